@@ -1,0 +1,157 @@
+"""Exceptions and diagnostics.
+
+A user mistake is never a traceback: every stage collects `Diagnostic`s and raises one
+`ModelError` holding all of them. Each diagnostic renders as
+
+    file:line:col: error[CODE] path: message
+      expected: ...
+      got: ...
+      hint: ...
+
+Exit codes of the command line (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error,
+3 analysis failure.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+# Every diagnostic code casmech emits, with a one-line title. Tests keep one bad-model fixture
+# per code (tests/schema/bad_models/), so adding a code here means adding a fixture.
+CODES: dict[str, str] = {
+    # E0xx: the YAML text itself
+    "E001": "YAML syntax error",
+    "E002": "duplicate key",
+    "E003": "the document is not a mapping",
+    # E1xx: structure (shape and types of the format)
+    "E100": "missing required key",
+    "E101": "unknown key",
+    "E102": "wrong type",
+    "E103": "invalid value",
+    "E104": "unsupported format version",
+    # E2xx: expressions
+    "E200": "expression syntax error",
+    "E201": "unknown symbol in expression",
+    "E202": "time 't' used where no function of time is allowed",
+    "E203": "unknown function or wrong number of arguments",
+    "E204": "expression cannot be evaluated",
+    # E3xx: names and references
+    "E300": "unknown reference",
+    "E301": "duplicate name",
+    "E302": "reserved name",
+    "E303": "invalid name",
+    "E304": "a joint or force connects a body to itself",
+    # E4xx: physical sanity
+    "E400": "mass must be positive",
+    "E401": "inertia not positive definite",
+    "E402": "inertia violates the triangle inequality",
+    "E403": "Euler parameters not of unit norm",
+    "E404": "zero-length vector",
+    "E405": "axes not perpendicular",
+    "E406": "rotation matrix not orthonormal",
+    "E407": "orientation needs exactly one form",
+    "E408": "driver not allowed on this joint type",
+    "E409": "non-positive or inconsistent analysis setting",
+    "E410": "invalid geometry",
+    # E5xx: structure of the assembled mechanism (found by the compiler)
+    "E500": "redundant constraints",
+    "E501": "mechanism is not fully driven",
+}
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where something came from: 1-based line and column in a file."""
+
+    file: str
+    line: int
+    col: int
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.col}"
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    code: str
+    path: str
+    message: str
+    source: Source | None = None
+    expected: str | None = None
+    got: str | None = None
+    hint: str | None = None
+    severity: str = "error"  # "error" | "warning" | "note"
+
+    def __post_init__(self) -> None:
+        if self.code not in CODES:
+            raise ValueError(f"unregistered diagnostic code {self.code}")
+
+    def format(self) -> str:
+        where = f"{self.source}: " if self.source else ""
+        path = f" {self.path}:" if self.path else ""
+        lines = [f"{where}{self.severity}[{self.code}]{path} {self.message}"]
+        for label, text in (("expected", self.expected), ("got", self.got), ("hint", self.hint)):
+            if text:
+                lines.append(f"  {label}: {text}")
+        return "\n".join(lines)
+
+
+def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
+    """A 'did you mean ...?' hint, or None when nothing is close."""
+    close = difflib.get_close_matches(str(word), [str(c) for c in candidates], n=1, cutoff=0.6)
+    return f"did you mean '{close[0]}'?" if close else None
+
+
+class CasmechError(Exception):
+    """Base of every error casmech raises on purpose."""
+
+    exit_code = 1
+
+
+class ModelError(CasmechError):
+    """The model is wrong; carries every finding at once."""
+
+    exit_code = 1
+
+    def __init__(self, diagnostics: Sequence[Diagnostic]):
+        self.diagnostics = list(diagnostics)
+        super().__init__(self.format())
+
+    def format(self) -> str:
+        return "\n".join(d.format() for d in self.diagnostics)
+
+
+class UsageError(CasmechError):
+    """The command line or API call is wrong (not the model)."""
+
+    exit_code = 2
+
+
+@dataclass
+class FailureContext:
+    """What an analysis failure names: time, cause, joints involved (with their sources)."""
+
+    time: float | None
+    cause: str
+    joints: list[tuple[str, Source | None, float]] = field(default_factory=list)
+
+    def format(self) -> str:
+        at = f"at t = {self.time:.6g}: " if self.time is not None else ""
+        lines = [f"analysis failed {at}{self.cause}"]
+        for name, source, residual in self.joints:
+            where = f"{source}: " if source else ""
+            lines.append(f"  {where}joint '{name}' (residual {residual:.3e})")
+        return "\n".join(lines)
+
+
+class AnalysisError(CasmechError):
+    """An analysis failed (assembly, singular configuration, solver). Keeps partial results."""
+
+    exit_code = 3
+
+    def __init__(self, context: FailureContext, partial=None):
+        self.context = context
+        self.partial = partial
+        super().__init__(context.format())

@@ -1,0 +1,131 @@
+"""The resolved model: what `schema` hands to `compiler`.
+
+Everything here is checked and evaluated: parameters are numbers, vectors are numpy arrays in the
+GLOBAL frame exactly as the file wrote them (at t = 0), orientations are unit Euler parameters,
+functions of time are parsed expressions with the parameters bound. Names are still names
+(`ground` included); turning them into indices is the compiler's job (compiler/lower.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from casmech.errors import Source
+from casmech.schema.expressions import Expr
+
+GROUND = "ground"
+
+
+@dataclass(frozen=True)
+class ScalarFunction:
+    """A scalar expression of some named variables (t, length, ...) with parameters bound."""
+
+    text: str
+    expr: Expr
+    constants: Mapping[str, float]
+    variables: tuple[str, ...]
+    source: Source | None = None
+
+    def casadi(self, **variables: Any) -> Any:
+        """Evaluate with CasADi operations (symbolic or numeric CasADi inputs)."""
+        return self.expr.evaluate({**self.constants, **variables}, "casadi")
+
+    def value(self, **variables: float) -> float:
+        """Evaluate numerically."""
+        return float(self.expr.evaluate({**self.constants, **variables}, "numpy"))
+
+    @property
+    def is_zero(self) -> bool:
+        return self.expr.is_constant and self.value(**dict.fromkeys(self.variables, 0.0)) == 0.0
+
+
+@dataclass(frozen=True)
+class Body:
+    name: str
+    mass: float
+    inertia: np.ndarray  # (3, 3) about the CM, body frame
+    position: np.ndarray  # (3,) global CM at t = 0
+    euler_parameters: np.ndarray  # (4,) unit, at t = 0
+    velocity: np.ndarray  # (3,) global
+    angular_velocity: np.ndarray  # (3,) GLOBAL frame
+    geometry: tuple[Mapping[str, Any], ...] = ()
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One entry of `joints:`; composite and basic alike (a joint type is data, not a class).
+
+    `vectors` holds the YAML vector keys that apply to the type, as numpy arrays:
+    composite joints: at, axis (unit), axis_i, axis_j (unit), at_i, at_j: GLOBAL, t = 0;
+    basic constraints: a_i, a_j, s_i, s_j (BODY frames), c (global).
+    """
+
+    name: str
+    type: str
+    body_i: str
+    body_j: str
+    vectors: Mapping[str, np.ndarray] = field(default_factory=dict)
+    length: float | None = None  # distance joint (resolved default: |at_j - at_i| at t = 0)
+    f: ScalarFunction | None = None  # basic constraints: f(t) (variables ("t",))
+    driver_angle: ScalarFunction | None = None  # variables ("t",)
+    driver_displacement: ScalarFunction | None = None  # variables ("t",)
+    source: Source | None = None
+    sources: Mapping[str, Source] = field(default_factory=dict)  # per-key locations
+
+
+@dataclass(frozen=True)
+class Force:
+    """One entry of `forces:`. Points are GLOBAL at t = 0.
+
+    tsda: body_i, body_j, at_i, at_j, stiffness, free_length, damping,
+          actuator (variables ("t", "length", "length_dot"))
+    rsda: joint, stiffness, free_angle, damping, actuator (variables ("t", "angle", "angle_dot"))
+    force: body, at, value (3 ScalarFunctions of ("t",)), frame
+    torque: body, value, frame
+    """
+
+    name: str
+    type: str
+    body_i: str | None = None
+    body_j: str | None = None
+    body: str | None = None
+    joint: str | None = None
+    vectors: Mapping[str, np.ndarray] = field(default_factory=dict)
+    stiffness: float = 0.0
+    damping: float = 0.0
+    free_length: float | None = None
+    free_angle: float = 0.0
+    actuator: ScalarFunction | None = None
+    value: tuple[ScalarFunction, ScalarFunction, ScalarFunction] | None = None
+    frame: str = "global"
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class Analysis:
+    type: str = "dynamics"
+    t_end: float = 1.0
+    output_step: float = 0.01
+    rtol: float = 1e-8
+    atol: float = 1e-10
+    options: Mapping[str, Any] = field(default_factory=dict)  # further keys (formulation, ...)
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class ResolvedModel:
+    name: str
+    description: str
+    file: str
+    text: str
+    parameters: Mapping[str, float]
+    gravity: np.ndarray
+    bodies: tuple[Body, ...]
+    joints: tuple[Joint, ...]
+    forces: tuple[Force, ...]
+    analysis: Analysis
