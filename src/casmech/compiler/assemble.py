@@ -1,0 +1,124 @@
+"""ModelIR -> the symbolic constraint system: Phi and everything CasADi derives from it.
+
+`q = [r_1..r_nb, p_1..p_nb]`. Ground is a pseudo-body with its own symbols `q_ground`
+(r = 0, p = [1, 0, 0, 0] when evaluated) so that reactions ON ground come out of the same AD as
+reactions on any body; every analysis function substitutes the constant ground pose.
+
+Derived (never by hand): Phi_q, nu = -Phi_t,
+gamma = -(Phi_q q_dot)_q q_dot - 2 Phi_qt q_dot - Phi_tt, and the delta-pi_bar variation matrices
+Pi_bar_k = 1/2 Phi_p_k G(p_k)^T.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler import euler
+from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
+from casmech.compiler.primitives import PRIMITIVES, Frame
+
+GROUND_POSE = np.array([0.0, 0, 0, 1, 0, 0, 0])
+
+
+@dataclass(frozen=True)
+class Coordinates:
+    """Symbols of one model: time, coordinates and their rates, ground's pseudo-coordinates."""
+
+    t: ca.SX
+    q: ca.SX
+    q_dot: ca.SX
+    q_ddot: ca.SX
+    q_ground: ca.SX
+    n_bodies: int
+
+    @staticmethod
+    def create(n_bodies: int) -> Coordinates:
+        n = 7 * n_bodies
+        return Coordinates(ca.SX.sym("t"), ca.SX.sym("q", n), ca.SX.sym("q_dot", n),
+                           ca.SX.sym("q_ddot", n), ca.SX.sym("q_ground", 7), n_bodies)
+
+    def r(self, k: int, vector=None):
+        vector = self.q if vector is None else vector
+        return self.q_ground[0:3] if k == GROUND_INDEX else vector[3 * k:3 * k + 3]
+
+    def p(self, k: int, vector=None):
+        vector = self.q if vector is None else vector
+        if k == GROUND_INDEX:
+            return self.q_ground[3:7]
+        start = 3 * self.n_bodies + 4 * k
+        return vector[start:start + 4]
+
+    def frame(self, k: int) -> Frame:
+        return Frame(self.r(k), euler.rotation(self.p(k)))
+
+    def ground_fixed(self, expr):
+        """Substitute ground's constant pose."""
+        return ca.substitute(expr, self.q_ground, ca.DM(GROUND_POSE))
+
+
+def driver_value(prim: PrimitiveIR, t, scale=1.0):
+    """f(t) of a primitive (with its constant offset); drivers are multiplied by `scale`."""
+    value = prim.f.casadi(t=t) if prim.f is not None else 0.0
+    if prim.is_driver:
+        value = scale * value
+    return value + prim.offset
+
+
+def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
+    """Phi with ground symbolic: the joint rows, then p^T p - 1 for every body."""
+    rows = []
+    for prim in ir.primitives:
+        phi_fun, keys = PRIMITIVES[prim.kind]
+        vectors = {k: ca.DM(prim.vectors[k]) for k in keys}
+        rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
+                            driver_value(prim, x.t, scale)))
+    rows += [x.p(k).T @ x.p(k) - 1 for k in range(ir.n_bodies)]
+    return ca.vertcat(*rows) if rows else ca.SX(0, 1)
+
+
+def rotational_jacobian(phi, x: Coordinates, k: int):
+    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation)."""
+    p = x.p(k)
+    return 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T
+
+
+@dataclass(frozen=True)
+class ConstraintSystem:
+    x: Coordinates
+    phi: ca.SX  # ground substituted
+    phi_with_ground: ca.SX  # ground symbolic (for reactions on ground)
+    phi_q: ca.SX
+    nu: ca.SX
+    gamma: ca.SX
+    phi_r: ca.SX  # (m, 3 nb)
+    pi_bar: ca.SX  # (m, 3 nb)
+    scale: ca.SX  # continuation parameter of the drivers (assembly)
+    phi_scaled: ca.SX
+    phi_q_scaled: ca.SX
+
+
+def derive(phi, x: Coordinates) -> dict[str, ca.SX]:
+    """Phi_q, nu, gamma of any phi(t, q) by AD."""
+    phi_q = ca.jacobian(phi, x.q)
+    phi_t = ca.jacobian(phi, x.t)
+    phi_q_qdot = phi_q @ x.q_dot
+    gamma = (-ca.jacobian(phi_q_qdot, x.q) @ x.q_dot - 2 * ca.jacobian(phi_q_qdot, x.t)
+             - ca.jacobian(phi_t, x.t))
+    return {"phi_q": phi_q, "nu": -phi_t, "gamma": gamma}
+
+
+def build_constraints(ir: ModelIR) -> ConstraintSystem:
+    x = Coordinates.create(ir.n_bodies)
+    phi_ground = constraint_rows(ir, x)
+    phi = x.ground_fixed(phi_ground)
+    d = derive(phi, x)
+    nb = ir.n_bodies
+    phi_r = ca.jacobian(phi, x.q[: 3 * nb])
+    pi_bar = ca.horzcat(*[rotational_jacobian(phi, x, k) for k in range(nb)]) if nb else phi_r
+    scale = ca.SX.sym("s")
+    phi_scaled = x.ground_fixed(constraint_rows(ir, x, scale))
+    return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r, pi_bar,
+                            scale, phi_scaled, ca.jacobian(phi_scaled, x.q))

@@ -1,0 +1,79 @@
+"""Structural checks at a configuration: DOF, rank, redundant rows mapped to joints and lines."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.ir import RowInfo
+
+RANK_TOLERANCE = 1e-9  # relative to the largest singular value of Phi_q
+
+
+@dataclass(frozen=True)
+class Structure:
+    n_coordinates: int
+    n_rows: int
+    rank: int
+    redundant: tuple[RowInfo, ...]  # rows that depend on earlier rows (file order)
+    nominal_dof: int  # 6 nb minus the joint rows (Gruebler count)
+
+    @property
+    def dof(self) -> int:
+        return self.n_coordinates - self.rank
+
+    def summary(self) -> str:
+        lines = [f"coordinates: {self.n_coordinates}  constraint rows: {self.n_rows} "
+                 f"(incl. normalization)  rank: {self.rank}",
+                 f"degrees of freedom: {self.dof} (count 6 nb - joint rows: {self.nominal_dof})"]
+        for row in self.redundant:
+            where = f"{row.source}: " if row.source else ""
+            lines.append(f"  redundant: {where}{row.label}")
+        return "\n".join(lines)
+
+
+def independent_rows(matrix: np.ndarray, tolerance: float = RANK_TOLERANCE) -> list[bool]:
+    """Greedy in row order: is row k independent of the rows kept before it?"""
+    scale = max(np.linalg.norm(matrix, 2), 1.0) if matrix.size else 1.0
+    basis: list[np.ndarray] = []
+    keep = []
+    for row in matrix:
+        residual = row.copy()
+        for b in basis:  # two passes of Gram-Schmidt for stability
+            residual -= (b @ residual) * b
+        for b in basis:
+            residual -= (b @ residual) * b
+        norm = np.linalg.norm(residual)
+        independent = norm > tolerance * scale
+        if independent:
+            basis.append(residual / norm)
+        keep.append(independent)
+    return keep
+
+
+def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
+    phi_q = functions.matrix("phi_q", t, q)
+    keep = independent_rows(phi_q)
+    redundant = tuple(row for row, k in zip(functions.rows, keep, strict=True) if not k)
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    return Structure(functions.n_coordinates, functions.n_rows, int(sum(keep)), redundant,
+                     6 * functions.n_bodies - n_joint_rows)
+
+
+def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 3):
+    """(joint name, source, largest |residual| of its rows), worst first, for failure messages."""
+    by_joint: dict[str, tuple[object, float]] = {}
+    for row, value in zip(functions.rows, np.abs(np.ravel(residual)), strict=True):
+        source, worst = by_joint.get(row.joint, (row.source, 0.0))
+        by_joint[row.joint] = (source, max(worst, float(value)))
+    ranked = sorted(by_joint.items(), key=lambda item: -item[1][1])
+    return [(name, source, value) for name, (source, value) in ranked[:count]]
+
+
+def dependent_joints(functions: SystemFunctions, phi_q: np.ndarray, count: int = 3):
+    """Joints whose rows became dependent: the left singular vector of the smallest singular
+    value of Phi_q weighs each row by its part in the dependency."""
+    u, s, _ = np.linalg.svd(phi_q)
+    return worst_joints(functions, np.abs(u[:, s.size - 1]), count)

@@ -1,0 +1,153 @@
+"""Equations of motion in the r-p form, forces, energy and joint reactions.
+
+r-p form (Haug 1989, ch. 11): M r_ddot + Phi_r^T lam = F and
+4 G^T J_bar G p_ddot + Phi_p^T lam + P^T lam_P = 2 G^T n_bar + 8 G_dot^T J_bar G_dot p.
+Generalized forces of force elements come from virtual work by AD: a force F at a point with
+global position x(q) contributes x_q^T F; a spring with length l(q) and tension f contributes
+-l_q^T f; a torque n_bar (body frame) contributes 2 G^T n_bar.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import casadi as ca
+
+from casmech.compiler import euler
+from casmech.compiler.assemble import Coordinates
+from casmech.compiler.ir import ForceIR, ModelIR
+
+
+def mass_matrix(ir: ModelIR, x: Coordinates):
+    """blkdiag(m_k I_3 ..., 4 G_k^T J_bar_k G_k ...) (7 nb x 7 nb)."""
+    blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies]
+    for k, b in enumerate(ir.bodies):
+        g = euler.g_matrix(x.p(k))
+        blocks.append(4 * g.T @ ca.DM(b.inertia) @ g)
+    return ca.diagcat(*blocks) if blocks else ca.SX(0, 0)
+
+
+def quadratic_velocity(ir: ModelIR, x: Coordinates):
+    """[0; 8 G_dot^T J_bar G_dot p] for every body (G_dot = G(p_dot))."""
+    nb = ir.n_bodies
+    terms = [ca.SX.zeros(3 * nb, 1)]
+    for k, b in enumerate(ir.bodies):
+        g_dot = euler.g_matrix(x.p(k, x.q_dot))
+        terms.append(8 * g_dot.T @ ca.DM(b.inertia) @ g_dot @ x.p(k))
+    return ca.vertcat(*terms)
+
+
+def point(x: Coordinates, k: int, s_bar):
+    """Global position of a body-fixed point (ground: s_bar is already global)."""
+    f = x.frame(k)
+    return f.r + f.A @ ca.DM(s_bar)
+
+
+def rate(expr, x: Coordinates):
+    return ca.jacobian(expr, x.q) @ x.q_dot
+
+
+def tsda_length(force: ForceIR, x: Coordinates):
+    d = point(x, force.body_j, force.points["s_j"]) - point(x, force.body_i, force.points["s_i"])
+    return ca.sqrt(d.T @ d)
+
+
+def rsda_angle(force: ForceIR, x: Coordinates):
+    """Rotation of body j about the joint axis, from the joint frame: atan2(v_i.u_j, u_i.u_j)."""
+    ai, aj = x.frame(force.body_i).A, x.frame(force.body_j).A
+    u_j = aj @ ca.DM(force.axes["u_j"])
+    return ca.atan2((ai @ ca.DM(force.axes["v_i"])).T @ u_j, (ai @ ca.DM(force.axes["u_i"])).T @ u_j)
+
+
+def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tuple[str, str]):
+    """(generalized force, potential) of a spring-damper-actuator acting along `coordinate`."""
+    k, c = force.params["stiffness"], force.params["damping"]
+    value, value_dot = coordinate, rate(coordinate, x)
+    tension = k * (value - rest) + c * value_dot
+    if force.actuator is not None:
+        tension += force.actuator.casadi(t=x.t, **{names[0]: value, names[1]: value_dot})
+    generalized = -ca.jacobian(coordinate, x.q).T * tension
+    return generalized, 0.5 * k * (value - rest) ** 2
+
+
+def _tsda(force, x):
+    return _spring(force, x, tsda_length(force, x), force.params["free_length"],
+                   ("length", "length_dot"))
+
+
+def _rsda(force, x):
+    return _spring(force, x, rsda_angle(force, x), force.params["free_angle"],
+                   ("angle", "angle_dot"))
+
+
+def _value(force: ForceIR, x: Coordinates):
+    """The force/torque vector in the global frame."""
+    v = ca.vertcat(*[component.casadi(t=x.t) for component in force.value])
+    return x.frame(force.body_i).A @ v if force.frame == "body" else v
+
+
+def _point_force(force, x):
+    at = point(x, force.body_i, force.points.get("s", [0.0, 0.0, 0.0]))
+    return ca.jacobian(at, x.q).T @ _value(force, x), 0.0
+
+
+def _torque(force, x):
+    k = force.body_i
+    n_bar = x.frame(k).A.T @ _value(force, x)
+    generalized = ca.SX.zeros(x.q.numel(), 1)
+    start = 3 * x.n_bodies + 4 * k
+    generalized[start:start + 4] = 2 * euler.g_matrix(x.p(k)).T @ n_bar
+    return generalized, 0.0
+
+
+FORCE_ELEMENTS: dict[str, Callable] = {
+    "tsda": _tsda,
+    "rsda": _rsda,
+    "force": _point_force,
+    "torque": _torque,
+}
+
+
+def applied_forces(ir: ModelIR, x: Coordinates):
+    """(generalized applied forces incl. gravity, spring potential energy)."""
+    nb = ir.n_bodies
+    gravity = ca.vertcat(*[b.mass * ca.DM(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
+    total, potential = gravity, 0.0
+    for force in ir.forces:
+        generalized, energy = FORCE_ELEMENTS[force.type](force, x)
+        total, potential = total + generalized, potential + energy
+    return total, potential
+
+
+def energy(ir: ModelIR, x: Coordinates, spring_potential):
+    """(kinetic, potential): 1/2 m v.v + 1/2 w_bar^T J_bar w_bar; -m g.r + springs."""
+    kinetic, potential = 0.0, spring_potential
+    for k, b in enumerate(ir.bodies):
+        v = x.r(k, x.q_dot)
+        w_bar = 2 * euler.g_matrix(x.p(k)) @ x.p(k, x.q_dot)
+        kinetic += 0.5 * b.mass * (v.T @ v) + 0.5 * w_bar.T @ ca.DM(b.inertia) @ w_bar
+        potential -= b.mass * (ca.DM(ir.gravity).T @ x.r(k))
+    return kinetic, potential
+
+
+def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
+    """Force and torque each joint exerts ON body_j: global, torque about body_i's joint point.
+
+    From the lecture: force -Phi_r_j^T lam, body-frame torque about the CM -Pi_bar_j^T lam,
+    moved to the joint point P: T_P = A_j n_bar + (r_j - r_P) x F.
+    """
+    forces, torques = [], []
+    for joint in ir.joints:
+        rows = list(joint.rows)
+        phi = phi_with_ground[rows]
+        lam_j = lam[rows]
+        b = joint.body_j
+        p = x.p(b)
+        force = -ca.jacobian(phi, x.r(b)).T @ lam_j
+        n_bar = -0.5 * euler.g_matrix(p) @ ca.jacobian(phi, p).T @ lam_j
+        at = point(x, joint.body_i, joint.point_i)
+        torque = euler.rotation(p) @ n_bar + ca.cross(x.r(b) - at, force)
+        forces.append(force)
+        torques.append(torque)
+    empty = ca.SX(3, 0)
+    return (ca.horzcat(*forces) if forces else empty, ca.horzcat(*torques) if torques else empty)

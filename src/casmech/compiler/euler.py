@@ -1,0 +1,57 @@
+"""Euler-parameter geometry: A(p), G(p), E(p), B(p, a_bar), skew(v).
+
+The only hand-written geometry in casmech (DESIGN.md). Every function accepts CasADi SX/MX/DM or
+numpy inputs and returns CasADi matrices; derivatives of these are left to CasADi.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+
+def skew(v) -> ca.SX:
+    """The cross-product matrix: skew(a) @ b == cross(a, b)."""
+    v = _vector(v, 3)
+    return ca.vertcat(
+        ca.horzcat(0, -v[2], v[1]),
+        ca.horzcat(v[2], 0, -v[0]),
+        ca.horzcat(-v[1], v[0], 0),
+    )
+
+
+def rotation(p) -> ca.SX:
+    """A(p) = 2[(e0^2 - 1/2) I + e e^T + e0 e~]: body frame -> global frame."""
+    p = _vector(p, 4)
+    e0, e = p[0], p[1:4]
+    return 2 * ((e0**2 - 0.5) * ca.DM.eye(3) + e @ e.T + e0 * skew(e))
+
+
+def g_matrix(p) -> ca.SX:
+    """G(p) = [-e, -e~ + e0 I] (3x4); omega_bar = 2 G p_dot."""
+    p = _vector(p, 4)
+    e0, e = p[0], p[1:4]
+    return ca.horzcat(-e, -skew(e) + e0 * ca.DM.eye(3))
+
+
+def e_matrix(p) -> ca.SX:
+    """E(p) = [-e, e~ + e0 I] (3x4); omega (global) = 2 E p_dot; A = E G^T."""
+    p = _vector(p, 4)
+    e0, e = p[0], p[1:4]
+    return ca.horzcat(-e, skew(e) + e0 * ca.DM.eye(3))
+
+
+def b_matrix(p, a_bar) -> ca.SX:
+    """B(p, a_bar) = d(A(p) a_bar)/dp = 2[(e0 I + e~) a_bar, e a_bar^T - (e0 I + e~) a_bar~]."""
+    p, a_bar = _vector(p, 4), _vector(a_bar, 3)
+    e0, e = p[0], p[1:4]
+    m = e0 * ca.DM.eye(3) + skew(e)
+    return 2 * ca.horzcat(m @ a_bar, e @ a_bar.T - m @ skew(a_bar))
+
+
+def _vector(v, n: int):
+    """Column vector of length n, keeping symbolic types symbolic."""
+    if not isinstance(v, (ca.SX, ca.MX, ca.DM)):
+        v = ca.DM(v)
+    if v.shape != (n, 1):
+        v = ca.reshape(v, n, 1)
+    return v

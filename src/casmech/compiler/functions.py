@@ -1,0 +1,115 @@
+"""The named casadi.Function bundle that every analysis consumes.
+
+Interpreted (SX) and compiled bundles are interchangeable: analyses only call
+`bundle[name](...)` and read the metadata below.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler import euler, eom
+from casmech.compiler.assemble import build_constraints
+from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
+
+
+@dataclass(frozen=True)
+class JointMeta:
+    name: str
+    type: str
+    rows: range
+    body_i: str
+    body_j: str
+    source: object = None
+
+
+@dataclass(frozen=True)
+class SystemFunctions:
+    """casadi.Functions by name plus what analyses need to know about the model."""
+
+    functions: dict[str, ca.Function]
+    body_names: tuple[str, ...]
+    joints: tuple[JointMeta, ...]
+    rows: tuple[RowInfo, ...]
+    ir: ModelIR = field(repr=False)
+
+    def __getitem__(self, name: str) -> ca.Function:
+        return self.functions[name]
+
+    def evaluate(self, name: str, *args) -> list[np.ndarray]:
+        """Call a function numerically; every output as a dense numpy array."""
+        return [np.array(out.full()) for out in _as_list(self.functions[name](*args))]
+
+    def matrix(self, name: str, *args) -> np.ndarray:
+        """The first output of a function as a dense 2-D array."""
+        return self.evaluate(name, *args)[0]
+
+    def vector(self, name: str, *args) -> np.ndarray:
+        """The first output of a function as a flat array."""
+        return self.evaluate(name, *args)[0].ravel()
+
+    @property
+    def n_bodies(self) -> int:
+        return len(self.body_names)
+
+    @property
+    def n_coordinates(self) -> int:
+        return 7 * len(self.body_names)
+
+    @property
+    def n_rows(self) -> int:
+        return len(self.rows)
+
+
+def _as_list(outputs) -> list:
+    return list(outputs) if isinstance(outputs, (tuple, list)) else [outputs]
+
+
+def _function(name, inputs: dict, outputs: dict) -> ca.Function:
+    return ca.Function(name, list(inputs.values()), list(outputs.values()),
+                       list(inputs), list(outputs))
+
+
+def build_functions(ir: ModelIR) -> SystemFunctions:
+    cs = build_constraints(ir)
+    x = cs.x
+    t, q, q_dot, q_ddot = x.t, x.q, x.q_dot, x.q_ddot
+    lam = ca.SX.sym("lam", cs.phi.numel())
+    fixed = x.ground_fixed
+    mass = eom.mass_matrix(ir, x)
+    applied, spring_potential = eom.applied_forces(ir, x)
+    kinetic, potential = eom.energy(ir, x, spring_potential)
+    force, torque = eom.reactions(ir, x, cs.phi_with_ground, lam)
+    omega = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_dot) for k in range(ir.n_bodies)]
+    alpha = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_ddot) for k in range(ir.n_bodies)]
+    stack = (lambda vs: ca.horzcat(*vs)) if ir.n_bodies else (lambda vs: ca.SX(3, 0))
+    functions = [
+        _function("phi", {"t": t, "q": q}, {"phi": cs.phi}),
+        _function("phi_q", {"t": t, "q": q}, {"phi_q": cs.phi_q}),
+        _function("nu", {"t": t, "q": q}, {"nu": cs.nu}),
+        _function("gamma", {"t": t, "q": q, "q_dot": q_dot}, {"gamma": cs.gamma}),
+        _function("variations", {"t": t, "q": q}, {"phi_r": cs.phi_r, "pi_bar": cs.pi_bar}),
+        _function("phi_scaled", {"t": t, "q": q, "s": cs.scale},
+                  {"phi": cs.phi_scaled, "phi_q": cs.phi_q_scaled}),
+        _function("mass_matrix", {"q": q}, {"mass_matrix": mass}),
+        _function("generalized_forces", {"t": t, "q": q, "q_dot": q_dot},
+                  {"generalized_forces": fixed(applied + eom.quadratic_velocity(ir, x))}),
+        _function("energy", {"t": t, "q": q, "q_dot": q_dot},
+                  {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
+        _function("reactions", {"t": t, "q": q, "lam": lam},
+                  {"force": fixed(force), "torque": fixed(torque)}),
+        _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
+                  {"omega": stack(omega), "alpha": stack(alpha)}),
+    ]
+    names = tuple(b.name for b in ir.bodies)
+
+    def body_name(k: int) -> str:
+        return "ground" if k == GROUND_INDEX else names[k]
+
+    joints = tuple(JointMeta(j.name, j.type, j.rows, body_name(j.body_i), body_name(j.body_j),
+                             j.source) for j in ir.joints)
+    return SystemFunctions({f.name(): f for f in functions}, names, joints,
+                           tuple(ir.row_info()), ir)

@@ -1,0 +1,152 @@
+"""ResolvedModel -> ModelIR: names to indices, joints expanded into primitives.
+
+Composite joints are defined in global coordinates at t = 0; here they become body-frame vectors
+using each body's pose in the file (ground: identity).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from casmech.compiler import joints as joint_tables
+from casmech.compiler.ir import GROUND_INDEX, BodyIR, ForceIR, JointIR, ModelIR, PrimitiveIR, RowInfo
+from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
+
+POINTS = frozenset({"P", "Q", "Pi", "Pj"})
+UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array([0, 0, 1.0])}
+
+
+def rotation_matrix(p: np.ndarray) -> np.ndarray:
+    """A(p) in numpy (for lowering only; the symbolic one lives in euler.py)."""
+    e0, e = p[0], np.asarray(p[1:4])
+    tilde = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+    return 2 * ((e0**2 - 0.5) * np.eye(3) + np.outer(e, e) + e0 * tilde)
+
+
+def perpendicular_pair(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit u, v with (u, v, w) right-handed orthonormal; deterministic in w."""
+    e = np.eye(3)[int(np.argmin(np.abs(w)))]
+    u = e - (e @ w) * w
+    u /= np.linalg.norm(u)
+    return u, np.cross(w, u)
+
+
+class _Poses:
+    """Initial poses by body name (ground: origin, identity) and their indices."""
+
+    def __init__(self, model: ResolvedModel):
+        self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
+        self.pose = {b.name: (b.position, rotation_matrix(b.euler_parameters)) for b in model.bodies}
+        self.pose[GROUND] = (np.zeros(3), np.eye(3))
+
+    def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
+        r0, a0 = self.pose[body]
+        return a0.T @ (value - r0) if quantity in POINTS else a0.T @ value
+
+
+def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
+    """Global joint-frame quantities at t = 0 (see joints.py)."""
+    v = joint.vectors
+    frame = dict(UNIT)
+    for key, name in (("at", "P"), ("at_i", "Pi"), ("axis_i", "axis_i"), ("axis_j", "axis_j")):
+        if key in v:
+            frame[name] = np.asarray(v[key], float)
+    if "at_j" in v:
+        frame["Q" if joint.type == "revolute_spherical" else "Pj"] = np.asarray(v["at_j"], float)
+    if "axis" in v:
+        w = np.asarray(v["axis"], float) / np.linalg.norm(v["axis"])
+        frame["u"], frame["v"] = perpendicular_pair(w)
+        frame["w"] = w
+    return frame
+
+
+def _vectors(template: dict[str, str], joint: Joint, frame, poses: _Poses) -> dict:
+    out = {}
+    for key, spec in template.items():
+        name, _, side = spec.partition("@")
+        if not side:  # basic constraint: as written in the file
+            out[key] = np.asarray(joint.vectors[name] if name in joint.vectors else frame[name], float)
+        else:
+            body = joint.body_i if side == "i" else joint.body_j
+            out[key] = poses.local(body, name, frame[name])
+    return out
+
+
+def _offset(joint: Joint, frame) -> float:
+    """The constant part of f for a composite joint's D rows: the squared length."""
+    if joint.type == "distance":
+        length = joint.length if joint.length is not None else np.linalg.norm(frame["Pj"] - frame["Pi"])
+        return float(length) ** 2
+    if joint.type == "revolute_spherical":
+        return float(np.sum((frame["Q"] - frame["P"]) ** 2))
+    return 0.0
+
+
+def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[PrimitiveIR], JointIR]:
+    frame = joint_frame(joint)
+    bi, bj = poses.index[joint.body_i], poses.index[joint.body_j]
+    templates = [(t, joint.f, False) for t in joint_tables.rows_of(joint.type)]
+    for key, fun in (("angle", joint.driver_angle), ("displacement", joint.driver_displacement)):
+        if fun is not None:
+            templates.append((joint_tables.DRIVER_ROWS[key], fun, True))
+    offset = _offset(joint, frame)
+    prims = []
+    for (kind, template, label), fun, is_driver in templates:
+        source = joint.sources.get("driver", joint.source) if is_driver else joint.source
+        row = RowInfo(joint.name, kind, f"{joint.type} '{joint.name}': {label}", source)
+        prims.append(PrimitiveIR(kind, bi, bj, _vectors(template, joint, frame, poses), fun,
+                                 offset if kind == "d" and not is_driver else 0.0, is_driver, row))
+    point_name = joint_tables.REACTION_POINT[joint.type]
+    if point_name is None:
+        point = np.zeros(3) if joint.body_i != GROUND else poses.pose[GROUND][0]
+    elif point_name in joint.vectors and point_name.startswith("s_"):
+        point = np.asarray(joint.vectors[point_name], float)
+    else:
+        point = poses.local(joint.body_i, point_name, frame[point_name])
+    rows = range(first_row, first_row + len(prims))
+    return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source)
+
+
+def lower_force(force: Force, model: ResolvedModel, poses: _Poses) -> ForceIR:
+    v = force.vectors
+    params = {"stiffness": force.stiffness, "damping": force.damping}
+    if force.type == "tsda":
+        at_i, at_j = np.asarray(v["at_i"], float), np.asarray(v["at_j"], float)
+        length = force.free_length if force.free_length is not None else np.linalg.norm(at_j - at_i)
+        points = {"s_i": poses.local(force.body_i, "P", at_i),
+                  "s_j": poses.local(force.body_j, "P", at_j)}
+        return ForceIR(force.name, "tsda", poses.index[force.body_i], poses.index[force.body_j],
+                       points, params | {"free_length": float(length)}, force.actuator,
+                       source=force.source)
+    if force.type == "rsda":
+        joint = next(j for j in model.joints if j.name == force.joint)
+        frame = joint_frame(joint)
+        axes = {"u_i": poses.local(joint.body_i, "u", frame["u"]),
+                "v_i": poses.local(joint.body_i, "v", frame["v"]),
+                "u_j": poses.local(joint.body_j, "u", frame["u"])}
+        return ForceIR(force.name, "rsda", poses.index[joint.body_i], poses.index[joint.body_j],
+                       {}, params | {"free_angle": force.free_angle}, force.actuator,
+                       axes=axes, source=force.source)
+    body = poses.index[force.body]
+    points = {"s": poses.local(force.body, "P", np.asarray(v["at"], float))} if "at" in v else {}
+    return ForceIR(force.name, force.type, body, body, points, {}, value=force.value,
+                   frame=force.frame, source=force.source)
+
+
+def lower(model: ResolvedModel) -> ModelIR:
+    poses = _Poses(model)
+    primitives: list[PrimitiveIR] = []
+    joints: list[JointIR] = []
+    for joint in model.joints:
+        prims, joint_ir = lower_joint(joint, poses, len(primitives))
+        primitives += prims
+        joints.append(joint_ir)
+    bodies = tuple(
+        BodyIR(b.name, float(b.mass), np.asarray(b.inertia, float), np.asarray(b.position, float),
+               np.asarray(b.euler_parameters, float), np.asarray(b.velocity, float),
+               np.asarray(b.angular_velocity, float), b.source)
+        for b in model.bodies
+    )
+    forces = tuple(lower_force(f, model, poses) for f in model.forces)
+    return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
+                   forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters))

@@ -1,0 +1,125 @@
+"""Assembly: positions by Newton from the file's pose, then velocities and accelerations.
+
+Drivers of composite joints are reached by continuation: the driver values are scaled from 0
+(the pose in the file) to 1 in steps of at most MAX_DRIVER_STEP radians/metres, so Newton never
+jumps to the mirrored root of a rotation driver.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from casmech.compiler.checks import dependent_joints, worst_joints
+from casmech.compiler.functions import SystemFunctions
+from casmech.errors import AnalysisError, FailureContext
+
+POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
+MAX_ITERATIONS = 50
+MAX_DRIVER_STEP = 0.5
+
+
+def initial_guess(functions: SystemFunctions) -> np.ndarray:
+    bodies = functions.ir.bodies
+    return np.concatenate([b.r0 for b in bodies] + [b.p0 for b in bodies]) if bodies else np.zeros(0)
+
+
+def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
+    """q_dot from the file's global velocities: p_dot = 1/2 E(p)^T omega."""
+    nb = functions.n_bodies
+    r_dot = [b.r_dot0 for b in functions.ir.bodies]
+    p_dot = [0.5 * _e_matrix(q[3 * nb + 4 * k:3 * nb + 4 * k + 4]).T @ b.omega0
+             for k, b in enumerate(functions.ir.bodies)]
+    return np.concatenate(r_dot + p_dot) if nb else np.zeros(0)
+
+
+def _e_matrix(p: np.ndarray) -> np.ndarray:
+    e0, e = p[0], p[1:4]
+    tilde = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+    return np.hstack([-e[:, None], tilde + e0 * np.eye(3)])
+
+
+def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
+           tolerance: float = POSITION_TOLERANCE) -> np.ndarray:
+    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed)."""
+    q = np.array(q, float)
+    for _ in range(MAX_ITERATIONS):
+        phi, phi_q = _evaluate(functions, t, q, scale)
+        if np.max(np.abs(phi), initial=0.0) <= tolerance:
+            return q
+        step = np.linalg.lstsq(phi_q, -phi, rcond=None)[0]
+        q += step
+    phi, phi_q = _evaluate(functions, t, q, scale)
+    if np.max(np.abs(phi), initial=0.0) <= 1e3 * tolerance:
+        return q
+    cause = (f"positions did not converge in {MAX_ITERATIONS} Newton iterations "
+             f"(max |Phi| = {np.max(np.abs(phi)):.3e}); the joints with the largest residuals:")
+    raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
+
+
+def _evaluate(functions, t, q, scale):
+    if scale is None:
+        return functions.vector("phi", t, q), functions.matrix("phi_q", t, q)
+    phi, phi_q = functions.evaluate("phi_scaled", t, q, scale)
+    return phi.ravel(), phi_q
+
+
+def driver_span(functions: SystemFunctions, t: float) -> float:
+    """Largest |f(t)| over the composite-joint drivers (how far continuation must go)."""
+    values = [abs(p.f.value(t=t)) for p in functions.ir.primitives if p.is_driver and p.f]
+    return max(values, default=0.0)
+
+
+def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
+    q = initial_guess(functions) if q is None else np.array(q, float)
+    steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
+    for k in range(1, steps + 1):
+        q = newton(functions, t, q, scale=k / steps, tolerance=1e-8 if k < steps else 1e-12)
+    return newton(functions, t, q)
+
+
+def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
+                     q_dot_guess: np.ndarray) -> np.ndarray:
+    """Phi_q q_dot = nu, closest (least squares) to the guess."""
+    phi_q = functions.matrix("phi_q", t, q)
+    nu = functions.vector("nu", t, q)
+    correction = np.linalg.lstsq(phi_q, nu - phi_q @ q_dot_guess, rcond=None)[0]
+    return q_dot_guess + correction
+
+
+def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
+                                  q_dot: np.ndarray) -> np.ndarray:
+    """Phi_q q_ddot = gamma, for a fully driven (0-DOF) mechanism."""
+    phi_q = functions.matrix("phi_q", t, q)
+    gamma = functions.vector("gamma", t, q, q_dot)
+    q_ddot, _, rank, _ = np.linalg.lstsq(phi_q, gamma, rcond=None)
+    if rank < functions.n_coordinates:
+        cause = ("singular configuration: the constraint Jacobian lost rank "
+                 f"({rank} < {functions.n_coordinates}); the joints involved:")
+        raise AnalysisError(FailureContext(t, cause, dependent_joints(functions, phi_q)))
+    return q_ddot
+
+
+def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.ndarray,
+                      q_ddot: np.ndarray) -> np.ndarray:
+    """Inverse dynamics: Phi_q^T lam = Q - M q_ddot (minimum norm where rows are redundant)."""
+    mass = functions.matrix("mass_matrix", q)
+    forces = functions.vector("generalized_forces", t, q, q_dot)
+    phi_q = functions.matrix("phi_q", t, q)
+    return np.linalg.lstsq(phi_q.T, forces - mass @ q_ddot, rcond=None)[0]
+
+
+def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
+                                q_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now."""
+    n = functions.n_coordinates
+    mass = functions.matrix("mass_matrix", q)
+    phi_q = functions.matrix("phi_q", t, q)
+    m = phi_q.shape[0]
+    lhs = np.block([[mass, phi_q.T], [phi_q, np.zeros((m, m))]])
+    rhs = np.concatenate([functions.vector("generalized_forces", t, q, q_dot),
+                          functions.vector("gamma", t, q, q_dot)])
+    solution = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    return solution[:n], solution[n:]
+
