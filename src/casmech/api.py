@@ -1,0 +1,82 @@
+"""The Python API: load a model, compile it, run its analysis.
+
+    model = casmech.load("models/me751_pendulum.yaml")
+    functions = casmech.compile(model)
+    result = casmech.analyze(functions)
+    names, values = casmech.results_table(functions, result)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import replace
+from pathlib import Path
+
+from casmech.compiler.checks import Structure, structure
+from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.lower import lower
+from casmech.errors import AnalysisError, UsageError
+from casmech.runtime import assembly
+from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
+from casmech.runtime.results import Result, table
+from casmech.schema import load_model, load_model_text
+from casmech.schema.resolved import ResolvedModel
+
+
+def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:
+    """Read, validate and evaluate a model file (raises ModelError with every finding)."""
+    return load_model(path, overrides=overrides)
+
+
+def loads(text: str, file: str = "<string>",
+          overrides: Mapping[str, str] | None = None) -> ResolvedModel:
+    return load_model_text(text, file=file, overrides=overrides)
+
+
+def compile(model: ResolvedModel) -> SystemFunctions:  # noqa: A001 - the compiler's verb
+    """Build the named CasADi functions of a model (interpreted SX functions)."""
+    return build_functions(lower(model))
+
+
+def _prescribed(kind: str) -> Callable:
+    def run(functions: SystemFunctions, t_end: float, step: float) -> Result:
+        return run_prescribed_motion(functions, t_end, step, analysis=kind)
+    return run
+
+
+ANALYSES: dict[str, Callable[[SystemFunctions, float, float], Result]] = {
+    "kinematics": _prescribed("kinematics"),
+    "inverse_dynamics": _prescribed("inverse_dynamics"),
+    "assembly": lambda functions, t_end, step: run_assembly(functions),
+}
+
+
+def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: float | None = None,
+            output_step: float | None = None) -> Result:
+    """Run an analysis; the model's `analysis:` block gives what is not passed."""
+    settings = functions.ir.analysis
+    settings = replace(settings, type=analysis or settings.type,
+                       t_end=settings.t_end if t_end is None else t_end,
+                       output_step=settings.output_step if output_step is None else output_step)
+    if settings.type not in ANALYSES:
+        raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
+                         f"{', '.join(ANALYSES)}")
+    if settings.t_end <= 0 or settings.output_step <= 0:
+        raise UsageError("t_end and output_step must be positive")
+    result = ANALYSES[settings.type](functions, settings.t_end, settings.output_step)
+    result.metadata.update(analysis=settings.type, mode="interpreted")
+    return result
+
+
+def check(functions: SystemFunctions) -> tuple[Structure, bool]:
+    """Structure (DOF, rank, redundant rows) at the assembled configuration, or at the file's
+    pose when assembly fails; the flag says whether assembly succeeded."""
+    try:
+        q = assembly.assemble_positions(functions)
+        return structure(functions, 0.0, q), True
+    except AnalysisError:
+        return structure(functions, 0.0, assembly.initial_guess(functions)), False
+
+
+def results_table(functions: SystemFunctions, result: Result):
+    return table(functions, result)

@@ -1,0 +1,115 @@
+"""End to end: the `casmech` console script on model files (exit codes, results contract)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casmech.output.csv import read_csv
+from tests.conftest import MODELS
+
+SCRIPT = Path(sys.executable).parent / "casmech"  # where pip installs the console script
+
+BODY = ["x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
+        "ax", "ay", "az", "alphax", "alphay", "alphaz"]
+JOINT = ["fx", "fy", "fz", "tx", "ty", "tz"]
+
+
+def casmech(*args, cwd=None):
+    return subprocess.run([str(SCRIPT), *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=300)
+
+
+def contract_columns(bodies, joints):
+    """The column order written in MODEL_FORMAT.md's results contract."""
+    return (["t"] + [f"{b}.{c}" for b in bodies for c in BODY]
+            + [f"{j}.{c}" for j in joints for c in JOINT] + ["energy", "constraint_violation"])
+
+
+def test_run_writes_results_per_contract(tmp_path):
+    done = casmech("run", MODELS / "slider_crank.yaml", "--out", tmp_path, "--t-end", "0.5")
+    assert done.returncode == 0, done.stderr
+    names, values = read_csv(tmp_path / "results.csv")
+    assert names == contract_columns(["crank", "rod", "slider"],
+                                     ["crank_pivot", "crank_pin", "wrist_pin", "slide"])
+    # default output_step 0.01 from the model; --t-end overrides t_end
+    np.testing.assert_allclose(values[:, 0], np.linspace(0, 0.5, 51), rtol=0, atol=1e-12)
+    assert np.all(np.isfinite(values))
+
+
+def test_run_default_output_directory_beside_model(tmp_path):
+    model = tmp_path / "pendulum.yaml"
+    model.write_text((MODELS / "me751_pendulum.yaml").read_text())
+    done = casmech("run", model, "--t-end", "0.1", "--set", "L=3.0")
+    assert done.returncode == 0, done.stderr
+    names, values = read_csv(tmp_path / "pendulum_results" / "results.csv")
+    # --set L=3 moves the CM to L/2 = 1.5 from the pivot
+    radius = np.hypot(values[:, names.index("bar.y")], values[:, names.index("bar.z")])
+    np.testing.assert_allclose(radius, 1.5, rtol=0, atol=1e-10)  # Newton tolerance 1e-12
+
+
+def test_check_reports_dof(tmp_path):
+    done = casmech("check", MODELS / "four_bar.yaml")
+    assert done.returncode == 0, done.stderr
+    assert "degrees of freedom: 0" in done.stdout
+    assert "redundant" not in done.stdout
+
+
+def test_check_reports_redundant_rows_by_joint_and_line(tmp_path):
+    model = tmp_path / "redundant.yaml"
+    text = (MODELS / "me751_pendulum.yaml").read_text()
+    extra = ("  - name: second_pivot\n    type: revolute\n    body_i: ground\n    body_j: bar\n"
+             "    at: [0, 0, 0]\n    axis: [1, 0, 0]\n")
+    model.write_text(text.replace("\nanalysis:", extra + "\nanalysis:"))
+    line = 1 + model.read_text().splitlines().index("  - name: second_pivot")
+    done = casmech("check", model)
+    assert done.returncode == 0, done.stderr
+    assert f"redundant.yaml:{line}:" in done.stdout
+    assert "warning[E500] second_pivot" in done.stdout
+    assert done.stdout.count("warning[E500]") == 5  # a second revolute repeats all 5 rows
+
+
+def test_model_error_exit_1_with_location(tmp_path):
+    model = tmp_path / "bad.yaml"
+    model.write_text((MODELS / "me751_pendulum.yaml").read_text().replace("mass: m", "mass: -m"))
+    done = casmech("run", model)
+    assert done.returncode == 1
+    line = 1 + model.read_text().splitlines().index("    mass: -m")
+    assert f"bad.yaml:{line}:" in done.stderr and "error[E400]" in done.stderr
+    assert "Traceback" not in done.stderr
+
+
+def test_usage_error_exit_2(tmp_path):
+    assert casmech("run", MODELS / "me751_pendulum.yaml", "--set", "L").returncode == 2
+    assert casmech("frobnicate").returncode == 2
+    missing = casmech("run", tmp_path / "missing.yaml")
+    assert missing.returncode == 2 and "no such file" in missing.stderr
+
+
+@pytest.mark.parametrize("analysis", ["kinematics", "inverse_dynamics"])
+def test_not_fully_driven_exit_1(tmp_path, analysis):
+    model = tmp_path / "free.yaml"
+    model.write_text((MODELS / "me751_pendulum.yaml").read_text()
+                     .replace("    driver:\n      angle: pi/4 * cos(2*t)\n", ""))
+    done = casmech("run", model, "--analysis", analysis)
+    assert done.returncode == 1
+    assert "error[E501]" in done.stderr and "1 degree(s) of freedom" in done.stderr
+
+
+def test_analysis_failure_exit_3_keeps_rows(tmp_path):
+    """A four-bar whose crank is too long to turn fully (a = 1.6 with b = 2, c = 1.5, d = 2)
+    reaches its toggle position when |B O4| = b + c, i.e. cos(theta) = (d^2 + a^2 - (b + c)^2)
+    / (2 a d): theta = 152.7 deg, t = (152.7 - 90) / 180 s = 0.348 s at omega = pi. The run must
+    stop there with exit 3, name the time and joints, and keep the rows computed before."""
+    theta = np.degrees(np.arccos((2.0**2 + 1.6**2 - 3.5**2) / (2 * 1.6 * 2.0)))
+    t_toggle = (theta - 90.0) / 180.0
+    done = casmech("run", MODELS / "four_bar.yaml", "--set", "a=1.6", "--out", tmp_path,
+                   "--analysis", "kinematics")
+    assert done.returncode == 3, done.stderr
+    assert "analysis failed at t = " in done.stderr and "joint '" in done.stderr
+    failed_at = float(done.stderr.split("analysis failed at t = ")[1].split(":")[0])
+    assert t_toggle - 0.02 <= failed_at <= t_toggle + 0.02  # within two output steps
+    names, values = read_csv(tmp_path / "results.csv")
+    assert len(values) >= 30 and values[-1, 0] < t_toggle
