@@ -23,11 +23,11 @@ def table():
 
 def closed_form(t):
     th, thd, thdd = np.pi / 4 * np.cos(2 * t), -np.pi / 2 * np.sin(2 * t), -np.pi * np.cos(2 * t)
-    l = L / 2
-    r = np.stack([0 * t, l * np.sin(th), -l * np.cos(th)])
-    v = np.stack([0 * t, l * np.cos(th) * thd, l * np.sin(th) * thd])
-    a = np.stack([0 * t, l * (np.cos(th) * thdd - np.sin(th) * thd**2),
-                  l * (np.sin(th) * thdd + np.cos(th) * thd**2)])
+    arm = L / 2
+    r = np.stack([0 * t, arm * np.sin(th), -arm * np.cos(th)])
+    v = np.stack([0 * t, arm * np.cos(th) * thd, arm * np.sin(th) * thd])
+    a = np.stack([0 * t, arm * (np.cos(th) * thdd - np.sin(th) * thd**2),
+                  arm * (np.sin(th) * thdd + np.cos(th) * thd**2)])
     return th, thd, thdd, r, v, a
 
 

@@ -56,7 +56,8 @@ def rsda_angle(force: ForceIR, x: Coordinates):
     """Rotation of body j about the joint axis, from the joint frame: atan2(v_i.u_j, u_i.u_j)."""
     ai, aj = x.frame(force.body_i).A, x.frame(force.body_j).A
     u_j = aj @ ca.DM(force.axes["u_j"])
-    return ca.atan2((ai @ ca.DM(force.axes["v_i"])).T @ u_j, (ai @ ca.DM(force.axes["u_i"])).T @ u_j)
+    v_i, u_i = ai @ ca.DM(force.axes["v_i"]), ai @ ca.DM(force.axes["u_i"])
+    return ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
 
 
 def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tuple[str, str]):

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler, eom
+from casmech.compiler import eom, euler
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
 

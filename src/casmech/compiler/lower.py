@@ -9,7 +9,15 @@ from __future__ import annotations
 import numpy as np
 
 from casmech.compiler import joints as joint_tables
-from casmech.compiler.ir import GROUND_INDEX, BodyIR, ForceIR, JointIR, ModelIR, PrimitiveIR, RowInfo
+from casmech.compiler.ir import (
+    GROUND_INDEX,
+    BodyIR,
+    ForceIR,
+    JointIR,
+    ModelIR,
+    PrimitiveIR,
+    RowInfo,
+)
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
 
 POINTS = frozenset({"P", "Q", "Pi", "Pj"})
@@ -36,7 +44,8 @@ class _Poses:
 
     def __init__(self, model: ResolvedModel):
         self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
-        self.pose = {b.name: (b.position, rotation_matrix(b.euler_parameters)) for b in model.bodies}
+        self.pose = {b.name: (b.position, rotation_matrix(b.euler_parameters))
+                     for b in model.bodies}
         self.pose[GROUND] = (np.zeros(3), np.eye(3))
 
     def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
@@ -65,7 +74,7 @@ def _vectors(template: dict[str, str], joint: Joint, frame, poses: _Poses) -> di
     for key, spec in template.items():
         name, _, side = spec.partition("@")
         if not side:  # basic constraint: as written in the file
-            out[key] = np.asarray(joint.vectors[name] if name in joint.vectors else frame[name], float)
+            out[key] = np.asarray(joint.vectors.get(name, frame.get(name)), float)
         else:
             body = joint.body_i if side == "i" else joint.body_j
             out[key] = poses.local(body, name, frame[name])
@@ -75,8 +84,9 @@ def _vectors(template: dict[str, str], joint: Joint, frame, poses: _Poses) -> di
 def _offset(joint: Joint, frame) -> float:
     """The constant part of f for a composite joint's D rows: the squared length."""
     if joint.type == "distance":
-        length = joint.length if joint.length is not None else np.linalg.norm(frame["Pj"] - frame["Pi"])
-        return float(length) ** 2
+        if joint.length is not None:
+            return float(joint.length) ** 2
+        return float(np.sum((frame["Pj"] - frame["Pi"]) ** 2))
     if joint.type == "revolute_spherical":
         return float(np.sum((frame["Q"] - frame["P"]) ** 2))
     return 0.0

@@ -22,7 +22,7 @@ MAX_DRIVER_STEP = 0.5
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
     bodies = functions.ir.bodies
-    return np.concatenate([b.r0 for b in bodies] + [b.p0 for b in bodies]) if bodies else np.zeros(0)
+    return np.concatenate([b.r0 for b in bodies] + [b.p0 for b in bodies] + [np.zeros(0)])
 
 
 def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
