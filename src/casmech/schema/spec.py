@@ -1,0 +1,528 @@
+"""The model format (MODEL_FORMAT.md) as pydantic v2 models, one class per YAML mapping.
+
+Frozen, `extra="forbid"`; joints and forces are unions discriminated on `type`, inertia and
+geometry items on their shape. Every scalar is a number or an expression string (evaluated in
+`semantic`). `validate(document)` turns pydantic's errors into Diagnostics: the union tags are
+dropped from pydantic's locations so that paths read `joints[2].axis`, as in the source map.
+"""
+
+from __future__ import annotations
+
+from types import UnionType
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+    Tag,
+    ValidationError,
+    WrapValidator,
+)
+from pydantic_core import ErrorDetails, PydanticCustomError
+
+from casmech.errors import Diagnostic, did_you_mean
+from casmech.schema.loader import Document, Path, format_path
+
+
+def _scalar(value: Any, handler: Any) -> Any:
+    try:
+        return handler(value)
+    except ValidationError:
+        raise PydanticCustomError("scalar_type", "expected a number or an expression") from None
+
+
+Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
+Vector = Annotated[tuple[Scalar, ...], Field(min_length=3, max_length=3)]
+Vector6 = Annotated[tuple[Scalar, ...], Field(min_length=6, max_length=6)]
+Matrix = Annotated[tuple[Vector, ...], Field(min_length=3, max_length=3)]
+Name = StrictStr
+
+
+def _inertia_shape(value: Any) -> str:
+    if isinstance(value, list | tuple):
+        if len(value) == 6:
+            return "full"
+        if any(isinstance(item, list | tuple) for item in value):
+            return "matrix"
+    return "principal"
+
+
+Inertia = Annotated[
+    Union[  # noqa: UP007
+        Annotated[Vector, Tag("principal")],
+        Annotated[Vector6, Tag("full")],
+        Annotated[Matrix, Tag("matrix")],
+    ],
+    Discriminator(_inertia_shape),
+]
+
+
+class Spec(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# ------------------------------------------------------------------------------- orientation
+class AxisAngle(Spec):
+    axis: Vector
+    angle: Scalar
+
+
+class Orientation(Spec):
+    """Exactly one form must be given (checked in semantic, E407)."""
+
+    euler_parameters: Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)] | None = None
+    axis_angle: AxisAngle | None = None
+    matrix: Matrix | None = None
+    x_axis: Vector | None = None
+    y_axis: Vector | None = None
+    z_axis: Vector | None = None
+
+
+# ---------------------------------------------------------------------------------- geometry
+class Placement(Spec):
+    offset: Vector | None = None
+    orientation: Orientation | None = None
+
+
+class Cylinder(Spec):
+    radius: Scalar
+    length: Scalar
+    axis: Literal["x", "y", "z"] = "z"
+
+
+class BoxItem(Placement):
+    box: Vector
+
+
+class CylinderItem(Placement):
+    cylinder: Cylinder
+
+
+class SphereItem(Placement):
+    sphere: Scalar
+
+
+class MeshItem(Placement):
+    mesh: StrictStr
+    scale: Scalar = 1
+
+
+GEOMETRY_KINDS = ("box", "cylinder", "sphere", "mesh")
+
+
+def _geometry_kind(value: Any) -> str | None:
+    kinds = [kind for kind in GEOMETRY_KINDS if isinstance(value, dict) and kind in value]
+    return kinds[0] if len(kinds) == 1 else None
+
+
+Geometry = Annotated[
+    Union[  # noqa: UP007
+        Annotated[BoxItem, Tag("box")],
+        Annotated[CylinderItem, Tag("cylinder")],
+        Annotated[SphereItem, Tag("sphere")],
+        Annotated[MeshItem, Tag("mesh")],
+    ],
+    Discriminator(
+        _geometry_kind,
+        custom_error_type="geometry_kind",
+        custom_error_message="a geometry item needs exactly one of box, cylinder, sphere, mesh",
+    ),
+]
+
+
+class Body(Spec):
+    name: Name
+    mass: Scalar
+    inertia: Inertia
+    position: Vector
+    orientation: Orientation | None = None
+    velocity: Vector | None = None
+    angular_velocity: Vector | None = None
+    geometry: tuple[Geometry, ...] = ()
+
+
+# ------------------------------------------------------------------------------------ joints
+class Driver(Spec):
+    """Which keys a joint type allows is checked in semantic (E408)."""
+
+    angle: Scalar | None = None
+    displacement: Scalar | None = None
+
+
+class JointBase(Spec):
+    name: Name
+    body_i: Name
+    body_j: Name
+
+
+class Composite(JointBase):
+    driver: Driver | None = None
+
+
+class Revolute(Composite):
+    type: Literal["revolute"]
+    at: Vector
+    axis: Vector
+
+
+class Spherical(Composite):
+    type: Literal["spherical"]
+    at: Vector
+
+
+class Universal(Composite):
+    type: Literal["universal"]
+    at: Vector
+    axis_i: Vector
+    axis_j: Vector
+
+
+class Cylindrical(Composite):
+    type: Literal["cylindrical"]
+    at: Vector
+    axis: Vector
+
+
+class Translational(Composite):
+    type: Literal["translational"]
+    at: Vector
+    axis: Vector
+
+
+class Fixed(Composite):
+    type: Literal["fixed"]
+    at: Vector
+
+
+class Distance(Composite):
+    type: Literal["distance"]
+    at_i: Vector
+    at_j: Vector
+    length: Scalar | None = None
+
+
+class RevoluteSpherical(Composite):
+    type: Literal["revolute_spherical"]
+    at: Vector
+    axis: Vector
+    at_j: Vector
+
+
+class Planar(Composite):
+    type: Literal["planar"]
+    at: Vector
+    axis: Vector
+
+
+class Basic(JointBase):
+    f: Scalar = "0"
+
+
+class DP1(Basic):
+    type: Literal["dp1"]
+    a_i: Vector
+    a_j: Vector
+
+
+class DP2(Basic):
+    type: Literal["dp2"]
+    a_i: Vector
+    s_i: Vector
+    s_j: Vector
+
+
+class D(Basic):
+    type: Literal["d"]
+    s_i: Vector
+    s_j: Vector
+
+
+class CD(Basic):
+    type: Literal["cd"]
+    c: Vector
+    s_i: Vector
+    s_j: Vector
+
+
+JOINTS = (Revolute, Spherical, Universal, Cylindrical, Translational, Fixed, Distance)
+JOINTS += (RevoluteSpherical, Planar, DP1, DP2, D, CD)
+Joint = Annotated[Union[JOINTS], Field(discriminator="type")]  # noqa: UP007
+
+
+# ------------------------------------------------------------------------------------ forces
+class TSDA(Spec):
+    name: Name
+    type: Literal["tsda"]
+    body_i: Name
+    at_i: Vector
+    body_j: Name
+    at_j: Vector
+    stiffness: Scalar = 0
+    free_length: Scalar | None = None
+    damping: Scalar = 0
+    actuator: Scalar = "0"
+
+
+class RSDA(Spec):
+    name: Name
+    type: Literal["rsda"]
+    joint: Name
+    stiffness: Scalar = 0
+    free_angle: Scalar = 0
+    damping: Scalar = 0
+    actuator: Scalar = "0"
+
+
+class PointForce(Spec):
+    name: Name
+    type: Literal["force"]
+    body: Name
+    at: Vector | None = None  # default: the body's centre of mass
+    value: Vector
+    frame: Literal["global", "body"] = "global"
+
+
+class Torque(Spec):
+    name: Name
+    type: Literal["torque"]
+    body: Name
+    value: Vector
+    frame: Literal["global", "body"] = "global"
+
+
+Force = Annotated[Union[TSDA, RSDA, PointForce, Torque], Field(discriminator="type")]  # noqa: UP007
+
+
+# ---------------------------------------------------------------------------------- analysis
+class Analysis(Spec):
+    type: Literal["kinematics", "dynamics", "inverse_dynamics", "statics", "assembly"] = "dynamics"
+    t_end: Scalar = 1.0
+    output_step: Scalar = 0.01
+    rtol: Scalar = 1e-8
+    atol: Scalar = 1e-10
+    formulation: Literal["rp", "romega"] = "rp"
+
+
+class ModelSpec(Spec):
+    """A whole model file."""
+
+    casmech: Literal[1]
+    name: StrictStr
+    description: StrictStr = ""
+    parameters: dict[StrictStr, Scalar] = Field(default_factory=dict)
+    gravity: Vector = (0, 0, -9.81)
+    bodies: tuple[Body, ...]
+    joints: tuple[Joint, ...] = ()
+    forces: tuple[Force, ...] = ()
+    analysis: Analysis = Field(default_factory=Analysis)
+
+    model_config = ConfigDict(
+        extra="forbid",
+        frozen=True,
+        title="casmech model",
+        json_schema_extra={"$schema": "https://json-schema.org/draft/2020-12/schema"},
+    )
+
+
+# -------------------------------------------------------------------- errors -> diagnostics
+def _strip(annotation: Any) -> Any:
+    while get_origin(annotation) is Annotated:
+        annotation = get_args(annotation)[0]
+    return annotation
+
+
+def _tag(member: Any) -> str | None:
+    """The tag of a union member: its Tag metadata or the Literal of its `type` field."""
+    tags = [meta.tag for meta in get_args(member)[1:] if isinstance(meta, Tag)]
+    model = _strip(member)
+    if not tags and isinstance(model, type) and issubclass(model, BaseModel):
+        tags = list(
+            get_args(model.model_fields["type"].annotation) if "type" in model.model_fields else ()
+        )
+    return tags[0] if tags else None
+
+
+def _union_members(annotation: Any) -> dict[str | None, Any]:
+    return {_tag(member): member for member in get_args(annotation)}
+
+
+def _step(annotation: Any, step: str | int) -> tuple[Any, bool]:
+    """The annotation one step down `loc`, and whether the step is part of the YAML path."""
+    annotation = _strip(annotation)
+    origin = get_origin(annotation)
+    if origin in (Union, UnionType):
+        members = _union_members(annotation)
+        if isinstance(step, str) and step in members:
+            return members[step], False
+        present = [m for m in get_args(annotation) if m is not type(None)]
+        return _step(present[0], step) if len(present) == 1 else (Any, True)
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        field = annotation.model_fields.get(str(step))
+        return (field.annotation if field else Any), True
+    args = get_args(annotation)
+    return {tuple: args[:1], list: args[:1], dict: args[1:]}.get(origin, (Any,))[0], True
+
+
+def _walk(loc: tuple[str | int, ...]) -> tuple[Path, type[BaseModel], Any]:
+    """YAML path, innermost model, and annotation of a pydantic error location."""
+    path: list[str | int] = []
+    annotation: Any = ModelSpec
+    model: type[BaseModel] = ModelSpec
+    for step in loc:
+        inner = _strip(annotation)
+        if isinstance(inner, type) and issubclass(inner, BaseModel):
+            model = inner
+        annotation, in_path = _step(annotation, step)
+        path.extend([step] if in_path else [])
+    return tuple(path), model, _strip(annotation)
+
+
+def _describe(value: Any) -> str:
+    kinds = {
+        bool: lambda v: str(v).lower(),
+        type(None): lambda v: "nothing (null)",
+        dict: lambda v: "a mapping",
+        list: lambda v: f"a list of {len(v)} items",
+        str: lambda v: f"'{v}'",
+    }
+    return kinds.get(type(value), repr)(value)
+
+
+EXPECTED = {
+    "scalar_type": "a number or an expression string",
+    "string_type": "a string",
+    "tuple_type": "a list",
+    "model_type": "a mapping",
+    "model_attributes_type": "a mapping",
+    "dict_type": "a mapping",
+}
+HINTS = {
+    "inertia": "inertia is [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] or a 3x3 list",
+    "euler_parameters": "Euler parameters are [e0, e1, e2, e3]",
+}
+
+
+class _Error:
+    """One pydantic error, located in the document."""
+
+    def __init__(self, error: ErrorDetails, document: Document):
+        self.error = error
+        self.input = error.get("input")
+        self.ctx = error.get("ctx", {})
+        self.path, self.model, self.annotation = _walk(tuple(error["loc"]))
+        self.document = document
+
+    def diagnostic(self, code: str, message: str, path: Path | None = None, **extra: Any):
+        path = self.path if path is None else path
+        source = extra.pop("source", None) or self.document.locate(path)
+        if "hint" not in extra:
+            keys = [step for step in path if isinstance(step, str)]
+            extra["hint"] = HINTS.get(keys[-1]) if keys else None
+        return Diagnostic(code, format_path(path), message, source, **extra)
+
+
+def _missing(e: _Error) -> Diagnostic:
+    key = e.path[-1]
+    return e.diagnostic(
+        "E100", f"missing required key '{key}'", source=e.document.locate(e.path[:-1])
+    )
+
+
+def _extra(e: _Error) -> Diagnostic:
+    allowed = list(e.model.model_fields)
+    hint = did_you_mean(e.path[-1], allowed) or f"allowed keys: {', '.join(allowed)}"
+    source = e.document.locate_key(e.path)
+    return e.diagnostic("E101", f"unknown key '{e.path[-1]}'", source=source, hint=hint)
+
+
+def _tags(e: _Error) -> list[str]:
+    return [tag for tag in _union_members(e.annotation) if tag is not None]
+
+
+def _bad_tag(e: _Error) -> Diagnostic:
+    tag, tags = e.ctx.get("tag"), _tags(e)
+    path, expected = (*e.path, "type"), " | ".join(tags)
+    hint = did_you_mean(tag, tags)
+    return e.diagnostic("E103", f"unknown type '{tag}'", path, expected=expected, hint=hint)
+
+
+def _no_tag(e: _Error) -> Diagnostic:
+    source = e.document.locate(e.path)
+    return e.diagnostic(
+        "E100",
+        "missing required key 'type'",
+        (*e.path, "type"),
+        source=source,
+        expected=" | ".join(_tags(e)),
+    )
+
+
+def _literal(e: _Error) -> Diagnostic:
+    values = [str(value) for value in get_args(e.annotation)]
+    got = _describe(e.input)
+    if e.path == ("casmech",):
+        return e.diagnostic("E104", "unsupported format version", expected="1", got=got)
+    hint = did_you_mean(e.input, values)
+    return e.diagnostic("E103", "invalid value", expected=" | ".join(values), got=got, hint=hint)
+
+
+def _geometry(e: _Error) -> Diagnostic:
+    if not isinstance(e.input, dict):
+        return e.diagnostic("E102", "wrong type", expected="a mapping", got=_describe(e.input))
+    present = [kind for kind in GEOMETRY_KINDS if kind in e.input]
+    if present:
+        return e.diagnostic(
+            "E410",
+            f"several shapes in one geometry item: {', '.join(present)}",
+            hint="write one geometry item per shape",
+        )
+    unknown = [key for key in e.input if key not in ("offset", "orientation")]
+    hint = did_you_mean(unknown[0], GEOMETRY_KINDS) if unknown else None
+    return e.diagnostic(
+        "E100", "missing required key: one of box, cylinder, sphere, mesh", hint=hint
+    )
+
+
+def _length(e: _Error) -> Diagnostic | None:
+    low, high = e.ctx.get("min_length", 0), e.ctx.get("max_length", e.ctx.get("min_length"))
+    if isinstance(e.input, list | tuple) and low <= len(e.input) <= (high or low):
+        return None  # pydantic counts only the valid items; the bad ones are reported already
+    count = f"{low}" if low == high else f"{low} to {high}"
+    got = _describe(e.input)
+    return e.diagnostic(
+        "E102", "wrong number of items", expected=f"a list of {count} items", got=got
+    )
+
+
+def _wrong_type(e: _Error) -> Diagnostic:
+    expected = EXPECTED.get(e.error["type"], e.error["msg"])
+    return e.diagnostic("E102", "wrong type", expected=expected, got=_describe(e.input))
+
+
+TRANSLATE = {
+    "missing": _missing,
+    "extra_forbidden": _extra,
+    "union_tag_invalid": _bad_tag,
+    "union_tag_not_found": _no_tag,
+    "literal_error": _literal,
+    "geometry_kind": _geometry,
+    "too_short": _length,
+    "too_long": _length,
+}
+
+
+def validate(document: Document) -> tuple[ModelSpec | None, list[Diagnostic]]:
+    """The ModelSpec of a document, or None and the structural diagnostics."""
+    try:
+        return ModelSpec.model_validate(document.data), []
+    except ValidationError as error:
+        found = (
+            TRANSLATE.get(item["type"], _wrong_type)(_Error(item, document))
+            for item in error.errors(include_url=False)
+        )
+        return None, [diagnostic for diagnostic in found if diagnostic is not None]
