@@ -1,0 +1,228 @@
+"""Bodies: mass, inertia, orientation (every form -> unit Euler parameters), geometry."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from casmech.schema import resolved, spec
+from casmech.schema.checker import Checker, failed
+from casmech.schema.loader import Path
+
+UNIT = 1e-9  # tolerance of unit norms, orthonormality, det = 1, inertia symmetry and triangle
+PARALLEL = 1e-6  # |sin| below which two orientation axes are parallel
+ORIENTATION_FORMS = ("euler_parameters", "axis_angle", "matrix", "x_axis", "y_axis", "z_axis")
+AXES = ("x_axis", "y_axis", "z_axis")
+CROSS = {"x_axis": AXES[1:], "y_axis": AXES[2::-2], "z_axis": AXES[:2]}  # right-handed third axis
+IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
+
+INERTIA_FORMS = {
+    3: np.diag,  # principal moments
+    6: lambda v: np.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]]),
+}
+GEOMETRY_SIZES = {  # kind -> {resolved key: (path inside the item, value)}, all must be > 0
+    "box": lambda g: {"size": (("box",), g.box)},
+    "cylinder": lambda g: {
+        "radius": (("cylinder", "radius"), g.cylinder.radius),
+        "length": (("cylinder", "length"), g.cylinder.length),
+    },
+    "sphere": lambda g: {"radius": (("sphere",), g.sphere)},
+    "mesh": lambda g: {"scale": (("scale",), g.scale)},
+}
+GEOMETRY_EXTRAS = {
+    "box": lambda g: {},
+    "cylinder": lambda g: {"axis": g.cylinder.axis},
+    "sphere": lambda g: {},
+    "mesh": lambda g: {"file": g.mesh},
+}
+
+
+# ------------------------------------------------------------------------------ rotations
+def skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def rotation_matrix(p: np.ndarray) -> np.ndarray:
+    """A(p) = 2[(e0^2 - 1/2) I + e e^T + e0 e~]: body -> global; columns are the body axes."""
+    e0, e = p[0], np.asarray(p[1:])
+    return 2.0 * ((e0 * e0 - 0.5) * np.eye(3) + np.outer(e, e) + e0 * skew(e))
+
+
+def euler_parameters(a: np.ndarray) -> np.ndarray:
+    """Shepperd's method: Euler parameters (e0 >= 0) of a rotation matrix."""
+    trace = np.trace(a)
+    k = np.array(
+        [
+            [1 + trace, a[2, 1] - a[1, 2], a[0, 2] - a[2, 0], a[1, 0] - a[0, 1]],
+            [a[2, 1] - a[1, 2], 1 + 2 * a[0, 0] - trace, a[0, 1] + a[1, 0], a[0, 2] + a[2, 0]],
+            [a[0, 2] - a[2, 0], a[0, 1] + a[1, 0], 1 + 2 * a[1, 1] - trace, a[1, 2] + a[2, 1]],
+            [a[1, 0] - a[0, 1], a[0, 2] + a[2, 0], a[1, 2] + a[2, 1], 1 + 2 * a[2, 2] - trace],
+        ]
+    )  # k[i, j] = 4 p_i p_j
+    largest = int(np.argmax(np.diag(k)))
+    p = k[largest] / (2.0 * math.sqrt(k[largest, largest]))
+    p = -p if p[0] < 0 else p
+    return p / np.linalg.norm(p)
+
+
+# ------------------------------------------------------------------------------- checker
+
+
+# ---------------------------------------------------------------------------------- checks
+def orientation(check: Checker, path: Path, given: spec.Orientation | None) -> np.ndarray | None:
+    if given is None:
+        return IDENTITY.copy()
+    forms = [form for form in ORIENTATION_FORMS if getattr(given, form) is not None]
+    axes = [form for form in forms if form in AXES]
+    kinds = [form for form in forms if form not in AXES] + (["two axes"] if axes else [])
+    if len(kinds) != 1 or len(axes) not in (0, 2):
+        got = ", ".join(forms) or "none"
+        check.error(
+            "E407",
+            path,
+            "orientation needs exactly one form",
+            got=got,
+            expected="one of euler_parameters, axis_angle, matrix, or two of x_axis, y_axis, z_axis",
+        )
+        return None
+    return ORIENTATIONS[kinds[0]](check, path, given)
+
+
+def from_euler_parameters(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
+    path = (*path, "euler_parameters")
+    p = check.numbers(path, given.euler_parameters)
+    norm = None if p is None else np.linalg.norm(p)
+    if norm is not None and abs(norm - 1.0) > UNIT:
+        hint = "normalised: [" + ", ".join(f"{x:.12g}" for x in p / norm) + "]" if norm else None
+        check.error(
+            "E403",
+            path,
+            "Euler parameters must have unit norm",
+            got=f"norm {norm:.12g}",
+            hint=hint,
+        )
+        return None
+    return None if p is None else p / norm
+
+
+def from_axis_angle(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
+    path = (*path, "axis_angle")
+    axis = check.direction((*path, "axis"), given.axis_angle.axis)
+    angle = check.number((*path, "angle"), given.axis_angle.angle)
+    if axis is None or angle is None:
+        return None
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
+
+
+def from_matrix(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
+    path = (*path, "matrix")
+    rows = [check.numbers((*path, row), values) for row, values in enumerate(given.matrix)]
+    if failed(rows):
+        return None
+    a = np.array(rows)
+    error, det = np.abs(a.T @ a - np.eye(3)).max(), np.linalg.det(a)
+    if error > UNIT or abs(det - 1.0) > UNIT:
+        check.error(
+            "E406",
+            path,
+            "rotation matrix must be orthonormal with det = +1",
+            got=f"max |A^T A - I| = {error:.3g}, det = {det:.12g}",
+            hint="columns are the body x, y, z axes in the global frame",
+        )
+        return None
+    return euler_parameters(a)
+
+
+def from_axes(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
+    first, second = (form for form in AXES if getattr(given, form) is not None)
+    u = check.direction((*path, first), getattr(given, first))
+    v = check.direction((*path, second), getattr(given, second))
+    if u is None or v is None:
+        return None
+    v = v - (v @ u) * u
+    if np.linalg.norm(v) < PARALLEL:
+        check.error("E405", (*path, second), f"{first} and {second} are parallel")
+        return None
+    axes = {first: u, second: v / np.linalg.norm(v)}
+    third = next(form for form in AXES if form not in axes)
+    axes[third] = np.cross(*(axes[form] for form in CROSS[third]))
+    return euler_parameters(np.column_stack([axes[form] for form in AXES]))
+
+
+def inertia(check: Checker, path: Path, values) -> np.ndarray | None:
+    nested = isinstance(values[0], tuple)
+    rows = [check.numbers((*path, r), row) for r, row in enumerate(values)] if nested else []
+    flat = None if nested else check.numbers(path, values)
+    if failed([flat] if not nested else rows):
+        return None
+    matrix = np.array(rows) if nested else INERTIA_FORMS[len(flat)](flat)
+    scale = np.abs(matrix).max()
+    if np.abs(matrix - matrix.T).max() > UNIT * scale:
+        check.error("E401", path, "inertia matrix is not symmetric")
+        return None
+    moments = np.linalg.eigvalsh(matrix)
+    if moments[0] <= 0:
+        check.error(
+            "E401",
+            path,
+            "inertia is not positive definite",
+            got=f"principal moments {', '.join(f'{m:g}' for m in moments)}",
+        )
+        return None
+    if moments[0] + moments[1] < moments[2] * (1 - UNIT):
+        check.error(
+            "E402",
+            path,
+            "principal moments violate the triangle inequality",
+            got="{:g} + {:g} < {:g}".format(*moments),
+            hint="no rigid body has one moment larger than the sum of the other two",
+        )
+        return None
+    return matrix
+
+
+def geometry(check: Checker, path: Path, item) -> dict[str, Any] | None:
+    kind = next(kind for kind in spec.GEOMETRY_KINDS if hasattr(item, kind))
+    result: dict[str, Any] = {"type": kind, **GEOMETRY_EXTRAS[kind](item)}
+    for key, (where, value) in GEOMETRY_SIZES[kind](item).items():
+        where = (*path, *where)
+        number = (
+            check.numbers(where, value)
+            if isinstance(value, tuple)
+            else (check.number(where, value))
+        )
+        result[key] = check.positive("E410", where, number, f"{kind} {key}")
+    result["offset"] = check.vector((*path, "offset"), item.offset)
+    result["euler_parameters"] = orientation(check, (*path, "orientation"), item.orientation)
+    return None if failed(result.values()) else result
+
+
+def body(check: Checker, index: int, given: spec.Body) -> resolved.Body | None:
+    path = ("bodies", index)
+    mass = check.positive(
+        "E400", (*path, "mass"), check.number((*path, "mass"), given.mass), "mass"
+    )
+    fields = dict(
+        mass=mass,
+        inertia=inertia(check, (*path, "inertia"), given.inertia),
+        position=check.vector((*path, "position"), given.position),
+        euler_parameters=orientation(check, (*path, "orientation"), given.orientation),
+        velocity=check.vector((*path, "velocity"), given.velocity),
+        angular_velocity=check.vector((*path, "angular_velocity"), given.angular_velocity),
+        geometry=tuple(
+            geometry(check, (*path, "geometry", k), item) for k, item in enumerate(given.geometry)
+        ),
+    )
+    if failed([*fields.values(), *fields["geometry"]]):
+        return None
+    return resolved.Body(given.name, **fields, source=check.doc.locate(path))
+
+
+ORIENTATIONS = {
+    "euler_parameters": from_euler_parameters,
+    "axis_angle": from_axis_angle,
+    "matrix": from_matrix,
+    "two axes": from_axes,
+}

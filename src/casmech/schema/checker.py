@@ -1,0 +1,209 @@
+"""The Checker: reports findings and evaluates scalars, vectors and names for `semantic`.
+
+Every finding is collected in `Checker.found`; the caller raises them all at once. A value whose
+check failed is None, and references to a parameter that failed are not reported again.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from casmech.errors import Diagnostic, Source, did_you_mean
+from casmech.schema import resolved, spec
+from casmech.schema.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
+from casmech.schema.expressions import parse as parse_expression
+from casmech.schema.loader import Document, Path, format_path
+from casmech.schema.resolved import GROUND, ScalarFunction
+
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
+RESERVED = frozenset({"t", *CONSTANTS, *FUNCTIONS})
+ZERO = 1e-12  # a vector shorter than this is zero-length (its direction is meaningless)
+WHY_RESERVED = "pi, e, t and the function names cannot be parameters"
+WHY_GROUND = "'ground' is the fixed global frame, always present; choose another name"
+TIME_KEYS = "joint f, driver angle/displacement, force/torque value, tsda/rsda actuator"
+
+
+def failed(values) -> bool:
+    """Whether any of `values` is None (a check that failed and was reported)."""
+    return any(value is None for value in values)
+
+
+class Checker:
+    def __init__(self, document: Document, overrides: Mapping[str, str] | None):
+        self.doc = document
+        self.overrides = dict(overrides or {})
+        self.found: list[Diagnostic] = []
+        self.parameters: dict[str, float] = {}
+        self.declared: dict[str, int] = {}  # parameter -> line, for "defined later"
+        self.broken: set[str] = set()  # parameters that failed: no follow-up errors
+        self.bodies: dict[str, resolved.Body | None] = {}
+        self.joint_types: dict[str, str] = {}
+        self.joint_bodies: dict[str, tuple[str, str]] = {}
+
+    # -- reporting
+    def error(self, code: str, path: Path | str, message: str, **extra: Any) -> None:
+        if "source" not in extra:
+            extra["source"] = self.doc.locate(path) if isinstance(path, tuple) else None
+        text = format_path(path) if isinstance(path, tuple) else path
+        self.found.append(Diagnostic(code, text, message, **extra))
+
+    def inside(self, path: Path | str, offset: int) -> Source | None:
+        return self.doc.source_in_scalar(path, offset) if isinstance(path, tuple) else None
+
+    # -- expressions
+    def expression(self, path: Path | str, value: Any, variables=()) -> Expr | None:
+        """Parse and check the names of a scalar (E200, E201, E202, E203, E204)."""
+        try:
+            expr = parse_expression(value) if isinstance(value, str) else from_number(value)
+        except ExpressionError as error:
+            source = self.inside(path, error.offset)
+            self.error(error.code, path, error.message, source=source, hint=error.hint)
+            return None
+        except OverflowError:
+            self.error("E204", path, "number too large", got=str(value))
+            return None
+        known = [name not in self.broken for name in expr.symbols]
+        for name, offset, _ in expr.names_with_offsets():
+            if name not in self.parameters and name not in variables and name not in self.broken:
+                self.unknown_symbol(path, name, self.inside(path, offset), variables)
+                known.append(False)
+        return expr if all(known) else None
+
+    def unknown_symbol(self, path, name: str, source, variables) -> None:
+        if name == "t":
+            self.error(
+                "E202",
+                path,
+                "time 't' is not allowed here",
+                source=source,
+                hint=f"functions of time are allowed in: {TIME_KEYS}",
+            )
+        elif name in self.declared:
+            message = f"'{name}' is used before it is defined"
+            hint = f"parameters are evaluated in order; '{name}' is defined at line "
+            self.error("E201", path, message, source=source, hint=f"{hint}{self.declared[name]}")
+        else:
+            names = [*self.parameters, *variables, *CONSTANTS]
+            hint = did_you_mean(name, names)
+            self.error("E201", path, f"unknown symbol '{name}'", source=source, hint=hint)
+
+    def finite(self, path, expr: Expr, at: Mapping[str, float]) -> float | None:
+        value = float(expr.evaluate({**self.parameters, **at}, "numpy"))
+        if not math.isfinite(value):
+            where = ", ".join(f"{name} = {number:g}" for name, number in at.items())
+            self.error(
+                "E204",
+                path,
+                f"'{expr.text}' evaluates to {value}" + (f" at {where}" if where else ""),
+            )
+            return None
+        return value
+
+    def number(self, path: Path | str, value: Any) -> float | None:
+        expr = self.expression(path, value)
+        return None if expr is None else self.finite(path, expr, {})
+
+    def function(self, path: Path, value: Any, at: Mapping[str, float]) -> ScalarFunction | None:
+        variables = tuple(at)
+        expr = self.expression(path, value, variables)
+        if expr is None or self.finite(path, expr, at) is None:
+            return None
+        source = self.doc.locate(path)
+        return ScalarFunction(str(value), expr, dict(self.parameters), variables, source)
+
+    def numbers(self, path: Path, values) -> np.ndarray | None:
+        items = [self.number((*path, index), value) for index, value in enumerate(values)]
+        return None if failed(items) else np.array(items)
+
+    def positive(self, code: str, path: Path, value, what: str) -> Any:
+        """`value` (a number or an array) if all positive; else report and return None."""
+        if value is not None and np.any(np.asarray(value) <= 0):
+            got = ", ".join(f"{x:g}" for x in np.atleast_1d(value))
+            self.error(code, path, f"{what} must be positive", got=got)
+            return None
+        return value
+
+    def vector(self, path: Path, values, default=(0.0, 0.0, 0.0)) -> np.ndarray | None:
+        return np.array(default, float) if values is None else self.numbers(path, values)
+
+    def direction(self, path: Path, values, normalise: bool = True) -> np.ndarray | None:
+        vector = self.numbers(path, values)
+        if vector is None:
+            return None
+        norm = np.linalg.norm(vector)
+        if norm < ZERO:
+            self.error("E404", path, "zero-length vector: its direction is undefined")
+            return None
+        return vector / norm if normalise else vector
+
+    # -- names
+    def parameter_values(self, parameters: Mapping[str, Any]) -> None:
+        self.declared = {
+            name: self.doc.locate_key(("parameters", name)).line for name in parameters
+        }
+        for name in self.overrides.keys() - parameters.keys():
+            hint = did_you_mean(name, parameters)
+            self.error("E300", f"--set {name}", f"unknown parameter '{name}'", hint=hint)
+        for name, value in parameters.items():
+            path = ("parameters", name)
+            if not self.valid_name(path, name, self.doc.locate_key(path), RESERVED, WHY_RESERVED):
+                self.broken.add(name)
+                continue
+            where = f"--set {name}" if name in self.overrides else path
+            result = self.number(where, self.overrides.get(name, value))
+            del self.declared[name]
+            self.parameters.update({name: result} if result is not None else {})
+            self.broken.update({name} if result is None else set())
+
+    def valid_name(self, path: Path, name: str, source: Source, reserved, why: str) -> bool:
+        if not NAME.match(name):
+            expected = "letters, digits and '_', not starting with a digit"
+            self.error("E303", path, f"invalid name '{name}'", source=source, expected=expected)
+        elif name in reserved:
+            self.error(
+                "E302",
+                path,
+                f"'{name}' is a reserved name",
+                source=source,
+                hint=why,
+            )
+        return bool(NAME.match(name)) and name not in reserved
+
+    def unique_names(self, model: spec.ModelSpec) -> None:
+        first: dict[str, Path] = {}
+        for section in ("bodies", "joints", "forces"):
+            for index, item in enumerate(getattr(model, section)):
+                path = (section, index, "name")
+                if not self.valid_name(
+                    path, item.name, self.doc.locate(path), {GROUND}, WHY_GROUND
+                ):
+                    continue
+                if item.name in first:
+                    where = first[item.name]
+                    line = self.doc.locate(where).line
+                    message = f"duplicate name '{item.name}' (first used by "
+                    self.error("E301", path, f"{message}{format_path(where[:2])}, line {line})")
+                first.setdefault(item.name, path)
+
+    def reference(self, path: Path, name: str, known, what: str) -> bool:
+        if name not in known:
+            hint = did_you_mean(name, known)
+            self.error("E300", path, f"unknown {what} '{name}'", hint=hint)
+        return name in known
+
+    def two_bodies(self, path: Path, body_i: str, body_j: str) -> bool:
+        known = [GROUND, *self.bodies]
+        found = all(
+            [
+                self.reference((*path, "body_i"), body_i, known, "body"),
+                self.reference((*path, "body_j"), body_j, known, "body"),
+            ]
+        )
+        if found and body_i == body_j:
+            self.error("E304", (*path, "body_j"), f"body_i and body_j are both '{body_i}'")
+        return found and body_i != body_j

@@ -1,0 +1,216 @@
+"""Joints and forces: references, vectors, drivers, functions of time."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from casmech.schema import resolved
+from casmech.schema.checker import ZERO, Checker, failed
+from casmech.schema.loader import Path
+from casmech.schema.resolved import ScalarFunction
+
+VECTOR_KEYS = ("at", "axis", "axis_i", "axis_j", "at_i", "at_j", "a_i", "a_j", "s_i", "s_j", "c")
+UNIT_KEYS = frozenset({"axis", "axis_i", "axis_j"})  # normalised
+NONZERO_KEYS = frozenset({"axis", "axis_i", "axis_j", "a_i", "a_j", "c"})  # E404 when zero
+DRIVERS = {"angle": ("revolute", "cylindrical"), "displacement": ("translational", "cylindrical")}
+RSDA_JOINTS = ("revolute", "cylindrical")
+PERPENDICULAR = 1e-6  # |cos| above which two axes are not perpendicular
+
+
+def joint(check: Checker, index: int, given) -> resolved.Joint | None:
+    path = ("joints", index)
+    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
+    check.joint_types[given.name] = given.type
+    check.joint_bodies[given.name] = (given.body_i, given.body_j)
+    keys = [key for key in VECTOR_KEYS if key in type(given).model_fields]
+    vectors = {key: joint_vector(check, (*path, key), key, getattr(given, key)) for key in keys}
+    extra = (
+        {"length": distance_length(check, path, given, vectors)} if given.type == "distance" else {}
+    )
+    extra.update(drivers(check, path, given))
+    if given.type in JOINT_CHECKS and not failed(vectors.values()):
+        JOINT_CHECKS[given.type](check, path, vectors)
+    if hasattr(given, "f"):
+        extra["f"] = check.function((*path, "f"), given.f, {"t": 0.0})
+    if not bodies_ok or failed([*vectors.values(), *extra.values()]):
+        return None
+    sources = {key: check.doc.locate_key((*path, key)) for key in given.model_fields_set}
+    if given.driver is not None if hasattr(given, "driver") else False:
+        sources.update(
+            {
+                f"driver.{key}": check.doc.locate_key((*path, "driver", key))
+                for key in given.driver.model_fields_set
+            }
+        )
+    return resolved.Joint(
+        given.name,
+        given.type,
+        given.body_i,
+        given.body_j,
+        vectors,
+        **extra,
+        source=check.doc.locate(path),
+        sources=sources,
+    )
+
+
+def joint_vector(check: Checker, path: Path, key: str, values) -> np.ndarray | None:
+    if key in NONZERO_KEYS:
+        return check.direction(path, values, normalise=key in UNIT_KEYS)
+    return check.numbers(path, values)
+
+
+def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | None]:
+    driver = getattr(given, "driver", None)
+    found = {}
+    for key in [] if driver is None else sorted(driver.model_fields_set):
+        where = (*path, "driver", key)
+        if given.type not in DRIVERS[key]:
+            allowed = " and ".join(DRIVERS[key])
+            check.error(
+                "E408",
+                where,
+                f"a {key} driver is not allowed on a {given.type} joint",
+                source=check.doc.locate_key(where),
+                hint=f"allowed on {allowed} joints",
+            )
+            found[key] = None
+        else:
+            found[f"driver_{key}"] = check.function(where, getattr(driver, key), {"t": 0.0})
+    return found
+
+
+def distance_length(check: Checker, path: Path, given, vectors) -> float | None:
+    if given.length is not None:
+        length = check.number((*path, "length"), given.length)
+        where = (*path, "length")
+    elif failed(vectors.values()):
+        return None
+    else:
+        length, where = float(np.linalg.norm(vectors["at_j"] - vectors["at_i"])), (*path, "at_j")
+    if length is not None and length <= ZERO:
+        check.error(
+            "E404",
+            where,
+            "a distance joint needs a positive length",
+            got=f"{length:g}",
+            hint="use a spherical joint for coincident points",
+        )
+        return None
+    return length
+
+
+def check_universal(check: Checker, path: Path, vectors) -> None:
+    cosine = abs(vectors["axis_i"] @ vectors["axis_j"])
+    if cosine > PERPENDICULAR:
+        check.error(
+            "E405",
+            (*path, "axis_j"),
+            "axis_i and axis_j must be perpendicular",
+            got=f"|cos| = {cosine:.3g}",
+        )
+
+
+def check_revolute_spherical(check: Checker, path: Path, vectors) -> None:
+    arm = vectors["at_j"] - vectors["at"]
+    length = np.linalg.norm(arm)
+    if length < ZERO:
+        check.error(
+            "E404",
+            (*path, "at_j"),
+            "at_j coincides with at",
+            hint="the arm from `at` to `at_j` must have a positive length",
+        )
+    elif abs(arm @ vectors["axis"]) > PERPENDICULAR * length:
+        check.error(
+            "E405",
+            (*path, "at_j"),
+            "at_j - at must be perpendicular to axis",
+            got=f"|cos| = {abs(arm @ vectors['axis']) / length:.3g}",
+        )
+
+
+def force(check: Checker, index: int, given) -> resolved.Force | None:
+    path = ("forces", index)
+    fields = FORCES[given.type](check, path, given)
+    if fields is None or failed([*fields.values(), *fields.get("value", ())]):
+        return None
+    return resolved.Force(given.name, given.type, **fields, source=check.doc.locate(path))
+
+
+def tsda(check: Checker, path: Path, given) -> dict[str, Any] | None:
+    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
+    at = {key: check.numbers((*path, key), getattr(given, key)) for key in ("at_i", "at_j")}
+    if not bodies_ok or failed(at.values()):
+        return None
+    length = float(np.linalg.norm(at["at_j"] - at["at_i"]))
+    free = (
+        length
+        if given.free_length is None
+        else (check.number((*path, "free_length"), given.free_length))
+    )
+    at_zero = {"t": 0.0, "length": length, "length_dot": 0.0}
+    return dict(
+        body_i=given.body_i,
+        body_j=given.body_j,
+        vectors=at,
+        free_length=free,
+        **coefficients(check, path, given),
+        actuator=check.function((*path, "actuator"), given.actuator, at_zero),
+    )
+
+
+def rsda(check: Checker, path: Path, given) -> dict[str, Any] | None:
+    joint = (*path, "joint")
+    if not check.reference(joint, given.joint, list(check.joint_types), "joint"):
+        return None
+    if check.joint_types[given.joint] not in RSDA_JOINTS:
+        check.error(
+            "E103",
+            joint,
+            "an rsda acts about the axis of a revolute or cylindrical joint",
+            got=f"'{given.joint}' is {check.joint_types[given.joint]}",
+        )
+        return None
+    body_i, body_j = check.joint_bodies[given.joint]
+    at_zero = {"t": 0.0, "angle": 0.0, "angle_dot": 0.0}
+    return dict(
+        joint=given.joint,
+        body_i=body_i,
+        body_j=body_j,
+        free_angle=check.number((*path, "free_angle"), given.free_angle),
+        **coefficients(check, path, given),
+        actuator=check.function((*path, "actuator"), given.actuator, at_zero),
+    )
+
+
+def coefficients(check: Checker, path: Path, given) -> dict[str, float | None]:
+    return {
+        key: check.number((*path, key), getattr(given, key)) for key in ("stiffness", "damping")
+    }
+
+
+def load(check: Checker, path: Path, given) -> dict[str, Any] | None:
+    """A point force or a torque on one moving body."""
+    if not check.reference((*path, "body"), given.body, list(check.bodies), "moving body"):
+        return None
+    value = tuple(
+        check.function((*path, "value", k), component, {"t": 0.0})
+        for k, component in enumerate(given.value)
+    )
+    fields = dict(body=given.body, value=value, frame=given.frame)
+    if given.type == "force":
+        body = check.bodies[given.body]
+        default = None if body is None else body.position
+        at = check.vector((*path, "at"), given.at, default) if default is not None else None
+        fields["vectors"] = None if at is None else {"at": at}
+    return fields
+
+
+JOINT_CHECKS = {
+    "universal": check_universal,
+    "revolute_spherical": check_revolute_spherical,
+}
+FORCES = {"tsda": tsda, "rsda": rsda, "force": load, "torque": load}
