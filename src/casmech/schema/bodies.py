@@ -84,7 +84,7 @@ def orientation(check: Checker, path: Path, given: spec.Orientation | None) -> n
             path,
             "orientation needs exactly one form",
             got=got,
-            expected="one of euler_parameters, axis_angle, matrix, or two of x_axis, y_axis, z_axis",
+            expected="euler_parameters, axis_angle, matrix, or two of x_axis, y_axis, z_axis",
         )
         return None
     return ORIENTATIONS[kinds[0]](check, path, given)
