@@ -38,6 +38,7 @@ def _scalar(value: Any, handler: Any) -> Any:
 
 Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
 Vector = Annotated[tuple[Scalar, ...], Field(min_length=3, max_length=3)]
+Vector4 = Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)]
 Vector6 = Annotated[tuple[Scalar, ...], Field(min_length=6, max_length=6)]
 Matrix = Annotated[tuple[Vector, ...], Field(min_length=3, max_length=3)]
 Name = StrictStr
@@ -339,11 +340,8 @@ def _strip(annotation: Any) -> Any:
 def _tag(member: Any) -> str | None:
     """The tag of a union member: its Tag metadata or the Literal of its `type` field."""
     tags = [meta.tag for meta in get_args(member)[1:] if isinstance(meta, Tag)]
-    model = _strip(member)
-    if not tags and isinstance(model, type) and issubclass(model, BaseModel):
-        tags = list(
-            get_args(model.model_fields["type"].annotation) if "type" in model.model_fields else ()
-        )
+    fields = getattr(_strip(member), "model_fields", {})
+    tags += list(get_args(fields["type"].annotation)) if "type" in fields else []
     return tags[0] if tags else None
 
 
@@ -489,14 +487,12 @@ def _geometry(e: _Error) -> Diagnostic:
 
 
 def _length(e: _Error) -> Diagnostic | None:
-    low, high = e.ctx.get("min_length", 0), e.ctx.get("max_length", e.ctx.get("min_length"))
-    if isinstance(e.input, list | tuple) and low <= len(e.input) <= (high or low):
+    """Every list of the format has a fixed length (3, 4 or 6 items)."""
+    count = e.ctx.get("min_length", e.ctx.get("max_length"))
+    if isinstance(e.input, list | tuple) and len(e.input) == count:
         return None  # pydantic counts only the valid items; the bad ones are reported already
-    count = f"{low}" if low == high else f"{low} to {high}"
-    got = _describe(e.input)
-    return e.diagnostic(
-        "E102", "wrong number of items", expected=f"a list of {count} items", got=got
-    )
+    expected, got = f"a list of {count} items", _describe(e.input)
+    return e.diagnostic("E102", "wrong number of items", expected=expected, got=got)
 
 
 def _wrong_type(e: _Error) -> Diagnostic:
