@@ -27,7 +27,9 @@ import numpy as np
 
 from casmech.errors import did_you_mean
 
-MAX_DEPTH = 200  # nesting limit, keeps the recursive parser far from Python's recursion limit
+# limits that keep the recursive parser and evaluator far from Python's recursion limit
+MAX_DEPTH = 50  # nested parentheses, calls, signs and powers
+MAX_TOKENS = 1000  # bounds the depth of long operator chains
 
 
 class ExpressionError(Exception):
@@ -252,6 +254,8 @@ def tokenize(text: str) -> list[Token]:
         if match.lastgroup != "space":
             tokens.append(Token(match.lastgroup, match.group(), pos))
         pos = match.end()
+    if len(tokens) > MAX_TOKENS:
+        raise ExpressionSyntaxError(f"expression longer than {MAX_TOKENS} tokens", 0, len(text))
     tokens.append(Token("end", "", len(text)))
     return tokens
 
