@@ -158,3 +158,15 @@ def rank(matrix: np.ndarray, relative: float = 1e-9) -> int:
     """Numerical rank: singular values above `relative` times the largest."""
     s = np.linalg.svd(matrix, compute_uv=False)
     return int(np.sum(s > relative * s[0]))
+
+
+def two_free_bodies(rng: np.random.Generator) -> tuple[Body, Body]:
+    """Bodies 'b1' and 'b2' with non-trivial orientations, CMs apart, full inertia tensors."""
+    def inertia():
+        m = rng.normal(size=(3, 3))
+        return m @ m.T + 3 * np.eye(3)  # symmetric positive definite, not diagonal
+
+    return (body("b1", [0.3, -0.2, 1.1] + 0.1 * rng.normal(size=3), random_unit_p(rng),
+                 mass=1.7, inertia=inertia()),
+            body("b2", [1.4, 0.6, 0.5] + 0.1 * rng.normal(size=3), random_unit_p(rng),
+                 mass=0.8, inertia=inertia()))
