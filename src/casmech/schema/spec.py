@@ -13,6 +13,7 @@ from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 from pydantic import (
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Discriminator,
     Field,
@@ -36,6 +37,13 @@ def _scalar(value: Any, handler: Any) -> Any:
         raise PydanticCustomError("scalar_type", "expected a number or an expression") from None
 
 
+def _version(value: Any) -> Any:
+    if type(value) is not int or value != 1:  # not True, not 1.0
+        raise PydanticCustomError("format_version", "unsupported format version")
+    return value
+
+
+Version = Annotated[Literal[1], BeforeValidator(_version)]
 Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
 Vector = Annotated[tuple[Scalar, ...], Field(min_length=3, max_length=3)]
 Vector4 = Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)]
@@ -312,7 +320,7 @@ class Analysis(Spec):
 class ModelSpec(Spec):
     """A whole model file."""
 
-    casmech: Literal[1]
+    casmech: Version
     name: StrictStr
     description: StrictStr = ""
     parameters: dict[StrictStr, Scalar] = Field(default_factory=dict)
@@ -462,11 +470,14 @@ def _no_tag(e: _Error) -> Diagnostic:
 
 def _literal(e: _Error) -> Diagnostic:
     values = [str(value) for value in get_args(e.annotation)]
-    got = _describe(e.input)
-    if e.path == ("casmech",):
-        return e.diagnostic("E104", "unsupported format version", expected="1", got=got)
     hint = did_you_mean(e.input, values)
-    return e.diagnostic("E103", "invalid value", expected=" | ".join(values), got=got, hint=hint)
+    expected, got = " | ".join(values), _describe(e.input)
+    return e.diagnostic("E103", "invalid value", expected=expected, got=got, hint=hint)
+
+
+def _version_error(e: _Error) -> Diagnostic:
+    got = _describe(e.input)
+    return e.diagnostic("E104", "unsupported format version", expected="1", got=got)
 
 
 def _geometry(e: _Error) -> Diagnostic:
@@ -506,6 +517,7 @@ TRANSLATE = {
     "union_tag_invalid": _bad_tag,
     "union_tag_not_found": _no_tag,
     "literal_error": _literal,
+    "format_version": _version_error,
     "geometry_kind": _geometry,
     "too_short": _length,
     "too_long": _length,
