@@ -114,8 +114,10 @@ def test_files(tmp_path):
     path = tmp_path / "model.yaml"
     path.write_text("a: 1\n", encoding="utf-8")
     assert load_file(str(path)).file == str(path)
-    with pytest.raises(UsageError):
+    with pytest.raises(UsageError, match="no such file"):
         load_file(str(tmp_path / "missing.yaml"))
+    with pytest.raises(UsageError, match="cannot read model file"):
+        load_file(str(tmp_path))  # a directory
     path.write_bytes(b"a: \xff\xfe\n")
     with pytest.raises(ModelError) as caught:
         load_file(str(path))

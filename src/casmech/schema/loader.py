@@ -173,6 +173,8 @@ def load_file(path: str) -> Document:
     except UnicodeDecodeError as error:
         message = f"the file is not UTF-8 text ({error.reason})"
         raise ModelError([Diagnostic("E001", "", message, Source(str(path), 1, 1))]) from None
+    except FileNotFoundError:
+        raise UsageError(f"no such file: {path}") from None
     except OSError as error:
         raise UsageError(f"cannot read model file {path}: {error.strerror or error}") from None
     return load_document(text, str(path))
