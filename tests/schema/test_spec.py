@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from casmech.schema import export, spec
+from casmech.schema import export, spec, spec_errors
 from casmech.schema.loader import load_document
 
 HEADER = "casmech: 1\nname: s\n"
@@ -12,7 +12,7 @@ BAR = "  - {name: bar, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}\n"
 
 
 def validate(text: str):
-    return spec.validate(load_document(HEADER + text, "s.yaml"))
+    return spec_errors.validate(load_document(HEADER + text, "s.yaml"))
 
 
 def errors(text: str) -> list[tuple]:
@@ -158,7 +158,7 @@ def test_enums_tags_and_versions():
     assert found["analysis.formulation"].expected == "rp | romega"
     for version, got in [("1.0", "1.0"), ("true", "true"), ("'1'", "'1'"), ("2", "2")]:
         document = load_document(f"casmech: {version}\nname: s\nbodies: []\n")
-        [diagnostic] = spec.validate(document)[1]
+        [diagnostic] = spec_errors.validate(document)[1]
         assert (diagnostic.code, diagnostic.expected, diagnostic.got) == ("E104", "1", got)
 
 

@@ -16,7 +16,7 @@ from casmech.errors import Diagnostic, ModelError
 from casmech.schema.loader import Document, load_document, load_file
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.semantic import resolve
-from casmech.schema.spec import validate
+from casmech.schema.spec_errors import validate
 
 
 def _order(diagnostic: Diagnostic) -> tuple[int, int]:
