@@ -67,11 +67,19 @@ def test_every_joint_and_force_type_is_discriminated():
     assert (model.forces[2].frame, model.forces[3].frame) == ("global", "body")
 
 
-def test_defaults():
-    model, _ = validate(f"bodies:\n{BAR}")
+@pytest.mark.parametrize("empty", ["", "parameters:\njoints:\nforces:\nanalysis:\ndescription:\n"])
+def test_defaults(empty):
+    model, _ = validate(f"bodies:\n{BAR}{empty}")
     assert model.gravity == (0, 0, -9.81)
     assert (model.joints, model.forces, model.parameters, model.description) == ((), (), {}, "")
     assert model.analysis == spec.Analysis(type="dynamics", formulation="rp")
+
+
+def test_a_required_key_without_value_is_a_wrong_type():
+    diagnostic = only("bodies:\n  - {name: b, mass: , inertia: [1, 1, 1], position: [0, 0, 0]}\n")
+    assert (diagnostic.code, diagnostic.path, diagnostic.got) == (
+        "E102", "bodies[0].mass", "nothing (null)",
+    )  # fmt: skip
 
 
 @pytest.mark.parametrize(

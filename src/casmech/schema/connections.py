@@ -36,14 +36,6 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
         extra["f"] = check.function((*path, "f"), given.f, {"t": 0.0})
     if not bodies_ok or failed([*vectors.values(), *extra.values()]):
         return None
-    sources = {key: check.doc.locate_key((*path, key)) for key in given.model_fields_set}
-    if given.driver is not None if hasattr(given, "driver") else False:
-        sources.update(
-            {
-                f"driver.{key}": check.doc.locate_key((*path, "driver", key))
-                for key in given.driver.model_fields_set
-            }
-        )
     return resolved.Joint(
         given.name,
         given.type,
@@ -52,8 +44,17 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
         vectors,
         **extra,
         source=check.doc.locate(path),
-        sources=sources,
+        sources=joint_sources(check, path, given),
     )
+
+
+def joint_sources(check: Checker, path: Path, given) -> dict[str, Any]:
+    """Where each key of the joint (and of its driver, as `driver.angle`) was written."""
+    sources = {key: check.doc.locate_key((*path, key)) for key in given.model_fields_set}
+    driver = getattr(given, "driver", None)
+    for key in driver.model_fields_set if driver is not None else ():
+        sources[f"driver.{key}"] = check.doc.locate_key((*path, "driver", key))
+    return sources
 
 
 def joint_vector(check: Checker, path: Path, key: str, values) -> np.ndarray | None:
@@ -63,9 +64,11 @@ def joint_vector(check: Checker, path: Path, key: str, values) -> np.ndarray | N
 
 
 def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | None]:
+    """`driver_angle`/`driver_displacement` functions of t (None: reported as wrong)."""
     driver = getattr(given, "driver", None)
+    keys = [key for key in DRIVERS if driver is not None and getattr(driver, key) is not None]
     found = {}
-    for key in [] if driver is None else sorted(driver.model_fields_set):
+    for key in keys:
         where = (*path, "driver", key)
         if given.type not in DRIVERS[key]:
             allowed = " and ".join(DRIVERS[key])
@@ -76,7 +79,7 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
                 source=check.doc.locate_key(where),
                 hint=f"allowed on {allowed} joints",
             )
-            found[key] = None
+            found[f"driver_{key}"] = None
         else:
             found[f"driver_{key}"] = check.function(where, getattr(driver, key), {"t": 0.0})
     return found
