@@ -16,7 +16,7 @@ def _derivatives(expressions: dict):
     for name, expr in expressions.items():
         d1 = ca.jacobian(expr, T)
         d2 = ca.jacobian(d1, T)
-        f = ca.Function(name, [T], [expr, d1, d2])
+        f = ca.Function("closed_form", [T], [expr, d1, d2])
         out[name] = lambda t, f=f: [np.array(v).ravel() for v in f.map(len(t))(np.atleast_2d(t))]
     return out
 

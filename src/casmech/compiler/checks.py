@@ -54,11 +54,15 @@ def independent_rows(matrix: np.ndarray, tolerance: float = RANK_TOLERANCE) -> l
 
 
 def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
+    """Rank and redundancy. The normalization rows are scanned first (they are never
+    redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
     phi_q = functions.matrix("phi_q", t, q)
-    keep = independent_rows(phi_q)
-    redundant = tuple(row for row, k in zip(functions.rows, keep, strict=True) if not k)
     n_joint_rows = functions.n_rows - functions.n_bodies
-    return Structure(functions.n_coordinates, functions.n_rows, int(sum(keep)), redundant,
+    order = list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
+    keep = dict(zip(order, independent_rows(phi_q[order]), strict=True))
+    redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    return Structure(functions.n_coordinates, functions.n_rows, int(sum(keep.values())), redundant,
                      6 * functions.n_bodies - n_joint_rows)
 
 

@@ -20,10 +20,15 @@ def skew(v) -> ca.SX:
 
 
 def rotation(p) -> ca.SX:
-    """A(p) = 2[(e0^2 - 1/2) I + e e^T + e0 e~]: body frame -> global frame."""
+    """A(p) = E G^T = (e0^2 - e^T e) I + 2 e e^T + 2 e0 e~: body frame -> global frame.
+
+    On unit p this equals DESIGN's 2[(e0^2 - 1/2) I + e e^T + e0 e~]; the homogeneous form is
+    used because its exact Jacobian is the lecture's B(p, a_bar) (the other form adds
+    2 a_bar p^T), so AD of every constraint reproduces the lecture's delta-p closed forms.
+    """
     p = _vector(p, 4)
     e0, e = p[0], p[1:4]
-    return 2 * ((e0**2 - 0.5) * ca.DM.eye(3) + e @ e.T + e0 * skew(e))
+    return (e0**2 - e.T @ e) * ca.DM.eye(3) + 2 * (e @ e.T) + 2 * e0 * skew(e)
 
 
 def g_matrix(p) -> ca.SX:
