@@ -67,12 +67,14 @@ class Checker:
         except OverflowError:
             self.error("E204", path, "number too large", got=str(value))
             return None
-        known = [name not in self.broken for name in expr.symbols]
+        unknown: dict[str, int] = {}  # name -> offset of its first use
         for name, offset, _ in expr.names_with_offsets():
-            if name not in self.parameters and name not in variables and name not in self.broken:
+            if name not in self.parameters and name not in variables:
+                unknown.setdefault(name, offset)
+        for name, offset in unknown.items():
+            if name not in self.broken:  # a failed parameter was reported where it is defined
                 self.unknown_symbol(path, name, self.inside(path, offset), variables)
-                known.append(False)
-        return expr if all(known) else None
+        return None if unknown else expr
 
     def unknown_symbol(self, path, name: str, source, variables) -> None:
         if name == "t":
