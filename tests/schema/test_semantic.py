@@ -392,3 +392,16 @@ def test_body_checks_at_their_limits():
         ("E401", "bodies[6].inertia"),
     ]
     assert found[0].message == "x_axis and y_axis are parallel"
+
+
+def test_yaml_strings_that_look_like_numbers_are_numbers():
+    resolved = model(parameters="  small: 1e-3\n  big: 2E+3\n  neg: -.5e1\n")
+    assert {k: resolved.parameters[k] for k in ("small", "big", "neg")} == {
+        "small": 1e-3, "big": 2000.0, "neg": -5.0,
+    }  # fmt: skip
+
+
+def test_euler_parameter_hint_shows_the_normalised_vector():
+    [diagnostic] = findings(bodies=body("b", "orientation: {euler_parameters: [1, 0, 0, 1]}"))
+    assert diagnostic.code == "E403"
+    assert diagnostic.hint == "normalised: [0.707106781187, 0, 0, 0.707106781187]"

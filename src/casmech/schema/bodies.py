@@ -67,9 +67,6 @@ def euler_parameters(a: np.ndarray) -> np.ndarray:
     return p / np.linalg.norm(p)
 
 
-# ------------------------------------------------------------------------------- checker
-
-
 # ---------------------------------------------------------------------------------- checks
 def orientation(check: Checker, path: Path, given: spec.Orientation | None) -> np.ndarray | None:
     if given is None:
@@ -93,18 +90,16 @@ def orientation(check: Checker, path: Path, given: spec.Orientation | None) -> n
 def from_euler_parameters(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
     path = (*path, "euler_parameters")
     p = check.numbers(path, given.euler_parameters)
-    norm = None if p is None else np.linalg.norm(p)
-    if norm is not None and abs(norm - 1.0) > UNIT:
-        hint = "normalised: [" + ", ".join(f"{x:.12g}" for x in p / norm) + "]" if norm else None
-        check.error(
-            "E403",
-            path,
-            "Euler parameters must have unit norm",
-            got=f"norm {norm:.12g}",
-            hint=hint,
-        )
+    if p is None:
         return None
-    return None if p is None else p / norm
+    norm = np.linalg.norm(p)
+    if abs(norm - 1.0) > UNIT:
+        unit = "[" + ", ".join(f"{x:.12g}" for x in p / norm) + "]" if norm else None
+        got = f"norm {norm:.12g}"
+        hint = f"normalised: {unit}" if unit else None
+        check.error("E403", path, "Euler parameters must have unit norm", got=got, hint=hint)
+        return None
+    return p / norm
 
 
 def from_axis_angle(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
@@ -152,12 +147,12 @@ def from_axes(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray
 
 
 def inertia(check: Checker, path: Path, values) -> np.ndarray | None:
-    nested = isinstance(values[0], tuple)
+    nested = isinstance(values[0], tuple)  # the 3x3 form
     rows = [check.numbers((*path, r), row) for r, row in enumerate(values)] if nested else []
-    flat = None if nested else check.numbers(path, values)
-    if failed([flat] if not nested else rows):
+    rows = rows or [check.numbers(path, values)]
+    if failed(rows):
         return None
-    matrix = np.array(rows) if nested else INERTIA_FORMS[len(flat)](flat)
+    matrix = np.array(rows) if nested else INERTIA_FORMS[len(values)](rows[0])
     scale = np.abs(matrix).max()
     if np.abs(matrix - matrix.T).max() > UNIT * scale:
         check.error("E401", path, "inertia matrix is not symmetric")
@@ -188,11 +183,8 @@ def geometry(check: Checker, path: Path, item) -> dict[str, Any] | None:
     result: dict[str, Any] = {"type": kind, **GEOMETRY_EXTRAS[kind](item)}
     for key, (where, value) in GEOMETRY_SIZES[kind](item).items():
         where = (*path, *where)
-        number = (
-            check.numbers(where, value)
-            if isinstance(value, tuple)
-            else (check.number(where, value))
-        )
+        measure = check.numbers if isinstance(value, tuple) else check.number
+        number = measure(where, value)
         result[key] = check.positive("E410", where, number, f"{kind} {key}")
     result["offset"] = check.vector((*path, "offset"), item.offset)
     result["euler_parameters"] = orientation(check, (*path, "orientation"), item.orientation)
