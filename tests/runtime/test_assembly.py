@@ -15,6 +15,7 @@ def pendulum(theta0=0.0, omega0=0.0, driver=None, extra_joint="", file_velocity=
     """A pendulum about global x at the origin, CM at distance L, drawn at angle theta0."""
     r = [0.0, L * np.sin(theta0), -L * np.cos(theta0)]
     v = file_velocity or [0.0, L * np.cos(theta0) * omega0, L * np.sin(theta0) * omega0]
+    r, v = ([float(x) for x in vector] for vector in (r, v))
     driver_text = f"\n    driver: {{angle: '{driver}'}}" if driver else ""
     return f"""
 casmech: 1
