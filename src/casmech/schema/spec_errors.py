@@ -72,7 +72,7 @@ def _describe(value: Any) -> str:
         bool: lambda v: str(v).lower(),
         type(None): lambda v: "nothing (null)",
         dict: lambda v: "a mapping",
-        list: lambda v: f"a list of {len(v)} items",
+        list: lambda v: f"a list of {len(v)} item{'' if len(v) == 1 else 's'}",
         str: lambda v: f"'{v}'",
     }
     return kinds.get(type(value), repr)(value)
