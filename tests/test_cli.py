@@ -95,7 +95,9 @@ def test_not_fully_driven_exit_1(tmp_path, analysis):
                      .replace("    driver:\n      angle: pi/4 * cos(2*t)\n", ""))
     done = casmech("run", model, "--analysis", analysis)
     assert done.returncode == 1
-    assert "error[E501]" in done.stderr and "1 degree(s) of freedom" in done.stderr
+    line = 1 + model.read_text().splitlines().index("analysis:")
+    assert f"free.yaml:{line}:" in done.stderr
+    assert "error[E501] analysis.type:" in done.stderr and "1 degree(s) of freedom" in done.stderr
 
 
 def test_analysis_failure_exit_3_keeps_rows(tmp_path):

@@ -2,7 +2,10 @@
 
 import json
 
+import jsonschema
 import pytest
+import yaml
+from tests.conftest import MODELS
 
 from casmech.schema import export, spec, spec_errors
 from casmech.schema.loader import load_document
@@ -187,7 +190,6 @@ def test_committed_json_schema_is_current():
 
 
 def test_json_schema_accepts_a_model(tmp_path):
-    jsonschema = pytest.importorskip("jsonschema")
     schema = json.loads(export.schema_text())
     jsonschema.Draft202012Validator.check_schema(schema)
     model = {"casmech": 1, "name": "s", "bodies": [{"name": "b", "mass": "m",
@@ -197,3 +199,9 @@ def test_json_schema_accepts_a_model(tmp_path):
         jsonschema.validate({**model, "gravty": [0, 0, 0]}, schema)
     assert export.main([str(tmp_path / "s.json")]) == 0
     assert (tmp_path / "s.json").read_text(encoding="utf-8") == export.schema_text()
+
+
+@pytest.mark.parametrize("model", sorted(MODELS.glob("*.yaml")), ids=lambda p: p.name)
+def test_json_schema_accepts_every_example_model(model):
+    """What an editor's YAML plug-in checks must agree with casmech on the shipped models."""
+    jsonschema.validate(yaml.safe_load(model.read_text()), json.loads(export.schema_text()))
