@@ -95,9 +95,10 @@ def test_not_fully_driven_exit_1(tmp_path, analysis):
                      .replace("    driver:\n      angle: pi/4 * cos(2*t)\n", ""))
     done = casmech("run", model, "--analysis", analysis)
     assert done.returncode == 1
-    line = 1 + model.read_text().splitlines().index("analysis:")
+    line = 1 + model.read_text().splitlines().index("  type: inverse_dynamics")
     assert f"free.yaml:{line}:" in done.stderr
-    assert "error[E501] analysis.type:" in done.stderr and "1 degree(s) of freedom" in done.stderr
+    assert f"error[E501] analysis.type: {analysis} needs a fully driven" in done.stderr
+    assert "1 degree(s) of freedom" in done.stderr
 
 
 def test_analysis_failure_exit_3_keeps_rows(tmp_path):

@@ -7,6 +7,7 @@ numpy inputs and returns CasADi matrices; derivatives of these are left to CasAD
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 
 def skew(v) -> ca.SX:
@@ -51,6 +52,11 @@ def b_matrix(p, a_bar) -> ca.SX:
     e0, e = p[0], p[1:4]
     m = e0 * ca.DM.eye(3) + skew(e)
     return 2 * ca.horzcat(m @ a_bar, e @ a_bar.T - m @ skew(a_bar))
+
+
+def numeric(function, *args) -> np.ndarray:
+    """Evaluate one of the functions above on numbers: euler.numeric(rotation, p)."""
+    return np.array(ca.DM(function(*args)).full())
 
 
 def _vector(v, n: int):

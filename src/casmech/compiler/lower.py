@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.compiler import euler
 from casmech.compiler import joints as joint_tables
 from casmech.compiler.ir import (
     GROUND_INDEX,
@@ -24,13 +25,6 @@ POINTS = frozenset({"P", "Q", "Pi", "Pj"})
 UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array([0, 0, 1.0])}
 
 
-def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p) in numpy (for lowering only; the symbolic one lives in euler.py)."""
-    e0, e = p[0], np.asarray(p[1:4])
-    tilde = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
-    return 2 * ((e0**2 - 0.5) * np.eye(3) + np.outer(e, e) + e0 * tilde)
-
-
 def perpendicular_pair(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit u, v with (u, v, w) right-handed orthonormal; deterministic in w."""
     e = np.eye(3)[int(np.argmin(np.abs(w)))]
@@ -44,7 +38,7 @@ class _Poses:
 
     def __init__(self, model: ResolvedModel):
         self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
-        self.pose = {b.name: (b.position, rotation_matrix(b.euler_parameters))
+        self.pose = {b.name: (b.position, euler.numeric(euler.rotation, b.euler_parameters))
                      for b in model.bodies}
         self.pose[GROUND] = (np.zeros(3), np.eye(3))
 

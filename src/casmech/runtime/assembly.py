@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from casmech.compiler import euler
 from casmech.compiler.checks import dependent_joints, worst_joints
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
@@ -29,15 +30,9 @@ def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
     """q_dot from the file's global velocities: p_dot = 1/2 E(p)^T omega."""
     nb = functions.n_bodies
     r_dot = [b.r_dot0 for b in functions.ir.bodies]
-    p_dot = [0.5 * _e_matrix(q[3 * nb + 4 * k:3 * nb + 4 * k + 4]).T @ b.omega0
+    p_dot = [0.5 * euler.numeric(euler.e_matrix, q[3 * nb + 4 * k:3 * nb + 4 * k + 4]).T @ b.omega0
              for k, b in enumerate(functions.ir.bodies)]
     return np.concatenate(r_dot + p_dot) if nb else np.zeros(0)
-
-
-def _e_matrix(p: np.ndarray) -> np.ndarray:
-    e0, e = p[0], p[1:4]
-    tilde = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
-    return np.hstack([-e[:, None], tilde + e0 * np.eye(3)])
 
 
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,

@@ -24,16 +24,16 @@ def output_times(t0: float, t_end: float, step: float) -> np.ndarray:
     return times if times[-1] >= t_end - 1e-9 * step else np.append(times, t_end)
 
 
-def require_fully_driven(functions: SystemFunctions, t: float, q: np.ndarray) -> None:
+def require_fully_driven(functions: SystemFunctions, t: float, q: np.ndarray,
+                         analysis: str) -> None:
     report = structure(functions, t, q)
     if report.dof == 0:
         return
-    analysis = functions.ir.analysis
     raise ModelError([Diagnostic(
         "E501", "analysis.type",
-        f"{analysis.type} needs a fully driven mechanism, but this one has {report.dof} "
+        f"{analysis} needs a fully driven mechanism, but this one has {report.dof} "
         "degree(s) of freedom at the assembled configuration",
-        analysis.source, expected="0 degrees of freedom", got=f"{report.dof}",
+        functions.ir.analysis.source, expected="0 degrees of freedom", got=f"{report.dof}",
         hint="add drivers (`driver: {angle: ...}` on a revolute joint, `f:` on a basic "
              "constraint) or run a dynamics analysis")])
 
@@ -50,7 +50,7 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
                           analysis: str = "kinematics", t0: float = 0.0) -> Result:
     result = Result(analysis)
     q = assembly.assemble_positions(functions, t0)
-    require_fully_driven(functions, t0, q)
+    require_fully_driven(functions, t0, q, analysis)
     q_dot = np.zeros(functions.n_coordinates)
     q_ddot = np.zeros(functions.n_coordinates)
     previous = t0

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from casmech.compiler import euler
 from casmech.schema import resolved, spec
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
@@ -40,14 +41,9 @@ GEOMETRY_EXTRAS = {
 
 
 # ------------------------------------------------------------------------------ rotations
-def skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p) = 2[(e0^2 - 1/2) I + e e^T + e0 e~]: body -> global; columns are the body axes."""
-    e0, e = p[0], np.asarray(p[1:])
-    return 2.0 * ((e0 * e0 - 0.5) * np.eye(3) + np.outer(e, e) + e0 * skew(e))
+    """A(p): body -> global; columns are the body axes (compiler/euler.py's, on numbers)."""
+    return euler.numeric(euler.rotation, np.asarray(p, float))
 
 
 def euler_parameters(a: np.ndarray) -> np.ndarray:
