@@ -17,6 +17,7 @@ from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
+from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
@@ -48,6 +49,8 @@ ANALYSES: dict[str, Callable[[SystemFunctions, float, float], Result]] = {
     "kinematics": _prescribed("kinematics"),
     "inverse_dynamics": _prescribed("inverse_dynamics"),
     "assembly": lambda functions, t_end, step: run_assembly(functions),
+    "dynamics": lambda functions, t_end, step: run_dynamics(
+        functions, t_end, step, functions.ir.analysis.rtol, functions.ir.analysis.atol),
 }
 
 

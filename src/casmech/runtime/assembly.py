@@ -106,15 +106,17 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
 
 
 def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
-                                q_dot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now."""
+                                q_dot: np.ndarray, rows=None) -> tuple[np.ndarray, np.ndarray]:
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now.
+    `rows` restricts the constraints to an independent subset (lam then has their length)."""
     n = functions.n_coordinates
+    rows = slice(None) if rows is None else rows
     mass = functions.matrix("mass_matrix", q)
-    phi_q = functions.matrix("phi_q", t, q)
+    phi_q = functions.matrix("phi_q", t, q)[rows]
     m = phi_q.shape[0]
     lhs = np.block([[mass, phi_q.T], [phi_q, np.zeros((m, m))]])
     rhs = np.concatenate([functions.vector("generalized_forces", t, q, q_dot),
-                          functions.vector("gamma", t, q, q_dot)])
+                          functions.vector("gamma", t, q, q_dot)[rows]])
     solution = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
     return solution[:n], solution[n:]
 
