@@ -136,13 +136,14 @@ class FailureContext:
     time: float | None
     cause: str
     joints: list[tuple[str, Source | None, float]] = field(default_factory=list)
+    measure: str = "residual"  # what the number beside each joint is
 
     def format(self) -> str:
         at = f"at t = {self.time:.6g}: " if self.time is not None else ""
         lines = [f"analysis failed {at}{self.cause}"]
         for name, source, residual in self.joints:
             where = f"{source}: " if source else ""
-            lines.append(f"  {where}joint '{name}' (residual {residual:.3e})")
+            lines.append(f"  {where}joint '{name}' ({self.measure} {residual:.3e})")
         return "\n".join(lines)
 
 

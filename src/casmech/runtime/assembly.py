@@ -92,7 +92,8 @@ def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.nd
     if rank < functions.n_coordinates:
         cause = ("singular configuration: the constraint Jacobian lost rank "
                  f"({rank} < {functions.n_coordinates}); the joints involved:")
-        raise AnalysisError(FailureContext(t, cause, dependent_joints(functions, phi_q)))
+        raise AnalysisError(FailureContext(t, cause, dependent_joints(functions, phi_q),
+                                           "weight in the dependency"))
     return q_ddot
 
 

@@ -19,7 +19,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.checks import structure, worst_joints
+from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
@@ -67,22 +67,30 @@ class _Stepper:
 
     def __init__(self, functions: SystemFunctions, rows: list[int], rtol: float, atol: float):
         self.functions = functions
+        self.chunk = CHUNK
         self.dae = dae_problem(functions, rows)
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": 1000000,
                         "suppress_algebraic": True, "calc_ic": False,
                         "disable_internal_warnings": True}
 
     def integrate(self, t0: float, times: np.ndarray, q, q_dot, q_ddot, lam) -> np.ndarray:
+        """States at `times`; on an IDAS failure, the failing interval alone is retried so the
+        error names it exactly (and the caller keeps every row before it)."""
         options = self.options | {"init_xdot": list(np.concatenate([q_dot, q_ddot]))}
         integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0), options)
         try:
             out = integrator(x0=np.concatenate([q, q_dot]), z0=np.concatenate([q_ddot, lam]),
                              p=t0)
         except RuntimeError as error:
-            phi = self.functions.vector("phi", t0, q)
-            cause = (f"IDAS failed after t0 ({str(error).splitlines()[-1].strip()}); "
-                     "the joints with the largest residuals at t0:")
-            context = FailureContext(t0, cause, worst_joints(self.functions, phi))
+            if len(times) > 1:
+                self.chunk = 1  # from here on, one output interval per call
+                return self.integrate(t0, times[:1], q, q_dot, q_ddot, lam)
+            phi_q = self.functions.matrix("phi_q", t0, q)
+            cause = (f"IDAS failed between t = {t0:.6g} and {times[0]:.6g} "
+                     f"({str(error).splitlines()[-1].strip()}); the joints whose rows are "
+                     "closest to dependent (a singular configuration?):")
+            context = FailureContext(t0, cause, dependent_joints(self.functions, phi_q),
+                                     "weight in the dependency")
             raise AnalysisError(context) from None
         return np.array(out["xf"].full())
 
@@ -100,9 +108,9 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     try:
         q_ddot, lam = _record(functions, result, rows, times[0], q, q_dot)
         while k < len(times) - 1:
-            chunk = times[k + 1:k + 1 + CHUNK]
+            chunk = times[k + 1:k + 1 + stepper.chunk]
             states = stepper.integrate(times[k], chunk, q, q_dot, q_ddot, lam)
-            for j, t in enumerate(chunk):
+            for j, t in enumerate(chunk[:states.shape[1]]):  # fewer after a failure
                 q, q_dot = states[:n, j], states[n:, j]
                 k += 1
                 if drift(functions, t, q, q_dot) > DRIFT_TOLERANCE:
