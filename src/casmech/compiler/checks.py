@@ -19,6 +19,7 @@ class Structure:
     rank: int
     redundant: tuple[RowInfo, ...]  # rows that depend on earlier rows (file order)
     nominal_dof: int  # 6 nb minus the joint rows (Gruebler count)
+    independent: tuple[int, ...] = ()  # indices of the rows kept, in row order
 
     @property
     def dof(self) -> int:
@@ -61,9 +62,9 @@ def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
     order = list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
     keep = dict(zip(order, independent_rows(phi_q[order]), strict=True))
     redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
-    n_joint_rows = functions.n_rows - functions.n_bodies
-    return Structure(functions.n_coordinates, functions.n_rows, int(sum(keep.values())), redundant,
-                     6 * functions.n_bodies - n_joint_rows)
+    independent = tuple(k for k in range(functions.n_rows) if keep[k])
+    return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
+                     6 * functions.n_bodies - n_joint_rows, independent)
 
 
 def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 3):

@@ -45,11 +45,6 @@ def dae_problem(functions: SystemFunctions, rows: list[int]) -> dict:
     return {"t": tau, "x": x, "z": z, "p": t0, "ode": ca.vertcat(q_dot, q_ddot), "alg": alg}
 
 
-def independent_rows(functions: SystemFunctions, t: float, q: np.ndarray) -> list[int]:
-    redundant = set(structure(functions, t, q).redundant)
-    return [k for k, row in enumerate(functions.rows) if row not in redundant]
-
-
 def drift(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.ndarray) -> float:
     """Largest violation of the position and velocity constraints."""
     phi = functions.vector("phi", t, q)
@@ -101,7 +96,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     n = functions.n_coordinates
     q = assembly.assemble_positions(functions, t0)
     q_dot = assembly.solve_velocities(functions, t0, q, assembly.file_velocities(functions, q))
-    rows = independent_rows(functions, t0, q)
+    rows = list(structure(functions, t0, q).independent)
     stepper = _Stepper(functions, rows, rtol, atol)
     times = output_times(t0, t_end, step)
     k, restarts = 0, 0
