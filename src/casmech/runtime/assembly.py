@@ -74,6 +74,12 @@ def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np
     return newton(functions, t, q)
 
 
+def initial_state(functions: SystemFunctions, t0: float = 0.0):
+    """Assembled positions and the file's velocities projected onto the constraints."""
+    q = assemble_positions(functions, t0)
+    return q, solve_velocities(functions, t0, q, file_velocities(functions, q))
+
+
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
                      q_dot_guess: np.ndarray) -> np.ndarray:
     """Phi_q q_dot = nu, closest (least squares) to the guess."""

@@ -94,8 +94,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
                  atol: float, t0: float = 0.0) -> Result:
     result = Result("dynamics")
     n = functions.n_coordinates
-    q = assembly.assemble_positions(functions, t0)
-    q_dot = assembly.solve_velocities(functions, t0, q, assembly.file_velocities(functions, q))
+    q, q_dot = assembly.initial_state(functions, t0)
     rows = list(structure(functions, t0, q).independent)
     stepper = _Stepper(functions, rows, rtol, atol)
     times = output_times(t0, t_end, step)
@@ -108,13 +107,14 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
             for j, t in enumerate(chunk[:states.shape[1]]):  # fewer after a failure
                 q, q_dot = states[:n, j], states[n:, j]
                 k += 1
-                if drift(functions, t, q, q_dot) > DRIFT_TOLERANCE:
+                projected = drift(functions, t, q, q_dot) > DRIFT_TOLERANCE
+                if projected:
                     q = assembly.newton(functions, t, q)
                     q_dot = assembly.solve_velocities(functions, t, q, q_dot)
-                    q_ddot, lam = _record(functions, result, rows, t, q, q_dot)
                     restarts += 1
-                    break
                 q_ddot, lam = _record(functions, result, rows, t, q, q_dot)
+                if projected:
+                    break  # restart IDAS from the projected state
     except AnalysisError as error:
         error.partial = result
         raise

@@ -71,8 +71,7 @@ def run_assembly(functions: SystemFunctions, t0: float = 0.0) -> Result:
     """One state at t0: assembled positions, velocities projected from the file's, and the
     accelerations and multipliers the equations of motion give at that instant."""
     result = Result("assembly")
-    q = assembly.assemble_positions(functions, t0)
-    q_dot = assembly.solve_velocities(functions, t0, q, assembly.file_velocities(functions, q))
+    q, q_dot = assembly.initial_state(functions, t0)
     q_ddot, lam = assembly.solve_dynamic_accelerations(functions, t0, q, q_dot)
     result.append(t0, q, q_dot, q_ddot, lam)
     return result
