@@ -21,7 +21,7 @@ from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
-from casmech.schema.resolved import ResolvedModel
+from casmech.schema.resolved import Analysis, ResolvedModel
 
 
 def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:
@@ -39,18 +39,13 @@ def compile(model: ResolvedModel) -> SystemFunctions:  # noqa: A001 - the compil
     return build_functions(lower(model))
 
 
-def _prescribed(kind: str) -> Callable:
-    def run(functions: SystemFunctions, t_end: float, step: float) -> Result:
-        return run_prescribed_motion(functions, t_end, step, analysis=kind)
-    return run
-
-
-ANALYSES: dict[str, Callable[[SystemFunctions, float, float], Result]] = {
-    "kinematics": _prescribed("kinematics"),
-    "inverse_dynamics": _prescribed("inverse_dynamics"),
-    "assembly": lambda functions, t_end, step: run_assembly(functions),
-    "dynamics": lambda functions, t_end, step: run_dynamics(
-        functions, t_end, step, functions.ir.analysis.rtol, functions.ir.analysis.atol),
+# analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
+# caller's overrides applied.
+ANALYSES: dict[str, Callable[[SystemFunctions, Analysis], Result]] = {
+    "kinematics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
+    "inverse_dynamics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
+    "assembly": lambda f, s: run_assembly(f),
+    "dynamics": lambda f, s: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol),
 }
 
 
@@ -66,7 +61,7 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
                          f"{', '.join(ANALYSES)}")
     if settings.t_end <= 0 or settings.output_step <= 0:
         raise UsageError("t_end and output_step must be positive")
-    result = ANALYSES[settings.type](functions, settings.t_end, settings.output_step)
+    result = ANALYSES[settings.type](functions, settings)
     result.metadata.update(analysis=settings.type, mode="interpreted")
     return result
 
