@@ -116,3 +116,23 @@ def test_analysis_failure_exit_3_keeps_rows(tmp_path):
     assert t_toggle - 0.02 <= failed_at <= t_toggle + 0.02  # within two output steps
     names, values = read_csv(tmp_path / "results.csv")
     assert len(values) >= 30 and values[-1, 0] < t_toggle
+
+
+def test_run_tolerances_from_the_command_line(tmp_path):
+    """--rtol/--atol override the model's: a loose run of the A01 pendulum lands farther from
+    the tight one than the tight one's own error, and a non-positive tolerance is a usage error."""
+    model = MODELS / "validation" / "iftomm_a01_pendulum.yaml"
+    runs = {}
+    for rtol in ("1e-4", "1e-10"):
+        out = tmp_path / rtol
+        done = casmech("run", model, "--out", out, "--t-end", "1", "--rtol", rtol,
+                       "--atol", "1e-8" if rtol == "1e-4" else "1e-12")
+        assert done.returncode == 0, done.stderr
+        runs[rtol] = read_csv(out / "results.csv")
+    names, loose = runs["1e-4"]
+    _, tight = runs["1e-10"]
+    x = names.index("mass.x")
+    # a 1e-4 run is off by far more than 1e-6 m (measured ~1e-4); the tight one is within 1e-7
+    assert np.max(np.abs(loose[:, x] - tight[:, x])) > 1e-6
+    done = casmech("run", model, "--out", tmp_path / "bad", "--rtol", "0")
+    assert done.returncode == 2 and "rtol must be positive" in done.stderr

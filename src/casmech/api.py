@@ -50,17 +50,19 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis], Result]] = {
 
 
 def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: float | None = None,
-            output_step: float | None = None) -> Result:
+            output_step: float | None = None, rtol: float | None = None,
+            atol: float | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed."""
     settings = functions.ir.analysis
-    settings = replace(settings, type=analysis or settings.type,
-                       t_end=settings.t_end if t_end is None else t_end,
-                       output_step=settings.output_step if output_step is None else output_step)
+    given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
+             "atol": atol}
+    settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")
-    if settings.t_end <= 0 or settings.output_step <= 0:
-        raise UsageError("t_end and output_step must be positive")
+    for name in ("t_end", "output_step", "rtol", "atol"):
+        if not getattr(settings, name) > 0:
+            raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
     result = ANALYSES[settings.type](functions, settings)
     result.metadata.update(analysis=settings.type, mode="interpreted")
     return result

@@ -30,6 +30,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=Path, help="output directory (default MODEL_results/)")
     run.add_argument("--t-end", type=float, help="end time [s]")
     run.add_argument("--output-step", type=float, help="output interval [s]")
+    run.add_argument("--rtol", type=float, help="relative tolerance of the integrator (dynamics)")
+    run.add_argument("--atol", type=float, help="absolute tolerance of the integrator (dynamics)")
     run.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                      help="override a parameter (repeatable)")
@@ -72,7 +74,8 @@ def command_run(args) -> int:
     functions = casmech.compile(model)
     start = time.perf_counter()
     try:
-        result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step)
+        result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
+                                 rtol=args.rtol, atol=args.atol)
     except AnalysisError as error:
         if error.partial is not None and len(error.partial):
             path = write_csv(out / "results.csv", *casmech.results_table(functions, error.partial))
