@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom, euler, romega
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
 
@@ -63,6 +63,11 @@ class SystemFunctions:
     def n_rows(self) -> int:
         return len(self.rows)
 
+    @property
+    def n_joint_rows(self) -> int:
+        """Rows of phi that are joint constraints (not Euler-parameter normalization)."""
+        return sum(row.kind != "normalization" for row in self.rows)
+
 
 def _as_list(outputs) -> list:
     return list(outputs) if isinstance(outputs, (tuple, list)) else [outputs]
@@ -104,6 +109,7 @@ def build_functions(ir: ModelIR) -> SystemFunctions:
         _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
                   {"omega": stack(omega), "alpha": stack(alpha)}),
     ]
+    functions += [_function(*definition) for definition in romega.definitions(ir, cs)]
     names = tuple(b.name for b in ir.bodies)
 
     def body_name(k: int) -> str:
