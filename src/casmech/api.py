@@ -12,6 +12,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
+from casmech.compiler.augmented import FORMULATIONS
 from casmech.compiler.checks import Structure, structure
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
@@ -45,18 +46,24 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis], Result]] = {
     "kinematics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
     "inverse_dynamics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
     "assembly": lambda f, s: run_assembly(f),
-    "dynamics": lambda f, s: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol),
+    "dynamics": lambda f, s: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                                          formulation=s.options.get("formulation", "rp")),
 }
 
 
 def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: float | None = None,
             output_step: float | None = None, rtol: float | None = None,
-            atol: float | None = None) -> Result:
-    """Run an analysis; the model's `analysis:` block gives what is not passed."""
+            atol: float | None = None, formulation: str | None = None) -> Result:
+    """Run an analysis; the model's `analysis:` block gives what is not passed
+    (formulation: "rp" or "romega", for dynamics)."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
     settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
+    if formulation is not None:
+        if formulation not in FORMULATIONS:
+            raise UsageError(f"formulation '{formulation}' is not one of {', '.join(FORMULATIONS)}")
+        settings = replace(settings, options={**settings.options, "formulation": formulation})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")

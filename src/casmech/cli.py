@@ -32,6 +32,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--output-step", type=float, help="output interval [s]")
     run.add_argument("--rtol", type=float, help="relative tolerance of the integrator (dynamics)")
     run.add_argument("--atol", type=float, help="absolute tolerance of the integrator (dynamics)")
+    run.add_argument("--formulation", choices=["rp", "romega"],
+                     help="equations of motion for dynamics (default: the model's, else rp)")
     run.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
     run.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                      help="override a parameter (repeatable)")
@@ -75,7 +77,7 @@ def command_run(args) -> int:
     start = time.perf_counter()
     try:
         result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
-                                 rtol=args.rtol, atol=args.atol)
+                                 rtol=args.rtol, atol=args.atol, formulation=args.formulation)
     except AnalysisError as error:
         if error.partial is not None and len(error.partial):
             path = write_csv(out / "results.csv", *casmech.results_table(functions, error.partial))

@@ -127,3 +127,30 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     solution = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
     return solution[:n], solution[n:]
 
+
+
+def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,
+            penalty: float) -> tuple[np.ndarray, np.ndarray]:
+    """Back onto Phi = 0, then onto the velocity constraints, each by mass-orthogonal
+    corrections damped with the augmented-Lagrangian penalty: (M / a + P^T P) dx = -P^T r.
+    Where P is well-conditioned this is the Gauss-Newton step of least kinetic energy; near a
+    singular configuration the damping keeps the step from jumping along the nearly lost
+    direction (a Euclidean least-squares step there moved A02 onto the wrong branch)."""
+    mass = functions.matrix("mass_matrix", q)
+    for _ in range(MAX_ITERATIONS):
+        phi = functions.vector("phi", t, q)
+        if np.max(np.abs(phi), initial=0.0) <= POSITION_TOLERANCE:
+            break
+        q = q - _damped_step(mass, functions.matrix("phi_q", t, q), phi, penalty)
+    else:
+        cause = (f"the projection onto the constraints did not converge in {MAX_ITERATIONS} "
+                 f"iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); the joints with the "
+                 "largest residuals:")
+        raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
+    jac = functions.matrix(form.jacobian, t, q)
+    residual = jac @ v - functions.vector(form.nu, t, q)
+    return q, v - _damped_step(functions.matrix(form.mass, q), jac, residual, penalty)
+
+
+def _damped_step(mass, jac, residual, penalty):
+    return np.linalg.solve(mass / penalty + jac.T @ jac, jac.T @ residual)

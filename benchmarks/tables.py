@@ -1,0 +1,169 @@
+"""Markdown tables from a run.py report (also: python benchmarks/tables.py results/latest.json)."""
+
+from __future__ import annotations
+
+import json
+import statistics
+import sys
+
+KNOB = {"casmech": "rtol", "exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}
+PEERS = ("exudyn", "exudyn-fast", "mujoco")
+
+
+def _setting(tool: str, setting: dict | None) -> str:
+    if not setting:
+        return ""
+    return f"{KNOB[tool]}={setting[KNOB[tool]]:g}"
+
+
+def _seconds(x: float) -> str:
+    if x >= 100:
+        return f"{x:.0f}"
+    if x >= 1:
+        return f"{x:.2f}"
+    return f"{x:.3g}"
+
+
+def _load(values) -> str:
+    return ", ".join(f"{v:.2f}" for v in values) if values else "?"
+
+
+def _note(result: dict) -> str:
+    extra = result.get("extra", {})
+    notes = []
+    if "projections" in extra:
+        notes.append(f"{extra['projections']} projections")
+    if "loop_violation" in extra:
+        notes.append(f"loop gap {extra['loop_violation']:.1e} m")
+    status = result.get("status", "ok")
+    if status == "stopped":
+        notes.append(f"stopped after {result['seconds']:.0f} s (slower than "
+                     f"{result['limit']:.0f} s: pruned)")
+    elif status == "timeout":
+        notes.append(f"timed out after {result['seconds']:.0f} s (--timeout)")
+    elif status in ("error", "skipped"):
+        notes.append(f"{status}: {result.get('message', '')}")
+    return "; ".join(notes)
+
+
+def best_at(results: list[dict], tool: str, level: float):
+    ok = [r for r in results if r["tool"] == tool and "median" in r and r["error"] <= level]
+    return min(ok, key=lambda r: r["median"]) if ok else None
+
+
+def sweep_table(entry: dict) -> list[str]:
+    lines = ["| tool | setting | wall, 10 s [s] (median) | n | min - max [s] | error at 1 s [m] "
+             "| note |", "|---|---|---:|---:|---|---:|---|"]
+    for r in entry["results"]:
+        tool = r["tool"]
+        if "median" in r:
+            walls = r["walls"]
+            lines.append(f"| {tool} | {_setting(tool, r.get('setting'))} | "
+                         f"{_seconds(r['median'])} | {len(walls)} | "
+                         f"{_seconds(min(walls))} - {_seconds(max(walls))} | "
+                         f"{r['error']:.1e} | {_note(r)} |")
+        else:
+            lines.append(f"| {tool} | {_setting(tool, r.get('setting'))} | - | 0 | | | "
+                         f"{_note(r)} |")
+    return lines
+
+
+def level_table(entry: dict, levels, tools: list[str]) -> list[str]:
+    peers = [t for t in tools if t in PEERS]
+    head = "| error <= | " + " | ".join(tools) + " | " + " | ".join(
+        f"casmech / {p}" for p in peers) + " |"
+    lines = [head, "|---|" + "---|" * (len(tools) + len(peers))]
+    for level in levels:
+        best = {t: best_at(entry["results"], t, level) for t in tools}
+        cells = []
+        for t in tools:
+            b = best[t]
+            if b is None:
+                reached = [r["error"] for r in entry["results"] if r["tool"] == t and "error" in r]
+                cells.append("not reached" + (f" (best {min(reached):.0e})" if reached else ""))
+            else:
+                cells.append(f"{_seconds(b['median'])} s ({_setting(t, b['setting'])})")
+        ratios = []
+        for p in peers:
+            c, b = best.get("casmech"), best[p]
+            ratios.append(f"{c['median'] / b['median']:.3g}" if c and b else "-")
+        lines.append(f"| {level:g} m | " + " | ".join(cells) + " | " + " | ".join(ratios) + " |")
+    return lines
+
+
+def build_table(report: dict, tools: list[str]) -> list[str]:
+    lines = ["| system | " + " | ".join(tools) + " |", "|---|" + "---|" * len(tools)]
+    for entry in report["systems"]:
+        cells = []
+        for t in tools:
+            parts = [r["build"]["parts"] for r in entry["results"]
+                     if r["tool"] == t and "build" in r]
+            if not parts:
+                cells.append("-")
+            elif t == "casmech":
+                load = statistics.median(p["load"] for p in parts)
+                comp = statistics.median(p["compile"] for p in parts)
+                cells.append(f"{_seconds(load + comp)} s (load {_seconds(load)} + compile "
+                             f"{_seconds(comp)})")
+            else:
+                key = "compile" if t == "mujoco" else "build"
+                cells.append(f"{_seconds(statistics.median(p[key] for p in parts))} s")
+        lines.append(f"| {entry['system']} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def cross_table(report: dict) -> list[str]:
+    lines = ["| system | reference (planar, RK4, step halving) | tool, tightest setting, to "
+             "t = 1 s | distance from the reference [m] |", "|---|---|---|---:|"]
+    for entry in report["systems"]:
+        ref = entry["reference"]
+        first = True
+        for r in entry["cross_check"] or [{}]:
+            loop = (f", loop residual {ref['loop_residual']:.0e} m" if ref["loop_residual"]
+                    else "")
+            head = (f"| {entry['system']} | h = {ref['step']:g} s, last halving "
+                    f"{ref['agreement']:.0e} m{loop}, {ref['seconds']:.1f} s | ") if first \
+                else "| | | "
+            first = False
+            if not r:
+                lines.append(head + "(not run) | |")
+                continue
+            value = f"{r['error']:.1e}" if "error" in r else r.get("status", "")
+            lines.append(head + f"{r['tool']} {_setting(r['tool'], r['setting'])} | {value} |")
+    return lines
+
+
+def markdown(report: dict) -> str:
+    tools = []
+    for entry in report["systems"]:
+        for r in entry["results"]:
+            if r["tool"] not in tools:
+                tools.append(r["tool"])
+    m = report["machine"]
+    out = [f"Run of {m['date']} on {m.get('Model name', '?')} ({m.get('CPU(s)', '?')} CPUs), "
+           f"Python {m['python']}, casadi {m.get('casadi')}, exudyn {m.get('exudyn')}, "
+           f"mujoco {m.get('mujoco')}, numpy {m.get('numpy')}, scipy {m.get('scipy')}; "
+           f"casmech: {m.get('casmech_source')}; repository HEAD {m.get('git_commit', '?')[:10]}"
+           f"{' (src/ modified)' if m.get('src_dirty') else ''}; imported from "
+           f"{m.get('casmech_file')}. BLAS threads per worker: "
+           f"{report.get('settings', {}).get('threads', '?')}. Load average (1, 5, 15 min) "
+           "at start "
+           f"{_load(m.get('loadavg_start'))}, at end {_load(m.get('loadavg_end'))}.",
+           "", f"Command: `{report['command']}`", ""]
+    out += ["### Time to reach an accuracy (fastest measured setting; wall time of the 10 s "
+            "simulation, median)", "",
+            "casmech / peer is the ratio of wall times: below 1 casmech is faster.", ""]
+    for entry in report["systems"]:
+        out += [f"**{entry['system']}** ({entry['description']})", ""]
+        out += level_table(entry, report["levels"], tools) + [""]
+    out += ["### Model build / compile time (median over the setting's processes)", ""]
+    out += build_table(report, tools) + [""]
+    out += ["### Reference and cross-check", ""] + cross_table(report) + [""]
+    out += ["### Every setting", ""]
+    for entry in report["systems"]:
+        out += [f"**{entry['system']}**", ""] + sweep_table(entry) + [""]
+    return "\n".join(out)
+
+
+if __name__ == "__main__":
+    print(markdown(json.loads(open(sys.argv[1]).read())))

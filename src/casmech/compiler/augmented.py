@@ -1,0 +1,81 @@
+"""Accelerations of a constrained mechanism by the mass-orthogonal augmented Lagrangian.
+
+For either formulation (r-p: v = q_dot; r-omega: v = [r_dot; omega_bar]) the equations of motion
+are M v_dot + P^T lam = F, P v_dot = gamma. Their augmented-Lagrangian solution (Bayo & Ledesma,
+Nonlinear Dyn. 9, 1996) iterates, from lam_0 = 0,
+    (M + a P^T P) v_dot_k = F - P^T lam_k-1 + a P^T gamma,   lam_k = lam_k-1 + a (P v_dot_k - gamma).
+Every iterate satisfies M v_dot_k + P^T lam_k = F exactly, and the acceleration constraint error
+contracts by 1 / (1 + a s^2) per iteration for each constraint mode of mass-weighted singular
+value s. M + a P^T P stays positive definite where P loses rank (singular configurations such as
+the IFToMM A02 N-four-bar passing its flat poses, redundant joints), where the [M P^T; P 0] form
+of an index-1 DAE is singular. There lam is the minimum-norm multiplier (every update lies in
+range(P)), which spreads the reaction over redundant joints instead of choosing rows.
+
+The penalty a is an input: the runtime scales it to the model (PENALTY times mass over
+constraint-gradient size), so no user constant is involved.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+
+ROW_SCALING = True
+ITERATIONS = 6  # see PENALTY
+LINEAR_SOLVER = "ldl"  # M + a P^T P is symmetric positive definite
+PENALTY = 1e8  # a relative to max(diag M) / max(diag P^T P); see runtime.dynamics
+
+
+@dataclass(frozen=True)
+class Formulation:
+    """Which system functions play M, F, P, gamma and nu; q_dot(q, v) (None: v is q_dot)."""
+
+    mass: str
+    forces: str
+    jacobian: str
+    gamma: str
+    nu: str
+    q_dot: str | None
+
+
+FORMULATIONS = {
+    "rp": Formulation("mass_matrix", "generalized_forces", "phi_q", "gamma", "nu", None),
+    "romega": Formulation("romega_mass", "romega_forces", "romega_jacobian", "romega_gamma",
+                          "romega_nu", "romega_q_dot"),
+}
+
+
+def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
+    """(t, q, v, penalty) -> (v_dot, lam), as an MX graph with sparse LDL solves."""
+    form = FORMULATIONS[name]
+    mass = functions[form.mass]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
+    v, penalty = ca.MX.sym("v", mass.size1_out(0)), ca.MX.sym("penalty")
+    m, p = mass(q), functions[form.jacobian](t, q)
+    f, gamma = functions[form.forces](t, q, v), functions[form.gamma](t, q, v)
+    if ROW_SCALING:
+        scale = 1 / ca.fmax(ca.sqrt(ca.sum2(p * p)), 1e-12)
+        p, gamma = p * ca.repmat(scale, 1, p.size2()), gamma * scale
+    lhs = m + penalty * p.T @ p
+    lam, v_dot = ca.MX.zeros(p.size1()), ca.MX.zeros(v.size1())
+    for _ in range(ITERATIONS):
+        v_dot = ca.solve(lhs, f - p.T @ lam + penalty * p.T @ gamma, LINEAR_SOLVER)
+        lam = lam + penalty * (p @ v_dot - gamma)
+    if ROW_SCALING:
+        lam = lam * scale
+    return ca.Function(f"{name}_accelerations", [t, q, v, penalty], [v_dot, lam],
+                       ["t", "q", "v", "penalty"], ["v_dot", "lam"])
+
+
+def ode(functions: dict[str, ca.Function], name: str) -> dict:
+    """The first-order ODE x = [q, v], x' = [q_dot(q, v), v_dot], for casadi.integrator; time is
+    t0 (a parameter, with the penalty) + tau, so one integrator serves every restart."""
+    form = FORMULATIONS[name]
+    solve = accelerations(functions, name)
+    n_q, n_v = solve.size1_in(1), solve.size1_in(2)
+    tau, x, params = ca.MX.sym("tau"), ca.MX.sym("x", n_q + n_v), ca.MX.sym("p", 2)
+    q, v = x[:n_q], x[n_q:]
+    q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
+    v_dot = solve(params[0] + tau, q, v, params[1])[0]
+    return {"t": tau, "x": x, "p": params, "ode": ca.vertcat(q_dot, v_dot)}
