@@ -139,7 +139,7 @@ def test_conservative_models_keep_energy_and_constraints(name, formulation):
                              formulation=formulation)
     table = Table(*casmech.results_table(functions, result))
     kinetic = [functions.evaluate("energy", t, q, q_dot)[0].item()
-               for t, q, q_dot in zip(result.times, result.q, result.q_dot)]
+               for t, q, q_dot in zip(result.times, result.q, result.q_dot, strict=True)]
     drift = np.ptp(table["energy"]) / max(kinetic)
     print(f"\n{name} {formulation}: energy drift {drift:.1e} of max kinetic energy, "
           f"max |Phi| {table['constraint_violation'].max():.1e}, "

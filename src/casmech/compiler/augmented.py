@@ -3,7 +3,8 @@
 For either formulation (r-p: v = q_dot; r-omega: v = [r_dot; omega_bar]) the equations of motion
 are M v_dot + P^T lam = F, P v_dot = gamma. Their augmented-Lagrangian solution (Bayo & Ledesma,
 Nonlinear Dyn. 9, 1996) iterates, from lam_0 = 0,
-    (M + a P^T P) v_dot_k = F - P^T lam_k-1 + a P^T gamma,   lam_k = lam_k-1 + a (P v_dot_k - gamma).
+    (M + a P^T P) v_dot_k = F - P^T lam_k-1 + a P^T gamma,
+    lam_k = lam_k-1 + a (P v_dot_k - gamma).
 Every iterate satisfies M v_dot_k + P^T lam_k = F exactly, and the acceleration constraint error
 contracts by 1 / (1 + a s^2) per iteration for each constraint mode of mass-weighted singular
 value s. M + a P^T P stays positive definite where P loses rank (singular configurations such as
