@@ -1,6 +1,7 @@
 """The IFToMM A02 N-four-bar for any N, written out like
-models/validation/iftomm_a02_four_bar_N2.yaml (whose comments explain the joints: revolutes to ground, then a universal at each coupler's left
-end and a spherical at its right end, so the constraint Jacobian has full row rank)."""
+models/validation/iftomm_a02_four_bar_N2.yaml (whose comments explain the joints: revolutes to
+ground, then a universal at each coupler's left end and a spherical at its right end, so the
+constraint Jacobian has full row rank)."""
 
 from pathlib import Path
 
