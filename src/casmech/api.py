@@ -42,20 +42,25 @@ def compile(model: ResolvedModel) -> SystemFunctions:  # noqa: A001 - the compil
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
-ANALYSES: dict[str, Callable[[SystemFunctions, Analysis], Result]] = {
-    "kinematics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
-    "inverse_dynamics": lambda f, s: run_prescribed_motion(f, s.t_end, s.output_step, s.type),
-    "assembly": lambda f, s: run_assembly(f),
-    "dynamics": lambda f, s: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                          formulation=s.options.get("formulation", "rp")),
+ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Result]] = {
+    "kinematics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
+                                                        progress=p),
+    "inverse_dynamics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
+                                                              progress=p),
+    "assembly": lambda f, s, p: run_assembly(f, progress=p),
+    "dynamics": lambda f, s, p: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                                             formulation=s.options.get("formulation", "rp"),
+                                             progress=p),
 }
 
 
 def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: float | None = None,
             output_step: float | None = None, rtol: float | None = None,
-            atol: float | None = None, formulation: str | None = None) -> Result:
+            atol: float | None = None, formulation: str | None = None,
+            progress: Callable[[float], None] | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed
-    (formulation: "rp" or "romega", for dynamics)."""
+    (formulation: "rp" or "romega", for dynamics). `progress`, when given, is called with the
+    time of every output row as it is computed."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
@@ -70,7 +75,7 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     for name in ("t_end", "output_step", "rtol", "atol"):
         if not getattr(settings, name) > 0:
             raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
-    result = ANALYSES[settings.type](functions, settings)
+    result = ANALYSES[settings.type](functions, settings, progress)
     result.metadata.update(analysis=settings.type, mode="interpreted")
     return result
 

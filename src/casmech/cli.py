@@ -1,6 +1,6 @@
 """casmech command line: parse arguments, call the API, render diagnostics.
 
-Each subcommand is a module of casmech.commands (listed in commands.NAMES).
+Each subcommand is a module of casmech.commands (listed in commands.COMMANDS).
 Exit codes (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error, 3 analysis failure.
 """
 
@@ -11,12 +11,13 @@ import importlib
 import sys
 
 import casmech
-from casmech.commands import NAMES
+from casmech.commands import COMMANDS
 from casmech.errors import CasmechError, ModelError, Source, UsageError
 
 
 def _modules() -> dict:
-    return {name: importlib.import_module(f"casmech.commands.{name}") for name in NAMES}
+    return {name: importlib.import_module(f"casmech.commands.{module}")
+            for name, module in COMMANDS.items()}
 
 
 def _parser(modules: dict) -> argparse.ArgumentParser:

@@ -6,7 +6,7 @@ import pytest
 
 import casmech
 from casmech.errors import AnalysisError
-from tests.conftest import Table
+from tests.conftest import MODELS, Table
 
 M, L, G, I_CM = 2.0, 1.2, 9.81, 0.3  # mass, CM distance from the pivot, gravity, inertia about x
 
@@ -99,3 +99,11 @@ def test_assembly_failure_names_the_joint():
     message = str(failure.value)
     assert "did not converge" in message and "joint 'tether'" in message
     assert "<string>:" in message  # the joint's location in the model text
+
+
+def test_progress_is_called_with_every_row_time():
+    """analyze(progress=...) sees each output time once, in order, as rows are made."""
+    functions = casmech.compile(casmech.load(MODELS / "me751_pendulum.yaml"))
+    seen = []
+    result = casmech.analyze(functions, t_end=0.05, progress=seen.append)
+    assert seen == result.times

@@ -1,8 +1,11 @@
 """The subcommands of `casmech`, one module each.
 
-Every module listed in NAMES defines HELP (one line), add_arguments(parser) and run(args) -> int
-(the exit code). cli.py builds the parser from this table; a new command is a new module and one
-new name here.
+COMMANDS maps a command's name to its module in this package; every module defines HELP (one
+line), add_arguments(parser) and run(args) -> int (the exit code). cli.py builds the parser from
+this table: a new command is a new module and one new entry here.
 """
 
-NAMES = ("check", "run")
+COMMANDS = {
+    "check": "check",
+    "run": "run",
+}

@@ -95,9 +95,10 @@ class _Stepper:
 
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
-                 atol: float, t0: float = 0.0, formulation: str = "rp") -> Result:
+                 atol: float, t0: float = 0.0, formulation: str = "rp",
+                 progress=None) -> Result:
     form = augmented.FORMULATIONS[formulation]
-    result = Result("dynamics")
+    result = Result("dynamics", on_row=progress)
     n = functions.n_coordinates
     q, q_dot = assembly.initial_state(functions, t0)
     v = velocities(functions, formulation, q, q_dot)

@@ -47,8 +47,9 @@ def state_at(functions: SystemFunctions, t: float, q_guess: np.ndarray, q_dot_gu
 
 
 def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
-                          analysis: str = "kinematics", t0: float = 0.0) -> Result:
-    result = Result(analysis)
+                          analysis: str = "kinematics", t0: float = 0.0,
+                          progress=None) -> Result:
+    result = Result(analysis, on_row=progress)
     q = assembly.assemble_positions(functions, t0)
     require_fully_driven(functions, t0, q, analysis)
     q_dot = np.zeros(functions.n_coordinates)
@@ -67,10 +68,10 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
     return result
 
 
-def run_assembly(functions: SystemFunctions, t0: float = 0.0) -> Result:
+def run_assembly(functions: SystemFunctions, t0: float = 0.0, progress=None) -> Result:
     """One state at t0: assembled positions, velocities projected from the file's, and the
     accelerations and multipliers the equations of motion give at that instant."""
-    result = Result("assembly")
+    result = Result("assembly", on_row=progress)
     q, q_dot = assembly.initial_state(functions, t0)
     q_ddot, lam = assembly.solve_dynamic_accelerations(functions, t0, q, q_dot)
     result.append(t0, q, q_dot, q_ddot, lam)

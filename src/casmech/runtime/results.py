@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -15,7 +16,8 @@ JOINT_COLUMNS = ("fx", "fy", "fz", "tx", "ty", "tz")
 
 @dataclass
 class Result:
-    """States at the output times; q_ddot and lam complete the state where known."""
+    """States at the output times; q_ddot and lam complete the state where known.
+    on_row, when given, is called with the time of every row as it is appended (progress)."""
 
     analysis: str
     times: list[float] = field(default_factory=list)
@@ -24,12 +26,15 @@ class Result:
     q_ddot: list[np.ndarray] = field(default_factory=list)
     lam: list[np.ndarray] = field(default_factory=list)
     metadata: dict = field(default_factory=dict)
+    on_row: Callable[[float], None] | None = field(default=None, repr=False, compare=False)
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
         self.times.append(float(t))
         for store, value in ((self.q, q), (self.q_dot, q_dot), (self.q_ddot, q_ddot),
                              (self.lam, lam)):
             store.append(np.array(value, float))
+        if self.on_row is not None:
+            self.on_row(float(t))
 
     def __len__(self) -> int:
         return len(self.times)
