@@ -8,4 +8,5 @@ this table: a new command is a new module and one new entry here.
 COMMANDS = {
     "check": "check",
     "run": "run",
+    "animate": "animate",
 }

@@ -1,0 +1,56 @@
+"""casmech animate MODEL.yaml RESULTS.csv -o DIR: a ParaView time series and an HTML player."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casmech
+from casmech.commands.common import add_overrides, overrides
+from casmech.errors import UsageError
+from casmech.output.animate import build_scene
+from casmech.output.csv import read_csv
+from casmech.output.html_player import write_html
+from casmech.output.vtk import write_vtk
+
+HELP = "write a VTK time series (ParaView) and a self-contained HTML player"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("model", type=Path)
+    parser.add_argument("results", type=Path, help="results.csv written by `casmech run`")
+    parser.add_argument("-o", "--out", type=Path,
+                        help="output directory (default: animation/ beside the results)")
+    frames = parser.add_mutually_exclusive_group()
+    frames.add_argument("--every", type=int, metavar="K",
+                        help="draw every K-th row (and the last); default: every row")
+    frames.add_argument("--fps", type=float,
+                        help="draw the row nearest each multiple of 1/FPS of simulated time")
+    parser.add_argument("--no-vtk", action="store_true", help="write only the HTML player")
+    parser.add_argument("--no-html", action="store_true", help="write only the VTK series")
+    add_overrides(parser)
+
+
+def _results(path: Path):
+    if not path.is_file():
+        raise UsageError(f"{path}: no such results file (hint: write one with `casmech run`)")
+    try:
+        return read_csv(path)
+    except ValueError as error:
+        raise UsageError(f"{path}: not a results table of numbers ({error})") from None
+
+
+def run(args) -> int:
+    if args.no_vtk and args.no_html:
+        raise UsageError("--no-vtk and --no-html together leave nothing to write")
+    model = casmech.load(args.model, overrides(args.set))
+    names, values = _results(args.results)
+    scene = build_scene(model, names, values, every=args.every, fps=args.fps)
+    out = args.out or args.results.parent / "animation"
+    written = []
+    if not args.no_vtk:
+        written.append(write_vtk(scene, out))
+    if not args.no_html:
+        written.append(write_html(scene, out / "animation.html"))
+    print(f"{len(scene.times)} frames, {len(scene.bodies)} bodies, {len(scene.parts)} parts -> "
+          + ", ".join(str(path) for path in written))
+    return 0
