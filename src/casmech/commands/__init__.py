@@ -8,5 +8,6 @@ this table: a new command is a new module and one new entry here.
 COMMANDS = {
     "check": "check",
     "run": "run",
+    "import": "import_cmd",
     "animate": "animate",
 }

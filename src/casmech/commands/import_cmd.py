@@ -1,0 +1,45 @@
+"""casmech import FILE.adm|FILE.mdl|FILE.acf -o MODEL.yaml: convert to casmech YAML.
+
+Warnings (what was not translated, with the source line) go to stderr; the written YAML is
+validated by casmech's own loader, and a model that does not validate is still written (so it
+can be fixed by hand) with the diagnostics printed and exit code 1.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import casmech
+from casmech.errors import ModelError, UsageError
+from casmech.importers import TRANSLATORS, import_file
+
+HELP = "convert an Adams .adm deck or a simEngine3D .mdl/.acf model to casmech YAML"
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("source", type=Path, help=f"file to import ({', '.join(TRANSLATORS)})")
+    parser.add_argument("-o", "--output", type=Path, default=None,
+                        help="YAML file to write (default: the source with suffix .yaml)")
+    parser.add_argument("--quiet", action="store_true", help="do not print warnings")
+
+
+def run(args) -> int:
+    output = args.output or args.source.with_suffix(".yaml")
+    if output.resolve() == args.source.resolve():
+        raise UsageError(f"{output}: the output would overwrite the source; give -o MODEL.yaml")
+    text, warnings = import_file(args.source)
+    if not args.quiet:
+        for warning in warnings:
+            print(warning.format(), file=sys.stderr)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(text)
+    try:
+        model = casmech.loads(text, file=str(output))
+    except ModelError as error:
+        print(error.format(), file=sys.stderr)
+        print(f"{output}: written, but it does not validate (see above)", file=sys.stderr)
+        return error.exit_code
+    print(f"{args.source} -> {output}: {len(model.bodies)} bodies, {len(model.joints)} joints, "
+          f"{len(model.forces)} forces; {len(warnings)} warnings")
+    return 0
