@@ -1,7 +1,14 @@
-"""casmech run MODEL.yaml: run the model's analysis and write DIR/results.csv."""
+"""casmech run MODEL.yaml: run the model's analysis and write DIR/results.csv (and/or .h5).
+
+--format csv (default) writes results.csv per the results contract plus metadata.json beside it
+(versions, model hash and text, overrides, settings, timings, mode); --format hdf5 writes
+results.h5 holding the same table and metadata; --format csv,hdf5 writes both. A progress bar
+is drawn on stderr when it is a terminal and the run lasts more than a second.
+"""
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
@@ -10,8 +17,29 @@ import casmech
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import AnalysisError
 from casmech.output.csv import write_csv
+from casmech.output.hdf5 import h5py, write_hdf5
+from casmech.output.metadata import resolved_settings, run_metadata, write_json
+from casmech.output.progress import progress_bar
 
-HELP = "run the model's analysis; write results.csv"
+HELP = "run the model's analysis; write results.csv (or results.h5)"
+
+# format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
+FORMATS = {
+    "csv": ("results.csv", lambda path, names, values, meta: write_csv(path, names, values),
+            lambda: None),
+    "hdf5": ("results.h5", write_hdf5, h5py),
+}
+
+
+def formats(text: str) -> list[str]:
+    """--format: one format or a comma-separated list of them."""
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in FORMATS]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(
+            f"unknown format '{','.join(unknown) or text}'; expected one or more of "
+            f"{', '.join(FORMATS)}, comma-separated (e.g. csv,hdf5)")
+    return list(dict.fromkeys(names))
 
 
 def add_arguments(parser) -> None:
@@ -26,24 +54,53 @@ def add_arguments(parser) -> None:
     parser.add_argument("--formulation", choices=["rp", "romega"],
                         help="equations of motion for dynamics (default: the model's, else rp)")
     parser.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
+    parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
+                        help="results file format(s), comma-separated (default csv)")
     add_overrides(parser)
 
 
 def run(args) -> int:
-    model = casmech.load(args.model, overrides(args.set))
+    for name in args.format:
+        FORMATS[name][2]()  # a missing optional dependency is a usage error before the run
+    given = overrides(args.set)
+    clock = time.perf_counter()
+    model = casmech.load(args.model, given)
+    timings = {"load": time.perf_counter() - clock}
     out = args.out or args.model.with_name(args.model.stem + "_results")
+    clock = time.perf_counter()
     functions = casmech.compile(model)
-    start = time.perf_counter()
+    timings["compile"] = time.perf_counter() - clock
+    settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
+                                 output_step=args.output_step, rtol=args.rtol, atol=args.atol,
+                                 formulation=args.formulation)
+    clock = time.perf_counter()
     try:
-        result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
-                                 rtol=args.rtol, atol=args.atol, formulation=args.formulation)
+        with progress_bar(settings["t_end"]) as callback:
+            result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
+                                     rtol=args.rtol, atol=args.atol,
+                                     formulation=args.formulation, progress=callback)
     except AnalysisError as error:
+        timings["analysis"] = time.perf_counter() - clock
         if error.partial is not None and len(error.partial):
-            path = write_csv(out / "results.csv", *casmech.results_table(functions, error.partial))
-            print(f"kept {len(error.partial)} rows computed before the failure in {path}",
-                  file=sys.stderr)
+            paths = _save(args, out, functions, error.partial,
+                          (model, given, settings, timings), str(error))
+            print(f"kept {len(error.partial)} rows computed before the failure in "
+                  f"{', '.join(map(str, paths))}", file=sys.stderr)
         raise
-    path = write_csv(out / "results.csv", *casmech.results_table(functions, result))
-    print(f"{result.metadata['analysis']}: {len(result)} rows, "
-          f"{time.perf_counter() - start:.3g} s -> {path}")
+    timings["analysis"] = time.perf_counter() - clock
+    paths = _save(args, out, functions, result, (model, given, settings, timings))
+    print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
+          f"-> {', '.join(map(str, paths))}")
     return 0
+
+
+def _save(args, out: Path, functions, result, run, error: str | None = None) -> list[Path]:
+    """The table in every requested format, plus metadata.json beside a CSV."""
+    names, values = casmech.results_table(functions, result)
+    model, given, settings, timings = run
+    metadata = run_metadata(model, given, settings, timings, result.metadata, len(values), error)
+    paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
+             for name in args.format]
+    if "csv" in args.format:
+        write_json(out / "metadata.json", metadata)
+    return paths

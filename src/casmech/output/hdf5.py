@@ -1,0 +1,78 @@
+"""results.h5: the results table plus the run's metadata, in one HDF5 file (h5py, extra `hdf5`).
+
+Layout:
+    /results    float64 [rows x columns], the results contract's table
+    /columns    the column names, in contract order (variable-length UTF-8 strings)
+    /metadata   casmech.output.metadata's dict: a nested dict is a group, a value an attribute,
+                except the model text, a string dataset /metadata/model/text
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from casmech.errors import UsageError
+
+DATASETS = ("text",)  # metadata keys stored as datasets (long), not attributes
+
+
+def h5py():
+    try:
+        import h5py as module
+    except ImportError:
+        raise UsageError("HDF5 output needs h5py; install it with: pip install 'casmech[hdf5]'"
+                         ) from None
+    return module
+
+
+def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
+               metadata: Mapping | None = None) -> Path:
+    """Write atomically (a reader never sees a half-written file)."""
+    h5 = h5py()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(path.name + ".tmp")
+    strings = h5.string_dtype("utf-8")
+    with h5.File(temporary, "w") as handle:
+        table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
+        handle.create_dataset("results", data=table)
+        handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
+        _write_group(handle.create_group("metadata"), metadata or {}, strings)
+    os.replace(temporary, path)
+    return path
+
+
+def _write_group(group, mapping: Mapping, strings) -> None:
+    for key, value in mapping.items():
+        if isinstance(value, Mapping):
+            _write_group(group.create_group(key), value, strings)
+        elif key in DATASETS:
+            group.create_dataset(key, data=str(value), dtype=strings)
+        else:
+            group.attrs[key] = "" if value is None else value
+
+
+def read_hdf5(path: str | Path) -> tuple[list[str], np.ndarray]:
+    with h5py().File(path, "r") as handle:
+        names = [str(name) for name in handle["columns"].asstr()[()]]
+        return names, np.array(handle["results"][()], float)
+
+
+def read_hdf5_metadata(path: str | Path) -> dict:
+    with h5py().File(path, "r") as handle:
+        return _read_group(handle["metadata"])
+
+
+def _read_group(group) -> dict:
+    data = {key: _plain(value) for key, value in group.attrs.items()}
+    for key, item in group.items():
+        data[key] = _read_group(item) if hasattr(item, "keys") else item.asstr()[()]
+    return data
+
+
+def _plain(value):
+    return value.item() if isinstance(value, np.generic) else value

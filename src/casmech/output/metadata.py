@@ -1,0 +1,80 @@
+"""What a run was: versions, model (name, sha256, text), overrides, settings, timings, mode.
+
+One dict, written as DIR/metadata.json beside results.csv (the CSV stays plain per the results
+contract) and into results.h5 (casmech.output.hdf5).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import replace
+from datetime import datetime, timezone
+from pathlib import Path
+
+import casadi
+
+import casmech
+from casmech.schema.resolved import Analysis, ResolvedModel
+
+SETTINGS = ("type", "t_end", "output_step", "rtol", "atol")
+
+
+def resolved_settings(analysis: Analysis, **given) -> dict:
+    """The analysis settings a run uses: the model's `analysis:` block with the caller's
+    overrides (None: not given), as casmech.analyze resolves them."""
+    settings = replace(analysis, **{k: v for k, v in given.items()
+                                    if k in SETTINGS and v is not None})
+    formulation = given.get("formulation") or settings.options.get("formulation", "rp")
+    return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation}
+
+
+def sha256(text: str) -> str:
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: dict,
+                 timings: Mapping[str, float], result_metadata: Mapping, rows: int,
+                 error: str | None = None) -> dict:
+    """Everything needed to tell how a results table was made (JSON-serialisable)."""
+    return {
+        "casmech_version": casmech.__version__,
+        "casadi_version": casadi.__version__,
+        "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "model": {"file": Path(model.file).name, "path": str(model.file), "name": model.name,
+                  "sha256": sha256(model.text), "text": model.text},
+        "overrides": dict(overrides),
+        "analysis": dict(settings),
+        "timings_s": dict(timings),
+        "mode": result_metadata.get("mode", "interpreted"),
+        "rows": int(rows),
+        "status": "failed" if error else "complete",
+        "error": error or "",
+        "result": {k: _plain(v) for k, v in result_metadata.items()},
+    }
+
+
+def _plain(value):
+    """numpy scalars and other odd values as JSON-friendly Python values."""
+    if isinstance(value, (bool, int, float, str)) or value is None:
+        return value
+    try:
+        return value.item()
+    except AttributeError:
+        return str(value)
+
+
+def write_json(path: str | Path, metadata: Mapping) -> Path:
+    """Write atomically, like the CSV writer."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(json.dumps(metadata, indent=2) + "\n")
+    os.replace(temporary, path)
+    return path
+
+
+def read_json(path: str | Path) -> dict:
+    return json.loads(Path(path).read_text())

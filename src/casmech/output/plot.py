@@ -1,0 +1,163 @@
+"""Plots of a results table (matplotlib, optional extra `plot`, imported only when plotting).
+
+A selection is a list of specs: column names, globs (`crank.*`) or presets (PRESETS). The chosen
+columns are drawn against t, one panel per physical quantity (read from the column's suffix), with
+SI units on the axes, a title per panel and a legend.
+"""
+
+from __future__ import annotations
+
+import difflib
+import fnmatch
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from casmech.errors import UsageError
+from casmech.runtime.results import JOINT_COLUMNS
+
+# column suffix (after the last dot) or whole column name -> (quantity, unit, panel title)
+QUANTITIES: dict[str, tuple[str, str, str]] = {
+    **{s: ("position", "m", "CM position (global)") for s in ("x", "y", "z")},
+    **{f"e{k}": ("Euler parameter", "-", "Euler parameters") for k in range(4)},
+    **{f"v{s}": ("velocity", "m/s", "CM velocity (global)") for s in "xyz"},
+    **{f"w{s}": ("angular velocity", "rad/s", "angular velocity (global)") for s in "xyz"},
+    **{f"a{s}": ("acceleration", "m/s²", "CM acceleration (global)") for s in "xyz"},
+    **{f"alpha{s}": ("angular acceleration", "rad/s²", "angular acceleration (global)")
+       for s in "xyz"},
+    **{f"f{s}": ("force", "N", "joint reaction force on body_j (global)") for s in "xyz"},
+    **{f"t{s}": ("torque", "N m", "joint reaction torque about the joint point (global)")
+       for s in "xyz"},
+    "energy": ("energy", "J", "energy (kinetic + potential)"),
+    "constraint_violation": ("constraint violation", "-", "constraint violation max |Φ|"),
+    "t": ("time", "s", "time"),
+}
+LOG_SCALE = {"constraint violation"}  # quantities drawn on a logarithmic axis
+SAVE_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def quantity(column: str) -> tuple[str, str, str]:
+    """(quantity, SI unit, panel title) of a results column, from its name."""
+    key = column if column in QUANTITIES else column.rsplit(".", 1)[-1]
+    return QUANTITIES.get(key, (key, "?", key))
+
+
+def _positions(names: Sequence[str], _argument: str) -> list[str]:
+    return [n for n in names if "." in n and n.rsplit(".", 1)[1] in ("x", "y", "z")]
+
+
+def _reactions(names: Sequence[str], joint: str) -> list[str]:
+    columns = [f"{joint}.{c}" for c in JOINT_COLUMNS]
+    if all(c in names for c in columns):
+        return columns
+    joints = _joints(names)
+    close = difflib.get_close_matches(joint, joints, n=3, cutoff=0.5)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    raise UsageError(f"reactions:{joint}: no joint '{joint}' in the results{hint} "
+                     f"(joints: {', '.join(joints) or 'none'})")
+
+
+# preset -> columns(names, argument); an argument follows a colon (reactions:JOINT)
+PRESETS: dict[str, Callable[[Sequence[str], str], list[str]]] = {
+    "positions": _positions,
+    "energy": lambda names, _: ["energy"],
+    "reactions": _reactions,
+    "constraints": lambda names, _: ["constraint_violation"],
+}
+PRESET_HELP = "positions, energy, reactions:JOINT, constraints"
+
+
+def select(names: Sequence[str], specs: Sequence[str]) -> list[str]:
+    """The columns the specs name, in order, without repeats and without t."""
+    chosen: list[str] = []
+    for spec in specs:
+        chosen += _columns(names, spec)
+    return [c for c in dict.fromkeys(chosen) if c != "t"]
+
+
+def _columns(names: Sequence[str], spec: str) -> list[str]:
+    preset, _, argument = spec.partition(":")
+    if preset in PRESETS and (argument or preset != "reactions"):
+        return PRESETS[preset](names, argument)
+    if spec == "reactions":
+        raise UsageError(f"the preset reactions needs a joint: reactions:JOINT "
+                         f"(joints: {', '.join(_joints(names)) or 'none'})")
+    if any(char in spec for char in "*?["):
+        matches = fnmatch.filter(names, spec)
+        if matches:
+            return matches
+        raise UsageError(f"no column matches '{spec}'{_did_you_mean(names, spec)}")
+    if spec in names:
+        return [spec]
+    raise UsageError(f"unknown column or preset '{spec}'{_did_you_mean(names, spec)} "
+                     f"(presets: {PRESET_HELP}; globs such as 'crank.*' select several columns)")
+
+
+def _joints(names: Sequence[str]) -> list[str]:
+    return sorted({n.rsplit(".", 1)[0] for n in names if n.endswith(".fx")})
+
+
+def _did_you_mean(names: Sequence[str], spec: str) -> str:
+    candidates = list(dict.fromkeys([*names, *PRESETS]))
+    close = difflib.get_close_matches(spec.replace("*", ""), candidates, n=4, cutoff=0.6)
+    return f"; did you mean {', '.join(close)}?" if close else ""
+
+
+def panels(columns: Sequence[str]) -> dict[tuple[str, str, str], list[str]]:
+    """Columns grouped by quantity, in order of first appearance."""
+    grouped: dict[tuple[str, str, str], list[str]] = {}
+    for column in columns:
+        grouped.setdefault(quantity(column), []).append(column)
+    return grouped
+
+
+def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title: str = ""):
+    """A matplotlib Figure of the selected columns against t (one panel per quantity)."""
+    Figure = _matplotlib_figure()  # noqa: N806 - a class
+    grouped = panels(select(names, specs))
+    values = np.atleast_2d(values)
+    t = values[:, list(names).index("t")]
+    fig = Figure(figsize=(9, 1.2 + 2.8 * len(grouped)), layout="constrained")
+    axes = fig.subplots(len(grouped), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, ((name, unit, heading), columns) in zip(axes, grouped.items(), strict=True):
+        for column in columns:
+            ax.plot(t, values[:, list(names).index(column)], label=column)
+        _decorate(ax, name, unit, heading, len(columns))
+    axes[-1].set_xlabel("time t [s]")
+    fig.suptitle(title or ", ".join(specs))
+    return fig
+
+
+def _decorate(ax, name: str, unit: str, heading: str, lines: int) -> None:
+    ax.set_title(heading, fontsize="medium")
+    ax.set_ylabel(f"{name} [{unit}]")
+    ax.grid(True, alpha=0.3)
+    if name in LOG_SCALE and any(np.any(line.get_ydata() > 0) for line in ax.get_lines()):
+        ax.set_yscale("log")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
+              ncol=1 + lines // 16, frameon=False)
+
+
+def check_output(path: Path) -> Path:
+    """A usage error unless matplotlib can write this kind of file."""
+    if Path(path).suffix.lower() not in SAVE_SUFFIXES:
+        raise UsageError(f"cannot write '{path}': expected a file name ending in "
+                         f"{', '.join(SAVE_SUFFIXES)}")
+    return Path(path)
+
+
+def save(fig, path: Path) -> Path:
+    path = check_output(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    return path
+
+
+def _matplotlib_figure():
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        raise UsageError("casmech plot needs matplotlib; install it with: "
+                         "pip install 'casmech[plot]'") from None
+    return Figure
