@@ -13,6 +13,7 @@ inertia, I_x = m (b^2 + c^2) / 5 etc., along the principal axes of inertia.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -140,7 +141,12 @@ def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """A surface mesh read by meshio (STL, OBJ, PLY, ...): its triangles, scaled."""
     import meshio
 
-    mesh = meshio.read(path)
+    with warnings.catch_warnings():  # meshio's binary-STL size probe overflows on ASCII files
+        warnings.simplefilter("ignore", RuntimeWarning)
+        try:
+            mesh = meshio.read(path)
+        except meshio.ReadError as error:
+            raise ValueError(str(error) or "meshio cannot read it") from None
     triangles = [block.data for block in mesh.cells if block.type == "triangle"]
     if not triangles:
         raise ValueError("no triangles in the mesh")
@@ -289,14 +295,14 @@ def build_scene(model: ResolvedModel, names: list[str], values: np.ndarray,
     times, r, p = body_poses(names, values, bodies)
     rows = select_rows(times, every, fps)
     parts = body_parts(model)
-    radius = MARKER * scene_size(model, parts)
-    marker, triangles = sphere(radius)
+    size = scene_size(model, parts)
+    marker, triangles = sphere(MARKER * size)
     links = []
     for joint, ends in joint_points(model):
         name = f"joint {model.joints[joint].name}"
         for body, point in ends:
             parts.append(Part(name, body, joint, marker + point, triangles))
-        if len(ends) == 2 and np.linalg.norm(_initial(model, ends[0]) - _initial(model, ends[1])):
+        if len(ends) == 2 and _apart(model, *ends) > 1e-9 * size:  # not one point seen twice
             links.append(Link(joint, ends[0][0], ends[0][1], ends[1][0], ends[1][1]))
     gravity = np.asarray(model.gravity, float)
     up = -gravity / np.linalg.norm(gravity) if np.linalg.norm(gravity) else np.array([0, 0, 1.0])
@@ -304,9 +310,12 @@ def build_scene(model: ResolvedModel, names: list[str], values: np.ndarray,
                  tuple(links), times[rows], r[rows], p[rows], up)
 
 
-def _initial(model: ResolvedModel, end: tuple[int, np.ndarray]) -> np.ndarray:
-    body, point = end
-    if body == GROUND_INDEX:
-        return point
-    b = model.bodies[body]
-    return b.position + rotations(b.euler_parameters) @ point
+def _apart(model: ResolvedModel, *ends: tuple[int, np.ndarray]) -> float:
+    """Distance at t = 0 (the file's pose) between body-frame points of two bodies."""
+    def initial(body: int, point: np.ndarray) -> np.ndarray:
+        if body == GROUND_INDEX:
+            return point
+        b = model.bodies[body]
+        return b.position + rotations(b.euler_parameters) @ point
+
+    return float(np.linalg.norm(initial(*ends[0]) - initial(*ends[1])))
