@@ -1,0 +1,152 @@
+"""The index-1 DAE of a parametric system, its consistent initial state and its outputs.
+
+    x = [q, q_dot]    z = [q_ddot, lam]    p = [theta, u]
+    ode: [q_dot; q_ddot]
+    alg: [M q_ddot + Phi_q^T lam - Q - B^T u;  Phi_q q_ddot - gamma]
+
+over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
+state is a function of theta: positions solve Phi(t0, q, theta) = 0 with N^T (q - q_file) = 0 (N
+spanning the null space of Phi_q at the nominal assembly: the least-squares correction Newton
+makes), velocities are the file's velocities corrected by the least-squares step onto
+Phi_q q_dot = nu. CasADi differentiates both (rootfinder by the implicit function theorem).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler.checks import structure
+from casmech.optimal.system import ParametricSystem
+from casmech.runtime.assembly import initial_state
+from casmech.runtime.results import column_names
+
+
+@dataclass(frozen=True)
+class DAE:
+    """Symbols and residuals of the index-1 DAE (SX), with the rows it keeps."""
+
+    system: ParametricSystem
+    rows: tuple[int, ...]  # independent constraint rows
+    t: ca.SX
+    x: ca.SX
+    z: ca.SX
+    theta: ca.SX
+    u: ca.SX
+    ode: ca.SX
+    alg: ca.SX
+    t0: float
+    q_assembled: np.ndarray
+    q_dot_assembled: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.system.n_coordinates
+
+    @property
+    def p(self) -> ca.SX:
+        return ca.vertcat(self.theta, self.u)
+
+    def problem(self) -> dict:
+        return {"t": self.t, "x": self.x, "z": self.z, "p": self.p, "ode": self.ode,
+                "alg": self.alg}
+
+    def split(self, x, z):
+        n = self.n
+        return x[:n], x[n:], z[:n], z[n:]
+
+    def full_multipliers(self, lam_rows):
+        """lam over every row of phi (zeros on the dropped redundant rows)."""
+        m = self.system.nominal.n_rows
+        lam = ca.MX.zeros(m, lam_rows.shape[1]) if isinstance(lam_rows, ca.MX) else \
+            ca.SX.zeros(m, lam_rows.shape[1])
+        for k, row in enumerate(self.rows):
+            lam[row, :] = lam_rows[k, :]
+        return lam
+
+
+def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
+              t0: float = 0.0) -> DAE:
+    """The DAE; `controls(q, u) -> Q_u` adds generalized control forces (see ocp.py)."""
+    nominal = system.nominal
+    q_nom, q_dot_nom = initial_state(nominal, t0)
+    rows = structure(nominal, t0, q_nom).independent
+    n, m = system.n_coordinates, len(rows)
+    t = ca.SX.sym("t")
+    x, z = ca.SX.sym("x", 2 * n), ca.SX.sym("z", n + m)
+    theta = ca.SX.sym("theta", len(system.names))
+    n_u = controls.size1_in(1) if controls is not None else 0
+    u = ca.SX.sym("u", n_u)
+    q, q_dot, q_ddot, lam = x[:n], x[n:], z[:n], z[n:]
+    phi_q = system["phi_q"](t, q, theta)[list(rows), :]
+    forces = system["generalized_forces"](t, q, q_dot, theta)
+    if controls is not None:
+        forces += controls(q, u)
+    alg = ca.vertcat(system["mass_matrix"](q, theta) @ q_ddot + phi_q.T @ lam - forces,
+                     phi_q @ q_ddot - system["gamma"](t, q, q_dot, theta)[list(rows)])
+    return DAE(system, tuple(rows), t, x, z, theta, u, ca.vertcat(q_dot, q_ddot), alg, t0,
+               q_nom, q_dot_nom)
+
+
+def _null_space(matrix: np.ndarray) -> np.ndarray:
+    _, s, vt = np.linalg.svd(matrix)
+    rank = int(np.sum(s > 1e-10 * max(s.max(initial=0.0), 1.0)))
+    return vt[rank:].T
+
+
+def initial_state_function(dae: DAE) -> ca.Function:
+    """x0(theta): consistent positions and velocities (differentiable in theta)."""
+    system, rows, t0 = dae.system, list(dae.rows), dae.t0
+    theta, q = dae.theta, ca.SX.sym("q", dae.n)
+    values = system.values
+    basis = _null_space(system["phi_q"](t0, dae.q_assembled, values).full()[rows])
+    residual = ca.vertcat(system["phi"](t0, q, theta)[rows],
+                          ca.DM(basis).T @ (q - ca.DM(dae.q_assembled)))
+    solve = ca.rootfinder("assembly", "newton", ca.Function("g", [q, theta], [residual]),
+                          {"abstol": 1e-14, "max_iter": 50})
+    th = ca.MX.sym("theta", theta.numel())
+    q0 = solve(ca.DM(dae.q_assembled), th)
+    guess = system["file_velocities"](q0, th)
+    jac = system["phi_q"](t0, q0, th)[rows, :]
+    rhs = system["nu"](t0, q0, th)[rows] - jac @ guess
+    q_dot0 = guess + jac.T @ ca.solve(jac @ jac.T, rhs)
+    return ca.Function("x0", [th], [ca.vertcat(q0, q_dot0)], ["theta"], ["x0"])
+
+
+def algebraic_function(dae: DAE) -> ca.Function:
+    """z(t, x, p) = [q_ddot, lam] solving alg = 0 (alg is linear in z): a sparse linear solve
+    in an MX graph, so outputs can be written in x alone (what adjoint sweeps need)."""
+    zeros = ca.DM.zeros(dae.z.numel())
+    parts = ca.Function("kkt", [dae.t, dae.x, dae.p],
+                        [ca.jacobian(dae.alg, dae.z), ca.substitute(dae.alg, dae.z, zeros)])
+    t, x, p = ca.MX.sym("t"), ca.MX.sym("x", dae.x.numel()), ca.MX.sym("p", dae.p.numel())
+    matrix, residual = parts(t, x, p)
+    return ca.Function("z", [t, x, p], [ca.solve(matrix, -residual)], ["t", "x", "p"], ["z"])
+
+
+def consistent_algebraic(dae: DAE, x0: np.ndarray, theta: np.ndarray, u=None) -> np.ndarray:
+    """z = [q_ddot, lam] solving alg = 0 at (t0, x0)."""
+    p = np.concatenate([theta, np.zeros(dae.u.numel()) if u is None else u])
+    return algebraic_function(dae)(dae.t0, x0, p).full().ravel()
+
+
+def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
+    """Results columns (MODEL_FORMAT.md order, without t) of (t, x, z, theta)."""
+    system, nominal = dae.system, dae.system.nominal
+    t, theta = dae.t, dae.theta
+    q, q_dot, q_ddot, lam_rows = dae.split(dae.x, dae.z)
+    lam = dae.full_multipliers(lam_rows)
+    nb = nominal.n_bodies
+    omega, alpha = nominal["body_rates"](q, q_dot, q_ddot)
+    per_body = [ca.vertcat(q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4],
+                           q_dot[3 * k:3 * k + 3], omega[:, k], q_ddot[3 * k:3 * k + 3],
+                           alpha[:, k]) for k in range(nb)]
+    force, torque = system["reactions"](t, q, lam, theta)
+    per_joint = [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(nominal.joints))]
+    kinetic, potential = system["energy"](t, q, q_dot, theta)
+    violation = ca.mmax(ca.fabs(system["phi"](t, q, theta)))
+    values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation)
+    return column_names(nominal)[1:], ca.Function("columns", [t, dae.x, dae.z, theta], [values],
+                                                  ["t", "x", "z", "theta"], ["columns"])
