@@ -115,3 +115,13 @@ def test_missing_matplotlib_names_the_extra(slider_run, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import now fails
     with pytest.raises(UsageError, match=r"pip install 'casmech\[plot\]'"):
         plot.figure(*read_csv(slider_run.out / "results.csv"), ["energy"])
+
+
+def test_log_axis_keeps_round_off_floor():
+    """An exact zero and a 1e-33 left by a projection must not stretch the log axis over 20
+    decades: everything above round-off (1e-12 .. 1e-9 here) stays visible."""
+    names = ["t", "constraint_violation"]
+    values = np.array([[0.0, 0.0], [0.1, 1e-33], [0.2, 1e-12], [0.3, 1e-9]])
+    (ax,) = plot.figure(names, values, ["constraints"]).axes
+    bottom, top = ax.get_ylim()
+    assert ax.get_yscale() == "log" and 1e-17 <= bottom <= 1e-12 and top >= 1e-9

@@ -34,6 +34,7 @@ QUANTITIES: dict[str, tuple[str, str, str]] = {
     "t": ("time", "s", "time"),
 }
 LOG_SCALE = {"constraint violation"}  # quantities drawn on a logarithmic axis
+LOG_FLOOR = 1e-16  # below this a constraint violation is round-off
 SAVE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
@@ -133,10 +134,20 @@ def _decorate(ax, name: str, unit: str, heading: str, lines: int) -> None:
     ax.set_title(heading, fontsize="medium")
     ax.set_ylabel(f"{name} [{unit}]")
     ax.grid(True, alpha=0.3)
-    if name in LOG_SCALE and any(np.any(line.get_ydata() > 0) for line in ax.get_lines()):
-        ax.set_yscale("log")
+    if name in LOG_SCALE:
+        _log_scale(ax)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
               ncol=1 + lines // 16, frameon=False)
+
+
+def _log_scale(ax) -> None:
+    """Logarithmic y axis whose floor is the round-off level (LOG_FLOOR), not an exact zero
+    hit by a projection (which would squash the rest of the curve)."""
+    data = np.concatenate([np.asarray(line.get_ydata(), float) for line in ax.get_lines()])
+    positive = data[data > 0]
+    if positive.size:
+        ax.set_yscale("log")
+        ax.set_ylim(bottom=max(positive.min(), min(LOG_FLOOR, positive.max())) / 2)
 
 
 def check_output(path: Path) -> Path:
