@@ -82,7 +82,8 @@ def test_dynamics_settings_and_failure_status(tmp_path):
 
 
 def test_writer_round_trips_nested_metadata(tmp_path):
-    metadata = {"a": 1, "b": {"c": "x", "d": {"e": 2.5}}, "text": "long\ntext", "f": True}
+    metadata = {"a": 1, "b": {"c": "x", "d": {"e": 2.5}}, "text": "long\ntext", "f": True,
+                "g": [1.5, 2.5], "h": ["rp", "romega"]}
     values = np.arange(6.0).reshape(2, 3)
     path = write_hdf5(tmp_path / "r.h5", ["t", "p.x", "p.y"], values, metadata)
     assert read_hdf5_metadata(path) == metadata

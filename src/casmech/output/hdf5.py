@@ -75,4 +75,7 @@ def _read_group(group) -> dict:
 
 
 def _plain(value):
+    """h5py's numpy scalars and arrays as the Python values they were written from."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
     return value.item() if isinstance(value, np.generic) else value

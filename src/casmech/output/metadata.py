@@ -15,6 +15,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import casadi
+import numpy as np
 
 import casmech
 from casmech.schema.resolved import Analysis, ResolvedModel
@@ -60,10 +61,11 @@ def _plain(value):
     """numpy scalars and other odd values as JSON-friendly Python values."""
     if isinstance(value, (bool, int, float, str)) or value is None:
         return value
-    try:
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return np.asarray(value).tolist()
+    if isinstance(value, np.generic):
         return value.item()
-    except AttributeError:
-        return str(value)
+    return str(value)
 
 
 def write_json(path: str | Path, metadata: Mapping) -> Path:
