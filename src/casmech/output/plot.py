@@ -34,6 +34,8 @@ QUANTITIES: dict[str, tuple[str, str, str]] = {
     "t": ("time", "s", "time"),
 }
 LOG_SCALE = {"constraint violation"}  # quantities drawn on a logarithmic axis
+PANEL_HEIGHT = 2.8  # [in] of a panel with a short legend
+LEGEND_ROWS, LEGEND_COLUMNS = 16, 3  # a legend's entries per column before it widens, columns
 LOG_FLOOR = 1e-16  # below this a constraint violation is round-off
 SAVE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -119,8 +121,10 @@ def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title
     grouped = panels(select(names, specs))
     values = np.atleast_2d(values)
     t = values[:, list(names).index("t")]
-    fig = Figure(figsize=(9, 1.2 + 2.8 * len(grouped)), layout="constrained")
-    axes = fig.subplots(len(grouped), 1, sharex=True, squeeze=False)[:, 0]
+    heights = [_panel_height(len(columns)) for columns in grouped.values()]
+    fig = Figure(figsize=(9, 1.2 + sum(heights)), layout="constrained")
+    axes = fig.subplots(len(grouped), 1, sharex=True, squeeze=False,
+                        height_ratios=heights)[:, 0]
     for ax, ((name, unit, heading), columns) in zip(axes, grouped.items(), strict=True):
         for column in columns:
             ax.plot(t, values[:, list(names).index(column)], label=column)
@@ -130,14 +134,27 @@ def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title
     return fig
 
 
+def _legend_shape(lines: int) -> tuple[int, int]:
+    """(columns, rows) of a legend: LEGEND_ROWS entries a column, up to LEGEND_COLUMNS
+    columns, then longer columns."""
+    columns = min(LEGEND_COLUMNS, 1 + (lines - 1) // LEGEND_ROWS)
+    return columns, -(-lines // columns)
+
+
+def _panel_height(lines: int) -> float:
+    """[in] tall enough for the panel's legend beside it."""
+    return max(PANEL_HEIGHT, 0.6 + 0.16 * _legend_shape(lines)[1])
+
+
 def _decorate(ax, name: str, unit: str, heading: str, lines: int) -> None:
     ax.set_title(heading, fontsize="medium")
     ax.set_ylabel(f"{name} [{unit}]")
     ax.grid(True, alpha=0.3)
     if name in LOG_SCALE:
         _log_scale(ax)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small",
-              ncol=1 + lines // 16, frameon=False)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False,
+              fontsize="small" if lines <= LEGEND_ROWS else "x-small",
+              ncol=_legend_shape(lines)[0])
 
 
 def _log_scale(ax) -> None:
