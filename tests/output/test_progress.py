@@ -23,13 +23,13 @@ SCRIPT = Path(sys.executable).parent / "casmech"
 RUN = [str(SCRIPT), "run", str(MODELS / "slider_crank.yaml"), "--t-end", "0.5"]
 
 
-def run_on_terminal(out, delay: str) -> str:
+def run_on_terminal(out, delay: str, columns: int = 120) -> str:
     """casmech run with stderr on a pseudo-terminal; everything the terminal received."""
     try:
         master, slave = pty.openpty()
     except OSError as error:  # a machine without /dev/ptmx cannot host this test
         pytest.skip(f"no pseudo-terminal: {error}")
-    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))  # 120 columns
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, columns, 0, 0))
     env = {**os.environ, "CASMECH_PROGRESS_DELAY": delay}
     process = subprocess.Popen([*RUN, "--out", str(out)], stdin=subprocess.DEVNULL,
                                stdout=subprocess.DEVNULL, stderr=slave, env=env)
@@ -49,15 +49,17 @@ def run_on_terminal(out, delay: str) -> str:
     return received.decode("utf-8", "replace")
 
 
-def test_drawn_on_a_terminal(tmp_path):
+@pytest.mark.parametrize("columns", [120, 0])  # 0: a terminal that never says its size
+def test_drawn_on_a_terminal(tmp_path, columns):
     """Delay 0 stands in for a run longer than a second: the final bar shows the whole
     simulated span, the row count of the CSV written by the same run, and the wall time."""
-    screen = run_on_terminal(tmp_path, "0")
+    screen = run_on_terminal(tmp_path, "0", columns)
     _, values = read_csv(tmp_path / "results.csv")
     final = screen.replace("\r", "\n").strip().splitlines()[-1]
     assert "100%" in final and "t = 0.5/0.5 s" in final
     assert f"{len(values)} rows" in final and len(values) == 51
     assert re.search(r"wall \d\d:\d\d<", final)
+    assert len(final) <= (columns or 100)  # fits the terminal (or the fallback width)
 
 
 def test_silent_on_a_terminal_for_a_short_run(tmp_path):

@@ -12,6 +12,7 @@ import sys
 from contextlib import contextmanager
 
 DELAY = 1.0  # [s] a run shorter than this never shows a bar
+FALLBACK_WIDTH = 100  # columns when the terminal reports none (tqdm would draw nothing)
 BAR = ("{desc}{percentage:3.0f}%|{bar}| t = {n:.4g}/{total:.4g} s "
        "[wall {elapsed}<{remaining}{postfix}]")  # tqdm puts ", " before a postfix
 
@@ -25,8 +26,10 @@ class _Bar:
 
     def __init__(self, tqdm, t_end: float, stream):
         self.rows = 0
+        width = _width(stream)
         self.bar = tqdm(total=float(t_end), file=stream, delay=delay(), bar_format=BAR,
-                        desc="casmech run ", dynamic_ncols=True, leave=True)
+                        desc="casmech run ", ncols=width or FALLBACK_WIDTH,
+                        dynamic_ncols=bool(width), leave=True)
 
     def __call__(self, t: float) -> None:
         self.rows += 1
@@ -51,6 +54,14 @@ def progress_bar(t_end: float, stream=None):
         yield bar
     finally:
         bar.close()
+
+
+def _width(stream) -> int:
+    """The terminal's columns; 0 when it does not say (a pseudo-terminal never sized)."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns
+    except (AttributeError, OSError, ValueError):
+        return 0
 
 
 def _is_terminal(stream) -> bool:
