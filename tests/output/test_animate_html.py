@@ -134,19 +134,30 @@ def finish(job):
     return out
 
 
+def status(dom):
+    """The player's status line (filled by player.js after every drawn frame), parsed."""
+    text = re.search(r'<output id="status"[^>]*>(.*?)</output>', dom, re.S).group(1)
+    match = re.fullmatch(r"ok frame=(\d+) of (\d+) t=(\S+) triangles=(\d+) shown=(\d+)", text)
+    assert match, text
+    return match
+
+
 def test_player_draws_frames_that_change_with_time(page, chromium, tmp_path):
     url = page[0].resolve().as_uri()
     shots = {t: tmp_path / f"t{t}.png" for t in ("0", "0.3")}
     jobs = [browse(chromium, f"{url}#t={t}", f"--screenshot={shot}") for t, shot in shots.items()]
     jobs.append(browse(chromium, f"{url}#t=0.29", "--dump-dom"))
+    jobs.append(browse(chromium, url, "--virtual-time-budget=2000", "--dump-dom"))
     finish(jobs[0]), finish(jobs[1])
-    dom = finish(jobs[2])
-    status = re.search(r'<output id="status"[^>]*>(.*?)</output>', dom, re.S).group(1)
-    match = re.fullmatch(r"ok frame=(\d+) of (\d+) t=(\S+) triangles=(\d+)", status)
-    assert match, status
+    match = status(finish(jobs[2]))
     assert (int(match[1]), int(match[2])) == (3, len(TIMES))  # 0.29 s is nearest row 3 (0.3 s)
     assert float(match[3]) == pytest.approx(0.3, rel=1e-12, abs=0)  # the row's own time
     assert int(match[4]) > 100  # triangles of the five bodies drawn (some may face away)
+
+    # without #t the page plays at 1x and loops: 2 s of (virtual) page time run the 0.5 s,
+    # 6-row table 4 times, so it draws between one loop (6) and 5 loops' worth (1 + 30) of frames
+    played = status(finish(jobs[3]))
+    assert 6 <= int(played[5]) <= 31, played[0]
 
     pictures = [read_png(shot) for shot in shots.values()]
     for picture in pictures:  # the decoder reads the page's known colours where nothing is drawn

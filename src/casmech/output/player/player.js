@@ -149,7 +149,8 @@
   }
 
   // ----------------------------------------------------------------------------- playback
-  var state = { frame: 0, time: D.times[0], playing: false, speed: 1, last: null };
+  var state = { frame: 0, time: D.times[0], playing: false, speed: 1, last: null, shown: 0,
+    timer: null };
   function frameAt(t) {  // last frame with time <= t
     var lo = 0, hi = nFrames - 1;
     while (lo < hi) {
@@ -168,19 +169,25 @@
     timeLabel.textContent = 't = ' + D.times[k].toFixed(3) + ' s / ' +
       D.times[nFrames - 1].toFixed(3) + ' s';
     var drawn = draw(k);
-    report('ok frame=' + k + ' of ' + nFrames + ' t=' + D.times[k] + ' triangles=' + drawn);
+    state.shown += 1;
+    report('ok frame=' + k + ' of ' + nFrames + ' t=' + D.times[k] + ' triangles=' + drawn +
+      ' shown=' + state.shown);
   }
+  // Playback runs on a 60 Hz timer rather than requestAnimationFrame: the same in a browser
+  // window, and it also advances under headless Chromium's virtual time (used by the tests).
   function setPlaying(on) {
     state.playing = on && nFrames > 1;
     playButton.textContent = state.playing ? 'Pause' : 'Play';
     state.last = null;
+    window.clearTimeout(state.timer);
     if (state.playing) {
       if (state.frame === nFrames - 1) state.time = D.times[0];
-      window.requestAnimationFrame(tick);
+      tick();
     }
   }
-  function tick(now) {
+  function tick() {
     if (!state.playing) return;
+    var now = window.performance.now();
     if (state.last !== null) {
       state.time += (now - state.last) / 1000 * state.speed;
       if (state.time > D.times[nFrames - 1]) state.time = D.times[0];  // loop
@@ -188,7 +195,7 @@
     state.last = now;
     var k = frameAt(state.time);
     if (k !== state.frame) show(k);
-    window.requestAnimationFrame(tick);
+    state.timer = window.setTimeout(tick, 1000 / 60);
   }
 
   slider.max = String(nFrames - 1);
@@ -226,12 +233,17 @@
     if (!state.playing) show(state.frame);
   }, { passive: false });
 
-  // #t=SECONDS opens paused at the frame nearest that time; otherwise play from the start
-  var asked = /(?:^#|&)t=([-+0-9.eE]+)/.exec(window.location.hash);
-  if (asked && isFinite(Number(asked[1]))) {
+  // #t=SECONDS shows the frame nearest that time, paused; otherwise play from the start
+  function fromHash() {
+    var asked = /(?:^#|&)t=([-+0-9.eE]+)/.exec(window.location.hash);
+    if (!asked || !isFinite(Number(asked[1]))) return false;
+    setPlaying(false);
     state.time = Number(asked[1]);
     show(nearestFrame(state.time));
-  } else {
+    return true;
+  }
+  window.addEventListener('hashchange', fromHash);
+  if (!fromHash()) {
     show(0);
     setPlaying(true);
   }
