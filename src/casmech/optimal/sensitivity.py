@@ -75,25 +75,41 @@ def chain(dae: DAE, times: np.ndarray, rtol: float, atol: float) -> list[ca.Func
             for k, (begin, end) in enumerate(zip(starts, times, strict=True))]
 
 
-def output_graph(dae: DAE, outputs: Sequence[str], times: np.ndarray, rtol: float, atol: float):
-    """(theta MX symbol, outputs stacked time-major as an MX expression of theta)."""
+def output_graph(dae: DAE, outputs: Sequence[str], times: np.ndarray, rtol: float, atol: float,
+                 chained: bool = True):
+    """(theta MX symbol, outputs stacked time-major as an MX expression of theta).
+    `chained`: one integrator per output interval (needed for adjoint derivatives); otherwise
+    one integrator with an output grid (faster, forward derivatives only)."""
     names, columns = columns_function(dae)
     index = _output_indices(names, outputs)
     algebraic = algebraic_function(dae)
-    integrators = chain(dae, times, rtol, atol)
     x0 = initial_state_function(dae)
+    theta = ca.MX.sym("theta", dae.theta.numel())
     values = dae.system.values
-    starts = [dae.t0, *times[:-1]]
+    if not chained:
+        z0 = algebraic(dae.t0, x0(values), values)
+        xs = idas(dae, times, rtol, atol)(x0=x0(theta), z0=z0, p=theta)["xf"]
+        xs = [xs[:, k] for k in range(times.size)]
+    else:
+        xs = _chained_states(dae, chain(dae, times, rtol, atol), x0, theta, times)
+    rows = [columns(t, x, algebraic(t, x, theta), theta)[index]
+            for t, x in zip(times, xs, strict=True)]
+    return theta, ca.vertcat(*rows)
+
+
+def _chained_states(dae: DAE, integrators, x0: ca.Function, theta, times):
+    """States at the output times; the algebraic guesses that start each IDAS call are numbers
+    (a nominal pass), so no derivative flows through them."""
+    algebraic, values = algebraic_function(dae), dae.system.values
     x, guesses = x0(values), []
-    for begin, integrator in zip(starts, integrators, strict=True):
+    for begin, integrator in zip([dae.t0, *times[:-1]], integrators, strict=True):
         guesses.append(algebraic(begin, x, values))
         x = integrator(x0=x, z0=guesses[-1], p=values)["xf"]
-    theta = ca.MX.sym("theta", dae.theta.numel())
-    x, rows = x0(theta), []
-    for t, guess, integrator in zip(times, guesses, integrators, strict=True):
+    x, xs = x0(theta), []
+    for guess, integrator in zip(guesses, integrators, strict=True):
         x = integrator(x0=x, z0=guess, p=theta)["xf"]
-        rows.append(columns(t, x, algebraic(t, x, theta), theta)[index])
-    return theta, ca.vertcat(*rows)
+        xs.append(x)
+    return xs
 
 
 def _evaluate(function: ca.Function, theta: np.ndarray, times: np.ndarray):
@@ -117,7 +133,7 @@ def sensitivity(model: ResolvedModel, parameters: Sequence[str], outputs: Sequen
     system = parametric_system(model, parameters)
     dae = build_dae(system)
     times = _check_times(times, dae.t0)
-    theta, y = output_graph(dae, outputs, times, rtol, atol)
+    theta, y = output_graph(dae, outputs, times, rtol, atol, chained=mode == "adjoint")
     n_p, n_y = theta.numel(), y.numel()
     if mode == "forward":
         jac = ca.jtimes(y, theta, ca.DM.eye(n_p), False)
@@ -135,6 +151,6 @@ def simulate(model: ResolvedModel, outputs: Sequence[str], times: Sequence[float
     system = parametric_system(model, ())
     dae = build_dae(system)
     times = _check_times(times, dae.t0)
-    theta, y = output_graph(dae, outputs, times, rtol, atol)
+    theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
     values, = _evaluate(ca.Function("sim", [theta], [y]), system.values, times)
     return values.reshape(times.size, len(outputs))

@@ -1,0 +1,97 @@
+"""Parameter estimation: weighted least squares of results columns against measurements.
+
+    fit = casmech.optimal.estimate(model, ["m", "c"], times, {"bar.y": ys, "bar.z": zs})
+
+minimise  sum_k sum_i w_i (y_i(t_k; theta) - d_ik)^2  over theta (within optional bounds), with
+IPOPT (bundled in CasADi); the gradient is exact (adjoint IDAS sensitivities) and the Hessian is
+approximated by L-BFGS. Parameters are scaled by their starting values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.optimal.dae import build_dae
+from casmech.optimal.sensitivity import _check_times, output_graph
+from casmech.optimal.system import parametric_system
+from casmech.output.csv import read_csv
+from casmech.schema.resolved import ResolvedModel
+
+
+@dataclass(frozen=True)
+class Estimate:
+    parameters: tuple[str, ...]
+    values: np.ndarray  # estimated
+    initial: np.ndarray
+    objective: float
+    residuals: np.ndarray  # (times, outputs): model - data at the estimate
+    iterations: int
+    status: str
+
+
+def read_measurements(path: str | Path, columns: Sequence[str] | None = None):
+    """(times, {column: values}) from a CSV with a `t` column (the results format)."""
+    try:
+        names, values = read_csv(path)
+    except (OSError, ValueError) as error:
+        raise UsageError(f"cannot read measurements from {path}: {error}") from None
+    if "t" not in names:
+        raise UsageError(f"{path}: the measurements need a 't' column (time) and one column per "
+                         "measured output, named as in results.csv")
+    columns = [n for n in names if n != "t"] if columns is None else list(columns)
+    missing = [c for c in columns if c not in names]
+    if missing:
+        raise UsageError(f"{path}: no column '{missing[0]}'; columns: {', '.join(names)}")
+    return values[:, names.index("t")], {c: values[:, names.index(c)] for c in columns}
+
+
+def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[float],
+             data: Mapping[str, Sequence[float]], weights: Mapping[str, float] | None = None,
+             bounds: Mapping[str, tuple[float, float]] | None = None, rtol: float = 1e-9,
+             atol: float = 1e-11, max_iter: int = 100, verbose: bool = False) -> Estimate:
+    """Fit `parameters` (starting from the model's values) to measured columns."""
+    system = parametric_system(model, parameters)
+    dae = build_dae(system)
+    times = _check_times(times, dae.t0)
+    outputs = list(data)
+    measured = np.column_stack([np.asarray(data[o], float) for o in outputs])
+    if measured.shape[0] != times.size:
+        raise UsageError(f"{measured.shape[0]} measurements per column for {times.size} times")
+    weights = weights or {}
+    w = np.array([float(weights.get(o, 1.0)) for o in outputs])
+    theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
+    n_y = y.numel()
+    # lifted least squares: variables [theta / scale, r], r = y(theta) - data; the constraint
+    # Jacobian (n_y x n_theta) comes from forward IDAS sensitivities
+    scale = np.where(system.values != 0, np.abs(system.values), 1.0)
+    scaled, r = ca.MX.sym("s", theta.numel()), ca.MX.sym("r", n_y)
+    model_y = ca.Function("y", [theta], [y])(scaled * ca.DM(scale))
+    weight = np.tile(w, times.size)
+    bounds = bounds or {}
+    low = np.array([bounds.get(n, (-np.inf, np.inf))[0] for n in system.names]) / scale
+    high = np.array([bounds.get(n, (-np.inf, np.inf))[1] for n in system.names]) / scale
+    nlp = {"x": ca.vertcat(scaled, r), "f": ca.sum1(ca.DM(weight) * r ** 2),
+           "g": model_y - ca.DM(measured.ravel()) - r}
+    options = {"ipopt.hessian_approximation": "limited-memory", "ipopt.max_iter": max_iter,
+               "ipopt.tol": 1e-8, "ipopt.print_level": 5 if verbose else 0,
+               "print_time": verbose, "ipopt.sb": "yes"}
+    solver = ca.nlpsol("estimate", "ipopt", nlp, options)
+    n_r = np.full(n_y, np.inf)
+    try:
+        solution = solver(x0=np.concatenate([np.ones(theta.numel()), np.zeros(n_y)]),
+                          lbx=np.concatenate([low, -n_r]), ubx=np.concatenate([high, n_r]),
+                          lbg=0, ubg=0)
+    except RuntimeError as error:
+        raise AnalysisError(FailureContext(float(times[-1]), f"estimation failed: {error}"[:600],
+                                           [])) from None
+    stats = solver.stats()
+    values = np.array(solution["x"].full()).ravel()[:theta.numel()] * scale
+    at = ca.Function("y", [theta], [y])(values).full().reshape(measured.shape) - measured
+    return Estimate(system.names, values, system.values, float(solution["f"]), at,
+                    int(stats.get("iter_count", -1)), str(stats.get("return_status")))
