@@ -310,3 +310,34 @@ def test_real_run_keeps_the_pendulum_pivot_at_the_origin(tmp_path):
         pivot = cell_points(mesh, "triangle", 0, 0).mean(axis=0)
         # assembly/kinematics hold constraints to ~1e-10 (results' constraint_violation)
         np.testing.assert_allclose(pivot, 0, rtol=0, atol=1e-8)
+
+
+def test_quad_mesh_is_split_into_two_triangles_per_quad(tmp_path):
+    (tmp_path / "square.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    (tmp_path / "m.yaml").write_text(
+        "casmech: 1\nname: tile\nbodies:\n  - name: tile\n    mass: 1\n    inertia: [1, 1, 1]\n"
+        "    position: [0, 0, 0]\n    geometry: [{mesh: square.obj, scale: 3}]\n")
+    (tmp_path / "r.csv").write_text("t,tile.x,tile.y,tile.z,tile.e0,tile.e1,tile.e2,tile.e3\n"
+                                    "0,1,2,3,1,0,0,0\n")
+    assert cli.main(["animate", str(tmp_path / "m.yaml"), str(tmp_path / "r.csv"),
+                     "-o", str(tmp_path / "out"), "--no-html"]) == 0
+    mesh = read_series(tmp_path / "out")[1][0]
+    assert len(mesh.cells[0].data) == 2  # one quad, two triangles, no joints
+    expected = [1, 2, 3] + 3 * np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
+    got = mesh.points[np.unique(mesh.cells[0].data)]
+    np.testing.assert_allclose(got[np.lexsort(got.T)], expected[np.lexsort(expected.T)],
+                               rtol=RTOL, atol=ATOL)
+    # the two triangles tile the square: a point inside it near each edge lies in exactly one
+    corners = (mesh.points[mesh.cells[0].data] - [1, 2, 3])[:, :, :2] / 3
+    for point in [(0.5, 0.2), (0.8, 0.5), (0.5, 0.8), (0.2, 0.5)]:
+        inside = 0
+        for a, b, c in corners:
+            weights = np.linalg.solve(np.column_stack([b - a, c - a]), np.subtract(point, a))
+            inside += bool(weights.min() > 0 and weights.sum() < 1)
+        assert inside == 1, point
+
+
+def test_rows_out_of_time_order_are_a_usage_error(tmp_path, capsys):
+    model, results, _, _ = make_case(tmp_path, rows=TIMES[::-1])
+    assert cli.main(["animate", str(model), str(results), "-o", str(tmp_path / "out")]) == 2
+    assert "time order" in capsys.readouterr().err

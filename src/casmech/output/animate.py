@@ -137,10 +137,19 @@ def inertia_ellipsoid(mass: float, inertia: np.ndarray) -> tuple[np.ndarray, np.
     return (points * semi) @ axes.T, triangles
 
 
-def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """A surface mesh read by meshio (STL, OBJ, PLY, ...): its triangles, scaled."""
-    import meshio
+def meshio_module():
+    """meshio, or a usage error saying how to install it (the `animate` extra)."""
+    try:
+        import meshio
+    except ImportError:
+        raise UsageError("VTK output and mesh geometry need meshio; install it with "
+                         "pip install \"casmech[animate]\"") from None
+    return meshio
 
+
+def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """A surface mesh read by meshio (STL, OBJ, PLY, ...): its triangles (quads split), scaled."""
+    meshio = meshio_module()
     with warnings.catch_warnings():  # meshio's binary-STL size probe overflows on ASCII files
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
@@ -148,8 +157,10 @@ def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
         except meshio.ReadError as error:
             raise ValueError(str(error) or "meshio cannot read it") from None
     triangles = [block.data for block in mesh.cells if block.type == "triangle"]
+    triangles += [block.data[:, corners] for block in mesh.cells if block.type == "quad"
+                  for corners in ([0, 1, 2], [0, 2, 3])]
     if not triangles:
-        raise ValueError("no triangles in the mesh")
+        raise ValueError("no triangles or quads in the mesh")
     return np.asarray(mesh.points[:, :3], float) * scale, np.vstack(triangles)
 
 
@@ -187,6 +198,9 @@ def body_poses(names: list[str], values: np.ndarray, bodies: tuple[str, ...]):
                          f"`casmech run` from this model)")
     if not len(values):
         raise UsageError("the results have no rows to animate")
+    if np.any(np.diff(values[:, column["t"]]) < 0):
+        raise UsageError("the results' t column decreases somewhere; expected one run's rows in "
+                         "time order")
     pose = values[:, [column[name] for name in wanted[1:]]].reshape(len(values), len(bodies), 7)
     p = pose[..., 3:]
     norm = np.linalg.norm(p, axis=-1, keepdims=True)

@@ -15,19 +15,9 @@ from xml.sax.saxutils import escape, quoteattr
 
 import numpy as np
 
-from casmech.errors import UsageError
-from casmech.output.animate import Scene
+from casmech.output.animate import Scene, meshio_module
 
 FRAMES = "frames"  # sub-directory of the .vtu files, next to the .pvd
-
-
-def _meshio():
-    try:
-        import meshio
-    except ImportError:
-        raise UsageError("writing VTK needs meshio; install it with "
-                         "pip install \"casmech[animate]\"") from None
-    return meshio
 
 
 def frame_geometry(scene: Scene):
@@ -63,7 +53,7 @@ def legend(scene: Scene) -> str:
 
 def write_vtk(scene: Scene, directory: str | Path) -> Path:
     """Write DIR/frames/frame_NNNNN.vtu and DIR/animation.pvd; return the .pvd's path."""
-    meshio = _meshio()
+    meshio = meshio_module()
     directory = Path(directory)
     (directory / FRAMES).mkdir(parents=True, exist_ok=True)
     for stale in (directory / FRAMES).glob("frame_*.vtu"):  # a longer earlier run's frames
