@@ -89,7 +89,8 @@ class Translator:
         r = at.vector(body, path, BODY_KEYS["r"], 3)
         p = at.vector(body, path, BODY_KEYS["p"], 4, default=[1, 0, 0, 0])
         if abs(np.linalg.norm(p) - 1) > 1e-9:
-            at.warn(path, f"p of body {name} has norm {np.linalg.norm(p):.9g}: normalised",
+            at.warn(at.key_path(body, path, BODY_KEYS["p"]),
+                    f"p of body {name} has norm {np.linalg.norm(p):.9g}: normalised",
                     hint="casmech needs unit Euler parameters to 1e-9")
         p = p / np.linalg.norm(p)
         a = rotation(p)

@@ -79,7 +79,7 @@ class Located:
                              if len(spellings) > 1 else None)
         return default
 
-    def _key(self, obj: dict, path, spellings) -> tuple:
+    def key_path(self, obj: dict, path, spellings) -> tuple:
         return (*path, next((s for s in spellings if s in obj), spellings[0]))
 
     def vector(self, obj: dict, path, spellings, size: int, default: Any = ...) -> np.ndarray:
@@ -90,14 +90,14 @@ class Located:
         except (TypeError, ValueError):
             array = None
         if array is None or array.size != size:
-            raise self.error(self._key(obj, path, spellings), f"'{spellings[0]}' must be "
+            raise self.error(self.key_path(obj, path, spellings), f"'{spellings[0]}' must be "
                              f"{size} numbers", f"a list of {size} numbers", got=str(value))
         return array
 
     def number(self, obj: dict, path, spellings) -> float:
         value = self.pick(obj, path, spellings)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.error(self._key(obj, path, spellings), f"'{spellings[0]}' must be a "
+            raise self.error(self.key_path(obj, path, spellings), f"'{spellings[0]}' must be a "
                              "number", "a number", got=repr(value))
         return float(value)
 
@@ -107,7 +107,7 @@ class Located:
             return [[float(x) for x in row] for row in value]
         if value.shape in ((3,), (6,)):
             return [float(x) for x in value]
-        raise self.error(self._key(obj, path, spellings), "inertia (jbar) must be a 3x3 "
+        raise self.error(self.key_path(obj, path, spellings), "inertia (jbar) must be a 3x3 "
                          "matrix, 3 principal moments or 6 entries", "[[..],[..],[..]]",
                          got=str(value.tolist()))
 
