@@ -87,3 +87,12 @@ def test_radian_angles_without_suffix_are_radians(tmp_path):
     b = casmech.loads(import_file(write(tmp_path, degrees, "d.adm"))[0]).bodies[0]
     # the two spellings differ by the roundoff of pi/2 written to 17 digits
     np.testing.assert_allclose(a.euler_parameters, b.euler_parameters, rtol=0, atol=1e-15)
+
+
+def test_clashing_view_names_stay_unique(tmp_path):
+    """Adams/View names can repeat across kinds; casmech names are unique across bodies,
+    joints and forces, so the second falls back to its statement id."""
+    deck = GOOD.replace("JOINT/1, REVOLUTE", "!  adams_view_name='PART_2'\nJOINT/1, REVOLUTE")
+    deck = deck.replace("PART/2, MASS", "!  adams_view_name='PART_2'\nPART/2, MASS")
+    model = casmech.loads(import_file(write(tmp_path, deck))[0])
+    assert (model.bodies[0].name, model.joints[0].name) == ("part_2", "joint_1")

@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 
 import casmech
 from casmech.errors import ModelError
@@ -140,3 +141,12 @@ def test_unknown_keys_warn_and_are_left_out(tmp_path):
     _, warnings = import_file(path)
     (warning,) = [w for w in warnings if w.path == "bodies[1].color"]
     assert warning.code == "E101" and warning.source.line == line_of(path, '"color"')
+
+
+def test_quoted_body_ids_are_read(tmp_path):
+    """Some course files quote the ids ("body2": "2"); the model is the same."""
+    data = json.loads(MDL.read_text())
+    for row in data["constraints"]:
+        row["body_j"] = str(row["body_j"])
+    quoted = yaml.safe_load(import_file(write(tmp_path, data))[0])
+    assert quoted == yaml.safe_load(import_file(write(tmp_path, SAMPLE, "same.mdl"))[0])

@@ -12,7 +12,7 @@ import numpy as np
 
 from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_functions import NotTranslated, affine
-from casmech.importers.adm_model import Deck, Marker, view_name
+from casmech.importers.adm_model import Deck, Marker
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Item
 
@@ -75,7 +75,7 @@ def joint(deck: Deck, statement: Statement) -> list[Item]:
     for failed in _mismatch(i, j, checks):
         deck.reader.warn(statement, f"I and J markers do not agree at t = 0 ({failed}); casmech "
                          "uses the I marker's", hint="Adams would assemble them first")
-    data = {"name": view_name(statement, f"joint_{statement.ident}"), "type": casmech_type,
+    data = {"name": deck.name_for(statement, f"joint_{statement.ident}"), "type": casmech_type,
             "body_i": deck.part_name(i), "body_j": deck.part_name(j), **keys(i, j)}
     comments = [*statement.comments, f"JOINT/{statement.ident} {kind} (line {statement.line})"]
     return [Item(data, comments + marker_notes(deck, i, j))]
@@ -133,7 +133,7 @@ def jprim(deck: Deck, statement: Statement) -> list[Item]:
                          + ", ".join(JPRIMS))
         return []
     i, j = deck.marker(statement, "I"), deck.marker(statement, "J")
-    name = view_name(statement, f"jprim_{statement.ident}")
+    name = deck.name_for(statement, f"jprim_{statement.ident}")
     comments = [*statement.comments, f"JPRIM/{statement.ident} {kind} (line {statement.line})"]
     if kind == "ATPOINT":
         data = {"name": name, "type": "spherical", "body_i": deck.part_name(i),
@@ -163,7 +163,7 @@ def gcon(deck: Deck, statement: Statement) -> list[Item]:
         return []
     j, i = (deck.marker_by_id(statement, m) for m in measure.markers)
     length = -form.constant / coefficient * deck.units.length
-    data = {"name": view_name(statement, f"gcon_{statement.ident}"), "type": "distance",
+    data = {"name": deck.name_for(statement, f"gcon_{statement.ident}"), "type": "distance",
             "body_i": deck.part_name(i), "body_j": deck.part_name(j),
             "at_i": tidy(i.frame.origin), "at_j": tidy(j.frame.origin), "length": length}
     comments = [*statement.comments,

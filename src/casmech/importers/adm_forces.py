@@ -18,7 +18,7 @@ import numpy as np
 from casmech.importers.adm_connections import marker_notes
 from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_functions import NotTranslated, affine
-from casmech.importers.adm_model import Deck, Marker, view_name
+from casmech.importers.adm_model import Deck, Marker
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Imported, Item
 
@@ -111,7 +111,7 @@ def _rsda(deck, model, statement, name, i: Marker, j: Marker, t0, k, c, joints) 
 def sforce(deck: Deck, model: Imported, statement: Statement, joints: list[Item]) -> list[Item]:
     argument = statement.find("FUNCTION")
     flags = {flag.key[:5] for flag in statement.flags()}
-    name = view_name(statement, f"sforce_{statement.ident}")
+    name = deck.name_for(statement, f"sforce_{statement.ident}")
     try:
         if argument is None:
             raise NotTranslated("no FUNCTION (user subroutines are not translated)")
@@ -141,7 +141,7 @@ def springdamper(deck: Deck, model: Imported, statement: Statement,
     k, c, free, preload = ((deck.reader.numbers(statement, key, 1, angle=key == "ANGLE")
                             or [0.0])[0] for key in keys)
     i, j = deck.marker(statement, "I"), deck.marker(statement, "J")
-    name = view_name(statement, f"springdamper_{statement.ident}")
+    name = deck.name_for(statement, f"springdamper_{statement.ident}")
     f0 = preload + k * free  # the same force written as F0 + a DM + b VR
     try:
         item = (_rsda(deck, model, statement, name, i, j, f0, k, c, joints) if rotational

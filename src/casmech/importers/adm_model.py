@@ -127,6 +127,19 @@ class Deck:
     parts: dict[int, Part] = field(default_factory=dict)
     markers: dict[int, Marker] = field(default_factory=dict)
     used: set[int] = field(default_factory=set)  # statement lines translated
+    names: set[str] = field(default_factory=lambda: {"ground"})  # casmech names given so far
+
+    def name_for(self, statement: Statement, fallback: str) -> str:
+        """A unique casmech name: the adams_view_name if any, else `fallback` (numbered on a
+        clash, since casmech names are unique across bodies, joints and forces)."""
+        name = view_name(statement, fallback)
+        if name in self.names:
+            name = fallback
+        base, k = name, 2
+        while name in self.names:
+            name, k = f"{base}_{k}", k + 1
+        self.names.add(name)
+        return name
 
     def marker(self, statement: Statement, key: str) -> Marker:
         ident = self.reader.ident(statement, key)
@@ -191,17 +204,14 @@ def placement(statement: Statement, reader: Reader, units: Units, position: str,
 
 
 def read_parts(deck: Deck, statements: list[Statement]) -> None:
-    reader, names = deck.reader, set()
+    reader = deck.reader
     for statement in statements:
         ident = int(statement.ident) if statement.ident.isdigit() else None
         if ident is None:
             raise reader.fail(Value(statement.ident, statement.line, 1), statement.label,
                               "a PART needs a numeric id", "PART/<id>", "e.g. PART/2, MASS = 1")
         ground = statement.find("GROUND") is not None
-        name = "ground" if ground else view_name(statement, f"part_{statement.ident}")
-        if name in names or (not ground and name == "ground"):
-            name = f"part_{statement.ident}"
-        names.add(name)
+        name = "ground" if ground else deck.name_for(statement, f"part_{statement.ident}")
         frame = placement(statement, reader, deck.units, "QG", "ZG", "XG")
         deck.parts[ident] = Part(statement, name, frame, ground)
 

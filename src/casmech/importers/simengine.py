@@ -122,6 +122,8 @@ class Translator:
 
     def body_ref(self, row: dict, path, key: str) -> str:
         value = self.at.pick(row, path, ROW_KEYS[key])
+        if isinstance(value, str) and value.strip().isdigit() and value not in self.names:
+            value = int(value)  # some course files quote the ids: "body2": "2"
         if value not in self.names:
             raise self.at.error((*path, key), f"{key} refers to an unknown body '{value}'",
                                 "a body id or name from 'bodies'", "E300",
