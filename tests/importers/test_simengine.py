@@ -148,5 +148,6 @@ def test_quoted_body_ids_are_read(tmp_path):
     data = json.loads(MDL.read_text())
     for row in data["constraints"]:
         row["body_j"] = str(row["body_j"])
-    quoted = yaml.safe_load(import_file(write(tmp_path / "..", data))[0])
+    (tmp_path / "quoted").mkdir()
+    quoted = yaml.safe_load(import_file(write(tmp_path / "quoted", data))[0])
     assert quoted == yaml.safe_load(import_file(write(tmp_path, SAMPLE))[0])
