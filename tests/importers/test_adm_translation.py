@@ -13,6 +13,7 @@ import yaml
 
 import casmech
 from casmech.importers import import_file
+from tests.importers.helpers import DECKS, G, imported, run
 
 DECK = """synthetic deck for the importer tests
 UNITS/
@@ -123,3 +124,28 @@ def test_millimetre_gram_deck_gives_the_same_si_model(translations):
     np.testing.assert_allclose([mm["parameters"][n] for n in names],
                                [si["parameters"][n] for n in names], rtol=1e-12, atol=0)
     np.testing.assert_allclose(mm["gravity"], si["gravity"], rtol=1e-12, atol=0)  # as above
+
+
+ROTSPRING = DECKS / "test_RotSpring_Case01.adm"
+
+
+@pytest.mark.parametrize("i, j, torque_on_bar", [
+    (207, 208, -30.0),  # torque -k (AZ - 30 deg) acts on I (ground): the bar gets -30 N m
+    (208, 207, 30.0),  # the same with I on the bar (AZ(208, 207) = 0 at t = 0)
+])
+def test_rotational_sforce_free_angle_sign(tmp_path, i, j, torque_on_bar):
+    """SFORCE ROTATIONAL with a free angle: -RTOD*(AZ - 30*DTOR) is 30 N m at t = 0 (AZ = 0)
+    on the I marker's part about the J marker's z (global +y). The bar's angular acceleration
+    at t = 0 about the pivot (I = 0.1 + 1 * 2^2 = 4.1) adds gravity's 2 m g about +y."""
+    text = ROTSPRING.read_text().replace("-0.0*DTOR", "-30.0*DTOR")
+    text = text.replace("I = 207\n, J = 208", f"I = {i}\n, J = {j}")
+    text = text.replace("az(207,208)", f"az({i},{j})").replace("wz(207,208,208)",
+                                                                f"wz({i},{j},{j})")
+    path = tmp_path / "rotspring.adm"
+    path.write_text(text)
+    _, warnings, functions = imported(path)
+    assert not [w for w in warnings if w.path.startswith("SFORCE")]
+    table = run(functions, analysis="assembly")
+    expected = (2 * G + torque_on_bar) / 4.1
+    # the equations of motion at t = 0 are solved to roundoff
+    np.testing.assert_allclose(table["part_2.alphay"][0], expected, rtol=1e-12, atol=1e-12)
