@@ -151,3 +151,19 @@ def test_quoted_body_ids_are_read(tmp_path):
     (tmp_path / "quoted").mkdir()
     quoted = yaml.safe_load(import_file(write(tmp_path / "quoted", data))[0])
     assert quoted == yaml.safe_load(import_file(write(tmp_path, SAMPLE))[0])
+
+
+def test_acf_errors_are_located(tmp_path):
+    acf = tmp_path / "run.acf"
+    acf.write_text('{\n    "simulation": "kinematics",\n    "t_end": 1\n}\n')
+    with pytest.raises(ModelError) as raised:  # no run.mdl beside it, none named in it
+        import_file(acf)
+    assert raised.value.diagnostics[0].code == "E300"
+    assert raised.value.diagnostics[0].source.file == str(acf)
+    (tmp_path / "run.mdl").write_text(MDL.read_text())
+    acf.write_text('{\n    "simulation": "quasi-static",\n    "t_end": 1\n}\n')
+    with pytest.raises(ModelError) as raised:
+        import_file(acf)
+    (diagnostic,) = raised.value.diagnostics
+    assert (diagnostic.code, diagnostic.source.line) == ("E103", 2)
+    assert "kinematics" in diagnostic.expected
