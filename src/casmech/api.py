@@ -8,10 +8,12 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
+from casmech import codegen
 from casmech.compiler.augmented import FORMULATIONS
 from casmech.compiler.checks import Structure, structure
 from casmech.compiler.functions import SystemFunctions, build_functions
@@ -35,9 +37,21 @@ def loads(text: str, file: str = "<string>",
     return load_model_text(text, file=file, overrides=overrides)
 
 
-def compile(model: ResolvedModel) -> SystemFunctions:  # noqa: A001 - the compiler's verb
-    """Build the named CasADi functions of a model (interpreted SX functions)."""
-    return build_functions(lower(model))
+COMPILE_MODES = ("interpreted", "compiled", "auto")
+
+
+def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
+    """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
+    "compiled" (C generated, built with the C compiler and loaded; cached by model content in
+    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (compiled when a C compiler
+    exists, else interpreted with one warning). Both bundles have the same functions."""
+    if mode not in COMPILE_MODES:
+        raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
+    if mode == "auto" and not codegen.available():
+        warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
+                      "functions, which is slower; install gcc to compile models", stacklevel=2)
+        mode = "interpreted"
+    return build_functions(lower(model)) if mode == "interpreted" else codegen.compiled(model)
 
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
@@ -76,7 +90,7 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
         if not getattr(settings, name) > 0:
             raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
     result = ANALYSES[settings.type](functions, settings, progress)
-    result.metadata.update(analysis=settings.type, mode="interpreted")
+    result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
     return result
 
 

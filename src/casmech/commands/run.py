@@ -56,6 +56,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
     parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
+    parser.add_argument("--mode", choices=casmech.api.COMPILE_MODES, default="auto",
+                        help="compiled C (built once, cached) or interpreted CasADi functions "
+                             "(default auto: compiled when a C compiler exists)")
     add_overrides(parser)
 
 
@@ -68,7 +71,7 @@ def run(args) -> int:
     timings = {"load": time.perf_counter() - clock}
     out = args.out or args.model.with_name(args.model.stem + "_results")
     clock = time.perf_counter()
-    functions = casmech.compile(model)
+    functions = casmech.compile(model, args.mode)
     timings["compile"] = time.perf_counter() - clock
     settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,

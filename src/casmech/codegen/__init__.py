@@ -1,0 +1,65 @@
+"""Code generation: SystemFunctions -> C -> shared library -> casadi.external, with a cache.
+
+    functions = compiled(model)                  # built once per model content, then cached
+    write_build(symbolic, Path("out"), Toolchain())   # sources, header, manifest, library
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import casadi as ca
+
+import casmech
+from casmech.codegen import cache, generate, manifest
+from casmech.codegen.build import LIBRARY, Toolchain, available, build_library
+from casmech.codegen.load import load, mode_of
+from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.lower import lower
+from casmech.schema.resolved import ResolvedModel
+
+__all__ = ["Toolchain", "available", "compiled", "mode_of", "write_build", "export"]
+
+
+def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: Toolchain,
+                info: dict) -> Path:
+    """Generate the sources and header, build the library and write the manifest (last, so a
+    directory with a manifest is complete)."""
+    sources = generate.write_sources(functions, directory, toolchain.jobs)
+    build_library(sources, directory, toolchain)
+    return manifest.write(directory, functions, generate.DIFFERENTIATED, {
+        **info, "casmech": casmech.__version__, "casmech_sources": cache.source_digest(),
+        "casadi": ca.__version__, "compiler": toolchain.compiler,
+        "compiler_version": toolchain.version(), "flags": list(toolchain.all_flags),
+        "library": LIBRARY, "header": generate.HEADER, "sources": [s.name for s in sources]})
+
+
+def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
+            symbolic: SystemFunctions | None = None) -> tuple[Path, bool]:
+    model_hash = cache.model_digest(model.text, model.parameters)
+    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags)
+
+    def build(directory: Path) -> None:
+        functions = (symbolic or build_functions(lower(model))).functions
+        write_build(functions, directory, toolchain,
+                    {"model": model.name, "model_hash": model_hash, "key": entry})
+
+    return cache.lookup(entry, build, root)
+
+
+def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
+             root: Path | None = None) -> SystemFunctions:
+    """The model's SystemFunctions loaded from a compiled library, built only when the cache
+    holds none for this model content, casmech/CasADi version, compiler and flags."""
+    directory, _ = _cached(model, toolchain or Toolchain(), root)
+    return load(directory, lower(model))
+
+
+def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
+           root: Path | None = None) -> tuple[Path, bool]:
+    """Copy the model's build (through the cache) into `out`; (manifest path, cache hit)."""
+    directory, hit = _cached(model, toolchain or Toolchain(), root)
+    out.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(directory, out, dirs_exist_ok=True)
+    return out / manifest.MANIFEST, hit

@@ -1,0 +1,81 @@
+"""Build generated C sources into one shared library: units compiled in parallel, then linked."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+from casmech.errors import AnalysisError, UsageError
+
+DEFAULT_FLAGS = ("-O1",)  # measured: benchmarks/RESULTS_codegen.md
+REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
+LIBRARY = "libcasmech_model.so"
+FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
+
+
+def default_flags() -> tuple[str, ...]:
+    configured = os.environ.get(FLAGS_ENVIRONMENT)
+    return tuple(configured.split()) if configured is not None else DEFAULT_FLAGS
+
+
+@dataclass(frozen=True)
+class Toolchain:
+    """A C compiler ($CC, default gcc) and the flags every unit is compiled with
+    ($CASMECH_CFLAGS, default DEFAULT_FLAGS; REQUIRED_FLAGS are always added)."""
+
+    compiler: str = field(default_factory=lambda: os.environ.get("CC", "gcc"))
+    flags: tuple[str, ...] = field(default_factory=lambda: default_flags())
+    jobs: int = field(default_factory=lambda: os.cpu_count() or 1)
+
+    @property
+    def all_flags(self) -> tuple[str, ...]:
+        return REQUIRED_FLAGS + tuple(self.flags)
+
+    def version(self) -> str:
+        return compiler_version(self.compiler)
+
+
+@lru_cache(maxsize=8)
+def compiler_version(compiler: str) -> str:
+    """First line of `compiler --version`, or "" when there is no such compiler."""
+    if shutil.which(compiler) is None:
+        return ""
+    try:
+        done = subprocess.run([compiler, "--version"], capture_output=True, text=True,
+                              timeout=30, check=False)
+    except OSError:
+        return ""
+    return done.stdout.splitlines()[0].strip() if done.returncode == 0 and done.stdout else ""
+
+
+def available(toolchain: Toolchain | None = None) -> bool:
+    return bool((toolchain or Toolchain()).version())
+
+
+def _run(command: list[str], cwd: Path) -> None:
+    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise AnalysisError(f"the C compiler failed: {' '.join(command)}\n"
+                            f"{done.stderr.strip()[-4000:]}")
+
+
+def build_library(sources: list[Path], directory: Path, toolchain: Toolchain) -> Path:
+    """Compile every source to an object (toolchain.jobs at a time) and link LIBRARY."""
+    if not available(toolchain):
+        raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or set CC, "
+                         "or use mode='interpreted' (casmech run --mode interpreted)")
+    flags = list(toolchain.all_flags)
+    commands = [[toolchain.compiler, *flags, "-c", src.name, "-o", src.stem + ".o"]
+                for src in sources]
+    with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
+        list(pool.map(lambda command: _run(command, directory), commands))
+    objects = [src.stem + ".o" for src in sources]
+    _run([toolchain.compiler, *flags, "-shared", *objects, "-o", LIBRARY, "-lm"], directory)
+    for obj in objects:
+        (directory / obj).unlink()
+    return directory / LIBRARY

@@ -1,0 +1,118 @@
+"""The build cache: one directory per key, published atomically.
+
+Key: the model's content (its text and resolved parameters, so --set overrides count), the
+casmech version and a digest of its compiler sources, the CasADi version, the C compiler and its
+flags. A build happens in a private temporary directory under the cache and is published with
+one rename; a lock file makes a second process wait for the first instead of building the same
+key again, and the rename alone keeps the cache whole should the lock not hold (NFS).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable
+from contextlib import contextmanager
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+
+import casmech
+from casmech.codegen.manifest import FORMAT, MANIFEST
+
+ENVIRONMENT = "CASMECH_CACHE_DIR"
+PACKAGE = Path(casmech.__file__).parent
+SOURCE_PACKAGES = ("schema", "compiler", "codegen")  # what the generated code depends on
+
+
+def cache_dir() -> Path:
+    configured = os.environ.get(ENVIRONMENT)
+    return Path(configured) if configured else Path.home() / ".cache" / "casmech"
+
+
+@lru_cache(maxsize=1)
+def source_digest() -> str:
+    """sha256 of casmech's own sources that shape the generated code (an edited compiler in a
+    development install must not reuse stale builds under the same version number)."""
+    digest = hashlib.sha256()
+    for package in SOURCE_PACKAGES:
+        for path in sorted((PACKAGE / package).glob("*.py")):
+            digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+def model_digest(text: str, parameters) -> str:
+    content = json.dumps({"text": text, "parameters": {k: float(v) for k, v in
+                                                       sorted(parameters.items())}})
+    return hashlib.sha256(content.encode()).hexdigest()
+
+
+def key(model_hash: str, compiler: str, flags) -> str:
+    content = json.dumps({"format": FORMAT, "model": model_hash, "casmech": casmech.__version__,
+                          "sources": source_digest(), "casadi": ca.__version__,
+                          "compiler": compiler, "flags": list(flags)})
+    return hashlib.sha256(content.encode()).hexdigest()[:32]
+
+
+@contextmanager
+def _locked(path: Path):
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = None
+           ) -> tuple[Path, bool]:
+    """The cache directory of a key, building it with build(temporary_dir) when missing;
+    returns (directory, hit)."""
+    root = root or cache_dir()
+    root.mkdir(parents=True, exist_ok=True)
+    final = root / entry_key
+    if (final / MANIFEST).is_file():
+        return final, True
+    with _locked(root / f"{entry_key}.lock"):
+        if (final / MANIFEST).is_file():
+            return final, True
+        temporary = Path(tempfile.mkdtemp(prefix=f".{entry_key}.", dir=root))
+        try:
+            build(temporary)
+            os.replace(temporary, final)  # atomic; fails if another process published first
+        except OSError:
+            if not (final / MANIFEST).is_file():
+                raise
+        finally:
+            shutil.rmtree(temporary, ignore_errors=True)
+    return final, False
+
+
+def entries(root: Path | None = None) -> list[Path]:
+    root = root or cache_dir()
+    return sorted(p for p in root.glob("*") if p.is_dir() and (p / MANIFEST).is_file()) \
+        if root.is_dir() else []
+
+
+def size(path: Path) -> int:
+    return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+
+
+def clear(root: Path | None = None) -> int:
+    """Remove every entry (and stale temporary directories and locks); the bytes freed."""
+    root = root or cache_dir()
+    if not root.is_dir():
+        return 0
+    freed = 0
+    for path in root.iterdir():
+        if path.is_dir():
+            freed += size(path)
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.suffix == ".lock":
+            path.unlink(missing_ok=True)
+    return freed

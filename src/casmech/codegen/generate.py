@@ -1,0 +1,63 @@
+"""SystemFunctions -> C: a few translation units of balanced size (built in parallel), one
+header.
+
+Each unit holds a function and, for the functions an integrator differentiates, its Jacobian
+under the name casadi's External looks up (`jac_<name>`, inputs then nominal outputs), so an MX
+graph over the loaded functions (the dynamics ODE) is differentiated through compiled code.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casadi as ca
+
+# Functions whose Jacobian is generated as well: everything IDAS integrates through (the
+# equations of motion of both formulations and the constraints), and nothing it does not.
+DIFFERENTIATED = frozenset({
+    "phi", "phi_q", "nu", "gamma", "mass_matrix", "generalized_forces",
+    "romega_mass", "romega_forces", "romega_jacobian", "romega_nu", "romega_gamma",
+    "romega_q_dot",
+})
+HEADER = "casmech_model.h"
+
+
+def units(functions: dict[str, ca.Function]) -> dict[str, list[ca.Function]]:
+    """Function name -> the functions generated for it (itself, and its Jacobian)."""
+    return {name: [f, f.jacobian()] if name in DIFFERENTIATED else [f]
+            for name, f in functions.items()}
+
+
+def _cost(members: list[ca.Function]) -> int:
+    return sum(f.n_instructions() for f in members)
+
+
+def partition(groups: dict[str, list[ca.Function]], parts: int) -> list[list[ca.Function]]:
+    """Split into at most `parts` translation units of about equal instruction count (largest
+    first, each to the lightest unit), so parallel compilers finish together."""
+    bins: list[list[ca.Function]] = [[] for _ in range(max(1, min(parts, len(groups))))]
+    loads = [0] * len(bins)
+    for members in sorted(groups.values(), key=_cost, reverse=True):
+        lightest = loads.index(min(loads))
+        bins[lightest] += members
+        loads[lightest] += _cost(members)
+    return [b for b in bins if b]
+
+
+def write_sources(functions: dict[str, ca.Function], directory: Path,
+                  parts: int = 1) -> list[Path]:
+    """Write `casmech_model_<k>.c/.h` (k < parts) and HEADER including them; the C sources."""
+    directory.mkdir(parents=True, exist_ok=True)
+    sources = []
+    for k, members in enumerate(partition(units(functions), parts)):
+        generator = ca.CodeGenerator(f"casmech_model_{k}.c", {"with_header": True})
+        for function in members:
+            generator.add(function)
+        generator.generate(str(directory) + "/")
+        sources.append(directory / f"casmech_model_{k}.c")
+    includes = "".join(f'#include "{path.stem}.h"\n' for path in sources)
+    (directory / HEADER).write_text(
+        "/* casmech generated model: every system function (casadi C API). Compile with\n"
+        "   -std=c99 (gnu modes declare a math.h gamma() that clashes with ours). */\n"
+        "#ifndef CASMECH_MODEL_H\n#define CASMECH_MODEL_H\n" + includes + "#endif\n")
+    return sources

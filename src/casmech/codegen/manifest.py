@@ -1,0 +1,45 @@
+"""manifest.json: what a generated library holds and how it was built."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import casadi as ca
+
+MANIFEST = "manifest.json"
+FORMAT = 1  # bump when the layout of a build directory changes
+
+
+def _sparsity(sparsity: ca.Sparsity) -> dict:
+    return {"rows": sparsity.size1(), "columns": sparsity.size2(), "nnz": sparsity.nnz(),
+            "colind": [int(k) for k in sparsity.colind()],
+            "row": [int(k) for k in sparsity.row()]}
+
+
+def describe(function: ca.Function) -> dict:
+    """Name, inputs and outputs (name, size, sparsity in compressed-column form)."""
+    return {
+        "name": function.name(),
+        "inputs": [{"name": function.name_in(k), **_sparsity(function.sparsity_in(k))}
+                   for k in range(function.n_in())],
+        "outputs": [{"name": function.name_out(k), **_sparsity(function.sparsity_out(k))}
+                    for k in range(function.n_out())],
+    }
+
+
+def write(directory: Path, functions: dict[str, ca.Function], differentiated, info: dict) -> Path:
+    entries = [{**describe(f), "jacobian": name in differentiated}
+               for name, f in functions.items()]
+    path = directory / MANIFEST
+    path.write_text(json.dumps({"format": FORMAT, **info, "functions": entries}, indent=1))
+    return path
+
+
+def read(directory: Path) -> dict:
+    return json.loads((directory / MANIFEST).read_text())
+
+
+def sparsity(entry: dict) -> ca.Sparsity:
+    """The casadi.Sparsity of an input or output entry."""
+    return ca.Sparsity(entry["rows"], entry["columns"], entry["colind"], entry["row"])

@@ -1,0 +1,110 @@
+"""The build cache: a hit for an unchanged model (API and `casmech run`), a rebuild for a changed
+one, two processes building one model at once, `casmech cache info|clear`."""
+
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech import codegen
+from casmech.cli import main
+from casmech.codegen import cache
+
+from .conftest import MODEL
+
+
+@pytest.fixture
+def builds(monkeypatch) -> list:
+    """Records every library build (the C compiler runs only inside build_library)."""
+    calls = []
+    original = codegen.build_library
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(codegen, "build_library", counting)
+    return calls
+
+
+def test_unchanged_model_hits_changed_model_rebuilds(model, toolchain, cache_root, compiled,
+                                                     builds):
+    again = codegen.compiled(casmech.load(MODEL), toolchain, root=cache_root)
+    assert builds == []  # the session fixture built it; same text, parameters, flags
+    stiffer = casmech.load(MODEL, {"k": "25"})
+    rebuilt = codegen.compiled(stiffer, toolchain, root=cache_root)
+    assert len(builds) == 1
+    # the override reached the library: forces differ where the spring acts, as interpreted
+    args = (0.1, casmech.api.assembly.initial_guess(again), np.zeros(14))
+    want = casmech.compile(stiffer).vector("generalized_forces", *args)
+    np.testing.assert_allclose(rebuilt.vector("generalized_forces", *args), want,
+                               rtol=1e-12, atol=1e-12)  # compiled == interpreted bound
+    assert not np.allclose(again.vector("generalized_forces", *args), want, rtol=1e-6, atol=0)
+
+
+def test_flags_are_part_of_the_key(model):
+    digest = cache.model_digest(model.text, model.parameters)
+    assert cache.key(digest, "gcc 12", ("-O0",)) != cache.key(digest, "gcc 12", ("-O1",))
+    assert cache.key(digest, "gcc 12", ("-O0",)) != cache.key(digest, "gcc 13", ("-O0",))
+
+
+def test_second_casmech_run_does_not_recompile(tmp_path, compiled, builds):
+    """`casmech run` of the unchanged model (built by the session fixture with the same flags):
+    no build, twice; after an edit of the file: one build."""
+    path = tmp_path / "m.yaml"
+    path.write_text(MODEL.read_text())
+    for _ in range(2):
+        assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+        assert '"mode": "compiled"' in (tmp_path / "out" / "metadata.json").read_text()
+    assert builds == []
+    path.write_text(path.read_text().replace("stiffness: k,", "stiffness: 2 * k,"))
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--t-end", "0.05"]) == 0
+    assert len(builds) == 1
+
+
+BUILD_SCRIPT = """
+import sys, casmech
+from pathlib import Path
+from casmech import codegen
+f = codegen.compiled(casmech.load(sys.argv[1]), codegen.Toolchain(flags=("-O0",)),
+                     root=Path(sys.argv[2]))
+print(repr(f.vector("phi", 0.2, [0.1 * k for k in range(14)]).tolist()))
+"""
+
+
+def test_two_processes_building_one_model(tmp_path, interpreted):
+    """Started together on a cache holding only the debris of a killed build: both load a
+    working library, one entry is published, no temporary directory of theirs is left, and
+    the debris (maybe another live build's) is left alone."""
+    root = tmp_path / "cache"
+    debris = root / ".deadbeef.partial"
+    debris.mkdir(parents=True)
+    (debris / "casmech_model_0.c").write_text("int broken(")
+    command = [sys.executable, "-c", BUILD_SCRIPT, str(MODEL), str(root)]
+    processes = [subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                  text=True) for _ in range(2)]
+    outputs = [p.communicate(timeout=120) for p in processes]
+    assert [p.returncode for p in processes] == [0, 0], outputs
+    want = interpreted.vector("phi", 0.2, [0.1 * k for k in range(14)])
+    for out, _ in outputs:
+        np.testing.assert_allclose(eval(out), want, rtol=1e-12, atol=1e-12)  # same operations
+    assert len(cache.entries(root)) == 1
+    hidden = [p for p in root.iterdir() if p.is_dir() and p.name.startswith(".")]
+    assert hidden == [debris]
+
+
+def test_cache_info_and_clear(tmp_path, compiled, cache_root, monkeypatch, capsys):
+    root = tmp_path / "c"
+    entry = cache.entries(cache_root)[0]
+    shutil.copytree(entry, root / entry.name)
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(root))
+    assert main(["cache", "info"]) == 0
+    out = capsys.readouterr().out
+    assert f"{root}: 1 compiled models" in out and "codegen_test" in out
+    assert main(["cache", "clear"]) == 0
+    assert cache.entries(root) == [] and list(root.iterdir()) == []
+    assert main(["cache", "info"]) == 0
+    assert f"{root}: 0 compiled models" in capsys.readouterr().out
