@@ -14,8 +14,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from casmech import codegen
-from casmech.compiler.augmented import FORMULATIONS
 from casmech.compiler.checks import Structure, structure
+from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, UsageError

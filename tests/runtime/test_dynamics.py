@@ -8,7 +8,7 @@ import pytest
 
 import casmech
 from casmech.output.csv import read_csv
-from casmech.runtime.dynamics import DRIFT_TOLERANCE
+from casmech.runtime.dynamics import DRIFT_TOLERANCE, drift_tolerance
 from tests.conftest import Table
 from tests.runtime.reference_data import VALIDATION_MODELS as VALIDATION
 
@@ -70,8 +70,9 @@ def test_pendulum_keeps_constraints_and_energy_and_converges_with_rtol():
                                                            "atol: 1.0e-13"))
     reference = simulate(PENDULUM.replace("output_step: 0.01", "output_step: 0.01, "
                                           "rtol: 1.0e-13, atol: 1.0e-15"))
-    for table in (loose, tight):
-        assert np.max(table["constraint_violation"]) <= DRIFT_TOLERANCE
+    # the drift allowed before a projection: 1e-9, or 10 atol for looser runs
+    assert np.max(tight["constraint_violation"]) <= DRIFT_TOLERANCE
+    assert np.max(loose["constraint_violation"]) <= drift_tolerance(1e-9)
     error = {name: np.max(np.abs(table["bar.y"] - reference["bar.y"]))
              for name, table in (("loose", loose), ("tight", tight))}
     assert error["tight"] <= error["loose"] / 100  # 10^4 tighter rtol: at least 100x smaller

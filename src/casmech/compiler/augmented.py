@@ -18,33 +18,14 @@ constraint-gradient size), so no user constant is involved.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
+
+from casmech.compiler.formulations import FORMULATIONS
 
 ROW_SCALING = True
 ITERATIONS = 6  # see PENALTY
 LINEAR_SOLVER = "ldl"  # M + a P^T P is symmetric positive definite
 PENALTY = 1e8  # a relative to max(diag M) / max(diag P^T P); see runtime.dynamics
-
-
-@dataclass(frozen=True)
-class Formulation:
-    """Which system functions play M, F, P, gamma and nu; q_dot(q, v) (None: v is q_dot)."""
-
-    mass: str
-    forces: str
-    jacobian: str
-    gamma: str
-    nu: str
-    q_dot: str | None
-
-
-FORMULATIONS = {
-    "rp": Formulation("mass_matrix", "generalized_forces", "phi_q", "gamma", "nu", None),
-    "romega": Formulation("romega_mass", "romega_forces", "romega_jacobian", "romega_gamma",
-                          "romega_nu", "romega_q_dot"),
-}
 
 
 def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:

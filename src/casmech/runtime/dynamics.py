@@ -1,15 +1,18 @@
 """Forward dynamics in the r-p or r-omega form, integrated by SUNDIALS IDAS through CasADi.
 
-State x = [q, v] with v = q_dot (r-p) or [r_dot; omega_bar] (r-omega). IDAS integrates
-x' = [q_dot(q, v), v_dot(t, q, v)], where v_dot comes from the augmented-Lagrangian solution of
-the constrained equations of motion (compiler.augmented), which stays well-posed through
-singular configurations and with redundant joints. The position and velocity constraints hold at
-the integration error; at the first output where either drifts past DRIFT_TOLERANCE the state is
-projected back, mass-orthogonally (assembly.project), and IDAS restarts from there. No
-Baumgarte constants.
+IDAS integrates the index-1 DAE of compiler.dae: x = [q, v], z = [v_dot, lam] (v = q_dot in
+r-p, [r_dot; omega_bar] in r-omega), with rows that depend on the others at t0 (redundant
+joints) masked out. Every start hands IDAS the exact derivative and algebraic state
+(init_xdot, z0), solved here from the same equations, so IDACalcIC is never needed.
 
-Measured on IFToMM A02 (the N-four-bar through its flat poses) this passes every singular
-configuration, where the index-1 DAE [M P^T; P 0] of the previous version failed at the first.
+The position and velocity constraints hold at the integration error; at the first output where
+either drifts past drift_tolerance(atol) the state is projected back mass-orthogonally
+(assembly.project) and IDAS restarts from there. No Baumgarte constants.
+
+Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
+its flat poses) the index-1 DAE is singular and IDAS fails; that output interval alone is then
+integrated with the augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there,
+from then on (metadata augmented_from says when). A failure there names the time and the joints.
 """
 
 from __future__ import annotations
@@ -17,8 +20,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import augmented, euler
-from casmech.compiler.checks import dependent_joints
+from casmech.compiler import augmented, dae, euler
+from casmech.compiler.checks import dependent_joints, independent_rows
+from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
@@ -27,14 +31,14 @@ from casmech.runtime.results import Result
 
 CHUNK = 64  # most output intervals per IDAS call
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
-DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting; velocities: this over the output step
+DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
 
 
-def penalty(functions: SystemFunctions, form: augmented.Formulation, t, q) -> float:
-    """The augmented-Lagrangian penalty scaled to the model: PENALTY max(diag M) / max(diag
-    P^T P), so a s^2 ~ PENALTY for the constraint modes whatever the units."""
-    mass = functions.matrix(form.mass, q)
-    return augmented.PENALTY * np.max(np.diag(mass), initial=1.0)
+def drift_tolerance(atol: float) -> float:
+    """Constraint drift allowed before a projection: DRIFT_TOLERANCE, or 10 atol when the
+    integration itself is looser (projecting more often than the error allows only restarts
+    IDAS, which at rtol 1e-8 made runs 20x slower, measured on benchmarks/chain2)."""
+    return max(DRIFT_TOLERANCE, 10 * atol)
 
 
 def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
@@ -47,79 +51,167 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
     return np.concatenate([q_dot[:3 * nb], *omega_bar])
 
 
-class _Stepper:
-    """Integrates from a state over a chunk of the output grid; one IDAS integrator per relative
-    output grid, reused for every restart (time enters as the parameter t0)."""
+def penalty(functions: SystemFunctions, form: Formulation, q) -> float:
+    """The augmented-Lagrangian penalty scaled to the model: PENALTY max(diag M)."""
+    return augmented.PENALTY * np.max(np.diag(functions.matrix(form.mass, q)), initial=1.0)
 
-    def __init__(self, functions: SystemFunctions, name: str, rtol: float, atol: float,
-                 penalty_value: float):
-        self.functions, self.penalty = functions, penalty_value
+
+class _Model:
+    """The numeric side of one formulation: unit-row P, consistent (v_dot, lam), q_dot."""
+
+    def __init__(self, functions: SystemFunctions, name: str):
+        self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
+        self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
+
+    def row_norms(self, t, q) -> np.ndarray:
+        return np.linalg.norm(self.functions.matrix(self.form.jacobian, t, q), axis=1)
+
+    def mask(self, t, q) -> np.ndarray:
+        """1 for every row that depends on earlier ones (dropped from the DAE), else 0."""
+        independent = independent_rows(self.functions.matrix(self.form.jacobian, t, q))
+        return 1.0 - np.array(independent, float)
+
+    def consistent(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
+        """(v_dot, unit-row lam) solving the DAE's algebraic equations at (t, q, v)."""
+        f = self.functions
+        norms = self.row_norms(t, q)
+        jac = f.matrix(self.form.jacobian, t, q) / norms[:, None]
+        gamma = f.vector(self.form.gamma, t, q, v) / norms
+        lhs = np.block([[f.matrix(self.form.mass, q), jac.T], [jac, -np.diag(mask)]])
+        rhs = np.concatenate([f.vector(self.form.forces, t, q, v), gamma])
+        try:
+            z = np.linalg.solve(lhs, rhs)
+        except np.linalg.LinAlgError:  # singular configuration: the least-squares solution
+            z = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+        return z[:self.n_v], z[self.n_v:]
+
+    def q_dot(self, q, v) -> np.ndarray:
+        if self.form.q_dot is None:
+            return np.asarray(v, float)
+        return self.functions.vector(self.form.q_dot, q, v)
+
+
+class _Stepper:
+    """Integrates from a state over a chunk of the output grid: by the DAE until it first
+    fails, by the augmented-Lagrangian ODE from there on (a model that has met a singular
+    configuration will meet it again; the DAE only fails there after thousands of steps)."""
+
+    def __init__(self, model: _Model, rtol: float, atol: float):
+        self.model = model
         self.chunk = CHUNK
-        self.ode = augmented.ode(functions.functions, name)
+        self.dae = dae.problem(dae.residual(model.functions.functions, model.name))
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
-        self.cache: dict[tuple, ca.Function] = {}
+        self.ode = None  # the augmented-Lagrangian ODE, once the DAE has failed
+        self.ode_integrators: dict[tuple, ca.Function] = {}
+        self.switched_at = None
 
-    def adapt(self, used: int, projected: bool) -> None:
-        """Next chunk: twice the intervals used before a projection (the rest of a chunk after
+    def adapt(self, used: int, restarted: bool) -> None:
+        """Next chunk: twice the intervals used before a restart (the rest of a chunk after
         one is discarded), or twice the last chunk, up to CHUNK."""
-        self.chunk = min(CHUNK, 2 * used if projected else 2 * self.chunk)
+        self.chunk = min(CHUNK, 2 * used if restarted else 2 * self.chunk)
 
-    def integrator(self, grid: np.ndarray) -> ca.Function:
-        key = tuple(np.round(grid, 12))
-        if key not in self.cache:
-            self.cache[key] = ca.integrator("dynamics", "idas", self.ode, 0.0, list(grid),
-                                            self.options)
-        return self.cache[key]
+    def integrate(self, t0: float, times: np.ndarray, q, v, mask):
+        """(states, lam) at `times`: states rows [q, v, v_dot], lam in unit rows."""
+        if self.ode is None:
+            start = self._dae_start(t0, times, q, v, mask)
+            try:
+                return self._dae(*start)
+            except RuntimeError:  # IDAS failed: from here on, the augmented Lagrangian
+                self.switched_at = t0
+                self.ode = augmented.ode(self.model.functions.functions, self.model.name)
+                self.solve = augmented.accelerations(self.model.functions.functions,
+                                                     self.model.name)
+        return self._ode(t0, times, q, v)
 
-    def integrate(self, t0: float, times: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """States at `times`; on an IDAS failure, the failing interval alone is retried so the
-        error names it exactly (and the caller keeps every row before it)."""
+    def _dae_start(self, t0, times, q, v, mask):
+        """An IDAS integrator over `times` started with the exact derivative, and its inputs."""
+        model = self.model
+        v_dot, lam = model.consistent(t0, q, v, mask)
+        options = self.options | {"suppress_algebraic": True, "calc_ic": False,
+                                  "init_xdot": list(np.concatenate([model.q_dot(q, v), v_dot]))}
+        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0), options)
+        inputs = {"x0": np.concatenate([q, v]), "z0": np.concatenate([v_dot, lam]),
+                  "p": np.concatenate([[t0], mask])}
+        return integrator, inputs
+
+    def _dae(self, integrator, inputs):
+        out = integrator(**inputs)
+        x, z = np.array(out["xf"].full()), np.array(out["zf"].full())
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+            raise RuntimeError("the state became NaN or infinite")
+        n_v = self.model.n_v
+        return np.vstack([x, z[:n_v]]), z[n_v:]
+
+    def _ode(self, t0, times, q, v):
+        """The augmented-Lagrangian ODE over the chunk; on a failure, its first interval alone,
+        so the error names it exactly (and the caller keeps every row before it)."""
+        model = self.model
+        a = penalty(model.functions, model.form, q)
+        key = tuple(np.round(times - t0, 12))
+        if key not in self.ode_integrators:
+            self.ode_integrators[key] = ca.integrator("fallback", "idas", self.ode, 0.0,
+                                                      list(key), self.options)
         try:
-            out = self.integrator(times - t0)(x0=x, p=[t0, self.penalty])
-            states = np.array(out["xf"].full())
+            x = np.array(self.ode_integrators[key](x0=np.concatenate([q, v]), p=[t0, a])["xf"]
+                         .full())
+            why = None if np.all(np.isfinite(x)) else "the state became NaN or infinite"
         except RuntimeError as error:
-            states, error_text = None, str(error).splitlines()[-1].strip()
-        if states is not None and np.all(np.isfinite(states)):
-            return states
-        if len(times) > 1:
-            self.chunk = 1  # from here on, one output interval per call
-            return self.integrate(t0, times[:1], x)
-        why = error_text if states is None else "the state became NaN or infinite"
-        q = x[:self.functions.n_coordinates]
-        cause = (f"IDAS failed between t = {t0:.6g} and {times[0]:.6g} ({why}); the joints "
-                 "whose rows are closest to dependent (a singular configuration?):")
-        context = FailureContext(t0, cause, dependent_joints(
-            self.functions, self.functions.matrix("phi_q", t0, q)), "weight in the dependency")
-        raise AnalysisError(context)
+            why = str(error).splitlines()[-1].strip()
+        if why is not None:
+            if len(times) > 1:
+                self.chunk = 1  # from here on, one output interval per call
+                return self._ode(t0, times[:1], q, v)
+            raise self.failure(t0, times[0], q, why)
+        columns = [self._accelerations(t, x[:, j], a) for j, t in enumerate(times)]
+        v_dots, lams = zip(*columns, strict=True)
+        return np.vstack([x, np.array(v_dots).T]), np.array(lams).T
+
+    def _accelerations(self, t, x, a):
+        model = self.model
+        q, v = x[:model.n_q], x[model.n_q:]
+        v_dot, lam = (np.array(out.full()).ravel() for out in self.solve(t, q, v, a))
+        return v_dot, lam * model.row_norms(t, q)  # true multipliers -> unit rows
+
+    def failure(self, t0, t1, q, why) -> AnalysisError:
+        functions = self.model.functions
+        cause = (f"IDAS failed between t = {t0:.6g} and {t1:.6g} ({why}); the joints whose "
+                 "rows are closest to dependent (a singular configuration?):")
+        return AnalysisError(FailureContext(t0, cause, dependent_joints(
+            functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
 
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
                  progress=None) -> Result:
-    form = augmented.FORMULATIONS[formulation]
+    model = _Model(functions, formulation)
     result = Result("dynamics", on_row=progress)
-    n = functions.n_coordinates
     q, q_dot = assembly.initial_state(functions, t0)
     v = velocities(functions, formulation, q, q_dot)
-    a = penalty(functions, form, t0, q)
-    stepper = _Stepper(functions, formulation, rtol, atol, a)
-    record = _Recorder(functions, formulation, result, a)
+    mask = model.mask(t0, q)
+    stepper = _Stepper(model, rtol, atol)
+    record = _Recorder(model, result)
+    tolerance = drift_tolerance(atol)
     times = output_times(t0, t_end, step)
-    k, restarts = 0, 0
+    k, projections = 0, 0
     try:
-        record(times[0], q, v)
+        v_dot, lam = model.consistent(times[0], q, v, mask)
+        record(times[0], q, v, v_dot, lam)
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + stepper.chunk]
-            states = stepper.integrate(times[k], chunk, np.concatenate([q, v]))
-            for j, t in enumerate(chunk[:states.shape[1]]):  # fewer after a failure
-                q, v = states[:n, j], states[n:, j]
+            states, lams = stepper.integrate(times[k], chunk, q, v, mask)
+            for j in range(states.shape[1]):
+                t = chunk[j]
+                q, v = states[:model.n_q, j], states[model.n_q:model.n_q + model.n_v, j]
+                v_dot, lam = states[model.n_q + model.n_v:, j], lams[:, j]
                 k += 1
-                projected = drifted(functions, form, t, q, v, step)
+                projected = drifted(functions, model.form, t, q, v, step, tolerance)
                 if projected:
-                    q, v = assembly.project(functions, form, t, q, v, a)
-                    restarts += 1
-                record(t, q, v)
+                    q, v = assembly.project(functions, model.form, t, q, v,
+                                            penalty(functions, model.form, q))
+                    v_dot, lam = model.consistent(t, q, v, mask)
+                    projections += 1
+                record(t, q, v, v_dot, lam)
                 if projected:
                     break  # restart IDAS from the projected state
             stepper.adapt(j + 1, projected)
@@ -127,35 +219,34 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
         error.partial = result
         raise
     result.metadata.update(rtol=rtol, atol=atol, formulation=formulation, integrator="idas",
-                           accelerations="augmented Lagrangian", projections=restarts)
+                           projections=projections, augmented_from=stepper.switched_at,
+                           dropped_rows=int(mask.sum()))
     return result
 
 
-def drifted(functions: SystemFunctions, form: augmented.Formulation, t: float, q, v,
-            step: float) -> bool:
-    """Whether |Phi| passed DRIFT_TOLERANCE, or the velocity-constraint residual passed what
+def drifted(functions: SystemFunctions, form: Formulation, t: float, q, v, step: float,
+            tolerance: float = DRIFT_TOLERANCE) -> bool:
+    """Whether |Phi| passed the tolerance, or the velocity-constraint residual passed what
     would move the positions by as much before the next output."""
     phi = functions.vector("phi", t, q)
     velocity = functions.matrix(form.jacobian, t, q) @ v - functions.vector(form.nu, t, q)
-    return bool(np.max(np.abs(phi), initial=0.0) > DRIFT_TOLERANCE
-                or np.max(np.abs(velocity), initial=0.0) * step > DRIFT_TOLERANCE)
+    return bool(np.max(np.abs(phi), initial=0.0) > tolerance
+                or np.max(np.abs(velocity), initial=0.0) * step > tolerance)
 
 
 class _Recorder:
-    """Appends a results row (r-p velocities, accelerations and all multipliers) for a state."""
+    """Appends a results row (r-p velocities and accelerations, every multiplier)."""
 
-    def __init__(self, functions: SystemFunctions, name: str, result: Result, penalty_value):
-        self.functions, self.name, self.result = functions, name, result
-        self.solve = augmented.accelerations(functions.functions, name)
-        self.penalty = penalty_value
+    def __init__(self, model: _Model, result: Result):
+        self.model, self.result = model, result
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
-        v_dot, lam = (np.array(out.full()).ravel() for out in
-                      self.solve(t, q, v, self.penalty))
-        if self.name == "rp":
+    def __call__(self, t: float, q, v, v_dot, unit_lam) -> None:
+        model = self.model
+        lam = unit_lam / model.row_norms(t, q)
+        if model.name == "rp":
             self.result.append(t, q, v, v_dot, lam)
             return
-        q_dot, q_ddot = self.functions.evaluate("romega_to_rp", q, v, v_dot)
-        lam_full = np.zeros(self.functions.n_rows)  # normalization rows carry no reaction
+        q_dot, q_ddot = model.functions.evaluate("romega_to_rp", q, v, v_dot)
+        lam_full = np.zeros(model.functions.n_rows)  # normalization rows carry no reaction
         lam_full[:len(lam)] = lam
         self.result.append(t, q, q_dot.ravel(), q_ddot.ravel(), lam_full)
