@@ -1,0 +1,59 @@
+"""casmech.compile(model, mode): auto falls back to interpreted with one warning when there is
+no C compiler; compiled without one, or an unknown mode, is a usage error; casmech compile
+writes its files into -o DIR."""
+
+import warnings
+
+import pytest
+
+import casmech
+from casmech import codegen
+from casmech.cli import main
+from casmech.errors import UsageError
+
+from .conftest import MODEL
+
+
+@pytest.fixture
+def no_compiler(monkeypatch):
+    monkeypatch.setenv("CC", "casmech-no-such-compiler")
+
+
+def test_auto_without_compiler_warns_once_and_interprets(model, no_compiler):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        functions = casmech.compile(model, "auto")
+    assert len(caught) == 1 and "no C compiler" in str(caught[0].message)
+    assert codegen.mode_of(functions) == "interpreted"
+    result = casmech.analyze(functions, "assembly")
+    assert result.metadata["mode"] == "interpreted"
+
+
+def test_compiled_without_compiler_is_a_usage_error(model, no_compiler, tmp_path, capsys):
+    with pytest.raises(UsageError, match="no C compiler"):
+        casmech.compile(model, "compiled")
+    assert main(["compile", str(MODEL), "-o", str(tmp_path / "out")]) == 2
+    assert "no C compiler" in capsys.readouterr().err
+
+
+def test_unknown_mode_is_a_usage_error(model):
+    with pytest.raises(UsageError, match="not one of interpreted, compiled, auto"):
+        casmech.compile(model, "jit")
+
+
+def test_auto_with_compiler_is_compiled(model, compiled):
+    assert codegen.mode_of(casmech.compile(model, "auto")) == "compiled"
+
+
+def test_compile_command_writes_sources_header_manifest_library(tmp_path, compiled, capsys):
+    out = tmp_path / "out"
+    assert main(["compile", str(MODEL), "-o", str(out)]) == 0
+    assert "from the cache" in capsys.readouterr().out  # the session fixture built it
+    names = {p.name for p in out.iterdir()}
+    assert {"manifest.json", "casmech_model.h", "libcasmech_model.so"} <= names
+    assert any(name.endswith(".c") for name in names)
+
+
+def test_bad_jobs_is_a_usage_error(tmp_path, capsys):
+    assert main(["compile", str(MODEL), "-o", str(tmp_path), "--jobs", "0"]) == 2
+    assert "--jobs must be at least 1" in capsys.readouterr().err
