@@ -1,0 +1,242 @@
+"""Optimal control on the model's index-1 DAE: direct collocation or multiple shooting.
+
+    problem = OCP(controls=[Control("pivot", "torque", -6, 6)], horizon=3.0, intervals=30,
+                  terminal={"bar.z": 0.5, "bar.wx": 0.0})
+    solution = solve(model, problem, "collocation")      # or "shooting"
+    replay(model, problem, solution)                      # IDAS with the optimal controls
+
+Controls are piecewise constant on `intervals` equal intervals; the objective is
+effort * integral(u^T u) dt (exact for piecewise-constant u, so both transcriptions minimise the
+same functional) plus terminal weights on results columns; `terminal` targets are equality
+constraints on results columns at the final time. The initial state is the model's assembled,
+consistent state; the initial guess is a forward simulation with small constant controls.
+Collocation: Radau IIA (degree 3) on x = [q, q_dot] with z = [q_ddot, lam] at the collocation
+points; multiple shooting: one IDAS integrator per interval with its end state matched.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.optimal.controls import Control, control_forces
+from casmech.optimal.dae import (
+    DAE,
+    algebraic_function,
+    build_dae,
+    columns_function,
+    initial_state_function,
+)
+from casmech.optimal.sensitivity import idas
+from casmech.optimal.system import parametric_system
+from casmech.schema.resolved import ResolvedModel
+
+DEGREE = 3
+TRANSCRIPTIONS = ("collocation", "shooting")
+
+
+@dataclass(frozen=True)
+class OCP:
+    controls: Sequence[Control]
+    horizon: float
+    intervals: int = 30
+    effort: float = 1.0
+    terminal: Mapping[str, float] = field(default_factory=dict)  # column -> value (equality)
+    terminal_cost: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # (w, target)
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    guess: Sequence[float] | None = None  # constant controls of the initial simulation
+
+
+def default_guess(problem: OCP) -> np.ndarray:
+    """A small push (10% of each finite upper bound): at rest the gradients of terminal
+    conditions on orientations often vanish, and IPOPT then declares the problem infeasible."""
+    if problem.guess is not None:
+        return np.asarray(problem.guess, float)
+    return np.array([0.1 * c.upper if np.isfinite(c.upper) else 0.0 for c in problem.controls])
+
+
+@dataclass(frozen=True)
+class Solution:
+    transcription: str
+    times: np.ndarray  # interval boundaries (intervals + 1)
+    x: np.ndarray  # (intervals + 1, 2 n) states at the boundaries
+    u: np.ndarray  # (intervals, n_u)
+    objective: float
+    status: str
+    iterations: int
+
+
+@dataclass(frozen=True)
+class _Setup:
+    dae: DAE
+    x0: np.ndarray
+    columns: ca.Function
+    names: list[str]
+    algebraic: ca.Function
+    step: float
+
+
+def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
+    if problem.horizon <= 0 or problem.intervals < 1:
+        raise UsageError("the horizon must be positive and intervals at least 1")
+    dae = build_dae(parametric_system(model, ()), control_forces(model, problem.controls))
+    names, columns = columns_function(dae)
+    for name in [*problem.terminal, *problem.terminal_cost]:
+        if name not in names:
+            raise UsageError(f"unknown terminal column '{name}' (results columns, see "
+                             "MODEL_FORMAT.md)")
+    x0 = initial_state_function(dae)(np.zeros(0)).full().ravel()
+    return _Setup(dae, x0, columns, names, algebraic_function(dae),
+                  problem.horizon / problem.intervals)
+
+
+def _column(setup: _Setup, name: str, t, x, u):
+    p = ca.vertcat(ca.DM.zeros(0), u)
+    return setup.columns(t, x, setup.algebraic(t, x, p), ca.DM.zeros(0))[setup.names.index(name)]
+
+
+def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, u_all):
+    cost = problem.effort * setup.step * ca.sumsqr(u_all)
+    t_end = setup.dae.t0 + problem.horizon
+    for name, (weight, target) in problem.terminal_cost.items():
+        cost += weight * (_column(setup, name, t_end, x_end, u_last) - target) ** 2
+    for name, target in problem.terminal.items():
+        opti.subject_to(_column(setup, name, t_end, x_end, u_last) == target)
+    return cost
+
+
+def _bounds(opti, problem: OCP, u):
+    for k, control in enumerate(problem.controls):
+        if np.isfinite(control.lower):
+            opti.subject_to(u[k, :] >= control.lower)
+        if np.isfinite(control.upper):
+            opti.subject_to(u[k, :] <= control.upper)
+
+
+def _guess(setup: _Setup, problem: OCP) -> np.ndarray:
+    """States at the interval boundaries of a forward simulation with constant controls."""
+    return replay_states(setup, problem, np.tile(default_guess(problem), (problem.intervals, 1)))
+
+
+def replay_states(setup: _Setup, problem: OCP, u: np.ndarray) -> np.ndarray:
+    """IDAS through every interval with its constant control (rtol/atol of the problem)."""
+    dae, xs = setup.dae, [setup.x0]
+    for k in range(problem.intervals):
+        t0 = dae.t0 + k * setup.step
+        integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0)
+        z0 = setup.algebraic(t0, xs[-1], u[k]).full().ravel()
+        xs.append(integrator(x0=xs[-1], z0=z0, p=u[k])["xf"].full().ravel())
+    return np.array(xs)
+
+
+def _collocation(opti, setup: _Setup, problem: OCP, u, guess):
+    dae = setup.dae
+    n_x, n_z = dae.x.numel(), dae.z.numel()
+    tau = np.append(0, ca.collocation_points(DEGREE, "radau"))
+    coefficients = _lagrange(tau)
+    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.p], [dae.ode, dae.alg])
+    x = opti.variable(n_x, problem.intervals + 1)
+    opti.subject_to(x[:, 0] == setup.x0)
+    opti.set_initial(x, guess.T)
+    for k in range(problem.intervals):
+        xc = opti.variable(n_x, DEGREE)
+        zc = opti.variable(n_z, DEGREE)
+        opti.set_initial(xc, np.repeat(guess[k + 1][:, None], DEGREE, 1))
+        z_guess = setup.algebraic(dae.t0 + k * setup.step, guess[k + 1], np.zeros(u.shape[0]))
+        opti.set_initial(zc, np.repeat(z_guess.full(), DEGREE, 1))
+        points = ca.horzcat(x[:, k], xc)
+        for j in range(1, DEGREE + 1):
+            slope = points @ ca.DM(coefficients[:, j])
+            t = dae.t0 + (k + tau[j]) * setup.step
+            ode, alg = f(t, points[:, j], zc[:, j - 1], u[:, k])
+            opti.subject_to(slope == setup.step * ode)
+            opti.subject_to(alg == 0)
+        opti.subject_to(x[:, k + 1] == xc[:, DEGREE - 1])  # Radau: last point is the end
+    return x
+
+
+def _lagrange(tau: np.ndarray) -> np.ndarray:
+    """C[r, j]: derivative of the r-th Lagrange basis polynomial at tau_j (times the step)."""
+    size = tau.size
+    matrix = np.zeros((size, size))
+    for r in range(size):
+        basis = np.poly1d([1.0])
+        for s in range(size):
+            if s != r:
+                basis *= np.poly1d([1.0, -tau[s]]) / (tau[r] - tau[s])
+        matrix[r] = np.polyder(basis)(tau)
+    return matrix
+
+
+def _shooting(opti, setup: _Setup, problem: OCP, u, guess):
+    dae = setup.dae
+    x = opti.variable(dae.x.numel(), problem.intervals + 1)
+    opti.subject_to(x[:, 0] == setup.x0)
+    opti.set_initial(x, guess.T)
+    for k in range(problem.intervals):
+        t0 = dae.t0 + k * setup.step
+        integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0,
+                          name=f"F{k}")
+        z0 = setup.algebraic(t0, guess[k], np.zeros(u.shape[0])).full().ravel()
+        opti.subject_to(x[:, k + 1] == integrator(x0=x[:, k], z0=z0, p=u[:, k])["xf"])
+    return x
+
+
+BUILDERS = {"collocation": _collocation, "shooting": _shooting}
+
+
+def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation",
+          verbose: bool = False, max_iter: int = 500, start: Solution | None = None) -> Solution:
+    """Solve with `transcription`; `start` (another solution) replaces the initial simulation
+    as the initial guess (multiple shooting from a collocation solution is far more robust:
+    IDAS fails on the wild states IPOPT tries first from a poor guess)."""
+    if transcription not in TRANSCRIPTIONS:
+        raise UsageError(f"transcription '{transcription}' is not one of "
+                         f"{', '.join(TRANSCRIPTIONS)}")
+    setup = _setup(model, problem)
+    guess = _guess(setup, problem) if start is None else start.x
+    opti = ca.Opti()
+    u = opti.variable(len(problem.controls), problem.intervals)
+    u_guess = np.tile(default_guess(problem), (problem.intervals, 1)) if start is None else start.u
+    opti.set_initial(u, u_guess.T)
+    x = BUILDERS[transcription](opti, setup, problem, u, guess)
+    _bounds(opti, problem, u)
+    opti.minimize(_objective_and_terminal(opti, setup, problem, x[:, -1], u[:, -1], u))
+    options = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
+               "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10}
+    if transcription == "shooting":
+        options["ipopt.hessian_approximation"] = "limited-memory"
+    opti.solver("ipopt", options)
+    try:
+        result = opti.solve()
+    except RuntimeError as error:
+        raise AnalysisError(FailureContext(problem.horizon, f"the optimal control problem "
+                                           f"({transcription}) was not solved: {error}"[:600],
+                                           [])) from None
+    stats = result.stats()
+    times = setup.dae.t0 + setup.step * np.arange(problem.intervals + 1)
+    return Solution(transcription, times, np.atleast_2d(result.value(x)).T,
+                    np.atleast_2d(result.value(u)).T.reshape(problem.intervals, -1),
+                    float(result.value(opti.f)), str(stats.get("return_status")),
+                    int(stats.get("iter_count", -1)))
+
+
+def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray:
+    """States at the interval boundaries from IDAS driven by the solution's controls."""
+    return replay_states(_setup(model, problem), problem, solution.u)
+
+
+def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
+               names: Sequence[str]) -> np.ndarray:
+    """Results columns of the solution's states at its interval boundaries."""
+    setup = _setup(model, problem)
+    rows = []
+    for k, (t, x) in enumerate(zip(solution.times, solution.x, strict=True)):
+        u = solution.u[min(k, len(solution.u) - 1)]
+        rows.append([float(_column(setup, n, t, x, u)) for n in names])
+    return np.array(rows)
