@@ -8,6 +8,8 @@ this table: a new command is a new module and one new entry here.
 COMMANDS = {
     "check": "check",
     "run": "run",
+    "sensitivity": "sensitivity",
+    "optimize": "optimize",
     "compile": "compile",
     "cache": "cache",
     "plot": "plot",

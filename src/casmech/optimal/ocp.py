@@ -47,6 +47,7 @@ class OCP:
     effort: float = 1.0
     terminal: Mapping[str, float] = field(default_factory=dict)  # column -> value (equality)
     terminal_cost: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # (w, target)
+    path: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # column bounds at nodes
     rtol: float = 1e-10
     atol: float = 1e-12
     guess: Sequence[float] | None = None  # constant controls of the initial simulation
@@ -86,18 +87,22 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
         raise UsageError("the horizon must be positive and intervals at least 1")
     dae = build_dae(parametric_system(model, ()), control_forces(model, problem.controls))
     names, columns = columns_function(dae)
-    for name in [*problem.terminal, *problem.terminal_cost]:
+    for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
         if name not in names:
-            raise UsageError(f"unknown terminal column '{name}' (results columns, see "
-                             "MODEL_FORMAT.md)")
+            raise UsageError(f"unknown column '{name}' in the optimal control problem; "
+                             "columns are results columns (<body>.x, <joint>.fx, energy, ...)")
     x0 = initial_state_function(dae)(np.zeros(0)).full().ravel()
     return _Setup(dae, x0, columns, names, algebraic_function(dae),
                   problem.horizon / problem.intervals)
 
 
+def _columns(setup: _Setup, t, x, u):
+    """Every results column (without t) at a state; the DAE's p is [theta (empty), u]."""
+    return setup.columns(t, x, setup.algebraic(t, x, u), ca.DM.zeros(0))
+
+
 def _column(setup: _Setup, name: str, t, x, u):
-    p = ca.vertcat(ca.DM.zeros(0), u)
-    return setup.columns(t, x, setup.algebraic(t, x, p), ca.DM.zeros(0))[setup.names.index(name)]
+    return _columns(setup, t, x, u)[setup.names.index(name)]
 
 
 def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, u_all):
@@ -108,6 +113,15 @@ def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, u_
     for name, target in problem.terminal.items():
         opti.subject_to(_column(setup, name, t_end, x_end, u_last) == target)
     return cost
+
+
+def _path(opti, setup: _Setup, problem: OCP, x, u):
+    """Bounds on results columns at every interval boundary after the first."""
+    for name, (low, high) in problem.path.items():
+        for k in range(1, problem.intervals + 1):
+            t = setup.dae.t0 + k * setup.step
+            value = _column(setup, name, t, x[:, k], u[:, min(k, problem.intervals - 1)])
+            opti.subject_to(opti.bounded(low, value, high))
 
 
 def _bounds(opti, problem: OCP, u):
@@ -206,6 +220,7 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     opti.set_initial(u, u_guess.T)
     x = BUILDERS[transcription](opti, setup, problem, u, guess)
     _bounds(opti, problem, u)
+    _path(opti, setup, problem, x, u)
     opti.minimize(_objective_and_terminal(opti, setup, problem, x[:, -1], u[:, -1], u))
     options = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10}
@@ -235,8 +250,23 @@ def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
                names: Sequence[str]) -> np.ndarray:
     """Results columns of the solution's states at its interval boundaries."""
     setup = _setup(model, problem)
+    index = [setup.names.index(n) for n in names]
     rows = []
     for k, (t, x) in enumerate(zip(solution.times, solution.x, strict=True)):
         u = solution.u[min(k, len(solution.u) - 1)]
-        rows.append([float(_column(setup, n, t, x, u)) for n in names])
+        rows.append(_columns(setup, t, x, u).full().ravel()[index])
     return np.array(rows)
+
+
+def from_block(block) -> tuple[OCP, str]:
+    """The problem and transcription of a model's `ocp:` block (schema.resolved)."""
+    controls = [Control(c.joint, c.type, c.lower, c.upper) for c in block.controls]
+    return OCP(controls, block.horizon, block.intervals, block.effort, dict(block.terminal),
+               dict(block.terminal_cost), dict(block.path)), block.transcription
+
+
+def results_table(model: ResolvedModel, problem: OCP, solution: Solution):
+    """(names, values): t and every results column at the interval boundaries."""
+    setup = _setup(model, problem)
+    return ["t", *setup.names], np.column_stack(
+        [solution.times, columns_at(model, problem, solution, setup.names)])

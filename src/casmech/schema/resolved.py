@@ -118,6 +118,41 @@ class Analysis:
 
 
 @dataclass(frozen=True)
+class Estimation:
+    """The `estimate:` block: parameters to fit (starting from their values), measurements."""
+
+    parameters: tuple[str, ...]
+    data: str  # path of the CSV, relative to the model file's folder
+    outputs: tuple[str, ...] | None
+    weights: Mapping[str, float]
+    bounds: Mapping[str, tuple[float, float]]
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class ControlInput:
+    joint: str
+    type: str  # torque | force
+    lower: float
+    upper: float
+
+
+@dataclass(frozen=True)
+class OptimalControl:
+    """The `ocp:` block (columns are results-table column names)."""
+
+    horizon: float
+    intervals: int
+    transcription: str
+    controls: tuple[ControlInput, ...]
+    effort: float
+    terminal_cost: Mapping[str, tuple[float, float]]  # column -> (weight, target)
+    terminal: Mapping[str, float]
+    path: Mapping[str, tuple[float, float]]
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
 class ResolvedModel:
     name: str
     description: str
@@ -129,3 +164,5 @@ class ResolvedModel:
     joints: tuple[Joint, ...]
     forces: tuple[Force, ...]
     analysis: Analysis
+    estimate: Estimation | None = None
+    ocp: OptimalControl | None = None

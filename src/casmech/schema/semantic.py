@@ -6,6 +6,7 @@ in `connections`) and returns them with the model, which is None if anything is 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from casmech.errors import Diagnostic
@@ -44,6 +45,68 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
     )
 
 
+def _pairs(check: Checker, path: Path, given) -> dict[str, tuple[float, float]] | None:
+    """{name: (low, high)} with low <= high (E409)."""
+    pairs = {name: check.numbers((*path, name), pair) for name, pair in given.items()}
+    for name, pair in pairs.items():
+        if pair is not None and pair[0] > pair[1]:
+            check.error("E409", (*path, name), "bounds must be [low, high] with low <= high",
+                        got=f"[{pair[0]:g}, {pair[1]:g}]")
+            pairs[name] = None
+    return None if failed(pairs.values()) else {k: (float(a), float(b))
+                                                 for k, (a, b) in pairs.items()}
+
+
+def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimation | None:
+    path: Path = ("estimate",)
+    names = [check.reference((*path, "parameters", k), name, check.parameters, "parameter")
+             for k, name in enumerate(given.parameters)]
+    names += [check.reference((*path, "bounds", name), name, given.parameters,
+                              "estimated parameter") for name in given.bounds]
+    weights = {name: check.number((*path, "weights", name), w) for name, w in given.weights.items()}
+    bounds = _pairs(check, (*path, "bounds"), given.bounds)
+    if not all(names) or failed([*weights.values(), bounds]):
+        return None
+    return resolved.Estimation(tuple(given.parameters), given.data, given.outputs, weights, bounds,
+                               check.doc.source_map.values.get(path))
+
+
+def _control(check: Checker, path: Path, given: spec.Control) -> resolved.ControlInput | None:
+    known = check.reference((*path, "joint"), given.joint, check.joint_types, "joint")
+    free = (-math.inf, math.inf)
+    bounds = _pairs(check, path, {"bounds": given.bounds}) if given.bounds else {"bounds": free}
+    if not known or bounds is None:
+        return None
+    return resolved.ControlInput(given.joint, given.type, *bounds["bounds"])
+
+
+def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.OptimalControl | None:
+    path: Path = ("ocp",)
+    horizon = check.number((*path, "horizon"), given.horizon)
+    if horizon is not None and horizon <= 0:
+        check.error("E409", (*path, "horizon"), "horizon must be positive", got=f"{horizon:g}")
+        horizon = None
+    if given.intervals < 1:
+        check.error("E409", (*path, "intervals"), "intervals must be at least 1",
+                    got=str(given.intervals))
+    controls = [_control(check, (*path, "controls", k), c) for k, c in enumerate(given.controls)]
+    objective = (*path, "objective")
+    effort = check.number((*objective, "effort"), given.objective.effort)
+    costs = {name: (check.number((*objective, "terminal", name, "weight"), cost.weight),
+                    check.number((*objective, "terminal", name, "target"), cost.target))
+             for name, cost in given.objective.terminal.items()}
+    terminal = {name: check.number((*path, "terminal", name), value)
+                for name, value in given.terminal.items()}
+    bounds = _pairs(check, (*path, "path"), given.path)
+    values = [horizon, effort, bounds, *controls, *terminal.values(),
+              *(x for pair in costs.values() for x in pair)]
+    if failed(values) or given.intervals < 1:
+        return None
+    return resolved.OptimalControl(horizon, given.intervals, given.transcription, tuple(controls),
+                                   effort, costs, terminal, bounds,
+                                   check.doc.source_map.values.get(path))
+
+
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:
     check.parameter_values(given.parameters)
     check.unique_names(given)
@@ -55,6 +118,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     joints = [joint(check, index, item) for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     settings = analysis(check, given.analysis)
+    estimate = estimation(check, given.estimate) if given.estimate is not None else None
+    ocp = optimal_control(check, given.ocp) if given.ocp is not None else None
     if check.found:
         return None
     parameters = dict(check.parameters)
@@ -69,6 +134,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
         tuple(joints),
         tuple(forces),
         settings,
+        estimate,
+        ocp,
     )
 
 

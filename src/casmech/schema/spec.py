@@ -326,6 +326,48 @@ class Analysis(Spec):
     formulation: Literal["rp", "romega"] = "rp"
 
 
+# ------------------------------------------------------- estimation and optimal control (issue 7)
+Pair = Annotated[tuple[Scalar, ...], Field(min_length=2, max_length=2)]
+
+
+class Estimate(Spec):
+    """Fit parameters to measurements: `casmech optimize` (see casmech.optimal.estimate)."""
+
+    parameters: Annotated[tuple[Name, ...], Field(min_length=1)]
+    data: StrictStr  # CSV with a `t` column and measured results columns (path from the model)
+    outputs: tuple[StrictStr, ...] | None = None  # default: every column of data but t
+    weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> weight (1)
+    bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # parameter -> [low, high]
+
+
+class Control(Spec):
+    joint: Name
+    type: Literal["torque", "force"] = "torque"
+    bounds: Pair | None = None
+
+
+class TerminalCost(Spec):
+    weight: Scalar
+    target: Scalar = 0
+
+
+class Objective(Spec):
+    effort: Scalar = 1  # weight of the integral of u^T u
+    terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
+
+
+class OptimalControl(Spec):
+    """An optimal control problem on the model: `casmech optimize` (casmech.optimal.ocp)."""
+
+    horizon: Scalar
+    intervals: StrictInt = 30
+    transcription: Literal["collocation", "shooting"] = "collocation"
+    controls: Annotated[tuple[Control, ...], Field(min_length=1)]
+    objective: Objective = Field(default_factory=Objective)
+    terminal: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at the end
+    path: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [low, high] at nodes
+
+
 class ModelSpec(Spec):
     """A whole model file."""
 
@@ -338,6 +380,8 @@ class ModelSpec(Spec):
     joints: tuple[Joint, ...] = ()
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
+    estimate: Estimate | None = None
+    ocp: OptimalControl | None = None
 
     model_config = ConfigDict(
         extra="forbid",
