@@ -14,7 +14,8 @@ import casadi as ca
 import casmech
 from casmech.codegen import cache, generate, manifest
 from casmech.codegen.build import LIBRARY, Toolchain, available, build_library
-from casmech.codegen.load import load, mode_of
+from casmech.codegen.load import load as load_build
+from casmech.codegen.load import mode_of
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.schema.resolved import ResolvedModel
@@ -53,7 +54,7 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     """The model's SystemFunctions loaded from a compiled library, built only when the cache
     holds none for this model content, casmech/CasADi version, compiler and flags."""
     directory, _ = _cached(model, toolchain or Toolchain(), root)
-    return load(directory, lower(model))
+    return load_build(directory, lower(model))
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
