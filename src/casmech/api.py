@@ -51,7 +51,16 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
                       "functions, which is slower; install gcc to compile models", stacklevel=2)
         mode = "interpreted"
-    return build_functions(lower(model)) if mode == "interpreted" else codegen.compiled(model)
+    if mode == "interpreted":
+        return build_functions(lower(model))
+    try:
+        return codegen.compiled(model)
+    except AnalysisError as error:  # the C compiler failed on the generated code
+        if mode == "compiled":
+            raise
+        warnings.warn(f"{str(error).splitlines()[0]}; casmech runs interpreted CasADi "
+                      "functions instead", stacklevel=2)
+        return build_functions(lower(model))
 
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the

@@ -9,7 +9,7 @@ import pytest
 import casmech
 from casmech import codegen
 from casmech.cli import main
-from casmech.errors import UsageError
+from casmech.errors import AnalysisError, UsageError
 
 from .conftest import MODEL
 
@@ -57,3 +57,26 @@ def test_compile_command_writes_sources_header_manifest_library(tmp_path, compil
 def test_bad_jobs_is_a_usage_error(tmp_path, capsys):
     assert main(["compile", str(MODEL), "-o", str(tmp_path), "--jobs", "0"]) == 2
     assert "--jobs must be at least 1" in capsys.readouterr().err
+
+
+@pytest.fixture
+def failing_compiler(tmp_path, monkeypatch):
+    """A 'compiler' that reports a version but fails every compilation."""
+    script = tmp_path / "brokencc"
+    script.write_text('#!/bin/sh\nif [ "$1" = --version ]; then echo brokencc 1.0; exit 0; fi\n'
+                      'echo "brokencc: internal error" >&2; exit 1\n')
+    script.chmod(0o755)
+    monkeypatch.setenv("CC", str(script))
+
+
+def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_path,
+                                                 monkeypatch):
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        functions = casmech.compile(model, "auto")
+    assert len(caught) == 1 and "the C compiler failed" in str(caught[0].message)
+    assert codegen.mode_of(functions) == "interpreted"
+    with pytest.raises(AnalysisError, match="brokencc: internal error"):
+        casmech.compile(model, "compiled")
+    assert codegen.cache.entries(tmp_path / "cache") == []  # nothing half-built published
