@@ -96,31 +96,34 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
                   problem.horizon / problem.intervals)
 
 
-def _columns(setup: _Setup, t, x, u):
-    """Every results column (without t) at a state; the DAE's p is [theta (empty), u]."""
-    return setup.columns(t, x, setup.algebraic(t, x, u), ca.DM.zeros(0))
+def _columns(setup: _Setup, t, x, u, z=None):
+    """Every results column (without t) at a state; z (accelerations, multipliers) is solved
+    for when not given. The DAE's p is [theta (empty), u]."""
+    z = setup.algebraic(t, x, u) if z is None else z
+    return setup.columns(t, x, z, ca.DM.zeros(0))
 
 
-def _column(setup: _Setup, name: str, t, x, u):
-    return _columns(setup, t, x, u)[setup.names.index(name)]
+def _column(setup: _Setup, name: str, t, x, u, z=None):
+    return _columns(setup, t, x, u, z)[setup.names.index(name)]
 
 
-def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, u_all):
+def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, z_end, u_all):
     cost = problem.effort * setup.step * ca.sumsqr(u_all)
     t_end = setup.dae.t0 + problem.horizon
     for name, (weight, target) in problem.terminal_cost.items():
-        cost += weight * (_column(setup, name, t_end, x_end, u_last) - target) ** 2
+        cost += weight * (_column(setup, name, t_end, x_end, u_last, z_end) - target) ** 2
     for name, target in problem.terminal.items():
-        opti.subject_to(_column(setup, name, t_end, x_end, u_last) == target)
+        opti.subject_to(_column(setup, name, t_end, x_end, u_last, z_end) == target)
     return cost
 
 
-def _path(opti, setup: _Setup, problem: OCP, x, u):
-    """Bounds on results columns at every interval boundary after the first."""
+def _path(opti, setup: _Setup, problem: OCP, x, u, z):
+    """Bounds on results columns at every interval boundary after the first (z[k - 1]: the
+    algebraic states there, with the control of the interval that ends there)."""
     for name, (low, high) in problem.path.items():
         for k in range(1, problem.intervals + 1):
             t = setup.dae.t0 + k * setup.step
-            value = _column(setup, name, t, x[:, k], u[:, min(k, problem.intervals - 1)])
+            value = _column(setup, name, t, x[:, k], u[:, k - 1], z[k - 1])
             opti.subject_to(opti.bounded(low, value, high))
 
 
@@ -157,6 +160,7 @@ def _collocation(opti, setup: _Setup, problem: OCP, u, guess):
     x = opti.variable(n_x, problem.intervals + 1)
     opti.subject_to(x[:, 0] == setup.x0)
     opti.set_initial(x, guess.T)
+    ends = []
     for k in range(problem.intervals):
         xc = opti.variable(n_x, DEGREE)
         zc = opti.variable(n_z, DEGREE)
@@ -171,7 +175,8 @@ def _collocation(opti, setup: _Setup, problem: OCP, u, guess):
             opti.subject_to(slope == setup.step * ode)
             opti.subject_to(alg == 0)
         opti.subject_to(x[:, k + 1] == xc[:, DEGREE - 1])  # Radau: last point is the end
-    return x
+        ends.append(zc[:, DEGREE - 1])
+    return x, ends
 
 
 def _lagrange(tau: np.ndarray) -> np.ndarray:
@@ -198,7 +203,9 @@ def _shooting(opti, setup: _Setup, problem: OCP, u, guess):
                           name=f"F{k}")
         z0 = setup.algebraic(t0, guess[k], np.zeros(u.shape[0])).full().ravel()
         opti.subject_to(x[:, k + 1] == integrator(x0=x[:, k], z0=z0, p=u[:, k])["xf"])
-    return x
+    ends = [setup.algebraic(dae.t0 + (k + 1) * setup.step, x[:, k + 1], u[:, k])
+            for k in range(problem.intervals)]
+    return x, ends
 
 
 BUILDERS = {"collocation": _collocation, "shooting": _shooting}
@@ -218,14 +225,16 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     u = opti.variable(len(problem.controls), problem.intervals)
     u_guess = np.tile(default_guess(problem), (problem.intervals, 1)) if start is None else start.u
     opti.set_initial(u, u_guess.T)
-    x = BUILDERS[transcription](opti, setup, problem, u, guess)
+    x, z = BUILDERS[transcription](opti, setup, problem, u, guess)
     _bounds(opti, problem, u)
-    _path(opti, setup, problem, x, u)
-    opti.minimize(_objective_and_terminal(opti, setup, problem, x[:, -1], u[:, -1], u))
+    _path(opti, setup, problem, x, u, z)
+    opti.minimize(_objective_and_terminal(opti, setup, problem, x[:, -1], u[:, -1], z[-1], u))
     options = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10}
     if transcription == "shooting":
         options["ipopt.hessian_approximation"] = "limited-memory"
+    else:
+        options["expand"] = True  # SX graphs: far faster exact Hessians for IPOPT
     opti.solver("ipopt", options)
     try:
         result = opti.solve()
