@@ -58,7 +58,8 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float) -> dict:
         c_bytes = sum(s.stat().st_size for s in sources)
         build.build_library(sources, Path(directory), chain)
         lap("gcc")
-        manifest.write(Path(directory), symbolic.functions, generate.DIFFERENTIATED, {})
+        manifest.write(Path(directory), symbolic.functions,
+                       generate.differentiated(symbolic.functions), {})
         compiled = load.load(Path(directory), lower(model))
         lap("load_library")
         times["total"] = sum(times.values())

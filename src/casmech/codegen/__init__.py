@@ -24,12 +24,13 @@ __all__ = ["Toolchain", "available", "compiled", "mode_of", "write_build", "expo
 
 
 def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: Toolchain,
-                info: dict) -> Path:
+                info: dict, dae: bool = False) -> Path:
     """Generate the sources and header, build the library and write the manifest (last, so a
-    directory with a manifest is complete)."""
+    directory with a manifest is complete); `dae`: the DAE residuals dae_<formulation> too."""
+    functions = {**functions, **(generate.dae_functions(functions) if dae else {})}
     sources = generate.write_sources(functions, directory, toolchain.jobs)
     build_library(sources, directory, toolchain)
-    return manifest.write(directory, functions, generate.DIFFERENTIATED, {
+    return manifest.write(directory, functions, generate.differentiated(functions), {
         **info, "casmech": casmech.__version__, "casmech_sources": cache.source_digest(),
         "casadi": ca.__version__, "compiler": toolchain.compiler,
         "compiler_version": toolchain.version(), "flags": list(toolchain.all_flags),
@@ -37,14 +38,13 @@ def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: T
 
 
 def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
-            symbolic: SystemFunctions | None = None) -> tuple[Path, bool]:
+            dae: bool = False) -> tuple[Path, bool]:
     model_hash = cache.model_digest(model.text, model.parameters)
-    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags)
+    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
 
     def build(directory: Path) -> None:
-        functions = (symbolic or build_functions(lower(model))).functions
-        write_build(functions, directory, toolchain,
-                    {"model": model.name, "model_hash": model_hash, "key": entry})
+        write_build(build_functions(lower(model)).functions, directory, toolchain,
+                    {"model": model.name, "model_hash": model_hash, "key": entry}, dae)
 
     return cache.lookup(entry, build, root)
 
@@ -58,9 +58,10 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
-           root: Path | None = None) -> tuple[Path, bool]:
-    """Copy the model's build (through the cache) into `out`; (manifest path, cache hit)."""
-    directory, hit = _cached(model, toolchain or Toolchain(), root)
+           root: Path | None = None, dae: bool = True) -> tuple[Path, bool]:
+    """Copy the model's build (through the cache) into `out`, by default with the DAE
+    residuals and their Jacobians (what a C integrator needs); (manifest path, cache hit)."""
+    directory, hit = _cached(model, toolchain or Toolchain(), root, dae)
     out.mkdir(parents=True, exist_ok=True)
     shutil.copytree(directory, out, dirs_exist_ok=True)
     return out / manifest.MANIFEST, hit

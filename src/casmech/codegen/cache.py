@@ -52,10 +52,10 @@ def model_digest(text: str, parameters) -> str:
     return hashlib.sha256(content.encode()).hexdigest()
 
 
-def key(model_hash: str, compiler: str, flags) -> str:
+def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:
     content = json.dumps({"format": FORMAT, "model": model_hash, "casmech": casmech.__version__,
                           "sources": source_digest(), "casadi": ca.__version__,
-                          "compiler": compiler, "flags": list(flags)})
+                          "compiler": compiler, "flags": list(flags), "dae": dae})
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 

@@ -12,6 +12,9 @@ from pathlib import Path
 
 import casadi as ca
 
+from casmech.compiler import dae
+from casmech.compiler.formulations import FORMULATIONS
+
 # Functions whose Jacobian is generated as well: everything IDAS integrates through (the
 # equations of motion of both formulations and the constraints), and nothing it does not.
 DIFFERENTIATED = frozenset({
@@ -22,9 +25,21 @@ DIFFERENTIATED = frozenset({
 HEADER = "casmech_model.h"
 
 
+def dae_functions(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """dae_<formulation>: the index-1 DAE residual IDAS integrates (compiler.dae), one SX
+    Function per formulation, built from the interpreted bundle."""
+    return {f"dae_{name}": dae.residual(functions, name) for name in FORMULATIONS}
+
+
+def differentiated(functions: dict[str, ca.Function]) -> set[str]:
+    """The functions generated with their Jacobian."""
+    return {name for name in functions if name in DIFFERENTIATED or name.startswith("dae_")}
+
+
 def units(functions: dict[str, ca.Function]) -> dict[str, list[ca.Function]]:
     """Function name -> the functions generated for it (itself, and its Jacobian)."""
-    return {name: [f, f.jacobian()] if name in DIFFERENTIATED else [f]
+    jacobians = differentiated(functions)
+    return {name: [f, f.jacobian()] if name in jacobians else [f]
             for name, f in functions.items()}
 
 

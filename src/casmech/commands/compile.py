@@ -21,6 +21,9 @@ def add_arguments(parser) -> None:
                              "$CASMECH_CFLAGS, else "
                              f"{' '.join(codegen.build.DEFAULT_FLAGS)}; -std=c99 -fPIC always)")
     parser.add_argument("--jobs", type=int, help="parallel compiler processes (default: cores)")
+    parser.add_argument("--no-dae", action="store_true",
+                        help="leave out the DAE residuals dae_rp, dae_romega and their "
+                             "Jacobians (about half of the code)")
     add_overrides(parser)
 
 
@@ -36,7 +39,8 @@ def toolchain(flags: str | None, jobs: int | None) -> codegen.Toolchain:
 def run(args) -> int:
     model = casmech.load(args.model, overrides(args.set))
     start = time.perf_counter()
-    path, hit = codegen.export(model, args.out, toolchain(args.flags, args.jobs))
+    path, hit = codegen.export(model, args.out, toolchain(args.flags, args.jobs),
+                               dae=not args.no_dae)
     how = "from the cache" if hit else f"built in {time.perf_counter() - start:.3g} s"
     print(f"{args.model}: {path.parent / codegen.build.LIBRARY} ({how}); manifest {path}")
     return 0
