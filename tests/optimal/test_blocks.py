@@ -1,0 +1,92 @@
+"""The estimate: and ocp: model blocks (schema) and the two commands that read them."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.cli import main
+from casmech.errors import ModelError
+from casmech.optimal.ocp import from_block
+from casmech.optimal.sensitivity import simulate
+from casmech.output.csv import read_csv
+
+MODELS = Path(__file__).parents[2] / "models"
+SWING = (MODELS / "ocp_pendulum_swing_up.yaml").read_text()
+BASE = SWING[:SWING.index("\nocp:")]
+
+
+def codes(text: str) -> list[tuple[str, int]]:
+    with pytest.raises(ModelError) as error:
+        casmech.loads(text)
+    return [(d.code, d.source.line if d.source else 0) for d in error.value.diagnostics]
+
+
+def line_of(text: str, fragment: str) -> int:
+    return text[:text.index(fragment)].count("\n") + 1
+
+
+def test_blocks_resolve_to_numbers():
+    model = casmech.load(MODELS / "ocp_pendulum_swing_up.yaml")
+    problem, transcription = from_block(model.ocp)
+    assert transcription == "collocation" and problem.intervals == 20
+    assert (problem.controls[0].joint, problem.controls[0].lower) == ("pivot", -4.0)
+    assert dict(problem.terminal) == {"bar.e0": 0.0, "bar.wx": 0.0}
+    assert casmech.load(MODELS / "estimate_pendulum.yaml").estimate.parameters == ("m", "c")
+    assert casmech.load(MODELS / "me751_pendulum.yaml").ocp is None  # optional blocks
+
+
+def test_block_errors_point_at_their_lines():
+    text = BASE + """
+estimate:
+  parameters: [m, mass]
+  data: x.csv
+  bounds: {m: [2, 1]}
+ocp:
+  horizon: -1
+  controls: [{joint: pivt, bounds: [-1, 1]}]
+"""
+    found = codes(text)
+    assert ("E300", line_of(text, "parameters: [m, mass]")) in found  # unknown parameter
+    assert ("E409", line_of(text, "bounds: {m: [2, 1]}")) in found  # low > high
+    assert ("E409", line_of(text, "horizon: -1")) in found
+    assert ("E300", line_of(text, "controls: [{joint: pivt")) in found  # unknown joint
+
+
+def test_optimize_command_writes_a_replayable_optimum(tmp_path, capsys):
+    model = tmp_path / "swing.yaml"
+    model.write_text(BASE + """
+ocp:
+  horizon: 1.0
+  intervals: 8
+  controls: [{joint: pivot, bounds: [-8, 8]}]
+  terminal: {bar.e0: 0.8, bar.wx: 0}
+""")
+    assert main(["optimize", str(model), "--out", str(tmp_path / "out")]) == 0
+    names, table = read_csv(tmp_path / "out" / "results.csv")
+    # terminal equalities hold to IPOPT's constraint tolerance
+    np.testing.assert_allclose(table[-1, [names.index("bar.e0"), names.index("bar.wx")]],
+                               [0.8, 0.0], rtol=0, atol=1e-7)
+    _, controls = read_csv(tmp_path / "out" / "controls.csv")
+    assert controls.shape == (8, 2) and np.all(np.abs(controls[:, 1]) <= 8 + 1e-8)
+    assert "replay through IDAS: max position error" in capsys.readouterr().out
+
+
+def test_sensitivity_command(tmp_path, capsys):
+    model = str(MODELS / "estimate_pendulum.yaml")
+    args = ["sensitivity", model, "--parameter", "m", "--output", "bar.y", "--output",
+            "energy", "--at", "0.5", "--csv", str(tmp_path / "s.csv")]
+    assert main(args) == 0
+    names, table = read_csv(tmp_path / "s.csv")
+    assert names == ["output_index", "t", "value", "d/dm"] and table.shape == (2, 4)
+    # the printed derivatives against central differences of re-loaded models (h = 1e-3 m)
+    ends = [simulate(casmech.load(model, {"m": repr(1.5 + h)}), ["bar.y", "energy"], [0.5],
+                     rtol=1e-12, atol=1e-14)[0] for h in (1.5e-3, -1.5e-3)]
+    # relative 1e-5 as in test_sensitivity (measured ~1e-7 here)
+    np.testing.assert_allclose(table[:, 3], (ends[0] - ends[1]) / 3e-3, rtol=1e-5, atol=1e-9)
+    assert main(["sensitivity", model, "--parameter", "L", "--output", "bar.y",
+                 "--at", "1"]) == 2
+    assert "moves the model's geometry" in capsys.readouterr().err
+    assert main(["sensitivity", model, "--parameter", "m", "--output", "bar.y",
+                 "--at", "0"]) == 2
