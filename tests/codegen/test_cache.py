@@ -75,7 +75,7 @@ print(repr(f.vector("phi", 0.2, [0.1 * k for k in range(14)]).tolist()))
 """
 
 
-def test_two_processes_building_one_model(tmp_path, interpreted):
+def test_two_processes_building_one_model(tmp_path, interpreted, toolchain):
     """Started together on a cache holding only the debris of a killed build: both load a
     working library, one entry is published, no temporary directory of theirs is left, and
     the debris (maybe another live build's) is left alone."""
