@@ -55,7 +55,7 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
         return build_functions(lower(model))
     try:
         return codegen.compiled(model)
-    except AnalysisError as error:  # the C compiler failed on the generated code
+    except (AnalysisError, UsageError) as error:  # the compiler failed; no writable cache
         if mode == "compiled":
             raise
         warnings.warn(f"{str(error).splitlines()[0]}; casmech runs interpreted CasADi "

@@ -80,3 +80,25 @@ def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_pa
     with pytest.raises(AnalysisError, match="brokencc: internal error"):
         casmech.compile(model, "compiled")
     assert codegen.cache.entries(tmp_path / "cache") == []  # nothing half-built published
+
+
+def test_unwritable_cache(model, tmp_path, monkeypatch, capsys):
+    """A cache path that cannot be a directory: compiled is a usage error naming the variable,
+    auto warns and interprets."""
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(blocker / "cache"))
+    with pytest.raises(UsageError, match="CASMECH_CACHE_DIR"):
+        casmech.compile(model, "compiled")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        functions = casmech.compile(model, "auto")
+    assert len(caught) == 1 and "not writable" in str(caught[0].message)
+    assert codegen.mode_of(functions) == "interpreted"
+
+
+def test_output_path_that_is_a_file(tmp_path, capsys):
+    target = tmp_path / "taken"
+    target.write_text("")
+    assert main(["compile", str(MODEL), "-o", str(target)]) == 2
+    assert "-o expects a directory" in capsys.readouterr().err

@@ -18,6 +18,7 @@ from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
+from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 
 __all__ = ["Toolchain", "available", "compiled", "mode_of", "write_build", "export"]
@@ -61,6 +62,8 @@ def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
            root: Path | None = None, dae: bool = True) -> tuple[Path, bool]:
     """Copy the model's build (through the cache) into `out`, by default with the DAE
     residuals and their Jacobians (what a C integrator needs); (manifest path, cache hit)."""
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{out} is a file; -o expects a directory (created if missing)")
     directory, hit = _cached(model, toolchain or Toolchain(), root, dae)
     out.mkdir(parents=True, exist_ok=True)
     shutil.copytree(directory, out, dirs_exist_ok=True)

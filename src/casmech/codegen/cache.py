@@ -24,6 +24,7 @@ import casadi as ca
 
 import casmech
 from casmech.codegen.manifest import FORMAT, MANIFEST
+from casmech.errors import UsageError
 
 ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(casmech.__file__).parent
@@ -74,7 +75,13 @@ def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = No
     """The cache directory of a key, building it with build(temporary_dir) when missing;
     returns (directory, hit)."""
     root = root or cache_dir()
-    root.mkdir(parents=True, exist_ok=True)
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        probe = tempfile.TemporaryFile(dir=root)
+        probe.close()
+    except OSError as error:
+        raise UsageError(f"the compiled-model cache {root} is not writable ({error.strerror}); "
+                         f"set {ENVIRONMENT} to a writable directory") from None
     final = root / entry_key
     if (final / MANIFEST).is_file():
         return final, True
