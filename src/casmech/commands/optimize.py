@@ -38,7 +38,11 @@ def _optimal_control(model, args, out: Path) -> None:
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
     transcription = args.transcription or transcription
     start = time.perf_counter()
-    solution = ocp.solve(model, problem, transcription, verbose=args.verbose)
+    guess = None
+    if transcription == "shooting":  # IDAS fails on the wild states of a poor first guess
+        guess = ocp.solve(model, problem, "collocation", verbose=args.verbose)
+        print(f"initial guess: the collocation solution (objective {guess.objective:.10g})")
+    solution = ocp.solve(model, problem, transcription, verbose=args.verbose, start=guess)
     replayed = ocp.replay(model, problem, solution)
     n = replayed.shape[1] // 2
     error = float(np.max(np.abs(replayed[:, :n] - solution.x[:, :n])))
