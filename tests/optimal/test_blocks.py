@@ -90,3 +90,18 @@ def test_sensitivity_command(tmp_path, capsys):
     assert "moves the model's geometry" in capsys.readouterr().err
     assert main(["sensitivity", model, "--parameter", "m", "--output", "bar.y",
                  "--at", "0"]) == 2
+
+
+def test_free_final_time_block():
+    text = BASE + """
+ocp:
+  horizon: 2
+  free_time: [0.5, 3]
+  objective: {effort: 0.1, time: 1}
+  controls: [{joint: pivot}]
+"""
+    problem, _ = from_block(casmech.loads(text).ocp)
+    assert problem.free_time == (0.5, 3.0) and problem.time_weight == 1.0
+    assert problem.controls[0].lower == -np.inf  # no bounds written: unbounded
+    bad = text.replace("free_time: [0.5, 3]", "free_time: [0, 3]")
+    assert ("E409", line_of(bad, "free_time: [0, 3]")) in codes(bad)

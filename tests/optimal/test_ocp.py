@@ -39,3 +39,32 @@ def test_controls_need_a_matching_joint():
     model = casmech.load(MODEL)
     with pytest.raises(UsageError, match="needs a joint of type translational"):
         solve(model, OCP([Control("pivot", "force")], horizon=1.0, intervals=2))
+
+
+SLIDER = """
+casmech: 1
+name: slider
+bodies:
+  - {name: cart, mass: 1.0, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}
+joints:
+  - {name: track, type: translational, body_i: ground, body_j: cart, at: [0, 0, 0],
+     axis: [0, 1, 0]}
+"""
+
+
+def test_minimum_time_rest_to_rest_matches_the_bang_bang_closed_form():
+    """Rest to rest over D = 1 m with |F| <= 2 N on m = 1 kg: T* = 2 sqrt(D m / F) (accelerate
+    for half the time, brake for the other half; exact with an even number of intervals)."""
+    model = casmech.loads(SLIDER)
+    problem = OCP([Control("track", "force", -2.0, 2.0)], horizon=2.0, intervals=4, effort=0.0,
+                  terminal={"cart.y": 1.0, "cart.vy": 0.0}, free_time=(0.5, 5.0),
+                  time_weight=1.0)
+    collocation = solve(model, problem, "collocation")
+    shooting = solve(model, problem, "shooting", start=collocation)
+    for solution in (collocation, shooting):
+        # bang-bang is exact on this grid: T to IPOPT's tolerance (measured ~1e-9)
+        np.testing.assert_allclose(solution.times[-1], 2 * np.sqrt(0.5), rtol=1e-6, atol=0)
+        np.testing.assert_allclose(solution.u.ravel(), [2, 2, -2, -2], rtol=0, atol=1e-5)
+        replayed = replay(model, problem, solution)
+        # a polynomial motion: collocation and IDAS both reproduce it (measured ~1e-10)
+        np.testing.assert_allclose(replayed[:, :7], solution.x[:, :7], rtol=0, atol=1e-6)

@@ -51,6 +51,8 @@ class OCP:
     rtol: float = 1e-10
     atol: float = 1e-12
     guess: Sequence[float] | None = None  # constant controls of the initial simulation
+    free_time: tuple[float, float] | None = None  # bounds of a free final time (horizon: guess)
+    time_weight: float = 0.0  # objective term time_weight * (final time - t0)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -70,6 +72,10 @@ class Solution:
     objective: float
     status: str
     iterations: int
+
+    @property
+    def step(self) -> float:
+        return float(self.times[1] - self.times[0])
 
 
 @dataclass(frozen=True)
@@ -107,9 +113,11 @@ def _column(setup: _Setup, name: str, t, x, u, z=None):
     return _columns(setup, t, x, u, z)[setup.names.index(name)]
 
 
-def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, z_end, u_all):
-    cost = problem.effort * setup.step * ca.sumsqr(u_all)
-    t_end = setup.dae.t0 + problem.horizon
+def _objective_and_terminal(opti, setup: _Setup, problem: OCP, step, x_end, u_last, z_end,
+                            u_all):
+    horizon = step * problem.intervals
+    cost = problem.effort * step * ca.sumsqr(u_all) + problem.time_weight * horizon
+    t_end = setup.dae.t0 + horizon
     for name, (weight, target) in problem.terminal_cost.items():
         cost += weight * (_column(setup, name, t_end, x_end, u_last, z_end) - target) ** 2
     for name, target in problem.terminal.items():
@@ -117,12 +125,12 @@ def _objective_and_terminal(opti, setup: _Setup, problem: OCP, x_end, u_last, z_
     return cost
 
 
-def _path(opti, setup: _Setup, problem: OCP, x, u, z):
+def _path(opti, setup: _Setup, problem: OCP, step, x, u, z):
     """Bounds on results columns at every interval boundary after the first (z[k - 1]: the
     algebraic states there, with the control of the interval that ends there)."""
     for name, (low, high) in problem.path.items():
         for k in range(1, problem.intervals + 1):
-            t = setup.dae.t0 + k * setup.step
+            t = setup.dae.t0 + k * step
             value = _column(setup, name, t, x[:, k], u[:, k - 1], z[k - 1])
             opti.subject_to(opti.bounded(low, value, high))
 
@@ -140,18 +148,18 @@ def _guess(setup: _Setup, problem: OCP) -> np.ndarray:
     return replay_states(setup, problem, np.tile(default_guess(problem), (problem.intervals, 1)))
 
 
-def replay_states(setup: _Setup, problem: OCP, u: np.ndarray) -> np.ndarray:
+def replay_states(setup: _Setup, problem: OCP, u: np.ndarray, step: float | None = None):
     """IDAS through every interval with its constant control (rtol/atol of the problem)."""
-    dae, xs = setup.dae, [setup.x0]
+    dae, xs, step = setup.dae, [setup.x0], setup.step if step is None else step
     for k in range(problem.intervals):
-        t0 = dae.t0 + k * setup.step
-        integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0)
+        t0 = dae.t0 + k * step
+        integrator = idas(dae, [t0 + step], problem.rtol, problem.atol, t0=t0)
         z0 = setup.algebraic(t0, xs[-1], u[k]).full().ravel()
         xs.append(integrator(x0=xs[-1], z0=z0, p=u[k])["xf"].full().ravel())
     return np.array(xs)
 
 
-def _collocation(opti, setup: _Setup, problem: OCP, u, guess):
+def _collocation(opti, setup: _Setup, problem: OCP, step, u, guess):
     dae = setup.dae
     n_x, n_z = dae.x.numel(), dae.z.numel()
     tau = np.append(0, ca.collocation_points(DEGREE, "radau"))
@@ -170,9 +178,9 @@ def _collocation(opti, setup: _Setup, problem: OCP, u, guess):
         points = ca.horzcat(x[:, k], xc)
         for j in range(1, DEGREE + 1):
             slope = points @ ca.DM(coefficients[:, j])
-            t = dae.t0 + (k + tau[j]) * setup.step
+            t = dae.t0 + (k + tau[j]) * step
             ode, alg = f(t, points[:, j], zc[:, j - 1], u[:, k])
-            opti.subject_to(slope == setup.step * ode)
+            opti.subject_to(slope == step * ode)
             opti.subject_to(alg == 0)
         opti.subject_to(x[:, k + 1] == xc[:, DEGREE - 1])  # Radau: last point is the end
         ends.append(zc[:, DEGREE - 1])
@@ -192,20 +200,51 @@ def _lagrange(tau: np.ndarray) -> np.ndarray:
     return matrix
 
 
-def _shooting(opti, setup: _Setup, problem: OCP, u, guess):
+def _scaled_integrator(dae: DAE, k: int, problem: OCP, name: str) -> ca.Function:
+    """IDAS over interval k in scaled time s in [0, 1] (t = t0 + (k + s) h, h a parameter):
+    p = [theta, u, h]. Used when the final time is free."""
+    s, h = ca.SX.sym("s"), ca.SX.sym("h")
+    t = dae.t0 + (k + s) * h
+    ode, alg = (ca.substitute(e, dae.t, t) for e in (dae.ode, dae.alg))
+    problem_dae = {"t": s, "x": dae.x, "z": dae.z, "p": ca.vertcat(dae.p, h), "ode": h * ode,
+                   "alg": alg}
+    options = {"abstol": problem.atol, "reltol": problem.rtol, "calc_ic": True,
+               "max_num_steps": 100000}
+    return ca.integrator(name, "idas", problem_dae, 0.0, [1.0], options)
+
+
+def _shooting(opti, setup: _Setup, problem: OCP, step, u, guess):
     dae = setup.dae
     x = opti.variable(dae.x.numel(), problem.intervals + 1)
     opti.subject_to(x[:, 0] == setup.x0)
     opti.set_initial(x, guess.T)
     for k in range(problem.intervals):
         t0 = dae.t0 + k * setup.step
-        integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0,
-                          name=f"F{k}")
         z0 = setup.algebraic(t0, guess[k], np.zeros(u.shape[0])).full().ravel()
-        opti.subject_to(x[:, k + 1] == integrator(x0=x[:, k], z0=z0, p=u[:, k])["xf"])
-    ends = [setup.algebraic(dae.t0 + (k + 1) * setup.step, x[:, k + 1], u[:, k])
+        if problem.free_time is None:
+            integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0,
+                              name=f"F{k}")
+            end = integrator(x0=x[:, k], z0=z0, p=u[:, k])["xf"]
+        else:
+            integrator = _scaled_integrator(dae, k, problem, f"F{k}")
+            end = integrator(x0=x[:, k], z0=z0, p=ca.vertcat(u[:, k], step))["xf"]
+        opti.subject_to(x[:, k + 1] == end)
+    ends = [setup.algebraic(dae.t0 + (k + 1) * step, x[:, k + 1], u[:, k])
             for k in range(problem.intervals)]
     return x, ends
+
+
+def _step(opti, problem: OCP, guess: float):
+    """The interval length: a number, or a variable when the final time is free."""
+    if problem.free_time is None:
+        return problem.horizon / problem.intervals
+    low, high = problem.free_time
+    if not 0 < low <= high:
+        raise UsageError(f"free final time bounds must satisfy 0 < low <= high, got {low}, {high}")
+    step = opti.variable()
+    opti.subject_to(opti.bounded(low / problem.intervals, step, high / problem.intervals))
+    opti.set_initial(step, guess)
+    return step
 
 
 BUILDERS = {"collocation": _collocation, "shooting": _shooting}
@@ -225,10 +264,12 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     u = opti.variable(len(problem.controls), problem.intervals)
     u_guess = np.tile(default_guess(problem), (problem.intervals, 1)) if start is None else start.u
     opti.set_initial(u, u_guess.T)
-    x, z = BUILDERS[transcription](opti, setup, problem, u, guess)
+    step = _step(opti, problem, setup.step if start is None else start.step)
+    x, z = BUILDERS[transcription](opti, setup, problem, step, u, guess)
     _bounds(opti, problem, u)
-    _path(opti, setup, problem, x, u, z)
-    opti.minimize(_objective_and_terminal(opti, setup, problem, x[:, -1], u[:, -1], z[-1], u))
+    _path(opti, setup, problem, step, x, u, z)
+    opti.minimize(_objective_and_terminal(opti, setup, problem, step, x[:, -1], u[:, -1], z[-1],
+                                          u))
     options = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10}
     if transcription == "shooting":
@@ -243,7 +284,7 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
                                            f"({transcription}) was not solved: {error}"[:600],
                                            [])) from None
     stats = result.stats()
-    times = setup.dae.t0 + setup.step * np.arange(problem.intervals + 1)
+    times = setup.dae.t0 + float(result.value(step)) * np.arange(problem.intervals + 1)
     return Solution(transcription, times, np.atleast_2d(result.value(x)).T,
                     np.atleast_2d(result.value(u)).T.reshape(problem.intervals, -1),
                     float(result.value(opti.f)), str(stats.get("return_status")),
@@ -252,7 +293,7 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
 
 def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray:
     """States at the interval boundaries from IDAS driven by the solution's controls."""
-    return replay_states(_setup(model, problem), problem, solution.u)
+    return replay_states(_setup(model, problem), problem, solution.u, solution.step)
 
 
 def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
@@ -271,7 +312,8 @@ def from_block(block) -> tuple[OCP, str]:
     """The problem and transcription of a model's `ocp:` block (schema.resolved)."""
     controls = [Control(c.joint, c.type, c.lower, c.upper) for c in block.controls]
     return OCP(controls, block.horizon, block.intervals, block.effort, dict(block.terminal),
-               dict(block.terminal_cost), dict(block.path)), block.transcription
+               dict(block.terminal_cost), dict(block.path), free_time=block.free_time,
+               time_weight=block.time_weight), block.transcription
 
 
 def results_table(model: ResolvedModel, problem: OCP, solution: Solution):

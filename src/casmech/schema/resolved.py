@@ -150,6 +150,8 @@ class OptimalControl:
     terminal: Mapping[str, float]
     path: Mapping[str, tuple[float, float]]
     source: Source | None = None
+    free_time: tuple[float, float] | None = None
+    time_weight: float = 0.0
 
 
 @dataclass(frozen=True)

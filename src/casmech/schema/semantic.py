@@ -98,13 +98,19 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
     terminal = {name: check.number((*path, "terminal", name), value)
                 for name, value in given.terminal.items()}
     bounds = _pairs(check, (*path, "path"), given.path)
-    values = [horizon, effort, bounds, *controls, *terminal.values(),
+    time_weight = check.number((*objective, "time"), given.objective.time)
+    free = _pairs(check, path, {"free_time": given.free_time}) if given.free_time else {}
+    if free and free["free_time"][0] <= 0:
+        check.error("E409", (*path, "free_time"), "the final time's bounds must be positive")
+        free = None
+    values = [horizon, effort, bounds, time_weight, free, *controls, *terminal.values(),
               *(x for pair in costs.values() for x in pair)]
     if failed(values) or given.intervals < 1:
         return None
     return resolved.OptimalControl(horizon, given.intervals, given.transcription, tuple(controls),
                                    effort, costs, terminal, bounds,
-                                   check.doc.source_map.values.get(path))
+                                   check.doc.source_map.values.get(path),
+                                   free.get("free_time"), time_weight)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

@@ -353,6 +353,7 @@ class TerminalCost(Spec):
 
 class Objective(Spec):
     effort: Scalar = 1  # weight of the integral of u^T u
+    time: Scalar = 0  # weight of the final time (with free_time)
     terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
 
 
@@ -366,6 +367,7 @@ class OptimalControl(Spec):
     objective: Objective = Field(default_factory=Objective)
     terminal: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at the end
     path: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [low, high] at nodes
+    free_time: Pair | None = None  # [low, high] of a free final time; horizon is its guess
 
 
 class ModelSpec(Spec):
