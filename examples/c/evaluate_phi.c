@@ -2,7 +2,7 @@
  *
  *   casmech compile models/four_bar.yaml -o build
  *   gcc -std=c99 -Wall -Werror -Ibuild evaluate_phi.c -Lbuild -lcasmech_model \
- *       -Wl,-rpath,build -o evaluate_phi
+ *       -Wl,-rpath,'$ORIGIN/build' -o evaluate_phi
  *   ./evaluate_phi T Q1 Q2 ... QN       (N = 7 x bodies; no Q: the zero vector)
  *
  * Prints "phi I VALUE" per row and "phi_q I J VALUE" per structural nonzero (0-based), values
