@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 import subprocess
 from concurrent.futures import ThreadPoolExecutor
@@ -25,8 +26,8 @@ def default_flags() -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class Toolchain:
-    """A C compiler ($CC, default gcc) and the flags every unit is compiled with
-    ($CASMECH_CFLAGS, default DEFAULT_FLAGS; REQUIRED_FLAGS are always added)."""
+    """A C compiler ($CC, default gcc; a launcher may lead: "ccache gcc") and the flags every
+    unit is compiled with ($CASMECH_CFLAGS, default DEFAULT_FLAGS; REQUIRED_FLAGS always)."""
 
     compiler: str = field(default_factory=lambda: os.environ.get("CC", "gcc"))
     flags: tuple[str, ...] = field(default_factory=lambda: default_flags())
@@ -43,10 +44,11 @@ class Toolchain:
 @lru_cache(maxsize=8)
 def compiler_version(compiler: str) -> str:
     """First line of `compiler --version`, or "" when there is no such compiler."""
-    if shutil.which(compiler) is None:
+    command = shlex.split(compiler)
+    if not command or shutil.which(command[0]) is None:
         return ""
     try:
-        done = subprocess.run([compiler, "--version"], capture_output=True, text=True,
+        done = subprocess.run([*command, "--version"], capture_output=True, text=True,
                               timeout=30, check=False)
     except OSError:
         return ""
@@ -69,13 +71,12 @@ def build_library(sources: list[Path], directory: Path, toolchain: Toolchain) ->
     if not available(toolchain):
         raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or set CC, "
                          "or use mode='interpreted' (casmech run --mode interpreted)")
-    flags = list(toolchain.all_flags)
-    commands = [[toolchain.compiler, *flags, "-c", src.name, "-o", src.stem + ".o"]
-                for src in sources]
+    compiler, flags = shlex.split(toolchain.compiler), list(toolchain.all_flags)
+    commands = [[*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"] for src in sources]
     with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
         list(pool.map(lambda command: _run(command, directory), commands))
     objects = [src.stem + ".o" for src in sources]
-    _run([toolchain.compiler, *flags, "-shared", *objects, "-o", LIBRARY, "-lm"], directory)
+    _run([*compiler, *flags, "-shared", *objects, "-o", LIBRARY, "-lm"], directory)
     for obj in objects:
         (directory / obj).unlink()
     return directory / LIBRARY
