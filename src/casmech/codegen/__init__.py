@@ -1,7 +1,7 @@
 """Code generation: SystemFunctions -> C -> shared library -> casadi.external, with a cache.
 
-    functions = compiled(model)                  # built once per model content, then cached
-    write_build(symbolic, Path("out"), Toolchain())   # sources, header, manifest, library
+    functions = compiled(model)           # SystemFunctions; built once per content, then cached
+    export(model, Path("out"))            # `casmech compile`: sources, header, manifest, library
 """
 
 from __future__ import annotations
