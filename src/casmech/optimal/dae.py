@@ -5,14 +5,17 @@
     alg: [M q_ddot + Phi_q^T lam - Q - B^T u;  Phi_q q_ddot - gamma]
 
 over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
-state is a function of theta: positions solve Phi(t0, q, theta) = 0 with N^T (q - q_file) = 0 (N
-spanning the null space of Phi_q at the nominal assembly: the least-squares correction Newton
-makes), velocities are the file's velocities corrected by the least-squares step onto
-Phi_q q_dot = nu. CasADi differentiates both (rootfinder by the implicit function theorem).
+state is a function of theta: positions are casmech's assembly (runtime/assembly.py: driver
+continuation, then least-squares Newton from the file's pose) unrolled as a CasADi graph with the
+iteration counts the nominal assembly takes plus one (so the result is the same map near the
+nominal theta, and its derivative the derivative of the converged point, also when the mechanism
+has degrees of freedom and the pose depends on the path Newton takes); velocities are the file's
+velocities corrected by the least-squares step onto Phi_q q_dot = nu.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import casadi as ca
@@ -20,6 +23,7 @@ import numpy as np
 
 from casmech.compiler.checks import structure
 from casmech.optimal.system import ParametricSystem
+from casmech.runtime import assembly
 from casmech.runtime.assembly import initial_state
 from casmech.runtime.results import column_names
 
@@ -90,24 +94,52 @@ def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
                q_nom, q_dot_nom)
 
 
-def _null_space(matrix: np.ndarray) -> np.ndarray:
-    _, s, vt = np.linalg.svd(matrix)
-    rank = int(np.sum(s > 1e-10 * max(s.max(initial=0.0), 1.0)))
-    return vt[rank:].T
+def _newton_counts(dae: DAE) -> list[tuple[float | None, int]]:
+    """(driver scale or None, Newton iterations) of each stage of the nominal assembly, as
+    runtime/assembly.py runs it (continuation stages, then the unscaled solve)."""
+    nominal, t0 = dae.system.nominal, dae.t0
+    q = assembly.initial_guess(nominal)
+    steps = max(1, math.ceil(assembly.driver_span(nominal, t0) / assembly.MAX_DRIVER_STEP))
+    stages = [(k / steps, 1e-8 if k < steps else assembly.POSITION_TOLERANCE)
+              for k in range(1, steps + 1)] + [(None, assembly.POSITION_TOLERANCE)]
+    counts = []
+    for scale, tolerance in stages:
+        count = 0
+        while count < assembly.MAX_ITERATIONS:
+            if scale is None:
+                phi, phi_q = nominal.vector("phi", t0, q), nominal.matrix("phi_q", t0, q)
+            else:
+                phi, phi_q = nominal.evaluate("phi_scaled", t0, q, scale)
+                phi = phi.ravel()
+            if np.max(np.abs(phi), initial=0.0) <= tolerance:
+                break
+            q = q + np.linalg.lstsq(phi_q, -phi, rcond=None)[0]
+            count += 1
+        counts.append((scale, count))
+    return counts
+
+
+def _assembly_graph(dae: DAE, theta) -> ca.MX:
+    """Assembled positions as a function of theta: the nominal Newton iterations unrolled, one
+    more per stage, least-squares steps on the independent rows."""
+    system, rows, t0 = dae.system, list(dae.rows), dae.t0
+    q = ca.MX(ca.DM(assembly.initial_guess(system.nominal)))
+    for scale, count in _newton_counts(dae):
+        for _ in range(count + 1):
+            if scale is None:
+                phi, jac = system["phi"](t0, q, theta), system["phi_q"](t0, q, theta)
+            else:
+                phi, jac = system["phi_scaled"](t0, q, scale, theta)
+            phi, jac = phi[rows], jac[rows, :]
+            q = q - jac.T @ ca.solve(jac @ jac.T, phi)
+    return q
 
 
 def initial_state_function(dae: DAE) -> ca.Function:
     """x0(theta): consistent positions and velocities (differentiable in theta)."""
     system, rows, t0 = dae.system, list(dae.rows), dae.t0
-    theta, q = dae.theta, ca.SX.sym("q", dae.n)
-    values = system.values
-    basis = _null_space(system["phi_q"](t0, dae.q_assembled, values).full()[rows])
-    residual = ca.vertcat(system["phi"](t0, q, theta)[rows],
-                          ca.DM(basis).T @ (q - ca.DM(dae.q_assembled)))
-    solve = ca.rootfinder("assembly", "newton", ca.Function("g", [q, theta], [residual]),
-                          {"abstol": 1e-14, "max_iter": 50})
-    th = ca.MX.sym("theta", theta.numel())
-    q0 = solve(ca.DM(dae.q_assembled), th)
+    th = ca.MX.sym("theta", dae.theta.numel())
+    q0 = _assembly_graph(dae, th)
     guess = system["file_velocities"](q0, th)
     jac = system["phi_q"](t0, q0, th)[rows, :]
     rhs = system["nu"](t0, q0, th)[rows] - jac @ guess

@@ -106,6 +106,8 @@ def build_parametric(symbolic: SymbolicModel) -> dict[str, ca.Function]:
     definitions = [
         ("phi", {"t": t, "q": q, "theta": theta}, {"phi": cs.phi}),
         ("phi_q", {"t": t, "q": q, "theta": theta}, {"phi_q": cs.phi_q}),
+        ("phi_scaled", {"t": t, "q": q, "s": cs.scale, "theta": theta},
+         {"phi": cs.phi_scaled, "phi_q": cs.phi_q_scaled}),
         ("nu", {"t": t, "q": q, "theta": theta}, {"nu": cs.nu}),
         ("gamma", {"t": t, "q": q, "q_dot": q_dot, "theta": theta}, {"gamma": cs.gamma}),
         ("mass_matrix", {"q": q, "theta": theta}, {"mass_matrix": mass}),
