@@ -68,3 +68,21 @@ def test_minimum_time_rest_to_rest_matches_the_bang_bang_closed_form():
         replayed = replay(model, problem, solution)
         # a polynomial motion: collocation and IDAS both reproduce it (measured ~1e-10)
         np.testing.assert_allclose(replayed[:, :7], solution.x[:, :7], rtol=0, atol=1e-6)
+
+
+def test_bound_on_a_reaction_force_is_active_and_respected():
+    """Limit the pivot's force along z below what the free optimum needs: the bound holds at
+    every node and the optimum costs more."""
+    model = casmech.load(MODEL)
+    free = OCP([Control("pivot", "torque", -6.0, 6.0)], horizon=1.0, intervals=10,
+               terminal={"bar.e0": np.cos(ANGLE / 2), "bar.wx": 0.0})
+    loose = solve(model, free, "collocation")
+    peak = columns_at(model, free, loose, ["pivot.fz"])[1:, 0].max()
+    limit = 0.97 * peak
+    bounded = OCP(free.controls, free.horizon, free.intervals, terminal=free.terminal,
+                  path={"pivot.fz": (-100.0, limit)})
+    tight = solve(model, bounded, "collocation")
+    force = columns_at(model, bounded, tight, ["pivot.fz"])[1:, 0]
+    assert force.max() <= limit + 1e-6  # IPOPT's constraint tolerance, in newtons
+    assert force.max() >= limit - 1e-3  # the bound is active
+    assert tight.objective > loose.objective

@@ -18,7 +18,7 @@ import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
-from casmech.optimal.sensitivity import _check_times, output_graph
+from casmech.optimal.sensitivity import check_times, output_graph
 from casmech.optimal.system import parametric_system
 from casmech.output.csv import read_csv
 from casmech.schema.resolved import ResolvedModel
@@ -58,7 +58,7 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
     """Fit `parameters` (starting from the model's values) to measured columns."""
     system = parametric_system(model, parameters)
     dae = build_dae(system)
-    times = _check_times(times, dae.t0)
+    times = check_times(times, dae.t0)
     outputs = list(data)
     measured = np.column_stack([np.asarray(data[o], float) for o in outputs])
     if measured.shape[0] != times.size:

@@ -298,12 +298,14 @@ def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray
 
 def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
                names: Sequence[str]) -> np.ndarray:
-    """Results columns of the solution's states at its interval boundaries."""
+    """Results columns of the solution's states at its interval boundaries. Accelerations and
+    reactions depend on the control, which jumps there: boundary k > 0 reports the end of
+    interval k - 1 (the value path bounds constrain), boundary 0 the start of interval 0."""
     setup = _setup(model, problem)
     index = [setup.names.index(n) for n in names]
     rows = []
     for k, (t, x) in enumerate(zip(solution.times, solution.x, strict=True)):
-        u = solution.u[min(k, len(solution.u) - 1)]
+        u = solution.u[max(k - 1, 0)]
         rows.append(_columns(setup, t, x, u).full().ravel()[index])
     return np.array(rows)
 

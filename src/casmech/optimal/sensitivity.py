@@ -50,7 +50,7 @@ def idas(dae: DAE, grid: Sequence[float], rtol: float, atol: float, t0: float | 
     return ca.integrator(name, "idas", dae.problem(), start, list(grid), options)
 
 
-def _check_times(times: Sequence[float], t0: float) -> np.ndarray:
+def check_times(times: Sequence[float], t0: float) -> np.ndarray:
     times = np.atleast_1d(np.asarray(times, float))
     if times.size == 0 or np.any(times <= t0) or np.any(np.diff(times) <= 0):
         raise UsageError(f"output times must be increasing and after t0 = {t0:g}; "
@@ -132,7 +132,7 @@ def sensitivity(model: ResolvedModel, parameters: Sequence[str], outputs: Sequen
         raise UsageError("name at least one parameter to differentiate with respect to")
     system = parametric_system(model, parameters)
     dae = build_dae(system)
-    times = _check_times(times, dae.t0)
+    times = check_times(times, dae.t0)
     theta, y = output_graph(dae, outputs, times, rtol, atol, chained=mode == "adjoint")
     n_p, n_y = theta.numel(), y.numel()
     if mode == "forward":
@@ -150,7 +150,7 @@ def simulate(model: ResolvedModel, outputs: Sequence[str], times: Sequence[float
     """Results columns at `times` from the same IDAS problem, without derivatives."""
     system = parametric_system(model, ())
     dae = build_dae(system)
-    times = _check_times(times, dae.t0)
+    times = check_times(times, dae.t0)
     theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
     values, = _evaluate(ca.Function("sim", [theta], [y]), system.values, times)
     return values.reshape(times.size, len(outputs))

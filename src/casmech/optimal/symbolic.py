@@ -166,8 +166,7 @@ def _check_geometry(model: ResolvedModel, ir: ModelIR, names, dependent) -> None
         if moved:
             raise UsageError(f"parameter '{name}' moves the model's geometry ({moved[0]}); "
                              "sensitivities are available for parameters of masses, inertias, "
-                             "gravity, forces, drivers and initial velocities",
-                             )
+                             "gravity, forces, drivers and initial velocities")
 
 
 def classify(model: ResolvedModel, names: Iterable[str]) -> tuple[list[str], list[str]]:
