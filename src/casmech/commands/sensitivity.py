@@ -21,7 +21,8 @@ def add_arguments(parser) -> None:
                         help="a model parameter, or an initial velocity <body>.vx..vz/.wx..wz "
                              "(repeatable)")
     parser.add_argument("--output", action="append", required=True, metavar="COLUMN",
-                        help="a results column, e.g. bar.x, pivot.fz, energy (repeatable)")
+                        help="a results column, e.g. bar.x, pivot.fz, energy, or "
+                             "integral(COLUMN), its integral from t = 0 (repeatable)")
     parser.add_argument("--at", action="append", required=True, type=float, metavar="T",
                         help="output time after t = 0 (repeatable)")
     parser.add_argument("--mode", choices=MODES, default="forward",

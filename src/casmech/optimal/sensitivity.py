@@ -4,6 +4,9 @@
     s.values[k, i]           column i at times[k]
     s.jacobian[k, i, j]      d column i at times[k] / d parameter j
 
+An output is a results column (`bar.y`, `pivot.fz`, `energy`, ...) or `integral(COLUMN)`, its
+integral from t0 to the output time (an IDAS quadrature): a scalar of the trajectory.
+
 Derivatives come from CasADi's IDAS sensitivities: forward (`mode="forward"`: one sensitivity
 system per parameter) or adjoint (`mode="adjoint"`: one backward sweep per output), both through
 the consistent initial state (assembly and velocity projection differentiated implicitly).
@@ -11,6 +14,7 @@ the consistent initial state (assembly and velocity projection differentiated im
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -29,6 +33,7 @@ from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 MODES = ("forward", "adjoint")
+INTEGRAL = re.compile(r"integral\((.+)\)")
 
 
 @dataclass(frozen=True)
@@ -42,12 +47,14 @@ class Sensitivity:
 
 
 def idas(dae: DAE, grid: Sequence[float], rtol: float, atol: float, t0: float | None = None,
-         name: str = "F") -> ca.Function:
-    """IDAS from t0 (default the DAE's) with outputs at `grid`."""
+         name: str = "F", quad=None) -> ca.Function:
+    """IDAS from t0 (default the DAE's) with outputs at `grid`; `quad` (SX of t, x, z, p):
+    integrands of quadratures, integrated from t0."""
     options = {"abstol": atol, "reltol": rtol, "calc_ic": True, "max_num_steps": 100000,
                "fsens_err_con": True}
     start = dae.t0 if t0 is None else t0
-    return ca.integrator(name, "idas", dae.problem(), start, list(grid), options)
+    problem = dae.problem() | ({"quad": quad} if quad is not None else {})
+    return ca.integrator(name, "idas", problem, start, list(grid), options)
 
 
 def check_times(times: Sequence[float], t0: float) -> np.ndarray:
@@ -58,58 +65,78 @@ def check_times(times: Sequence[float], t0: float) -> np.ndarray:
     return times
 
 
+def _integrand(output: str) -> str | None:
+    """The column inside `integral(COLUMN)`, or None for a pointwise output."""
+    match = INTEGRAL.fullmatch(output.replace(" ", ""))
+    return match.group(1) if match else None
+
+
 def _output_indices(names: list[str], outputs: Sequence[str]) -> list[int]:
+    outputs = [_integrand(o) or o for o in outputs]
     missing = [o for o in outputs if o not in names]
     if missing:
         raise UsageError(f"unknown output column '{missing[0]}'; results columns are "
-                         f"<body>.x/.vx/.wx/..., <joint>.fx/..., energy (see MODEL_FORMAT.md)")
+                         f"<body>.x/.vx/.wx/..., <joint>.fx/..., energy (see MODEL_FORMAT.md), "
+                         "or integral(COLUMN) for its integral from t = 0")
     return [names.index(o) for o in outputs]
 
 
-def chain(dae: DAE, times: np.ndarray, rtol: float, atol: float) -> list[ca.Function]:
+def chain(dae: DAE, times: np.ndarray, rtol: float, atol: float, quad=None) -> list[ca.Function]:
     """One IDAS integrator per output interval: each ends at its output time, so an adjoint
     sweep starts from a terminal condition instead of re-initialising inside an interval
     (IDAS's backward problem failed at interior output times of one integrator)."""
     starts = [dae.t0, *times[:-1]]
-    return [idas(dae, [end], rtol, atol, t0=begin, name=f"F{k}")
+    return [idas(dae, [end], rtol, atol, t0=begin, name=f"F{k}", quad=quad)
             for k, (begin, end) in enumerate(zip(starts, times, strict=True))]
 
 
 def output_graph(dae: DAE, outputs: Sequence[str], times: np.ndarray, rtol: float, atol: float,
                  chained: bool = True):
     """(theta MX symbol, outputs stacked time-major as an MX expression of theta).
-    `chained`: one integrator per output interval (needed for adjoint derivatives); otherwise
-    one integrator with an output grid (faster, forward derivatives only)."""
+    `integral(COLUMN)` outputs are IDAS quadratures from t0. `chained`: one integrator per output
+    interval (needed for adjoint derivatives); otherwise one integrator with an output grid
+    (faster, forward derivatives only)."""
     names, columns = columns_function(dae)
     index = _output_indices(names, outputs)
+    integrals = [k for k, o in enumerate(outputs) if _integrand(o)]
+    quad = columns(dae.t, dae.x, dae.z, dae.theta)[[index[k] for k in integrals]] \
+        if integrals else None
     algebraic = algebraic_function(dae)
     x0 = initial_state_function(dae)
     theta = ca.MX.sym("theta", dae.theta.numel())
     values = dae.system.values
     if not chained:
         z0 = algebraic(dae.t0, x0(values), values)
-        xs = idas(dae, times, rtol, atol)(x0=x0(theta), z0=z0, p=theta)["xf"]
-        xs = [xs[:, k] for k in range(times.size)]
+        result = idas(dae, times, rtol, atol, quad=quad)(x0=x0(theta), z0=z0, p=theta)
+        xs = [result["xf"][:, k] for k in range(times.size)]
+        qs = [result["qf"][:, k] for k in range(times.size)]
     else:
-        xs = _chained_states(dae, chain(dae, times, rtol, atol), x0, theta, times)
-    rows = [columns(t, x, algebraic(t, x, theta), theta)[index]
-            for t, x in zip(times, xs, strict=True)]
+        integrators = chain(dae, times, rtol, atol, quad)
+        xs, qs = _chained_states(dae, integrators, x0, theta, times)
+    rows = []
+    for t, x, q in zip(times, xs, qs, strict=True):
+        row = columns(t, x, algebraic(t, x, theta), theta)[index]
+        for j, k in enumerate(integrals):
+            row[k] = q[j]
+        rows.append(row)
     return theta, ca.vertcat(*rows)
 
 
 def _chained_states(dae: DAE, integrators, x0: ca.Function, theta, times):
-    """States at the output times; the algebraic guesses that start each IDAS call are numbers
-    (a nominal pass), so no derivative flows through them."""
+    """States and cumulative quadratures at the output times; the algebraic guesses that start
+    each IDAS call are numbers (a nominal pass), so no derivative flows through them."""
     algebraic, values = algebraic_function(dae), dae.system.values
     x, guesses = x0(values), []
     for begin, integrator in zip([dae.t0, *times[:-1]], integrators, strict=True):
         guesses.append(algebraic(begin, x, values))
         x = integrator(x0=x, z0=guesses[-1], p=values)["xf"]
-    x, xs = x0(theta), []
+    x, xs, qs, total = x0(theta), [], [], 0
     for guess, integrator in zip(guesses, integrators, strict=True):
-        x = integrator(x0=x, z0=guess, p=theta)["xf"]
+        result = integrator(x0=x, z0=guess, p=theta)
+        x, total = result["xf"], total + result["qf"]
         xs.append(x)
-    return xs
+        qs.append(total)
+    return xs, qs
 
 
 def _evaluate(function: ca.Function, theta: np.ndarray, times: np.ndarray):
