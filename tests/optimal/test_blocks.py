@@ -105,3 +105,12 @@ ocp:
     assert problem.controls[0].lower == -np.inf  # no bounds written: unbounded
     bad = text.replace("free_time: [0.5, 3]", "free_time: [0, 3]")
     assert ("E409", line_of(bad, "free_time: [0, 3]")) in codes(bad)
+
+
+def test_optimize_usage_errors(tmp_path, capsys):
+    assert main(["optimize", str(MODELS / "me751_pendulum.yaml")]) == 2
+    assert "neither an 'ocp:' nor an 'estimate:' block" in capsys.readouterr().err
+    model = tmp_path / "fit.yaml"
+    model.write_text(BASE + "\nestimate: {parameters: [m], data: missing.csv}\n")
+    assert main(["optimize", str(model), "--out", str(tmp_path / "out")]) == 2
+    assert "cannot read measurements" in capsys.readouterr().err
