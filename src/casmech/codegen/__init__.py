@@ -51,10 +51,13 @@ def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
 
 
 def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
-             root: Path | None = None) -> SystemFunctions:
+             root: Path | None = None, dae: bool = True) -> SystemFunctions:
     """The model's SystemFunctions loaded from a compiled library, built only when the cache
-    holds none for this model content, casmech/CasADi version, compiler and flags."""
-    directory, _ = _cached(model, toolchain or Toolchain(), root)
+    holds none for this model content, casmech/CasADi version, compiler and flags. With `dae`,
+    the bundle also carries the DAE residuals dae_<formulation> with their Jacobians, which
+    dynamics integrates instead of an MX graph over the other functions (measured 1.5x faster
+    runs for 2.4x the build time: benchmarks/RESULTS_codegen.md)."""
+    directory, _ = _cached(model, toolchain or Toolchain(), root, dae)
     return load_build(directory, lower(model))
 
 
