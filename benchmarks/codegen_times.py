@@ -50,20 +50,20 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float) -> dict:
     model = casmech.loads(text)
     lap("load")
     symbolic = build_functions(lower(model))
-    lap("symbolic")
+    functions = {**symbolic.functions, **generate.dae_functions(symbolic.functions)}
+    lap("symbolic")  # what codegen.compiled builds: the bundle and the DAE residuals
     chain = codegen.Toolchain(flags=tuple(flags.split()), jobs=jobs)
     with tempfile.TemporaryDirectory() as directory:
-        sources = generate.write_sources(symbolic.functions, Path(directory), jobs)
+        sources = generate.write_sources(functions, Path(directory), jobs)
         lap("generate_c")
         c_bytes = sum(s.stat().st_size for s in sources)
         build.build_library(sources, Path(directory), chain)
         lap("gcc")
-        manifest.write(Path(directory), symbolic.functions,
-                       generate.differentiated(symbolic.functions), {})
+        manifest.write(Path(directory), functions, generate.differentiated(functions), {})
         compiled = load.load(Path(directory), lower(model))
         lap("load_library")
         times["total"] = sum(times.values())
-        instructions = sum(f.n_instructions() for group in generate.units(symbolic.functions)
+        instructions = sum(f.n_instructions() for group in generate.units(functions)
                            .values() for f in group)
         result = {"bodies": bodies, "flags": flags, "jobs": jobs, "times": times,
                   "c_megabytes": c_bytes / 1e6, "instructions": instructions}
