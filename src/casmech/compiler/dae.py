@@ -38,12 +38,15 @@ def unit_rows(jacobian, gamma):
 
 
 def residual(functions: dict[str, ca.Function], name: str) -> ca.Function:
-    """dae_<name>: (t, x, z, p) -> (ode, alg), the semi-explicit index-1 DAE above."""
+    """dae_<name>: (t, x, z, p) -> (ode, alg), the semi-explicit index-1 DAE above; the
+    bundle's own when it has one (a compiled bundle carries it, with its Jacobian)."""
+    if f"dae_{name}" in functions:
+        return functions[f"dae_{name}"]
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     sym = _symbols(functions)
     tau, x, z, p = sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m), sym.sym("p", 1 + m)
-    t, q, v, v_dot, lam, w = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:], p[1:]
+    t, q, v, v_dot, lam, w = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:], p[1:1 + m, 0]
     jacobian, gamma = unit_rows(functions[form.jacobian](t, q), functions[form.gamma](t, q, v))
     alg = ca.vertcat(
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),

@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import augmented, dae, euler
-from casmech.compiler.checks import dependent_joints, independent_rows
+from casmech.compiler.checks import RANK_TOLERANCE, dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
@@ -67,9 +67,25 @@ class _Model:
         return np.linalg.norm(self.functions.matrix(self.form.jacobian, t, q), axis=1)
 
     def mask(self, t, q) -> np.ndarray:
-        """1 for every row that depends on earlier ones (dropped from the DAE), else 0."""
-        independent = independent_rows(self.functions.matrix(self.form.jacobian, t, q))
-        return 1.0 - np.array(independent, float)
+        """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
+        redundant (the same joint rows in both formulations; r-p rows are ordered as Phi's,
+        r-omega's are Phi's joint rows)."""
+        keep = np.zeros(self.functions.n_rows)
+        keep[list(structure(self.functions, t, q).independent)] = 1.0
+        return 1.0 - keep[:self.m]
+
+    def multipliers(self, t, q, unit_lam, mask) -> np.ndarray:
+        """True multipliers from unit-row ones. With rows dropped, the joint multipliers are
+        made the minimum-norm ones of the same constraint force and torque on the bodies,
+        [Phi_r, Pi_bar]^T lam (as kinematics and inverse dynamics report); in that form the
+        r-p normalization rows play no part, so both formulations report the same ones."""
+        lam = unit_lam / self.row_norms(t, q)
+        if not mask.any():
+            return lam
+        n = self.functions.n_joint_rows
+        jacobian_t = self.functions.matrix("romega_jacobian", t, q).T
+        lam[:n] = np.linalg.lstsq(jacobian_t, jacobian_t @ lam[:n], rcond=RANK_TOLERANCE)[0]
+        return lam
 
     def consistent(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, unit-row lam) solving the DAE's algebraic equations at (t, q, v)."""
@@ -102,9 +118,9 @@ class _Stepper:
         self.dae = dae.problem(dae.residual(model.functions.functions, model.name))
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
-        self.ode = None  # the augmented-Lagrangian ODE, once the DAE has failed
+        self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
         self.ode_integrators: dict[tuple, ca.Function] = {}
-        self.switched_at = None
+        self.on_ode, self.switched_at = False, None
 
     def adapt(self, used: int, restarted: bool) -> None:
         """Next chunk: twice the intervals used before a restart (the rest of a chunk after
@@ -112,16 +128,18 @@ class _Stepper:
         self.chunk = min(CHUNK, 2 * used if restarted else 2 * self.chunk)
 
     def integrate(self, t0: float, times: np.ndarray, q, v, mask):
-        """(states, lam) at `times`: states rows [q, v, v_dot], lam in unit rows."""
-        if self.ode is None:
+        """(states, lam) at `times`: states rows [q, v, v_dot], lam in unit rows.
+
+        By the DAE until it first fails, by the augmented-Lagrangian ODE from there to the end.
+        Measured on A02: a DAE run retried over a single interval after a failure can pass the
+        singular pose onto the wrong branch (r-omega), and handing back to the DAE after the
+        pose did too, so the first failure switches for good."""
+        if not self.on_ode:
             start = self._dae_start(t0, times, q, v, mask)
             try:
                 return self._dae(*start)
-            except RuntimeError:  # IDAS failed: from here on, the augmented Lagrangian
-                self.switched_at = t0
-                self.ode = augmented.ode(self.model.functions.functions, self.model.name)
-                self.solve = augmented.accelerations(self.model.functions.functions,
-                                                     self.model.name)
+            except RuntimeError:  # IDAS failed (its construction is not guarded)
+                self.on_ode, self.switched_at = True, t0
         return self._ode(t0, times, q, v)
 
     def _dae_start(self, t0, times, q, v, mask):
@@ -147,6 +165,9 @@ class _Stepper:
         """The augmented-Lagrangian ODE over the chunk; on a failure, its first interval alone,
         so the error names it exactly (and the caller keeps every row before it)."""
         model = self.model
+        if self.ode is None:
+            self.ode = augmented.ode(model.functions.functions, model.name)
+            self.solve = augmented.accelerations(model.functions.functions, model.name)
         a = penalty(model.functions, model.form, q)
         key = tuple(np.round(times - t0, 12))
         if key not in self.ode_integrators:
@@ -190,7 +211,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     v = velocities(functions, formulation, q, q_dot)
     mask = model.mask(t0, q)
     stepper = _Stepper(model, rtol, atol)
-    record = _Recorder(model, result)
+    record = _Recorder(model, result, mask)
     tolerance = drift_tolerance(atol)
     times = output_times(t0, t_end, step)
     k, projections = 0, 0
@@ -208,7 +229,8 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
                 projected = drifted(functions, model.form, t, q, v, step, tolerance)
                 if projected:
                     q, v = assembly.project(functions, model.form, t, q, v,
-                                            penalty(functions, model.form, q))
+                                            penalty(functions, model.form, q),
+                                            accept=0.1 * tolerance)
                     v_dot, lam = model.consistent(t, q, v, mask)
                     projections += 1
                 record(t, q, v, v_dot, lam)
@@ -237,12 +259,12 @@ def drifted(functions: SystemFunctions, form: Formulation, t: float, q, v, step:
 class _Recorder:
     """Appends a results row (r-p velocities and accelerations, every multiplier)."""
 
-    def __init__(self, model: _Model, result: Result):
-        self.model, self.result = model, result
+    def __init__(self, model: _Model, result: Result, mask: np.ndarray):
+        self.model, self.result, self.mask = model, result, mask
 
     def __call__(self, t: float, q, v, v_dot, unit_lam) -> None:
         model = self.model
-        lam = unit_lam / model.row_norms(t, q)
+        lam = model.multipliers(t, q, unit_lam, self.mask)
         if model.name == "rp":
             self.result.append(t, q, v, v_dot, lam)
             return
