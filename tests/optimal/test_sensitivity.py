@@ -63,7 +63,7 @@ def check(load, parameters, outputs, times):
         fd = central_difference(load, name, value, outputs, times, 1e-3 * (abs(value) or 1.0))
         scale = np.maximum(np.abs(fd).max(axis=0), 1e-6)  # each column's size (0: FD noise)
         for result in results:
-            # relative 1e-5 of each output column's size (the bound); measured <= 3e-6
+            # relative 1e-5 of each output column's size (the bound); measured <= 2e-6
             # with h = 1e-3 relative and IDAS at rtol 1e-12 (h^2 truncation vs solver noise / h)
             np.testing.assert_allclose(result.jacobian[..., j] / scale, fd / scale, rtol=1e-5,
                                        atol=1e-5)
@@ -82,7 +82,7 @@ def test_spatial_mechanism():
         return casmech.loads(MECHANISM, overrides=overrides)
 
     check(load, ["g", "J", "k", "w0"],
-          ["lower.x", "lower.y", "lower.z", "upper.wz", "elbow.fy", "energy"], [0.2, 0.4])
+          ["lower.x", "lower.y", "lower.z", "upper.wz", "elbow.fy", "energy"], [0.15, 0.3])
 
 
 def test_forward_and_adjoint_agree():
