@@ -78,16 +78,20 @@ def quaternion_matrix(e: np.ndarray) -> np.ndarray:
 
 
 class Runner:
+    """casmech on interpreted CasADi functions (tool `casmech`) or on the model compiled to C
+    by casmech's code generation (tool `casmech-c`: mode "compiled", $CASMECH_CFLAGS, which
+    run.py sets to -O2; the build is reported as compile time)."""
+
     tool = "casmech"
 
-    def __init__(self, system: System):
+    def __init__(self, system: System, mode: str = "interpreted"):
         import casmech
 
         self.system = system
         start = time.perf_counter()
         model = casmech.loads(yaml_text(system), file=f"<{system.name}>")
         loaded = time.perf_counter()
-        self.functions = casmech.compile(model)
+        self.functions = casmech.compile(model, mode=mode)
         done = time.perf_counter()
         self.build_time = {"load": loaded - start, "compile": done - loaded}
 

@@ -64,16 +64,20 @@ SWEEPS = {
     "mujoco": [{"timestep": h} for h in (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)],
 }
 SWEEPS["exudyn-fast"] = SWEEPS["exudyn"]
+SWEEPS["casmech-c"] = SWEEPS["casmech"]
 QUICK_SWEEPS = {
     "casmech": [{"rtol": 1e-12, "atol": 1e-14}, {"rtol": 1e-8, "atol": 1e-10}],
     "exudyn": [{"h": h} for h in (1e-2, 1e-3, 1e-4)],
     "mujoco": [{"timestep": h} for h in (1e-2, 1e-3, 1e-4)],
 }
 QUICK_SWEEPS["exudyn-fast"] = QUICK_SWEEPS["exudyn"]
+QUICK_SWEEPS["casmech-c"] = QUICK_SWEEPS["casmech"]
 # tightest settings, run to t = 1 s only, to cross-check the planar reference
-CROSS_CHECK = {"casmech": {"rtol": 1e-12, "atol": 1e-14}, "exudyn": {"h": 1e-5},
+CROSS_CHECK = {"casmech": {"rtol": 1e-12, "atol": 1e-14},
+               "casmech-c": {"rtol": 1e-12, "atol": 1e-14}, "exudyn": {"h": 1e-5},
                "exudyn-fast": {"h": 1e-5}, "mujoco": {"timestep": 1e-5}}
-KNOB = {"casmech": "rtol", "exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}
+KNOB = {"casmech": "rtol", "casmech-c": "rtol", "exudyn": "h", "exudyn-fast": "h",
+        "mujoco": "timestep"}
 
 
 def knob(tool: str, setting: dict) -> str:
@@ -89,6 +93,9 @@ def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: floa
         env.update({name: str(THREADS) for name in THREAD_VARIABLES})
     if tool == "exudyn-fast":
         env["EXUDYN_MODULE"] = "fast"
+    if tool == "casmech-c":  # simulation-speed flags; a private cache so the build is timed
+        env["CASMECH_CFLAGS"] = "-O2"
+        env["CASMECH_CACHE_DIR"] = tempfile.mkdtemp(prefix="casmech_bench_cache_")
     command = [sys.executable, str(HERE / "worker.py"), tool, system, json.dumps(setting),
                "--repeats", str(repeats), "--t-end", repr(t_end)]
     with tempfile.TemporaryFile("w+") as stderr:
@@ -199,7 +206,8 @@ def run_system(name: str, tools: list[str], args, sweeps: dict, log) -> dict:
                 + (f"{outcome['error']:.2e} m from the reference" if "error" in outcome
                    else outcome["status"]))
     for tool in tools:
-        if tool == "casmech" and args.casmech_max_bars and len(system.bars) > args.casmech_max_bars:
+        if (tool.startswith("casmech") and args.casmech_max_bars
+                and len(system.bars) > args.casmech_max_bars):
             entry["results"].append({"tool": tool, "system": name, "status": "skipped",
                                      "message": f"--casmech-max-bars {args.casmech_max_bars}"})
             log(f"   {tool}: skipped (more than {args.casmech_max_bars} bars)")
@@ -230,7 +238,8 @@ def run_system(name: str, tools: list[str], args, sweeps: dict, log) -> dict:
                 skip_reason = (f"an earlier setting timed out (--timeout {args.timeout:g} s)")
             elif outcome["status"] == "error":
                 skip_reason = "an earlier setting failed"
-            elif (tool != "casmech" and "median" in outcome and outcome["error"] <= LEVELS[-1]
+            elif (not tool.startswith("casmech") and "median" in outcome
+                  and outcome["error"] <= LEVELS[-1]
                   and outcome["median"] > args.skip_after):
                 skip_reason = (f"a cheaper setting already reached {LEVELS[-1]:g} m and took "
                                f"more than {args.skip_after:g} s")
@@ -307,8 +316,9 @@ def main(argv=None) -> int:
     parser.add_argument("--systems", nargs="+",
                         default=["chain2", "four_bar", "chain8", "chain32", "chain128"],
                         help="chain<N> and/or four_bar")
-    parser.add_argument("--tools", nargs="+", default=["casmech", "exudyn", "mujoco"],
-                        choices=["casmech", "exudyn", "exudyn-fast", "mujoco"])
+    parser.add_argument("--tools", nargs="+",
+                        default=["casmech", "casmech-c", "exudyn", "mujoco"],
+                        choices=["casmech", "casmech-c", "exudyn", "exudyn-fast", "mujoco"])
     parser.add_argument("--repeats", type=int, default=3,
                         help="timed runs per setting (at least 7 for runs under 1 s)")
     parser.add_argument("--quick", action="store_true",

@@ -6,7 +6,8 @@ import json
 import statistics
 import sys
 
-KNOB = {"casmech": "rtol", "exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}
+KNOB = {"casmech": "rtol", "casmech-c": "rtol",
+        "exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}
 PEERS = ("exudyn", "exudyn-fast", "mujoco")
 
 
@@ -70,9 +71,11 @@ def sweep_table(entry: dict) -> list[str]:
 
 def level_table(entry: dict, levels, tools: list[str]) -> list[str]:
     peers = [t for t in tools if t in PEERS]
+    ours = [t for t in tools if t.startswith("casmech")]
+    pairs = [(c, p) for c in ours for p in peers]
     head = "| error <= | " + " | ".join(tools) + " | " + " | ".join(
-        f"casmech / {p}" for p in peers) + " |"
-    lines = [head, "|---|" + "---|" * (len(tools) + len(peers))]
+        f"{c} / {p}" for c, p in pairs) + " |"
+    lines = [head, "|---|" + "---|" * (len(tools) + len(pairs))]
     for level in levels:
         best = {t: best_at(entry["results"], t, level) for t in tools}
         cells = []
@@ -84,8 +87,8 @@ def level_table(entry: dict, levels, tools: list[str]) -> list[str]:
             else:
                 cells.append(f"{_seconds(b['median'])} s ({_setting(t, b['setting'])})")
         ratios = []
-        for p in peers:
-            c, b = best.get("casmech"), best[p]
+        for ours_tool, p in pairs:
+            c, b = best.get(ours_tool), best[p]
             ratios.append(f"{c['median'] / b['median']:.3g}" if c and b else "-")
         lines.append(f"| {level:g} m | " + " | ".join(cells) + " | " + " | ".join(ratios) + " |")
     return lines
@@ -100,7 +103,7 @@ def build_table(report: dict, tools: list[str]) -> list[str]:
                      if r["tool"] == t and "build" in r]
             if not parts:
                 cells.append("-")
-            elif t == "casmech":
+            elif t.startswith("casmech"):
                 load = statistics.median(p["load"] for p in parts)
                 comp = statistics.median(p["compile"] for p in parts)
                 cells.append(f"{_seconds(load + comp)} s (load {_seconds(load)} + compile "

@@ -23,9 +23,11 @@ SHORT_REPEATS = 7
 
 
 def runner(tool: str, system):
-    if tool == "casmech":
+    if tool in ("casmech", "casmech-c"):
         from casmech_model import Runner
-    elif tool in ("exudyn", "exudyn-fast"):  # run.py sets EXUDYN_MODULE=fast for exudyn-fast
+
+        return Runner(system, mode="compiled" if tool == "casmech-c" else "interpreted")
+    if tool in ("exudyn", "exudyn-fast"):  # run.py sets EXUDYN_MODULE=fast for exudyn-fast
         from exudyn_model import Runner
     elif tool == "mujoco":
         from mujoco_model import Runner
@@ -40,7 +42,7 @@ def emit(**event) -> None:
 
 def versions(tool: str) -> dict:
     out = {"python": platform.python_version()}
-    if tool == "casmech":
+    if tool.startswith("casmech"):
         import casadi
 
         import casmech

@@ -29,16 +29,17 @@ from casmech.runtime import assembly
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
-CHUNK = 64  # most output intervals per IDAS call
+CHUNK = 256  # most output intervals per IDAS call
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
 DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
 
 
 def drift_tolerance(atol: float) -> float:
-    """Constraint drift allowed before a projection: DRIFT_TOLERANCE, or 10 atol when the
-    integration itself is looser (projecting more often than the error allows only restarts
-    IDAS, which at rtol 1e-8 made runs 20x slower, measured on benchmarks/chain2)."""
-    return max(DRIFT_TOLERANCE, 10 * atol)
+    """Constraint drift allowed before a projection: DRIFT_TOLERANCE, or 100 atol when the
+    integration itself is looser. Every projection restarts IDAS (a new integrator: 0.1 s for
+    a 32-body chain, interpreted); with 10 atol a 10 s run of benchmarks/chain2 at rtol 1e-8
+    projected 500 times and took 4x longer than with 100 atol (76 projections)."""
+    return max(DRIFT_TOLERANCE, 100 * atol)
 
 
 def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
@@ -135,26 +136,28 @@ class _Stepper:
         singular pose onto the wrong branch (r-omega), and handing back to the DAE after the
         pose did too, so the first failure switches for good."""
         if not self.on_ode:
-            start = self._dae_start(t0, times, q, v, mask)
             try:
-                return self._dae(*start)
-            except RuntimeError:  # IDAS failed (its construction is not guarded)
+                return self._dae(t0, times, q, v, mask)
+            except RuntimeError:  # IDAS failed twice (its construction is not guarded)
                 self.on_ode, self.switched_at = True, t0
         return self._ode(t0, times, q, v)
 
-    def _dae_start(self, t0, times, q, v, mask):
-        """An IDAS integrator over `times` started with the exact derivative, and its inputs."""
+    def _dae(self, t0, times, q, v, mask):
+        """IDAS on the DAE from the exact consistent state, handed over with its derivative
+        (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
+        started by IDACalcIC was slower (its line search often failed, measured on the
+        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
         model = self.model
         v_dot, lam = model.consistent(t0, q, v, mask)
-        options = self.options | {"suppress_algebraic": True, "calc_ic": False,
-                                  "init_xdot": list(np.concatenate([model.q_dot(q, v), v_dot]))}
-        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0), options)
-        inputs = {"x0": np.concatenate([q, v]), "z0": np.concatenate([v_dot, lam]),
-                  "p": np.concatenate([[t0], mask])}
-        return integrator, inputs
+        x_dot = np.concatenate([model.q_dot(q, v), v_dot])
+        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0),
+                                   self.options | {"suppress_algebraic": True, "calc_ic": False,
+                                                   "init_xdot": list(x_dot)})
+        return self._dae_states(integrator(x0=np.concatenate([q, v]),
+                                           z0=np.concatenate([v_dot, lam]),
+                                           p=np.concatenate([[t0], mask])))
 
-    def _dae(self, integrator, inputs):
-        out = integrator(**inputs)
+    def _dae_states(self, out):
         x, z = np.array(out["xf"].full()), np.array(out["zf"].full())
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
             raise RuntimeError("the state became NaN or infinite")
