@@ -33,7 +33,9 @@ def test_compiled_and_interpreted_dynamics_agree(compiled, interpreted, formulat
     states = [k for k, name in enumerate(names) if name.split(".")[-1] in STATES]
     for columns in (states, slice(None)):  # states, then every column (a, alpha, reactions)
         error = np.max(np.abs(want - reference)[:, columns])  # measured 1.3e-7..1.8e-7 (states)
-        assert 0 < error < 1e-4
+        # a sane loose run: below 1e-4 of the columns' scale (reactions reach ~10 N; with the
+        # drift allowed at atol 1e-10, 1e-8, their error measured 1.1e-4 N)
+        assert 0 < error < 1e-4 * max(1.0, np.max(np.abs(reference[:, columns])))
         # measured (states): compiled - interpreted 0 with the compiled dae_<form> (the same
         # residual, the same operations), 1.5e-7 (rp) and 2.5e-14 (romega) through the MX
         # graph over compiled functions; each run's own error 1.3e-7..3.1e-7
