@@ -343,6 +343,8 @@ def main(argv=None) -> int:
                         help="benchmark casmech's src/ as of this git commit (exported to a "
                              "temporary directory and put first on PYTHONPATH) instead of the "
                              "installed casmech")
+    parser.add_argument("--casmech-rtols", type=float, nargs="+", metavar="RTOL",
+                        help="casmech's rtol sweep (atol = rtol / 100) instead of the default")
     parser.add_argument("--out", type=Path, default=HERE / "results")
     args = parser.parse_args(argv)
     global THREADS
@@ -355,6 +357,9 @@ def main(argv=None) -> int:
         args.repeats = 1
         args.no_cross_check = True
         sweeps = QUICK_SWEEPS
+    if args.casmech_rtols:
+        mine = [{"rtol": r, "atol": r * 1e-2} for r in sorted(args.casmech_rtols)]
+        sweeps = {**sweeps, "casmech": mine, "casmech-c": mine}
     if args.casmech_commit:
         use_snapshot(args.casmech_commit)
     export_models()
