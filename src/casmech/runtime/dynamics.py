@@ -10,9 +10,10 @@ either drifts past drift_tolerance(atol) the state is projected back mass-orthog
 (assembly.project) and IDAS restarts from there. No Baumgarte constants.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
-its flat poses) the index-1 DAE is singular and IDAS fails; that output interval alone is then
-integrated with the augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there,
-from then on (metadata augmented_from says when). A failure there names the time and the joints.
+its flat poses) the index-1 DAE is singular and IDAS fails; from the start of the chunk where it
+first failed, the rest of the run is integrated with the augmented-Lagrangian ODE
+(compiler.augmented), which stays well-posed there (metadata augmented_from says from when).
+A failure of that one is reported with the output interval, the time and the joints.
 """
 
 from __future__ import annotations
