@@ -55,20 +55,21 @@ def _mismatch(i: Marker, j: Marker, checks) -> list[str]:
     return [check for check in checks if tests[check]]
 
 
-def _joint_type(deck: Deck, statement: Statement, table) -> str | None:
-    """The type flag, abbreviations of three letters or more accepted (REV, TRANS, ...)."""
+def _joint_type(deck: Deck, statement: Statement, table, what: str) -> str | None:
+    """The type flag, abbreviations of three letters or more accepted (REV, TRANS, ...); None
+    with a warning naming the statement when it is not one the table translates."""
     for flag in statement.flags():
         for name in table:
             if len(flag.key) >= 3 and name.startswith(flag.key):
                 return name
+    deck.reader.warn(statement, f"{what} type not translated", hint="translated: "
+                     + ", ".join(table))
     return None
 
 
 def joint(deck: Deck, statement: Statement) -> list[Item]:
-    kind = _joint_type(deck, statement, JOINTS)
+    kind = _joint_type(deck, statement, JOINTS, "joint")
     if kind is None:
-        deck.reader.warn(statement, "joint type not translated", hint="translated: "
-                         + ", ".join(JOINTS))
         return []
     i, j = deck.marker(statement, "I"), deck.marker(statement, "J")
     casmech_type, keys, checks = JOINTS[kind]
@@ -127,10 +128,8 @@ JPRIMS = {
 
 
 def jprim(deck: Deck, statement: Statement) -> list[Item]:
-    kind = _joint_type(deck, statement, JPRIMS)
+    kind = _joint_type(deck, statement, JPRIMS, "JPRIM")
     if kind is None:
-        deck.reader.warn(statement, "JPRIM type not translated", hint="translated: "
-                         + ", ".join(JPRIMS))
         return []
     i, j = deck.marker(statement, "I"), deck.marker(statement, "J")
     name = deck.name_for(statement, f"jprim_{statement.ident}")

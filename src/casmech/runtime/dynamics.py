@@ -65,8 +65,11 @@ class _Model:
         self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
         self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
 
-    def row_norms(self, t, q) -> np.ndarray:
-        return np.linalg.norm(self.functions.matrix(self.form.jacobian, t, q), axis=1)
+    def row_norms(self, t, q, jacobian=None) -> np.ndarray:
+        """Norms of P's rows (P evaluated here unless given)."""
+        if jacobian is None:
+            jacobian = self.functions.matrix(self.form.jacobian, t, q)
+        return np.linalg.norm(jacobian, axis=1)
 
     def mask(self, t, q) -> np.ndarray:
         """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
@@ -92,8 +95,9 @@ class _Model:
     def consistent(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, unit-row lam) solving the DAE's algebraic equations at (t, q, v)."""
         f = self.functions
-        norms = self.row_norms(t, q)
-        jac = f.matrix(self.form.jacobian, t, q) / norms[:, None]
+        jac = f.matrix(self.form.jacobian, t, q)
+        norms = self.row_norms(t, q, jac)
+        jac = jac / norms[:, None]
         gamma = f.vector(self.form.gamma, t, q, v) / norms
         lhs = np.block([[f.matrix(self.form.mass, q), jac.T], [jac, -np.diag(mask)]])
         rhs = np.concatenate([f.vector(self.form.forces, t, q, v), gamma])
@@ -139,7 +143,7 @@ class _Stepper:
         if not self.on_ode:
             try:
                 return self._dae(t0, times, q, v, mask)
-            except RuntimeError:  # IDAS failed twice (its construction is not guarded)
+            except RuntimeError:  # IDAS failed (its construction is not guarded)
                 self.on_ode, self.switched_at = True, t0
         return self._ode(t0, times, q, v)
 
