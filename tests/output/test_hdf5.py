@@ -40,6 +40,12 @@ def test_metadata_recomputed_from_sources(slider_run):
     assert meta["casmech_version"] == version("casmech")
     assert meta["casadi_version"] == casadi.__version__
     assert meta["overrides"] == {"omega": "3"}
+    # every parameter's value as the run used it: the override, and the file's own values
+    given = yaml.safe_load(raw)["parameters"]
+    assert meta["parameters"]["omega"] == 3.0
+    assert set(meta["parameters"]) == set(given)
+    assert all(meta["parameters"][k] == v for k, v in given.items()
+               if k != "omega" and isinstance(v, (int, float)))
     analysis = yaml.safe_load(raw)["analysis"]  # the model's own block, read by PyYAML
     assert meta["analysis"]["type"] == analysis["type"] == "inverse_dynamics"
     assert meta["analysis"]["t_end"] == 0.1  # from --t-end

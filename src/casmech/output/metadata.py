@@ -1,4 +1,5 @@
-"""What a run was: versions, model (name, sha256, text), overrides, settings, timings, mode.
+"""What a run was: versions, model (name, sha256, text), overrides and the parameter values they
+led to, settings, timings, mode.
 
 One dict, written as DIR/metadata.json beside results.csv (the CSV stays plain per the results
 contract) and into results.h5 (casmech.output.hdf5).
@@ -47,6 +48,7 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
         "model": {"file": Path(model.file).name, "path": str(model.file), "name": model.name,
                   "sha256": sha256(model.text), "text": model.text},
         "overrides": dict(overrides),
+        "parameters": {name: float(value) for name, value in model.parameters.items()},
         "analysis": dict(settings),
         "timings_s": dict(timings),
         "mode": result_metadata.get("mode", "interpreted"),
