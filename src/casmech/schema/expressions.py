@@ -7,7 +7,8 @@
     power   := atom ('**' unary)?          # right-associative, binds tighter than unary minus
     atom    := NUMBER | NAME | NAME '(' expr (',' expr)* ')' | '(' expr ')'
 
-Names are parameters or variables (`t`, `length`, ...); `pi` and `e` are builtin constants;
+Names are parameters or variables (`t`, `length`, ...) and may be dotted (`pivot.angle`,
+`bar.vx`: states of the mechanism, resolved in semantic); `pi` and `e` are builtin constants;
 calls are limited to the functions of `FUNCTIONS`, checked (name and arity) at parse time.
 An `Expr` evaluates with the "numpy" backend (floats or arrays) or the "casadi" backend
 (SX/MX/DM or floats), both defined by tables, not branches.
@@ -233,7 +234,7 @@ class Expr:
 _TOKEN = re.compile(
     r"(?P<space>\s+)"
     r"|(?P<number>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
-    r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*)"
+    r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z][A-Za-z0-9_]*)*)"  # dotted: pivot.angle
     r"|(?P<op>\*\*|[-+*/(),])"
 )
 
