@@ -313,7 +313,29 @@ class Torque(Spec):
     frame: Literal["global", "body"] = "global"
 
 
-Force = Annotated[Union[TSDA, RSDA, PointForce, Torque], Field(discriminator="type")]  # noqa: UP007
+class Bushing(Spec):
+    """6-DOF linear spring-damper between a frame on body_i and one on body_j (docs/forces.md).
+
+    Both frames are at the global point `at` with `orientation` (default: global axes) at t = 0;
+    vectors are components in the body_i frame (x, y, z): force = -K d - C d_dot + preload.
+    """
+
+    name: Name
+    type: Literal["bushing"]
+    body_i: Name
+    body_j: Name
+    at: Vector
+    orientation: Orientation | None = None
+    stiffness: Vector = (0, 0, 0)
+    damping: Vector = (0, 0, 0)
+    rotational_stiffness: Vector = (0, 0, 0)
+    rotational_damping: Vector = (0, 0, 0)
+    preload_force: Vector = (0, 0, 0)
+    preload_torque: Vector = (0, 0, 0)
+
+
+FORCES = (TSDA, RSDA, PointForce, Torque, Bushing)
+Force = Annotated[Union[FORCES], Field(discriminator="type")]  # noqa: UP007
 
 
 # ---------------------------------------------------------------------------------- analysis
