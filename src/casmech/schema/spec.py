@@ -101,6 +101,21 @@ class Orientation(Spec):
     z_axis: Vector | None = None
 
 
+# --------------------------------------------------------------- repeat (docs/components.md)
+class Repeat(Spec):
+    """One copy of the item per integer `index` from `from` to `to` (inclusive; none if to <
+    from); the index is a number in the item's expressions and `{expr}` in its names."""
+
+    model_config = ConfigDict(populate_by_name=True)
+
+    index: Name
+    from_: Scalar = Field(alias="from")
+    to: Scalar
+
+
+Repeats = Union[Repeat, Annotated[tuple[Repeat, ...], Field(min_length=1)]]  # noqa: UP007
+
+
 # ---------------------------------------------------------------------------------- geometry
 class Placement(Spec):
     offset: Vector | None = None
@@ -162,6 +177,7 @@ class Body(Spec):
     velocity: Vector | None = None
     angular_velocity: Vector | None = None
     geometry: tuple[Geometry, ...] = ()
+    repeat: Repeats | None = None
 
 
 # ------------------------------------------------------------------------------------ joints
@@ -176,6 +192,7 @@ class JointBase(Spec):
     name: Name
     body_i: Name
     body_j: Name
+    repeat: Repeats | None = None
 
 
 class Composite(JointBase):
@@ -284,6 +301,7 @@ class TSDA(Spec):
     free_length: Scalar | None = None
     damping: Scalar = 0
     actuator: Scalar = "0"
+    repeat: Repeats | None = None
 
 
 class RSDA(Spec):
@@ -294,6 +312,7 @@ class RSDA(Spec):
     free_angle: Scalar = 0
     damping: Scalar = 0
     actuator: Scalar = "0"
+    repeat: Repeats | None = None
 
 
 class PointForce(Spec):
@@ -303,6 +322,7 @@ class PointForce(Spec):
     at: Vector | None = None  # default: the body's centre of mass
     value: Vector
     frame: Literal["global", "body"] = "global"
+    repeat: Repeats | None = None
 
 
 class Torque(Spec):
@@ -311,6 +331,7 @@ class Torque(Spec):
     body: Name
     value: Vector
     frame: Literal["global", "body"] = "global"
+    repeat: Repeats | None = None
 
 
 class Bushing(Spec):
@@ -392,6 +413,46 @@ class OptimalControl(Spec):
     free_time: Pair | None = None  # [low, high] of a free final time; horizon is its guess
 
 
+# ------------------------------------------------------ components and instances (issue 6)
+class Instance(Spec):
+    """One use of a component: its parameters (expressions of the user's parameters) and the
+    placement of its frame (docs/components.md)."""
+
+    name: Name
+    component: Name
+    parameters: dict[StrictStr, Scalar] = Field(default_factory=dict)
+    position: Vector | None = None
+    orientation: Orientation | None = None
+    repeat: Repeats | None = None
+
+
+class ComponentFile(Spec):
+    """A component defined by another model file (path relative to this file)."""
+
+    file: StrictStr
+
+
+class Component(Spec):
+    """An inline component: a model body; a parameter without a value must be given by every
+    instance."""
+
+    description: StrictStr = ""
+    parameters: dict[StrictStr, Scalar | None] = Field(default_factory=dict)
+    bodies: tuple[Body, ...] = ()
+    joints: tuple[Joint, ...] = ()
+    forces: tuple[Force, ...] = ()
+    instances: tuple[Instance, ...] = ()
+
+
+ComponentRef = Annotated[
+    Union[  # noqa: UP007
+        Annotated[ComponentFile, Tag("file")],
+        Annotated[Component, Tag("inline")],
+    ],
+    Discriminator(lambda v: "file" if isinstance(v, dict) and "file" in v else "inline"),
+]
+
+
 class ModelSpec(Spec):
     """A whole model file."""
 
@@ -406,6 +467,8 @@ class ModelSpec(Spec):
     analysis: Analysis = Field(default_factory=Analysis)
     estimate: Estimate | None = None
     ocp: OptimalControl | None = None
+    components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
+    instances: tuple[Instance, ...] = ()
 
     model_config = ConfigDict(
         extra="forbid",
