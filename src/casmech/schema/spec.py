@@ -353,6 +353,7 @@ class Bushing(Spec):
     rotational_damping: Vector = (0, 0, 0)
     preload_force: Vector = (0, 0, 0)
     preload_torque: Vector = (0, 0, 0)
+    repeat: Repeats | None = None
 
 
 FORCES = (TSDA, RSDA, PointForce, Torque, Bushing)
