@@ -15,6 +15,7 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    StrictBool,
     StrictFloat,
     StrictInt,
     StrictStr,
@@ -181,11 +182,46 @@ class Body(Spec):
 
 
 # ------------------------------------------------------------------------------------ joints
+class Table(Spec):
+    """A function of t from a CSV table (casmech.schema.tables; docs/motors.md)."""
+
+    table: StrictStr  # CSV file with a `t` column, path relative to the model file's folder
+    column: StrictStr
+    interpolation: Literal["linear", "cubic"] = "cubic"
+    periodic: StrictBool = False
+
+
+def _time_function_kind(value: Any) -> str:
+    return "table" if isinstance(value, dict | Table) else "scalar"
+
+
+TimeFunction = Annotated[  # an expression of t, or a data table
+    Union[Annotated[Scalar, Tag("scalar")], Annotated[Table, Tag("table")]],  # noqa: UP007
+    Discriminator(_time_function_kind),
+]
+
+
 class Driver(Spec):
     """Which keys a joint type allows is checked in semantic (E408)."""
 
-    angle: Scalar | None = None
-    displacement: Scalar | None = None
+    angle: TimeFunction | None = None
+    displacement: TimeFunction | None = None
+
+
+class Motor(Spec):
+    """One mode per motion (casmech.schema.motors checks the keys against the joint type:
+    revolute angle | speed | torque, translational displacement | velocity | force, cylindrical
+    one of each). Unknown keys are reported there too, with the keys the joint type allows."""
+
+    model_config = ConfigDict(extra="allow", frozen=True,
+                              json_schema_extra={"additionalProperties": False})
+
+    angle: TimeFunction | None = None
+    speed: TimeFunction | None = None
+    torque: TimeFunction | None = None
+    displacement: TimeFunction | None = None
+    velocity: TimeFunction | None = None
+    force: TimeFunction | None = None
 
 
 class JointBase(Spec):
@@ -197,6 +233,7 @@ class JointBase(Spec):
 
 class Composite(JointBase):
     driver: Driver | None = None
+    motor: Motor | None = None
 
 
 class Revolute(Composite):
@@ -255,7 +292,7 @@ class Planar(Composite):
 
 
 class Basic(JointBase):
-    f: Scalar = "0"
+    f: TimeFunction = "0"
 
 
 class DP1(Basic):
