@@ -76,6 +76,9 @@ class Joint:
     driver_displacement: ScalarFunction | None = None  # variables ("t",)
     source: Source | None = None
     sources: Mapping[str, Source] = field(default_factory=dict)  # per-key locations
+    # effort motors (schema/motors.py): torque -> f(t, angle, angle_dot),
+    # force -> f(t, displacement, displacement_dot); position/speed motors are drivers above
+    motor: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

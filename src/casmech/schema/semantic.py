@@ -10,7 +10,7 @@ import math
 from collections.abc import Mapping
 
 from casmech.errors import Diagnostic
-from casmech.schema import resolved, spec
+from casmech.schema import motors, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import force, joint
@@ -121,7 +121,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     for index, item in enumerate(given.bodies):
         bodies.append(body(check, index, item))
         check.bodies.setdefault(item.name, bodies[-1])
-    joints = [joint(check, index, item) for index, item in enumerate(given.joints)]
+    joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
+              for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     settings = analysis(check, given.analysis)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None

@@ -1,0 +1,247 @@
+"""Functions of time from data tables: CSV reading, splines, evaluation in CasADi.
+
+A table is a CSV file with a header row naming its columns, one of them `t` (strictly
+increasing). A column becomes a piecewise polynomial of t:
+
+- `linear`: the broken line through the samples (C0; its second derivative is zero);
+- `cubic` (default): the C2 cubic spline through the samples with NOT-A-KNOT end conditions
+  (the third derivative is continuous at the second and the second-to-last sample, so four
+  samples of any cubic reproduce it exactly); with `periodic: true`, PERIODIC end conditions
+  instead (value, slope and curvature continuous across the wrap).
+
+Outside [t_first, t_last]: with `periodic`, the table repeats with period t_last - t_first (its
+first and last values must then be equal); without, t is clamped: the value holds the end
+sample and the derivatives are zero there (error-free, but the speed jumps to zero at the end of
+a table unless its end slope is zero).
+
+Evaluation is a tree of `if_else` over the pieces in CasADi operations (SX, MX or DM), so AD gives
+the exact derivatives of every order and code generation needs nothing special. The exact
+antiderivative (speed motors driven by a table) is the same kind of function, of one degree more.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from casmech.errors import did_you_mean
+
+MIN_ROWS = {"linear": 2, "cubic": 4}  # not-a-knot needs four samples; periodic cubic three
+MIN_ROWS_PERIODIC = {"linear": 2, "cubic": 3}
+PERIODIC_MATCH = 1e-9  # |y_last - y_first| allowed, relative to max |y| (and absolute for 0)
+
+
+class TableError(Exception):
+    """A problem with a table; `key` is the YAML key it belongs to (table, column, ...), `code`
+    its diagnostic code (E300: a file or column that does not exist, E103: bad contents)."""
+
+    def __init__(self, key: str, message: str, hint: str | None = None, got: str | None = None,
+                 code: str = "E103"):
+        super().__init__(message)
+        self.key, self.message, self.hint, self.got, self.code = key, message, hint, got, code
+
+
+# ----------------------------------------------------------------------------------- reading
+def _number_rows(lines: list[tuple[int, str]], width: int) -> np.ndarray:
+    rows = []
+    for line_number, line in lines:
+        cells = [cell.strip() for cell in line.split(",")]
+        try:
+            values = [float(cell) for cell in cells]
+        except ValueError:
+            raise TableError("table", f"line {line_number} is not a row of numbers",
+                             got=line.strip()[:60]) from None
+        if len(values) != width:
+            raise TableError("table", f"line {line_number} has {len(values)} values, the header "
+                             f"{width}", got=line.strip()[:60])
+        rows.append(values)
+    return np.array(rows, float).reshape(len(rows), width)
+
+
+def read_columns(path: Path) -> dict[str, np.ndarray]:
+    """Columns of a CSV file by header name (blank lines and lines starting with # skipped)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TableError("table", f"table file '{path}' not found", code="E300",
+                         hint="the path is relative to the model file's folder") from None
+    except (OSError, UnicodeDecodeError) as error:
+        raise TableError("table", f"cannot read table file '{path}': {error}") from None
+    lines = [(k + 1, line) for k, line in enumerate(text.splitlines())
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise TableError("table", f"table file '{path}' is empty",
+                         hint="write a header row (t, columns...) and one row per sample")
+    header = [name.strip() for name in lines[0][1].split(",")]
+    values = _number_rows(lines[1:], len(header))
+    return {name: values[:, k] for k, name in enumerate(header)}
+
+
+def samples(path: Path, column: str, interpolation: str, periodic: bool):
+    """(t, y) of `column`, checked: t present, strictly increasing, finite, enough rows."""
+    columns = read_columns(path)
+    for name, key in (("t", "table"), (column, "column")):
+        if name not in columns:
+            hint = did_you_mean(name, columns) or f"columns: {', '.join(columns)}"
+            raise TableError(key, f"no column '{name}' in '{path.name}'", hint=hint, code="E300")
+    t, y = columns["t"], columns[column]
+    needed = (MIN_ROWS_PERIODIC if periodic else MIN_ROWS)[interpolation]
+    if len(t) < needed:
+        raise TableError("table", f"a {interpolation} table needs at least {needed} rows",
+                         got=f"{len(t)} rows")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(y))):
+        raise TableError("table", "the table holds a value that is not finite")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        k = int(np.argmax(steps <= 0))
+        raise TableError("table", "column 't' must be strictly increasing",
+                         got=f"t = {t[k]:g} then {t[k + 1]:g} (data rows {k + 1}, {k + 2})")
+    if periodic and abs(y[-1] - y[0]) > PERIODIC_MATCH * max(1.0, float(np.max(np.abs(y)))):
+        raise TableError("periodic", f"a periodic table must end where it starts: column "
+                         f"'{column}' goes from {y[0]:g} to {y[-1]:g}",
+                         hint="repeat the first row's value in the last row")
+    return t, y
+
+
+# ----------------------------------------------------------------------------------- splines
+def _second_derivatives(t: np.ndarray, y: np.ndarray, periodic: bool) -> np.ndarray:
+    """M_k = s''(t_k) of the cubic spline: not-a-knot, or periodic (dense solve)."""
+    n, h = len(t), np.diff(t)
+    slope = np.diff(y) / h
+    if periodic:  # unknowns M_0..M_{n-2}, M_{n-1} = M_0; the row of M_0 wraps around
+        m = n - 1
+        a, rhs = np.zeros((m, m)), np.zeros(m)
+        for i in range(m):
+            before, after = h[i - 1], h[i]
+            a[i, (i - 1) % m] += before
+            a[i, i] += 2 * (before + after)
+            a[i, (i + 1) % m] += after
+            rhs[i] = 6 * (slope[i] - slope[i - 1])
+        second = np.linalg.solve(a, rhs)
+        return np.append(second, second[0])
+    a, rhs = np.zeros((n, n)), np.zeros(n)
+    for i in range(1, n - 1):
+        a[i, i - 1:i + 2] = h[i - 1], 2 * (h[i - 1] + h[i]), h[i]
+        rhs[i] = 6 * (slope[i] - slope[i - 1])
+    a[0, :3] = h[1], -(h[0] + h[1]), h[0]  # not-a-knot: s''' continuous at t_1
+    a[-1, -3:] = h[-1], -(h[-2] + h[-1]), h[-2]  # ... and at t_{n-2}
+    return np.linalg.solve(a, rhs)
+
+
+def spline_coefficients(t, y, interpolation: str, periodic: bool) -> np.ndarray:
+    """(pieces, 4): ascending powers of s = t - t_k on each piece [t_k, t_k+1]."""
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    h, slope = np.diff(t), np.diff(y) / np.diff(t)
+    if interpolation == "linear":
+        zeros = np.zeros_like(h)
+        return np.column_stack([y[:-1], slope, zeros, zeros])
+    m = _second_derivatives(t, y, periodic)
+    b = slope - h * (2 * m[:-1] + m[1:]) / 6
+    return np.column_stack([y[:-1], b, m[:-1] / 2, (m[1:] - m[:-1]) / (6 * h)])
+
+
+@dataclass(frozen=True)
+class PiecewisePolynomial:
+    """Pieces on `breaks` (ascending powers of t - t_k, any degree), extended outside the
+    breaks linearly (`slopes` below/above; zero: clamped) or periodically, each period adding
+    `increment` (the integral over one period, for an antiderivative)."""
+
+    breaks: np.ndarray
+    coefficients: np.ndarray  # (pieces, degree + 1)
+    periodic: bool = False
+    slopes: tuple[float, float] = (0.0, 0.0)
+    increment: float = 0.0
+
+    def _piece(self, k: int, u) -> Any:
+        s, value = u - float(self.breaks[k]), 0.0
+        for c in self.coefficients[k, ::-1]:  # Horner
+            value = value * s + float(c)
+        return value
+
+    def _tree(self, u, low: int, high: int) -> Any:
+        """The piece containing u among pieces low..high-1 (a balanced if_else tree)."""
+        if high - low == 1:
+            return self._piece(low, u)
+        mid = (low + high) // 2
+        return ca.if_else(u < float(self.breaks[mid]), self._tree(u, low, mid),
+                          self._tree(u, mid, high))
+
+    def casadi(self, t) -> Any:
+        first, last = float(self.breaks[0]), float(self.breaks[-1])
+        pieces = len(self.coefficients)
+        if self.periodic:
+            periods = ca.floor((t - first) / (last - first))
+            return self._tree(t - periods * (last - first), 0, pieces) + periods * self.increment
+        inside = self._tree(ca.fmin(ca.fmax(t, first), last), 0, pieces)
+        below, above = self.slopes
+        return inside + below * ca.fmin(t - first, 0) + above * ca.fmax(t - last, 0)
+
+    def antiderivative(self) -> PiecewisePolynomial:
+        """The integral from breaks[0]: exact, one degree more, same extension rule."""
+        pieces, degree = self.coefficients.shape
+        h = np.diff(self.breaks)
+        integrated = np.zeros((pieces, degree + 1))
+        integrated[:, 1:] = self.coefficients / np.arange(1, degree + 1)
+        piece_integrals = np.sum(integrated[:, 1:] * h[:, None] ** np.arange(1, degree + 1), axis=1)
+        integrated[:, 0] = np.concatenate([[0.0], np.cumsum(piece_integrals)[:-1]])
+        total = float(np.sum(piece_integrals))
+        if self.periodic:
+            return replace(self, coefficients=integrated, increment=total)
+        ends = (float(self.coefficients[0, 0]), self._end_value())
+        return replace(self, coefficients=integrated, slopes=ends)
+
+    def _end_value(self) -> float:
+        h = float(self.breaks[-1] - self.breaks[-2])
+        return float(self.coefficients[-1] @ h ** np.arange(self.coefficients.shape[1]))
+
+
+# ------------------------------------------------------------------------------ the function
+@dataclass(frozen=True)
+class TableFunction:
+    """A function of t from a table, interchangeable with resolved.ScalarFunction (the same
+    `casadi`, `value`, `text`, `constants`, `variables`, `source`, `is_zero`)."""
+
+    text: str
+    polynomial: PiecewisePolynomial
+    source: Any = None
+    constants: dict = field(default_factory=dict)  # none: a table has no parameters
+    variables: tuple[str, ...] = ("t",)
+
+    def casadi(self, **variables: Any) -> Any:
+        return self.polynomial.casadi(variables["t"])
+
+    def value(self, **variables: float) -> float:
+        return float(self.polynomial.casadi(ca.DM(float(variables["t"]))))
+
+    @property
+    def is_zero(self) -> bool:
+        return False
+
+    def integral(self, start: float = 0.0) -> TableFunction:
+        """The exact integral from t = start, as a function of t."""
+        antiderivative = self.polynomial.antiderivative()
+        offset = float(antiderivative.casadi(ca.DM(start)))
+        shifted = antiderivative.coefficients.copy()
+        shifted[:, 0] -= offset
+        text = f"integral from {start:g} to t of {self.text}"
+        return replace(self, text=text, polynomial=replace(antiderivative, coefficients=shifted))
+
+
+def table_function(path: Path, column: str, interpolation: str = "cubic", periodic: bool = False,
+                   source: Any = None) -> TableFunction:
+    """The function of t a table column describes (raises TableError)."""
+    t, y = samples(path, column, interpolation, periodic)
+    coefficients = spline_coefficients(t, y, interpolation, periodic and interpolation == "cubic")
+    polynomial = PiecewisePolynomial(t, coefficients, periodic)
+    text = f"{interpolation}{' periodic' if periodic else ''} table {path.name}:{column}"
+    return TableFunction(text, polynomial, source)
+
+
+def period(function: TableFunction) -> float:
+    breaks = function.polynomial.breaks
+    return float(breaks[-1] - breaks[0]) if function.polynomial.periodic else math.inf
