@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.compiler import euler
+from casmech.compiler import bushing, coordinates, euler  # coordinates: state of force laws
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR, ModelIR
 
@@ -66,7 +66,8 @@ def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tupl
     value, value_dot = coordinate, rate(coordinate, x)
     tension = k * (value - rest) + c * value_dot
     if force.actuator is not None:
-        tension += force.actuator.casadi(t=x.t, **{names[0]: value, names[1]: value_dot})
+        tension += force.actuator.casadi(t=x.t, **{names[0]: value, names[1]: value_dot},
+                                         **coordinates.values(force.actuator, x))
     generalized = -ca.jacobian(coordinate, x.q).T * tension
     return generalized, 0.5 * k * (value - rest) ** 2
 
@@ -83,7 +84,8 @@ def _rsda(force, x):
 
 def _value(force: ForceIR, x: Coordinates):
     """The force/torque vector in the global frame."""
-    v = ca.vertcat(*[component.casadi(t=x.t) for component in force.value])
+    v = ca.vertcat(*[component.casadi(t=x.t, **coordinates.values(component, x))
+                     for component in force.value])
     return x.frame(force.body_i).A @ v if force.frame == "body" else v
 
 
@@ -106,6 +108,7 @@ FORCE_ELEMENTS: dict[str, Callable] = {
     "rsda": _rsda,
     "force": _point_force,
     "torque": _torque,
+    "bushing": lambda force, x: bushing.generalized_force(force, x),
 }
 
 

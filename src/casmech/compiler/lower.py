@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.compiler import bushing, coordinates, euler
 from casmech.compiler import joints as joint_tables
 from casmech.compiler.ir import (
     GROUND_INDEX,
@@ -111,8 +111,22 @@ def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[Primi
     return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source)
 
 
+def joint_coordinates(joint: Joint, poses: _Poses) -> ForceIR:
+    """Geometry of a joint's coordinates (compiler/coordinates.py), 0 at the file's pose: the
+    joint frame's u, v, w on body_i, u on body_j (as an rsda's), the joint point on both."""
+    frame = joint_frame(joint)
+    axes = {f"{key}_i": poses.local(joint.body_i, key, frame[key]) for key in "uvw"}
+    axes["u_j"] = poses.local(joint.body_j, "u", frame["u"])
+    points = {f"s_{side}": poses.local(body, "P", frame["P"])
+              for side, body in (("i", joint.body_i), ("j", joint.body_j))}
+    return ForceIR(joint.name, joint.type, poses.index[joint.body_i], poses.index[joint.body_j],
+                   points, {}, axes=axes, source=joint.source)
+
+
 def lower_force(force: Force, model: ResolvedModel, poses: _Poses) -> ForceIR:
     v = force.vectors
+    if force.type == "bushing":
+        return bushing.lower(force, model, poses)
     params = {"stiffness": force.stiffness, "damping": force.damping}
     if force.type == "tsda":
         at_i, at_j = np.asarray(v["at_i"], float), np.asarray(v["at_j"], float)
@@ -151,6 +165,9 @@ def lower(model: ResolvedModel) -> ModelIR:
                np.asarray(b.angular_velocity, float), b.source)
         for b in model.bodies
     )
-    forces = tuple(lower_force(f, model, poses) for f in model.forces)
+    geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
+                if j.type in coordinates.JOINT_TYPES}  # for force laws reading the state
+    forces = tuple(coordinates.bind(lower_force(f, model, poses), poses.index, geometry)
+                   for f in model.forces)
     return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
                    forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters))

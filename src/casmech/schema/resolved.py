@@ -90,6 +90,10 @@ class Force:
     rsda: joint, stiffness, free_angle, damping, actuator (variables ("t", "angle", "angle_dot"))
     force: body, at, value (3 ScalarFunctions of ("t",)), frame
     torque: body, value, frame
+    bushing: body_i, body_j, vectors at, orientation (Euler parameters of the frame at t = 0),
+             stiffness, damping, rotational_stiffness, rotational_damping, preload_force,
+             preload_torque (3 each, components in the frame)
+    value and actuator may read the state (`pivot.angle`, `bar.vx`): compiler/coordinates.py
     """
 
     name: str

@@ -13,7 +13,8 @@ from casmech.errors import Diagnostic
 from casmech.schema import motors, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
-from casmech.schema.connections import force, joint
+from casmech.schema.connections import joint
+from casmech.schema.force_laws import StateChecker, force  # forces read the state
 from casmech.schema.loader import Document, Path
 
 ANALYSIS_RULES = {  # key -> problem with the settings `v`, or None
@@ -152,5 +153,5 @@ def resolve(
     overrides: Mapping[str, str] | None = None,
 ) -> tuple[resolved.ResolvedModel | None, list[Diagnostic]]:
     """The resolved model (None if anything is wrong) and every finding."""
-    check = Checker(document, overrides)
+    check = StateChecker(document, overrides)
     return resolve_model(check, model), check.found

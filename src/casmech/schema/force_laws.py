@@ -1,0 +1,134 @@
+"""Force laws that read the state of the mechanism, and the bushing (docs/forces.md).
+
+A force's or torque's `value` and a tsda's or rsda's `actuator` may name the state
+(`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the table is compiler/coordinates.py)
+besides t and parameters. `StateChecker` lets those expressions (and only those) read it, and
+says what is wrong with a dotted name anywhere: a state where none is allowed, a misspelt one
+(did you mean), an attribute the joint type does not have, ground.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from casmech.compiler.coordinates import BODY_STATES, JOINT_COORDINATES, split
+from casmech.errors import did_you_mean
+from casmech.schema import connections, resolved
+from casmech.schema.bodies import orientation
+from casmech.schema.checker import Checker, failed
+from casmech.schema.loader import Path
+
+STATE_KEYS = "force/torque value, tsda/rsda actuator"
+STATE_NAMES = ("<joint>.angle", "<joint>.displacement", "<body>.vx", "...")
+BUSHING_VECTORS = ("at", "stiffness", "damping", "rotational_stiffness", "rotational_damping",
+                   "preload_force", "preload_torque")
+NON_NEGATIVE = ("stiffness", "damping", "rotational_stiffness", "rotational_damping")
+BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
+
+
+def joint_attributes(joint_type: str) -> list[str]:
+    return [name for name, (types, _) in JOINT_COORDINATES.items() if joint_type in types]
+
+
+def _body_value(body: resolved.Body | None, attribute: str) -> float:
+    """The state's value at t = 0 as the file writes it (0 for a body that failed its checks)."""
+    if body is None:
+        return 0.0
+    return float(getattr(body, BODY_INITIAL[attribute[:-1]])["xyz".index(attribute[-1])])
+
+
+def initial_states(check: Checker) -> dict[str, float]:
+    """Every state name a force law may read, with its value at t = 0 (joint coordinates: 0)."""
+    states = {f"{joint}.{attribute}": 0.0 for joint, kind in check.joint_types.items()
+              for attribute in joint_attributes(kind)}
+    states.update({f"{name}.{attribute}": _body_value(body, attribute)
+                   for name, body in check.bodies.items() for attribute in BODY_STATES})
+    return states
+
+
+class StateChecker(Checker):
+    """A Checker whose functions read the state inside `reading_state()`."""
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self.states: dict[str, float] | None = None
+
+    @contextmanager
+    def reading_state(self) -> Iterator[None]:
+        self.states = initial_states(self)
+        try:
+            yield
+        finally:
+            self.states = None
+
+    def function(self, path: Path, value: Any, at):
+        return super().function(path, value, {**at, **(self.states or {})})
+
+    def unknown_symbol(self, path, name: str, source, variables) -> None:
+        if "." not in name:
+            super().unknown_symbol(path, name, source, variables)
+            return
+        message, hint = (self.misnamed_state(name) if self.states is not None
+                         else self.misplaced_state(name))
+        self.error("E201", path, message, source=source, hint=hint)
+
+    def misplaced_state(self, name: str) -> tuple[str, str]:
+        _, attribute = split(name)
+        if attribute in JOINT_COORDINATES or attribute in BODY_STATES:
+            return f"the state '{name}' is not allowed here", f"states are read in: {STATE_KEYS}"
+        return (f"unknown symbol '{name}'",
+                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {STATE_KEYS}")
+
+    def misnamed_state(self, name: str) -> tuple[str, str | None]:
+        owner, attribute = split(name)
+        if owner == resolved.GROUND:
+            return "'ground' does not move: it has no state", "name a moving body or a joint"
+        if owner in self.joint_types:
+            kind = self.joint_types[owner]
+            has = joint_attributes(kind)
+            listed = ", ".join(has) if has else "no coordinates (revolute, cylindrical and " \
+                "translational joints have)"
+            hint = did_you_mean(attribute, has) or f"{kind} joints have {listed}"
+            return f"{kind} joint '{owner}' has no '{attribute}'", hint
+        if owner in self.bodies:
+            hint = did_you_mean(attribute, BODY_STATES) or f"bodies have {', '.join(BODY_STATES)}"
+            return f"body '{owner}' has no '{attribute}'", hint
+        known = [*self.joint_types, *self.bodies]
+        hint = did_you_mean(name, self.states or {}) or did_you_mean(owner, known)
+        return f"unknown state '{name}': no body or joint '{owner}'", hint
+
+
+# --------------------------------------------------------------------------------- bushing
+def bushing(check: Checker, path: Path, given) -> dict[str, Any] | None:
+    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
+    vectors = {key: check.numbers((*path, key), getattr(given, key)) for key in BUSHING_VECTORS}
+    for key in NON_NEGATIVE:
+        if vectors[key] is not None and np.any(vectors[key] < 0):
+            got = ", ".join(f"{v:g}" for v in vectors[key])
+            check.error("E103", (*path, key), f"bushing {key.replace('_', ' ')} must not be "
+                        "negative", got=got, hint="zero leaves that direction free")
+            vectors[key] = None
+    vectors["orientation"] = orientation(check, (*path, "orientation"), given.orientation)
+    if not bodies_ok or failed(vectors.values()):
+        return None
+    return dict(body_i=given.body_i, body_j=given.body_j, vectors=vectors)
+
+
+LAWS = {"bushing": bushing}  # force types resolved here; the others in connections.py
+
+
+def force(check: Checker, index: int, given) -> resolved.Force | None:
+    """One entry of `forces:`; value and actuator read the state when `check` can."""
+    if given.type in LAWS:
+        path = ("forces", index)
+        fields = LAWS[given.type](check, path, given)
+        return None if fields is None else resolved.Force(
+            given.name, given.type, **fields, source=check.doc.locate(path))
+    if not isinstance(check, StateChecker):
+        return connections.force(check, index, given)
+    with check.reading_state():
+        return connections.force(check, index, given)
