@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.compiler import bushing, coordinates, euler  # coordinates: state of force laws
+from casmech.compiler import bushing, coordinates, euler, motors  # coordinates: force laws
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR, ModelIR
 
@@ -110,6 +110,7 @@ FORCE_ELEMENTS: dict[str, Callable] = {
     "torque": _torque,
     "bushing": lambda force, x: bushing.generalized_force(force, x),
 }
+FORCE_ELEMENTS.update(motors.FORCE_ELEMENTS)  # effort motors of joints (ir.motors)
 
 
 def applied_forces(ir: ModelIR, x: Coordinates):
@@ -117,7 +118,7 @@ def applied_forces(ir: ModelIR, x: Coordinates):
     nb = ir.n_bodies
     gravity = ca.vertcat(*[b.mass * ca.DM(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
     total, potential = gravity, 0.0
-    for force in ir.forces:
+    for force in (*ir.forces, *ir.motors):
         generalized, energy = FORCE_ELEMENTS[force.type](force, x)
         total, potential = total + generalized, potential + energy
     return total, potential
@@ -151,6 +152,9 @@ def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
         n_bar = -0.5 * euler.g_matrix(p) @ ca.jacobian(phi, p).T @ lam_j
         at = point(x, joint.body_i, joint.point_i)
         torque = euler.rotation(p) @ n_bar + ca.cross(x.r(b) - at, force)
+        for motor in (m for m in ir.motors if m.name == joint.name):  # its actuation
+            motor_force, motor_torque = motors.reaction(motor, x, at)
+            force, torque = force + motor_force, torque + motor_torque
         forces.append(force)
         torques.append(torque)
     empty = ca.SX(3, 0)

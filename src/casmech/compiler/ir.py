@@ -91,6 +91,7 @@ class ModelIR:
     gravity: np.ndarray
     analysis: Analysis
     parameters: Mapping[str, float] = field(default_factory=dict)
+    motors: tuple[ForceIR, ...] = ()  # effort motors of joints (compiler/motors.py), by joint name
 
     @property
     def n_bodies(self) -> int:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import bushing, coordinates, euler
+from casmech.compiler import bushing, coordinates, euler, motors
 from casmech.compiler import joints as joint_tables
 from casmech.compiler.ir import (
     GROUND_INDEX,
@@ -169,5 +169,8 @@ def lower(model: ResolvedModel) -> ModelIR:
                 if j.type in coordinates.JOINT_TYPES}  # for force laws reading the state
     forces = tuple(coordinates.bind(lower_force(f, model, poses), poses.index, geometry)
                    for f in model.forces)
+    effort = tuple(m for j in model.joints if j.motor
+                   for m in motors.lower(j, joint_frame(j), poses))
     return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
-                   forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters))
+                   forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters),
+                   motors=effort)
