@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from casmech.errors import Diagnostic, ModelError
+from casmech.schema.components import compose, uses_composition
 from casmech.schema.loader import Document, load_document, load_file
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.semantic import resolve
@@ -25,6 +26,12 @@ def _order(diagnostic: Diagnostic) -> tuple[int, int]:
 
 
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
+    if uses_composition(document.data):  # components, instances, repeat: docs/components.md
+        model, found = compose(document, overrides)
+        found = sorted(dict.fromkeys(found), key=_order)
+        if found or model is None:
+            raise ModelError(found)
+        return model
     spec, found = validate(document)
     model = None
     if spec is not None:

@@ -175,3 +175,6 @@ class ResolvedModel:
     analysis: Analysis
     estimate: Estimation | None = None
     ocp: OptimalControl | None = None
+    # component files the model was composed from (path -> text; docs/components.md): with
+    # `text`, everything the model's content depends on
+    files: Mapping[str, str] = field(default_factory=dict)
