@@ -50,7 +50,7 @@ class _Poses:
 def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
     """Global joint-frame quantities at t = 0 (see joints.py)."""
     v = joint.vectors
-    frame = dict(UNIT)
+    frame = dict(UNIT) | {"u": UNIT["ex"], "v": UNIT["ey"], "w": UNIT["ez"]}  # fixed: no axis
     for key, name in (("at", "P"), ("at_i", "Pi"), ("axis_i", "axis_i"), ("axis_j", "axis_j")):
         if key in v:
             frame[name] = np.asarray(v[key], float)
