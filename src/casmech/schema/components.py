@@ -359,8 +359,8 @@ def compose_document(document: Document, overrides, context: Context,
     members = instances.members
     check = ComposedChecker(expanded, own, members)
     model = resolve_model(check, given)
-    found = [repeat.relabel(d, expanded) for d in [*instances.check.found, *check.found]]
-    found = [*document.diagnostics, *dict.fromkeys(found), *instances.found]
+    found = repeat.relabel([*instances.check.found, *check.found], expanded)
+    found = [*document.diagnostics, *found, *instances.found]
     if model is None or found:
         return None, found, members.instances
     return merged(model, members), [], members.instances

@@ -257,14 +257,33 @@ def expand(document: Document, parameters: Mapping[str, float]):
 ITEM_PATH = re.compile(r"^(bodies|joints|forces|instances)\[(\d+)\]")
 
 
-def relabel(diagnostic: Diagnostic, document: Document) -> Diagnostic:
-    """A finding on a copy, named by the written item and the index values of the copy."""
+def _written(diagnostic: Diagnostic, document: Document) -> tuple[Diagnostic, str | None]:
+    """The finding on a copy named by the written item, and the copy's index values."""
     items = getattr(document, "items", {})
     match = ITEM_PATH.match(diagnostic.path)
     if not match or (match.group(1), int(match.group(2))) not in items:
-        return diagnostic
+        return diagnostic, None
     j, values = items[(match.group(1), int(match.group(2)))]
     path = f"{match.group(1)}[{j}]{diagnostic.path[match.end():]}"
     note = ", ".join(f"{name} = {value}" for name, value in values.items())
-    message = f"{diagnostic.message} (for {note})" if note else diagnostic.message
-    return replace(diagnostic, path=path, message=message)
+    return replace(diagnostic, path=path), note or None
+
+
+def _notes(notes: list[str]) -> str:
+    """'i = 2', 'i = 3' -> 'i = 2, 3'; several indices: 'i = 1, j = 2; i = 2, j = 0'."""
+    shown = notes[:6] + (["..."] if len(notes) > 6 else [])
+    single = all(note.count("=") == 1 for note in notes)
+    if single and len({note.split(" =")[0] for note in notes}) == 1:
+        return notes[0].split(" =")[0] + " = " + ", ".join(n.split("= ")[-1] for n in shown)
+    return "; ".join(shown)
+
+
+def relabel(found: list[Diagnostic], document: Document) -> list[Diagnostic]:
+    """Findings on copies, named by the written item; the same finding on several copies of one
+    item is reported once, with the index values of those copies."""
+    groups: dict[Diagnostic, list[str]] = {}
+    for diagnostic in found:
+        written, note = _written(diagnostic, document)
+        groups.setdefault(written, []).extend([note] if note else [])
+    return [replace(d, message=f"{d.message} (for {_notes(notes)})") if notes else d
+            for d, notes in groups.items()]

@@ -114,7 +114,13 @@ class Repeat(Spec):
     to: Scalar
 
 
-Repeats = Union[Repeat, Annotated[tuple[Repeat, ...], Field(min_length=1)]]  # noqa: UP007
+Repeats = Annotated[
+    Union[  # noqa: UP007
+        Annotated[Repeat, Tag("one")],
+        Annotated[tuple[Repeat, ...], Field(min_length=1), Tag("nested")],
+    ],
+    Discriminator(lambda v: "nested" if isinstance(v, list | tuple) else "one"),
+]
 
 
 # ---------------------------------------------------------------------------------- geometry
@@ -512,5 +518,12 @@ class ModelSpec(Spec):
         extra="forbid",
         frozen=True,
         title="casmech model",
-        json_schema_extra={"$schema": "https://json-schema.org/draft/2020-12/schema"},
+        json_schema_extra=lambda schema: _model_schema(schema),
     )
+
+
+def _model_schema(schema: dict) -> None:
+    """$schema; `bodies` may be left out when `instances` give the bodies (docs/components.md)."""
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["required"] = [key for key in schema.get("required", []) if key != "bodies"]
+    schema["anyOf"] = [{"required": ["bodies"]}, {"required": ["instances"]}]
