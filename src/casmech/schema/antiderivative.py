@@ -166,7 +166,17 @@ def _step(arg, a, x0, h0, x1, h1):
 LINEAR_ARGUMENT = {"sin": _sin, "cos": _cos, "exp": _exp}
 
 
+def _constant_argument(node, constants) -> bool:
+    """Whether a call's first argument is a*t + b with a = 0 at these parameters."""
+    coefficients = polynomial(node.args[0])
+    return (coefficients is not None and len(coefficients) == 2
+            and _value(coefficients[1], constants) == 0.0
+            and not any(has_t(arg) for arg in node.args[1:]))
+
+
 def _integrate_call(node, constants):
+    if node.function in (*LINEAR_ARGUMENT, "step") and _constant_argument(node, constants):
+        return _bin("*", node, Name(T, 0, 0))  # constant in time (its t-terms vanish)
     if node.function in LINEAR_ARGUMENT:
         linear = _linear(node.args[0], constants)
         if linear is not None:
