@@ -51,7 +51,7 @@ def test_integral_matches_quadrature(text, rng):
     for t in rng.uniform(-1.0, 4.0, 4):
         expected = quad(f, 0.0, t, epsabs=1e-13, epsrel=1e-13, limit=200, points=[0.5, 1.5])[0]
         got = float(angle.evaluate({**PARAMETERS, "t": t}))
-        # closed form vs adaptive quadrature: measured agreement 1e-13 relative at worst
+        # closed form vs adaptive quadrature: measured 1.1e-12 relative at worst (120 points)
         np.testing.assert_allclose(got, expected, rtol=1e-10, atol=1e-11)
 
 
