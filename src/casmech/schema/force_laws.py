@@ -72,8 +72,8 @@ class StateChecker(Checker):
         if "." not in name:
             super().unknown_symbol(path, name, source, variables)
             return
-        message, hint = (self.misnamed_state(name) if self.states is not None
-                         else self.misplaced_state(name))
+        allowed = self.states is not None and self.states.keys() <= set(variables)
+        message, hint = self.misnamed_state(name) if allowed else self.misplaced_state(name)
         self.error("E201", path, message, source=source, hint=hint)
 
     def misplaced_state(self, name: str) -> tuple[str, str]:
