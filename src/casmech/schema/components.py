@@ -54,14 +54,18 @@ class ComposedChecker(BaseChecker):
     def __init__(self, document: Document, overrides, members: Members | None = None):
         super().__init__(document, overrides)
         self.instances: dict[str, str] = {}
+        self.failed: set[str] = set()
         if members is not None:
             self.instances = dict(members.instances)
+            self.failed = set(members.failed)
             self.bodies.update({b.name: b for b in members.bodies})
             for item in members.joints:
                 self.joint_types[item.name] = item.type
                 self.joint_bodies[item.name] = (item.body_i, item.body_j)
 
     def reference(self, path: Path, name: str, known, what: str) -> bool:
+        if any(name.startswith(instance + ".") for instance in self.failed):
+            return False  # the instance's own findings are reported; no follow-up errors
         if name in known or "." not in name or not self.instances:
             return super().reference(path, name, known, what)
         owners = [i for i in self.instances if name.startswith(i + ".")]
@@ -107,6 +111,7 @@ class Members:
     forces: list = field(default_factory=list)
     parameters: dict[str, float] = field(default_factory=dict)
     instances: dict[str, str] = field(default_factory=dict)  # instance path -> component
+    failed: set[str] = field(default_factory=set)  # instances with findings
     files: dict[str, str] = field(default_factory=dict)  # component file -> text
 
 
@@ -205,8 +210,8 @@ class Instances:
         first: dict[str, int] = {}
         for index, given in enumerate(instances):
             path = ("instances", index)
-            if self.valid_name(path, given.name, first):
-                self.instance(path, given)
+            if self.valid_name(path, given.name, first) and not self.instance(path, given):
+                self.members.failed.add(given.name)
         unknown = [name for name in self.overrides if name not in first]
         for name in unknown:
             hint = did_you_mean(name, first) or f"instances: {listing(list(first)) or 'none'}"
@@ -229,14 +234,15 @@ class Instances:
             return True
         return False
 
-    def instance(self, path: Path, given: spec.Instance) -> None:
+    def instance(self, path: Path, given: spec.Instance) -> bool:
+        """Resolve, place and add one instance; False when it has findings."""
         definition = self.scope.definitions.get(given.component)
         if definition is None:
             hint = did_you_mean(given.component, self.scope.definitions)
             self.error("E300", (*path, "component"), f"in instance {given.name}: unknown "
                        f"component '{given.component}'", hint=hint or "components: " +
                        (listing(list(self.scope.definitions)) or "none (add a components: map)"))
-            return
+            return False
         ref, home = definition
         key = component_key(home, given.component, ref)
         chain = [name for k, name in self.context.stack]
@@ -245,17 +251,17 @@ class Instances:
                                 + [given.component])
             self.error("E103", (*path, "component"), f"in instance {given.name}: component "
                        f"cycle {cycle}", hint="a component cannot contain itself")
-            return
+            return False
         values = {name: self.check.number((*path, "parameters", name), value)
                   for name, value in given.parameters.items()}
         frame = self.frame(path, given)
         document, found = self.document(home, given.component, ref)
         self.inner += [(given.name, given.component, d) for d in found]
         if document is None or frame is None or None in values.values():
-            return
+            return False
         document = self.parameters(path, given, document, values)
         if document is None:
-            return
+            return False
         scope = self.scope if isinstance(ref, spec.Component) else None
         sets = self.overrides.get(given.name, {})
         model, found, instances = compose_document(document, sets, self.context.push(
@@ -263,6 +269,7 @@ class Instances:
         self.inner += [(given.name, given.component, d) for d in found]
         if model is not None:
             self.add(given, model, instances, frame)
+        return model is not None
 
     def document(self, home: Document, name: str, ref):
         if isinstance(ref, spec.ComponentFile):
