@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -177,9 +178,18 @@ class PiecewisePolynomial:
         if self.periodic:
             periods = ca.floor((t - first) / (last - first))
             return self._tree(t - periods * (last - first), 0, pieces) + periods * self.increment
-        inside = self._tree(ca.fmin(ca.fmax(t, first), last), 0, pieces)
+        # if_else, not fmin/fmax: AD of fmax(t, first) at t = first gives half the slope
+        before, after = t < first, t > last
+        inside = self._tree(ca.if_else(before, first, ca.if_else(after, last, t)), 0, pieces)
         below, above = self.slopes
-        return inside + below * ca.fmin(t - first, 0) + above * ca.fmax(t - last, 0)
+        return (inside + below * ca.if_else(before, t - first, 0)
+                + above * ca.if_else(after, t - last, 0))
+
+    @cached_property
+    def numeric(self) -> ca.Function:
+        """casadi.Function t -> value, for numerical evaluation (built once)."""
+        t = ca.SX.sym("t")
+        return ca.Function("table", [t], [self.casadi(t)])
 
     def antiderivative(self) -> PiecewisePolynomial:
         """The integral from breaks[0]: exact, one degree more, same extension rule."""
@@ -216,7 +226,7 @@ class TableFunction:
         return self.polynomial.casadi(variables["t"])
 
     def value(self, **variables: float) -> float:
-        return float(self.polynomial.casadi(ca.DM(float(variables["t"]))))
+        return float(self.polynomial.numeric(float(variables["t"])))
 
     @property
     def is_zero(self) -> bool:
@@ -225,7 +235,7 @@ class TableFunction:
     def integral(self, start: float = 0.0) -> TableFunction:
         """The exact integral from t = start, as a function of t."""
         antiderivative = self.polynomial.antiderivative()
-        offset = float(antiderivative.casadi(ca.DM(start)))
+        offset = float(antiderivative.numeric(start))
         shifted = antiderivative.coefficients.copy()
         shifted[:, 0] -= offset
         text = f"integral from {start:g} to t of {self.text}"
