@@ -25,10 +25,16 @@ def _order(diagnostic: Diagnostic) -> tuple[int, int]:
     return (0, 0) if source is None else (source.line, source.col)
 
 
+def _in_files(diagnostic: Diagnostic, top: str) -> tuple:
+    """The model's own file first, then the component files, each by line."""
+    file = diagnostic.source.file if diagnostic.source else top
+    return (file != top, file, *_order(diagnostic))
+
+
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
     if uses_composition(document.data):  # components, instances, repeat: docs/components.md
         model, found = compose(document, overrides)
-        found = sorted(dict.fromkeys(found), key=_order)
+        found = sorted(dict.fromkeys(found), key=lambda d: _in_files(d, document.file))
         if found or model is None:
             raise ModelError(found)
         return model
