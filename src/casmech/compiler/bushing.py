@@ -30,15 +30,11 @@ import numpy as np
 
 from casmech.compiler import euler
 from casmech.compiler.ir import ForceIR
+from casmech.schema.spec import BUSHING_PARAMS
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 SERIES = 1e-3  # below |e|^2 / e0^2 = SERIES, atan(u)/u by its series (5 terms: error < 1e-16)
-KEYS = ("stiffness", "damping", "preload")  # params: f"{key}{n}" for n in 0..5 (d, then theta)
-GIVEN = {  # resolved vector -> (params key, first index)
-    "stiffness": ("stiffness", 0), "rotational_stiffness": ("stiffness", 3),
-    "damping": ("damping", 0), "rotational_damping": ("damping", 3),
-    "preload_force": ("preload", 0), "preload_torque": ("preload", 3),
-}
+KEYS = tuple(BUSHING_PARAMS)  # params: f"{key}{n}" for n in 0..5 (along d, then theta)
 
 
 def _conjugate(p):
@@ -78,7 +74,8 @@ def deflection(force: ForceIR, x):
 
 def generalized_force(force: ForceIR, x):
     """(generalized force on q, potential energy) of one bushing."""
-    k, c, preload = (ca.DM([force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
+    # vertcat, not DM: optimal/symbolic.py puts SX parameters here (a DM of SX is silently NaN)
+    k, c, preload = (ca.vertcat(*[force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
     s = deflection(force, x)
     s_q = ca.jacobian(s, x.q)
     tension = k * s + c * (s_q @ x.q_dot) - preload
@@ -92,9 +89,10 @@ def lower(force, model, poses) -> ForceIR:
     initial = {b.name: b.euler_parameters for b in model.bodies}
     p0 = [ca.DM(initial.get(name, IDENTITY)) for name in (force.body_i, force.body_j)]
     rest = np.array(ca.DM(_conjugate(relative(*p0))).full()).ravel()
-    params = {f"{key}{n}": 0.0 for key in KEYS for n in range(6)}
-    for name, (key, first) in GIVEN.items():
-        params.update({f"{key}{first + n}": float(v) for n, v in enumerate(force.vectors[name])})
+    params = {}
+    for key, vectors in BUSHING_PARAMS.items():  # e.g. stiffness then rotational_stiffness
+        values = np.concatenate([force.vectors[name] for name in vectors])
+        params.update({f"{key}{n}": float(v) for n, v in enumerate(values)})
     points = {"s_i": poses.local(force.body_i, "P", at), "s_j": poses.local(force.body_j, "P", at)}
     axes = {"marker_i": poses.pose[force.body_i][1].T @ marker, "rest": rest}
     return ForceIR(force.name, "bushing", poses.index[force.body_i], poses.index[force.body_j],

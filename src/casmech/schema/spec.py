@@ -381,7 +381,7 @@ class Bushing(Spec):
     """6-DOF linear spring-damper between a frame on body_i and one on body_j (docs/forces.md).
 
     Both frames are at the global point `at` with `orientation` (default: global axes) at t = 0;
-    vectors are components in the body_i frame (x, y, z): force = -K d - C d_dot + preload.
+    vectors are components along the I frame's x, y, z: force = -K d - C d_dot + preload.
     """
 
     name: Name
@@ -398,6 +398,22 @@ class Bushing(Spec):
     preload_torque: Vector = (0, 0, 0)
     repeat: Repeats | None = None
 
+
+# Flat views of a bushing's coefficients under the compiler's names (compiler/bushing.py params
+# stiffness0..5 = stiffness then rotational_stiffness, ...), so that optimal/symbolic.py, which
+# re-evaluates `getattr(spec, key)` for every params key of a force, gives sensitivities to them.
+BUSHING_PARAMS = {"stiffness": ("stiffness", "rotational_stiffness"),
+                  "damping": ("damping", "rotational_damping"),
+                  "preload": ("preload_force", "preload_torque")}
+
+
+def _component(vector: str, index: int) -> property:
+    return property(lambda self: getattr(self, vector)[index])
+
+
+for _key, _vectors in BUSHING_PARAMS.items():
+    for _n in range(6):
+        setattr(Bushing, f"{_key}{_n}", _component(_vectors[_n // 3], _n % 3))
 
 FORCES = (TSDA, RSDA, PointForce, Torque, Bushing)
 Force = Annotated[Union[FORCES], Field(discriminator="type")]  # noqa: UP007
