@@ -119,7 +119,7 @@ class Members:
 def with_bodies(document: Document, always: bool = False) -> Document:
     """`bodies:` may be left out when instances give the bodies (and in inline components)."""
     data = document.data
-    if "bodies" in data or not (always or "instances" in data):
+    if data.get("bodies") is not None or not (always or "instances" in data):
         return document
     return replace(document, data={**data, "bodies": []})
 
@@ -305,7 +305,8 @@ class Instances:
                            f"{given.component} needs a value for its parameter '{name}'",
                            hint=f"add parameters: {{{name}: ...}} to the instance (declared at "
                                 f"{line})")
-        return with_values(document, values) if ok else None
+        given_by_set = {name: sets[name] for name in sets if declared.get(name, 0) is None}
+        return with_values(document, {**values, **given_by_set}) if ok else None
 
     def add(self, given: spec.Instance, model: ResolvedModel, instances: Mapping[str, str],
             frame: placement.Frame) -> None:
