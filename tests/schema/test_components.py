@@ -448,3 +448,25 @@ def test_nested_instances_compose_their_frames_and_names(tmp_path):
     assert model.parameters["p.m"] == 0.5 and model.parameters["p.right.L"] == 0.5
     assert [j.name for j in model.joints] == ["p.left.knee", "p.right.knee"]
     assert set(model.files) == {str(root / "parts/pair.yaml"), str(root / "parts/leg.yaml")}
+
+
+def test_required_parameter_from_set_and_components_without_bodies():
+    text = """\
+casmech: 1
+name: x
+components:
+  c:
+    parameters: {m: ~, h: 2*m}
+    bodies: [{name: b, mass: m, inertia: [1, 1, 1], position: [0, 0, h]}]
+  empty:
+    bodies:
+instances:
+  - {name: i1, component: c}
+  - {name: nothing, component: empty}
+bodies:
+"""
+    model = casmech.loads(text, overrides={"i1.m": "2.5"})
+    assert [(b.name, b.mass) for b in model.bodies] == [("i1.b", 2.5)]
+    # h = 2 m follows the value given by --set
+    np.testing.assert_allclose(model.bodies[0].position, [0, 0, 5.0], rtol=0, atol=0)
+    assert model.parameters["i1.h"] == 5.0
