@@ -107,8 +107,6 @@ class Repeat(Spec):
     """One copy of the item per integer `index` from `from` to `to` (inclusive; none if to <
     from); the index is a number in the item's expressions and `{expr}` in its names."""
 
-    model_config = ConfigDict(populate_by_name=True)
-
     index: Name
     from_: Scalar = Field(alias="from")
     to: Scalar
