@@ -205,3 +205,15 @@ def test_json_schema_accepts_a_model(tmp_path):
 def test_json_schema_accepts_every_example_model(model):
     """What an editor's YAML plug-in checks must agree with casmech on the shipped models."""
     jsonschema.validate(yaml.safe_load(model.read_text()), json.loads(export.schema_text()))
+
+
+def test_unknown_key_hint_uses_the_key_as_written_not_the_python_field():
+    # Repeat's `from` is the pydantic field `from_` (a Python keyword); the hint must say 'from'
+    text = (
+        "bodies:\n  - {name: b, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0],\n"
+        "     repeat: {index: i, form: 1, to: 2}}\n"
+    )
+    model, found = validate(text)
+    unknown = [d for d in found if d.code == "E101"]
+    assert [d.path for d in unknown] == ["bodies[0].repeat.form"]
+    assert unknown[0].hint == "did you mean 'from'?"

@@ -119,7 +119,7 @@ def _missing(e: _Error) -> Diagnostic:
 
 
 def _extra(e: _Error) -> Diagnostic:
-    allowed = list(e.model.model_fields)
+    allowed = [info.alias or name for name, info in e.model.model_fields.items()]  # as written
     hint = did_you_mean(e.path[-1], allowed) or f"allowed keys: {', '.join(allowed)}"
     source = e.document.locate_key(e.path)
     return e.diagnostic("E101", f"unknown key '{e.path[-1]}'", source=source, hint=hint)
