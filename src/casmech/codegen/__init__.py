@@ -16,7 +16,8 @@ from casmech.codegen import cache, generate, manifest
 from casmech.codegen.build import LIBRARY, Toolchain, available, build_library
 from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
-from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.codegen.mapped import mapped_functions
+from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
@@ -44,7 +45,7 @@ def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
 
     def build(directory: Path) -> None:
-        write_build(build_functions(lower(model)).functions, directory, toolchain,
+        write_build(mapped_functions(lower(model)), directory, toolchain,
                     {"model": model.name, "model_hash": model_hash, "key": entry}, dae)
 
     return cache.lookup(entry, build, root)

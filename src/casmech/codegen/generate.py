@@ -1,5 +1,6 @@
 """SystemFunctions -> C: a few translation units of balanced size (built in parallel), one
-header.
+header. The functions come from codegen.mapped (kernels mapped over bodies, rows and force
+elements), so the C holds each kernel once and grows with the model only by its index tables.
 
 Each unit holds a function and, for the functions an integrator differentiates, its Jacobian
 under the name casadi's External looks up (`jac_<name>`, inputs then nominal outputs), so an MX
@@ -15,19 +16,21 @@ import casadi as ca
 from casmech.compiler import dae
 from casmech.compiler.formulations import FORMULATIONS
 
-# Functions whose Jacobian is generated as well: everything IDAS integrates through (the
-# equations of motion of both formulations and the constraints), and nothing it does not.
+# Functions whose Jacobian is generated as well: the vector-valued ones an MX graph over the
+# library may differentiate, and the DAE residuals (what IDAS integrates). Not the
+# matrix-valued ones (phi_q, mass matrices, romega_jacobian): their Jacobians are 3-D tensors
+# whose sparsity tables in the C grow as N^2 (4 MB of C for the mass matrix of 128 bodies),
+# and nothing differentiates them since the library carries the DAE residuals.
 DIFFERENTIATED = frozenset({
-    "phi", "phi_q", "nu", "gamma", "mass_matrix", "generalized_forces",
-    "romega_mass", "romega_forces", "romega_jacobian", "romega_nu", "romega_gamma",
-    "romega_q_dot",
+    "phi", "nu", "gamma", "generalized_forces",
+    "romega_forces", "romega_nu", "romega_gamma", "romega_q_dot",
 })
 HEADER = "casmech_model.h"
 
 
 def dae_functions(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """dae_<formulation>: the index-1 DAE residual IDAS integrates (compiler.dae), one SX
-    Function per formulation, built from the interpreted bundle."""
+    """dae_<formulation>: the index-1 DAE residual IDAS integrates (compiler.dae) over the
+    given bundle, one per formulation (an MX graph of calls over the mapped bundle)."""
     return {f"dae_{name}": dae.residual(functions, name) for name in FORMULATIONS}
 
 
@@ -65,7 +68,8 @@ def write_sources(functions: dict[str, ca.Function], directory: Path,
     directory.mkdir(parents=True, exist_ok=True)
     sources = []
     for k, members in enumerate(partition(units(functions), parts)):
-        generator = ca.CodeGenerator(f"casmech_model_{k}.c", {"with_header": True})
+        generator = ca.CodeGenerator(f"casmech_model_{k}.c", {"with_header": True,
+                                                              "verbose": False})
         for function in members:
             generator.add(function)
         generator.generate(str(directory) + "/")

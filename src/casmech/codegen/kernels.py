@@ -1,16 +1,13 @@
-"""Constraint functions (phi, phi_q, nu, gamma) built from one kernel per kind of row, mapped
-over its instances: code whose size and compile time do not grow with the number of joints.
+"""The constraint family (phi, phi_q, nu, gamma, variations, phi_scaled, romega_jacobian,
+romega_nu, romega_gamma, reactions) as MX functions over row kernels (codegen.rows) mapped over
+their rows: code whose size does not grow with the number of joints.
 
-A row of Phi depends only on its two bodies, so one SX kernel per (primitive kind, constant
-vectors) gives phi, its Jacobian row (14 entries: r_i, p_i, r_j, p_j), nu and gamma of ONE row;
-the kernel is mapped (MX) over every row of that kind, with the bodies' coordinates gathered by
-index, and the Jacobian rows are scattered into Phi_q's pattern. Time enters through the
-Taylor coefficients [f, f', f''] of each row's driving function at the instant, computed
-outside the kernel, so nu and gamma are exact. The results equal the unrolled SX functions
-(compiler.assemble) in value and sparsity; benchmarks/codegen_times.py --kernels measures them.
-
-This covers the constraint family only; the mass matrix, forces and the r-omega functions are
-still unrolled (compiler.functions).
+Each group of rows that shares a kernel gathers its bodies' coordinates by index (ground: a
+constant pose appended to q), calls the kernel once through casadi's map, and the per-row
+results are put back in row order (vectors) or scattered into the unrolled sparsity pattern
+(Jacobians). Joint reactions sum the rows of each joint with a constant matrix. The results equal
+the unrolled SX functions (compiler.functions) in value and sparsity:
+tests/codegen/test_kernels.py.
 """
 
 from __future__ import annotations
@@ -18,130 +15,232 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.codegen import rows as kernels_of
+from casmech.codegen.rows import ROW, V_ROW
 from casmech.compiler.assemble import GROUND_POSE
-from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
-from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.compiler.ir import GROUND_INDEX, ModelIR
 
-ROW = 14  # [r_i, p_i, r_j, p_j]
-
-
-def row_kernels(kind: str, vectors: dict) -> tuple[ca.Function, ca.Function]:
-    """(x[14], f[3]) -> (phi, jac[1x14], nu) and (x, x_dot, f) -> gamma for one row."""
-    phi_of, _ = PRIMITIVES[kind]
-    x, x_dot, coefficients = ca.SX.sym("x", ROW), ca.SX.sym("x_dot", ROW), ca.SX.sym("f", 3)
-    tau = ca.SX.sym("tau")  # time from the instant: f(t + tau) to second order
-    f = coefficients[0] + coefficients[1] * tau + coefficients[2] * tau**2 / 2
-    frames = [Frame(x[0:3], euler.rotation(x[3:7])), Frame(x[7:10], euler.rotation(x[10:14]))]
-    phi = phi_of(*frames, {k: ca.DM(v) for k, v in vectors.items()}, f)
-    jac = ca.jacobian(phi, x)
-    jac_x_dot = jac @ x_dot
-    gamma = (-ca.jacobian(jac_x_dot, x) @ x_dot - 2 * ca.jacobian(jac_x_dot, tau)
-             - ca.jacobian(ca.jacobian(phi, tau), tau))
-    at = [ca.substitute(e, tau, 0) for e in (phi, jac, -ca.jacobian(phi, tau), gamma)]
-    return (ca.Function(kind, [x, coefficients], at[:3], ["x", "f"], ["phi", "jac", "nu"]),
-            ca.Function(f"{kind}_gamma", [x, x_dot, coefficients], at[3:],
-                        ["x", "x_dot", "f"], ["gamma"]))
+# Most distinct row geometries baked into kernels (exact unrolled sparsity); a model with more
+# passes the vectors as data (code independent of the geometry; see codegen.rows).
+BAKE_LIMIT = 24
 
 
-def normalization_kernels() -> tuple[ca.Function, ca.Function]:
-    p, p_dot = ca.SX.sym("p", 4), ca.SX.sym("p_dot", 4)
-    return (ca.Function("normalization", [p], [p.T @ p - 1, 2 * p.T, ca.SX(1, 1)]),
-            ca.Function("normalization_gamma", [p, p_dot], [-2 * p_dot.T @ p_dot]))
+# Derivative directions per call of a kernel's derivative. casadi batches up to 64 by default:
+# code 64 times the kernel's derivative; 1 builds the chain32 library 3.5x faster (measured).
+MAX_DIRECTIONS = 1
 
 
-def taylor(prim: PrimitiveIR, t):
-    """[f, f', f''] of a row's driving function (with its offset) at t."""
-    tt = ca.SX.sym("t")
-    f = ca.SX(prim.f.casadi(t=tt) if prim.f is not None else 0.0) + prim.offset
-    first = ca.jacobian(f, tt)
-    taylor_of = ca.Function("f", [tt], [ca.vertcat(f, first, ca.jacobian(first, tt))])
-    return taylor_of.call([t], True, False)[0]  # inlined: no call node (and code) per row
+def mapped(kernel: ca.Function, count: int) -> ca.Function:
+    """The kernel evaluated over `count` instances (columns), serially."""
+    return kernel.map(f"map{count}_{kernel.name()}", "serial", count, [], [],
+                      {"max_num_dir": MAX_DIRECTIONS})
 
 
-def _groups(ir: ModelIR) -> dict:
-    """(kind, vectors) -> [(row, primitive)]: rows that share one kernel."""
-    groups: dict = {}
-    for row, prim in enumerate(ir.primitives):
-        keys = PRIMITIVES[prim.kind][1]
-        vectors = tuple((k, tuple(np.asarray(prim.vectors[k], float).ravel())) for k in keys)
-        groups.setdefault((prim.kind, vectors), []).append((row, prim))
-    return groups
+class Layout:
+    """Indices of the bodies' coordinates in q = [r (3 nb); p (4 nb)] and in the r-omega
+    velocity v = [r_dot (3 nb); omega_bar (3 nb)]; ground maps past the end (padding)."""
+
+    def __init__(self, nb: int):
+        self.nb, self.n, self.n_v = nb, 7 * nb, 6 * nb
+
+    def q(self, k: int) -> list[int]:
+        if k == GROUND_INDEX:
+            return list(range(self.n, self.n + 7))
+        return [3 * k + i for i in range(3)] + [3 * self.nb + 4 * k + i for i in range(4)]
+
+    def v(self, k: int) -> list[int]:
+        if k == GROUND_INDEX:
+            return list(range(self.n_v, self.n_v + 6))
+        return [3 * k + i for i in range(3)] + [3 * self.nb + 3 * k + i for i in range(3)]
+
+    def pad_q(self, q):
+        return ca.vertcat(q, ca.DM(GROUND_POSE))
+
+    def pad(self, vector, extra: int):
+        return ca.vertcat(vector, ca.DM.zeros(extra))
 
 
-class _Assembly:
-    """Collects mapped outputs in kernel order and the Jacobian's (row, column, nonzero)."""
+def scatter(n_rows: int, n_cols: int, triplets: list, values) -> ca.MX:
+    """The sparse (n_rows x n_cols) matrix whose (row, col) entry is values[position], from
+    (row, col, position) triplets."""
+    if not triplets:
+        return ca.MX(n_rows, n_cols)
+    rows, cols, positions = zip(*triplets, strict=True)
+    sparsity, mapping = ca.Sparsity.triplet(n_rows, n_cols, list(rows), list(cols), True)
+    take = [0] * sparsity.nnz()
+    for k, nonzero in enumerate(mapping):
+        take[nonzero] = positions[k]
+    return ca.MX(sparsity, values[take])
 
-    def __init__(self, n_coordinates: int):
-        self.n = n_coordinates
-        self.parts: dict[str, list] = {"phi": [], "nu": [], "gamma": []}
-        self.order: list[int] = []
-        self.jac_blocks: list = []
-        self.triplets: list[tuple[int, int, int]] = []  # row, column, index into jac nonzeros
-        self.offset = 0
 
-    def add(self, rows, columns, pattern, outputs, jac) -> None:
-        """rows[k] uses coordinates columns[k] (ROW or 4 of them; >= n: ground)."""
-        for name, value in zip(("phi", "nu", "gamma"), outputs, strict=True):
-            self.parts[name].append(value.T)
+def ordered(parts: list, order: list[int]):
+    """Stack per-group row vectors and put them back in row order."""
+    inverse = [int(k) for k in np.argsort(order)]
+    return ca.vertcat(*parts)[inverse] if parts else ca.MX(0, 1)
+
+
+class Group:
+    """The rows of one kernel: their indices, the data matrix and the gathered coordinates."""
+
+    def __init__(self, key, members, layout: Layout):
+        self.key, self.members, self.layout = key, members, layout
+        self.rows = [row for row, _ in members]
+        self.count = len(members)
+        self.columns = [layout.q(p.body_i) + layout.q(p.body_j) for _, p in members]
+        self.v_columns = [layout.v(p.body_i) + layout.v(p.body_j) for _, p in members]
+        pattern = kernels_of.constraint(key).sparsity_in(1)
+        self.c = ca.DM(ca.repmat(pattern, 1, self.count), np.concatenate(
+            [kernels_of.vectors_of(p)[list(pattern.row())] for _, p in members]))
+
+    def x(self, q_padded):
+        flat = [c for cs in self.columns for c in cs]
+        return ca.reshape(q_padded[flat], ROW, self.count)
+
+    def v(self, v_padded):
+        flat = [c for cs in self.v_columns for c in cs]
+        return ca.reshape(v_padded[flat], V_ROW, self.count)
+
+    def f(self, t, scale=None):
+        """[f, f', f''] of every row (3 x count): constants unless f depends on time (or the
+        drivers are scaled by a symbol)."""
+        if self.key.f_class == kernels_of.TIME or (
+                scale is not None and self.key.f_class == kernels_of.CONSTANT):
+            return ca.horzcat(*[kernels_of.taylor(p, t, 1.0 if scale is None else scale)
+                                for _, p in self.members])
+        values = [kernels_of.f_constant(p) for _, p in self.members]
+        return ca.DM(np.vstack([values, np.zeros((2, self.count))]))
+
+    def call(self, kernel, *args):
+        return mapped(kernel, self.count)(*args)
+
+    def triplets(self, pattern, columns, offset: int, n: int, row_of=None) -> list:
+        """(row, column, position) of every structural entry of the kernel's Jacobian row;
+        positions count from `offset` in the stacked (width x count) kernel outputs."""
         width = len(columns[0])
-        for k, row in enumerate(rows):
-            self.triplets += [(row, columns[k][c], self.offset + k * width + c) for c in pattern
-                              if columns[k][c] < self.n]
-        self.order += rows
-        self.jac_blocks.append(ca.vec(jac))
-        self.offset += width * len(rows)
-
-    def result(self, n_rows: int) -> dict:
-        inverse = [int(k) for k in np.argsort(self.order)]
-        out = {name: ca.vertcat(*parts)[inverse] for name, parts in self.parts.items()}
-        rows, cols, positions = zip(*self.triplets, strict=True) if self.triplets else ((), (), ())
-        sparsity, mapping = ca.Sparsity.triplet(n_rows, self.n, list(rows), list(cols), True)
-        take = [0] * len(mapping)
-        for k, nonzero in enumerate(mapping):
-            take[nonzero] = positions[k]
-        values = ca.vertcat(*self.jac_blocks)[take] if take else ca.MX(0, 1)
-        out["phi_q"] = ca.MX(sparsity, values)
+        out = []
+        for k, row in enumerate(row_of or self.rows):
+            out += [(row, columns[k][c], offset + k * width + c) for c in pattern
+                    if columns[k][c] < n]
         return out
 
 
-def constraint_functions(ir: ModelIR) -> dict[str, ca.Function]:
-    """phi, phi_q, nu, gamma as MX functions over mapped kernels (names and inputs as the
-    interpreted bundle's)."""
-    nb = ir.n_bodies
-    n = 7 * nb
-    t, q, q_dot = ca.MX.sym("t"), ca.MX.sym("q", n), ca.MX.sym("q_dot", n)
-    padded, padded_dot = ca.vertcat(q, ca.DM(GROUND_POSE)), ca.vertcat(q_dot, ca.DM.zeros(7))
+_KEYS: dict[int, tuple] = {}  # id(ir) -> (ir, row keys): keys are computed once per model
 
-    def index(k: int) -> list[int]:
-        if k == GROUND_INDEX:
-            return list(range(n, n + 7))
-        return [3 * k + i for i in range(3)] + [3 * nb + 4 * k + i for i in range(4)]
 
-    assembly = _Assembly(n)
-    for (kind, vectors), members in _groups(ir).items():
-        kernel, kernel_gamma = row_kernels(kind, dict(vectors))
-        columns = [index(p.body_i) + index(p.body_j) for _, p in members]
-        flat = [c for cs in columns for c in cs]
-        x = ca.reshape(padded[flat], ROW, len(members))
-        x_dot = ca.reshape(padded_dot[flat], ROW, len(members))
-        coefficients = ca.horzcat(*[taylor(p, t) for _, p in members])
-        phi, jac, nu = kernel.map(len(members), "serial")(x, coefficients)
-        gamma = kernel_gamma.map(len(members), "serial")(x, x_dot, coefficients)
-        pattern = [c for c in range(ROW) if kernel.sparsity_out(1).has_nz(0, c)]
-        assembly.add([row for row, _ in members], columns, pattern, (phi, nu, gamma), jac)
+def row_keys(ir: ModelIR) -> list:
+    """Every row's kernel key; vectors baked while the model has at most BAKE_LIMIT distinct
+    (kind, vectors), i.e. kernels."""
+    cached = _KEYS.get(id(ir))
+    if cached is not None and cached[0] is ir:
+        return cached[1]
+    keys = [kernels_of.key_of(prim, True) for prim in ir.primitives]
+    if len(set(keys)) > BAKE_LIMIT:
+        keys = [kernels_of.key_of(prim, False) for prim in ir.primitives]
+    _KEYS.clear()
+    _KEYS[id(ir)] = (ir, keys)
+    return keys
+
+
+def groups(ir: ModelIR, layout: Layout) -> list[Group]:
+    by_key: dict = {}
+    for row, (prim, key) in enumerate(zip(ir.primitives, row_keys(ir), strict=True)):
+        by_key.setdefault(key, []).append((row, prim))
+    return [Group(key, members, layout) for key, members in by_key.items()]
+
+
+def _pattern(function: ca.Function, output: int) -> list[int]:
+    """Columns of a kernel's row output that are not the constant 0. (The unrolled functions
+    list some constant zeros in their patterns; they vanish when the DAE is formed there, so
+    leaving them out here gives the DAE Jacobian the unrolled sparsity.)"""
+    value = function.call(function.sx_in())[output]
+    sparsity = value.sparsity()
+    return [c for c in range(sparsity.size2()) if sparsity.has_nz(0, c)
+            and not value[0, c].is_zero()]
+
+
+def rp_constraints(ir: ModelIR, t, q, q_dot, scale=None) -> dict:
+    """phi, phi_q, nu, gamma (scale: phi and phi_q with drivers scaled, for phi_scaled)."""
+    layout = Layout(ir.n_bodies)
+    padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
+    parts: dict = {"phi": [], "nu": [], "gamma": []}
+    order, blocks, triplets, offset = [], [], [], 0
+    for group in groups(ir, layout):
+        x, f = group.x(padded), group.f(t, scale)
+        phi, jac, nu = group.call(kernels_of.constraint(group.key), x, group.c, f)
+        parts["phi"].append(phi.T)
+        parts["nu"].append(nu.T)
+        if scale is None:
+            parts["gamma"].append(group.call(kernels_of.gamma(group.key), x,
+                                             group.x(padded_dot), group.c, f).T)
+        triplets += group.triplets(_pattern(kernels_of.constraint(group.key), 1),
+                                   group.columns, offset, layout.n)
+        blocks.append(ca.vec(jac))
+        offset += ROW * group.count
+        order += group.rows
+    nb, m = ir.n_bodies, len(ir.primitives)
     if nb:
-        norm, norm_gamma = normalization_kernels()
+        norm, norm_gamma, _ = kernels_of.normalization()
         p, p_dot = ca.reshape(q[3 * nb:], 4, nb), ca.reshape(q_dot[3 * nb:], 4, nb)
-        phi, jac, nu = norm.map(nb, "serial")(p)
-        rows = list(range(len(ir.primitives), len(ir.primitives) + nb))
-        assembly.add(rows, [index(k)[3:] for k in range(nb)], range(4),
-                     (phi, nu, norm_gamma.map(nb, "serial")(p, p_dot)), jac)
-    out = assembly.result(len(ir.primitives) + nb)
-    return {
-        "phi": ca.Function("phi", [t, q], [out["phi"]], ["t", "q"], ["phi"]),
-        "phi_q": ca.Function("phi_q", [t, q], [out["phi_q"]], ["t", "q"], ["phi_q"]),
-        "nu": ca.Function("nu", [t, q], [out["nu"]], ["t", "q"], ["nu"]),
-        "gamma": ca.Function("gamma", [t, q, q_dot], [out["gamma"]], ["t", "q", "q_dot"],
-                             ["gamma"]),
-    }
+        phi, jac, nu = mapped(norm, nb)(p)
+        parts["phi"].append(phi.T)
+        parts["nu"].append(nu.T)
+        if scale is None:
+            parts["gamma"].append(mapped(norm_gamma, nb)(p, p_dot).T)
+        triplets += [(m + k, 3 * nb + 4 * k + c, offset + 4 * k + c) for k in range(nb)
+                     for c in range(4)]
+        blocks.append(ca.vec(jac))
+        order += list(range(m, m + nb))
+    values = ca.vertcat(*blocks) if blocks else ca.MX(0, 1)
+    out = {name: ordered(value, order) for name, value in parts.items() if value}
+    out["phi_q"] = scatter(m + nb, layout.n, triplets, values)
+    return out
+
+
+def variations(ir: ModelIR, t, q, joint_rows_only: bool = False) -> ca.MX:
+    """[Phi_r, Pi_bar] (rows of phi x 6 nb), the r-omega Jacobian; the normalization rows
+    (zero in value) unless joint_rows_only."""
+    layout = Layout(ir.n_bodies)
+    padded = layout.pad_q(q)
+    blocks, triplets, offset = [], [], 0
+    for group in groups(ir, layout):
+        kernel = kernels_of.variation(group.key)
+        blocks.append(ca.vec(group.call(kernel, group.x(padded), group.c, group.f(t))))
+        triplets += group.triplets(_pattern(kernel, 0), group.v_columns, offset, layout.n_v)
+        offset += V_ROW * group.count
+    nb, m = ir.n_bodies, len(ir.primitives)
+    if nb and not joint_rows_only:
+        pi_bar = mapped(kernels_of.normalization()[2], nb)(ca.reshape(q[3 * nb:], 4, nb))
+        triplets += [(m + k, 3 * nb + 3 * k + c, offset + 3 * k + c) for k in range(nb)
+                     for c in range(3)]
+        blocks.append(ca.vec(pi_bar))
+    values = ca.vertcat(*blocks) if blocks else ca.MX(0, 1)
+    return scatter(m if joint_rows_only else m + nb, layout.n_v, triplets, values)
+
+
+def romega_gamma(ir: ModelIR, t, q, v) -> ca.MX:
+    layout = Layout(ir.n_bodies)
+    padded, padded_v = layout.pad_q(q), layout.pad(v, 6)
+    parts, order = [], []
+    for group in groups(ir, layout):
+        parts.append(group.call(kernels_of.romega_gamma(group.key), group.x(padded),
+                                group.v(padded_v), group.c, group.f(t)).T)
+        order += group.rows
+    return ordered(parts, order)
+
+
+def reactions(ir: ModelIR, t, q, lam) -> tuple:
+    """(force, torque) of every joint on its body_j (3 x joints): each row's contribution from
+    its kernel, summed over the joint's rows by a constant matrix."""
+    layout = Layout(ir.n_bodies)
+    padded = layout.pad_q(q)
+    joint_of = {row: j for j, joint in enumerate(ir.joints) for row in joint.rows}
+    force, torque = ca.MX(3, len(ir.joints)), ca.MX(3, len(ir.joints))
+    for group in groups(ir, layout):
+        points = ca.DM(np.array([ir.joints[joint_of[row]].point_i for row in group.rows],
+                                float).T)
+        f_rows, t_rows = group.call(kernels_of.reaction(group.key), group.x(padded), group.c,
+                                    group.f(t), lam[group.rows].T, points)
+        total = ca.DM(ca.Sparsity.triplet(group.count, len(ir.joints), list(
+            range(group.count)), [joint_of[row] for row in group.rows]), 1.0)
+        force, torque = force + f_rows @ total, torque + t_rows @ total
+    return force, torque

@@ -1,0 +1,213 @@
+"""Applied forces (gravity and the force elements of compiler.eom) as kernels mapped over the
+instances of each element type: one SX kernel per (type, frame, actuator expression, which
+data entries are non-zero), its parameters (points, axes, stiffness, damping, free length or
+angle) as data, and the generalized forces of each instance summed into Q by a constant sparse
+matrix. A time function in a force's value (`value: [...]`) is evaluated outside the kernel and
+passed in, so forces with different time functions share code; a tsda/rsda actuator depends on
+the motion and is part of its kernel (forces with the same actuator text share it).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.codegen.kernels import Layout, mapped
+from casmech.compiler import euler
+from casmech.compiler.assemble import Coordinates
+from casmech.compiler.eom import FORCE_ELEMENTS
+from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
+from casmech.compiler.primitives import Frame
+from casmech.schema.resolved import ScalarFunction
+
+ROW = 14
+
+
+@dataclass(frozen=True)
+class ForceKey:
+    type: str
+    frame: str
+    actuator: tuple | None  # (text, constants) of a tsda/rsda actuator
+    pattern: tuple[bool, ...]  # non-zero entries of the data (then of the value)
+
+
+def _actuator_key(function: ScalarFunction | None):
+    if function is None:
+        return None
+    return (function.text, tuple(sorted((k, float(v)) for k, v in function.constants.items())))
+
+
+def data_of(force: ForceIR) -> np.ndarray:
+    p = force.params
+    if force.type == "tsda":
+        return np.concatenate([force.points["s_i"], force.points["s_j"],
+                               [p["stiffness"], p["damping"], p["free_length"]]])
+    if force.type == "rsda":
+        return np.concatenate([force.axes["u_i"], force.axes["v_i"], force.axes["u_j"],
+                               [p["stiffness"], p["damping"], p["free_angle"]]])
+    if force.type == "force":
+        return np.asarray(force.points.get("s", [0.0, 0.0, 0.0]), float)
+    return np.zeros(0)
+
+
+def value_pattern(force: ForceIR) -> tuple[bool, ...]:
+    return tuple(not c.is_zero for c in force.value) if force.value is not None else ()
+
+
+def key_of(force: ForceIR) -> ForceKey:
+    return ForceKey(force.type, force.frame, _actuator_key(force.actuator),
+                    tuple(bool(v != 0) for v in data_of(force)) + value_pattern(force))
+
+
+def _sparse_symbol(name: str, pattern) -> ca.SX:
+    nz = [k for k, on in enumerate(pattern) if on]
+    return ca.SX.sym(name, ca.Sparsity.triplet(len(pattern), 1, nz, [0] * len(nz)))
+
+
+def _frame(x):
+    return Frame(x[0:3], euler.rotation(x[3:7]))
+
+
+def _spring(actuator, coordinate, x, x_dot, t, params, names) -> tuple:
+    """(generalized [14], potential) of a spring-damper-actuator along `coordinate`
+    (compiler.eom._spring)."""
+    k, c, rest = params[0], params[1], params[2]
+    value_dot = ca.jacobian(coordinate, x) @ x_dot
+    tension = k * (coordinate - rest) + c * value_dot
+    if actuator is not None:
+        tension += actuator.casadi(t=t, **{names[0]: coordinate, names[1]: value_dot})
+    return -ca.jacobian(coordinate, x).T * tension, 0.5 * k * (coordinate - rest) ** 2
+
+
+def _tsda(key, x, x_dot, t, data, value, actuator):
+    fi, fj = _frame(x[:7]), _frame(x[7:])
+    d = fj.r + fj.A @ data[3:6] - (fi.r + fi.A @ data[0:3])
+    return _spring(actuator, ca.sqrt(d.T @ d), x, x_dot, t, data[6:9], ("length", "length_dot"))
+
+
+def _rsda(key, x, x_dot, t, data, value, actuator):
+    ai, aj = _frame(x[:7]).A, _frame(x[7:]).A
+    u_j, v_i, u_i = aj @ data[6:9], ai @ data[3:6], ai @ data[0:3]
+    angle = ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
+    return _spring(actuator, angle, x, x_dot, t, data[9:12], ("angle", "angle_dot"))
+
+
+def _global(key, frame, value):
+    return frame.A @ value if key.frame == "body" else value
+
+
+def _point_force(key, x, x_dot, t, data, value, actuator):
+    frame = _frame(x[:7])
+    at = frame.r + frame.A @ data[0:3]
+    return ca.jacobian(at, x[:7]).T @ _global(key, frame, value), ca.SX(0)
+
+
+def _torque(key, x, x_dot, t, data, value, actuator):
+    frame = _frame(x[:7])
+    n_bar = frame.A.T @ _global(key, frame, value)
+    return ca.vertcat(ca.SX(3, 1), 2 * euler.g_matrix(x[3:7]).T @ n_bar), ca.SX(0)
+
+
+# Element types with a kernel; any other type of compiler.eom.FORCE_ELEMENTS is built per
+# instance from eom (`unrolled`): correct for every element, compact for these.
+KERNELS = {"tsda": _tsda, "rsda": _rsda, "force": _point_force, "torque": _torque}
+
+
+def _digest(key: ForceKey) -> str:
+    return hashlib.sha256(repr(key).encode()).hexdigest()[:8]
+
+
+def n_value(key: ForceKey) -> int:
+    """Entries of the value input: a force or torque vector, else none."""
+    return 3 if key.type in ("force", "torque") else 0
+
+
+def kernel(key: ForceKey, actuator: ScalarFunction | None) -> ca.Function:
+    """(x [14], x_dot [14], t, data, value) -> (generalized, potential) of one element:
+    generalized over x (tsda, rsda) or body i's 7 coordinates (force, torque)."""
+    n_data = len(key.pattern) - n_value(key)
+    x, x_dot, t = ca.SX.sym("x", ROW), ca.SX.sym("x_dot", ROW), ca.SX.sym("t")
+    data = _sparse_symbol("data", key.pattern[:n_data])
+    value = _sparse_symbol("value", key.pattern[n_data:])
+    generalized, potential = KERNELS[key.type](key, x, x_dot, t, ca.densify(data),
+                                               ca.densify(value), actuator)
+    return ca.Function(f"force_{key.type}_{_digest(key)}", [x, x_dot, t, data, value],
+                       [generalized, potential], ["x", "x_dot", "t", "data", "value"],
+                       ["generalized", "potential"])
+
+
+def _value(force: ForceIR, t, pattern):
+    """The value vector at t with the sparsity of its non-zero components (MX; the SX of each
+    component inlined)."""
+    tt = ca.SX.sym("t")
+    nonzero = [k for k, on in enumerate(pattern) if on]
+    sparsity = ca.Sparsity.triplet(len(pattern), 1, nonzero, [0] * len(nonzero))
+    if not nonzero:
+        return ca.MX(sparsity)
+    of = ca.Function("value", [tt], [ca.vertcat(*[ca.SX(force.value[k].casadi(t=tt))
+                                                  for k in nonzero])])
+    return ca.MX(sparsity, of.call([t], True, False)[0])
+
+
+def kernelised(force: ForceIR) -> bool:
+    """Whether a force element has a kernel: a type of KERNELS whose laws read no other state
+    than t and its own length/angle and rate (compiler.coordinates binds the others)."""
+    laws = ([force.actuator] if force.actuator is not None else []) + list(force.value or ())
+    return force.type in KERNELS and not any(getattr(f, "states", None) for f in laws)
+
+
+def unrolled(ir: ModelIR, force: ForceIR) -> ca.Function:
+    """(t, q, q_dot) -> (generalized, potential) of one element as compiler.eom writes it, over
+    the whole model's coordinates: for the elements without a kernel (their code grows with
+    their number, not with the model's)."""
+    x = Coordinates.create(ir.n_bodies)
+    generalized, energy = FORCE_ELEMENTS[force.type](force, x)
+    name = "force_" + "".join(c if c.isalnum() else "_" for c in force.name)
+    return ca.Function(name, [x.t, x.q, x.q_dot],
+                       [x.ground_fixed(ca.SX(generalized)), x.ground_fixed(ca.SX(energy))])
+
+
+def applied(ir: ModelIR, t, q, q_dot) -> tuple:
+    """(sum of the force elements' generalized forces [n], their potential energy), MX."""
+    layout = Layout(ir.n_bodies)
+    padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
+    groups: dict = {}
+    total, potential = ca.MX(layout.n, 1), ca.MX(0)
+    for force in ir.forces:
+        if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
+            continue  # acts on ground: no generalized force
+        if kernelised(force):
+            groups.setdefault(key_of(force), []).append(force)
+        else:
+            term, energy = unrolled(ir, force)(t, q, padded_dot[:layout.n])
+            total, potential = total + term, potential + energy
+    for key, members in groups.items():
+        term, energy = _group(key, members, layout, (t, padded, padded_dot))
+        total, potential = total + term, potential + energy
+    return total, potential
+
+
+def _group(key: ForceKey, members: list[ForceIR], layout: Layout, state) -> tuple:
+    t, padded, padded_dot = state
+    function, count = kernel(key, members[0].actuator), len(members)
+    width = function.size1_out(0)
+    columns = [(layout.q(f.body_i) + layout.q(f.body_j))[:width] for f in members]
+    flat = [c for f in members for c in layout.q(f.body_i) + layout.q(f.body_j)]
+    split = len(key.pattern) - n_value(key)
+    chosen = [k for k, on in enumerate(key.pattern[:split]) if on]
+    data = np.concatenate([data_of(f)[chosen] for f in members])
+    values = ca.horzcat(*[_value(f, t, key.pattern[split:]) for f in members]) \
+        if n_value(key) else ca.DM(0, count)
+    generalized, energy = mapped(function, count)(
+        ca.reshape(padded[flat], ROW, count), ca.reshape(padded_dot[flat], ROW, count), t,
+        ca.DM(ca.repmat(function.sparsity_in(3), 1, count), data), values)
+    entries = [(column, width * k + c) for k, cs in enumerate(columns)
+               for c, column in enumerate(cs) if column < layout.n]
+    if not entries:
+        return ca.MX(layout.n, 1), ca.sum2(energy)
+    rows, cols = zip(*entries, strict=True)
+    sum_into = ca.DM(ca.Sparsity.triplet(layout.n, width * count, list(rows), list(cols)), 1.0)
+    return sum_into @ ca.vec(generalized), ca.sum2(energy)
