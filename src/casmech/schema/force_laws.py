@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -66,7 +67,12 @@ class StateChecker(Checker):
             self.states = None
 
     def function(self, path: Path, value: Any, at):
-        return super().function(path, value, {**at, **(self.states or {})})
+        """As Checker.function; its variables are `at`'s plus the states the expression uses."""
+        found = super().function(path, value, {**at, **(self.states or {})})
+        if found is None or not self.states:
+            return found
+        used = tuple(name for name in self.states if name in found.expr.symbols)
+        return replace(found, variables=(*at, *used))
 
     def unknown_symbol(self, path, name: str, source, variables) -> None:
         if "." not in name:
