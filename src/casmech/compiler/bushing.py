@@ -15,8 +15,8 @@ Here this is one generalized force from virtual work, like a tsda in six directi
 
 so the elastic part is exactly -dV/dq (conservative: the energy column is constant without
 damping) and the reaction on I (opposite force plus moment arm) comes out of AD. The torque on J
-is -Kt theta exactly when Kt is isotropic and to first order in theta otherwise (Adams' small
-angles AX, AY, AZ agree with theta to first order too). docs/forces.md.
+is -Kt theta exactly when Kt is isotropic (and T0 = 0), to first order in theta otherwise (Adams'
+small angles AX, AY, AZ agree with theta to first order too). docs/forces.md.
 
 The rotation vector comes from Euler parameters: s = conj(p_i) p_j c, where the constant c undoes
 the relative rotation at t = 0, so S = A_i^T A_j (A_i0^T A_j0)^T and theta = M_i^T theta(S) with
