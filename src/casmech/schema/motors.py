@@ -26,7 +26,8 @@ from casmech.schema import spec
 from casmech.schema.antiderivative import NoClosedForm, integral
 from casmech.schema.checker import Checker, failed
 from casmech.schema.resolved import ScalarFunction
-from casmech.schema.tables import TableError, table_function
+from casmech.schema.tables import TableError, is_table, table_function
+from casmech.schema.tables import integral as table_integral
 
 ROTATION = ("angle", "speed", "torque")
 TRANSLATION = ("displacement", "velocity", "force")
@@ -41,7 +42,7 @@ NO_CLOSED_FORM_HINT = ("write the motion itself as `{position}:` (position mode)
 
 # ---------------------------------------------------------------------------------- tables
 def table(check: Checker, where: tuple, given: spec.Table):
-    """The TableFunction of a `{table: ...}` value (None: reported)."""
+    """The function of t a `{table: ...}` value gives (None: reported)."""
     base = Path(check.doc.file).parent
     try:
         return table_function(base / given.table, given.column, given.interpolation,
@@ -53,7 +54,7 @@ def table(check: Checker, where: tuple, given: spec.Table):
 
 
 def time_function(check: Checker, where: tuple, value: Any, at: dict):
-    """A ScalarFunction of `at`'s variables, or a TableFunction of t."""
+    """A ScalarFunction of `at`'s variables (an expression or a table of t)."""
     if isinstance(value, spec.Table):
         return table(check, where, value)
     return check.function(where, value, at)
@@ -113,8 +114,8 @@ def _check_keys(check: Checker, path: tuple, given, motor: spec.Motor) -> list[s
 def _speed(check: Checker, where: tuple, value: Any, position: str):
     """The driver of a speed motor: the exact integral of the speed from t = 0."""
     function = time_function(check, where, value, {"t": 0.0})
-    if function is None or not isinstance(function, ScalarFunction):
-        return None if function is None else function.integral(0.0)
+    if function is None or is_table(function):
+        return None if function is None else table_integral(function, 0.0)
     try:
         expr = integral(function.expr, function.constants)
     except NoClosedForm as error:

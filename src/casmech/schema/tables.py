@@ -21,8 +21,7 @@ antiderivative (speed motors driven by a table) is the same kind of function, of
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -31,6 +30,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import did_you_mean
+from casmech.schema.resolved import ScalarFunction
 
 MIN_ROWS = {"linear": 2, "cubic": 4}  # not-a-knot needs four samples; periodic cubic three
 MIN_ROWS_PERIODIC = {"linear": 2, "cubic": 3}
@@ -212,46 +212,56 @@ class PiecewisePolynomial:
 
 # ------------------------------------------------------------------------------ the function
 @dataclass(frozen=True)
-class TableFunction:
-    """A function of t from a table, interchangeable with resolved.ScalarFunction (the same
-    `casadi`, `value`, `text`, `constants`, `variables`, `source`, `is_zero`)."""
+class TableExpr:
+    """A table as an expression of t: the `Expr` interface (evaluate with the "numpy" or
+    "casadi" backend, names, is_constant), so a table is an ordinary resolved.ScalarFunction
+    wherever a function of time goes."""
 
     text: str
     polynomial: PiecewisePolynomial
-    source: Any = None
-    constants: dict = field(default_factory=dict)  # none: a table has no parameters
-    variables: tuple[str, ...] = ("t",)
 
-    def casadi(self, **variables: Any) -> Any:
-        return self.polynomial.casadi(variables["t"])
+    def evaluate(self, env, backend: str = "numpy") -> Any:
+        t = env["t"]
+        if backend == "casadi":
+            return self.polynomial.casadi(t)
+        times = np.asarray(t, float)
+        mapped = self.polynomial.numeric.map(max(times.size, 1))(times.reshape(1, -1))
+        return np.asarray(mapped).reshape(times.shape)
 
-    def value(self, **variables: float) -> float:
-        return float(self.polynomial.numeric(float(variables["t"])))
+    def names_with_offsets(self) -> tuple[tuple[str, int, int], ...]:
+        return (("t", 0, 0),)
 
     @property
-    def is_zero(self) -> bool:
+    def symbols(self) -> frozenset[str]:
+        return frozenset({"t"})
+
+    @property
+    def is_constant(self) -> bool:
         return False
 
-    def integral(self, start: float = 0.0) -> TableFunction:
-        """The exact integral from t = start, as a function of t."""
-        antiderivative = self.polynomial.antiderivative()
-        offset = float(antiderivative.numeric(start))
-        shifted = antiderivative.coefficients.copy()
-        shifted[:, 0] -= offset
-        text = f"integral from {start:g} to t of {self.text}"
-        return replace(self, text=text, polynomial=replace(antiderivative, coefficients=shifted))
+    def __str__(self) -> str:
+        return self.text
 
 
 def table_function(path: Path, column: str, interpolation: str = "cubic", periodic: bool = False,
-                   source: Any = None) -> TableFunction:
+                   source: Any = None) -> ScalarFunction:
     """The function of t a table column describes (raises TableError)."""
     t, y = samples(path, column, interpolation, periodic)
     coefficients = spline_coefficients(t, y, interpolation, periodic and interpolation == "cubic")
-    polynomial = PiecewisePolynomial(t, coefficients, periodic)
     text = f"{interpolation}{' periodic' if periodic else ''} table {path.name}:{column}"
-    return TableFunction(text, polynomial, source)
+    expr = TableExpr(text, PiecewisePolynomial(t, coefficients, periodic))
+    return ScalarFunction(text, expr, {}, ("t",), source)
 
 
-def period(function: TableFunction) -> float:
-    breaks = function.polynomial.breaks
-    return float(breaks[-1] - breaks[0]) if function.polynomial.periodic else math.inf
+def is_table(function: ScalarFunction) -> bool:
+    return isinstance(function.expr, TableExpr)
+
+
+def integral(function: ScalarFunction, start: float = 0.0) -> ScalarFunction:
+    """The exact integral from t = start of a table function, as a function of t."""
+    antiderivative = function.expr.polynomial.antiderivative()
+    shifted = antiderivative.coefficients.copy()
+    shifted[:, 0] -= float(antiderivative.numeric(start))
+    text = f"integral from {start:g} to t of {function.text}"
+    expr = TableExpr(text, replace(antiderivative, coefficients=shifted))
+    return replace(function, text=text, expr=expr)
