@@ -102,3 +102,19 @@ def test_output_path_that_is_a_file(tmp_path, capsys):
     target.write_text("")
     assert main(["compile", str(MODEL), "-o", str(target)]) == 2
     assert "-o expects a directory" in capsys.readouterr().err
+
+
+def test_auto_mode_rule(model, compiled, cache_root, tmp_path, monkeypatch):
+    """codegen.auto_mode: compiled when the library is cached; on a cache miss compiled from
+    AUTO_BODIES bodies on, interpreted below; interpreted without a compiler."""
+    assert len(model.bodies) < codegen.AUTO_BODIES
+    assert codegen.is_cached(model, root=cache_root)  # the session fixture built it
+    assert codegen.auto_mode(model, root=cache_root) == "compiled"
+    empty = tmp_path / "empty"
+    assert not codegen.is_cached(model, root=empty)
+    assert codegen.auto_mode(model, root=empty) == "interpreted"
+    assert not empty.exists()  # deciding builds nothing
+    monkeypatch.setattr(codegen, "AUTO_BODIES", len(model.bodies))
+    assert codegen.auto_mode(model, root=empty) == "compiled"
+    monkeypatch.setenv("CC", "casmech-no-such-compiler")
+    assert codegen.auto_mode(model, root=cache_root) == "interpreted"

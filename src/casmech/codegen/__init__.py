@@ -2,6 +2,23 @@
 
     functions = compiled(model)           # SystemFunctions; built once per content, then cached
     export(model, Path("out"))            # `casmech compile`: sources, header, manifest, library
+    auto_mode(model)                      # "compiled" or "interpreted": the faster end to end
+
+What is compiled is codegen.mapped: every system function and the DAE residuals built from SX
+kernels (one per kind of constraint row, body quantity, force element) mapped over their
+instances, so the C holds each kernel once and only index tables grow with the model: YAML ->
+loaded library in ~6 s for a 128-body chain and ~75 s for 1000 bodies (the unrolled SX
+functions took 108 s at 128 bodies), default flags -O1 (as fast to build as -O0 for this code,
+5x faster runs). benchmarks/RESULTS_codegen.md has the measurements.
+
+`--mode auto` (auto_mode) takes the path that is fastest end to end:
+  - compiled when the library is in the cache (loading it takes 0.02-0.4 s);
+  - otherwise compiled when the model has at least AUTO_BODIES bodies, interpreted below.
+    The kernels' C is a fixed ~1.5 MB whatever the size: a 1-8 body model builds in 1.5-12 s
+    (shared 2-core VM) where its interpreted SX bundle takes 0.05-0.4 s and runs as fast; at
+    32 bodies the build (~8 s) is still not repaid by a 1 s simulation (interpreted: 1.2 s to
+    build, ~1.5x slower to run); from AUTO_BODIES on the interpreted bundle's superlinear build
+    (and slower runs) lose.
 """
 
 from __future__ import annotations
@@ -22,7 +39,8 @@ from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 
-__all__ = ["Toolchain", "available", "compiled", "mode_of", "write_build", "export"]
+__all__ = ["Toolchain", "auto_mode", "available", "compiled", "export", "is_cached", "mode_of",
+           "write_build"]
 
 
 def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: Toolchain,
@@ -56,10 +74,33 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     """The model's SystemFunctions loaded from a compiled library, built only when the cache
     holds none for this model content, casmech/CasADi version, compiler and flags. With `dae`,
     the bundle also carries the DAE residuals dae_<formulation> with their Jacobians, which
-    dynamics integrates instead of an MX graph over the other functions (measured 1.5x faster
-    runs for 2.4x the build time: benchmarks/RESULTS_codegen.md)."""
+    dynamics integrates (compiler.dae.residual takes them from the bundle)."""
     directory, _ = _cached(model, toolchain or Toolchain(), root, dae)
     return load_build(directory, lower(model))
+
+
+AUTO_BODIES = 64  # see the module docstring: the size from which compiling pays on a cache miss
+
+
+def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
+              root: Path | None = None, dae: bool = True) -> bool:
+    """Whether the cache holds the model's library for this toolchain (nothing is built)."""
+    toolchain = toolchain or Toolchain()
+    entry = cache.key(cache.model_digest(model.text, model.parameters), toolchain.version(),
+                      toolchain.all_flags, dae)
+    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
+
+
+def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
+              root: Path | None = None) -> str:
+    """"compiled" or "interpreted", whichever runs the model sooner end to end (module
+    docstring); "interpreted" without a C compiler."""
+    toolchain = toolchain or Toolchain()
+    if not available(toolchain):
+        return "interpreted"
+    if is_cached(model, toolchain, root) or len(model.bodies) >= AUTO_BODIES:
+        return "compiled"
+    return "interpreted"
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,

@@ -13,7 +13,9 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-DEFAULT_FLAGS = ("-O0",)  # builds 2.2-3.5x faster than -O1, same run time: RESULTS_codegen.md
+# -O1: for the mapped kernels about as fast to build as -O0 and 5x faster runs (a chain of 32:
+# benchmarks/RESULTS_codegen.md)
+DEFAULT_FLAGS = ("-O1",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
