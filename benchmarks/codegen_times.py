@@ -15,6 +15,7 @@ Each setting runs in a fresh process with an empty cache (so nothing is shared),
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import platform
@@ -41,7 +42,8 @@ def bundle(form: str, ir) -> dict:
     return {**functions, **generate.dae_functions(functions)}
 
 
-def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "mapped") -> dict:
+def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "mapped",
+           directions: int = 0) -> dict:
     """One setting, in this process: every stage timed."""
     sys.path.insert(0, str(HERE))
     import casmech_model
@@ -49,8 +51,11 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "map
 
     import casmech
     from casmech import codegen
-    from casmech.codegen import build, generate, load, manifest
+    from casmech.codegen import build, generate, kernels, load, manifest
     from casmech.compiler.lower import lower
+
+    if directions:
+        kernels.MAX_DIRECTIONS = directions
 
     text = casmech_model.yaml_text(systems.make(f"chain{bodies}"))
     times, clock = {}, time.perf_counter()
@@ -77,7 +82,7 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "map
         lap("load_library")
         times["total"] = sum(times.values())
         result = {"bodies": bodies, "flags": flags, "jobs": jobs, "form": form, "times": times,
-                  "c_megabytes": c_bytes / 1e6}
+                  "c_megabytes": c_bytes / 1e6, "directions": kernels.MAX_DIRECTIONS}
         if simulate > 0:
             start = time.perf_counter()
             casmech.analyze(compiled, "dynamics", t_end=simulate, output_step=0.01)
@@ -106,9 +111,9 @@ def interpreted_worker(bodies: int, simulate: float) -> dict:
 
 
 def run_setting(bodies: int, flags: str, jobs: int, simulate: float, timeout: float,
-                form: str) -> dict:
+                form: str, directions: int = 0) -> dict:
     command = [sys.executable, __file__, "--worker", str(bodies), flags, str(jobs),
-               str(simulate), form]
+               str(simulate), form, str(directions)]
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=timeout,
                               check=False, env={**os.environ, "OMP_NUM_THREADS": "1"})
@@ -138,18 +143,20 @@ STAGES = ("load", "symbolic", "generate_c", "gcc", "load_library")
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| bodies | form | flags | jobs | load | symbolic | generate C | gcc | load lib "
-             "| YAML -> loaded s | runs s | C MB | simulation s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| bodies | form | flags | jobs | dirs | load | symbolic | generate C | gcc | "
+             "load lib | YAML -> loaded s | runs s | C MB | simulation s | runs s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        head = f"| {r['bodies']} | {r['form']} | {r['flags']} | {r['jobs']} |"
+        head = (f"| {r['bodies']} | {r['form']} | {r['flags']} | {r['jobs']} | "
+                f"{r.get('directions', '')} |")
         if "times" not in r:
             why = f"timeout {r['timeout']:.0f} s" if "timeout" in r else "error"
-            lines.append(f"{head} {why} |||||||||")
+            lines.append(f"{head} {why} |||||||||||")
             continue
         t = r["times"]
         stages = " | ".join(f"{t[k]:.2f}" if k in t else "" for k in STAGES)
-        sim = f"{r['simulate']:.2f}" if "simulate" in r else ""
+        sim = f"{r['simulate']:.2f} | {' '.join(map(str, r['simulate_runs']))}" \
+            if "simulate" in r else " | "
         lines.append(f"{head} {stages} | **{t['total']:.2f}** | "
                      f"{' '.join(map(str, r['total_runs']))} | {r['c_megabytes']:.2f} | {sim} |")
     return "\n".join(lines)
@@ -157,11 +164,12 @@ def table(rows: list[dict]) -> str:
 
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
-        bodies, flags, jobs, simulate, form = sys.argv[2:7]
+        bodies, flags, jobs, simulate, form, directions = sys.argv[2:8]
         if form == "interpreted":
             print(json.dumps(interpreted_worker(int(bodies), float(simulate))))
         else:
-            print(json.dumps(worker(int(bodies), flags, int(jobs), float(simulate), form)))
+            print(json.dumps(worker(int(bodies), flags, int(jobs), float(simulate), form,
+                                    int(directions))))
         return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--bodies", type=int, nargs="+", default=[8, 32])
@@ -174,6 +182,9 @@ def main() -> None:
     parser.add_argument("--simulate", type=float, default=0.0,
                         help="also time dynamics over this many seconds (0: no)")
     parser.add_argument("--timeout", type=float, default=1800.0)
+    parser.add_argument("--directions", type=int, nargs="+", default=[0],
+                        help="kernel derivative directions per call (codegen.kernels."
+                             "MAX_DIRECTIONS; 0: its value)")
     args = parser.parse_args()
     print(f"# {platform.node()} {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
@@ -183,9 +194,11 @@ def main() -> None:
         for form in args.forms:
             levels = [""] if form == "interpreted" else [f"-O{level}" for level in args.levels]
             for flags in levels:
-                for jobs in args.jobs if form != "interpreted" else [1]:
-                    runs = [run_setting(bodies, flags, jobs, args.simulate, args.timeout, form)
-                            for _ in range(args.repeats)]
+                for jobs, directions in itertools.product(
+                        args.jobs if form != "interpreted" else [1],
+                        args.directions if form == "mapped" else [0]):
+                    runs = [run_setting(bodies, flags, jobs, args.simulate, args.timeout, form,
+                                        directions) for _ in range(args.repeats)]
                     rows.append(median_row(runs))
                     print(json.dumps(rows[-1]), flush=True)
     print(table(rows))
