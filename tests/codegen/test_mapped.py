@@ -35,12 +35,31 @@ def chain_text(bodies: int) -> str:
     return "\n".join(lines) + "\n"
 
 
+MOTORS = """
+casmech: 1
+name: motors
+bodies:
+  - {name: bar, mass: 5, inertia: [2, 2, 0.01], position: [0, 0, -1]}
+  - {name: disc, mass: 1, inertia: [0.15, 0.15, 0.25], position: [0, 0, -3]}
+  - {name: block, mass: 2, inertia: [0.1, 0.1, 0.1], position: [1, 0, -3]}
+joints:
+  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0],
+     driver: {angle: 0.3 * sin(t)}}
+  - {name: spin, type: revolute, body_i: bar, body_j: disc, at: [0, 0, -3], axis: [0, 0, 1],
+     motor: {torque: "2 - 0.1*angle"}}
+  - {name: slide, type: translational, body_i: disc, body_j: block, at: [1, 0, -3],
+     axis: [1, 0, 0], motor: {force: "-3*displacement + sin(t)"}}
+"""
+
 MODELS = {
     "codegen_test": lambda: casmech.load(MODEL),  # driven revolute, tsda, body torque
     "chain4": lambda: casmech.loads(chain_text(4)),
     "slider_crank": lambda: casmech.load(ROOT / "models" / "slider_crank.yaml"),
     "flyball_governor": lambda: casmech.load(ROOT / "models" / "flyball_governor.yaml"),  # rsda
     "cart_pole": lambda: casmech.load(ROOT / "models" / "cart_pole.yaml"),  # point force
+    # effort motors (in the forces and the joints' reactions), laws reading joint and body state
+    "motors": lambda: casmech.loads(MOTORS),
+    "user_force": lambda: casmech.load(ROOT / "models" / "user_force_pendulum.yaml"),
 }
 
 

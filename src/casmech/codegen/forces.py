@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.codegen.kernels import Layout, mapped
-from casmech.compiler import euler
+from casmech.compiler import eom, euler, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
@@ -176,7 +176,7 @@ def applied(ir: ModelIR, t, q, q_dot) -> tuple:
     padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
     groups: dict = {}
     total, potential = ca.MX(layout.n, 1), ca.MX(0)
-    for force in ir.forces:
+    for force in (*ir.forces, *getattr(ir, "motors", ())):  # effort motors: eom's elements
         if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
             continue  # acts on ground: no generalized force
         if kernelised(force):
@@ -211,3 +211,23 @@ def _group(key: ForceKey, members: list[ForceIR], layout: Layout, state) -> tupl
     rows, cols = zip(*entries, strict=True)
     sum_into = ca.DM(ca.Sparsity.triplet(layout.n, width * count, list(rows), list(cols)), 1.0)
     return sum_into @ ca.vec(generalized), ca.sum2(energy)
+
+
+def motor_reactions(ir: ModelIR, t, q) -> tuple:
+    """(force, torque) (3 x joints) the effort motors of ir.motors add to their joints'
+    reactions (compiler.eom.reactions), per motor from compiler.motors over the whole model's
+    coordinates, like the elements without a kernel."""
+    n_joints = len(ir.joints)
+    force, torque = ca.MX(3, n_joints), ca.MX(3, n_joints)
+    column = {joint.name: k for k, joint in enumerate(ir.joints)}
+    for motor in getattr(ir, "motors", ()):
+        k = column[motor.name]
+        joint = ir.joints[k]
+        x = Coordinates.create(ir.n_bodies)
+        at = eom.point(x, joint.body_i, joint.point_i)
+        pair = [x.ground_fixed(ca.SX(e)) for e in motors.reaction(motor, x, at)]
+        name = "motor_" + "".join(c if c.isalnum() else "_" for c in motor.name)
+        f_motor, t_motor = ca.Function(name, [x.t, x.q], pair)(t, q)
+        select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [k]), 1.0)
+        force, torque = force + f_motor @ select, torque + t_motor @ select
+    return force, torque

@@ -40,6 +40,8 @@ def rp_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
     element_forces, spring_potential = forces.applied(ir, t, q, q_dot)
     kinetic, gravity_potential = bodies.energy(ir, q, q_dot)
     force, torque = kernels.reactions(ir, t, q, x["lam"])
+    motor_force, motor_torque = forces.motor_reactions(ir, t, q)
+    force, torque = force + motor_force, torque + motor_torque
     omega, alpha = bodies.body_rates(ir, q, q_dot, x["q_ddot"])
     generalized = bodies.gravity(ir) + element_forces + bodies.quadratic_velocity(ir, q, q_dot)
     return [
