@@ -14,11 +14,12 @@ functions took 108 s at 128 bodies), default flags -O1 (as fast to build as -O0 
 `--mode auto` (auto_mode) takes the path that is fastest end to end:
   - compiled when the library is in the cache (loading it takes 0.02-0.4 s);
   - otherwise compiled when the model has at least AUTO_BODIES bodies, interpreted below.
-    The kernels' C is a fixed ~1.5 MB whatever the size: a 1-8 body model builds in 1.5-12 s
-    (shared 2-core VM) where its interpreted SX bundle takes 0.05-0.4 s and runs as fast; at
-    32 bodies the build (~8 s) is still not repaid by a 1 s simulation (interpreted: 1.2 s to
-    build, ~1.5x slower to run); from AUTO_BODIES on the interpreted bundle's superlinear build
-    (and slower runs) lose.
+    Measured on chains (shared 2-core VM, RESULTS_codegen.md): YAML -> ready takes 0.05-1.1 s
+    interpreted for 1-32 bodies against 1.5-8 s to build the library (the kernels' C is a
+    fixed ~1.5 MB whatever the size), and 1 s of simulation runs about as fast either way;
+    at 128 bodies 3.6 s against ~16 s. The interpreted SX bundle grows superlinearly (22 s
+    at 256 bodies, 61 s at 512) and the build linearly (~75 s at 1000), so compiling pays
+    from about 200 bodies even for a single run.
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     return load_build(directory, lower(model))
 
 
-AUTO_BODIES = 64  # see the module docstring: the size from which compiling pays on a cache miss
+AUTO_BODIES = 200  # module docstring: the size from which compiling pays on a cache miss
 
 
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
