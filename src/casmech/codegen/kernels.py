@@ -6,8 +6,9 @@ Each group of rows that shares a kernel gathers its bodies' coordinates by index
 constant pose appended to q), calls the kernel once through casadi's map, and the per-row
 results are put back in row order (vectors) or scattered into the unrolled sparsity pattern
 (Jacobians). Joint reactions sum the rows of each joint with a constant matrix. The results equal
-the unrolled SX functions (compiler.functions) in value and sparsity:
-tests/codegen/test_kernels.py.
+the unrolled SX functions (compiler.functions) in value and sparsity, except that entries which
+are the constant 0 in a kernel are left out of the patterns (see _pattern), which gives the
+DAE's Jacobian exactly the unrolled sparsity: tests/codegen/test_mapped.py.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ BAKE_LIMIT = 24
 
 
 # Derivative directions per call of a kernel's derivative. casadi batches up to 64 by default:
-# code 64 times the kernel's derivative; 1 builds the chain32 library 3.5x faster (measured).
+# code 64 times the kernel's derivative; 1 halves the C of chain32 and builds it 1.6-3.5x
+# faster (benchmarks/RESULTS_codegen.md).
 MAX_DIRECTIONS = 1
 
 
