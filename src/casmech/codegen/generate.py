@@ -13,18 +13,22 @@ from pathlib import Path
 
 import casadi as ca
 
+from casmech.codegen import manifest
 from casmech.compiler import dae
 from casmech.compiler.formulations import FORMULATIONS
 
-# Functions whose Jacobian is generated as well: the vector-valued ones an MX graph over the
-# library may differentiate, and the DAE residuals (what IDAS integrates). Not the
-# matrix-valued ones (phi_q, mass matrices, romega_jacobian): their Jacobians are 3-D tensors
-# whose sparsity tables in the C grow as N^2 (4 MB of C for the mass matrix of 128 bodies),
-# and nothing differentiates them since the library carries the DAE residuals.
+# Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
+# graph over the library differentiates (the augmented-Lagrangian ODE of runtime.dynamics), and
+# the DAE residuals (what IDAS integrates).
 DIFFERENTIATED = frozenset({
     "phi", "nu", "gamma", "generalized_forces",
     "romega_forces", "romega_nu", "romega_gamma", "romega_q_dot",
 })
+# Matrix-valued functions that graph differentiates too get one forward and one reverse
+# derivative instead (`fwd1_<name>`, `adj1_<name>`, which casadi's External uses the same way):
+# their Jacobians are 3-D tensors whose sparsity tables in the C grow as N^2 (4 MB of C for the
+# mass matrix of 128 bodies, gigabytes at 1000).
+DIRECTIONAL = manifest.DIRECTIONAL  # {"mass_matrix", "phi_q", "romega_mass", "romega_jacobian"}
 HEADER = "casmech_model.h"
 
 
@@ -39,11 +43,16 @@ def differentiated(functions: dict[str, ca.Function]) -> set[str]:
     return {name for name in functions if name in DIFFERENTIATED or name.startswith("dae_")}
 
 
+def derivatives(name: str, function: ca.Function, jacobians: set[str]) -> list[ca.Function]:
+    if name in jacobians:
+        return [function.jacobian()]
+    return [function.forward(1), function.reverse(1)] if name in DIRECTIONAL else []
+
+
 def units(functions: dict[str, ca.Function]) -> dict[str, list[ca.Function]]:
-    """Function name -> the functions generated for it (itself, and its Jacobian)."""
+    """Function name -> the functions generated for it (itself, and its derivatives)."""
     jacobians = differentiated(functions)
-    return {name: [f, f.jacobian()] if name in jacobians else [f]
-            for name, f in functions.items()}
+    return {name: [f, *derivatives(name, f, jacobians)] for name, f in functions.items()}
 
 
 def _cost(members: list[ca.Function]) -> int:

@@ -8,6 +8,8 @@ from pathlib import Path
 import casadi as ca
 
 MANIFEST = "manifest.json"
+# generated with fwd1_<name> and adj1_<name> (codegen.generate); kept here to avoid a cycle
+DIRECTIONAL = frozenset({"mass_matrix", "phi_q", "romega_mass", "romega_jacobian"})
 FORMAT = 1  # bump when the layout of a build directory changes
 
 
@@ -29,8 +31,8 @@ def describe(function: ca.Function) -> dict:
 
 
 def write(directory: Path, functions: dict[str, ca.Function], differentiated, info: dict) -> Path:
-    entries = [{**describe(f), "jacobian": name in differentiated}
-               for name, f in functions.items()]
+    entries = [{**describe(f), "jacobian": name in differentiated,
+                "forward_reverse": name in DIRECTIONAL} for name, f in functions.items()]
     path = directory / MANIFEST
     path.write_text(json.dumps({"format": FORMAT, **info, "functions": entries}, indent=1))
     return path
