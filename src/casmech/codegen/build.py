@@ -13,8 +13,9 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-# -O1: for the mapped kernels about as fast to build as -O0 and 5x faster runs (a chain of 32:
-# benchmarks/RESULTS_codegen.md)
+# -O1: the mapped kernels' library builds in 1.1-2.7x the time of -O0 and its simulations ran
+# 1.3-5x faster in three of four paired measurements (benchmarks/RESULTS_codegen.md); a build
+# is cached, runs repeat. CASMECH_CFLAGS=-O0 for the fastest build.
 DEFAULT_FLAGS = ("-O1",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"
