@@ -2,18 +2,32 @@
 
 IDAS integrates the index-1 DAE of compiler.dae: x = [q, v], z = [v_dot, lam] (v = q_dot in
 r-p, [r_dot; omega_bar] in r-omega), with rows that depend on the others at t0 (redundant
-joints) masked out. Every start hands IDAS the exact derivative and algebraic state
-(init_xdot, z0), solved here from the same equations, so IDACalcIC is never needed.
+joints) masked out. Every start hands IDAS the exact algebraic state z0 and, through
+compiler.dae.shifted_problem, the exact derivative, so IDACalcIC is never needed and one
+integrator per relative output grid serves every restart (building one took ~25 ms for an
+8-bar chain, mostly its symbolic Jacobian; one per chunk used to take 92 of them, 2.4 s of
+a 6.4 s run of benchmarks chain8 at rtol 1e-8).
 
 The position and velocity constraints hold at the integration error; at the first output where
 either drifts past drift_tolerance(atol) the state is projected back mass-orthogonally
 (assembly.project) and IDAS restarts from there. No Baumgarte constants.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
-its flat poses) the index-1 DAE is singular and IDAS fails; from the start of the chunk where it
-first failed, the rest of the run is integrated with the augmented-Lagrangian ODE
-(compiler.augmented), which stays well-posed there (metadata augmented_from says from when).
-A failure of that one is reported with the output interval, the time and the joints.
+its flat poses) the index-1 DAE is singular and IDAS fails; the run then starts over from t0
+on the augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there (metadata
+augmented_from = t0, dae_failed_at = the start of the chunk that failed). A failure of that
+one is reported with the output interval, the time and the joints.
+
+Measured and not adopted (A02, rtol 1e-10): a regularised DAE, [M P^T; P -eps I] with k
+augmented-Lagrangian iterates as extra algebraic unknowns (pure SX, sparse). Per flat pose it
+lost 5e-7 J (eps = 1e-8 max(diag M)^-1; 2.5e-5 J at 1e-9, 1.3e-3 J at 1e-10, 8e-6 J at 1e-6),
+the B0 error over 10 s ranged 1e-6..2e-4 with k = 2..6 and the drift projections' placement,
+N = 40 took 698 s for 2.97e-5 (k = 2). Newton on z also needed the algebraic unknowns out of
+the convergence test's tight weights (IDA_CONV_FAIL at the pose otherwise). The ODE fallback
+with GMRES (matrix-free Jacobian products) was more accurate on N = 2 (7.8e-7 rp, 9.2e-7
+r-omega) but 3-4x slower, and needs its dense preconditioner on N = 40 (without it, A02 N = 2
+left the branch). A02 N = 40 therefore still runs for over 10 minutes (the ODE's Jacobian
+is dense: 1694 x 1694); see tests/runtime/test_validation_iftomm.py.
 """
 
 from __future__ import annotations
@@ -24,7 +38,7 @@ import numpy as np
 from casmech.compiler import augmented, dae, euler
 from casmech.compiler.checks import RANK_TOLERANCE, dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
-from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
 from casmech.runtime.kinematics import output_times
@@ -33,6 +47,11 @@ from casmech.runtime.results import Result
 CHUNK = 256  # most output intervals per IDAS call
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
 DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
+# The DAE's Newton systems: casadi's sparse QR (its default). csparse (sparse LU) took half
+# the steps and 2.6x less time on benchmarks/chain8 (rtol 1e-8, 10 s; its error at t = 1 s
+# 3.6e-8 vs 1.2e-8), but was 5x slower per step on the A02 N-four-bar (N = 20) and crawled
+# through 50000 steps before failing at its flat poses, where QR fails at once.
+LINEAR_SOLVER = "qr"
 
 
 def drift_tolerance(atol: float) -> float:
@@ -56,6 +75,15 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
 def penalty(functions: SystemFunctions, form: Formulation, q) -> float:
     """The augmented-Lagrangian penalty scaled to the model: PENALTY max(diag M)."""
     return augmented.PENALTY * np.max(np.diag(functions.matrix(form.mass, q)), initial=1.0)
+
+
+def _differentiable(functions: SystemFunctions) -> dict[str, ca.Function]:
+    """The bundle's functions if all are SX, else the interpreted ones rebuilt from the IR:
+    the augmented-Lagrangian ODE differentiates P and M, whose Jacobians a compiled bundle
+    does not carry (codegen.generate.DIFFERENTIATED)."""
+    if all(f.is_a("SXFunction") for f in functions.functions.values()):
+        return functions.functions
+    return build_functions(functions.ir).functions
 
 
 class _Model:
@@ -121,46 +149,54 @@ class _Stepper:
     def __init__(self, model: _Model, rtol: float, atol: float):
         self.model = model
         self.chunk = CHUNK
-        self.dae = dae.problem(dae.residual(model.functions.functions, model.name))
+        self.dae = dae.shifted_problem(dae.residual(model.functions.functions, model.name))
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
+        self.dae_integrators: dict[tuple, ca.Function] = {}
         self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
         self.ode_integrators: dict[tuple, ca.Function] = {}
         self.on_ode, self.switched_at = False, None
 
     def adapt(self, used: int, restarted: bool) -> None:
-        """Next chunk: twice the intervals used before a restart (the rest of a chunk after
-        one is discarded), or twice the last chunk, up to CHUNK."""
-        self.chunk = min(CHUNK, 2 * used if restarted else 2 * self.chunk)
+        """Next chunk: the power of two at or above twice the intervals used before a restart
+        (the rest of a chunk after one is discarded), or twice the last chunk, up to CHUNK.
+        Powers of two keep the integrators built few (one per relative output grid)."""
+        wanted = 2 * used if restarted else 2 * self.chunk
+        self.chunk = min(CHUNK, 1 << (wanted - 1).bit_length())
 
     def integrate(self, t0: float, times: np.ndarray, q, v, mask):
         """(states, lam) at `times`: states rows [q, v, v_dot], lam in unit rows.
 
-        By the DAE until it first fails, by the augmented-Lagrangian ODE from there to the end.
-        Measured on A02: a DAE run retried over a single interval after a failure can pass the
-        singular pose onto the wrong branch (r-omega), and handing back to the DAE after the
-        pose did too, so the first failure switches for good."""
+        By the DAE until it first fails (then _Restart: the run starts over on the
+        augmented-Lagrangian ODE), else by that ODE."""
         if not self.on_ode:
             try:
                 return self._dae(t0, times, q, v, mask)
             except RuntimeError:  # IDAS failed (its construction is not guarded)
-                self.on_ode, self.switched_at = True, t0
+                raise _Restart(t0) from None
         return self._ode(t0, times, q, v)
 
     def _dae(self, t0, times, q, v, mask):
-        """IDAS on the DAE from the exact consistent state, handed over with its derivative
-        (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
-        started by IDACalcIC was slower (its line search often failed, measured on the
-        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
+        """IDAS on the DAE from the exact consistent state. Its derivative goes in through
+        compiler.dae.shifted_problem (y = x - tau x_dot0 starts with y' = 0), so one integrator
+        per relative output grid serves every restart; IDACalcIC is never asked (its line
+        search often failed on the benchmark chains, and it fails on IFToMM A01's 1e-9
+        inertia)."""
         model = self.model
         v_dot, lam = model.consistent(t0, q, v, mask)
-        x_dot = np.concatenate([model.q_dot(q, v), v_dot])
-        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0),
-                                   self.options | {"suppress_algebraic": True, "calc_ic": False,
-                                                   "init_xdot": list(x_dot)})
-        return self._dae_states(integrator(x0=np.concatenate([q, v]),
-                                           z0=np.concatenate([v_dot, lam]),
-                                           p=np.concatenate([[t0], mask])))
+        x_dot0 = np.concatenate([model.q_dot(q, v), v_dot])
+        grid = tuple(np.round(times - t0, 12))
+        if grid not in self.dae_integrators:
+            self.dae_integrators[grid] = ca.integrator(
+                "dynamics", "idas", self.dae, 0.0, list(grid),
+                self.options | {"suppress_algebraic": True, "calc_ic": False,
+                                "linear_solver": LINEAR_SOLVER})
+        out = self.dae_integrators[grid](x0=np.concatenate([q, v]),
+                                         z0=np.concatenate([v_dot, lam]),
+                                         p=np.concatenate([[t0], mask, x_dot0]))
+        x, z = self._dae_states(out)
+        x[:model.n_q + model.n_v] += np.outer(x_dot0, grid)
+        return x, z
 
     def _dae_states(self, out):
         x, z = np.array(out["xf"].full()), np.array(out["zf"].full())
@@ -174,8 +210,9 @@ class _Stepper:
         so the error names it exactly (and the caller keeps every row before it)."""
         model = self.model
         if self.ode is None:
-            self.ode = augmented.ode(model.functions.functions, model.name)
-            self.solve = augmented.accelerations(model.functions.functions, model.name)
+            functions = _differentiable(model.functions)
+            self.ode = augmented.ode(functions, model.name)
+            self.solve = augmented.accelerations(functions, model.name)
         a = penalty(model.functions, model.form, q)
         key = tuple(np.round(times - t0, 12))
         if key not in self.ode_integrators:
@@ -210,19 +247,44 @@ class _Stepper:
             functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
 
 
+class _Restart(Exception):
+    """The exact DAE failed in the chunk starting at `t`."""
+
+    def __init__(self, t: float):
+        super().__init__(t)
+        self.t = t
+
+
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
                  progress=None) -> Result:
+    """By the DAE; if it fails anywhere (a singular configuration), the whole run again from
+    t0 on the augmented-Lagrangian ODE. Measured on A02: switching at the failure, from the
+    start of the failed chunk, made the outcome depend on where chunks and projections fell
+    (one more restart before the first flat pose took r-omega onto the wrong branch at the
+    third), while the run on the ODE from t0 passed at every chunking tried; a DAE run retried
+    over a single interval, or handed back after the pose, went wrong too."""
     model = _Model(functions, formulation)
+    stepper = _Stepper(model, rtol, atol)
+    try:
+        return _run(model, stepper, t0, t_end, step, atol, progress)
+    except _Restart as restart:
+        stepper.on_ode, stepper.switched_at = True, restart.t
+        return _run(model, stepper, t0, t_end, step, atol, progress)
+
+
+def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
+         progress) -> Result:
+    functions = model.functions
     result = Result("dynamics", on_row=progress)
     q, q_dot = assembly.initial_state(functions, t0)
-    v = velocities(functions, formulation, q, q_dot)
+    v = velocities(functions, model.name, q, q_dot)
     mask = model.mask(t0, q)
-    stepper = _Stepper(model, rtol, atol)
     record = _Recorder(model, result, mask)
     tolerance = drift_tolerance(atol)
     times = output_times(t0, t_end, step)
     k, projections = 0, 0
+    stepper.chunk = CHUNK
     try:
         v_dot, lam = model.consistent(times[0], q, v, mask)
         record(times[0], q, v, v_dot, lam)
@@ -248,9 +310,10 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     except AnalysisError as error:
         error.partial = result
         raise
-    result.metadata.update(rtol=rtol, atol=atol, formulation=formulation, integrator="idas",
-                           projections=projections, augmented_from=stepper.switched_at,
-                           dropped_rows=int(mask.sum()))
+    result.metadata.update(rtol=stepper.options["reltol"], atol=atol,
+                           formulation=model.name, integrator="idas", projections=projections,
+                           augmented_from=t0 if stepper.on_ode else None,
+                           dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()))
     return result
 
 
