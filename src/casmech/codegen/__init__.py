@@ -9,8 +9,8 @@ kernels (one per kind of constraint row, body quantity, force element) mapped ov
 instances, so the C holds each kernel once and only index tables grow with the model: YAML ->
 loaded library for a 128-body chain in 6 s at -O0 and 16 s at -O1, 1000 bodies in 75 s and
 113 s (the unrolled SX functions took 108-267 s at 128 bodies), on a shared, loaded 2-core VM.
-Default flags -O1 (build.DEFAULT_FLAGS: faster runs). benchmarks/RESULTS_codegen.md has the
-measurements.
+Default flags -O0 (build.DEFAULT_FLAGS: within both targets; -O1 runs faster).
+benchmarks/RESULTS_codegen.md has the measurements.
 
 `--mode auto` (auto_mode) takes the path that is fastest end to end:
   - compiled when the library is in the cache (loading it takes 0.02-0.4 s);

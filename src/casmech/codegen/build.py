@@ -13,10 +13,10 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-# -O1: the mapped kernels' library builds in 1.1-2.7x the time of -O0 and its simulations ran
-# 1.3-5x faster in three of four paired measurements (benchmarks/RESULTS_codegen.md); a build
-# is cached, runs repeat. CASMECH_CFLAGS=-O0 for the fastest build.
-DEFAULT_FLAGS = ("-O1",)
+# -O0: a 128-body chain's library builds in 5.8-7.7 s (-O1: 9.7-16 s) and simulates within the
+# issue's 1.5x of the unrolled code (benchmarks/RESULTS_codegen.md); -O1 runs 1.3-2x faster
+# (casmech compile --flags=-O1, or CASMECH_CFLAGS=-O1, where runs outweigh the build).
+DEFAULT_FLAGS = ("-O0",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
