@@ -16,7 +16,7 @@ points; multiple shooting: one IDAS integrator per interval with its end state m
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import casadi as ca
@@ -31,12 +31,19 @@ from casmech.optimal.dae import (
     columns_function,
     initial_state_function,
 )
+from casmech.optimal.guess import Guess, inverse_dynamics_controls, target_pose
 from casmech.optimal.sensitivity import idas
 from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 DEGREE = 3
 TRANSCRIPTIONS = ("collocation", "shooting")
+INITIAL_GUESSES = ("simulation", "interpolation")
+# MUMPS pivoting: with its default pivot tolerance (1e-6) the KKT matrices of the 3D arm
+# (ocp_arm3d.yaml; absolute coordinates, a light payload) were reported with the wrong inertia
+# at nearly every iteration, IPOPT regularised the Hessian by 1e5..1e8 and stalled (dual
+# infeasibility 0.3 after 300 iterations); at 1e-4 the same problem converges in 18.
+MUMPS = {"ipopt.mumps_pivtol": 1e-4, "ipopt.mumps_pivtolmax": 0.1}
 
 
 @dataclass(frozen=True)
@@ -53,6 +60,9 @@ class OCP:
     guess: Sequence[float] | None = None  # constant controls of the initial simulation
     free_time: tuple[float, float] | None = None  # bounds of a free final time (horizon: guess)
     time_weight: float = 0.0  # objective term time_weight * (final time - t0)
+    initial_guess: str = "simulation"  # or "interpolation" (guess.py)
+    elements: int = 1  # collocation elements per control interval
+    stabilized: bool = False  # collocation: position and velocity constraints at its points
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -86,6 +96,20 @@ class _Setup:
     names: list[str]
     algebraic: ca.Function
     step: float
+
+
+@dataclass(frozen=True)
+class _Start:
+    """The initial guess: states at the interval boundaries, controls, the step and, when
+    known, the states at any time (for the collocation points)."""
+
+    x: np.ndarray
+    u: np.ndarray
+    step: float
+    state: Callable[[float], np.ndarray] | None = None
+
+    def at(self, t: float, k: int) -> np.ndarray:
+        return self.x[k + 1] if self.state is None else self.state(t)
 
 
 def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
@@ -143,9 +167,33 @@ def _bounds(opti, problem: OCP, u):
             opti.subject_to(u[k, :] <= control.upper)
 
 
-def _guess(setup: _Setup, problem: OCP) -> np.ndarray:
+def _simulated(setup: _Setup, problem: OCP) -> _Start:
     """States at the interval boundaries of a forward simulation with constant controls."""
-    return replay_states(setup, problem, np.tile(default_guess(problem), (problem.intervals, 1)))
+    u = np.tile(default_guess(problem), (problem.intervals, 1))
+    return _Start(replay_states(setup, problem, u), u, setup.step)
+
+
+def _interpolated(setup: _Setup, problem: OCP) -> _Start:
+    """Rest to rest from the initial pose to one meeting the terminal conditions (guess.py)."""
+    dae, n = setup.dae, setup.dae.n
+    q_end = target_pose(dae, setup.columns, setup.names, dict(problem.terminal), setup.x0[:n])
+    path = Guess(dae, setup.x0[:n], q_end, problem.horizon)
+    times = dae.t0 + setup.step * np.arange(problem.intervals + 1)
+    lower = [c.lower for c in problem.controls]
+    upper = [c.upper for c in problem.controls]
+    u = inverse_dynamics_controls(dae, path.rates, times, lower, upper)
+    x = np.array([setup.x0, *(path.state(t) for t in times[1:])])
+    return _Start(x, u, setup.step, path.state)
+
+
+def _start(setup: _Setup, problem: OCP, solution: Solution | None) -> _Start:
+    if solution is not None:
+        return _Start(solution.x, solution.u, solution.step)
+    if problem.initial_guess not in INITIAL_GUESSES:
+        raise UsageError(f"initial guess '{problem.initial_guess}' is not one of "
+                         f"{', '.join(INITIAL_GUESSES)}")
+    return (_interpolated if problem.initial_guess == "interpolation" else _simulated)(
+        setup, problem)
 
 
 def replay_states(setup: _Setup, problem: OCP, u: np.ndarray, step: float | None = None):
@@ -159,32 +207,65 @@ def replay_states(setup: _Setup, problem: OCP, u: np.ndarray, step: float | None
     return np.array(xs)
 
 
-def _collocation(opti, setup: _Setup, problem: OCP, step, u, guess):
+def _collocation(opti, setup: _Setup, problem: OCP, step, u, start: _Start):
+    """Radau IIA on `elements` equal elements per control interval (the control is constant
+    over the interval; more elements: a more accurate trajectory for the same controls)."""
     dae = setup.dae
-    n_x, n_z = dae.x.numel(), dae.z.numel()
     tau = np.append(0, ca.collocation_points(DEGREE, "radau"))
-    coefficients = _lagrange(tau)
-    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.p], [dae.ode, dae.alg])
-    x = opti.variable(n_x, problem.intervals + 1)
+    x = opti.variable(dae.x.numel(), problem.intervals + 1)
     opti.subject_to(x[:, 0] == setup.x0)
-    opti.set_initial(x, guess.T)
+    opti.set_initial(x, start.x.T)
     ends = []
     for k in range(problem.intervals):
-        xc = opti.variable(n_x, DEGREE)
-        zc = opti.variable(n_z, DEGREE)
-        opti.set_initial(xc, np.repeat(guess[k + 1][:, None], DEGREE, 1))
-        z_guess = setup.algebraic(dae.t0 + k * setup.step, guess[k + 1], np.zeros(u.shape[0]))
-        opti.set_initial(zc, np.repeat(z_guess.full(), DEGREE, 1))
-        points = ca.horzcat(x[:, k], xc)
-        for j in range(1, DEGREE + 1):
-            slope = points @ ca.DM(coefficients[:, j])
-            t = dae.t0 + (k + tau[j]) * step
-            ode, alg = f(t, points[:, j], zc[:, j - 1], u[:, k])
-            opti.subject_to(slope == step * ode)
-            opti.subject_to(alg == 0)
-        opti.subject_to(x[:, k + 1] == xc[:, DEGREE - 1])  # Radau: last point is the end
-        ends.append(zc[:, DEGREE - 1])
+        end = x[:, k]
+        for e in range(problem.elements):
+            end, z_end = _element(opti, setup, problem, (step, start), u[:, k], end,
+                                  (k, e, tau))
+        opti.subject_to(x[:, k + 1] == end)  # Radau: the last point is the element's end
+        ends.append(z_end)
     return x, ends
+
+
+def _element(opti, setup: _Setup, problem: OCP, steps, u, begin, where):
+    """One collocation element of control interval k: states at the DEGREE Radau points and
+    algebraic states there; returns (state, algebraic state) at its end."""
+    (step, start), (k, e, tau) = steps, where
+    dae, elements = setup.dae, problem.elements
+    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.p], [dae.ode, dae.alg])
+    xc, zc = opti.variable(dae.x.numel(), DEGREE), opti.variable(dae.z.numel(), DEGREE)
+    times = dae.t0 + (k + (e + tau[1:]) / elements) * start.step
+    x_guess = np.array([start.at(t, k) for t in times]).T
+    opti.set_initial(xc, x_guess)
+    opti.set_initial(zc, np.hstack([setup.algebraic(t, x_guess[:, j], start.u[k]).full()
+                                    for j, t in enumerate(times)]))
+    points = ca.horzcat(begin, xc)
+    coefficients = _lagrange(tau)
+    for j in range(1, DEGREE + 1):
+        slope = points @ ca.DM(coefficients[:, j])
+        t = dae.t0 + (k + (e + tau[j]) / elements) * step
+        ode, alg = f(t, points[:, j], zc[:, j - 1], u)
+        if problem.stabilized:
+            ode = ode + _stabilization(opti, setup, t, points[:, j])
+        opti.subject_to(slope == step / elements * ode)
+        opti.subject_to(alg == 0)
+    return xc[:, DEGREE - 1], zc[:, DEGREE - 1]
+
+
+def _stabilization(opti, setup: _Setup, t, x):
+    """Gear-Gupta-Leimkuhler terms at a collocation point: q' = q_dot + Phi_q^T mu and
+    q_dot' = q_ddot + Phi_q^T eta, with Phi(q) = 0 and Phi_q q_dot = nu imposed there. The
+    index-1 DAE keeps these invariants only to the discretisation error, and the optimiser
+    exploits the drift (links that stretch); mu and eta vanish on the exact solution."""
+    dae, rows, theta = setup.dae, list(setup.dae.rows), ca.DM.zeros(0)
+    n = dae.n
+    q, q_dot = x[:n], x[n:]
+    phi_q = dae.system["phi_q"](t, q, theta)[rows, :]
+    mu, eta = opti.variable(len(rows)), opti.variable(len(rows))
+    opti.set_initial(mu, 0)
+    opti.set_initial(eta, 0)
+    opti.subject_to(dae.system["phi"](t, q, theta)[rows] == 0)
+    opti.subject_to(phi_q @ q_dot == dae.system["nu"](t, q, theta)[rows])
+    return ca.vertcat(phi_q.T @ mu, phi_q.T @ eta)
 
 
 def _lagrange(tau: np.ndarray) -> np.ndarray:
@@ -213,14 +294,14 @@ def _scaled_integrator(dae: DAE, k: int, problem: OCP, name: str) -> ca.Function
     return ca.integrator(name, "idas", problem_dae, 0.0, [1.0], options)
 
 
-def _shooting(opti, setup: _Setup, problem: OCP, step, u, guess):
+def _shooting(opti, setup: _Setup, problem: OCP, step, u, start: _Start):
     dae = setup.dae
     x = opti.variable(dae.x.numel(), problem.intervals + 1)
     opti.subject_to(x[:, 0] == setup.x0)
-    opti.set_initial(x, guess.T)
+    opti.set_initial(x, start.x.T)
     for k in range(problem.intervals):
         t0 = dae.t0 + k * setup.step
-        z0 = setup.algebraic(t0, guess[k], np.zeros(u.shape[0])).full().ravel()
+        z0 = setup.algebraic(t0, start.x[k], start.u[k]).full().ravel()
         if problem.free_time is None:
             integrator = idas(dae, [t0 + setup.step], problem.rtol, problem.atol, t0=t0,
                               name=f"F{k}")
@@ -251,7 +332,8 @@ BUILDERS = {"collocation": _collocation, "shooting": _shooting}
 
 
 def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation",
-          verbose: bool = False, max_iter: int = 500, start: Solution | None = None) -> Solution:
+          verbose: bool = False, max_iter: int = 500, start: Solution | None = None,
+          options: Mapping | None = None) -> Solution:
     """Solve with `transcription`; `start` (another solution) replaces the initial simulation
     as the initial guess (multiple shooting from a collocation solution is far more robust:
     IDAS fails on the wild states IPOPT tries first from a poor guess)."""
@@ -259,24 +341,23 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
         raise UsageError(f"transcription '{transcription}' is not one of "
                          f"{', '.join(TRANSCRIPTIONS)}")
     setup = _setup(model, problem)
-    guess = _guess(setup, problem) if start is None else start.x
+    initial = _start(setup, problem, start)
     opti = ca.Opti()
     u = opti.variable(len(problem.controls), problem.intervals)
-    u_guess = np.tile(default_guess(problem), (problem.intervals, 1)) if start is None else start.u
-    opti.set_initial(u, u_guess.T)
-    step = _step(opti, problem, setup.step if start is None else start.step)
-    x, z = BUILDERS[transcription](opti, setup, problem, step, u, guess)
+    opti.set_initial(u, initial.u.T)
+    step = _step(opti, problem, initial.step)
+    x, z = BUILDERS[transcription](opti, setup, problem, step, u, initial)
     _bounds(opti, problem, u)
     _path(opti, setup, problem, step, x, u, z)
     opti.minimize(_objective_and_terminal(opti, setup, problem, step, x[:, -1], u[:, -1], z[-1],
                                           u))
-    options = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
-               "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10}
+    settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
+                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
     if transcription == "shooting":
-        options["ipopt.hessian_approximation"] = "limited-memory"
+        settings["ipopt.hessian_approximation"] = "limited-memory"
     else:
-        options["expand"] = True  # SX graphs: far faster exact Hessians for IPOPT
-    opti.solver("ipopt", options)
+        settings["expand"] = True  # SX graphs: far faster exact Hessians for IPOPT
+    opti.solver("ipopt", {**settings, **(options or {})})
     try:
         result = opti.solve()
     except RuntimeError as error:

@@ -1,0 +1,57 @@
+"""Minimum-effort point-to-point move of a 3D arm (models/ocp_arm3d.yaml, issue 7 item 4):
+stabilised Radau collocation from the interpolated rest-to-rest guess, replayed through IDAS."""
+
+from pathlib import Path
+
+import numpy as np
+
+import casmech
+from casmech.optimal.ocp import OCP, columns_at, from_block, replay, solve
+
+MODEL = Path(__file__).parents[2] / "models" / "ocp_arm3d.yaml"
+TIP = ["payload.x", "payload.y", "payload.z"]
+
+
+def _problem(model) -> OCP:
+    problem, _ = from_block(model.ocp)
+    # coarse control grid with 6 collocation elements per interval (the example: 30 x 1)
+    return OCP(**{**problem.__dict__, "intervals": 6, "elements": 6, "stabilized": True,
+                  "initial_guess": "interpolation", "rtol": 1e-9, "atol": 1e-11})
+
+
+def test_arm_reaches_the_target_at_rest_and_replays():
+    model = casmech.load(MODEL)
+    problem = _problem(model)
+    solution = solve(model, problem, "collocation")
+    assert solution.status == "Solve_Succeeded"
+    n = solution.x.shape[1] // 2
+    replayed = replay(model, problem, solution)
+    # the issue's bound on positions; measured 6e-5 (6 intervals x 4 elements)
+    np.testing.assert_allclose(replayed[:, :n], solution.x[:, :n], rtol=0, atol=1e-4)
+    bounds = np.array([[c.lower, c.upper] for c in problem.controls])
+    assert np.all(solution.u >= bounds[:, 0] - 1e-8)  # IPOPT's bound tolerance
+    assert np.all(solution.u <= bounds[:, 1] + 1e-8)
+    target = [model.ocp.terminal[c] for c in TIP]
+    # the IDAS replay ends at the target (collocation error as above) and at rest
+    end = replayed[-1]
+    tip = end[[solution_index(model, c) for c in TIP]]
+    np.testing.assert_allclose(tip, target, rtol=0, atol=1e-4)
+    np.testing.assert_allclose(end[n:], 0.0, rtol=0, atol=1e-3)  # measured ~1e-4 (rates)
+    # the tip is the forearm's end point: r_forearm + A(p_forearm) [L2/2, 0, 0] (independent
+    # of the weld rows that carry the payload; closed form of the Euler-parameter matrix)
+    forearm = columns_at(model, problem, solution, ["forearm.x", "forearm.y", "forearm.z",
+                                                    "forearm.e0", "forearm.e1", "forearm.e2",
+                                                    "forearm.e3"])[-1]
+    r, (e0, e1, e2, e3) = forearm[:3], forearm[3:]
+    x_axis = np.array([e0**2 + e1**2 - e2**2 - e3**2, 2 * (e1 * e2 + e0 * e3),
+                       2 * (e1 * e3 - e0 * e2)])
+    # terminal equality at IPOPT's tolerance, position constraints exact at the nodes
+    np.testing.assert_allclose(r + model.parameters["L2"] / 2 * x_axis, target, rtol=0,
+                               atol=1e-8)
+
+
+def solution_index(model, column: str) -> int:
+    """Index of a CM coordinate column in the state x = [r_1..r_nb, p_1..p_nb, ...]."""
+    body, _, axis = column.partition(".")
+    names = [b.name for b in model.bodies]
+    return 3 * names.index(body) + "xyz".index(axis)
