@@ -144,3 +144,13 @@ def test_integral_outputs():
     # energy is conserved to IDAS's rtol 1e-10 (measured drift of the integral ~1e-10)
     np.testing.assert_allclose(result.values[:, 0], start * np.array([0.5, 1.0]), rtol=1e-8,
                                atol=1e-10)
+
+
+def test_fully_driven_arm_forward_and_adjoint():
+    """0 DOF (models/robot_arm_3r.yaml: three driven joints): the motion is prescribed, so a
+    mass changes only the driving torques and a driver amplitude changes both. IDAS used to
+    fail at t = 0 on this model in both modes (error test on the algebraic states)."""
+    def load(overrides):
+        return casmech.load(MODELS / "robot_arm_3r.yaml", overrides)
+
+    check(load, ["m2", "A2"], ["shoulder.ty", "forearm.z"], [1.0])
