@@ -159,6 +159,9 @@ class OptimalControl:
     source: Source | None = None
     free_time: tuple[float, float] | None = None
     time_weight: float = 0.0
+    initial_guess: str = "simulation"  # simulation | interpolation
+    elements: int = 1  # collocation elements per control interval
+    stabilized: bool = False  # collocation with position/velocity constraints at its points
 
 
 @dataclass(frozen=True)

@@ -111,7 +111,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
     return resolved.OptimalControl(horizon, given.intervals, given.transcription, tuple(controls),
                                    effort, costs, terminal, bounds,
                                    check.doc.source_map.values.get(path),
-                                   free.get("free_time"), time_weight)
+                                   free.get("free_time"), time_weight, given.initial_guess,
+                                   max(given.elements, 1), given.stabilized)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

@@ -469,6 +469,9 @@ class OptimalControl(Spec):
     terminal: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at the end
     path: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [low, high] at nodes
     free_time: Pair | None = None  # [low, high] of a free final time; horizon is its guess
+    initial_guess: Literal["simulation", "interpolation"] = "simulation"  # casmech.optimal.guess
+    elements: StrictInt = 1  # collocation elements per control interval
+    stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
 
 
 # ------------------------------------------------------ components and instances (issue 6)
