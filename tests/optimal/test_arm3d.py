@@ -14,9 +14,10 @@ TIP = ["payload.x", "payload.y", "payload.z"]
 
 def _problem(model) -> OCP:
     problem, _ = from_block(model.ocp)
-    # coarse control grid with 6 collocation elements per interval (the example: 30 x 1)
-    return OCP(**{**problem.__dict__, "intervals": 6, "elements": 6, "stabilized": True,
-                  "initial_guess": "interpolation", "rtol": 1e-9, "atol": 1e-11})
+    assert problem.stabilized and problem.initial_guess == "interpolation"  # from the block
+    # a coarser control grid than the example's 12 x 3, 6 collocation elements per interval
+    return OCP(**{**problem.__dict__, "intervals": 6, "elements": 6, "rtol": 1e-9,
+                  "atol": 1e-11})
 
 
 def test_arm_reaches_the_target_at_rest_and_replays():

@@ -11,7 +11,10 @@ same functional) plus terminal weights on results columns; `terminal` targets ar
 constraints on results columns at the final time. The initial state is the model's assembled,
 consistent state; the initial guess is a forward simulation with small constant controls.
 Collocation: Radau IIA (degree 3) on x = [q, q_dot] with z = [q_ddot, lam] at the collocation
-points; multiple shooting: one IDAS integrator per interval with its end state matched.
+points, `elements` per control interval, optionally `stabilized` (GGL: Phi = 0 and
+Phi_q q_dot = nu imposed at the points); multiple shooting: one IDAS integrator per interval
+with its end state matched. `initial_guess="interpolation"` starts from guess.py's rest-to-rest
+path instead of the forward simulation.
 """
 
 from __future__ import annotations
@@ -396,7 +399,8 @@ def from_block(block) -> tuple[OCP, str]:
     controls = [Control(c.joint, c.type, c.lower, c.upper) for c in block.controls]
     return OCP(controls, block.horizon, block.intervals, block.effort, dict(block.terminal),
                dict(block.terminal_cost), dict(block.path), free_time=block.free_time,
-               time_weight=block.time_weight), block.transcription
+               time_weight=block.time_weight, initial_guess=block.initial_guess,
+               elements=block.elements, stabilized=block.stabilized), block.transcription
 
 
 def results_table(model: ResolvedModel, problem: OCP, solution: Solution):
