@@ -43,15 +43,17 @@ COMPILE_MODES = ("interpreted", "compiled", "auto")
 def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
     """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
     "compiled" (C generated, built with the C compiler and loaded; cached by model content in
-    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (compiled when a C compiler
-    exists, else interpreted with one warning). Both bundles have the same functions."""
+    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (whichever runs sooner end to end,
+    codegen.auto_mode: compiled when the library is cached or the model is big, else
+    interpreted; interpreted with one warning without a C compiler). Both bundles have the
+    same functions."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
     if mode == "auto" and not codegen.available():
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
                       "functions, which is slower; install gcc to compile models", stacklevel=2)
         mode = "interpreted"
-    if mode == "interpreted":
+    if mode == "interpreted" or (mode == "auto" and codegen.auto_mode(model) == "interpreted"):
         return build_functions(lower(model))
     try:
         return codegen.compiled(model)

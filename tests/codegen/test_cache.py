@@ -12,6 +12,7 @@ import casmech
 from casmech import codegen
 from casmech.cli import main
 from casmech.codegen import cache
+from tests.conftest import MODELS as MODELS_DIR
 
 from .conftest import MODEL
 
@@ -47,14 +48,15 @@ def test_unchanged_model_hits_changed_model_rebuilds(model, toolchain, cache_roo
 
 
 def test_flags_are_part_of_the_key(model):
-    digest = cache.model_digest(model.text, model.parameters)
+    digest = cache.model_digest(model)
     assert cache.key(digest, "gcc 12", ("-O0",)) != cache.key(digest, "gcc 12", ("-O1",))
     assert cache.key(digest, "gcc 12", ("-O0",)) != cache.key(digest, "gcc 13", ("-O0",))
 
 
 def test_second_casmech_run_does_not_recompile(tmp_path, compiled, builds):
     """`casmech run` of the unchanged model (built by the session fixture with the same flags):
-    no build, twice; after an edit of the file: one build."""
+    no build, twice (auto runs the cached library); after an edit of the file: one build with
+    --mode compiled, none with auto (a model this small runs sooner interpreted)."""
     path = tmp_path / "m.yaml"
     path.write_text(MODEL.read_text())
     for _ in range(2):
@@ -63,6 +65,10 @@ def test_second_casmech_run_does_not_recompile(tmp_path, compiled, builds):
     assert builds == []
     path.write_text(path.read_text().replace("stiffness: k,", "stiffness: 2 * k,"))
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--t-end", "0.05"]) == 0
+    assert '"mode": "interpreted"' in (tmp_path / "out" / "metadata.json").read_text()
+    assert builds == []
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--t-end", "0.05",
+                 "--mode", "compiled"]) == 0
     assert len(builds) == 1
 
 
@@ -109,3 +115,29 @@ def test_cache_info_and_clear(tmp_path, compiled, cache_root, monkeypatch, capsy
     assert cache.entries(root) == [] and list(root.iterdir()) == []
     assert main(["cache", "info"]) == 0
     assert f"{root}: 0 compiled models" in capsys.readouterr().out
+
+
+def _digest(path):
+    return cache.model_digest(casmech.load(path))
+
+
+def test_key_follows_table_data_and_component_files(tmp_path):
+    """What a model reads besides its own text is in the key: an edited CSV value (table
+    driver) and an edited component file (instances) each change it; reloading unchanged
+    files does not."""
+    models = MODELS_DIR
+    shutil.copy(models / "table_driver.yaml", tmp_path)
+    shutil.copy(models / "table_driver_profile.csv", tmp_path)
+    shutil.copy(models / "quadruped_legs.yaml", tmp_path)
+    shutil.copytree(models / "components", tmp_path / "components")
+    for name, edited in (("table_driver.yaml", "table_driver_profile.csv"),
+                         ("quadruped_legs.yaml", "components/leg.yaml")):
+        before = _digest(tmp_path / name)
+        assert _digest(tmp_path / name) == before  # deterministic
+        text = (tmp_path / edited).read_text()
+        # change one number that the model uses: a lift sample in a dwell / a leg's mass
+        changed = text.replace("0.950,0\n", "0.950,0.0001\n") \
+            if edited.endswith(".csv") else text.replace("mass: ", "mass: 1.5 * ", 1)
+        assert changed != text
+        (tmp_path / edited).write_text(changed)
+        assert _digest(tmp_path / name) != before, edited

@@ -41,8 +41,12 @@ def test_unknown_mode_is_a_usage_error(model):
         casmech.compile(model, "jit")
 
 
-def test_auto_with_compiler_is_compiled(model, compiled):
-    assert codegen.mode_of(casmech.compile(model, "auto")) == "compiled"
+def test_auto_with_compiler_is_compiled(model, compiled, tmp_path, monkeypatch):
+    assert codegen.mode_of(casmech.compile(model, "auto")) == "compiled"  # cached: compiled
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "empty"))
+    # a cache miss on a model this small: interpreted is sooner end to end (AUTO_BODIES)
+    assert codegen.mode_of(casmech.compile(model, "auto")) == "interpreted"
+    assert not (tmp_path / "empty").exists()  # nothing was built
 
 
 def test_compile_command_writes_sources_header_manifest_library(tmp_path, compiled, capsys):
@@ -69,8 +73,15 @@ def failing_compiler(tmp_path, monkeypatch):
     monkeypatch.setenv("CC", str(script))
 
 
+@pytest.fixture
+def auto_compiles(monkeypatch):
+    """auto decides to compile this small model on a cache miss (as it does from AUTO_BODIES
+    bodies on), so what happens when compiling fails is exercised."""
+    monkeypatch.setattr(codegen, "AUTO_BODIES", 1)
+
+
 def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_path,
-                                                 monkeypatch):
+                                                 monkeypatch, auto_compiles):
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -82,7 +93,7 @@ def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_pa
     assert codegen.cache.entries(tmp_path / "cache") == []  # nothing half-built published
 
 
-def test_unwritable_cache(model, tmp_path, monkeypatch, capsys):
+def test_unwritable_cache(model, tmp_path, monkeypatch, capsys, auto_compiles):
     """A cache path that cannot be a directory: compiled is a usage error naming the variable,
     auto warns and interprets."""
     blocker = tmp_path / "file"

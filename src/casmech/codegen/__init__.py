@@ -61,7 +61,7 @@ def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: T
 
 def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
             dae: bool = False) -> tuple[Path, bool]:
-    model_hash = cache.model_digest(model.text, model.parameters)
+    model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
 
     def build(directory: Path) -> None:
@@ -88,7 +88,7 @@ def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, dae: bool = True) -> bool:
     """Whether the cache holds the model's library for this toolchain (nothing is built)."""
     toolchain = toolchain or Toolchain()
-    entry = cache.key(cache.model_digest(model.text, model.parameters), toolchain.version(),
+    entry = cache.key(cache.model_digest(model), toolchain.version(),
                       toolchain.all_flags, dae)
     return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
 

@@ -1,6 +1,7 @@
 """The build cache: one directory per key, published atomically.
 
-Key: the model's content (its text and resolved parameters, so --set overrides count), the
+Key: the model's content (its text, the texts of the component files it was composed from, the
+data of every table it reads, and its resolved parameters, so --set overrides count), the
 casmech version and a digest of its compiler sources, the CasADi version, the C compiler and its
 flags. A build happens in a private temporary directory under the cache and is published with
 one rename; a lock file makes a second process wait for the first instead of building the same
@@ -15,16 +16,20 @@ import json
 import os
 import shutil
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from contextlib import contextmanager
+from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 import casmech
 from casmech.codegen.manifest import FORMAT, MANIFEST
 from casmech.errors import UsageError
+from casmech.schema.resolved import ResolvedModel
+from casmech.schema.tables import TableExpr
 
 ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(casmech.__file__).parent
@@ -47,10 +52,38 @@ def source_digest() -> str:
     return digest.hexdigest()
 
 
-def model_digest(text: str, parameters) -> str:
-    content = json.dumps({"text": text, "parameters": {k: float(v) for k, v in
-                                                       sorted(parameters.items())}})
-    return hashlib.sha256(content.encode()).hexdigest()
+def _tables(value, found: list, seen: set) -> list:
+    """Every table (schema.tables.TableExpr) reachable from a resolved model's fields, in a
+    fixed order: a CSV's content lives only there, not in any text."""
+    if id(value) in seen or isinstance(value, (str, bytes, int, float, np.ndarray)):
+        return found
+    seen.add(id(value))
+    if isinstance(value, TableExpr):
+        found.append(value)
+    elif is_dataclass(value):
+        for item in fields(value):
+            _tables(getattr(value, item.name), found, seen)
+    elif isinstance(value, Mapping):
+        for item in value.values():
+            _tables(item, found, seen)
+    elif isinstance(value, (tuple, list)):
+        for item in value:
+            _tables(item, found, seen)
+    return found
+
+
+def model_digest(model: ResolvedModel) -> str:
+    """sha256 of everything the generated code of a model depends on."""
+    digest = hashlib.sha256(json.dumps({
+        "text": model.text, "files": dict(sorted(model.files.items())),
+        "parameters": {k: float(v) for k, v in sorted(model.parameters.items())}}).encode())
+    for table in _tables(model, [], set()):
+        polynomial = table.polynomial
+        digest.update(json.dumps([table.text, polynomial.periodic, list(polynomial.slopes),
+                                  polynomial.increment]).encode())
+        digest.update(np.ascontiguousarray(polynomial.breaks, float).tobytes())
+        digest.update(np.ascontiguousarray(polynomial.coefficients, float).tobytes())
+    return digest.hexdigest()
 
 
 def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:

@@ -58,7 +58,8 @@ def add_arguments(parser) -> None:
                         help="results file format(s), comma-separated (default csv)")
     parser.add_argument("--mode", choices=casmech.api.COMPILE_MODES, default="auto",
                         help="compiled C (built once, cached) or interpreted CasADi functions "
-                             "(default auto: compiled when a C compiler exists)")
+                             "(default auto: compiled when cached or from 200 bodies, else "
+                             "interpreted)")
     add_overrides(parser)
 
 
