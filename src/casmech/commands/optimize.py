@@ -26,6 +26,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--intervals", type=int, help="ocp: override the number of intervals")
     parser.add_argument("--data", type=Path, help="estimate: measurements CSV (default: the "
                                                   "block's data, relative to the model)")
+    parser.add_argument("--mode", choices=casmech.api.COMPILE_MODES, default="interpreted",
+                        help="ocp collocation on interpreted SX functions (exact Hessian, the "
+                             "default), on the compiled C functions (limited-memory Hessian) "
+                             "or auto (as casmech run decides)")
     parser.add_argument("--verbose", action="store_true", help="print IPOPT's iterations")
     add_overrides(parser)
 
@@ -36,6 +40,7 @@ def _optimal_control(model, args, out: Path) -> None:
         if args.intervals < 1:
             raise UsageError(f"--intervals must be at least 1 (got {args.intervals})")
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
+    problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode})
     transcription = args.transcription or transcription
     start = time.perf_counter()
     guess = None

@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.optimal.compiled import Residuals, residuals
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import (
     DAE,
@@ -65,6 +66,7 @@ class OCP:
     time_weight: float = 0.0  # objective term time_weight * (final time - t0)
     initial_guess: str = "simulation"  # or "interpolation" (guess.py)
     elements: int = 1  # collocation elements per control interval
+    mode: str = "interpreted"  # collocation on interpreted | compiled | auto functions
     stabilized: bool = False  # collocation: position and velocity constraints at its points
 
 
@@ -99,6 +101,7 @@ class _Setup:
     names: list[str]
     algebraic: ca.Function
     step: float
+    functions: Residuals  # the residual and kinematics the collocation imposes
 
 
 @dataclass(frozen=True)
@@ -118,7 +121,8 @@ class _Start:
 def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
     if problem.horizon <= 0 or problem.intervals < 1:
         raise UsageError("the horizon must be positive and intervals at least 1")
-    dae = build_dae(parametric_system(model, ()), control_forces(model, problem.controls))
+    controls = control_forces(model, problem.controls)
+    dae = build_dae(parametric_system(model, ()), controls)
     names, columns = columns_function(dae)
     for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
         if name not in names:
@@ -126,7 +130,8 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
                              "columns are results columns (<body>.x, <joint>.fx, energy, ...)")
     x0 = initial_state_function(dae)(np.zeros(0)).full().ravel()
     return _Setup(dae, x0, columns, names, algebraic_function(dae),
-                  problem.horizon / problem.intervals)
+                  problem.horizon / problem.intervals,
+                  residuals(model, dae, controls, problem.mode))
 
 
 def _columns(setup: _Setup, t, x, u, z=None):
@@ -234,7 +239,7 @@ def _element(opti, setup: _Setup, problem: OCP, steps, u, begin, where):
     algebraic states there; returns (state, algebraic state) at its end."""
     (step, start), (k, e, tau) = steps, where
     dae, elements = setup.dae, problem.elements
-    f = ca.Function("f", [dae.t, dae.x, dae.z, dae.p], [dae.ode, dae.alg])
+    f = setup.functions.residual
     xc, zc = opti.variable(dae.x.numel(), DEGREE), opti.variable(dae.z.numel(), DEGREE)
     times = dae.t0 + (k + (e + tau[1:]) / elements) * start.step
     x_guess = np.array([start.at(t, k) for t in times]).T
@@ -259,15 +264,13 @@ def _stabilization(opti, setup: _Setup, t, x):
     q_dot' = q_ddot + Phi_q^T eta, with Phi(q) = 0 and Phi_q q_dot = nu imposed there. The
     index-1 DAE keeps these invariants only to the discretisation error, and the optimiser
     exploits the drift (links that stretch); mu and eta vanish on the exact solution."""
-    dae, rows, theta = setup.dae, list(setup.dae.rows), ca.DM.zeros(0)
-    n = dae.n
-    q, q_dot = x[:n], x[n:]
-    phi_q = dae.system["phi_q"](t, q, theta)[rows, :]
-    mu, eta = opti.variable(len(rows)), opti.variable(len(rows))
+    rows = len(setup.dae.rows)
+    phi, phi_q, nu = setup.functions.kinematics(t, x)
+    mu, eta = opti.variable(rows), opti.variable(rows)
     opti.set_initial(mu, 0)
     opti.set_initial(eta, 0)
-    opti.subject_to(dae.system["phi"](t, q, theta)[rows] == 0)
-    opti.subject_to(phi_q @ q_dot == dae.system["nu"](t, q, theta)[rows])
+    opti.subject_to(phi == 0)
+    opti.subject_to(phi_q @ x[setup.dae.n:] == nu)
     return ca.vertcat(phi_q.T @ mu, phi_q.T @ eta)
 
 
@@ -356,7 +359,8 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
                                           u))
     settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
                 "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
-    if transcription == "shooting":
+    if transcription == "shooting" or setup.functions.mode == "compiled":
+        # IDAS and the compiled externals give first derivatives only
         settings["ipopt.hessian_approximation"] = "limited-memory"
     else:
         settings["expand"] = True  # SX graphs: far faster exact Hessians for IPOPT
