@@ -57,6 +57,9 @@ def test_a02_four_bar_n2_through_its_singular_poses(formulation):
           f"t = {result.metadata['dae_failed_at']})")
     assert error <= 1e-5  # required over the whole span
     assert table["constraint_violation"].max() <= 1e-9
+    # the DAE failed at a flat pose, so the whole run is the augmented-Lagrangian one from t0
+    assert result.metadata["dae_failed_at"] is not None
+    assert result.metadata["augmented_from"] == 0.0
 
 
 @pytest.mark.slow

@@ -61,25 +61,3 @@ def problem(function: ca.Function) -> dict:
     sym = ca.SX if function.is_a("SXFunction") else ca.MX
     args = {name: sym.sym(name, function.sparsity_in(name)) for name in function.name_in()}
     return args | function.call(args)
-
-
-def shifted_problem(function: ca.Function) -> dict:
-    """The same DAE in y = x - tau x_dot0, with x_dot0 (the state derivative at tau = 0)
-    appended to p: y' = ode(tau, y + tau x_dot0, z, p) - x_dot0, so y'(0) = 0 exactly.
-
-    casadi's IDAS takes the initial derivative only as an option (init_xdot, fixed when the
-    integrator is built; building one costs ~25 ms for an 8-bar chain, mostly the symbolic
-    Jacobian). In y the initial derivative is always 0, so one integrator per output grid serves
-    every restart. x - y is linear in tau, which every BDF order integrates exactly, so the
-    steps' local error estimates are those of x; the error weights rtol |y| + atol are not
-    (|y| grows along a chunk: a free body's spin rate drifted 2.2e-8 at rtol 1e-10 instead of
-    1e-9; a bounded shift T (1 - exp(-tau / T)) was worse, 2e-7 on a free fall). Recover
-    x = y + tau x_dot0 at each output."""
-    sym = ca.SX if function.is_a("SXFunction") else ca.MX
-    n_x, n_p = function.size1_in("x"), function.size1_in("p")
-    tau, y = sym.sym("t"), sym.sym("x", n_x)
-    z, p = sym.sym("z", function.sparsity_in("z")), sym.sym("p", n_p + n_x)
-    x_dot0 = p[n_p:]
-    out = function.call({"t": tau, "x": y + tau * x_dot0, "z": z, "p": p[:n_p]})
-    return {"t": tau, "x": y, "z": z, "p": p, "ode": out["ode"] - x_dot0, "alg": out["alg"]}
-

@@ -2,11 +2,8 @@
 
 IDAS integrates the index-1 DAE of compiler.dae: x = [q, v], z = [v_dot, lam] (v = q_dot in
 r-p, [r_dot; omega_bar] in r-omega), with rows that depend on the others at t0 (redundant
-joints) masked out. Every start hands IDAS the exact algebraic state z0 and, through
-compiler.dae.shifted_problem, the exact derivative, so IDACalcIC is never needed and one
-integrator per relative output grid serves every restart (building one took ~25 ms for an
-8-bar chain, mostly its symbolic Jacobian; one per chunk used to take 92 of them, 2.4 s of
-a 6.4 s run of benchmarks chain8 at rtol 1e-8).
+joints) masked out. Every start hands IDAS the exact derivative and algebraic state
+(init_xdot, z0), solved here from the same equations, so IDACalcIC is never needed.
 
 The position and velocity constraints hold at the integration error; at the first output where
 either drifts past drift_tolerance(atol) the state is projected back mass-orthogonally
@@ -23,7 +20,15 @@ augmented-Lagrangian iterates as extra algebraic unknowns (pure SX, sparse). Per
 lost 5e-7 J (eps = 1e-8 max(diag M)^-1; 2.5e-5 J at 1e-9, 1.3e-3 J at 1e-10, 8e-6 J at 1e-6),
 the B0 error over 10 s ranged 1e-6..2e-4 with k = 2..6 and the drift projections' placement,
 N = 40 took 698 s for 2.97e-5 (k = 2). Newton on z also needed the algebraic unknowns out of
-the convergence test's tight weights (IDA_CONV_FAIL at the pose otherwise). The ODE fallback
+the convergence test's tight weights (IDA_CONV_FAIL at the pose otherwise). Also measured,
+for per-step speed: one integrator per relative output grid reused by every restart, the
+initial derivative passed by integrating y = x - tau x_dot0 (y'(0) = 0) instead of init_xdot
+(each build costs ~25 ms on chain8, 92 builds = 2.4 s of a 6.4 s run): benchmarks/run.py
+medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 and 15.3 vs 14.4 s at 1e-8, since
+the weights rtol |y| + atol loosen or tighten along a chunk and IDAS took other steps (and a
+free body's spin drifted 2.2e-8 instead of 1e-9). IDAS's linear solver: casadi's sparse QR
+(the default) kept; csparse (sparse LU) halved the steps on chain8 but was 5x slower per step
+on A02 (N = 20) and crawled through 50000 steps before failing at its flat poses. The ODE fallback
 with GMRES (matrix-free Jacobian products) was more accurate on N = 2 (7.8e-7 rp, 9.2e-7
 r-omega) but 3-4x slower, and needs its dense preconditioner on N = 40 (without it, A02 N = 2
 left the branch). A02 N = 40 therefore still runs for over 10 minutes (the ODE's Jacobian
@@ -47,11 +52,6 @@ from casmech.runtime.results import Result
 CHUNK = 256  # most output intervals per IDAS call
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
 DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
-# The DAE's Newton systems: casadi's sparse QR (its default). csparse (sparse LU) took half
-# the steps and 2.6x less time on benchmarks/chain8 (rtol 1e-8, 10 s; its error at t = 1 s
-# 3.6e-8 vs 1.2e-8), but was 5x slower per step on the A02 N-four-bar (N = 20) and crawled
-# through 50000 steps before failing at its flat poses, where QR fails at once.
-LINEAR_SOLVER = "qr"
 
 
 def drift_tolerance(atol: float) -> float:
@@ -149,20 +149,17 @@ class _Stepper:
     def __init__(self, model: _Model, rtol: float, atol: float):
         self.model = model
         self.chunk = CHUNK
-        self.dae = dae.shifted_problem(dae.residual(model.functions.functions, model.name))
+        self.dae = dae.problem(dae.residual(model.functions.functions, model.name))
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
-        self.dae_integrators: dict[tuple, ca.Function] = {}
         self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
         self.ode_integrators: dict[tuple, ca.Function] = {}
         self.on_ode, self.switched_at = False, None
 
     def adapt(self, used: int, restarted: bool) -> None:
-        """Next chunk: the power of two at or above twice the intervals used before a restart
-        (the rest of a chunk after one is discarded), or twice the last chunk, up to CHUNK.
-        Powers of two keep the integrators built few (one per relative output grid)."""
-        wanted = 2 * used if restarted else 2 * self.chunk
-        self.chunk = min(CHUNK, 1 << (wanted - 1).bit_length())
+        """Next chunk: twice the intervals used before a restart (the rest of a chunk after
+        one is discarded), or twice the last chunk, up to CHUNK."""
+        self.chunk = min(CHUNK, 2 * used if restarted else 2 * self.chunk)
 
     def integrate(self, t0: float, times: np.ndarray, q, v, mask):
         """(states, lam) at `times`: states rows [q, v, v_dot], lam in unit rows.
@@ -177,26 +174,19 @@ class _Stepper:
         return self._ode(t0, times, q, v)
 
     def _dae(self, t0, times, q, v, mask):
-        """IDAS on the DAE from the exact consistent state. Its derivative goes in through
-        compiler.dae.shifted_problem (y = x - tau x_dot0 starts with y' = 0), so one integrator
-        per relative output grid serves every restart; IDACalcIC is never asked (its line
-        search often failed on the benchmark chains, and it fails on IFToMM A01's 1e-9
-        inertia)."""
+        """IDAS on the DAE from the exact consistent state, handed over with its derivative
+        (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
+        started by IDACalcIC was slower (its line search often failed, measured on the
+        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
         model = self.model
         v_dot, lam = model.consistent(t0, q, v, mask)
-        x_dot0 = np.concatenate([model.q_dot(q, v), v_dot])
-        grid = tuple(np.round(times - t0, 12))
-        if grid not in self.dae_integrators:
-            self.dae_integrators[grid] = ca.integrator(
-                "dynamics", "idas", self.dae, 0.0, list(grid),
-                self.options | {"suppress_algebraic": True, "calc_ic": False,
-                                "linear_solver": LINEAR_SOLVER})
-        out = self.dae_integrators[grid](x0=np.concatenate([q, v]),
-                                         z0=np.concatenate([v_dot, lam]),
-                                         p=np.concatenate([[t0], mask, x_dot0]))
-        x, z = self._dae_states(out)
-        x[:model.n_q + model.n_v] += np.outer(x_dot0, grid)
-        return x, z
+        x_dot = np.concatenate([model.q_dot(q, v), v_dot])
+        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0),
+                                   self.options | {"suppress_algebraic": True, "calc_ic": False,
+                                                   "init_xdot": list(x_dot)})
+        return self._dae_states(integrator(x0=np.concatenate([q, v]),
+                                           z0=np.concatenate([v_dot, lam]),
+                                           p=np.concatenate([[t0], mask])))
 
     def _dae_states(self, out):
         x, z = np.array(out["xf"].full()), np.array(out["zf"].full())
@@ -262,7 +252,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     t0 on the augmented-Lagrangian ODE. Measured on A02: switching at the failure, from the
     start of the failed chunk, made the outcome depend on where chunks and projections fell
     (one more restart before the first flat pose took r-omega onto the wrong branch at the
-    third), while the run on the ODE from t0 passed at every chunking tried; a DAE run retried
+    third), while the run on the ODE from t0 passed with both chunkings tried; a DAE run retried
     over a single interval, or handed back after the pose, went wrong too."""
     model = _Model(functions, formulation)
     stepper = _Stepper(model, rtol, atol)
