@@ -23,6 +23,7 @@ from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.schema import load_model_text
+from casmech.schema.components import uses_composition
 from casmech.schema.expressions import parse
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
@@ -192,7 +193,12 @@ def symbolic_model(model: ResolvedModel, names: Iterable[str]) -> SymbolicModel:
     parameters, velocities = classify(model, names)
     theta = ca.SX.sym("theta", len(names))
     symbols = {name: theta[k] for k, name in enumerate(names)}
-    spec, _ = validate(load_document(model.text, model.file))
+    document = load_document(model.text, model.file)
+    if model.files or uses_composition(document.data):
+        raise UsageError(f"{model.file} is composed (components, instances or repeat): "
+                         "sensitivities and optimisation re-read a model's own expressions and "
+                         "do not support composed models yet; write the model out flat")
+    spec, _ = validate(document)
     env, dependent = _environment(spec, model, {n: symbols[n] for n in parameters})
     numeric = lower(model)
     _check_geometry(model, numeric, parameters, dependent)
@@ -200,7 +206,9 @@ def symbolic_model(model: ResolvedModel, names: Iterable[str]) -> SymbolicModel:
     ir = replace(numeric, bodies=_bodies(numeric, spec, env, dependent,
                                          _offsets(velocities, symbols, numeric_names(numeric))),
                  forces=_forces(numeric, spec, env, dependent), gravity=gravity,
-                 primitives=tuple(replace(p, f=_bind(p.f, env)) for p in numeric.primitives))
+                 primitives=tuple(replace(p, f=_bind(p.f, env)) for p in numeric.primitives),
+                 motors=tuple(replace(m, actuator=_bind(m.actuator, env))  # effort motors
+                              for m in numeric.motors))
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
     return SymbolicModel(ir, numeric, names, values, theta)
 
