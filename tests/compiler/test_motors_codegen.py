@@ -1,7 +1,7 @@
 """Compiled code (casmech.codegen) runs motors and tables like the interpreted functions: the
 effort motors live in ModelIR.motors beside ModelIR.forces, and a table is an if_else tree of
-plain SX, so generated C must give the same numbers. Slow (a gcc build, ~20 s): run with
-`python -m pytest -m slow tests/compiler/test_motors_codegen.py`."""
+plain SX, so generated C must give the same numbers (one gcc build of the kernel C into a
+private cache: 5 s here)."""
 
 from __future__ import annotations
 
@@ -29,7 +29,6 @@ joints:
 """
 
 
-@pytest.mark.slow
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C compiler")
 def test_compiled_motors_and_tables_equal_interpreted(tmp_path, monkeypatch):
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
