@@ -28,15 +28,11 @@ from casmech.errors import Diagnostic, ModelError, Source, UsageError, did_you_m
 from casmech.schema import placement, repeat, spec
 from casmech.schema.bodies import orientation, rotation_matrix
 from casmech.schema.checker import NAME, WHY_GROUND
+from casmech.schema.force_laws import StateChecker as BaseChecker
 from casmech.schema.loader import Document, Path, SourceMap, load_file
 from casmech.schema.resolved import GROUND, ResolvedModel
 from casmech.schema.semantic import resolve_model
 from casmech.schema.spec_errors import validate
-
-try:  # forces that read the state (issue 6, item 4) check with their own Checker
-    from casmech.schema.force_laws import StateChecker as BaseChecker
-except ImportError:  # pragma: no cover - before force laws existed
-    from casmech.schema.checker import Checker as BaseChecker
 
 PREFIX = re.compile(r"^in instances? (.+?) \(component (.+?)\): (.*)$", re.S)
 COMPOSED_KEYS = ("components", "instances")
