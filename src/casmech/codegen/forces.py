@@ -18,7 +18,7 @@ import numpy as np
 from casmech.codegen.kernels import Layout, mapped
 from casmech.compiler import eom, euler, motors
 from casmech.compiler.assemble import Coordinates
-from casmech.compiler.eom import FORCE_ELEMENTS
+from casmech.compiler.eom import FORCE_ELEMENTS, relative_angle, spring_law
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
 from casmech.compiler.primitives import Frame
 from casmech.schema.resolved import ScalarFunction
@@ -73,13 +73,10 @@ def _frame(x):
 
 def _spring(actuator, coordinate, x, x_dot, t, params, names) -> tuple:
     """(generalized [14], potential) of a spring-damper-actuator along `coordinate`
-    (compiler.eom._spring)."""
-    k, c, rest = params[0], params[1], params[2]
-    value_dot = ca.jacobian(coordinate, x) @ x_dot
-    tension = k * (coordinate - rest) + c * value_dot
-    if actuator is not None:
-        tension += actuator.casadi(t=t, **{names[0]: coordinate, names[1]: value_dot})
-    return -ca.jacobian(coordinate, x).T * tension, 0.5 * k * (coordinate - rest) ** 2
+    (compiler.eom.spring_law; kernelised actuators read no other state)."""
+    tension, potential = spring_law(coordinate, ca.jacobian(coordinate, x) @ x_dot, t,
+                                    params[0], params[1], params[2], actuator, names)
+    return -ca.jacobian(coordinate, x).T * tension, potential
 
 
 def _tsda(key, x, x_dot, t, data, value, actuator):
@@ -89,9 +86,7 @@ def _tsda(key, x, x_dot, t, data, value, actuator):
 
 
 def _rsda(key, x, x_dot, t, data, value, actuator):
-    ai, aj = _frame(x[:7]).A, _frame(x[7:]).A
-    u_j, v_i, u_i = aj @ data[6:9], ai @ data[3:6], ai @ data[0:3]
-    angle = ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
+    angle = relative_angle(_frame(x[:7]).A, _frame(x[7:]).A, data[0:3], data[3:6], data[6:9])
     return _spring(actuator, angle, x, x_dot, t, data[9:12], ("angle", "angle_dot"))
 
 

@@ -52,24 +52,37 @@ def tsda_length(force: ForceIR, x: Coordinates):
     return ca.sqrt(d.T @ d)
 
 
-def rsda_angle(force: ForceIR, x: Coordinates):
-    """Rotation of body j about the joint axis, from the joint frame: atan2(v_i.u_j, u_i.u_j)."""
-    ai, aj = x.frame(force.body_i).A, x.frame(force.body_j).A
-    u_j = aj @ ca.DM(force.axes["u_j"])
-    v_i, u_i = ai @ ca.DM(force.axes["v_i"]), ai @ ca.DM(force.axes["u_i"])
+def relative_angle(ai, aj, u_i, v_i, u_j):
+    """Rotation of body j about a joint axis from the joint frame (body-frame unit vectors
+    u_i, v_i on body i, u_j on body j; rotations ai, aj): atan2(v_i.u_j, u_i.u_j)."""
+    u_j, v_i, u_i = aj @ u_j, ai @ v_i, ai @ u_i
     return ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
+
+
+def rsda_angle(force: ForceIR, x: Coordinates):
+    """Rotation of body j about the joint axis (relative_angle)."""
+    return relative_angle(x.frame(force.body_i).A, x.frame(force.body_j).A,
+                          *(ca.DM(force.axes[k]) for k in ("u_i", "v_i", "u_j")))
+
+
+def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str],
+               states=None) -> tuple:
+    """(tension, potential) of a spring-damper-actuator along a coordinate and its rate;
+    `states`: the further state values the actuator reads (compiler.coordinates)."""
+    tension = k * (value - rest) + c * value_dot
+    if actuator is not None:
+        tension += actuator.casadi(t=t, **{names[0]: value, names[1]: value_dot},
+                                   **(states or {}))
+    return tension, 0.5 * k * (value - rest) ** 2
 
 
 def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tuple[str, str]):
     """(generalized force, potential) of a spring-damper-actuator acting along `coordinate`."""
-    k, c = force.params["stiffness"], force.params["damping"]
-    value, value_dot = coordinate, rate(coordinate, x)
-    tension = k * (value - rest) + c * value_dot
-    if force.actuator is not None:
-        tension += force.actuator.casadi(t=x.t, **{names[0]: value, names[1]: value_dot},
-                                         **coordinates.values(force.actuator, x))
-    generalized = -ca.jacobian(coordinate, x.q).T * tension
-    return generalized, 0.5 * k * (value - rest) ** 2
+    states = coordinates.values(force.actuator, x) if force.actuator is not None else None
+    tension, potential = spring_law(coordinate, rate(coordinate, x), x.t,
+                                    force.params["stiffness"], force.params["damping"], rest,
+                                    force.actuator, names, states)
+    return -ca.jacobian(coordinate, x.q).T * tension, potential
 
 
 def _tsda(force, x):
