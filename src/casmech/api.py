@@ -14,6 +14,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from casmech import codegen
+from casmech.compiler import dae
 from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
@@ -75,17 +76,19 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
     "dynamics": lambda f, s, p: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
                                              formulation=s.options.get("formulation", "rp"),
-                                             progress=p),
+                                             progress=p,
+                                             stabilization=s.options.get("stabilization", "ggl")),
 }
 
 
 def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: float | None = None,
             output_step: float | None = None, rtol: float | None = None,
             atol: float | None = None, formulation: str | None = None,
-            progress: Callable[[float], None] | None = None) -> Result:
+            progress: Callable[[float], None] | None = None,
+            stabilization: str | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed
-    (formulation: "rp" or "romega", for dynamics). `progress`, when given, is called with the
-    time of every output row as it is computed."""
+    (formulation: "rp" or "romega", stabilization: "ggl" or "projection", for dynamics).
+    `progress`, when given, is called with the time of every output row as it is computed."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
@@ -94,6 +97,11 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
         if formulation not in FORMULATIONS:
             raise UsageError(f"formulation '{formulation}' is not one of {', '.join(FORMULATIONS)}")
         settings = replace(settings, options={**settings.options, "formulation": formulation})
+    if stabilization is not None:
+        if stabilization not in dae.STABILIZATIONS:
+            raise UsageError(f"stabilization '{stabilization}' is not one of "
+                             f"{', '.join(dae.STABILIZATIONS)}")
+        settings = replace(settings, options={**settings.options, "stabilization": stabilization})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")

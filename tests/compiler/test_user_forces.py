@@ -228,7 +228,10 @@ def test_compiled_code_runs_the_laws_and_the_bushing_like_the_interpreted_one(tm
     model = casmech.loads(COMPILED)
     tables = []
     for functions in (casmech.compile(model), codegen.compiled(model, chain, root=tmp_path)):
-        result = casmech.analyze(functions, "dynamics", t_end=0.3, output_step=0.01)
+        # the index-1 DAE: the index-2 one (the default) turns last-bit differences between C
+        # and the VM into other step choices (3e-8 apart at the default rtol 1e-8, measured)
+        result = casmech.analyze(functions, "dynamics", t_end=0.3, output_step=0.01,
+                                 stabilization="projection")
         tables.append(Table(*casmech.results_table(functions, result)))
     # the same expressions evaluated by C and by CasADi's virtual machine: identical (0.0) for
     # the gallery models bushing_mount and user_force_pendulum run both ways

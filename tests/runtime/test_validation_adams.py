@@ -115,8 +115,10 @@ def test_free_fall_and_spring_drop_match_closed_forms():
     from rest at z = 0 (k = 10, c = 0.5, m = 1), an underdamped oscillator."""
     for name in ("Prismatic_Case01", "Cylindrical_Case01"):
         _, table = dynamics(name)
-        # free fall is a polynomial in t: BDF reproduces it to roundoff-level local errors
-        np.testing.assert_allclose(table["pendulum.z"], -G * table["t"] ** 2 / 2, rtol=1e-10,
+        # free fall is a polynomial in t, which BDF of order >= 2 reproduces; only the first,
+        # order-1 steps err, and the index-2 DAE's first step is sized to the tolerance
+        # (runtime.dynamics.initial_step): measured 1.7e-10 relative at the model's rtol 1e-10
+        np.testing.assert_allclose(table["pendulum.z"], -G * table["t"] ** 2 / 2, rtol=5e-10,
                                    atol=1e-10)
     _, table = dynamics("TranSpring_Case01")
     t, k, c = table["t"], 10.0, 0.5

@@ -15,7 +15,6 @@ import casadi as ca
 
 from casmech.codegen import manifest
 from casmech.compiler import dae
-from casmech.compiler.formulations import FORMULATIONS
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
 # graph over the library differentiates (the augmented-Lagrangian ODE of runtime.dynamics), and
@@ -33,9 +32,10 @@ HEADER = "casmech_model.h"
 
 
 def dae_functions(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """dae_<formulation>: the index-1 DAE residual IDAS integrates (compiler.dae) over the
-    given bundle, one per formulation (an MX graph of calls over the mapped bundle)."""
-    return {f"dae_{name}": dae.residual(functions, name) for name in FORMULATIONS}
+    """dae_<formulation> and dae_ggl_<formulation>: the DAE residuals IDAS integrates
+    (compiler.dae, both stabilizations) over the given bundle, one per formulation (MX graphs
+    of calls over the mapped bundle)."""
+    return dae.residuals(functions)
 
 
 def differentiated(functions: dict[str, ca.Function]) -> set[str]:

@@ -3,7 +3,7 @@ the bundle code generation compiles. Same names, inputs, outputs and sparsity as
 SX bundle, equal values (tests/codegen/test_mapped.py), and C whose size does not grow with the
 number of bodies, joints or force elements (only index tables and data do).
 
-The DAE residuals dae_rp/dae_romega are compiler.dae.residual over this bundle: an MX graph
+The DAE residuals dae_[ggl_]rp/romega are compiler.dae.residuals over this bundle: an MX graph
 calling the mapped functions, composed by the very code that composes the interpreted residual,
 and CasADi differentiates it into mapped derivative calls for its Jacobian.
 """
@@ -14,7 +14,6 @@ import casadi as ca
 
 from casmech.codegen import bodies, forces, kernels
 from casmech.compiler import dae
-from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.ir import ModelIR
 
 
@@ -91,9 +90,9 @@ def romega_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
 
 def mapped_functions(ir: ModelIR, residuals: bool = False) -> dict[str, ca.Function]:
     """name -> MX Function over mapped kernels, as compiler.functions.build_functions names
-    them; with `residuals`, dae_<formulation> too (compiler.dae.residual over this bundle)."""
+    them; with `residuals`, the DAE residuals too (compiler.dae.residuals over this bundle)."""
     x = _symbols(ir)
     functions = {f.name(): f for f in rp_functions(ir, x) + romega_functions(ir, x)}
     if residuals:
-        functions |= {f"dae_{name}": dae.residual(functions, name) for name in FORMULATIONS}
+        functions |= dae.residuals(functions)
     return functions

@@ -22,7 +22,7 @@ def add_arguments(parser) -> None:
                              f"{' '.join(codegen.build.DEFAULT_FLAGS)}; -std=c99 -fPIC always)")
     parser.add_argument("--jobs", type=int, help="parallel compiler processes (default: cores)")
     parser.add_argument("--no-dae", action="store_true",
-                        help="leave out the DAE residuals dae_rp, dae_romega and their "
+                        help="leave out the DAE residuals dae_[ggl_]rp, dae_[ggl_]romega and their "
                              "Jacobians (about half of the code)")
     add_overrides(parser)
 

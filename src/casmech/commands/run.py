@@ -53,6 +53,10 @@ def add_arguments(parser) -> None:
                         help="absolute tolerance of the integrator (dynamics)")
     parser.add_argument("--formulation", choices=["rp", "romega"],
                         help="equations of motion for dynamics (default: the model's, else rp)")
+    parser.add_argument("--stabilization", choices=["ggl", "projection"],
+                        help="how dynamics keeps the constraints: the stabilized index-2 DAE "
+                             "(ggl) or projections of the index-1 DAE (default: the model's, "
+                             "else ggl)")
     parser.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
     parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
@@ -76,13 +80,15 @@ def run(args) -> int:
     timings["compile"] = time.perf_counter() - clock
     settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,
-                                 formulation=args.formulation)
+                                 formulation=args.formulation,
+                                 stabilization=args.stabilization)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
             result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
-                                     formulation=args.formulation, progress=callback)
+                                     formulation=args.formulation, progress=callback,
+                                     stabilization=args.stabilization)
     except AnalysisError as error:
         timings["analysis"] = time.perf_counter() - clock
         if error.partial is not None and len(error.partial):

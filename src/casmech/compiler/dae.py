@@ -1,4 +1,6 @@
-"""The index-1 DAE of constrained motion that IDAS integrates, as one named casadi.Function.
+"""The DAEs of constrained motion that IDAS integrates, each as one named casadi.Function.
+
+The index-1 DAE (stabilization "projection": the runtime projects when the constraints drift):
 
     x = [q, v],  z = [v_dot, lam],  p = [t0, w (one per row of P)],  t = t0 + tau
     ode: x' = [q_dot(q, v), v_dot]
@@ -10,6 +12,17 @@ w masks rows: w_k = 0 keeps row k, w_k = 1 turns it into lam_k = P_k v_dot - gam
 algebraic Jacobian [M P^T; P -diag(w)] stays non-singular. The residual is pure SX: IDAS's
 Newton does the linear algebra, its Jacobian comes from AD, and the same Function is what code
 generation compiles.
+
+The stabilized index-2 DAE of Gear, Gupta and Leimkuhler (stabilization "ggl"), which keeps the
+position and velocity constraints themselves at every step instead of their second derivative:
+
+    x = [q, v],  z = [v_dot, lam, mu],  p as above
+    ode: x' = [q_dot(q, v) + Phi_q^T mu, v_dot]
+    alg: M v_dot + P^T lam - F = 0,   Phi(q) = 0,   P v - nu = 0
+
+(Phi_q and Phi with the unit rows of Phi_q: every row of Phi, the r-p normalization rows too in
+either formulation; mu is 0 along the exact motion.) The masked rows become lam_k = 0 and
+mu_k = 0. IDAS integrates it with the algebraic unknowns out of its error test.
 """
 
 from __future__ import annotations
@@ -37,11 +50,22 @@ def unit_rows(jacobian, gamma):
     return jacobian * ca.repmat(scale, 1, jacobian.size2()), gamma * scale
 
 
-def residual(functions: dict[str, ca.Function], name: str) -> ca.Function:
-    """dae_<name>: (t, x, z, p) -> (ode, alg), the semi-explicit index-1 DAE above; the
-    bundle's own when it has one (a compiled bundle carries it, with its Jacobian)."""
-    if f"dae_{name}" in functions:
-        return functions[f"dae_{name}"]
+STABILIZATIONS = ("ggl", "projection")
+
+
+def residual(functions: dict[str, ca.Function], name: str,
+             stabilization: str = "projection") -> ca.Function:
+    """dae_<name> (projection: the index-1 DAE) or dae_ggl_<name> (the stabilized index-2
+    one): (t, x, z, p) -> (ode, alg); the bundle's own when it has one (a compiled bundle
+    carries them, with their Jacobians)."""
+    key = f"dae_{name}" if stabilization == "projection" else f"dae_ggl_{name}"
+    if key in functions:
+        return functions[key]
+    build = _index1 if stabilization == "projection" else _ggl
+    return build(functions, name, key)
+
+
+def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     sym = _symbols(functions)
@@ -52,7 +76,40 @@ def residual(functions: dict[str, ca.Function], name: str) -> ca.Function:
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
         jacobian @ v_dot - gamma - w * lam)
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
-    return ca.Function(f"dae_{name}", [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
+    return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
+                       ["t", "x", "z", "p"], ["ode", "alg"])
+
+
+def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """Every residual by name, both stabilizations of both formulations, over a bundle."""
+    built = (residual(functions, name, kind) for name in FORMULATIONS for kind in STABILIZATIONS)
+    return {function.name(): function for function in built}
+
+
+def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
+    """Algebraic unknowns after v_dot: lam, and mu (one per row of Phi) for ggl."""
+    m = sizes(functions, name)[2]
+    return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
+
+
+def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
+    form = FORMULATIONS[name]
+    n_q, n_v, m = sizes(functions, name)
+    n_phi = functions["phi"].size1_out(0)
+    sym = _symbols(functions)
+    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
+                    sym.sym("p", 1 + m))
+    t, q, v, w = p[0] + tau, x[:n_q], x[n_q:], p[1:1 + m, 0]
+    v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
+    jacobian, nu = unit_rows(functions[form.jacobian](t, q), functions[form.nu](t, q))
+    phi_q, phi = unit_rows(functions["phi_q"](t, q), functions["phi"](t, q))
+    w_phi = ca.vertcat(w, sym(n_phi - m, 1))  # r-omega: + normalization rows (structural 0)
+    alg = ca.vertcat(
+        functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
+        (1 - w_phi) * phi - w_phi * mu,
+        (1 - w) * (jacobian @ v - nu) - w * lam)
+    q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
+    return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot + phi_q.T @ mu, v_dot), alg],
                        ["t", "x", "z", "p"], ["ode", "alg"])
 
 

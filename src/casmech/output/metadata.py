@@ -30,7 +30,9 @@ def resolved_settings(analysis: Analysis, **given) -> dict:
     settings = replace(analysis, **{k: v for k, v in given.items()
                                     if k in SETTINGS and v is not None})
     formulation = given.get("formulation") or settings.options.get("formulation", "rp")
-    return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation}
+    stabilization = given.get("stabilization") or settings.options.get("stabilization", "ggl")
+    return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation,
+            "stabilization": stabilization}
 
 
 def sha256(text: str) -> str:

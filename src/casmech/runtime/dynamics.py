@@ -1,13 +1,23 @@
 """Forward dynamics in the r-p or r-omega form, integrated by SUNDIALS IDAS through CasADi.
 
-IDAS integrates the index-1 DAE of compiler.dae: x = [q, v], z = [v_dot, lam] (v = q_dot in
-r-p, [r_dot; omega_bar] in r-omega), with rows that depend on the others at t0 (redundant
-joints) masked out. Every start hands IDAS the exact derivative and algebraic state
-(init_xdot, z0), solved here from the same equations, so IDACalcIC is never needed.
+By default IDAS integrates the stabilized index-2 DAE of compiler.dae (stabilization "ggl",
+Gear-Gupta-Leimkuhler): x = [q, v], z = [v_dot, lam, mu] (v = q_dot in r-p, [r_dot; omega_bar]
+in r-omega), which holds Phi = 0 and P v = nu themselves at every step, with the algebraic
+unknowns out of the error test. Measured against the index-1 DAE with projections (below) on
+benchmarks/chain8 over 10 s at rtol 1e-8: 4.3 s with no projection against 12.2 s with 82,
+max |Phi| 1.5e-10 against 1e-8; at t = 1 s both are within 2e-8..4e-8 m of the rtol 1e-12
+run at rtol 1e-10. Its first step is sized by initial_step (IDAS's own guess is too short for
+an index-2 iteration matrix).
 
-The position and velocity constraints hold at the integration error; at the first output where
-either drifts past drift_tolerance(atol) the state is projected back mass-orthogonally
-(assembly.project) and IDAS restarts from there. No Baumgarte constants.
+Stabilization "projection": the index-1 DAE, z = [v_dot, lam]. The position and velocity
+constraints then hold at the integration error; at the first output where either drifts past
+drift_tolerance(atol) the state is projected back mass-orthogonally (assembly.project) and
+IDAS restarts from there. No Baumgarte constants either way. If the index-2 DAE fails, the
+run is done again from t0 this way (run_dynamics).
+
+Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
+start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
+the same equations, so IDACalcIC is never needed.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
 its flat poses) the index-1 DAE is singular and IDAS fails; the run then starts over from t0
@@ -52,6 +62,14 @@ from casmech.runtime.results import Result
 CHUNK = 256  # most output intervals per IDAS call
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
 DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
+# GGL: absolute tolerance of the algebraic unknowns (v_dot, lam, mu) in IDAS's Newton
+# convergence test (they are out of its error test). With the integration's atol the index-2
+# iteration matrix (condition ~ 1/h^2) could not converge them at the first, short steps: at
+# rtol 1e-12, atol 1e-14 Bricard failed at t = 0 with 1e-9 and ran with 1e-8 .. 1; at rtol
+# 1e-10 the energy drift of A01 and the ADAMS spherical case over 5 s was 4e-9..6e-9 of the
+# kinetic energy with 1e-8 (below the index-1 DAE's 6e-9..9e-9), 1.2e-8..3.2e-8 with 1e-6.
+# A failure is never fatal: the run falls back to the index-1 DAE (run_dynamics).
+Z_TOL = 1e-8
 
 
 def drift_tolerance(atol: float) -> float:
@@ -146,10 +164,12 @@ class _Stepper:
     fails, by the augmented-Lagrangian ODE from there on (a model that has met a singular
     configuration will meet it again; the DAE only fails there after thousands of steps)."""
 
-    def __init__(self, model: _Model, rtol: float, atol: float):
-        self.model = model
+    def __init__(self, model: _Model, rtol: float, atol: float, stabilization: str = "ggl"):
+        self.model, self.stabilization = model, stabilization
         self.chunk = CHUNK
-        self.dae = dae.problem(dae.residual(model.functions.functions, model.name))
+        functions = model.functions.functions
+        self.dae = dae.problem(dae.residual(functions, model.name, stabilization))
+        self.n_z = model.n_v + dae.multipliers(functions, model.name, stabilization)
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
@@ -181,19 +201,25 @@ class _Stepper:
         model = self.model
         v_dot, lam = model.consistent(t0, q, v, mask)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
+        options = {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot)}
+        if self.stabilization == "ggl":
+            n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
+            options["step0"] = initial_step(q[:n], v_dot[:n], self.options["reltol"],
+                                            self.options["abstol"], times[0] - t0)
+            options["abstolv"] = [self.options["abstol"]] * (len(q) + len(v)) + [Z_TOL] * self.n_z
         integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0),
-                                   self.options | {"suppress_algebraic": True, "calc_ic": False,
-                                                   "init_xdot": list(x_dot)})
-        return self._dae_states(integrator(x0=np.concatenate([q, v]),
-                                           z0=np.concatenate([v_dot, lam]),
+                                   self.options | options)
+        z0 = np.zeros(self.n_z)  # GGL's mu is 0 along the exact motion
+        z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
+        return self._dae_states(integrator(x0=np.concatenate([q, v]), z0=z0,
                                            p=np.concatenate([[t0], mask])))
 
     def _dae_states(self, out):
         x, z = np.array(out["xf"].full()), np.array(out["zf"].full())
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
             raise RuntimeError("the state became NaN or infinite")
-        n_v = self.model.n_v
-        return np.vstack([x, z[:n_v]]), z[n_v:]
+        n_v, m = self.model.n_v, self.model.m
+        return np.vstack([x, z[:n_v]]), z[n_v:n_v + m]
 
     def _ode(self, t0, times, q, v):
         """The augmented-Lagrangian ODE over the chunk; on a failure, its first interval alone,
@@ -237,6 +263,18 @@ class _Stepper:
             functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
 
 
+def initial_step(r, r_ddot, rtol: float, atol: float, interval: float) -> float:
+    """IDAS's first step for the index-2 DAE: where an order-1 step's error h^2/2 r_ddot on the
+    translations r is half the tolerance (weighted RMS, IDAS's weights), at most IDAS's own
+    0.001 of the first output interval. IDAS's default from |x_dot| alone gave 3e-17 s on
+    benchmarks/chain8, where the iteration matrix of an index-2 DAE (condition ~ 1/h^2) is
+    singular in double precision and every Newton iteration failed."""
+    weights = rtol * np.abs(r) + atol
+    norm = np.sqrt(np.mean((r_ddot / weights) ** 2)) if len(r) else 0.0
+    largest = 1e-3 * interval
+    return float(min(largest, 0.5 * np.sqrt(2 / norm))) if norm > 0 else largest
+
+
 class _Restart(Exception):
     """The exact DAE failed in the chunk starting at `t`."""
 
@@ -247,20 +285,30 @@ class _Restart(Exception):
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
-                 progress=None) -> Result:
-    """By the DAE; if it fails anywhere (a singular configuration), the whole run again from
-    t0 on the augmented-Lagrangian ODE. Measured on A02: switching at the failure, from the
+                 progress=None, stabilization: str = "ggl") -> Result:
+    """By the stabilized index-2 DAE (ggl); if it fails anywhere (IFToMM A02 at its flat poses),
+    the whole run again from t0 by the index-1 DAE with projections (metadata ggl_failed_at),
+    and if that fails too, from t0 on the augmented-Lagrangian ODE. Measured on A02: switching at the failure, from the
     start of the failed chunk, made the outcome depend on where chunks and projections fell
     (one more restart before the first flat pose took r-omega onto the wrong branch at the
     third), while the run on the ODE from t0 passed with both chunkings tried; a DAE run retried
     over a single interval, or handed back after the pose, went wrong too."""
     model = _Model(functions, formulation)
-    stepper = _Stepper(model, rtol, atol)
+    ggl_failed_at = None
+    if stabilization == "ggl":
+        try:
+            return _run(model, _Stepper(model, rtol, atol, "ggl"), t0, t_end, step, atol,
+                        progress)
+        except _Restart as restart:
+            ggl_failed_at = restart.t
+    stepper = _Stepper(model, rtol, atol, "projection")
     try:
-        return _run(model, stepper, t0, t_end, step, atol, progress)
+        result = _run(model, stepper, t0, t_end, step, atol, progress)
     except _Restart as restart:
         stepper.on_ode, stepper.switched_at = True, restart.t
-        return _run(model, stepper, t0, t_end, step, atol, progress)
+        result = _run(model, stepper, t0, t_end, step, atol, progress)
+    result.metadata.update(ggl_failed_at=ggl_failed_at)
+    return result
 
 
 def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
@@ -302,6 +350,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
         raise
     result.metadata.update(rtol=stepper.options["reltol"], atol=atol,
                            formulation=model.name, integrator="idas", projections=projections,
+                           stabilization=stepper.stabilization, ggl_failed_at=None,
                            augmented_from=t0 if stepper.on_ode else None,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()))
     return result

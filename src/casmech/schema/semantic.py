@@ -37,7 +37,7 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
         problems["output_step"] = STEP_RULE
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}")
-    options = {"formulation": given.formulation}
+    options = {"formulation": given.formulation, "stabilization": given.stabilization}
     source = check.doc.source_map.values.get(path)
     return (
         None

@@ -425,6 +425,9 @@ class Analysis(Spec):
     rtol: Scalar = 1e-8
     atol: Scalar = 1e-10
     formulation: Literal["rp", "romega"] = "rp"
+    # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
+    # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
+    stabilization: Literal["ggl", "projection"] = "ggl"
 
 
 # ------------------------------------------------------- estimation and optimal control (issue 7)
