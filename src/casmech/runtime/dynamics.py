@@ -289,10 +289,11 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     """By the stabilized index-2 DAE (ggl); if it fails anywhere (IFToMM A02 at its flat poses),
     the whole run again from t0 by the index-1 DAE with projections (metadata ggl_failed_at),
     and if that fails too, from t0 on the augmented-Lagrangian ODE. Measured on A02: switching
-    at the failure, from the start of the failed chunk, made the outcome depend on where chunks and projections fell
-    (one more restart before the first flat pose took r-omega onto the wrong branch at the
-    third), while the run on the ODE from t0 passed with both chunkings tried; a DAE run retried
-    over a single interval, or handed back after the pose, went wrong too."""
+    at the failure, from the start of the failed chunk, made the outcome depend on where chunks
+    and projections fell (one more restart before the first flat pose took r-omega onto the
+    wrong branch at the third), while the run on the ODE from t0 passed with both chunkings
+    tried; a DAE run retried over a single interval, or handed back after the pose, went wrong
+    too."""
     model = _Model(functions, formulation)
     ggl_failed_at = None
     if stabilization == "ggl":
