@@ -70,6 +70,7 @@ DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_toler
 # kinetic energy with 1e-8 (below the index-1 DAE's 6e-9..9e-9), 1.2e-8..3.2e-8 with 1e-6.
 # A failure is never fatal: the run falls back to the index-1 DAE (run_dynamics).
 Z_TOL = 1e-8
+GGL_FAILURES = 3  # chunks the index-2 DAE may fail on before the index-1 one does the rest
 
 
 def drift_tolerance(atol: float) -> float:
@@ -162,14 +163,15 @@ class _Model:
 class _Stepper:
     """Integrates from a state over a chunk of the output grid: by the DAE until it first
     fails, by the augmented-Lagrangian ODE from there on (a model that has met a singular
-    configuration will meet it again; the DAE only fails there after thousands of steps)."""
+    configuration will meet it again; the DAE only fails there after thousands of steps).
+    With ggl, a chunk the index-2 DAE fails on is done by the index-1 DAE, and the next chunk
+    by the index-2 one again (the two DAEs have the same solution)."""
 
     def __init__(self, model: _Model, rtol: float, atol: float, stabilization: str = "ggl"):
         self.model, self.stabilization = model, stabilization
         self.chunk = CHUNK
-        functions = model.functions.functions
-        self.dae = dae.problem(dae.residual(functions, model.name, stabilization))
-        self.n_z = model.n_v + dae.multipliers(functions, model.name, stabilization)
+        self.problems: dict[str, dict] = {}  # stabilization -> casadi DAE dict, when first used
+        self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
@@ -187,13 +189,24 @@ class _Stepper:
         By the DAE until it first fails (then _Restart: the run starts over on the
         augmented-Lagrangian ODE), else by that ODE."""
         if not self.on_ode:
+            if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
+                try:
+                    return self._dae(t0, times, q, v, mask, "ggl")
+                except RuntimeError:
+                    self.ggl_failures.append(float(t0))
             try:
-                return self._dae(t0, times, q, v, mask)
+                return self._dae(t0, times, q, v, mask, "projection")
             except RuntimeError:  # IDAS failed (its construction is not guarded)
                 raise _Restart(t0) from None
         return self._ode(t0, times, q, v)
 
-    def _dae(self, t0, times, q, v, mask):
+    def _problem(self, kind: str) -> dict:
+        if kind not in self.problems:
+            functions = self.model.functions.functions
+            self.problems[kind] = dae.problem(dae.residual(functions, self.model.name, kind))
+        return self.problems[kind]
+
+    def _dae(self, t0, times, q, v, mask, kind: str):
         """IDAS on the DAE from the exact consistent state, handed over with its derivative
         (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
         started by IDACalcIC was slower (its line search often failed, measured on the
@@ -202,14 +215,15 @@ class _Stepper:
         v_dot, lam = model.consistent(t0, q, v, mask)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
         options = {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot)}
-        if self.stabilization == "ggl":
+        n_z = model.n_v + dae.multipliers(model.functions.functions, model.name, kind)
+        if kind == "ggl":
             n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
             options["step0"] = initial_step(q[:n], v_dot[:n], self.options["reltol"],
                                             self.options["abstol"], times[0] - t0)
-            options["abstolv"] = [self.options["abstol"]] * (len(q) + len(v)) + [Z_TOL] * self.n_z
-        integrator = ca.integrator("dynamics", "idas", self.dae, 0.0, list(times - t0),
-                                   self.options | options)
-        z0 = np.zeros(self.n_z)  # GGL's mu is 0 along the exact motion
+            options["abstolv"] = [self.options["abstol"]] * (len(q) + len(v)) + [Z_TOL] * n_z
+        integrator = ca.integrator("dynamics", "idas", self._problem(kind), 0.0,
+                                   list(times - t0), self.options | options)
+        z0 = np.zeros(n_z)  # GGL's mu is 0 along the exact motion
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         return self._dae_states(integrator(x0=np.concatenate([q, v]), z0=z0,
                                            p=np.concatenate([[t0], mask])))
@@ -286,30 +300,23 @@ class _Restart(Exception):
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
                  progress=None, stabilization: str = "ggl") -> Result:
-    """By the stabilized index-2 DAE (ggl); if it fails anywhere (IFToMM A02 at its flat poses),
-    the whole run again from t0 by the index-1 DAE with projections (metadata ggl_failed_at),
-    and if that fails too, from t0 on the augmented-Lagrangian ODE. Measured on A02: switching
+    """By the stabilized index-2 DAE (ggl) or the index-1 DAE with projections; a chunk of
+    output intervals the index-2 DAE fails on is done by the index-1 one (metadata
+    ggl_failed_at, ggl_failures: benchmarks chain32 at rtol 1e-10 failed right after a chunk
+    restart at 2.56 s). If the index-1 DAE fails too (IFToMM A02 at its flat poses), the whole
+    run again from t0 on the augmented-Lagrangian ODE. Measured on A02: switching
     at the failure, from the start of the failed chunk, made the outcome depend on where chunks
     and projections fell (one more restart before the first flat pose took r-omega onto the
     wrong branch at the third), while the run on the ODE from t0 passed with both chunkings
     tried; a DAE run retried over a single interval, or handed back after the pose, went wrong
     too."""
     model = _Model(functions, formulation)
-    ggl_failed_at = None
-    if stabilization == "ggl":
-        try:
-            return _run(model, _Stepper(model, rtol, atol, "ggl"), t0, t_end, step, atol,
-                        progress)
-        except _Restart as restart:
-            ggl_failed_at = restart.t
-    stepper = _Stepper(model, rtol, atol, "projection")
+    stepper = _Stepper(model, rtol, atol, stabilization)
     try:
-        result = _run(model, stepper, t0, t_end, step, atol, progress)
+        return _run(model, stepper, t0, t_end, step, atol, progress)
     except _Restart as restart:
         stepper.on_ode, stepper.switched_at = True, restart.t
-        result = _run(model, stepper, t0, t_end, step, atol, progress)
-    result.metadata.update(ggl_failed_at=ggl_failed_at)
-    return result
+        return _run(model, stepper, t0, t_end, step, atol, progress)
 
 
 def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
@@ -351,7 +358,9 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
         raise
     result.metadata.update(rtol=stepper.options["reltol"], atol=atol,
                            formulation=model.name, integrator="idas", projections=projections,
-                           stabilization=stepper.stabilization, ggl_failed_at=None,
+                           stabilization=stepper.stabilization,
+                           ggl_failed_at=stepper.ggl_failures[0] if stepper.ggl_failures else None,
+                           ggl_failures=len(stepper.ggl_failures),
                            augmented_from=t0 if stepper.on_ode else None,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()))
     return result
