@@ -64,9 +64,11 @@ def test_a02_four_bar_n2_through_its_singular_poses(formulation):
 
 @pytest.mark.slow
 def test_a02_four_bar_n40_through_its_singular_poses():
-    """Still over 10 minutes here: the DAE fails at the first flat pose and the
-    augmented-Lagrangian ODE that takes over has a dense 1694 x 1694 Jacobian (see the
-    docstring of runtime.dynamics for what else was measured)."""
+    """Still over 45 minutes here (measured 2026-11-22 with the benchmarks running alongside):
+    both DAEs fail at the first flat pose and the augmented-Lagrangian ODE that takes over
+    spends its time in its Jacobian, dense in the accelerations' rows (1134 states; one
+    evaluation by AD takes 0.61 s, and the first simulated second needed 147 of them). See
+    the docstring of runtime.dynamics for what else was measured."""
     exact = read_analytic("A02_Nfourbar_N40_0-20s_dt0.05.csv")
     functions = casmech.compile(casmech.loads(a02_model(40)))
     result = casmech.analyze(functions, "dynamics", t_end=20, output_step=0.05)

@@ -41,8 +41,20 @@ free body's spin drifted 2.2e-8 instead of 1e-9). IDAS's linear solver: casadi's
 on A02 (N = 20) and crawled through 50000 steps before failing at its flat poses. The ODE fallback
 with GMRES (matrix-free Jacobian products) was more accurate on N = 2 (7.8e-7 rp, 9.2e-7
 r-omega) but 3-4x slower, and needs its dense preconditioner on N = 40 (without it, A02 N = 2
-left the branch). A02 N = 40 therefore still runs for over 10 minutes (the ODE's Jacobian
-is dense: 1694 x 1694); see tests/runtime/test_validation_iftomm.py.
+left the branch). A02 N = 40 therefore still runs for over 45 minutes: the ODE (1134 states)
+spends its time in its Jacobian, whose acceleration rows are dense; AD through the
+ITERATIONS sparse solves takes 0.61 s per evaluation, 147 evaluations in the first second.
+Also measured there and not adopted: (a) the same Jacobian assembled from the iteration's
+structure (one sparse LDL solve per iteration with the sparse partials as right-hand sides,
+handed to IDAS as casadi's custom_jacobian of the right-hand side Function): equal to the AD
+one to 3e-10 relative and 3x cheaper (0.19 s), but on A02 N = 2 r-omega left the branch at
+the second flat pose (error 2 m) and r-p's error grew from 5e-7 to 2e-6. (b) That Jacobian
+linearised after one iteration: 0.02 s, r-omega left the branch too. (c) LAPACK's dense LU as
+the fallback's linear solver: 20 % faster on N = 40; N = 2 passed with B0 errors 2.7e-7 (r-p)
+and 1.4e-6 (r-omega) against the sparse QR's 5.4e-7 and 6.7e-7. Branch-taking at the flat poses is that
+sensitive to roundoff in the Newton iteration, so the N = 2 passes are not a margin against
+such changes. Explicit Runge-Kutta (scipy DOP853) on the same ODE: 2.2e-5 at rtol 1e-10 and
+4.9 million right-hand sides at 1e-12. The ODE is stiff near the poses.
 """
 
 from __future__ import annotations
