@@ -54,7 +54,8 @@ the fallback's linear solver: 20 % faster on N = 40; N = 2 passed with B0 errors
 and 1.4e-6 (r-omega) against the sparse QR's 5.4e-7 and 6.7e-7. Branch-taking at the flat
 poses is that sensitive to roundoff in the Newton iteration, so the N = 2 passes are not a
 margin against such changes. Explicit Runge-Kutta (scipy DOP853) on the same ODE, N = 2:
-B0 error 2.2e-5 at rtol 1e-10, and 4.9 million right-hand sides at 1e-12 (the ODE is stiff).
+B0 error 2.2e-5 at rtol 1e-10 with 21000 right-hand sides, and 4.9 million at 1e-12 (230x,
+where an order-8 method needs ~2x on a smooth non-stiff ODE: stiff or not smooth at the poses).
 """
 
 from __future__ import annotations
