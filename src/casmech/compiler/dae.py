@@ -101,8 +101,13 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
                     sym.sym("p", 1 + m))
     t, q, v, w = p[0] + tau, x[:n_q], x[n_q:], p[1:1 + m, 0]
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
-    jacobian, nu = unit_rows(functions[form.jacobian](t, q), functions[form.nu](t, q))
-    phi_q, phi = unit_rows(functions["phi_q"](t, q), functions["phi"](t, q))
+    raw = functions[form.jacobian](t, q)
+    scale = 1 / ca.sqrt(ca.sum2(raw * raw))
+    jacobian, nu = raw * ca.repmat(scale, 1, raw.size2()), functions[form.nu](t, q) * scale
+    if form.jacobian == "phi_q":  # r-p: P is Phi_q (one evaluation, one scaling)
+        phi_q, phi = jacobian, functions["phi"](t, q) * scale
+    else:
+        phi_q, phi = unit_rows(functions["phi_q"](t, q), functions["phi"](t, q))
     w_phi = ca.vertcat(w, sym(n_phi - m, 1))  # r-omega: + normalization rows (structural 0)
     alg = ca.vertcat(
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
