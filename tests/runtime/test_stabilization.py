@@ -103,8 +103,8 @@ def test_ggl_falls_back_at_singular_poses():
 
 
 def test_initial_step_closed_form():
-    """One translation with r_ddot = a: h0 with h0^2 / 2 a = tolerance / 4 (half the weighted
-    error, so h0 = 0.5 sqrt(2 w / a)); capped at 0.001 of the first interval; that cap when
+    """One translation with r_ddot = a: h0 with h0^2 / 2 a = w / 4 (a quarter of the weighted
+    tolerance, so h0 = 0.5 sqrt(2 w / a)); capped at 0.001 of the first interval; that cap when
     nothing accelerates."""
     w = 1e-8 * 2.0 + 1e-10
     h = initial_step(np.array([2.0]), np.array([9.81]), 1e-8, 1e-10, 1.0)

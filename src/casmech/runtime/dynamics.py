@@ -12,8 +12,8 @@ an index-2 iteration matrix).
 Stabilization "projection": the index-1 DAE, z = [v_dot, lam]. The position and velocity
 constraints then hold at the integration error; at the first output where either drifts past
 drift_tolerance(atol) the state is projected back mass-orthogonally (assembly.project) and
-IDAS restarts from there. No Baumgarte constants either way. If the index-2 DAE fails, the
-run is done again from t0 this way (run_dynamics).
+IDAS restarts from there. No Baumgarte constants either way. A chunk of output intervals the
+index-2 DAE fails on is done this way (run_dynamics).
 
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
@@ -292,8 +292,8 @@ class _Stepper:
 
 def initial_step(r, r_ddot, rtol: float, atol: float, interval: float) -> float:
     """IDAS's first step for the index-2 DAE: where an order-1 step's error h^2/2 r_ddot on the
-    translations r is half the tolerance (weighted RMS, IDAS's weights), at most IDAS's own
-    0.001 of the first output interval. IDAS's default from |x_dot| alone gave 3e-17 s on
+    translations r is a quarter of the tolerance (weighted RMS, IDAS's weights), at most IDAS's
+    own 0.001 of the first output interval. IDAS's default from |x_dot| alone gave 3e-17 s on
     benchmarks/chain8, where the iteration matrix of an index-2 DAE (condition ~ 1/h^2) is
     singular in double precision and every Newton iteration failed."""
     weights = rtol * np.abs(r) + atol
