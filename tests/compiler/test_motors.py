@@ -183,6 +183,19 @@ def test_rate_dependent_torque_spins_up_to_its_limit():
                                rtol=1e-8, atol=1e-8)
 
 
+def test_viscous_torque_is_reported_in_the_reaction_from_the_rate():
+    c, spin = 0.5, 4.0
+    table = run(disc(f'{{torque: "-{c}*angle_dot"}}', spin))
+    assert not np.isnan(table.values).any()
+    # J w' = -c w: w = w0 exp(-c t / J), the motion (independent of the reaction); measured
+    # 1.3e-9 rad/s of 4
+    np.testing.assert_allclose(table["disc.wz"], spin * np.exp(-c * table["t"] / J_DISC),
+                               rtol=1e-8, atol=1e-8)
+    # the reaction about the axis is the motor law at the reported rate (was NaN without q_dot);
+    # the revolute's own rows add ~0 about z: measured 6.7e-16 N m of 2, so absolute only
+    np.testing.assert_allclose(table["pivot.tz"], -c * table["disc.wz"], rtol=0, atol=1e-12)
+
+
 def test_constant_force_accelerates_the_slider():
     text = """
 casmech: 1

@@ -208,7 +208,7 @@ def _group(key: ForceKey, members: list[ForceIR], layout: Layout, state) -> tupl
     return sum_into @ ca.vec(generalized), ca.sum2(energy)
 
 
-def motor_reactions(ir: ModelIR, t, q) -> tuple:
+def motor_reactions(ir: ModelIR, t, q, q_dot) -> tuple:
     """(force, torque) (3 x joints) the effort motors of ir.motors add to their joints'
     reactions (compiler.eom.reactions), per motor from compiler.motors over the whole model's
     coordinates, like the elements without a kernel."""
@@ -222,7 +222,7 @@ def motor_reactions(ir: ModelIR, t, q) -> tuple:
         at = eom.point(x, joint.body_i, joint.point_i)
         pair = [x.ground_fixed(ca.SX(e)) for e in motors.reaction(motor, x, at)]
         name = "motor_" + "".join(c if c.isalnum() else "_" for c in motor.name)
-        f_motor, t_motor = ca.Function(name, [x.t, x.q], pair)(t, q)
+        f_motor, t_motor = ca.Function(name, [x.t, x.q, x.q_dot], pair)(t, q, q_dot)
         select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [k]), 1.0)
         force, torque = force + f_motor @ select, torque + t_motor @ select
     return force, torque

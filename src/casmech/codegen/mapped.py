@@ -39,7 +39,7 @@ def rp_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
     element_forces, spring_potential = forces.applied(ir, t, q, q_dot)
     kinetic, gravity_potential = bodies.energy(ir, q, q_dot)
     force, torque = kernels.reactions(ir, t, q, x["lam"])
-    motor_force, motor_torque = forces.motor_reactions(ir, t, q)
+    motor_force, motor_torque = forces.motor_reactions(ir, t, q, q_dot)
     force, torque = force + motor_force, torque + motor_torque
     omega, alpha = bodies.body_rates(ir, q, q_dot, x["q_ddot"])
     generalized = bodies.gravity(ir) + element_forces + bodies.quadratic_velocity(ir, q, q_dot)
@@ -57,7 +57,7 @@ def rp_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
                   {"generalized_forces": ca.densify(generalized)}),
         _function("energy", {"t": t, "q": q, "q_dot": q_dot},
                   {"kinetic": kinetic, "potential": spring_potential + gravity_potential}),
-        _function("reactions", {"t": t, "q": q, "lam": x["lam"]},
+        _function("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": x["lam"]},
                   {"force": force, "torque": torque}),
         _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": x["q_ddot"]},
                   {"omega": omega, "alpha": alpha}),

@@ -104,7 +104,7 @@ def build_functions(ir: ModelIR) -> SystemFunctions:
                   {"generalized_forces": fixed(applied + eom.quadratic_velocity(ir, x))}),
         _function("energy", {"t": t, "q": q, "q_dot": q_dot},
                   {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
-        _function("reactions", {"t": t, "q": q, "lam": lam},
+        _function("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": lam},
                   {"force": fixed(force), "torque": fixed(torque)}),
         _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
                   {"omega": stack(omega), "alpha": stack(alpha)}),

@@ -17,7 +17,6 @@ its actuation), via `reaction`.
 from __future__ import annotations
 
 import casadi as ca
-import numpy as np
 
 from casmech.compiler import euler
 from casmech.compiler.ir import ForceIR
@@ -81,18 +80,15 @@ def generalized_force(motor: ForceIR, x):
 
 
 def reaction(motor: ForceIR, x, at):
-    """(force, torque about `at`) the motor exerts on body j, global, as functions of (t, q).
-
-    The `reactions` function has no q_dot input: a torque or force that depends on the joint
-    rate comes out NaN there (reported as not available rather than wrong)."""
+    """(force, torque about `at`) the motor exerts on body j, global, as functions of
+    (t, q, q_dot): a motor law may read the joint rate, so `reactions` takes q_dot."""
     coordinate, value = coordinate_and_value(motor, x)
     b = motor.body_j
     p = x.p(b)
     force = ca.jacobian(coordinate, x.r(b)).T * value
     n_bar = 0.5 * euler.g_matrix(p) @ ca.jacobian(coordinate, p).T * value
     torque = euler.rotation(p) @ n_bar + ca.cross(x.r(b) - at, force)
-    nan = ca.DM(np.full(x.q_dot.numel(), np.nan))
-    return (ca.substitute(force, x.q_dot, nan), ca.substitute(torque, x.q_dot, nan))
+    return force, torque
 
 
 FORCE_ELEMENTS = {"motor_torque": generalized_force, "motor_force": generalized_force}

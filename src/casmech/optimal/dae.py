@@ -175,7 +175,7 @@ def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
     per_body = [ca.vertcat(q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4],
                            q_dot[3 * k:3 * k + 3], omega[:, k], q_ddot[3 * k:3 * k + 3],
                            alpha[:, k]) for k in range(nb)]
-    force, torque = system["reactions"](t, q, lam, theta)
+    force, torque = system["reactions"](t, q, q_dot, lam, theta)
     per_joint = [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(nominal.joints))]
     kinetic, potential = system["energy"](t, q, q_dot, theta)
     violation = ca.mmax(ca.fabs(system["phi"](t, q, theta)))

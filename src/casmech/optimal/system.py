@@ -115,7 +115,7 @@ def build_parametric(symbolic: SymbolicModel) -> dict[str, ca.Function]:
          {"generalized_forces": fixed(applied + quadratic)}),
         ("energy", {"t": t, "q": q, "q_dot": q_dot, "theta": theta},
          {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
-        ("reactions", {"t": t, "q": q, "lam": lam, "theta": theta},
+        ("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": lam, "theta": theta},
          {"force": fixed(force), "torque": fixed(torque)}),
         ("file_velocities", {"q": q, "theta": theta},
          {"q_dot": ca.vertcat(*guess) if nb else ca.SX(0, 1)}),

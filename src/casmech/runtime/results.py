@@ -56,7 +56,7 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
                         q_dot[3 * k:3 * k + 3], omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]])
         for k in range(nb)
     ]
-    force, torque = functions.evaluate("reactions", t, q, lam)
+    force, torque = functions.evaluate("reactions", t, q, q_dot, lam)
     per_joint = [np.concatenate([force[:, j], torque[:, j]]) for j in range(len(functions.joints))]
     kinetic, potential = functions.evaluate("energy", t, q, q_dot)
     violation = np.max(np.abs(functions.vector("phi", t, q)), initial=0.0)
