@@ -66,6 +66,9 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
         return build_functions(lower(model))
 
 
+# dynamics options a caller may override -> their choices
+DYNAMICS_OPTIONS = {"formulation": tuple(FORMULATIONS), "stabilization": dae.STABILIZATIONS}
+
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
 ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Result]] = {
@@ -93,15 +96,13 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
     settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
-    if formulation is not None:
-        if formulation not in FORMULATIONS:
-            raise UsageError(f"formulation '{formulation}' is not one of {', '.join(FORMULATIONS)}")
-        settings = replace(settings, options={**settings.options, "formulation": formulation})
-    if stabilization is not None:
-        if stabilization not in dae.STABILIZATIONS:
-            raise UsageError(f"stabilization '{stabilization}' is not one of "
-                             f"{', '.join(dae.STABILIZATIONS)}")
-        settings = replace(settings, options={**settings.options, "stabilization": stabilization})
+    for name, value in {"formulation": formulation, "stabilization": stabilization}.items():
+        if value is None:
+            continue
+        if value not in DYNAMICS_OPTIONS[name]:
+            raise UsageError(f"{name} '{value}' is not one of "
+                             f"{', '.join(DYNAMICS_OPTIONS[name])}")
+        settings = replace(settings, options={**settings.options, name: value})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")

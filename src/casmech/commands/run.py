@@ -51,9 +51,9 @@ def add_arguments(parser) -> None:
                         help="relative tolerance of the integrator (dynamics)")
     parser.add_argument("--atol", type=float,
                         help="absolute tolerance of the integrator (dynamics)")
-    parser.add_argument("--formulation", choices=["rp", "romega"],
+    parser.add_argument("--formulation", choices=casmech.api.DYNAMICS_OPTIONS["formulation"],
                         help="equations of motion for dynamics (default: the model's, else rp)")
-    parser.add_argument("--stabilization", choices=["ggl", "projection"],
+    parser.add_argument("--stabilization", choices=casmech.api.DYNAMICS_OPTIONS["stabilization"],
                         help="how dynamics keeps the constraints: the stabilized index-2 DAE "
                              "(ggl) or projections of the index-1 DAE (default: the model's, "
                              "else ggl)")
