@@ -47,9 +47,9 @@ joints:
   - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0],
      driver: {angle: 0.3 * sin(t)}}
   - {name: spin, type: revolute, body_i: bar, body_j: disc, at: [0, 0, -3], axis: [0, 0, 1],
-     motor: {torque: "2 - 0.1*angle"}}
+     motor: {torque: "2 - 0.1*angle - 0.3*angle_dot"}}
   - {name: slide, type: translational, body_i: disc, body_j: block, at: [1, 0, -3],
-     axis: [1, 0, 0], motor: {force: "-3*displacement + sin(t)"}}
+     axis: [1, 0, 0], motor: {force: "-3*displacement + sin(t) - 0.2*displacement_dot"}}
 """
 
 MODELS = {
@@ -58,7 +58,8 @@ MODELS = {
     "slider_crank": lambda: casmech.load(ROOT / "models" / "slider_crank.yaml"),
     "flyball_governor": lambda: casmech.load(ROOT / "models" / "flyball_governor.yaml"),  # rsda
     "cart_pole": lambda: casmech.load(ROOT / "models" / "cart_pole.yaml"),  # point force
-    # effort motors (in the forces and the joints' reactions), laws reading joint and body state
+    # effort motors (in the forces and the joints' reactions, laws reading the joint rate too),
+    # laws reading joint and body state
     "motors": lambda: casmech.loads(MOTORS),
     "user_force": lambda: casmech.load(ROOT / "models" / "user_force_pendulum.yaml"),
 }

@@ -11,22 +11,12 @@ import numpy as np
 import pytest
 
 import casmech
+from tests.codegen.test_mapped import MOTORS
 
-MODEL = """
-casmech: 1
-name: motors_codegen
-bodies:
-  - {name: bar, mass: 5, inertia: [2, 2, 0.01], position: [0, 0, -1]}
-  - {name: disc, mass: 1, inertia: [0.15, 0.15, 0.25], position: [0, 0, -3]}
-  - {name: block, mass: 2, inertia: [0.1, 0.1, 0.1], position: [1, 0, -3]}
-joints:
-  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0],
-     driver: {angle: {table: theta.csv, column: theta, periodic: true}}}
-  - {name: spin, type: revolute, body_i: bar, body_j: disc, at: [0, 0, -3], axis: [0, 0, 1],
-     motor: {torque: "2 - 0.1*angle - 0.3*angle_dot"}}
-  - {name: slide, type: translational, body_i: disc, body_j: block, at: [1, 0, -3],
-     axis: [1, 0, 0], motor: {force: "-3*displacement + sin(t) - 0.2*displacement_dot"}}
-"""
+# the motors model of the mapped-bundle tests, its pivot driven by a periodic table instead
+MODEL = MOTORS.replace("name: motors\n", "name: motors_codegen\n").replace(
+    "driver: {angle: 0.3 * sin(t)}",
+    "driver: {angle: {table: theta.csv, column: theta, periodic: true}}")
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C compiler")
