@@ -4,7 +4,8 @@ elements), so the C holds each kernel once and grows with the model only by its 
 
 Each unit holds a function and, for the functions an integrator differentiates, its Jacobian
 under the name casadi's External looks up (`jac_<name>`, inputs then nominal outputs), so an MX
-graph over the loaded functions (the dynamics ODE) is differentiated through compiled code.
+graph over the loaded functions (casmech.optimal's constraints, or a C or casadi user's) is
+differentiated through compiled code.
 """
 
 from __future__ import annotations
@@ -17,8 +18,9 @@ from casmech.codegen import manifest
 from casmech.compiler import dae
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
-# graph over the library differentiates (the augmented-Lagrangian ODE of runtime.dynamics), and
-# the DAE residuals (what IDAS integrates).
+# graph over the library differentiates (casmech.optimal; the augmented-Lagrangian fallback of
+# runtime.dynamics did until it became Runge-Kutta steps, which only evaluate), and the DAE
+# residuals (what IDAS integrates).
 DIFFERENTIATED = frozenset({
     "phi", "nu", "gamma", "generalized_forces",
     "romega_forces", "romega_nu", "romega_gamma", "romega_q_dot",

@@ -26,6 +26,7 @@ ROW_SCALING = True
 ITERATIONS = 6  # see PENALTY
 LINEAR_SOLVER = "ldl"  # M + a P^T P is symmetric positive definite
 PENALTY = 1e8  # a relative to max(diag M) / max(diag P^T P); see runtime.dynamics
+PROJECTION_ITERATIONS = 2  # see projection
 
 
 def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
@@ -50,14 +51,25 @@ def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
                        ["t", "q", "v", "penalty"], ["v_dot", "lam"])
 
 
-def ode(functions: dict[str, ca.Function], name: str) -> dict:
-    """The first-order ODE x = [q, v], x' = [q_dot(q, v), v_dot], for casadi.integrator; time is
-    t0 (a parameter, with the penalty) + tau, so one integrator serves every restart."""
+def projection(functions: dict[str, ca.Function], name: str) -> ca.Function:
+    """(t, q, v, penalty) -> (q, v) moved back onto Phi = 0 and then onto P v = nu, by the
+    mass-orthogonal steps of runtime.assembly.project, (M / a + P^T P) dx = -P^T r (positions
+    in r-p coordinates, velocities in the formulation's), as a sparse MX graph. A fixed
+    PROJECTION_ITERATIONS Gauss-Newton steps for the positions: from a Runge-Kutta step's
+    drift (1e-12 m on A02) one step leaves its square; the caller checks |Phi| at the outputs.
+    Near a singular configuration the a-damping keeps a step from jumping along the nearly
+    lost direction, i.e. onto another branch."""
     form = FORMULATIONS[name]
-    solve = accelerations(functions, name)
-    n_q, n_v = solve.size1_in(1), solve.size1_in(2)
-    tau, x, params = ca.MX.sym("tau"), ca.MX.sym("x", n_q + n_v), ca.MX.sym("p", 2)
-    q, v = x[:n_q], x[n_q:]
-    q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
-    v_dot = solve(params[0] + tau, q, v, params[1])[0]
-    return {"t": tau, "x": x, "p": params, "ode": ca.vertcat(q_dot, v_dot)}
+    mass, jacobian = functions["mass_matrix"], functions["phi_q"]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
+    v, penalty = ca.MX.sym("v", functions[form.mass].size1_out(0)), ca.MX.sym("penalty")
+    q_new, m = q, mass(q) / penalty
+    for _ in range(PROJECTION_ITERATIONS):
+        p = jacobian(t, q_new)
+        q_new = q_new - ca.solve(m + p.T @ p, p.T @ functions["phi"](t, q_new), LINEAR_SOLVER)
+    p = functions[form.jacobian](t, q_new)
+    residual = p @ v - functions[form.nu](t, q_new)
+    lhs = functions[form.mass](q_new) / penalty + p.T @ p
+    v_new = v - ca.solve(lhs, p.T @ residual, LINEAR_SOLVER)
+    return ca.Function(f"{name}_projection", [t, q, v, penalty], [q_new, v_new],
+                       ["t", "q", "v", "penalty"], ["q_projected", "v_projected"])

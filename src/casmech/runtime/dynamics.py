@@ -20,42 +20,31 @@ start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solve
 the same equations, so IDACalcIC is never needed.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
-its flat poses) the index-1 DAE is singular and IDAS fails; the run then starts over from t0
-on the augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there (metadata
-augmented_from = t0, dae_failed_at = the start of the chunk that failed). A failure of that
+its flat poses) both DAEs are singular and IDAS fails; the run then starts over from t0 on the
+augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there, integrated by
+runtime.projected_rk4: Runge-Kutta steps each projected back onto the constraints, their number
+per output interval set by step doubling (metadata augmented_from = t0, dae_failed_at = the
+start of the chunk that failed, rk4_steps, rk4_rejected, rk4_stalled_at). A failure of that
 one is reported with the output interval, the time and the joints.
 
-Measured and not adopted (A02, rtol 1e-10): a regularised DAE, [M P^T; P -eps I] with k
-augmented-Lagrangian iterates as extra algebraic unknowns (pure SX, sparse). Per flat pose it
-lost 5e-7 J (eps = 1e-8 max(diag M)^-1; 2.5e-5 J at 1e-9, 1.3e-3 J at 1e-10, 8e-6 J at 1e-6),
-the B0 error over 10 s ranged 1e-6..2e-4 with k = 2..6 and the drift projections' placement,
-N = 40 took 698 s for 2.97e-5 (k = 2). Newton on z also needed the algebraic unknowns out of
-the convergence test's tight weights (IDA_CONV_FAIL at the pose otherwise). Also measured,
-for per-step speed: one integrator per relative output grid reused by every restart, the
-initial derivative passed by integrating y = x - tau x_dot0 (y'(0) = 0) instead of init_xdot
-(each build costs ~25 ms on chain8, 92 builds = 2.4 s of a 6.4 s run): benchmarks/run.py
-medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 and 15.3 vs 14.4 s at 1e-8, since
-the weights rtol |y| + atol loosen or tighten along a chunk and IDAS took other steps (and a
-free body's spin drifted 2.2e-8 instead of 1e-9). IDAS's linear solver: casadi's sparse QR
-(the default) kept; csparse (sparse LU) halved the steps on chain8 but was 5x slower per step
-on A02 (N = 20) and crawled through 50000 steps before failing at its flat poses. The ODE fallback
-with GMRES (matrix-free Jacobian products) was more accurate on N = 2 (7.8e-7 rp, 9.2e-7
-r-omega) but 3-4x slower, and needs its dense preconditioner on N = 40 (without it, A02 N = 2
-left the branch). A02 N = 40 therefore still runs for over 45 minutes: the ODE (1134 states)
-spends its time in its Jacobian, whose acceleration rows are dense; AD through the
-ITERATIONS sparse solves takes 0.61 s per evaluation, 147 evaluations in the first second.
-Also measured there and not adopted: (a) the same Jacobian assembled from the iteration's
-structure (one sparse LDL solve per iteration with the sparse partials as right-hand sides,
-handed to IDAS as casadi's custom_jacobian of the right-hand side Function): equal to the AD
-one to 3e-10 relative and 3x cheaper (0.19 s), but on A02 N = 2 r-omega left the branch at
-the second flat pose (error 2 m) and r-p's error grew from 5e-7 to 2e-6. (b) That Jacobian
-linearised after one iteration: 0.02 s, r-omega left the branch too. (c) LAPACK's dense LU as
-the fallback's linear solver: 20 % faster on N = 40; N = 2 passed with B0 errors 2.7e-7 (r-p)
-and 1.4e-6 (r-omega) against the sparse QR's 5.4e-7 and 6.7e-7. Branch-taking at the flat
-poses is that sensitive to roundoff in the Newton iteration, so the N = 2 passes are not a
-margin against such changes. Explicit Runge-Kutta (scipy DOP853) on the same ODE, N = 2:
-B0 error 2.2e-5 at rtol 1e-10 with 21000 right-hand sides, and 4.9 million at 1e-12 (230x,
-where an order-8 method needs ~2x on a smooth non-stiff ODE: stiff or not smooth at the poses).
+That fallback was IDAS on the same ODE until 2026-11-22: A02 N = 40 did not finish in 45
+minutes (the ODE's Jacobian, dense in the accelerations' rows, cost 0.61 s by AD with 1134
+states, 147 of them in the first simulated second), and whether A02 N = 2 stayed on its branch
+at the flat poses depended on roundoff in IDAS's Newton iteration (an exact Jacobian assembled
+from the iteration's structure, equal to AD's to 3e-10, took r-omega onto the other branch).
+The projected steps, measured on the same machine: N = 40 over 20 s in 69 s (r-omega) and
+93 s (r-p), B0 within 2.2e-6 and 3.9e-6 m of the exact solution; N = 2 over 10 s in 2 s each,
+1.5e-8 and 3.7e-7 m (IDAS: 5.4e-7 and 6.7e-7 m). Also measured on A02 and not adopted: a
+regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as extra algebraic
+unknowns (it lost 5e-7 J per flat pose at eps = 1e-8 max(diag M)^-1 and N = 40 took 698 s for
+a 3e-5 m error); sparse LU (csparse) in IDAS, 5x slower per step on N = 20 and failing at the
+poses; GMRES on the ODE, 3-4x slower; explicit adaptive Runge-Kutta without projections (scipy
+DOP853), 4.9 million right-hand sides at rtol 1e-12 on N = 2 (the ODE drifts off the
+constraints along the lost direction there, which the projection removes). Also measured for
+per-step speed: one integrator per relative output grid reused by every restart, the initial
+derivative passed by integrating y = x - tau x_dot0 instead of init_xdot: benchmarks/run.py
+medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 (IDAS took other steps as the weights
+rtol |y| + atol changed along a chunk).
 """
 
 from __future__ import annotations
@@ -66,9 +55,9 @@ import numpy as np
 from casmech.compiler import augmented, dae, euler
 from casmech.compiler.checks import RANK_TOLERANCE, dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
-from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.runtime import assembly
+from casmech.runtime import assembly, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -107,15 +96,6 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
 def penalty(functions: SystemFunctions, form: Formulation, q) -> float:
     """The augmented-Lagrangian penalty scaled to the model: PENALTY max(diag M)."""
     return augmented.PENALTY * np.max(np.diag(functions.matrix(form.mass, q)), initial=1.0)
-
-
-def _differentiable(functions: SystemFunctions) -> dict[str, ca.Function]:
-    """The bundle's functions if all are SX, else the interpreted ones rebuilt from the IR:
-    the augmented-Lagrangian ODE differentiates P and M, whose Jacobians a compiled bundle
-    does not carry (codegen.generate.DIFFERENTIATED)."""
-    if all(f.is_a("SXFunction") for f in functions.functions.values()):
-        return functions.functions
-    return build_functions(functions.ir).functions
 
 
 class _Model:
@@ -188,7 +168,6 @@ class _Stepper:
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
-        self.ode_integrators: dict[tuple, ca.Function] = {}
         self.on_ode, self.switched_at = False, None
 
     def adapt(self, used: int, restarted: bool) -> None:
@@ -249,32 +228,30 @@ class _Stepper:
         return np.vstack([x, z[:n_v]]), z[n_v:n_v + m]
 
     def _ode(self, t0, times, q, v):
-        """The augmented-Lagrangian ODE over the chunk; on a failure, its first interval alone,
-        so the error names it exactly (and the caller keeps every row before it)."""
+        """The augmented-Lagrangian ODE by projected Runge-Kutta steps over the chunk. On a
+        failure, the intervals done so far (the caller records them and comes back for the
+        failed one); on the chunk's first interval, the error naming it."""
         model = self.model
         if self.ode is None:
-            functions = _differentiable(model.functions)
-            self.ode = augmented.ode(functions, model.name)
+            functions = model.functions.functions  # evaluated only: compiled ones serve too
+            self.ode = projected_rk4.ProjectedRK4(functions, model.name, self.options["reltol"],
+                                                  self.options["abstol"])
             self.solve = augmented.accelerations(functions, model.name)
         a = penalty(model.functions, model.form, q)
-        key = tuple(np.round(times - t0, 12))
-        if key not in self.ode_integrators:
-            self.ode_integrators[key] = ca.integrator("fallback", "idas", self.ode, 0.0,
-                                                      list(key), self.options)
-        try:
-            x = np.array(self.ode_integrators[key](x0=np.concatenate([q, v]), p=[t0, a])["xf"]
-                         .full())
-            why = None if np.all(np.isfinite(x)) else "the state became NaN or infinite"
-        except RuntimeError as error:
-            why = str(error).splitlines()[-1].strip()
-        if why is not None:
-            if len(times) > 1:
-                self.chunk = 1  # from here on, one output interval per call
-                return self._ode(t0, times[:1], q, v)
-            raise self.failure(t0, times[0], q, why)
-        columns = [self._accelerations(t, x[:, j], a) for j, t in enumerate(times)]
-        v_dots, lams = zip(*columns, strict=True)
-        return np.vstack([x, np.array(v_dots).T]), np.array(lams).T
+        x, columns, start = np.concatenate([q, v]), [], t0
+        for t in times:
+            try:
+                x = self.ode.advance(start, t, x, a)
+            except projected_rk4.StepFailure as error:
+                if not columns:
+                    raise self.failure(start, t, x[:model.n_q], str(error)) from None
+                break
+            columns.append(x)
+            start = t
+        states = np.array(columns).T
+        v_dots, lams = zip(*(self._accelerations(times[j], states[:, j], a)
+                             for j in range(states.shape[1])), strict=True)
+        return np.vstack([states, np.array(v_dots).T]), np.array(lams).T
 
     def _accelerations(self, t, x, a):
         model = self.model
@@ -284,7 +261,8 @@ class _Stepper:
 
     def failure(self, t0, t1, q, why) -> AnalysisError:
         functions = self.model.functions
-        cause = (f"IDAS failed between t = {t0:.6g} and {t1:.6g} ({why}); the joints whose "
+        cause = (f"the augmented-Lagrangian Runge-Kutta steps failed between t = {t0:.6g} and "
+                 f"{t1:.6g} ({why}); the joints whose "
                  "rows are closest to dependent (a singular configuration?):")
         return AnalysisError(FailureContext(t0, cause, dependent_joints(
             functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
@@ -375,6 +353,9 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                            ggl_failed_at=stepper.ggl_failures[0] if stepper.ggl_failures else None,
                            ggl_failures=len(stepper.ggl_failures),
                            augmented_from=t0 if stepper.on_ode else None,
+                           rk4_steps=stepper.ode.steps if stepper.on_ode else None,
+                           rk4_rejected=stepper.ode.rejected if stepper.on_ode else None,
+                           rk4_stalled_at=stepper.ode.stalled if stepper.on_ode else None,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()))
     return result
 

@@ -1,0 +1,64 @@
+"""The augmented-Lagrangian accelerations and projection (compiler.augmented) against the
+saddle-point solve and runtime.assembly.project, on a state off the flat poses."""
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.compiler import augmented
+from casmech.compiler.formulations import FORMULATIONS
+from casmech.runtime import assembly, dynamics
+from tests.runtime.test_stabilization import CHAIN
+
+
+@pytest.fixture(scope="module")
+def chain():
+    functions = casmech.compile(casmech.loads(CHAIN))
+    q, q_dot = assembly.initial_state(functions, 0.0)
+    return functions, q, q_dot
+
+
+@pytest.mark.parametrize("name", ["rp", "romega"])
+def test_accelerations_solve_the_saddle_point_system(chain, name):
+    """Where P has full row rank, the iterates converge to the [M P^T; P 0] solution."""
+    functions, q, q_dot = chain
+    form = FORMULATIONS[name]
+    v = dynamics.velocities(functions, name, q, q_dot)
+    t = 0.3
+    mass, jac = functions.matrix(form.mass, q), functions.matrix(form.jacobian, t, q)
+    lhs = np.block([[mass, jac.T], [jac, np.zeros((len(jac), len(jac)))]])
+    rhs = np.concatenate([functions.vector(form.forces, t, q, v),
+                          functions.vector(form.gamma, t, q, v)])
+    exact = np.linalg.solve(lhs, rhs)
+    solve = augmented.accelerations(functions.functions, name)
+    v_dot, lam = (np.array(out.full()).ravel()
+                  for out in solve(t, q, v, dynamics.penalty(functions, form, q)))
+    # measured up to 4e-8 of the largest entry: roundoff in M + a P^T P, whose condition is
+    # ~ the penalty ratio 1e8 (augmented.PENALTY), not the iteration (that contracts below it)
+    for got, want in ((v_dot, exact[:len(v)]), (lam, exact[len(v):])):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-7 * np.max(np.abs(want)))
+
+
+@pytest.mark.parametrize("name", ["rp", "romega"])
+def test_projection_is_assembly_project(chain, name):
+    """From a state 1e-6 off the constraints, the graph's two Gauss-Newton steps land where
+    assembly.project's iterations (to |Phi| <= 1e-12) do, with the constraints held."""
+    functions, q, q_dot = chain
+    form = FORMULATIONS[name]
+    rng = np.random.default_rng(3)
+    v = dynamics.velocities(functions, name, q, q_dot)
+    q_off, v_off = q + 1e-6 * rng.standard_normal(len(q)), v + 1e-6 * rng.standard_normal(len(v))
+    a, t = dynamics.penalty(functions, form, q), 0.0
+    project = augmented.projection(functions.functions, name)
+    q_new, v_new = (np.array(out.full()).ravel() for out in project(t, q_off, v_off, a))
+    q_ref, v_ref = assembly.project(functions, form, t, q_off, v_off, a)
+    # measured 1e-16 and 4e-16: both converge to the same point; the tolerance is the
+    # projection's own (POSITION_TOLERANCE)
+    np.testing.assert_allclose(q_new, q_ref, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(v_new, v_ref, rtol=0, atol=1e-12)
+    assert np.max(np.abs(functions.vector("phi", t, q_new))) <= 1e-12
+    jac = functions.matrix(form.jacobian, t, q_new)
+    residual = jac @ v_new - functions.vector(form.nu, t, q_new)
+    assert np.max(np.abs(residual)) <= 1e-12
+    # and it moved the state: the perturbation was not already consistent
+    assert np.max(np.abs(q_new - q_off)) > 1e-8
