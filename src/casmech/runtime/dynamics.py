@@ -39,8 +39,8 @@ regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as extra a
 unknowns (it lost 5e-7 J per flat pose at eps = 1e-8 max(diag M)^-1 and N = 40 took 698 s for
 a 3e-5 m error); sparse LU (csparse) in IDAS, 5x slower per step on N = 20 and failing at the
 poses; GMRES on the ODE, 3-4x slower; explicit adaptive Runge-Kutta without projections (scipy
-DOP853), 4.9 million right-hand sides at rtol 1e-12 on N = 2 (the ODE drifts off the
-constraints along the lost direction there, which the projection removes). Also measured for
+DOP853), 4.9 million right-hand sides at rtol 1e-12 on N = 2 against 21000 at 1e-10 (where an
+order-8 method needs ~2x: stiff or not smooth at the poses). Also measured for
 per-step speed: one integrator per relative output grid reused by every restart, the initial
 derivative passed by integrating y = x - tau x_dot0 instead of init_xdot: benchmarks/run.py
 medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 (IDAS took other steps as the weights
@@ -348,7 +348,8 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
         error.partial = result
         raise
     result.metadata.update(rtol=stepper.options["reltol"], atol=atol,
-                           formulation=model.name, integrator="idas", projections=projections,
+                           formulation=model.name, projections=projections,
+                           integrator="projected_rk4" if stepper.on_ode else "idas",
                            stabilization=stepper.stabilization,
                            ggl_failed_at=stepper.ggl_failures[0] if stepper.ggl_failures else None,
                            ggl_failures=len(stepper.ggl_failures),
