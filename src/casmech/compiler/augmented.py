@@ -13,7 +13,9 @@ of an index-1 DAE is singular. There lam is the minimum-norm multiplier (every u
 range(P)), which spreads the reaction over redundant joints instead of choosing rows.
 
 The penalty a is an input: the runtime scales it to the model (PENALTY times mass over
-constraint-gradient size), so no user constant is involved.
+constraint-gradient size), so no user constant is involved. `projection` takes the same
+a-damped, mass-orthogonal steps back onto the position and velocity constraints
+(runtime.projected_rk4 takes one after every Runge-Kutta step).
 """
 
 from __future__ import annotations
