@@ -109,3 +109,37 @@ def test_fixed_steps_keep_the_branch_through_flat_poses(name):
             error = max(error, np.hypot(b0[0] - exact["x_B0"][k], b0[1] - exact["y_B0"][k]))
         print(f"\nA02 N=2 {name}, fixed steps of {h * 1e3:g} ms: max B0 error {error:.1e} m")
         assert error <= 1e-5  # measured 7.0e-6 (rp) and 1.7e-6 m (romega) at 10 ms
+
+
+class Synthetic:
+    """Stands in for the steps: positions with a 4th-order error c_q / n^4, velocities either
+    with c_v / n^4 too or with noise of size c_v whose sign flips with n (what a penalty-set
+    velocity at a flat pose looks like: no step count removes it)."""
+
+    def __init__(self, n_q: int, n_v: int, c_q: float, c_v: float, noise: bool):
+        self.n_q, self.n_v, self.c_q, self.c_v, self.noise = n_q, n_v, c_q, c_v, noise
+
+    def __call__(self, t0, t1, x, penalty, n):
+        velocity = self.c_v * (-1) ** n if self.noise else self.c_v / n ** 4
+        return np.concatenate([np.full(self.n_q, 1.0 + self.c_q / n ** 4),
+                               np.full(self.n_v, 1.0 + velocity)])
+
+
+@pytest.mark.parametrize("noise", [True, False])
+def test_stalled_velocities_are_kept_only_if_they_do_not_converge(chain, noise):
+    """Velocities whose estimate does not halve when the steps are multiplied are noise: the
+    interval is kept after one retry (and listed); velocities that converge as 4th order are
+    refined until they meet the tolerance, like the positions."""
+    functions, q, _ = chain
+    _, rk4 = stepper(functions, "rp", rtol=1e-8, atol=1e-10)
+    rk4._steps = Synthetic(len(q), len(q), 1e-9, 1e-3, noise)
+    x = rk4.advance(0.5, 0.6, np.zeros(2 * len(q)), 1.0)
+    if noise:
+        assert rk4.stalled == [0.5] and rk4.rejected == 1
+        assert abs(x[-1] - 1.0) == pytest.approx(1e-3)  # the noise is kept, not refined away
+    else:
+        assert rk4.stalled == [] and rk4.rejected >= 1
+        # the fine result's velocity error c_v / (2n)^4 equals the estimate, which met the
+        # tolerance rtol |v| + atol
+        assert abs(x[-1] - 1.0) <= 1e-8 * abs(x[-1]) + 1e-10
+    assert abs(x[0] - 1.0) <= 1e-8 * abs(x[0]) + 1e-10  # the positions met it in both cases
