@@ -52,8 +52,13 @@ def best_at(results: list[dict], tool: str, level: float):
     return min(ok, key=lambda r: r["median"]) if ok else None
 
 
-def sweep_table(entry: dict) -> list[str]:
-    lines = ["| tool | setting | wall, 10 s [s] (median) | n | min - max [s] | error at 1 s [m] "
+def t_end(report: dict) -> str:
+    """The simulated span every timed run covered (run.py --t-end; 10 s before it existed)."""
+    return f"{report.get('settings', {}).get('t_end', 10.0):g} s"
+
+
+def sweep_table(entry: dict, span: str = "10 s") -> list[str]:
+    lines = [f"| tool | setting | wall, {span} [s] (median) | n | min - max [s] | error at 1 s [m] "
              "| note |", "|---|---|---:|---:|---|---:|---|"]
     for r in entry["results"]:
         tool = r["tool"]
@@ -153,8 +158,8 @@ def markdown(report: dict) -> str:
            "at start "
            f"{_load(m.get('loadavg_start'))}, at end {_load(m.get('loadavg_end'))}.",
            "", f"Command: `{report['command']}`", ""]
-    out += ["### Time to reach an accuracy (fastest measured setting; wall time of the 10 s "
-            "simulation, median)", "",
+    out += ["### Time to reach an accuracy (fastest measured setting; wall time of the "
+            f"{t_end(report)} simulation, median)", "",
             "casmech / peer is the ratio of wall times: below 1 casmech is faster.", ""]
     for entry in report["systems"]:
         out += [f"**{entry['system']}** ({entry['description']})", ""]
@@ -164,7 +169,7 @@ def markdown(report: dict) -> str:
     out += ["### Reference and cross-check", ""] + cross_table(report) + [""]
     out += ["### Every setting", ""]
     for entry in report["systems"]:
-        out += [f"**{entry['system']}**", ""] + sweep_table(entry) + [""]
+        out += [f"**{entry['system']}**", ""] + sweep_table(entry, t_end(report)) + [""]
     return "\n".join(out)
 
 
