@@ -9,7 +9,7 @@ import casmech
 from casmech.compiler import euler
 from casmech.errors import AnalysisError
 from casmech.runtime import assembly, dynamics, projected_rk4
-from tests.conftest import Table
+from tests.conftest import MODELS, Table
 from tests.runtime.reference_data import VALIDATION_MODELS, read_analytic
 from tests.runtime.test_stabilization import CHAIN
 
@@ -54,6 +54,29 @@ def run_on_rk4(model_text, monkeypatch, **kwargs):
     return result, Table(*casmech.results_table(functions, result))
 
 
+@pytest.mark.parametrize("model", ["flyball_governor.yaml", "bricard.yaml"])
+def test_fallback_agrees_with_the_dae_on_regular_models(model, monkeypatch):
+    """Off singular poses the fallback is another integrator of the same motion: on a spindle
+    driven through angle = omega t with rsda dampers, and on Bricard's linkage (a redundant
+    row), run as if the DAE had failed at t0, it agrees with IDAS's index-2 DAE at rtol 1e-10."""
+    text = (MODELS / model).read_text()
+    functions = casmech.compile(casmech.loads(text))
+    dae = Table(*casmech.results_table(functions, casmech.analyze(
+        functions, "dynamics", t_end=2, rtol=1e-10, atol=1e-12)))
+    result, rk4 = run_on_rk4(text, monkeypatch, t_end=2, rtol=1e-10, atol=1e-12)
+    assert result.metadata["integrator"] == "projected_rk4"
+    assert result.metadata["rk4_stalled_at"] == []  # no singular pose: every estimate converged
+    # measured (flyball, bricard): positions 6.6e-11, 4.3e-9 m; velocities 1.4e-9, 9.0e-9;
+    # reactions 9.2e-7 of 40 N, 3.7e-7 of 29 N (the multipliers carry a ~ 1e8 x roundoff)
+    for kinds, bound in ((("x", "y", "z"), 1e-7), (("vx", "vy", "vz", "wx", "wy", "wz"), 1e-7),
+                         (("fx", "fy", "fz", "tx", "ty", "tz"), 1e-6)):
+        columns = [c for c in dae.names if c.split(".")[-1] in kinds]
+        scale = max(1.0, max(np.max(np.abs(dae[c])) for c in columns))
+        for column in columns:
+            np.testing.assert_allclose(rk4[column], dae[column], rtol=0, atol=bound * scale,
+                                       err_msg=column)
+
+
 def test_error_control_against_idas(monkeypatch):
     """Over the chain's first second the positions agree with IDAS (index-2 DAE, rtol 1e-12)
     within what the tolerance allows, tightening rtol 100x cuts the error more than 10x (issue
@@ -69,7 +92,7 @@ def test_error_control_against_idas(monkeypatch):
         errors[rtol] = max(np.max(np.abs(table[c] - reference[c])) for c in columns)
         assert table["constraint_violation"].max() <= 1e-12  # projected every step
     print(f"\nchain3 on projected RK4: max position error over 1 s {errors}")
-    assert errors[1e-8] <= 1e-8  # measured 2.1e-10 m (and 3.0e-8 m at rtol 1e-6)
+    assert errors[1e-8] <= 1e-8  # measured 3.5e-9 m (and 5.2e-8 m at rtol 1e-6)
     assert errors[1e-8] * 10 <= errors[1e-6]
 
 
@@ -112,31 +135,32 @@ def test_fixed_steps_keep_the_branch_through_flat_poses(name):
 
 
 class Synthetic:
-    """Stands in for the steps: positions with a 4th-order error c_q / n^4, velocities either
-    with c_v / n^4 too or with noise of size c_v whose sign flips with n (what a penalty-set
-    velocity at a flat pose looks like: no step count removes it)."""
+    """Stands in for the steps: positions with a 4th-order error c_q / n^4, velocities with
+    c_v / n^4 too, with c_v / n, or with noise of size c_v whose sign flips with n (what a
+    penalty-set velocity at a flat pose looks like: no step count removes it)."""
 
-    def __init__(self, n_q: int, n_v: int, c_q: float, c_v: float, noise: bool):
+    def __init__(self, n_q: int, n_v: int, c_q: float, c_v: float, noise: str):
         self.n_q, self.n_v, self.c_q, self.c_v, self.noise = n_q, n_v, c_q, c_v, noise
 
     def __call__(self, t0, t1, x, penalty, n):
-        velocity = self.c_v * (-1) ** n if self.noise else self.c_v / n ** 4
+        velocity = {"flipping": self.c_v * (-1) ** n, "first order": self.c_v / n,
+                    "none": self.c_v / n ** 4}[self.noise]
         return np.concatenate([np.full(self.n_q, 1.0 + self.c_q / n ** 4),
                                np.full(self.n_v, 1.0 + velocity)])
 
 
-@pytest.mark.parametrize("noise", [True, False])
+@pytest.mark.parametrize("noise", ["flipping", "first order", "none"])
 def test_stalled_velocities_are_kept_only_if_they_do_not_converge(chain, noise):
-    """Velocities whose estimate does not halve when the steps are multiplied are noise: the
-    interval is kept after one retry (and listed); velocities that converge as 4th order are
-    refined until they meet the tolerance, like the positions."""
+    """Velocities whose estimate shrinks by less than the square of the step multiplication
+    are noise: the interval is kept after one retry (and listed); velocities that converge as
+    4th order are refined until they meet the tolerance, like the positions."""
     functions, q, _ = chain
     _, rk4 = stepper(functions, "rp", rtol=1e-8, atol=1e-10)
     rk4._steps = Synthetic(len(q), len(q), 1e-9, 1e-3, noise)
     x = rk4.advance(0.5, 0.6, np.zeros(2 * len(q)), 1.0)
-    if noise:
+    if noise != "none":
         assert rk4.stalled == [0.5] and rk4.rejected == 1
-        assert abs(x[-1] - 1.0) == pytest.approx(1e-3)  # the noise is kept, not refined away
+        assert abs(x[-1] - 1.0) > 1e-6  # the noise is kept, not refined away
     else:
         assert rk4.stalled == [] and rk4.rejected >= 1
         # the fine result's velocity error c_v / (2n)^4 equals the estimate, which met the

@@ -45,7 +45,8 @@ def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
     lhs = m + penalty * p.T @ p
     lam, v_dot = ca.MX.zeros(p.size1()), ca.MX.zeros(v.size1())
     for _ in range(ITERATIONS):
-        v_dot = ca.solve(lhs, f - p.T @ lam + penalty * p.T @ gamma, LINEAR_SOLVER)
+        residual = f - m @ v_dot - p.T @ lam - penalty * p.T @ (p @ v_dot - gamma)
+        v_dot = v_dot + ca.solve(lhs, residual, LINEAR_SOLVER)
         lam = lam + penalty * (p @ v_dot - gamma)
     if ROW_SCALING:
         lam = lam * scale
