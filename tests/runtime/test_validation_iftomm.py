@@ -65,7 +65,7 @@ def test_a02_four_bar_n2_through_its_singular_poses(formulation):
 
 def test_a02_four_bar_n40_through_its_singular_poses():
     """Both DAEs fail at the first flat pose and the run is done on projected Runge-Kutta steps
-    (runtime.projected_rk4) from t0: 81 bodies over 20 s in 91 s (r-p, median of 3 on this
+    (runtime.projected_rk4) from t0: 81 bodies over 20 s in 82 s (r-p, median of 3 on this
     machine, benchmarks/a02_singular.py; it took over 45 minutes with IDAS on the same ODE)."""
     exact = read_analytic("A02_Nfourbar_N40_0-20s_dt0.05.csv")
     functions = casmech.compile(casmech.loads(a02_model(40)))

@@ -12,6 +12,12 @@ the IFToMM A02 N-four-bar passing its flat poses, redundant joints), where the [
 of an index-1 DAE is singular. There lam is the minimum-norm multiplier (every update lies in
 range(P)), which spreads the reaction over redundant joints instead of choosing rows.
 
+Each iterate is computed as a correction, v_dot_k = v_dot_k-1 + (M + a P^T P)^-1 (F - M v_dot_k-1
+- P^T lam_k-1 - a P^T (P v_dot_k-1 - gamma)): the same iterates, but the solve's roundoff
+(condition ~ the penalty ratio) then scales the shrinking residual, not F + a P^T gamma. Solved
+directly, v_dot was 4e-8 off the saddle-point solution on tests/runtime's chain; as
+corrections, 1e-16 (tests/compiler/test_augmented.py).
+
 The penalty a is an input: the runtime scales it to the model (PENALTY times mass over
 constraint-gradient size), so no user constant is involved. `projection` takes the same
 a-damped, mass-orthogonal steps back onto the position and velocity constraints

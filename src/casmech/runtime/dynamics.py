@@ -33,9 +33,9 @@ states, 147 of them in the first simulated second), and whether A02 N = 2 stayed
 at the flat poses depended on roundoff in IDAS's Newton iteration (an exact Jacobian assembled
 from the iteration's structure, equal to AD's to 3e-10, took r-omega onto the other branch).
 The projected steps, on the same machine (benchmarks/RESULTS.md, medians of 3): N = 40 over 20
-s in 91 s (r-p) and 127 s (r-omega), B0 within 4.5e-7 and 3.2e-7 m of the exact solution; N = 2
-over 10 s in 2.3 s each, 1.5e-8 and 3.7e-7 m (IDAS: 5.4e-7 and 6.7e-7 m). Also measured on A02
-and not adopted: a regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as
+s in 82 s (r-p) and 110 s (r-omega), B0 within 5.4e-7 and 1.3e-7 m of the exact solution; N = 2
+over 10 s in 2.1 and 2.3 s, 7.9e-8 and 4.3e-8 m (IDAS: 5.4e-7 and 6.7e-7 m). Also measured on
+A02 and not adopted: a regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as
 extra algebraic unknowns (it lost 5e-7 J per flat pose at eps = 1e-8 max(diag M)^-1 and N = 40
 took 698 s for a 3e-5 m error); sparse LU (csparse) in IDAS, 5x slower per step on N = 20 and
 failing at the poses; GMRES on the ODE, 3-4x slower; explicit adaptive Runge-Kutta without

@@ -8,7 +8,7 @@ cross. Each step starts on the manifold and moves along the motion's tangent, so
 lies far nearer the branch the mechanism is on than the other one (they part linearly from the
 crossing, the step errs by h^5), and the mass-orthogonal projection takes the nearest. Measured
 on A02 N = 2 over 10 s: with the projection, fixed steps of 10, 5, 2.5 and 1 ms kept both
-formulations on the branch (B0 error 7e-6 down to 6e-8 m; tests/runtime/test_projected_rk4);
+formulations on the branch (B0 error 7e-6 down to 1e-10 m; tests/runtime/test_projected_rk4);
 projecting only at the outputs, 2 ms stayed on and 1 ms left it (error 2 m), and IDAS on the
 same ODE stayed on only as long as its roundoff was lucky (runtime.dynamics).
 
