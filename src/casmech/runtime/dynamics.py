@@ -167,7 +167,7 @@ class _Stepper:
         self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
-        self.ode = self.solve = None  # the augmented-Lagrangian ODE, built when first needed
+        self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
         self.on_ode, self.switched_at = False, None
 
     def adapt(self, used: int, restarted: bool) -> None:
@@ -232,16 +232,15 @@ class _Stepper:
         failure, the intervals done so far (the caller records them and comes back for the
         failed one); on the chunk's first interval, the error naming it."""
         model = self.model
-        if self.ode is None:
+        if self.fallback is None:
             functions = model.functions.functions  # evaluated only: compiled ones serve too
-            self.ode = projected_rk4.ProjectedRK4(functions, model.name, self.options["reltol"],
-                                                  self.options["abstol"])
-            self.solve = augmented.accelerations(functions, model.name)
+            self.fallback = projected_rk4.ProjectedRK4(
+                functions, model.name, self.options["reltol"], self.options["abstol"])
         a = penalty(model.functions, model.form, q)
         x, columns, start = np.concatenate([q, v]), [], t0
         for t in times:
             try:
-                x = self.ode.advance(start, t, x, a)
+                x = self.fallback.advance(start, t, x, a)
             except projected_rk4.StepFailure as error:
                 if not columns:
                     raise self.failure(start, t, x[:model.n_q], str(error)) from None
@@ -256,7 +255,8 @@ class _Stepper:
     def _accelerations(self, t, x, a):
         model = self.model
         q, v = x[:model.n_q], x[model.n_q:]
-        v_dot, lam = (np.array(out.full()).ravel() for out in self.solve(t, q, v, a))
+        v_dot, lam = (np.array(out.full()).ravel()
+                      for out in self.fallback.accelerations(t, q, v, a))
         return v_dot, lam * model.row_norms(t, q)  # true multipliers -> unit rows
 
     def failure(self, t0, t1, q, why) -> AnalysisError:
@@ -357,9 +357,9 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                            ggl_failed_at=stepper.ggl_failures[0] if stepper.ggl_failures else None,
                            ggl_failures=len(stepper.ggl_failures),
                            augmented_from=t0 if stepper.on_ode else None,
-                           rk4_steps=stepper.ode.steps if stepper.on_ode else None,
-                           rk4_rejected=stepper.ode.rejected if stepper.on_ode else None,
-                           rk4_stalled_at=stepper.ode.stalled if stepper.on_ode else None,
+                           rk4_steps=stepper.fallback.steps if stepper.on_ode else None,
+                           rk4_rejected=stepper.fallback.rejected if stepper.on_ode else None,
+                           rk4_stalled_at=stepper.fallback.stalled if stepper.on_ode else None,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()))
     return result
 

@@ -36,11 +36,11 @@ MAX_STEPS = 50000  # fine steps per output interval before giving up
 ORDER = 4
 
 
-def rk4_step(functions: dict[str, ca.Function], name: str) -> ca.Function:
+def rk4_step(functions: dict[str, ca.Function], name: str,
+             solve: ca.Function) -> ca.Function:
     """(t, x, h, penalty) -> x after one Runge-Kutta step of x' = [q_dot(q, v), v_dot(t, q, v)]
-    (v_dot by the augmented Lagrangian) and the projection of compiler.augmented."""
+    (v_dot by `solve`, augmented.accelerations) and the projection of compiler.augmented."""
     form = FORMULATIONS[name]
-    solve = augmented.accelerations(functions, name)
     project = augmented.projection(functions, name)
     n_q, n_v = solve.size1_in(1), solve.size1_in(2)
     t, x, h, penalty = (ca.MX.sym("t"), ca.MX.sym("x", n_q + n_v), ca.MX.sym("h"),
@@ -66,10 +66,12 @@ class StepFailure(Exception):
 
 
 class ProjectedRK4:
-    """Advances x = [q, v] from one output time to the next."""
+    """Advances x = [q, v] from one output time to the next; `accelerations` is the
+    (t, q, v, penalty) -> (v_dot, lam) its steps use, for the outputs' columns."""
 
     def __init__(self, functions: dict[str, ca.Function], name: str, rtol: float, atol: float):
-        self.step = rk4_step(functions, name)
+        self.accelerations = augmented.accelerations(functions, name)
+        self.step = rk4_step(functions, name, self.accelerations)
         self.n_q = functions["mass_matrix"].size1_in(0)
         self.rtol, self.atol = rtol, atol
         self.coarse = 1  # coarse steps for the next interval
