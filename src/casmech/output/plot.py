@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import UsageError
-from casmech.runtime.results import JOINT_COLUMNS
 
 # column suffix (after the last dot) or whole column name -> (quantity, unit, panel title)
 QUANTITIES: dict[str, tuple[str, str, str]] = {
@@ -51,6 +50,8 @@ def _positions(names: Sequence[str], _argument: str) -> list[str]:
 
 
 def _reactions(names: Sequence[str], joint: str) -> list[str]:
+    from casmech.runtime.results import JOINT_COLUMNS  # on use: it imports the compiler
+
     columns = [f"{joint}.{c}" for c in JOINT_COLUMNS]
     if all(c in names for c in columns):
         return columns
