@@ -22,7 +22,6 @@ from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
 
-
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
     "csv": ("results.csv", lambda path, names, values, meta: write_csv(path, names, values),
