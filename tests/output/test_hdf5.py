@@ -27,7 +27,7 @@ def test_hdf5_table_equals_csv(slider_run):
         table = handle["results"][()]
         columns = list(handle["columns"].asstr()[()])
     assert columns == names and table.dtype == np.float64
-    # %.17g text and HDF5 binary64 both round-trip exactly; the brief asks for 1e-15
+    # the CSV's shortest round-trip text and HDF5 binary64 are both exact; the brief asks for 1e-15
     np.testing.assert_allclose(table, values, rtol=1e-15, atol=0)
     assert table.shape == (11, len(names))  # t = 0, 0.01, .., 0.1
 

@@ -44,7 +44,7 @@ def test_lines_are_the_csv_columns(slider_run):
                 + [f"crank_pivot.{c}" for c in ("fx", "fy", "fz", "tx", "ty", "tz")])
     assert sorted(lines) == sorted(expected)
     for label, (x, y) in lines.items():
-        # %.17g in the file round-trips binary64, so the drawn data is the file's, bit for bit
+        # the file's numbers read back to the same binary64: the drawn data is the file's exactly
         np.testing.assert_allclose(x, table["t"], rtol=0, atol=0)
         np.testing.assert_allclose(y, table[label], rtol=0, atol=0)
     # positions (m), energy (J), force (N), torque (N m): four panels, one per quantity
