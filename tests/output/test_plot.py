@@ -111,9 +111,9 @@ def test_cli_usage_errors_exit_2(slider_run, tmp_path, capsys):
     assert "Traceback" not in err and not (tmp_path / "a.png").exists()
 
 
-def test_missing_matplotlib_names_the_extra(slider_run, monkeypatch):
+def test_missing_matplotlib_says_how_to_install_it(slider_run, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import now fails
-    with pytest.raises(UsageError, match=r"pip install 'casmech\[plot\]'"):
+    with pytest.raises(UsageError, match=r"pip install matplotlib"):
         plot.figure(*read_csv(slider_run.out / "results.csv"), ["energy"])
 
 

@@ -68,7 +68,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     for name in args.format:
-        FORMATS[name][2]()  # a missing optional dependency is a usage error before the run
+        FORMATS[name][2]()  # a missing h5py is a usage error before the run
     given = overrides(args.set)
     clock = time.perf_counter()
     model = casmech.load(args.model, given)

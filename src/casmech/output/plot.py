@@ -1,4 +1,4 @@
-"""Plots of a results table (matplotlib, optional extra `plot`, imported only when plotting).
+"""Plots of a results table (matplotlib, a dependency imported only when plotting).
 
 A selection is a list of specs: column names, globs (`crank.*`) or presets (PRESETS). The chosen
 columns are drawn against t, one panel per physical quantity (read from the column's suffix), with
@@ -187,6 +187,6 @@ def _matplotlib_figure():
     try:
         from matplotlib.figure import Figure
     except ImportError:
-        raise UsageError("casmech plot needs matplotlib; install it with: "
-                         "pip install 'casmech[plot]'") from None
+        raise UsageError("casmech plot needs matplotlib, a dependency of casmech missing here; "
+                         "install it with: pip install matplotlib") from None
     return Figure
