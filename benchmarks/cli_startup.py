@@ -13,9 +13,10 @@ fills the OS file cache). Floors in the same run: `python -c pass` and `python -
 casadi"`.
 
 Bytecode is cached in a private folder (PYTHONPYCACHEPREFIX), as after `pip install`, which
-byte-compiles; the row "check, no bytecode" shows the cost without (PYTHONDONTWRITEBYTECODE=1
-and an empty prefix: an editable install where .pyc files may not be written; casmech's own
-modules are then compiled on every run, the libraries' bytecode in site-packages still used).
+byte-compiles; the row "check, no bytecode" shows the cost without: PYTHONDONTWRITEBYTECODE=1
+and no prefix, as in an editable install where .pyc files may not be written (casmech's modules
+are compiled on every run unless the source tree holds __pycache__ folders; the libraries'
+bytecode in site-packages is used).
 
 `run`, warm cache: CASMECH_CACHE_DIR holds the model's compiled library (built once before the
 timing by `casmech run --mode compiled`), so `--mode auto` loads it. Cold cache: an empty cache
@@ -60,7 +61,7 @@ def cases(models: list[str], work: Path) -> list[tuple[str, list[str], dict]]:
              for name in models]
     rows += [(f"casmech check {models[0]}, no bytecode",
               casmech("check", MODELS / f"{models[0]}.yaml"),
-              {"PYTHONDONTWRITEBYTECODE": "1", "PYTHONPYCACHEPREFIX": str(work / "none")})]
+              {"PYTHONDONTWRITEBYTECODE": "1", "PYTHONPYCACHEPREFIX": None})]
     rows += [("casmech run me751_pendulum, warm cache", casmech("run", pendulum, "--out", "{out}"),
               {"CASMECH_CACHE_DIR": str(work / "warm")}),
              ("casmech run me751_pendulum, cold cache",
@@ -72,8 +73,8 @@ def environment(src: Path, work: Path, extra: dict, run: int) -> dict:
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env.update(PYTHONPATH=str(src), PYTHONPYCACHEPREFIX=str(work / "pycache"),
                CASMECH_CACHE_DIR=str(work / "default-cache"))
-    env.update({k: v.format(cache=work / f"cold-{run}") for k, v in extra.items()})
-    return env
+    env.update({k: v.format(cache=work / f"cold-{run}") for k, v in extra.items() if v})
+    return {k: v for k, v in env.items() if extra.get(k, "") is not None}  # None: unset
 
 
 def timed(command: list[str], env: dict, out: Path) -> tuple[float, float]:
