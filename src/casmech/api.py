@@ -13,7 +13,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
-from casmech import codegen
 from casmech.compiler import dae
 from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
@@ -50,6 +49,10 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
     same functions."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
+    if mode == "interpreted":  # before importing code generation, which this path never uses
+        return build_functions(lower(model))
+    from casmech import codegen
+
     if mode == "auto" and not codegen.available():
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
                       "functions, which is slower; install gcc to compile models", stacklevel=2)
@@ -110,6 +113,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
         if not getattr(settings, name) > 0:
             raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
     result = ANALYSES[settings.type](functions, settings, progress)
+    from casmech import codegen  # imported on use: `casmech check` never needs it
+
     result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
     return result
 
