@@ -20,7 +20,9 @@ from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
+from casmech.compiler.tree import spanning_tree
 from casmech.runtime.dynamics import run_dynamics
+from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
@@ -70,7 +72,20 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
 
 
 # dynamics options a caller may override -> their choices
-DYNAMICS_OPTIONS = {"formulation": tuple(FORMULATIONS), "stabilization": dae.STABILIZATIONS}
+DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
+                    "stabilization": dae.STABILIZATIONS}
+
+
+def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
+    """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
+    r-omega DAE (runtime.dynamics); auto takes joint coordinates when the joints form a tree."""
+    formulation = s.options.get("formulation", "rp")
+    if formulation == "auto":
+        formulation = "joint" if spanning_tree(f.ir).is_tree else "rp"
+    if formulation == "joint":
+        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress)
+    return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
+                        progress=progress, stabilization=s.options.get("stabilization", "ggl"))
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
@@ -80,10 +95,7 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "inverse_dynamics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
                                                               progress=p),
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
-    "dynamics": lambda f, s, p: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                             formulation=s.options.get("formulation", "rp"),
-                                             progress=p,
-                                             stabilization=s.options.get("stabilization", "ggl")),
+    "dynamics": _dynamics,
 }
 
 
