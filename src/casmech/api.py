@@ -18,9 +18,9 @@ from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
+from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
-from casmech.compiler.tree import spanning_tree
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion

@@ -15,13 +15,13 @@ The state is x = [theta; u] over the coordinates and velocities no driver prescr
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler
-from casmech.compiler.assemble import Coordinates
+from casmech.compiler import eom, euler, lazy_jacobian
+from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
 from casmech.compiler.joint_motions import MOTIONS, from_matrix, product
 from casmech.compiler.tree import Tree, TreeJoint
@@ -36,7 +36,9 @@ def local_motion(kind: str) -> ca.Function:
     theta, u = ca.SX.sym("theta", motion.n_q), ca.SX.sym("u", motion.n_v)
     rotation, translation = motion.rotation(theta), motion.translation(theta)
     theta_dot = motion.rates(theta, u)
-    omega = 2 * euler.g_matrix(rotation) @ ca.jtimes(rotation, theta, theta_dot)
+    omega = motion.angular_velocity(theta, u)
+    if omega is None:
+        omega = 2 * euler.g_matrix(rotation) @ ca.jtimes(rotation, theta, theta_dot)
     velocity = euler.rotation(rotation).T @ ca.jtimes(translation, theta, theta_dot)
     twist = ca.vertcat(omega, velocity)
     subspace = ca.jacobian(twist, u)
@@ -199,7 +201,7 @@ def articulated_body(ir: ModelIR, joints: list[_Joint], kin: Kinematics, externa
         bias[k] = cross_force(v, inertia[k] @ v) - external[k]
         art_inertia[k], art_bias[k] = ca.SX(inertia[k]), bias[k]
     solved = {}
-    for j in reversed(joints):
+    for j in reversed(joints):  # pass 2, leaves to root
         k, parent = j.joint.child, j.joint.parent
         ia, pa = art_inertia[k], art_bias[k]
         s = j.s_free
@@ -216,7 +218,7 @@ def articulated_body(ir: ModelIR, joints: list[_Joint], kin: Kinematics, externa
             art_inertia[parent] = art_inertia[parent] + j.x.T @ ia_a @ j.x
             art_bias[parent] = art_bias[parent] + j.x.T @ pa_a
     accelerations, u_dot = [None] * nb, []
-    for j in joints:
+    for j in joints:  # pass 3, root to leaves
         k, parent = j.joint.child, j.joint.parent
         a = c[k] if parent == GROUND_INDEX else j.x @ accelerations[parent] + c[k]
         if k in solved:
@@ -227,7 +229,39 @@ def articulated_body(ir: ModelIR, joints: list[_Joint], kin: Kinematics, externa
         else:
             u_dot.append(ca.SX(0, 1))
         accelerations[k] = a
-    return u_dot, accelerations
+    return u_dot, accelerations, bias, inertia
+
+
+def joint_wrenches(joints: list[_Joint], accelerations, bias, inertia) -> list:
+    """The wrench each tree joint's constraint exerts on its child (child frame, at its CM):
+    the Newton-Euler balance of the child's subtree (the backward pass of the recursive
+    Newton-Euler algorithm), per joint in tree order."""
+    wrench = {}
+    for j in reversed(joints):
+        k = j.joint.child
+        wrench[k] = wrench.get(k, 0) + inertia[k] @ accelerations[k] + bias[k]
+        if j.joint.parent != GROUND_INDEX:
+            wrench[j.joint.parent] = wrench.get(j.joint.parent, 0) + j.x.T @ wrench[k]
+    return [wrench[j.joint.child] for j in joints]
+
+
+def tree_multipliers(ir: ModelIR, joints: list[_Joint], t, q, kin: Kinematics,
+                     wrenches: list):
+    """Multipliers of every joint row (normalization rows 0): each tree joint's rows solve
+    -B^T lam = w for its constraint wrench w on the child, B the rows' r-omega Jacobian
+    [Phi_r, Pi_bar] at the child (global force, body-frame torque)."""
+    cs = build_constraints(ir)
+    blocks = []
+    for j in joints:
+        rows, c = list(j.joint.joint.rows), j.joint.child
+        blocks.append(ca.horzcat(cs.phi_r[rows, 3 * c:3 * c + 3], cs.pi_bar[rows, 3 * c:3 * c + 3]))
+    block = ca.Function("blocks", [cs.x.t, cs.x.q], blocks).call([t, q]) if blocks else []
+    lam = ca.SX.zeros(len(ir.row_info()), 1)
+    for j, b, w in zip(joints, block, wrenches, strict=True):
+        rows, c = list(j.joint.joint.rows), j.joint.child
+        force = ca.vertcat(kin.rotation[c] @ w[3:6], w[0:3])
+        lam[rows] = -ca.solve(b @ b.T, b @ force)
+    return lam
 
 
 @dataclass(frozen=True)
@@ -237,8 +271,13 @@ class JointSystem:
     tree: Tree
     layout: Layout
     ode: ca.Function  # (t, x) -> x_dot
-    motion: ca.Function  # (t, x, signs) -> (q, v, v_dot) r-p q, r-omega v and v_dot
+    motion: ca.Function  # (t, x, signs) -> (q, q_dot, q_ddot, lam): a results row's state
     relative: ca.Function  # per joint type: see local_motion (numeric initial conditions)
+
+    @cached_property
+    def problem(self) -> dict:
+        """casadi.integrator's ODE dictionary (MX, with lazy_jacobian's cheap Jacobian)."""
+        return lazy_jacobian.problem(self.ode)
 
 
 def build(ir: ModelIR, tree: Tree) -> JointSystem:
@@ -248,7 +287,7 @@ def build(ir: ModelIR, tree: Tree) -> JointSystem:
               zip(tree.joints, lay.theta, lay.u, lay.free_theta, lay.free_u, strict=True)]
     kin = kinematics(tree, joints, ir.n_bodies)
     external = applied_wrenches(ir, t, kin)
-    u_dot, accelerations = articulated_body(ir, joints, kin, external)
+    u_dot, accelerations, bias, inertia = articulated_body(ir, joints, kin, external)
     theta_dot = [j.theta_dot[list(free)] if free else ca.SX(0, 1)
                  for j, free in zip(joints, lay.free_theta, strict=True)]
     ode = ca.Function("joint_ode", [t, x], [ca.vertcat(*theta_dot, *u_dot)], ["t", "x"],
@@ -262,7 +301,20 @@ def build(ir: ModelIR, tree: Tree) -> JointSystem:
                                                                    kin.velocity[k][3:6]))
               for k in range(nb)]
     alpha = [accelerations[k][0:3] for k in range(nb)]
+    p_dot = [0.5 * euler.g_matrix(q_p).T @ w for q_p, w in zip(_quaternions(q, nb), omega,
+                                                                   strict=True)]
+    p_ddot = [0.5 * (euler.g_matrix(pd).T @ w + euler.g_matrix(q_p).T @ a)
+              for q_p, pd, w, a in zip(_quaternions(q, nb), p_dot, omega, alpha, strict=True)]
+    tree_joints = [j for j in joints if j.joint.joint is not None]
+    wrenches = joint_wrenches(joints, accelerations, bias, inertia)
+    lam = tree_multipliers(ir, tree_joints, t, q, kin,
+                           [w for j, w in zip(joints, wrenches, strict=True)
+                            if j.joint.joint is not None])
     motion = ca.Function("joint_motion", [t, x, signs],
-                         [q, ca.vertcat(*r_dot, *omega), ca.vertcat(*r_ddot, *alpha)],
-                         ["t", "x", "signs"], ["q", "v", "v_dot"])
+                         [q, ca.vertcat(*r_dot, *p_dot), ca.vertcat(*r_ddot, *p_ddot), lam],
+                         ["t", "x", "signs"], ["q", "q_dot", "q_ddot", "lam"])
     return JointSystem(tree, lay, ode, motion, local_motion)
+
+
+def _quaternions(q, nb: int) -> list:
+    return [q[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]

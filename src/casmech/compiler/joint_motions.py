@@ -26,6 +26,8 @@ import numpy as np
 from casmech.compiler import euler
 
 IDENTITY = ca.DM([1.0, 0.0, 0.0, 0.0])
+# the relative angular velocity (in F_c) of a joint whose rotation is one quaternion block:
+# its velocities u[0:3] by definition (their rate law is theta_dot = 1/2 G^T u)
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,11 @@ class Motion:
     quaternions: tuple[int, ...] = ()  # starts of quaternion blocks in theta
     drivers: Mapping[str, int] = field(default_factory=dict)  # driver -> coordinate index
     frame: str = "axes"
+
+    def angular_velocity(self, theta, u):
+        """The relative angular velocity in F_c: u[0:3] for a quaternion joint (by the
+        definition of its velocities), else None (compiler.articulated takes it by AD)."""
+        return u[0:3] if self.quaternions == (0,) else None
 
     def rates(self, theta, u):
         """theta_dot from (theta, u)."""

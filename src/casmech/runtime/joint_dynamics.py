@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import euler
-from casmech.compiler.articulated import JointSystem, build
+from casmech.compiler.articulated import JointSystem, build, local_motion
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
@@ -30,6 +30,13 @@ CHUNK = 1000  # output intervals per CVODES call (a restart between calls)
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
+
+
+def joint_system(functions: SystemFunctions) -> JointSystem:
+    """The bundle's joint system, built once per bundle."""
+    if "joint_system" not in functions.derived:
+        functions.derived["joint_system"] = build(functions.ir, require_tree(functions))
+    return functions.derived["joint_system"]
 
 
 def require_tree(functions: SystemFunctions) -> Tree:
@@ -75,14 +82,9 @@ def joint_state(joint: TreeJoint, q, q_dot, n_bodies: int) -> tuple[np.ndarray, 
     twist = np.concatenate([omega, rotation.T @ gap_dot])
     n_v = MOTIONS[joint.type].n_v
     subspace = np.array(ca.DM(
-        _motion(joint.type)(theta, np.zeros(n_v))[2]).full()).reshape(6, n_v)
+        local_motion(joint.type)(theta, np.zeros(n_v))[2]).full()).reshape(6, n_v)
     u = np.linalg.lstsq(subspace, twist, rcond=None)[0] if n_v else np.zeros(0)
     return theta, u
-
-
-def _motion(kind: str) -> ca.Function:
-    from casmech.compiler.articulated import local_motion
-    return local_motion(kind)
 
 
 def initial_state(system: JointSystem, q, q_dot, n_bodies: int) -> np.ndarray:
@@ -98,7 +100,7 @@ def initial_state(system: JointSystem, q, q_dot, n_bodies: int) -> np.ndarray:
 
 def quaternion_signs(system: JointSystem, t0: float, x0, q0, n_bodies: int) -> np.ndarray:
     """+1 or -1 per body, so the tree's Euler parameters continue the r-p state's."""
-    q = np.array(system.motion(t0, x0, np.ones(n_bodies))[0].full()).ravel()
+    q = np.array(system.motion(t0, x0, np.ones(n_bodies))[0].full()).ravel()  # noqa
     p_tree = q[3 * n_bodies:].reshape(n_bodies, 4)
     p_rp = q0[3 * n_bodies:].reshape(n_bodies, 4)
     return np.where(np.sum(p_tree * p_rp, axis=1) < 0, -1.0, 1.0)
@@ -107,8 +109,8 @@ def quaternion_signs(system: JointSystem, t0: float, x0, q0, n_bodies: int) -> n
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
                        method: str = "adams") -> Result:
-    tree = require_tree(functions)
-    system = build(functions.ir, tree)
+    system = joint_system(functions)
+    tree = system.tree
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
     x0 = initial_state(system, q0, q_dot0, nb)
@@ -117,8 +119,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     result = Result("dynamics", on_row=progress)
     options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                "disable_internal_warnings": True} | METHODS[method]
-    problem = {"t": ca.SX.sym("t"), "x": ca.SX.sym("x", system.layout.n_x)}
-    problem["ode"] = system.ode(problem["t"], problem["x"])
+    problem = system.problem
     recorder = _Recorder(functions, system, signs)
     steps = 0
     try:
@@ -158,13 +159,9 @@ class _Recorder:
         self.functions, self.system, self.signs = functions, system, signs
 
     def __call__(self, result: Result, times, states) -> None:
-        f = self.functions
+        n = len(times)
+        rows = self.system.motion.map(n)(np.asarray(times)[None, :], states,
+                                        np.repeat(self.signs[:, None], n, axis=1))
+        q, q_dot, q_ddot, lam = (np.array(out.full()) for out in rows)
         for j, t in enumerate(times):
-            q, v, v_dot = (np.array(out.full()).ravel()
-                           for out in self.system.motion(t, states[:, j], self.signs))
-            q_dot, q_ddot = (out.ravel() for out in f.evaluate("romega_to_rp", q, v, v_dot))
-            jacobian = f.matrix("romega_jacobian", t, q)
-            residual = f.vector("romega_forces", t, q, v) - f.matrix("romega_mass", q) @ v_dot
-            lam = np.zeros(f.n_rows)
-            lam[:jacobian.shape[0]] = np.linalg.lstsq(jacobian.T, residual, rcond=None)[0]
-            result.append(t, q, q_dot, q_ddot, lam)
+            result.append(t, q[:, j], q_dot[:, j], q_ddot[:, j], lam[:, j])
