@@ -76,6 +76,11 @@ def product(a, b):
     return ca.vertcat(a0 * b0 - av.T @ bv, a0 * bv + b0 * av + ca.cross(av, bv))
 
 
+def conjugate(p):
+    """The inverse rotation of a unit quaternion."""
+    return ca.vertcat(p[0], -p[1:4])
+
+
 def unit(p):
     return p / ca.sqrt(p.T @ p)
 

@@ -15,28 +15,34 @@ import casadi as ca
 
 
 def forward_jacobian(function: ca.Function) -> ca.Function:
-    """`function` (one output) with the custom Jacobian of the module docstring."""
-    inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k))
-              for k in range(function.n_in())]
-    output = ca.MX.sym(function.name_out(0), function.sparsity_out(0))
+    """`function` with the custom Jacobian of the module docstring (an MX call of it, so a
+    compiled function stays compiled)."""
+    n_in, n_out = function.n_in(), function.n_out()
+    inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k)) for k in range(n_in)]
+    outputs = [ca.MX.sym(function.name_out(k), function.sparsity_out(k)) for k in range(n_out)]
     sweep = function.forward(1)
-    zeros = [ca.MX.zeros(function.sparsity_in(k).shape) for k in range(function.n_in())]
-    blocks = []
+    zeros = [ca.MX.zeros(function.sparsity_in(k).shape) for k in range(n_in)]
+    blocks = {}
     for k, x in enumerate(inputs):
         n = x.numel()
         seeds = [ca.repmat(z, 1, n) for z in zeros]
         seeds[k] = ca.MX.eye(n)
-        blocks.append(sweep.map(n)(*inputs, output, *seeds))
-    name = function.name_out(0)
+        columns = sweep.map(n).call([*inputs, *outputs, *seeds])
+        for o in range(n_out):
+            blocks[o, k] = columns[o]
+    names_in, names_out = function.name_in(), function.name_out()
     jacobian = ca.Function(
-        f"jac_{function.name()}", [*inputs, output], blocks,
-        [*function.name_in(), name], [f"jac_{name}_{i}" for i in function.name_in()])
-    symbols = function.mx_in()  # MX: a call of `function` itself (compiled code stays so)
-    return ca.Function(function.name(), symbols, function.call(symbols), function.name_in(),
-                       function.name_out(), {"custom_jacobian": jacobian, "jac_penalty": 0})
+        f"jac_{function.name()}", [*inputs, *outputs],
+        [blocks[o, k] for o in range(n_out) for k in range(n_in)],
+        [*names_in, *names_out],
+        [f"jac_{o}_{i}" for o in names_out for i in names_in])
+    symbols = function.mx_in()
+    return ca.Function(function.name(), symbols, function.call(symbols), names_in, names_out,
+                       {"custom_jacobian": jacobian, "jac_penalty": 0})
 
 
-def problem(ode: ca.Function) -> dict:
-    """casadi.integrator's ODE dictionary over an (t, x) -> ode Function, called as MX."""
-    t, x = ca.MX.sym("t"), ca.MX.sym("x", ode.sparsity_in(1))
-    return {"t": t, "x": x, "ode": forward_jacobian(ode)(t, x)}
+def problem(dynamics: ca.Function) -> dict:
+    """casadi.integrator's problem over (t, x) -> ode or (t, x, z, p) -> (ode, alg), as MX."""
+    function = forward_jacobian(dynamics)
+    symbols = {name: ca.MX.sym(name, dynamics.sparsity_in(name)) for name in dynamics.name_in()}
+    return symbols | function.call(symbols)

@@ -1,4 +1,5 @@
-"""The articulated-body equations of motion (compiler/articulated.py) against the r-p ones.
+"""The joint formulation's equations of motion (compiler/joint_system.py, the recursions of
+compiler/articulated.py) against the r-p ones.
 
 At random joint states, the tree's poses and velocities satisfy every joint, and its
 accelerations and multipliers must be the solution of the r-p saddle-point system
@@ -10,8 +11,8 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.articulated import build
 from casmech.compiler.joint_motions import MOTIONS
+from casmech.compiler.joint_system import build
 from casmech.compiler.tree import spanning_tree
 from casmech.runtime import assembly
 from tests.conftest import MODELS, ROOT
@@ -39,7 +40,7 @@ def test_accelerations_and_multipliers_solve_the_rp_equations(path):
     for t in (0.0, 0.37):
         x = random_state(system)
         q, q_dot, q_ddot, lam = (np.array(out.full()).ravel()
-                                 for out in system.motion(t, x, np.ones(nb)))
+                                 for out in system.motion(t, x, [], np.ones(nb)))
         # the state satisfies every joint: position and velocity constraints to roundoff
         np.testing.assert_allclose(functions.vector("phi", t, q), 0, rtol=0, atol=1e-12)
         velocity = functions.matrix("phi_q", t, q) @ q_dot - functions.vector("nu", t, q)
