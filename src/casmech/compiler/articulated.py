@@ -77,7 +77,8 @@ class Joint:
         c_p, s_p = (ca.DM(v) for v in joint.parent_frame)
         c_c, s_c = (ca.DM(v) for v in joint.child_frame)
         e = (c_p @ euler.rotation(rotation) @ c_c.T).T
-        self.x = spatial.transform(e, s_p + c_p @ translation - e.T @ s_c)
+        self.e, self.r = e, s_p + c_p @ translation - e.T @ s_c
+        self.x = spatial.transform(self.e, self.r)
 
 
 @dataclass(frozen=True)
@@ -175,7 +176,8 @@ def articulated_body(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
         else:
             pa = pa + ia @ c[k]
         if parent != GROUND_INDEX:
-            art_inertia[parent] = art_inertia[parent] + j.x.T @ ia @ j.x
+            art_inertia[parent] = art_inertia[parent] + spatial.transformed_inertia(
+                j.e, j.r, ia)
             art_bias[parent] = art_bias[parent] + j.x.T @ pa
     accelerations, u_dot = [None] * nb, []
     for j in joints:  # pass 3, root to leaves
