@@ -78,16 +78,20 @@ DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
-    r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree:
-    with loops the joint DAE passes singular poses less reliably than the r-p fallback (IFToMM
-    A02 N = 2: 6.5e-6 m at rtol 1e-10, a failure at 1e-11; r-p: 7.9e-8 m)."""
-    formulation = s.options.get("formulation", "rp")
+    r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
+    and no DAE stabilization other than the default was asked for; with loops the joint DAE
+    passes singular poses less reliably than the r-p fallback (IFToMM A02 N = 2: 6.5e-6 m at
+    rtol 1e-10, a failure at 1e-11; r-p: 7.9e-8 m), so auto takes r-p there."""
+    formulation = s.options.get("formulation", "auto")
+    stabilization = s.options.get("stabilization", "ggl")
     if formulation == "auto":
-        formulation = "joint" if spanning_tree(f.ir).is_tree else "rp"
+        tree = stabilization == "ggl" and spanning_tree(f.ir).is_tree
+        formulation = "joint" if tree else "rp"
     if formulation == "joint":
         return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress)
     return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
-                        progress=progress, stabilization=s.options.get("stabilization", "ggl"))
+                        progress=progress, stabilization=stabilization)
+
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
@@ -120,6 +124,9 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             raise UsageError(f"{name} '{value}' is not one of "
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
         settings = replace(settings, options={**settings.options, name: value})
+    if stabilization is not None and formulation is None and settings.options.get(
+            "formulation", "auto") == "auto":  # a DAE stabilization asked for: the r-p DAE
+        settings = replace(settings, options={**settings.options, "formulation": "rp"})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")

@@ -75,7 +75,7 @@ def test_defaults(empty):
     model, _ = validate(f"bodies:\n{BAR}{empty}")
     assert model.gravity == (0, 0, -9.81)
     assert (model.joints, model.forces, model.parameters, model.description) == ((), (), {}, "")
-    assert model.analysis == spec.Analysis(type="dynamics", formulation="rp")
+    assert model.analysis == spec.Analysis(type="dynamics", formulation="auto")
 
 
 def test_a_required_key_without_value_is_a_wrong_type():

@@ -146,6 +146,8 @@ class _Integrator:
 
     def __call__(self, t0: float, times, x, z) -> tuple[np.ndarray, np.ndarray]:
         system = self.system
+        if not len(x):  # every coordinate driven: nothing to integrate
+            return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
             integrator = ca.integrator("joint", "cvodes", system.problem, t0, list(times),
                                        self.options)

@@ -428,7 +428,7 @@ class Analysis(Spec):
     atol: Scalar = 1e-10
     # dynamics: r-p or r-omega DAE, joint coordinates (casmech.compiler.tree), or auto (the
     # fastest the model allows)
-    formulation: Literal["rp", "romega", "joint", "auto"] = "rp"
+    formulation: Literal["rp", "romega", "joint", "auto"] = "auto"
     # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
     # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
     stabilization: Literal["ggl", "projection"] = "ggl"
