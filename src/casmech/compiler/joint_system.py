@@ -23,9 +23,10 @@ import casadi as ca
 
 from casmech.compiler import articulated, euler, lazy_jacobian
 from casmech.compiler.articulated import Joint
-from casmech.compiler.assemble import build_constraints
-from casmech.compiler.ir import ModelIR
+from casmech.compiler.assemble import driver_value
+from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.compiler.joint_motions import MOTIONS
+from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
 
 
@@ -76,6 +77,28 @@ class JointSystem:
         return lazy_jacobian.problem(self.dynamics)
 
 
+def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
+    """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega
+    Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame rotation; zero for
+    ground), built from the joint's own primitives so that the cost stays per joint."""
+    t = ca.SX.sym("t")
+    sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
+    frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if body == GROUND_INDEX
+              else Frame(r, euler.rotation(p))
+              for body, (r, p) in zip((joint.body_i, joint.body_j), sides, strict=True)]
+    rows = []
+    for prim in ir.primitives[joint.rows.start:joint.rows.stop]:
+        function, keys = PRIMITIVES[prim.kind]
+        rows.append(function(*frames, {k: ca.DM(prim.vectors[k]) for k in keys},
+                             driver_value(prim, t)))
+    phi = ca.vertcat(*rows)
+    blocks = [ca.horzcat(ca.jacobian(phi, r), 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T)
+              for r, p in sides]
+    return ca.Function("joint_rows", [t, *(v for side in sides for v in side)],
+                       [phi, *blocks], ["t", "r_i", "p_i", "r_j", "p_j"],
+                       ["phi", "B_i", "B_j"])
+
+
 class _Builder:
     """The SX of one model's tree; see build."""
 
@@ -92,38 +115,43 @@ class _Builder:
             for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                          lay.free_u, strict=True)]
         self.kin = articulated.kinematics(self.joints, ir.n_bodies)
-        self.q, self.q_dot = articulated.state(self.kin, ir.n_bodies)
-        self.constraints = build_constraints(ir)
         self.theta_dot = ca.vertcat(*[j.theta_dot[list(free)] if free else ca.SX(0, 1)
                                       for j, free in zip(self.joints, lay.free_theta,
                                                          strict=True)])
 
-    def rows(self, matrix, rows) -> ca.SX:
-        """Rows of a constraint-system matrix (SX of the r-p q) at the tree's state."""
-        cs = self.constraints
-        select = ca.Function("rows", [cs.x.t, cs.x.q], [matrix[list(rows), :]])
-        return select(self.t, self.q)
+    def rows(self, joint: JointIR) -> tuple:
+        """(phi, B_i, B_j) of a joint's rows at the tree's state."""
+        def pose(body: int):
+            if body == GROUND_INDEX:
+                return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
+            return self.kin.r[body], self.kin.p[body]
+        return joint_rows(self.ir, joint)(self.t, *pose(joint.body_i), *pose(joint.body_j))
 
     def loop_closure(self):
         """(Phi_c, d/dt Phi_c, the unit-row scale, lam, mu) of the cut rows."""
         m = len(self.cut_rows)
         theta = self.x[:self.layout.n_theta]
-        phi = self.rows(self.constraints.phi, self.cut_rows)
+        phi = ca.vertcat(*[self.rows(joint)[0] for joint in self.tree.cut])
         rate = ca.jacobian(phi, theta) @ self.theta_dot + ca.jacobian(phi, self.t)
         u = self.x[self.layout.n_theta:]
         scale = 1 / ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
         return phi, rate, scale, self.z[:m], self.z[m:]
 
     def cut_wrenches(self, lam) -> list:
-        """Body wrenches (n_bar, A^T F) of the cut rows' multipliers lam (true units)."""
-        nb, cs = self.ir.n_bodies, self.constraints
-        wrenches = [ca.SX.zeros(6, 1) for _ in range(nb)]
-        if not self.cut_rows:
-            return wrenches
-        phi_r, pi_bar = (self.rows(matrix, self.cut_rows) for matrix in (cs.phi_r, cs.pi_bar))
-        for k in range(nb):
-            force, torque = -phi_r[:, 3 * k:3 * k + 3].T @ lam, -pi_bar[:, 3 * k:3 * k + 3].T @ lam
-            wrenches[k] = ca.vertcat(torque, self.kin.rotation[k].T @ force)
+        """Body wrenches (n_bar, A^T F) of the cut rows' multipliers lam (true units): each
+        body takes -B^T lam of the rows acting on it."""
+        wrenches = [ca.SX.zeros(6, 1) for _ in range(self.ir.n_bodies)]
+        start = 0
+        for joint in self.tree.cut:
+            _, *blocks = self.rows(joint)
+            lam_j = lam[start:start + len(joint.rows)]
+            start += len(joint.rows)
+            for body, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
+                if body == GROUND_INDEX:
+                    continue
+                generalized = -block.T @ lam_j  # global force, body-frame torque
+                wrenches[body] += ca.vertcat(generalized[3:6],
+                                             self.kin.rotation[body].T @ generalized[0:3])
         return wrenches
 
     def dynamics(self, lam):
@@ -137,16 +165,17 @@ class _Builder:
         """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
         from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
         Jacobian at the child (global force, body-frame torque)."""
-        cs, lam = self.constraints, ca.SX.zeros(len(self.ir.row_info()), 1)
+        lam = ca.SX.zeros(len(self.ir.row_info()), 1)
         lam[list(self.cut_rows)] = lam_cut
-        tree = [(j, w) for j, w in zip(self.joints, articulated.joint_wrenches(
-            self.joints, dynamics), strict=True) if j.joint.joint is not None]
-        for j, w in tree:
-            rows, c = list(j.joint.joint.rows), j.joint.child
-            block = self.rows(ca.horzcat(cs.phi_r[:, 3 * c:3 * c + 3],
-                                         cs.pi_bar[:, 3 * c:3 * c + 3]), rows)
-            force = ca.vertcat(self.kin.rotation[c] @ w[3:6], w[0:3])
-            lam[rows] = -ca.solve(block @ block.T, block @ force)
+        wrenches = articulated.joint_wrenches(self.joints, dynamics)
+        for j, w in zip(self.joints, wrenches, strict=True):
+            joint = j.joint.joint
+            if joint is None:  # a floating body's free joint has no rows
+                continue
+            _, block_i, block_j = self.rows(joint)
+            block = block_i if j.joint.child == joint.body_i else block_j
+            force = ca.vertcat(self.kin.rotation[j.joint.child] @ w[3:6], w[0:3])
+            lam[list(joint.rows)] = -ca.solve(block @ block.T, block @ force)
         return lam
 
     def motion(self, dynamics, lam_cut, signs) -> list:
