@@ -18,9 +18,11 @@ from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
+from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
+from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
@@ -70,7 +72,26 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
 
 
 # dynamics options a caller may override -> their choices
-DYNAMICS_OPTIONS = {"formulation": tuple(FORMULATIONS), "stabilization": dae.STABILIZATIONS}
+DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
+                    "stabilization": dae.STABILIZATIONS}
+
+
+def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
+    """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
+    r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
+    and no DAE stabilization other than the default was asked for; with loops the joint DAE
+    passes singular poses less reliably than the r-p fallback (IFToMM A02 N = 2: 6.5e-6 m at
+    rtol 1e-10, a failure at 1e-11; r-p: 7.9e-8 m), so auto takes r-p there."""
+    formulation = s.options.get("formulation", "auto")
+    stabilization = s.options.get("stabilization", "ggl")
+    if formulation == "auto":
+        tree = stabilization == "ggl" and spanning_tree(f.ir).is_tree
+        formulation = "joint" if tree else "rp"
+    if formulation == "joint":
+        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress)
+    return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
+                        progress=progress, stabilization=stabilization)
+
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
@@ -80,10 +101,7 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "inverse_dynamics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
                                                               progress=p),
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
-    "dynamics": lambda f, s, p: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                             formulation=s.options.get("formulation", "rp"),
-                                             progress=p,
-                                             stabilization=s.options.get("stabilization", "ggl")),
+    "dynamics": _dynamics,
 }
 
 
@@ -106,6 +124,9 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             raise UsageError(f"{name} '{value}' is not one of "
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
         settings = replace(settings, options={**settings.options, name: value})
+    if stabilization is not None and formulation is None and settings.options.get(
+            "formulation", "auto") == "auto":  # a DAE stabilization asked for: the r-p DAE
+        settings = replace(settings, options={**settings.options, "formulation": "rp"})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")

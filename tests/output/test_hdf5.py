@@ -51,7 +51,7 @@ def test_metadata_recomputed_from_sources(slider_run):
     assert meta["analysis"]["type"] == analysis["type"] == "inverse_dynamics"
     assert meta["analysis"]["t_end"] == 0.1  # from --t-end
     assert meta["analysis"]["output_step"] == analysis["output_step"]
-    assert meta["analysis"]["formulation"] == "rp"  # the default; the model names none
+    assert meta["analysis"]["formulation"] == "auto"  # the default; the model names none
     # casmech run's default --mode auto ran what codegen.auto_mode decides for this model
     # (compiled if cached, else interpreted for a model this small; nothing built since)
     assert meta["mode"] == codegen.auto_mode(casmech.load(slider_run.model, {"omega": "3"}))
