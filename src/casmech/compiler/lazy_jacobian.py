@@ -17,6 +17,15 @@ import casadi as ca
 def forward_jacobian(function: ca.Function) -> ca.Function:
     """`function` with the custom Jacobian of the module docstring (an MX call of it, so a
     compiled function stays compiled)."""
+    symbols = function.mx_in()
+    return ca.Function(function.name(), symbols, function.call(symbols), function.name_in(),
+                       function.name_out(), {"custom_jacobian": jacobian(function),
+                                             "jac_penalty": 0})
+
+
+def jacobian(function: ca.Function) -> ca.Function:
+    """(inputs, outputs) -> every output's Jacobian by every input (CasADi's order), by forward
+    sweeps mapped over unit seeds."""
     n_in, n_out = function.n_in(), function.n_out()
     inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k)) for k in range(n_in)]
     outputs = [ca.MX.sym(function.name_out(k), function.sparsity_out(k)) for k in range(n_out)]
@@ -31,14 +40,11 @@ def forward_jacobian(function: ca.Function) -> ca.Function:
         for o in range(n_out):
             blocks[o, k] = columns[o]
     names_in, names_out = function.name_in(), function.name_out()
-    jacobian = ca.Function(
+    return ca.Function(
         f"jac_{function.name()}", [*inputs, *outputs],
         [blocks[o, k] for o in range(n_out) for k in range(n_in)],
         [*names_in, *names_out],
         [f"jac_{o}_{i}" for o in names_out for i in names_in])
-    symbols = function.mx_in()
-    return ca.Function(function.name(), symbols, function.call(symbols), names_in, names_out,
-                       {"custom_jacobian": jacobian, "jac_penalty": 0})
 
 
 def problem(dynamics: ca.Function) -> dict:
