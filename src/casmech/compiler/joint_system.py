@@ -109,9 +109,11 @@ class _Builder:
         self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
         m = len(self.cut_rows)
         self.z, self.w = ca.SX.sym("z", 2 * m), ca.SX.sym("w", m)
+        reference = {j.child: j.child_frame for j in tree.joints}
         self.joints = [
             Joint(j, self.t, {c: self.x[k] for c, k in zip(ft, th, strict=True)},
-                  {c: self.x[k] for c, k in zip(fu, us, strict=True)})
+                  {c: self.x[k] for c, k in zip(fu, us, strict=True)},
+                  reference.get(j.parent))
             for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                          lay.free_u, strict=True)]
         self.kin = articulated.kinematics(self.joints, ir.n_bodies)
