@@ -76,6 +76,11 @@ class JointSystem:
         """casadi.integrator's problem (MX, with lazy_jacobian's cheap Jacobian)."""
         return lazy_jacobian.problem(self.dynamics)
 
+    @cached_property
+    def functional_problem(self) -> dict:
+        """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
+        return lazy_jacobian.problem(self.dynamics, exact=False)
+
 
 def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
     """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega

@@ -14,13 +14,17 @@ from __future__ import annotations
 import casadi as ca
 
 
-def forward_jacobian(function: ca.Function) -> ca.Function:
+def forward_jacobian(function: ca.Function, exact: bool = True) -> ca.Function:
     """`function` with the custom Jacobian of the module docstring (an MX call of it, so a
-    compiled function stays compiled)."""
+    compiled function stays compiled); exact=False: declared not differentiable, for an
+    integrator that never evaluates the Jacobian (CVODES's functional iteration), since
+    creating one still analyses the Jacobian's sparsity for a linear solver (a dense one:
+    0.8 s for a 128-link chain, 4.7 s for 256, 574 s for 1000)."""
     symbols = function.mx_in()
+    options = ({"custom_jacobian": jacobian(function), "jac_penalty": 0} if exact
+               else {"is_diff_in": [False] * function.n_in()})
     return ca.Function(function.name(), symbols, function.call(symbols), function.name_in(),
-                       function.name_out(), {"custom_jacobian": jacobian(function),
-                                             "jac_penalty": 0})
+                       function.name_out(), options)
 
 
 def jacobian(function: ca.Function) -> ca.Function:
@@ -47,8 +51,9 @@ def jacobian(function: ca.Function) -> ca.Function:
         [f"jac_{o}_{i}" for o in names_out for i in names_in])
 
 
-def problem(dynamics: ca.Function) -> dict:
-    """casadi.integrator's problem over (t, x) -> ode or (t, x, z, p) -> (ode, alg), as MX."""
-    function = forward_jacobian(dynamics)
+def problem(dynamics: ca.Function, exact: bool = True) -> dict:
+    """casadi.integrator's problem over (t, x) -> ode or (t, x, z, p) -> (ode, alg), as MX
+    (exact: see forward_jacobian)."""
+    function = forward_jacobian(dynamics, exact)
     symbols = {name: ca.MX.sym(name, dynamics.sparsity_in(name)) for name in dynamics.name_in()}
     return symbols | function.call(symbols)

@@ -156,7 +156,9 @@ class _Integrator:
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
-            integrator = ca.integrator("joint", "cvodes", system.problem, t0, list(times),
+            functional = self.options["nonlinear_solver_iteration"] == "functional"
+            problem = system.functional_problem if functional else system.problem
+            integrator = ca.integrator("joint", "cvodes", problem, t0, list(times),
                                        self.options)
             out = integrator(x0=x)
         else:
