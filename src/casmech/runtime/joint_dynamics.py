@@ -42,6 +42,11 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
 # against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
 # bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
 STIFF = 10.0
+# the joint DAE's first step: FIRST_STEP times runtime.dynamics.initial_step (the r-p rule). At
+# 1x the four-bar failed at t0 at rtol 1e-12 (IDA_CONV_FAIL: the index-2 iteration matrix,
+# condition ~ 1/h^2); at 10x it, Bricard, a distance and a revolute-spherical link ran at
+# rtol 1e-6..1e-12 with step counts within 10 % of 1x (Bricard at 1e-12: 1865 against 3254).
+FIRST_STEP = 10.0
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
 
@@ -180,8 +185,8 @@ class _Integrator:
                            for v in system.motion(t0, x, z, np.ones(nb)))
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
-                "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], times[0] - t0),
+                "step0": FIRST_STEP * initial_step(q[:n], q_ddot[:n], self.options["reltol"],
+                                                   self.options["abstol"], times[0] - t0),
                 "abstolv": [self.options["abstol"]] * len(x) + [Z_TOL] * len(z)}
 
 
