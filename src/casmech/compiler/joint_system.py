@@ -77,6 +77,11 @@ class JointSystem:
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
+    def jacobian(self) -> ca.Function:
+        """lazy_jacobian.jacobian of `dynamics`, built once."""
+        return lazy_jacobian.jacobian(self.dynamics)
+
+    @cached_property
     def functional_problem(self) -> dict:
         """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
         return lazy_jacobian.problem(self.dynamics, exact=False)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler, lazy_jacobian
+from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import RANK_TOLERANCE, independent_rows
 from casmech.compiler.functions import SystemFunctions
@@ -195,7 +195,7 @@ def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
     if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
         return "adams"
     rate = system.dynamics(t0, x0)
-    jacobian = np.array(lazy_jacobian.jacobian(system.dynamics)(t0, x0, rate)[1].full())
+    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
     return "bdf" if radius * step > STIFF else "adams"
 
