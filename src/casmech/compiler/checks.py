@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
+from casmech.compiler import numeric_qr
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import RowInfo
 
@@ -35,32 +37,22 @@ class Structure:
         return "\n".join(lines)
 
 
-def independent_rows(matrix: np.ndarray, tolerance: float = RANK_TOLERANCE) -> list[bool]:
-    """Greedy in row order: is row k independent of the rows kept before it?"""
-    scale = max(np.linalg.norm(matrix, 2), 1.0) if matrix.size else 1.0
-    basis: list[np.ndarray] = []
-    keep = []
-    for row in matrix:
-        residual = row.copy()
-        for b in basis:  # two passes of Gram-Schmidt for stability
-            residual -= (b @ residual) * b
-        for b in basis:
-            residual -= (b @ residual) * b
-        norm = np.linalg.norm(residual)
-        independent = norm > tolerance * scale
-        if independent:
-            basis.append(residual / norm)
-        keep.append(independent)
-    return keep
+def independent_rows(matrix, tolerance: float = RANK_TOLERANCE) -> list[bool]:
+    """Greedy in row order: is row k farther than tolerance * max(|matrix|_2, 1) from the span
+    of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the work follows
+    the factors' fill, not rows x columns)."""
+    matrix = ca.DM(matrix)
+    scale = max(numeric_qr.norm2(matrix), 1.0)
+    return numeric_qr.independent_rows(matrix, tolerance, scale)
 
 
 def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
     """Rank and redundancy. The normalization rows are scanned first (they are never
     redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
-    phi_q = functions.matrix("phi_q", t, q)
+    phi_q = functions["phi_q"](t, q)
     n_joint_rows = functions.n_rows - functions.n_bodies
     order = list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
-    keep = dict(zip(order, independent_rows(phi_q[order]), strict=True))
+    keep = dict(zip(order, independent_rows(phi_q[order, :]), strict=True))
     redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
     independent = tuple(k for k in range(functions.n_rows) if keep[k])
     return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
