@@ -109,3 +109,29 @@ def test_norm2_equals_the_dense_spectral_norm():
     # power iteration stops at 1e-10 relative change
     np.testing.assert_allclose(numeric_qr.norm2(ca.DM(matrix)), np.linalg.norm(matrix, 2),
                                rtol=1e-8, atol=0)
+
+
+SLIDER_AT_ORIGIN = """
+casmech: 1
+name: slider
+bodies:
+  - {name: block, mass: 1.0, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}
+joints:
+  - {name: rail, type: translational, body_i: ground, body_j: block, at: [0, 0, 0], axis: [1, 0, 0]}
+  - {name: tether, type: d, body_i: ground, s_i: [0, 0, 0], body_j: block, s_j: [0, 0, 0]}
+"""
+
+
+def test_dependent_joints_sparse_equals_dense_on_a_single_dependency(monkeypatch):
+    """A block on a rail, tethered at zero distance: the tether's row of Phi_q vanishes (the
+    only dependency), so both paths give it all the weight (the sparse one forced by a zero
+    DENSE_LIMIT)."""
+    functions = casmech.compile(casmech.loads(SLIDER_AT_ORIGIN))
+    phi_q = functions["phi_q"](0.0, assembly.initial_guess(functions))
+    dense = checks.dependent_joints(functions, np.array(phi_q))
+    monkeypatch.setattr(checks, "DENSE_LIMIT", 0)
+    sparse = checks.dependent_joints(functions, phi_q)
+    assert dense[0][0] == sparse[0][0] == "tether"
+    # a unit weight and zeros, up to the SVD's roundoff
+    np.testing.assert_allclose([w for _, _, w in sparse], [w for _, _, w in dense], rtol=0,
+                               atol=1e-12)

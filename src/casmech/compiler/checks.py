@@ -51,12 +51,18 @@ def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
     redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
     phi_q = functions["phi_q"](t, q)
     n_joint_rows = functions.n_rows - functions.n_bodies
-    order = list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
+    order = _scan_order(functions)
     keep = dict(zip(order, independent_rows(phi_q[order, :]), strict=True))
     redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
     independent = tuple(k for k in range(functions.n_rows) if keep[k])
     return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
                      6 * functions.n_bodies - n_joint_rows, independent)
+
+
+def _scan_order(functions: SystemFunctions) -> list[int]:
+    """Rows of Phi in the order structure scans them: normalization first, then the joints."""
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    return list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
 
 
 def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 3):
@@ -69,8 +75,25 @@ def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 
     return [(name, source, value) for name, (source, value) in ranked[:count]]
 
 
-def dependent_joints(functions: SystemFunctions, phi_q: np.ndarray, count: int = 3):
-    """Joints whose rows became dependent: the left singular vector of the smallest singular
-    value of Phi_q weighs each row by its part in the dependency."""
-    u, s, _ = np.linalg.svd(phi_q)
-    return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
+DENSE_LIMIT = 250_000  # entries of Phi_q up to which dependent_joints uses a dense SVD
+
+
+def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3):
+    """Joints whose rows became dependent: a unit combination u of Phi_q's rows with
+    Phi_q^T u ~ 0 weighs each row by its part in the dependency. Up to DENSE_LIMIT entries u
+    is the left singular vector of the smallest singular value; above, the row (in
+    structure's scan order) closest to the span of the rows before it, combined with them by
+    least squares (sparse: numeric_qr)."""
+    rows, columns = phi_q.shape
+    if rows * columns <= DENSE_LIMIT:
+        u, s, _ = np.linalg.svd(np.array(ca.DM(phi_q)) if isinstance(phi_q, ca.DM) else phi_q)
+        return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
+    order = _scan_order(functions)[:columns]
+    a = ca.DM(phi_q)[order, :]
+    k = int(np.argmin(numeric_qr.NumericQR(a.T, order=False).diagonal()))
+    weights = np.zeros(rows)
+    weights[order[k]] = 1.0
+    if k:
+        earlier = numeric_qr.NumericQR(a[:k, :].T)
+        weights[order[:k]] = -earlier.solve(np.array(a[k, :]).ravel())
+    return worst_joints(functions, np.abs(weights) / np.linalg.norm(weights), count)
