@@ -1,8 +1,9 @@
 """Assembly: positions by Newton from the file's pose, then velocities and accelerations.
 
-Linear algebra on sparse matrices (CasADi DM): least squares by compiler.numeric_qr, square
-systems by CasADi's sparse linear solvers, so nothing is dense in the number of bodies (the
-per-row kinematics code, solve_kinematic_accelerations and solve_multipliers, stays dense).
+Linear algebra on the bundle's sparse matrices (CasADi DM) by compiler.numeric_qr (least
+squares as numpy.linalg.lstsq gives it, square solves), so nothing is dense in the number of
+bodies; only the per-row kinematics code (solve_kinematic_accelerations, solve_multipliers,
+which kinematics uses for the rows its mapped step rejects) stays dense.
 
 Drivers of composite joints are reached by continuation: the driver values are scaled from 0
 (the pose in the file) to 1 in steps of at most MAX_DRIVER_STEP radians/metres, so Newton never

@@ -64,9 +64,9 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
                           analysis: str = "kinematics", t0: float = 0.0,
                           progress=None) -> Result:
     """Rows by the mapped prescribed step over the whole grid; after a row it rejects (done by
-    state_at) it resumes over MIN_SPAN rows, doubling while they pass, so a grid where many
-    rows need the per-row code costs at most about twice the per-row work.
-    metadata per_row_rows: how many rows state_at did."""
+    state_at) it resumes over max(MIN_SPAN, twice the rows that last passed), doubling while
+    they pass, so the mapped rows computed and discarded are at most twice those kept plus
+    MIN_SPAN per rejected row. metadata per_row_rows: how many rows state_at did."""
     result = Result(analysis, on_row=progress)
     result.metadata["per_row_rows"] = 0
     q = assembly.assemble_positions(functions, t0)
