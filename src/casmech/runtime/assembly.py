@@ -161,7 +161,18 @@ def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.nda
     return q, v - _damped_step(functions[form.mass](q), jac, residual, penalty)
 
 
+REFINEMENTS = 2  # iterative-refinement steps of the damped solve
+
+
 def _damped_step(mass: ca.DM, jac: ca.DM, residual: np.ndarray, penalty: float) -> np.ndarray:
-    """(M / a + P^T P)^-1 P^T r, with the sparse matrices of the bundle."""
+    """(M / a + P^T P)^-1 P^T r, with the sparse matrices of the bundle. The matrix's condition
+    is ~1e12 (the penalty ratio times M's); the QR's solution was 1e-4 off (relative) on a
+    chain where numpy's LU was 5e-8 off, and REFINEMENTS steps on the residual bring it to
+    the LU's (both backward stable; the refinement makes the QR's componentwise so)."""
     lhs = mass / penalty + ca.mtimes(jac.T, jac)
-    return numeric_qr.NumericQR(lhs).solve(np.array(ca.mtimes(jac.T, ca.DM(residual))).ravel())
+    rhs = np.array(ca.mtimes(jac.T, ca.DM(residual))).ravel()
+    qr = numeric_qr.NumericQR(lhs)
+    step = qr.solve(rhs)
+    for _ in range(REFINEMENTS):
+        step += qr.solve(rhs - np.array(ca.mtimes(lhs, ca.DM(step))).ravel())
+    return step
