@@ -171,19 +171,35 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
 
 
 FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
+# Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
+# the factorization here (one Python step per nonzero of R, a few us). Measured on chains:
+# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state;
+# the square M / a + P^T P of assembly.project, 32 links (224 x 224): 9 ms dense, 28 ms sparse.
+DENSE_ENTRIES = 20_000  # lstsq
+DENSE_SQUARE_ENTRIES = 250_000  # factorize
+
+
+def factorize(a: ca.DM):
+    """b -> the solution of a x = b, for a square, nonsingular a (factored once if sparse)."""
+    if a.numel() <= DENSE_SQUARE_ENTRIES:
+        dense = np.array(a)
+        return lambda b: np.linalg.solve(dense, np.ravel(b))
+    return NumericQR(a).solve
 
 
 def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:
-    """numpy.linalg.lstsq(a, b)[0] for a sparse a: the least-squares solution of least norm.
-    Full row rank: the minimum-norm solution (QR of a^T); full column rank: least squares (QR
-    of a). Otherwise the rows D within tolerance * |a|_2 of the span of earlier rows I are
-    taken as a_D = C a_I exactly (C by least squares); then a x = b in least squares is
-    a_I x = y with (I + C^T C) y = b_I + C^T b_D (solved by Woodbury: D is small), and x the
-    minimum-norm solution of that: lstsq's answer for a matrix of that rank."""
+    """numpy.linalg.lstsq(a, b)[0]: by NumPy up to DENSE_ENTRIES; above, for a sparse a: full row
+    rank: the minimum-norm solution (QR of a^T); full column rank: least squares (QR of a).
+    Otherwise the rows D within tolerance * |a|_2 of the span of earlier rows I are taken as
+    a_D = C a_I exactly (C by least squares); then a x = b in least squares is a_I x = y with
+    (I + C^T C) y = b_I + C^T b_D (solved by Woodbury: D is small), and x the minimum-norm
+    solution of that: lstsq's answer for a matrix of that rank."""
     m, n = a.shape
     b = np.ravel(b).astype(float)
     if m == 0 or n == 0:
         return np.zeros(n)
+    if a.numel() <= DENSE_ENTRIES:
+        return np.linalg.lstsq(np.array(a), b, rcond=None)[0]
     qr = NumericQR(a.T) if m <= n else NumericQR(a)
     diagonal = qr.diagonal()
     if diagonal.min() > FULL_RANK * diagonal.max():

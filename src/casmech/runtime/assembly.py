@@ -1,9 +1,10 @@
 """Assembly: positions by Newton from the file's pose, then velocities and accelerations.
 
 Linear algebra on the bundle's sparse matrices (CasADi DM) by compiler.numeric_qr (least
-squares as numpy.linalg.lstsq gives it, square solves), so nothing is dense in the number of
-bodies; only the per-row kinematics code (solve_kinematic_accelerations, solve_multipliers,
-which kinematics uses for the rows its mapped step rejects) stays dense.
+squares as numpy.linalg.lstsq gives it, square solves; dense below its size limits),
+so nothing is dense in the number of bodies; only the per-row kinematics code
+(solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
+step rejects) stays dense.
 
 Drivers of composite joints are reached by continuation: the driver values are scaled from 0
 (the pose in the file) to 1 in steps of at most MAX_DRIVER_STEP radians/metres, so Newton never
@@ -166,13 +167,13 @@ REFINEMENTS = 2  # iterative-refinement steps of the damped solve
 
 def _damped_step(mass: ca.DM, jac: ca.DM, residual: np.ndarray, penalty: float) -> np.ndarray:
     """(M / a + P^T P)^-1 P^T r, with the sparse matrices of the bundle. The matrix's condition
-    is ~1e12 (the penalty ratio times M's); the QR's solution was 1e-4 off (relative) on a
-    chain where numpy's LU was 5e-8 off, and REFINEMENTS steps on the residual bring it to
-    the LU's (both backward stable; the refinement makes the QR's componentwise so)."""
+    is ~1e12 (the penalty ratio times M's); the sparse QR's solution was 1e-4 off (relative)
+    on a chain where numpy's LU was 5e-8 off, and REFINEMENTS steps on the residual bring it
+    to the LU's (both backward stable; the refinement makes the QR's componentwise so)."""
     lhs = mass / penalty + ca.mtimes(jac.T, jac)
     rhs = np.array(ca.mtimes(jac.T, ca.DM(residual))).ravel()
-    qr = numeric_qr.NumericQR(lhs)
-    step = qr.solve(rhs)
+    solve = numeric_qr.factorize(lhs)
+    step = solve(rhs)
     for _ in range(REFINEMENTS):
-        step += qr.solve(rhs - np.array(ca.mtimes(lhs, ca.DM(step))).ravel())
+        step += solve(rhs - np.array(ca.mtimes(lhs, ca.DM(step))).ravel())
     return step
