@@ -8,9 +8,10 @@ One output row is one call of
 
 positions: ITERATIONS Newton steps from the second-order predictor q + h q_dot + h^2/2 q_ddot,
 each the least-squares step with the QR of Phi_q at the predictor (a chord iteration: the
-predictor is within O(h^3) of the solution, so each step squares the error as a full Newton
-step would); then with the QR of Phi_q at the new positions: Phi_q q_dot = nu,
-Phi_q q_ddot = gamma, and the minimum-norm Phi_q^T lam = Q - M q_ddot. Least squares and
+predictor is within e = O(h^3) of the solution, the first step leaves O(e^2) as Newton's
+would, each later one multiplies the error by O(e)); then with the QR of Phi_q at the new
+positions: Phi_q q_dot = nu, Phi_q q_ddot = gamma, and the minimum-norm
+Phi_q^T lam = Q - M q_ddot. Least squares and
 minimum norm are what the per-row code computes with numpy.linalg.lstsq, so redundant rows
 (Bricard) give the same reactions. The checks tell the runtime whether the row converged
 (max |Phi| <= assembly.POSITION_TOLERANCE) and whether Phi_q may have lost rank (a small pivot
