@@ -167,3 +167,20 @@ analysis:""")
     failed_at = values[-1, 0]
     assert 0.25 <= failed_at < 0.3 and f"t = {failed_at:.6g}" in done.stderr
     np.testing.assert_allclose(values[:, 0], np.arange(len(values)) * 0.01, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("formulation", ["rp", "romega"])
+def test_redundant_rows_get_the_least_norm_multipliers(formulation):
+    """Bricard drops one dependent row; the reported joint multipliers are the least-norm ones
+    of their own constraint force: numpy's lstsq of [Phi_r, Pi_bar]^T lam, row by row, returns
+    them unchanged (to 1e-9 of their scale: lstsq's own roundoff at the Jacobian's condition),
+    and they are not the DAE's (whose dropped row carries 0)."""
+    functions = casmech.compile(casmech.load(MODELS / "bricard.yaml"))
+    result = casmech.analyze(functions, "dynamics", t_end=0.2, formulation=formulation)
+    assert result.metadata["dropped_rows"] == 1
+    n = functions.n_joint_rows
+    for t, q, lam in zip(result.times, result.q, result.lam, strict=True):
+        jacobian_t = functions.matrix("romega_jacobian", t, q).T
+        least = np.linalg.lstsq(jacobian_t, jacobian_t @ lam[:n], rcond=1e-9)[0]
+        np.testing.assert_allclose(lam[:n], least, rtol=0, atol=1e-9 * np.max(np.abs(least)))
+        assert np.min(np.abs(lam[:n])) > 1e-6 * np.max(np.abs(lam[:n]))  # no row left at 0
