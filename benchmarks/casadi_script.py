@@ -29,8 +29,9 @@ import time
 
 import casadi as ca
 import numpy as np
+from systems import I_AXIAL, OUTPUT_STEP, T_CHECK, G, chain
+
 from reference import Planar
-from systems import G, I_AXIAL, OUTPUT_STEP, T_CHECK, chain
 
 L, MASS = 1.0, 1.0
 

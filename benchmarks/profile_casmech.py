@@ -4,6 +4,8 @@ grouped, and IDAS's own counters and timers summed over every integrator the run
     python benchmarks/profile_casmech.py chain8 --rtol 1e-8 --t-end 10
     python benchmarks/profile_casmech.py chain32 --rtol 1e-8 --t-end 1 --mode compiled
     python benchmarks/profile_casmech.py chain8 --no-cprofile --repeats 3   # IDAS split only
+    python benchmarks/profile_casmech.py chain8 --no-cprofile --idas max_order=3 \
+        --idas linear_solver=csparse                        # IDAS options added to casmech's
 
 Prints the top functions by own time and by cumulative time, a coarse split (CasADi Function
 calls, integrator construction, NumPy linear algebra, the rest: Python), and IDAS's split of a
@@ -29,8 +31,10 @@ import time  # noqa: E402
 
 import casadi as ca  # noqa: E402
 import numpy as np  # noqa: E402
-from casmech_model import Runner  # noqa: E402
-from systems import OUTPUT_STEP, T_END, make  # noqa: E402
+from casmech_model import Runner, quaternion_matrix  # noqa: E402
+from systems import OUTPUT_STEP, T_CHECK, T_END, error, make, points  # noqa: E402
+
+from reference import Planar  # noqa: E402
 
 COUNTERS = ("nsteps", "nfevals", "nlinsetups", "nniters", "netfails", "nncfails")
 TIMERS = ("t_wall_total", "t_wall_daeF", "t_wall_jacF")
@@ -40,15 +44,16 @@ class IntegratorSpy:
     """Wraps casadi.integrator as the dynamics module sees it: records every integrator it
     makes (with record_time on), the time spent making them, and their options."""
 
-    def __init__(self, module):
+    def __init__(self, module, extra: dict | None = None):
         self.module, self.original = module, module.ca.integrator
         self.made, self.creation = [], 0.0
+        self.extra = extra or {}
 
     def __enter__(self):
         def make_integrator(*args, **kwargs):
             args = list(args)
             options = dict(args[-1]) if isinstance(args[-1], dict) else {}
-            args[-1] = options | {"record_time": True}
+            args[-1] = scaled(options, self.extra) | {"record_time": True}
             start = time.perf_counter()
             made = self.original(*args, **kwargs)
             self.creation += time.perf_counter() - start
@@ -71,6 +76,22 @@ class IntegratorSpy:
         total["integrators"] = len(self.made)
         total["creation"] = self.creation
         return total
+
+
+def scaled(options: dict, extra: dict) -> dict:
+    """casmech's options with `extra` added; the pseudo-options velocity_atol and
+    algebraic_atol (factors) scale abstolv's velocity and algebraic entries (GGL, which sets
+    abstolv: positions and velocities first, n_q = n_v in r-p)."""
+    extra = dict(extra)
+    factors = {key: extra.pop(key) for key in ("velocity_atol", "algebraic_atol") if key in extra}
+    options = options | extra
+    if factors and "abstolv" in options:
+        atol = np.array(options["abstolv"])
+        n_x = len(options["init_xdot"])
+        atol[n_x // 2:n_x] *= factors.get("velocity_atol", 1.0)
+        atol[n_x:] *= factors.get("algebraic_atol", 1.0)
+        options["abstolv"] = list(atol)
+    return options
 
 
 def linear_algebra(problem: dict, options: dict, x: np.ndarray, z: np.ndarray, p: np.ndarray,
@@ -106,19 +127,59 @@ def run_once(functions, args, profile=None) -> tuple[dict, dict]:
     from casmech.runtime import dynamics
 
     atol = args.atol if args.atol is not None else args.rtol * 1e-2
-    with IntegratorSpy(dynamics) as spy:
-        start = time.perf_counter()
+    with IntegratorSpy(dynamics, idas_options(args.idas)) as spy:
+        start, cpu = time.perf_counter(), time.process_time()
         if profile:
             profile.enable()
         result = casmech.analyze(functions, "dynamics", t_end=args.t_end,
                                  output_step=OUTPUT_STEP, rtol=args.rtol, atol=atol)
-        wall = time.perf_counter() - start
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
         casmech.results_table(functions, result)
         if profile:
             profile.disable()
         table = time.perf_counter() - start - wall
-    totals = spy.totals() | {"wall": wall, "table": table, "rows": len(result)}
+    totals = spy.totals() | {"wall": wall, "cpu": cpu, "table": table, "rows": len(result)}
     return totals, {"result": result, "spy": spy, "atol": atol}
+
+
+def idas_options(pairs: list[str]) -> dict:
+    """KEY=VALUE pairs as IDAS options (VALUE: a number, true/false, or a string)."""
+    options = {}
+    for pair in pairs:
+        key, value = pair.split("=", 1)
+        if value in ("true", "false"):
+            options[key] = value == "true"
+        else:
+            try:
+                options[key] = int(value) if value.lstrip("-").isdigit() else float(value)
+            except ValueError:
+                options[key] = value
+    return options
+
+
+def check_error(system, functions, result) -> float | None:
+    """Error at T_CHECK against reference.py (cached in the temporary directory), or None
+    when the run ends before it."""
+    import tempfile
+
+    import casmech
+
+    names, values = casmech.results_table(functions, result)
+    rows = np.flatnonzero(np.abs(values[:, 0] - T_CHECK) < 1e-9)
+    if not len(rows):
+        return None
+    row = values[rows[0]]
+    column = {name: k for k, name in enumerate(names)}
+    cms = [[row[column[f"{bar.name}.{c}"]] for c in "xyz"] for bar in system.bars]
+    rotations = [quaternion_matrix(np.array([row[column[f"{bar.name}.e{k}"]] for k in range(4)]))
+                 for bar in system.bars]
+    cache = os.path.join(tempfile.gettempdir(), f"casmech_reference_{system.name}.npy")
+    if os.path.exists(cache):
+        reference = np.load(cache)
+    else:
+        reference = Planar(system).solve()["points"]
+        np.save(cache, reference)
+    return error(points(system, np.array(cms), np.array(rotations)), reference)
 
 
 def print_cprofile(profile: cProfile.Profile, top: int) -> None:
@@ -152,7 +213,8 @@ def print_split(runs: list[dict], linalg: tuple[float, float]) -> None:
     t_linalg = factor * med["nlinsetups"] + solve * med["nniters"]
     t_idas = med["t_wall_total"]
     rest = t_idas - med["t_wall_daeF"] - med["t_wall_jacF"] - t_linalg
-    print(f"medians of {len(runs)} runs: wall {med['wall']:.3f} s, results_table "
+    print(f"medians of {len(runs)} runs: wall {med['wall']:.3f} s, CPU {med['cpu']:.3f} s, "
+          f"results_table "
           f"{med['table']:.3f} s ({med['rows']:.0f} rows)")
     print("  IDAS: " + ", ".join(f"{key} {med[key]:.0f}" for key in COUNTERS)
           + f", integrators {med['integrators']:.0f}")
@@ -181,8 +243,16 @@ def main(argv=None) -> None:
     parser.add_argument("--mode", default="interpreted", choices=("interpreted", "compiled"))
     parser.add_argument("--repeats", type=int, default=1, help="timed runs (medians)")
     parser.add_argument("--no-cprofile", action="store_true")
+    parser.add_argument("--idas", action="append", default=[], metavar="KEY=VALUE",
+                        help="an IDAS option added to casmech's (repeatable)")
+    parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                        help="a constant of casmech.runtime.dynamics, for experiments")
     args = parser.parse_args(argv)
 
+    from casmech.runtime import dynamics
+
+    for name, value in idas_options(args.set).items():
+        setattr(dynamics, name, value)
     runner = Runner(make(args.system), mode=args.mode)
     print(f"{args.system} ({args.mode}): rtol={args.rtol:g}, t_end={args.t_end:g}, "
           f"build {runner.build_time}")
@@ -194,6 +264,8 @@ def main(argv=None) -> None:
         if profile:
             print_cprofile(profile, args.top)
     print(f"metadata {last['result'].metadata}")
+    print(f"error at t = {T_CHECK:g} s: "
+          f"{check_error(runner.system, runner.functions, last['result'])}")
     options = last["spy"].made[-1][2]
     problem, state = _newton_system(runner.functions, last["result"], options)
     print_split(runs, linear_algebra(problem, options, *state))
@@ -211,8 +283,10 @@ def _newton_system(functions, result, options) -> tuple[dict, tuple]:
     x = np.concatenate([result.q[-1], result.q_dot[-1]])
     z = np.zeros(problem["z"].numel())
     z[:len(result.q_ddot[-1])] = result.q_ddot[-1]
-    m = problem["p"].numel() - 1
-    return problem, (x, z, np.concatenate([[result.times[-1]], np.zeros(m)]))
+    m = len(result.lam[-1]) if name == "rp" else functions.n_joint_rows
+    p = np.ones(problem["p"].numel())  # row scales 1: the sparsity is what matters
+    p[0], p[1:1 + m] = result.times[-1], 0.0
+    return problem, (x, z, p)
 
 
 if __name__ == "__main__":

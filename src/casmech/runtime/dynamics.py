@@ -64,14 +64,11 @@ from casmech.runtime.results import Result
 CHUNK = 256  # output intervals per IDAS call: after a failure, with projections, with progress
 MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
 DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
-# GGL: absolute tolerance of the algebraic unknowns (v_dot, lam, mu) in IDAS's Newton
-# convergence test (they are out of its error test). With the integration's atol the index-2
-# iteration matrix (condition ~ 1/h^2) could not converge them at the first, short steps: at
-# rtol 1e-12, atol 1e-14 Bricard failed at t = 0 with 1e-9 and ran with 1e-8 .. 1; at rtol
-# 1e-10 the energy drift of A01 and the ADAMS spherical case over 5 s was 4e-9..6e-9 of the
-# kinetic energy with 1e-8 (below the index-1 DAE's 6e-9..9e-9), 1.2e-8..3.2e-8 with 1e-6.
-# A failure is never fatal: the run falls back to the index-1 DAE (run_dynamics).
+# Absolute tolerances of the algebraic unknowns in IDAS's Newton convergence test (they are out
+# of its error test; algebraic_tolerances): at least Z_TOL for GGL's v_dot and lam (with less,
+# at rtol 1e-12, atol 1e-14, Bricard failed at t = 0), and MU_TOL for its mu.
 Z_TOL = 1e-8
+MU_TOL = 1.0
 GGL_FAILURES = 3  # chunks the index-2 DAE may fail on before the index-1 one does the rest
 
 
@@ -108,14 +105,18 @@ def mapped(function: ca.Function, *columns) -> list[np.ndarray]:
 
 
 class _Model:
-    """The numeric side of one formulation: unit-row P, consistent (v_dot, lam), q_dot."""
+    """The numeric side of one formulation: row scales, consistent (v_dot, lam), q_dot."""
 
     def __init__(self, functions: SystemFunctions, name: str):
         self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
         self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
-        t, q = ca.MX.sym("t"), ca.MX.sym("q", self.n_q)
-        jacobian = functions[self.form.jacobian](t, q)
-        self.norms = ca.Function("row_norms", [t, q], [ca.sqrt(ca.sum2(jacobian * jacobian))])
+
+    def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
+        """(s, s_phi): the DAEs' row scales (compiler.dae), inverse row norms of P and of
+        Phi_q at (t, q)."""
+        jacobian = self.functions.matrix(self.form.jacobian, t, q)
+        phi_q = jacobian if self.form.jacobian == "phi_q" else self.functions.matrix("phi_q", t, q)
+        return 1 / np.linalg.norm(jacobian, axis=1), 1 / np.linalg.norm(phi_q, axis=1)
 
     def mask(self, t, q) -> np.ndarray:
         """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
@@ -125,13 +126,12 @@ class _Model:
         keep[list(structure(self.functions, t, q).independent)] = 1.0
         return 1.0 - keep[:self.m]
 
-    def consistent(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
-        """(v_dot, unit-row lam) solving the DAE's algebraic equations at (t, q, v)."""
+    def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
+        """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
+        scales s (the DAE's lam: the true multipliers are s * lam)."""
         f = self.functions
-        jac = f.matrix(self.form.jacobian, t, q)
-        norms = np.linalg.norm(jac, axis=1)
-        jac = jac / norms[:, None]
-        gamma = f.vector(self.form.gamma, t, q, v) / norms
+        jac = f.matrix(self.form.jacobian, t, q) * s[:, None]
+        gamma = f.vector(self.form.gamma, t, q, v) * s
         lhs = np.block([[f.matrix(self.form.mass, q), jac.T], [jac, -np.diag(mask)]])
         rhs = np.concatenate([f.vector(self.form.forces, t, q, v), gamma])
         try:
@@ -139,6 +139,12 @@ class _Model:
         except np.linalg.LinAlgError:  # singular configuration: the least-squares solution
             z = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
         return z[:self.n_v], z[self.n_v:]
+
+    def accelerations(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
+        """(v_dot, true multipliers) at (t, q, v)."""
+        s = self.scales(t, q)[0]
+        v_dot, lam = self.consistent(t, q, v, mask, s)
+        return v_dot, s * lam
 
     def q_dot(self, q, v) -> np.ndarray:
         if self.form.q_dot is None:
@@ -161,15 +167,14 @@ def minimum_norm(jacobian, lam, keep: list[int]):
 
 class _Rows:
     """The output rows of a block of states, each by one mapped casadi.Function call: the
-    drift check (index-1 DAE only) and the results' r-p rates and true multipliers."""
+    drift check (index-1 DAE only) and the results' r-p rates and multipliers."""
 
     def __init__(self, model: _Model, mask: np.ndarray, tolerance: float, step: float):
         self.model, self.tolerance, self.step = model, tolerance, step
         f, form = model.functions, model.form
         t, q, v = ca.MX.sym("t"), ca.MX.sym("q", model.n_q), ca.MX.sym("v", model.n_v)
-        v_dot, unit = ca.MX.sym("v_dot", model.n_v), ca.MX.sym("lam", model.m)
-        lam = unit / model.norms(t, q)
-        n = f.n_joint_rows
+        v_dot, multipliers = ca.MX.sym("v_dot", model.n_v), ca.MX.sym("lam", model.m)
+        lam, n = multipliers, f.n_joint_rows
         if mask.any():  # joint rows: [Phi_r, Pi_bar], the same in both formulations
             keep = [k for k in range(n) if not mask[k]]
             lam = ca.vertcat(minimum_norm(f["romega_jacobian"](t, q), lam[:n], keep), lam[n:])
@@ -178,7 +183,8 @@ class _Rows:
         else:  # normalization rows carry no reaction
             (q_dot, q_ddot), lam = f["romega_to_rp"](q, v, v_dot), ca.vertcat(
                 lam, ca.MX(f.n_rows - model.m, 1))
-        self.rates = ca.Function("result_rows", [t, q, v, v_dot, unit], [q_dot, q_ddot, lam])
+        self.rates = ca.Function("result_rows", [t, q, v, v_dot, multipliers],
+                                 [q_dot, q_ddot, lam])
         phi = f["phi"](t, q)
         velocity = f[form.jacobian](t, q) @ v - f[form.nu](t, q)
         self.drift = ca.Function("drift", [t, q, v], [
@@ -198,10 +204,11 @@ class _Rows:
         return int(np.argmax(drifted)) if drifted.any() else None
 
     def record(self, result: Result, times: np.ndarray, states: np.ndarray,
-               unit_lam: np.ndarray) -> None:
-        """Appends the rows: r-p velocities and accelerations, every true multiplier."""
+               multipliers: np.ndarray) -> None:
+        """Appends the rows: r-p velocities and accelerations, every multiplier (the least-
+        norm ones where rows were dropped; 0 for r-omega's normalization rows)."""
         q, v, v_dot = self.split(states)
-        q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, unit_lam)
+        q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers)
         result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
 
 
@@ -244,8 +251,8 @@ class _Stepper:
             self.chunk = min(self.chunk, self.limit)
 
     def integrate(self, t0: float, times: np.ndarray, q, v, mask):
-        """(states, lam, kind) at `times` or a first part of them: states rows
-        [q, v, v_dot], lam in unit rows, kind "ggl", "projection" or "ode" (which made them).
+        """(states, lam, kind) at `times` or a first part of them: states rows [q, v, v_dot],
+        lam the true multipliers, kind "ggl", "projection" or "ode" (which made them).
 
         By the DAE until it first fails (then _Restart: the run starts over on the
         augmented-Lagrangian ODE), else by that ODE."""
@@ -263,7 +270,7 @@ class _Stepper:
         try:
             return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
         except RuntimeError:  # IDAS failed (its construction is not guarded)
-            raise _Restart(t0) from None
+            raise _Restart(float(t0)) from None
 
     def _problem(self, kind: str) -> dict:
         if kind not in self.problems:
@@ -277,25 +284,32 @@ class _Stepper:
         started by IDACalcIC was slower (its line search often failed, measured on the
         benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
         model = self.model
-        v_dot, lam = model.consistent(t0, q, v, mask)
+        s, s_phi = model.scales(t0, q)
+        v_dot, lam = model.consistent(t0, q, v, mask, s)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
-        options = {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot)}
         n_z = model.n_v + dae.multipliers(model.functions.functions, model.name, kind)
+        rtol, atol = self.options["reltol"], self.options["abstol"]
+        floor = Z_TOL if kind == "ggl" else atol
+        options = {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
+                   "abstolv": list(np.concatenate([
+                       np.full(len(q) + len(v), atol),
+                       algebraic_tolerances(rtol, floor, v_dot, lam, n_z)]))}
+        p = [[t0], mask, s]
         if kind == "ggl":
             n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
-            options["step0"] = initial_step(q[:n], v_dot[:n], self.options["reltol"],
-                                            self.options["abstol"], times[0] - t0)
-            options["abstolv"] = [self.options["abstol"]] * (len(q) + len(v)) + [Z_TOL] * n_z
+            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol, times[0] - t0)
+            p.append(s_phi)
         integrator = ca.integrator("dynamics", "idas", self._problem(kind), 0.0,
                                    list(times - t0), self.options | options)
         z0 = np.zeros(n_z)  # GGL's mu is 0 along the exact motion
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         self.idas_calls += 1
         try:
-            out = integrator(x0=np.concatenate([q, v]), z0=z0, p=np.concatenate([[t0], mask]))
+            out = integrator(x0=np.concatenate([q, v]), z0=z0, p=np.concatenate(p))
         finally:
             self.idas_steps += int(integrator.stats().get("nsteps", 0))
-        return self._dae_states(out)
+        states, lam = self._dae_states(out)
+        return states, s[:, None] * lam
 
     def _dae_states(self, out):
         x, z = np.array(out["xf"]), np.array(out["zf"])
@@ -329,8 +343,7 @@ class _Stepper:
         q_block, v_block = states[:model.n_q], states[model.n_q:]
         v_dot, lam = mapped(self.fallback.accelerations, done, q_block, v_block,
                             np.full((1, done.shape[1]), a))
-        unit = lam * mapped(model.norms, done, q_block)[0]  # true multipliers -> unit rows
-        return np.vstack([states, v_dot]), unit
+        return np.vstack([states, v_dot]), lam
 
     def failure(self, t0, t1, q, why) -> AnalysisError:
         functions = self.model.functions
@@ -339,6 +352,24 @@ class _Stepper:
                  "rows are closest to dependent (a singular configuration?):")
         return AnalysisError(FailureContext(t0, cause, dependent_joints(
             functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
+
+
+def algebraic_tolerances(rtol: float, floor: float, v_dot, lam, n_z: int) -> np.ndarray:
+    """Absolute tolerances of [v_dot, lam, mu] in IDAS's Newton test: for v_dot and for lam
+    rtol times the largest of the group at the start, at least `floor`; MU_TOL for mu.
+
+    Per group, not per component: a component that is 0 along the motion (the out-of-plane
+    accelerations and reactions of a planar mechanism) carries roundoff of the size of its
+    group's largest, which an absolute tolerance of a smaller size never lets converge.
+    Andrews' squeezer (accelerations up to 7e3, reactions 1e2) failed at t = 0 with
+    Z_TOL for every component, at every rtol from 1e-6 to 1e-10. mu is 0 along the motion and
+    acts only through q' = q_dot + Phi_q^T mu, so the positions' own convergence test covers
+    it; its own test, with Z_TOL, failed on the squeezer whatever its other tolerances."""
+    n_v, m = len(v_dot), len(lam)
+    out = np.full(n_z, MU_TOL)
+    out[:n_v] = max(floor, rtol * np.max(np.abs(v_dot), initial=0.0))
+    out[n_v:n_v + m] = max(floor, rtol * np.max(np.abs(lam), initial=0.0))
+    return out
 
 
 def initial_step(r, r_ddot, rtol: float, atol: float, interval: float) -> float:
@@ -398,7 +429,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
     k, projections = 0, 0
     stepper.start(len(times) - 1, progress is not None)
     try:
-        v_dot, lam = model.consistent(times[0], q, v, mask)
+        v_dot, lam = model.accelerations(times[0], q, v, mask)
         rows.record(result, times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + stepper.chunk]
@@ -411,7 +442,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                 q, v = assembly.project(functions, model.form, t, q, v,
                                         penalty(functions, model.form, q),
                                         accept=0.1 * rows.tolerance)
-                v_dot, lam = model.consistent(t, q, v, mask)
+                v_dot, lam = model.accelerations(t, q, v, mask)
                 states[:, drifted], lams[:, drifted] = np.concatenate([q, v, v_dot]), lam
                 projections += 1
             rows.record(result, chunk[:used], states[:, :used], lams[:, :used])
