@@ -10,10 +10,9 @@ The index-1 DAE (stabilization "projection": the runtime projects when the const
 P_s = diag(s) P and gamma_s = s * gamma: P's rows scaled by constants the runtime sets to the
 inverse row norms at the start of each integration, so lam is in force units (the true
 multipliers are s * lam) and the rows are comparable. Constants, not the norms at the current
-q: with norms of q every row of P^T lam depended on every coordinate of the row (the
-translation rows too), which took the Newton matrix of benchmarks/chain8's GGL DAE from 2000
-to 3008 nonzeros, its QR factorization from 55 to 82 us and the residual's Jacobian from 9425
-to 23568 instructions. w masks rows: w_k = 0 keeps row k, w_k = 1 turns it into
+q, keep P^T lam as sparse as P (with norms of q every entry of a row depends on every
+coordinate the row does: 1.5x the Newton matrix's nonzeros and 2.5x the Jacobian's
+instructions on benchmarks/chain8; benchmarks/notes_rpdyn.md). w masks rows: w_k = 0 keeps row k, w_k = 1 turns it into
 lam_k = P_k v_dot - gamma_k, which is 0 for a row that depends on the others (redundant
 joints), so the row drops out smoothly and the algebraic Jacobian [M P^T; P -diag(w)] stays
 non-singular. The residual is pure SX: IDAS's Newton does the linear algebra, its Jacobian

@@ -15,6 +15,11 @@ drift_tolerance(atol) the state is projected back mass-orthogonally (assembly.pr
 IDAS restarts from there. No Baumgarte constants either way. A chunk of output intervals the
 index-2 DAE fails on is done this way (run_dynamics).
 
+With ggl the whole output grid is one IDAS call, unless a progress callback wants rows as they
+come or the DAE failed (then chunks of CHUNK intervals); the output rows of a chunk (r-p rates,
+true or least-norm multipliers, the index-1 DAE's drift check) are each one mapped
+casadi.Function call, never Python per row.
+
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
 the same equations, so IDACalcIC is never needed.
@@ -210,10 +215,6 @@ class _Rows:
         q, v, v_dot = self.split(states)
         q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers)
         result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
-
-
-class _Shorter(Exception):
-    """The index-2 DAE failed on a chunk longer than CHUNK: retry CHUNK intervals."""
 
 
 class _Stepper:
