@@ -12,11 +12,12 @@ inverse row norms at the start of each integration, so lam is in force units (th
 multipliers are s * lam) and the rows are comparable. Constants, not the norms at the current
 q, keep P^T lam as sparse as P (with norms of q every entry of a row depends on every
 coordinate the row does: 1.5x the Newton matrix's nonzeros and 2.5x the Jacobian's
-instructions on benchmarks/chain8; benchmarks/notes_rpdyn.md). w masks rows: w_k = 0 keeps row k, w_k = 1 turns it into
-lam_k = P_k v_dot - gamma_k, which is 0 for a row that depends on the others (redundant
-joints), so the row drops out smoothly and the algebraic Jacobian [M P^T; P -diag(w)] stays
-non-singular. The residual is pure SX: IDAS's Newton does the linear algebra, its Jacobian
-comes from AD, and the same Function is what code generation compiles.
+instructions on benchmarks/chain8; benchmarks/notes_rpdyn.md). w masks rows: w_k = 0 keeps
+row k, w_k = 1 turns it into lam_k = P_k v_dot - gamma_k, which is 0 for a row that depends on
+the others (redundant joints), so the row drops out smoothly and the algebraic Jacobian
+[M P^T; P -diag(w)] stays non-singular. The residual is pure SX: IDAS's Newton does the
+linear algebra, its Jacobian comes from AD, and the same Function is what code generation
+compiles.
 
 The stabilized index-2 DAE of Gear, Gupta and Leimkuhler (stabilization "ggl"), which keeps the
 position and velocity constraints themselves at every step instead of their second derivative:
