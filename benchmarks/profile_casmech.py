@@ -132,7 +132,8 @@ def run_once(functions, args, profile=None) -> tuple[dict, dict]:
         if profile:
             profile.enable()
         result = casmech.analyze(functions, "dynamics", t_end=args.t_end,
-                                 output_step=OUTPUT_STEP, rtol=args.rtol, atol=atol)
+                                 output_step=OUTPUT_STEP, rtol=args.rtol, atol=atol,
+                                 formulation=args.formulation)
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu
         casmech.results_table(functions, result)
         if profile:
@@ -241,6 +242,8 @@ def main(argv=None) -> None:
     parser.add_argument("--t-end", type=float, default=T_END)
     parser.add_argument("--top", type=int, default=12)
     parser.add_argument("--mode", default="interpreted", choices=("interpreted", "compiled"))
+    parser.add_argument("--formulation", default="rp", choices=("rp", "romega"),
+                        help="the DAE's formulation (default rp)")
     parser.add_argument("--repeats", type=int, default=1, help="timed runs (medians)")
     parser.add_argument("--no-cprofile", action="store_true")
     parser.add_argument("--idas", action="append", default=[], metavar="KEY=VALUE",
@@ -272,19 +275,22 @@ def main(argv=None) -> None:
 
 
 def _newton_system(functions, result, options) -> tuple[dict, tuple]:
-    """The DAE dictionary of the run's last integrator (GGL when it had abstolv, which only
-    GGL sets) and (x, z, p) at the last output row (z: accelerations, multipliers 0; the
-    Newton matrix's sparsity and conditioning hardly depend on them)."""
+    """The DAE dictionary of the run's last integrator (GGL when it had step0, which only GGL
+    sets) and (x, z, p) at the last output row (z: r-p accelerations or 0, multipliers 0, row
+    scales 1; the Newton matrix's sparsity and conditioning hardly depend on them)."""
     from casmech.compiler import dae
+    from casmech.runtime.dynamics import velocities
 
     name = result.metadata["formulation"]
-    kind = "ggl" if "abstolv" in options else "projection"
+    kind = "ggl" if "step0" in options else "projection"
     problem = dae.problem(dae.residual(functions.functions, name, kind))
-    x = np.concatenate([result.q[-1], result.q_dot[-1]])
+    q = result.q[-1]
+    x = np.concatenate([q, velocities(functions, name, q, result.q_dot[-1])])
     z = np.zeros(problem["z"].numel())
-    z[:len(result.q_ddot[-1])] = result.q_ddot[-1]
-    m = len(result.lam[-1]) if name == "rp" else functions.n_joint_rows
-    p = np.ones(problem["p"].numel())  # row scales 1: the sparsity is what matters
+    if name == "rp":
+        z[:len(q)] = result.q_ddot[-1]
+    m = dae.sizes(functions.functions, name)[2]
+    p = np.ones(problem["p"].numel())
     p[0], p[1:1 + m] = result.times[-1], 0.0
     return problem, (x, z, p)
 
