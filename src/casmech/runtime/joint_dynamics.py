@@ -19,7 +19,7 @@ import numpy as np
 
 from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
-from casmech.compiler.checks import RANK_TOLERANCE, independent_rows
+from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
@@ -27,7 +27,7 @@ from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
-from casmech.runtime.dynamics import Z_TOL, initial_step
+from casmech.runtime.dynamics import Z_TOL, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -259,25 +259,32 @@ def _failure(t0: float, t1: float, why: str) -> AnalysisError:
 
 class _Recorder:
     """Appends results rows: the r-p state of the tree and every joint's multipliers (the
-    minimum-norm ones where loop rows were masked, as the r-p DAE reports them)."""
+    minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
+    a block by one mapped call."""
 
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
-        self.functions, self.system, self.signs, self.mask = functions, system, signs, mask
+        self.functions, self.system, self.signs = functions, system, signs
+        self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
 
     def __call__(self, result: Result, times, states, algebraic) -> None:
         n = len(times)
-        rows = self.system.motion.map(n)(np.asarray(times)[None, :], states, algebraic,
+        times = np.asarray(times, float)
+        rows = self.system.motion.map(n)(times[None, :], states, algebraic,
                                          np.repeat(self.signs[:, None], n, axis=1))
         q, q_dot, q_ddot, lam = (np.array(out.full()) for out in rows)
-        for j, t in enumerate(times):
-            result.append(t, q[:, j], q_dot[:, j], q_ddot[:, j],
-                          self._minimum_norm(t, q[:, j], lam[:, j]))
+        if self.least_norm is not None:
+            lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
+        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
 
-    def _minimum_norm(self, t, q, lam):
-        if not self.mask.any():
-            return lam
-        n = self.functions.n_joint_rows
-        jacobian_t = self.functions.matrix("romega_jacobian", t, q).T
-        lam = lam.copy()
-        lam[:n] = np.linalg.lstsq(jacobian_t, jacobian_t @ lam[:n], rcond=RANK_TOLERANCE)[0]
-        return lam
+
+def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
+    """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
+    minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
+    n = functions.n_joint_rows
+    masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
+    keep = [row for row in range(n) if row not in masked]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", functions.n_coordinates)
+    lam = ca.MX.sym("lam", functions.n_rows)
+    jacobian = functions["romega_jacobian"](t, q)
+    joint = minimum_norm(jacobian, lam[:n], keep)
+    return ca.Function("least_norm", [t, q, lam], [ca.vertcat(joint, lam[n:])])
