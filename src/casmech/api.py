@@ -22,7 +22,7 @@ from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
-from casmech.runtime.joint_dynamics import run_joint_dynamics
+from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
@@ -73,7 +73,7 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
 
 # dynamics options a caller may override -> their choices
 DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
-                    "stabilization": dae.STABILIZATIONS}
+                    "stabilization": dae.STABILIZATIONS, "method": ("auto", *METHODS)}
 
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
@@ -88,7 +88,8 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
         tree = stabilization == "ggl" and spanning_tree(f.ir).is_tree
         formulation = "joint" if tree else "rp"
     if formulation == "joint":
-        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress)
+        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,
+                                  method=s.options.get("method", "auto"))
     return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
                         progress=progress, stabilization=stabilization)
 
@@ -109,15 +110,17 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             output_step: float | None = None, rtol: float | None = None,
             atol: float | None = None, formulation: str | None = None,
             progress: Callable[[float], None] | None = None,
-            stabilization: str | None = None) -> Result:
-    """Run an analysis; the model's `analysis:` block gives what is not passed
-    (formulation: "rp" or "romega", stabilization: "ggl" or "projection", for dynamics).
+            stabilization: str | None = None, method: str | None = None) -> Result:
+    """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
+    formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
+    DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
     `progress`, when given, is called with the time of every output row as it is computed."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
     settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
-    for name, value in {"formulation": formulation, "stabilization": stabilization}.items():
+    asked = {"formulation": formulation, "stabilization": stabilization, "method": method}
+    for name, value in asked.items():
         if value is None:
             continue
         if value not in DYNAMICS_OPTIONS[name]:

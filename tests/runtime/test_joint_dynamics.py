@@ -6,7 +6,7 @@ import pytest
 
 import casmech
 from casmech.compiler.tree import spanning_tree
-from casmech.errors import AnalysisError
+from casmech.errors import AnalysisError, ModelError
 from tests.conftest import MODELS, ROOT, Table
 from tests.runtime.test_dynamics import FREE_BODY, G, W
 
@@ -164,3 +164,42 @@ def test_a_failure_keeps_the_rows_before_it():
     rows = failure.value.partial.times
     assert 0.25 <= rows[-1] <= 0.305  # every interval before the divergence was kept
     assert f"t = {rows[-1]:.6g}" in str(failure.value)  # it names where it stopped
+
+
+STIFF_ARM = """
+casmech: 1
+name: stiff_arm
+bodies:
+  - {name: arm, mass: 1.0, inertia: [0.01, 0.1, 0.1], position: [0.5, 0, 0]}
+  - {name: tip, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [1.0, 0, 0]}
+joints:
+  - {name: pivot, type: revolute, body_i: ground, body_j: arm, at: [0, 0, 0], axis: [0, 1, 0]}
+forces:
+  - {name: mount, type: bushing, body_i: arm, body_j: tip, at: [1.0, 0, 0],
+     stiffness: [1e7, 1e7, 1e7], damping: [3000, 3000, 3000],
+     rotational_stiffness: [1e5, 1e5, 1e5], rotational_damping: [30, 30, 30]}
+analysis: {type: dynamics, t_end: 0.5, output_step: 0.01, rtol: 1.0e-8, atol: 1.0e-10}
+"""
+
+
+def test_method_auto_takes_bdf_for_a_stiff_tree_and_both_agree():
+    """A tip on a stiff bushing (fastest mode ~3e4 1/s against a 0.01 s grid) runs by BDF
+    under auto, a chain by Adams; Adams and BDF give the same motion."""
+    stiff = casmech.compile(casmech.loads(STIFF_ARM))
+    runs = {m: casmech.analyze(stiff, method=m) for m in ("auto", "adams", "bdf")}
+    assert runs["auto"].metadata["method"] == "bdf"
+    assert runs["bdf"].metadata["steps"] < runs["adams"].metadata["steps"] / 5
+    chain = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"))
+    assert casmech.analyze(chain, t_end=0.1).metadata["method"] == "adams"
+    adams, bdf = (Table(*casmech.results_table(stiff, runs[m])) for m in ("adams", "bdf"))
+    for name in ("tip.x", "tip.z", "arm.e2"):
+        # two methods at rtol 1e-8: global errors of ~1e-8 of the 1 m scale
+        np.testing.assert_allclose(adams[name], bdf[name], rtol=0, atol=1e-6, err_msg=name)
+
+
+def test_method_adams_on_a_dae_is_a_located_error():
+    text = STIFF_ARM.replace("atol: 1.0e-10}", "atol: 1.0e-10, formulation: rp,\n  method: adams}")
+    with pytest.raises(ModelError) as error:
+        casmech.loads(text, file="arm.yaml")
+    line = next(k for k, row in enumerate(text.splitlines(), 1) if "method: adams" in row)
+    assert f"arm.yaml:{line}:" in str(error.value) and "error[E409]" in str(error.value)

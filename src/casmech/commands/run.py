@@ -51,11 +51,15 @@ def add_arguments(parser) -> None:
     parser.add_argument("--atol", type=float,
                         help="absolute tolerance of the integrator (dynamics)")
     parser.add_argument("--formulation", choices=api.DYNAMICS_OPTIONS["formulation"],
-                        help="equations of motion for dynamics (default: the model's, else rp)")
+                        help="equations of motion for dynamics (default: the model's, else auto: "
+                             "joint coordinates for a tree, rp with loops)")
     parser.add_argument("--stabilization", choices=api.DYNAMICS_OPTIONS["stabilization"],
                         help="how dynamics keeps the constraints: the stabilized index-2 DAE "
                              "(ggl) or projections of the index-1 DAE (default: the model's, "
                              "else ggl)")
+    parser.add_argument("--method", choices=api.DYNAMICS_OPTIONS["method"],
+                        help="CVODES's method for joint coordinates on a tree (default: the "
+                             "model's, else auto: bdf when the ODE is stiff at t0)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
     parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
@@ -80,14 +84,14 @@ def run(args) -> int:
     settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,
                                  formulation=args.formulation,
-                                 stabilization=args.stabilization)
+                                 stabilization=args.stabilization, method=args.method)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
             result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
                                      formulation=args.formulation, progress=callback,
-                                     stabilization=args.stabilization)
+                                     stabilization=args.stabilization, method=args.method)
     except AnalysisError as error:
         timings["analysis"] = time.perf_counter() - clock
         if error.partial is not None and len(error.partial):

@@ -76,6 +76,16 @@ class JointSystem:
         """casadi.integrator's problem (MX, with lazy_jacobian's cheap Jacobian)."""
         return lazy_jacobian.problem(self.dynamics)
 
+    @cached_property
+    def jacobian(self) -> ca.Function:
+        """lazy_jacobian.jacobian of `dynamics`, built once."""
+        return lazy_jacobian.jacobian(self.dynamics)
+
+    @cached_property
+    def functional_problem(self) -> dict:
+        """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
+        return lazy_jacobian.problem(self.dynamics, exact=False)
+
 
 def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
     """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega
@@ -109,9 +119,11 @@ class _Builder:
         self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
         m = len(self.cut_rows)
         self.z, self.w = ca.SX.sym("z", 2 * m), ca.SX.sym("w", m)
+        reference = {j.child: j.child_frame for j in tree.joints}
         self.joints = [
             Joint(j, self.t, {c: self.x[k] for c, k in zip(ft, th, strict=True)},
-                  {c: self.x[k] for c, k in zip(fu, us, strict=True)})
+                  {c: self.x[k] for c, k in zip(fu, us, strict=True)},
+                  reference.get(j.parent))
             for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                          lay.free_u, strict=True)]
         self.kin = articulated.kinematics(self.joints, ir.n_bodies)

@@ -27,6 +27,30 @@ def transform(e, r):
     return ca.vertcat(ca.horzcat(e, zero), ca.horzcat(-e @ euler.skew(r), e))
 
 
+def motion(e, r, m):
+    """transform(e, r) @ m without the 6x6 matrix: (E w, E (v - r x w))."""
+    w = e @ m[0:3]
+    return ca.vertcat(w, e @ m[3:6] - ca.cross(e @ r, w))
+
+
+def force_back(e, r, f):
+    """transform(e, r)^T @ f: a force in the new frame back in the old one."""
+    n, lin = e.T @ f[0:3], e.T @ f[3:6]
+    return ca.vertcat(n + ca.cross(r, lin), lin)
+
+
+def selection(subspace) -> list[int] | None:
+    """The rows a constant motion subspace selects (one 1 per column, zeros elsewhere), else
+    None."""
+    if not subspace.size2() or not subspace.is_constant():
+        return None
+    matrix = np.array(ca.DM(subspace).full())
+    rows = [int(np.flatnonzero(column)[0]) if np.count_nonzero(column) == 1
+            and np.flatnonzero(column).size and column[np.flatnonzero(column)[0]] == 1 else -1
+            for column in matrix.T]
+    return rows if min(rows) >= 0 and len(set(rows)) == len(rows) else None
+
+
 def transformed_inertia(e, r, inertia):
     """X^T I X for the motion transform X = transform(e, r) and a symmetric 6x6 I: rotated
     blockwise (E^T . E), then shifted by R = r~ as T^T I T with T = [[1, 0], [-R, 1]] (10 %

@@ -31,8 +31,9 @@ def resolved_settings(analysis: Analysis, **given) -> dict:
                                     if k in SETTINGS and v is not None})
     formulation = given.get("formulation") or settings.options.get("formulation", "auto")
     stabilization = given.get("stabilization") or settings.options.get("stabilization", "ggl")
+    method = given.get("method") or settings.options.get("method", "auto")
     return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation,
-            "stabilization": stabilization}
+            "stabilization": stabilization, "method": method}
 
 
 def sha256(text: str) -> str:

@@ -19,7 +19,7 @@ import numpy as np
 
 from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
-from casmech.compiler.checks import RANK_TOLERANCE, independent_rows
+from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
@@ -27,7 +27,7 @@ from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
-from casmech.runtime.dynamics import Z_TOL, initial_step
+from casmech.runtime.dynamics import Z_TOL, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -36,6 +36,18 @@ CHUNK = 1000  # output intervals per integrator call (a restart between calls)
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
+# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF.
+# Measured (an arm with a bushing of stiffness k to a tip mass, 2 s, rtol 1e-8): rho h = 2.8:
+# Adams 0.032 s (1621 steps), BDF 0.045 s (496); 28: 0.148 s against 0.065 s; 2800: 19 s
+# against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
+# bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
+STIFF = 10.0
+# the joint DAE's first step: FIRST_STEP times runtime.dynamics.initial_step (the r-p rule). At
+# 1x the four-bar failed at t0 at rtol 1e-12 (IDA_CONV_FAIL: the index-2 iteration matrix,
+# condition ~ 1/h^2); at 10x it, Bricard, a distance and a revolute-spherical link ran at
+# rtol 1e-6..1e-12 with step counts within 10 % of 1x (Bricard at 1e-12: 1865 against 3254).
+FIRST_STEP = 10.0
+STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
 
 def joint_system(functions: SystemFunctions) -> JointSystem:
@@ -149,7 +161,9 @@ class _Integrator:
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
-            integrator = ca.integrator("joint", "cvodes", system.problem, t0, list(times),
+            functional = self.options["nonlinear_solver_iteration"] == "functional"
+            problem = system.functional_problem if functional else system.problem
+            integrator = ca.integrator("joint", "cvodes", problem, t0, list(times),
                                        self.options)
             out = integrator(x0=x)
         else:
@@ -171,20 +185,32 @@ class _Integrator:
                            for v in system.motion(t0, x, z, np.ones(nb)))
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
-                "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], times[0] - t0),
+                "step0": FIRST_STEP * initial_step(q[:n], q_ddot[:n], self.options["reltol"],
+                                                   self.options["abstol"], times[0] - t0),
                 "abstolv": [self.options["abstol"]] * len(x) + [Z_TOL] * len(z)}
+
+
+def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
+    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
+    if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
+        return "adams"
+    rate = system.dynamics(t0, x0)
+    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
+    return "bdf" if radius * step > STIFF else "adams"
 
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "adams") -> Result:
+                       method: str = "auto") -> Result:
     system = joint_system(functions)
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
     x = initial_state(system, q0, q_dot0, nb)
     loops = _Loops(system, t0, x)
     z = loops.z(t0, x)
+    if method == "auto":
+        method = choose_method(system, t0, x, step)
     recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
                          loops.mask)
     integrate = _Integrator(system, loops, rtol, atol, method)
@@ -233,25 +259,32 @@ def _failure(t0: float, t1: float, why: str) -> AnalysisError:
 
 class _Recorder:
     """Appends results rows: the r-p state of the tree and every joint's multipliers (the
-    minimum-norm ones where loop rows were masked, as the r-p DAE reports them)."""
+    minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
+    a block by one mapped call."""
 
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
-        self.functions, self.system, self.signs, self.mask = functions, system, signs, mask
+        self.functions, self.system, self.signs = functions, system, signs
+        self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
 
     def __call__(self, result: Result, times, states, algebraic) -> None:
         n = len(times)
-        rows = self.system.motion.map(n)(np.asarray(times)[None, :], states, algebraic,
+        times = np.asarray(times, float)
+        rows = self.system.motion.map(n)(times[None, :], states, algebraic,
                                          np.repeat(self.signs[:, None], n, axis=1))
         q, q_dot, q_ddot, lam = (np.array(out.full()) for out in rows)
-        for j, t in enumerate(times):
-            result.append(t, q[:, j], q_dot[:, j], q_ddot[:, j],
-                          self._minimum_norm(t, q[:, j], lam[:, j]))
+        if self.least_norm is not None:
+            lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
+        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
 
-    def _minimum_norm(self, t, q, lam):
-        if not self.mask.any():
-            return lam
-        n = self.functions.n_joint_rows
-        jacobian_t = self.functions.matrix("romega_jacobian", t, q).T
-        lam = lam.copy()
-        lam[:n] = np.linalg.lstsq(jacobian_t, jacobian_t @ lam[:n], rcond=RANK_TOLERANCE)[0]
-        return lam
+
+def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
+    """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
+    minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
+    n = functions.n_joint_rows
+    masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
+    keep = [row for row in range(n) if row not in masked]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", functions.n_coordinates)
+    lam = ca.MX.sym("lam", functions.n_rows)
+    jacobian = functions["romega_jacobian"](t, q)
+    joint = minimum_norm(jacobian, lam[:n], keep)
+    return ca.Function("least_norm", [t, q, lam], [ca.vertcat(joint, lam[n:])])

@@ -432,6 +432,9 @@ class Analysis(Spec):
     # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
     # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
     stabilization: Literal["ggl", "projection"] = "ggl"
+    # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
+    # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
+    method: Literal["auto", "adams", "bdf"] = "auto"
 
 
 # ------------------------------------------------------- estimation and optimal control (issue 7)
