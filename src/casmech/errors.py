@@ -25,12 +25,16 @@ CODES: dict[str, str] = {
     "E001": "YAML syntax error",
     "E002": "duplicate key",
     "E003": "the document is not a mapping",
+    "E004": "a YAML 1.1 spelling that reads differently in YAML 1.2 (1:30, 0x10, yes, a date)",
+    "E005": "a YAML tag (!!python/..., !custom): not part of the format",
+    "E006": "the input exceeds a limit (file size, nesting depth, values after aliases)",
     # E1xx: structure (shape and types of the format)
     "E100": "missing required key",
     "E101": "unknown key",
     "E102": "wrong type",
     "E103": "invalid value",
     "E104": "unsupported format version",
+    "E105": "too many items (repeat copies, bodies, joints, forces, instances)",
     # E2xx: expressions
     "E200": "expression syntax error",
     "E201": "unknown symbol in expression",
@@ -43,6 +47,8 @@ CODES: dict[str, str] = {
     "E302": "reserved name",
     "E303": "invalid name",
     "E304": "a joint or force connects a body to itself",
+    "E305": "a file the model names is outside its folder or not a regular file",
+    "E306": "a file the model names is too large",
     # E4xx: physical sanity
     "E400": "mass must be positive",
     "E401": "inertia not positive definite",
@@ -55,6 +61,7 @@ CODES: dict[str, str] = {
     "E408": "driver not allowed on this joint type",
     "E409": "non-positive or inconsistent analysis setting",
     "E410": "invalid geometry",
+    "E411": "a magnitude outside the plausible range",
     # E5xx: structure of the assembled mechanism (found by the compiler)
     "E500": "redundant constraints",
     "E501": "mechanism is not fully driven",
