@@ -24,8 +24,8 @@ from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
-from casmech.runtime.results import Result, table
-from casmech.schema import load_model, load_model_text
+from casmech.runtime.results import Result, column_names, table
+from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
 
 
@@ -133,9 +133,12 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")
-    for name in ("t_end", "output_step", "rtol", "atol"):
-        if not getattr(settings, name) > 0:
-            raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
+    problems = limits.analysis_problems(
+        {name: float(getattr(settings, name)) for name in ("t_end", "output_step", "rtol", "atol")},
+        len(column_names(functions)), step_within=False)
+    if problems:  # the model's own settings were checked when it was loaded: these were given
+        raise UsageError("\n".join(f"error[E409] {name} = {getattr(settings, name):g}: {problem}"
+                                    for name, problem in problems.items()))
     result = ANALYSES[settings.type](functions, settings, progress)
     from casmech import codegen  # imported on use: `casmech check` never needs it
 

@@ -71,6 +71,7 @@ class SourceMap:
     values: dict[Path, Source] = field(default_factory=dict)
     keys: dict[Path, Source] = field(default_factory=dict)
     scalars: dict[Path, ScalarText] = field(default_factory=dict)
+    nulls: frozenset[Path] = frozenset()  # values written as null or ~ (not left empty)
 
 
 @dataclass(frozen=True)
@@ -178,6 +179,7 @@ class _Builder:
         self.file, self.text = file, text
         self.logs: tuple[list, list, list] = ([], [], [])  # (path, entry) of values, keys,
         self.diagnostics: list[Diagnostic] = []              # scalars, in reading order
+        self.nulls: list[Path] = []
         self.anchors: dict[str, _Anchor] = {}
         self.count = 0
         self.stack: list[_Node] = []
@@ -271,6 +273,8 @@ class _Builder:
             return event.value
         if isinstance(value, str):
             self.logs[2].append((path, ScalarText(self.scalar_start(event))))
+        elif value is None and event.value:
+            self.nulls.append(path)
         return value
 
     def key(self, key: str, child: Path, source: Source) -> None:
@@ -340,7 +344,7 @@ class _Builder:
 
     def source_map(self) -> SourceMap:
         values, keys, scalars = (dict(log) for log in self.logs)
-        return SourceMap(values, keys, scalars)
+        return SourceMap(values, keys, scalars, frozenset(self.nulls))
 
 
 def _tag(tag: str) -> str:
