@@ -36,6 +36,17 @@ def _in_files(diagnostic: Diagnostic, top: str) -> tuple:
 
 
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
+    """Overflows and NaNs are reported as findings (E204, E411), never warned about; paths in
+    the model resolve inside its folder (schema/files.py)."""
+    import numpy as np
+
+    from casmech.schema import files
+
+    with np.errstate(all="ignore"), files.rooted(document.file):
+        return _findings(document, overrides)
+
+
+def _findings(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
     from casmech.schema.components import compose, uses_composition
     from casmech.schema.semantic import resolve
     from casmech.schema.spec_errors import validate

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections import ChainMap
 from collections.abc import Mapping
 from typing import Any
 
@@ -103,8 +104,7 @@ class Checker:
             self.error("E201", path, f"unknown symbol '{name}'", source=source, hint=hint)
 
     def finite(self, path, expr: Expr, at: Mapping[str, float]) -> float | None:
-        with np.errstate(all="ignore"):  # an overflow is reported below, not warned about
-            value = float(expr.evaluate({**self.parameters, **at}, "numpy"))
+        value = float(expr.evaluate({**self.parameters, **at}, "numpy"))  # overflow: reported
         if not math.isfinite(value):
             where = ", ".join(f"{name} = {number:g}" for name, number in at.items())
             self.error(
@@ -215,7 +215,7 @@ class Checker:
         return name in known
 
     def two_bodies(self, path: Path, body_i: str, body_j: str) -> bool:
-        known = [GROUND, *self.bodies]
+        known = ChainMap({GROUND: None}, self.bodies)  # no copy: thousands of bodies
         found = all(
             [
                 self.reference((*path, "body_i"), body_i, known, "body"),

@@ -60,11 +60,12 @@ class ComposedChecker(BaseChecker):
                 self.joint_bodies[item.name] = (item.body_i, item.body_j)
 
     def reference(self, path: Path, name: str, known, what: str) -> bool:
-        if any(name.startswith(instance + ".") for instance in self.failed):
+        prefixes = owners_of(name)  # by set lookups: a model may have thousands of instances
+        if any(prefix in self.failed for prefix in prefixes):
             return False  # the instance's own findings are reported; no follow-up errors
         if name in known or "." not in name or not self.instances:
             return super().reference(path, name, known, what)
-        owners = [i for i in self.instances if name.startswith(i + ".")]
+        owners = [prefix for prefix in prefixes if prefix in self.instances]
         if not owners:
             head = name.split(".")[0]
             hint = did_you_mean(name, known) or did_you_mean(head, self.instances)
@@ -77,6 +78,12 @@ class ComposedChecker(BaseChecker):
         self.error("E300", path, f"unknown {what} '{name}': instance {owner} (component "
                    f"{self.instances[owner]}) has no {what} '{name[len(owner) + 1:]}'", hint=hint)
         return False
+
+
+def owners_of(name: str) -> list[str]:
+    """'a.b.c' -> ['a', 'a.b']: the instance paths a member name may belong to."""
+    parts = name.split(".")
+    return [".".join(parts[:k]) for k in range(1, len(parts))]
 
 
 def listing(names: list[str]) -> str:
@@ -95,9 +102,13 @@ class Scope:
 class Context:
     stack: tuple[tuple[tuple, str], ...] = ()  # (key, name) of the components being expanded
     files: dict[str, Document | list[Diagnostic]] = field(default_factory=dict)
+    # inline components as documents, made once per load: (id of the home document, name) ->
+    # (home, document); the home is kept so that its id stays its own
+    inline: dict[tuple[int, str], tuple[Document, Document]] = field(default_factory=dict)
+    budget: repeat.Budget = field(default_factory=repeat.Budget)  # items left to make
 
     def push(self, key: tuple, name: str) -> Context:
-        return Context((*self.stack, (key, name)), self.files)
+        return Context((*self.stack, (key, name)), self.files, self.inline, self.budget)
 
 
 @dataclass
@@ -232,6 +243,8 @@ class Instances:
 
     def instance(self, path: Path, given: spec.Instance) -> bool:
         """Resolve, place and add one instance; False when it has findings."""
+        if self.context.budget.exhausted:  # the model is too large (reported once, E105)
+            return False
         definition = self.scope.definitions.get(given.component)
         if definition is None:
             hint = did_you_mean(given.component, self.scope.definitions)
@@ -270,7 +283,10 @@ class Instances:
     def document(self, home: Document, name: str, ref):
         if isinstance(ref, spec.ComponentFile):
             return file_document(self.context, home, name, ref)
-        return inline_document(home, name), []
+        key = (id(home), name)
+        if key not in self.context.inline:  # one scan of the home's source map per component
+            self.context.inline[key] = (home, inline_document(home, name))
+        return self.context.inline[key][1], []
 
     def frame(self, path: Path, given: spec.Instance) -> placement.Frame | None:
         origin = self.check.vector((*path, "position"), given.position)
@@ -350,7 +366,7 @@ def compose_document(document: Document, overrides, context: Context,
     check.parameter_values(given.parameters)
     if check.found:
         return None, [*document.diagnostics, *check.found], {}
-    expanded, found = repeat.expand(document, check.parameters)
+    expanded, found = repeat.expand(document, check.parameters, context.budget)
     if expanded is None:
         return None, [*document.diagnostics, *found], {}
     given, found = validate(expanded)
