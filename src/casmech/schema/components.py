@@ -18,6 +18,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -25,7 +26,7 @@ from pathlib import Path as FilePath
 from typing import Any
 
 from casmech.errors import Diagnostic, ModelError, Source, UsageError, did_you_mean
-from casmech.schema import placement, repeat, spec
+from casmech.schema import files, placement, repeat, spec
 from casmech.schema.bodies import orientation, rotation_matrix
 from casmech.schema.checker import NAME, WHY_GROUND
 from casmech.schema.force_laws import StateChecker as BaseChecker
@@ -145,21 +146,47 @@ def inline_document(document: Document, name: str) -> Document:
 
 
 def file_document(context: Context, document: Document, name: str, ref):
-    """(the component file's document or None, findings) — read once per load."""
+    """(the component file's document or None, findings) — read once per load. The file must
+    be in the model's folder and a regular file of at most files.MAX_MODEL_BYTES."""
     where = ("components", name, "file")
-    path = str(FilePath(document.file).parent / ref.file)
+    try:
+        path = str(files.resolve(document.file, ref.file))
+    except files.NotAllowed as error:
+        return None, [Diagnostic("E305", f"components.{name}.file", f"component file "
+                                 f"'{ref.file}': {error.reason}", document.locate(where),
+                                 hint=error.hint)]
+    except FileNotFoundError:
+        path = str(FilePath(document.file).parent / ref.file)
     if path not in context.files:
-        try:
-            context.files[path] = with_bodies(load_file(path))
-        except UsageError as error:
-            message = f"cannot read component file '{ref.file}': {error}"
-            context.files[path] = [Diagnostic("E300", f"components.{name}.file", message,
-                                              document.locate(where),
-                                              hint="the path is relative to this file")]
-        except ModelError as error:
-            context.files[path] = error.diagnostics
+        context.files[path] = _read_component(document, name, ref, path)
     found = context.files[path]
     return (None, found) if isinstance(found, list) else (found, [])
+
+
+def _read_component(document: Document, name: str, ref, path: str):
+    """The component file's document, or its findings (located at `file:` when it cannot be
+    read or is too large, in the file itself otherwise)."""
+    where = ("components", name, "file")
+    try:
+        size = os.stat(path).st_size
+        if size > files.MAX_MODEL_BYTES:
+            return [Diagnostic("E306", f"components.{name}.file", f"component file "
+                               f"'{ref.file}' is larger than {files.MAX_MODEL_BYTES >> 20} MiB",
+                               document.locate(where), got=f"{size} bytes",
+                               hint="split it into smaller components")]
+        return with_bodies(load_file(path))
+    except (UsageError, OSError) as error:
+        message = f"cannot read component file '{ref.file}': {_reason(error)}"
+        return [Diagnostic("E300", f"components.{name}.file", message, document.locate(where),
+                           hint="the path is relative to this file")]
+    except ModelError as error:
+        return error.diagnostics
+
+
+def _reason(error: Exception) -> str:
+    if isinstance(error, FileNotFoundError) or "no such file" in str(error):
+        return "no such file"
+    return getattr(error, "strerror", None) or str(error)
 
 
 def component_key(document: Document, name: str, ref) -> tuple:

@@ -10,7 +10,7 @@ import math
 from collections.abc import Mapping
 
 from casmech.errors import Diagnostic
-from casmech.schema import limits, motors, resolved, spec
+from casmech.schema import files, limits, motors, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
@@ -77,6 +77,12 @@ def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimati
                               "estimated parameter") for name in given.bounds]
     weights = {name: check.number((*path, "weights", name), w) for name, w in given.weights.items()}
     bounds = _pairs(check, (*path, "bounds"), given.bounds)
+    try:
+        files.resolve(check.doc.file, given.data, must_exist=False)
+    except files.NotAllowed as error:
+        check.error("E305", (*path, "data"), f"data file '{given.data}': {error.reason}",
+                    hint=error.hint)
+        names.append(False)
     if not all(names) or failed([*weights.values(), bounds]):
         return None
     return resolved.Estimation(tuple(given.parameters), given.data, given.outputs, weights, bounds,
