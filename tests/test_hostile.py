@@ -255,7 +255,7 @@ bodies:
 joints:
   - {name: p1, type: revolute, body_i: ground, body_j: a, at: [0, 0, 0], axis: [0, 1, 0]}
   - {name: p2, type: revolute, body_i: a, body_j: b, at: [1, 0, 0], axis: [0, 1, 0]}
-analysis: {type: dynamics, t_end: 5000, output_step: 0.01, rtol: 1e-10, atol: 1e-12,
+analysis: {type: dynamics, t_end: 30000, output_step: 0.1, rtol: 1e-10, atol: 1e-12,
            formulation: FORMULATION}
 """
 
@@ -285,5 +285,5 @@ def test_interrupt_keeps_the_rows_computed(tmp_path, formulation, signum):
     from casmech.output.csv import read_csv
 
     names, values = read_csv(tmp_path / "out/results.csv")
-    assert names[0] == "t" and len(values) == meta["rows"] > 51  # more than the first run's
+    assert names[0] == "t" and len(values) == meta["rows"] > 6  # more than the first run's
     assert values[0, 0] == 0.0 and (values[1:, 0] > values[:-1, 0]).all()

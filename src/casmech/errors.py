@@ -9,12 +9,13 @@ A user mistake is never a traceback: every stage collects `Diagnostic`s and rais
       hint: ...
 
 Exit codes of the command line (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error,
-3 analysis failure.
+3 analysis failure, 128 + the signal's number when SIGINT (130) or SIGTERM (143) stopped it.
 """
 
 from __future__ import annotations
 
 import difflib
+import signal
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -163,3 +164,19 @@ class AnalysisError(CasmechError):
         self.context = context
         self.partial = partial
         super().__init__(context.format())
+
+
+class Interrupted(AnalysisError, KeyboardInterrupt):
+    """SIGINT or SIGTERM stopped an analysis (casmech.interrupts). An AnalysisError, so that
+    the analyses keep the rows computed so far in `partial` as they do for a failure; a
+    KeyboardInterrupt, so that a Python caller's Ctrl-C handling sees it. Exit code 128 + the
+    signal's number (130 for SIGINT, 143 for SIGTERM)."""
+
+    def __init__(self, signum: int, partial=None):
+        self.signum = signum
+        self.signal_name = signal.Signals(signum).name
+        self.exit_code = 128 + signum
+        super().__init__(FailureContext(None, f"interrupted by {self.signal_name}"), partial)
+
+    def __str__(self) -> str:
+        return f"interrupted by {self.signal_name}"

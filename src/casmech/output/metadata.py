@@ -40,10 +40,20 @@ def sha256(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+STATUSES = ("running", "complete", "failed", "interrupted")
+
+
 def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: dict,
                  timings: Mapping[str, float], result_metadata: Mapping, rows: int,
-                 error: str | None = None) -> dict:
-    """Everything needed to tell how a results table was made (JSON-serialisable)."""
+                 error: str | None = None, status: str | None = None,
+                 signal: str | None = None) -> dict:
+    """Everything needed to tell how a results table was made (JSON-serialisable). `status`:
+    running (written when the analysis starts: a results file from an earlier run is gone),
+    complete, failed or interrupted (`signal` names the signal); default: failed when there is
+    an error, else complete."""
+    status = status or ("failed" if error else "complete")
+    assert status in STATUSES, status
+    extra = {"signal": signal} if signal else {}
     return {
         "casmech_version": casmech.__version__,
         "casadi_version": casadi.__version__,
@@ -56,7 +66,8 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
         "timings_s": dict(timings),
         "mode": result_metadata.get("mode", "interpreted"),
         "rows": int(rows),
-        "status": "failed" if error else "complete",
+        "status": status,
+        **extra,
         "error": error or "",
         "result": {k: _plain(v) for k, v in result_metadata.items()},
     }

@@ -61,6 +61,7 @@ from casmech.compiler import augmented, dae, euler
 from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
+from casmech import interrupts
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly, projected_rk4
 from casmech.runtime.kinematics import output_times
@@ -262,7 +263,8 @@ class _Stepper:
         if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
             try:
                 return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
-            except RuntimeError:
+            except RuntimeError as error:
+                interrupts.check(error)  # a signal is not a solver failure
                 if len(times) > CHUNK:  # the whole grid: again in chunks, as after a failure
                     self.limit = self.chunk = CHUNK
                     return self.integrate(t0, times[:CHUNK], q, v, mask)
@@ -270,7 +272,8 @@ class _Stepper:
                 self.limit = CHUNK
         try:
             return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
-        except RuntimeError:  # IDAS failed (its construction is not guarded)
+        except RuntimeError as error:  # IDAS failed (its construction is not guarded)
+            interrupts.check(error)
             raise _Restart(float(t0)) from None
 
     def _problem(self, kind: str) -> dict:

@@ -25,6 +25,7 @@ from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
+from casmech import interrupts
 from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import Z_TOL, initial_step, minimum_norm
@@ -242,6 +243,7 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
     try:
         states, algebraic = integrate(t0, times, x, z)
     except RuntimeError as error:
+        interrupts.check(error)  # a signal is not a solver failure
         if len(times) == 1:
             raise _failure(t0, times[0], str(error)) from None
         half = len(times) // 2
