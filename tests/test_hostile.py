@@ -32,8 +32,8 @@ ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1",
 
 MEMORY = 1536 << 20  # address space of each process: casmech check/run needs ~600 MB
 TIMEOUT = 60.0  # [s] hard limit per process (a shared 2-core machine)
-LOCATED = re.compile(r"^(?P<file>[^\s:][^:]*):(?P<line>\d+):(?P<col>\d+): error\[(?P<code>E\d{3})\]",
-                     re.M)
+LOCATED = re.compile(r"^(?P<file>[^\s:][^:]*):(?P<line>\d+):(?P<col>\d+): "
+                     r"error\[(?P<code>E\d{3})\]", re.M)
 SECRET = "hunter2-not-for-your-eyes"
 
 BASE = """\
@@ -132,7 +132,7 @@ def _bodies(count: int) -> str:
 
 
 TABLE = "t, lift\n0, 0\n1, 0.1\n2, 0.2\n3, 0.1\n4, 0\n"
-FREE = BASE.replace("  type: dynamics", "  type: kinematics")  # a free pendulum cannot be run by kinematics
+FREE = BASE.replace("  type: dynamics", "  type: kinematics")  # kinematics of a free pendulum
 
 CASES = {
     # 1. numbers that reached NumPy as tracebacks

@@ -15,6 +15,7 @@ Exit codes of the command line (MODEL_FORMAT.md): 0 success, 1 model error, 2 us
 from __future__ import annotations
 
 import difflib
+import re
 import signal
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -137,9 +138,46 @@ class UsageError(CasmechError):
     exit_code = 2
 
 
+# SUNDIALS return flags (IDAS IDA_*, CVODES CV_*) -> what they mean, for failure messages
+SOLVER_REASONS = {
+    "TOO_MUCH_ACC": "too much accuracy requested (rtol/atol below what double precision "
+                    "reaches)",
+    "TOO_MUCH_WORK": "too many steps (max_num_steps) before the next output time",
+    "ERR_FAIL": "the error test failed repeatedly (or |h| = hmin)",
+    "CONV_FAIL": "the corrector did not converge (or |h| = hmin)",
+    "CONV_FAILURE": "the corrector did not converge (or |h| = hmin)",
+    "LINIT_FAIL": "the linear solver could not be set up",
+    "LSETUP_FAIL": "the linear solver's setup failed (a singular iteration matrix?)",
+    "LSOLVE_FAIL": "the linear solver failed",
+    "RES_FAIL": "the residual function failed (NaN or an interrupt)",
+    "RHSFUNC_FAIL": "the right-hand side failed (NaN or an interrupt)",
+    "REP_RES_ERR": "the residual function failed repeatedly",
+    "CONSTR_FAIL": "the inequality constraints failed",
+}
+_FLAG = re.compile(r'returned "(?:IDA|CV)_(\w+)"')
+
+
+def solver_reason(error: BaseException) -> str:
+    """What a SUNDIALS solver said, from the RuntimeError CasADi raised ("IDAS: too much
+    accuracy requested"), else the error's last line."""
+    text = str(error)
+    match = _FLAG.search(text)
+    if match:
+        solver = "IDAS" if "Idas" in text or '"IDA_' in text else "CVODES"
+        return f"{solver}: {SOLVER_REASONS.get(match.group(1), match.group(1))}"
+    lines = [line for line in text.strip().splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
+class BodyName(str):
+    """The name of a body where a failure names joints (its normalization row p^T p - 1):
+    `FailureContext` calls it a body."""
+
+
 @dataclass
 class FailureContext:
-    """What an analysis failure names: time, cause, joints involved (with their sources)."""
+    """What an analysis failure names: time, cause, joints involved (with their sources); an
+    entry whose name is a BodyName is a body's normalization row."""
 
     time: float | None
     cause: str
@@ -151,7 +189,8 @@ class FailureContext:
         lines = [f"analysis failed {at}{self.cause}"]
         for name, source, residual in self.joints:
             where = f"{source}: " if source else ""
-            lines.append(f"  {where}joint '{name}' ({self.measure} {residual:.3e})")
+            what = "body" if isinstance(name, BodyName) else "joint"
+            lines.append(f"  {where}{what} '{name}' ({self.measure} {residual:.3e})")
         return "\n".join(lines)
 
 
