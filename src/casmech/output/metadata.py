@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from collections.abc import Mapping
 from dataclasses import replace
 from datetime import datetime, timezone
@@ -86,11 +85,11 @@ def _plain(value):
 
 def write_json(path: str | Path, metadata: Mapping) -> Path:
     """Write atomically, like the CSV writer."""
+    from casmech.output.csv import atomic
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(metadata, indent=2) + "\n")
-    os.replace(temporary, path)
+    with atomic(path) as handle:
+        handle.write(json.dumps(metadata, indent=2) + "\n")
     return path
 
 
