@@ -253,3 +253,16 @@ def test_a_whole_model_is_bounded_members_of_instances_included():
     [diagnostic] = caught.value.diagnostics
     assert diagnostic.code == "E105" and diagnostic.path == "bodies[3]"
     assert f"more than {repeat.MAX_ITEMS}" in diagnostic.message
+
+
+def test_items_written_out_are_bounded_too():
+    from casmech.schema import repeat
+
+    body = "  - {{name: b{0}, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}}\n"
+    text = "casmech: 1\nname: many\nbodies:\n" + "".join(body.format(k) for k in
+                                                        range(repeat.MAX_ITEMS + 1))
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.path) == ("E105", f"bodies[{repeat.MAX_ITEMS}]")
+    assert diagnostic.source.line == 4 + repeat.MAX_ITEMS

@@ -48,6 +48,7 @@ def _resolve(document: Document, overrides: Mapping[str, str] | None) -> Resolve
 
 def _findings(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
     from casmech.schema.components import compose, uses_composition
+    from casmech.schema.repeat import too_many
     from casmech.schema.semantic import resolve
     from casmech.schema.spec_errors import validate
 
@@ -57,6 +58,9 @@ def _findings(document: Document, overrides: Mapping[str, str] | None) -> Resolv
         if found or model is None:
             raise ModelError(found)
         return model
+    found = too_many(document)  # composed models count as they are made (repeat.Budget)
+    if found:
+        raise ModelError(found)
     spec, found = validate(document)
     model = None
     if spec is not None:

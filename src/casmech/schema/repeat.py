@@ -244,6 +244,23 @@ def has_repeat(data: Mapping[str, Any]) -> bool:
                                        for k in NAME_KEYS) for item in items)
 
 
+def too_many(document: Document) -> list[Diagnostic]:
+    """E105 when the items written in a model without repeat or instances exceed MAX_ITEMS
+    (at the item that goes past it)."""
+    count = 0
+    for section in SECTIONS:
+        items = document.data.get(section)
+        if not isinstance(items, list):
+            continue
+        if count + len(items) > MAX_ITEMS:
+            path = (section, MAX_ITEMS - count)
+            return [Diagnostic("E105", format_path(path), f"the model has more than {MAX_ITEMS} "
+                               "bodies, joints, forces and instances", document.locate(path),
+                               hint="a model this large takes too long to check and compile")]
+        count += len(items)
+    return []
+
+
 def expand(document: Document, parameters: Mapping[str, float], budget: Budget | None = None):
     """(the expanded document, findings); the document must have passed validation. Every
     item made is spent from `budget` (E105 when it runs out)."""
