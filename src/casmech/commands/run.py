@@ -29,6 +29,7 @@ from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
+from casmech.runtime.results import column_names
 
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
@@ -101,10 +102,13 @@ def _run(args) -> int:
                                  formulation=args.formulation,
                                  stabilization=args.stabilization, method=args.method)
     run = (model, given, settings, timings)
+    api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
+                          args.atol, args.formulation, args.stabilization,
+                          args.method)  # a usage error before an earlier run's files go
+    _start(args, out, run)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
-            _start(args, out, run)
             result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
                                      formulation=args.formulation,
@@ -137,29 +141,22 @@ def _start(args, out: Path, run) -> None:
 
 
 def _keep(args, out: Path, functions, error: AnalysisError, run) -> None:
-    """The rows computed before a failure or an interrupt, and the metadata saying which."""
-    partial = error.partial
+    """The rows computed before a failure or an interrupt, and the metadata saying which (an
+    interrupt before the first row: the header only; a failure: the metadata only)."""
     interrupted = isinstance(error, Interrupted)
-    if partial is None or not len(partial):
-        if interrupted:  # the header and the metadata: the run is accounted for
-            partial = None
-        else:
-            _save_metadata(args, out, run, 0, str(error), "failed")
-            return
+    partial = error.partial if error.partial is not None and len(error.partial) else None
+    if partial is None and not interrupted:
+        if "csv" in args.format:
+            model, given, settings, timings = run
+            write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
+                                                           0, str(error), "failed"))
+        return
     paths = _save(args, out, functions, partial, run, str(error),
-                  status="interrupted" if interrupted else "failed",
-                  signal=error.signal_name if interrupted else None)
-    rows = len(partial) if partial is not None else 0
-    when = f" (t = {partial.times[-1]:.6g})" if rows else ""
+                  "interrupted" if interrupted else "failed",
+                  error.signal_name if interrupted else None)
+    rows, when = (len(partial), f" (t = {partial.times[-1]:.6g})") if partial else (0, "")
     print(f"kept {rows} rows computed before the {'interrupt' if interrupted else 'failure'}"
           f"{when} in {', '.join(map(str, paths))}", file=sys.stderr)
-
-
-def _save_metadata(args, out: Path, run, rows: int, error: str, status: str) -> None:
-    if "csv" in args.format:
-        model, given, settings, timings = run
-        write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
-                                                       rows, error, status))
 
 
 def _save(args, out: Path, functions, result, run, error: str | None = None,
@@ -167,8 +164,6 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
     """The table in every requested format, plus metadata.json beside a CSV (result None:
     no rows, the header only)."""
     if result is None:
-        from casmech.runtime.results import column_names
-
         names = column_names(functions)
         values, meta, rows = np.zeros((0, len(names))), {}, 0
     else:

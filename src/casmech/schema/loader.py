@@ -41,7 +41,6 @@ _RESOLVER = yaml.resolver.Resolver()  # YAML 1.1's implicit types: to recognise 
 _CORE = "tag:yaml.org,2002:"
 _TEXT_TAGS = {"!", f"{_CORE}str"}  # tags that only say "text"
 _COLLECTION_TAGS = {f"{_CORE}map", f"{_CORE}seq"}
-_NULL = {"", "~", "null", "Null", "NULL"}
 _BOOL = {"true": True, "True": True, "TRUE": True, "false": False, "False": False,
          "FALSE": False}
 _INTEGER = re.compile(r"[-+]?(0|[1-9][0-9]*)\Z")

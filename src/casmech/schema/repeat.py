@@ -34,6 +34,9 @@ MAX_ITEMS = 20_000  # bodies, joints, forces and instances of a whole model, the
 #                    instances (and theirs) included: each costs ~1 ms to check, and the
 #                    compiler's time grows faster than linearly beyond (2000 bodies: 27 s)
 INTEGRAL = 1e-9  # |x - round(x)| accepted as an integer
+TOO_MANY = (f"the model has more than {MAX_ITEMS} bodies, joints, forces and instances (the "
+            "members of instances included)")
+TOO_MANY_HINT = "a model this large takes too long to check and compile"
 
 
 @dataclass(frozen=True)
@@ -254,9 +257,8 @@ def too_many(document: Document) -> list[Diagnostic]:
             continue
         if count + len(items) > MAX_ITEMS:
             path = (section, MAX_ITEMS - count)
-            return [Diagnostic("E105", format_path(path), f"the model has more than {MAX_ITEMS} "
-                               "bodies, joints, forces and instances", document.locate(path),
-                               hint="a model this large takes too long to check and compile")]
+            return [Diagnostic("E105", format_path(path), TOO_MANY, document.locate(path),
+                               hint=TOO_MANY_HINT)]
         count += len(items)
     return []
 
@@ -278,13 +280,10 @@ def expand(document: Document, parameters: Mapping[str, float], budget: Budget |
             combos = ([{}] if "repeat" not in item
                       else bindings(report, path, item["repeat"], parameters))
             if budget.exhausted:  # reported where it ran out
-                return None, [*report.found]
+                return None, report.found
             if not budget.spend(len(combos or ())):
-                report.error("E105", path, f"the model has more than {MAX_ITEMS} bodies, "
-                             "joints, forces and instances (the members of instances "
-                             "included)", got=f"{section}[{j}]" + (
-                                 f" makes {len(combos)} copies" if "repeat" in item else ""),
-                             hint="a model this large takes too long to check and compile")
+                report.error("E105", path, TOO_MANY, hint=TOO_MANY_HINT,
+                             got=f"{len(combos)} copies" if "repeat" in item else None)
                 return None, report.found
             for values in combos or ():
                 items[(section, len(copies))] = (j, values)
