@@ -17,6 +17,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech import interrupts
 from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import independent_rows
@@ -25,7 +26,7 @@ from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -244,8 +245,9 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
     try:
         states, algebraic = integrate(t0, times, x, z)
     except RuntimeError as error:
+        interrupts.check(error)  # a signal is not a solver failure
         if len(times) == 1:
-            raise _failure(t0, times[0], str(error)) from None
+            raise _failure(t0, times[0], solver_reason(error)) from None
         half = len(times) // 2
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
