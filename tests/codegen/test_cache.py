@@ -19,15 +19,15 @@ from .conftest import MODEL
 
 @pytest.fixture
 def builds(monkeypatch) -> list:
-    """Records every library build (the C compiler runs only inside build_library)."""
+    """Records every build (the C compiler runs only inside build_libraries)."""
     calls = []
-    original = codegen.build_library
+    original = codegen.build_libraries
 
     def counting(*args, **kwargs):
         calls.append(args)
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(codegen, "build_library", counting)
+    monkeypatch.setattr(codegen, "build_libraries", counting)
     return calls
 
 
@@ -36,7 +36,7 @@ def test_unchanged_model_hits_changed_model_rebuilds(model, toolchain, cache_roo
     again = codegen.compiled(casmech.load(MODEL), toolchain, root=cache_root)
     assert builds == []  # the session fixture built it; same text, parameters, flags
     stiffer = casmech.load(MODEL, {"k": "25"})
-    # without the DAE residuals: a library a third the size builds faster (the key says so)
+    # without the DAE residuals: fewer libraries to build (the key says so)
     rebuilt = codegen.compiled(stiffer, toolchain, root=cache_root, dae=False)
     assert len(builds) == 1
     # the override reached the library: forces differ where the spring acts, as interpreted

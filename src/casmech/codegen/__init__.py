@@ -31,12 +31,14 @@ from pathlib import Path
 import casadi as ca
 
 import casmech
-from casmech.codegen import cache, generate, manifest
-from casmech.codegen.build import LIBRARY, Toolchain, available, build_library
+from casmech.codegen import cache, generate, manifest, residuals
+from casmech.codegen.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.codegen.mapped import mapped_functions
+from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
@@ -45,18 +47,32 @@ __all__ = ["Toolchain", "auto_mode", "available", "compiled", "export", "is_cach
            "write_build"]
 
 
-def write_build(functions: dict[str, ca.Function], directory: Path, toolchain: Toolchain,
-                info: dict, dae: bool = False) -> Path:
-    """Generate the sources and header, build the library and write the manifest (last, so a
-    directory with a manifest is complete); `dae`: the DAE residuals dae_<formulation> too."""
-    functions = {**functions, **(generate.dae_functions(functions) if dae else {})}
+def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
+    """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF."""
+    return {residuals.name(form, kind): residuals.oracle(ir, form, kind)
+            for form in FORMULATIONS for kind in residuals.KINDS}
+
+
+def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
+                dae: bool = False) -> Path:
+    """Generate the sources and headers, build the libraries and write the manifest (last, so
+    a directory with a manifest is complete); `dae`: the DAE residuals dae_[ggl_]<formulation>
+    too, each in its own library."""
+    functions = mapped_functions(ir)
     sources = generate.write_sources(functions, directory, toolchain.jobs)
-    build_library(sources, directory, toolchain)
-    return manifest.write(directory, functions, generate.differentiated(functions), {
+    oracles = dae_oracles(ir) if dae else {}
+    dae_sources = generate.write_dae_sources(oracles, directory)
+    build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
+    libraries = {name: generate.dae_library(name) for name in oracles}
+    return manifest.write(directory, {**functions, **{name: oracle[name] for name, oracle in
+                                                      oracles.items()}},
+                          generate.differentiated(functions), {
         **info, "casmech": casmech.__version__, "casmech_sources": cache.source_digest(),
         "casadi": ca.__version__, "compiler": toolchain.compiler,
         "compiler_version": toolchain.version(), "flags": list(toolchain.all_flags),
-        "library": LIBRARY, "header": generate.HEADER, "sources": [s.name for s in sources]})
+        "library": LIBRARY, "header": generate.HEADER,
+        "sources": [s.name for s in sources + [p for group in dae_sources.values()
+                                               for p in group]]}, libraries)
 
 
 def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
@@ -65,7 +81,7 @@ def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
 
     def build(directory: Path) -> None:
-        write_build(mapped_functions(lower(model)), directory, toolchain,
+        write_build(lower(model), directory, toolchain,
                     {"model": model.name, "model_hash": model_hash, "key": entry}, dae)
 
     return cache.lookup(entry, build, root)
