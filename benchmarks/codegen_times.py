@@ -31,19 +31,24 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 
-def bundle(form: str, ir) -> dict:
-    """What code generation compiles: every system function and the DAE residuals, built from
-    mapped kernels (codegen.mapped, what casmech compiles) or unrolled SX (compiler.functions,
-    what it compiled before)."""
-    from casmech.codegen import mapped
+def bundle(form: str, ir) -> tuple[dict, dict]:
+    """What code generation compiles: (the system functions, {DAE name: its dae/daeF/jacF}).
+    compiled: what casmech builds (codegen.mapped's kernels mapped over instances, the DAEs as
+    sums of elements, codegen.residuals); unrolled: the SX bundle of compiler.functions and
+    compiler.dae's SX residuals with their SX Jacobians."""
+    from casmech import codegen
+    from casmech.codegen import mapped, residuals
     from casmech.compiler import dae
     from casmech.compiler.functions import build_functions
 
-    functions = mapped.mapped_functions(ir) if form == "mapped" else build_functions(ir).functions
-    return {**functions, **dae.residuals(functions)}
+    if form == "compiled":
+        return mapped.mapped_functions(ir), codegen.dae_oracles(ir)
+    functions = build_functions(ir).functions
+    return functions, {name: residuals.from_residual(f)
+                       for name, f in dae.residuals(functions).items()}
 
 
-def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "mapped",
+def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "compiled",
            directions: int = 0) -> dict:
     """One setting, in this process: every stage timed."""
     sys.path.insert(0, str(HERE))
@@ -69,16 +74,20 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "map
     model = casmech.loads(text)
     lap("load")
     ir = lower(model)
-    functions = bundle(form, ir)
+    functions, oracles = bundle(form, ir)
     lap("symbolic")
     chain = codegen.Toolchain(flags=tuple(flags.split()), jobs=jobs)
     with tempfile.TemporaryDirectory() as directory:
         sources = generate.write_sources(functions, Path(directory), jobs)
+        dae_sources = generate.write_dae_sources(oracles, Path(directory))
         lap("generate_c")
-        c_bytes = sum(s.stat().st_size for s in sources)
-        build.build_library(sources, Path(directory), chain)
+        c_bytes = sum(s.stat().st_size for s in sources) + sum(
+            s.stat().st_size for group in dae_sources.values() for s in group)
+        build.build_libraries({build.LIBRARY: sources, **dae_sources}, Path(directory), chain)
         lap("gcc")
-        manifest.write(Path(directory), functions, generate.differentiated(functions), {})
+        manifest.write(Path(directory), {**functions, **{n: o[n] for n, o in oracles.items()}},
+                       generate.differentiated(functions), {"library": build.LIBRARY},
+                       {name: generate.dae_library(name) for name in oracles})
         compiled = load.load(Path(directory), ir)
         lap("load_library")
         times["total"] = sum(times.values())
@@ -170,23 +179,6 @@ def _library(functions: dict, directory: Path, flags: str) -> tuple[dict, float,
     return ({name: ca.external(name, library) for name in functions}, seconds, megabytes)
 
 
-def _oracle_of(residual) -> dict:
-    """dyn/daeF/jacF of a (t, x, z, p) -> (ode, alg) residual (codegen.residuals' form)."""
-    import casadi as ca
-
-    symbol = ca.SX if residual.is_a("SXFunction") else ca.MX
-    ins = [symbol.sym(residual.name_in(k), residual.sparsity_in(k)) for k in range(4)]
-    ins.append(symbol.sym("u", 0))
-    ode, alg = residual(*ins[:4])
-    names = ["t", "x", "z", "p", "u"]
-    return {"dyn": ca.Function("dyn", ins, [ode, alg, symbol(0, 1), symbol(0, 1)], names,
-                               ["ode", "alg", "quad", "zero"]),
-            "jacF": ca.Function("jacF", ins, [ca.jacobian(ode, ins[1]), ca.jacobian(alg, ins[1]),
-                                              ca.jacobian(ode, ins[2]),
-                                              ca.jacobian(alg, ins[2])], names,
-                                ["jac_ode_x", "jac_alg_x", "jac_ode_z", "jac_alg_z"])}
-
-
 def per_call_worker(system: str, form: str, flags: str) -> dict:
     """Per-call CPU microseconds of IDAS's daeF and jacF for the r-p GGL DAE and of the
     functions a results row calls, for one form of the bundle at one -O level."""
@@ -217,9 +209,9 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
         elif form == "unrolled":  # the SX bundle and the SX DAE, with jacF in the library
             sx = build_functions(ir).functions
             chosen = {name: sx[name] for name in ROW_FUNCTIONS}
-            chosen |= _oracle_of(dae.residual(sx, "rp", "ggl"))
+            chosen |= residuals.from_residual(dae.residual(sx, "rp", "ggl"))
             rows, out["gcc_s"], out["c_mb"] = _library(chosen, Path(directory), flags)
-            problem = rows["dyn"]
+            problem = rows["dae_ggl_rp"]
         else:  # elements: the mapped bundle's functions, the DAE of codegen.residuals
             bundle = mapped.mapped_functions(ir)
             chosen = {name: bundle[name] for name in ROW_FUNCTIONS}
@@ -337,8 +329,8 @@ def main() -> None:
         return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--bodies", type=int, nargs="+", default=[8, 32])
-    parser.add_argument("--forms", nargs="+", default=["mapped"],
-                        choices=["mapped", "unrolled", "interpreted"])
+    parser.add_argument("--forms", nargs="+", default=["compiled"],
+                        choices=["compiled", "unrolled", "interpreted"])
     parser.add_argument("--levels", nargs="+", default=["0"],
                         help="gcc optimisation levels to compare (0 1 2 3 s)")
     parser.add_argument("--jobs", type=int, nargs="+", default=[os.cpu_count() or 1])
@@ -378,7 +370,7 @@ def main() -> None:
             for flags in levels:
                 for jobs, directions in itertools.product(
                         args.jobs if form != "interpreted" else [1],
-                        args.directions if form == "mapped" else [0]):
+                        args.directions if form == "compiled" else [0]):
                     runs = [run_setting(bodies, flags, jobs, args.simulate, args.timeout, form,
                                         directions) for _ in range(args.repeats)]
                     rows.append(median_row(runs))

@@ -33,6 +33,7 @@ import casadi as ca
 import casmech
 from casmech.codegen import cache, generate, manifest, residuals
 from casmech.codegen.build import LIBRARY, Toolchain, available, build_libraries
+from casmech.codegen.library import compile_functions
 from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.codegen.mapped import mapped_functions
@@ -43,8 +44,8 @@ from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 
-__all__ = ["Toolchain", "auto_mode", "available", "compiled", "export", "is_cached", "mode_of",
-           "write_build"]
+__all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled", "export",
+           "is_cached", "mode_of", "write_build"]
 
 
 def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:

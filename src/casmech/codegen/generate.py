@@ -73,18 +73,26 @@ def _unit(name: str, functions: list[ca.Function], directory: Path) -> Path:
     return directory / f"{name}.c"
 
 
+def write_units(groups: dict[str, list[ca.Function]], directory: Path, parts: int,
+                prefix: str) -> list[Path]:
+    """Write `<prefix>_<k>.c/.h` (k < parts) and `<prefix>.h` including them; the C sources.
+    groups: name -> the functions generated for it (kept in one unit)."""
+    directory.mkdir(parents=True, exist_ok=True)
+    sources = [_unit(f"{prefix}_{k}", members, directory)
+               for k, members in enumerate(partition(groups, parts))]
+    includes = "".join(f'#include "{path.stem}.h"\n' for path in sources)
+    guard = prefix.upper() + "_H"
+    (directory / f"{prefix}.h").write_text(
+        "/* casmech generated functions (casadi C API). Compile with -std=c99 (gnu modes\n"
+        "   declare a math.h gamma() that clashes with ours). */\n"
+        f"#ifndef {guard}\n#define {guard}\n" + includes + "#endif\n")
+    return sources
+
+
 def write_sources(functions: dict[str, ca.Function], directory: Path,
                   parts: int = 1) -> list[Path]:
-    """Write `casmech_model_<k>.c/.h` (k < parts) and HEADER including them; the C sources."""
-    directory.mkdir(parents=True, exist_ok=True)
-    sources = [_unit(f"casmech_model_{k}", members, directory)
-               for k, members in enumerate(partition(units(functions), parts))]
-    includes = "".join(f'#include "{path.stem}.h"\n' for path in sources)
-    (directory / HEADER).write_text(
-        "/* casmech generated model: every system function (casadi C API). Compile with\n"
-        "   -std=c99 (gnu modes declare a math.h gamma() that clashes with ours). */\n"
-        "#ifndef CASMECH_MODEL_H\n#define CASMECH_MODEL_H\n" + includes + "#endif\n")
-    return sources
+    """The bundle: `casmech_model_<k>.c/.h` (k < parts) and HEADER including them."""
+    return write_units(units(functions), directory, parts, HEADER.removesuffix(".h"))
 
 
 def dae_library(name: str) -> str:

@@ -286,3 +286,22 @@ def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:
         "jacF": ca.Function("jacF", ins, [ode_x, alg_x, ode_z, alg_z], INTEGRATOR_IN,
                             ["jac_ode_x", "jac_alg_x", "jac_ode_z", "jac_alg_z"]),
     }
+
+
+def from_residual(residual: ca.Function) -> dict[str, ca.Function]:
+    """The same three functions for any residual (t, x, z, p) -> (ode, alg) (SX or MX), its
+    Jacobian blocks by CasADi's AD of the whole residual (e.g. compiler.dae's unrolled SX)."""
+    symbol = ca.SX if residual.is_a("SXFunction") else ca.MX
+    ins = [symbol.sym(n, residual.sparsity_in(k)) for k, n in enumerate(residual.name_in())]
+    ins.append(symbol.sym("u", 0))
+    ode, alg = residual(*ins[:4])
+    x, z = ins[1], ins[2]
+    return {
+        residual.name(): ca.Function(residual.name(), ins, [ode, alg, symbol(0, 1),
+                                                            symbol(0, 1)],
+                                     INTEGRATOR_IN, ["ode", "alg", "quad", "zero"]),
+        "daeF": ca.Function("daeF", ins, [ode, alg], INTEGRATOR_IN, ["ode", "alg"]),
+        "jacF": ca.Function("jacF", ins, [ca.jacobian(ode, x), ca.jacobian(alg, x),
+                                          ca.jacobian(ode, z), ca.jacobian(alg, z)],
+                            INTEGRATOR_IN, ["jac_ode_x", "jac_alg_x", "jac_ode_z", "jac_alg_z"]),
+    }
