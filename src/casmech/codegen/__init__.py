@@ -25,7 +25,9 @@ benchmarks/RESULTS_codegen.md has the measurements.
 
 from __future__ import annotations
 
+import os
 import shutil
+import signal
 from pathlib import Path
 
 import casadi as ca
@@ -111,15 +113,51 @@ def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
 
 
 def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
-              root: Path | None = None) -> str:
-    """"compiled" or "interpreted", whichever runs the model sooner end to end (module
-    docstring); "interpreted" without a C compiler."""
+              root: Path | None = None, background: bool = False) -> str:
+    """"compiled" or "interpreted", whichever the model runs sooner without waiting long for a
+    build (module docstring); "interpreted" without a C compiler. With `background`, a cache
+    miss below AUTO_BODIES also starts building the library behind the run when
+    $CASMECH_BACKGROUND_BUILD is 1 (build_in_background), so later runs are compiled."""
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
         return "interpreted"
     if is_cached(model, toolchain, root) or len(model.bodies) >= AUTO_BODIES:
         return "compiled"
+    if background and os.environ.get(BACKGROUND_ENVIRONMENT) == "1":
+        build_in_background(model, toolchain, root)
     return "interpreted"
+
+
+BACKGROUND_ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "1": auto builds behind the run
+BACKGROUND_LIMIT = 900  # s: a background build still running then stops (SIGALRM)
+
+
+def build_in_background(model: ResolvedModel, toolchain: Toolchain | None = None,
+                        root: Path | None = None) -> int:
+    """Build the model's library into the cache in a detached process (two forks: no zombie,
+    no wait at exit; one compiler process, niced), published atomically by cache.lookup, whose
+    lock makes a foreground build of the same key wait for it instead of building twice.
+    Returns the intermediate child's pid (0 where there is no fork)."""
+    if not hasattr(os, "fork"):
+        return 0
+    toolchain = toolchain or Toolchain()
+    pid = os.fork()
+    if pid:
+        os.waitpid(pid, 0)
+        return pid
+    try:
+        os.setsid()
+        if os.fork():
+            os._exit(0)
+        os.nice(10)
+        signal.alarm(BACKGROUND_LIMIT)
+        quiet = os.open(os.devnull, os.O_RDWR)
+        for stream in (0, 1, 2):
+            os.dup2(quiet, stream)
+        _cached(model, Toolchain(toolchain.compiler, toolchain.flags, 1), root, True)
+        os._exit(0)
+    except BaseException:  # noqa: BLE001 - a detached child reports nothing and never returns
+        os._exit(1)
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,

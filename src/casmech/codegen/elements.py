@@ -4,11 +4,11 @@ data d_e (time, masks, geometry: not differentiated), and S_e adds its outputs i
 Instances of one kernel form a Group, evaluated by one mapped call.
 
 The Jacobian dr/du is assembled the same way from each kernel's own SX Jacobian (a small
-sparse matrix per instance) added into the global pattern by a constant 0/1 matrix, so its
-cost is that of the kernels' Jacobians plus one pass over their non-zeros, and its code does
-not grow with the number of instances (only index tables do). Differentiating the mapped
-residual instead (CasADi's MX Jacobian) costs one forward sweep of every kernel per colour of
-the Jacobian: 10-20x more on a 32-body chain (benchmarks/notes_codegen.md).
+sparse matrix per instance), every entry added in place into the global non-zeros (add_into),
+so its cost is that of the kernels' Jacobians plus one pass over their non-zeros, and its code
+does not grow with the number of instances (only index tables do). CasADi's MX Jacobian of a
+mapped residual instead costs a forward sweep of every kernel per colour of the Jacobian
+(benchmarks/notes_codegen.md: 4-13x the interpreted SX Jacobian, where this is 2-6x faster).
 """
 
 from __future__ import annotations
@@ -70,8 +70,8 @@ class ElementSum:
             positions.append(offset + np.flatnonzero(keep))
             parts.append(ca.vec(out))  # column k holds instance k: the same order
             offset += out.numel()
-        rows, positions = np.concatenate(rows), np.concatenate(positions)
-        return _assemble([(self.n_rows, 1, rows, np.zeros(len(rows), int), positions)],
+        rows, positions = np.concatenate([[], *rows]), np.concatenate([[], *positions])
+        return assemble([(self.n_rows, 1, rows, np.zeros(len(rows), int), positions)],
                          parts, dense=True)[0]
 
     def jacobian(self, u, row_blocks=(None,), column_blocks=(None,)) -> list[ca.MX]:
@@ -91,7 +91,9 @@ class ElementSum:
             parts.append(ca.vec(_map(local, group.count)(self._gathered(padded, group),
                                                            group.data)))
             offset += nnz * group.count
-        rows, cols, positions = (np.concatenate(items) for items in zip(*triplets, strict=True))
+        rows, cols, positions = (np.concatenate([[], *items]).astype(int)
+                                 for items in zip(*triplets, strict=True)) \
+            if triplets else (np.zeros(0, int),) * 3
         blocks = []
         for row_block in row_blocks:
             r0, r1 = row_block or (0, self.n_rows)
@@ -100,7 +102,7 @@ class ElementSum:
                 inside = (rows >= r0) & (rows < r1) & (cols >= c0) & (cols < c1)
                 blocks.append((r1 - r0, c1 - c0, rows[inside] - r0, cols[inside] - c0,
                                positions[inside]))
-        return _assemble(blocks, parts)
+        return assemble(blocks, parts)
 
 
 def _map(kernel: ca.Function, count: int) -> ca.Function:
@@ -118,13 +120,13 @@ def jacobian_kernel(kernel: ca.Function) -> tuple[ca.Function, ca.Sparsity]:
                        ["y", "d"], ["jac"]), jac.sparsity()
 
 
-def _assemble(blocks: list[tuple], parts: list, dense: bool = False) -> list[ca.MX]:
+def assemble(blocks: list[tuple], parts: list, dense: bool = False) -> list[ca.MX]:
     """Sparse matrices from (n_rows, n_cols, rows, cols, positions) triplets into the stacked
     parts: entry (rows[k], cols[k]) is the sum of the stacked entries positions[k] (duplicates
     add up); dense: dense blocks. Every block's non-zeros are one slice of a single vector into
     which each part is added in place (add_into)."""
     sizes = np.cumsum([0] + [part.numel() for part in parts])
-    sparsities, target = [], np.full(sizes[-1], -1)
+    sparsities, target = [], np.full(sizes[-1], -1, dtype=int)
     for n_rows, n_cols, rows, cols, positions in blocks:
         rows, cols = [int(r) for r in rows], [int(c) for c in cols]
         if dense:
@@ -137,13 +139,20 @@ def _assemble(blocks: list[tuple], parts: list, dense: bool = False) -> list[ca.
         sparsities.append(sparsity)
     total = sum(s.nnz() for s in sparsities)
     target[target < 0] = total  # entries no block takes go to a last, discarded slot
-    values = add_into(total + 1, [(ca.vec(part), target[sizes[g]:sizes[g + 1]])
+    values = add_into(total + 1, [(ca.densify(ca.vec(part)), target[sizes[g]:sizes[g + 1]])
                                   for g, part in enumerate(parts)])
     out, start = [], 0
     for sparsity in sparsities:
         out.append(ca.MX(sparsity, values[start:start + sparsity.nnz()]))
         start += sparsity.nnz()
     return out
+
+
+def summed(n_rows: int, n_cols: int, rows, cols, parts: list) -> ca.MX:
+    """The sparse (n_rows x n_cols) matrix whose entry (rows[k], cols[k]) is the sum of the
+    k-th entries of the stacked parts (each vectorized column by column)."""
+    positions = np.arange(sum(part.numel() for part in parts))
+    return assemble([(n_rows, n_cols, rows, cols, positions)], parts)[0]
 
 
 def add_into(size: int, terms: list[tuple]) -> ca.MX:

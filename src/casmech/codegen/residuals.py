@@ -22,7 +22,7 @@ from casmech.codegen import bodies, forces
 from casmech.codegen import residual_kernels as kernels
 from casmech.codegen import rows as row_kernels
 from casmech.codegen.elements import DROPPED, ElementSum, Group
-from casmech.codegen.kernels import Layout, row_keys
+from casmech.codegen.kernels import Layout, by_joint_keys, taylor_or_constant
 from casmech.compiler import euler
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.formulations import FORMULATIONS
@@ -91,25 +91,9 @@ class Indices:
 
 # --- joints ---------------------------------------------------------------------------------
 
-def _joint_rows(ir: ModelIR) -> list[list[int]]:
-    """Rows grouped by joint; a row whose bodies differ from its joint's others alone."""
-    out, covered = [], set()
-    for joint in ir.joints:
-        rows = list(joint.rows)
-        pairs = {(ir.primitives[k].body_i, ir.primitives[k].body_j) for k in rows}
-        out += [rows] if len(pairs) == 1 else [[k] for k in rows]
-        covered.update(rows)
-    return out + [[k] for k in range(len(ir.primitives)) if k not in covered]
-
-
 def joint_groups(ir: ModelIR, ix: Indices, t, w) -> list[Group]:
-    keys = row_keys(ir)
-    by_key: dict = {}
-    for rows in _joint_rows(ir):
-        if rows:
-            by_key.setdefault(tuple(keys[k] for k in rows), []).append(rows)
     out = []
-    for joint_keys, members in by_key.items():
+    for joint_keys, members in by_joint_keys(ir).items():
         inputs, outputs = [], []
         for rows in members:
             pair = (ir.primitives[rows[0]].body_i, ir.primitives[rows[0]].body_j)
@@ -131,13 +115,6 @@ def _both(indices, pair) -> list[int]:
     return [i for body in pair for i in indices(body)]
 
 
-def _f(prim, key, t):
-    """[f, f', f''] of a row at t (codegen.kernels.Group.f, one row)."""
-    if key.f_class == row_kernels.TIME:
-        return row_kernels.taylor(prim, t)
-    return ca.DM([row_kernels.f_constant(prim), 0.0, 0.0])
-
-
 def _joint_data(ir: ModelIR, keys: tuple, members: list[list[int]], t, w):
     """d of every instance (columns): w by one gather (zero for rows outside P), f constant
     unless a row's f depends on time, the vectors of rows whose kernels do not bake them."""
@@ -145,7 +122,7 @@ def _joint_data(ir: ModelIR, keys: tuple, members: list[list[int]], t, w):
     flat = [k for rows in members for k in rows]
     weights = ca.reshape(w[flat], r, count)
     if any(key.f_class == row_kernels.TIME for key in keys):
-        f = ca.horzcat(*[ca.vertcat(*[_f(ir.primitives[k], key, t)
+        f = ca.horzcat(*[ca.vertcat(*[taylor_or_constant(ir.primitives[k], key, t)
                                       for k, key in zip(rows, keys, strict=True)])
                          for rows in members])
     else:
