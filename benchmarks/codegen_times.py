@@ -125,38 +125,90 @@ def interpreted_worker(bodies: int, simulate: float) -> dict:
 ROW_FUNCTIONS = ("phi", "phi_q", "nu", "body_rates", "reactions", "energy")  # per output row
 
 
-def per_call(function, seconds: float = 0.2, repeats: int = 5) -> float:
-    """Median CPU microseconds of one evaluation: `function` mapped over many copies of one
-    random input (casadi's serial map, so no Python between calls), timed by process time."""
+HARNESS = r"""
+/* Times repeated calls of one casadi-generated function in a shared library (same buffers). */
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+typedef long long int casadi_int;
+typedef int (*eval_t)(const double**, double**, casadi_int*, double*, int);
+typedef int (*work_t)(casadi_int*, casadi_int*, casadi_int*, casadi_int*);
+typedef const casadi_int* (*sp_t)(casadi_int);
+typedef casadi_int (*n_t)(void);
+static void* sym(void* h, const char* f, const char* s) { char b[256]; snprintf(b, 256, "%s%s", f, s); void* p = dlsym(h, b); if (!p) { fprintf(stderr, "no %s\n", b); exit(1);} return p; }
+static casadi_int nnz(const casadi_int* sp) { casadi_int nc = sp[1]; if (sp[2] == 1) return sp[0] * nc; return sp[2 + nc]; }
+int casadi_c_push_file(const char*); int casadi_c_activate(int); int casadi_c_eval(const double**, double**, casadi_int*, double*, int);
+int casadi_c_work(casadi_int*, casadi_int*, casadi_int*, casadi_int*); const casadi_int* casadi_c_sparsity_in(casadi_int);
+const casadi_int* casadi_c_sparsity_out(casadi_int); casadi_int casadi_c_n_in(void); casadi_int casadi_c_n_out(void); int casadi_c_checkout(void);
+static int mem0;
+static int ev_c(const double** a, double** r, casadi_int* iw, double* w, int m) { return casadi_c_eval(a, r, iw, w, mem0); }
+int main(int argc, char** argv) {
+  const char* f = argv[2]; int calls = atoi(argv[3]);
+  eval_t ev; work_t wk; sp_t spi, spo; n_t nin, nout;
+  if (argv[1][0] == '@') {  /* a serialized casadi Function, evaluated by casadi itself */
+    if (casadi_c_push_file(argv[1] + 1)) { fprintf(stderr, "load failed\n"); return 1; }
+    casadi_c_activate(0);
+    mem0 = casadi_c_checkout();
+    ev = ev_c; wk = casadi_c_work; spi = casadi_c_sparsity_in; spo = casadi_c_sparsity_out; nin = casadi_c_n_in; nout = casadi_c_n_out;
+  } else {
+    void* h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL); if (!h) { fprintf(stderr, "%s\n", dlerror()); return 1; }
+    ev = (eval_t) sym(h, f, ""); wk = (work_t) sym(h, f, "_work");
+    spi = (sp_t) sym(h, f, "_sparsity_in"); spo = (sp_t) sym(h, f, "_sparsity_out");
+    nin = (n_t) sym(h, f, "_n_in"); nout = (n_t) sym(h, f, "_n_out");
+  }
+  casadi_int sa, sr, si, sw; wk(&sa, &sr, &si, &sw);
+  const double** arg = malloc(sizeof(double*) * (sa > nin() ? sa : nin()));
+  double** res = malloc(sizeof(double*) * (sr > nout() ? sr : nout()));
+  casadi_int* iw = malloc(sizeof(casadi_int) * (si + 1)); double* w = malloc(sizeof(double) * (sw + 1));
+  srand(1);
+  for (casadi_int i = 0; i < nin(); ++i) { casadi_int n = nnz(spi(i)); double* a = malloc(sizeof(double) * (n + 1)); for (casadi_int k = 0; k < n; ++k) a[k] = 2.0 * rand() / RAND_MAX - 1; arg[i] = a; }
+  for (casadi_int i = 0; i < nout(); ++i) res[i] = malloc(sizeof(double) * (nnz(spo(i)) + 1));
+  if (calls <= 0) {  /* calibrate: about 20 ms per repetition */
+    struct timespec a, b; calls = 1;
+    for (;;) {
+      clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+      for (int c = 0; c < calls; ++c) ev(arg, res, iw, w, 0);
+      clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+      double s = (b.tv_sec - a.tv_sec) + (b.tv_nsec - a.tv_nsec) * 1e-9;
+      if (s > 0.02 || calls > 10000000) break;
+      calls *= 2;
+    }
+  }
+  double best = 1e30;
+  for (int rep = 0; rep < 7; ++rep) {
+    struct timespec t0, t1; clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+    for (int c = 0; c < calls; ++c) if (ev(arg, res, iw, w, 0)) { fprintf(stderr, "eval failed\n"); return 1; }
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+    double us = ((t1.tv_sec - t0.tv_sec) * 1e9 + (t1.tv_nsec - t0.tv_nsec)) / 1e3 / calls;
+    if (us < best) best = us;
+  }
+  printf("%.3f\n", best);
+  return 0;
+}
+"""
+
+
+def harness(directory: Path) -> Path:
+    """The C program that times one function: `harness LIB NAME 0` loads NAME from a generated
+    library, `harness @FILE NAME 0` a serialized casadi Function (evaluated by casadi's own
+    virtual machine: the interpreted form); both are called with the same buffers, the CPU
+    time per call is the minimum over 7 repetitions of ~20 ms each, printed in microseconds."""
     import casadi as ca
-    import numpy as np
 
-    rng = np.random.default_rng(0)
-    args = [ca.DM(function.sparsity_in(k), rng.uniform(-1, 1, function.nnz_in(k)))
-            for k in range(function.n_in())]
-
-    def timed(count: int) -> float:
-        mapped = function.map(count, "serial")
-        big = [ca.repmat(a, 1, count) for a in args]
-        mapped.call(big)
-        start = time.process_time()
-        mapped.call(big)
-        return time.process_time() - start
-
-    count = 1
-    while count < 2000 and timed(count) < 0.02:
-        count *= 4
-    count = max(1, min(2000, int(count * seconds / max(timed(count), 1e-6))))
-    return statistics.median(timed(count) / count * 1e6 for _ in range(repeats))
+    source, binary = directory / "harness.c", directory / "harness"
+    source.write_text(HARNESS)
+    casadi_dir = Path(ca.__file__).parent
+    subprocess.run(["gcc", "-O2", "-o", str(binary), str(source), "-ldl", f"-L{casadi_dir}",
+                    "-lcasadi", f"-Wl,-rpath,{casadi_dir}"], check=True)
+    return binary
 
 
-def integrator_functions(dae) -> tuple:
-    """IDAS's own residual and Jacobian functions (daeF, jacF) for a DAE problem: what the
-    integrator evaluates at each Newton iteration and each Jacobian update."""
-    import casadi as ca
-
-    integrator = ca.integrator("idas", "idas", dae, 0.0, [0.1])
-    return integrator.get_function("daeF"), integrator.get_function("jacF")
+def per_call(binary: Path, target: str, name: str) -> float:
+    """CPU microseconds per call of function `name` in `target` (a library, or @file)."""
+    done = subprocess.run([str(binary), target, name, "0"], capture_output=True, text=True,
+                          check=True)
+    return float(done.stdout)
 
 
 def _library(functions: dict, directory: Path, flags: str) -> tuple[dict, float, float]:
@@ -181,48 +233,60 @@ def _library(functions: dict, directory: Path, flags: str) -> tuple[dict, float,
 
 def per_call_worker(system: str, form: str, flags: str) -> dict:
     """Per-call CPU microseconds of IDAS's daeF and jacF for the r-p GGL DAE and of the
-    functions a results row calls, for one form of the bundle at one -O level."""
+    functions a results row calls, for one form of the code at one -O level (C harness)."""
     sys.path.insert(0, str(HERE))
+    import casadi as ca
     import casmech_model
     import systems
 
     import casmech
-    from casmech.codegen import mapped, residuals
+    from casmech.codegen import build, mapped, residuals
     from casmech.compiler import dae
     from casmech.compiler.functions import build_functions
     from casmech.compiler.lower import lower
 
     ir = lower(casmech.loads(casmech_model.yaml_text(systems.make(system))))
     out = {"system": system, "form": form, "flags": flags}
-    start = time.perf_counter()
-    with tempfile.TemporaryDirectory() as directory:
-        if form == "interpreted":
-            rows = build_functions(ir).functions
-            problem = dae.problem(dae.residual(rows, "rp", "ggl"))
-        elif form == "mapped":  # what casmech compiled until this change: MX over kernels
-            bundle = mapped.mapped_functions(ir)
-            bundle["dae_ggl_rp"] = dae.residual(bundle, "rp", "ggl")
-            chosen = {name: bundle[name] for name in (*ROW_FUNCTIONS, "dae_ggl_rp")}
-            chosen["jac_dae_ggl_rp"] = bundle["dae_ggl_rp"].jacobian()
-            rows, out["gcc_s"], out["c_mb"] = _library(chosen, Path(directory), flags)
-            problem = dae.problem(rows["dae_ggl_rp"])
-        elif form == "unrolled":  # the SX bundle and the SX DAE, with jacF in the library
-            sx = build_functions(ir).functions
-            chosen = {name: sx[name] for name in ROW_FUNCTIONS}
-            chosen |= residuals.from_residual(dae.residual(sx, "rp", "ggl"))
-            rows, out["gcc_s"], out["c_mb"] = _library(chosen, Path(directory), flags)
-            problem = rows["dae_ggl_rp"]
-        else:  # elements: the mapped bundle's functions, the DAE of codegen.residuals
-            bundle = mapped.mapped_functions(ir)
-            chosen = {name: bundle[name] for name in ROW_FUNCTIONS}
-            chosen |= residuals.oracle(ir, "rp", "ggl")
-            rows, out["gcc_s"], out["c_mb"] = _library(chosen, Path(directory), flags)
-            problem = rows["dae_ggl_rp"]
+    with tempfile.TemporaryDirectory() as name:
+        directory = Path(name)
+        binary = harness(directory)
+        start = time.perf_counter()
+        targets = {}
+        if form == "interpreted":  # the SX functions, in casadi's virtual machine
+            functions = build_functions(ir).functions
+            integrator = ca.integrator("i", "idas", dae.problem(dae.residual(
+                functions, "rp", "ggl")), 0.0, [0.1])
+            chosen = {n: functions[n] for n in ROW_FUNCTIONS}
+            chosen |= {n: integrator.get_function(n) for n in ("daeF", "jacF")}
+            for n, function in chosen.items():
+                function.save(str(directory / f"{n}.casadi"))
+                targets[n] = "@" + str(directory / f"{n}.casadi")
+        else:
+            if form == "mapped":  # what casmech compiled before: MX over kernels, and IDAS's
+                # jacF built as an MX graph around the library's jac_dae_ggl_rp
+                bundle = mapped.mapped_functions(ir)
+                residual = dae.residual(bundle, "rp", "ggl")
+                chosen = {n: bundle[n] for n in ROW_FUNCTIONS}
+                chosen |= {"dae_ggl_rp": residual, "jac_dae_ggl_rp": residual.jacobian()}
+            elif form == "unrolled":  # the SX functions and SX DAE, daeF/jacF in the library
+                functions = build_functions(ir).functions
+                chosen = {n: functions[n] for n in ROW_FUNCTIONS}
+                chosen |= residuals.from_residual(dae.residual(functions, "rp", "ggl"))
+            else:  # elements: what casmech compiles (codegen.mapped, codegen.residuals)
+                chosen = {n: mapped.mapped_functions(ir)[n] for n in ROW_FUNCTIONS}
+                chosen |= residuals.oracle(ir, "rp", "ggl")
+            loaded, out["gcc_s"], out["c_mb"] = _library(chosen, directory / "lib", flags)
+            library = str(directory / "lib" / build.LIBRARY)
+            targets = {n: library for n in (*ROW_FUNCTIONS, "daeF", "jacF")}
+            if form == "mapped":
+                integrator = ca.integrator("i", "idas", dae.problem(loaded["dae_ggl_rp"]), 0.0,
+                                           [0.1])
+                for n in ("daeF", "jacF"):
+                    integrator.get_function(n).save(str(directory / f"{n}.casadi"))
+                    targets[n] = "@" + str(directory / f"{n}.casadi")
         out["build_s"] = time.perf_counter() - start
-        dae_f, jac_f = integrator_functions(problem)
-        out["daeF"], out["jacF"] = per_call(dae_f), per_call(jac_f)
-        out["jacF_class"] = jac_f.class_name()
-        out |= {name: per_call(rows[name]) for name in ROW_FUNCTIONS}
+        for n, target in targets.items():
+            out[n] = per_call(binary, target, n)
     return out
 
 
