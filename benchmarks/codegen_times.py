@@ -48,7 +48,45 @@ def bundle(form: str, ir) -> tuple[dict, dict]:
                        for name, f in dae.residuals(functions).items()}
 
 
-def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "compiled",
+def timed_dynamics(functions, t_end: float) -> dict:
+    """casmech.analyze(..., "dynamics") over t_end (output every 0.01 s): wall and CPU seconds,
+    and from IDAS's own timers (record_time) the time inside the integrations and in its
+    daeF/jacF calls, with its step and residual-evaluation counts."""
+    import casadi as ca
+
+    import casmech
+
+    made, original = [], ca.integrator
+
+    def recording(*args):
+        *head, options = args
+        made.append(original(*head, {**options, "record_time": True}))
+        return made[-1]
+
+    ca.integrator = recording
+    try:
+        wall, cpu = time.perf_counter(), time.process_time()
+        casmech.analyze(functions, "dynamics", t_end=t_end, output_step=0.01)
+        out = {"simulate": time.perf_counter() - wall, "simulate_cpu": time.process_time() - cpu}
+    finally:
+        ca.integrator = original
+    totals: dict = {}
+    for integrator in made:
+        for key, value in integrator.stats().items():
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                totals[key] = totals.get(key, 0) + value
+    out |= {"idas_s": totals.get("t_proc_total", 0.0), "daeF_s": totals.get("t_proc_daeF", 0.0),
+            "jacF_s": totals.get("t_proc_jacF", 0.0), "steps": totals.get("nsteps", 0),
+            "residuals": totals.get("nfevals", 0), "jacobians": totals.get("nlinsetups", 0)}
+    return out
+
+
+def system_name(bodies: str) -> str:
+    """--bodies N means benchmarks/systems.py's chain<N>; any other name is that system."""
+    return f"chain{bodies}" if str(bodies).isdigit() else str(bodies)
+
+
+def worker(bodies: str, flags: str, jobs: int, simulate: float, form: str = "compiled",
            directions: int = 0) -> dict:
     """One setting, in this process: every stage timed."""
     sys.path.insert(0, str(HERE))
@@ -63,7 +101,7 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "com
     if directions:
         kernels.MAX_DIRECTIONS = directions
 
-    text = casmech_model.yaml_text(systems.make(f"chain{bodies}"))
+    text = casmech_model.yaml_text(systems.make(system_name(bodies)))
     times, clock = {}, time.perf_counter()
 
     def lap(name: str) -> None:
@@ -94,13 +132,11 @@ def worker(bodies: int, flags: str, jobs: int, simulate: float, form: str = "com
         result = {"bodies": bodies, "flags": flags, "jobs": jobs, "form": form, "times": times,
                   "c_megabytes": c_bytes / 1e6, "directions": kernels.MAX_DIRECTIONS}
         if simulate > 0:
-            start = time.perf_counter()
-            casmech.analyze(compiled, "dynamics", t_end=simulate, output_step=0.01)
-            result["simulate"] = time.perf_counter() - start
+            result |= timed_dynamics(compiled, simulate)
     return result
 
 
-def interpreted_worker(bodies: int, simulate: float) -> dict:
+def interpreted_worker(bodies: str, simulate: float) -> dict:
     """YAML -> the interpreted SX bundle, and its simulation (no C)."""
     sys.path.insert(0, str(HERE))
     import casmech_model
@@ -110,13 +146,11 @@ def interpreted_worker(bodies: int, simulate: float) -> dict:
 
     start = time.perf_counter()
     functions = casmech.compile(casmech.loads(casmech_model.yaml_text(
-        systems.make(f"chain{bodies}"))), "interpreted")
+        systems.make(system_name(bodies)))), "interpreted")
     result = {"bodies": bodies, "flags": "", "jobs": 1, "form": "interpreted",
               "times": {"total": time.perf_counter() - start}, "c_megabytes": 0.0}
     if simulate > 0:
-        start = time.perf_counter()
-        casmech.analyze(functions, "dynamics", t_end=simulate, output_step=0.01)
-        result["simulate"] = time.perf_counter() - start
+        result |= timed_dynamics(functions, simulate)
     return result
 
 
@@ -327,7 +361,7 @@ def median_per_call(runs: list[dict]) -> dict:
             "repeats": len(good)}
 
 
-def run_setting(bodies: int, flags: str, jobs: int, simulate: float, timeout: float,
+def run_setting(bodies: str, flags: str, jobs: int, simulate: float, timeout: float,
                 form: str, directions: int = 0) -> dict:
     command = [sys.executable, __file__, "--worker", str(bodies), flags, str(jobs),
                str(simulate), form, str(directions)]
@@ -350,7 +384,8 @@ def median_row(runs: list[dict]) -> dict:
     row = {**first, "times": {k: statistics.median(r["times"][k] for r in good)
                               for k in first["times"]}, "repeats": len(good)}
     if "simulate" in first:
-        row["simulate"] = statistics.median(r["simulate"] for r in good)
+        for key in ("simulate", "simulate_cpu", "idas_s", "daeF_s", "jacF_s", "steps"):
+            row[key] = statistics.median(r[key] for r in good)
         row["simulate_runs"] = [round(r["simulate"], 3) for r in good]
     row["total_runs"] = [round(r["times"]["total"], 2) for r in good]
     return row
@@ -360,20 +395,21 @@ STAGES = ("load", "symbolic", "generate_c", "gcc", "load_library")
 
 
 def table(rows: list[dict]) -> str:
-    lines = ["| bodies | form | flags | jobs | dirs | load | symbolic | generate C | gcc | "
-             "load lib | YAML -> loaded s | runs s | C MB | simulation s | runs s |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| system | form | flags | jobs | load | symbolic | generate C | gcc | load lib | "
+             "YAML -> loaded s | runs s | C MB | simulation s | runs s | CPU s | IDAS s | "
+             "daeF s | jacF s | steps |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        head = (f"| {r['bodies']} | {r['form']} | {r['flags']} | {r['jobs']} | "
-                f"{r.get('directions', '')} |")
+        head = f"| {system_name(r['bodies'])} | {r['form']} | {r['flags']} | {r['jobs']} |"
         if "times" not in r:
             why = f"timeout {r['timeout']:.0f} s" if "timeout" in r else "error"
-            lines.append(f"{head} {why} |||||||||||")
+            lines.append(f"{head} {why} |||||||||||||||")
             continue
         t = r["times"]
         stages = " | ".join(f"{t[k]:.2f}" if k in t else "" for k in STAGES)
-        sim = f"{r['simulate']:.2f} | {' '.join(map(str, r['simulate_runs']))}" \
-            if "simulate" in r else " | "
+        sim = (f"{r['simulate']:.2f} | {' '.join(map(str, r['simulate_runs']))} | "
+               f"{r['simulate_cpu']:.2f} | {r['idas_s']:.3f} | {r['daeF_s']:.3f} | "
+               f"{r['jacF_s']:.3f} | {r['steps']:.0f}") if "simulate" in r else " | | | | | |"
         lines.append(f"{head} {stages} | **{t['total']:.2f}** | "
                      f"{' '.join(map(str, r['total_runs']))} | {r['c_megabytes']:.2f} | {sim} |")
     return "\n".join(lines)
@@ -386,13 +422,14 @@ def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
         bodies, flags, jobs, simulate, form, directions = sys.argv[2:8]
         if form == "interpreted":
-            print(json.dumps(interpreted_worker(int(bodies), float(simulate))))
+            print(json.dumps(interpreted_worker(bodies, float(simulate))))
         else:
-            print(json.dumps(worker(int(bodies), flags, int(jobs), float(simulate), form,
+            print(json.dumps(worker(bodies, flags, int(jobs), float(simulate), form,
                                     int(directions))))
         return
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--bodies", type=int, nargs="+", default=[8, 32])
+    parser.add_argument("--bodies", nargs="+", default=["8", "32"],
+                        help="chain sizes (benchmarks/systems.py chain<N>) or system names")
     parser.add_argument("--forms", nargs="+", default=["compiled"],
                         choices=["compiled", "unrolled", "interpreted"])
     parser.add_argument("--levels", nargs="+", default=["0"],

@@ -13,10 +13,10 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-# -O0: a 128-body chain's library builds in 5.8-7.7 s (-O1: 9.7-16 s) and simulates within the
-# issue's 1.5x of the unrolled code (benchmarks/RESULTS_codegen.md); -O1 runs 1.3-2x faster
-# (casmech compile --flags=-O1, or CASMECH_CFLAGS=-O1, where runs outweigh the build).
-DEFAULT_FLAGS = ("-O0",)
+# -O1: the generated functions run 2-3x faster than at -O0 (benchmarks/RESULTS_codegen.md, per
+# call), and a 128-body chain's libraries build in ~6-8 s (-O2: ~10-12 s for 10-20 % faster
+# calls). casmech compile --flags, or CASMECH_CFLAGS, choose others.
+DEFAULT_FLAGS = ("-O1",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
