@@ -255,14 +255,41 @@ def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:
     xz = ((0, ix.n_x), (ix.n_x, ix.n_u))
     ode_x, ode_z, alg_x, alg_z = elements.jacobian(unknowns, xz, xz)
     ins = [tau, x, z, p, u]
+    outs = [ode, alg, ca.MX(0, 1), ca.MX(0, 1)]
+    blocks = {("ode", "x"): ode_x, ("ode", "z"): ode_z, ("alg", "x"): alg_x,
+              ("alg", "z"): alg_z}
+    for output, value in (("ode", ode), ("alg", alg)):  # t and p enter through data: by AD
+        blocks[output, "t"] = ca.jacobian(value, tau)
+        blocks[output, "p"] = ca.jacobian(value, p)
+    dae_name = name(form, kind)
     return {
-        name(form, kind): ca.Function(name(form, kind), ins, [ode, alg, ca.MX(0, 1),
-                                                              ca.MX(0, 1)],
-                                      INTEGRATOR_IN, ["ode", "alg", "quad", "zero"]),
+        dae_name: ca.Function(dae_name, ins, outs, INTEGRATOR_IN, DYN_OUT),
         "daeF": ca.Function("daeF", ins, [ode, alg], INTEGRATOR_IN, ["ode", "alg"]),
         "jacF": ca.Function("jacF", ins, [ode_x, alg_x, ode_z, alg_z], INTEGRATOR_IN,
                             ["jac_ode_x", "jac_alg_x", "jac_ode_z", "jac_alg_z"]),
+        f"jac_{dae_name}": jacobian_function(dae_name, ins, outs, blocks),
+        "jac_daeF": jacobian_function("daeF", ins, outs[:2], blocks),
     }
+
+
+DYN_OUT = ["ode", "alg", "quad", "zero"]  # casadi's DAE outputs (ca.dyn_out())
+
+
+def jacobian_function(dae_name: str, ins: list, outs: list, blocks: dict) -> ca.Function:
+    """jac_<name> as casadi's External looks it up: (inputs, nominal outputs) -> every block
+    d output / d input (zero where `blocks` has none). Besides serving AD through the function,
+    its patterns are what casadi takes for the function's Jacobian sparsity; without it an
+    External counts as dense: IDAS's setup (Integrator::sp_jac_dae, from daeF) then took 2 s
+    for a 128-body chain."""
+    out_names = DYN_OUT[:len(outs)]
+    nominal = [ca.MX.sym(f"out_{n}", o.sparsity()) for n, o in zip(out_names, outs, strict=True)]
+    values, names = [], []
+    for o_name, o_value in zip(out_names, outs, strict=True):
+        for i_name, i_value in zip(INTEGRATOR_IN, ins, strict=True):
+            values.append(blocks.get((o_name, i_name), ca.MX(o_value.numel(), i_value.numel())))
+            names.append(f"jac_{o_name}_{i_name}")
+    return ca.Function(f"jac_{dae_name}", ins + nominal, values,
+                       INTEGRATOR_IN + [f"out_{n}" for n in out_names], names)
 
 
 def from_residual(residual: ca.Function) -> dict[str, ca.Function]:
