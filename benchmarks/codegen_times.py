@@ -160,7 +160,8 @@ ROW_FUNCTIONS = ("phi", "phi_q", "nu", "body_rates", "reactions", "energy")  # p
 
 
 HARNESS = r"""
-/* Times repeated calls of one casadi-generated function in a shared library (same buffers). */
+/* Times one casadi function: from a generated library (dlopen) or, for "@file", a serialized
+   casadi Function evaluated by libcasadi (casadi_c_*); the same buffers on every call. */
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -170,51 +171,81 @@ typedef int (*eval_t)(const double**, double**, casadi_int*, double*, int);
 typedef int (*work_t)(casadi_int*, casadi_int*, casadi_int*, casadi_int*);
 typedef const casadi_int* (*sp_t)(casadi_int);
 typedef casadi_int (*n_t)(void);
-static void* sym(void* h, const char* f, const char* s) { char b[256]; snprintf(b, 256, "%s%s", f, s); void* p = dlsym(h, b); if (!p) { fprintf(stderr, "no %s\n", b); exit(1);} return p; }
-static casadi_int nnz(const casadi_int* sp) { casadi_int nc = sp[1]; if (sp[2] == 1) return sp[0] * nc; return sp[2 + nc]; }
-int casadi_c_push_file(const char*); int casadi_c_activate(int); int casadi_c_eval(const double**, double**, casadi_int*, double*, int);
-int casadi_c_work(casadi_int*, casadi_int*, casadi_int*, casadi_int*); const casadi_int* casadi_c_sparsity_in(casadi_int);
-const casadi_int* casadi_c_sparsity_out(casadi_int); casadi_int casadi_c_n_in(void); casadi_int casadi_c_n_out(void); int casadi_c_checkout(void);
+int casadi_c_push_file(const char*);
+int casadi_c_activate(int);
+int casadi_c_checkout(void);
+int casadi_c_eval(const double**, double**, casadi_int*, double*, int);
+int casadi_c_work(casadi_int*, casadi_int*, casadi_int*, casadi_int*);
+const casadi_int* casadi_c_sparsity_in(casadi_int);
+const casadi_int* casadi_c_sparsity_out(casadi_int);
+casadi_int casadi_c_n_in(void);
+casadi_int casadi_c_n_out(void);
 static int mem0;
-static int ev_c(const double** a, double** r, casadi_int* iw, double* w, int m) { return casadi_c_eval(a, r, iw, w, mem0); }
+static int eval_c(const double** a, double** r, casadi_int* iw, double* w, int m) {
+  (void) m;
+  return casadi_c_eval(a, r, iw, w, mem0);
+}
+static void* sym(void* h, const char* f, const char* s) {
+  char b[256];
+  snprintf(b, 256, "%s%s", f, s);
+  void* p = dlsym(h, b);
+  if (!p) { fprintf(stderr, "no %s\n", b); exit(1); }
+  return p;
+}
+static casadi_int nnz(const casadi_int* sp) {  /* {nrow, ncol, 1}: dense */
+  return sp[2] == 1 ? sp[0] * sp[1] : sp[2 + sp[1]];
+}
+static double seconds(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return t.tv_sec + 1e-9 * t.tv_nsec;
+}
 int main(int argc, char** argv) {
-  const char* f = argv[2]; int calls = atoi(argv[3]);
   eval_t ev; work_t wk; sp_t spi, spo; n_t nin, nout;
-  if (argv[1][0] == '@') {  /* a serialized casadi Function, evaluated by casadi itself */
+  if (argc < 4) return 2;
+  int calls = atoi(argv[3]);
+  if (argv[1][0] == '@') {
     if (casadi_c_push_file(argv[1] + 1)) { fprintf(stderr, "load failed\n"); return 1; }
     casadi_c_activate(0);
     mem0 = casadi_c_checkout();
-    ev = ev_c; wk = casadi_c_work; spi = casadi_c_sparsity_in; spo = casadi_c_sparsity_out; nin = casadi_c_n_in; nout = casadi_c_n_out;
+    ev = eval_c; wk = casadi_c_work; spi = casadi_c_sparsity_in;
+    spo = casadi_c_sparsity_out; nin = casadi_c_n_in; nout = casadi_c_n_out;
   } else {
-    void* h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL); if (!h) { fprintf(stderr, "%s\n", dlerror()); return 1; }
-    ev = (eval_t) sym(h, f, ""); wk = (work_t) sym(h, f, "_work");
-    spi = (sp_t) sym(h, f, "_sparsity_in"); spo = (sp_t) sym(h, f, "_sparsity_out");
-    nin = (n_t) sym(h, f, "_n_in"); nout = (n_t) sym(h, f, "_n_out");
+    void* h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!h) { fprintf(stderr, "%s\n", dlerror()); return 1; }
+    ev = (eval_t) sym(h, argv[2], ""); wk = (work_t) sym(h, argv[2], "_work");
+    spi = (sp_t) sym(h, argv[2], "_sparsity_in");
+    spo = (sp_t) sym(h, argv[2], "_sparsity_out");
+    nin = (n_t) sym(h, argv[2], "_n_in"); nout = (n_t) sym(h, argv[2], "_n_out");
   }
-  casadi_int sa, sr, si, sw; wk(&sa, &sr, &si, &sw);
+  casadi_int sa, sr, si, sw;
+  wk(&sa, &sr, &si, &sw);
   const double** arg = malloc(sizeof(double*) * (sa > nin() ? sa : nin()));
   double** res = malloc(sizeof(double*) * (sr > nout() ? sr : nout()));
-  casadi_int* iw = malloc(sizeof(casadi_int) * (si + 1)); double* w = malloc(sizeof(double) * (sw + 1));
+  casadi_int* iw = malloc(sizeof(casadi_int) * (si + 1));
+  double* w = malloc(sizeof(double) * (sw + 1));
   srand(1);
-  for (casadi_int i = 0; i < nin(); ++i) { casadi_int n = nnz(spi(i)); double* a = malloc(sizeof(double) * (n + 1)); for (casadi_int k = 0; k < n; ++k) a[k] = 2.0 * rand() / RAND_MAX - 1; arg[i] = a; }
+  for (casadi_int i = 0; i < nin(); ++i) {
+    casadi_int n = nnz(spi(i));
+    double* a = malloc(sizeof(double) * (n + 1));
+    for (casadi_int k = 0; k < n; ++k) a[k] = 2.0 * rand() / RAND_MAX - 1;
+    arg[i] = a;
+  }
   for (casadi_int i = 0; i < nout(); ++i) res[i] = malloc(sizeof(double) * (nnz(spo(i)) + 1));
-  if (calls <= 0) {  /* calibrate: about 20 ms per repetition */
-    struct timespec a, b; calls = 1;
-    for (;;) {
-      clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  if (calls <= 0) {  /* about 20 ms per repetition */
+    for (calls = 1; calls < 10000000; calls *= 2) {
+      double start = seconds();
       for (int c = 0; c < calls; ++c) ev(arg, res, iw, w, 0);
-      clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
-      double s = (b.tv_sec - a.tv_sec) + (b.tv_nsec - a.tv_nsec) * 1e-9;
-      if (s > 0.02 || calls > 10000000) break;
-      calls *= 2;
+      if (seconds() - start > 0.02) break;
     }
   }
   double best = 1e30;
   for (int rep = 0; rep < 7; ++rep) {
-    struct timespec t0, t1; clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
-    for (int c = 0; c < calls; ++c) if (ev(arg, res, iw, w, 0)) { fprintf(stderr, "eval failed\n"); return 1; }
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
-    double us = ((t1.tv_sec - t0.tv_sec) * 1e9 + (t1.tv_nsec - t0.tv_nsec)) / 1e3 / calls;
+    double start = seconds();
+    for (int c = 0; c < calls; ++c) {
+      if (ev(arg, res, iw, w, 0)) { fprintf(stderr, "evaluation failed\n"); return 1; }
+    }
+    double us = (seconds() - start) * 1e6 / calls;
     if (us < best) best = us;
   }
   printf("%.3f\n", best);

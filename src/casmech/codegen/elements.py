@@ -19,7 +19,6 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-
 DROPPED = -1  # an output index that is not added anywhere (e.g. ground's rows)
 
 
