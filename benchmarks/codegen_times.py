@@ -21,6 +21,7 @@ import itertools
 import json
 import os
 import platform
+import resource
 import statistics
 import subprocess
 import sys
@@ -121,8 +122,11 @@ def worker(bodies: str, flags: str, jobs: int, simulate: float, form: str = "com
         lap("generate_c")
         c_bytes = sum(s.stat().st_size for s in sources) + sum(
             s.stat().st_size for group in dae_sources.values() for s in group)
+        children = resource.getrusage(resource.RUSAGE_CHILDREN)
         build.build_libraries({build.LIBRARY: sources, **dae_sources}, Path(directory), chain)
         lap("gcc")
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        gcc_cpu = after.ru_utime + after.ru_stime - children.ru_utime - children.ru_stime
         manifest.write(Path(directory), {**functions, **{n: o[n] for n, o in oracles.items()}},
                        generate.differentiated(functions), {"library": build.LIBRARY},
                        {name: generate.dae_library(name) for name in oracles})
@@ -130,7 +134,8 @@ def worker(bodies: str, flags: str, jobs: int, simulate: float, form: str = "com
         lap("load_library")
         times["total"] = sum(times.values())
         result = {"bodies": bodies, "flags": flags, "jobs": jobs, "form": form, "times": times,
-                  "c_megabytes": c_bytes / 1e6, "directions": kernels.MAX_DIRECTIONS}
+                  "c_megabytes": c_bytes / 1e6, "directions": kernels.MAX_DIRECTIONS,
+                  "gcc_cpu": gcc_cpu}
         if simulate > 0:
             result |= timed_dynamics(compiled, simulate)
     return result
@@ -414,6 +419,8 @@ def median_row(runs: list[dict]) -> dict:
     first = good[0]
     row = {**first, "times": {k: statistics.median(r["times"][k] for r in good)
                               for k in first["times"]}, "repeats": len(good)}
+    if "gcc_cpu" in first:
+        row["gcc_cpu"] = statistics.median(r["gcc_cpu"] for r in good)
     if "simulate" in first:
         for key in ("simulate", "simulate_cpu", "idas_s", "daeF_s", "jacF_s", "steps"):
             row[key] = statistics.median(r[key] for r in good)
@@ -427,9 +434,9 @@ STAGES = ("load", "symbolic", "generate_c", "gcc", "load_library")
 
 def table(rows: list[dict]) -> str:
     lines = ["| system | form | flags | jobs | load | symbolic | generate C | gcc | load lib | "
-             "YAML -> loaded s | runs s | C MB | simulation s | runs s | CPU s | IDAS s | "
-             "daeF s | jacF s | steps |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "YAML -> loaded s | runs s | gcc CPU s | C MB | simulation s | runs s | CPU s | "
+             "IDAS s | daeF s | jacF s | steps |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         head = f"| {system_name(r['bodies'])} | {r['form']} | {r['flags']} | {r['jobs']} |"
         if "times" not in r:
@@ -441,8 +448,10 @@ def table(rows: list[dict]) -> str:
         sim = (f"{r['simulate']:.2f} | {' '.join(map(str, r['simulate_runs']))} | "
                f"{r['simulate_cpu']:.2f} | {r['idas_s']:.3f} | {r['daeF_s']:.3f} | "
                f"{r['jacF_s']:.3f} | {r['steps']:.0f}") if "simulate" in r else " | | | | | |"
+        gcc_cpu = f"{r['gcc_cpu']:.2f}" if "gcc_cpu" in r else ""
         lines.append(f"{head} {stages} | **{t['total']:.2f}** | "
-                     f"{' '.join(map(str, r['total_runs']))} | {r['c_megabytes']:.2f} | {sim} |")
+                     f"{' '.join(map(str, r['total_runs']))} | {gcc_cpu} | "
+                     f"{r['c_megabytes']:.2f} | {sim} |")
     return "\n".join(lines)
 
 

@@ -19,16 +19,15 @@ import casadi as ca
 from casmech.codegen import manifest
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
-# graph over the library differentiates (casmech.optimal).
-DIFFERENTIATED = frozenset({
-    "phi", "nu", "gamma", "generalized_forces",
-    "romega_forces", "romega_nu", "romega_gamma", "romega_q_dot",
-})
+# graph over the library differentiates (casmech.optimal.compiled, r-p only). The romega_*
+# functions are evaluated only (the runtime's fallback steps): their derivatives were 40-50 %
+# of the bundle's gcc time on the four-bar (benchmarks/notes_codegen.md).
+DIFFERENTIATED = frozenset({"phi", "nu", "gamma", "generalized_forces"})
 # Matrix-valued functions that graph differentiates too get one forward and one reverse
 # derivative instead (`fwd1_<name>`, `adj1_<name>`, which casadi's External uses the same way):
 # their Jacobians are 3-D tensors whose sparsity tables in the C grow as N^2 (4 MB of C for the
 # mass matrix of 128 bodies, gigabytes at 1000).
-DIRECTIONAL = manifest.DIRECTIONAL  # {"mass_matrix", "phi_q", "romega_mass", "romega_jacobian"}
+DIRECTIONAL = manifest.DIRECTIONAL  # {"mass_matrix", "phi_q"}
 HEADER = "casmech_model.h"
 
 

@@ -9,7 +9,7 @@ import casadi as ca
 
 MANIFEST = "manifest.json"
 # generated with fwd1_<name> and adj1_<name> (codegen.generate); kept here to avoid a cycle
-DIRECTIONAL = frozenset({"mass_matrix", "phi_q", "romega_mass", "romega_jacobian"})
+DIRECTIONAL = frozenset({"mass_matrix", "phi_q"})
 FORMAT = 2  # bump when the layout of a build directory changes (2: a library per DAE)
 
 
