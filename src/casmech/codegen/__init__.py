@@ -1,26 +1,35 @@
-"""Code generation: SystemFunctions -> C -> shared library -> casadi.external, with a cache.
+"""Code generation: SystemFunctions -> C -> shared libraries -> casadi.external, with a cache.
 
     functions = compiled(model)           # SystemFunctions; built once per content, then cached
-    export(model, Path("out"))            # `casmech compile`: sources, header, manifest, library
-    auto_mode(model)                      # "compiled" or "interpreted": the faster end to end
+    export(model, Path("out"))            # `casmech compile`: sources, headers, manifest, libraries
+    auto_mode(model)                      # "compiled" or "interpreted"
+    compile_functions({"f": f}, ...)      # any named casadi Functions (codegen.library)
 
-What is compiled is codegen.mapped: every system function and the DAE residuals built from SX
-kernels (one per kind of constraint row, body quantity, force element) mapped over their
-instances, so the C holds each kernel once and only index tables grow with the model: YAML ->
-loaded library for a 128-body chain in 6 s at -O0 and 16 s at -O1, 1000 bodies in 75 s and
-113 s (the unrolled SX functions took 108-267 s at 128 bodies), on a shared, loaded 2-core VM.
-Default flags -O0 (build.DEFAULT_FLAGS: within both targets; -O1 runs faster).
-benchmarks/RESULTS_codegen.md has the measurements.
+What is compiled (write_build):
+  - the bundle, codegen.mapped: every system function from SX kernels (one per kind of
+    constraint row, joint, body quantity, force element) mapped over their instances, with the
+    derivatives casmech.optimal differentiates through (codegen.generate);
+  - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (codegen.residuals: one
+    kernel per joint, body and force element, the Jacobian from the kernels' own SX
+    Jacobians), in a library of its own with the daeF and jacF casadi's IDAS interface loads
+    from it.
+The C holds each kernel once; only index tables grow with the model. Default flags -O1
+(build.DEFAULT_FLAGS). Measured (benchmarks/RESULTS_codegen.md): IDAS's residual 3.3-4x and
+Jacobian 4-8x faster than the interpreted SX from 2 to 128 bodies; YAML -> loaded library in
+2-4 s for chains of 2-128 bodies (the four-bar, whose joints share no kernel, ~6-10 s), 12 s
+for 1000.
 
-`--mode auto` (auto_mode) takes the path that is fastest end to end:
-  - compiled when the library is in the cache (loading it takes 0.02-0.4 s);
-  - otherwise compiled when the model has at least AUTO_BODIES bodies, interpreted below.
-    Measured on chains (shared 2-core VM, RESULTS_codegen.md): YAML -> ready takes 0.05-1.1 s
-    interpreted for 1-32 bodies against 1.5-8 s to build the library (the kernels' C is a
-    fixed ~1.5 MB whatever the size), and 1 s of simulation runs about as fast either way;
-    at 128 bodies 3.6 s against ~16 s. The interpreted SX bundle grows superlinearly (22 s
-    at 256 bodies, 61 s at 512) and the build linearly (~75 s at 1000), so compiling pays
-    from about 200 bodies even for a single run.
+`--mode auto` (auto_mode):
+  - compiled when the library is in the cache (loading it takes 0.02-0.3 s);
+  - otherwise compiled from AUTO_BODIES bodies on, interpreted below, on these measurements of
+    a first run over 1 s of simulated time: YAML -> ready interpreted takes 0.02-1.6 s for 2-128
+    bodies and a build 2-4 s, and the interpreted run is the sooner up to 128 bodies (6.3 s
+    against 7.1 s at 128); at 256 bodies setup 4.6 s against 3.8 s and the compiled run is
+    sooner (11.6 s against 14.1 s for 0.2 s simulated), at 512 the setup alone 12.8 s against
+    5.4 s. Later runs of an unchanged model load the cached library.
+  - with $CASMECH_BACKGROUND_BUILD=1, a cache miss below AUTO_BODIES also builds the library
+    in a detached process (build_in_background) while the run goes on interpreted, so the
+    next run is compiled.
 """
 
 from __future__ import annotations
@@ -92,15 +101,16 @@ def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
 
 def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
              root: Path | None = None, dae: bool = True) -> SystemFunctions:
-    """The model's SystemFunctions loaded from a compiled library, built only when the cache
-    holds none for this model content, casmech/CasADi version, compiler and flags. With `dae`,
-    the bundle also carries the DAE residuals dae_<formulation> with their Jacobians, which
-    dynamics integrates (compiler.dae.residual takes them from the bundle)."""
+    """The model's SystemFunctions loaded from its compiled libraries, built only when the
+    cache holds none for this model content, casmech/CasADi version, compiler and flags. With
+    `dae`, the bundle also carries the DAE residuals dae_[ggl_]<formulation> as IDAS integrates
+    them (t, x, z, p, u) -> (ode, alg, quad, zero) (compiler.dae.residual takes them from the
+    bundle, compiler.dae.problem hands them to casadi as they are)."""
     directory, _ = _cached(model, toolchain or Toolchain(), root, dae)
     return load_build(directory, lower(model))
 
 
-AUTO_BODIES = 200  # module docstring: the size from which compiling pays on a cache miss
+AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
@@ -163,7 +173,8 @@ def build_in_background(model: ResolvedModel, toolchain: Toolchain | None = None
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
            root: Path | None = None, dae: bool = True) -> tuple[Path, bool]:
     """Copy the model's build (through the cache) into `out`, by default with the DAE
-    residuals and their Jacobians (what a C integrator needs); (manifest path, cache hit)."""
+    libraries (each DAE with daeF, jacF and its Jacobian: what a C integrator needs);
+    (manifest path, cache hit)."""
     if out.exists() and not out.is_dir():
         raise UsageError(f"{out} is a file; -o expects a directory (created if missing)")
     directory, hit = _cached(model, toolchain or Toolchain(), root, dae)
