@@ -77,17 +77,26 @@ def quaternion_matrix(e: np.ndarray) -> np.ndarray:
         [e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5]])
 
 
+# tool -> how casmech runs: interpreted CasADi functions or the model compiled to C (mode
+# "compiled", $CASMECH_CFLAGS, which run.py sets to -O2; the build is reported as compile
+# time), and the dynamics formulation (None: the model's, i.e. casmech's default)
+TOOLS = {
+    "casmech": {"mode": "interpreted", "formulation": None},
+    "casmech-c": {"mode": "compiled", "formulation": None},
+    "casmech-rp": {"mode": "interpreted", "formulation": "rp"},
+    "casmech-joint": {"mode": "interpreted", "formulation": "joint"},
+}
+
+
 class Runner:
-    """casmech on interpreted CasADi functions (tool `casmech`) or on the model compiled to C
-    by casmech's code generation (tool `casmech-c`: mode "compiled", $CASMECH_CFLAGS, which
-    run.py sets to -O2; the build is reported as compile time)."""
+    """casmech as one of TOOLS."""
 
     tool = "casmech"
 
-    def __init__(self, system: System, mode: str = "interpreted"):
+    def __init__(self, system: System, mode: str = "interpreted", formulation: str | None = None):
         import casmech
 
-        self.system = system
+        self.system, self.formulation = system, formulation
         start = time.perf_counter()
         model = casmech.loads(yaml_text(system), file=f"<{system.name}>")
         loaded = time.perf_counter()
@@ -103,7 +112,7 @@ class Runner:
         start = time.perf_counter()
         result = casmech.analyze(self.functions, "dynamics", t_end=t_end,
                                  output_step=OUTPUT_STEP, rtol=setting["rtol"],
-                                 atol=setting["atol"])
+                                 atol=setting["atol"], formulation=self.formulation)
         wall = time.perf_counter() - start
         start = time.perf_counter()
         names, values = casmech.results_table(self.functions, result)

@@ -47,6 +47,7 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 import systems  # noqa: E402
+from casmech_model import TOOLS as CASMECH_TOOLS  # noqa: E402
 from casmech_model import yaml_text  # noqa: E402
 from mujoco_model import mjcf  # noqa: E402
 
@@ -65,20 +66,21 @@ SWEEPS = {
     "mujoco": [{"timestep": h} for h in (1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4)],
 }
 SWEEPS["exudyn-fast"] = SWEEPS["exudyn"]
-SWEEPS["casmech-c"] = SWEEPS["casmech"]
 QUICK_SWEEPS = {
     "casmech": [{"rtol": 1e-12, "atol": 1e-14}, {"rtol": 1e-8, "atol": 1e-10}],
     "exudyn": [{"h": h} for h in (1e-2, 1e-3, 1e-4)],
     "mujoco": [{"timestep": h} for h in (1e-2, 1e-3, 1e-4)],
 }
 QUICK_SWEEPS["exudyn-fast"] = QUICK_SWEEPS["exudyn"]
-QUICK_SWEEPS["casmech-c"] = QUICK_SWEEPS["casmech"]
 # tightest settings, run to t = 1 s only, to cross-check the planar reference
 CROSS_CHECK = {"casmech": {"rtol": 1e-12, "atol": 1e-14},
                "casmech-c": {"rtol": 1e-12, "atol": 1e-14}, "exudyn": {"h": 1e-5},
                "exudyn-fast": {"h": 1e-5}, "mujoco": {"timestep": 1e-5}}
 KNOB = {"casmech": "rtol", "casmech-c": "rtol", "exudyn": "h", "exudyn-fast": "h",
         "mujoco": "timestep"}
+for _tool in CASMECH_TOOLS:  # every casmech tool sweeps and cross-checks like `casmech`
+    for _table in (SWEEPS, QUICK_SWEEPS, CROSS_CHECK, KNOB):
+        _table[_tool] = _table["casmech"]
 
 
 def knob(tool: str, setting: dict) -> str:
@@ -94,7 +96,8 @@ def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: floa
         env.update({name: str(THREADS) for name in THREAD_VARIABLES})
     if tool == "exudyn-fast":
         env["EXUDYN_MODULE"] = "fast"
-    if tool == "casmech-c":  # simulation-speed flags; a private cache so the build is timed
+    if CASMECH_TOOLS.get(tool, {}).get("mode") == "compiled":
+        # simulation-speed flags; a private cache so the build is timed
         env["CASMECH_CFLAGS"] = "-O2"
         env["CASMECH_CACHE_DIR"] = tempfile.mkdtemp(prefix="casmech_bench_cache_")
     command = [sys.executable, str(HERE / "worker.py"), tool, system, json.dumps(setting),
@@ -319,7 +322,7 @@ def main(argv=None) -> int:
                         help="chain<N> and/or four_bar")
     parser.add_argument("--tools", nargs="+",
                         default=["casmech", "casmech-c", "exudyn", "mujoco"],
-                        choices=["casmech", "casmech-c", "exudyn", "exudyn-fast", "mujoco"])
+                        choices=[*CASMECH_TOOLS, "exudyn", "exudyn-fast", "mujoco"])
     parser.add_argument("--repeats", type=int, default=3,
                         help="timed runs per setting (at least 7 for runs under 1 s)")
     parser.add_argument("--quick", action="store_true",

@@ -6,15 +6,15 @@ import json
 import statistics
 import sys
 
-KNOB = {"casmech": "rtol", "casmech-c": "rtol",
-        "exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}
+KNOB = {"exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}  # every casmech tool: rtol
 PEERS = ("exudyn", "exudyn-fast", "mujoco")
 
 
 def _setting(tool: str, setting: dict | None) -> str:
     if not setting:
         return ""
-    return f"{KNOB[tool]}={setting[KNOB[tool]]:g}"
+    knob = "rtol" if tool.startswith("casmech") else KNOB[tool]
+    return f"{knob}={setting[knob]:g}"
 
 
 def _seconds(x: float) -> str:

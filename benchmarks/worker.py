@@ -23,10 +23,10 @@ SHORT_REPEATS = 7
 
 
 def runner(tool: str, system):
-    if tool in ("casmech", "casmech-c"):
-        from casmech_model import Runner
+    if tool.startswith("casmech"):
+        from casmech_model import TOOLS, Runner
 
-        return Runner(system, mode="compiled" if tool == "casmech-c" else "interpreted")
+        return Runner(system, **TOOLS[tool])
     if tool in ("exudyn", "exudyn-fast"):  # run.py sets EXUDYN_MODULE=fast for exudyn-fast
         from exudyn_model import Runner
     elif tool == "mujoco":

@@ -1,5 +1,6 @@
 """End to end: the `casmech` console script on model files (exit codes, results contract)."""
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -7,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from casmech.commands import COMMANDS
 from casmech.output.csv import read_csv
 from tests.conftest import MODELS
 
@@ -136,3 +138,94 @@ def test_run_tolerances_from_the_command_line(tmp_path):
     assert np.max(np.abs(loose[:, x] - tight[:, x])) > 1e-6
     done = casmech("run", model, "--out", tmp_path / "bad", "--rtol", "0")
     assert done.returncode == 2 and "rtol must be positive" in done.stderr
+
+
+# What start-up must not pay for (issue 21; benchmarks/cli_startup.py times the processes): the
+# optional heavy libraries, and the parts of casmech a command does not use. Checked on the
+# modules a fresh interpreter holds after the command, so a regression fails without a timing.
+OPTIONAL = ("matplotlib", "meshio", "h5py", "tqdm", "scipy", "pandas", "jsonschema")
+PROBE = """
+import json, sys
+from casmech import cli
+try:
+    code = cli.main(sys.argv[2:])
+except SystemExit as exit:
+    code = exit.code
+with open(sys.argv[1], "w") as handle:
+    json.dump({"code": code, "modules": sorted(sys.modules)}, handle)
+"""
+
+
+def imported(tmp_path, *args) -> set[str]:
+    """The modules a fresh interpreter has imported once `casmech ARGS` is done."""
+    report = tmp_path / "modules.json"
+    done = subprocess.run([sys.executable, "-c", PROBE, str(report), *map(str, args)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    probe = json.loads(report.read_text())
+    assert probe["code"] in (0, None), done.stderr
+    return set(probe["modules"])
+
+
+def loaded(modules: set[str], packages) -> list[str]:
+    return sorted(m for m in modules for p in packages if m == p or m.startswith(p + "."))
+
+
+def test_help_imports_no_library(tmp_path):
+    modules = imported(tmp_path, "--help")
+    assert "casmech.cli" in modules  # the probe sees what the command imported
+    assert loaded(modules, [*OPTIONAL, "casadi", "numpy", "pydantic", "yaml", "casmech.api",
+                            "casmech.schema", "casmech.commands.run"]) == []
+
+
+def test_check_imports_what_checking_needs(tmp_path):
+    modules = imported(tmp_path, "check", MODELS / "four_bar.yaml")
+    assert {"casadi", "pydantic", "casmech.schema", "casmech.commands.check"} <= modules
+    assert loaded(modules, [*OPTIONAL, "casmech.codegen", "casmech.optimal", "casmech.importers",
+                            "casmech.output"]) == []
+
+
+def test_run_imports_no_optional_library(tmp_path):
+    modules = imported(tmp_path, "run", MODELS / "me751_pendulum.yaml", "--t-end", "0.05",
+                       "--out", tmp_path / "out", "--mode", "interpreted")
+    assert (tmp_path / "out" / "results.csv").is_file()
+    # tqdm too: the probe's stderr is not a terminal, so no progress bar is drawn
+    assert loaded(modules, [*OPTIONAL, "casmech.optimal", "casmech.importers",
+                            "casmech.output.plot", "casmech.output.animate"]) == []
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_command_help_imports_no_optional_library(tmp_path, command):
+    modules = imported(tmp_path, command, "--help")
+    assert f"casmech.commands.{COMMANDS[command][0]}" in modules
+    others = [f"casmech.commands.{module}" for name, (module, _) in COMMANDS.items()
+              if name != command]
+    assert loaded(modules, [*OPTIONAL, *others]) == []
+
+
+CYCLES = """
+import importlib, json, pkgutil, sys
+import casmech
+names = sorted(m.name for m in pkgutil.walk_packages(casmech.__path__, "casmech."))
+failed = {}
+for name in names:
+    for loaded in [m for m in sys.modules if m == "casmech" or m.startswith("casmech.")]:
+        del sys.modules[loaded]
+    try:
+        importlib.import_module(name)
+    except ImportError as error:
+        failed[name] = str(error)
+print(json.dumps({"modules": len(names), "failed": failed}))
+"""
+
+
+def test_every_module_imports_first():
+    """Each casmech module imports as the first casmech module of a process: with imports
+    deferred to first use, no import order hides a cycle (compiler.ir -> schema.resolved ->
+    schema -> ... -> compiler.ir failed this way)."""
+    done = subprocess.run([sys.executable, "-c", CYCLES], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout)
+    assert report["modules"] > 50  # walked the whole package
+    assert report["failed"] == {}

@@ -1,8 +1,34 @@
 """casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."""
 
-from casmech.api import analyze, check, compile, load, loads, results_table
-from casmech.errors import AnalysisError, CasmechError, ModelError, UsageError
+from __future__ import annotations
+
+import importlib
 
 __version__ = "0.1.0"
-__all__ = ["analyze", "check", "compile", "load", "loads", "results_table", "AnalysisError",
-           "CasmechError", "ModelError", "UsageError", "__version__"]
+
+# public name -> module defining it; imported on first use (PEP 562), so `import casmech` and
+# the command line pay only for what a command uses (benchmarks/notes_startup.md)
+_LAZY = {
+    **dict.fromkeys(("analyze", "check", "compile", "load", "loads", "results_table"),
+                    "casmech.api"),
+    **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
+                    "casmech.errors"),
+}
+# subpackages and modules reachable as attributes (`casmech.api.ANALYSES`) without an import
+_SUBMODULES = ("api", "cli", "codegen", "commands", "compiler", "errors", "importers", "optimal",
+               "output", "runtime", "schema")
+__all__ = [*_LAZY, "__version__"]
+
+
+def __getattr__(name: str):
+    if name in _SUBMODULES:
+        return importlib.import_module(f"casmech.{name}")  # the import binds the attribute
+    if name not in _LAZY:
+        raise AttributeError(f"module 'casmech' has no attribute '{name}'")
+    value = getattr(importlib.import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY, *_SUBMODULES})

@@ -13,15 +13,16 @@ from collections.abc import Callable, Mapping
 from dataclasses import replace
 from pathlib import Path
 
-from casmech import codegen
 from casmech.compiler import dae
 from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
+from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
+from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
@@ -50,6 +51,10 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
     same functions."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
+    if mode == "interpreted":  # before importing code generation, which this path never uses
+        return build_functions(lower(model))
+    from casmech import codegen
+
     if mode == "auto" and not codegen.available():
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
                       "functions, which is slower; install gcc to compile models", stacklevel=2)
@@ -68,7 +73,27 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
 
 
 # dynamics options a caller may override -> their choices
-DYNAMICS_OPTIONS = {"formulation": tuple(FORMULATIONS), "stabilization": dae.STABILIZATIONS}
+DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
+                    "stabilization": dae.STABILIZATIONS, "method": ("auto", *METHODS)}
+
+
+def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
+    """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
+    r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
+    and no DAE stabilization other than the default was asked for; with loops the joint DAE
+    passes singular poses less reliably than the r-p fallback (IFToMM A02 N = 2: 6.5e-6 m at
+    rtol 1e-10, a failure at 1e-11; r-p: 7.9e-8 m), so auto takes r-p there."""
+    formulation = s.options.get("formulation", "auto")
+    stabilization = s.options.get("stabilization", "ggl")
+    if formulation == "auto":
+        tree = stabilization == "ggl" and spanning_tree(f.ir).is_tree
+        formulation = "joint" if tree else "rp"
+    if formulation == "joint":
+        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,
+                                  method=s.options.get("method", "auto"))
+    return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
+                        progress=progress, stabilization=stabilization)
+
 
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
@@ -78,10 +103,7 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "inverse_dynamics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
                                                               progress=p),
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
-    "dynamics": lambda f, s, p: run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                             formulation=s.options.get("formulation", "rp"),
-                                             progress=p,
-                                             stabilization=s.options.get("stabilization", "ggl")),
+    "dynamics": _dynamics,
 }
 
 
@@ -89,21 +111,26 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             output_step: float | None = None, rtol: float | None = None,
             atol: float | None = None, formulation: str | None = None,
             progress: Callable[[float], None] | None = None,
-            stabilization: str | None = None) -> Result:
-    """Run an analysis; the model's `analysis:` block gives what is not passed
-    (formulation: "rp" or "romega", stabilization: "ggl" or "projection", for dynamics).
+            stabilization: str | None = None, method: str | None = None) -> Result:
+    """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
+    formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
+    DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
     `progress`, when given, is called with the time of every output row as it is computed."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
     settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
-    for name, value in {"formulation": formulation, "stabilization": stabilization}.items():
+    asked = {"formulation": formulation, "stabilization": stabilization, "method": method}
+    for name, value in asked.items():
         if value is None:
             continue
         if value not in DYNAMICS_OPTIONS[name]:
             raise UsageError(f"{name} '{value}' is not one of "
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
         settings = replace(settings, options={**settings.options, name: value})
+    if stabilization is not None and formulation is None and settings.options.get(
+            "formulation", "auto") == "auto":  # a DAE stabilization asked for: the r-p DAE
+        settings = replace(settings, options={**settings.options, "formulation": "rp"})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")
@@ -111,6 +138,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
         if not getattr(settings, name) > 0:
             raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
     result = ANALYSES[settings.type](functions, settings, progress)
+    from casmech import codegen  # imported on use: `casmech check` never needs it
+
     result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
     return result
 

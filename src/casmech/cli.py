@@ -1,6 +1,8 @@
 """casmech command line: parse arguments, call the API, render diagnostics.
 
-Each subcommand is a module of casmech.commands (listed in commands.COMMANDS).
+Each subcommand is a module of casmech.commands (listed in commands.COMMANDS). Only the module
+of the command on the command line is imported, so each command pays for its own imports
+(`casmech --help` imports none; benchmarks/notes_startup.md).
 Exit codes (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error, 3 analysis failure.
 """
 
@@ -15,25 +17,33 @@ from casmech.commands import COMMANDS
 from casmech.errors import CasmechError, ModelError, Source, UsageError
 
 
-def _modules() -> dict:
-    return {name: importlib.import_module(f"casmech.commands.{module}")
-            for name, module in COMMANDS.items()}
+def chosen(argv: list[str]) -> str | None:
+    """The command named on the command line: the first argument that is not an option (no
+    option before the command takes a value)."""
+    return next((arg for arg in argv if not arg.startswith("-")), None)
 
 
-def _parser(modules: dict) -> argparse.ArgumentParser:
+def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
+    """The parser, with the arguments of the chosen command only, and that command's module."""
     parser = argparse.ArgumentParser(prog="casmech", description=casmech.__doc__)
     parser.add_argument("--version", action="version", version=f"casmech {casmech.__version__}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for name, module in modules.items():
-        module.add_arguments(commands.add_parser(name, help=module.HELP))
-    return parser
+    name = chosen(argv)
+    module = None
+    for command, (module_name, help_text) in COMMANDS.items():
+        sub = commands.add_parser(command, help=help_text, description=help_text)
+        if command == name:
+            module = importlib.import_module(f"casmech.commands.{module_name}")
+            module.add_arguments(sub)
+    return parser, module
 
 
 def main(argv: list[str] | None = None) -> int:
-    modules = _modules()
-    args = _parser(modules).parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser, module = _parser(argv)
+    args = parser.parse_args(argv)
     try:
-        return modules[args.command].run(args)
+        return module.run(args)
     except ModelError as error:
         print(error.format(), file=sys.stderr)
         return error.exit_code

@@ -30,8 +30,10 @@ def test_pendulum_mass_and_damping_from_noisy_positions(tmp_path, capsys):
     names, committed = read_csv(MODELS / "estimate_pendulum_measured.csv")
     assert names == ["t", "bar.y", "bar.z"]
     np.testing.assert_allclose(committed[:, 0], TIMES, rtol=0, atol=1e-15)  # written with %.17g
-    # written with 17 significant digits: equal to the regenerated data up to rounding
-    np.testing.assert_allclose(committed[:, 1:], measurements(), rtol=0, atol=1e-12)
+    # the regenerated data differ from the committed ones by the integration's roundoff, which
+    # depends on the machine (measured 0 where they were written, 2.1e-9 m on another VM):
+    # 1e-8 m is 1/50000 of the noise they carry
+    np.testing.assert_allclose(committed[:, 1:], measurements(), rtol=0, atol=1e-8)
     assert main(["optimize", str(PENDULUM), "--out", str(tmp_path)]) == 0
     _, table = read_csv(tmp_path / "estimate.csv")
     np.testing.assert_allclose(table[:, 0], [1.5, 0.3], rtol=0, atol=0)  # the file's values

@@ -7,14 +7,13 @@ r + q x_bar q* with a quaternion product written below (not casmech's A(p)).
 
 import xml.etree.ElementTree as ET
 
+import meshio
 import numpy as np
 import pytest
 
 from casmech import cli
 from casmech.output.animate import RINGS, SEGMENTS
 from tests.conftest import MODELS
-
-meshio = pytest.importorskip("meshio", reason="the animate extra (meshio) is not installed")
 
 MODEL = """\
 casmech: 1

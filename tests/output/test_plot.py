@@ -44,7 +44,7 @@ def test_lines_are_the_csv_columns(slider_run):
                 + [f"crank_pivot.{c}" for c in ("fx", "fy", "fz", "tx", "ty", "tz")])
     assert sorted(lines) == sorted(expected)
     for label, (x, y) in lines.items():
-        # %.17g in the file round-trips binary64, so the drawn data is the file's, bit for bit
+        # the file's numbers read back to the same binary64: the drawn data is the file's exactly
         np.testing.assert_allclose(x, table["t"], rtol=0, atol=0)
         np.testing.assert_allclose(y, table[label], rtol=0, atol=0)
     # positions (m), energy (J), force (N), torque (N m): four panels, one per quantity
@@ -111,9 +111,9 @@ def test_cli_usage_errors_exit_2(slider_run, tmp_path, capsys):
     assert "Traceback" not in err and not (tmp_path / "a.png").exists()
 
 
-def test_missing_matplotlib_names_the_extra(slider_run, monkeypatch):
+def test_missing_matplotlib_says_how_to_install_it(slider_run, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import now fails
-    with pytest.raises(UsageError, match=r"pip install 'casmech\[plot\]'"):
+    with pytest.raises(UsageError, match=r"pip install matplotlib"):
         plot.figure(*read_csv(slider_run.out / "results.csv"), ["energy"])
 
 

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.compiler import numeric_qr
 from casmech.errors import AnalysisError
+from casmech.runtime import assembly
 from tests.conftest import MODELS, Table
 
 M, L, G, I_CM = 2.0, 1.2, 9.81, 0.3  # mass, CM distance from the pivot, gravity, inertia about x
@@ -107,3 +109,109 @@ def test_progress_is_called_with_every_row_time():
     seen = []
     result = casmech.analyze(functions, t_end=0.05, progress=seen.append)
     assert seen == result.times
+
+
+# Sparse linear algebra (compiler.numeric_qr) against the dense numpy code it replaced; the
+# gallery's matrices are below numeric_qr's dense limits, so the sparse path is forced.
+
+
+@pytest.fixture
+def sparse(monkeypatch):
+    monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)
+    monkeypatch.setattr(numeric_qr, "DENSE_SQUARE_ENTRIES", 0)
+
+
+DENSE_CASES = [*sorted(MODELS.glob("*.yaml")),
+               MODELS / "validation" / "iftomm_a02_four_bar_N2.yaml"]
+
+
+def dense_newton(functions, q, scale=None, tolerance=assembly.POSITION_TOLERANCE):
+    q = np.array(q, float)
+    for _ in range(assembly.MAX_ITERATIONS):
+        if scale is None:
+            phi, phi_q = functions.vector("phi", 0.0, q), functions.matrix("phi_q", 0.0, q)
+        else:
+            phi, phi_q = functions.evaluate("phi_scaled", 0.0, q, scale)
+        if np.max(np.abs(phi), initial=0.0) <= tolerance:
+            break
+        q += np.linalg.lstsq(phi_q, -np.ravel(phi), rcond=None)[0]
+    return q
+
+
+def dense_initial_state(functions, q):
+    steps = max(1, int(np.ceil(assembly.driver_span(functions, 0.0) / assembly.MAX_DRIVER_STEP)))
+    for k in range(1, steps + 1):
+        q = dense_newton(functions, q, k / steps, 1e-8 if k < steps else 1e-12)
+    q = dense_newton(functions, q)
+    phi_q, nu = functions.matrix("phi_q", 0.0, q), functions.vector("nu", 0.0, q)
+    guess = assembly.file_velocities(functions, q)
+    return q, guess + np.linalg.lstsq(phi_q, nu - phi_q @ guess, rcond=None)[0]
+
+
+@pytest.mark.parametrize("path", DENSE_CASES, ids=lambda path: path.stem)
+def test_initial_state_equals_the_dense_code(path, sparse):
+    """From the file's pose and from a pose 1e-3 away (so Newton takes real steps). Bricard
+    from the perturbed pose is left out: near the solution its Phi_q has a singular value
+    of 1e-13 of the largest (the redundant row), which dense lstsq still inverts (|Phi| went
+    from 2.6e-12 to 2.7e-9 in that step, measured) while the sparse code takes that row as
+    dependent; both end assembled, 6e-5 apart along the mechanism's motion."""
+    functions = casmech.compile(casmech.load(path))
+    guess = assembly.initial_guess(functions)
+    starts = [guess]
+    if path.stem != "bricard":
+        starts.append(guess + 1e-3 * np.random.default_rng(0).standard_normal(guess.size))
+    for start in starts:
+        q = assembly.assemble_positions(functions, 0.0, start)
+        q_dot = assembly.solve_velocities(functions, 0.0, q, assembly.file_velocities(functions, q))
+        dense_q, dense_q_dot = dense_initial_state(functions, start)
+        # the same Newton steps up to roundoff, both stopped at |Phi| <= 1e-12: measured <= 4e-18
+        np.testing.assert_allclose(q, dense_q, rtol=0, atol=1e-13)
+        # velocities of O(1..50): roundoff of the solves, measured <= 1e-14
+        np.testing.assert_allclose(q_dot, dense_q_dot, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("model", ["bricard", "flyball_governor", "four_bar", "quadruped_legs"])
+def test_dynamic_accelerations_equal_the_dense_least_squares(model, sparse):
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]; singular with Bricard's redundant row,
+    where lstsq gives the minimum-norm multipliers."""
+    functions = casmech.compile(casmech.load(MODELS / f"{model}.yaml"))
+    q, _ = assembly.initial_state(functions)
+    q_dot = assembly.solve_velocities(functions, 0.0, q, np.ones_like(q))  # moving: gamma != 0
+    q_ddot, lam = assembly.solve_dynamic_accelerations(functions, 0.0, q, q_dot)
+    mass, phi_q = functions.matrix("mass_matrix", q), functions.matrix("phi_q", 0.0, q)
+    m = phi_q.shape[0]
+    lhs = np.block([[mass, phi_q.T], [phi_q, np.zeros((m, m))]])
+    rhs = np.concatenate([functions.vector("generalized_forces", 0.0, q, q_dot),
+                          functions.vector("gamma", 0.0, q, q_dot)])
+    expected = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    scale = np.max(np.abs(expected))
+    # roundoff of two factorizations of a KKT matrix with condition ~1e3..1e5
+    np.testing.assert_allclose(np.concatenate([q_ddot, lam]), expected, rtol=0,
+                               atol=1e-10 * scale)
+
+
+def test_projection_equals_the_dense_solve(sparse):
+    """project's damped Gauss-Newton steps, sparse against dense, from a drifted state."""
+    from casmech.compiler.formulations import FORMULATIONS
+
+    functions = casmech.compile(casmech.load(MODELS / "flyball_governor.yaml"))
+    q, v = assembly.initial_state(functions)
+    rng = np.random.default_rng(2)
+    q, v = q + 1e-4 * rng.standard_normal(q.size), v + 1e-3 * rng.standard_normal(v.size)
+    form, penalty = FORMULATIONS["rp"], 1e6
+    projected_q, projected_v = assembly.project(functions, form, 0.0, q, v, penalty)
+    mass = functions.matrix("mass_matrix", q)
+    dense_q = q.copy()
+    for _ in range(assembly.MAX_ITERATIONS):
+        phi = functions.vector("phi", 0.0, dense_q)
+        if np.max(np.abs(phi)) <= assembly.POSITION_TOLERANCE:
+            break
+        jac = functions.matrix("phi_q", 0.0, dense_q)
+        dense_q = dense_q - np.linalg.solve(mass / penalty + jac.T @ jac, jac.T @ phi)
+    jac = functions.matrix("phi_q", 0.0, dense_q)
+    residual = jac @ v - functions.vector("nu", 0.0, dense_q)
+    dense_v = v - np.linalg.solve(functions.matrix("mass_matrix", dense_q) / penalty
+                                  + jac.T @ jac, jac.T @ residual)
+    # the same iterations up to roundoff (condition of M / a + P^T P ~1e6)
+    np.testing.assert_allclose(projected_q, dense_q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(projected_v, dense_v, rtol=0, atol=1e-10)

@@ -10,6 +10,7 @@ import casmech
 from casmech.output.csv import read_csv
 from casmech.runtime.dynamics import DRIFT_TOLERANCE, drift_tolerance
 from tests.conftest import MODELS, Table
+from tests.models import closed_forms as cf
 from tests.runtime.reference_data import VALIDATION_MODELS as VALIDATION
 
 G = np.array([0.0, 0.0, -9.81])
@@ -135,8 +136,11 @@ def test_free_spin_r_omega_matches_closed_form():
 @pytest.mark.parametrize("name", ["iftomm_a01_pendulum.yaml", "spherical_case01.yaml",
                                   "iftomm_a02_four_bar_N2.yaml"])
 def test_conservative_models_keep_energy_and_constraints(name, formulation):
-    """At rtol 1e-10: energy constant to 1e-8 of its scale (the largest kinetic energy reached,
-    since these models start at E = 0 or with little motion) and max |Phi| <= 1e-9."""
+    """At rtol 1e-10: energy constant to 2e-8 of its scale (the largest kinetic energy reached,
+    since these models start at E = 0 or with little motion) and max |Phi| <= 1e-9. One run's
+    drift moves by 2x with its step sequence (A01 and the ADAMS case at rtol 1e-9, 1e-10 and
+    1e-11, both formulations: 27-105 rtol, mean 45 rtol; benchmarks/notes_rpdyn.md), so the
+    bound is 200 rtol."""
     functions = casmech.compile(casmech.load(VALIDATION / name))
     result = casmech.analyze(functions, "dynamics", t_end=5, rtol=1e-10, atol=1e-12,
                              formulation=formulation)
@@ -147,7 +151,7 @@ def test_conservative_models_keep_energy_and_constraints(name, formulation):
     print(f"\n{name} {formulation}: energy drift {drift:.1e} of max kinetic energy, "
           f"max |Phi| {table['constraint_violation'].max():.1e}, "
           f"{result.metadata['projections']} projections")
-    assert drift <= 1e-8
+    assert drift <= 2e-8
     assert table["constraint_violation"].max() <= DRIFT_TOLERANCE
 
 
@@ -167,3 +171,118 @@ analysis:""")
     failed_at = values[-1, 0]
     assert 0.25 <= failed_at < 0.3 and f"t = {failed_at:.6g}" in done.stderr
     np.testing.assert_allclose(values[:, 0], np.arange(len(values)) * 0.01, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("formulation", ["rp", "romega"])
+def test_redundant_rows_get_the_least_norm_multipliers(formulation):
+    """Bricard drops one dependent row; the reported joint multipliers are the least-norm ones
+    of their own constraint force: numpy's lstsq of [Phi_r, Pi_bar]^T lam, row by row, returns
+    them unchanged (to 1e-9 of their scale: lstsq's own roundoff at the Jacobian's condition),
+    and they are not the DAE's (whose dropped row carries 0)."""
+    functions = casmech.compile(casmech.load(MODELS / "bricard.yaml"))
+    result = casmech.analyze(functions, "dynamics", t_end=0.2, formulation=formulation)
+    assert result.metadata["dropped_rows"] == 1
+    n = functions.n_joint_rows
+    for t, q, lam in zip(result.times, result.q, result.lam, strict=True):
+        jacobian_t = functions.matrix("romega_jacobian", t, q).T
+        least = np.linalg.lstsq(jacobian_t, jacobian_t @ lam[:n], rcond=1e-9)[0]
+        np.testing.assert_allclose(lam[:n], least, rtol=0, atol=1e-9 * np.max(np.abs(least)))
+        assert np.min(np.abs(lam[:n])) > 1e-6 * np.max(np.abs(lam[:n]))  # no row left at 0
+
+
+def heavy_top_error(formulation: str, rtol: float, spin: float) -> tuple[float, dict]:
+    """Max distance over 1 s of the heavy top's CM from its steady precession (models/
+    heavy_top.yaml, started exactly on it), and the run's metadata."""
+    model = casmech.load(MODELS / "heavy_top.yaml", overrides={"omega3": str(spin)})
+    functions = casmech.compile(model)
+    result = casmech.analyze(functions, "dynamics", t_end=1, rtol=rtol, atol=rtol / 100,
+                             formulation=formulation)
+    table = Table(*casmech.results_table(functions, result))
+    p = model.parameters
+    i1_pivot = p["m"] * (3 * p["R"]**2 + p["h"]**2) / 12 + p["m"] * p["l"]**2
+    rate = cf.steady_precession_rate(p["m"], 9.81, p["l"], i1_pivot, p["m"] * p["R"]**2 / 2,
+                                     spin, p["theta0"])
+    t, tilt = table["t"], p["theta0"]
+    exact = p["l"] * np.column_stack([np.sin(tilt) * np.cos(rate * t),
+                                      np.sin(tilt) * np.sin(rate * t), np.cos(tilt) + 0 * t])
+    cm = np.column_stack([table[f"top.{c}"] for c in "xyz"])
+    return float(np.max(np.linalg.norm(cm - exact, axis=1))), result.metadata
+
+
+@pytest.mark.parametrize("formulation, spin", [("romega", 100.0), ("rp", 100.0),
+                                               ("rp", 1000.0)])
+def test_heavy_top_error_shrinks_with_rtol(formulation, spin):
+    """The CM against the closed-form steady precession, over 1 s (16 or 160 turns of the
+    spin): within the issue's ~100 rtol of the arm l = 0.1 m at rtol 1e-6, 1e-8 and 1e-10
+    (bound 150: measured 1-5 rtol l in r-omega, 9-102 in r-p, where the sparse assembly's
+    initial state moved 81 to 102 at 1e-10), 1000x smaller from rtol 1e-6 to 1e-10, on the DAE
+    (the 1000 rad/s top in r-p fell back to the augmented-Lagrangian steps at rtol 1e-10
+    when IDAS's Newton test held every multiplier to an absolute 1e-8)."""
+    errors = {}
+    for rtol in (1e-6, 1e-8, 1e-10):
+        errors[rtol], metadata = heavy_top_error(formulation, rtol, spin)
+        assert metadata["integrator"] == "idas" and metadata["ggl_failures"] == 0
+    print(f"\nheavy top {formulation} {spin:g} rad/s: CM error / (rtol l) "
+          + ", ".join(f"{e / (r * 0.1):.0f} at {r:g}" for r, e in errors.items()))
+    for rtol, error in errors.items():
+        assert error <= 150 * rtol * 0.1, rtol
+    assert errors[1e-10] <= errors[1e-6] / 1000
+
+
+FLIP_INERTIA, FLIP_OMEGA = np.array([1.0, 2.0, 3.0]), np.array([0.1, 5.0, 0.0])
+FLIP = f"""
+casmech: 1
+name: flip
+gravity: [0, 0, 0]
+bodies:
+  - {{name: body, mass: 1.0, inertia: {FLIP_INERTIA.tolist()}, position: [0, 0, 0],
+     angular_velocity: {FLIP_OMEGA.tolist()}}}
+analysis: {{type: dynamics, t_end: 4, output_step: 0.01}}
+"""
+
+
+def flip_reference(times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Euler parameters, global and body angular velocity of the torque-free body by DOP853
+    at rtol 1e-13 on Euler's equations and the quaternion kinematics e' = e (0, omega_body)/2
+    (body frame = global at t = 0)."""
+    from scipy.integrate import solve_ivp
+
+    i1, i2, i3 = FLIP_INERTIA
+
+    def rates(_, state):
+        w, e = state[:3], state[3:]
+        w_dot = [(i2 - i3) * w[1] * w[2] / i1, (i3 - i1) * w[2] * w[0] / i2,
+                 (i1 - i2) * w[0] * w[1] / i3]
+        e_dot = 0.5 * np.array([-e[1:] @ w, *(e[0] * w + np.cross(e[1:], w))])
+        return np.concatenate([w_dot, e_dot])
+
+    solution = solve_ivp(rates, (0, times[-1]), np.concatenate([FLIP_OMEGA, [1, 0, 0, 0]]),
+                         method="DOP853", rtol=1e-13, atol=1e-15, t_eval=times)
+    e = solution.y[3:].T
+    rotations = cf.rotation(e)
+    return e, np.einsum("kij,jk->ki", rotations, solution.y[:3]), solution.y[:3].T
+
+
+@pytest.mark.parametrize("formulation", ["rp", "romega"])
+def test_torque_free_flip_follows_eulers_equations(formulation):
+    """A free body spun about its intermediate axis with a small perturbation turns over (the
+    Dzhanibekov effect: omega_y goes from 5 to -5 rad/s within 4 s); an unstable motion that
+    amplifies every error. Euler parameters and angular velocity (relative to |omega| = 5)
+    against scipy at rtol 1e-13: within 500 rtol at rtol 1e-6, 1e-8, 1e-10 (measured 15-35
+    rtol in r-omega, 65-277 in r-p), 1000x smaller from 1e-6 to 1e-10."""
+    functions = casmech.compile(casmech.loads(FLIP))
+    errors = {}
+    for rtol in (1e-6, 1e-8, 1e-10):
+        table = Table(*casmech.results_table(functions, casmech.analyze(
+            functions, rtol=rtol, atol=rtol / 100, formulation=formulation)))
+        e_ref, w_ref, w_body = flip_reference(table["t"])
+        e = np.column_stack([table[f"body.e{k}"] for k in range(4)])
+        w = np.column_stack([table[f"body.w{c}"] for c in "xyz"])
+        assert np.min(w_body[:, 1]) < -4.9  # it turned over
+        errors[rtol] = max(np.max(np.abs(e - e_ref)),
+                           np.max(np.abs(w - w_ref)) / np.linalg.norm(FLIP_OMEGA))
+    print(f"\nflip {formulation}: error / rtol "
+          + ", ".join(f"{e / r:.0f} at {r:g}" for r, e in errors.items()))
+    for rtol, error in errors.items():
+        assert error <= 500 * rtol, rtol
+    assert errors[1e-10] <= errors[1e-6] / 1000

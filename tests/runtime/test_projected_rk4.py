@@ -50,7 +50,8 @@ def run_on_rk4(model_text, monkeypatch, **kwargs):
 
     monkeypatch.setattr(dynamics._Stepper, "__init__", on_ode_from_t0)
     functions = casmech.compile(casmech.loads(model_text))
-    result = casmech.analyze(functions, "dynamics", **kwargs)
+    result = casmech.analyze(functions, "dynamics", formulation=kwargs.pop("formulation", "rp"),
+                             **kwargs)
     return result, Table(*casmech.results_table(functions, result))
 
 
@@ -62,7 +63,7 @@ def test_fallback_agrees_with_the_dae_on_regular_models(model, monkeypatch):
     text = (MODELS / model).read_text()
     functions = casmech.compile(casmech.loads(text))
     dae = Table(*casmech.results_table(functions, casmech.analyze(
-        functions, "dynamics", t_end=2, rtol=1e-10, atol=1e-12)))
+        functions, "dynamics", t_end=2, rtol=1e-10, atol=1e-12, formulation="rp")))
     result, rk4 = run_on_rk4(text, monkeypatch, t_end=2, rtol=1e-10, atol=1e-12)
     assert result.metadata["integrator"] == "projected_rk4"
     assert result.metadata["rk4_stalled_at"] == []  # no singular pose: every estimate converged
@@ -83,7 +84,7 @@ def test_error_control_against_idas(monkeypatch):
     3's property), and the constraints hold at every output."""
     functions = casmech.compile(casmech.loads(CHAIN))
     reference = Table(*casmech.results_table(functions, casmech.analyze(
-        functions, "dynamics", t_end=1, rtol=1e-12, atol=1e-14)))
+        functions, "dynamics", t_end=1, rtol=1e-12, atol=1e-14, formulation="rp")))
     columns = [c for c in reference.names if c.split(".")[-1] in ("x", "y", "z")]
     errors = {}
     for rtol in (1e-6, 1e-8):

@@ -75,7 +75,7 @@ def test_defaults(empty):
     model, _ = validate(f"bodies:\n{BAR}{empty}")
     assert model.gravity == (0, 0, -9.81)
     assert (model.joints, model.forces, model.parameters, model.description) == ((), (), {}, "")
-    assert model.analysis == spec.Analysis(type="dynamics", formulation="rp")
+    assert model.analysis == spec.Analysis(type="dynamics", formulation="auto")
 
 
 def test_a_required_key_without_value_is_a_wrong_type():
@@ -166,7 +166,7 @@ def test_enums_tags_and_versions():
     )[1]}  # fmt: skip
     assert found["joints[0].type"].code == "E100"
     assert found["joints[1].type"].hint == "did you mean 'spherical'?"
-    assert found["analysis.formulation"].expected == "rp | romega"
+    assert found["analysis.formulation"].expected == "rp | romega | joint | auto"
     for version, got in [("1.0", "1.0"), ("true", "true"), ("'1'", "'1'"), ("2", "2")]:
         document = load_document(f"casmech: {version}\nname: s\nbodies: []\n")
         [diagnostic] = spec_errors.validate(document)[1]

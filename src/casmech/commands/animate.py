@@ -12,8 +12,6 @@ from casmech.output.csv import read_csv
 from casmech.output.html_player import write_html
 from casmech.output.vtk import write_vtk
 
-HELP = "write a VTK time series (ParaView) and a self-contained HTML player"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path)

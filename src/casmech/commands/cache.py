@@ -7,8 +7,6 @@ import json
 from casmech.codegen import cache
 from casmech.codegen.manifest import MANIFEST
 
-HELP = "show or clear the compiled-model cache"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("action", choices=["info", "clear"])

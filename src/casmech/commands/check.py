@@ -8,8 +8,6 @@ import casmech
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import Diagnostic
 
-HELP = "validate a model; print DOF, rank, redundancy"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path)

@@ -10,8 +10,6 @@ from casmech import codegen
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import UsageError
 
-HELP = "generate C for the model's functions and build the shared library into DIR"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path)

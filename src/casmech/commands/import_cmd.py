@@ -14,8 +14,6 @@ import casmech
 from casmech.errors import ModelError, UsageError
 from casmech.importers import TRANSLATORS, import_file
 
-HELP = "convert an Adams .adm deck or a simEngine3D .mdl/.acf model to casmech YAML"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("source", type=Path, help=f"file to import ({', '.join(TRANSLATORS)})")

@@ -9,8 +9,6 @@ from pathlib import Path
 import casmech
 from casmech.commands.common import add_overrides, overrides
 
-HELP = "print coordinates, constraint rows by joint with YAML lines, DOF, rank"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path)

@@ -9,13 +9,12 @@ from pathlib import Path
 import numpy as np
 
 import casmech
+from casmech import api
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import UsageError
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
 from casmech.output.csv import write_csv
-
-HELP = "optimal control (ocp: block) or parameter estimation (estimate: block)"
 
 
 def add_arguments(parser) -> None:
@@ -26,7 +25,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--intervals", type=int, help="ocp: override the number of intervals")
     parser.add_argument("--data", type=Path, help="estimate: measurements CSV (default: the "
                                                   "block's data, relative to the model)")
-    parser.add_argument("--mode", choices=casmech.api.COMPILE_MODES, default="interpreted",
+    parser.add_argument("--mode", choices=api.COMPILE_MODES, default="interpreted",
                         help="ocp collocation on interpreted SX functions (exact Hessian, the "
                              "default), on the compiled C functions (limited-memory Hessian) "
                              "or auto (as casmech run decides)")

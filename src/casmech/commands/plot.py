@@ -9,8 +9,6 @@ from casmech.output import plot
 from casmech.output.csv import read_csv
 from casmech.output.hdf5 import read_hdf5
 
-HELP = "plot results columns or presets against time (matplotlib)"
-
 READERS = {".csv": read_csv, ".h5": read_hdf5, ".hdf5": read_hdf5}  # results file suffix -> reader
 
 

@@ -14,14 +14,13 @@ import time
 from pathlib import Path
 
 import casmech
+from casmech import api
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import AnalysisError
 from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
-
-HELP = "run the model's analysis; write results.csv (or results.h5)"
 
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
@@ -51,16 +50,20 @@ def add_arguments(parser) -> None:
                         help="relative tolerance of the integrator (dynamics)")
     parser.add_argument("--atol", type=float,
                         help="absolute tolerance of the integrator (dynamics)")
-    parser.add_argument("--formulation", choices=casmech.api.DYNAMICS_OPTIONS["formulation"],
-                        help="equations of motion for dynamics (default: the model's, else rp)")
-    parser.add_argument("--stabilization", choices=casmech.api.DYNAMICS_OPTIONS["stabilization"],
+    parser.add_argument("--formulation", choices=api.DYNAMICS_OPTIONS["formulation"],
+                        help="equations of motion for dynamics (default: the model's, else auto: "
+                             "joint coordinates for a tree, rp with loops)")
+    parser.add_argument("--stabilization", choices=api.DYNAMICS_OPTIONS["stabilization"],
                         help="how dynamics keeps the constraints: the stabilized index-2 DAE "
                              "(ggl) or projections of the index-1 DAE (default: the model's, "
                              "else ggl)")
-    parser.add_argument("--analysis", choices=sorted(casmech.api.ANALYSES), help="analysis type")
+    parser.add_argument("--method", choices=api.DYNAMICS_OPTIONS["method"],
+                        help="CVODES's method for joint coordinates on a tree (default: the "
+                             "model's, else auto: bdf when the ODE is stiff at t0)")
+    parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
     parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
-    parser.add_argument("--mode", choices=casmech.api.COMPILE_MODES, default="auto",
+    parser.add_argument("--mode", choices=api.COMPILE_MODES, default="auto",
                         help="compiled C (built once, cached) or interpreted CasADi functions "
                              "(default auto: compiled when cached or from 200 bodies, else "
                              "interpreted)")
@@ -69,7 +72,7 @@ def add_arguments(parser) -> None:
 
 def run(args) -> int:
     for name in args.format:
-        FORMATS[name][2]()  # a missing optional dependency is a usage error before the run
+        FORMATS[name][2]()  # a missing h5py is a usage error before the run
     given = overrides(args.set)
     clock = time.perf_counter()
     model = casmech.load(args.model, given)
@@ -81,14 +84,14 @@ def run(args) -> int:
     settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,
                                  formulation=args.formulation,
-                                 stabilization=args.stabilization)
+                                 stabilization=args.stabilization, method=args.method)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
             result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
                                      formulation=args.formulation, progress=callback,
-                                     stabilization=args.stabilization)
+                                     stabilization=args.stabilization, method=args.method)
     except AnalysisError as error:
         timings["analysis"] = time.perf_counter() - clock
         if error.partial is not None and len(error.partial):

@@ -12,8 +12,6 @@ from casmech.commands.common import add_overrides, overrides
 from casmech.optimal.sensitivity import MODES, sensitivity
 from casmech.output.csv import write_csv
 
-HELP = "derivatives of results columns w.r.t. parameters (IDAS sensitivities)"
-
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path)

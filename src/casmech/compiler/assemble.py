@@ -11,7 +11,7 @@ Pi_bar_k = 1/2 Phi_p_k G(p_k)^T.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -33,6 +33,7 @@ class Coordinates:
     q_ddot: ca.SX
     q_ground: ca.SX
     n_bodies: int
+    _frames: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     @staticmethod
     def create(n_bodies: int) -> Coordinates:
@@ -52,7 +53,11 @@ class Coordinates:
         return vector[start:start + 4]
 
     def frame(self, k: int) -> Frame:
-        return Frame(self.r(k), euler.rotation(self.p(k)))
+        """Body k's (or ground's) position and A(p), built once: every primitive, force and
+        reaction on the body shares the same expression nodes."""
+        if k not in self._frames:
+            self._frames[k] = Frame(self.r(k), euler.rotation(self.p(k)))
+        return self._frames[k]
 
     def ground_fixed(self, expr):
         """Substitute ground's constant pose."""

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
+from casmech.compiler import numeric_qr
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import RowInfo
 
@@ -35,36 +37,32 @@ class Structure:
         return "\n".join(lines)
 
 
-def independent_rows(matrix: np.ndarray, tolerance: float = RANK_TOLERANCE) -> list[bool]:
-    """Greedy in row order: is row k independent of the rows kept before it?"""
-    scale = max(np.linalg.norm(matrix, 2), 1.0) if matrix.size else 1.0
-    basis: list[np.ndarray] = []
-    keep = []
-    for row in matrix:
-        residual = row.copy()
-        for b in basis:  # two passes of Gram-Schmidt for stability
-            residual -= (b @ residual) * b
-        for b in basis:
-            residual -= (b @ residual) * b
-        norm = np.linalg.norm(residual)
-        independent = norm > tolerance * scale
-        if independent:
-            basis.append(residual / norm)
-        keep.append(independent)
-    return keep
+def independent_rows(matrix, tolerance: float = RANK_TOLERANCE) -> list[bool]:
+    """Greedy in row order: is row k farther than tolerance * max(|matrix|_2, 1) from the span
+    of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the work follows
+    the factors' fill, not rows x columns)."""
+    matrix = ca.DM(matrix)
+    scale = max(numeric_qr.norm2(matrix), 1.0)
+    return numeric_qr.independent_rows(matrix, tolerance, scale)
 
 
 def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
     """Rank and redundancy. The normalization rows are scanned first (they are never
     redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
-    phi_q = functions.matrix("phi_q", t, q)
+    phi_q = functions["phi_q"](t, q)
     n_joint_rows = functions.n_rows - functions.n_bodies
-    order = list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
-    keep = dict(zip(order, independent_rows(phi_q[order]), strict=True))
+    order = _scan_order(functions)
+    keep = dict(zip(order, independent_rows(phi_q[order, :]), strict=True))
     redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
     independent = tuple(k for k in range(functions.n_rows) if keep[k])
     return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
                      6 * functions.n_bodies - n_joint_rows, independent)
+
+
+def _scan_order(functions: SystemFunctions) -> list[int]:
+    """Rows of Phi in the order structure scans them: normalization first, then the joints."""
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    return list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
 
 
 def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 3):
@@ -77,8 +75,25 @@ def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 
     return [(name, source, value) for name, (source, value) in ranked[:count]]
 
 
-def dependent_joints(functions: SystemFunctions, phi_q: np.ndarray, count: int = 3):
-    """Joints whose rows became dependent: the left singular vector of the smallest singular
-    value of Phi_q weighs each row by its part in the dependency."""
-    u, s, _ = np.linalg.svd(phi_q)
-    return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
+DENSE_LIMIT = 250_000  # entries of Phi_q up to which dependent_joints uses a dense SVD
+
+
+def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3):
+    """Joints whose rows became dependent: a unit combination u of Phi_q's rows with
+    Phi_q^T u ~ 0 weighs each row by its part in the dependency. Up to DENSE_LIMIT entries u
+    is the left singular vector of the smallest singular value; above, the row (in
+    structure's scan order) closest to the span of the rows before it, combined with them by
+    least squares (sparse: numeric_qr)."""
+    rows, columns = phi_q.shape
+    if rows * columns <= DENSE_LIMIT:
+        u, s, _ = np.linalg.svd(np.array(ca.DM(phi_q)) if isinstance(phi_q, ca.DM) else phi_q)
+        return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
+    order = _scan_order(functions)[:columns]
+    a = ca.DM(phi_q)[order, :]
+    k = int(np.argmin(numeric_qr.NumericQR(a.T, order=False).diagonal()))
+    weights = np.zeros(rows)
+    weights[order[k]] = 1.0
+    if k:
+        earlier = numeric_qr.NumericQR(a[:k, :].T)
+        weights[order[:k]] = -earlier.solve(np.array(a[k, :]).ravel())
+    return worst_joints(functions, np.abs(weights) / np.linalg.norm(weights), count)

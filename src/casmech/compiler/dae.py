@@ -2,27 +2,34 @@
 
 The index-1 DAE (stabilization "projection": the runtime projects when the constraints drift):
 
-    x = [q, v],  z = [v_dot, lam],  p = [t0, w (one per row of P)],  t = t0 + tau
+    x = [q, v],  z = [v_dot, lam],  p = [t0, w (one per row of P), s (one per row of P)],
+    t = t0 + tau
     ode: x' = [q_dot(q, v), v_dot]
-    alg: M v_dot + P^T lam - F = 0,   P v_dot - gamma - w * lam = 0
+    alg: M v_dot + P_s^T lam - F = 0,   P_s v_dot - gamma_s - w * lam = 0
 
-(P and gamma with unit-norm rows, so lam is in force units and the rows are comparable.)
-w masks rows: w_k = 0 keeps row k, w_k = 1 turns it into lam_k = P_k v_dot - gamma_k, which is
-0 for a row that depends on the others (redundant joints), so the row drops out smoothly and the
-algebraic Jacobian [M P^T; P -diag(w)] stays non-singular. The residual is pure SX: IDAS's
-Newton does the linear algebra, its Jacobian comes from AD, and the same Function is what code
-generation compiles.
+P_s = diag(s) P and gamma_s = s * gamma: P's rows scaled by constants the runtime sets to the
+inverse row norms at the start of each integration, so lam is in force units (the true
+multipliers are s * lam) and the rows are comparable. Constants, not the norms at the current
+q, keep P^T lam as sparse as P (with norms of q every entry of a row depends on every
+coordinate the row does: 1.5x the Newton matrix's nonzeros and 2.5x the Jacobian's
+instructions on benchmarks/chain8; benchmarks/notes_rpdyn.md). w masks rows: w_k = 0 keeps
+row k, w_k = 1 turns it into lam_k = P_k v_dot - gamma_k, which is 0 for a row that depends on
+the others (redundant joints), so the row drops out smoothly and the algebraic Jacobian
+[M P^T; P -diag(w)] stays non-singular. The residual is pure SX: IDAS's Newton does the
+linear algebra, its Jacobian comes from AD, and the same Function is what code generation
+compiles.
 
 The stabilized index-2 DAE of Gear, Gupta and Leimkuhler (stabilization "ggl"), which keeps the
 position and velocity constraints themselves at every step instead of their second derivative:
 
-    x = [q, v],  z = [v_dot, lam, mu],  p as above
-    ode: x' = [q_dot(q, v) + Phi_q^T mu, v_dot]
-    alg: M v_dot + P^T lam - F = 0,   Phi(q) = 0,   P v - nu = 0
+    x = [q, v],  z = [v_dot, lam, mu],  p = [t0, w, s, s_phi (one per row of Phi)]
+    ode: x' = [q_dot(q, v) + Phi_q_s^T mu, v_dot]
+    alg: M v_dot + P_s^T lam - F = 0,   Phi_s(q) = 0,   P_s v - nu_s = 0
 
-(Phi_q and Phi with the unit rows of Phi_q: every row of Phi, the r-p normalization rows too in
-either formulation; mu is 0 along the exact motion.) The masked rows become lam_k = 0 and
-mu_k = 0. IDAS integrates it with the algebraic unknowns out of its error test.
+(Phi_q_s and Phi_s: every row of Phi, the r-p normalization rows too in either formulation,
+scaled by s_phi; in r-p P is Phi_q, and s_phi = s; mu is 0 along the exact motion.) The
+masked rows become lam_k = 0 and mu_k = 0. IDAS integrates it with the algebraic unknowns out
+of its error test.
 """
 
 from __future__ import annotations
@@ -44,12 +51,6 @@ def sizes(functions: dict[str, ca.Function], name: str) -> tuple[int, int, int]:
     return jacobian.size1_in(1), jacobian.size2_out(0), jacobian.size1_out(0)
 
 
-def unit_rows(jacobian, gamma):
-    """P and gamma with every row of P scaled to unit norm (rows never vanish for a joint)."""
-    scale = 1 / ca.sqrt(ca.sum2(jacobian * jacobian))
-    return jacobian * ca.repmat(scale, 1, jacobian.size2()), gamma * scale
-
-
 STABILIZATIONS = ("ggl", "projection")
 
 
@@ -65,19 +66,32 @@ def residual(functions: dict[str, ca.Function], name: str,
     return build(functions, name, key)
 
 
+def parameters(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
+    """Size of p: t0, then w and s per row of P, then s_phi per row of Phi for ggl."""
+    m = sizes(functions, name)[2]
+    return 1 + 2 * m + (functions["phi"].size1_out(0) if stabilization == "ggl" else 0)
+
+
 def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     sym = _symbols(functions)
-    tau, x, z, p = sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m), sym.sym("p", 1 + m)
-    t, q, v, v_dot, lam, w = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:], p[1:1 + m, 0]
-    jacobian, gamma = unit_rows(functions[form.jacobian](t, q), functions[form.gamma](t, q, v))
+    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
+                    sym.sym("p", parameters(functions, name, "projection")))
+    t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
+    w, s = p[1:1 + m], p[1 + m:1 + 2 * m]
+    jacobian = _scaled(functions[form.jacobian](t, q), s)
     alg = ca.vertcat(
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
-        jacobian @ v_dot - gamma - w * lam)
+        jacobian @ v_dot - functions[form.gamma](t, q, v) * s - w * lam)
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
     return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
                        ["t", "x", "z", "p"], ["ode", "alg"])
+
+
+def _scaled(matrix, s):
+    """diag(s) matrix."""
+    return matrix * ca.repmat(s, 1, matrix.size2())
 
 
 def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
@@ -98,16 +112,15 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     n_phi = functions["phi"].size1_out(0)
     sym = _symbols(functions)
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
-                    sym.sym("p", 1 + m))
-    t, q, v, w = p[0] + tau, x[:n_q], x[n_q:], p[1:1 + m, 0]
+                    sym.sym("p", parameters(functions, name, "ggl")))
+    t, q, v = p[0] + tau, x[:n_q], x[n_q:]
+    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:]
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
-    raw = functions[form.jacobian](t, q)
-    scale = 1 / ca.sqrt(ca.sum2(raw * raw))
-    jacobian, nu = raw * ca.repmat(scale, 1, raw.size2()), functions[form.nu](t, q) * scale
-    if form.jacobian == "phi_q":  # r-p: P is Phi_q (one evaluation, one scaling)
-        phi_q, phi = jacobian, functions["phi"](t, q) * scale
-    else:
-        phi_q, phi = unit_rows(functions["phi_q"](t, q), functions["phi"](t, q))
+    jacobian = _scaled(functions[form.jacobian](t, q), s)
+    nu = functions[form.nu](t, q) * s
+    # r-p: P is Phi_q (one evaluation; s_phi = s)
+    phi_q = jacobian if form.jacobian == "phi_q" else _scaled(functions["phi_q"](t, q), s_phi)
+    phi = functions["phi"](t, q) * s_phi
     w_phi = ca.vertcat(w, sym(n_phi - m, 1))  # r-omega: + normalization rows (structural 0)
     alg = ca.vertcat(
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),

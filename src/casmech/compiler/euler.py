@@ -6,6 +6,8 @@ numpy inputs and returns CasADi matrices; derivatives of these are left to CasAD
 
 from __future__ import annotations
 
+from functools import cache
+
 import casadi as ca
 import numpy as np
 
@@ -55,8 +57,18 @@ def b_matrix(p, a_bar) -> ca.SX:
 
 
 def numeric(function, *args) -> np.ndarray:
-    """Evaluate one of the functions above on numbers: euler.numeric(rotation, p)."""
-    return np.array(ca.DM(function(*args)).full())
+    """Evaluate one of the functions above on numbers: euler.numeric(rotation, p) (through a
+    casadi.Function built once per function and argument shapes)."""
+    arrays = [np.asarray(a, float) for a in args]
+    compiled = _function(function, *(a.shape for a in arrays))
+    return np.array(compiled(*arrays).full())
+
+
+@cache
+def _function(function, *shapes) -> ca.Function:
+    symbols = [ca.SX.sym(f"a{k}", *(shape if len(shape) == 2 else (int(np.prod(shape)), 1)))
+               for k, shape in enumerate(shapes)]
+    return ca.Function(function.__name__, symbols, [function(*symbols)])
 
 
 def _vector(v, n: int):

@@ -35,6 +35,8 @@ class SystemFunctions:
     joints: tuple[JointMeta, ...]
     rows: tuple[RowInfo, ...]
     ir: ModelIR = field(repr=False)
+    # what analyses derive from the bundle once and reuse (e.g. the joint formulation's system)
+    derived: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]

@@ -62,6 +62,11 @@ class JointIR:
     rows: range
     point_i: np.ndarray  # the joint point on body_i, body frame (global for ground)
     source: Source | None = None
+    # joint-frame quantities (lower.joint_frame: P, u, v, w, axis_i, axis_j) in each body's
+    # frame, keyed "<name>@i" / "<name>@j" (ground: global): the joint formulation's frames
+    geometry: Mapping[str, np.ndarray] = field(default_factory=dict)
+    drivers: Mapping[str, ScalarFunction] = field(default_factory=dict)  # angle, displacement
+    cut: bool = False  # `cut: true`: never a tree joint of the joint formulation
 
 
 @dataclass(frozen=True)

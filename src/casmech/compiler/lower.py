@@ -108,7 +108,20 @@ def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[Primi
     else:
         point = poses.local(joint.body_i, point_name, frame[point_name])
     rows = range(first_row, first_row + len(prims))
-    return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source)
+    drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
+                                         ("displacement", joint.driver_displacement)) if fun}
+    return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
+                          _geometry(joint, frame, poses), drivers, joint.cut)
+
+
+FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")
+
+
+def _geometry(joint: Joint, frame, poses: _Poses) -> dict[str, np.ndarray]:
+    """The joint frame's quantities in both bodies' frames, "<name>@i" and "<name>@j"."""
+    return {f"{name}@{side}": poses.local(body, name, frame[name])
+            for name in FRAME_QUANTITIES if name in frame
+            for side, body in (("i", joint.body_i), ("j", joint.body_j))}
 
 
 def joint_coordinates(joint: Joint, poses: _Poses) -> ForceIR:

@@ -138,12 +138,13 @@ def inertia_ellipsoid(mass: float, inertia: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def meshio_module():
-    """meshio, or a usage error saying how to install it (the `animate` extra)."""
+    """meshio (a dependency of casmech, imported on use), or a usage error saying how to
+    install it."""
     try:
         import meshio
     except ImportError:
-        raise UsageError("VTK output and mesh geometry need meshio; install it with "
-                         "pip install \"casmech[animate]\"") from None
+        raise UsageError("VTK output and mesh geometry need meshio, a dependency of casmech "
+                         "missing here; install it with: pip install meshio") from None
     return meshio
 
 

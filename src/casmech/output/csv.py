@@ -9,13 +9,16 @@ import numpy as np
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
-    """Write atomically (a reader never sees a half-written file)."""
+    """Write atomically (a reader never sees a half-written file). Numbers in the shortest form
+    that reads back to the same binary64 value (Python's `repr`: 0.03, not
+    0.029999999999999999)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(path.name + ".tmp")
     with open(temporary, "w", newline="") as handle:
         handle.write(",".join(names) + "\n")
-        np.savetxt(handle, np.atleast_2d(values), delimiter=",", fmt="%.17g")
+        handle.writelines(",".join(map(repr, row)) + "\n"
+                          for row in np.atleast_2d(values).tolist())
     os.replace(temporary, path)
     return path
 

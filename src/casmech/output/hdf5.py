@@ -1,4 +1,5 @@
-"""results.h5: the results table plus the run's metadata, in one HDF5 file (h5py, extra `hdf5`).
+"""results.h5: the results table plus the run's metadata, in one HDF5 file (h5py, imported on
+use).
 
 Layout:
     /results    float64 [rows x columns], the results contract's table
@@ -24,8 +25,8 @@ def h5py():
     try:
         import h5py as module
     except ImportError:
-        raise UsageError("HDF5 output needs h5py; install it with: pip install 'casmech[hdf5]'"
-                         ) from None
+        raise UsageError("HDF5 output needs h5py, a dependency of casmech missing here; install "
+                         "it with: pip install h5py") from None
     return module
 
 

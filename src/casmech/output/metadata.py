@@ -29,10 +29,11 @@ def resolved_settings(analysis: Analysis, **given) -> dict:
     overrides (None: not given), as casmech.analyze resolves them."""
     settings = replace(analysis, **{k: v for k, v in given.items()
                                     if k in SETTINGS and v is not None})
-    formulation = given.get("formulation") or settings.options.get("formulation", "rp")
+    formulation = given.get("formulation") or settings.options.get("formulation", "auto")
     stabilization = given.get("stabilization") or settings.options.get("stabilization", "ggl")
+    method = given.get("method") or settings.options.get("method", "auto")
     return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation,
-            "stabilization": stabilization}
+            "stabilization": stabilization, "method": method}
 
 
 def sha256(text: str) -> str:

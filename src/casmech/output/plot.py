@@ -1,4 +1,4 @@
-"""Plots of a results table (matplotlib, optional extra `plot`, imported only when plotting).
+"""Plots of a results table (matplotlib, a dependency imported only when plotting).
 
 A selection is a list of specs: column names, globs (`crank.*`) or presets (PRESETS). The chosen
 columns are drawn against t, one panel per physical quantity (read from the column's suffix), with
@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import UsageError
-from casmech.runtime.results import JOINT_COLUMNS
 
 # column suffix (after the last dot) or whole column name -> (quantity, unit, panel title)
 QUANTITIES: dict[str, tuple[str, str, str]] = {
@@ -51,6 +50,8 @@ def _positions(names: Sequence[str], _argument: str) -> list[str]:
 
 
 def _reactions(names: Sequence[str], joint: str) -> list[str]:
+    from casmech.runtime.results import JOINT_COLUMNS  # on use: it imports the compiler
+
     columns = [f"{joint}.{c}" for c in JOINT_COLUMNS]
     if all(c in names for c in columns):
         return columns
@@ -186,6 +187,6 @@ def _matplotlib_figure():
     try:
         from matplotlib.figure import Figure
     except ImportError:
-        raise UsageError("casmech plot needs matplotlib; install it with: "
-                         "pip install 'casmech[plot]'") from None
+        raise UsageError("casmech plot needs matplotlib, a dependency of casmech missing here; "
+                         "install it with: pip install matplotlib") from None
     return Figure

@@ -5,17 +5,28 @@ Phi_q q_dot = nu, accelerations from Phi_q q_ddot = gamma; then the multipliers 
 equations of motion with the prescribed motion, Phi_q^T lam = Q - M q_ddot (inverse dynamics).
 With a fully driven mechanism the two analyses differ only in what they are asked for; both
 report the joint reactions, since the prescribed motion determines them.
+
+The rows come from one mapped CasADi Function over the output grid (compiler.prescribed); a
+row it rejects (Newton not converged in its fixed steps, or Phi_q close to losing rank) is
+done by the per-row code (state_at: numpy least squares), which reports a failure with the
+joints involved, and the mapped step resumes after it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from casmech.compiler import prescribed
 from casmech.compiler.checks import structure
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.runtime import assembly
 from casmech.runtime.results import Result
+
+# Rows whose Phi_q has min |R_kk| / max |R_kk| below this go to the per-row code, which decides
+# by the singular values whether the configuration is singular (that ratio bounds 1/cond from
+# above, so the per-row code sees every row it could reject; numpy's rank cut is ~1e-14).
+PIVOT_RATIO = 1e-10
 
 
 def output_times(t0: float, t_end: float, step: float) -> np.ndarray:
@@ -46,26 +57,77 @@ def state_at(functions: SystemFunctions, t: float, q_guess: np.ndarray, q_dot_gu
     return q, q_dot, q_ddot, lam
 
 
+MIN_SPAN = 16  # rows of the first mapped call after a row the per-row code had to do
+
+
 def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
                           analysis: str = "kinematics", t0: float = 0.0,
                           progress=None) -> Result:
+    """Rows by the mapped prescribed step over the whole grid; after a row it rejects (done by
+    state_at) it resumes over max(MIN_SPAN, twice the rows that last passed), doubling while
+    they pass, so the mapped rows computed and discarded are at most twice those kept plus
+    MIN_SPAN per rejected row. metadata per_row_rows: how many rows state_at did."""
     result = Result(analysis, on_row=progress)
+    result.metadata["per_row_rows"] = 0
     q = assembly.assemble_positions(functions, t0)
     require_fully_driven(functions, t0, q, analysis)
-    q_dot = np.zeros(functions.n_coordinates)
-    q_ddot = np.zeros(functions.n_coordinates)
-    previous = t0
+    times = output_times(t0, t_end, step)
+    mapped = _MappedGrid(functions)
+    state, previous, done, span = np.concatenate([q, 0 * q, 0 * q]), t0, 0, len(times)
     try:
-        for t in output_times(t0, t_end, step):
-            h = t - previous
-            q, q_dot, q_ddot, lam = state_at(functions, t, q + h * q_dot + 0.5 * h * h * q_ddot,
-                                             q_dot + h * q_ddot)
-            result.append(t, q, q_dot, q_ddot, lam)
-            previous = t
+        while done < len(times):
+            block = times[done:done + span]
+            states, lam, passed = mapped(state, previous, block)
+            result.extend(block[:passed], *np.split(states[:passed], 3, axis=1), lam[:passed])
+            done += passed
+            if passed:
+                state, previous = states[passed - 1], block[passed - 1]
+            span = 2 * span if passed == len(block) else max(MIN_SPAN, 2 * passed)
+            if passed < len(block):  # the per-row code does (or reports) the rejected row
+                state, lam_row = _per_row(functions, state, previous, times[done])
+                result.append(times[done], *np.split(state, 3), lam_row)
+                result.metadata["per_row_rows"] += 1
+                previous, done = times[done], done + 1
     except AnalysisError as error:
         error.partial = result
         raise
     return result
+
+
+def _per_row(functions: SystemFunctions, state: np.ndarray, previous: float, t: float):
+    """state_at t from the state [q; q_dot; q_ddot] at `previous`: (new state, lam)."""
+    h = t - previous
+    q, q_dot, q_ddot = np.split(state, 3)
+    q, q_dot, q_ddot, lam = state_at(functions, t, q + h * q_dot + 0.5 * h * h * q_ddot,
+                                     q_dot + h * q_ddot)
+    return np.concatenate([q, q_dot, q_ddot]), lam
+
+
+class _MappedGrid:
+    """The prescribed step mapped over blocks of output times, one Function per padded
+    block length; a call returns the block's states, multipliers and how many leading rows
+    passed the step's checks."""
+
+    def __init__(self, functions: SystemFunctions):
+        self.step = prescribed.step(functions.functions)
+        self.m = functions.n_rows
+        self.grids: dict[int, object] = {}
+
+    def __call__(self, state, previous: float, block: np.ndarray):
+        rows = len(block)
+        padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
+        if padded not in self.grids:
+            self.grids[padded] = prescribed.grid(self.step, rows)[0]
+        function = self.grids[padded]
+        times = np.concatenate([block, np.full(padded - rows, block[-1])])
+        steps = np.diff(times, prepend=previous)
+        states, checks = (np.array(out) for out in function(state, np.vstack([times, steps])))
+        worst, ratio = checks[self.m, :rows], checks[self.m + 1, :rows]
+        states, checks = states[:, :rows], checks[:, :rows]
+        good = (worst <= assembly.POSITION_TOLERANCE) & (ratio > PIVOT_RATIO)
+        good &= np.isfinite(states).all(axis=0) & np.isfinite(checks).all(axis=0)
+        passed = rows if good.all() else int(np.argmin(good))
+        return states.T, checks[:self.m].T, passed
 
 
 def run_assembly(functions: SystemFunctions, t0: float = 0.0, progress=None) -> Result:

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
+import casadi as ca
 import numpy as np
 
 from casmech.compiler.functions import SystemFunctions
@@ -12,32 +12,74 @@ from casmech.compiler.functions import SystemFunctions
 BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
                 "ax", "ay", "az", "alphax", "alphay", "alphaz")
 JOINT_COLUMNS = ("fx", "fy", "fz", "tx", "ty", "tz")
+STATES = ("q", "q_dot", "q_ddot", "lam")
 
 
-@dataclass
 class Result:
     """States at the output times; q_ddot and lam complete the state where known.
-    on_row, when given, is called with the time of every row as it is appended (progress)."""
 
-    analysis: str
-    times: list[float] = field(default_factory=list)
-    q: list[np.ndarray] = field(default_factory=list)
-    q_dot: list[np.ndarray] = field(default_factory=list)
-    q_ddot: list[np.ndarray] = field(default_factory=list)
-    lam: list[np.ndarray] = field(default_factory=list)
-    metadata: dict = field(default_factory=dict)
-    on_row: Callable[[float], None] | None = field(default=None, repr=False, compare=False)
+    Rows arrive one at a time (append) or as blocks (extend); `times` reads as a list of
+    floats, q, q_dot, q_ddot and lam as 2-D arrays (rows x n). on_row, when given, is called
+    with the time of every row as it is added (progress)."""
+
+    def __init__(self, analysis: str, metadata: dict | None = None,
+                 on_row: Callable[[float], None] | None = None):
+        self.analysis = analysis
+        self.metadata = {} if metadata is None else metadata
+        self.on_row = on_row
+        self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
-        self.times.append(float(t))
-        for store, value in ((self.q, q), (self.q_dot, q_dot), (self.q_ddot, q_ddot),
-                             (self.lam, lam)):
-            store.append(np.array(value, float))
+        """One row: t a float, the states 1-D."""
+        self.extend([t], *(np.reshape(np.asarray(v, float), (1, -1))
+                           for v in (q, q_dot, q_ddot, lam)))
+
+    def extend(self, times, q, q_dot, q_ddot, lam) -> None:
+        """A block of rows: times (k,), the states 2-D arrays (k x n), row j at times[j]."""
+        times = np.asarray(times, float).reshape(-1)
+        values = dict(zip(STATES, (np.asarray(v, float) for v in (q, q_dot, q_ddot, lam)),
+                          strict=True))
+        for name, value in values.items():
+            if value.ndim != 2 or value.shape[0] != len(times):
+                raise ValueError(f"{name}: expected {len(times)} rows, got shape {value.shape}")
+        self._blocks["t"].append(times)
+        for name, value in values.items():
+            self._blocks[name].append(value)
         if self.on_row is not None:
-            self.on_row(float(t))
+            for t in times.tolist():
+                self.on_row(t)
+
+    def _array(self, name: str) -> np.ndarray:
+        blocks = self._blocks[name]
+        if len(blocks) > 1:  # consolidate once, so repeated reads are free
+            blocks[:] = [np.concatenate(blocks)]
+        return blocks[0] if blocks else np.zeros((0,) if name == "t" else (0, 0))
+
+    @property
+    def times(self) -> list[float]:
+        return self._array("t").tolist()
+
+    @property
+    def q(self) -> np.ndarray:
+        return self._array("q")
+
+    @property
+    def q_dot(self) -> np.ndarray:
+        return self._array("q_dot")
+
+    @property
+    def q_ddot(self) -> np.ndarray:
+        return self._array("q_ddot")
+
+    @property
+    def lam(self) -> np.ndarray:
+        return self._array("lam")
 
     def __len__(self) -> int:
-        return len(self.times)
+        return sum(len(block) for block in self._blocks["t"])
+
+    def __repr__(self) -> str:
+        return f"Result({self.analysis!r}, {len(self)} rows, metadata={self.metadata!r})"
 
 
 def column_names(functions: SystemFunctions) -> list[str]:
@@ -48,7 +90,7 @@ def column_names(functions: SystemFunctions) -> list[str]:
 
 
 def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
-    """One row of the results table."""
+    """One row of the results table, numerically (row_function does the same symbolically)."""
     nb = functions.n_bodies
     omega, alpha = functions.evaluate("body_rates", q, q_dot, q_ddot)
     per_body = [
@@ -63,8 +105,36 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
     return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation]])
 
 
+def row_function(functions: SystemFunctions) -> ca.Function:
+    """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it: one
+    casadi.Function over the bundle's own (SX: inlined; compiled: called)."""
+    bundle = functions.functions
+    sym = ca.SX if all(f.is_a("SXFunction") for f in bundle.values()) else ca.MX
+    n, m = functions.n_coordinates, functions.n_rows
+    t, q, q_dot, q_ddot, lam = (sym.sym("t"), sym.sym("q", n), sym.sym("q_dot", n),
+                                sym.sym("q_ddot", n), sym.sym("lam", m))
+    nb = functions.n_bodies
+    omega, alpha = bundle["body_rates"](q, q_dot, q_ddot)
+    force, torque = bundle["reactions"](t, q, q_dot, lam)
+    kinetic, potential = bundle["energy"](t, q, q_dot)
+    phi = bundle["phi"](t, q)
+    violation = ca.mmax(ca.fabs(phi)) if phi.numel() else sym(1, 1)
+    parts = [t]
+    for k in range(nb):
+        parts += [q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4], q_dot[3 * k:3 * k + 3],
+                  omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
+    parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
+    parts += [kinetic + potential, violation]
+    return ca.Function("results_row", [t, q, q_dot, q_ddot, lam], [ca.vertcat(*parts)])
+
+
 def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.ndarray]:
+    """Every row at once: row_function mapped over the rows, one call."""
     names = column_names(functions)
-    rows = [row(functions, *state) for state in
-            zip(result.times, result.q, result.q_dot, result.q_ddot, result.lam, strict=True)]
-    return names, np.array(rows).reshape(len(rows), len(names))
+    rows = len(result)
+    if rows == 0:
+        return names, np.zeros((0, len(names)))
+    mapped = row_function(functions).map(rows)
+    values = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
+                    result.q_ddot.T, result.lam.T)
+    return names, np.array(values).T.reshape(rows, len(names))

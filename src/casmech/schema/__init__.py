@@ -5,19 +5,23 @@
 
 Both raise `casmech.errors.ModelError` holding every finding (YAML, structure, expressions, names,
 physics), each rendered as `file:line:col: error[CODE] path: message`.
+
+The package imports its modules where they are used, so that importing one of them (the
+compiler reads `casmech.schema.resolved`) does not import pydantic and the whole checker, and
+so that the compiler and the schema can import each other's modules in any order.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from casmech.errors import Diagnostic, ModelError
-from casmech.schema.components import compose, uses_composition
-from casmech.schema.loader import Document, load_document, load_file
-from casmech.schema.resolved import ResolvedModel
-from casmech.schema.semantic import resolve
-from casmech.schema.spec_errors import validate
+
+if TYPE_CHECKING:
+    from casmech.schema.loader import Document
+    from casmech.schema.resolved import ResolvedModel
 
 
 def _order(diagnostic: Diagnostic) -> tuple[int, int]:
@@ -32,6 +36,10 @@ def _in_files(diagnostic: Diagnostic, top: str) -> tuple:
 
 
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
+    from casmech.schema.components import compose, uses_composition
+    from casmech.schema.semantic import resolve
+    from casmech.schema.spec_errors import validate
+
     if uses_composition(document.data):  # components, instances, repeat: docs/components.md
         model, found = compose(document, overrides)
         found = sorted(dict.fromkeys(found), key=lambda d: _in_files(d, document.file))
@@ -50,6 +58,8 @@ def _resolve(document: Document, overrides: Mapping[str, str] | None) -> Resolve
 
 def load_model(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:
     """Read, validate and evaluate a model file; raises ModelError with every finding."""
+    from casmech.schema.loader import load_file
+
     return _resolve(load_file(str(path)), overrides)
 
 
@@ -57,6 +67,8 @@ def load_model_text(
     text: str, file: str = "<string>", overrides: Mapping[str, str] | None = None
 ) -> ResolvedModel:
     """As `load_model`, from text (`file` names it in diagnostics)."""
+    from casmech.schema.loader import load_document
+
     return _resolve(load_document(text, file), overrides)
 
 

@@ -30,6 +30,8 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
         {"length": distance_length(check, path, given, vectors)} if given.type == "distance" else {}
     )
     extra.update(drivers(check, path, given))
+    if getattr(given, "cut", False):
+        extra["cut"] = True
     if given.type in JOINT_CHECKS and not failed(vectors.values()):
         JOINT_CHECKS[given.type](check, path, vectors)
     if hasattr(given, "f"):

@@ -79,6 +79,7 @@ class Joint:
     # effort motors (schema/motors.py): torque -> f(t, angle, angle_dot),
     # force -> f(t, displacement, displacement_dot); position/speed motors are drivers above
     motor: Mapping[str, Any] = field(default_factory=dict)
+    cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
 
 
 @dataclass(frozen=True)

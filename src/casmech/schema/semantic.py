@@ -37,7 +37,12 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
         problems["output_step"] = STEP_RULE
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}")
-    options = {"formulation": given.formulation, "stabilization": given.stabilization}
+    options = {"formulation": given.formulation, "stabilization": given.stabilization,
+               "method": given.method}
+    if given.method == "adams" and given.formulation in ("rp", "romega"):
+        check.error("E409", (*path, "method"), "method adams integrates joint coordinates of a "
+                    "tree; the rp and romega DAEs are integrated by IDAS's BDF method",
+                    got="adams", hint="write formulation: joint (or auto), or remove method")
     source = check.doc.source_map.values.get(path)
     return (
         None

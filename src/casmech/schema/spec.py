@@ -238,6 +238,8 @@ class JointBase(Spec):
 class Composite(JointBase):
     driver: Driver | None = None
     motor: Motor | None = None
+    # joint formulation: keep this joint as a loop-closure constraint, never a tree joint
+    cut: StrictBool = False
 
 
 class Revolute(Composite):
@@ -424,10 +426,15 @@ class Analysis(Spec):
     output_step: Scalar = 0.01
     rtol: Scalar = 1e-8
     atol: Scalar = 1e-10
-    formulation: Literal["rp", "romega"] = "rp"
+    # dynamics: r-p or r-omega DAE, joint coordinates (casmech.compiler.tree), or auto (the
+    # fastest the model allows)
+    formulation: Literal["rp", "romega", "joint", "auto"] = "auto"
     # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
     # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
     stabilization: Literal["ggl", "projection"] = "ggl"
+    # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
+    # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
+    method: Literal["auto", "adams", "bdf"] = "auto"
 
 
 # ------------------------------------------------------- estimation and optimal control (issue 7)

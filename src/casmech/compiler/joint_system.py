@@ -1,0 +1,239 @@
+"""The joint formulation as CasADi Functions: the ODE of a tree, the DAE of a tree with loop
+closures, and the results row's state.
+
+State x = [theta; u]: the coordinates and velocities of the tree joints that no driver
+prescribes (compiler/articulated.py). A tree is the ODE x' = (theta_dot, ABA). Cut joints keep
+their constraint rows Phi_c(t, q(theta)) (compiler/tree.py). Their multipliers act on the two
+bodies as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the DAE is the stabilized
+index-2 form of Gear, Gupta and Leimkuhler (as compiler/dae.py's for r-p):
+
+    theta' = theta_dot(theta, u) + Phi_c_theta^T mu,   u' = ABA(t, theta, u; lam)
+    0 = Phi_c(t, theta),   0 = d/dt Phi_c (t, theta, u),   z = [lam, mu]
+
+with the rows scaled to unit velocity-Jacobian norm (lam in force units) and masked by p = w
+(w_k = 1 turns row k into lam_k = 0 and mu_k = 0: rows that depend on the others at t0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+
+from casmech.compiler import articulated, euler, lazy_jacobian
+from casmech.compiler.articulated import Joint
+from casmech.compiler.assemble import driver_value
+from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
+from casmech.compiler.joint_motions import MOTIONS
+from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.compiler.tree import Tree
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Which coordinates and velocities are states: per tree joint, the indices into x of its
+    free coordinates and velocities, and which of its own they are."""
+
+    theta: tuple[tuple[int, ...], ...]
+    u: tuple[tuple[int, ...], ...]
+    free_theta: tuple[tuple[int, ...], ...]
+    free_u: tuple[tuple[int, ...], ...]
+    n_theta: int
+    n_x: int
+
+
+def layout(tree: Tree) -> Layout:
+    free_theta = [tuple(c for c in range(MOTIONS[j.type].n_q) if c not in j.prescribed)
+                  for j in tree.joints]
+    free_u = [tuple(c for c in range(MOTIONS[j.type].n_v) if c not in j.prescribed)
+              for j in tree.joints]
+    n, slots = 0, []
+    for free in (*free_theta, *free_u):
+        slots.append(tuple(range(n, n + len(free))))
+        n += len(free)
+    k = len(tree.joints)
+    return Layout(tuple(slots[:k]), tuple(slots[k:]), tuple(free_theta), tuple(free_u),
+                  sum(map(len, free_theta)), n)
+
+
+@dataclass(frozen=True)
+class JointSystem:
+    tree: Tree
+    layout: Layout
+    cut_rows: tuple[int, ...]  # rows of Phi the cut joints own (the DAE's algebraic rows)
+    dynamics: ca.Function  # tree: (t, x) -> ode; loops: (t, x, z, p) -> (ode, alg)
+    motion: ca.Function  # (t, x, z, signs) -> (q, q_dot, q_ddot, lam, velocity_jacobian)
+    acceleration_residual: ca.Function  # loops: (t, x, z) -> d^2/dt^2 Phi_c (unit rows)
+    velocity_jacobian: ca.Function  # loops: (t, x) -> d/du of d/dt Phi_c (unit rows)
+
+    @property
+    def n_cut(self) -> int:
+        return len(self.cut_rows)
+
+    @cached_property
+    def problem(self) -> dict:
+        """casadi.integrator's problem (MX, with lazy_jacobian's cheap Jacobian)."""
+        return lazy_jacobian.problem(self.dynamics)
+
+    @cached_property
+    def jacobian(self) -> ca.Function:
+        """lazy_jacobian.jacobian of `dynamics`, built once."""
+        return lazy_jacobian.jacobian(self.dynamics)
+
+    @cached_property
+    def functional_problem(self) -> dict:
+        """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
+        return lazy_jacobian.problem(self.dynamics, exact=False)
+
+
+def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
+    """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega
+    Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame rotation; zero for
+    ground), built from the joint's own primitives so that the cost stays per joint."""
+    t = ca.SX.sym("t")
+    sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
+    frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if body == GROUND_INDEX
+              else Frame(r, euler.rotation(p))
+              for body, (r, p) in zip((joint.body_i, joint.body_j), sides, strict=True)]
+    rows = []
+    for prim in ir.primitives[joint.rows.start:joint.rows.stop]:
+        function, keys = PRIMITIVES[prim.kind]
+        rows.append(function(*frames, {k: ca.DM(prim.vectors[k]) for k in keys},
+                             driver_value(prim, t)))
+    phi = ca.vertcat(*rows)
+    blocks = [ca.horzcat(ca.jacobian(phi, r), 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T)
+              for r, p in sides]
+    return ca.Function("joint_rows", [t, *(v for side in sides for v in side)],
+                       [phi, *blocks], ["t", "r_i", "p_i", "r_j", "p_j"],
+                       ["phi", "B_i", "B_j"])
+
+
+class _Builder:
+    """The SX of one model's tree; see build."""
+
+    def __init__(self, ir: ModelIR, tree: Tree):
+        self.ir, self.tree, self.layout = ir, tree, layout(tree)
+        lay = self.layout
+        self.t, self.x = ca.SX.sym("t"), ca.SX.sym("x", lay.n_x)
+        self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
+        m = len(self.cut_rows)
+        self.z, self.w = ca.SX.sym("z", 2 * m), ca.SX.sym("w", m)
+        reference = {j.child: j.child_frame for j in tree.joints}
+        self.joints = [
+            Joint(j, self.t, {c: self.x[k] for c, k in zip(ft, th, strict=True)},
+                  {c: self.x[k] for c, k in zip(fu, us, strict=True)},
+                  reference.get(j.parent))
+            for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
+                                         lay.free_u, strict=True)]
+        self.kin = articulated.kinematics(self.joints, ir.n_bodies)
+        self.theta_dot = ca.vertcat(*[j.theta_dot[list(free)] if free else ca.SX(0, 1)
+                                      for j, free in zip(self.joints, lay.free_theta,
+                                                         strict=True)])
+
+    def rows(self, joint: JointIR) -> tuple:
+        """(phi, B_i, B_j) of a joint's rows at the tree's state."""
+        def pose(body: int):
+            if body == GROUND_INDEX:
+                return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
+            return self.kin.r[body], self.kin.p[body]
+        return joint_rows(self.ir, joint)(self.t, *pose(joint.body_i), *pose(joint.body_j))
+
+    def loop_closure(self):
+        """(Phi_c, d/dt Phi_c, the unit-row scale, lam, mu) of the cut rows."""
+        m = len(self.cut_rows)
+        theta = self.x[:self.layout.n_theta]
+        phi = ca.vertcat(*[self.rows(joint)[0] for joint in self.tree.cut])
+        rate = ca.jacobian(phi, theta) @ self.theta_dot + ca.jacobian(phi, self.t)
+        u = self.x[self.layout.n_theta:]
+        scale = 1 / ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        return phi, rate, scale, self.z[:m], self.z[m:]
+
+    def cut_wrenches(self, lam) -> list:
+        """Body wrenches (n_bar, A^T F) of the cut rows' multipliers lam (true units): each
+        body takes -B^T lam of the rows acting on it."""
+        wrenches = [ca.SX.zeros(6, 1) for _ in range(self.ir.n_bodies)]
+        start = 0
+        for joint in self.tree.cut:
+            _, *blocks = self.rows(joint)
+            lam_j = lam[start:start + len(joint.rows)]
+            start += len(joint.rows)
+            for body, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
+                if body == GROUND_INDEX:
+                    continue
+                generalized = -block.T @ lam_j  # global force, body-frame torque
+                wrenches[body] += ca.vertcat(generalized[3:6],
+                                             self.kin.rotation[body].T @ generalized[0:3])
+        return wrenches
+
+    def dynamics(self, lam):
+        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
+        cut = self.cut_wrenches(lam)
+        external = [a + c for a, c in zip(applied, cut, strict=True)]
+        torques = [ca.SX.zeros(len(j.free), 1) for j in self.joints]
+        return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
+
+    def multipliers(self, dynamics, lam_cut) -> ca.SX:
+        """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
+        from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
+        Jacobian at the child (global force, body-frame torque)."""
+        lam = ca.SX.zeros(len(self.ir.row_info()), 1)
+        lam[list(self.cut_rows)] = lam_cut
+        wrenches = articulated.joint_wrenches(self.joints, dynamics)
+        for j, w in zip(self.joints, wrenches, strict=True):
+            joint = j.joint.joint
+            if joint is None:  # a floating body's free joint has no rows
+                continue
+            _, block_i, block_j = self.rows(joint)
+            block = block_i if j.joint.child == joint.body_i else block_j
+            force = ca.vertcat(self.kin.rotation[j.joint.child] @ w[3:6], w[0:3])
+            lam[list(joint.rows)] = -ca.solve(block @ block.T, block @ force)
+        return lam
+
+    def motion(self, dynamics, lam_cut, signs) -> list:
+        """(q, q_dot, q_ddot, lam) of the results row: r-p, Euler parameters times signs."""
+        nb, kin = self.ir.n_bodies, self.kin
+        p = [signs[k] * kin.p[k] for k in range(nb)]
+        omega = [kin.velocity[k][0:3] for k in range(nb)]
+        alpha = [dynamics.accelerations[k][0:3] for k in range(nb)]
+        r_ddot = [kin.rotation[k] @ (dynamics.accelerations[k][3:6]
+                                     + ca.cross(omega[k], kin.velocity[k][3:6]))
+                  for k in range(nb)]
+        p_dot = [0.5 * euler.g_matrix(p[k]).T @ omega[k] for k in range(nb)]
+        p_ddot = [0.5 * (euler.g_matrix(p_dot[k]).T @ omega[k] + euler.g_matrix(p[k]).T @ alpha[k])
+                  for k in range(nb)]
+        return [ca.vertcat(*kin.r, *p),
+                ca.vertcat(*[kin.r_dot(k) for k in range(nb)], *p_dot),
+                ca.vertcat(*r_ddot, *p_ddot), self.multipliers(dynamics, lam_cut)]
+
+
+def build(ir: ModelIR, tree: Tree) -> JointSystem:
+    b = _Builder(ir, tree)
+    t, x, z, w = b.t, b.x, b.z, b.w
+    signs = ca.SX.sym("signs", ir.n_bodies)
+    if not b.cut_rows:
+        dyn = b.dynamics(ca.SX(0, 1))
+        x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
+        dynamics = ca.Function("joint_ode", [t, x], [x_dot], ["t", "x"], ["ode"])
+        acceleration = ca.Function("joint_acceleration", [t, x, z], [ca.SX(0, 1)])
+        velocity = ca.Function("joint_velocity_jacobian", [t, x], [ca.SX(0, b.layout.n_x)])
+        lam_cut = ca.SX(0, 1)
+    else:
+        phi, rate, scale, lam_unit, mu = b.loop_closure()
+        lam_cut = scale * lam_unit
+        dyn = b.dynamics(lam_cut)
+        x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
+        theta = x[:b.layout.n_theta]
+        ode = x_dot + ca.vertcat(ca.jacobian(scale * phi, theta).T @ mu,
+                                 ca.SX.zeros(b.layout.n_x - b.layout.n_theta, 1))
+        alg = ca.vertcat((1 - w) * scale * phi - w * mu, (1 - w) * scale * rate - w * lam_unit)
+        dynamics = ca.Function("joint_dae", [t, x, z, w], [ode, alg],
+                               ["t", "x", "z", "p"], ["ode", "alg"])
+        second = ca.jacobian(rate, x) @ x_dot + ca.jacobian(rate, t)
+        acceleration = ca.Function("joint_acceleration", [t, x, z], [scale * second])
+        u = x[b.layout.n_theta:]
+        velocity = ca.Function("joint_velocity_jacobian", [t, x],
+                               [ca.jacobian(scale * rate, u)])
+    motion = ca.Function("joint_motion", [t, x, z, signs], b.motion(dyn, lam_cut, signs),
+                         ["t", "x", "z", "signs"], ["q", "q_dot", "q_ddot", "lam"])
+    return JointSystem(tree, b.layout, b.cut_rows, dynamics, motion, acceleration, velocity)

@@ -1,0 +1,290 @@
+"""Forward dynamics in joint coordinates (analysis.formulation: joint), through SUNDIALS via
+CasADi over the output grid: CVODES on a tree's ODE, IDAS on the stabilized index-2 DAE of a
+tree with loop closures (compiler/joint_system.py).
+
+The initial state is the r-p one (assembly: the file's pose assembled, its velocities projected
+onto the constraints), mapped to joint coordinates joint by joint (relative pose -> theta,
+relative twist -> u through the joint's motion subspace), so every formulation starts from the
+same state. Loop closures start from their consistent multipliers (the acceleration-level
+constraints solved for lam; the ABA's accelerations are affine in lam), with the rows that
+depend on the others at t0 masked out; the reactions are then reported as the minimum-norm
+ones, as the r-p DAE does. Each results row holds the r-p state the tree gives and every joint
+row's multiplier.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler import euler
+from casmech.compiler.articulated import local_motion
+from casmech.compiler.checks import independent_rows
+from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.ir import GROUND_INDEX
+from casmech.compiler.joint_motions import MOTIONS
+from casmech.compiler.joint_system import JointSystem, build
+from casmech.compiler.tree import TreeJoint, spanning_tree
+from casmech.errors import AnalysisError, FailureContext
+from casmech.runtime import assembly
+from casmech.runtime.dynamics import Z_TOL, initial_step, minimum_norm
+from casmech.runtime.kinematics import output_times
+from casmech.runtime.results import Result
+
+MAX_STEPS = 50000  # steps per output interval before SUNDIALS gives up (as runtime.dynamics)
+CHUNK = 1000  # output intervals per integrator call (a restart between calls)
+METHODS = {"adams": {"linear_multistep_method": "adams",
+                     "nonlinear_solver_iteration": "functional"},
+           "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
+# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF.
+# Measured (an arm with a bushing of stiffness k to a tip mass, 2 s, rtol 1e-8): rho h = 2.8:
+# Adams 0.032 s (1621 steps), BDF 0.045 s (496); 28: 0.148 s against 0.065 s; 2800: 19 s
+# against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
+# bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
+STIFF = 10.0
+# the joint DAE's first step: FIRST_STEP times runtime.dynamics.initial_step (the r-p rule). At
+# 1x the four-bar failed at t0 at rtol 1e-12 (IDA_CONV_FAIL: the index-2 iteration matrix,
+# condition ~ 1/h^2); at 10x it, Bricard, a distance and a revolute-spherical link ran at
+# rtol 1e-6..1e-12 with step counts within 10 % of 1x (Bricard at 1e-12: 1865 against 3254).
+FIRST_STEP = 10.0
+STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
+
+
+def joint_system(functions: SystemFunctions) -> JointSystem:
+    """The bundle's joint system, built once per bundle."""
+    if "joint_system" not in functions.derived:
+        functions.derived["joint_system"] = build(functions.ir, spanning_tree(functions.ir))
+    return functions.derived["joint_system"]
+
+
+class _Pose:
+    """Global pose and velocity of a body (ground: fixed at the origin) from the r-p state."""
+
+    def __init__(self, q, q_dot, n_bodies: int, k: int):
+        if k == GROUND_INDEX:
+            self.r, self.a = np.zeros(3), np.eye(3)
+            self.r_dot, self.omega = np.zeros(3), np.zeros(3)
+            return
+        p = q[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
+        p_dot = q_dot[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
+        self.r, self.r_dot = q[3 * k:3 * k + 3], q_dot[3 * k:3 * k + 3]
+        self.a = euler.numeric(euler.rotation, p)
+        self.omega = 2 * euler.numeric(euler.g_matrix, p) @ p_dot  # body frame
+
+    def origin(self, s):
+        """Global position and velocity of the body-fixed point s."""
+        return self.r + self.a @ s, self.r_dot + self.a @ np.cross(self.omega, s)
+
+
+def joint_state(joint: TreeJoint, q, q_dot, n_bodies: int) -> tuple[np.ndarray, np.ndarray]:
+    """(theta, u) of a tree joint at the r-p state."""
+    parent, child = (_Pose(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
+    (c_p, s_p), (c_c, s_c) = joint.parent_frame, joint.child_frame
+    o_p, o_p_dot = parent.origin(s_p)
+    o_c, o_c_dot = child.origin(s_c)
+    rotation = c_p.T @ parent.a.T @ child.a @ c_c
+    gap = parent.a.T @ (o_c - o_p)
+    theta = MOTIONS[joint.type].coordinates(rotation, c_p.T @ gap)
+    omega = c_c.T @ (child.omega - child.a.T @ parent.a @ parent.omega)
+    gap_dot = c_p.T @ (parent.a.T @ (o_c_dot - o_p_dot) - np.cross(parent.omega, gap))
+    twist = np.concatenate([omega, rotation.T @ gap_dot])
+    n_v = MOTIONS[joint.type].n_v
+    if not n_v:
+        return theta, np.zeros(0)
+    subspace = np.array(local_motion(joint.type)(theta, np.zeros(n_v))[2].full())
+    return theta, np.linalg.lstsq(subspace, twist, rcond=None)[0]
+
+
+def initial_state(system: JointSystem, q, q_dot, n_bodies: int) -> np.ndarray:
+    """x0 = [theta; u] of the free coordinates and velocities at the r-p state."""
+    lay = system.layout
+    x0 = np.zeros(lay.n_x)
+    for k, joint in enumerate(system.tree.joints):
+        theta, u = joint_state(joint, q, q_dot, n_bodies)
+        x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
+        x0[list(lay.u[k])] = u[list(lay.free_u[k])]
+    return x0
+
+
+class _Loops:
+    """Consistent multipliers of the loop closures and the rows masked out at t0."""
+
+    def __init__(self, system: JointSystem, t0: float, x0):
+        self.system, m = system, system.n_cut
+        self.n_z = 2 * m
+        jacobian = np.array(system.velocity_jacobian(t0, x0).full()) if m else np.zeros((0, 0))
+        keep = independent_rows(jacobian) if m else []
+        self.mask = 1.0 - np.array(keep, float)
+
+    def z(self, t: float, x) -> np.ndarray:
+        """[lam; mu = 0] with lam making the constraint accelerations vanish."""
+        m = self.system.n_cut
+        if not m:
+            return np.zeros(0)
+        residual = self.system.acceleration_residual
+        base = np.array(residual(t, x, np.zeros(2 * m)).full()).ravel()
+        keep = np.flatnonzero(self.mask == 0)
+        columns = []
+        for k in keep:
+            unit = np.zeros(2 * m)
+            unit[k] = 1.0
+            columns.append(np.array(residual(t, x, unit).full()).ravel() - base)
+        z = np.zeros(2 * m)
+        if len(keep):
+            matrix = np.array(columns).T[keep]
+            z[keep] = np.linalg.lstsq(matrix, -base[keep], rcond=None)[0]
+        return z
+
+
+def quaternion_signs(system: JointSystem, t0: float, x0, z0, q0, n_bodies: int):
+    """+1 or -1 per body, so the tree's Euler parameters continue the r-p state's."""
+    q = np.array(system.motion(t0, x0, z0, np.ones(n_bodies))[0].full()).ravel()
+    p_tree = q[3 * n_bodies:].reshape(n_bodies, 4)
+    p_rp = q0[3 * n_bodies:].reshape(n_bodies, 4)
+    return np.where(np.sum(p_tree * p_rp, axis=1) < 0, -1.0, 1.0)
+
+
+class _Integrator:
+    """One SUNDIALS call over a chunk of the output grid: CVODES for a tree, IDAS for loops."""
+
+    def __init__(self, system: JointSystem, loops: _Loops, rtol: float, atol: float,
+                 method: str):
+        self.system, self.loops = system, loops
+        self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
+                        "disable_internal_warnings": True}
+        if not system.n_cut:
+            self.options |= METHODS[method]
+        self.steps = 0
+
+    def __call__(self, t0: float, times, x, z) -> tuple[np.ndarray, np.ndarray]:
+        system = self.system
+        if not len(x):  # every coordinate driven: nothing to integrate
+            return np.zeros((0, len(times))), np.zeros((0, len(times)))
+        if not system.n_cut:
+            functional = self.options["nonlinear_solver_iteration"] == "functional"
+            problem = system.functional_problem if functional else system.problem
+            integrator = ca.integrator("joint", "cvodes", problem, t0, list(times),
+                                       self.options)
+            out = integrator(x0=x)
+        else:
+            integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
+                                       self.options | self._dae_options(t0, times, x, z))
+            out = integrator(x0=x, z0=z, p=self.loops.mask)
+        self.steps += int(integrator.stats().get("nsteps", 0))
+        states = np.array(out["xf"].full())
+        algebraic = np.array(out["zf"].full()) if system.n_cut else np.zeros((0, len(times)))
+        if not (np.all(np.isfinite(states)) and np.all(np.isfinite(algebraic))):
+            raise RuntimeError("the state became NaN or infinite")
+        return states, algebraic
+
+    def _dae_options(self, t0, times, x, z) -> dict:
+        system = self.system
+        x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
+        nb = len(system.tree.joints)  # every body is the child of one tree joint
+        q, _, q_ddot, _ = (np.array(v.full()).ravel()
+                           for v in system.motion(t0, x, z, np.ones(nb)))
+        n = 3 * nb
+        return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
+                "step0": FIRST_STEP * initial_step(q[:n], q_ddot[:n], self.options["reltol"],
+                                                   self.options["abstol"], times[0] - t0),
+                "abstolv": [self.options["abstol"]] * len(x) + [Z_TOL] * len(z)}
+
+
+def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
+    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
+    if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
+        return "adams"
+    rate = system.dynamics(t0, x0)
+    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
+    return "bdf" if radius * step > STIFF else "adams"
+
+
+def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
+                       atol: float, t0: float = 0.0, progress=None,
+                       method: str = "auto") -> Result:
+    system = joint_system(functions)
+    nb = functions.n_bodies
+    q0, q_dot0 = assembly.initial_state(functions, t0)
+    x = initial_state(system, q0, q_dot0, nb)
+    loops = _Loops(system, t0, x)
+    z = loops.z(t0, x)
+    if method == "auto":
+        method = choose_method(system, t0, x, step)
+    recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
+                         loops.mask)
+    integrate = _Integrator(system, loops, rtol, atol, method)
+    times = output_times(t0, t_end, step)
+    result = Result("dynamics", on_row=progress)
+    try:
+        recorder(result, times[:1], x[:, None], z[:, None])
+        k = 0
+        while k < len(times) - 1:
+            chunk = times[k + 1:k + 1 + CHUNK]
+            x, z = _advance(integrate, loops, recorder, result, times[k], chunk, x, z)
+            k += len(chunk)
+    except AnalysisError as error:
+        error.partial = result
+        raise
+    tree = system.tree
+    result.metadata.update(
+        rtol=rtol, atol=atol, formulation="joint",
+        integrator="idas" if system.n_cut else "cvodes",
+        method="bdf" if system.n_cut else method, steps=integrate.steps,
+        tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
+        cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
+    return result
+
+
+def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
+    """Integrate over `times` from (t0, x, z) and record the rows; on a failure, the same in
+    halves, so the rows before it are kept and the error names the output interval."""
+    try:
+        states, algebraic = integrate(t0, times, x, z)
+    except RuntimeError as error:
+        if len(times) == 1:
+            raise _failure(t0, times[0], str(error)) from None
+        half = len(times) // 2
+        x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
+        return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
+    recorder(result, times, states, algebraic)
+    return states[:, -1], loops.z(times[-1], states[:, -1])
+
+
+def _failure(t0: float, t1: float, why: str) -> AnalysisError:
+    cause = (f"the integrator failed between t = {t0:.6g} and {t1:.6g} "
+             f"({why.strip().splitlines()[-1]})")
+    return AnalysisError(FailureContext(t0, cause, [], ""))
+
+
+class _Recorder:
+    """Appends results rows: the r-p state of the tree and every joint's multipliers (the
+    minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
+    a block by one mapped call."""
+
+    def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
+        self.functions, self.system, self.signs = functions, system, signs
+        self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
+
+    def __call__(self, result: Result, times, states, algebraic) -> None:
+        n = len(times)
+        times = np.asarray(times, float)
+        rows = self.system.motion.map(n)(times[None, :], states, algebraic,
+                                         np.repeat(self.signs[:, None], n, axis=1))
+        q, q_dot, q_ddot, lam = (np.array(out.full()) for out in rows)
+        if self.least_norm is not None:
+            lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
+        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
+
+
+def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
+    """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
+    minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
+    n = functions.n_joint_rows
+    masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
+    keep = [row for row in range(n) if row not in masked]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", functions.n_coordinates)
+    lam = ca.MX.sym("lam", functions.n_rows)
+    jacobian = functions["romega_jacobian"](t, q)
+    joint = minimum_norm(jacobian, lam[:n], keep)
+    return ca.Function("least_norm", [t, q, lam], [ca.vertcat(joint, lam[n:])])

@@ -1,0 +1,58 @@
+"""The spanning tree of the joint formulation (compiler/tree.py)."""
+
+import casmech
+from casmech.compiler.ir import GROUND_INDEX
+from casmech.compiler.lower import lower
+from casmech.compiler.tree import spanning_tree
+from tests.conftest import MODELS
+
+FOUR_BAR = MODELS / "four_bar.yaml"
+
+
+def tree_of(text: str):
+    return spanning_tree(lower(casmech.loads(text)))
+
+
+BARS = """
+casmech: 1
+name: t
+bodies:
+  - {name: a, mass: 1, inertia: [1, 1, 1], position: [1, 0, 0]}
+  - {name: b, mass: 1, inertia: [1, 1, 1], position: [2, 0, 0]}
+  - {name: c, mass: 1, inertia: [1, 1, 1], position: [3, 0, 0]}
+  - {name: float, mass: 1, inertia: [1, 1, 1], position: [0, 5, 0]}
+  - {name: rider, mass: 1, inertia: [1, 1, 1], position: [0, 6, 0]}
+joints:
+  - {name: ja, type: revolute, body_i: ground, body_j: a, at: [0, 0, 0], axis: [0, 0, 1]}
+  - {name: jb, type: revolute, body_i: b, body_j: a, at: [1.5, 0, 0], axis: [0, 0, 1]}
+  - {name: jc, type: spherical, body_i: b, body_j: c, at: [2.5, 0, 0] CUT}
+  - {name: loop, type: distance, body_i: ground, body_j: c, at_i: [3, 1, 0], at_j: [3, 0, 0]}
+  - {name: ride, type: translational, body_i: float, body_j: rider, at: [0, 5.5, 0],
+     axis: [0, 1, 0]}
+"""
+
+
+def test_breadth_first_from_ground_in_file_order():
+    tree = tree_of(BARS.replace(" CUT", ""))
+    names = [(j.name, j.parent, j.child, j.reversed) for j in tree.joints]
+    # ja reaches a from ground; jb reaches b from a (written b -> a: reversed); jc reaches c;
+    # the floating body gets a free joint from ground, and its rider follows from it
+    assert names == [("ja", GROUND_INDEX, 0, False), ("jb", 0, 1, True), ("jc", 1, 2, False),
+                     ("", GROUND_INDEX, 3, False), ("ride", 3, 4, False)]
+    assert [j.type for j in tree.joints] == ["revolute", "revolute", "spherical", "free",
+                                             "translational"]
+    assert [j.name for j in tree.cut] == ["loop"]  # a distance joint has no tree motion
+
+
+def test_cut_true_keeps_a_joint_out_of_the_tree():
+    tree = tree_of(BARS.replace(" CUT", ", cut: true"))
+    assert [j.name for j in tree.cut] == ["jc", "loop"]
+    # no tree joint reaches c any more: it floats, held by the two cut joints' rows
+    assert [(j.name, j.type) for j in tree.joints if j.child == 2] == [("", "free")]
+
+
+def test_four_bar_cuts_the_joint_that_closes_its_loop():
+    tree = spanning_tree(lower(casmech.load(FOUR_BAR)))
+    assert len(tree.joints) == 3 and len(tree.cut) == 1
+    children = sorted(j.child for j in tree.joints)
+    assert children == [0, 1, 2]  # every body once

@@ -1,0 +1,52 @@
+"""results.csv numbers: shortest round-trip text, read back bit for bit."""
+
+import numpy as np
+
+from casmech.output.csv import read_csv, write_csv
+
+SPECIAL = [0.0, -0.0, 0.03, 0.1 + 0.2, 1.0, 1 / 3, 1e16, 2.0**53 + 2, -1.5e-300, 5e-324,
+           np.finfo(float).max, np.finfo(float).tiny, np.inf, -np.inf]
+
+
+def bits(values: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(values, dtype=np.float64).view(np.uint64)
+
+
+def table() -> np.ndarray:
+    """Output times as a run makes them, special values, and random doubles of every scale."""
+    rng = np.random.default_rng(7)
+    times = np.arange(101) * 0.01
+    random = rng.standard_normal(101) * 10.0 ** rng.integers(-300, 300, 101)
+    special = np.resize(np.array(SPECIAL), 101)
+    return np.column_stack([times, random, special, rng.random(101)])
+
+
+def test_read_back_bit_for_bit(tmp_path):
+    values = table()
+    names, read = read_csv(write_csv(tmp_path / "results.csv", ["t", "a", "b", "c"], values))
+    assert names == ["t", "a", "b", "c"]
+    np.testing.assert_array_equal(bits(read), bits(values))  # -0.0 and the signs included
+
+
+def significant(text: str) -> str:
+    """The significant digits of a number's text: '-1.50e-3' -> '15'."""
+    return text.lower().split("e")[0].lstrip("-").replace(".", "").strip("0")
+
+
+def test_shortest_round_trip_text(tmp_path):
+    values = table()
+    path = write_csv(tmp_path / "results.csv", ["t", "a", "b", "c"], values)
+    rows = [line.split(",") for line in path.read_text().splitlines()[1:]]
+    assert rows[3][0] == "0.03"  # 3 * 0.01, not 0.029999999999999999 (%.17g)
+    pairs = [(text, x) for row, numbers in zip(rows, values, strict=True)
+             for text, x in zip(row, numbers, strict=True) if np.isfinite(x)]
+    for text, x in pairs:
+        shortest = next(f"{x:.{p}g}" for p in range(1, 18) if float(f"{x:.{p}g}") == x)
+        assert len(significant(text)) <= len(significant(shortest)), (text, shortest)
+
+
+def test_nan_is_written_and_read_as_nan(tmp_path):
+    values = np.array([[0.0, np.nan], [0.01, 2.5]])
+    _, read = read_csv(write_csv(tmp_path / "results.csv", ["t", "x"], values))
+    np.testing.assert_array_equal(np.isnan(read), np.isnan(values))
+    np.testing.assert_array_equal(read[~np.isnan(read)], values[~np.isnan(values)])
