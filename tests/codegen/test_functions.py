@@ -127,7 +127,9 @@ def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted, bu
         dae_f, jac_f = integrator.get_function("daeF"), integrator.get_function("jacF")
         assert dae_f.class_name() == jac_f.class_name() == "External"
         inputs = _random_inputs(want, rng)
-        inputs[3][1:] = rng.integers(0, 2, want.nnz_in(3) - 1)  # rows kept or masked
+        m = dae.sizes(interpreted.functions, form)[2]
+        inputs[3][1:] = rng.uniform(0.5, 2.0, want.nnz_in(3) - 1)  # row scales s (, s_phi)
+        inputs[3][1:1 + m] = rng.integers(0, 2, m)  # w: rows kept or masked
         # same equations, sums in another order: the compiled-vs-interpreted bound
         for a, b in zip(got.call([*inputs, ca.DM(0, 1)])[:2], want.call(inputs), strict=True):
             np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12, err_msg=name)

@@ -2,8 +2,8 @@
 the unrolled SX bundle (an independent construction of the same equations): the residual, and
 IDAS's Jacobian blocks d(ode, alg)/d(x, z) (jacF) against CasADi's SX Jacobian, in value and
 sparsity, and every block of jac_<dae> and jac_daeF (t and p too), for both formulations and
-stabilizations, with rows masked at random (w in {0, 1}). The element functions are MX graphs
-evaluated here directly (no C compiler needed)."""
+stabilizations, with rows masked at random (w in {0, 1}) and random row scales (s, s_phi).
+The element functions are MX graphs evaluated here directly (no C compiler needed)."""
 
 import itertools
 
@@ -22,10 +22,14 @@ from .test_mapped import MODELS
 CASES = list(itertools.product(FORMULATIONS, residuals.KINDS))
 
 
-def _inputs(reference: ca.Function, rng) -> list[ca.DM]:
+def _inputs(reference: ca.Function, m: int, rng) -> list[ca.DM]:
+    """Random (t, x, z) and p = [t0, w, s (, s_phi)]: rows kept or masked at random, scales
+    in [0.5, 2]."""
     values = [ca.DM(reference.sparsity_in(k), rng.uniform(-1, 1, reference.nnz_in(k)))
               for k in range(4)]
-    values[3][1:] = rng.integers(0, 2, reference.nnz_in(3) - 1)  # w: rows kept or masked
+    n_p = reference.nnz_in(3)
+    values[3][1:] = rng.uniform(0.5, 2.0, n_p - 1)
+    values[3][1:1 + m] = rng.integers(0, 2, m)
     return values
 
 
@@ -63,8 +67,10 @@ def check(ir, unrolled: dict, form: str, kind: str, seed: int = 5, same_pattern=
     assert [function.size_in(k) for k in range(4)] == [reference.size_in(k) for k in range(4)]
     blocks = _blocks(reference)
     rng = np.random.default_rng(seed)
+    m = residuals.Indices(ir, form, kind).m
+    assert function.size_in(3) == reference.size_in(3) == (dae.parameters(unrolled, form, kind), 1)
     for _ in range(2):
-        inputs = _inputs(reference, rng)
+        inputs = _inputs(reference, m, rng)
         u = ca.DM(0, 1)
         for a, b in zip(function.call([*inputs, u])[:2], reference.call(inputs), strict=True):
             _close(a, b, f"{reference.name()} residual")
@@ -121,6 +127,6 @@ def test_elements_per_joint_and_body():
     kernels (the ground joint's rows bake ground, the others share one), 1 body kernel."""
     ir = lower(MODELS["chain4"]())
     ix = residuals.Indices(ir, "rp", "ggl")
-    t, w = ca.MX.sym("t"), ca.MX.sym("w", ix.m)
-    groups = residuals.element_sum(ir, ix, t, w).groups
+    t, p = ca.MX.sym("t"), ca.MX.sym("p", ix.n_p)
+    groups = residuals.element_sum(ir, ix, t, ix.constants(p)).groups
     assert [g.count for g in groups] == [1, 3, 4]

@@ -9,7 +9,9 @@ terms are compiler.dae's, element by element:
     alg:  M v_dot + P^T lam - F,  then per row either (1 - w) phi - w mu and
           (1 - w) (P v - nu) - w lam (ggl), or P v_dot - gamma - w lam (projection)
 
-with every row of P (and of Phi_q, for ggl's Phi_q^T mu and phi) scaled to unit norm.
+with every row of P scaled by a constant s and, for ggl, every row of Phi and Phi_q by s_phi
+(constants of p that the runtime sets to the inverse row norms at each start; in r-p the ode's
+Phi_q^T mu uses P's own scaling, as compiler.dae does).
 """
 
 from __future__ import annotations
@@ -28,12 +30,6 @@ V_WIDTH = {"rp": 14, "romega": 12}  # a joint's velocity entries: q_dot, or [r_d
 BODY_V = {"rp": 7, "romega": 6}
 
 
-def unit(jac, *values):
-    """jac / |jac| and the values scaled alike (compiler.dae.unit_rows, one row)."""
-    scale = 1 / ca.sqrt(jac @ jac.T)
-    return (jac * scale, *(value * scale for value in values))
-
-
 def _function(name: str, y, d, out: list) -> ca.Function:
     return ca.Function(name, [y, d], [ca.vertcat(*out)], ["y", "d"], ["out"])
 
@@ -44,39 +40,46 @@ def joint_data_sizes(keys) -> list[int]:
             for key in keys]
 
 
+def n_scales(kind: str) -> int:
+    """Row constants per row in d: w and s, and s_phi for ggl (compiler.dae.parameters)."""
+    return 3 if kind == "ggl" else 2
+
+
 @lru_cache(maxsize=512)
 def joint(keys: tuple, form: str, kind: str) -> ca.Function:
-    """The r rows of one joint between bodies i and j (x = [q_i, q_j], v their velocities).
+    """The r rows of one joint between bodies i and j (x = [q_i, q_j], v their velocities),
+    every row of P scaled by its constant s (and of Phi, Phi_q by s_phi: compiler.dae).
 
     y = [x (14), v, lam (r), mu (r)] (ggl) or [x, v, v_dot, lam (r)] (projection);
-    out = [sum Phi_q^T mu (14), sum P^T lam, (1 - w) phi - w mu (r), (1 - w) (P v - nu)
-    - w lam (r)] (ggl) or [sum P^T lam, P v_dot - gamma - w lam (r)] (projection);
-    d = [w (r), f, f', f'' of each row (3 r), each row's vectors unless baked]."""
-    r, n_v = len(keys), V_WIDTH[form]
+    out = [sum Phi_q_s^T mu (14), sum P_s^T lam, (1 - w) phi_s - w mu (r), (1 - w) (P_s v -
+    nu_s) - w lam (r)] (ggl) or [sum P_s^T lam, P_s v_dot - gamma_s - w lam (r)] (projection);
+    d = [w, s (, s_phi) (r each), f, f', f'' of each row (3 r), each row's vectors unless
+    baked]. In r-p, P is Phi_q: Phi_q_s = P_s (s) and phi_s = s_phi phi, as compiler.dae."""
+    r, n_v, n_c = len(keys), V_WIDTH[form], n_scales(kind)
     sizes = joint_data_sizes(keys)
-    d = ca.SX.sym("d", 4 * r + sum(sizes))
+    d = ca.SX.sym("d", (n_c + 3) * r + sum(sizes))
     y = ca.SX.sym("y", ROW + n_v + (2 * r if kind == "ggl" else n_v + r))
-    x, v, w = y[:ROW], y[ROW:ROW + n_v], d[:r]
+    x, v = y[:ROW], y[ROW:ROW + n_v]
+    w, scale, scale_phi = d[:r], d[r:2 * r], d[2 * r:3 * r] if kind == "ggl" else None
     lam = y[-2 * r:-r] if kind == "ggl" else y[-r:]
-    sum_mu, sum_lam, first, second, start = ca.SX(ROW, 1), ca.SX(n_v, 1), [], [], 4 * r
+    sum_mu, sum_lam, first, second = ca.SX(ROW, 1), ca.SX(n_v, 1), [], []
+    start = (n_c + 3) * r
     for k, key in enumerate(keys):
         pattern = row_kernels.constraint(key).sparsity_in(1)
         c = ca.SX(pattern, d[start:start + sizes[k]]) if sizes[k] else ca.SX(pattern)
-        f, start = d[r + 3 * k:r + 3 * k + 3], start + sizes[k]
+        f, start = d[n_c * r + 3 * k:n_c * r + 3 * k + 3], start + sizes[k]
         phi, jac, nu = row_kernels.constraint(key)(x, c, f)
         raw = row_kernels.variation(key)(x, c, f) if form == "romega" else jac
-        scale = 1 / ca.sqrt(raw @ raw.T)
-        p = raw * scale
+        p = raw * scale[k]
         if kind == "ggl":
             mu = y[-r + k]
-            phi_scale = scale if form == "rp" else 1 / ca.sqrt(jac @ jac.T)
-            sum_mu += (jac * phi_scale).T * mu
-            first.append((1 - w[k]) * phi * phi_scale - w[k] * mu)
-            second.append((1 - w[k]) * (p @ v - nu * scale) - w[k] * lam[k])
+            sum_mu += (p if form == "rp" else jac * scale_phi[k]).T * mu
+            first.append((1 - w[k]) * phi * scale_phi[k] - w[k] * mu)
+            second.append((1 - w[k]) * (p @ v - nu * scale[k]) - w[k] * lam[k])
         else:
             gamma = row_kernels.romega_gamma(key)(x, v, c, f) if form == "romega" \
                 else row_kernels.gamma(key)(x, v, c, f)
-            first.append(p @ y[ROW + n_v:ROW + 2 * n_v] - gamma * scale - w[k] * lam[k])
+            first.append(p @ y[ROW + n_v:ROW + 2 * n_v] - gamma * scale[k] - w[k] * lam[k])
         sum_lam += p.T * lam[k]
     out = [sum_mu, sum_lam, *first, *second] if kind == "ggl" else [sum_lam, *first]
     digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
@@ -88,22 +91,29 @@ def q_dot(form: str, q, v):
     return v if form == "rp" else ca.vertcat(v[:3], 0.5 * euler.g_matrix(q[3:]).T @ v[3:])
 
 
+def body_constants(form: str, kind: str) -> int:
+    """Row constants of the normalization row in a body's d: w, s (, s_phi) in r-p (a row of
+    P); s_phi alone for romega ggl (a row of Phi only, w = 0); none for romega projection."""
+    if form == "rp":
+        return n_scales(kind)
+    return 1 if kind == "ggl" else 0
+
+
 @lru_cache(maxsize=64)
 def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind: str
          ) -> ca.Function:
     """One body, with its normalization row where the DAE has one (rp: a row of P; romega
-    ggl: a row of Phi only, with w = 0).
+    ggl: a row of Phi only).
 
-    y = [q (7), v, v_dot, lam_n (rp), mu_n (ggl)]; out = [q_dot + Phi_n^T mu_n (7), v_dot,
-    M v_dot - F + P_n^T lam_n, then the normalization row's alg entries]; F: gravity and
-    quadratic velocity (rp) or the gyroscopic torque (romega). d = [w_n (rp), m, J_bar]."""
+    y = [q (7), v, v_dot, lam_n (rp), mu_n (ggl)]; out = [q_dot + Phi_q_s^T mu_n (7), v_dot,
+    M v_dot - F + P_s^T lam_n, then the normalization row's alg entries]; F: gravity and
+    quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's constants
+    (body_constants), m, J_bar]."""
     kernels = bodies._kernels(pattern, gravity)
-    n_v, rp = BODY_V[form], form == "rp"
-    extra = (1 if rp else 0) + (1 if kind == "ggl" else 0)
-    y = ca.SX.sym("y", 7 + 2 * n_v + extra)
-    d = ca.SX.sym("d", (1 if rp else 0) + 1 + sum(pattern))
-    w, mass = (d[0], d[1]) if rp else (0, d[0])
-    inertia = ca.SX(kernels["mass"].sparsity_in(1), d[2 if rp else 1:])
+    n_v, rp, n_c = BODY_V[form], form == "rp", body_constants(form, kind)
+    y = ca.SX.sym("y", 7 + 2 * n_v + (1 if rp else 0) + (1 if kind == "ggl" else 0))
+    d = ca.SX.sym("d", n_c + 1 + sum(pattern))
+    mass, inertia = d[n_c], ca.SX(kernels["mass"].sparsity_in(1), d[n_c + 1:])
     q, v, v_dot = y[:7], y[7:7 + n_v], y[7 + n_v:7 + 2 * n_v]
     p, zero = q[3:], ca.SX(3, 1)
     translation = mass * v_dot[:3] - mass * ca.DM(gravity)
@@ -118,21 +128,20 @@ def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind:
     phi, jac, nu = row_kernels.normalization()[0](p)
     rows = []
     if rp:
-        lam = y[7 + 2 * n_v]
+        w, scale, lam = d[0], d[1], y[7 + 2 * n_v]
+        jac_s = jac * scale
         if kind == "ggl":
-            unit_jac, phi, nu = unit(jac, phi, nu)
             mu = y[-1]
-            rows = [(1 - w) * phi - w * mu, (1 - w) * (unit_jac @ v[3:] - nu) - w * lam]
+            rows = [(1 - w) * phi * d[2] - w * mu, (1 - w) * (jac_s @ v[3:] - nu * scale)
+                    - w * lam]
+            ode[0] += ca.vertcat(zero, jac_s.T * mu)
         else:
-            unit_jac, gamma = unit(jac, row_kernels.normalization()[1](p, v[3:]))
-            rows = [unit_jac @ v_dot[3:] - gamma - w * lam]
-        alg += ca.vertcat(zero, unit_jac.T * lam)
+            gamma = row_kernels.normalization()[1](p, v[3:])
+            rows = [jac_s @ v_dot[3:] - gamma * scale - w * lam]
+        alg += ca.vertcat(zero, jac_s.T * lam)
     elif kind == "ggl":
-        unit_jac, phi = unit(jac, phi)
-        mu = y[-1]
-        rows = [phi]
-    if kind == "ggl":
-        ode[0] += ca.vertcat(zero, unit_jac.T * mu)
+        rows = [phi * d[0]]
+        ode[0] += ca.vertcat(zero, (jac * d[0]).T * y[-1])
     digest = "".join("1" if on else "0" for on in pattern)
     return _function(f"element_{form}_{kind}_body_{digest}", y, d, [*ode, alg, *rows])
 

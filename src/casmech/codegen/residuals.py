@@ -7,8 +7,8 @@ Jacobian blocks, which that interface takes from the DAE's library instead of bu
 (so each DAE gets a library of its own: codegen.generate). Equal to compiler.dae's residuals
 over the SX bundle in value and Jacobian (tests/codegen/test_residuals.py).
 
-Layout (compiler.dae): x = [q; v], z = [v_dot; lam (; mu)], p = [t0; w], t = t0 + tau,
-u = [x; z]; residual [ode; alg] = [q_dot (+ Phi_q^T mu); v_dot; M v_dot + P^T lam - F;
+Layout (compiler.dae): x = [q; v], z = [v_dot; lam (; mu)], p = [t0; w; s (; s_phi)],
+t = t0 + tau, u = [x; z]; residual [ode; alg] = [q_dot (+ Phi_q^T mu); v_dot; M v_dot + P^T lam - F;
 per-row terms]. rp: v = q_dot (7 per body), every row of Phi in P; romega: v = [r_dot;
 omega_bar] (6 per body), P the joint rows of [Phi_r, Pi_bar], Phi (for ggl) all rows.
 """
@@ -51,7 +51,13 @@ class Indices:
         self.n_x = self.n_q + self.n_v
         self.n_z = self.n_v + self.m + (self.n_phi if kind == "ggl" else 0)
         self.n_u = self.n_x + self.n_z
+        self.n_p = 1 + 2 * self.m + (self.n_phi if kind == "ggl" else 0)  # dae.parameters
         self.padding = ca.DM(np.concatenate([GROUND_POSE, np.zeros(7)]))
+
+    def constants(self, p) -> list:
+        """The row constants in p = [t0, w, s (, s_phi)]: [w, s (, s_phi)]."""
+        m = self.m
+        return [p[1:1 + m], p[1 + m:1 + 2 * m]] + ([p[1 + 2 * m:]] if self.kind == "ggl" else [])
 
     def _v(self, body: int) -> list[int]:
         return self.layout.q(body) if self.form == "rp" else self.layout.v(body)
@@ -91,7 +97,7 @@ class Indices:
 
 # --- joints ---------------------------------------------------------------------------------
 
-def joint_groups(ir: ModelIR, ix: Indices, t, w) -> list[Group]:
+def joint_groups(ir: ModelIR, ix: Indices, t, constants: list) -> list[Group]:
     out = []
     for joint_keys, members in by_joint_keys(ir).items():
         inputs, outputs = [], []
@@ -107,7 +113,8 @@ def joint_groups(ir: ModelIR, ix: Indices, t, w) -> list[Group]:
                               + [ix.lam(k) for k in rows])
                 outputs.append(_both(ix.alg_v, pair) + [ix.alg(k, 0) for k in rows])
         out.append(Group(kernels.joint(joint_keys, ix.form, ix.kind), np.array(inputs),
-                         np.array(outputs), _joint_data(ir, joint_keys, members, t, w)))
+                         np.array(outputs), _joint_data(ir, joint_keys, members, t,
+                                                        constants)))
     return out
 
 
@@ -115,12 +122,13 @@ def _both(indices, pair) -> list[int]:
     return [i for body in pair for i in indices(body)]
 
 
-def _joint_data(ir: ModelIR, keys: tuple, members: list[list[int]], t, w):
-    """d of every instance (columns): w by one gather (zero for rows outside P), f constant
-    unless a row's f depends on time, the vectors of rows whose kernels do not bake them."""
+def _joint_data(ir: ModelIR, keys: tuple, members: list[list[int]], t, constants: list):
+    """d of every instance (columns): each row constant (w, s, s_phi) by one gather, f
+    constant unless a row's f depends on time, the vectors of rows whose kernels do not bake
+    them."""
     count, r = len(members), len(keys)
     flat = [k for rows in members for k in rows]
-    weights = ca.reshape(w[flat], r, count)
+    gathered = [ca.reshape(vector[flat], r, count) for vector in constants]
     if any(key.f_class == row_kernels.TIME for key in keys):
         f = ca.horzcat(*[ca.vertcat(*[taylor_or_constant(ir.primitives[k], key, t)
                                       for k, key in zip(rows, keys, strict=True)])
@@ -132,12 +140,12 @@ def _joint_data(ir: ModelIR, keys: tuple, members: list[list[int]], t, w):
         row_kernels.vectors_of(ir.primitives[k])[list(
             row_kernels.constraint(key).sparsity_in(1).row())]
         for k, key in zip(rows, keys, strict=True) if key.values is None]) for rows in members]
-    return ca.vertcat(weights, f, ca.DM(np.array(vectors).reshape(count, -1).T))
+    return ca.vertcat(*gathered, f, ca.DM(np.array(vectors).reshape(count, -1).T))
 
 
 # --- bodies ---------------------------------------------------------------------------------
 
-def body_group(ir: ModelIR, ix: Indices, w) -> list[Group]:
+def body_group(ir: ModelIR, ix: Indices, constants: list) -> list[Group]:
     nb = ir.n_bodies
     if not nb:
         return []
@@ -150,9 +158,10 @@ def body_group(ir: ModelIR, ix: Indices, w) -> list[Group]:
         outputs.append(ix.ode_q(k) + ix.ode_v(k) + ix.alg_v(k)
                        + ([ix.alg(row, 0)] if rp or ggl else [])
                        + ([ix.alg(row, 1)] if rp and ggl else []))
-    data = [bodies.masses(ir), _nonzeros(bodies.inertias(ir))]
-    if rp:
-        data.insert(0, ca.reshape(w[ix.joint_rows:ix.joint_rows + nb], 1, nb))
+    rows = slice(ix.joint_rows, ix.joint_rows + nb)  # the normalization rows
+    chosen = constants if rp else constants[2:]  # r-omega: s_phi alone (ggl), or none
+    data = [ca.reshape(vector[rows], 1, nb) for vector in chosen]
+    data += [bodies.masses(ir), _nonzeros(bodies.inertias(ir))]
     kernel = kernels.body(bodies.inertia_pattern(ir), tuple(float(g) for g in ir.gravity),
                           ix.form, ix.kind)
     return [Group(kernel, np.array(inputs), np.array(outputs), ca.vertcat(*data))]
@@ -231,8 +240,10 @@ def _unrolled_force(ir: ModelIR, ix: Indices, force, t) -> Group:
 
 # --- the residual ---------------------------------------------------------------------------
 
-def element_sum(ir: ModelIR, ix: Indices, t, w) -> ElementSum:
-    groups = [*joint_groups(ir, ix, t, w), *body_group(ir, ix, w), *force_groups(ir, ix, t)]
+def element_sum(ir: ModelIR, ix: Indices, t, constants: list) -> ElementSum:
+    """constants: the row constants of p, [w, s] (, s_phi for ggl) (compiler.dae)."""
+    groups = [*joint_groups(ir, ix, t, constants), *body_group(ir, ix, constants),
+              *force_groups(ir, ix, t)]
     return ElementSum(ix.n_x + ix.n_z, ix.n_u, tuple(groups), ix.padding)
 
 
@@ -247,8 +258,8 @@ def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:
         raise ValueError(f"unknown formulation {form}")
     ix = Indices(ir, form, kind)
     tau, x, z = ca.MX.sym("t"), ca.MX.sym("x", ix.n_x), ca.MX.sym("z", ix.n_z)
-    p, u = ca.MX.sym("p", 1 + ix.m), ca.MX.sym("u", 0)
-    elements = element_sum(ir, ix, p[0] + tau, p[1:])
+    p, u = ca.MX.sym("p", ix.n_p), ca.MX.sym("u", 0)
+    elements = element_sum(ir, ix, p[0] + tau, ix.constants(p))
     unknowns = ca.vertcat(x, z)
     residual = elements.value(unknowns)
     ode, alg = residual[:ix.n_x], residual[ix.n_x:]
