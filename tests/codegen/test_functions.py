@@ -126,6 +126,8 @@ def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted, bu
         integrator = ca.integrator("i", "idas", dae.problem(got), 0.0, [0.1])
         dae_f, jac_f = integrator.get_function("daeF"), integrator.get_function("jacF")
         assert dae_f.class_name() == jac_f.class_name() == "External"
+        for function in (got, dae_f):  # Jacobian patterns from the library, not dense
+            assert function.jac_sparsity(1, 1) == jac_f.sparsity_out(1), name
         inputs = _random_inputs(want, rng)
         m = dae.sizes(interpreted.functions, form)[2]
         inputs[3][1:] = rng.uniform(0.5, 2.0, want.nnz_in(3) - 1)  # row scales s (, s_phi)

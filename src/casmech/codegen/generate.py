@@ -16,7 +16,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from casmech.codegen import manifest
+from casmech.codegen import manifest, residuals
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
 # graph over the library differentiates (casmech.optimal.compiled, r-p only). The romega_*
@@ -100,8 +100,33 @@ def dae_library(name: str) -> str:
 
 def write_dae_sources(oracles: dict[str, dict[str, ca.Function]], directory: Path
                       ) -> dict[str, list[Path]]:
-    """One unit `casmech_<dae name>.c/.h` per DAE (its function, daeF and jacF); library file
-    name -> its sources."""
+    """Per DAE a unit `casmech_<dae name>.c/.h` (its function, daeF and jacF) and
+    `casmech_<dae name>_patterns.c` (the Jacobian patterns casadi reads, see
+    codegen.residuals.jacobian_patterns); library file name -> its sources."""
     directory.mkdir(parents=True, exist_ok=True)
-    return {dae_library(name): [_unit(f"casmech_{name}", list(functions.values()), directory)]
-            for name, functions in oracles.items()}
+    libraries = {}
+    for name, functions in oracles.items():
+        patterns = directory / f"casmech_{name}_patterns.c"
+        patterns.write_text(patterns_source(residuals.jacobian_patterns(functions)))
+        libraries[dae_library(name)] = [
+            _unit(f"casmech_{name}", list(functions.values()), directory), patterns]
+    return libraries
+
+
+def patterns_source(patterns: dict[str, list[ca.Sparsity]]) -> str:
+    """C defining jac_<name>_sparsity_out(i) for every function: the i-th block of its
+    Jacobian (output-major) in casadi's compressed column format."""
+    lines = ["/* Jacobian patterns (casmech.codegen.generate.patterns_source): casadi's External",
+             "   reads them from jac_<name>_sparsity_out. */",
+             "#include <stddef.h>", "typedef long long int casadi_int;"]
+    for name, blocks in patterns.items():
+        for k, sparsity in enumerate(blocks):
+            values = [sparsity.size1(), sparsity.size2(), *sparsity.colind(), *sparsity.row()]
+            lines.append(f"static const casadi_int {name}_s{k}[{len(values)}] = "
+                         f"{{{','.join(str(int(v)) for v in values)}}};")
+        lines.append(f"const casadi_int* jac_{name}_sparsity_out(casadi_int i);")
+        lines.append(f"const casadi_int* jac_{name}_sparsity_out(casadi_int i) {{")
+        lines.append("  switch (i) {")
+        lines += [f"    case {k}: return {name}_s{k};" for k in range(len(blocks))]
+        lines += ["    default: return NULL;", "  }", "}"]
+    return "\n".join(lines) + "\n"

@@ -266,41 +266,41 @@ def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:
     xz = ((0, ix.n_x), (ix.n_x, ix.n_u))
     ode_x, ode_z, alg_x, alg_z = elements.jacobian(unknowns, xz, xz)
     ins = [tau, x, z, p, u]
-    outs = [ode, alg, ca.MX(0, 1), ca.MX(0, 1)]
-    blocks = {("ode", "x"): ode_x, ("ode", "z"): ode_z, ("alg", "x"): alg_x,
-              ("alg", "z"): alg_z}
-    for output, value in (("ode", ode), ("alg", alg)):  # t and p enter through data: by AD
-        blocks[output, "t"] = ca.jacobian(value, tau)
-        blocks[output, "p"] = ca.jacobian(value, p)
     dae_name = name(form, kind)
     return {
-        dae_name: ca.Function(dae_name, ins, outs, INTEGRATOR_IN, DYN_OUT),
+        dae_name: ca.Function(dae_name, ins, [ode, alg, ca.MX(0, 1), ca.MX(0, 1)],
+                              INTEGRATOR_IN, DYN_OUT),
         "daeF": ca.Function("daeF", ins, [ode, alg], INTEGRATOR_IN, ["ode", "alg"]),
         "jacF": ca.Function("jacF", ins, [ode_x, alg_x, ode_z, alg_z], INTEGRATOR_IN,
                             ["jac_ode_x", "jac_alg_x", "jac_ode_z", "jac_alg_z"]),
-        f"jac_{dae_name}": jacobian_function(dae_name, ins, outs, blocks),
-        "jac_daeF": jacobian_function("daeF", ins, outs[:2], blocks),
     }
 
 
 DYN_OUT = ["ode", "alg", "quad", "zero"]  # casadi's DAE outputs (ca.dyn_out())
 
 
-def jacobian_function(dae_name: str, ins: list, outs: list, blocks: dict) -> ca.Function:
-    """jac_<name> as casadi's External looks it up: (inputs, nominal outputs) -> every block
-    d output / d input (zero where `blocks` has none). Besides serving AD through the function,
-    its patterns are what casadi takes for the function's Jacobian sparsity; without it an
-    External counts as dense: IDAS's setup (Integrator::sp_jac_dae, from daeF) then took 2 s
-    for a 128-body chain."""
-    out_names = DYN_OUT[:len(outs)]
-    nominal = [ca.MX.sym(f"out_{n}", o.sparsity()) for n, o in zip(out_names, outs, strict=True)]
-    values, names = [], []
-    for o_name, o_value in zip(out_names, outs, strict=True):
-        for i_name, i_value in zip(INTEGRATOR_IN, ins, strict=True):
-            values.append(blocks.get((o_name, i_name), ca.MX(o_value.numel(), i_value.numel())))
-            names.append(f"jac_{o_name}_{i_name}")
-    return ca.Function(f"jac_{dae_name}", ins + nominal, values,
-                       INTEGRATOR_IN + [f"out_{n}" for n in out_names], names)
+def jacobian_patterns(functions: dict[str, ca.Function]) -> dict[str, list[ca.Sparsity]]:
+    """The Jacobian sparsity of the DAE function and of daeF, block by block (output-major:
+    d output_i / d input_j), for jac_<name>_sparsity_out in the DAE's library: casadi's
+    External reads a function's Jacobian pattern there and counts it dense without it, which
+    made IDAS's setup (Integrator::sp_jac_dae, from daeF) take 1.9 s at 128 bodies (0.01 s with
+    it) and would need gigabytes at 1000. The (x, z) blocks are jacF's; the others come from
+    CasADi's sparsity propagation through the function. The library holds no jac_<name>
+    itself: AD through these functions stops with an error instead of using a pattern alone."""
+    jac = functions["jacF"]
+    known = {("ode", "x"): jac.sparsity_out(0), ("alg", "x"): jac.sparsity_out(1),
+             ("ode", "z"): jac.sparsity_out(2), ("alg", "z"): jac.sparsity_out(3)}
+    out = {}
+    for function_name, function in functions.items():
+        if function_name == "jacF":
+            continue
+        blocks = []
+        for o in range(function.n_out()):
+            for i in range(function.n_in()):
+                block = (function.name_out(o), function.name_in(i))
+                blocks.append(known[block] if block in known else function.jac_sparsity(o, i))
+        out[function_name] = blocks
+    return out
 
 
 def from_residual(residual: ca.Function) -> dict[str, ca.Function]:
