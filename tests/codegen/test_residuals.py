@@ -2,8 +2,9 @@
 the unrolled SX bundle (an independent construction of the same equations): the residual, and
 IDAS's Jacobian blocks d(ode, alg)/d(x, z) (jacF) against CasADi's SX Jacobian, in value and
 sparsity, and the Jacobian patterns of every block (t and p too) the library declares, for
-both formulations and stabilizations, with rows masked at random (w in {0, 1}) and random row scales (s, s_phi).
-The element functions are MX graphs evaluated here directly (no C compiler needed)."""
+both formulations and stabilizations, with rows masked at random (w in {0, 1}) and random row
+scales (s, s_phi). The element functions are MX graphs evaluated here directly (no C compiler
+needed)."""
 
 import itertools
 
