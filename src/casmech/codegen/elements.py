@@ -8,7 +8,8 @@ sparse matrix per instance), every entry added in place into the global non-zero
 so its cost is that of the kernels' Jacobians plus one pass over their non-zeros, and its code
 does not grow with the number of instances (only index tables do). CasADi's MX Jacobian of a
 mapped residual instead costs a forward sweep of every kernel per colour of the Jacobian
-(benchmarks/notes_codegen.md: 4-13x the interpreted SX Jacobian, where this is 2-6x faster).
+(benchmarks/RESULTS_codegen.md: 8-11x the interpreted SX Jacobian's time at -O1, where this is
+2.5-8x faster).
 """
 
 from __future__ import annotations
