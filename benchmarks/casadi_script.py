@@ -113,6 +113,50 @@ def initial_state(n: int, kkt: ca.Function, n_z: int):
     return x0, z0
 
 
+class Runner:
+    """The script as a benchmark tool (run.py's `casadi-script`: GGL, SX, default linear
+    solver), chains only: build once, then one IDAS call per run over the 0.01 s grid."""
+
+    tool = "casadi-script"
+
+    def __init__(self, system):
+        if not system.name.startswith("chain"):
+            raise ValueError("the CasADi script models the N-link chain only")
+        start = time.perf_counter()
+        self.n = len(system.bars)
+        self.function, kkt = dae_function(self.n, "ggl")
+        self.x0, self.z0 = initial_state(self.n, kkt, self.function.size1_in(1))
+        self.build_time = {"compile": time.perf_counter() - start}
+        self.system = system
+
+    def run(self, setting: dict, t_end: float) -> dict:
+        x, z = ca.SX.sym("x", len(self.x0)), ca.SX.sym("z", len(self.z0))
+        ode, alg = self.function(x, z)
+        times = OUTPUT_STEP * np.arange(1, int(round(t_end / OUTPUT_STEP)) + 1)
+        x_dot = np.array(ca.Function("f", [x, z], [ode])(self.x0, self.z0)).ravel()
+        options = {"reltol": setting["rtol"], "abstol": setting["atol"],
+                   "max_num_steps": 100000, "suppress_algebraic": True, "calc_ic": False,
+                   "step0": 1e-6, "init_xdot": list(x_dot)}
+        start = time.perf_counter()
+        integrator = ca.integrator("chain", "idas", {"x": x, "z": z, "ode": ode, "alg": alg},
+                                   0.0, list(times), options)
+        xf = np.array(integrator(x0=self.x0, z0=self.z0)["xf"])
+        wall = time.perf_counter() - start
+        q = xf[:7 * self.n, int(round(T_CHECK / OUTPUT_STEP)) - 1]
+        return {"wall": wall, "points": chain_points(q, self.n),
+                "extra": {"steps": int(integrator.stats()["nsteps"])}}
+
+
+def chain_points(q: np.ndarray, n: int) -> np.ndarray:
+    """The CM and tip of every bar from the r-p coordinates, in systems.points' order."""
+    points = []
+    for k in range(n):
+        r, p = q[7 * k:7 * k + 3], q[7 * k + 3:7 * k + 7]
+        tip = r + np.array(ca.evalf(rotation(ca.DM(p)) @ ca.DM([L / 2, 0, 0]))).ravel()
+        points += [r, tip]
+    return np.array(points)
+
+
 def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=8)
@@ -153,14 +197,9 @@ def main(argv=None) -> None:
     stats = integrator.stats()
     xf = np.array(out["xf"])
     check = int(round(T_CHECK / OUTPUT_STEP)) - 1
-    q = xf[:7 * args.n, check]
-    points = []
-    for k in range(args.n):
-        r, p = q[7 * k:7 * k + 3], q[7 * k + 3:7 * k + 7]
-        tip = r + np.array(ca.evalf(rotation(ca.DM(p)) @ ca.DM([L / 2, 0, 0]))).ravel()
-        points += [r, tip]
+    points = chain_points(xf[:7 * args.n, check], args.n)
     reference = Planar(chain(args.n)).solve()["points"]
-    error = float(np.max(np.linalg.norm(np.array(points) - reference, axis=1)))
+    error = float(np.max(np.linalg.norm(points - reference, axis=1)))
     wall = float(np.median(walls))
     steps = stats["nsteps"]
     print(f"chain{args.n} {args.form} {'C -' + args.compile if args.compile else 'SX'} "

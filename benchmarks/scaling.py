@@ -12,7 +12,13 @@ per N so that one size's memory does not slow the next):
 - initial_state: runtime.assembly.initial_state (Newton assembly from the file's pose and the
   file's velocities projected onto the constraints);
 - structure: compiler.checks.structure at the assembled pose (rank, redundant rows);
+- simulate: casmech.analyze(..., "dynamics") over --t-sim seconds from horizontal rest
+  (casmech's default formulation: joint coordinates for the chain), output every 0.01 s,
+  rtol 1e-8, including building the formulation's functions on the first repeat;
 - total: the sum.
+
+`--plot FILE.png` draws seconds per simulated second against N (log-log, with a line of
+slope 1) from the simulate stage.
 """
 
 from __future__ import annotations
@@ -30,10 +36,10 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-STAGES = ("load", "build", "initial_state", "structure")
+STAGES = ("load", "build", "initial_state", "structure", "simulate")
 
 
-def one_size(n: int, repeats: int, mode: str) -> dict:
+def one_size(n: int, repeats: int, mode: str, t_sim: float) -> dict:
     """Medians of each stage for chain(n) (runs in the child process)."""
     sys.path[:0] = [str(ROOT / "src"), str(ROOT / "benchmarks")]
     from casmech_model import yaml_text
@@ -59,6 +65,8 @@ def one_size(n: int, repeats: int, mode: str) -> dict:
             functions = timed("build", lambda model=model: casmech.compile(model, mode))
             q, _ = timed("initial_state", lambda f=functions: assembly.initial_state(f))
             report = timed("structure", lambda f=functions, q=q: structure(f, 0.0, q))
+            timed("simulate", lambda f=functions: casmech.analyze(
+                f, "dynamics", t_end=t_sim, output_step=0.01, rtol=1e-8, atol=1e-10))
     assert report.dof == 3 * n and report.rank == report.n_rows, report.summary()
     return {stage: [statistics.median(s[k] for s in samples[stage]) for k in (0, 1)]
             for stage in STAGES}
@@ -80,18 +88,21 @@ def main() -> None:
     parser.add_argument("--n", nargs="+", type=int, default=[8, 32, 128, 256, 512, 1000])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--mode", choices=("interpreted", "compiled"), default="interpreted")
+    parser.add_argument("--t-sim", type=float, default=1.0, help="simulated seconds")
+    parser.add_argument("--plot", type=Path, help="PNG of seconds per simulated second vs N")
     parser.add_argument("--child", type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child is not None:
-        print(json.dumps(one_size(args.child, args.repeats, args.mode)))
+        print(json.dumps(one_size(args.child, args.repeats, args.mode, args.t_sim)))
         return
     print(header(), f"mode {args.mode}, medians of {args.repeats}; seconds CPU (wall)\n")
     print("| N | " + " | ".join(STAGES) + " | total |")
     print("|---:|" + "---:|" * (len(STAGES) + 1))
+    rates = {}
     for n in args.n:
         done = subprocess.run([sys.executable, __file__, "--child", str(n), "--repeats",
-                               str(args.repeats), "--mode", args.mode],
-                              capture_output=True, text=True, check=False)
+                               str(args.repeats), "--mode", args.mode, "--t-sim",
+                               str(args.t_sim)], capture_output=True, text=True, check=False)
         if done.returncode != 0:
             print(f"| {n} | failed: {done.stderr.strip().splitlines()[-1]} |")
             continue
@@ -100,6 +111,30 @@ def main() -> None:
         wall = sum(w for w, _ in stages.values())
         cpu = sum(c for _, c in stages.values())
         print(f"| {n} | " + " | ".join(cells) + f" | {cpu:.3g} ({wall:.3g}) |", flush=True)
+        rates[n] = stages["simulate"][0] / args.t_sim
+    if args.plot and rates:
+        plot(rates, args.plot, header())
+
+
+def plot(rates: dict[int, float], path: Path, title: str) -> None:
+    """Seconds (wall) per simulated second against N, log-log, with a slope-1 guide."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = sorted(rates)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.loglog(n, [rates[k] for k in n], "o-", label="casmech (joint coordinates, CVODES)")
+    ax.loglog(n, [rates[n[0]] * k / n[0] for k in n], "--", color="gray",
+              label="proportional to N")
+    ax.set_xlabel("links N")
+    ax.set_ylabel("wall seconds per simulated second")
+    ax.set_title(f"N-link chain, rtol 1e-8\n{title}", fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
 
 
 if __name__ == "__main__":

@@ -7,13 +7,13 @@ import statistics
 import sys
 
 KNOB = {"exudyn": "h", "exudyn-fast": "h", "mujoco": "timestep"}  # every casmech tool: rtol
-PEERS = ("exudyn", "exudyn-fast", "mujoco")
+PEERS = ("exudyn", "exudyn-fast", "mujoco", "casadi-script")
 
 
 def _setting(tool: str, setting: dict | None) -> str:
     if not setting:
         return ""
-    knob = "rtol" if tool.startswith("casmech") else KNOB[tool]
+    knob = "rtol" if tool.startswith("casmech") or tool == "casadi-script" else KNOB[tool]
     return f"{knob}={setting[knob]:g}"
 
 
@@ -114,7 +114,7 @@ def build_table(report: dict, tools: list[str]) -> list[str]:
                 cells.append(f"{_seconds(load + comp)} s (load {_seconds(load)} + compile "
                              f"{_seconds(comp)})")
             else:
-                key = "compile" if t == "mujoco" else "build"
+                key = "compile" if t in ("mujoco", "casadi-script") else "build"
                 cells.append(f"{_seconds(statistics.median(p[key] for p in parts))} s")
         lines.append(f"| {entry['system']} | " + " | ".join(cells) + " |")
     return lines

@@ -27,6 +27,10 @@ def runner(tool: str, system):
         from casmech_model import TOOLS, Runner
 
         return Runner(system, **TOOLS[tool])
+    if tool == "casadi-script":
+        from casadi_script import Runner
+
+        return Runner(system)
     if tool in ("exudyn", "exudyn-fast"):  # run.py sets EXUDYN_MODULE=fast for exudyn-fast
         from exudyn_model import Runner
     elif tool == "mujoco":
@@ -42,7 +46,7 @@ def emit(**event) -> None:
 
 def versions(tool: str) -> dict:
     out = {"python": platform.python_version()}
-    if tool.startswith("casmech"):
+    if tool.startswith("casmech") or tool == "casadi-script":
         import casadi
 
         import casmech

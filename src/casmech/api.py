@@ -24,8 +24,8 @@ from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
-from casmech.runtime.results import Result, table
-from casmech.schema import load_model, load_model_text
+from casmech.runtime.results import Result, column_names, table
+from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
 
 
@@ -116,6 +116,23 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
     DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
     `progress`, when given, is called with the time of every output row as it is computed."""
+    settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
+                                 formulation, stabilization, method)
+    result = ANALYSES[settings.type](functions, settings, progress)
+    from casmech import codegen  # imported on use: `casmech check` never needs it
+
+    result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
+    return result
+
+
+def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
+                      t_end: float | None = None, output_step: float | None = None,
+                      rtol: float | None = None, atol: float | None = None,
+                      formulation: str | None = None, stabilization: str | None = None,
+                      method: str | None = None) -> Analysis:
+    """The settings `analyze` runs with (its arguments over the model's `analysis:` block),
+    checked: a UsageError for an option that does not exist and for values outside
+    schema.limits (E409: rtol, atol, t_end, an output grid too large)."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
@@ -134,14 +151,13 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
                          f"{', '.join(ANALYSES)}")
-    for name in ("t_end", "output_step", "rtol", "atol"):
-        if not getattr(settings, name) > 0:
-            raise UsageError(f"{name} must be positive (got {getattr(settings, name)})")
-    result = ANALYSES[settings.type](functions, settings, progress)
-    from casmech import codegen  # imported on use: `casmech check` never needs it
-
-    result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
-    return result
+    numbers = {name: float(getattr(settings, name))
+               for name in ("t_end", "output_step", "rtol", "atol")}
+    problems = limits.analysis_problems(numbers, len(column_names(functions)), step_within=False)
+    if problems:  # the model's own settings were checked when it was loaded: these were given
+        raise UsageError("\n".join(f"error[E409] {name} = {numbers[name]:g}: {problem}"
+                                    for name, problem in problems.items()))
+    return settings
 
 
 def check(functions: SystemFunctions) -> tuple[Structure, bool]:

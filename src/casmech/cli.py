@@ -3,7 +3,8 @@
 Each subcommand is a module of casmech.commands (listed in commands.COMMANDS). Only the module
 of the command on the command line is imported, so each command pays for its own imports
 (`casmech --help` imports none; benchmarks/notes_startup.md).
-Exit codes (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error, 3 analysis failure.
+Exit codes (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error, 3 analysis failure,
+130/143 stopped by SIGINT/SIGTERM.
 """
 
 from __future__ import annotations
@@ -53,6 +54,9 @@ def main(argv: list[str] | None = None) -> int:
     except FileNotFoundError as error:
         print(f"casmech: {Source(str(error.filename), 1, 1)}: no such file", file=sys.stderr)
         return UsageError.exit_code
+    except KeyboardInterrupt:  # Ctrl-C in a command that keeps nothing (run: errors.Interrupted)
+        print("casmech: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -9,12 +9,14 @@ A user mistake is never a traceback: every stage collects `Diagnostic`s and rais
       hint: ...
 
 Exit codes of the command line (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error,
-3 analysis failure.
+3 analysis failure, 128 + the signal's number when SIGINT (130) or SIGTERM (143) stopped it.
 """
 
 from __future__ import annotations
 
 import difflib
+import re
+import signal
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -25,12 +27,16 @@ CODES: dict[str, str] = {
     "E001": "YAML syntax error",
     "E002": "duplicate key",
     "E003": "the document is not a mapping",
+    "E004": "a YAML 1.1 spelling that reads differently in YAML 1.2 (1:30, 0x10, yes, a date)",
+    "E005": "a YAML tag (!!python/..., !custom): not part of the format",
+    "E006": "the input exceeds a limit (file size, nesting depth, values after aliases)",
     # E1xx: structure (shape and types of the format)
     "E100": "missing required key",
     "E101": "unknown key",
     "E102": "wrong type",
     "E103": "invalid value",
     "E104": "unsupported format version",
+    "E105": "too many items (repeat copies, bodies, joints, forces, instances)",
     # E2xx: expressions
     "E200": "expression syntax error",
     "E201": "unknown symbol in expression",
@@ -43,6 +49,8 @@ CODES: dict[str, str] = {
     "E302": "reserved name",
     "E303": "invalid name",
     "E304": "a joint or force connects a body to itself",
+    "E305": "a file the model names is outside its folder or not a regular file",
+    "E306": "a file the model names is too large",
     # E4xx: physical sanity
     "E400": "mass must be positive",
     "E401": "inertia not positive definite",
@@ -55,6 +63,7 @@ CODES: dict[str, str] = {
     "E408": "driver not allowed on this joint type",
     "E409": "non-positive or inconsistent analysis setting",
     "E410": "invalid geometry",
+    "E411": "a magnitude outside the plausible range",
     # E5xx: structure of the assembled mechanism (found by the compiler)
     "E500": "redundant constraints",
     "E501": "mechanism is not fully driven",
@@ -129,9 +138,46 @@ class UsageError(CasmechError):
     exit_code = 2
 
 
+# SUNDIALS return flags (IDAS IDA_*, CVODES CV_*) -> what they mean, for failure messages
+SOLVER_REASONS = {
+    "TOO_MUCH_ACC": "too much accuracy requested (rtol/atol below what double precision "
+                    "reaches)",
+    "TOO_MUCH_WORK": "too many steps (max_num_steps) before the next output time",
+    "ERR_FAIL": "the error test failed repeatedly (or |h| = hmin)",
+    "CONV_FAIL": "the corrector did not converge (or |h| = hmin)",
+    "CONV_FAILURE": "the corrector did not converge (or |h| = hmin)",
+    "LINIT_FAIL": "the linear solver could not be set up",
+    "LSETUP_FAIL": "the linear solver's setup failed (a singular iteration matrix?)",
+    "LSOLVE_FAIL": "the linear solver failed",
+    "RES_FAIL": "the residual function failed (NaN or an interrupt)",
+    "RHSFUNC_FAIL": "the right-hand side failed (NaN or an interrupt)",
+    "REP_RES_ERR": "the residual function failed repeatedly",
+    "CONSTR_FAIL": "the inequality constraints failed",
+}
+_FLAG = re.compile(r'returned "(?:IDA|CV)_(\w+)"')
+
+
+def solver_reason(error: BaseException) -> str:
+    """What a SUNDIALS solver said, from the RuntimeError CasADi raised ("IDAS: too much
+    accuracy requested"), else the error's last line."""
+    text = str(error)
+    match = _FLAG.search(text)
+    if match:
+        solver = "IDAS" if "Idas" in text or '"IDA_' in text else "CVODES"
+        return f"{solver}: {SOLVER_REASONS.get(match.group(1), match.group(1))}"
+    lines = [line for line in text.strip().splitlines() if line.strip()]
+    return lines[-1] if lines else type(error).__name__
+
+
+class BodyName(str):
+    """The name of a body where a failure names joints (its normalization row p^T p - 1):
+    `FailureContext` calls it a body."""
+
+
 @dataclass
 class FailureContext:
-    """What an analysis failure names: time, cause, joints involved (with their sources)."""
+    """What an analysis failure names: time, cause, joints involved (with their sources); an
+    entry whose name is a BodyName is a body's normalization row."""
 
     time: float | None
     cause: str
@@ -143,7 +189,8 @@ class FailureContext:
         lines = [f"analysis failed {at}{self.cause}"]
         for name, source, residual in self.joints:
             where = f"{source}: " if source else ""
-            lines.append(f"  {where}joint '{name}' ({self.measure} {residual:.3e})")
+            what = "body" if isinstance(name, BodyName) else "joint"
+            lines.append(f"  {where}{what} '{name}' ({self.measure} {residual:.3e})")
         return "\n".join(lines)
 
 
@@ -156,3 +203,19 @@ class AnalysisError(CasmechError):
         self.context = context
         self.partial = partial
         super().__init__(context.format())
+
+
+class Interrupted(AnalysisError, KeyboardInterrupt):
+    """SIGINT or SIGTERM stopped an analysis (casmech.interrupts). An AnalysisError, so that
+    the analyses keep the rows computed so far in `partial` as they do for a failure; a
+    KeyboardInterrupt, so that a Python caller's Ctrl-C handling sees it. Exit code 128 + the
+    signal's number (130 for SIGINT, 143 for SIGTERM)."""
+
+    def __init__(self, signum: int, partial=None):
+        self.signum = signum
+        self.signal_name = signal.Signals(signum).name
+        self.exit_code = 128 + signum
+        super().__init__(FailureContext(None, f"interrupted by {self.signal_name}"), partial)
+
+    def __str__(self) -> str:
+        return f"interrupted by {self.signal_name}"

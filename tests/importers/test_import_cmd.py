@@ -53,3 +53,17 @@ def test_usage_errors_exit_2(tmp_path, capsys):
     deck = tmp_path / "same.adm"
     deck.write_text(GOOD)
     assert main(["import", str(deck), "-o", str(deck)]) == 2
+
+
+def test_sources_are_read_with_a_bound(tmp_path, capsys, monkeypatch):
+    """A huge deck is refused by its size (E006), not read whole; an .acf cannot name a model
+    file outside its folder (E305)."""
+    import casmech.importers
+
+    monkeypatch.setattr(casmech.importers, "MAX_SOURCE_BYTES", 1000)
+    (tmp_path / "big.adm").write_text("ADAMS\n!" + "x" * 2000 + "\n")
+    assert main(["import", str(tmp_path / "big.adm"), "-o", str(tmp_path / "x.yaml")]) == 1
+    assert f"{tmp_path / 'big.adm'}:1:1: error[E006]" in capsys.readouterr().err
+    (tmp_path / "evil.acf").write_text('{"model": "../../etc/passwd"}')
+    assert main(["import", str(tmp_path / "evil.acf"), "-o", str(tmp_path / "x.yaml")]) == 1
+    assert "error[E305] model: model file '../../etc/passwd'" in capsys.readouterr().err

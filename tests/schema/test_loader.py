@@ -3,6 +3,7 @@
 import pytest
 
 from casmech.errors import ModelError, Source, UsageError
+from casmech.schema import loader
 from casmech.schema.loader import format_path, load_document, load_file
 
 TEXT = """\
@@ -128,3 +129,71 @@ def test_format_path():
     assert format_path(("joints", 0, "driver", "angle")) == "joints[0].driver.angle"
     assert format_path(("bodies", 1, "inertia", 2, 0)) == "bodies[1].inertia[2][0]"
     assert format_path(()) == ""
+
+
+# ------------------------------------------------------------------ YAML 1.1, tags, limits
+@pytest.mark.parametrize("text", ["1:30", "0x10", "010", "0b101", "1_000", "1:30.5", "yes", "No",
+                                  "on", "OFF", "2001-12-14", "2001-12-14 21:59:43.10 -5"])
+def test_yaml_11_spellings_are_reported_not_converted(text):
+    """YAML 1.1 (PyYAML) reads these as 90, 16, 8, 5, 1000, 90.5, booleans and dates; YAML
+    1.2 as text. Neither is what a model means: E004 at the value."""
+    with pytest.raises(ModelError) as caught:
+        load_document(f"a: 1\nb: [2, {text}]\n", "s.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.path, diagnostic.source) == \
+        ("E004", "b[1]", Source("s.yaml", 2, 8))
+
+
+@pytest.mark.parametrize("text, value", [("12", 12), ("-0", 0), ("+3", 3), ("1.5", 1.5),
+                                         ("-2.5e+3", -2500.0), (".inf", float("inf")),
+                                         ("true", True), ("FALSE", False), ("~", None),
+                                         ("1e-3", "1e-3"), ("'1:30'", "1:30"),
+                                         ("!!str 0x10", "0x10"), ("'yes'", "yes")])
+def test_yaml_12_values(text, value):
+    assert load_document(f"a: {text}\n").data["a"] == value
+
+
+@pytest.mark.parametrize("text", ["!!python/object/apply:os.system [echo]", "!custom 1",
+                                  "!!binary aGVsbG8=", "!!set {a, b}", "!!timestamp 2001-12-14",
+                                  "!!python/name:os.system"])
+def test_tags_are_refused(text):
+    with pytest.raises(ModelError) as caught:
+        load_document(f"a: 1\nb: {text}\n", "s.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.source) == ("E005", Source("s.yaml", 2, 4))
+
+
+def test_aliases_are_located_at_their_anchor():
+    document = load_document("a: &x {b: [1, 2]}\nc: *x\n", "s.yaml")
+    assert document.data["c"] == {"b": [1, 2]}
+    assert document.locate(("c", "b", 1)) == Source("s.yaml", 1, 15)
+
+
+def test_alias_expansion_is_bounded():
+    """A 'billion laughs' (9 levels of 8 aliases: 8^9 values) stops at MAX_VALUES."""
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x]"]
+    lines += [f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 8) + "]" for k in range(1, 9)]
+    with pytest.raises(ModelError) as caught:
+        load_document("\n".join(lines) + "\n", "s.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert diagnostic.code == "E006" and f"more than {loader.MAX_VALUES} values" in \
+        diagnostic.message
+
+
+def test_nesting_is_bounded_without_recursion():
+    depth = 100_000  # far beyond Python's recursion limit
+    with pytest.raises(ModelError) as caught:
+        load_document("a: " + "[" * depth + "]" * depth + "\n", "s.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert diagnostic.code == "E006" and diagnostic.source.col == 3 + loader.MAX_DEPTH
+
+
+def test_file_size_is_bounded(tmp_path):
+    path = tmp_path / "big.yaml"
+    path.write_text("a: 1\n# " + "x" * loader.MAX_MODEL_BYTES + "\n")
+    for source in (path, "/dev/zero"):
+        with pytest.raises(ModelError) as caught:
+            load_file(str(source))
+        assert caught.value.diagnostics[0].code == "E006"
+    with pytest.raises(ModelError):
+        load_document(path.read_text(), "big.yaml")

@@ -13,6 +13,7 @@ from tests.conftest import MODELS
 import casmech
 from casmech.cli import main
 from casmech.errors import ModelError
+from casmech.schema import load_model_text
 
 N = 4
 T_END = 0.5
@@ -217,3 +218,51 @@ bodies:
     with pytest.raises(ModelError) as caught:
         casmech.loads(bad)
     assert [(d.code, d.path) for d in caught.value.diagnostics] == [("E100", "bodies[0].repeat.to")]
+
+
+# ------------------------------------------------------------------------------ limits
+def test_copies_are_counted_before_they_are_made():
+    """A range of 1e9 (or 5000 x 5000 nested) is refused at once, not after filling memory."""
+    import time
+
+    from casmech.schema import repeat
+
+    for bounds in ("{index: i, from: 1, to: 1e9}",
+                   "[{index: i, from: 1, to: 5000}, {index: j, from: 1, to: 5000}]"):
+        text = ("casmech: 1\nname: many\nbodies:\n  - name: \"b{i}\"\n    repeat: " + bounds +
+                "\n    mass: 1\n    inertia: [1, 1, 1]\n    position: [0, 0, 0]\n")
+        start = time.perf_counter()
+        with pytest.raises(ModelError) as caught:
+            load_model_text(text, "m.yaml")
+        assert time.perf_counter() - start < 5.0  # ~1 ms; a billion dicts would take minutes
+        [diagnostic] = caught.value.diagnostics
+        assert diagnostic.code == "E105" and f"more than {repeat.MAX_COPIES}" in \
+            diagnostic.message and diagnostic.source.line == 5
+
+
+def test_a_whole_model_is_bounded_members_of_instances_included():
+    """4 items of 6000 copies each are 24000 items: beyond MAX_ITEMS though each repeat is
+    within MAX_COPIES; reported once, where the budget ran out."""
+    from casmech.schema import repeat
+
+    body = ("  - name: \"{0}{{i}}\"\n    repeat: {{index: i, from: 1, to: 6000}}\n"
+            "    mass: 1\n    inertia: [1, 1, 1]\n    position: [0, 0, 0]\n")
+    text = "casmech: 1\nname: many\nbodies:\n" + "".join(body.format(n) for n in "abcd")
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert diagnostic.code == "E105" and diagnostic.path == "bodies[3]"
+    assert f"more than {repeat.MAX_ITEMS}" in diagnostic.message
+
+
+def test_items_written_out_are_bounded_too():
+    from casmech.schema import repeat
+
+    body = "  - {{name: b{0}, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}}\n"
+    text = "casmech: 1\nname: many\nbodies:\n" + "".join(body.format(k) for k in
+                                                        range(repeat.MAX_ITEMS + 1))
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.path) == ("E105", f"bodies[{repeat.MAX_ITEMS}]")
+    assert diagnostic.source.line == 4 + repeat.MAX_ITEMS

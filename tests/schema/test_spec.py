@@ -115,7 +115,7 @@ def test_locations_drop_union_tags():
         "  - {name: a, type: spherical, body_i: ground, body_j: bar, at: [0, 0, 0]}\n"
         "  - {name: b, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0]}\n"
         "  - {name: c, type: universal, body_i: ground, body_j: bar, at: [0, 0, 0],\n"
-        "     axis_i: [1, 0, x, 4], axis_j: [0, 1, yes]}\n"
+        "     axis_i: [1, 0, x, 4], axis_j: [0, 1, true]}\n"
     )
     assert errors(text) == [
         ("E100", "joints[1].axis", 7, 5),  # at the joint's mapping

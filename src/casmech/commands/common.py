@@ -7,9 +7,24 @@ import argparse
 from casmech.errors import UsageError
 
 
+class _AllowDir(argparse.Action):
+    """--allow-dir DIR: the model may name files under DIR too (casmech.schema.files)."""
+
+    def __call__(self, parser, namespace, value, option_string=None) -> None:
+        from casmech.schema import files
+
+        files.allow(value)
+        getattr(namespace, self.dest).append(value)
+
+
 def add_overrides(parser: argparse.ArgumentParser) -> None:
+    """--set NAME=VALUE and --allow-dir DIR: options of every command that loads a model."""
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                         help="override a parameter (repeatable)")
+    parser.add_argument("--allow-dir", action=_AllowDir, default=[], metavar="DIR",
+                        help="a folder outside the model's own from which it may read tables, "
+                             "component files, meshes and data (repeatable; also "
+                             "$CASMECH_ALLOWED_DIRS)")
 
 
 def overrides(pairs: list[str]) -> dict[str, str]:

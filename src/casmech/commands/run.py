@@ -4,6 +4,12 @@
 (versions, model hash and text, overrides, settings, timings, mode); --format hdf5 writes
 results.h5 holding the same table and metadata; --format csv,hdf5 writes both. A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
+
+SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.interrupts): the rows computed
+so far are written with `status: interrupted` and the signal in the metadata, and the exit
+code is 128 + the signal's number (130, 143). When the analysis starts, the results files of an
+earlier run in DIR are removed and metadata.json says `status: running`, so that a run killed
+outright (SIGKILL) never leaves an older results file looking current.
 """
 
 from __future__ import annotations
@@ -13,14 +19,17 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 import casmech
-from casmech import api
+from casmech import api, interrupts
 from casmech.commands.common import add_overrides, overrides
-from casmech.errors import AnalysisError
+from casmech.errors import AnalysisError, Interrupted
 from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
+from casmech.runtime.results import column_names
 
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
@@ -73,45 +82,95 @@ def add_arguments(parser) -> None:
 def run(args) -> int:
     for name in args.format:
         FORMATS[name][2]()  # a missing h5py is a usage error before the run
+    with interrupts.trap():
+        return _run(args)
+
+
+def _run(args) -> int:
     given = overrides(args.set)
     clock = time.perf_counter()
     model = casmech.load(args.model, given)
     timings = {"load": time.perf_counter() - clock}
+    interrupts.check()
     out = args.out or args.model.with_name(args.model.stem + "_results")
     clock = time.perf_counter()
     functions = casmech.compile(model, args.mode)
     timings["compile"] = time.perf_counter() - clock
+    interrupts.check()  # a signal during a C compiler's run ends it as a failure
     settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,
                                  formulation=args.formulation,
                                  stabilization=args.stabilization, method=args.method)
+    run = (model, given, settings, timings)
+    api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
+                          args.atol, args.formulation, args.stabilization,
+                          args.method)  # a usage error before an earlier run's files go
+    _start(args, out, run)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
             result = casmech.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
-                                     formulation=args.formulation, progress=callback,
+                                     formulation=args.formulation,
+                                     progress=interrupts.watch(callback),
                                      stabilization=args.stabilization, method=args.method)
     except AnalysisError as error:
         timings["analysis"] = time.perf_counter() - clock
-        if error.partial is not None and len(error.partial):
-            paths = _save(args, out, functions, error.partial,
-                          (model, given, settings, timings), str(error))
-            print(f"kept {len(error.partial)} rows computed before the failure in "
-                  f"{', '.join(map(str, paths))}", file=sys.stderr)
+        with interrupts.saving():
+            _keep(args, out, functions, error, run)
         raise
     timings["analysis"] = time.perf_counter() - clock
-    paths = _save(args, out, functions, result, (model, given, settings, timings))
+    with interrupts.saving():
+        paths = _save(args, out, functions, result, run)
     print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
           f"-> {', '.join(map(str, paths))}")
     return 0
 
 
-def _save(args, out: Path, functions, result, run, error: str | None = None) -> list[Path]:
-    """The table in every requested format, plus metadata.json beside a CSV."""
-    names, values = casmech.results_table(functions, result)
+def _start(args, out: Path, run) -> None:
+    """Before the analysis: the results files of an earlier run go, metadata.json says
+    running."""
+    with interrupts.saving():
+        for name in FORMATS.values():
+            (out / name[0]).unlink(missing_ok=True)
+        (out / "metadata.json").unlink(missing_ok=True)
+        if "csv" in args.format:
+            model, given, settings, timings = run
+            write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
+                                                           0, status="running"))
+
+
+def _keep(args, out: Path, functions, error: AnalysisError, run) -> None:
+    """The rows computed before a failure or an interrupt, and the metadata saying which (an
+    interrupt before the first row: the header only; a failure: the metadata only)."""
+    interrupted = isinstance(error, Interrupted)
+    partial = error.partial if error.partial is not None and len(error.partial) else None
+    if partial is None and not interrupted:
+        if "csv" in args.format:
+            model, given, settings, timings = run
+            write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
+                                                           0, str(error), "failed"))
+        return
+    paths = _save(args, out, functions, partial, run, str(error),
+                  "interrupted" if interrupted else "failed",
+                  error.signal_name if interrupted else None)
+    rows, when = (len(partial), f" (t = {partial.times[-1]:.6g})") if partial else (0, "")
+    print(f"kept {rows} rows computed before the {'interrupt' if interrupted else 'failure'}"
+          f"{when} in {', '.join(map(str, paths))}", file=sys.stderr)
+
+
+def _save(args, out: Path, functions, result, run, error: str | None = None,
+          status: str | None = None, signal: str | None = None) -> list[Path]:
+    """The table in every requested format, plus metadata.json beside a CSV (result None:
+    no rows, the header only)."""
+    if result is None:
+        names = column_names(functions)
+        values, meta, rows = np.zeros((0, len(names))), {}, 0
+    else:
+        names, values = casmech.results_table(functions, result)
+        meta, rows = result.metadata, len(values)
     model, given, settings, timings = run
-    metadata = run_metadata(model, given, settings, timings, result.metadata, len(values), error)
+    metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     if "csv" in args.format:

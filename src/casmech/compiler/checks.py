@@ -10,6 +10,7 @@ import numpy as np
 from casmech.compiler import numeric_qr
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import RowInfo
+from casmech.errors import BodyName
 
 RANK_TOLERANCE = 1e-9  # relative to the largest singular value of Phi_q
 
@@ -69,8 +70,9 @@ def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 
     """(joint name, source, largest |residual| of its rows), worst first, for failure messages."""
     by_joint: dict[str, tuple[object, float]] = {}
     for row, value in zip(functions.rows, np.abs(np.ravel(residual)), strict=True):
-        source, worst = by_joint.get(row.joint, (row.source, 0.0))
-        by_joint[row.joint] = (source, max(worst, float(value)))
+        name = BodyName(row.joint) if row.kind == "normalization" else row.joint
+        source, worst = by_joint.get(name, (row.source, 0.0))
+        by_joint[name] = (source, max(worst, float(value)))
     ranked = sorted(by_joint.items(), key=lambda item: -item[1][1])
     return [(name, source, value) for name, (source, value) in ranked[:count]]
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.importers import adm_connections, adm_forces
+from casmech.importers import adm_connections, adm_forces, read_source
 from casmech.importers.adm_frames import euler_parameters, tidy
 from casmech.importers.adm_model import Deck, Part, Reader, read_markers, read_parts, read_units
 from casmech.importers.adm_parser import Statement, Value, parse_adm
@@ -158,7 +158,7 @@ def _header(path: Path, dataset, units_statements: list[Statement]) -> list[str]
 
 def import_adm(path: Path) -> Imported:
     """Translate the dataset at `path`; warnings (not errors) for what is not translated."""
-    dataset = parse_adm(path.read_text(errors="replace"), str(path))
+    dataset = parse_adm(read_source(path), str(path))
     reader = Reader(str(path))
     groups = _by_name(dataset.statements)
     units = read_units(groups.get("UNITS", []), reader)

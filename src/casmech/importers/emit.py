@@ -1,21 +1,28 @@
 """An imported model as casmech YAML text, with the source's comments kept as YAML comments.
 
 The importers fill an `Imported` (sections of items, each item with the comment lines that stood
-above it in the source); `to_yaml` writes it in the order of MODEL_FORMAT.md. Numbers are written
-with repr (shortest text that reads back to the same float), strings as expressions unquoted
-when they are plain, vectors in flow style.
+above it in the source); `to_yaml` writes it in the order of MODEL_FORMAT.md. Every key and
+value goes through PyYAML's serializer (numbers in the shortest text that reads back to the same
+float, strings quoted whenever YAML would read them as anything else, vectors in flow style);
+comments are split at every YAML line break and stripped of characters YAML does not allow, so
+no text of the source can become a key of the model (a `comment` holding
+"\\nforces:\\n  - ..." stays a comment). The model's name is made an identifier.
 """
 
 from __future__ import annotations
 
-import json
+import math
 import re
 from dataclasses import dataclass, field
 from typing import Any
 
+import yaml
+
 from casmech.errors import Diagnostic
 
-_PLAIN = re.compile(r"^[A-Za-z_][A-Za-z0-9_ .]*$")
+LINE_BREAKS = re.compile("\r\n|[\r\n\x85\u2028\u2029]")  # every line break YAML knows
+NOT_PRINTABLE = re.compile("[^\x09\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
 @dataclass
@@ -40,42 +47,79 @@ class Imported:
     warnings: list[Diagnostic] = field(default_factory=list)
 
 
-def scalar(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value)
-    text = str(value)
-    if _PLAIN.match(text) and text.lower() not in {"true", "false", "null", "yes", "no", "on",
-                                                    "off"}:
-        return text
-    return json.dumps(text)
+class _Dumper(yaml.SafeDumper):
+    """Floats as Python's repr (the shortest text that reads back to the same double); numpy
+    numbers as Python numbers."""
 
 
-def flow(value: Any) -> str:
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k}: {flow(v)}" for k, v in value.items()) + "}"
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(flow(v) for v in value) + "]"
-    return scalar(value)
+def _float(dumper: yaml.SafeDumper, value: float) -> yaml.ScalarNode:
+    if not math.isfinite(value):
+        return dumper.represent_float(value)
+    text = repr(float(value))
+    if "e" in text and "." not in text.split("e")[0]:  # 1e-05: YAML 1.1 needs 1.0e-05
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}.0e{exponent}"
+    return dumper.represent_scalar("tag:yaml.org,2002:float", text)
+
+
+def _flat(value) -> bool:
+    return not isinstance(value, dict) and (not isinstance(value, list | tuple)
+                                            or all(_flat(item) for item in value))
+
+
+def _text(dumper: yaml.SafeDumper, value: str) -> yaml.ScalarNode:
+    """Text with a line break or an unprintable character is double-quoted (escaped): in a
+    plain or single-quoted scalar a reader folds NEL, LS and PS into spaces."""
+    style = '"' if LINE_BREAKS.search(value) or NOT_PRINTABLE.search(value) or \
+        "\ufeff" in value else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", value, style=style)
+
+
+_Dumper.add_representer(str, _text)
+_Dumper.add_representer(float, _float)
+_Dumper.add_representer(dict, lambda d, v: d.represent_mapping(
+    "tag:yaml.org,2002:map", v.items(), flow_style=False))  # mappings in block style
+for _sequence in (list, tuple):  # lists of numbers (vectors, matrices) in flow style
+    _Dumper.add_representer(_sequence, lambda d, v: d.represent_sequence(
+        "tag:yaml.org,2002:seq", list(v), flow_style=_flat(v)))
+try:  # numpy scalars from the importers' arithmetic
+    import numpy as np
+
+    _Dumper.add_multi_representer(np.floating, lambda d, v: _float(d, float(v)))
+    _Dumper.add_multi_representer(np.integer, lambda d, v: d.represent_int(int(v)))
+    _Dumper.add_multi_representer(np.bool_, lambda d, v: d.represent_bool(bool(v)))
+except ImportError:  # pragma: no cover - numpy is a dependency
+    pass
+
+
+def dump(value: Any) -> str:
+    """YAML text of a value: mappings in block style, lists of numbers in flow style."""
+    return yaml.dump(value, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=10_000)
 
 
 def comment_lines(comments: list[str], indent: str) -> list[str]:
-    return [f"{indent}#{' ' + c if c else ''}".rstrip() for c in comments]
+    """Each comment as `#` lines: split at every line break, unprintable characters escaped."""
+    lines = []
+    for comment in comments:
+        for part in LINE_BREAKS.split(str(comment)):
+            part = NOT_PRINTABLE.sub(lambda m: m.group().encode("unicode_escape").decode(),
+                                     part)
+            lines.append(f"{indent}#{' ' + part if part else ''}".rstrip())
+    return lines
+
+
+def identifier(name: str, fallback: str = "imported") -> str:
+    """`name` as a model name: characters other than letters, digits and _ become _."""
+    text = re.sub(r"\W", "_", str(name), flags=re.ASCII).strip("_") or fallback
+    return text if NAME.match(text) else f"m_{text}"
+
+
+def _indented(text: str, indent: str) -> list[str]:
+    return [indent + line if line else line for line in text.rstrip("\n").split("\n")]
 
 
 def _item(item: Item) -> list[str]:
-    lines = comment_lines(item.comments, "  ")
-    for k, (key, value) in enumerate(item.data.items()):
-        lead = "  - " if k == 0 else "    "
-        if isinstance(value, dict) and any(isinstance(v, dict) for v in value.values()):
-            lines.append(f"{lead}{key}:")
-            lines += [f"      {sub}: {flow(v)}" for sub, v in value.items()]
-        else:
-            lines.append(f"{lead}{key}: {flow(value)}")
-    return lines
+    return comment_lines(item.comments, "  ") + _indented(dump([item.data]), "  ")
 
 
 def _section(title: str, items: list[Item]) -> list[str]:
@@ -87,23 +131,29 @@ def _section(title: str, items: list[Item]) -> list[str]:
     return lines
 
 
+def _parameters(parameters: list[tuple[str, Any, str]]) -> list[str]:
+    lines = ["", "parameters:"]
+    for name, value, note in parameters:
+        lines += comment_lines([note] if note else [], "  ")
+        lines += _indented(dump({name: value}), "  ")
+    return lines
+
+
 def to_yaml(model: Imported) -> str:
     lines = comment_lines(model.header, "")
-    lines += ["casmech: 1", f"name: {scalar(model.name)}",
-              f"description: {json.dumps(model.description)}"]
+    lines += dump({"casmech": 1, "name": identifier(model.name),
+                   "description": str(model.description)}).rstrip("\n").split("\n")
     if model.parameters:
-        lines += ["", "parameters:"]
-        lines += [f"  {name}: {scalar(value)}" + (f"  # {note}" if note else "")
-                  for name, value, note in model.parameters]
+        lines += _parameters(model.parameters)
     if model.gravity is not None:
         lines += ["", *comment_lines(model.gravity_comments, ""),
-                  f"gravity: {flow(model.gravity)}"]
+                  *dump({"gravity": list(model.gravity)}).rstrip("\n").split("\n")]
     lines += _section("bodies", model.bodies)
     lines += _section("joints", model.joints)
     lines += _section("forces", model.forces)
     if model.analysis is not None:
-        lines += [""] + comment_lines(model.analysis.comments, "") + ["analysis:"]
-        lines += [f"  {key}: {scalar(value)}" for key, value in model.analysis.data.items()]
+        lines += [""] + comment_lines(model.analysis.comments, "")
+        lines += dump({"analysis": dict(model.analysis.data)}).rstrip("\n").split("\n")
     if model.trailer:
         lines += [""] + comment_lines(model.trailer, "")
     return "\n".join(lines) + "\n"

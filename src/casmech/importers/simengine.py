@@ -23,6 +23,7 @@ from casmech.errors import Diagnostic, ModelError, Source
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item
 from casmech.importers.simengine_read import Located, composite_joint, rotation
+from casmech.schema import files
 
 # casmech key <- accepted simEngine3D spellings
 BODY_KEYS = {"r": ("r", "r0", "position"), "p": ("p", "p0", "euler_parameters"),
@@ -182,6 +183,12 @@ def import_simengine(path: Path) -> Imported:
     if path.suffix.lower() == ".acf":
         named = acf.pick(acf.data, (), ("model", "mdl", "model_file"), default=None)
         mdl_path = path.parent / named if named else path.with_suffix(".mdl")
+        try:  # beside the .acf or below, as a model's files are (casmech.schema.files)
+            mdl_path = files.resolve(str(path), str(named or mdl_path.name), must_exist=False)
+        except files.NotAllowed as error:
+            raise ModelError([Diagnostic("E305", "model", f"model file '{named}': "
+                                         f"{error.reason}", Source(str(path), 1, 1),
+                                         hint="import the .mdl directly")]) from None
         if not mdl_path.is_file():
             raise ModelError([Diagnostic("E300", "model", f"no model file {mdl_path}",
                                          Source(str(path), 1, 1), expected="a .mdl beside "

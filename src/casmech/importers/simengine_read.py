@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from casmech.errors import Diagnostic, ModelError, Source
+from casmech.importers import read_source
 from casmech.schema.expressions import ExpressionError, parse
 from casmech.schema.loader import format_path, load_document
 
@@ -34,7 +35,7 @@ class Located:
 
     @classmethod
     def read(cls, path: Path) -> Located:
-        text = path.read_text()
+        text = read_source(path)
         try:
             data = json.loads(text)
         except json.JSONDecodeError as error:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import os
+import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -13,14 +15,27 @@ def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
     that reads back to the same binary64 value (Python's `repr`: 0.03, not
     0.029999999999999999)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(path.name + ".tmp")
-    with open(temporary, "w", newline="") as handle:
+    with atomic(path, newline="") as handle:
         handle.write(",".join(names) + "\n")
         handle.writelines(",".join(map(repr, row)) + "\n"
                           for row in np.atleast_2d(values).tolist())
-    os.replace(temporary, path)
     return path
+
+
+@contextmanager
+def atomic(path: Path, **options):
+    """A text file written under a temporary name of its own (two runs into one folder do not
+    share it) and renamed to `path` once complete; removed if writing fails."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
+                                             suffix=".tmp")
+    try:
+        with open(descriptor, "w", **options) as handle:
+            yield handle
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
 
 
 def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from collections.abc import Mapping
 from dataclasses import replace
 from datetime import datetime, timezone
@@ -40,10 +39,20 @@ def sha256(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
+STATUSES = ("running", "complete", "failed", "interrupted")
+
+
 def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: dict,
                  timings: Mapping[str, float], result_metadata: Mapping, rows: int,
-                 error: str | None = None) -> dict:
-    """Everything needed to tell how a results table was made (JSON-serialisable)."""
+                 error: str | None = None, status: str | None = None,
+                 signal: str | None = None) -> dict:
+    """Everything needed to tell how a results table was made (JSON-serialisable). `status`:
+    running (written when the analysis starts: a results file from an earlier run is gone),
+    complete, failed or interrupted (`signal` names the signal); default: failed when there is
+    an error, else complete."""
+    status = status or ("failed" if error else "complete")
+    assert status in STATUSES, status
+    extra = {"signal": signal} if signal else {}
     return {
         "casmech_version": casmech.__version__,
         "casadi_version": casadi.__version__,
@@ -56,7 +65,8 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
         "timings_s": dict(timings),
         "mode": result_metadata.get("mode", "interpreted"),
         "rows": int(rows),
-        "status": "failed" if error else "complete",
+        "status": status,
+        **extra,
         "error": error or "",
         "result": {k: _plain(v) for k, v in result_metadata.items()},
     }
@@ -75,11 +85,11 @@ def _plain(value):
 
 def write_json(path: str | Path, metadata: Mapping) -> Path:
     """Write atomically, like the CSV writer."""
+    from casmech.output.csv import atomic
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(json.dumps(metadata, indent=2) + "\n")
-    os.replace(temporary, path)
+    with atomic(path) as handle:
+        handle.write(json.dumps(metadata, indent=2) + "\n")
     return path
 
 

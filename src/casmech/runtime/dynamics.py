@@ -57,11 +57,12 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech import interrupts
 from casmech.compiler import augmented, dae, euler
 from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
@@ -234,7 +235,7 @@ class _Stepper:
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
-        self.on_ode, self.switched_at = False, None
+        self.on_ode, self.switched_at, self.dae_reason = False, None, ""
         self.idas_calls, self.idas_steps = 0, 0
 
     def start(self, intervals: int, progress: bool) -> None:
@@ -262,7 +263,8 @@ class _Stepper:
         if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
             try:
                 return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
-            except RuntimeError:
+            except RuntimeError as error:
+                interrupts.check(error)  # a signal is not a solver failure
                 if len(times) > CHUNK:  # the whole grid: again in chunks, as after a failure
                     self.limit = self.chunk = CHUNK
                     return self.integrate(t0, times[:CHUNK], q, v, mask)
@@ -270,8 +272,9 @@ class _Stepper:
                 self.limit = CHUNK
         try:
             return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
-        except RuntimeError:  # IDAS failed (its construction is not guarded)
-            raise _Restart(float(t0)) from None
+        except RuntimeError as error:  # IDAS failed (its construction is not guarded)
+            interrupts.check(error)
+            raise _Restart(float(t0), solver_reason(error)) from None
 
     def _problem(self, kind: str) -> dict:
         if kind not in self.problems:
@@ -348,8 +351,10 @@ class _Stepper:
 
     def failure(self, t0, t1, q, why) -> AnalysisError:
         functions = self.model.functions
+        dae = (f", after the DAE failed at t = {self.switched_at:.6g} ({self.dae_reason})"
+               if self.dae_reason else "")
         cause = (f"the augmented-Lagrangian Runge-Kutta steps failed between t = {t0:.6g} and "
-                 f"{t1:.6g} ({why}); the joints whose "
+                 f"{t1:.6g} ({why}){dae}; the joints whose "
                  "rows are closest to dependent (a singular configuration?):")
         return AnalysisError(FailureContext(t0, cause, dependent_joints(
             functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
@@ -386,11 +391,11 @@ def initial_step(r, r_ddot, rtol: float, atol: float, interval: float) -> float:
 
 
 class _Restart(Exception):
-    """The exact DAE failed in the chunk starting at `t`."""
+    """The exact DAE failed in the chunk starting at `t`; `reason`: what IDAS said."""
 
-    def __init__(self, t: float):
+    def __init__(self, t: float, reason: str = ""):
         super().__init__(t)
-        self.t = t
+        self.t, self.reason = t, reason
 
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
@@ -414,7 +419,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     try:
         return _run(model, stepper, t0, t_end, step, atol, progress)
     except _Restart as restart:
-        stepper.on_ode, stepper.switched_at = True, restart.t
+        stepper.on_ode, stepper.switched_at, stepper.dae_reason = True, restart.t, restart.reason
         return _run(model, stepper, t0, t_end, step, atol, progress)
 
 

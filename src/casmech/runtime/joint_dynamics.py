@@ -17,6 +17,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech import interrupts
 from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import independent_rows
@@ -25,9 +26,9 @@ from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly
-from casmech.runtime.dynamics import Z_TOL, initial_step, minimum_norm
+from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -42,11 +43,7 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
 # against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
 # bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
 STIFF = 10.0
-# the joint DAE's first step: FIRST_STEP times runtime.dynamics.initial_step (the r-p rule). At
-# 1x the four-bar failed at t0 at rtol 1e-12 (IDA_CONV_FAIL: the index-2 iteration matrix,
-# condition ~ 1/h^2); at 10x it, Bricard, a distance and a revolute-spherical link ran at
-# rtol 1e-6..1e-12 with step counts within 10 % of 1x (Bricard at 1e-12: 1865 against 3254).
-FIRST_STEP = 10.0
+
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
 
@@ -178,6 +175,11 @@ class _Integrator:
         return states, algebraic
 
     def _dae_options(self, t0, times, x, z) -> dict:
+        """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
+        rule's first step, the algebraic unknowns out of the error test and held in Newton's
+        test per group (algebraic_tolerances: with Z_TOL on every multiplier the four-bar failed
+        at t0 at rtol 1e-12, and Andrews' squeezer at t0 at any rtol; it now runs to 0.018 s
+        and fails there, where the r-p DAE passes)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
@@ -185,9 +187,10 @@ class _Integrator:
                            for v in system.motion(t0, x, z, np.ones(nb)))
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
-                "step0": FIRST_STEP * initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                                   self.options["abstol"], times[0] - t0),
-                "abstolv": [self.options["abstol"]] * len(x) + [Z_TOL] * len(z)}
+                "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
+                                      self.options["abstol"], times[0] - t0),
+                "abstolv": [self.options["abstol"]] * len(x) + list(algebraic_tolerances(
+                    self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
 
 
 def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
@@ -242,8 +245,9 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
     try:
         states, algebraic = integrate(t0, times, x, z)
     except RuntimeError as error:
+        interrupts.check(error)  # a signal is not a solver failure
         if len(times) == 1:
-            raise _failure(t0, times[0], str(error)) from None
+            raise _failure(t0, times[0], solver_reason(error)) from None
         half = len(times) // 2
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)

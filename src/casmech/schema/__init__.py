@@ -36,7 +36,19 @@ def _in_files(diagnostic: Diagnostic, top: str) -> tuple:
 
 
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
+    """Overflows and NaNs are reported as findings (E204, E411), never warned about; paths in
+    the model resolve inside its folder (schema/files.py)."""
+    import numpy as np
+
+    from casmech.schema import files
+
+    with np.errstate(all="ignore"), files.rooted(document.file):
+        return _findings(document, overrides)
+
+
+def _findings(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
     from casmech.schema.components import compose, uses_composition
+    from casmech.schema.repeat import too_many
     from casmech.schema.semantic import resolve
     from casmech.schema.spec_errors import validate
 
@@ -46,6 +58,9 @@ def _resolve(document: Document, overrides: Mapping[str, str] | None) -> Resolve
         if found or model is None:
             raise ModelError(found)
         return model
+    found = too_many(document)  # composed models count as they are made (repeat.Budget)
+    if found:
+        raise ModelError(found)
     spec, found = validate(document)
     model = None
     if spec is not None:

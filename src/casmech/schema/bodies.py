@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from casmech.compiler import euler
-from casmech.schema import resolved, spec
+from casmech.schema import files, resolved, spec
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
 
@@ -182,9 +182,22 @@ def geometry(check: Checker, path: Path, item) -> dict[str, Any] | None:
         measure = check.numbers if isinstance(value, tuple) else check.number
         number = measure(where, value)
         result[key] = check.positive("E410", where, number, f"{kind} {key}")
+    if kind == "mesh":
+        result["file"] = mesh_file(check, (*path, "mesh"), item.mesh)
     result["offset"] = check.vector((*path, "offset"), item.offset)
     result["euler_parameters"] = orientation(check, (*path, "orientation"), item.orientation)
     return None if failed(result.values()) else result
+
+
+def mesh_file(check: Checker, path: Path, name: str) -> str | None:
+    """The mesh file as written, if it may be read (in the model's folder, a regular file when
+    it exists; `casmech animate` reads it); None: reported (E305)."""
+    try:
+        files.resolve(check.doc.file, name, must_exist=False)
+    except files.NotAllowed as error:
+        check.error("E305", path, f"mesh file '{name}': {error.reason}", hint=error.hint)
+        return None
+    return name
 
 
 def body(check: Checker, index: int, given: spec.Body) -> resolved.Body | None:

@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import math
 import re
+from collections import ChainMap
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from casmech.errors import Diagnostic, Source, did_you_mean
-from casmech.schema import resolved, spec
+from casmech.schema import limits, resolved, spec
 from casmech.schema.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
 from casmech.schema.expressions import parse as parse_expression
 from casmech.schema.loader import Document, Path, format_path
@@ -26,6 +27,14 @@ ZERO = 1e-12  # a vector shorter than this is zero-length (its direction is mean
 WHY_RESERVED = "pi, e, t and the function names cannot be parameters"
 WHY_GROUND = "'ground' is the fixed global frame, always present; choose another name"
 TIME_KEYS = "joint f, driver angle/displacement, force/torque value, tsda/rsda actuator"
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def failed(values) -> bool:
@@ -95,7 +104,7 @@ class Checker:
             self.error("E201", path, f"unknown symbol '{name}'", source=source, hint=hint)
 
     def finite(self, path, expr: Expr, at: Mapping[str, float]) -> float | None:
-        value = float(expr.evaluate({**self.parameters, **at}, "numpy"))
+        value = float(expr.evaluate({**self.parameters, **at}, "numpy"))  # overflow: reported
         if not math.isfinite(value):
             where = ", ".join(f"{name} = {number:g}" for name, number in at.items())
             self.error(
@@ -103,6 +112,13 @@ class Checker:
                 path,
                 f"'{expr.text}' evaluates to {value}" + (f" at {where}" if where else ""),
             )
+            return None
+        problem = limits.implausible(path, value)
+        if problem is not None:
+            written = "" if _is_number(expr.text) else f"{expr.text} = "
+            self.error("E411", path, problem[0], expected=problem[1],
+                       got=f"{written}{value:.6g}",
+                       hint="SI units: metres, kilograms, seconds, radians")
             return None
         return value
 
@@ -199,7 +215,7 @@ class Checker:
         return name in known
 
     def two_bodies(self, path: Path, body_i: str, body_j: str) -> bool:
-        known = [GROUND, *self.bodies]
+        known = ChainMap({GROUND: None}, self.bodies)  # no copy: thousands of bodies
         found = all(
             [
                 self.reference((*path, "body_i"), body_i, known, "body"),

@@ -18,6 +18,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -25,7 +26,7 @@ from pathlib import Path as FilePath
 from typing import Any
 
 from casmech.errors import Diagnostic, ModelError, Source, UsageError, did_you_mean
-from casmech.schema import placement, repeat, spec
+from casmech.schema import files, placement, repeat, spec
 from casmech.schema.bodies import orientation, rotation_matrix
 from casmech.schema.checker import NAME, WHY_GROUND
 from casmech.schema.force_laws import StateChecker as BaseChecker
@@ -60,11 +61,12 @@ class ComposedChecker(BaseChecker):
                 self.joint_bodies[item.name] = (item.body_i, item.body_j)
 
     def reference(self, path: Path, name: str, known, what: str) -> bool:
-        if any(name.startswith(instance + ".") for instance in self.failed):
+        prefixes = owners_of(name)  # by set lookups: a model may have thousands of instances
+        if any(prefix in self.failed for prefix in prefixes):
             return False  # the instance's own findings are reported; no follow-up errors
         if name in known or "." not in name or not self.instances:
             return super().reference(path, name, known, what)
-        owners = [i for i in self.instances if name.startswith(i + ".")]
+        owners = [prefix for prefix in prefixes if prefix in self.instances]
         if not owners:
             head = name.split(".")[0]
             hint = did_you_mean(name, known) or did_you_mean(head, self.instances)
@@ -77,6 +79,12 @@ class ComposedChecker(BaseChecker):
         self.error("E300", path, f"unknown {what} '{name}': instance {owner} (component "
                    f"{self.instances[owner]}) has no {what} '{name[len(owner) + 1:]}'", hint=hint)
         return False
+
+
+def owners_of(name: str) -> list[str]:
+    """'a.b.c' -> ['a', 'a.b']: the instance paths a member name may belong to."""
+    parts = name.split(".")
+    return [".".join(parts[:k]) for k in range(1, len(parts))]
 
 
 def listing(names: list[str]) -> str:
@@ -95,9 +103,13 @@ class Scope:
 class Context:
     stack: tuple[tuple[tuple, str], ...] = ()  # (key, name) of the components being expanded
     files: dict[str, Document | list[Diagnostic]] = field(default_factory=dict)
+    # inline components as documents, made once per load: (id of the home document, name) ->
+    # (home, document); the home is kept so that its id stays its own
+    inline: dict[tuple[int, str], tuple[Document, Document]] = field(default_factory=dict)
+    budget: repeat.Budget = field(default_factory=repeat.Budget)  # items left to make
 
     def push(self, key: tuple, name: str) -> Context:
-        return Context((*self.stack, (key, name)), self.files)
+        return Context((*self.stack, (key, name)), self.files, self.inline, self.budget)
 
 
 @dataclass
@@ -134,21 +146,47 @@ def inline_document(document: Document, name: str) -> Document:
 
 
 def file_document(context: Context, document: Document, name: str, ref):
-    """(the component file's document or None, findings) — read once per load."""
+    """(the component file's document or None, findings) — read once per load. The file must
+    be in the model's folder and a regular file of at most files.MAX_MODEL_BYTES."""
     where = ("components", name, "file")
-    path = str(FilePath(document.file).parent / ref.file)
+    try:
+        path = str(files.resolve(document.file, ref.file))
+    except files.NotAllowed as error:
+        return None, [Diagnostic("E305", f"components.{name}.file", f"component file "
+                                 f"'{ref.file}': {error.reason}", document.locate(where),
+                                 hint=error.hint)]
+    except FileNotFoundError:
+        path = str(FilePath(document.file).parent / ref.file)
     if path not in context.files:
-        try:
-            context.files[path] = with_bodies(load_file(path))
-        except UsageError as error:
-            message = f"cannot read component file '{ref.file}': {error}"
-            context.files[path] = [Diagnostic("E300", f"components.{name}.file", message,
-                                              document.locate(where),
-                                              hint="the path is relative to this file")]
-        except ModelError as error:
-            context.files[path] = error.diagnostics
+        context.files[path] = _read_component(document, name, ref, path)
     found = context.files[path]
     return (None, found) if isinstance(found, list) else (found, [])
+
+
+def _read_component(document: Document, name: str, ref, path: str):
+    """The component file's document, or its findings (located at `file:` when it cannot be
+    read or is too large, in the file itself otherwise)."""
+    where = ("components", name, "file")
+    try:
+        size = os.stat(path).st_size
+        if size > files.MAX_MODEL_BYTES:
+            return [Diagnostic("E306", f"components.{name}.file", f"component file "
+                               f"'{ref.file}' is larger than {files.MAX_MODEL_BYTES >> 20} MiB",
+                               document.locate(where), got=f"{size} bytes",
+                               hint="split it into smaller components")]
+        return with_bodies(load_file(path))
+    except (UsageError, OSError) as error:
+        message = f"cannot read component file '{ref.file}': {_reason(error)}"
+        return [Diagnostic("E300", f"components.{name}.file", message, document.locate(where),
+                           hint="the path is relative to this file")]
+    except ModelError as error:
+        return error.diagnostics
+
+
+def _reason(error: Exception) -> str:
+    if isinstance(error, FileNotFoundError) or "no such file" in str(error):
+        return "no such file"
+    return getattr(error, "strerror", None) or str(error)
 
 
 def component_key(document: Document, name: str, ref) -> tuple:
@@ -232,6 +270,8 @@ class Instances:
 
     def instance(self, path: Path, given: spec.Instance) -> bool:
         """Resolve, place and add one instance; False when it has findings."""
+        if self.context.budget.exhausted:  # the model is too large (reported once, E105)
+            return False
         definition = self.scope.definitions.get(given.component)
         if definition is None:
             hint = did_you_mean(given.component, self.scope.definitions)
@@ -270,7 +310,10 @@ class Instances:
     def document(self, home: Document, name: str, ref):
         if isinstance(ref, spec.ComponentFile):
             return file_document(self.context, home, name, ref)
-        return inline_document(home, name), []
+        key = (id(home), name)
+        if key not in self.context.inline:  # one scan of the home's source map per component
+            self.context.inline[key] = (home, inline_document(home, name))
+        return self.context.inline[key][1], []
 
     def frame(self, path: Path, given: spec.Instance) -> placement.Frame | None:
         origin = self.check.vector((*path, "position"), given.position)
@@ -350,7 +393,7 @@ def compose_document(document: Document, overrides, context: Context,
     check.parameter_values(given.parameters)
     if check.found:
         return None, [*document.diagnostics, *check.found], {}
-    expanded, found = repeat.expand(document, check.parameters)
+    expanded, found = repeat.expand(document, check.parameters, context.budget)
     if expanded is None:
         return None, [*document.diagnostics, *found], {}
     given, found = validate(expanded)

@@ -70,6 +70,13 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
     driver = getattr(given, "driver", None)
     keys = [key for key in DRIVERS if driver is not None and getattr(driver, key) is not None]
     found = {}
+    if driver is not None and not keys:
+        check.error("E100", (*path, "driver"), "a driver needs a motion",
+                    expected=" or ".join(DRIVERS),
+                    hint="write `driver: {angle: ...}` (revolute, cylindrical) or "
+                         "`driver: {displacement: ...}` (translational, cylindrical); leave "
+                         "`driver:` out for a joint that moves freely")
+        found["driver"] = None
     for key in keys:
         where = (*path, "driver", key)
         if given.type not in DRIVERS[key]:

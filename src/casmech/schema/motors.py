@@ -18,11 +18,10 @@ Mismatched and unknown keys, two modes on one motion and a motion driven by both
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 from casmech.errors import did_you_mean
-from casmech.schema import spec
+from casmech.schema import files, spec
 from casmech.schema.antiderivative import NoClosedForm, integral
 from casmech.schema.checker import Checker, failed
 from casmech.schema.resolved import ScalarFunction
@@ -42,11 +41,17 @@ NO_CLOSED_FORM_HINT = ("write the motion itself as `{position}:` (position mode)
 
 # ---------------------------------------------------------------------------------- tables
 def table(check: Checker, where: tuple, given: spec.Table):
-    """The function of t a `{table: ...}` value gives (None: reported)."""
-    base = Path(check.doc.file).parent
+    """The function of t a `{table: ...}` value gives (None: reported). The file must be in
+    the model's folder (schema/files.py)."""
     try:
-        return table_function(base / given.table, given.column, given.interpolation,
-                              given.periodic, check.doc.locate(where))
+        path = files.resolve(check.doc.file, given.table, must_exist=False)
+    except files.NotAllowed as error:
+        check.error("E305", (*where, "table"), f"table file '{given.table}': {error.reason}",
+                    hint=error.hint)
+        return None
+    try:
+        return table_function(path, given.column, given.interpolation, given.periodic,
+                              check.doc.locate(where))
     except TableError as error:
         key_path = (*where, error.key)
         check.error(error.code, key_path, error.message, hint=error.hint, got=error.got)

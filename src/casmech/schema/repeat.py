@@ -29,8 +29,14 @@ SECTIONS = ("bodies", "joints", "forces", "instances")
 NAME_KEYS = frozenset({"name", "body_i", "body_j", "body", "joint"})  # `{expr}` substituted
 TEXT_KEYS = NAME_KEYS | {"type", "frame", "component", "mesh", "axis", "file"}  # not expressions
 BRACES = re.compile(r"\{([^{}]*)\}")
-MAX_COPIES = 10000  # copies of one item: a bound gone wrong should not hang the loader
+MAX_COPIES = 10_000  # copies of one item: a bound gone wrong should not hang the loader
+MAX_ITEMS = 20_000  # bodies, joints, forces and instances of a whole model, the members of
+#                    instances (and theirs) included: each costs ~1 ms to check, and the
+#                    compiler's time grows faster than linearly beyond (2000 bodies: 27 s)
 INTEGRAL = 1e-9  # |x - round(x)| accepted as an integer
+TOO_MANY = (f"the model has more than {MAX_ITEMS} bodies, joints, forces and instances (the "
+            "members of instances included)")
+TOO_MANY_HINT = "a model this large takes too long to check and compile"
 
 
 @dataclass(frozen=True)
@@ -51,6 +57,21 @@ class ExpandedDocument(Document):
                 return super().source_in_scalar(path, start - delta)
             delta += new_length - old_length
         return super().source_in_scalar(path, offset - delta)
+
+
+@dataclass
+class Budget:
+    """Items a whole model may still make (shared by the documents of its components)."""
+
+    left: int = MAX_ITEMS
+
+    def spend(self, count: int) -> bool:
+        self.left -= count
+        return self.left >= 0
+
+    @property
+    def exhausted(self) -> bool:
+        return self.left < 0
 
 
 class _Findings:
@@ -126,11 +147,13 @@ def bindings(report: _Findings, path: Path, given: Any,
             high = integer(report, (*where, "to"), item["to"], env, what="repeat bound")
             if low is None or high is None:
                 return None
-            grown += [{**outer, name: value} for value in range(low, high + 1)]
-            if len(grown) > MAX_COPIES:
-                report.error("E103", (*where, "to"), f"repeat makes more than {MAX_COPIES} copies",
-                             got=f"from {low} to {high}")
+            if len(grown) + max(0, high - low + 1) > MAX_COPIES:  # counted before made
+                report.error("E105", (*where, "to"), f"repeat makes more than {MAX_COPIES} "
+                             "copies of one item", got=f"from {low} to {high}"
+                             + (f" for each of {len(combos)} outer copies" if outer else ""),
+                             hint="check the bounds (`to` is inclusive)")
                 return None
+            grown += [{**outer, name: value} for value in range(low, high + 1)]
         combos = grown
     return combos
 
@@ -224,8 +247,26 @@ def has_repeat(data: Mapping[str, Any]) -> bool:
                                        for k in NAME_KEYS) for item in items)
 
 
-def expand(document: Document, parameters: Mapping[str, float]):
-    """(the expanded document, findings); the document must have passed validation."""
+def too_many(document: Document) -> list[Diagnostic]:
+    """E105 when the items written in a model without repeat or instances exceed MAX_ITEMS
+    (at the item that goes past it)."""
+    count = 0
+    for section in SECTIONS:
+        items = document.data.get(section)
+        if not isinstance(items, list):
+            continue
+        if count + len(items) > MAX_ITEMS:
+            path = (section, MAX_ITEMS - count)
+            return [Diagnostic("E105", format_path(path), TOO_MANY, document.locate(path),
+                               hint=TOO_MANY_HINT)]
+        count += len(items)
+    return []
+
+
+def expand(document: Document, parameters: Mapping[str, float], budget: Budget | None = None):
+    """(the expanded document, findings); the document must have passed validation. Every
+    item made is spent from `budget` (E105 when it runs out)."""
+    budget = Budget() if budget is None else budget
     report = _Findings(document)
     copier = _Copier(report, parameters)
     data = dict(document.data)
@@ -238,6 +279,12 @@ def expand(document: Document, parameters: Mapping[str, float]):
             path = (section, j)
             combos = ([{}] if "repeat" not in item
                       else bindings(report, path, item["repeat"], parameters))
+            if budget.exhausted:  # reported where it ran out
+                return None, report.found
+            if not budget.spend(len(combos or ())):
+                report.error("E105", path, TOO_MANY, hint=TOO_MANY_HINT,
+                             got=f"{len(combos)} copies" if "repeat" in item else None)
+                return None, report.found
             for values in combos or ():
                 items[(section, len(copies))] = (j, values)
                 copies.append(copier.copy(item, path, (section, len(copies)), values))

@@ -10,33 +10,39 @@ import math
 from collections.abc import Mapping
 
 from casmech.errors import Diagnostic
-from casmech.schema import motors, resolved, spec
+from casmech.schema import files, limits, motors, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
 from casmech.schema.loader import Document, Path
 
-ANALYSIS_RULES = {  # key -> problem with the settings `v`, or None
-    "t_end": lambda v: "t_end must be positive" if v["t_end"] <= 0 else None,
-    "output_step": lambda v: "output_step must be positive" if v["output_step"] <= 0 else None,
-    "rtol": lambda v: "rtol must be positive" if v["rtol"] <= 0 else None,
-    "atol": lambda v: "atol must be positive" if v["atol"] <= 0 else None,
+ANALYSIS_HINTS = {
+    "output_step": "a larger output_step or a shorter t_end (output_step is the interval of "
+                   "the rows written, not the integrator's step)",
+    "rtol": "1e-6 (quick) to 1e-10 (tight); the default is 1e-8",
+    "atol": "the absolute error allowed in metres and radians; the default is 1e-10",
 }
-STEP_RULE = "output_step must not exceed t_end"
+
+
+def result_columns(bodies: int, joints: int) -> int:
+    """Columns of the results table (MODEL_FORMAT.md's results contract)."""
+    return 3 + 19 * bodies + 6 * joints
 
 
 def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
+    """The analysis settings, within limits.analysis_problems (E409); call it once the bodies
+    and joints are known (the output grid is bounded in rows x results columns)."""
     path: Path = ("analysis",)
     keys = ("t_end", "output_step", "rtol", "atol")
     values = {key: check.number((*path, key), getattr(given, key)) for key in keys}
     if failed(values.values()):
         return None
-    problems = {key: rule(values) for key, rule in ANALYSIS_RULES.items() if rule(values)}
-    if not problems and values["output_step"] > values["t_end"]:
-        problems["output_step"] = STEP_RULE
+    columns = result_columns(len(check.bodies), len(check.joint_types))
+    problems = limits.analysis_problems(values, columns)
     for key, problem in problems.items():
-        check.error("E409", (*path, key), problem, got=f"{values[key]:g}")
+        check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
+                    hint=ANALYSIS_HINTS.get(key))
     options = {"formulation": given.formulation, "stabilization": given.stabilization,
                "method": given.method}
     if given.method == "adams" and given.formulation in ("rp", "romega"):
@@ -71,6 +77,12 @@ def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimati
                               "estimated parameter") for name in given.bounds]
     weights = {name: check.number((*path, "weights", name), w) for name, w in given.weights.items()}
     bounds = _pairs(check, (*path, "bounds"), given.bounds)
+    try:
+        files.resolve(check.doc.file, given.data, must_exist=False)
+    except files.NotAllowed as error:
+        check.error("E305", (*path, "data"), f"data file '{given.data}': {error.reason}",
+                    hint=error.hint)
+        names.append(False)
     if not all(names) or failed([*weights.values(), bounds]):
         return None
     return resolved.Estimation(tuple(given.parameters), given.data, given.outputs, weights, bounds,
@@ -122,6 +134,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:
     check.parameter_values(given.parameters)
+    if ("name",) in check.doc.source_map.values:  # written (an inline component's is its key)
+        check.valid_name(("name",), given.name, check.doc.locate(("name",)), (), "")
     check.unique_names(given)
     gravity = check.numbers(("gravity",), given.gravity)
     bodies = []

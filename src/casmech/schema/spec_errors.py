@@ -203,13 +203,51 @@ TRANSLATE = {
 }
 
 
+def _admits_none(annotation: Any) -> bool:
+    annotation = _strip(annotation)
+    return get_origin(annotation) in (Union, UnionType) and type(None) in get_args(annotation)
+
+
+def _child(parent: Any, step: str | int) -> Any:
+    """One step down the validated model along a YAML path (None: not there)."""
+    if isinstance(parent, BaseModel):
+        names = {info.alias or name: name for name, info in type(parent).model_fields.items()}
+        return getattr(parent, names[step]) if step in names else None
+    if isinstance(parent, dict):
+        return parent.get(step)
+    if isinstance(parent, tuple | list) and isinstance(step, int) and step < len(parent):
+        return parent[step]
+    return None
+
+
+def _written_null(model: ModelSpec, document: Document, path: Path) -> Diagnostic | None:
+    """E102 for a key written as `null`/`~` that takes no null: an empty value (`joints:`)
+    means "the default", an explicit null is a mistake (`joints: null` is not "no joints")."""
+    parent: Any = model
+    for step in path[:-1]:
+        parent = _child(parent, step)
+    if not isinstance(parent, BaseModel):
+        return None  # a mapping of names (component parameters: `m: ~` has no default)
+    fields = {info.alias or name: info for name, info in type(parent).model_fields.items()}
+    info = fields.get(str(path[-1]))
+    if info is None or _admits_none(info.annotation):
+        return None
+    return Diagnostic("E102", format_path(path), "wrong type", document.locate(path),
+                      expected="a value (leave it empty, or remove the key, for the default)",
+                      got="null")
+
+
 def validate(document: Document) -> tuple[ModelSpec | None, list[Diagnostic]]:
     """The ModelSpec of a document, or None and the structural diagnostics."""
     try:
-        return ModelSpec.model_validate(document.data), []
+        model = ModelSpec.model_validate(document.data)
     except ValidationError as error:
         found = (
             TRANSLATE.get(item["type"], _wrong_type)(_Error(item, document))
             for item in error.errors(include_url=False)
         )
         return None, [diagnostic for diagnostic in found if diagnostic is not None]
+    nulls = [_written_null(model, document, path) for path in sorted(
+        document.source_map.nulls, key=lambda p: document.locate(p).line)]
+    nulls = [diagnostic for diagnostic in nulls if diagnostic is not None]
+    return (None, nulls) if nulls else (model, [])

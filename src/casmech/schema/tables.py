@@ -21,6 +21,7 @@ antiderivative (speed motors driven by a table) is the same kind of function, of
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
@@ -30,16 +31,22 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import did_you_mean
+from casmech.schema import files
 from casmech.schema.resolved import ScalarFunction
 
 MIN_ROWS = {"linear": 2, "cubic": 4}  # not-a-knot needs four samples; periodic cubic three
 MIN_ROWS_PERIODIC = {"linear": 2, "cubic": 3}
+MAX_ROWS = 20_000  # samples of a table (20 s at 1 kHz): each is a piece of the CasADi function
+MAX_BYTES = files.MAX_TABLE_BYTES
 PERIODIC_MATCH = 1e-9  # |y_last - y_first| allowed, relative to max |y| (and absolute for 0)
+COLUMN = re.compile(r"[A-Za-z_][A-Za-z0-9_.]{0,63}\Z")  # a header cell shown in a hint
 
 
 class TableError(Exception):
     """A problem with a table; `key` is the YAML key it belongs to (table, column, ...), `code`
-    its diagnostic code (E300: a file or column that does not exist, E103: bad contents)."""
+    its diagnostic code (E300: a file or column that does not exist, E305: a path outside the
+    model's folder or not a file, E306: too large, E103: bad contents). Messages never quote
+    the file's contents beyond column names."""
 
     def __init__(self, key: str, message: str, hint: str | None = None, got: str | None = None,
                  code: str = "E103"):
@@ -55,32 +62,64 @@ def _number_rows(lines: list[tuple[int, str]], width: int) -> np.ndarray:
         try:
             values = [float(cell) for cell in cells]
         except ValueError:
-            raise TableError("table", f"line {line_number} is not a row of numbers",
-                             got=line.strip()[:60]) from None
+            bad = next(k for k, cell in enumerate(cells) if not _is_number(cell))
+            raise TableError("table", f"line {line_number} is not a row of numbers (value "
+                             f"{bad + 1} of {len(cells)} is not a number)") from None
         if len(values) != width:
             raise TableError("table", f"line {line_number} has {len(values)} values, the header "
-                             f"{width}", got=line.strip()[:60])
+                             f"{width}") from None
         rows.append(values)
     return np.array(rows, float).reshape(len(rows), width)
 
 
-def read_columns(path: Path) -> dict[str, np.ndarray]:
-    """Columns of a CSV file by header name (blank lines and lines starting with # skipped)."""
+def _is_number(text: str) -> bool:
     try:
-        text = path.read_text(encoding="utf-8")
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _text(path: Path) -> str:
+    """The file's text, read up to MAX_BYTES."""
+    try:
+        return files.read_bounded(path, MAX_BYTES).decode("utf-8")
+    except files.TooLarge:
+        raise TableError("table", f"table file '{path.name}' is larger than {MAX_BYTES >> 20} "
+                         "MiB", code="E306", hint=f"at most {MAX_ROWS} rows are used; "
+                         "resample the data") from None
     except FileNotFoundError:
         raise TableError("table", f"table file '{path}' not found", code="E300",
                          hint="the path is relative to the model file's folder") from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise TableError("table", f"cannot read table file '{path}': {error}") from None
-    lines = [(k + 1, line) for k, line in enumerate(text.splitlines())
+    except UnicodeDecodeError:
+        raise TableError("table", f"table file '{path.name}' is not UTF-8 text") from None
+    except OSError as error:
+        raise TableError("table", f"cannot read table file '{path.name}' "
+                         f"({error.strerror or type(error).__name__})") from None
+
+
+def read_columns(path: Path) -> dict[str, np.ndarray]:
+    """Columns of a CSV file by header name (blank lines and lines starting with # skipped)."""
+    lines = [(k + 1, line) for k, line in enumerate(_text(path).splitlines())
              if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
-        raise TableError("table", f"table file '{path}' is empty",
+        raise TableError("table", f"table file '{path.name}' is empty",
                          hint="write a header row (t, columns...) and one row per sample")
+    if len(lines) - 1 > MAX_ROWS:
+        raise TableError("table", f"table file '{path.name}' has {len(lines) - 1} rows, more "
+                         f"than {MAX_ROWS}", code="E306", hint="resample the data")
     header = [name.strip() for name in lines[0][1].split(",")]
     values = _number_rows(lines[1:], len(header))
     return {name: values[:, k] for k, name in enumerate(header)}
+
+
+def _columns_hint(name: str, columns) -> str:
+    """'did you mean' or the header's names; only cells that look like column names are shown
+    (a file that is not a table is not quoted)."""
+    shown = [column for column in columns if COLUMN.match(column)]
+    listed = f"columns: {', '.join(shown[:20])}" if shown else \
+        "its first row is not a header of column names"
+    return did_you_mean(name, shown) or listed
 
 
 def samples(path: Path, column: str, interpolation: str, periodic: bool):
@@ -88,8 +127,8 @@ def samples(path: Path, column: str, interpolation: str, periodic: bool):
     columns = read_columns(path)
     for name, key in (("t", "table"), (column, "column")):
         if name not in columns:
-            hint = did_you_mean(name, columns) or f"columns: {', '.join(columns)}"
-            raise TableError(key, f"no column '{name}' in '{path.name}'", hint=hint, code="E300")
+            raise TableError(key, f"no column '{name}' in '{path.name}'",
+                             hint=_columns_hint(name, columns), code="E300")
     t, y = columns["t"], columns[column]
     needed = (MIN_ROWS_PERIODIC if periodic else MIN_ROWS)[interpolation]
     if len(t) < needed:
@@ -110,28 +149,39 @@ def samples(path: Path, column: str, interpolation: str, periodic: bool):
 
 
 # ----------------------------------------------------------------------------------- splines
+def _sparse_solve(size: int, entries: dict[tuple[int, int], float], rhs) -> np.ndarray:
+    """Solve the sparse system {(row, column): value} x = rhs (CasADi's CSparse: the spline's
+    matrix has three entries per row, so the work and memory grow with the rows, not their
+    square)."""
+    rows, columns = zip(*entries, strict=True)
+    a = ca.DM.triplet(list(rows), list(columns), ca.DM(list(entries.values())), size, size)
+    return np.array(ca.solve(a, ca.DM(rhs), "csparse")).ravel()
+
+
 def _second_derivatives(t: np.ndarray, y: np.ndarray, periodic: bool) -> np.ndarray:
-    """M_k = s''(t_k) of the cubic spline: not-a-knot, or periodic (dense solve)."""
+    """M_k = s''(t_k) of the cubic spline: not-a-knot, or periodic (sparse solve)."""
     n, h = len(t), np.diff(t)
     slope = np.diff(y) / h
+    a: dict[tuple[int, int], float] = {}
     if periodic:  # unknowns M_0..M_{n-2}, M_{n-1} = M_0; the row of M_0 wraps around
         m = n - 1
-        a, rhs = np.zeros((m, m)), np.zeros(m)
+        rhs = np.zeros(m)
         for i in range(m):
             before, after = h[i - 1], h[i]
-            a[i, (i - 1) % m] += before
-            a[i, i] += 2 * (before + after)
-            a[i, (i + 1) % m] += after
+            for column, value in (((i - 1) % m, before), (i, 2 * (before + after)),
+                                  ((i + 1) % m, after)):
+                a[(i, column)] = a.get((i, column), 0.0) + value
             rhs[i] = 6 * (slope[i] - slope[i - 1])
-        second = np.linalg.solve(a, rhs)
+        second = _sparse_solve(m, a, rhs)
         return np.append(second, second[0])
-    a, rhs = np.zeros((n, n)), np.zeros(n)
+    rhs = np.zeros(n)
     for i in range(1, n - 1):
-        a[i, i - 1:i + 2] = h[i - 1], 2 * (h[i - 1] + h[i]), h[i]
+        a.update({(i, i - 1): h[i - 1], (i, i): 2 * (h[i - 1] + h[i]), (i, i + 1): h[i]})
         rhs[i] = 6 * (slope[i] - slope[i - 1])
-    a[0, :3] = h[1], -(h[0] + h[1]), h[0]  # not-a-knot: s''' continuous at t_1
-    a[-1, -3:] = h[-1], -(h[-2] + h[-1]), h[-2]  # ... and at t_{n-2}
-    return np.linalg.solve(a, rhs)
+    # not-a-knot: the third derivative continuous at t_1 and at t_{n-2}
+    a.update({(0, 0): h[1], (0, 1): -(h[0] + h[1]), (0, 2): h[0]})
+    a.update({(n - 1, n - 3): h[-1], (n - 1, n - 2): -(h[-2] + h[-1]), (n - 1, n - 1): h[-2]})
+    return _sparse_solve(n, a, rhs)
 
 
 def spline_coefficients(t, y, interpolation: str, periodic: bool) -> np.ndarray:

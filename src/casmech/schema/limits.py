@@ -1,0 +1,98 @@
+"""Plausibility limits on the numbers of a model (E411) and on its analysis settings (E409).
+
+Every number of a body, joint, force, instance and gravity is bounded in magnitude: a position
+of 1e300 m overflows NumPy's squares and SVDs (a traceback, or a wrong rank with an overflow
+warning), and nothing a mechanism means comes near these bounds. Parameters are not bounded
+(they may be intermediate values); what they evaluate to where they are used is.
+"""
+
+from __future__ import annotations
+
+import math
+
+from casmech.schema.loader import Path
+
+LENGTH = 1e6  # [m] positions, points, offsets and sizes: 1000 km (move the origin instead)
+SPEED = 1e6  # [m/s], [rad/s] initial velocities
+GRAVITY = 1e6  # [m/s^2] 100 000 g
+ANY = 1e12  # anything else: masses [kg], inertias, stiffnesses, forces... (squares stay far
+#             from overflow, and 1e12 is beyond any physical constant of a mechanism)
+
+# the YAML key a number is written under -> (largest magnitude, what it is, unit)
+KEYS: dict[str, tuple[float, str, str]] = {
+    **{key: (LENGTH, "a position or length", "m") for key in (
+        "position", "at", "at_i", "at_j", "s_i", "s_j", "offset", "length", "free_length",
+        "box", "radius")},
+    "velocity": (SPEED, "a velocity", "m/s"),
+    "angular_velocity": (SPEED, "an angular velocity", "rad/s"),
+    "gravity": (GRAVITY, "gravity", "m/s^2"),
+    **{key: (ANY, "a direction's component", "") for key in (
+        "axis", "axis_i", "axis_j", "a_i", "a_j", "c", "x_axis", "y_axis", "z_axis")},
+}
+BOUNDED = frozenset({"bodies", "joints", "forces", "instances", "gravity"})  # first path keys
+
+# analysis settings (E409)
+MIN_RTOL, MAX_RTOL = 1e-14, 0.1  # below ~100 unit roundoffs IDAS/CVODES stop with "too much
+#                                  accuracy requested"; above 10% an integrator controls nothing
+MIN_ATOL, MAX_ATOL = 1e-20, 1.0  # the error weight 1/(rtol |y| + atol) stays finite
+MAX_T_END = 1e9  # [s] 30 years of simulated time
+MAX_ROWS = 1_000_000  # rows of the output grid (t_end / output_step + 1)
+MAX_VALUES = 20_000_000  # rows x results columns: the results table passes through CasADi's
+#                          DM -> list -> NumPy conversion at ~50 bytes a value (1 GB here)
+
+
+def limit(path: Path | str) -> tuple[float, str, str] | None:
+    """(largest magnitude, what, unit) of the number at `path`, or None (not bounded)."""
+    if not isinstance(path, tuple) or not path or path[0] not in BOUNDED:
+        return None
+    key = next((step for step in reversed(path) if isinstance(step, str)), "")
+    return KEYS.get(key, (ANY, "a value", "SI units"))
+
+
+def implausible(path: Path | str, value: float) -> tuple[str, str] | None:
+    """(the problem, what is expected) of `value` at `path`, or None when it is plausible."""
+    bound = limit(path)
+    if bound is None or abs(value) <= bound[0]:
+        return None
+    unit = f" {bound[2]}" if bound[2] else ""
+    return (f"{bound[1]} of magnitude {abs(value):.3g}{unit} is implausible",
+            f"a magnitude of at most {bound[0]:g}{unit}")
+
+
+def grid_rows(t_end: float, output_step: float) -> float:
+    """Rows of the output grid from 0 to t_end every output_step (as a float: may be huge)."""
+    return math.floor(t_end / output_step + 1e-9) + 2 if output_step > 0 else math.inf
+
+
+def analysis_problems(settings: dict[str, float], columns: int,
+                      step_within: bool = True) -> dict[str, str]:
+    """{setting: problem} of t_end, output_step, rtol, atol (non-positive, not finite, out of
+    range, or an output grid of more than MAX_ROWS rows or MAX_VALUES values; with
+    `step_within`, an output_step larger than t_end)."""
+    problems: dict[str, str] = {}
+    for key, value in settings.items():
+        if value is None:
+            continue
+        if not math.isfinite(value):
+            problems[key] = f"{key} must be a finite number"
+        elif value <= 0:
+            problems[key] = f"{key} must be positive"
+    t_end, step = settings.get("t_end"), settings.get("output_step")
+    rtol, atol = settings.get("rtol"), settings.get("atol")
+    if "t_end" not in problems and t_end is not None and t_end > MAX_T_END:
+        problems["t_end"] = f"t_end must be at most {MAX_T_END:.0e} s"
+    if "rtol" not in problems and rtol is not None and not MIN_RTOL <= rtol <= MAX_RTOL:
+        problems["rtol"] = f"rtol must be between {MIN_RTOL:g} and {MAX_RTOL:g}"
+    if "atol" not in problems and atol is not None and not MIN_ATOL <= atol <= MAX_ATOL:
+        problems["atol"] = f"atol must be between {MIN_ATOL:g} and {MAX_ATOL:g}"
+    if problems.keys() & {"t_end", "output_step"} or t_end is None or step is None:
+        return problems
+    if step_within and step > t_end:
+        problems["output_step"] = "output_step must not exceed t_end"
+        return problems
+    rows = grid_rows(t_end, step)
+    if rows > MAX_ROWS or rows * columns > MAX_VALUES:
+        problems["output_step"] = (
+            f"the output grid would have {rows:.3g} rows of {columns} columns; at most "
+            f"{MAX_ROWS} rows and {MAX_VALUES:.0e} values")
+    return problems

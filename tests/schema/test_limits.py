@@ -1,0 +1,102 @@
+"""Plausibility limits (schema/limits.py): magnitudes (E411), analysis settings and the output
+grid (E409), and the other nonsense a model must not get past `check` with."""
+
+import pytest
+
+from casmech.errors import ModelError
+from casmech.schema import limits, load_model_text
+
+MODEL = """\
+casmech: 1
+name: pend
+gravity: [0, 0, -9.81]
+bodies:
+  - name: bar
+    mass: 1
+    inertia: [1, 1, 1]
+    position: [0, 0, -1]
+    velocity: [0, 0, 0]
+joints:
+  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0]}
+forces:
+  - {name: push, type: force, body: bar, value: [0, 0, 0]}
+analysis: {type: dynamics, t_end: 1, output_step: 0.01, rtol: 1e-8, atol: 1e-10}
+"""
+
+
+def findings(text: str) -> list[tuple[str, str]]:
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    return [(d.code, d.path) for d in caught.value.diagnostics]
+
+
+def test_the_model_is_fine():
+    load_model_text(MODEL)
+
+
+@pytest.mark.parametrize("old, new, path", [
+    ("position: [0, 0, -1]", "position: [0, 0, -2e6]", "bodies[0].position[2]"),
+    ("velocity: [0, 0, 0]", "velocity: [1e300, 0, 0]", "bodies[0].velocity[0]"),
+    ("mass: 1", "mass: 1e300", "bodies[0].mass"),
+    ("inertia: [1, 1, 1]", "inertia: [1e13, 1e13, 1e13]", "bodies[0].inertia[0]"),
+    ("gravity: [0, 0, -9.81]", "gravity: [0, 0, -1e300]", "gravity[2]"),
+    ("axis: [1, 0, 0]", "axis: [1e300, 1e300, 0]", "joints[0].axis[0]"),
+    ("at: [0, 0, 0]", "at: [0, 0, 1e7]", "joints[0].at[2]"),
+    ("value: [0, 0, 0]", "value: [0, 0, '1e20 * (1 + t)']", "forces[0].value[2]"),
+])
+def test_magnitudes_beyond_the_limits_are_located(old, new, path):
+    found = findings(MODEL.replace(old, new))
+    assert ("E411", path) in found and {code for code, _ in found} == {"E411"}
+
+
+def test_parameters_are_not_bounded_where_they_are_used_they_are():
+    text = MODEL.replace("name: pend", "name: pend\nparameters: {big: 1e30, L: big / 1e30}")
+    load_model_text(text.replace("position: [0, 0, -1]", "position: [0, 0, -L]"))
+    assert findings(text.replace("mass: 1", "mass: big")) == [("E411", "bodies[0].mass")]
+
+
+@pytest.mark.parametrize("setting, value, words", [
+    ("rtol", "10", "between"), ("rtol", "1e-300", "between"), ("atol", "1e-300", "between"),
+    ("atol", "0", "must be positive"), ("t_end", "1e300", "at most"),
+    ("output_step", "1e-9", "output grid would have"),
+])
+def test_analysis_settings_within_limits(setting, value, words):
+    text = MODEL.replace(f"{setting}: ", f"{setting}: {value}, _was: ")
+    text = text.replace(", _was: " + {"rtol": "1e-8", "atol": "1e-10", "t_end": "1",
+                                       "output_step": "0.01"}[setting], "")
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.path) == ("E409", f"analysis.{setting}")
+    assert words in diagnostic.message and diagnostic.source.line == 14
+
+
+def test_output_grid_counts_rows_and_columns():
+    """1e5 rows of a 1-body, 1-joint model are fine; the same grid on 2000 bodies is not."""
+    columns = 3 + 19 + 6
+    assert limits.analysis_problems({"t_end": 1e3, "output_step": 0.01}, columns) == {}
+    assert "output_step" in limits.analysis_problems({"t_end": 1e3, "output_step": 0.01},
+                                                      3 + 19 * 2000)
+    assert "output_step" in limits.analysis_problems({"t_end": 1e4, "output_step": 1e-3},
+                                                      columns)
+
+
+JOINT = ("  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], "
+         "axis: [1, 0, 0]}\n")
+
+
+@pytest.mark.parametrize("old, new, expected", [
+    ("name: pend", "name: my pendulum", ("E303", "name")),
+    ("axis: [1, 0, 0]}", "axis: [1, 0, 0], driver: {}}", ("E100", "joints[0].driver")),
+    ("joints:\n" + JOINT, "joints: null\n", ("E102", "joints")),
+    ("gravity: [0, 0, -9.81]", "gravity: ~", ("E102", "gravity")),
+])
+def test_nonsense_is_reported(old, new, expected):
+    assert expected in findings(MODEL.replace(old, new))
+
+
+def test_an_empty_value_is_the_default_a_null_is_not():
+    """`joints:` left empty means the default (no joints); `velocity: ~` is allowed where the
+    key itself is optional without a default value."""
+    assert load_model_text(MODEL.replace("joints:\n" + JOINT, "joints:\n")).joints == ()
+    load_model_text(MODEL.replace("velocity: [0, 0, 0]", "velocity: ~"))
