@@ -12,6 +12,7 @@ import casmech
 from casmech import codegen
 from casmech.cli import main
 from casmech.codegen import cache
+from casmech.codegen.manifest import MANIFEST
 from tests.conftest import MODELS as MODELS_DIR
 
 from .conftest import MODEL
@@ -105,7 +106,9 @@ def test_two_processes_building_one_model(tmp_path, interpreted, toolchain):
 
 def test_cache_info_and_clear(tmp_path, compiled, cache_root, monkeypatch, capsys):
     root = tmp_path / "c"
-    entry = cache.entries(cache_root)[0]
+    # the model's bundle (the session cache also holds the joint formulation's functions)
+    entry = next(e for e in cache.entries(cache_root)
+                 if "codegen_test" in (e / MANIFEST).read_text())
     shutil.copytree(entry, root / entry.name)
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(root))
     assert main(["cache", "info"]) == 0
