@@ -59,7 +59,8 @@ def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
                       "functions, which is slower; install gcc to compile models", stacklevel=2)
         mode = "interpreted"
-    if mode == "interpreted" or (mode == "auto" and codegen.auto_mode(model) == "interpreted"):
+    if mode == "interpreted" or (mode == "auto" and codegen.auto_mode(
+            model, background=True) == "interpreted"):
         return build_functions(lower(model))
     try:
         return codegen.compiled(model)

@@ -8,6 +8,7 @@ import pytest
 
 from casmech import codegen
 from casmech.codegen import generate, manifest, mapped
+from casmech.compiler import dae
 from casmech.compiler.lower import lower
 
 from .test_mapped import SUBSET
@@ -81,12 +82,14 @@ def test_jacobians_through_the_library_equal_ad(compiled, interpreted):
 
 
 def test_manifest_describes_every_function(build_dir, interpreted, model):
-    """Names, sizes and sparsity in manifest.json rebuild the functions' own patterns (those
-    code generation compiled: codegen.mapped); the exported library also holds the DAE
-    residuals."""
-    entries = {e["name"]: e for e in manifest.read(build_dir)["functions"]}
-    built = mapped.mapped_functions(lower(model), residuals=True)
-    residuals = {name: f for name, f in built.items() if name.startswith("dae_")}
+    """Names, sizes, sparsity and library in manifest.json rebuild the functions' own patterns
+    (those code generation compiled: codegen.mapped, and the DAE residuals of
+    codegen.residuals, each in a library of its own)."""
+    info = manifest.read(build_dir)
+    entries = {e["name"]: e for e in info["functions"]}
+    ir = lower(model)
+    built = {**mapped.mapped_functions(ir),
+             **{name: oracle[name] for name, oracle in codegen.dae_oracles(ir).items()}}
     assert set(entries) == set(built) == {*interpreted.functions, *RESIDUALS}
     for name, function in built.items():
         entry = entries[name]
@@ -94,25 +97,47 @@ def test_manifest_describes_every_function(build_dir, interpreted, model):
         assert [o["name"] for o in entry["outputs"]] == function.name_out()
         for k, output in enumerate(entry["outputs"]):
             assert manifest.sparsity(output) == function.sparsity_out(k)
-        assert entry["jacobian"] == (name in generate.DIFFERENTIATED or name in residuals)
+        assert entry["jacobian"] == (name in generate.DIFFERENTIATED)
         assert entry["forward_reverse"] == (name in generate.DIRECTIONAL)
+        library = generate.dae_library(name) if name in RESIDUALS else info["library"]
+        assert entry["library"] == library and (build_dir / library).is_file()
 
 
-def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted):
-    """The DAE residuals (both stabilizations, both formulations) of the compiled bundle (what
-    IDAS integrates) and their Jacobians equal compiler.dae over the interpreted bundle."""
-    library = compiled.functions
-    rng = np.random.default_rng(11)
-    for name, want in generate.dae_functions(interpreted.functions).items():
-        got = library[name]
-        assert got.name_in() == want.name_in() and got.name_out() == want.name_out()
+def _sx_blocks(residual: ca.Function) -> ca.Function:
+    """jacF as casadi's IDAS interface builds it for an SX DAE."""
+    symbols = [ca.SX.sym(n, residual.sparsity_in(k)) for k, n in enumerate(residual.name_in())]
+    ode, alg = residual(*symbols)
+    x, z = symbols[1], symbols[2]
+    return ca.Function("jacF", symbols, [ca.jacobian(ode, x), ca.jacobian(alg, x),
+                                         ca.jacobian(ode, z), ca.jacobian(alg, z)])
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted, build_dir, seed):
+    """The compiled DAEs (both stabilizations, both formulations) are what IDAS integrates:
+    with the integrator's signature, and IDAS takes daeF and jacF from their libraries; their
+    values equal compiler.dae over the interpreted bundle and its SX Jacobian."""
+    rng = np.random.default_rng(seed)
+    for name in RESIDUALS:
+        form, kind = name.split("_")[-1], "ggl" if "ggl" in name else "projection"
+        want = dae.residual(interpreted.functions, form, kind)
+        got = compiled[name]
+        assert got.name_in() == ca.dyn_in() and got.name_out() == ca.dyn_out()
+        integrator = ca.integrator("i", "idas", dae.problem(got), 0.0, [0.1])
+        dae_f, jac_f = integrator.get_function("daeF"), integrator.get_function("jacF")
+        assert dae_f.class_name() == jac_f.class_name() == "External"
+        for function in (got, dae_f):  # Jacobian patterns from the library, not dense
+            assert function.jac_sparsity(1, 1) == jac_f.sparsity_out(1), name
         inputs = _random_inputs(want, rng)
-        for a, b in zip(got.call(inputs), want.call(inputs), strict=True):
-            # same operations: the issue's compiled-vs-interpreted bound
-            np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12)
-        symbols = [ca.MX.sym(n, want.sparsity_in(k)) for k, n in enumerate(want.name_in())]
-        jacobians = [ca.Function("j", symbols, [ca.jacobian(ca.vcat(f.call(symbols)),
-                                                            ca.vcat(symbols))])
-                     for f in (got, want)]
-        a, b = (j.call(inputs)[0].full() for j in jacobians)
-        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)  # same bound
+        m = dae.sizes(interpreted.functions, form)[2]
+        inputs[3][1:] = rng.uniform(0.5, 2.0, want.nnz_in(3) - 1)  # row scales s (, s_phi)
+        inputs[3][1:1 + m] = rng.integers(0, 2, m)  # w: rows kept or masked
+        # same equations, sums in another order: the issue's compiled-vs-interpreted bound
+        for a, b in zip(got.call([*inputs, ca.DM(0, 1)])[:2], want.call(inputs), strict=True):
+            np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12, err_msg=name)
+        for a, b in zip(dae_f.call([*inputs, ca.DM(0, 1)]), want.call(inputs), strict=True):
+            np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12, err_msg=name)
+        blocks = _sx_blocks(want).call(inputs)
+        for a, b in zip(jac_f.call([*inputs, ca.DM(0, 1)]), blocks, strict=True):
+            np.testing.assert_allclose(ca.densify(a).full(), ca.densify(b).full(), rtol=1e-12,
+                                       atol=1e-12, err_msg=name)  # the same bound

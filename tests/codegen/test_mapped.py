@@ -1,10 +1,8 @@
 """The bundle code generation compiles (codegen.mapped: every function from mapped kernels)
 equals the unrolled SX bundle (compiler.functions, an independent construction of the same
-equations): values on random inputs, names, sparsity; the DAE residuals dae_rp/dae_romega
-(compiler.dae over each bundle) and their Jacobians in value and sparsity (what IDAS uses);
-and the kernels' code does not grow with the number of bodies."""
+equations): values on random inputs, names, sparsity; and the code (with the DAE residuals of
+codegen.residuals, tested in test_residuals.py) does not grow with the number of bodies."""
 
-import itertools
 from pathlib import Path
 
 import casadi as ca
@@ -12,9 +10,8 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech import codegen
 from casmech.codegen import forces, generate, kernels, mapped
-from casmech.compiler import dae
-from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.lower import lower
 
 from .conftest import MODEL
@@ -109,52 +106,18 @@ def test_mapped_functions_equal_unrolled(name):
     _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
 
 
-def _compare_residuals(got: dict, unrolled: dict) -> None:
-    """dae_<form> of the mapped bundle vs compiler.dae over the unrolled one: values, and the
-    Jacobian (CasADi's AD of each) in value and sparsity, block by block."""
-    rng = np.random.default_rng(5)
-    for form, kind in itertools.product(FORMULATIONS, dae.STABILIZATIONS):
-        reference = dae.residual(unrolled, form, kind)
-        mine = got[reference.name()]
-        assert mine.name_in() == reference.name_in() and mine.size_in(3) == reference.size_in(3)
-        inputs = _random(reference, rng)
-        for a, b in zip(mine.call(inputs), reference.call(inputs), strict=True):
-            _close(a, b, reference.name())
-        jac_mine, jac_reference = mine.jacobian(), reference.jacobian()
-        for k in range(jac_reference.n_out()):
-            assert jac_mine.sparsity_out(k) == jac_reference.sparsity_out(k), (
-                form, jac_reference.name_out(k))
-        inputs = _random(jac_reference, rng)
-        for k, (a, b) in enumerate(zip(jac_mine.call(inputs), jac_reference.call(inputs),
-                                       strict=True)):
-            _close(a, b, f"{reference.name()} {jac_reference.name_out(k)}")
-
-
-@pytest.mark.parametrize("name", ["codegen_test", "slider_crank", "flyball_governor"])
-def test_dae_residuals_and_jacobians_equal_unrolled(name):
-    model = MODELS[name]()
-    _compare_residuals(mapped.mapped_functions(lower(model), residuals=True),
-                       casmech.compile(model).functions)
-
-
 def test_vectors_as_data_keep_values(monkeypatch):
-    """Past BAKE_LIMIT geometries the rows' vectors are kernel inputs: the same values, and
-    patterns that contain the unrolled ones (products of constants no longer cancel)."""
+    """Past BAKE_LIMIT geometries the rows' vectors are kernel inputs: the same values."""
     monkeypatch.setattr(kernels, "BAKE_LIMIT", 0)
     model = MODELS["slider_crank"]()
     ir = lower(model)
     assert all(key.values is None for key in kernels.row_keys(ir))
-    got, want = mapped.mapped_functions(ir, residuals=True), casmech.compile(model).functions
+    got, want = mapped.mapped_functions(ir), casmech.compile(model).functions
     rng = np.random.default_rng(9)
     for name, reference in want.items():
         inputs = _random(reference, rng)
         for a, b in zip(got[name].call(inputs), reference.call(inputs), strict=True):
             _close(a, b, name)
-    for form, kind in itertools.product(FORMULATIONS, dae.STABILIZATIONS):
-        reference = dae.residual(want, form, kind)
-        jac_mine, jac_reference = got[reference.name()].jacobian(), reference.jacobian()
-        for k in range(jac_reference.n_out()):
-            assert _triplets(jac_reference.sparsity_out(k)) <= _triplets(jac_mine.sparsity_out(k))
 
 
 def test_force_elements_without_a_kernel(monkeypatch):
@@ -171,11 +134,13 @@ def test_force_elements_without_a_kernel(monkeypatch):
 def _code(bodies: int) -> list[str]:
     """The generated C of every function (with the Jacobians code generation adds), without
     the data: constant tables and the numbers in the code (sizes, offsets)."""
-    functions = mapped.mapped_functions(lower(casmech.loads(chain_text(bodies))),
-                                        residuals=True)
+    ir = lower(casmech.loads(chain_text(bodies)))
     generator = ca.CodeGenerator("k.c", {"verbose": False})
-    for group in generate.units(functions).values():
+    for group in generate.units(mapped.mapped_functions(ir)).values():
         for function in group:
+            generator.add(function)
+    for oracle in codegen.dae_oracles(ir).values():  # the DAE residuals (codegen.residuals)
+        for function in oracle.values():
             generator.add(function)
     lines, table = [], False
     for line in generator.dump().splitlines():
@@ -187,8 +152,8 @@ def _code(bodies: int) -> list[str]:
 
 
 def test_code_does_not_grow_with_the_chain():
-    """6 and 24 bodies: the same code but for a few declarations wrapped differently (measured
-    27197 and 27202 lines; casadi lays out work vectors by size); only the numbers and tables
-    grow. (The unrolled code grows with every body.)"""
+    """6 and 24 bodies: the same code but for a few declarations wrapped differently (casadi
+    lays out work vectors by size); only the numbers and tables grow. (The unrolled code grows
+    with every body.)"""
     small, large = _code(6), _code(24)
     assert len(small) > 1000 and abs(len(large) - len(small)) <= 0.001 * len(small)

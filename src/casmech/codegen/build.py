@@ -13,10 +13,10 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-# -O0: a 128-body chain's library builds in 5.8-7.7 s (-O1: 9.7-16 s) and simulates within the
-# issue's 1.5x of the unrolled code (benchmarks/RESULTS_codegen.md); -O1 runs 1.3-2x faster
-# (casmech compile --flags=-O1, or CASMECH_CFLAGS=-O1, where runs outweigh the build).
-DEFAULT_FLAGS = ("-O0",)
+# -O1: the generated functions run 2-3x faster than at -O0 (benchmarks/RESULTS_codegen.md, per
+# call), and a 128-body chain's libraries build in ~6-8 s (-O2: ~10-12 s for 10-20 % faster
+# calls). casmech compile --flags, or CASMECH_CFLAGS, choose others.
+DEFAULT_FLAGS = ("-O1",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
@@ -69,17 +69,26 @@ def _run(command: list[str], cwd: Path) -> None:
                             f"{done.stderr.strip()[-4000:]}")
 
 
-def build_library(sources: list[Path], directory: Path, toolchain: Toolchain) -> Path:
-    """Compile every source to an object (toolchain.jobs at a time) and link LIBRARY."""
+def build_libraries(libraries: dict[str, list[Path]], directory: Path,
+                    toolchain: Toolchain) -> list[Path]:
+    """Compile every source to an object (toolchain.jobs at a time, all libraries in one pool)
+    and link each library (file name -> its sources)."""
     if not available(toolchain):
         raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or set CC, "
                          "or use mode='interpreted' (casmech run --mode interpreted)")
     compiler, flags = shlex.split(toolchain.compiler), list(toolchain.all_flags)
+    sources = [src for group in libraries.values() for src in group]
     commands = [[*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"] for src in sources]
     with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
         list(pool.map(lambda command: _run(command, directory), commands))
-    objects = [src.stem + ".o" for src in sources]
-    _run([*compiler, *flags, "-shared", *objects, "-o", LIBRARY, "-lm"], directory)
-    for obj in objects:
-        (directory / obj).unlink()
-    return directory / LIBRARY
+    for library, group in libraries.items():
+        _run([*compiler, *flags, "-shared", *(src.stem + ".o" for src in group), "-o", library,
+              "-lm"], directory)
+    for src in sources:
+        (directory / (src.stem + ".o")).unlink()
+    return [directory / library for library in libraries]
+
+
+def build_library(sources: list[Path], directory: Path, toolchain: Toolchain) -> Path:
+    """Compile the sources (toolchain.jobs at a time) and link LIBRARY."""
+    return build_libraries({LIBRARY: sources}, directory, toolchain)[0]

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casmech.codegen.elements import assemble
 from casmech.codegen.kernels import Layout, mapped
 from casmech.compiler import eom, euler, motors
 from casmech.compiler.assemble import Coordinates
@@ -203,9 +204,10 @@ def _group(key: ForceKey, members: list[ForceIR], layout: Layout, state) -> tupl
                for c, column in enumerate(cs) if column < layout.n]
     if not entries:
         return ca.MX(layout.n, 1), ca.sum2(energy)
-    rows, cols = zip(*entries, strict=True)
-    sum_into = ca.DM(ca.Sparsity.triplet(layout.n, width * count, list(rows), list(cols)), 1.0)
-    return sum_into @ ca.vec(generalized), ca.sum2(energy)
+    rows, positions = (np.array(items) for items in zip(*entries, strict=True))
+    total = assemble([(layout.n, 1, rows, np.zeros(len(rows), int), positions)],
+                      [generalized])[0]
+    return total, ca.sum2(energy)
 
 
 def motor_reactions(ir: ModelIR, t, q, q_dot) -> tuple:

@@ -13,9 +13,13 @@ DAE's Jacobian exactly the unrolled sparsity: tests/codegen/test_mapped.py.
 
 from __future__ import annotations
 
+import hashlib
+from functools import lru_cache
+
 import casadi as ca
 import numpy as np
 
+from casmech.codegen import elements
 from casmech.codegen import rows as kernels_of
 from casmech.codegen.rows import ROW, V_ROW
 from casmech.compiler.assemble import GROUND_POSE
@@ -230,19 +234,86 @@ def romega_gamma(ir: ModelIR, t, q, v) -> ca.MX:
     return ordered(parts, order)
 
 
+def joint_rows(ir: ModelIR) -> list[list[int]]:
+    """Rows grouped by joint (one element each: their bodies are the same); a row whose bodies
+    differ from the rest of its joint's, and a row of no joint, alone."""
+    out, covered = [], set()
+    for joint in ir.joints:
+        rows = list(joint.rows)
+        pairs = {(ir.primitives[k].body_i, ir.primitives[k].body_j) for k in rows}
+        out += [rows] if len(pairs) == 1 else [[k] for k in rows]
+        covered.update(rows)
+    return [rows for rows in out if rows] + [[k] for k in range(len(ir.primitives))
+                                             if k not in covered]
+
+
+def by_joint_keys(ir: ModelIR) -> dict[tuple, list[list[int]]]:
+    """joint_rows grouped by the tuple of their rows' kernel keys (one kernel per group)."""
+    keys, out = row_keys(ir), {}
+    for rows in joint_rows(ir):
+        out.setdefault(tuple(keys[k] for k in rows), []).append(rows)
+    return out
+
+
+@lru_cache(maxsize=256)
+def joint_reaction(keys: tuple) -> ca.Function:
+    """(x, c, f, lam, s) -> (force, torque) of one joint's rows together (x [14]; c, f, lam:
+    every row's, stacked): the sum of their codegen.rows.reaction."""
+    rows = [kernels_of.reaction(key) for key in keys]
+    c = ca.SX.sym("c", sum(r.nnz_in(1) for r in rows))
+    f, lam, s = ca.SX.sym("f", 3 * len(keys)), ca.SX.sym("lam", len(keys)), ca.SX.sym("s", 3)
+    x = ca.SX.sym("x", ROW)
+    force, torque, start = ca.SX(3, 1), ca.SX(3, 1), 0
+    for k, row in enumerate(rows):
+        pattern = row.sparsity_in(1)
+        f_k, t_k = row(x, ca.SX(pattern, c[start:start + pattern.nnz()]), f[3 * k:3 * k + 3],
+                       lam[k], s)
+        force, torque, start = force + f_k, torque + t_k, start + pattern.nnz()
+    digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
+    return ca.Function(f"joint_reaction_{digest}", [x, c, f, lam, s], [force, torque],
+                       ["x", "c", "f", "lam", "s"], ["force", "torque"])
+
+
 def reactions(ir: ModelIR, t, q, lam) -> tuple:
-    """(force, torque) of every joint on its body_j (3 x joints): each row's contribution from
-    its kernel, summed over the joint's rows by a constant matrix."""
+    """(force, torque) of every joint on its body_j (3 x joints): one kernel call per joint
+    (joint_reaction), each column added into its joint's (codegen.elements.summed)."""
     layout = Layout(ir.n_bodies)
     padded = layout.pad_q(q)
     joint_of = {row: j for j, joint in enumerate(ir.joints) for row in joint.rows}
-    force, torque = ca.MX(3, len(ir.joints)), ca.MX(3, len(ir.joints))
-    for group in groups(ir, layout):
-        points = ca.DM(np.array([ir.joints[joint_of[row]].point_i for row in group.rows],
-                                float).T)
-        f_rows, t_rows = group.call(kernels_of.reaction(group.key), group.x(padded), group.c,
-                                    group.f(t), lam[group.rows].T, points)
-        total = ca.DM(ca.Sparsity.triplet(group.count, len(ir.joints), list(
-            range(group.count)), [joint_of[row] for row in group.rows]), 1.0)
-        force, torque = force + f_rows @ total, torque + t_rows @ total
-    return force, torque
+    forces, torques, columns = [], [], []
+    for keys, members in by_joint_keys(ir).items():
+        first = [ir.primitives[rows[0]] for rows in members]
+        x = ca.reshape(padded[[c for p in first for c in layout.q(p.body_i) + layout.q(p.body_j)]],
+                       ROW, len(members))
+        c = ca.DM(np.array([np.concatenate([np.zeros(0)] + [kernels_of.vectors_of(
+            ir.primitives[k])[list(kernels_of.reaction(key).sparsity_in(1).row())]
+            for k, key in zip(rows, keys, strict=True)]) for rows in members]).reshape(
+            len(members), -1).T)
+        f = ca.horzcat(*[ca.vertcat(*[taylor_or_constant(ir.primitives[k], key, t)
+                                      for k, key in zip(rows, keys, strict=True)])
+                         for rows in members])
+        multipliers = ca.reshape(lam[[k for rows in members for k in rows]], len(keys),
+                                 len(members))
+        points = ca.DM(np.array([ir.joints[joint_of[rows[0]]].point_i if rows[0] in joint_of
+                                 else np.zeros(3) for rows in members], float).T)
+        force, torque = mapped(joint_reaction(keys), len(members))(x, c, f, multipliers,
+                                                                  points)
+        forces.append(force)
+        torques.append(torque)
+        columns += [joint_of.get(rows[0], -1) for rows in members]
+    n_joints = len(ir.joints)
+    keep = [k for k, column in enumerate(columns) if column >= 0]
+    if not keep:
+        return ca.MX(3, n_joints), ca.MX(3, n_joints)
+    rows = np.tile(np.arange(3), len(keep))
+    positions = (3 * np.asarray(keep)[:, None] + np.arange(3)[None, :]).ravel()
+    cols = np.repeat(np.asarray(columns)[keep], 3)
+    return tuple(elements.assemble([(3, n_joints, rows, cols, positions)], parts)[0]
+                 for parts in (forces, torques))
+
+
+def taylor_or_constant(prim, key, t):
+    """[f, f', f''] of a row at t: its Taylor coefficients when f depends on time."""
+    if key.f_class == kernels_of.TIME:
+        return kernels_of.taylor(prim, t)
+    return ca.DM([kernels_of.f_constant(prim), 0.0, 0.0])

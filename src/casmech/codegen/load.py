@@ -1,5 +1,6 @@
-"""A compiled SystemFunctions: casadi.external over a generated library, interchangeable with
-the interpreted bundle (same names, inputs, outputs and sparsity)."""
+"""A compiled SystemFunctions: casadi.external over the generated libraries, interchangeable
+with the interpreted bundle (same names, inputs, outputs and sparsity), plus the DAE residuals
+dae_[ggl_]<formulation> in the form IDAS integrates (codegen.residuals)."""
 
 from __future__ import annotations
 
@@ -28,9 +29,9 @@ def metadata(ir: ModelIR) -> dict:
 
 def externals(directory: Path) -> dict[str, ca.Function]:
     """Every function the manifest of a build directory lists, loaded from its library."""
-    library = str((directory / LIBRARY).resolve())
     entries = manifest.read(directory)["functions"]
-    return {entry["name"]: ca.external(entry["name"], library) for entry in entries}
+    return {entry["name"]: ca.external(entry["name"], str(
+        (directory / (entry.get("library") or LIBRARY)).resolve())) for entry in entries}
 
 
 def load(directory: Path, ir: ModelIR) -> SystemFunctions:

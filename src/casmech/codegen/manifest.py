@@ -9,8 +9,8 @@ import casadi as ca
 
 MANIFEST = "manifest.json"
 # generated with fwd1_<name> and adj1_<name> (codegen.generate); kept here to avoid a cycle
-DIRECTIONAL = frozenset({"mass_matrix", "phi_q", "romega_mass", "romega_jacobian"})
-FORMAT = 1  # bump when the layout of a build directory changes
+DIRECTIONAL = frozenset({"mass_matrix", "phi_q"})
+FORMAT = 2  # bump when the layout of a build directory changes (2: a library per DAE)
 
 
 def _sparsity(sparsity: ca.Sparsity) -> dict:
@@ -30,9 +30,14 @@ def describe(function: ca.Function) -> dict:
     }
 
 
-def write(directory: Path, functions: dict[str, ca.Function], differentiated, info: dict) -> Path:
-    entries = [{**describe(f), "jacobian": name in differentiated,
-                "forward_reverse": name in DIRECTIONAL} for name, f in functions.items()]
+def write(directory: Path, functions: dict[str, ca.Function], differentiated, info: dict,
+          libraries: dict[str, str] | None = None) -> Path:
+    """Every function with its library file (`libraries`: name -> file; default: the
+    bundle's, info["library"]) and whether its derivatives are generated too."""
+    libraries = libraries or {}
+    entries = [{**describe(f), "library": libraries.get(name, info.get("library")),
+                "jacobian": name in differentiated, "forward_reverse": name in DIRECTIONAL}
+               for name, f in functions.items()]
     path = directory / MANIFEST
     path.write_text(json.dumps({"format": FORMAT, **info, "functions": entries}, indent=1))
     return path

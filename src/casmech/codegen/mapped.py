@@ -3,9 +3,9 @@ the bundle code generation compiles. Same names, inputs, outputs and sparsity as
 SX bundle, equal values (tests/codegen/test_mapped.py), and C whose size does not grow with the
 number of bodies, joints or force elements (only index tables and data do).
 
-The DAE residuals dae_[ggl_]rp/romega are compiler.dae.residuals over this bundle: an MX graph
-calling the mapped functions, composed by the very code that composes the interpreted residual,
-and CasADi differentiates it into mapped derivative calls for its Jacobian.
+The DAE residuals are not built over this bundle (compiler.dae over it is an MX graph whose
+Jacobian CasADi evaluates by a forward sweep per colour: 8-11x slower than the interpreted SX
+at -O1, benchmarks/RESULTS_codegen.md) but as sums of elements: codegen.residuals.
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.codegen import bodies, forces, kernels
-from casmech.compiler import dae
 from casmech.compiler.ir import ModelIR
 
 
@@ -88,11 +87,8 @@ def romega_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
     ]
 
 
-def mapped_functions(ir: ModelIR, residuals: bool = False) -> dict[str, ca.Function]:
+def mapped_functions(ir: ModelIR) -> dict[str, ca.Function]:
     """name -> MX Function over mapped kernels, as compiler.functions.build_functions names
-    them; with `residuals`, the DAE residuals too (compiler.dae.residuals over this bundle)."""
+    them."""
     x = _symbols(ir)
-    functions = {f.name(): f for f in rp_functions(ir, x) + romega_functions(ir, x)}
-    if residuals:
-        functions |= dae.residuals(functions)
-    return functions
+    return {f.name(): f for f in rp_functions(ir, x) + romega_functions(ir, x)}

@@ -131,8 +131,12 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
                        ["t", "x", "z", "p"], ["ode", "alg"])
 
 
-def problem(function: ca.Function) -> dict:
-    """The residual Function as casadi.integrator's DAE dictionary (t, x, z, p, ode, alg)."""
+def problem(function: ca.Function) -> dict | ca.Function:
+    """The residual Function as casadi.integrator's DAE dictionary (t, x, z, p, ode, alg); a
+    function that already has the integrator's signature (t, x, z, p, u) -> (ode, alg, quad,
+    zero) as it is (a compiled DAE: IDAS takes daeF and jacF from its library)."""
+    if function.name_in() == ca.dyn_in():
+        return function
     sym = ca.SX if function.is_a("SXFunction") else ca.MX
     args = {name: sym.sym(name, function.sparsity_in(name)) for name in function.name_in()}
     return args | function.call(args)

@@ -14,6 +14,8 @@ row's multiplier.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 import numpy as np
 
@@ -48,10 +50,29 @@ STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem):
 
 
 def joint_system(functions: SystemFunctions) -> JointSystem:
-    """The bundle's joint system, built once per bundle."""
+    """The bundle's joint system, built once per bundle; with a compiled bundle, a tree's ODE
+    and results rows are compiled too (compiled_system)."""
     if "joint_system" not in functions.derived:
-        functions.derived["joint_system"] = build(functions.ir, spanning_tree(functions.ir))
+        system = build(functions.ir, spanning_tree(functions.ir))
+        from casmech import codegen  # imported on use: interpreted runs never need it
+
+        if codegen.mode_of(functions) == "compiled" and not system.n_cut:
+            system = compiled_system(system)
+        functions.derived["joint_system"] = system
     return functions.derived["joint_system"]
+
+
+def compiled_system(system: JointSystem) -> JointSystem:
+    """A tree's ODE and results rows compiled through codegen's cache, and the ODE's forward
+    derivative where method auto may choose BDF (its Jacobian by forward sweeps: casadi's
+    externals find fwd1_<name> in their library)."""
+    from casmech import codegen
+
+    functions = {"joint_ode": system.dynamics, "joint_motion": system.motion}
+    if system.layout.n_x <= STIFF_STATES:
+        functions["fwd1_joint_ode"] = system.dynamics.forward(1)
+    built = codegen.compile_functions(functions)
+    return replace(system, dynamics=built["joint_ode"], motion=built["joint_motion"])
 
 
 class _Pose:
@@ -196,7 +217,7 @@ class _Integrator:
 def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
     if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
-        return "adams"
+        return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
     jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))

@@ -1,0 +1,36 @@
+"""The joint formulation on a compiled bundle: its tree's ODE and results rows compiled
+(runtime.joint_dynamics.compiled_system) and equal to the interpreted ones."""
+
+import numpy as np
+
+import casmech
+from casmech.runtime.joint_dynamics import joint_system
+from tests.conftest import Table
+
+RNG = np.random.default_rng(11)
+
+
+def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):
+    fast, slow = joint_system(compiled), joint_system(interpreted)
+    assert fast.dynamics.class_name() == "External" and slow.dynamics.is_a("SXFunction")
+    nb = interpreted.n_bodies
+    for _ in range(3):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        # the same SX compiled to C: equal to roundoff
+        np.testing.assert_allclose(np.array(fast.dynamics(t, x)), np.array(slow.dynamics(t, x)),
+                                   rtol=1e-12, atol=1e-12)
+        for a, b in zip(fast.motion(t, x, [], np.ones(nb)), slow.motion(t, x, [], np.ones(nb)),
+                        strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_run_is_the_interpreted_run(interpreted, compiled):
+    runs = [Table(*casmech.results_table(f, casmech.analyze(
+        f, "dynamics", formulation="joint", t_end=0.5, rtol=1e-10, atol=1e-12)))
+        for f in (interpreted, compiled)]
+    for name in runs[0].names[1:]:
+        scale = max(1.0, np.max(np.abs(runs[0][name])))
+        # the same equations; roundoff may change a step size, within the rtol 1e-10 runs'
+        # own error
+        np.testing.assert_allclose(runs[1][name], runs[0][name], rtol=0, atol=1e-8 * scale,
+                                   err_msg=name)
