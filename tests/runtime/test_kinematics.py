@@ -11,6 +11,7 @@ import pytest
 import casmech
 from casmech.errors import AnalysisError
 from casmech.runtime import assembly
+from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.kinematics import output_times, state_at
 from tests.conftest import MODELS
 
@@ -76,6 +77,8 @@ def test_mapped_rows_equal_the_per_row_code(model, mode):
     loaded = (casmech.loads(BRICARD_DRIVEN) if model == "bricard_driven"
               else casmech.load(MODELS / f"{model}.yaml"))
     functions = casmech.compile(loaded, mode)
+    if mode == "compiled":  # the library carries the step (codegen.bundle), in C
+        assert functions.functions["prescribed_step"].class_name() == "External"
     settings = functions.ir.analysis
     t_end = min(settings.t_end, 2.0)
     result = casmech.analyze(functions, t_end=t_end)
@@ -97,7 +100,8 @@ def test_redundant_rows_get_minimum_norm_multipliers():
 
 
 def count_calls(monkeypatch):
-    """Count every casadi.Function evaluation made from Python (symbolic and numeric)."""
+    """Count every casadi.Function evaluation made from Python (symbolic, numeric and
+    buffered)."""
     calls = []
     for method in ("__call__", "call"):
         original = getattr(ca.Function, method)
@@ -107,6 +111,13 @@ def count_calls(monkeypatch):
             return _original(self, *args, **kwargs)
 
         monkeypatch.setattr(ca.Function, method, counted)
+    buffered = BufferedCall.__call__
+
+    def counted_buffered(self, *args):
+        calls.append(self.function.name())
+        return buffered(self, *args)
+
+    monkeypatch.setattr(BufferedCall, "__call__", counted_buffered)
     return calls
 
 

@@ -9,6 +9,9 @@ What is compiled (write_build):
   - the bundle, codegen.mapped: every system function from SX kernels (one per kind of
     constraint row, joint, body quantity, force element) mapped over their instances, with the
     derivatives casmech.optimal differentiates through (codegen.generate);
+  - for a model whose analysis is kinematics or inverse dynamics, the prescribed-motion step
+    over the bundle (compiler.prescribed.step), which runtime.kinematics maps over the output
+    grid;
   - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (codegen.residuals: one
     kernel per joint, body and force element, the Jacobian from the kernels' own SX
     Jacobians), in a library of its own with the daeF and jacF casadi's IDAS interface loads
@@ -48,8 +51,9 @@ from casmech.codegen.library import compile_functions
 from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.codegen.mapped import mapped_functions
+from casmech.compiler import prescribed
 from casmech.compiler.formulations import FORMULATIONS
-from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
@@ -65,12 +69,30 @@ def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
             for form in FORMULATIONS for kind in residuals.KINDS}
 
 
+PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")
+
+
+INLINED_STEP_BODIES = 32  # up to here prescribed_step is one SX graph (benchmarks/RESULTS.md)
+
+
+def bundle(ir: ModelIR) -> dict[str, ca.Function]:
+    """The functions of the bundle's library (module docstring). prescribed_step is built over
+    the SX system functions (one inlined graph) for small models, over the mapped kernels for
+    larger ones."""
+    functions = mapped_functions(ir)
+    if ir.analysis.type in PRESCRIBED_ANALYSES:
+        over = build_functions(ir).functions if len(ir.bodies) <= INLINED_STEP_BODIES \
+            else functions
+        functions["prescribed_step"] = prescribed.step(over)
+    return functions
+
+
 def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
                 dae: bool = False) -> Path:
     """Generate the sources and headers, build the libraries and write the manifest (last, so
     a directory with a manifest is complete); `dae`: the DAE residuals dae_[ggl_]<formulation>
     too, each in its own library."""
-    functions = mapped_functions(ir)
+    functions = bundle(ir)
     sources = generate.write_sources(functions, directory, toolchain.jobs)
     oracles = dae_oracles(ir) if dae else {}
     dae_sources = generate.write_dae_sources(oracles, directory)

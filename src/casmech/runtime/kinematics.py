@@ -21,6 +21,7 @@ from casmech.compiler.checks import structure
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.runtime import assembly
+from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.results import Result
 
 # Rows whose Phi_q has min |R_kk| / max |R_kk| below this go to the per-row code, which decides
@@ -111,17 +112,18 @@ class _MappedGrid:
     def __init__(self, functions: SystemFunctions):
         self.step = prescribed.step(functions.functions)
         self.m = functions.n_rows
-        self.grids: dict[int, object] = {}
+        # kept with the functions: a later analysis of the same system reuses the mapped grids
+        self.grids: dict[int, object] = functions.derived.setdefault("prescribed_grids", {})
 
     def __call__(self, state, previous: float, block: np.ndarray):
         rows = len(block)
         padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
         if padded not in self.grids:
-            self.grids[padded] = prescribed.grid(self.step, rows)[0]
+            self.grids[padded] = BufferedCall(prescribed.grid(self.step, rows)[0])
         function = self.grids[padded]
         times = np.concatenate([block, np.full(padded - rows, block[-1])])
         steps = np.diff(times, prepend=previous)
-        states, checks = (np.array(out) for out in function(state, np.vstack([times, steps])))
+        states, checks = function(state, np.vstack([times, steps]))
         worst, ratio = checks[self.m, :rows], checks[self.m + 1, :rows]
         states, checks = states[:, :rows], checks[:, :rows]
         good = (worst <= assembly.POSITION_TOLERANCE) & (ratio > PIVOT_RATIO)
