@@ -203,3 +203,24 @@ def test_method_adams_on_a_dae_is_a_located_error():
         casmech.loads(text, file="arm.yaml")
     line = next(k for k, row in enumerate(text.splitlines(), 1) if "method: adams" in row)
     assert f"arm.yaml:{line}:" in str(error.value) and "error[E409]" in str(error.value)
+
+
+def test_runs_reusing_kept_integrators_repeat_exactly():
+    """A later run over the same grid with the same options reuses the kept CVODES instance:
+    it must give the first run's rows bit for bit, also after runs with other options and
+    grids in between; the kept instances stay bounded."""
+    from casmech.runtime.joint_dynamics import KEPT_INTEGRATORS
+
+    functions = casmech.compile(casmech.load(ZOO))
+
+    def run(rtol, t_end=0.3):
+        return casmech.analyze(functions, "dynamics", formulation="joint", t_end=t_end,
+                               rtol=rtol, atol=rtol * 1e-2, method="adams")
+
+    first = run(1e-8)
+    for k in range(KEPT_INTEGRATORS + 2):
+        run(1e-6, t_end=0.1 + 0.01 * k)
+    again, other = run(1e-8), run(1e-6)
+    np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
+    assert np.max(np.abs(other.q - first.q)) > 0  # the options are part of what is kept
+    assert len(functions.derived["cvodes"]) <= KEPT_INTEGRATORS

@@ -30,6 +30,7 @@ from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly
+from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
@@ -45,6 +46,8 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
 # against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
 # bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
 STIFF = 10.0
+
+KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
@@ -166,8 +169,8 @@ class _Integrator:
     """One SUNDIALS call over a chunk of the output grid: CVODES for a tree, IDAS for loops."""
 
     def __init__(self, system: JointSystem, loops: _Loops, rtol: float, atol: float,
-                 method: str):
-        self.system, self.loops = system, loops
+                 method: str, system_cache: dict):
+        self.system, self.loops, self.system_cache = system, loops, system_cache
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         if not system.n_cut:
@@ -181,8 +184,7 @@ class _Integrator:
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = ca.integrator("joint", "cvodes", problem, t0, list(times),
-                                       self.options)
+            integrator = self._cvodes(problem, t0, times)
             out = integrator(x0=x)
         else:
             integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
@@ -194,6 +196,18 @@ class _Integrator:
         if not (np.all(np.isfinite(states)) and np.all(np.isfinite(algebraic))):
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
+
+    def _cvodes(self, problem: ca.Function, t0: float, times) -> ca.Function:
+        """CVODES over the grid, kept with the system for a later run over the same grid with
+        the same options (creating one costs about as much as integrating a small tree for 1 s)."""
+        key = (id(problem), float(t0), tuple(float(t) for t in times),
+               tuple(sorted(self.options.items())))
+        cache = self.system_cache.setdefault("cvodes", {})
+        if key not in cache:
+            if len(cache) >= KEPT_INTEGRATORS:
+                cache.pop(next(iter(cache)))
+            cache[key] = ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)
+        return cache[key]
 
     def _dae_options(self, t0, times, x, z) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
@@ -237,7 +251,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         method = choose_method(system, t0, x, step)
     recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
                          loops.mask)
-    integrate = _Integrator(system, loops, rtol, atol, method)
+    integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
     try:
@@ -290,13 +304,21 @@ class _Recorder:
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
         self.functions, self.system, self.signs = functions, system, signs
         self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
+        self.maps = functions.derived.setdefault("joint_motion_maps", {})
+
+    def _mapped(self, n: int) -> BufferedCall:
+        """The results rows' function mapped over n rows (kept with the functions)."""
+        key = (id(self.system.motion), n)
+        if key not in self.maps:
+            self.maps[key] = BufferedCall(self.system.motion.map(n))
+        return self.maps[key]
 
     def __call__(self, result: Result, times, states, algebraic) -> None:
         n = len(times)
         times = np.asarray(times, float)
-        rows = self.system.motion.map(n)(times[None, :], states, algebraic,
-                                         np.repeat(self.signs[:, None], n, axis=1))
-        q, q_dot, q_ddot, lam = (np.array(out.full()) for out in rows)
+        rows = self._mapped(n)(times[None, :], states, algebraic,
+                               np.repeat(self.signs[:, None], n, axis=1))
+        q, q_dot, q_ddot, lam = rows
         if self.least_norm is not None:
             lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
         result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
