@@ -1,4 +1,4 @@
-"""Results of an analysis and their table per the results contract (MODEL_FORMAT.md)."""
+"""Results of an analysis and their table per the results contract (docs/format.md)."""
 
 from __future__ import annotations
 

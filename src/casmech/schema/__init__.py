@@ -1,4 +1,4 @@
-"""YAML model files -> checked, evaluated `ResolvedModel` (see MODEL_FORMAT.md).
+"""YAML model files -> checked, evaluated `ResolvedModel` (see docs/format.md).
 
     load_model(path, overrides=None)                    read a file
     load_model_text(text, file="<string>", overrides=None)
