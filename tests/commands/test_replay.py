@@ -150,3 +150,27 @@ def test_unreadable_record(tmp_path, text, message, capsys):
 def test_model_required_without_replay(capsys):
     assert cli.main(["run"]) == 2
     assert "needs a MODEL file" in capsys.readouterr().err
+
+
+def test_allowed_folders_are_replayed(tmp_path, monkeypatch):
+    """A table outside the model's folder, read under --allow-dir: the replay allows the same
+    folder (and checks the table's hash) without being told again."""
+    from casmech.schema import files
+
+    monkeypatch.setattr(files, "_extra", [])  # the process-wide allowed folders, restored after
+    model, data = tmp_path / "model", tmp_path / "data"
+    model.mkdir(), data.mkdir()
+    (model / "pendulum.yaml").write_text(MODEL.replace("profile.csv", "../data/profile.csv"))
+    (data / "profile.csv").write_text(PROFILE)
+    (model / "bar.stl").write_text("solid bar\nendsolid bar\n")
+    out = model / "run"
+    assert cli.main(["run", str(model / "pendulum.yaml"), "--out", str(out),
+                     "--allow-dir", str(data)]) == 0
+    meta = json.loads((out / "metadata.json").read_text())
+    assert meta["options"]["allow_dir"] == [str(data.resolve())]
+    assert meta["files"][str((data / "profile.csv").resolve())]["sha256"] == sha(
+        data / "profile.csv")  # outside the model's folder: keyed by its absolute path
+    files._extra.clear()  # a fresh process: only the record allows the folder
+    assert cli.main(["run", "--replay", str(out / "metadata.json")]) == 0
+    np.testing.assert_allclose(read_csv(model / "run_replay" / "results.csv")[1],
+                               read_csv(out / "results.csv")[1], rtol=0, atol=0)  # same doubles
