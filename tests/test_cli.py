@@ -25,7 +25,7 @@ def casmech(*args, cwd=None):
 
 
 def contract_columns(bodies, joints):
-    """The column order written in MODEL_FORMAT.md's results contract."""
+    """The column order written in the results contract of docs/format.md."""
     return (["t"] + [f"{b}.{c}" for b in bodies for c in BODY]
             + [f"{j}.{c}" for j in joints for c in JOINT] + ["energy", "constraint_violation"])
 

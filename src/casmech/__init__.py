@@ -13,6 +13,7 @@ _LAZY = {
                     "casmech.api"),
     **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
                     "casmech.errors"),
+    "load_results": "casmech.output.frames",
 }
 # subpackages and modules reachable as attributes (`casmech.api.ANALYSES`) without an import
 _SUBMODULES = ("api", "cli", "codegen", "commands", "compiler", "errors", "importers", "optimal",

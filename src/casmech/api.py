@@ -19,7 +19,7 @@ from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.compiler.tree import spanning_tree
-from casmech.errors import AnalysisError, UsageError
+from casmech.errors import AnalysisError, Interrupted, UsageError
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
@@ -115,13 +115,21 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
     formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
     DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
-    `progress`, when given, is called with the time of every output row as it is computed."""
+    `progress`, when given, is called with the time of every output row as it is computed.
+    The Result keeps `functions`: `result.to_dataframe()` is its results table as a DataFrame."""
     settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
                                  formulation, stabilization, method)
-    result = ANALYSES[settings.type](functions, settings, progress)
+    try:
+        result = ANALYSES[settings.type](functions, settings, progress)
+    except AnalysisError as error:  # the rows before a failure tabulate like a whole run's
+        if error.partial is not None:
+            error.partial.functions = functions
+            error.partial.status = "interrupted" if isinstance(error, Interrupted) else "failed"
+        raise
     from casmech import codegen  # imported on use: `casmech check` never needs it
 
     result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
+    result.functions = functions
     return result
 
 

@@ -3,7 +3,7 @@
 Each subcommand is a module of casmech.commands (listed in commands.COMMANDS). Only the module
 of the command on the command line is imported, so each command pays for its own imports
 (`casmech --help` imports none; benchmarks/notes_startup.md).
-Exit codes (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error, 3 analysis failure,
+Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis failure,
 130/143 stopped by SIGINT/SIGTERM.
 """
 

@@ -8,7 +8,7 @@ A user mistake is never a traceback: every stage collects `Diagnostic`s and rais
       got: ...
       hint: ...
 
-Exit codes of the command line (MODEL_FORMAT.md): 0 success, 1 model error, 2 usage error,
+Exit codes of the command line (docs/format.md): 0 success, 1 model error, 2 usage error,
 3 analysis failure, 128 + the signal's number when SIGINT (130) or SIGTERM (143) stopped it.
 """
 

@@ -2,8 +2,8 @@
 
 Two kinds of things live here:
 - plain-numpy geometry (A, G, E, B, skew, quaternions, rigid motions), written from the formulas of
-  DESIGN.md / Haug (1989) independently of casmech.compiler.euler, so that tests can compare the
-  code under test against it;
+  docs/architecture.md / Haug (1989) independently of casmech.compiler.euler, so that tests can
+  compare the code under test against it;
 - hand-built models: `ResolvedModel`s (schema contract) compiled with compiler.lower.lower and
   compiler.functions.build_functions, without going through YAML.
 """

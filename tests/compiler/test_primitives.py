@@ -69,7 +69,7 @@ class Evaluated:
 
 
 def expected_value(e: Evaluated) -> float:
-    """phi from the definitions in DESIGN.md, written in numpy."""
+    """phi from the definitions in docs/architecture.md, written in numpy."""
     x, v = e.pair, e.vectors
     if e.kind == "dp1":
         return (x.A_i @ v["a_i"]) @ (x.A_j @ v["a_j"]) - e.f

@@ -10,6 +10,9 @@ so far are written with `status: interrupted` and the signal in the metadata, an
 code is 128 + the signal's number (130, 143). When the analysis starts, the results files of an
 earlier run in DIR are removed and metadata.json says `status: running`, so that a run killed
 outright (SIGKILL) never leaves an older results file looking current.
+
+--replay DIR/metadata.json runs a recorded run again (commands/replay.py): the same model file
+(every file it read checked against its recorded sha256), overrides, settings and options.
 """
 
 from __future__ import annotations
@@ -51,7 +54,12 @@ def formats(text: str) -> list[str]:
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("model", type=Path)
+    parser.add_argument("model", type=Path, nargs="?",
+                        help="the model file (left out with --replay)")
+    parser.add_argument("--replay", type=Path, metavar="METADATA.json",
+                        help="run again what a run's metadata.json records (same files, checked "
+                             "by sha256, overrides, settings, options); default --out: "
+                             "DIR_replay/ beside its DIR")
     parser.add_argument("--out", type=Path, help="output directory (default MODEL_results/)")
     parser.add_argument("--t-end", type=float, help="end time [s]")
     parser.add_argument("--output-step", type=float, help="output interval [s]")
@@ -70,9 +78,9 @@ def add_arguments(parser) -> None:
                         help="CVODES's method for joint coordinates on a tree (default: the "
                              "model's, else auto: bdf when the ODE is stiff at t0)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
-    parser.add_argument("--format", type=formats, default=["csv"], metavar="csv|hdf5",
+    parser.add_argument("--format", type=formats, metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
-    parser.add_argument("--mode", choices=api.COMPILE_MODES, default="auto",
+    parser.add_argument("--mode", choices=api.COMPILE_MODES,
                         help="compiled C (built once, cached) or interpreted CasADi functions "
                              "(default auto: compiled when cached or from 200 bodies, else "
                              "interpreted)")
@@ -80,6 +88,9 @@ def add_arguments(parser) -> None:
 
 
 def run(args) -> int:
+    from casmech.commands import replay
+
+    args = replay.replayed(args) if args.replay else replay.direct(args)
     for name in args.format:
         FORMATS[name][2]()  # a missing h5py is a usage error before the run
     with interrupts.trap():
@@ -101,7 +112,9 @@ def _run(args) -> int:
                                  output_step=args.output_step, rtol=args.rtol, atol=args.atol,
                                  formulation=args.formulation,
                                  stabilization=args.stabilization, method=args.method)
-    run = (model, given, settings, timings)
+    options = {"mode": args.mode, "format": list(args.format),
+               "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
+    run = (model, given, settings, timings, options)
     api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
                           args.atol, args.formulation, args.stabilization,
                           args.method)  # a usage error before an earlier run's files go
@@ -135,9 +148,10 @@ def _start(args, out: Path, run) -> None:
             (out / name[0]).unlink(missing_ok=True)
         (out / "metadata.json").unlink(missing_ok=True)
         if "csv" in args.format:
-            model, given, settings, timings = run
+            model, given, settings, timings, options = run
             write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
-                                                           0, status="running"))
+                                                           0, status="running",
+                                                           options=options))
 
 
 def _keep(args, out: Path, functions, error: AnalysisError, run) -> None:
@@ -147,9 +161,10 @@ def _keep(args, out: Path, functions, error: AnalysisError, run) -> None:
     partial = error.partial if error.partial is not None and len(error.partial) else None
     if partial is None and not interrupted:
         if "csv" in args.format:
-            model, given, settings, timings = run
+            model, given, settings, timings, options = run
             write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
-                                                           0, str(error), "failed"))
+                                                           0, str(error), "failed",
+                                                           options=options))
         return
     paths = _save(args, out, functions, partial, run, str(error),
                   "interrupted" if interrupted else "failed",
@@ -169,8 +184,9 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
     else:
         names, values = casmech.results_table(functions, result)
         meta, rows = result.metadata, len(values)
-    model, given, settings, timings = run
-    metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal)
+    model, given, settings, timings, options = run
+    metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal,
+                            options)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     if "csv" in args.format:

@@ -1,7 +1,7 @@
 """Euler-parameter geometry: A(p), G(p), E(p), B(p, a_bar), skew(v).
 
-The only hand-written geometry in casmech (DESIGN.md). Every function accepts CasADi SX/MX/DM or
-numpy inputs and returns CasADi matrices; derivatives of these are left to CasADi.
+The only hand-written geometry in casmech (docs/architecture.md). Every function accepts CasADi
+SX/MX/DM or numpy inputs and returns CasADi matrices; derivatives of these are left to CasADi.
 """
 
 from __future__ import annotations

@@ -64,7 +64,7 @@ DRIVER_ROWS: dict[str, Template] = {
     "displacement": ("dp2", {"a_i": "w@i", "s_i": "P@i", "s_j": "P@j"}, "slide = f(t)"),
 }
 
-# The point about which a joint's reaction torque is reported (MODEL_FORMAT results contract),
+# The point about which a joint's reaction torque is reported (docs/format.md, results contract),
 # as a joint-frame quantity on body i; None means body i's origin (pure couples, e.g. DP1).
 REACTION_POINT: dict[str, str | None] = {
     **dict.fromkeys(JOINT_ROWS, "P"),

@@ -1,7 +1,7 @@
 """An imported model as casmech YAML text, with the source's comments kept as YAML comments.
 
 The importers fill an `Imported` (sections of items, each item with the comment lines that stood
-above it in the source); `to_yaml` writes it in the order of MODEL_FORMAT.md. Every key and
+above it in the source); `to_yaml` writes it in the order of docs/format.md. Every key and
 value goes through PyYAML's serializer (numbers in the shortest text that reads back to the same
 float, strings quoted whenever YAML would read them as anything else, vectors in flow style);
 comments are split at every YAML line break and stripped of characters YAML does not allow, so

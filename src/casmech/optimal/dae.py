@@ -165,7 +165,7 @@ def consistent_algebraic(dae: DAE, x0: np.ndarray, theta: np.ndarray, u=None) ->
 
 
 def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
-    """Results columns (MODEL_FORMAT.md order, without t) of (t, x, z, theta)."""
+    """Results columns (docs/format.md order, without t) of (t, x, z, theta)."""
     system, nominal = dae.system, dae.system.nominal
     t, theta = dae.t, dae.theta
     q, q_dot, q_ddot, lam_rows = dae.split(dae.x, dae.z)

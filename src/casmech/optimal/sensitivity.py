@@ -111,7 +111,7 @@ def _output_indices(names: list[str], outputs: Sequence[str]) -> list[int]:
     missing = [o for o in outputs if o not in names]
     if missing:
         raise UsageError(f"unknown output column '{missing[0]}'; results columns are "
-                         f"<body>.x/.vx/.wx/..., <joint>.fx/..., energy (see MODEL_FORMAT.md), "
+                         f"<body>.x/.vx/.wx/..., <joint>.fx/..., energy (see docs/format.md), "
                          "or integral(COLUMN) for its integral from t = 0")
     return [names.index(o) for o in outputs]
 

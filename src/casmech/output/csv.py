@@ -39,7 +39,10 @@ def atomic(path: Path, **options):
 
 
 def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:
+    """The names and the rows (exact: Python's float parsing); a header alone is 0 rows."""
     with open(path) as handle:
         names = handle.readline().strip().split(",")
+        if not handle.readline().strip():
+            return names, np.zeros((0, len(names)))
     values = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     return names, values

@@ -5,7 +5,8 @@ Layout:
     /results    float64 [rows x columns], the results contract's table
     /columns    the column names, in contract order (variable-length UTF-8 strings)
     /metadata   casmech.output.metadata's dict: a nested dict is a group, a value an attribute,
-                except the model text, a string dataset /metadata/model/text
+                except the model text, a string dataset /metadata/model/text; a key's '/'
+                (file paths under `files`) is written %2F and '%' %25 (HDF5 names hold no '/')
 """
 
 from __future__ import annotations
@@ -47,8 +48,16 @@ def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
     return path
 
 
+def _name(key: str) -> str:
+    return key.replace("%", "%25").replace("/", "%2F")
+
+
+def _key(name: str) -> str:
+    return name.replace("%2F", "/").replace("%25", "%")
+
+
 def _write_group(group, mapping: Mapping, strings) -> None:
-    for key, value in mapping.items():
+    for key, value in ((_name(k), v) for k, v in mapping.items()):
         if isinstance(value, Mapping):
             _write_group(group.create_group(key), value, strings)
         elif key in DATASETS:
@@ -69,9 +78,9 @@ def read_hdf5_metadata(path: str | Path) -> dict:
 
 
 def _read_group(group) -> dict:
-    data = {key: _plain(value) for key, value in group.attrs.items()}
+    data = {_key(key): _plain(value) for key, value in group.attrs.items()}
     for key, item in group.items():
-        data[key] = _read_group(item) if hasattr(item, "keys") else item.asstr()[()]
+        data[_key(key)] = _read_group(item) if hasattr(item, "keys") else item.asstr()[()]
     return data
 
 

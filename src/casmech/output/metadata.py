@@ -1,5 +1,6 @@
-"""What a run was: versions, model (name, sha256, text), overrides and the parameter values they
-led to, settings, timings, mode.
+"""What a run was: versions (casmech, CasADi, NumPy, Python) and platform, model (name, sha256,
+text), the sha256 of every file the model read, overrides and the parameter values they led to,
+settings, the command-line options `casmech run --replay` repeats, timings, mode.
 
 One dict, written as DIR/metadata.json beside results.csv (the CSV stays plain per the results
 contract) and into results.h5 (casmech.output.hdf5).
@@ -9,6 +10,9 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
+import platform
+import sys
 from collections.abc import Mapping
 from dataclasses import replace
 from datetime import datetime, timezone
@@ -42,24 +46,44 @@ def sha256(text: str) -> str:
 STATUSES = ("running", "complete", "failed", "interrupted")
 
 
+def source_files(model: ResolvedModel) -> dict[str, dict[str, str]]:
+    """The files the model read (model.sources): the path relative to the model's folder (or
+    absolute, outside it) -> its absolute path and sha256."""
+    folder = Path(model.file).resolve().parent
+    files = {}
+    for path, digest in model.sources.items():
+        relative = os.path.relpath(path, folder)
+        name = path if relative.startswith("..") else Path(relative).as_posix()
+        files[name] = {"path": path, "sha256": digest}
+    return files
+
+
 def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: dict,
                  timings: Mapping[str, float], result_metadata: Mapping, rows: int,
                  error: str | None = None, status: str | None = None,
-                 signal: str | None = None) -> dict:
-    """Everything needed to tell how a results table was made (JSON-serialisable). `status`:
-    running (written when the analysis starts: a results file from an earlier run is gone),
-    complete, failed or interrupted (`signal` names the signal); default: failed when there is
-    an error, else complete."""
+                 signal: str | None = None, options: Mapping | None = None) -> dict:
+    """Everything needed to tell how a results table was made and to make it again
+    (JSON-serialisable). `status`: running (written when the analysis starts: a results file
+    from an earlier run is gone), complete, failed or interrupted (`signal` names the signal);
+    default: failed when there is an error, else complete. `options`: the command-line
+    options besides overrides and settings (mode asked for, formats, allowed folders)."""
     status = status or ("failed" if error else "complete")
     assert status in STATUSES, status
     extra = {"signal": signal} if signal else {}
     return {
         "casmech_version": casmech.__version__,
         "casadi_version": casadi.__version__,
+        "numpy_version": np.__version__,
+        "python_version": platform.python_version(),
+        "platform": platform.platform(),
+        "python_executable": sys.executable,
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "model": {"file": Path(model.file).name, "path": str(model.file), "name": model.name,
+        "model": {"file": Path(model.file).name, "path": str(model.file),
+                  "absolute_path": str(Path(model.file).resolve()), "name": model.name,
                   "sha256": sha256(model.text), "text": model.text},
+        "files": source_files(model),
         "overrides": dict(overrides),
+        "options": dict(options or {}),
         "parameters": {name: float(value) for name, value in model.parameters.items()},
         "analysis": dict(settings),
         "timings_s": dict(timings),

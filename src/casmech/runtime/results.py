@@ -1,4 +1,4 @@
-"""Results of an analysis and their table per the results contract (MODEL_FORMAT.md)."""
+"""Results of an analysis and their table per the results contract (docs/format.md)."""
 
 from __future__ import annotations
 
@@ -78,8 +78,42 @@ class Result:
     def __len__(self) -> int:
         return sum(len(block) for block in self._blocks["t"])
 
+    # the SystemFunctions that computed the rows (casmech.analyze sets it): the source of the
+    # results table, the DataFrame and the summary's model name and column count
+    functions: SystemFunctions | None = None
+    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError
+
+    def to_dataframe(self):
+        """The results table as a pandas DataFrame, as casmech.load_results reads it from the
+        files of a run: index t, the contract's columns, attrs["units"], attrs["metadata"]."""
+        from casmech.output import frames
+
+        if self.functions is None:
+            raise ValueError("this Result has no system functions to tabulate its rows with; "
+                             "use casmech.analyze's Result, or casmech.results_table(functions, "
+                             "result)")
+        names, values = table(self.functions, self)
+        return frames.frame(names, values, self.metadata)
+
+    def _facts(self) -> dict[str, str]:
+        from casmech.output import frames
+
+        known = self.functions is not None
+        extra = {key: self.metadata[key] for key in ("formulation", "mode")
+                 if key in self.metadata}
+        return frames.summary(self.functions.ir.name if known else "?", self.analysis,
+                              self.times, self.status,
+                              len(column_names(self.functions)) if known else 0, extra)
+
     def __repr__(self) -> str:
-        return f"Result({self.analysis!r}, {len(self)} rows, metadata={self.metadata!r})"
+        from casmech.output import frames
+
+        return frames.summary_text(self._facts())
+
+    def _repr_html_(self) -> str:
+        from casmech.output import frames
+
+        return frames.summary_html(self._facts())
 
 
 def column_names(functions: SystemFunctions) -> list[str]:

@@ -1,4 +1,4 @@
-"""YAML model files -> checked, evaluated `ResolvedModel` (see MODEL_FORMAT.md).
+"""YAML model files -> checked, evaluated `ResolvedModel` (see docs/format.md).
 
     load_model(path, overrides=None)                    read a file
     load_model_text(text, file="<string>", overrides=None)
@@ -14,6 +14,7 @@ so that the compiler and the schema can import each other's modules in any order
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -37,13 +38,15 @@ def _in_files(diagnostic: Diagnostic, top: str) -> tuple:
 
 def _resolve(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:
     """Overflows and NaNs are reported as findings (E204, E411), never warned about; paths in
-    the model resolve inside its folder (schema/files.py)."""
+    the model resolve inside its folder (schema/files.py), and the model records the digests
+    of the files it read or named (`sources`)."""
     import numpy as np
 
     from casmech.schema import files
 
-    with np.errstate(all="ignore"), files.rooted(document.file):
-        return _findings(document, overrides)
+    with np.errstate(all="ignore"), files.rooted(document.file) as named:
+        model = _findings(document, overrides)
+    return replace(model, sources=files.digests(document.file, named))
 
 
 def _findings(document: Document, overrides: Mapping[str, str] | None) -> ResolvedModel:

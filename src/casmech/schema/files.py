@@ -10,10 +10,14 @@ process environment or another user's files, and an error message never shows su
 
 A file is read up to a limit (E306 beyond it; E006 for the model file itself): a device or a
 huge file costs at most the limit in time and memory.
+
+While a model loads (`rooted`), every file it names that exists is recorded; `digests` gives
+their sha256 for the run's metadata (output/metadata.py) and `casmech run --replay`.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import stat
 from collections.abc import Iterator
@@ -28,6 +32,8 @@ ALLOWED_DIRS = "CASMECH_ALLOWED_DIRS"
 
 _extra: list[Path] = []  # folders allowed by `allow` (the command line)
 _roots: ContextVar[tuple[Path, ...] | None] = ContextVar("casmech_model_roots", default=None)
+_named: ContextVar[dict[str, Path] | None] = ContextVar("casmech_model_files", default=None)
+MAX_HASH_BYTES = 256 << 20  # a file named by a model is hashed up to this size (meshes)
 
 
 class TooLarge(OSError):
@@ -59,16 +65,19 @@ def allowed_folders(model_file: str) -> tuple[Path, ...]:
 
 
 @contextmanager
-def rooted(model_file: str) -> Iterator[None]:
+def rooted(model_file: str) -> Iterator[dict[str, Path]]:
     """Within this block, paths resolve inside the folder of `model_file` (the model being
-    loaded; its component files stay under the same folders)."""
+    loaded; its component files stay under the same folders). Yields the files named so far
+    (absolute path text -> Path), filled as `resolve` finds them."""
     if _roots.get() is not None:  # a nested load (a component file) keeps the outer roots
-        yield
+        yield _named.get() or {}
         return
-    token = _roots.set(allowed_folders(model_file))
+    named: dict[str, Path] = {}
+    token, recording = _roots.set(allowed_folders(model_file)), _named.set(named)
     try:
-        yield
+        yield named
     finally:
+        _named.reset(recording)
         _roots.reset(token)
 
 
@@ -94,7 +103,29 @@ def resolve(base_file: str, name: str, *, must_exist: bool = True) -> Path:
     if not stat.S_ISREG(mode):
         raise NotAllowed("it is not a regular file (a folder, a device or a pipe)",
                          "name a file")
+    named = _named.get()
+    if named is not None:
+        named.setdefault(str(path), path)
     return path
+
+
+def digest(path: str | os.PathLike) -> str:
+    """sha256 of a file's bytes; of a file over MAX_HASH_BYTES, 'size:N' (read no further)."""
+    size = os.stat(path).st_size
+    if size > MAX_HASH_BYTES:
+        return f"size:{size}"
+    sha = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            sha.update(block)
+    return sha.hexdigest()
+
+
+def digests(model_file: str, named: dict[str, Path]) -> dict[str, str]:
+    """The model file (when it is a file) and every file it named: absolute path -> digest."""
+    paths = [Path(model_file).resolve()] if Path(model_file).is_file() else []
+    paths += [path for path in named.values() if path.is_file()]
+    return {str(path): digest(path) for path in dict.fromkeys(paths)}
 
 
 def read_bounded(path: str | os.PathLike, limit: int) -> bytes:

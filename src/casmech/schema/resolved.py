@@ -182,3 +182,6 @@ class ResolvedModel:
     # component files the model was composed from (path -> text; docs/components.md): with
     # `text`, everything the model's content depends on
     files: Mapping[str, str] = field(default_factory=dict)
+    # sha256 of the model file and of every file it read or named (components, tables, meshes,
+    # estimation data): absolute path -> digest (schema/files.py), for metadata.json and replay
+    sources: Mapping[str, str] = field(default_factory=dict)

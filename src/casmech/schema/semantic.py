@@ -26,7 +26,7 @@ ANALYSIS_HINTS = {
 
 
 def result_columns(bodies: int, joints: int) -> int:
-    """Columns of the results table (MODEL_FORMAT.md's results contract)."""
+    """Columns of the results table (the results contract of docs/format.md)."""
     return 3 + 19 * bodies + 6 * joints
 
 

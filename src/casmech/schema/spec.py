@@ -1,4 +1,4 @@
-"""The model format (MODEL_FORMAT.md) as pydantic v2 models, one class per YAML mapping.
+"""The model format (docs/format.md) as pydantic v2 models, one class per YAML mapping.
 
 Frozen, `extra="forbid"`; joints and forces are unions discriminated on `type`, inertia and
 geometry items on their shape. Every scalar is a number or an expression string (evaluated in
