@@ -3,7 +3,8 @@
     text, warnings = casmech.importers.import_file("deck.adm")
 
 Suffix -> translator: `.adm` (Adams/Solver dataset, importers/adm.py), `.mdl` / `.acf`
-(simEngine3D model / analysis-control JSON, importers/simengine.py). Every translator returns an
+(simEngine3D model / analysis-control JSON, importers/simengine.py), `.urdf` (robot description,
+importers/urdf.py). Every translator returns an
 `emit.Imported`; what it could not translate is a warning Diagnostic naming the source line.
 """
 
@@ -14,7 +15,7 @@ from pathlib import Path
 from casmech.errors import Diagnostic, ModelError, Source, UsageError
 from casmech.importers.emit import Imported, to_yaml
 
-MAX_SOURCE_BYTES = 16 << 20  # an Adams deck or simEngine3D file: the test decks are 2-10 kB
+MAX_SOURCE_BYTES = 16 << 20  # an Adams deck, simEngine3D or URDF file: the test files are 2-10 kB
 
 
 def read_source(path: Path) -> str:
@@ -43,7 +44,12 @@ def _simengine(path: Path) -> Imported:
     return import_simengine(path)
 
 
-TRANSLATORS = {".adm": _adm, ".mdl": _simengine, ".acf": _simengine}
+def _urdf(path: Path) -> Imported:
+    from casmech.importers.urdf import import_urdf
+    return import_urdf(path)
+
+
+TRANSLATORS = {".adm": _adm, ".mdl": _simengine, ".acf": _simengine, ".urdf": _urdf}
 
 
 def translate(path: str | Path) -> Imported:
@@ -51,7 +57,7 @@ def translate(path: str | Path) -> Imported:
     translator = TRANSLATORS.get(path.suffix.lower())
     if translator is None:
         raise UsageError(f"{path}: cannot import a '{path.suffix}' file; expected one of "
-                         f"{', '.join(TRANSLATORS)} (Adams dataset, simEngine3D model/acf)")
+                         f"{', '.join(TRANSLATORS)} (Adams dataset, simEngine3D model/acf, URDF)")
     if not path.is_file():
         raise UsageError(f"{path}:1:1: no such file")
     return translator(path)
