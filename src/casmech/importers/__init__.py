@@ -44,15 +44,16 @@ def _simengine(path: Path) -> Imported:
     return import_simengine(path)
 
 
-def _urdf(path: Path) -> Imported:
+def _urdf(path: Path, **initial) -> Imported:
     from casmech.importers.urdf import import_urdf
-    return import_urdf(path)
+    return import_urdf(path, **initial)
 
 
 TRANSLATORS = {".adm": _adm, ".mdl": _simengine, ".acf": _simengine, ".urdf": _urdf}
 
 
-def translate(path: str | Path) -> Imported:
+def translate(path: str | Path, **options) -> Imported:
+    """`options`: the URDF importer's initial joint `positions` and `velocities` (by name)."""
     path = Path(path)
     translator = TRANSLATORS.get(path.suffix.lower())
     if translator is None:
@@ -60,10 +61,12 @@ def translate(path: str | Path) -> Imported:
                          f"{', '.join(TRANSLATORS)} (Adams dataset, simEngine3D model/acf, URDF)")
     if not path.is_file():
         raise UsageError(f"{path}:1:1: no such file")
-    return translator(path)
+    if any(options.values()) and translator is not _urdf:
+        raise UsageError(f"{path}: initial joint positions and velocities are for URDF files")
+    return translator(path, **{k: v for k, v in options.items() if v})
 
 
-def import_file(path: str | Path) -> tuple[str, list[Diagnostic]]:
+def import_file(path: str | Path, **options) -> tuple[str, list[Diagnostic]]:
     """The casmech YAML text of a model file, and the warnings of its translation."""
-    model = translate(path)
+    model = translate(path, **options)
     return to_yaml(model), model.warnings

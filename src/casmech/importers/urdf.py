@@ -39,6 +39,8 @@ DAMPER_LENGTH = 1.0  # [m] distance between the two points of a prismatic joint'
 SKIPPED = {"collision"}  # link children skipped without a warning (said in the header)
 KNOWN = {"robot": {"link", "joint", "material"}, "link": {"inertial", "visual", "collision"},
          "joint": {"parent", "child", "origin", "axis", "limit", "dynamics"}}
+HINTS = {"mimic": "a mimic joint can be written by hand as a basic constraint (docs/import.md)",
+         "transmission": "actuation: add motors or forces by hand (docs/motors.md)"}
 
 
 @dataclass
@@ -112,7 +114,8 @@ class Translator:
     def warn_unknown(self, element, path: str, kind: str) -> None:
         for child in element.children:
             if child.tag not in KNOWN[kind] and child.tag not in SKIPPED:
-                self.reader.warn(child, path, f"<{child.tag}> not translated")
+                self.reader.warn(child, path, f"<{child.tag}> not translated",
+                                 hint=HINTS.get(child.tag))
 
     def body(self, group: Group) -> None:
         reader, link = self.reader, self.tree.links[group.head]
@@ -160,7 +163,6 @@ class Translator:
     def joint(self, joint: Joint) -> None:
         path = f"joint[{joint.name}]"
         self.warn_unknown(joint.element, path, "joint")
-        self.unsupported(joint, path)
         if joint.type == "fixed":
             return
         body_i = self.body_names[self.groups[joint.parent].head]
@@ -215,14 +217,6 @@ class Translator:
                              "not translated")
             return
         self.model.forces.append(Item(force, comment))
-
-    def unsupported(self, joint: Joint, path: str) -> None:
-        for tag in ("mimic", "calibration", "safety_controller"):
-            element = joint.element.find(tag)
-            if element is not None:
-                self.reader.warn(element, f"{path}.{tag}", f"<{tag}> not translated",
-                                 hint="a mimic joint can be written as a basic constraint by "
-                                 "hand" if tag == "mimic" else None)
 
 
 def _check_values(tree: Tree, values: dict[str, float], what: str) -> None:

@@ -33,7 +33,7 @@ def axis_rotation(axis, angle: float) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * skew + (1 - np.cos(angle)) * skew @ skew
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Frame:
     """A frame: rotation (columns = its axes) and origin, in the frame it is given in."""
 
@@ -51,14 +51,14 @@ class Frame:
 IDENTITY = Frame(np.eye(3), np.zeros(3))
 
 
-@dataclass
+@dataclass(eq=False)
 class Inertial:
     mass: float
     frame: Frame  # of the centre of mass and the tensor's axes, in the link frame
     tensor: np.ndarray  # about the centre of mass, in `frame`'s axes
 
 
-@dataclass
+@dataclass(eq=False)
 class Link:
     name: str
     element: Element
@@ -66,7 +66,7 @@ class Link:
     visuals: list[Element] = field(default_factory=list)
 
 
-@dataclass
+@dataclass(eq=False)
 class Joint:
     name: str
     element: Element
@@ -167,8 +167,20 @@ def _unique(reader: Reader, items, kind: str) -> dict:
     return named
 
 
+def _bounded(reader: Reader) -> None:
+    """E105 beyond casmech's bound on a model's items (schema.repeat.MAX_ITEMS)."""
+    from casmech.schema import repeat
+
+    items = [e for e in reader.root.children if e.tag in ("link", "joint")]
+    if len(items) > repeat.MAX_ITEMS:
+        raise reader.error(items[repeat.MAX_ITEMS], "robot", f"the robot has more than "
+                           f"{repeat.MAX_ITEMS} links and joints", "a robot casmech can "
+                           "build", code="E105", hint=repeat.TOO_MANY_HINT)
+
+
 def read_tree(reader: Reader) -> Tree:
     """The links and joints of the robot, checked to form one tree."""
+    _bounded(reader)
     links = _unique(reader, [read_link(reader, e) for e in reader.root.findall("link")], "link")
     joints = list(_unique(reader, [read_joint(reader, e) for e in reader.root.findall("joint")],
                           "joint").values())
@@ -200,7 +212,8 @@ def read_tree(reader: Reader) -> Tree:
                            code="E103")
     order = _depth_first(roots[0], joints)
     if len(order) != len(joints):
-        lost = next(j for j in joints if j not in order)
+        reached = {j.name for j in order}
+        lost = next(j for j in joints if j.name not in reached)
         raise reader.error(lost.element, f"joint[{lost.name}]", "the joint is part of a loop "
                            "not connected to the root link", "a tree", code="E103")
     return Tree(links, order, roots[0])
