@@ -143,8 +143,8 @@ def test_pendulum_translation(tmp_path):
     assert (hinge.type, hinge.body_i, hinge.body_j) == ("revolute", "ground", "rod")
     assert imported.warnings == []
     (comments,) = [item.comments for item in imported.joints]
-    assert "URDF limit (line 9, rad): lower -1, upper 1, effort 5, velocity 3; not enforced" \
-        in comments[1]
+    assert "URDF limit (line 9): lower -1 rad, upper 1 rad, effort 5 N m, velocity 3 rad/s; " \
+        "not enforced" in comments[1]
     (shape,) = rod.geometry
     assert shape["type"] == "cylinder" and shape["axis"] == "z" and shape["length"] == 1
     np.testing.assert_allclose(shape["offset"], 0, rtol=0, atol=0)  # the visual is at the CM

@@ -4,8 +4,8 @@
 
 Suffix -> translator: `.adm` (Adams/Solver dataset, importers/adm.py), `.mdl` / `.acf`
 (simEngine3D model / analysis-control JSON, importers/simengine.py), `.urdf` (robot description,
-importers/urdf.py). Every translator returns an
-`emit.Imported`; what it could not translate is a warning Diagnostic naming the source line.
+importers/urdf.py). Every translator returns an `emit.Imported`; what it could not translate is
+a warning Diagnostic naming the source line.
 """
 
 from __future__ import annotations

@@ -109,7 +109,6 @@ class Translator:
         self.groups = groups(tree)
         self.names = Names()
         self.body_names = {tree.root: "ground"}  # head link -> casmech body
-        self.joint_names: dict[str, str] = {}
 
     def warn_unknown(self, element, path: str, kind: str) -> None:
         for child in element.children:
@@ -172,7 +171,6 @@ class Translator:
                                       f"floating: {body_j} is a free body")
             return
         name = self.names(joint.name, "_joint")
-        self.joint_names[joint.name] = name
         frame = self.state.frames[joint.child]
         axis = frame.rotation @ joint.axis
         data = {"name": name, "type": MOVING[joint.type], "body_i": body_i, "body_j": body_j,
@@ -186,13 +184,13 @@ class Translator:
         element = joint.element.find("limit")
         if element is None or joint.type not in ("revolute", "prismatic", "continuous"):
             return []
-        unit = "m" if joint.type == "prismatic" else "rad"
-        keys = ("lower", "upper", "effort", "velocity")
-        values = {k: self.reader.number(element, f"{path}.limit", k, 0.0) for k in keys
-                  if k in element.attrib}
-        text = ", ".join(f"{k} {values[k]:g}" for k in keys if k in values)
-        return [f"URDF limit (line {element.line}, {unit}): {text}; not enforced: casmech "
-                "has no joint limits"]
+        units = dict(zip(("lower", "upper", "effort", "velocity"), (
+            ("m", "m", "N", "m/s") if joint.type == "prismatic" else
+            ("rad", "rad", "N m", "rad/s")), strict=True))
+        text = ", ".join(f"{key} {self.reader.number(element, f'{path}.limit', key):g} {unit}"
+                         for key, unit in units.items() if key in element.attrib)
+        return [f"URDF limit (line {element.line}): {text}; not enforced: casmech has no "
+                "joint limits"]
 
     def damper(self, joint: Joint, path: str, data: dict) -> None:
         element = joint.element.find("dynamics")
