@@ -3,8 +3,9 @@
 Translated: UNITS, PART (GROUND; MASS, CM, IP, QG/REULER, VX..VZ global, WX..WZ in the CM
 marker's axes), MARKER (QP, REULER, ZP/XP), JOINT (revolute, spherical, universal, Hooke,
 cylindrical, translational, fixed, planar), JPRIM, GCON of a distance, SFORCE and SPRINGDAMPER
-of the linear spring-damper forms (adm_forces), ACCGRAV. Every other statement or argument is a
-warning naming its line; its text and comments are kept at the end of the YAML.
+of the linear spring-damper forms (adm_forces), MOTION on a joint (adm_motion), BUSHING,
+VFORCE, VTORQUE and GFORCE of functions of time (adm_loads), ACCGRAV. Every other statement or
+argument is a warning naming its line; its text and comments are kept at the end of the YAML.
 
 Conventions: casmech body frame = the CM marker's frame; IP = (xx, yy, zz[, xy, xz, yz]) about
 the CM in its axes, Adams's products being +integral(x y dm), so the inertia matrix entries are
@@ -17,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.importers import adm_connections, adm_forces, read_source
+from casmech.importers import adm_connections, adm_forces, adm_loads, adm_motion, read_source
 from casmech.importers.adm_frames import euler_parameters, tidy
 from casmech.importers.adm_model import Deck, Part, Reader, read_markers, read_parts, read_units
 from casmech.importers.adm_parser import Statement, Value, parse_adm
@@ -36,12 +37,16 @@ KNOWN = {
                      "TRANSLATIONAL", "ROTATIONAL"},
     "ACCGRAV": {"IGRAVITY", "JGRAVITY", "KGRAVITY", "IGRAV", "JGRAV", "KGRAV"},
     "UNITS": {"FORCE", "MASS", "LENGTH", "TIME", "SYSTEM"},
+    "MOTION": {"JOINT", *adm_motion.KINDS, *adm_motion.MODES, "FUNCTION", "I", "J", "B1", "B2",
+               "B3", "X", "Y", "Z"},
+    "BUSHING": {"I", "J", "K", "C", "KT", "CT", "FORCE", "TORQUE"},
+    **{name: {"I", "JFLOAT", "RM", *keys} for name, keys in adm_loads.COMPONENTS.items()},
 }
 OUTPUT_ONLY = {"GRAPHICS", "REQUEST", "OUTPUT", "RESULTS", "VARIABLE", "STRING"}
 
 
 def _known_argument(name: str, key: str) -> bool:
-    if name in ("JOINT", "JPRIM", "SFORCE", "SPRINGDAMPER") and len(key) >= 3:
+    if name in ("JOINT", "JPRIM", "SFORCE", "SPRINGDAMPER", "MOTION") and len(key) >= 3:
         return any(k.startswith(key) for k in KNOWN[name])
     return key in KNOWN[name]
 
@@ -124,6 +129,10 @@ def _trailer(deck: Deck, statements: list[Statement], trailing: list[str]) -> li
     return lines + trailing
 
 
+def _ident(text: str) -> str:
+    return str(int(text)) if text.strip().isdigit() else text.strip()
+
+
 def _translate(deck: Deck, model: Imported, groups: dict[str, list[Statement]]) -> None:
     for part in deck.parts.values():
         if not part.ground:
@@ -131,13 +140,21 @@ def _translate(deck: Deck, model: Imported, groups: dict[str, list[Statement]]) 
             deck.used.add(part.statement.line)
     connections = [("JOINT", adm_connections.joint), ("JPRIM", adm_connections.jprim),
                    ("GCON", adm_connections.gcon)]
+    joints = {}  # JOINT id -> (its item, its statement), for MOTION
     for name, translate in connections:
         for statement in groups.get(name, []):
             items = translate(deck, statement)
             model.joints += items
             deck.used.update([statement.line] if items else [])
+            if name == "JOINT" and items:
+                joints[_ident(statement.ident)] = (items[0], statement)
+    for statement in groups.get("MOTION", []):
+        if adm_motion.motion(deck, statement, joints):
+            deck.used.add(statement.line)
     for name, translate in (("SFORCE", adm_forces.sforce),
-                            ("SPRINGDAMPER", adm_forces.springdamper)):
+                            ("SPRINGDAMPER", adm_forces.springdamper),
+                            ("BUSHING", adm_loads.bushing),
+                            *((key, adm_loads.vector_force) for key in adm_loads.COMPONENTS)):
         for statement in groups.get(name, []):
             items = translate(deck, model, statement, model.joints)
             model.forces += items

@@ -80,3 +80,32 @@ def affine(text: str) -> Affine:
     coefficients = [float(c) for c in ca.DM(coefficients).full().ravel()]
     return Affine(float(constant), {measures[n]: c for n, c in zip(names, coefficients, strict=True)
                                     if c != 0.0})
+
+
+_DEGREES = re.compile(r"(?<![\w.])(\d+\.?\d*|\.\d+)(?:[eE]([+-]?\d+))?[dD](?![\w(])")
+_TIME = re.compile(r"\btime\b")
+
+
+def time_function(text: str, time_unit: float = 1.0, scale: float = 1.0) -> str:
+    """An Adams FUNCTION of TIME alone as a casmech expression of t (seconds): TIME -> t (in
+    the deck's time unit), 30D -> 30*pi/180, DTOR/RTOD as numbers, the value times `scale` (the
+    SI factor of its unit). NotTranslated when it reads anything but TIME (DX(..), VR(..): the
+    state) or a function casmech does not have."""
+    lowered = _DEGREES.sub(lambda m: f"({m.group(1)}{'e' + m.group(2) if m.group(2) else ''}"
+                           "*pi/180)", text.lower())
+    for call in _CALL.finditer(lowered):
+        if call.group(1) in MEASURES:
+            raise NotTranslated(f"reads the state ({call.group(0).upper()}); only functions "
+                                "of TIME are translated")
+    lowered = _TIME.sub("t" if time_unit == 1 else f"(t / {time_unit!r})", lowered)
+    for name, value in CONSTANTS.items():
+        lowered = re.sub(rf"\b{name}\b", repr(value), lowered)
+    try:
+        expression = parse(lowered)
+        unknown = expression.symbols - {"t", "pi"}
+        if unknown:
+            raise NotTranslated(f"depends on {', '.join(sorted(s.upper() for s in unknown))}")
+        expression.evaluate({"t": ca.SX.sym("t"), "pi": 3.141592653589793}, backend="casadi")
+    except ExpressionError as error:
+        raise NotTranslated(f"cannot read the expression: {error}") from None
+    return lowered if scale == 1 else f"{float(scale)!r} * ({lowered})"
