@@ -34,3 +34,23 @@ def test_compiled_run_is_the_interpreted_run(interpreted, compiled):
         # own error
         np.testing.assert_allclose(runs[1][name], runs[0][name], rtol=0, atol=1e-8 * scale,
                                    err_msg=name)
+
+
+def test_large_trees_keep_their_results_rows_interpreted(compiled, monkeypatch):
+    """Above COMPILED_MOTION_BODIES only the ODE is compiled; above COMPILED_ODE_BODIES
+    nothing of the tree (their C builds grow with the tree)."""
+    from casmech.runtime import joint_dynamics
+
+    kept = compiled.derived.pop("joint_system", None)
+    try:
+        monkeypatch.setattr(joint_dynamics, "COMPILED_MOTION_BODIES", 0)
+        system = joint_system(compiled)
+        assert system.dynamics.class_name() == "External" and system.motion.is_a("SXFunction")
+        compiled.derived.pop("joint_system")
+        monkeypatch.setattr(joint_dynamics, "COMPILED_ODE_BODIES", 0)
+        system = joint_system(compiled)
+        assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
+    finally:
+        compiled.derived.pop("joint_system", None)
+        if kept is not None:
+            compiled.derived["joint_system"] = kept

@@ -47,6 +47,12 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
 # bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
 STIFF = 10.0
 
+# On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
+# with the tree: measured at 128 bodies (-O1) 4.9 s for the ODE, 22.7 s for the results rows
+# (called once per output block, so interpreted costs little). Larger trees stay interpreted.
+COMPILED_ODE_BODIES = 128
+COMPILED_MOTION_BODIES = 32
+
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
@@ -59,23 +65,27 @@ def joint_system(functions: SystemFunctions) -> JointSystem:
         system = build(functions.ir, spanning_tree(functions.ir))
         from casmech import codegen  # imported on use: interpreted runs never need it
 
-        if codegen.mode_of(functions) == "compiled" and not system.n_cut:
-            system = compiled_system(system)
+        if codegen.mode_of(functions) == "compiled" and not system.n_cut \
+                and functions.n_bodies <= COMPILED_ODE_BODIES:
+            system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
         functions.derived["joint_system"] = system
     return functions.derived["joint_system"]
 
 
-def compiled_system(system: JointSystem) -> JointSystem:
-    """A tree's ODE and results rows compiled through codegen's cache, and the ODE's forward
-    derivative where method auto may choose BDF (its Jacobian by forward sweeps: casadi's
-    externals find fwd1_<name> in their library)."""
+def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSystem:
+    """A tree's ODE (and with_motion its results rows) compiled through codegen's cache, and
+    the ODE's forward derivative where method auto may choose BDF (its Jacobian by forward
+    sweeps: casadi's externals find fwd1_<name> in their library)."""
     from casmech import codegen
 
-    functions = {"joint_ode": system.dynamics, "joint_motion": system.motion}
+    functions = {"joint_ode": system.dynamics}
+    if with_motion:
+        functions["joint_motion"] = system.motion
     if system.layout.n_x <= STIFF_STATES:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
     built = codegen.compile_functions(functions)
-    return replace(system, dynamics=built["joint_ode"], motion=built["joint_motion"])
+    return replace(system, dynamics=built["joint_ode"],
+                   motion=built.get("joint_motion", system.motion))
 
 
 class _Pose:
