@@ -1,0 +1,150 @@
+"""Linearization and modes at the static equilibrium (runtime.statics).
+
+Independent coordinates: z with q = q* + N z, N the orthonormal null-space basis of Phi_q(q*)
+from a column-pivoted QR of Phi_q^T (statics.null_space; Euler-parameter normalization rows
+included, so z never changes a quaternion's norm). Projecting M q_ddot + Phi_q^T lam = Q on N
+removes the multipliers; to first order about the equilibrium (where Q - Phi_q^T lam* = 0)
+
+    M_r z'' + C_r z' + K_r z = 0,   M_r = N^T M N,  C_r = -N^T dQ/dq_dot N,
+    K_r = -N^T d(Q - Phi_q^T lam*)/dq N   (lam* fixed: the constraint-curvature term),
+
+all derivatives by CasADi's AD (statics.tangent_function). State x = [z; z'],
+A = [[0, I], [-M_r^-1 K_r, -M_r^-1 C_r]]. No inputs yet (B, D have 0 columns); the outputs
+y = C x are every body's translation and small global rotation (2 E(p) dp) away from the
+equilibrium: `<body>.dx .dy .dz .rx .ry .rz`.
+
+Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
+overdamped or zero-frequency motion) on its own; frequency_hz = |s| / 2 pi (undamped natural
+frequency), damped_frequency_hz = |Im s| / 2 pi, damping_ratio = -Re s / |s|; sorted by
+frequency. Mode shapes: the eigenvector's z mapped to body motions (n_modes x n_bodies x 6),
+scaled so that the largest entry is 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from casmech.compiler.functions import SystemFunctions
+from casmech.output.csv import write_csv
+from casmech.runtime import statics
+from casmech.runtime.results import Result
+
+MODE_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "eigenvalue_real", "eigenvalue_imag",
+                "damped_frequency_hz")
+MOTION = ("dx", "dy", "dz", "rx", "ry", "rz")
+FILES = ("modes.csv", "linear_model.npz")  # what a modal run writes beside results.csv
+REAL_CUT = 1e-9  # |Im s| <= REAL_CUT |s|: a real eigenvalue
+
+
+@dataclass
+class LinearModel:
+    """x' = A x + B u, y = C x + D u about the equilibrium q (states z, z'), and its modes."""
+
+    A: np.ndarray  # noqa: N815 (the usual names)
+    B: np.ndarray  # noqa: N815
+    C: np.ndarray  # noqa: N815
+    D: np.ndarray  # noqa: N815
+    state_names: list[str]
+    input_names: list[str]
+    output_names: list[str]
+    q: np.ndarray  # the equilibrium
+    basis: np.ndarray  # N: dq = N z
+    eigenvalues: np.ndarray  # one per mode (complex)
+    mode_shapes: np.ndarray  # (modes, bodies, 6) complex
+    body_names: list[str] = field(default_factory=list)
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        return np.abs(self.eigenvalues) / (2 * np.pi)
+
+    @property
+    def damped_frequency_hz(self) -> np.ndarray:
+        return np.abs(self.eigenvalues.imag) / (2 * np.pi)
+
+    @property
+    def damping_ratio(self) -> np.ndarray:
+        size = np.abs(self.eigenvalues)
+        return np.divide(-self.eigenvalues.real, size, out=np.zeros(size.shape), where=size > 0)
+
+    def modes_table(self) -> tuple[list[str], np.ndarray]:
+        values = np.column_stack([np.arange(1, len(self.eigenvalues) + 1), self.frequency_hz,
+                                  self.damping_ratio, self.eigenvalues.real,
+                                  self.eigenvalues.imag, self.damped_frequency_hz])
+        return list(MODE_COLUMNS), values.reshape(-1, len(MODE_COLUMNS))
+
+    def write_modes(self, path: Path) -> Path:
+        return write_csv(path, *self.modes_table())
+
+    def write_npz(self, path: Path) -> Path:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "wb") as handle:
+            np.savez(handle, A=self.A, B=self.B, C=self.C, D=self.D,
+                     state_names=np.array(self.state_names, dtype=str),
+                     input_names=np.array(self.input_names, dtype=str),
+                     output_names=np.array(self.output_names, dtype=str),
+                     q_equilibrium=self.q, basis=self.basis, eigenvalues=self.eigenvalues,
+                     mode_shapes=self.mode_shapes,
+                     mode_shape_names=np.array(
+                         [f"{b}.{m}" for b in self.body_names for m in MOTION], dtype=str))
+        return path
+
+
+def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> LinearModel:
+    """The linear model and modes at an equilibrium's reduced system."""
+    k = system.dof
+    stiffness = np.linalg.solve(system.mass, system.stiffness) if k else np.zeros((0, 0))
+    damping = np.linalg.solve(system.mass, system.damping) if k else np.zeros((0, 0))
+    a = np.block([[np.zeros((k, k)), np.eye(k)], [-stiffness, -damping]])
+    outputs = _output_map(functions, system)
+    c = np.hstack([outputs, np.zeros_like(outputs)])
+    eigenvalues, shapes = _modes(functions, system, a)
+    bodies = list(functions.body_names)
+    return LinearModel(
+        A=a, B=np.zeros((2 * k, 0)), C=c, D=np.zeros((c.shape[0], 0)),
+        state_names=[f"z{i + 1}" for i in range(k)] + [f"z{i + 1}_dot" for i in range(k)],
+        input_names=[], output_names=[f"{b}.{m}" for b in bodies for m in MOTION],
+        q=system.q, basis=system.basis, eigenvalues=eigenvalues, mode_shapes=shapes,
+        body_names=bodies)
+
+
+def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np.ndarray:
+    """(6 n_bodies, k): z -> every body's translation and small rotation."""
+    columns = [statics.body_motion(functions, system.q, column).ravel()
+               for column in system.basis.T]
+    return np.array(columns).T.reshape(6 * functions.n_bodies, system.dof)
+
+
+def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):
+    """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions)."""
+    k = system.dof
+    if not k:
+        return np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex)
+    values, vectors = np.linalg.eig(a)
+    size = np.abs(values)
+    real = np.abs(values.imag) <= REAL_CUT * np.maximum(size, 1e-300)
+    keep = real | (values.imag > 0)
+    values, vectors = np.where(real, values.real, values)[keep], vectors[:, keep]
+    order = np.lexsort((-values.real, np.abs(values)))
+    shapes = []
+    for index in order:
+        motion = statics.body_motion(functions, system.q,
+                                     system.basis @ vectors[:k, index].astype(complex))
+        largest = motion.ravel()[np.argmax(np.abs(motion))]
+        shapes.append(motion / largest if abs(largest) > 0 else motion)
+    return values[order].astype(complex), np.array(shapes)
+
+
+def run_modal(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:
+    """The modal analysis: the equilibrium row (statics), the linear model and the modes; a
+    zero-stiffness DOF is kept (a zero-frequency mode), no equilibrium is an AnalysisError."""
+    equilibrium = statics.solve(functions, t)
+    result = statics.equilibrium_result(functions, t, equilibrium, "modal", progress)
+    model = linearize(functions, equilibrium.system)
+    result.linear_model = model
+    result.files = {FILES[0]: model.write_modes, FILES[1]: model.write_npz}
+    result.metadata.update(frequencies_hz=model.frequency_hz.tolist(),
+                           damping_ratios=model.damping_ratio.tolist())
+    return result

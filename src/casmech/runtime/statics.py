@@ -1,0 +1,376 @@
+"""Statics: the equilibrium pose under gravity, springs, bushings, constant forces and motors
+held at their drivers (at t = 0).
+
+Equations (r-p form, Euler-parameter normalization rows part of Phi): Phi(q) = 0 and
+Q(q, 0) - Phi_q^T lam = 0, the equations of motion with q_dot = q_ddot = 0 (the sign
+convention of inverse dynamics, so the multipliers give the usual joint reactions).
+
+Solver: pseudo-transient continuation (implicit damped dynamic relaxation) on the constraint
+manifold, which becomes Newton's method near the solution. Every iterate is on Phi = 0
+(assembly's Newton projects it back); lam is the least-squares multiplier there, so the force
+residual R = Q - Phi_q^T lam is the unbalanced generalized force N N^T Q, N an orthonormal
+basis of the null space of Phi_q from a column-pivoted QR of Phi_q^T (reduced_system). In those
+independent coordinates z (dq = N dz) a step solves
+
+    (K + mu M) dz = f,   f = N^T Q,  K = -N^T dR/dq N,  M = N^T M_q N
+
+(K the tangent stiffness, lam fixed; M the mass matrix). That is backward Euler on the
+overdamped flow M z' = f with pseudo time step 1/mu: far from equilibrium it follows the flow
+downhill (to a stable equilibrium), and mu shrinks as the residual does (switched evolution
+relaxation: mu <- mu |f|/|f_prev|), so the last steps are Newton's, converging quadratically.
+mu stays above the value that keeps K + mu M positive definite, and steps that rotate a body by
+more than MAX_ROTATION radians are shortened. An equilibrium found unstable (an eigenvalue of
+(K, M) below zero: a pendulum started upright) is left along its most unstable mode, at most
+MAX_ESCAPES times. All matrices are dense: statics is for mechanisms of tens of bodies.
+
+No equilibrium (a free body falling: the residual does not fall in MAX_ITERATIONS steps) or a
+DOF of zero stiffness (neutral: every pose along it is an equilibrium) is an AnalysisError (exit
+3) naming the joints whose relative motion that DOF is (and free bodies), with YAML lines; the
+neutral case keeps the equilibrium row found.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+import scipy.linalg
+
+from casmech.compiler import euler
+from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.errors import AnalysisError, BodyName, FailureContext
+from casmech.runtime import assembly
+from casmech.runtime.results import Result
+
+MAX_ITERATIONS = 200
+FORCE_TOLERANCE = 1e-10  # |R|_inf at convergence, relative to the largest applied load
+MAX_ROTATION = 0.5  # radians a body may turn in one step
+MAX_ESCAPES = 3  # departures from unstable equilibria
+ESCAPE_ROTATION = 0.1  # radians (or 0.1 of the model's size) a departure moves along its mode
+# squared frequencies |omega^2| below max(ZERO_OMEGA2, NEUTRAL_RATIO * the largest) count as 0
+ZERO_OMEGA2 = 1e-12
+NEUTRAL_RATIO = 1e-10
+
+
+@dataclass
+class ReducedSystem:
+    """Everything at one configuration q (on Phi = 0), in the independent coordinates z."""
+
+    q: np.ndarray
+    lam: np.ndarray
+    residual: np.ndarray  # R = Q - Phi_q^T lam, full coordinates
+    applied: np.ndarray  # Q
+    basis: np.ndarray  # N, n x k, orthonormal, Phi_q N = 0
+    mass: np.ndarray  # N^T M N
+    stiffness: np.ndarray  # -N^T dR/dq N
+    damping: np.ndarray  # -N^T dQ/dq_dot N
+    force: np.ndarray  # N^T Q
+
+    @property
+    def dof(self) -> int:
+        return self.basis.shape[1]
+
+    def omega2(self) -> np.ndarray:
+        """Eigenvalues of (sym K, M), ascending: squared undamped frequencies."""
+        if not self.dof:
+            return np.zeros(0)
+        return scipy.linalg.eigh(0.5 * (self.stiffness + self.stiffness.T), self.mass,
+                                 eigvals_only=True)
+
+    def merit(self) -> float:
+        """|f| in the metric of M^-1 (an acceleration: units agree across coordinates)."""
+        if not self.dof:
+            return 0.0
+        return float(np.sqrt(max(self.force @ np.linalg.solve(self.mass, self.force), 0.0)))
+
+
+@dataclass
+class Equilibrium:
+    q: np.ndarray
+    lam: np.ndarray
+    system: ReducedSystem
+    iterations: int
+    escapes: int
+
+    @property
+    def residual_norm(self) -> float:
+        return float(np.max(np.abs(self.system.residual), initial=0.0))
+
+
+def tangent_function(functions: SystemFunctions) -> ca.Function:
+    """(t, q, lam) -> (R, dR/dq, dQ/dq_dot, M, Phi_q, Q) at q_dot = 0, built once per bundle
+    from its SX functions (a compiled bundle's model is rebuilt in SX for AD)."""
+    if "statics_tangent" in functions.derived:
+        return functions.derived["statics_tangent"]
+    bundle = functions
+    if not all(f.is_a("SXFunction") for f in functions.functions.values()):
+        bundle = build_functions(functions.ir)
+    n, m = functions.n_coordinates, functions.n_rows
+    t, q, q_dot, lam = ca.SX.sym("t"), ca.SX.sym("q", n), ca.SX.sym("q_dot", n), ca.SX.sym("lam", m)
+    applied = bundle["generalized_forces"](t, q, q_dot)
+    phi_q = bundle["phi_q"](t, q)
+    residual = applied - ca.mtimes(phi_q.T, lam)
+    zero = ca.DM.zeros(n)
+    outputs = [residual, ca.jacobian(residual, q), ca.jacobian(applied, q_dot),
+               bundle["mass_matrix"](q), phi_q, applied]
+    outputs = [ca.substitute(out, q_dot, zero) for out in outputs]
+    function = ca.Function("statics_tangent", [t, q, lam], outputs)
+    functions.derived["statics_tangent"] = function
+    return function
+
+
+def null_space(phi_q: np.ndarray) -> np.ndarray:
+    """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T (rank by
+    numpy's cut: |R_kk| <= max(m, n) eps |R_00|)."""
+    m, n = phi_q.shape
+    if m == 0:
+        return np.eye(n)
+    q_factor, r_factor, _ = scipy.linalg.qr(phi_q.T, pivoting=True)
+    diagonal = np.abs(np.diag(r_factor))
+    cut = max(m, n) * np.finfo(float).eps * (diagonal[0] if diagonal.size else 0.0)
+    rank = int(np.sum(diagonal > cut))
+    return q_factor[:, rank:]
+
+
+def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray) -> ReducedSystem:
+    """The reduced quantities at q; lam the least-squares multipliers (minimum norm where rows
+    are redundant)."""
+    tangent = tangent_function(functions)
+    m = functions.n_rows
+    *_, phi_q, applied = (np.array(v) for v in tangent(t, q, np.zeros(m)))
+    applied = applied.ravel()
+    lam = np.linalg.lstsq(phi_q.T, applied, rcond=None)[0] if m else np.zeros(0)
+    residual, r_q, q_v, mass, phi_q, applied = (np.array(v) for v in tangent(t, q, lam))
+    basis = null_space(phi_q)
+    return ReducedSystem(q, lam, residual.ravel(), applied.ravel(), basis,
+                         basis.T @ mass @ basis, -basis.T @ r_q @ basis,
+                         -basis.T @ q_v @ basis, basis.T @ applied.ravel())
+
+
+def body_motion(functions: SystemFunctions, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    """(n_bodies, 6): each body's translation and small rotation (global, 2 E(p) dp) for the
+    coordinate change dq (real or complex)."""
+    nb = functions.n_bodies
+    motion = np.zeros((nb, 6), dtype=np.result_type(dq, float))
+    for k in range(nb):
+        p = q[3 * nb + 4 * k:3 * nb + 4 * k + 4]
+        motion[k, :3] = dq[3 * k:3 * k + 3]
+        motion[k, 3:] = 2 * euler.numeric(euler.e_matrix, p) @ dq[3 * nb + 4 * k:3 * nb + 4 * k + 4]
+    return motion
+
+
+def model_size(functions: SystemFunctions, q: np.ndarray) -> float:
+    """A length to weigh translations against rotations: the spread of the bodies and joint
+    points, at least 0.1 (m)."""
+    nb = functions.n_bodies
+    points = [q[3 * k:3 * k + 3] for k in range(nb)]
+    points += [np.asarray(j.point_i, float) for j in functions.ir.joints if j.body_i < 0]
+    if len(points) < 2:
+        return 0.1
+    points = np.array(points)
+    return max(0.1, float(np.max(np.linalg.norm(points - points.mean(axis=0), axis=1))))
+
+
+def moving_parts(functions: SystemFunctions, q: np.ndarray, dq: np.ndarray, count: int = 4):
+    """Joints whose relative motion dq is, and moving bodies no joint holds, with their share
+    of the motion (largest first): what a failure names for a DOF."""
+    motion = np.abs(body_motion(functions, q, dq)) if dq.dtype.kind == "c" else \
+        body_motion(functions, q, dq)
+    motion = np.real(motion)
+    length = model_size(functions, q)
+    nb = functions.n_bodies
+    parts: list[tuple[str, object, float]] = []
+    held = set()
+    for joint in functions.ir.joints:
+        held.update((joint.body_i, joint.body_j))
+        ends = []
+        for k in (joint.body_i, joint.body_j):
+            if k < 0:
+                ends.append((np.zeros(3), np.zeros(3), np.zeros(3)))
+            else:
+                ends.append((q[3 * k:3 * k + 3], motion[k, :3], motion[k, 3:]))
+        at = _joint_point(functions, q, joint)
+        (r_i, dr_i, dth_i), (r_j, dr_j, dth_j) = ends
+        v_rel = dr_j + np.cross(dth_j, at - r_j) - dr_i - np.cross(dth_i, at - r_i)
+        w_rel = dth_j - dth_i
+        parts.append((joint.name, joint.source,
+                      float(np.linalg.norm(w_rel) + np.linalg.norm(v_rel) / length)))
+    for k, body in enumerate(functions.ir.bodies):
+        if k not in held:
+            size = np.linalg.norm(motion[k, 3:]) + np.linalg.norm(motion[k, :3]) / length
+            parts.append((BodyName(body.name), body.source, float(size)))
+    total = max((p[2] for p in parts), default=0.0)
+    if total <= 0.0 or nb == 0:
+        return []
+    ranked = sorted(((n, s, v / total) for n, s, v in parts if v > 1e-6 * total),
+                    key=lambda item: -item[2])
+    return ranked[:count]
+
+
+def _joint_point(functions: SystemFunctions, q: np.ndarray, joint) -> np.ndarray:
+    """Global position of the joint point on body_i."""
+    k = joint.body_i
+    if k < 0:
+        return np.asarray(joint.point_i, float)
+    nb = functions.n_bodies
+    rotation = euler.numeric(euler.rotation, q[3 * nb + 4 * k:3 * nb + 4 * k + 4])
+    return q[3 * k:3 * k + 3] + rotation @ np.asarray(joint.point_i, float)
+
+
+def neutral_threshold(omega2: np.ndarray) -> float:
+    return max(ZERO_OMEGA2, NEUTRAL_RATIO * float(np.max(np.abs(omega2), initial=0.0)))
+
+
+def _converged(system: ReducedSystem, scale: float) -> bool:
+    return float(np.max(np.abs(system.residual), initial=0.0)) <= FORCE_TOLERANCE * scale
+
+
+def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
+    """The largest applied load (gravity included) or reaction, for the relative tolerance."""
+    weights = [b.mass * float(np.linalg.norm(functions.ir.gravity)) for b in functions.ir.bodies]
+    loads = [float(np.max(np.abs(system.applied), initial=0.0)), *weights]
+    return max(max(loads), np.finfo(float).tiny)
+
+
+def _step(system: ReducedSystem, mu: float, functions: SystemFunctions) -> np.ndarray:
+    """dq of one pseudo-time step, shortened to MAX_ROTATION per body."""
+    dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
+    dq = system.basis @ dz
+    rotation = np.max(np.linalg.norm(body_motion(functions, system.q, dq)[:, 3:], axis=1),
+                      initial=0.0)
+    return dq * min(1.0, MAX_ROTATION / rotation) if rotation > 0 else dq
+
+
+def _positive_shift(omega2: np.ndarray) -> float:
+    """The least mu keeping K + mu M safely positive definite."""
+    lowest = float(omega2[0]) if omega2.size else 0.0
+    return 2.0 * max(0.0, -lowest) + neutral_threshold(omega2)
+
+
+def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
+    """q moved off an unstable equilibrium along its most unstable mode."""
+    _, vectors = scipy.linalg.eigh(0.5 * (system.stiffness + system.stiffness.T), system.mass)
+    dq = system.basis @ vectors[:, 0]
+    dq = dq if dq[np.argmax(np.abs(dq))] > 0 else -dq  # a fixed sign: runs repeat
+    motion = body_motion(functions, system.q, dq)
+    size = max(np.max(np.linalg.norm(motion[:, 3:], axis=1), initial=0.0),
+               np.max(np.linalg.norm(motion[:, :3], axis=1), initial=0.0)
+               / model_size(functions, system.q))
+    return system.q + dq * (ESCAPE_ROTATION / size)
+
+
+POLISH_STEPS = 3
+
+
+def _polish(functions: SystemFunctions, t: float, system: ReducedSystem,
+            omega2: np.ndarray) -> ReducedSystem:
+    """Up to POLISH_STEPS Newton steps past the tolerance, each kept while it lowers the
+    residual (the tolerance is met at 1e-10 of the loads; roundoff allows ~1e-15)."""
+    for _ in range(POLISH_STEPS):
+        try:
+            q = assembly.newton(functions, t, system.q + _step(system, _positive_shift(omega2),
+                                                                functions))
+            trial = reduced_system(functions, t, q)
+        except (AnalysisError, np.linalg.LinAlgError):
+            break
+        if not np.max(np.abs(trial.residual), initial=0.0) < np.max(np.abs(system.residual),
+                                                                    initial=0.0):
+            break
+        system = trial
+    return system
+
+
+def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = None
+          ) -> Equilibrium:
+    """The equilibrium from the assembled pose (or from q), by pseudo-transient continuation.
+    Raises AnalysisError when the residual does not converge (naming the DOF it drives)."""
+    q = assembly.assemble_positions(functions, t, q)
+    system = reduced_system(functions, t, q)
+    scale = _load_scale(functions, system)
+    omega2 = system.omega2()
+    mu = max(_positive_shift(omega2), float(np.max(np.abs(omega2), initial=0.0)),
+             ZERO_OMEGA2)
+    merit, escapes = system.merit(), 0
+    for iteration in range(MAX_ITERATIONS):
+        if _converged(system, scale):
+            if escapes >= MAX_ESCAPES or not omega2.size or omega2[0] >= -neutral_threshold(
+                    omega2):
+                system = _polish(functions, t, system, omega2)
+                return Equilibrium(system.q, system.lam, system, iteration, escapes)
+            escapes += 1
+            q = assembly.newton(functions, t, _escape(functions, system))
+            system = reduced_system(functions, t, q)
+            omega2, merit = system.omega2(), system.merit()
+            mu = max(_positive_shift(omega2), float(np.max(np.abs(omega2), initial=0.0)))
+            continue
+        mu = max(mu, _positive_shift(omega2))
+        try:
+            q = assembly.newton(functions, t, system.q + _step(system, mu, functions))
+            trial = reduced_system(functions, t, q)
+        except (AnalysisError, np.linalg.LinAlgError):
+            mu *= 10.0
+            continue
+        trial_merit = trial.merit()
+        if not np.isfinite(trial_merit) or trial_merit > 100.0 * max(merit, ZERO_OMEGA2):
+            mu *= 10.0  # a step that made things far worse is not taken
+            continue
+        mu *= min(1.0, trial_merit / merit) if merit > 0 else 1.0
+        system, merit, omega2 = trial, trial_merit, trial.omega2()
+    direction = system.basis @ np.linalg.solve(system.mass, system.force) if system.dof else \
+        np.zeros(functions.n_coordinates)
+    cause = (f"no static equilibrium found in {MAX_ITERATIONS} iterations (unbalanced "
+             f"generalized force {np.linalg.norm(system.force):.3e}); the free motion it "
+             "drives (a body falling, a DOF with nothing to hold it):")
+    raise AnalysisError(FailureContext(t, cause, moving_parts(functions, system.q, direction),
+                                       "share of the motion"))
+
+
+def neutral_directions(system: ReducedSystem) -> np.ndarray:
+    """Columns dq of the DOF with zero stiffness at an equilibrium (n x count)."""
+    if not system.dof:
+        return np.zeros((system.q.size, 0))
+    omega2, vectors = scipy.linalg.eigh(0.5 * (system.stiffness + system.stiffness.T),
+                                        system.mass)
+    zero = np.abs(omega2) <= neutral_threshold(omega2)
+    return system.basis @ vectors[:, zero]
+
+
+def neutral_error(functions: SystemFunctions, t: float, equilibrium: Equilibrium,
+                  directions: np.ndarray) -> AnalysisError:
+    """The failure for an equilibrium that is not unique: the parts every neutral DOF moves."""
+    parts: dict[str, tuple[object, float]] = {}
+    for column in directions.T:
+        for name, source, share in moving_parts(functions, equilibrium.q, column):
+            parts[name] = (source, max(share, parts.get(name, (None, 0.0))[1]))
+    ranked = sorted(((n, s, v) for n, (s, v) in parts.items()), key=lambda item: -item[2])
+    cause = (f"the equilibrium is not unique: {directions.shape[1]} DOF with zero stiffness "
+             "(every pose along it balances); the joints and bodies it moves:")
+    return AnalysisError(FailureContext(t, cause, ranked, "share of the motion"))
+
+
+def equilibrium_result(functions: SystemFunctions, t: float, equilibrium: Equilibrium,
+                       analysis: str, progress=None) -> Result:
+    """One row at the equilibrium (velocities and accelerations zero) and its metadata."""
+    result = Result(analysis, on_row=progress)
+    n = functions.n_coordinates
+    result.append(t, equilibrium.q, np.zeros(n), np.zeros(n), equilibrium.lam)
+    omega2 = equilibrium.system.omega2()
+    result.metadata.update(
+        residual_norm=equilibrium.residual_norm, iterations=equilibrium.iterations,
+        escapes=equilibrium.escapes, dof=equilibrium.system.dof,
+        stable=bool(not omega2.size or omega2[0] >= -neutral_threshold(omega2)))
+    return result
+
+
+def run_statics(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:
+    """The statics analysis: one results row; AnalysisError (exit 3) when there is no unique
+    equilibrium (a neutral DOF keeps the row found in the error's partial result)."""
+    equilibrium = solve(functions, t)
+    result = equilibrium_result(functions, t, equilibrium, "statics", progress)
+    directions = neutral_directions(equilibrium.system)
+    if directions.shape[1]:
+        error = neutral_error(functions, t, equilibrium, directions)
+        error.partial = result
+        raise error
+    return result
