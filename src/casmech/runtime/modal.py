@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from casmech.compiler.functions import SystemFunctions
-from casmech.output.csv import write_csv
+from casmech.output.csv import atomic
 from casmech.runtime import statics
 from casmech.runtime.results import Result
 
@@ -67,7 +67,8 @@ class LinearModel:
     @property
     def damping_ratio(self) -> np.ndarray:
         size = np.abs(self.eigenvalues)
-        return np.divide(-self.eigenvalues.real, size, out=np.zeros(size.shape), where=size > 0)
+        ratio = np.divide(-self.eigenvalues.real, size, out=np.zeros(size.shape), where=size > 0)
+        return ratio + 0.0  # no -0.0
 
     def modes_table(self) -> tuple[list[str], np.ndarray]:
         values = np.column_stack([np.arange(1, len(self.eigenvalues) + 1), self.frequency_hz,
@@ -76,7 +77,13 @@ class LinearModel:
         return list(MODE_COLUMNS), values.reshape(-1, len(MODE_COLUMNS))
 
     def write_modes(self, path: Path) -> Path:
-        return write_csv(path, *self.modes_table())
+        """modes.csv: the table, mode numbers as integers, atomically."""
+        names, values = self.modes_table()
+        with atomic(Path(path), newline="") as handle:
+            handle.write(",".join(names) + "\n")
+            handle.writelines(",".join([str(int(row[0])), *map(repr, row[1:])]) + "\n"
+                              for row in values.tolist())
+        return Path(path)
 
     def write_npz(self, path: Path) -> Path:
         path.parent.mkdir(parents=True, exist_ok=True)
