@@ -2,18 +2,17 @@
 linearization of casmech's own equations of motion (issue 17 item 2 'must show')."""
 
 import numpy as np
-import pytest
 import scipy.linalg
 
 import casmech
 from casmech.runtime import assembly, statics
 from tests.conftest import MODELS
 from tests.runtime.statics_models import (
-    G,
     HANGING_FOUR_BAR,
     HANGING_ROD,
     RSDA_PENDULUM,
     SPRING_MASS,
+    G,
     compiled,
     row,
 )

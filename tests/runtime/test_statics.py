@@ -10,10 +10,10 @@ from casmech.runtime import statics
 from tests.conftest import MODELS
 from tests.runtime.statics_models import (
     FREE_BODY,
-    G,
     RSDA_PENDULUM,
     SPRING_MASS,
     VERTICAL_HINGE,
+    G,
     compiled,
     row,
 )
