@@ -37,7 +37,9 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
+from casmech import interrupts
 from casmech.compiler import euler
+from casmech.compiler.checks import RANK_TOLERANCE
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.errors import AnalysisError, BodyName, FailureContext
 from casmech.runtime import assembly
@@ -71,12 +73,23 @@ class ReducedSystem:
     def dof(self) -> int:
         return self.basis.shape[1]
 
+    def modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """(omega^2 ascending, V): eigenpairs of (sym K, M), V^T M V = I; computed once."""
+        if not hasattr(self, "_modes"):
+            if self.dof:
+                self._modes = scipy.linalg.eigh(0.5 * (self.stiffness + self.stiffness.T),
+                                                self.mass)
+            else:
+                self._modes = (np.zeros(0), np.zeros((0, 0)))
+        return self._modes
+
     def omega2(self) -> np.ndarray:
-        """Eigenvalues of (sym K, M), ascending: squared undamped frequencies."""
-        if not self.dof:
-            return np.zeros(0)
-        return scipy.linalg.eigh(0.5 * (self.stiffness + self.stiffness.T), self.mass,
-                                 eigvals_only=True)
+        """Squared undamped frequencies, ascending (of the symmetric part of K)."""
+        return self.modes()[0]
+
+    def unstable(self) -> bool:
+        omega2 = self.omega2()
+        return bool(omega2.size and omega2[0] < -neutral_threshold(omega2))
 
     def merit(self) -> float:
         """|f| in the metric of M^-1 (an acceleration: units agree across coordinates)."""
@@ -121,14 +134,15 @@ def tangent_function(functions: SystemFunctions) -> ca.Function:
 
 
 def null_space(phi_q: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T (rank by
-    numpy's cut: |R_kk| <= max(m, n) eps |R_00|)."""
+    """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T, rank by
+    `casmech check`'s cut (|R_kk| > RANK_TOLERANCE max(|R_00|, 1)): a redundant row stays
+    redundant off the exact pose (the Bricard loop's R_kk is ~1e-13 at |Phi| ~ 1e-12)."""
     m, n = phi_q.shape
     if m == 0:
         return np.eye(n)
     q_factor, r_factor, _ = scipy.linalg.qr(phi_q.T, pivoting=True)
     diagonal = np.abs(np.diag(r_factor))
-    cut = max(m, n) * np.finfo(float).eps * (diagonal[0] if diagonal.size else 0.0)
+    cut = RANK_TOLERANCE * max(diagonal[0] if diagonal.size else 0.0, 1.0)
     rank = int(np.sum(diagonal > cut))
     return q_factor[:, rank:]
 
@@ -140,7 +154,7 @@ def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray) -> Reduc
     m = functions.n_rows
     *_, phi_q, applied = (np.array(v) for v in tangent(t, q, np.zeros(m)))
     applied = applied.ravel()
-    lam = np.linalg.lstsq(phi_q.T, applied, rcond=None)[0] if m else np.zeros(0)
+    lam = np.linalg.lstsq(phi_q.T, applied, rcond=RANK_TOLERANCE)[0] if m else np.zeros(0)
     residual, r_q, q_v, mass, phi_q, applied = (np.array(v) for v in tangent(t, q, lam))
     basis = null_space(phi_q)
     return ReducedSystem(q, lam, residual.ravel(), applied.ravel(), basis,
@@ -234,24 +248,23 @@ def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
 
 
 def _step(system: ReducedSystem, mu: float, functions: SystemFunctions) -> np.ndarray:
-    """dq of one pseudo-time step, shortened to MAX_ROTATION per body."""
-    dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
+    """dq of one pseudo-time step, shortened to MAX_ROTATION per body: (K + mu M) dz = f, or,
+    where sym K has negative eigenvalues, (|K| + mu M) dz = f with |K| = M V |Omega^2| V^T M
+    (saddle-free: downhill along the unstable modes instead of towards the unstable pose)."""
+    if system.unstable():
+        omega2, vectors = system.modes()
+        dz = vectors @ ((vectors.T @ system.force) / (np.abs(omega2) + mu))
+    else:
+        dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
     dq = system.basis @ dz
     rotation = np.max(np.linalg.norm(body_motion(functions, system.q, dq)[:, 3:], axis=1),
                       initial=0.0)
     return dq * min(1.0, MAX_ROTATION / rotation) if rotation > 0 else dq
 
 
-def _positive_shift(omega2: np.ndarray) -> float:
-    """The least mu keeping K + mu M safely positive definite."""
-    lowest = float(omega2[0]) if omega2.size else 0.0
-    return 2.0 * max(0.0, -lowest) + neutral_threshold(omega2)
-
-
 def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
     """q moved off an unstable equilibrium along its most unstable mode."""
-    _, vectors = scipy.linalg.eigh(0.5 * (system.stiffness + system.stiffness.T), system.mass)
-    dq = system.basis @ vectors[:, 0]
+    dq = system.basis @ system.modes()[1][:, 0]
     dq = dq if dq[np.argmax(np.abs(dq))] > 0 else -dq  # a fixed sign: runs repeat
     motion = body_motion(functions, system.q, dq)
     size = max(np.max(np.linalg.norm(motion[:, 3:], axis=1), initial=0.0),
@@ -260,22 +273,30 @@ def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
     return system.q + dq * (ESCAPE_ROTATION / size)
 
 
+def _initial_mu(system: ReducedSystem) -> float:
+    """A first pseudo time step of 1 / (the largest |omega^2|): overdamped for every mode."""
+    return max(float(np.max(np.abs(system.omega2()), initial=0.0)), ZERO_OMEGA2)
+
+
+def _try(functions: SystemFunctions, t: float, system: ReducedSystem, mu: float):
+    """The next iterate projected onto Phi = 0, or None when the projection fails."""
+    try:
+        q = assembly.newton(functions, t, system.q + _step(system, mu, functions))
+        return reduced_system(functions, t, q)
+    except (AnalysisError, np.linalg.LinAlgError):
+        return None
+
+
 POLISH_STEPS = 3
 
 
-def _polish(functions: SystemFunctions, t: float, system: ReducedSystem,
-            omega2: np.ndarray) -> ReducedSystem:
+def _polish(functions: SystemFunctions, t: float, system: ReducedSystem) -> ReducedSystem:
     """Up to POLISH_STEPS Newton steps past the tolerance, each kept while it lowers the
     residual (the tolerance is met at 1e-10 of the loads; roundoff allows ~1e-15)."""
     for _ in range(POLISH_STEPS):
-        try:
-            q = assembly.newton(functions, t, system.q + _step(system, _positive_shift(omega2),
-                                                                functions))
-            trial = reduced_system(functions, t, q)
-        except (AnalysisError, np.linalg.LinAlgError):
-            break
-        if not np.max(np.abs(trial.residual), initial=0.0) < np.max(np.abs(system.residual),
-                                                                    initial=0.0):
+        trial = _try(functions, t, system, neutral_threshold(system.omega2()))
+        if trial is None or not (np.max(np.abs(trial.residual), initial=0.0)
+                                 < np.max(np.abs(system.residual), initial=0.0)):
             break
         system = trial
     return system
@@ -288,35 +309,27 @@ def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = Non
     q = assembly.assemble_positions(functions, t, q)
     system = reduced_system(functions, t, q)
     scale = _load_scale(functions, system)
-    omega2 = system.omega2()
-    mu = max(_positive_shift(omega2), float(np.max(np.abs(omega2), initial=0.0)),
-             ZERO_OMEGA2)
-    merit, escapes = system.merit(), 0
+    mu, merit, escapes = _initial_mu(system), system.merit(), 0
     for iteration in range(MAX_ITERATIONS):
+        interrupts.check()  # a pending SIGINT/SIGTERM (casmech run) stops here
         if _converged(system, scale):
-            if escapes >= MAX_ESCAPES or not omega2.size or omega2[0] >= -neutral_threshold(
-                    omega2):
-                system = _polish(functions, t, system, omega2)
+            if escapes >= MAX_ESCAPES or not system.unstable():
+                system = _polish(functions, t, system)
                 return Equilibrium(system.q, system.lam, system, iteration, escapes)
             escapes += 1
-            q = assembly.newton(functions, t, _escape(functions, system))
-            system = reduced_system(functions, t, q)
-            omega2, merit = system.omega2(), system.merit()
-            mu = max(_positive_shift(omega2), float(np.max(np.abs(omega2), initial=0.0)))
+            system = reduced_system(functions, t,
+                                    assembly.newton(functions, t, _escape(functions, system)))
+            mu, merit = _initial_mu(system), system.merit()
             continue
-        mu = max(mu, _positive_shift(omega2))
-        try:
-            q = assembly.newton(functions, t, system.q + _step(system, mu, functions))
-            trial = reduced_system(functions, t, q)
-        except (AnalysisError, np.linalg.LinAlgError):
-            mu *= 10.0
-            continue
-        trial_merit = trial.merit()
+        trial = _try(functions, t, system, mu)
+        trial_merit = np.inf if trial is None else trial.merit()
         if not np.isfinite(trial_merit) or trial_merit > 100.0 * max(merit, ZERO_OMEGA2):
             mu *= 10.0  # a step that made things far worse is not taken
             continue
-        mu *= min(1.0, trial_merit / merit) if merit > 0 else 1.0
-        system, merit, omega2 = trial, trial_merit, trial.omega2()
+        # switched evolution relaxation: a longer pseudo time step as the residual falls
+        mu = max(mu * min(1.0, trial_merit / merit) if merit > 0 else mu,
+                 neutral_threshold(trial.omega2()))
+        system, merit = trial, trial_merit
     direction = system.basis @ np.linalg.solve(system.mass, system.force) if system.dof else \
         np.zeros(functions.n_coordinates)
     cause = (f"no static equilibrium found in {MAX_ITERATIONS} iterations (unbalanced "
@@ -330,8 +343,7 @@ def neutral_directions(system: ReducedSystem) -> np.ndarray:
     """Columns dq of the DOF with zero stiffness at an equilibrium (n x count)."""
     if not system.dof:
         return np.zeros((system.q.size, 0))
-    omega2, vectors = scipy.linalg.eigh(0.5 * (system.stiffness + system.stiffness.T),
-                                        system.mass)
+    omega2, vectors = system.modes()
     zero = np.abs(omega2) <= neutral_threshold(omega2)
     return system.basis @ vectors[:, zero]
 
@@ -355,11 +367,10 @@ def equilibrium_result(functions: SystemFunctions, t: float, equilibrium: Equili
     result = Result(analysis, on_row=progress)
     n = functions.n_coordinates
     result.append(t, equilibrium.q, np.zeros(n), np.zeros(n), equilibrium.lam)
-    omega2 = equilibrium.system.omega2()
     result.metadata.update(
         residual_norm=equilibrium.residual_norm, iterations=equilibrium.iterations,
         escapes=equilibrium.escapes, dof=equilibrium.system.dof,
-        stable=bool(not omega2.size or omega2[0] >= -neutral_threshold(omega2)))
+        stable=not equilibrium.system.unstable())
     return result
 
 
