@@ -119,9 +119,7 @@ def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> Line
 
 def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np.ndarray:
     """(6 n_bodies, k): z -> every body's translation and small rotation."""
-    columns = [statics.body_motion(functions, system.q, column).ravel()
-               for column in system.basis.T]
-    return np.array(columns).T.reshape(6 * functions.n_bodies, system.dof)
+    return statics.motion_map(system.q) @ system.basis
 
 
 def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):

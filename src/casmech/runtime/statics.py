@@ -7,21 +7,24 @@ convention of inverse dynamics, so the multipliers give the usual joint reaction
 
 Solver: pseudo-transient continuation (implicit damped dynamic relaxation) on the constraint
 manifold, which becomes Newton's method near the solution. Every iterate is on Phi = 0
-(assembly's Newton projects it back); lam is the least-squares multiplier there, so the force
+(assembly's Newton projects it back); lam is a least-squares multiplier there, so the force
 residual R = Q - Phi_q^T lam is the unbalanced generalized force N N^T Q, N an orthonormal
 basis of the null space of Phi_q from a column-pivoted QR of Phi_q^T (reduced_system). In those
 independent coordinates z (dq = N dz) a step solves
 
     (K + mu M) dz = f,   f = N^T Q,  K = -N^T dR/dq N,  M = N^T M_q N
 
-(K the tangent stiffness, lam fixed; M the mass matrix). That is backward Euler on the
-overdamped flow M z' = f with pseudo time step 1/mu: far from equilibrium it follows the flow
-downhill (to a stable equilibrium), and mu shrinks as the residual does (switched evolution
-relaxation: mu <- mu |f|/|f_prev|), so the last steps are Newton's, converging quadratically.
-mu stays above the value that keeps K + mu M positive definite, and steps that rotate a body by
-more than MAX_ROTATION radians are shortened. An equilibrium found unstable (an eigenvalue of
-(K, M) below zero: a pendulum started upright) is left along its most unstable mode, at most
-MAX_ESCAPES times. All matrices are dense: statics is for mechanisms of tens of bodies.
+(K the tangent stiffness by AD, lam fixed: the constraint-curvature term; M the mass matrix).
+That is backward Euler on the overdamped flow M z' = f with pseudo time step 1/mu: far from
+equilibrium it follows the flow downhill (to a stable equilibrium); mu starts at the largest
+|omega^2| of (K, M) and shrinks as the residual |f|_(M^-1) does (switched evolution
+relaxation, at least halved by every step that lowers it; a step that makes it 100x worse is
+retried with 10 mu), so the last steps are Newton's, converging quadratically. Where the
+symmetric part of K has negative eigenvalues (a pose above a stable one), or the step would
+turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free,
+each mode clipped on its own). An equilibrium found unstable (a pendulum started upright) is
+left along its most unstable mode, at most MAX_ESCAPES times. All matrices are dense: statics
+is for mechanisms of tens of bodies (a 30-link chain from horizontal: 130 steps, 3.6 s).
 
 No equilibrium (a free body falling: the residual does not fall in MAX_ITERATIONS steps) or a
 DOF of zero stiffness (neutral: every pose along it is an equilibrium) is an AnalysisError (exit
@@ -48,6 +51,7 @@ from casmech.runtime.results import Result
 MAX_ITERATIONS = 200
 FORCE_TOLERANCE = 1e-10  # |R|_inf at convergence, relative to the largest applied load
 MAX_ROTATION = 0.5  # radians a body may turn in one step
+GROWTH = 0.5  # mu's factor after a step that lowered the residual (at most)
 MAX_ESCAPES = 3  # departures from unstable equilibria
 ESCAPE_ROTATION = 0.1  # radians (or 0.1 of the model's size) a departure moves along its mode
 # squared frequencies |omega^2| below max(ZERO_OMEGA2, NEUTRAL_RATIO * the largest) count as 0
@@ -133,45 +137,74 @@ def tangent_function(functions: SystemFunctions) -> ca.Function:
     return function
 
 
+def _factor(phi_q: np.ndarray):
+    """Column-pivoted QR of Phi_q^T (Phi_q^T[:, pivots] = Q R) and its rank by `casmech
+    check`'s cut, |R_kk| > RANK_TOLERANCE max(|R_00|, 1): a redundant row stays redundant off
+    the exact pose (the Bricard loop's R_kk is ~1e-13 at |Phi| ~ 1e-12)."""
+    q_factor, r_factor, pivots = scipy.linalg.qr(phi_q.T, pivoting=True)
+    diagonal = np.abs(np.diag(r_factor))
+    cut = RANK_TOLERANCE * max(diagonal[0] if diagonal.size else 0.0, 1.0)
+    return q_factor, r_factor, pivots, int(np.sum(diagonal > cut))
+
+
 def null_space(phi_q: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T, rank by
-    `casmech check`'s cut (|R_kk| > RANK_TOLERANCE max(|R_00|, 1)): a redundant row stays
-    redundant off the exact pose (the Bricard loop's R_kk is ~1e-13 at |Phi| ~ 1e-12)."""
+    """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T."""
     m, n = phi_q.shape
     if m == 0:
         return np.eye(n)
-    q_factor, r_factor, _ = scipy.linalg.qr(phi_q.T, pivoting=True)
-    diagonal = np.abs(np.diag(r_factor))
-    cut = RANK_TOLERANCE * max(diagonal[0] if diagonal.size else 0.0, 1.0)
-    rank = int(np.sum(diagonal > cut))
+    q_factor, _, _, rank = _factor(phi_q)
     return q_factor[:, rank:]
 
 
-def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray) -> ReducedSystem:
-    """The reduced quantities at q; lam the least-squares multipliers (minimum norm where rows
-    are redundant)."""
-    tangent = tangent_function(functions)
-    m = functions.n_rows
-    *_, phi_q, applied = (np.array(v) for v in tangent(t, q, np.zeros(m)))
-    applied = applied.ravel()
-    lam = np.linalg.lstsq(phi_q.T, applied, rcond=RANK_TOLERANCE)[0] if m else np.zeros(0)
-    residual, r_q, q_v, mass, phi_q, applied = (np.array(v) for v in tangent(t, q, lam))
-    basis = null_space(phi_q)
-    return ReducedSystem(q, lam, residual.ravel(), applied.ravel(), basis,
-                         basis.T @ mass @ basis, -basis.T @ r_q @ basis,
-                         -basis.T @ q_v @ basis, basis.T @ applied.ravel())
+def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
+                   minimum_norm: bool = False) -> ReducedSystem:
+    """The reduced quantities at q. lam solves Phi_q^T lam = Q in least squares: the basic
+    solution of the QR (zero on redundant rows), or with `minimum_norm` the minimum-norm one
+    (the reactions reported). Either gives the same residual Q - Phi_q^T lam."""
+    m, n = functions.n_rows, functions.n_coordinates
+    phi_q = functions.matrix("phi_q", t, q)
+    applied = functions.vector("generalized_forces", t, q, np.zeros(n))
+    if m == 0:
+        basis, lam = np.eye(n), np.zeros(0)
+    else:
+        q_factor, r_factor, pivots, rank = _factor(phi_q)
+        basis = q_factor[:, rank:]
+        lam = np.zeros(m)
+        lam[pivots[:rank]] = scipy.linalg.solve_triangular(
+            r_factor[:rank, :rank], q_factor[:, :rank].T @ applied)
+        if minimum_norm:
+            lam = np.linalg.lstsq(phi_q.T, applied, rcond=RANK_TOLERANCE)[0]
+    residual, r_q, q_v, mass, _, _ = (np.array(v)
+                                      for v in tangent_function(functions)(t, q, lam))
+    return ReducedSystem(q, lam, residual.ravel(), applied, basis, basis.T @ mass @ basis,
+                         -basis.T @ r_q @ basis, -basis.T @ q_v @ basis, basis.T @ applied)
+
+
+def motion_map(q: np.ndarray) -> np.ndarray:
+    """T (6 nb x 7 nb): T dq stacks each body's translation and small global rotation
+    2 E(p) dp for a coordinate change dq."""
+    nb = q.size // 7
+    t = np.zeros((6 * nb, 7 * nb))
+    for k in range(nb):
+        e0, e = q[3 * nb + 4 * k], q[3 * nb + 4 * k + 1:3 * nb + 4 * k + 4]
+        skew = np.array([[0, -e[2], e[1]], [e[2], 0, -e[0]], [-e[1], e[0], 0]])
+        t[6 * k:6 * k + 3, 3 * k:3 * k + 3] = np.eye(3)
+        t[6 * k + 3:6 * k + 6, 3 * nb + 4 * k:3 * nb + 4 * k + 4] = 2 * np.column_stack(
+            [-e, skew + e0 * np.eye(3)])
+    return t
 
 
 def body_motion(functions: SystemFunctions, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
     """(n_bodies, 6): each body's translation and small rotation (global, 2 E(p) dp) for the
     coordinate change dq (real or complex)."""
-    nb = functions.n_bodies
-    motion = np.zeros((nb, 6), dtype=np.result_type(dq, float))
-    for k in range(nb):
-        p = q[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-        motion[k, :3] = dq[3 * k:3 * k + 3]
-        motion[k, 3:] = 2 * euler.numeric(euler.e_matrix, p) @ dq[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-    return motion
+    return (motion_map(q) @ dq).reshape(functions.n_bodies, 6)
+
+
+def largest_rotation(motion: np.ndarray) -> np.ndarray:
+    """Per column of T dQ (6 nb x k): the largest rotation of a body."""
+    nb = motion.shape[0] // 6
+    rotations = motion.reshape(nb, 6, -1)[:, 3:, :]
+    return np.max(np.linalg.norm(rotations, axis=1), axis=0, initial=0.0)
 
 
 def model_size(functions: SystemFunctions, q: np.ndarray) -> float:
@@ -247,19 +280,24 @@ def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
     return max(max(loads), np.finfo(float).tiny)
 
 
-def _step(system: ReducedSystem, mu: float, functions: SystemFunctions) -> np.ndarray:
-    """dq of one pseudo-time step, shortened to MAX_ROTATION per body: (K + mu M) dz = f, or,
-    where sym K has negative eigenvalues, (|K| + mu M) dz = f with |K| = M V |Omega^2| V^T M
-    (saddle-free: downhill along the unstable modes instead of towards the unstable pose)."""
-    if system.unstable():
-        omega2, vectors = system.modes()
-        dz = vectors @ ((vectors.T @ system.force) / (np.abs(omega2) + mu))
-    else:
+def _step(system: ReducedSystem, mu: float) -> np.ndarray:
+    """dq of one pseudo-time step: (K + mu M) dz = f; where sym K has negative eigenvalues, or
+    the step turns a body by more than MAX_ROTATION, mode by mode instead (the eigenpairs of
+    (sym K, M)): amplitude V_i^T f / (|omega_i^2| + mu) (saddle-free: downhill along an
+    unstable mode, not towards the unstable pose), each clipped to MAX_ROTATION, so that a mode
+    of (almost) zero stiffness cannot shorten the others' steps; the sum clipped again."""
+    motions = motion_map(system.q) @ system.basis
+    if not system.unstable():
         dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
-    dq = system.basis @ dz
-    rotation = np.max(np.linalg.norm(body_motion(functions, system.q, dq)[:, 3:], axis=1),
-                      initial=0.0)
-    return dq * min(1.0, MAX_ROTATION / rotation) if rotation > 0 else dq
+        if largest_rotation(motions @ dz[:, None])[0] <= MAX_ROTATION:
+            return system.basis @ dz
+    omega2, vectors = system.modes()
+    amplitude = (vectors.T @ system.force) / (np.abs(omega2) + mu)
+    per_mode = largest_rotation(motions @ vectors) * np.abs(amplitude)
+    amplitude *= np.minimum(1.0, MAX_ROTATION / np.maximum(per_mode, 1e-300))
+    dz = vectors @ amplitude
+    rotation = largest_rotation(motions @ dz[:, None])[0]
+    return system.basis @ (dz * min(1.0, MAX_ROTATION / rotation) if rotation > 0 else dz)
 
 
 def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
@@ -281,7 +319,7 @@ def _initial_mu(system: ReducedSystem) -> float:
 def _try(functions: SystemFunctions, t: float, system: ReducedSystem, mu: float):
     """The next iterate projected onto Phi = 0, or None when the projection fails."""
     try:
-        q = assembly.newton(functions, t, system.q + _step(system, mu, functions))
+        q = assembly.newton(functions, t, system.q + _step(system, mu))
         return reduced_system(functions, t, q)
     except (AnalysisError, np.linalg.LinAlgError):
         return None
@@ -314,7 +352,8 @@ def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = Non
         interrupts.check()  # a pending SIGINT/SIGTERM (casmech run) stops here
         if _converged(system, scale):
             if escapes >= MAX_ESCAPES or not system.unstable():
-                system = _polish(functions, t, system)
+                system = reduced_system(functions, t, _polish(functions, t, system).q,
+                                        minimum_norm=True)
                 return Equilibrium(system.q, system.lam, system, iteration, escapes)
             escapes += 1
             system = reduced_system(functions, t,
@@ -326,8 +365,10 @@ def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = Non
         if not np.isfinite(trial_merit) or trial_merit > 100.0 * max(merit, ZERO_OMEGA2):
             mu *= 10.0  # a step that made things far worse is not taken
             continue
-        # switched evolution relaxation: a longer pseudo time step as the residual falls
-        mu = max(mu * min(1.0, trial_merit / merit) if merit > 0 else mu,
+        # switched evolution relaxation, accelerated: a step that lowered the residual doubles
+        # the pseudo time step at least
+        ratio = trial_merit / merit if merit > 0 else 1.0
+        mu = max(mu * (min(ratio, GROWTH) if ratio < 1.0 else 1.0),
                  neutral_threshold(trial.omega2()))
         system, merit = trial, trial_merit
     direction = system.basis @ np.linalg.solve(system.mass, system.force) if system.dof else \
