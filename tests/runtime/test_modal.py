@@ -153,3 +153,24 @@ def test_modal_row_is_the_statics_row():
     static = row(functions, casmech.analyze(functions, "statics"))
     modes = row(functions, casmech.analyze(functions, "modal"))
     assert static == modes
+
+
+def test_cart_pole_free_cart_mode_and_coupled_pendulum_frequency():
+    model = casmech.load(MODELS / "cart_pole.yaml")  # pole released near upright: it hangs
+    functions = casmech.compile(model)
+    result = casmech.analyze(functions, "modal")
+    big, m, length, w = (model.parameters[n] for n in ("m_cart", "m_pole", "L", "w"))
+    arm, inertia = length / 2, m * (length**2 + w**2) / 12
+    # x (cart) and theta (pole from hanging): mass [[M + m, m l], [m l, I + m l^2]],
+    # stiffness diag(0, m g l): a rigid mode of the cart and one pendulum mode
+    omega2 = m * G * arm * (big + m) / ((big + m) * (inertia + m * arm**2) - (m * arm)**2)
+    model_ = result.linear_model
+    # two DOF, two modes: 0 Hz exactly (the cart's zero stiffness) and the coupled frequency
+    # (rtol 1e-10: a 4 x 4 eigenproblem at an equilibrium converged to roundoff)
+    assert model_.frequency_hz[0] == 0.0
+    np.testing.assert_allclose(model_.frequency_hz[1:], [np.sqrt(omega2) / (2 * np.pi)],
+                               rtol=1e-10, atol=0)
+    # the zero mode moves the whole mechanism along x only (the cart's rail)
+    shape = model_.mode_shapes[0]
+    np.testing.assert_allclose(shape[:, 0], 1.0, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(shape[:, 1:], 0.0, rtol=0, atol=1e-10)

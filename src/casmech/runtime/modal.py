@@ -123,23 +123,29 @@ def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np
 
 
 def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):
-    """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions)."""
+    """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions). A DOF of zero
+    stiffness is one mode at s = 0 shaped as its null vector of K (A's eigenvalues there, a
+    double zero or 0 and a real decay, are roundoff-split: |s| <= zero_cut counts as 0)."""
     k = system.dof
     if not k:
         return np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex)
+    omega2, modes = system.modes()
+    threshold = statics.neutral_threshold(omega2)
+    neutral = modes[:, np.abs(omega2) <= threshold]
     values, vectors = np.linalg.eig(a)
     size = np.abs(values)
     real = np.abs(values.imag) <= REAL_CUT * np.maximum(size, 1e-300)
-    keep = real | (values.imag > 0)
-    values, vectors = np.where(real, values.real, values)[keep], vectors[:, keep]
+    keep = (real | (values.imag > 0)) & (size > np.sqrt(threshold))
+    values, vectors = np.where(real, values.real, values)[keep], vectors[:k, keep]
+    values = np.concatenate([np.zeros(neutral.shape[1]), values]).astype(complex)
+    vectors = np.hstack([neutral, vectors]).astype(complex)
     order = np.lexsort((-values.real, np.abs(values)))
+    motions = statics.motion_map(system.q) @ system.basis @ vectors[:, order]
     shapes = []
-    for index in order:
-        motion = statics.body_motion(functions, system.q,
-                                     system.basis @ vectors[:k, index].astype(complex))
-        largest = motion.ravel()[np.argmax(np.abs(motion))]
-        shapes.append(motion / largest if abs(largest) > 0 else motion)
-    return values[order].astype(complex), np.array(shapes)
+    for motion in motions.T:
+        largest = motion[np.argmax(np.abs(motion))]
+        shapes.append((motion / largest if abs(largest) > 0 else motion).reshape(-1, 6))
+    return values[order], np.array(shapes).reshape(len(order), functions.n_bodies, 6)
 
 
 def run_modal(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:
