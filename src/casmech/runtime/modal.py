@@ -129,9 +129,8 @@ def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndar
     k = system.dof
     if not k:
         return np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex)
-    omega2, modes = system.modes()
-    threshold = statics.neutral_threshold(omega2)
-    neutral = modes[:, np.abs(omega2) <= threshold]
+    threshold = statics.neutral_threshold(system.omega2())
+    neutral = system.basis.T @ statics.neutral_directions(system)  # N orthonormal
     values, vectors = np.linalg.eig(a)
     size = np.abs(values)
     real = np.abs(values.imag) <= REAL_CUT * np.maximum(size, 1e-300)

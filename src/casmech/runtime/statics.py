@@ -20,7 +20,7 @@ equilibrium it follows the flow downhill (to a stable equilibrium); mu starts at
 |omega^2| of (K, M) and shrinks as the residual |f|_(M^-1) does (switched evolution
 relaxation, at least halved by every step that lowers it; a step that makes it 100x worse is
 retried with 10 mu), so the last steps are Newton's, converging quadratically. Where the
-symmetric part of K has negative eigenvalues (a pose above a stable one), or the step would
+eigenvalues of M^-1 K have negative real parts (a pose above a stable one), or the step would
 turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free,
 each mode clipped on its own). An equilibrium found unstable (a pendulum started upright) is
 left along its most unstable mode, at most MAX_ESCAPES times. All matrices are dense: statics
@@ -78,7 +78,8 @@ class ReducedSystem:
         return self.basis.shape[1]
 
     def modes(self) -> tuple[np.ndarray, np.ndarray]:
-        """(omega^2 ascending, V): eigenpairs of (sym K, M), V^T M V = I; computed once."""
+        """(omega^2 ascending, V): eigenpairs of (sym K, M), V^T M V = I (the saddle-free
+        steps' modes); computed once."""
         if not hasattr(self, "_modes"):
             if self.dof:
                 self._modes = scipy.linalg.eigh(0.5 * (self.stiffness + self.stiffness.T),
@@ -87,11 +88,22 @@ class ReducedSystem:
                 self._modes = (np.zeros(0), np.zeros((0, 0)))
         return self._modes
 
+    def spectrum(self) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenpairs of M^-1 K, ascending by real part: squared undamped frequencies (K of
+        follower loads is not symmetric, so not those of sym K); computed once."""
+        if not hasattr(self, "_spectrum"):
+            values, vectors = np.linalg.eig(np.linalg.solve(self.mass, self.stiffness)) \
+                if self.dof else (np.zeros(0), np.zeros((0, 0)))
+            order = np.argsort(values.real)
+            self._spectrum = (values[order], vectors[:, order])
+        return self._spectrum
+
     def omega2(self) -> np.ndarray:
-        """Squared undamped frequencies, ascending (of the symmetric part of K)."""
-        return self.modes()[0]
+        """Real parts of the eigenvalues of M^-1 K, ascending."""
+        return self.spectrum()[0].real
 
     def unstable(self) -> bool:
+        """An eigenvalue of M^-1 K with real part below zero."""
         omega2 = self.omega2()
         return bool(omega2.size and omega2[0] < -neutral_threshold(omega2))
 
@@ -381,12 +393,13 @@ def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = Non
 
 
 def neutral_directions(system: ReducedSystem) -> np.ndarray:
-    """Columns dq of the DOF with zero stiffness at an equilibrium (n x count)."""
-    if not system.dof:
+    """Columns dq of the DOF with zero stiffness at an equilibrium (n x count): the
+    eigenvectors of M^-1 K whose eigenvalues are 0 within neutral_threshold."""
+    values, vectors = system.spectrum()
+    zero = np.abs(values) <= neutral_threshold(values.real)
+    if not zero.any():
         return np.zeros((system.q.size, 0))
-    omega2, vectors = system.modes()
-    zero = np.abs(omega2) <= neutral_threshold(omega2)
-    return system.basis @ vectors[:, zero]
+    return system.basis @ np.linalg.qr(vectors[:, zero].real)[0]
 
 
 def neutral_error(functions: SystemFunctions, t: float, equilibrium: Equilibrium,
