@@ -174,3 +174,21 @@ def test_cart_pole_free_cart_mode_and_coupled_pendulum_frequency():
     shape = model_.mode_shapes[0]
     np.testing.assert_allclose(shape[:, 0], 1.0, rtol=0, atol=1e-10)
     np.testing.assert_allclose(shape[:, 1:], 0.0, rtol=0, atol=1e-10)
+
+
+def test_motor_input_static_gain_is_one_over_m_g_l():
+    # an effort motor (torque 0 by default) on the hanging rod's pivot is the input
+    text = HANGING_ROD.replace("axis: [0, 1, 0]}", "axis: [0, 1, 0],\n     motor: {torque: \"0\"}}")
+    functions, result = modal(text)
+    model = result.linear_model
+    assert model.input_names == ["pivot.torque"]
+    assert model.B.shape == (2, 1) and model.D.shape == (6, 1)
+    # steady state y = -C A^-1 B u: the rod turns about y by u / (m g l), l = L / 2
+    gain = -model.C @ np.linalg.solve(model.A, model.B)
+    m, length = 1.5, 0.8
+    # a 2 x 2 solve at an equilibrium converged to roundoff: rtol 1e-10
+    np.testing.assert_allclose(gain[model.output_names.index("rod.ry"), 0],
+                               1 / (m * G * length / 2), rtol=1e-10, atol=0)
+    # the rod's CM moves along x by l times that rotation (hanging along -z, turning about +y)
+    np.testing.assert_allclose(gain[model.output_names.index("rod.dx"), 0],
+                               -(length / 2) / (m * G * length / 2), rtol=1e-10, atol=0)

@@ -9,9 +9,11 @@ removes the multipliers; to first order about the equilibrium (where Q - Phi_q^T
     K_r = -N^T d(Q - Phi_q^T lam*)/dq N   (lam* fixed: the constraint-curvature term),
 
 all derivatives by CasADi's AD (statics.tangent_function). State x = [z; z'],
-A = [[0, I], [-M_r^-1 K_r, -M_r^-1 C_r]]. No inputs yet (B, D have 0 columns); the outputs
-y = C x are every body's translation and small global rotation (2 E(p) dp) away from the
-equilibrium: `<body>.dx .dy .dz .rx .ry .rz`.
+A = [[0, I], [-M_r^-1 K_r, -M_r^-1 C_r]]. Inputs u: a torque or force added to each effort
+motor (`<joint>.torque` / `<joint>.force`; none without effort motors), B = [0; M_r^-1 N^T
+G] with G the motors' generalized forces per unit input. Outputs y = C x (D = 0): every
+body's translation and small global rotation (2 E(p) dp) away from the equilibrium:
+`<body>.dx .dy .dz .rx .ry .rz`.
 
 Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
 overdamped or zero-frequency motion) on its own; frequency_hz = |s| / 2 pi (undamped natural
@@ -25,8 +27,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 
+from casmech.compiler import motors as compiler_motors
+from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import SystemFunctions
 from casmech.output.csv import atomic
 from casmech.runtime import statics
@@ -105,16 +110,38 @@ def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> Line
     stiffness = np.linalg.solve(system.mass, system.stiffness) if k else np.zeros((0, 0))
     damping = np.linalg.solve(system.mass, system.damping) if k else np.zeros((0, 0))
     a = np.block([[np.zeros((k, k)), np.eye(k)], [-stiffness, -damping]])
+    names, generalized = _inputs(functions, system.q)
+    driven = np.linalg.solve(system.mass, system.basis.T @ generalized) if k else \
+        np.zeros((0, len(names)))
+    b = np.vstack([np.zeros((k, len(names))), driven])
     outputs = _output_map(functions, system)
     c = np.hstack([outputs, np.zeros_like(outputs)])
     eigenvalues, shapes = _modes(functions, system, a)
     bodies = list(functions.body_names)
     return LinearModel(
-        A=a, B=np.zeros((2 * k, 0)), C=c, D=np.zeros((c.shape[0], 0)),
+        A=a, B=b, C=c, D=np.zeros((c.shape[0], len(names))),
         state_names=[f"z{i + 1}" for i in range(k)] + [f"z{i + 1}_dot" for i in range(k)],
-        input_names=[], output_names=[f"{b}.{m}" for b in bodies for m in MOTION],
+        input_names=names, output_names=[f"{b}.{m}" for b in bodies for m in MOTION],
         q=system.q, basis=system.basis, eigenvalues=eigenvalues, mode_shapes=shapes,
         body_names=bodies)
+
+
+INPUT_NAMES = {"motor_torque": "torque", "motor_force": "force"}
+
+
+def _inputs(functions: SystemFunctions, q: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """The inputs: a torque or force added to each effort motor's (`<joint>.torque`,
+    `<joint>.force`), and their generalized forces at q (n x inputs): the gradient of the joint
+    coordinate the motor drives (virtual work, as compiler.motors applies it)."""
+    motors = functions.ir.motors
+    if not motors:
+        return [], np.zeros((q.size, 0))
+    x = Coordinates.create(functions.n_bodies)
+    columns = [x.ground_fixed(ca.jacobian(compiler_motors.COORDINATE[m.type](m, x), x.q).T)
+               for m in motors]
+    gradient = ca.Function("motor_inputs", [x.q], [ca.horzcat(*columns)])
+    return ([f"{m.name}.{INPUT_NAMES[m.type]}" for m in motors],
+            np.array(gradient(q)).reshape(q.size, len(motors)))
 
 
 def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np.ndarray:
