@@ -82,8 +82,13 @@ def test_spring_deflection_and_slide_reactions():
     np.testing.assert_allclose(values["slide.fx"], 0.0, rtol=0, atol=1e-9)
 
 
-def test_double_pendulum_joints_carry_the_weights_below_them():
-    model = casmech.load(MODELS / "double_pendulum.yaml")  # released at theta1 = 90 deg
+# from the file's 90 deg, from both rods upright and from one upright (unstable equilibria,
+# left along their unstable modes), and from folded poses
+@pytest.mark.parametrize("start", [{}, {"theta1": "pi", "theta2": "pi"},
+                                   {"theta1": "0", "theta2": "pi"},
+                                   {"theta1": "3", "theta2": "-3"}])
+def test_double_pendulum_joints_carry_the_weights_below_them(start):
+    model = casmech.load(MODELS / "double_pendulum.yaml", start)
     functions = casmech.compile(model)
     result = casmech.analyze(functions, "statics")
     values = row(functions, result)
