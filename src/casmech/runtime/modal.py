@@ -16,7 +16,7 @@ body's translation and small global rotation (2 E(p) dp) away from the equilibri
 `<body>.dx .dy .dz .rx .ry .rz`.
 
 Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
-overdamped or zero-frequency motion) on its own; frequency_hz = |s| / 2 pi (undamped natural
+overdamped motion) on its own, a DOF of zero stiffness as one mode at s = 0; frequency_hz = |s| / 2 pi (undamped natural
 frequency), damped_frequency_hz = |Im s| / 2 pi, damping_ratio = -Re s / |s|; sorted by
 frequency. Mode shapes: the eigenvector's z mapped to body motions (n_modes x n_bodies x 6),
 scaled so that the largest entry is 1.
@@ -24,6 +24,7 @@ scaled so that the largest entry is 1.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +41,9 @@ from casmech.runtime.results import Result
 MODE_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "eigenvalue_real", "eigenvalue_imag",
                 "damped_frequency_hz")
 MOTION = ("dx", "dy", "dz", "rx", "ry", "rz")
-FILES = ("modes.csv", "linear_model.npz")  # what a modal run writes beside results.csv
+# what a modal run writes beside results.csv (commands/run.py's ANALYSIS_FILES names them too,
+# to remove an earlier run's without importing this module)
+FILES = ("modes.csv", "linear_model.npz")
 REAL_CUT = 1e-9  # |Im s| <= REAL_CUT |s|: a real eigenvalue
 
 
@@ -91,8 +94,12 @@ class LinearModel:
         return Path(path)
 
     def write_npz(self, path: Path) -> Path:
+        """linear_model.npz, written under a temporary name and renamed (a reader never sees
+        half of it)."""
+        path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "wb") as handle:
+        temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        with open(temporary, "wb") as handle:
             np.savez(handle, A=self.A, B=self.B, C=self.C, D=self.D,
                      state_names=np.array(self.state_names, dtype=str),
                      input_names=np.array(self.input_names, dtype=str),
@@ -101,6 +108,7 @@ class LinearModel:
                      mode_shapes=self.mode_shapes,
                      mode_shape_names=np.array(
                          [f"{b}.{m}" for b in self.body_names for m in MOTION], dtype=str))
+        os.replace(temporary, path)
         return path
 
 
@@ -121,7 +129,7 @@ def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> Line
     return LinearModel(
         A=a, B=b, C=c, D=np.zeros((c.shape[0], len(names))),
         state_names=[f"z{i + 1}" for i in range(k)] + [f"z{i + 1}_dot" for i in range(k)],
-        input_names=names, output_names=[f"{b}.{m}" for b in bodies for m in MOTION],
+        input_names=names, output_names=[f"{body}.{m}" for body in bodies for m in MOTION],
         q=system.q, basis=system.basis, eigenvalues=eigenvalues, mode_shapes=shapes,
         body_names=bodies)
 
@@ -152,7 +160,8 @@ def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np
 def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):
     """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions). A DOF of zero
     stiffness is one mode at s = 0 shaped as its null vector of K (A's eigenvalues there, a
-    double zero or 0 and a real decay, are roundoff-split: |s| <= zero_cut counts as 0)."""
+    double zero or 0 and a real decay, are split by roundoff: |s| <= sqrt(neutral_threshold)
+    counts as 0)."""
     k = system.dof
     if not k:
         return np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex)

@@ -128,8 +128,8 @@ class Equilibrium:
 
 
 def tangent_function(functions: SystemFunctions) -> ca.Function:
-    """(t, q, lam) -> (R, dR/dq, dQ/dq_dot, M, Phi_q, Q) at q_dot = 0, built once per bundle
-    from its SX functions (a compiled bundle's model is rebuilt in SX for AD)."""
+    """(t, q, lam) -> (R = Q - Phi_q^T lam, dR/dq, dQ/dq_dot, M) at q_dot = 0, built once per
+    bundle from its SX functions (a compiled bundle's model is rebuilt in SX for AD)."""
     if "statics_tangent" in functions.derived:
         return functions.derived["statics_tangent"]
     bundle = functions
@@ -142,7 +142,7 @@ def tangent_function(functions: SystemFunctions) -> ca.Function:
     residual = applied - ca.mtimes(phi_q.T, lam)
     zero = ca.DM.zeros(n)
     outputs = [residual, ca.jacobian(residual, q), ca.jacobian(applied, q_dot),
-               bundle["mass_matrix"](q), phi_q, applied]
+               bundle["mass_matrix"](q)]
     outputs = [ca.substitute(out, q_dot, zero) for out in outputs]
     function = ca.Function("statics_tangent", [t, q, lam], outputs)
     functions.derived["statics_tangent"] = function
@@ -186,8 +186,7 @@ def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
             r_factor[:rank, :rank], q_factor[:, :rank].T @ applied)
         if minimum_norm:
             lam = np.linalg.lstsq(phi_q.T, applied, rcond=RANK_TOLERANCE)[0]
-    residual, r_q, q_v, mass, _, _ = (np.array(v)
-                                      for v in tangent_function(functions)(t, q, lam))
+    residual, r_q, q_v, mass = (np.array(v) for v in tangent_function(functions)(t, q, lam))
     return ReducedSystem(q, lam, residual.ravel(), applied, basis, basis.T @ mass @ basis,
                          -basis.T @ r_q @ basis, -basis.T @ q_v @ basis, basis.T @ applied)
 
@@ -234,11 +233,9 @@ def model_size(functions: SystemFunctions, q: np.ndarray) -> float:
 def moving_parts(functions: SystemFunctions, q: np.ndarray, dq: np.ndarray, count: int = 4):
     """Joints whose relative motion dq is, and moving bodies no joint holds, with their share
     of the motion (largest first): what a failure names for a DOF."""
-    motion = np.abs(body_motion(functions, q, dq)) if dq.dtype.kind == "c" else \
-        body_motion(functions, q, dq)
-    motion = np.real(motion)
+    motion = body_motion(functions, q, dq)
+    motion = np.abs(motion) if np.iscomplexobj(motion) else motion
     length = model_size(functions, q)
-    nb = functions.n_bodies
     parts: list[tuple[str, object, float]] = []
     held = set()
     for joint in functions.ir.joints:
@@ -260,7 +257,7 @@ def moving_parts(functions: SystemFunctions, q: np.ndarray, dq: np.ndarray, coun
             size = np.linalg.norm(motion[k, 3:]) + np.linalg.norm(motion[k, :3]) / length
             parts.append((BodyName(body.name), body.source, float(size)))
     total = max((p[2] for p in parts), default=0.0)
-    if total <= 0.0 or nb == 0:
+    if total <= 0.0:
         return []
     ranked = sorted(((n, s, v / total) for n, s, v in parts if v > 1e-6 * total),
                     key=lambda item: -item[2])
@@ -286,16 +283,16 @@ def _converged(system: ReducedSystem, scale: float) -> bool:
 
 
 def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
-    """The largest applied load (gravity included) or reaction, for the relative tolerance."""
+    """The largest applied generalized force or body weight, for the relative tolerance."""
     weights = [b.mass * float(np.linalg.norm(functions.ir.gravity)) for b in functions.ir.bodies]
     loads = [float(np.max(np.abs(system.applied), initial=0.0)), *weights]
     return max(max(loads), np.finfo(float).tiny)
 
 
 def _step(system: ReducedSystem, mu: float) -> np.ndarray:
-    """dq of one pseudo-time step: (K + mu M) dz = f; where sym K has negative eigenvalues, or
-    the step turns a body by more than MAX_ROTATION, mode by mode instead (the eigenpairs of
-    (sym K, M)): amplitude V_i^T f / (|omega_i^2| + mu) (saddle-free: downhill along an
+    """dq of one pseudo-time step: (K + mu M) dz = f; where M^-1 K has eigenvalues below zero,
+    or that step turns a body by more than MAX_ROTATION, mode by mode instead (the eigenpairs
+    of (sym K, M)): amplitude V_i^T f / (|omega_i^2| + mu) (saddle-free: downhill along an
     unstable mode, not towards the unstable pose), each clipped to MAX_ROTATION, so that a mode
     of (almost) zero stiffness cannot shorten the others' steps; the sum clipped again."""
     motions = motion_map(system.q) @ system.basis
