@@ -18,8 +18,8 @@ body's translation and small global rotation (2 E(p) dp) away from the equilibri
 Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
 overdamped motion) on its own, a DOF of zero stiffness as one mode at s = 0;
 frequency_hz = |s| / 2 pi (undamped natural frequency), damped_frequency_hz = |Im s| / 2 pi,
-damping_ratio = -Re s / |s|; sorted by frequency. Mode shapes: the eigenvector's z mapped to body motions (n_modes x n_bodies x 6),
-scaled so that the largest entry is 1.
+damping_ratio = -Re s / |s|; sorted by frequency. Mode shapes: the eigenvector's z mapped to
+body motions (n_modes x n_bodies x 6), scaled so that the largest entry is 1.
 """
 
 from __future__ import annotations
