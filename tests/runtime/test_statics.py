@@ -156,3 +156,18 @@ def test_null_space_is_orthonormal_and_annihilated():
     # the fifth row is a combination of two others to 1e-12: the basis is annihilated by all
     # rows to that size (the rank cut, 1e-9, counts the row redundant)
     np.testing.assert_allclose(phi_q @ basis, 0.0, rtol=0, atol=1e-11)
+
+
+def test_cli_zero_stiffness_keeps_the_row_with_status_failed(tmp_path, capsys):
+    from casmech.cli import main
+    from casmech.output.csv import read_csv
+    from casmech.output.metadata import read_json
+
+    path = tmp_path / "hinge.yaml"
+    path.write_text(VERTICAL_HINGE)
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 3
+    assert "joint 'hinge'" in capsys.readouterr().err
+    _, values = read_csv(tmp_path / "out" / "results.csv")
+    assert values.shape[0] == 1
+    metadata = read_json(tmp_path / "out" / "metadata.json")
+    assert metadata["status"] == "failed" and "not unique" in metadata["error"]
