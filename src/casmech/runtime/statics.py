@@ -21,10 +21,11 @@ equilibrium it follows the flow downhill (to a stable equilibrium); mu starts at
 relaxation, at least halved by every step that lowers it; a step that makes it 100x worse is
 retried with 10 mu), so the last steps are Newton's, converging quadratically. Where the
 eigenvalues of M^-1 K have negative real parts (a pose above a stable one), or the step would
-turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free,
-each mode clipped on its own). An equilibrium found unstable (a pendulum started upright) is
-left along its most unstable mode, at most MAX_ESCAPES times. All matrices are dense: statics
-is for mechanisms of tens of bodies (a 30-link chain from horizontal: 130 steps, 3.6 s).
+turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free, with
+mu raised until no body turns more: a trust region). An equilibrium found unstable (a pendulum
+started upright) is left along its most unstable mode, at most MAX_ESCAPES times. All matrices
+are dense: statics is for mechanisms of tens of bodies (a 40-link chain released horizontal:
+52 steps, 1.7 s).
 
 No equilibrium (a free body falling: the residual does not fall in MAX_ITERATIONS steps) or a
 DOF of zero stiffness (neutral: every pose along it is an equilibrium) is an AnalysisError (exit
@@ -51,6 +52,7 @@ from casmech.runtime.results import Result
 MAX_ITERATIONS = 200
 FORCE_TOLERANCE = 1e-10  # |R|_inf at convergence, relative to the largest applied load
 MAX_ROTATION = 0.5  # radians a body may turn in one step
+TRUST_BISECTIONS = 8  # halvings of log(mu) bracketing the step that turns a body MAX_ROTATION
 GROWTH = 0.5  # mu's factor after a step that lowered the residual (at most)
 MAX_ESCAPES = 3  # departures from unstable equilibria
 ESCAPE_ROTATION = 0.1  # radians (or 0.1 of the model's size) a departure moves along its mode
@@ -290,23 +292,36 @@ def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
 
 
 def _step(system: ReducedSystem, mu: float) -> np.ndarray:
-    """dq of one pseudo-time step: (K + mu M) dz = f; where M^-1 K has eigenvalues below zero,
+    """dq of one pseudo-time step: (K + mu M) dz = f. Where M^-1 K has eigenvalues below zero,
     or that step turns a body by more than MAX_ROTATION, mode by mode instead (the eigenpairs
-    of (sym K, M)): amplitude V_i^T f / (|omega_i^2| + mu) (saddle-free: downhill along an
-    unstable mode, not towards the unstable pose), each clipped to MAX_ROTATION, so that a mode
-    of (almost) zero stiffness cannot shorten the others' steps; the sum clipped again."""
+    (omega_i^2, V_i) of (sym K, M)): amplitudes V_i^T f / (|omega_i^2| + mu) (saddle-free:
+    downhill along an unstable mode, not towards the unstable pose), with mu raised, if need
+    be, until no body turns by more than MAX_ROTATION (a trust region: a larger mu shortens
+    the soft modes' steps most, so a mode of almost zero stiffness and roundoff force, a rod's
+    spin about its axis, cannot take the whole step)."""
     motions = motion_map(system.q) @ system.basis
     if not system.unstable():
         dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
         if largest_rotation(motions @ dz[:, None])[0] <= MAX_ROTATION:
             return system.basis @ dz
     omega2, vectors = system.modes()
-    amplitude = (vectors.T @ system.force) / (np.abs(omega2) + mu)
-    per_mode = largest_rotation(motions @ vectors) * np.abs(amplitude)
-    amplitude *= np.minimum(1.0, MAX_ROTATION / np.maximum(per_mode, 1e-300))
-    dz = vectors @ amplitude
-    rotation = largest_rotation(motions @ dz[:, None])[0]
-    return system.basis @ (dz * min(1.0, MAX_ROTATION / rotation) if rotation > 0 else dz)
+    force, stiffness, turns = vectors.T @ system.force, np.abs(omega2), motions @ vectors
+
+    def amplitudes(shift: float) -> np.ndarray:
+        return force / (stiffness + shift)
+
+    def too_far(shift: float) -> bool:
+        return largest_rotation(turns @ amplitudes(shift)[:, None])[0] > MAX_ROTATION
+
+    if too_far(mu):
+        low, high = mu, max(mu, ZERO_OMEGA2)
+        while too_far(high):
+            low, high = high, 4.0 * high
+        for _ in range(TRUST_BISECTIONS):  # in log(mu): the factor high / low to ~1 %
+            middle = np.sqrt(max(low, ZERO_OMEGA2) * high)
+            low, high = (middle, high) if too_far(middle) else (low, middle)
+        mu = high
+    return system.basis @ (vectors @ amplitudes(mu))
 
 
 def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
