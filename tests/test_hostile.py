@@ -196,7 +196,6 @@ CASES = {
                        "E005", 5),
     "custom_tag": Case(base(mass="    mass: !secret 1"), "E005", 5),
     "check_free_kinematics": Case(FREE, "E501", 16),
-    "check_statics": Case(BASE.replace("  type: dynamics", "  type: statics"), "E409", 16),
 }
 
 

@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import importlib
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import replace
@@ -95,6 +96,11 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
                         progress=progress, stabilization=stabilization)
 
 
+def _runtime(name: str):
+    """A runtime module imported on use (statics and modal need scipy.linalg)."""
+    return importlib.import_module(f"casmech.runtime.{name}")
+
+
 # analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
 # caller's overrides applied.
 ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Result]] = {
@@ -104,6 +110,8 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
                                                               progress=p),
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
     "dynamics": _dynamics,
+    "statics": lambda f, s, p: _runtime("statics").run_statics(f, progress=p),
+    "modal": lambda f, s, p: _runtime("modal").run_modal(f, progress=p),
 }
 
 

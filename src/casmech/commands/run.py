@@ -2,7 +2,8 @@
 
 --format csv (default) writes results.csv per the results contract plus metadata.json beside it
 (versions, model hash and text, overrides, settings, timings, mode); --format hdf5 writes
-results.h5 holding the same table and metadata; --format csv,hdf5 writes both. A progress bar
+results.h5 holding the same table and metadata; --format csv,hdf5 writes both. An analysis
+may write further files (modal: modes.csv, linear_model.npz). A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
 
 SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.interrupts): the rows computed
@@ -34,6 +35,8 @@ from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
 from casmech.runtime.results import column_names
 
+# further files an analysis may write (Result.files), removed with an earlier run's results
+ANALYSIS_FILES = ("modes.csv", "linear_model.npz")
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
     "csv": ("results.csv", lambda path, names, values, meta: write_csv(path, names, values),
@@ -144,8 +147,8 @@ def _start(args, out: Path, run) -> None:
     """Before the analysis: the results files of an earlier run go, metadata.json says
     running."""
     with interrupts.saving():
-        for name in FORMATS.values():
-            (out / name[0]).unlink(missing_ok=True)
+        for name in (*(f[0] for f in FORMATS.values()), *ANALYSIS_FILES):
+            (out / name).unlink(missing_ok=True)
         (out / "metadata.json").unlink(missing_ok=True)
         if "csv" in args.format:
             model, given, settings, timings, options = run
@@ -189,6 +192,8 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
                             options)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
+    files = {} if result is None else result.files
+    paths += [write(out / name) for name, write in files.items()]
     if "csv" in args.format:
         write_json(out / "metadata.json", metadata)
     return paths

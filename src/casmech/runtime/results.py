@@ -27,6 +27,9 @@ class Result:
         self.analysis = analysis
         self.metadata = {} if metadata is None else metadata
         self.on_row = on_row
+        # further files of the analysis: name in the output folder -> writer(path) (modal)
+        self.files: dict[str, Callable] = {}
+        self.linear_model = None  # modal: runtime.modal.LinearModel
         self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:

@@ -421,7 +421,8 @@ Force = Annotated[Union[FORCES], Field(discriminator="type")]  # noqa: UP007
 
 # ---------------------------------------------------------------------------------- analysis
 class Analysis(Spec):
-    type: Literal["kinematics", "dynamics", "inverse_dynamics", "statics", "assembly"] = "dynamics"
+    type: Literal["kinematics", "dynamics", "inverse_dynamics", "statics", "assembly",
+                  "modal"] = "dynamics"
     t_end: Scalar = 1.0
     output_step: Scalar = 0.01
     rtol: Scalar = 1e-8
