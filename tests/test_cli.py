@@ -1,6 +1,7 @@
 """End to end: the `casmech` console script on model files (exit codes, results contract)."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -10,7 +11,7 @@ import pytest
 
 from casmech.commands import COMMANDS
 from casmech.output.csv import read_csv
-from tests.conftest import MODELS
+from tests.conftest import MODELS, ROOT
 
 SCRIPT = Path(sys.executable).parent / "casmech"  # where pip installs the console script
 
@@ -229,3 +230,17 @@ def test_every_module_imports_first():
     report = json.loads(done.stdout)
     assert report["modules"] > 50  # walked the whole package
     assert report["failed"] == {}
+
+
+@pytest.mark.parametrize("given, expected", [(None, "1"), ("2", "2")])
+def test_one_blas_thread_unless_the_user_chose(given, expected):
+    """The command line sets OPENBLAS_NUM_THREADS=1 before NumPy loads, unless it is set."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if given is not None:
+        env["OPENBLAS_NUM_THREADS"] = given
+    env["PYTHONPATH"] = str(ROOT / "src")
+    code = ("import os, sys; import casmech.cli; assert 'numpy' not in sys.modules; "
+            "print(os.environ['OPENBLAS_NUM_THREADS'])")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert out.strip() == expected

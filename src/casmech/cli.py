@@ -11,11 +11,18 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
-import casmech
-from casmech.commands import COMMANDS
-from casmech.errors import CasmechError, ModelError, Source, UsageError
+# One BLAS thread unless the user chose: casmech's dense linear algebra is on small matrices,
+# and OpenBLAS's threads made it 10-60x slower on a busy 2-core machine (docs/decisions.md).
+# Set before a command imports NumPy.
+for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+import casmech  # noqa: E402
+from casmech.commands import COMMANDS  # noqa: E402
+from casmech.errors import CasmechError, ModelError, Source, UsageError  # noqa: E402
 
 
 def chosen(argv: list[str]) -> str | None:
