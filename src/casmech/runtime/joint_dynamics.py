@@ -209,8 +209,9 @@ class _Integrator:
 
     def _cvodes(self, problem: ca.Function, t0: float, times) -> ca.Function:
         """CVODES over the grid, kept with the system for a later run over the same grid with
-        the same options (creating one costs about as much as integrating a small tree for 1 s)."""
-        key = (id(problem), float(t0), tuple(float(t) for t in times),
+        the same options (creating one costs about as much as integrating a small tree for 1 s).
+        The key holds the problem itself (not its id, which a rebuilt system could reuse)."""
+        key = (problem, float(t0), tuple(float(t) for t in times),
                tuple(sorted(self.options.items())))
         cache = self.system_cache.setdefault("cvodes", {})
         if key not in cache:
@@ -318,7 +319,7 @@ class _Recorder:
 
     def _mapped(self, n: int) -> BufferedCall:
         """The results rows' function mapped over n rows (kept with the functions)."""
-        key = (id(self.system.motion), n)
+        key = (self.system.motion, n)
         if key not in self.maps:
             self.maps[key] = BufferedCall(self.system.motion.map(n))
         return self.maps[key]
