@@ -207,18 +207,19 @@ class _Integrator:
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
 
-    def _cvodes(self, problem: ca.Function, t0: float, times) -> ca.Function:
+    def _cvodes(self, problem, t0: float, times) -> ca.Function:
         """CVODES over the grid, kept with the system for a later run over the same grid with
         the same options (creating one costs about as much as integrating a small tree for 1 s).
-        The key holds the problem itself (not its id, which a rebuilt system could reuse)."""
-        key = (problem, float(t0), tuple(float(t) for t in times),
+        An entry keeps its problem alive, so the problem's id in the key is not reused."""
+        key = (id(problem), float(t0), tuple(float(t) for t in times),
                tuple(sorted(self.options.items())))
         cache = self.system_cache.setdefault("cvodes", {})
         if key not in cache:
             if len(cache) >= KEPT_INTEGRATORS:
                 cache.pop(next(iter(cache)))
-            cache[key] = ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)
-        return cache[key]
+            cache[key] = (problem, ca.integrator("joint", "cvodes", problem, t0, list(times),
+                                                 self.options))
+        return cache[key][1]
 
     def _dae_options(self, t0, times, x, z) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
