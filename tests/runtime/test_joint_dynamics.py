@@ -224,23 +224,3 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
     np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
     assert np.max(np.abs(other.q - first.q)) > 0  # the options are part of what is kept
     assert len(functions.derived["cvodes"]) <= KEPT_INTEGRATORS
-
-
-@pytest.mark.parametrize("source", ["stiff_arm", ZOO, MODELS / "double_pendulum.yaml",
-                                    MODELS / "bushing_mount.yaml"])
-def test_spectral_radius_estimate_is_near_the_eigenvalues(source):
-    """method auto's stiffness test estimates the Jacobian's spectral radius from 24 forward
-    derivatives (for more than 24 states); against the eigenvalues of the whole Jacobian it
-    must be within the factor the threshold allows (stiff and non-stiff trees lie >= 10x
-    apart: STIFF's comment)."""
-    from casmech.runtime import assembly
-    from casmech.runtime.joint_dynamics import initial_state, joint_system, spectral_radius
-
-    model = casmech.loads(STIFF_ARM) if source == "stiff_arm" else casmech.load(source)
-    functions = casmech.compile(model)
-    system = joint_system(functions)
-    q, q_dot = assembly.initial_state(functions)
-    x0 = initial_state(system, q, q_dot, functions.n_bodies)
-    rate = system.dynamics(0.0, x0)
-    exact = np.max(np.abs(np.linalg.eigvals(np.array(system.jacobian(0.0, x0, rate)[1]))))
-    assert 0.5 * exact <= spectral_radius(system, 0.0, x0) <= 2.0 * exact

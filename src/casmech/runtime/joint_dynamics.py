@@ -46,9 +46,6 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
 # against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
 # bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
 STIFF = 10.0
-# forward derivatives in the spectral radius's estimate (spectral_radius): measured on the
-# gallery's trees and a stiff bushing, the estimate is 1.0-1.4x the radius at 24 (1.0-1.9x at 12)
-RADIUS_SWEEPS = 24
 
 # On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
 # with the tree: measured at 128 bodies (-O1) 4.9 s for the ODE, 22.7 s for the results rows
@@ -247,34 +244,10 @@ def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
     if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
-    if len(x0) <= RADIUS_SWEEPS:  # the whole Jacobian costs no more sweeps than the estimate
-        rate = system.dynamics(t0, x0)
-        jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
-        radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
-    else:
-        radius = spectral_radius(system, t0, x0)
-    return "bdf" if radius * step > STIFF else "adams"
-
-
-def spectral_radius(system: JointSystem, t0: float, x0, sweeps: int = RADIUS_SWEEPS) -> float:
-    """The largest |eigenvalue| of the ODE's Jacobian at (t0, x0), estimated by Gelfand's
-    formula ||J^k v||^(1/k) from a fixed random unit vector v with k = `sweeps` forward derivatives
-    (Jacobian-vector products), instead of the whole Jacobian (n_x sweeps) and its eigenvalues.
-    Taking the k-th root keeps the estimate within a small factor of the radius however v
-    meets the eigenvectors, enough for a threshold (STIFF) whose cases lie 10x apart."""
-    forward = system.dynamics.forward(1)
     rate = system.dynamics(t0, x0)
-    v = np.random.default_rng(0).standard_normal(len(x0))  # generic, and the same every run
-    v /= np.linalg.norm(v)
-    log_growth = 0.0
-    for _ in range(sweeps):
-        v = np.array(forward(t0, x0, rate, 0.0, v).full()).ravel()
-        norm = np.linalg.norm(v)
-        if not np.isfinite(norm) or norm == 0.0:
-            return 0.0 if norm == 0.0 else np.inf
-        log_growth += np.log(norm)
-        v /= norm
-    return float(np.exp(log_growth / sweeps))
+    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
+    return "bdf" if radius * step > STIFF else "adams"
 
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
