@@ -82,9 +82,52 @@ class JointSystem:
         return lazy_jacobian.jacobian(self.dynamics)
 
     @cached_property
+    def relative_states(self) -> ca.Function:
+        """relative_states of the tree's joints, built once."""
+        return relative_states(self.tree.joints)
+
+    @cached_property
     def functional_problem(self) -> dict:
         """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
         return lazy_jacobian.problem(self.dynamics, exact=False)
+
+
+def _body_state(q, q_dot, n_bodies: int, k: int):
+    """Global position, rotation, velocity and body-frame angular velocity of body k (SX; the
+    ground fixed at the origin)."""
+    if k == GROUND_INDEX:
+        return ca.DM.zeros(3), ca.DM.eye(3), ca.DM.zeros(3), ca.DM.zeros(3)
+    p = q[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
+    p_dot = q_dot[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
+    omega = 2 * euler.g_matrix(p) @ p_dot
+    return q[3 * k:3 * k + 3], euler.rotation(p), q_dot[3 * k:3 * k + 3], omega
+
+
+def relative_states(tree_joints) -> ca.Function:
+    """(q, q_dot) -> (rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint: the
+    child frame F_c's rotation and origin relative to the parent frame F_p (in F_p), and its
+    twist relative to F_p (angular, then the origin's velocity, in F_c): one call for the whole
+    tree (runtime.joint_dynamics takes each joint's coordinates and velocities from them).
+    Every body is the child of one tree joint."""
+    n_bodies = len(tree_joints)
+    q, q_dot = ca.SX.sym("q", 7 * n_bodies), ca.SX.sym("q_dot", 7 * n_bodies)
+    rotations, gaps, twists = [], [], []
+    for joint in tree_joints:
+        (r_p, a_p, r_p_dot, w_p), (r_c, a_c, r_c_dot, w_c) = (
+            _body_state(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
+        (c_p, s_p), (c_c, s_c) = joint.parent_frame, joint.child_frame
+        o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
+        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, ca.DM(s_p))
+        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, ca.DM(s_c))
+        rotation = c_p.T @ a_p.T @ a_c @ c_c
+        gap = a_p.T @ (o_c - o_p)
+        omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
+        gap_dot = c_p.T @ (a_p.T @ (o_c_dot - o_p_dot) - ca.cross(w_p, gap))
+        rotations.append(rotation)
+        gaps.append(c_p.T @ gap)
+        twists.append(ca.vertcat(omega, rotation.T @ gap_dot))
+    return ca.Function("relative_states", [q, q_dot],
+                       [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)])
 
 
 def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:

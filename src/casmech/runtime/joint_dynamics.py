@@ -20,11 +20,9 @@ import casadi as ca
 import numpy as np
 
 from casmech import interrupts
-from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import TreeJoint, spanning_tree
@@ -88,37 +86,9 @@ def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSyste
                    motion=built.get("joint_motion", system.motion))
 
 
-class _Pose:
-    """Global pose and velocity of a body (ground: fixed at the origin) from the r-p state."""
-
-    def __init__(self, q, q_dot, n_bodies: int, k: int):
-        if k == GROUND_INDEX:
-            self.r, self.a = np.zeros(3), np.eye(3)
-            self.r_dot, self.omega = np.zeros(3), np.zeros(3)
-            return
-        p = q[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
-        p_dot = q_dot[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
-        self.r, self.r_dot = q[3 * k:3 * k + 3], q_dot[3 * k:3 * k + 3]
-        self.a = euler.numeric(euler.rotation, p)
-        self.omega = 2 * euler.numeric(euler.g_matrix, p) @ p_dot  # body frame
-
-    def origin(self, s):
-        """Global position and velocity of the body-fixed point s."""
-        return self.r + self.a @ s, self.r_dot + self.a @ np.cross(self.omega, s)
-
-
-def joint_state(joint: TreeJoint, q, q_dot, n_bodies: int) -> tuple[np.ndarray, np.ndarray]:
-    """(theta, u) of a tree joint at the r-p state."""
-    parent, child = (_Pose(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
-    (c_p, s_p), (c_c, s_c) = joint.parent_frame, joint.child_frame
-    o_p, o_p_dot = parent.origin(s_p)
-    o_c, o_c_dot = child.origin(s_c)
-    rotation = c_p.T @ parent.a.T @ child.a @ c_c
-    gap = parent.a.T @ (o_c - o_p)
-    theta = MOTIONS[joint.type].coordinates(rotation, c_p.T @ gap)
-    omega = c_c.T @ (child.omega - child.a.T @ parent.a @ parent.omega)
-    gap_dot = c_p.T @ (parent.a.T @ (o_c_dot - o_p_dot) - np.cross(parent.omega, gap))
-    twist = np.concatenate([omega, rotation.T @ gap_dot])
+def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.ndarray]:
+    """(theta, u) of a tree joint from its relative rotation, gap and twist (relative_states)."""
+    theta = MOTIONS[joint.type].coordinates(rotation, gap)
     n_v = MOTIONS[joint.type].n_v
     if not n_v:
         return theta, np.zeros(0)
@@ -128,10 +98,11 @@ def joint_state(joint: TreeJoint, q, q_dot, n_bodies: int) -> tuple[np.ndarray, 
 
 def initial_state(system: JointSystem, q, q_dot, n_bodies: int) -> np.ndarray:
     """x0 = [theta; u] of the free coordinates and velocities at the r-p state."""
-    lay = system.layout
+    lay, joints = system.layout, system.tree.joints
+    rotations, gaps, twists = BufferedCall(system.relative_states)(q, q_dot)
     x0 = np.zeros(lay.n_x)
-    for k, joint in enumerate(system.tree.joints):
-        theta, u = joint_state(joint, q, q_dot, n_bodies)
+    for k, joint in enumerate(joints):
+        theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
         x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
         x0[list(lay.u[k])] = u[list(lay.free_u[k])]
     return x0
