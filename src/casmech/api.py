@@ -19,11 +19,10 @@ from casmech.compiler.checks import Structure, structure
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
-from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, Interrupted, UsageError
 from casmech.runtime import assembly
 from casmech.runtime.dynamics import run_dynamics
-from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics
+from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, column_names, table
 from casmech.schema import limits, load_model, load_model_text
@@ -87,7 +86,7 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
     formulation = s.options.get("formulation", "auto")
     stabilization = s.options.get("stabilization", "ggl")
     if formulation == "auto":
-        tree = stabilization == "ggl" and spanning_tree(f.ir).is_tree
+        tree = stabilization == "ggl" and tree_of(f).is_tree
         formulation = "joint" if tree else "rp"
     if formulation == "joint":
         return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,

@@ -25,7 +25,7 @@ from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
-from casmech.compiler.tree import TreeJoint, spanning_tree
+from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly
 from casmech.runtime.buffers import BufferedCall
@@ -56,11 +56,18 @@ KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
 
+def tree_of(functions: SystemFunctions) -> Tree:
+    """The bundle's spanning tree (compiler.tree), found once per bundle."""
+    if "spanning_tree" not in functions.derived:
+        functions.derived["spanning_tree"] = spanning_tree(functions.ir)
+    return functions.derived["spanning_tree"]
+
+
 def joint_system(functions: SystemFunctions) -> JointSystem:
     """The bundle's joint system, built once per bundle; with a compiled bundle, a tree's ODE
     and results rows are compiled too (compiled_system)."""
     if "joint_system" not in functions.derived:
-        system = build(functions.ir, spanning_tree(functions.ir))
+        system = build(functions.ir, tree_of(functions))
         from casmech import codegen  # imported on use: interpreted runs never need it
 
         if codegen.mode_of(functions) == "compiled" and not system.n_cut \
