@@ -103,10 +103,13 @@ def test_more_rows_than_columns():
     assert checks.independent_rows(ca.DM(matrix)) == [True] * 4 + [False] * 5
 
 
-def test_norm2_equals_the_dense_spectral_norm():
+@pytest.mark.parametrize("shape", [(20, 30), (200, 300)])  # dense SVD; power iteration
+def test_norm2_equals_the_dense_spectral_norm(shape):
     rng = np.random.default_rng(5)
-    matrix = rng.standard_normal((20, 30)) * (rng.random((20, 30)) < 0.2)
-    # power iteration stops at 1e-10 relative change
+    matrix = rng.standard_normal(shape) * (rng.random(shape) < 0.02)
+    matrix[:5, :5] += 10.0  # a well separated largest singular value (~50 against ~2)
+    assert (matrix.size > numeric_qr.DENSE_NORM_ENTRIES) == (shape == (200, 300))
+    # power iteration stops at 1e-10 relative change; the SVD is exact to roundoff
     np.testing.assert_allclose(numeric_qr.norm2(ca.DM(matrix)), np.linalg.norm(matrix, 2),
                                rtol=1e-8, atol=0)
 
