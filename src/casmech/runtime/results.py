@@ -8,6 +8,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler.functions import SystemFunctions
+from casmech.runtime.buffers import BufferedCall
 
 BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
                 "ax", "ay", "az", "alphax", "alphay", "alphaz")
@@ -162,16 +163,20 @@ def row_function(functions: SystemFunctions) -> ca.Function:
                   omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
     parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
     parts += [kinetic + potential, violation]
-    return ca.Function("results_row", [t, q, q_dot, q_ddot, lam], [ca.vertcat(*parts)])
+    return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],
+                       [ca.densify(ca.vertcat(*parts))])
 
 
 def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_function mapped over the rows, one call."""
+    """Every row at once: row_function (built once per bundle) mapped over the rows, one call
+    writing into NumPy memory (runtime.buffers)."""
     names = column_names(functions)
     rows = len(result)
     if rows == 0:
         return names, np.zeros((0, len(names)))
-    mapped = row_function(functions).map(rows)
-    values = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
-                    result.q_ddot.T, result.lam.T)
-    return names, np.array(values).T.reshape(rows, len(names))
+    if "results_row" not in functions.derived:
+        functions.derived["results_row"] = row_function(functions)
+    mapped = BufferedCall(functions.derived["results_row"].map(rows))
+    (values,) = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
+                       result.q_ddot.T, result.lam.T)
+    return names, values.T
