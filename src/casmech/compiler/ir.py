@@ -67,6 +67,7 @@ class JointIR:
     geometry: Mapping[str, np.ndarray] = field(default_factory=dict)
     drivers: Mapping[str, ScalarFunction] = field(default_factory=dict)  # angle, displacement
     cut: bool = False  # `cut: true`: never a tree joint of the joint formulation
+    reaction_frame: str = "global"  # the frame of its reaction columns (runtime.reaction_frames)
 
 
 @dataclass(frozen=True)

@@ -111,7 +111,8 @@ def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[Primi
     drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
                                          ("displacement", joint.driver_displacement)) if fun}
     return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
-                          _geometry(joint, frame, poses), drivers, joint.cut)
+                          _geometry(joint, frame, poses), drivers, joint.cut,
+                          joint.reaction_frame)
 
 
 FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import casadi as ca
 import numpy as np
 
 from casmech.compiler.functions import SystemFunctions
+from casmech.runtime import reaction_frames as reaction_frames_of
 
 BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
                 "ax", "ay", "az", "alphax", "alphay", "alphaz")
@@ -96,7 +97,10 @@ class Result:
                              "use casmech.analyze's Result, or casmech.results_table(functions, "
                              "result)")
         names, values = table(self.functions, self)
-        return frames.frame(names, values, self.metadata)
+        ir = self.functions.ir
+        chosen = reaction_frames_of.describe(ir, reaction_frames_of.chosen(ir),
+                                             self.functions.body_names)
+        return frames.frame(names, values, {**self.metadata, "reaction_frames": chosen})
 
     def _facts(self) -> dict[str, str]:
         from casmech.output import frames
@@ -165,8 +169,13 @@ def row_function(functions: SystemFunctions) -> ca.Function:
     return ca.Function("results_row", [t, q, q_dot, q_ddot, lam], [ca.vertcat(*parts)])
 
 
-def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_function mapped over the rows, one call."""
+def table(functions: SystemFunctions, result: Result,
+          reaction_frames: str | Mapping[str, str] | None = None
+          ) -> tuple[list[str], np.ndarray]:
+    """Every row at once: row_function mapped over the rows, one call; then each joint's
+    reaction columns in its frame: the model's `reactions: {frame: ...}`, replaced by
+    `reaction_frames` for every joint (a frame name) or the joints it names (a mapping)."""
+    frames = reaction_frames_of.chosen(functions.ir, reaction_frames)
     names = column_names(functions)
     rows = len(result)
     if rows == 0:
@@ -174,4 +183,8 @@ def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.nda
     mapped = row_function(functions).map(rows)
     values = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
                     result.q_ddot.T, result.lam.T)
-    return names, np.array(values).T.reshape(rows, len(names))
+    values = np.array(values).T.reshape(rows, len(names))
+    start = 1 + len(BODY_COLUMNS) * functions.n_bodies
+    block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
+    values[:, block] = reaction_frames_of.rotate(functions.ir, frames, result.q, values[:, block])
+    return names, values

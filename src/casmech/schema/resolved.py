@@ -80,6 +80,7 @@ class Joint:
     # force -> f(t, displacement, displacement_dot); position/speed motors are drivers above
     motor: Mapping[str, Any] = field(default_factory=dict)
     cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
+    reaction_frame: str = "global"  # `reactions: {frame: ...}` (runtime.reaction_frames)
 
 
 @dataclass(frozen=True)

@@ -228,11 +228,18 @@ class Motor(Spec):
     force: TimeFunction | None = None
 
 
+class Reactions(Spec):
+    """The frame a joint's reaction columns are written in (casmech.runtime.reaction_frames)."""
+
+    frame: Literal["global", "body_i", "body_j", "joint"] = "global"
+
+
 class JointBase(Spec):
     name: Name
     body_i: Name
     body_j: Name
     repeat: Repeats | None = None
+    reactions: Reactions | None = None
 
 
 class Composite(JointBase):
