@@ -1,6 +1,6 @@
 """Reactions in body and joint frames (runtime.reaction_frames): the global ones rotated, at
 random poses and along a dynamics run of a mechanism with every joint type; in the joint frame a
-joint carries no load along the motions it allows."""
+joint carries no load along the motions it allows; about a `point`, Newton-Euler of the body."""
 
 from pathlib import Path
 
@@ -12,6 +12,7 @@ import casmech
 from casmech.errors import ModelError, UsageError
 from casmech.runtime import reaction_frames
 from casmech.runtime.results import Result, table
+from tests.conftest import MODELS
 
 ZOO = Path(__file__).with_name("joint_zoo.yaml")  # every joint type, oblique axes
 VECTORS = ("fx", "fy", "fz", "tx", "ty", "tz")
@@ -190,3 +191,65 @@ def test_a_bad_frame_name_is_a_located_error(frame, hint):
     assert message.startswith(f"zoo.yaml:{line}:"), message
     assert "error[E103]" in message and "joints[6].reactions.frame" in message, message
     assert "global | body_i | body_j | joint" in message and hint in message, message
+
+
+# A spinning body hung from ground by a ball joint written with the body as body_i: the joint's
+# reaction ON ground about the body's CM (`point`, carried by body_i), in the body's frame, is
+# minus the body's Newton-Euler equations there: F = m (g - a), T = -(J alpha + w x J w).
+TOP = """\
+casmech: 1
+name: top
+bodies:
+  - {name: bar, mass: 2.0, inertia: [0.3, 0.25, 0.1, 0.01, 0.0, 0.02], position: [0.3, 0.1, -0.5],
+     angular_velocity: [1.0, -2.0, 3.0]}
+joints:
+  - {name: ball, type: spherical, body_i: bar, body_j: ground, at: [0, 0, 0],
+     reactions: {frame: body_i, point: [0.3, 0.1, -0.5]}}
+analysis: {type: dynamics, t_end: 0.5, output_step: 0.05, rtol: 1.0e-10, atol: 1.0e-12}
+"""
+
+
+def test_reaction_about_a_point_in_body_frame_is_newton_euler():
+    model = casmech.loads(TOP, "top.yaml")
+    functions = casmech.compile(model, "interpreted")
+    result = casmech.analyze(functions)
+    names, values = table(functions, result)
+    force, torque = vectors(names, values, "ball").transpose(1, 0, 2)
+    a = attitude(names, values, "bar")
+    column = {c: values[:, [names.index(f"bar.{c}{k}") for k in "xyz"]]
+              for c in ("a", "w", "alpha")}
+    to_body = lambda v: np.einsum("rab,ra->rb", a, v)  # noqa: E731  A^T v
+    w, alpha = to_body(column["w"]), to_body(column["alpha"])
+    inertia = model.bodies[0].inertia
+    expected_torque = -(alpha @ inertia.T + np.cross(w, w @ inertia.T))
+    expected_force = to_body(2.0 * (np.asarray(model.gravity) - column["a"]))
+    # the accelerations and the multipliers solve one linear system at each row: they agree
+    # to roundoff of terms of ~20 N and ~1 N m (1e-11 leaves ~1e3 ulps of margin)
+    np.testing.assert_allclose(force, expected_force, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(torque, expected_torque, rtol=0, atol=1e-11)
+    described = result.to_dataframe().attrs["metadata"]["reaction_frames"]["ball"]
+    assert described == {"frame": "body_i", "body": "bar",
+                         "point": {"body": "bar", "position": [0.0, 0.0, 0.0]}}
+
+
+def test_reaction_point_at_the_joint_point_changes_nothing(zoo, zoo_run):
+    """`point:` at the joint's own point (`at`) gives the default table bit for bit (the arm
+    is exactly 0 in body i's frame)."""
+    text = ZOO.read_text(encoding="utf-8").replace(
+        "{name: r1, ", "{name: r1, reactions: {point: [0, 0, 0]}, ")
+    functions = casmech.compile(casmech.loads(text, "zoo.yaml"), "interpreted")
+    np.testing.assert_array_equal(table(functions, zoo_run)[1], table(zoo, zoo_run)[1])
+
+
+def test_a_components_reaction_point_is_placed_like_its_joint_point(tmp_path):
+    """In a component instance (placed, the hind legs turned half a turn), a `point` written
+    as the joint's `at` stays on the placed `at`."""
+    (tmp_path / "components").mkdir()
+    leg = (MODELS / "components" / "leg.yaml").read_text(encoding="utf-8")
+    (tmp_path / "components" / "leg.yaml").write_text(leg.replace(
+        "    at: [0, 0, -L1]\n", "    at: [0, 0, -L1]\n    reactions: {point: [0, 0, -L1]}\n"))
+    (tmp_path / "legs.yaml").write_text((MODELS / "quadruped_legs.yaml").read_text())
+    knees = [j for j in casmech.load(tmp_path / "legs.yaml").joints if j.name.endswith("knee")]
+    assert len(knees) == 4
+    for knee in knees:  # the same placement of the same numbers
+        np.testing.assert_array_equal(knee.reaction_point, knee.vectors["at"])

@@ -13,7 +13,9 @@ the frame's axes in global components) is
             `axis`, u and v perpendicular to it; a joint without `axis` has the global axes at
             the file's pose), carried by body i
 
-The torque stays about the same point; only its components change. All rows at once (einsum).
+A joint with `reactions: {point: Q}` (global at t = 0, carried by body i like the joint point
+P) has its torque taken about Q instead, before the rotation: T_Q = T_P + (P - Q) x F, with
+P - Q = A_i (s_P - s_Q) from the two points in body i's frame. All rows at once (einsum).
 """
 
 from __future__ import annotations
@@ -79,6 +81,22 @@ def orientations(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray) -> np.nd
     return np.stack([FRAMES[frames[joint.name]](joint, a) for joint in ir.joints], axis=1)
 
 
+def moved(ir: ModelIR, q: np.ndarray, reactions: np.ndarray) -> np.ndarray:
+    """The reaction columns (rows, n_joints * 6: fx fy fz tx ty tz per joint, global) with each
+    torque about its joint's reaction point; unchanged when no joint names one."""
+    joints = [k for k, joint in enumerate(ir.joints) if joint.reaction_point is not None]
+    if not joints:
+        return reactions
+    nb = ir.n_bodies
+    a = body_rotations(q[:, 3 * nb:].reshape(len(q), nb, 4))
+    vectors = reactions.reshape(len(q), len(ir.joints), 2, 3).copy()
+    for k in joints:  # a loop over the joints that name a point, each over all rows
+        joint = ir.joints[k]
+        arm = a[:, joint.body_i] @ (np.asarray(joint.point_i) - joint.reaction_point)
+        vectors[:, k, 1] += np.cross(arm, vectors[:, k, 0])
+    return vectors.reshape(reactions.shape)
+
+
 def rotate(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray,
            reactions: np.ndarray) -> np.ndarray:
     """The reaction columns (rows, n_joints * 6: fx fy fz tx ty tz per joint, global) in each
@@ -91,9 +109,15 @@ def rotate(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray,
     return local.reshape(rows, n_joints * 6)
 
 
+def written(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray,
+            reactions: np.ndarray) -> np.ndarray:
+    """The global reaction columns as the table writes them: moved, then rotated."""
+    return rotate(ir, frames, q, moved(ir, q, reactions))
+
+
 def describe(ir: ModelIR, frames: Mapping[str, str], body_names) -> dict[str, dict]:
     """For metadata.json: per joint, its reaction frame, the body that carries it and (joint
-    frame) the axes u, v, w in that body's frame."""
+    frame) the axes u, v, w in that body's frame; a reaction point, in body i's frame."""
     def name(k: int) -> str:
         return "ground" if k == GROUND_INDEX else body_names[k]
 
@@ -107,5 +131,8 @@ def describe(ir: ModelIR, frames: Mapping[str, str], body_names) -> dict[str, di
             entry["body"] = name(joint.body_j)
         if frame == "joint":
             entry["axes"] = {axis: joint.geometry[f"{axis}@i"].tolist() for axis in "uvw"}
+        if joint.reaction_point is not None:
+            entry["point"] = {"body": name(joint.body_i),
+                              "position": np.asarray(joint.reaction_point).tolist()}
         out[joint.name] = entry
     return out

@@ -186,5 +186,6 @@ def table(functions: SystemFunctions, result: Result,
     values = np.array(values).T.reshape(rows, len(names))
     start = 1 + len(BODY_COLUMNS) * functions.n_bodies
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
-    values[:, block] = reaction_frames_of.rotate(functions.ir, frames, result.q, values[:, block])
+    values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
+                                                  values[:, block])
     return names, values

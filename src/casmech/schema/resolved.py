@@ -81,6 +81,7 @@ class Joint:
     motor: Mapping[str, Any] = field(default_factory=dict)
     cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
     reaction_frame: str = "global"  # `reactions: {frame: ...}` (runtime.reaction_frames)
+    reaction_point: np.ndarray | None = None  # `reactions: {point: ...}`, global at t = 0
 
 
 @dataclass(frozen=True)

@@ -229,9 +229,12 @@ class Motor(Spec):
 
 
 class Reactions(Spec):
-    """The frame a joint's reaction columns are written in (casmech.runtime.reaction_frames)."""
+    """How a joint's reaction columns are written (casmech.runtime.reaction_frames): the frame
+    of their components and the point the torque is taken about (global at t = 0, carried by
+    body_i; default the joint point)."""
 
     frame: Literal["global", "body_i", "body_j", "joint"] = "global"
+    point: Vector | None = None
 
 
 class JointBase(Spec):
