@@ -138,7 +138,8 @@ def test_dynamics_run_rotates_back_and_frees_the_joint_axes(zoo, zoo_run):
 def yaml_with_frames(frames: dict[str, str]) -> str:
     text = ZOO.read_text(encoding="utf-8")
     for joint, frame in frames.items():
-        text = text.replace(f"{{name: {joint}, ", f"{{name: {joint}, reactions: {{frame: {frame}}}, ")
+        written = f"{{name: {joint}, "
+        text = text.replace(written, f"{written}reactions: {{frame: {frame}}}, ")
     return text
 
 

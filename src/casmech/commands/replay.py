@@ -4,9 +4,9 @@
 format and mode). `replayed(args)` turns `casmech run --replay DIR/metadata.json [--out OUT]`
 into the arguments of the run that metadata.json records (output/metadata.py): the same model
 file, overrides, analysis settings, formats, reaction frames, allowed folders and compile
-mode (the mode that ran, for a complete run). Every file the run read (`files`: model, components, tables, meshes,
-data) must still have its recorded sha256; a changed or missing file is a usage error naming
-it. OUT defaults to `DIR_replay/` beside DIR.
+mode (the mode that ran, for a complete run). Every file the run read (`files`: model,
+components, tables, meshes, data) must still have its recorded sha256; a changed or missing file
+is a usage error naming it. OUT defaults to `DIR_replay/` beside DIR.
 """
 
 from __future__ import annotations

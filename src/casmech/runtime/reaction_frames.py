@@ -1,4 +1,4 @@
-"""The frame of each joint's reaction columns (docs/format.md, `reactions: {frame: ...}`).
+"""The frame and point of each joint's reaction columns (docs/format.md, `reactions:`).
 
 compiler.eom.reactions gives every joint's reaction in global components: the force on body_j
 and the torque about body_i's joint point. A joint whose frame is not `global` has both vectors
@@ -73,46 +73,50 @@ def body_rotations(p: np.ndarray) -> np.ndarray:
     return np.concatenate([a, ground], axis=1)
 
 
-def orientations(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray) -> np.ndarray:
-    """R of every joint's reaction frame at every row: q (rows, 7 n_bodies) in the r-p
-    coordinates -> (rows, n_joints, 3, 3)."""
+def attitudes(ir: ModelIR, q: np.ndarray) -> np.ndarray:
+    """body_rotations at every row of q (rows, 7 n_bodies, the r-p coordinates)."""
     nb = ir.n_bodies
-    a = body_rotations(q[:, 3 * nb:].reshape(len(q), nb, 4))
+    return body_rotations(q[:, 3 * nb:].reshape(len(q), nb, 4))
+
+
+def orientations(ir: ModelIR, frames: Mapping[str, str], a: np.ndarray) -> np.ndarray:
+    """R of every joint's reaction frame at every row (a: attitudes) -> (rows, n_joints, 3, 3)."""
     return np.stack([FRAMES[frames[joint.name]](joint, a) for joint in ir.joints], axis=1)
 
 
-def moved(ir: ModelIR, q: np.ndarray, reactions: np.ndarray) -> np.ndarray:
-    """The reaction columns (rows, n_joints * 6: fx fy fz tx ty tz per joint, global) with each
-    torque about its joint's reaction point; unchanged when no joint names one."""
+def moved(ir: ModelIR, a: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """Global reactions (rows, n_joints, 2, 3: force, torque) with each torque about its
+    joint's reaction point (a: attitudes); unchanged when no joint names one."""
     joints = [k for k, joint in enumerate(ir.joints) if joint.reaction_point is not None]
     if not joints:
-        return reactions
-    nb = ir.n_bodies
-    a = body_rotations(q[:, 3 * nb:].reshape(len(q), nb, 4))
-    vectors = reactions.reshape(len(q), len(ir.joints), 2, 3).copy()
+        return vectors
+    vectors = vectors.copy()
     for k in joints:  # a loop over the joints that name a point, each over all rows
         joint = ir.joints[k]
         arm = a[:, joint.body_i] @ (np.asarray(joint.point_i) - joint.reaction_point)
         vectors[:, k, 1] += np.cross(arm, vectors[:, k, 0])
-    return vectors.reshape(reactions.shape)
+    return vectors
 
 
-def rotate(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray,
-           reactions: np.ndarray) -> np.ndarray:
-    """The reaction columns (rows, n_joints * 6: fx fy fz tx ty tz per joint, global) in each
-    joint's frame; unchanged when every frame is global."""
+def rotate(ir: ModelIR, frames: Mapping[str, str], a: np.ndarray,
+           vectors: np.ndarray) -> np.ndarray:
+    """Global reactions (rows, n_joints, 2, 3) in each joint's frame (a: attitudes)."""
     if all(frames[joint.name] == DEFAULT for joint in ir.joints):
-        return reactions
-    rows, n_joints = len(q), len(ir.joints)
-    vectors = reactions.reshape(rows, n_joints, 2, 3)
-    local = np.einsum("rjab,rjka->rjkb", orientations(ir, frames, q), vectors)
-    return local.reshape(rows, n_joints * 6)
+        return vectors
+    return np.einsum("rjab,rjka->rjkb", orientations(ir, frames, a), vectors)
 
 
 def written(ir: ModelIR, frames: Mapping[str, str], q: np.ndarray,
             reactions: np.ndarray) -> np.ndarray:
-    """The global reaction columns as the table writes them: moved, then rotated."""
-    return rotate(ir, frames, q, moved(ir, q, reactions))
+    """The table's reaction columns (rows, n_joints * 6: fx fy fz tx ty tz per joint, global)
+    as it writes them: each torque moved to its point, then both vectors in the frame."""
+    unchanged = all(frames[joint.name] == DEFAULT and joint.reaction_point is None
+                    for joint in ir.joints)
+    if unchanged:
+        return reactions
+    a = attitudes(ir, q)
+    vectors = reactions.reshape(len(q), len(ir.joints), 2, 3)
+    return rotate(ir, frames, a, moved(ir, a, vectors)).reshape(reactions.shape)
 
 
 def describe(ir: ModelIR, frames: Mapping[str, str], body_names) -> dict[str, dict]:
