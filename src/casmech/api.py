@@ -185,5 +185,9 @@ def check(functions: SystemFunctions) -> tuple[Structure, bool]:
         return structure(functions, 0.0, assembly.initial_guess(functions)), False
 
 
-def results_table(functions: SystemFunctions, result: Result):
-    return table(functions, result)
+def results_table(functions: SystemFunctions, result: Result,
+                  reaction_frames: str | Mapping[str, str] | None = None):
+    """(column names, values): the results table of a Result. Each joint's reaction columns
+    are in the frame its `reactions: {frame: ...}` names (default global); `reaction_frames`
+    replaces it for every joint (global, body_i, body_j, joint) or the joints a mapping names."""
+    return table(functions, result, reaction_frames)

@@ -3,10 +3,10 @@
 `direct(args)` completes the arguments of `casmech run MODEL ...` (MODEL required, default
 format and mode). `replayed(args)` turns `casmech run --replay DIR/metadata.json [--out OUT]`
 into the arguments of the run that metadata.json records (output/metadata.py): the same model
-file, overrides, analysis settings, formats, allowed folders and compile mode (the mode that
-ran, for a complete run). Every file the run read (`files`: model, components, tables, meshes,
-data) must still have its recorded sha256; a changed or missing file is a usage error naming
-it. OUT defaults to `DIR_replay/` beside DIR.
+file, overrides, analysis settings, formats, reaction frames, allowed folders and compile
+mode (the mode that ran, for a complete run). Every file the run read (`files`: model,
+components, tables, meshes, data) must still have its recorded sha256; a changed or missing file
+is a usage error naming it. OUT defaults to `DIR_replay/` beside DIR.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from casmech.errors import UsageError
 SETTINGS = {"analysis": "type", "t_end": "t_end", "output_step": "output_step",
             "rtol": "rtol", "atol": "atol", "formulation": "formulation",
             "stabilization": "stabilization", "method": "method"}
-RECORDED = (*SETTINGS, "format", "mode")  # run's arguments a replay takes from the record
+RECORDED = (*SETTINGS, "format", "mode", "reactions_frame")  # run's arguments a replay takes
 
 
 def direct(args: argparse.Namespace) -> argparse.Namespace:
@@ -50,6 +50,7 @@ def replayed(args: argparse.Namespace) -> argparse.Namespace:
         "out": args.out or folder.with_name(folder.name + "_replay"),
         **{name: settings[key] for name, key in SETTINGS.items()},
         "format": list(options.get("format", ["csv"])),
+        "reactions_frame": options.get("reactions_frame"),
         "mode": record["mode"] if complete else options.get("mode", "auto"),
         "allow_dir": [*args.allow_dir, *options.get("allow_dir", [])],
     })

@@ -33,6 +33,7 @@ from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
+from casmech.runtime import reaction_frames
 from casmech.runtime.results import column_names
 
 # further files an analysis may write (Result.files), removed with an earlier run's results
@@ -81,6 +82,9 @@ def add_arguments(parser) -> None:
                         help="CVODES's method for joint coordinates on a tree (default: the "
                              "model's, else auto: bdf when the ODE is stiff at t0)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
+    parser.add_argument("--reactions-frame", choices=list(reaction_frames.FRAMES),
+                        help="the frame of every joint's reaction columns, replacing the "
+                             "joints' `reactions: {frame: ...}` (default: theirs, else global)")
     parser.add_argument("--format", type=formats, metavar="csv|hdf5",
                         help="results file format(s), comma-separated (default csv)")
     parser.add_argument("--mode", choices=api.COMPILE_MODES,
@@ -117,6 +121,8 @@ def _run(args) -> int:
                                  stabilization=args.stabilization, method=args.method)
     options = {"mode": args.mode, "format": list(args.format),
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
+    if args.reactions_frame:  # recorded when given, for --replay
+        options["reactions_frame"] = args.reactions_frame
     run = (model, given, settings, timings, options)
     api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
                           args.atol, args.formulation, args.stabilization,
@@ -185,11 +191,14 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
         names = column_names(functions)
         values, meta, rows = np.zeros((0, len(names))), {}, 0
     else:
-        names, values = casmech.results_table(functions, result)
+        names, values = casmech.results_table(functions, result, args.reactions_frame)
         meta, rows = result.metadata, len(values)
     model, given, settings, timings, options = run
     metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal,
                             options)
+    ir = functions.ir
+    metadata["reaction_frames"] = reaction_frames.describe(
+        ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     files = {} if result is None else result.files

@@ -67,6 +67,8 @@ class JointIR:
     geometry: Mapping[str, np.ndarray] = field(default_factory=dict)
     drivers: Mapping[str, ScalarFunction] = field(default_factory=dict)  # angle, displacement
     cut: bool = False  # `cut: true`: never a tree joint of the joint formulation
+    reaction_frame: str = "global"  # the frame of its reaction columns (runtime.reaction_frames)
+    reaction_point: np.ndarray | None = None  # the torque's point instead of point_i, body_i frame
 
 
 @dataclass(frozen=True)

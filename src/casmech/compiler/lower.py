@@ -111,10 +111,18 @@ def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[Primi
     drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
                                          ("displacement", joint.driver_displacement)) if fun}
     return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
-                          _geometry(joint, frame, poses), drivers, joint.cut)
+                          _geometry(joint, frame, poses), drivers, joint.cut,
+                          joint.reaction_frame, _reaction_point(joint, poses))
 
 
 FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")
+
+
+def _reaction_point(joint: Joint, poses: _Poses) -> np.ndarray | None:
+    """`reactions: {point: ...}` (global at t = 0) in body i's frame (ground: global)."""
+    if joint.reaction_point is None:
+        return None
+    return poses.local(joint.body_i, "P", np.asarray(joint.reaction_point, float))
 
 
 def _geometry(joint: Joint, frame, poses: _Poses) -> dict[str, np.ndarray]:

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import casadi as ca
 import numpy as np
 
 from casmech.compiler.functions import SystemFunctions
+from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import BufferedCall
 
 BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
@@ -97,7 +98,10 @@ class Result:
                              "use casmech.analyze's Result, or casmech.results_table(functions, "
                              "result)")
         names, values = table(self.functions, self)
-        return frames.frame(names, values, self.metadata)
+        ir = self.functions.ir
+        chosen = reaction_frames_of.describe(ir, reaction_frames_of.chosen(ir),
+                                             self.functions.body_names)
+        return frames.frame(names, values, {**self.metadata, "reaction_frames": chosen})
 
     def _facts(self) -> dict[str, str]:
         from casmech.output import frames
@@ -167,9 +171,14 @@ def row_function(functions: SystemFunctions) -> ca.Function:
                        [ca.densify(ca.vertcat(*parts))])
 
 
-def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.ndarray]:
+def table(functions: SystemFunctions, result: Result,
+          reaction_frames: str | Mapping[str, str] | None = None
+          ) -> tuple[list[str], np.ndarray]:
     """Every row at once: row_function (built once per bundle) mapped over the rows, one call
-    writing into NumPy memory (runtime.buffers)."""
+    writing into NumPy memory (runtime.buffers); then each joint's reaction columns in its
+    frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for every joint
+    (a frame name) or the joints it names (a mapping)."""
+    frames = reaction_frames_of.chosen(functions.ir, reaction_frames)
     names = column_names(functions)
     rows = len(result)
     if rows == 0:
@@ -179,4 +188,9 @@ def table(functions: SystemFunctions, result: Result) -> tuple[list[str], np.nda
     mapped = BufferedCall(functions.derived["results_row"].map(rows))
     (values,) = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
                        result.q_ddot.T, result.lam.T)
-    return names, values.T
+    values = values.T
+    start = 1 + len(BODY_COLUMNS) * functions.n_bodies
+    block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
+    values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
+                                                  values[:, block])
+    return names, values

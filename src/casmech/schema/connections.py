@@ -32,6 +32,11 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     extra.update(drivers(check, path, given))
     if getattr(given, "cut", False):
         extra["cut"] = True
+    if given.reactions is not None:
+        extra["reaction_frame"] = given.reactions.frame
+    if given.reactions is not None and given.reactions.point is not None:
+        extra["reaction_point"] = check.numbers((*path, "reactions", "point"),
+                                                given.reactions.point)
     if given.type in JOINT_CHECKS and not failed(vectors.values()):
         JOINT_CHECKS[given.type](check, path, vectors)
     if hasattr(given, "f"):

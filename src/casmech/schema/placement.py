@@ -5,7 +5,8 @@ basic constraints on moving bodies, body-frame loads, bushing stiffnesses) are l
 on `ground` the a/s vectors of basic constraints are component-frame vectors and are placed.
 
     what it is              keys                                     placed as
-    point                   position, at, at_i, at_j                 R x + d
+    point                   position, at, at_i, at_j, a joint's      R x + d
+                            reactions point
     direction               velocity, angular_velocity, axis,        R x
                             axis_i, axis_j, c, global value
     orientation             euler_parameters, bushing orientation   q_R * p
@@ -130,8 +131,10 @@ def _vectors(frame: Frame, item, vectors: Mapping[str, np.ndarray]) -> dict[str,
 
 
 def joint(frame: Frame, names: Names, given: resolved.Joint) -> resolved.Joint:
+    point = given.reaction_point
     return replace(given, name=names(given.name), body_i=names(given.body_i),
-                   body_j=names(given.body_j), vectors=_vectors(frame, given, given.vectors))
+                   body_j=names(given.body_j), vectors=_vectors(frame, given, given.vectors),
+                   reaction_point=None if point is None else frame.point(point))
 
 
 def force(frame: Frame, names: Names, given: resolved.Force) -> resolved.Force:

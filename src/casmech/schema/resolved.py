@@ -80,6 +80,8 @@ class Joint:
     # force -> f(t, displacement, displacement_dot); position/speed motors are drivers above
     motor: Mapping[str, Any] = field(default_factory=dict)
     cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
+    reaction_frame: str = "global"  # `reactions: {frame: ...}` (runtime.reaction_frames)
+    reaction_point: np.ndarray | None = None  # `reactions: {point: ...}`, global at t = 0
 
 
 @dataclass(frozen=True)

@@ -228,11 +228,21 @@ class Motor(Spec):
     force: TimeFunction | None = None
 
 
+class Reactions(Spec):
+    """How a joint's reaction columns are written (casmech.runtime.reaction_frames): the frame
+    of their components and the point the torque is taken about (global at t = 0, carried by
+    body_i; default the joint point)."""
+
+    frame: Literal["global", "body_i", "body_j", "joint"] = "global"
+    point: Vector | None = None
+
+
 class JointBase(Spec):
     name: Name
     body_i: Name
     body_j: Name
     repeat: Repeats | None = None
+    reactions: Reactions | None = None
 
 
 class Composite(JointBase):

@@ -91,6 +91,12 @@ HINTS = {
     "euler_parameters": "Euler parameters are [e0, e1, e2, e3]",
 }
 
+# (parent key, key) of a choice -> the hint when the value written is not close to a choice
+LITERAL_HINTS = {
+    ("reactions", "frame"): "the frame of the joint's reaction columns: global (the default), "
+                            "body_i, body_j, or joint (the joint's own axes, fixed to body_i)",
+}
+
 
 class _Error:
     """One pydantic error, located in the document."""
@@ -149,7 +155,8 @@ def _no_tag(e: _Error) -> Diagnostic:
 
 def _literal(e: _Error) -> Diagnostic:
     values = [str(value) for value in get_args(e.annotation)]
-    hint = did_you_mean(e.input, values)
+    keys = tuple(step for step in e.path if isinstance(step, str))[-2:]
+    hint = did_you_mean(e.input, values) or LITERAL_HINTS.get(keys)
     expected, got = " | ".join(values), _describe(e.input)
     return e.diagnostic("E103", "invalid value", expected=expected, got=got, hint=hint)
 
