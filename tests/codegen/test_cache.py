@@ -111,9 +111,13 @@ def test_cache_info_and_clear(tmp_path, compiled, cache_root, monkeypatch, capsy
                  if "codegen_test" in (e / MANIFEST).read_text())
     shutil.copytree(entry, root / entry.name)
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(root))
+    killed = root / f".{entry.name}.abc123"  # what a killed build leaves
+    killed.mkdir()
+    (killed / "casmech_model.c").write_text("x" * 2000)
     assert main(["cache", "info"]) == 0
     out = capsys.readouterr().out
     assert f"{root}: 1 compiled models" in out and "codegen_test" in out
+    assert "and 1 unfinished builds (0.00 MB" in out
     assert main(["cache", "clear"]) == 0
     assert cache.entries(root) == [] and list(root.iterdir()) == []
     assert main(["cache", "info"]) == 0

@@ -102,6 +102,17 @@ def test_writer_round_trips_nested_metadata(tmp_path):
     np.testing.assert_allclose(back, values, rtol=0, atol=0)  # small integers: exact
 
 
+def test_writes_leave_no_temporary_file(tmp_path):
+    """Each write goes through a temporary name of its own, renamed or removed: a finished
+    write and a failed one (a table that does not match its names) leave only results.h5."""
+    names, values = ["t", "p.x"], np.arange(4.0).reshape(2, 2)
+    write_hdf5(tmp_path / "results.h5", names, values)
+    with pytest.raises(ValueError):
+        write_hdf5(tmp_path / "results.h5", ["t", "p.x", "p.y"], np.arange(4.0))
+    assert [p.name for p in tmp_path.iterdir()] == ["results.h5"]
+    np.testing.assert_array_equal(read_hdf5(tmp_path / "results.h5")[1], values)  # the first
+
+
 def test_missing_h5py_is_a_usage_error_before_the_run(tmp_path, monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "h5py", None)  # import now fails
     argv = ["run", str(MODELS / "slider_crank.yaml"), "--out", str(tmp_path), "--format", "hdf5"]

@@ -139,6 +139,12 @@ def entries(root: Path | None = None) -> list[Path]:
         if root.is_dir() else []
 
 
+def unfinished(root: Path | None = None) -> list[Path]:
+    """Hidden temporary build folders: builds in progress, or left by a killed one."""
+    root = root or cache_dir()
+    return sorted(p for p in root.glob(".*") if p.is_dir()) if root.is_dir() else []
+
+
 def size(path: Path) -> int:
     return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
 

@@ -30,4 +30,9 @@ def run(args) -> int:
     print(f"{root}: {len(entries)} compiled models, {total / 1e6:.2f} MB")
     for entry in entries:
         print(_describe(entry))
+    unfinished = cache.unfinished(root)
+    if unfinished:
+        stale = sum(cache.size(path) for path in unfinished)
+        print(f"  and {len(unfinished)} unfinished builds ({stale / 1e6:.2f} MB: in progress, "
+              f"or left by a build that was killed; `casmech cache clear` removes them)")
     return 0

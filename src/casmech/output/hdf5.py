@@ -12,6 +12,7 @@ Layout:
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -37,14 +38,21 @@ def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
     h5 = h5py()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = path.with_name(path.name + ".tmp")
+    # a temporary name of its own (two runs into one folder do not share it), as csv.atomic
+    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
+                                             suffix=".tmp")
+    os.close(descriptor)
     strings = h5.string_dtype("utf-8")
-    with h5.File(temporary, "w") as handle:
-        table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
-        handle.create_dataset("results", data=table)
-        handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
-        _write_group(handle.create_group("metadata"), metadata or {}, strings)
-    os.replace(temporary, path)
+    try:
+        with h5.File(temporary, "w") as handle:
+            table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
+            handle.create_dataset("results", data=table)
+            handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
+            _write_group(handle.create_group("metadata"), metadata or {}, strings)
+        os.replace(temporary, path)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
     return path
 
 
