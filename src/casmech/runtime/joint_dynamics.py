@@ -52,6 +52,7 @@ COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
 
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
+KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
 
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
@@ -103,7 +104,7 @@ def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.
     return theta, np.linalg.lstsq(subspace, twist, rcond=None)[0]
 
 
-def initial_state(system: JointSystem, q, q_dot, n_bodies: int) -> np.ndarray:
+def initial_state(system: JointSystem, q, q_dot) -> np.ndarray:
     """x0 = [theta; u] of the free coordinates and velocities at the r-p state."""
     lay, joints = system.layout, system.tree.joints
     rotations, gaps, twists = BufferedCall(system.relative_states)(q, q_dot)
@@ -234,7 +235,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     system = joint_system(functions)
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
-    x = initial_state(system, q0, q_dot0, nb)
+    x = initial_state(system, q0, q_dot0)
     loops = _Loops(system, t0, x)
     z = loops.z(t0, x)
     if method == "auto":
@@ -300,6 +301,8 @@ class _Recorder:
         """The results rows' function mapped over n rows (kept with the functions)."""
         key = (self.system.motion, n)
         if key not in self.maps:
+            if len(self.maps) >= KEPT_MAPS:
+                self.maps.pop(next(iter(self.maps)))
             self.maps[key] = BufferedCall(self.system.motion.map(n))
         return self.maps[key]
 
