@@ -13,6 +13,7 @@ from casmech.errors import UsageError
 from casmech.output import plot
 from casmech.output.csv import read_csv
 from casmech.output.hdf5 import read_hdf5
+from tests.conftest import MODELS
 
 # the brief's unit table, written out independently of casmech.output.plot.QUANTITIES
 UNITS = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s", "ax": "m/s²",
@@ -125,3 +126,29 @@ def test_log_axis_keeps_round_off_floor():
     (ax,) = plot.figure(names, values, ["constraints"]).axes
     bottom, top = ax.get_ylim()
     assert ax.get_yscale() == "log" and 1e-17 <= bottom <= 1e-12 and top >= 1e-9
+
+
+def test_reactions_in_another_frame_get_their_own_titled_panel():
+    """A joint whose reactions are in its joint frame (metadata reaction_frames) is not drawn
+    in the panel of a global one, and its panel says which frame."""
+    names = ["t", "a.fx", "b.fx", "c.x"]
+    grouped = plot.panels(names[1:], {"a": "joint", "b": "global"})
+    titles = {key[2]: columns for key, columns in grouped.items()}
+    assert titles["joint reaction force on body_j (joint frame of each joint)"] == ["a.fx"]
+    assert titles["joint reaction force on body_j (global)"] == ["b.fx"]
+    assert titles["CM position (global)"] == ["c.x"]  # body columns are not reactions
+
+
+def test_plot_command_reads_the_frames_from_the_runs_metadata(tmp_path):
+    """casmech plot takes each joint's frame from metadata.json beside results.csv (and from
+    results.h5's own metadata)."""
+    from casmech.commands.plot import reaction_frames
+
+    out = tmp_path / "run"
+    assert cli.main(["run", str(MODELS / "slider_crank.yaml"), "--out", str(out), "--t-end",
+                     "0.05", "--mode", "interpreted", "--reactions-frame", "joint",
+                     "--format", "csv,hdf5"]) == 0
+    expected = dict.fromkeys(("crank_pivot", "crank_pin", "wrist_pin", "slide"), "joint")
+    assert reaction_frames(out / "results.csv") == expected
+    assert reaction_frames(out / "results.h5") == expected
+    assert reaction_frames(tmp_path / "elsewhere" / "results.csv") == {}  # no metadata: global

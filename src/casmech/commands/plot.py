@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from casmech.errors import UsageError
 from casmech.output import plot
 from casmech.output.csv import read_csv
-from casmech.output.hdf5 import read_hdf5
+from casmech.output.hdf5 import read_hdf5, read_hdf5_metadata
 
 READERS = {".csv": read_csv, ".h5": read_hdf5, ".hdf5": read_hdf5}  # results file suffix -> reader
 
@@ -21,6 +22,23 @@ def add_arguments(parser) -> None:
                         help="image to write: .png, .pdf or .svg")
 
 
+def reaction_frames(results: Path) -> dict[str, str]:
+    """joint -> the frame of its reaction columns, from the run's metadata (metadata.json
+    beside a CSV, the file's own for HDF5); empty (global) when the metadata says nothing."""
+    try:
+        if results.suffix.lower() == ".csv":
+            metadata = json.loads((results.parent / "metadata.json").read_text())
+        else:
+            metadata = read_hdf5_metadata(results)
+    except (OSError, ValueError, KeyError):
+        return {}
+    described = metadata.get("reaction_frames") if isinstance(metadata, dict) else None
+    if not isinstance(described, dict):
+        return {}
+    return {joint: entry["frame"] for joint, entry in described.items()
+            if isinstance(entry, dict) and isinstance(entry.get("frame"), str)}
+
+
 def run(args) -> int:
     plot.check_output(args.output)
     reader = READERS.get(args.results.suffix.lower())
@@ -32,6 +50,7 @@ def run(args) -> int:
         raise UsageError(f"'{args.results}' has no column 't'; expected a results table of "
                          "casmech run")
     title = f"{args.results.name}: {', '.join(args.columns)}"
-    path = plot.save(plot.figure(names, values, args.columns, title), args.output)
+    frames = reaction_frames(args.results)
+    path = plot.save(plot.figure(names, values, args.columns, title, frames), args.output)
     print(f"plotted {', '.join(args.columns)} -> {path}")
     return 0

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import difflib
 import fnmatch
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -108,18 +108,35 @@ def _did_you_mean(names: Sequence[str], spec: str) -> str:
     return f"; did you mean {', '.join(close)}?" if close else ""
 
 
-def panels(columns: Sequence[str]) -> dict[tuple[str, str, str], list[str]]:
-    """Columns grouped by quantity, in order of first appearance."""
+REACTIONS = {f"{kind}{axis}" for kind in "ft" for axis in "xyz"}  # a joint's reaction columns
+
+
+def panel_key(column: str, frames: Mapping[str, str] | None = None) -> tuple[str, str, str]:
+    """The column's quantity; a joint's reaction in another frame than the global axes (the
+    run's metadata `reaction_frames`: joint -> frame) gets its own panel, titled by its frame."""
+    name, unit, heading = quantity(column)
+    joint, _, suffix = column.rpartition(".")
+    frame = (frames or {}).get(joint, "global")
+    if suffix in REACTIONS and frame != "global":
+        heading = heading.replace("(global)", f"({frame} frame of each joint)")
+    return name, unit, heading
+
+
+def panels(columns: Sequence[str], frames: Mapping[str, str] | None = None
+           ) -> dict[tuple[str, str, str], list[str]]:
+    """Columns grouped by quantity (and reaction frame), in order of first appearance."""
     grouped: dict[tuple[str, str, str], list[str]] = {}
     for column in columns:
-        grouped.setdefault(quantity(column), []).append(column)
+        grouped.setdefault(panel_key(column, frames), []).append(column)
     return grouped
 
 
-def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title: str = ""):
-    """A matplotlib Figure of the selected columns against t (one panel per quantity)."""
+def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title: str = "",
+           frames: Mapping[str, str] | None = None):
+    """A matplotlib Figure of the selected columns against t (one panel per quantity; reaction
+    columns by the frame `frames` names for their joint, global when not named)."""
     Figure = _matplotlib_figure()  # noqa: N806 - a class
-    grouped = panels(select(names, specs))
+    grouped = panels(select(names, specs), frames)
     values = np.atleast_2d(values)
     t = values[:, list(names).index("t")]
     heights = [_panel_height(len(columns)) for columns in grouped.values()]
