@@ -20,7 +20,7 @@ from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, Interrupted, UsageError
-from casmech.runtime import assembly
+from casmech.runtime import assembly, solver_messages
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
@@ -126,18 +126,27 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     The Result keeps `functions`: `result.to_dataframe()` is its results table as a DataFrame."""
     settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
                                  formulation, stabilization, method)
+    messages: list[str] = []  # the solvers' own stderr lines (runtime.solver_messages)
     try:
-        result = ANALYSES[settings.type](functions, settings, progress)
+        with solver_messages.collected(messages) as stream:
+            result = ANALYSES[settings.type](functions, settings, progress)
     except AnalysisError as error:  # the rows before a failure tabulate like a whole run's
         if error.partial is not None:
             error.partial.functions = functions
             error.partial.status = "interrupted" if isinstance(error, Interrupted) else "failed"
+            _keep_messages(error.partial, messages, stream.count)
         raise
+    _keep_messages(result, messages, stream.count)
     from casmech import codegen  # imported on use: `casmech check` never needs it
 
     result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
     result.functions = functions
     return result
+
+
+def _keep_messages(result: Result, messages: list[str], count: int) -> None:
+    if count:
+        result.metadata.update(solver_messages=messages, solver_message_count=count)
 
 
 def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
