@@ -84,10 +84,12 @@ def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
     return ca.vertcat(*rows) if rows else ca.SX(0, 1)
 
 
-def rotational_jacobian(phi, x: Coordinates, k: int):
-    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation)."""
-    p = x.p(k)
-    return 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T
+def rotational_jacobian(phi_q, x: Coordinates, k: int):
+    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation), from
+    body k's columns of Phi_q (one Jacobian of phi for every body: a Jacobian per body cost
+    O(bodies) each, 3.4 s of `casmech check` at 1000 bodies)."""
+    start = 3 * x.n_bodies + 4 * k
+    return 0.5 * phi_q[:, start:start + 4] @ euler.g_matrix(x.p(k)).T
 
 
 @dataclass(frozen=True)
@@ -121,8 +123,9 @@ def build_constraints(ir: ModelIR) -> ConstraintSystem:
     phi = x.ground_fixed(phi_ground)
     d = derive(phi, x)
     nb = ir.n_bodies
-    phi_r = ca.jacobian(phi, x.q[: 3 * nb])
-    pi_bar = ca.horzcat(*[rotational_jacobian(phi, x, k) for k in range(nb)]) if nb else phi_r
+    phi_r = d["phi_q"][:, :3 * nb]
+    pi_bar = ca.horzcat(*[rotational_jacobian(d["phi_q"], x, k) for k in range(nb)]) \
+        if nb else phi_r
     scale = ca.SX.sym("s")
     phi_scaled = x.ground_fixed(constraint_rows(ir, x, scale))
     return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r, pi_bar,
