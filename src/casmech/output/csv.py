@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
+
+from casmech.output.atomic import atomic
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
@@ -20,22 +19,6 @@ def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
         handle.writelines(",".join(map(repr, row)) + "\n"
                           for row in np.atleast_2d(values).tolist())
     return path
-
-
-@contextmanager
-def atomic(path: Path, **options):
-    """A text file written under a temporary name of its own (two runs into one folder do not
-    share it) and renamed to `path` once complete; removed if writing fails."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
-                                             suffix=".tmp")
-    try:
-        with open(descriptor, "w", **options) as handle:
-            yield handle
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:

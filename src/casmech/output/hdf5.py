@@ -11,14 +11,13 @@ Layout:
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
 from casmech.errors import UsageError
+from casmech.output.atomic import replaced
 
 DATASETS = ("text",)  # metadata keys stored as datasets (long), not attributes
 
@@ -34,25 +33,15 @@ def h5py():
 
 def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
                metadata: Mapping | None = None) -> Path:
-    """Write atomically (a reader never sees a half-written file)."""
+    """Write atomically (output.atomic)."""
     h5 = h5py()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # a temporary name of its own (two runs into one folder do not share it), as csv.atomic
-    descriptor, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.",
-                                             suffix=".tmp")
-    os.close(descriptor)
     strings = h5.string_dtype("utf-8")
-    try:
-        with h5.File(temporary, "w") as handle:
-            table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
-            handle.create_dataset("results", data=table)
-            handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
-            _write_group(handle.create_group("metadata"), metadata or {}, strings)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
+    with replaced(path) as temporary, h5.File(temporary, "w") as handle:
+        table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
+        handle.create_dataset("results", data=table)
+        handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
+        _write_group(handle.create_group("metadata"), metadata or {}, strings)
     return path
 
 

@@ -108,8 +108,8 @@ def _plain(value):
 
 
 def write_json(path: str | Path, metadata: Mapping) -> Path:
-    """Write atomically, like the CSV writer."""
-    from casmech.output.csv import atomic
+    """Write atomically (output.atomic)."""
+    from casmech.output.atomic import atomic
 
     path = Path(path)
     with atomic(path) as handle:

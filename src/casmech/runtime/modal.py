@@ -24,7 +24,6 @@ body motions (n_modes x n_bodies x 6), scaled so that the largest entry is 1.
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,7 +33,7 @@ import numpy as np
 from casmech.compiler import motors as compiler_motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import SystemFunctions
-from casmech.output.csv import atomic
+from casmech.output.atomic import atomic
 from casmech.runtime import statics
 from casmech.runtime.results import Result
 
@@ -94,12 +93,9 @@ class LinearModel:
         return Path(path)
 
     def write_npz(self, path: Path) -> Path:
-        """linear_model.npz, written under a temporary name and renamed (a reader never sees
-        half of it)."""
+        """linear_model.npz, atomically (output.atomic)."""
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        with open(temporary, "wb") as handle:
+        with atomic(path, "wb") as handle:
             np.savez(handle, A=self.A, B=self.B, C=self.C, D=self.D,
                      state_names=np.array(self.state_names, dtype=str),
                      input_names=np.array(self.input_names, dtype=str),
@@ -108,7 +104,6 @@ class LinearModel:
                      mode_shapes=self.mode_shapes,
                      mode_shape_names=np.array(
                          [f"{b}.{m}" for b in self.body_names for m in MOTION], dtype=str))
-        os.replace(temporary, path)
         return path
 
 
