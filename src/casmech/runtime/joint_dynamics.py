@@ -31,6 +31,7 @@ from casmech.runtime import assembly
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
 
 MAX_STEPS = 50000  # steps per output interval before SUNDIALS gives up (as runtime.dynamics)
@@ -192,13 +193,9 @@ class _Integrator:
         An entry keeps its problem alive, so the problem's id in the key is not reused."""
         key = (id(problem), float(t0), tuple(float(t) for t in times),
                tuple(sorted(self.options.items())))
-        cache = self.system_cache.setdefault("cvodes", {})
-        if key not in cache:
-            if len(cache) >= KEPT_INTEGRATORS:
-                cache.pop(next(iter(cache)))
-            cache[key] = (problem, ca.integrator("joint", "cvodes", problem, t0, list(times),
-                                                 self.options))
-        return cache[key][1]
+        return kept(self.system_cache.setdefault("cvodes", {}), key, lambda: (
+            problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
+            KEPT_INTEGRATORS)[1]
 
     def _dae_options(self, t0, times, x, z) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
@@ -299,12 +296,8 @@ class _Recorder:
 
     def _mapped(self, n: int) -> BufferedCall:
         """The results rows' function mapped over n rows (kept with the functions)."""
-        key = (self.system.motion, n)
-        if key not in self.maps:
-            if len(self.maps) >= KEPT_MAPS:
-                self.maps.pop(next(iter(self.maps)))
-            self.maps[key] = BufferedCall(self.system.motion.map(n))
-        return self.maps[key]
+        return kept(self.maps, (self.system.motion, n),
+                    lambda: BufferedCall(self.system.motion.map(n)), KEPT_MAPS)
 
     def __call__(self, result: Result, times, states, algebraic) -> None:
         n = len(times)

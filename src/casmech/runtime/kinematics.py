@@ -22,6 +22,7 @@ from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.runtime import assembly
 from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
 
 # Rows whose Phi_q has min |R_kk| / max |R_kk| below this go to the per-row code, which decides
@@ -58,6 +59,7 @@ def state_at(functions: SystemFunctions, t: float, q_guess: np.ndarray, q_dot_gu
     return q, q_dot, q_ddot, lam
 
 
+KEPT_GRIDS = 16  # mapped grids (one per padded block length) kept with the functions
 MIN_SPAN = 16  # rows of the first mapped call after a row the per-row code had to do
 
 
@@ -118,9 +120,8 @@ class _MappedGrid:
     def __call__(self, state, previous: float, block: np.ndarray):
         rows = len(block)
         padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
-        if padded not in self.grids:
-            self.grids[padded] = BufferedCall(prescribed.grid(self.step, rows)[0])
-        function = self.grids[padded]
+        function = kept(self.grids, padded,
+                        lambda: BufferedCall(prescribed.grid(self.step, rows)[0]), KEPT_GRIDS)
         times = np.concatenate([block, np.full(padded - rows, block[-1])])
         steps = np.diff(times, prepend=previous)
         states, checks = function(state, np.vstack([times, steps]))
