@@ -1,11 +1,14 @@
 """Shared fixtures: paths to the example models, running a model through the API."""
 
+import re
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 
 import casmech
+from casmech.runtime.buffers import BufferedCall
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -19,6 +22,29 @@ class Table:
 
     def __getitem__(self, name):
         return self.values[:, self.names.index(name)]
+
+
+def count_calls(monkeypatch) -> list[str]:
+    """The names of every casadi.Function evaluation made from Python from now on (symbolic,
+    numeric, or buffered: runtime.buffers), with a mapped function's row count left out
+    (mapN_f -> map_f), for tests that no analysis calls CasADi once per row."""
+    calls = []
+    call, buffered = ca.Function.call, BufferedCall.__call__
+
+    def name(function) -> str:
+        return re.sub(r"^map\d+_", "map_", function.name())
+
+    def counting(self, *args, **kwargs):
+        calls.append(name(self))
+        return call(self, *args, **kwargs)
+
+    def counting_buffered(self, *args):
+        calls.append(name(self.function))
+        return buffered(self, *args)
+
+    monkeypatch.setattr(ca.Function, "call", counting)  # Function.__call__ goes through call
+    monkeypatch.setattr(BufferedCall, "__call__", counting_buffered)
+    return calls
 
 
 def run_model(path, **kwargs):

@@ -4,16 +4,14 @@ numpy.linalg.lstsq), on every gallery model with such an analysis and a redundan
 
 import re
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import casmech
 from casmech.errors import AnalysisError
 from casmech.runtime import assembly
-from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.kinematics import output_times, state_at
-from tests.conftest import MODELS
+from tests.conftest import MODELS, count_calls
 
 PRESCRIBED = sorted(path.stem for path in MODELS.glob("*.yaml")
                     if re.search(r"^\s+type:\s*(kinematics|inverse_dynamics)\s*$",
@@ -97,28 +95,6 @@ def test_redundant_rows_get_minimum_norm_multipliers():
         null = np.linalg.svd(phi_q.T)[2][-1]  # phi_q^T (35 x 36) has a one-dimensional null space
         # roundoff of a minimum-norm solve on multipliers of ~1e1 N
         assert abs(null @ lam) <= 1e-11 * max(1.0, np.max(np.abs(lam)))
-
-
-def count_calls(monkeypatch):
-    """Count every casadi.Function evaluation made from Python (symbolic, numeric and
-    buffered)."""
-    calls = []
-    for method in ("__call__", "call"):
-        original = getattr(ca.Function, method)
-
-        def counted(self, *args, _original=original, **kwargs):
-            calls.append(self.name())
-            return _original(self, *args, **kwargs)
-
-        monkeypatch.setattr(ca.Function, method, counted)
-    buffered = BufferedCall.__call__
-
-    def counted_buffered(self, *args):
-        calls.append(self.function.name())
-        return buffered(self, *args)
-
-    monkeypatch.setattr(BufferedCall, "__call__", counted_buffered)
-    return calls
 
 
 @pytest.mark.parametrize("mode", ["interpreted", "compiled"])

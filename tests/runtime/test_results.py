@@ -1,16 +1,13 @@
 """Results and their table (runtime.results): blocks of rows, one mapped call for the table,
 and no CasADi call per output row in a dynamics run."""
 
-import re
 
-import casadi as ca
 import numpy as np
 import pytest
 
 import casmech
-from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.results import Result, row, table
-from tests.conftest import MODELS
+from tests.conftest import MODELS, count_calls
 
 
 def per_row(functions, result):
@@ -57,26 +54,6 @@ def test_extend_and_append_build_the_same_result():
         np.testing.assert_array_equal(getattr(by_rows, name), value)
     with pytest.raises(ValueError, match="q: expected 2 rows"):
         by_blocks.extend(times[:2], *(s[:3] for s in states))
-
-
-def count_calls(monkeypatch):
-    """Counts every casadi.Function call made from Python (numeric, symbolic or buffered)."""
-    calls = []
-    call = ca.Function.call
-
-    def counting(self, *args, **kwargs):
-        calls.append(re.sub(r"^map\d+_", "map_", self.name()))  # mapN_f: N is the rows
-        return call(self, *args, **kwargs)
-
-    monkeypatch.setattr(ca.Function, "call", counting)
-    buffered = BufferedCall.__call__
-
-    def counting_buffered(self, *args):
-        calls.append(re.sub(r"^map\d+_", "map_", self.function.name()))
-        return buffered(self, *args)
-
-    monkeypatch.setattr(BufferedCall, "__call__", counting_buffered)
-    return calls
 
 
 @pytest.mark.parametrize("formulation", ["rp", "romega"])
