@@ -37,6 +37,7 @@ MAX_VALUES = 400_000  # values after alias expansion: a 2 MiB model written out 
 #                       stops here instead of filling memory
 
 _PARSER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when PyYAML was built with it
+_LIBYAML_DEPTH = "exceeded maximum nesting depth"  # libyaml's own nesting limit (load_document)
 _RESOLVER = yaml.resolver.Resolver()  # YAML 1.1's implicit types: to recognise the surprises
 _CORE = "tag:yaml.org,2002:"
 _TEXT_TAGS = {"!", f"{_CORE}str"}  # tags that only say "text"
@@ -350,9 +351,9 @@ def _tag(tag: str) -> str:
     return "!!" + tag[len(_CORE):] if tag.startswith(_CORE) else tag
 
 
-def _events(builder: _Builder, text: str) -> None:
+def _events(builder: _Builder, text: str, parser=_PARSER) -> None:
     documents = 0
-    for event in yaml.parse(text, Loader=_PARSER):
+    for event in yaml.parse(text, Loader=parser):
         kind = type(event)
         if kind is yaml.ScalarEvent:
             builder.scalar(event)
@@ -403,7 +404,16 @@ def load_document(text: str, file: str = "<string>") -> Document:
         raise ModelError([too_large(file, len(text), MAX_MODEL_BYTES)])
     builder = _Builder(file, text)
     try:
-        _events(builder, text)
+        try:
+            _events(builder, text)
+        except yaml.YAMLError as error:
+            if _PARSER is yaml.SafeLoader or _LIBYAML_DEPTH not in str(error):
+                raise
+            # libyaml (as PyYAML 6.0.4 bundles it) refuses deep nesting itself, from a scanner
+            # running ahead of the events; the pure-Python parser hands each event to the
+            # builder, so MAX_DEPTH decides (E006, where it is exceeded) with either build
+            builder = _Builder(file, text)
+            _events(builder, text, yaml.SafeLoader)
     except Fatal as fatal:
         raise ModelError([fatal.diagnostic]) from None
     except yaml.YAMLError as error:
