@@ -15,6 +15,7 @@ row's multiplier.
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -95,12 +96,31 @@ def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSyste
                    motion=built.get("joint_motion", system.motion))
 
 
+@cache
+def constant_inverse(kind: str) -> np.ndarray | None:
+    """The pseudo-inverse of a joint type's motion subspace S_J where S_J is the same at every
+    theta (revolute, spherical, ...: u = S_J^+ twist with no per-state work), else None.
+    Whether it is constant is seen at sample coordinates (its SX does not simplify
+    sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
+    motion, samples = MOTIONS[kind], np.random.default_rng(0).normal(size=(4, MOTIONS[kind].n_q))
+    for start in motion.quaternions:
+        samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
+    zero = np.zeros(motion.n_v)
+    subspaces = [np.array(local_motion(kind)(theta, zero)[2].full()) for theta in samples]
+    if max(np.max(np.abs(s - subspaces[0])) for s in subspaces) > 1e-14:
+        return None
+    return np.linalg.pinv(subspaces[0])
+
+
 def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.ndarray]:
     """(theta, u) of a tree joint from its relative rotation, gap and twist (relative_states)."""
     theta = MOTIONS[joint.type].coordinates(rotation, gap)
     n_v = MOTIONS[joint.type].n_v
     if not n_v:
         return theta, np.zeros(0)
+    inverse = constant_inverse(joint.type)
+    if inverse is not None:
+        return theta, inverse @ twist
     subspace = np.array(local_motion(joint.type)(theta, np.zeros(n_v))[2].full())
     return theta, np.linalg.lstsq(subspace, twist, rcond=None)[0]
 
@@ -216,9 +236,13 @@ class _Integrator:
                     self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
 
 
-def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
-    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
-    if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
+def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True) -> str:
+    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams".
+
+    Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
+    source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
+    solution follows, so it is not examined."""
+    if system.n_cut or not forces or not 0 < len(x0) <= STIFF_STATES:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
     jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
@@ -236,7 +260,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     loops = _Loops(system, t0, x)
     z = loops.z(t0, x)
     if method == "auto":
-        method = choose_method(system, t0, x, step)
+        method = choose_method(system, t0, x, step,
+                               bool(functions.ir.forces or functions.ir.motors))
     recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
                          loops.mask)
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
