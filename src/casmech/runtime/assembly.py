@@ -93,7 +93,10 @@ def initial_state(functions: SystemFunctions, t0: float = 0.0):
 
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
                      q_dot_guess: np.ndarray) -> np.ndarray:
-    """Phi_q q_dot = nu, closest (least squares) to the guess."""
+    """Phi_q q_dot = nu, closest (least squares) to the guess (the guess itself when it is
+    zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
+    if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
+        return np.array(q_dot_guess, float)
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()
