@@ -258,3 +258,22 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
     np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
     assert np.max(np.abs(other.q - first.q)) > 0  # the options are part of what is kept
     assert len(functions.derived["cvodes"]) <= KEPT_INTEGRATORS
+
+
+def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
+    """The tree's ODE above QUICK_BUILD_INSTRUCTIONS compiles at -O0, below at the default
+    flags; $CASMECH_CFLAGS always wins."""
+    from casmech.codegen import build
+    from casmech.runtime import joint_dynamics
+
+    system = joint_dynamics.joint_system(
+        casmech.compile(casmech.load(MODELS / "double_pendulum.yaml")))
+    monkeypatch.delenv(build.FLAGS_ENVIRONMENT, raising=False)
+    size = system.dynamics.n_instructions()
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
+    assert joint_dynamics._toolchain(system).flags == ("-O0",)
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size)
+    assert joint_dynamics._toolchain(system).flags == build.DEFAULT_FLAGS
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
+    monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
+    assert joint_dynamics._toolchain(system).flags == ("-O2", "-march=native")

@@ -14,6 +14,7 @@ row's multiplier.
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
 from functools import cache
 
@@ -52,6 +53,11 @@ STIFF = 10.0
 # (called once per output block, so interpreted costs little). Larger trees stay interpreted.
 COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
+# ... and above QUICK_BUILD_INSTRUCTIONS SX instructions (chain32's ODE: 18k, chain128's: 76k)
+# at -O0 unless $CASMECH_CFLAGS says otherwise: gcc -O1 on one unrolled function grows faster
+# than its size (chain64 5.7 s against 0.9 s, chain128 5.2 against 2.0) for calls ~1.5x
+# faster, which a first run rarely repays (docs/decisions.md).
+QUICK_BUILD_INSTRUCTIONS = 30000
 
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
@@ -91,7 +97,7 @@ def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSyste
         functions["joint_motion"] = system.motion
     if system.layout.n_x <= STIFF_STATES:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
-    built = codegen.compile_functions(functions)
+    built = codegen.compile_functions(functions, toolchain=_toolchain(system))
     return replace(system, dynamics=built["joint_ode"],
                    motion=built.get("joint_motion", system.motion))
 
@@ -110,6 +116,16 @@ def constant_inverse(kind: str) -> np.ndarray | None:
     if max(np.max(np.abs(s - subspaces[0])) for s in subspaces) > 1e-14:
         return None
     return np.linalg.pinv(subspaces[0])
+
+
+def _toolchain(system: JointSystem):
+    """The default toolchain, at -O0 for a large tree (QUICK_BUILD_INSTRUCTIONS) when the
+    user chose no flags."""
+    from casmech.codegen.build import FLAGS_ENVIRONMENT, Toolchain
+
+    quick = (system.dynamics.n_instructions() > QUICK_BUILD_INSTRUCTIONS
+             and os.environ.get(FLAGS_ENVIRONMENT) is None)
+    return Toolchain(flags=("-O0",)) if quick else Toolchain()
 
 
 def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.ndarray]:
