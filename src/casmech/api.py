@@ -25,6 +25,7 @@ from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, column_names, table
+from casmech.runtime.singular_poses import singular_poses
 from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
 
@@ -89,10 +90,16 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
         tree = stabilization == "ggl" and tree_of(f).is_tree
         formulation = "joint" if tree else "rp"
     if formulation == "joint":
-        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,
-                                  method=s.options.get("method", "auto"))
-    return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
-                        progress=progress, stabilization=stabilization)
+        result = run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                                    progress=progress, method=s.options.get("method", "auto"))
+    else:
+        result = run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                              formulation=formulation, progress=progress,
+                              stabilization=stabilization)
+    poses = singular_poses(f, result, loops=not tree_of(f).is_tree)
+    if poses is not None:
+        result.metadata["singular_poses"] = poses
+    return result
 
 
 def _runtime(name: str):

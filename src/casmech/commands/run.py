@@ -33,7 +33,7 @@ from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
-from casmech.runtime import reaction_frames
+from casmech.runtime import reaction_frames, singular_poses
 from casmech.runtime.results import column_names
 
 # further files an analysis may write (Result.files), removed with an earlier run's results
@@ -146,6 +146,8 @@ def _run(args) -> int:
         paths = _save(args, out, functions, result, run)
     print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
           f"-> {', '.join(map(str, paths))}")
+    for pose in result.metadata.get("singular_poses") or ():
+        print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
     return 0
 
 
