@@ -77,7 +77,7 @@ DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
                     "stabilization": dae.STABILIZATIONS, "method": ("auto", *METHODS)}
 
 
-def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
+def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
     r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
     and no DAE stabilization other than the default was asked for; with loops the joint DAE
@@ -90,9 +90,11 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
         formulation = "joint" if tree else "rp"
     if formulation == "joint":
         return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,
-                                  method=s.options.get("method", "auto"))
+                                  method=s.options.get("method", "auto"),
+                                  extra_events=extra_events)
     return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
-                        progress=progress, stabilization=stabilization)
+                        progress=progress, stabilization=stabilization,
+                        extra_events=extra_events)
 
 
 def _runtime(name: str):

@@ -27,7 +27,7 @@ from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly
+from casmech.runtime import assembly, events
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -167,14 +167,18 @@ class _Integrator:
             self.options |= METHODS[method]
         self.steps = 0
 
-    def __call__(self, t0: float, times, x, z) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(self, t0: float, times, x, z, keep: bool = True
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """States and algebraic states at `times` from (t0, x, z); keep: the CVODES instance
+        is kept for a later run over the same grid (not for an event's trial points)."""
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times)
+            integrator = self._cvodes(problem, t0, times) if keep else ca.integrator(
+                "joint", "cvodes", problem, t0, list(times), self.options)
             out = integrator(x0=x)
         else:
             integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
@@ -228,7 +232,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "auto") -> Result:
+                       method: str = "auto", extra_events=()) -> Result:
+    """The model's `events:` and `extra_events` (runtime.events.Event) are located and
+    recorded in Result.events; without any, no event work is done."""
     system = joint_system(functions)
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
@@ -242,13 +248,19 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
+    recorder.watch = events.watch(functions, result, extra_events)
     try:
-        recorder(result, times[:1], x[:, None], z[:, None])
+        first = recorder.rows(times[:1], x[:, None], z[:, None])
+        result.extend(times[:1], *first)
+        if recorder.watch is not None:
+            recorder.watch.start(times[0], first)
         k = 0
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + CHUNK]
             x, z = _advance(integrate, loops, recorder, result, times[k], chunk, x, z)
             k += len(chunk)
+    except events.Stopped:
+        pass
     except AnalysisError as error:
         error.partial = result
         raise
@@ -274,7 +286,7 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
         half = len(times) // 2
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
-    recorder(result, times, states, algebraic)
+    recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
     return states[:, -1], loops.z(times[-1], states[:, -1])
 
 
@@ -293,13 +305,15 @@ class _Recorder:
         self.functions, self.system, self.signs = functions, system, signs
         self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
         self.maps = functions.derived.setdefault("joint_motion_maps", {})
+        self.watch = None  # runtime.events.Watch of the run, when it has events
 
     def _mapped(self, n: int) -> BufferedCall:
         """The results rows' function mapped over n rows (kept with the functions)."""
         return kept(self.maps, (self.system.motion, n),
                     lambda: BufferedCall(self.system.motion.map(n)), KEPT_MAPS)
 
-    def __call__(self, result: Result, times, states, algebraic) -> None:
+    def rows(self, times, states, algebraic):
+        """(q, q_dot, q_ddot, lam), one row per time."""
         n = len(times)
         times = np.asarray(times, float)
         rows = self._mapped(n)(times[None, :], states, algebraic,
@@ -307,7 +321,26 @@ class _Recorder:
         q, q_dot, q_ddot, lam = rows
         if self.least_norm is not None:
             lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
-        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+    def __call__(self, result: Result, times, states, algebraic, start, integrate,
+                 loops) -> None:
+        """Appends the rows of a block integrated from `start` = (t0, x, z); through the
+        events' watch when there is one (an event's trial points integrate from the row
+        before them)."""
+        if self.watch is None:
+            result.extend(times, *self.rows(times, states, algebraic))
+            return
+
+        def probe(t_start: float, state, t: float):
+            x, z = state
+            found, found_z = integrate(t_start, [t], x, z, keep=False)
+            return self.rows([t], found, found_z), (found[:, 0], found_z[:, 0])
+
+        t0, x, z = start
+        self.watch.record(t0, (x, z), np.asarray(times, float), lambda j: (
+            states[:, j], loops.z(times[j], states[:, j])),
+            self.rows(times, states, algebraic), probe)
 
 
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
