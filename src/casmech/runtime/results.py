@@ -90,7 +90,8 @@ class Result:
     # the SystemFunctions that computed the rows (casmech.analyze sets it): the source of the
     # results table, the DataFrame and the summary's model name and column count
     functions: SystemFunctions | None = None
-    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError
+    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError;
+    # "stopped by event": a stop event ended a dynamics run (runtime.events)
 
     def to_dataframe(self):
         """The results table as a pandas DataFrame, as casmech.load_results reads it from the

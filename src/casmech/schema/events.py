@@ -9,6 +9,8 @@ a did-you-mean hint; a duplicate event name is E301.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from casmech.errors import did_you_mean
 from casmech.schema import resolved, spec
 from casmech.schema.checker import Checker
@@ -66,14 +68,20 @@ def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
     return f"unknown state '{name}': no body or joint '{owner}'", hint
 
 
-def _unknown_states(check: Checker, path: Path, text, states) -> set[str]:
-    """Report (E201) every dotted name of `text` that is not a state; those names."""
+def _names(text) -> tuple[str, ...]:
+    """The names `text` uses (none when it is a number or does not parse: Checker.function
+    reports the syntax error)."""
     try:
         expr = parse(text) if isinstance(text, str) else None
     except ExpressionError:
-        return set()  # Checker.function reports the syntax error
+        return ()
+    return tuple(name for name, _, _ in expr.names_with_offsets()) if expr else ()
+
+
+def _unknown_states(check: Checker, path: Path, text, states) -> set[str]:
+    """Report (E201) every dotted name of `text` that is not a state; those names."""
     unknown: set[str] = set()
-    for name, offset, _ in (expr.names_with_offsets() if expr is not None else ()):
+    for name, offset, _ in (parse(text).names_with_offsets() if _names(text) else ()):
         if "." in name and name not in states and name not in unknown:
             message, hint = _misnamed(check, name, states)
             check.error("E201", path, message, source=check.inside(path, offset), hint=hint)
@@ -82,14 +90,16 @@ def _unknown_states(check: Checker, path: Path, text, states) -> set[str]:
 
 
 def event(check: Checker, index: int, given: spec.Event, states) -> resolved.Event | None:
+    """One entry of `events:`; its `when` reads t, parameters and the states it names (checked
+    finite at their values at t = 0)."""
     path: Path = ("events", index, "when")
     unknown = _unknown_states(check, path, given.when, states)
-    at = {"t": 0.0, **states, **dict.fromkeys(unknown, 0.0)}  # unknown: reported above
+    used = {name: states[name] for name in _names(given.when) if name in states}
+    at = {"t": 0.0, **used, **dict.fromkeys(unknown, 0.0)}  # unknown: reported above
     found = check.function(path, given.when, at)
     if found is None or unknown:
         return None
-    used = tuple(name for name in at if name in found.expr.symbols)
-    when = resolved.ScalarFunction(found.text, found.expr, found.constants, used, found.source)
+    when = replace(found, variables=tuple(name for name in at if name in found.expr.symbols))
     return resolved.Event(given.name, when, given.direction, given.action,
                           check.doc.locate(("events", index)))
 

@@ -1,0 +1,184 @@
+"""Events of dynamics runs (runtime.events) against closed forms: a compound pendulum released
+from horizontal (its quarter period from the complete elliptic integral, intermediate angles
+from the incomplete one) and a falling body (sqrt(2 h / g)), in the r-p, r-omega and joint
+formulations, interpreted and compiled."""
+
+import math
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.special import ellipk, ellipkinc
+
+import casmech
+from casmech import codegen
+from casmech.runtime import events
+from casmech.runtime.dynamics import run_dynamics
+from casmech.runtime.joint_dynamics import run_joint_dynamics
+from tests.conftest import count_calls
+
+G, M, D, IC, H = 9.81, 2.0, 0.5, 0.05, 0.7  # gravity, mass, pivot-CM distance, inertia, height
+I_O = IC + M * D**2  # about the pivot
+SCALE = math.sqrt(I_O / (M * G * D))  # the pendulum's time scale
+QUARTER = SCALE * ellipk(0.5)  # released from horizontal: amplitude pi/2, k^2 = sin(pi/4)^2
+# At rtol 1e-10 the integration error of the event time is ~1e-10 s; the brief's bound is 1e-8 s.
+TIME = 1e-8
+
+PENDULUM = f"""casmech: 1
+name: pendulum
+parameters: {{d: {D}}}
+bodies:
+  - {{name: bar, mass: {M}, inertia: [{IC}, {IC}, {IC}], position: [d, 0, 0]}}
+joints:
+  - {{name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 1, 0]}}
+"""
+FALLING = f"""casmech: 1
+name: falling
+bodies:
+  - {{name: ball, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}}
+"""
+FORMULATIONS = ("rp", "romega", "joint")
+
+
+def model(head: str, events_block: str, t_end: float = 1.0, step: float = 0.05,
+          mode: str = "interpreted"):
+    text = (f"{head}events:\n{events_block}" if events_block else head) + (
+        f"analysis: {{type: dynamics, t_end: {t_end}, output_step: {step}, rtol: 1e-10, "
+        f"atol: 1e-12}}\n")
+    return casmech.compile(casmech.loads(text, "m.yaml"), mode)
+
+
+def time_at_angle(theta: float) -> float:
+    """Time from release (horizontal) to the angle theta swung down: the amplitude from the
+    bottom is pi/2, k = sin(pi/4); phi = pi/2 - theta from the bottom, sin(phi/2) = k sin(psi),
+    and the time from phi to the bottom is SCALE F(psi, k)."""
+    psi = math.asin(math.sin((math.pi / 2 - theta) / 2) / math.sin(math.pi / 4))
+    return QUARTER - SCALE * ellipkinc(psi, 0.5)
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_pendulum_reaches_the_bottom_at_the_quarter_period(formulation):
+    functions = model(PENDULUM, '  - {name: bottom, when: "bar.x", direction: falling}\n')
+    result = casmech.analyze(functions, formulation=formulation)
+    [event] = result.events
+    assert (event.name, event.direction, event.action) == ("bottom", "falling", "log")
+    assert abs(event.t - QUARTER) < TIME
+    assert result.status == "complete" and result.times[-1] == 1.0  # log: the run goes on
+
+
+@pytest.mark.parametrize("formulation", ("rp", "joint"))
+def test_compiled_functions_locate_the_same_event(formulation):
+    if not codegen.available():
+        pytest.skip("no C compiler")
+    functions = model(PENDULUM, '  - {name: bottom, when: "bar.x", direction: falling}\n',
+                      mode="compiled")
+    [event] = casmech.analyze(functions, formulation=formulation).events
+    assert abs(event.t - QUARTER) < TIME
+
+
+@pytest.mark.parametrize("formulation", ("rp", "joint"))
+def test_falling_body_crosses_a_height_at_sqrt_2h_over_g(formulation):
+    functions = model(FALLING, f'  - {{name: low, when: "ball.z + {H}", direction: falling}}\n')
+    [event] = casmech.analyze(functions, formulation=formulation).events
+    assert abs(event.t - math.sqrt(2 * H / G)) < TIME
+
+
+def test_stop_keeps_every_row_before_the_event_and_the_event_row_last():
+    block = '  - {name: bottom, when: "bar.x", direction: falling, action: stop}\n'
+    for formulation in ("rp", "joint"):
+        stopped = casmech.analyze(model(PENDULUM, block), formulation=formulation)
+        free = casmech.analyze(model(PENDULUM, ""), formulation=formulation)
+        kept = len(stopped) - 1
+        assert stopped.status == events.STOPPED
+        assert stopped.times[:kept] == free.times[:kept]  # every output time before the event
+        assert free.times[kept - 1] < QUARTER < free.times[kept]
+        assert abs(stopped.times[-1] - QUARTER) < TIME and stopped.times[-1] == stopped.events[0].t
+        # the same motion (chunking may differ): within the integration error at rtol 1e-10
+        np.testing.assert_allclose(stopped.q[:kept], free.q[:kept], rtol=0, atol=1e-8)
+        # the event row: the CM straight below the pivot
+        np.testing.assert_allclose(stopped.q[-1, :3], [0, 0, -D], rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize(("direction", "expected"), [
+    ("falling", [("falling", 1)]),
+    ("rising", [("rising", 3)]),
+    ("both", [("falling", 1), ("rising", 3)]),
+])
+def test_directions(direction, expected):
+    """bar.x falls through 0 at the first quarter period, rises through it at the third."""
+    functions = model(PENDULUM, f'  - {{name: x0, when: "bar.x", direction: {direction}}}\n',
+                      t_end=4 * QUARTER - 0.1)
+    found = casmech.analyze(functions, formulation="joint").events
+    assert [e.direction for e in found] == [sign for sign, _ in expected]
+    np.testing.assert_allclose([e.t for e in found], [k * QUARTER for _, k in expected],
+                               rtol=0, atol=TIME)
+
+
+@pytest.mark.parametrize("formulation", ("rp", "joint"))
+def test_several_events_in_one_output_interval_in_time_order(formulation):
+    block = ('  - {name: bottom, when: "bar.x"}\n'  # written first, happens last
+             '  - {name: sixty, when: "pivot.angle - pi/3"}\n'
+             '  - {name: thirty, when: "pivot.angle - pi/6", direction: rising}\n')
+    functions = model(PENDULUM, block, t_end=1.0, step=1.0)  # one output interval
+    found = casmech.analyze(functions, formulation=formulation).events
+    assert [e.name for e in found] == ["thirty", "sixty", "bottom"]
+    exact = [time_at_angle(math.pi / 6), time_at_angle(math.pi / 3), QUARTER]
+    np.testing.assert_allclose([e.t for e in found], exact, rtol=0, atol=TIME)
+
+
+def test_the_event_rows_hold_the_state_at_the_event():
+    functions = model(PENDULUM, '  - {name: sixty, when: "pivot.angle - pi/3"}\n')
+    result = casmech.analyze(functions, formulation="rp")
+    frame = result.events_dataframe()
+    assert list(frame.columns[:3]) == ["t", "name", "bar.x"]
+    assert frame["name"].tolist() == ["sixty"]
+    # angle pi/3 swung down about +y: the CM at d (cos, 0, -sin); speed from energy
+    np.testing.assert_allclose(frame[["bar.x", "bar.z"]].to_numpy()[0],
+                               [D * math.cos(math.pi / 3), -D * math.sin(math.pi / 3)],
+                               rtol=0, atol=1e-9)  # position error at rtol 1e-10 over 0.4 s
+    omega = math.sqrt(2 * M * G * D * math.sin(math.pi / 3) / I_O)
+    assert frame["bar.wy"].iloc[0] == pytest.approx(omega, rel=1e-8, abs=0)
+
+
+def test_an_event_declared_by_code():
+    """runtime.events.Event with a casadi Function of the row's state, as contact would."""
+    functions = model(FALLING, "")
+    q, q_dot, q_ddot = (ca.SX.sym(n, functions.n_coordinates) for n in ("q", "q_dot", "q_ddot"))
+    t = ca.SX.sym("t")
+    lam = ca.SX.sym("lam", functions.n_rows)
+    low = events.Event("low", ca.Function("low", [t, q, q_dot, q_ddot, lam], [q[2] + H]),
+                       "falling", "stop")
+    for run in (run_dynamics, run_joint_dynamics):
+        result = run(functions, 1.0, 0.05, 1e-10, 1e-12, extra_events=[low])
+        assert abs(result.times[-1] - math.sqrt(2 * H / G)) < TIME
+        assert [e.name for e in result.events] == ["low"]
+
+
+def test_illinois_on_a_closed_form():
+    calls = []
+
+    def g(t):
+        calls.append(t)
+        return math.cos(t) - t  # root 0.7390851332151607 (the Dottie number)
+
+    root = events.illinois(g, 0.0, 1.0, 1.0, math.cos(1.0) - 1.0, 1e-15)
+    assert abs(root - 0.7390851332151607) < 4e-16
+    assert len(calls) < 15  # superlinear: bisection would need 50
+
+
+@pytest.mark.parametrize("formulation", ("rp", "joint"))
+def test_events_add_only_their_own_calls(monkeypatch, formulation):
+    """A model without events makes exactly the calls of the same model with an event that
+    never fires, minus the events' own: no other extra work."""
+    never = '  - {name: never, when: "bar.z + 100"}\n'
+    plain, watched = model(PENDULUM, ""), model(PENDULUM, never)
+    for functions in (plain, watched):  # build the integrators and maps before counting
+        casmech.analyze(functions, formulation=formulation)
+    calls = count_calls(monkeypatch)
+    casmech.analyze(plain, formulation=formulation)
+    without = list(calls)
+    calls.clear()
+    casmech.analyze(watched, formulation=formulation)
+    assert not any("event" in name for name in without)
+    assert [name for name in calls if "event" not in name] == without
+    assert any("event" in name for name in calls)  # the watch did evaluate the event
