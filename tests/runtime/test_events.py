@@ -12,9 +12,11 @@ from scipy.special import ellipk, ellipkinc
 
 import casmech
 from casmech import codegen
+from casmech.errors import AnalysisError
 from casmech.runtime import events
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
+from casmech.runtime.results import Result
 from tests.conftest import count_calls
 
 G, M, D, IC, H = 9.81, 2.0, 0.5, 0.05, 0.7  # gravity, mass, pivot-CM distance, inertia, height
@@ -66,14 +68,16 @@ def test_pendulum_reaches_the_bottom_at_the_quarter_period(formulation):
     assert result.status == "complete" and result.times[-1] == 1.0  # log: the run goes on
 
 
-@pytest.mark.parametrize("formulation", ("rp", "joint"))
-def test_compiled_functions_locate_the_same_event(formulation):
+def test_compiled_functions_locate_the_same_event(monkeypatch, tmp_path):
     if not codegen.available():
         pytest.skip("no C compiler")
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path))  # never the user's cache
     functions = model(PENDULUM, '  - {name: bottom, when: "bar.x", direction: falling}\n',
                       mode="compiled")
-    [event] = casmech.analyze(functions, formulation=formulation).events
-    assert abs(event.t - QUARTER) < TIME
+    assert codegen.mode_of(functions) == "compiled"
+    for formulation in ("rp", "joint"):
+        [event] = casmech.analyze(functions, formulation=formulation).events
+        assert abs(event.t - QUARTER) < TIME
 
 
 @pytest.mark.parametrize("formulation", ("rp", "joint"))
@@ -182,3 +186,54 @@ def test_events_add_only_their_own_calls(monkeypatch, formulation):
     assert not any("event" in name for name in without)
     assert [name for name in calls if "event" not in name] == without
     assert any("event" in name for name in calls)  # the watch did evaluate the event
+
+
+def synthetic(action: str = "log", fail: bool = False):
+    """A Watch over q(t) = sin t (one coordinate) for the event q - 1/2 (root pi/6), its rows
+    on a grid and a probe giving the exact row at any t (or failing as an integrator would)."""
+    t, q, q_dot, q_ddot, lam = (ca.SX.sym(n) for n in ("t", "q", "q_dot", "q_ddot", "lam"))
+    half = events.Event("half", ca.Function("half", [t, q, q_dot, q_ddot, lam], [q - 0.5]),
+                        "rising", action)
+    result = Result("dynamics")
+
+    def rows(times):
+        times = np.asarray(times, float)[:, None]
+        return np.sin(times), np.cos(times), -np.sin(times), np.zeros_like(times)
+
+    def probe(t_start, state, t):
+        if fail:
+            raise RuntimeError("IDAS: the corrector convergence failed repeatedly")
+        return rows([t]), None
+
+    watch = events.Watch([half], result)
+    watch.start(0.0, rows([0.0]))
+    result.extend([0.0], *rows([0.0]))
+    return watch, result, rows, probe
+
+
+def test_watch_locates_to_a_few_ulps_on_exact_rows():
+    watch, result, rows, probe = synthetic()
+    times = np.arange(1, 11) * 0.1
+    watch.record(0.0, None, times, lambda j: None, rows(times), probe)
+    [event] = result.events
+    assert abs(event.t - math.pi / 6) < 1e-15  # the probe is exact: only the bracket's width
+    assert result.times == [0.0, *times.tolist()]  # log: every row, in order
+    assert result.event_states.times == [event.t]
+
+
+def test_watch_stop_raises_after_recording():
+    watch, result, rows, probe = synthetic("stop")
+    times = np.arange(1, 11) * 0.1
+    with pytest.raises(events.Stopped):
+        watch.record(0.0, None, times, lambda j: None, rows(times), probe)
+    assert result.times[:-1] == [0.0, 0.1, 0.2, 0.30000000000000004, 0.4, 0.5]
+    assert result.times[-1] == result.events[0].t and result.status == events.STOPPED
+
+
+def test_a_failed_trial_integration_is_an_analysis_error_with_the_rows_before_it():
+    watch, result, rows, probe = synthetic(fail=True)
+    times = np.arange(1, 11) * 0.1
+    with pytest.raises(AnalysisError, match="locating event 'half' between "
+                       "t = 0.5 and 0.6: the integrator failed"):
+        watch.record(0.0, None, times, lambda j: None, rows(times), probe)
+    assert len(result) == 6  # t = 0 and the five rows before the crossing

@@ -3,7 +3,8 @@
 --format csv (default) writes results.csv per the results contract plus metadata.json beside it
 (versions, model hash and text, overrides, settings, timings, mode); --format hdf5 writes
 results.h5 holding the same table and metadata; --format csv,hdf5 writes both. An analysis
-may write further files (modal: modes.csv, linear_model.npz). A progress bar
+may write further files (modal: modes.csv, linear_model.npz; dynamics of a model with
+`events:`: events.csv, one line printed per event). A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
 
 SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.interrupts): the rows computed
@@ -145,11 +146,11 @@ def _run(args) -> int:
     timings["analysis"] = time.perf_counter() - clock
     with interrupts.saving():
         paths = _save(args, out, functions, result, run)
+    print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
+          f"-> {', '.join(map(str, paths))}")
     for record in result.events:
         print(f"event {record.name} ({record.direction}) at t = {record.t:.10g} s"
               f"{': run stopped' if record.action == 'stop' else ''}")
-    print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
-          f"-> {', '.join(map(str, paths))}")
     return 0
 
 
@@ -205,14 +206,17 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
     ir = functions.ir
     metadata["reaction_frames"] = reaction_frames.describe(
         ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
+    event_paths = []
+    if result is not None and result.event_states is not None:  # the run watched events
+        event_names, event_rows = events.table(functions, result, args.reactions_frame)
+        event_paths.append(events_output.write_events(out / events_output.FILE, event_names,
+                                                      event_rows))
+        metadata["events"] = events_output.metadata_rows(result.events, event_names,
+                                                         event_rows)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     files = {} if result is None else result.files
-    paths += [write(out / name) for name, write in files.items()]
-    if result is not None and result.event_states is not None:  # the run watched events
-        names, event_rows = events.table(functions, result, args.reactions_frame)
-        paths.append(events_output.write_events(out / events_output.FILE, names, event_rows))
-        metadata["events"] = events_output.metadata_rows(result.events, names, event_rows)
+    paths += [write(out / name) for name, write in files.items()] + event_paths
     if "csv" in args.format:
         write_json(out / "metadata.json", metadata)
     return paths

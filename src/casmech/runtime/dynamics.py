@@ -442,7 +442,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
          progress, extra_events=()) -> Result:
     functions = model.functions
     result = Result("dynamics", on_row=progress)
-    watch = events.watch(functions, result, extra_events)
+    watch = events.watch(functions, result, extra_events, stepper.options["reltol"])
     q, q_dot = assembly.initial_state(functions, t0)
     v = velocities(functions, model.name, q, q_dot)
     mask = model.mask(t0, q)

@@ -10,8 +10,9 @@ A Watch sees every block of rows a run integrates: the events' values on the blo
 mapped call; in an output interval where an event's value changes sign in its direction, the
 crossing is located by the Illinois method (regula falsi that halves the retained end's value),
 each of its values by integrating again from the interval's start to the trial time with the
-run's own integrator and tolerances (`probe`), until the bracket is a few ulps of t wide. The
-time found is then exact to the integration error of the run, not to the output grid
+run's own integrator and tolerances (`probe`), until the bracket is rtol |t| wide (at least a
+few ulps; the trial values carry the integration error, so a narrower bracket only costs
+trials). The time found is exact to the integration error of the run, not to the output grid
 (benchmarks/notes_events.md has the measurements behind this choice). A sign change inside
 one output interval that returns before its end (two crossings) is not seen.
 
@@ -29,10 +30,12 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from casmech import interrupts
 from casmech.compiler import coordinates, euler
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR
 from casmech.compiler.functions import SystemFunctions
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.memo import kept
 from casmech.runtime.results import BODY_COLUMNS, Result, column_names
@@ -43,7 +46,7 @@ SIGNS = {1: "rising", -1: "falling"}
 ACTIONS = ("stop", "log")
 STOPPED = "stopped by event"  # Result.status of a run a stop event ended
 MAX_ITERATIONS = 100  # Illinois steps per crossing (a few tens at most in practice)
-ULPS = 64  # the bracket's width at which location stops, in units of eps * |t|
+ULPS = 64  # the narrowest bracket location stops at, in units of eps * |t|
 KEPT_MAPS = 16  # the events' function mapped over a block length
 
 
@@ -179,8 +182,8 @@ Probe = Callable[[float, Any, float], tuple[Rows, Any]]
 class Watch:
     """Finds, locates and records the events of one run (see the module docstring)."""
 
-    def __init__(self, events: Sequence[Event], result: Result):
-        self.events, self.result = tuple(events), result
+    def __init__(self, events: Sequence[Event], result: Result, rtol: float = 0.0):
+        self.events, self.result, self.rtol = tuple(events), result, rtol
         self.values = stacked([e.function for e in events])
         self.maps: dict = {}
         self.last: np.ndarray | None = None  # the events' values at the last row
@@ -208,24 +211,23 @@ class Watch:
         times = np.asarray(times, float)
         values = self.evaluate(times, rows)
         before = np.column_stack([self.last, values[:, :-1]])
-        crossings = self._crossings(before, values)
+        crossings, done = self._crossings(before, values), 0
         for j in sorted(set(crossings[0].tolist())):
+            self._append(times, rows, done, j)  # the rows before the crossing come first
+            done = j
             a = times[j - 1] if j else t_start
             state = state_at(j - 1) if j else start
             found = sorted((self._locate(i, a, state, times[j], before[i, j], values[i, j],
                                          probe) for i in crossings[1][crossings[0] == j]),
                            key=lambda hit: hit[0].t)
             stop = next((hit for hit in found if hit[0].action == "stop"), None)
+            for hit in found[:found.index(stop) + 1] if stop else found:
+                self._keep(*hit)
             if stop is not None:
-                self._append(times[:j], rows, j)
-                for hit in found[:found.index(stop) + 1]:
-                    self._keep(*hit)
                 self.result.extend([stop[0].t], *stop[1])
                 self.result.status = STOPPED
                 raise Stopped(stop[0].name)
-            for hit in found:
-                self._keep(*hit)
-        self._append(times, rows, len(times))
+        self._append(times, rows, done, len(times))
         self.last = values[:, -1]
 
     def _crossings(self, before: np.ndarray, after: np.ndarray):
@@ -243,32 +245,41 @@ class Watch:
         """(EventRecord, its row) of event i's crossing in [a, b]."""
         event, trials = self.events[i], {}
 
-        def value(t: float) -> float:
+        def row_at(t: float) -> Rows:
             self.probes += 1
-            trials[t] = probe(a, state, t)[0]
+            self.result.metadata["event_probes"] = self.probes
+            try:
+                return probe(a, state, t)[0]
+            except RuntimeError as error:  # the integrator failed on the way to t
+                interrupts.check(error)
+                cause = (f"locating event '{event.name}' between t = {a:.6g} and {b:.6g}: the "
+                         f"integrator failed before t = {t:.10g} ({solver_reason(error)})")
+                raise AnalysisError(FailureContext(a, cause, [], "")) from None
+
+        def value(t: float) -> float:
+            trials[t] = row_at(t)
             return float(self.evaluate([t], trials[t])[i, 0])
 
-        xtol = ULPS * np.finfo(float).eps * max(abs(a), abs(b), b - a)
+        xtol = max(ULPS * np.finfo(float).eps, self.rtol) * max(abs(a), abs(b), b - a)
         t = illinois(value, a, b, ga, gb, xtol)
-        row = trials[t] if t in trials else probe(a, state, t)[0]
-        self.result.metadata["event_probes"] = self.probes
+        row = trials[t] if t in trials else row_at(t)
         return EventRecord(event.name, float(t), SIGNS[1 if gb > ga else -1], event.action), row
 
     def _keep(self, record: EventRecord, row: Rows) -> None:
         self.result.events.append(record)
         self.result.event_states.extend([record.t], *row)
 
-    def _append(self, times, rows: Rows, count: int) -> None:
-        if count:
-            self.result.extend(times[:count], *(r[:count] for r in rows))
+    def _append(self, times, rows: Rows, first: int, end: int) -> None:
+        if end > first:
+            self.result.extend(times[first:end], *(r[first:end] for r in rows))
 
 
-def watch(functions: SystemFunctions, result: Result,
-          extra: Sequence[Event] = ()) -> Watch | None:
-    """The Watch of a run over the model's events and `extra` ones; None without any (the
-    run then does no event work at all)."""
+def watch(functions: SystemFunctions, result: Result, extra: Sequence[Event] = (),
+          rtol: float = 0.0) -> Watch | None:
+    """The Watch of a run over the model's events and `extra` ones, locating to the run's
+    rtol; None without any (the run then does no event work at all)."""
     events = (*model_events(functions), *extra)
-    return Watch(events, result) if events else None
+    return Watch(events, result, rtol) if events else None
 
 
 def has_stop(watcher: Watch | None) -> bool:

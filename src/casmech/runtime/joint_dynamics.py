@@ -248,7 +248,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
-    recorder.watch = events.watch(functions, result, extra_events)
+    recorder.watch = events.watch(functions, result, extra_events, rtol)
     try:
         first = recorder.rows(times[:1], x[:, None], z[:, None])
         result.extend(times[:1], *first)
