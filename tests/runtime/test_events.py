@@ -8,11 +8,12 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 from scipy.special import ellipk, ellipkinc
 
 import casmech
 from casmech import codegen
-from casmech.errors import AnalysisError
+from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import events
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
@@ -87,6 +88,55 @@ def test_falling_body_crosses_a_height_at_sqrt_2h_over_g(formulation):
     assert abs(event.t - math.sqrt(2 * H / G)) < TIME
 
 
+def parallelogram(m=1.0, mc=0.5, length=0.8, w=0.6, ic=0.02):
+    """A parallelogram four-bar (revolute, spherical, universal, revolute) released with its
+    cranks 45 degrees from hanging, and its quarter period: the coupler translates, so it is a
+    compound pendulum of inertia 2 I_O + mc L^2 and gravity moment (2 m L/2 + mc L) g,
+    amplitude pi/4 (k^2 = sin^2(pi/8))."""
+    s = math.sqrt(0.5)
+    ax, az, bx = length * s, -length * s, w + length * s
+    text = f"""casmech: 1
+name: parallelogram
+bodies:
+  - {{name: crank, mass: {m}, inertia: [{ic}, {ic}, {ic}], position: [{ax / 2}, 0, {az / 2}]}}
+  - {{name: coupler, mass: {mc}, inertia: [{ic}, {ic}, {ic}], position: [{(ax + bx) / 2}, 0, {az}]}}
+  - {{name: rocker, mass: {m}, inertia: [{ic}, {ic}, {ic}], position: [{w + ax / 2}, 0, {az / 2}]}}
+joints:
+  - {{name: crank_pivot, type: revolute, body_i: ground, body_j: crank, at: [0, 0, 0],
+     axis: [0, 1, 0]}}
+  - {{name: coupler_pin, type: spherical, body_i: crank, body_j: coupler, at: [{ax}, 0, {az}]}}
+  - {{name: rocker_pin, type: universal, body_i: coupler, body_j: rocker, at: [{bx}, 0, {az}],
+     axis_i: [0, 0, 1], axis_j: [0, 1, 0]}}
+  - {{name: rocker_pivot, type: revolute, body_i: ground, body_j: rocker, at: [{w}, 0, 0],
+     axis: [0, 1, 0]}}
+"""
+    inertia = 2 * (ic + m * (length / 2) ** 2) + mc * length**2
+    moment = (m * length + mc * length) * G
+    return text, math.sqrt(inertia / moment) * ellipk(math.sin(math.pi / 8) ** 2)
+
+
+@pytest.mark.parametrize("formulation", FORMULATIONS)
+def test_a_closed_loop_reaches_the_bottom_at_its_quarter_period(formulation):
+    """The joint formulation integrates the loop's DAE on IDAS (a cut joint), as r-p does."""
+    text, quarter = parallelogram()
+    functions = model(text, '  - {name: bottom, when: "crank.x", direction: falling}\n')
+    result = casmech.analyze(functions, formulation=formulation)
+    assert result.metadata["integrator"] == "idas"
+    [event] = result.events
+    assert abs(event.t - quarter) < TIME
+
+
+@pytest.mark.parametrize("formulation", ("rp", "joint"))
+def test_an_event_just_after_an_output_row(formulation):
+    """The first trial point is then ~1e-9 s after the row: the r-p index-2 DAE must not
+    start there with a first step sized by that (it failed so)."""
+    crossing = 0.3 + 1e-9
+    angle = brentq(lambda theta: time_at_angle(theta) - crossing, 0.1, 1.5, xtol=1e-15)
+    functions = model(PENDULUM, f'  - {{name: at, when: "pivot.angle - {angle!r}"}}\n')
+    [event] = casmech.analyze(functions, formulation=formulation).events
+    assert abs(event.t - crossing) < TIME
+
+
 def test_stop_keeps_every_row_before_the_event_and_the_event_row_last():
     block = '  - {name: bottom, when: "bar.x", direction: falling, action: stop}\n'
     for formulation in ("rp", "joint"):
@@ -156,6 +206,10 @@ def test_an_event_declared_by_code():
         result = run(functions, 1.0, 0.05, 1e-10, 1e-12, extra_events=[low])
         assert abs(result.times[-1] - math.sqrt(2 * H / G)) < TIME
         assert [e.name for e in result.events] == ["low"]
+    result = casmech.analyze(functions, events=[low])  # the same through the API
+    assert result.status == events.STOPPED and abs(result.times[-1] - math.sqrt(2 * H / G)) < TIME
+    with pytest.raises(UsageError, match="events are watched by dynamics"):
+        casmech.analyze(functions, "assembly", events=[low])
 
 
 def test_illinois_on_a_closed_form():
@@ -200,7 +254,7 @@ def synthetic(action: str = "log", fail: bool = False):
         times = np.asarray(times, float)[:, None]
         return np.sin(times), np.cos(times), -np.sin(times), np.zeros_like(times)
 
-    def probe(t_start, state, t):
+    def probe(t_start, state, t, t_end):
         if fail:
             raise RuntimeError("IDAS: the corrector convergence failed repeatedly")
         return rows([t]), None

@@ -281,12 +281,17 @@ class _Stepper:
             interrupts.check(error)
             raise _Restart(float(t0), solver_reason(error)) from None
 
-    def probe(self, kind: str, t0: float, t: float, q, v, mask):
-        """(states, lam) at the one time t from (t0, q, v), by what made the block (`kind`
-        as integrate returns it): an event's trial point (runtime.events)."""
+    def probe(self, kind: str, t0: float, t: float, t1: float, q, v, mask):
+        """(states, lam) at the one time t in (t0, t1) from (t0, q, v), by what made the block
+        (`kind` as integrate returns it): an event's trial point (runtime.events). The DAE
+        integrates to t1 with the first step of the interval (t0, t1) and gives t from its
+        interpolant: a trial point just after t0 would otherwise start the index-2 DAE with
+        a step too short for its iteration matrix (the four-bar failed at 1e-9 s), and every
+        trial of one interval reads the same steps."""
         if kind == "ode":
             return self._ode(t0, np.array([t]), q, v)
-        return self._dae(t0, np.array([t]), q, v, mask, kind)
+        states, lam = self._dae(t0, np.array([t, t1]), q, v, mask, kind, t1 - t0)
+        return states[:, :1], lam[:, :1]
 
     def _problem(self, kind: str) -> dict:
         if kind not in self.problems:
@@ -294,11 +299,12 @@ class _Stepper:
             self.problems[kind] = dae.problem(dae.residual(functions, self.model.name, kind))
         return self.problems[kind]
 
-    def _dae(self, t0, times, q, v, mask, kind: str):
+    def _dae(self, t0, times, q, v, mask, kind: str, first: float | None = None):
         """IDAS on the DAE from the exact consistent state, handed over with its derivative
         (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
         started by IDACalcIC was slower (its line search often failed, measured on the
-        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
+        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia. `first`: the
+        output interval the first step is sized by (default the first of `times`)."""
         model = self.model
         s, s_phi = model.scales(t0, q)
         v_dot, lam = model.consistent(t0, q, v, mask, s)
@@ -313,7 +319,8 @@ class _Stepper:
         p = [[t0], mask, s]
         if kind == "ggl":
             n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
-            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol, times[0] - t0)
+            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol,
+                                            first or times[0] - t0)
             p.append(s_phi)
         integrator = ca.integrator("dynamics", "idas", self._problem(kind), 0.0,
                                    list(times - t0), self.options | options)
@@ -502,8 +509,8 @@ def _watched(watch: events.Watch, rows: _Rows, stepper: _Stepper, kind: str, mas
              start, times, states, lams) -> None:
     """Records a block through the events' watch: an event's trial points integrate from the
     row before them by what made the block."""
-    def probe(t_start: float, state, t: float):
-        found, lam = stepper.probe(kind, t_start, t, *state, mask)
+    def probe(t_start: float, state, t: float, t_end: float):
+        found, lam = stepper.probe(kind, t_start, t, t_end, *state, mask)
         return rows.rows(np.array([t]), found, lam), rows.split(found[:, 0])[:2]
 
     watch.record(t0, start, times, lambda j: rows.split(states[:, j])[:2],

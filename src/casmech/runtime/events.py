@@ -175,8 +175,9 @@ def stacked(functions: Sequence[ca.Function]) -> ca.Function:
 
 
 Rows = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]  # q, q_dot, q_ddot, lam: k x n
-# probe(t_start, state at t_start, t) -> (the row at t (1 x n each), the state at t)
-Probe = Callable[[float, Any, float], tuple[Rows, Any]]
+# probe(t_start, state at t_start, t, t_end) -> (the row at t (1 x n each), the state at t):
+# t_start < t < t_end, the rows before and after the crossing
+Probe = Callable[[float, Any, float, float], tuple[Rows, Any]]
 
 
 class Watch:
@@ -249,7 +250,7 @@ class Watch:
             self.probes += 1
             self.result.metadata["event_probes"] = self.probes
             try:
-                return probe(a, state, t)[0]
+                return probe(a, state, t, b)[0]
             except RuntimeError as error:  # the integrator failed on the way to t
                 interrupts.check(error)
                 cause = (f"locating event '{event.name}' between t = {a:.6g} and {b:.6g}: the "

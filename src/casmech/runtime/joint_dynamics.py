@@ -167,22 +167,26 @@ class _Integrator:
             self.options |= METHODS[method]
         self.steps = 0
 
-    def __call__(self, t0: float, times, x, z, keep: bool = True
+    def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
-        """States and algebraic states at `times` from (t0, x, z); keep: the CVODES instance
-        is kept for a later run over the same grid (not for an event's trial points)."""
+        """States and algebraic states at `times` from (t0, x, z). trial: times are an event's
+        trial point (runtime.events) and the end of its interval; CVODES integrates to the
+        trial point only (its instance not kept for later runs), IDAS to the end with its
+        first step sized by the whole interval (an index-2 DAE fails on a very short one)."""
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times) if keep else ca.integrator(
-                "joint", "cvodes", problem, t0, list(times), self.options)
+            integrator = self._cvodes(problem, t0, times) if not trial else ca.integrator(
+                "joint", "cvodes", problem, t0, list(times[:1]), self.options)
             out = integrator(x0=x)
         else:
+            first = times[-1] - t0 if trial else None
             integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
-                                       self.options | self._dae_options(t0, times, x, z))
+                                       self.options | self._dae_options(t0, times, x, z,
+                                                                        first))
             out = integrator(x0=x, z0=z, p=self.loops.mask)
         self.steps += int(integrator.stats().get("nsteps", 0))
         states = np.array(out["xf"].full())
@@ -201,12 +205,13 @@ class _Integrator:
             problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
             KEPT_INTEGRATORS)[1]
 
-    def _dae_options(self, t0, times, x, z) -> dict:
+    def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
         test per group (algebraic_tolerances: with Z_TOL on every multiplier the four-bar failed
         at t0 at rtol 1e-12, and Andrews' squeezer at t0 at any rtol; it now runs to 0.018 s
-        and fails there, where the r-p DAE passes)."""
+        and fails there, where the r-p DAE passes). `first`: the interval the first step is
+        sized by (default the first output interval)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
@@ -215,7 +220,7 @@ class _Integrator:
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
                 "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], times[0] - t0),
+                                      self.options["abstol"], first or times[0] - t0),
                 "abstolv": [self.options["abstol"]] * len(x) + list(algebraic_tolerances(
                     self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
 
@@ -332,10 +337,12 @@ class _Recorder:
             result.extend(times, *self.rows(times, states, algebraic))
             return
 
-        def probe(t_start: float, state, t: float):
+        def probe(t_start: float, state, t: float, t_end: float):
+            """To t_end, t from the interpolant (as runtime.dynamics' probe: with loops, the
+            index-2 DAE's first step is sized by the whole interval)."""
             x, z = state
-            found, found_z = integrate(t_start, [t], x, z, keep=False)
-            return self.rows([t], found, found_z), (found[:, 0], found_z[:, 0])
+            found, found_z = integrate(t_start, [t, t_end], x, z, trial=True)
+            return self.rows([t], found[:, :1], found_z[:, :1]), (found[:, 0], found_z[:, 0])
 
         t0, x, z = start
         self.watch.record(t0, (x, z), np.asarray(times, float), lambda j: (
