@@ -47,3 +47,14 @@ def test_run_writes_events_and_stops(tmp_path, capsys):
     assert [e["name"] for e in meta["events"]] == ["half", "low"]
     assert meta["events"][1]["values"]["ball.z"] == float(lines[1][z])
     assert cli.main(["run", "--replay", str(out / "metadata.json")]) == 0
+
+
+def test_run_with_hdf5_too(tmp_path):
+    """results.h5 beside events.csv (its metadata holds no list of event records)."""
+    path = tmp_path / "falling.yaml"
+    path.write_text(MODEL)
+    out = tmp_path / "run"
+    assert cli.main(["run", str(path), "--out", str(out), "--mode", "interpreted",
+                     "--format", "csv,hdf5"]) == 0
+    assert (out / "results.h5").is_file() and (out / "events.csv").is_file()
+    assert json.loads((out / "metadata.json").read_text())["status"] == "stopped by event"

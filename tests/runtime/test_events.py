@@ -14,7 +14,7 @@ from scipy.special import ellipk, ellipkinc
 import casmech
 from casmech import codegen
 from casmech.errors import AnalysisError, UsageError
-from casmech.runtime import events
+from casmech.runtime import dynamics, events
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.results import Result
@@ -291,3 +291,17 @@ def test_a_failed_trial_integration_is_an_analysis_error_with_the_rows_before_it
                        "t = 0.5 and 0.6: the integrator failed"):
         watch.record(0.0, None, times, lambda j: None, rows(times), probe)
     assert len(result) == 6  # t = 0 and the five rows before the crossing
+
+
+@pytest.mark.parametrize("formulation", ("rp", "romega"))
+def test_the_runge_kutta_fallback_locates_events_too(formulation):
+    """Where IDAS fails the r-p run goes on by projected Runge-Kutta steps (runtime.dynamics);
+    trial points then integrate by those steps."""
+    functions = model(PENDULUM, '  - {name: bottom, when: "bar.x", direction: falling}\n')
+    form = dynamics._Model(functions, formulation)
+    stepper = dynamics._Stepper(form, 1e-10, 1e-12)
+    stepper.on_ode = True  # as after a failure of the DAE
+    result = dynamics._run(form, stepper, 0.0, 1.0, 0.05, 1e-12, None)
+    assert result.metadata["integrator"] == "projected_rk4"
+    [event] = result.events
+    assert abs(event.t - QUARTER) < TIME

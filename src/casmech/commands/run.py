@@ -206,17 +206,17 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
     ir = functions.ir
     metadata["reaction_frames"] = reaction_frames.describe(
         ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
-    event_paths = []
-    if result is not None and result.event_states is not None:  # the run watched events
-        event_names, event_rows = events.table(functions, result, args.reactions_frame)
-        event_paths.append(events_output.write_events(out / events_output.FILE, event_names,
-                                                      event_rows))
-        metadata["events"] = events_output.metadata_rows(result.events, event_names,
-                                                         event_rows)
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     files = {} if result is None else result.files
-    paths += [write(out / name) for name, write in files.items()] + event_paths
+    paths += [write(out / name) for name, write in files.items()]
+    if result is not None and result.event_states is not None:  # the run watched events
+        event_names, event_rows = events.table(functions, result, args.reactions_frame)
+        paths.append(events_output.write_events(out / events_output.FILE, event_names,
+                                                event_rows))
+        # in metadata.json only: results.h5's metadata holds no list of records
+        metadata["events"] = events_output.metadata_rows(result.events, event_names,
+                                                         event_rows)
     if "csv" in args.format:
         write_json(out / "metadata.json", metadata)
     return paths
