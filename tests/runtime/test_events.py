@@ -242,7 +242,7 @@ def test_events_add_only_their_own_calls(monkeypatch, formulation):
     assert any("event" in name for name in calls)  # the watch did evaluate the event
 
 
-def synthetic(action: str = "log", fail: bool = False):
+def synthetic(action: str = "log", fail: bool = False, rtol: float = 0.0):
     """A Watch over q(t) = sin t (one coordinate) for the event q - 1/2 (root pi/6), its rows
     on a grid and a probe giving the exact row at any t (or failing as an integrator would)."""
     t, q, q_dot, q_ddot, lam = (ca.SX.sym(n) for n in ("t", "q", "q_dot", "q_ddot", "lam"))
@@ -259,7 +259,7 @@ def synthetic(action: str = "log", fail: bool = False):
             raise RuntimeError("IDAS: the corrector convergence failed repeatedly")
         return rows([t]), None
 
-    watch = events.Watch([half], result)
+    watch = events.Watch([half], result, rtol)
     watch.start(0.0, rows([0.0]))
     result.extend([0.0], *rows([0.0]))
     return watch, result, rows, probe
@@ -305,3 +305,12 @@ def test_the_runge_kutta_fallback_locates_events_too(formulation):
     assert result.metadata["integrator"] == "projected_rk4"
     [event] = result.events
     assert abs(event.t - QUARTER) < TIME
+
+
+def test_an_interval_narrower_than_the_tolerance_needs_no_trial():
+    """rtol |t| wider than the output interval: the row after the crossing is the event's."""
+    watch, result, rows, probe = synthetic(fail=True, rtol=0.5)  # a trial would fail
+    times = np.arange(1, 11) * 0.1
+    watch.record(0.0, None, times, lambda j: None, rows(times), probe)
+    assert [e.t for e in result.events] == [times[5]] and watch.probes == 0
+    np.testing.assert_array_equal(result.event_states.q, rows(times[5:6])[0])

@@ -218,9 +218,10 @@ class Watch:
             done = j
             a = times[j - 1] if j else t_start
             state = state_at(j - 1) if j else start
-            found = sorted((self._locate(i, a, state, times[j], before[i, j], values[i, j],
-                                         probe) for i in crossings[1][crossings[0] == j]),
-                           key=lambda hit: hit[0].t)
+            at_b = tuple(r[j:j + 1] for r in rows)
+            found = sorted((self._locate(i, (a, state, before[i, j]), (times[j], at_b,
+                                                                       values[i, j]), probe)
+                            for i in crossings[1][crossings[0] == j]), key=lambda hit: hit[0].t)
             stop = next((hit for hit in found if hit[0].action == "stop"), None)
             for hit in found[:found.index(stop) + 1] if stop else found:
                 self._keep(*hit)
@@ -242,9 +243,11 @@ class Watch:
         order = np.lexsort((events, columns))
         return columns[order], events[order]
 
-    def _locate(self, i: int, a: float, state, b: float, ga: float, gb: float, probe: Probe):
-        """(EventRecord, its row) of event i's crossing in [a, b]."""
-        event, trials = self.events[i], {}
+    def _locate(self, i: int, start, end, probe: Probe):
+        """(EventRecord, its row) of event i's crossing between start = (a, the state at a,
+        the value at a) and end = (b, the row at b, the value at b)."""
+        (a, state, ga), (b, row_b, gb) = start, end
+        event, trials = self.events[i], {b: row_b}
 
         def row_at(t: float) -> Rows:
             self.probes += 1
