@@ -90,3 +90,11 @@ def test_every_finding_of_several_events_at_once():
     found = findings('  - {name: a, when: "bar.q"}\n  - {name: 1b, when: "pivot.x"}\n')
     assert [(d.code, d.path) for d in found] == [
         ("E201", "events[0].when"), ("E303", "events[1].name"), ("E201", "events[1].when")]
+
+
+def test_the_body_columns_are_the_results_contracts():
+    """schema.events keeps its own copy (schema does not import the runtime)."""
+    from casmech.runtime.results import BODY_COLUMNS
+    from casmech.schema.events import BODY_COLUMNS as READABLE
+
+    assert READABLE == BODY_COLUMNS
