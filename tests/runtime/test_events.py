@@ -35,10 +35,10 @@ bodies:
 joints:
   - {{name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 1, 0]}}
 """
-FALLING = f"""casmech: 1
+FALLING = """casmech: 1
 name: falling
 bodies:
-  - {{name: ball, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}}
+  - {name: ball, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0]}
 """
 FORMULATIONS = ("rp", "romega", "joint")
 

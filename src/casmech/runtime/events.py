@@ -33,8 +33,8 @@ import numpy as np
 from casmech import interrupts
 from casmech.compiler import coordinates, euler
 from casmech.compiler.assemble import Coordinates
-from casmech.compiler.ir import ForceIR
 from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.ir import ForceIR
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.memo import kept

@@ -7,8 +7,8 @@ in `connections`) and returns them with the model, which is None if anything is 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 from collections.abc import Mapping
+from dataclasses import replace
 
 from casmech.errors import Diagnostic
 from casmech.schema import events, files, limits, motors, resolved, spec
