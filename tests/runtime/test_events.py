@@ -24,7 +24,7 @@ G, M, D, IC, H = 9.81, 2.0, 0.5, 0.05, 0.7  # gravity, mass, pivot-CM distance, 
 I_O = IC + M * D**2  # about the pivot
 SCALE = math.sqrt(I_O / (M * G * D))  # the pendulum's time scale
 QUARTER = SCALE * ellipk(0.5)  # released from horizontal: amplitude pi/2, k^2 = sin(pi/4)^2
-# At rtol 1e-10 the integration error of the event time is ~1e-10 s; the brief's bound is 1e-8 s.
+# At rtol 1e-10 the integration error of the event time is ~1e-10 s; issue 17 asks for 1e-8 s.
 TIME = 1e-8
 
 PENDULUM = f"""casmech: 1
@@ -51,12 +51,18 @@ def model(head: str, events_block: str, t_end: float = 1.0, step: float = 0.05,
     return casmech.compile(casmech.loads(text, "m.yaml"), mode)
 
 
+def swing_time(swung: float, amplitude: float = math.pi / 2, scale: float = SCALE) -> float:
+    """Time for a pendulum released at rest `amplitude` from the bottom to swing through the
+    angle `swung`: with phi = amplitude - swung from the bottom, k = sin(amplitude / 2) and
+    sin(phi / 2) = k sin(psi), the time from phi to the bottom is scale F(psi, k)."""
+    k = math.sin(amplitude / 2)
+    psi = math.asin(math.sin((amplitude - swung) / 2) / k)
+    return scale * (ellipk(k**2) - ellipkinc(psi, k**2))
+
+
 def time_at_angle(theta: float) -> float:
-    """Time from release (horizontal) to the angle theta swung down: the amplitude from the
-    bottom is pi/2, k = sin(pi/4); phi = pi/2 - theta from the bottom, sin(phi/2) = k sin(psi),
-    and the time from phi to the bottom is SCALE F(psi, k)."""
-    psi = math.asin(math.sin((math.pi / 2 - theta) / 2) / math.sin(math.pi / 4))
-    return QUARTER - SCALE * ellipkinc(psi, 0.5)
+    """The pendulum released from horizontal: time to the angle theta swung down."""
+    return swing_time(theta)
 
 
 @pytest.mark.parametrize("formulation", FORMULATIONS)
@@ -112,18 +118,18 @@ joints:
 """
     inertia = 2 * (ic + m * (length / 2) ** 2) + mc * length**2
     moment = (m * length + mc * length) * G
-    return text, math.sqrt(inertia / moment) * ellipk(math.sin(math.pi / 8) ** 2)
+    return text, math.sqrt(inertia / moment)
 
 
 @pytest.mark.parametrize("formulation", FORMULATIONS)
 def test_a_closed_loop_reaches_the_bottom_at_its_quarter_period(formulation):
     """The joint formulation integrates the loop's DAE on IDAS (a cut joint), as r-p does."""
-    text, quarter = parallelogram()
+    text, scale = parallelogram()
     functions = model(text, '  - {name: bottom, when: "crank.x", direction: falling}\n')
     result = casmech.analyze(functions, formulation=formulation)
     assert result.metadata["integrator"] == "idas"
     [event] = result.events
-    assert abs(event.t - quarter) < TIME
+    assert abs(event.t - swing_time(math.pi / 4, math.pi / 4, scale)) < TIME
 
 
 @pytest.mark.parametrize("formulation", ("rp", "joint"))
@@ -135,6 +141,18 @@ def test_an_event_just_after_an_output_row(formulation):
     functions = model(PENDULUM, f'  - {{name: at, when: "pivot.angle - {angle!r}"}}\n')
     [event] = casmech.analyze(functions, formulation=formulation).events
     assert abs(event.t - crossing) < TIME
+
+
+def test_an_event_just_after_an_output_row_of_a_closed_loop():
+    """The same on the joint formulation's loop DAE (IDAS, index 2)."""
+    text, scale = parallelogram()
+    crossing = 0.3 + 1e-9
+    angle = brentq(lambda swung: swing_time(swung, math.pi / 4, scale) - crossing, 0.01,
+                   math.pi / 4, xtol=1e-15)
+    functions = model(text, f'  - {{name: at, when: "crank_pivot.angle - {angle!r}"}}\n')
+    result = casmech.analyze(functions, formulation="joint")
+    [event] = result.events
+    assert result.metadata["cut_joints"] and abs(event.t - crossing) < TIME
 
 
 def test_stop_keeps_every_row_before_the_event_and_the_event_row_last():
