@@ -29,7 +29,7 @@ from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly
+from casmech.runtime import assembly, events
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -203,18 +203,26 @@ class _Integrator:
             self.options |= METHODS[method]
         self.steps = 0
 
-    def __call__(self, t0: float, times, x, z) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(self, t0: float, times, x, z, trial: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """States and algebraic states at `times` from (t0, x, z). trial: times are an event's
+        trial point (runtime.events) and the end of its interval; CVODES integrates to the
+        trial point only (its instance not kept for later runs), IDAS to the end with its
+        first step sized by the whole interval (an index-2 DAE fails on a very short one)."""
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times)
+            integrator = self._cvodes(problem, t0, times) if not trial else ca.integrator(
+                "joint", "cvodes", problem, t0, list(times[:1]), self.options)
             out = integrator(x0=x)
         else:
+            first = times[-1] - t0 if trial else None
             integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
-                                       self.options | self._dae_options(t0, times, x, z))
+                                       self.options | self._dae_options(t0, times, x, z,
+                                                                        first))
             out = integrator(x0=x, z0=z, p=self.loops.mask)
         self.steps += int(integrator.stats().get("nsteps", 0))
         states = np.array(out["xf"].full())
@@ -233,12 +241,13 @@ class _Integrator:
             problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
             KEPT_INTEGRATORS)[1]
 
-    def _dae_options(self, t0, times, x, z) -> dict:
+    def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
         test per group (algebraic_tolerances: with Z_TOL on every multiplier the four-bar failed
         at t0 at rtol 1e-12, and Andrews' squeezer at t0 at any rtol; it now runs to 0.018 s
-        and fails there, where the r-p DAE passes)."""
+        and fails there, where the r-p DAE passes). `first`: the interval the first step is
+        sized by (default the first output interval)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
@@ -247,7 +256,7 @@ class _Integrator:
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
                 "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], times[0] - t0),
+                                      self.options["abstol"], first or times[0] - t0),
                 "abstolv": [self.options["abstol"]] * len(x) + list(algebraic_tolerances(
                     self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
 
@@ -268,7 +277,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "auto") -> Result:
+                       method: str = "auto", extra_events=()) -> Result:
+    """The model's `events:` and `extra_events` (runtime.events.Event) are located and
+    recorded in Result.events; without any, no event work is done."""
     system = joint_system(functions)
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
@@ -283,13 +294,19 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
+    recorder.watch = events.watch(functions, result, extra_events, rtol)
     try:
-        recorder(result, times[:1], x[:, None], z[:, None])
+        first = recorder.rows(times[:1], x[:, None], z[:, None])
+        result.extend(times[:1], *first)
+        if recorder.watch is not None:
+            recorder.watch.start(times[0], first)
         k = 0
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + CHUNK]
             x, z = _advance(integrate, loops, recorder, result, times[k], chunk, x, z)
             k += len(chunk)
+    except events.Stopped:
+        pass
     except AnalysisError as error:
         error.partial = result
         raise
@@ -315,7 +332,7 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
         half = len(times) // 2
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
-    recorder(result, times, states, algebraic)
+    recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
     return states[:, -1], loops.z(times[-1], states[:, -1])
 
 
@@ -334,13 +351,15 @@ class _Recorder:
         self.functions, self.system, self.signs = functions, system, signs
         self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
         self.maps = functions.derived.setdefault("joint_motion_maps", {})
+        self.watch = None  # runtime.events.Watch of the run, when it has events
 
     def _mapped(self, n: int) -> BufferedCall:
         """The results rows' function mapped over n rows (kept with the functions)."""
         return kept(self.maps, (self.system.motion, n),
                     lambda: BufferedCall(self.system.motion.map(n)), KEPT_MAPS)
 
-    def __call__(self, result: Result, times, states, algebraic) -> None:
+    def rows(self, times, states, algebraic):
+        """(q, q_dot, q_ddot, lam), one row per time."""
         n = len(times)
         times = np.asarray(times, float)
         rows = self._mapped(n)(times[None, :], states, algebraic,
@@ -348,7 +367,28 @@ class _Recorder:
         q, q_dot, q_ddot, lam = rows
         if self.least_norm is not None:
             lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
-        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+    def __call__(self, result: Result, times, states, algebraic, start, integrate,
+                 loops) -> None:
+        """Appends the rows of a block integrated from `start` = (t0, x, z); through the
+        events' watch when there is one (an event's trial points integrate from the row
+        before them)."""
+        if self.watch is None:
+            result.extend(times, *self.rows(times, states, algebraic))
+            return
+
+        def probe(t_start: float, state, t: float, t_end: float):
+            """To t_end, t from the interpolant (as runtime.dynamics' probe: with loops, the
+            index-2 DAE's first step is sized by the whole interval)."""
+            x, z = state
+            found, found_z = integrate(t_start, [t, t_end], x, z, trial=True)
+            return self.rows([t], found[:, :1], found_z[:, :1]), (found[:, 0], found_z[:, 0])
+
+        t0, x, z = start
+        self.watch.record(t0, (x, z), np.asarray(times, float), lambda j: (
+            states[:, j], loops.z(times[j], states[:, j])),
+            self.rows(times, states, algebraic), probe)
 
 
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:

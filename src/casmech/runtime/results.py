@@ -32,6 +32,10 @@ class Result:
         # further files of the analysis: name in the output folder -> writer(path) (modal)
         self.files: dict[str, Callable] = {}
         self.linear_model = None  # modal: runtime.modal.LinearModel
+        # dynamics with events (runtime.events): the EventRecords in time order, and a Result
+        # holding each one's row (None: the run watched no events)
+        self.events: list = []
+        self.event_states: Result | None = None
         self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
@@ -86,7 +90,8 @@ class Result:
     # the SystemFunctions that computed the rows (casmech.analyze sets it): the source of the
     # results table, the DataFrame and the summary's model name and column count
     functions: SystemFunctions | None = None
-    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError
+    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError;
+    # "stopped by event": a stop event ended a dynamics run (runtime.events)
 
     def to_dataframe(self):
         """The results table as a pandas DataFrame, as casmech.load_results reads it from the
@@ -102,6 +107,15 @@ class Result:
         chosen = reaction_frames_of.describe(ir, reaction_frames_of.chosen(ir),
                                              self.functions.body_names)
         return frames.frame(names, values, {**self.metadata, "reaction_frames": chosen})
+
+    def events_dataframe(self):
+        """The events (runtime.events) as a pandas DataFrame, as events.csv holds them:
+        columns t, name, then every results column at the event (no rows without events)."""
+        from casmech.runtime import events
+
+        if self.functions is None:
+            raise ValueError("this Result has no system functions to tabulate its events with")
+        return events.dataframe(self.functions, self)
 
     def _facts(self) -> dict[str, str]:
         from casmech.output import frames

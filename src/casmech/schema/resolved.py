@@ -117,6 +117,18 @@ class Force:
 
 
 @dataclass(frozen=True)
+class Event:
+    """One entry of `events:` (schema/events.py): `when` reads the names of
+    schema.events.state_names besides t and parameters."""
+
+    name: str
+    when: ScalarFunction
+    direction: str = "both"  # rising | falling | both
+    action: str = "log"  # stop | log
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
 class Analysis:
     type: str = "dynamics"
     t_end: float = 1.0
@@ -125,6 +137,7 @@ class Analysis:
     atol: float = 1e-10
     options: Mapping[str, Any] = field(default_factory=dict)  # further keys (formulation, ...)
     source: Source | None = None
+    events: tuple[Event, ...] = ()  # the model's `events:` (dynamics runs watch them)
 
 
 @dataclass(frozen=True)

@@ -448,6 +448,18 @@ class Analysis(Spec):
     method: Literal["auto", "adams", "bdf"] = "auto"
 
 
+# ----------------------------------------------------------------------------------- events
+class Event(Spec):
+    """An event: where `when` (an expression of the results columns, joint coordinates, t and
+    parameters) crosses zero in `direction`; `action` stop ends the run there, log records it
+    (docs/format.md#events, casmech.schema.events)."""
+
+    name: Name
+    when: Scalar
+    direction: Literal["rising", "falling", "both"] = "both"
+    action: Literal["stop", "log"] = "log"
+
+
 # ------------------------------------------------------- estimation and optimal control (issue 7)
 Pair = Annotated[tuple[Scalar, ...], Field(min_length=2, max_length=2)]
 
@@ -547,6 +559,7 @@ class ModelSpec(Spec):
     joints: tuple[Joint, ...] = ()
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
+    events: tuple[Event, ...] = ()
     estimate: Estimate | None = None
     ocp: OptimalControl | None = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
