@@ -65,9 +65,12 @@ def test_hunt_crossley_and_linear_in_one_form():
      normal: {{law: linear, stiffness: 1e5, damping: 30}}, friction: {{static: 0.4}}}}
 """)
     h, lin = (f.params for f in model.forces)
-    # c = k 3/2 (1 - e) / v_in, the damping exponent the stiffness's (exact in binary here)
-    assert (h["stiffness"], h["exponent"], h["damping"], h["damping_exponent"]) == \
-        (1e5, 1.5, 1e5 * 1.5 * 0.4 / 2, 1.5)
+    assert (h["stiffness"], h["exponent"], h["damping_exponent"]) == (1e5, 1.5, 1.5)
+    # c = k alpha with restitution 0.6 at 2 m/s by the law's own impact relation:
+    # alpha e v + ln(1 - alpha e v) = -alpha v + ln(1 + alpha v) (to rounding of the logs)
+    a, e = h["damping"] / 1e5 * 2, 0.6
+    np.testing.assert_allclose(a * e + np.log1p(-a * e), -a + np.log1p(a), rtol=1e-12, atol=0)
+    assert 0.5 < a < 1.0  # the root, not a = 0 (Hunt and Crossley's first order: 0.6)
     assert (lin["exponent"], lin["damping"], lin["damping_exponent"]) == (1.0, 30.0, 0.0)
     # friction defaults: dynamic = static, transition = 2 stiction, stiction 1 mm/s
     assert (lin["mu_s"], lin["mu_d"], lin["v_s"], lin["v_t"]) == (0.4, 0.4, 1e-3, 2e-3)

@@ -17,10 +17,10 @@ centre, n . v_rel is exactly gap_dot, so the elastic part k d^n is -dV/dq of
 V = k d^(n+1) / (n+1) (the potential energy column holds it: the energy is constant for
 c = 0, mu = 0). The `eps` (EPS) keeps s > 0, so the friction's Jacobian is finite at zero slip.
 
-Hunt-Crossley (Hunt, Crossley 1975, J. Appl. Mech. 42:440): F = k d^n (1 + alpha d_dot) with
-alpha = 3/2 (1 - e) / v_in gives restitution e at impact speed v_in for e near 1; its exact
+Hunt-Crossley (Hunt, Crossley 1975, J. Appl. Mech. 42:440): F = k d^n (1 + alpha d_dot); its
 restitution at approach speed v (no other force during the impact) solves
-alpha e v + ln(1 - alpha e v) = -alpha v + ln(1 + alpha v)  (docs/forces.md#contact).
+alpha e v + ln(1 - alpha e v) = -alpha v + ln(1 + alpha v), and schema/contact.py picks alpha
+so that it is the file's `restitution` at its `impact_velocity` (docs/forces.md#contact).
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ GLOBAL at t = 0 like every point of the format (plane `at`, unit `normal`; spher
 radii and the normal law and friction in one form (compiler/contact.py):
 
     F_n = max(0, k d^n + c d^m d_dot) while d > 0      (d: penetration = -gap)
-    hunt_crossley: n = exponent (1.5), m = n, c = k 3/2 (1 - e) / v_in
+    hunt_crossley: n = exponent (1.5), m = n, c = k a(e) / v_in   (hunt_crossley_damping)
     linear:        n = 1, m = 0, c = damping
 
 Sizes not written in the entry come from the body's `geometry` (the shapes the animation draws):
@@ -16,6 +16,7 @@ segment and radius (a capsule). A body without that item and no explicit size is
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -41,6 +42,23 @@ def _positive(check: Checker, path: Path, value, what: str, allow_zero: bool = F
                     got=f"{value:g}")
         return None
     return value
+
+
+def hunt_crossley_damping(e: float) -> float:
+    """a = alpha v_in of F = k d^n (1 + alpha d_dot) whose restitution at impact speed v_in is
+    exactly e: the root in (0, 1/e) of  a e + ln(1 - a e) = -a + ln(1 + a)  (the law integrated
+    over an impact, m v dv / (1 + alpha v) = -k d^n dd; Hunt and Crossley's a = 3/2 (1 - e) is
+    its first order in 1 - e). By bisection: f > 0 near 0, -> -inf at 1/e."""
+    if e >= 1:
+        return 0.0
+    low, high = 0.0, 1.0 / e
+    for _ in range(200):
+        a = 0.5 * (low + high)
+        if a in (low, high):
+            break
+        f = a * e + math.log1p(-a * e) + a - math.log1p(a)
+        low, high = (a, high) if f > 0 else (low, a)
+    return 0.5 * (low + high)
 
 
 def normal_law(check: Checker, path: Path, given) -> dict[str, float] | None:
@@ -70,7 +88,7 @@ def _hunt_crossley(check: Checker, path: Path, given, numbers) -> dict[str, floa
     k, v_in = numbers["stiffness"], numbers["impact_velocity"]
     if failed([exponent, e, k, v_in]):
         return None
-    return {"stiffness": k, "exponent": exponent, "damping": k * 1.5 * (1 - e) / v_in,
+    return {"stiffness": k, "exponent": exponent, "damping": k * hunt_crossley_damping(e) / v_in,
             "damping_exponent": exponent}
 
 

@@ -440,7 +440,8 @@ for _key, _vectors in BUSHING_PARAMS.items():
 
 # contact (compiler/contact.py, schema/contact.py; docs/forces.md#contact)
 class NormalLaw(Spec):
-    """hunt_crossley: F = k d^n (1 + 3/2 (1 - e) d_dot / v_in); linear: F = k d + c d_dot."""
+    """hunt_crossley: F = k d^n (1 + alpha d_dot), alpha giving restitution e at v_in
+    (schema/contact.py); linear: F = k d + c d_dot."""
 
     law: Literal["hunt_crossley", "linear"] = "hunt_crossley"
     stiffness: Scalar
