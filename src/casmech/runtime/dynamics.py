@@ -64,6 +64,7 @@ from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import assembly, projected_rk4
+from casmech.runtime import contact_steps
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -416,6 +417,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     failure; it keeps every row off a DAE that has met a singular pose."""
     model = _Model(functions, formulation)
     stepper = _Stepper(model, rtol, atol, stabilization)
+    stepper.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     try:
         return _run(model, stepper, t0, t_end, step, atol, progress)
     except _Restart as restart:
