@@ -148,3 +148,32 @@ def test_limit_resolves_with_infinite_missing_bound():
     joints = JOINT.format(type="translational", limit="{upper: 0.3, stiffness: 10}")
     (joint,) = load(joints=joints).joints
     assert joint.limit == {"lower": -np.inf, "upper": 0.3, "stiffness": 10.0, "damping": 0.0}
+
+
+PLACED = """casmech: 1
+name: placed
+components:
+  tile:
+    bodies:
+      - {name: ball, mass: 1, inertia: [1, 1, 1], position: [0, 0, 1], geometry: [{sphere: 0.1}]}
+      - {name: slab, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0], geometry: [{box: [1, 1, 0.1]}]}
+    forces:
+      - {name: rests, type: sphere_plane, body_i: slab, body_j: ball, normal: {stiffness: 1},
+         plane: {at: [0, 0, 0.05], normal: [0, 0, 1]}}
+      - {name: corners, type: points_plane, body_j: slab, normal: {stiffness: 1},
+         points: [[0.5, 0, 0], [-0.5, 0, 0]]}
+instances:
+  - {name: t, component: tile, position: [1, 2, 3],
+     orientation: {axis_angle: {axis: [1, 0, 0], angle: 1.5707963267948966}}}
+"""
+
+
+def test_an_instance_places_contact_points_and_normals():
+    rests, corners = load_model_text(PLACED, "m.yaml").forces
+    tight = {"rtol": 0, "atol": 1e-12}  # one rotation by 90 degrees: rounding only
+    # x-axis quarter turn: (x, y, z) -> (x, -z, y), then + (1, 2, 3)
+    np.testing.assert_allclose(rests.vectors["at"], [1, 1.95, 3], **tight)
+    np.testing.assert_allclose(rests.vectors["normal"], [0, -1, 0], **tight)
+    np.testing.assert_allclose(rests.vectors["center"], [1, 1, 3], **tight)
+    np.testing.assert_allclose(corners.vectors["points"], [[1.5, 2, 3], [0.5, 2, 3]], **tight)
+    assert (rests.body_i, rests.body_j) == ("t.slab", "t.ball")
