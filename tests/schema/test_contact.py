@@ -59,10 +59,10 @@ def test_shapes_come_from_the_bodys_geometry_in_global_terms():
 
 
 def test_hunt_crossley_and_linear_in_one_form():
-    model = load(f"""  - {{name: h, type: sphere_plane, body_j: ball,
-     normal: {{stiffness: 1e5, restitution: 0.6, impact_velocity: 2}}}}
-  - {{name: l, type: sphere_plane, body_j: ball,
-     normal: {{law: linear, stiffness: 1e5, damping: 30}}, friction: {{static: 0.4}}}}
+    model = load("""  - {name: h, type: sphere_plane, body_j: ball,
+     normal: {stiffness: 1e5, restitution: 0.6, impact_velocity: 2}}
+  - {name: l, type: sphere_plane, body_j: ball,
+     normal: {law: linear, stiffness: 1e5, damping: 30}, friction: {static: 0.4}}
 """)
     h, lin = (f.params for f in model.forces)
     assert (h["stiffness"], h["exponent"], h["damping_exponent"]) == (1e5, 1.5, 1.5)
@@ -92,11 +92,14 @@ def located(text: str, line: int, col: int) -> str:
      ("E410", "forces[0].body_i", "plain")),
     ("  - {name: s, type: sphere_plane, body_j: ball, normal: {stiffness: -1}}\n",
      ("E103", "forces[0].normal.stiffness", "-1")),
-    ("  - {name: s, type: sphere_plane, body_j: ball,\n     normal: {stiffness: 1, restitution: 1.5}}\n",
+    ("  - {name: s, type: sphere_plane, body_j: ball,\n"
+     "     normal: {stiffness: 1, restitution: 1.5}}\n",
      ("E103", "forces[0].normal.restitution", "1.5")),
-    ("  - {name: s, type: sphere_plane, body_j: ball,\n     normal: {stiffness: 1, damping: 3}}\n",
+    ("  - {name: s, type: sphere_plane, body_j: ball,\n"
+     "     normal: {stiffness: 1, damping: 3}}\n",
      ("E103", "forces[0].normal.damping", "3")),
-    ("  - {name: s, type: sphere_plane, body_j: ball,\n     normal: {law: linear, stiffness: 1, exponent: 2}}\n",
+    ("  - {name: s, type: sphere_plane, body_j: ball,\n"
+     "     normal: {law: linear, stiffness: 1, exponent: 2}}\n",
      ("E103", "forces[0].normal.exponent", "2")),
     ("  - {name: s, type: sphere_plane, body_j: ball, normal: {stiffness: 1}, radius: 0}\n",
      ("E103", "forces[0].radius", "0")),
@@ -156,7 +159,8 @@ components:
   tile:
     bodies:
       - {name: ball, mass: 1, inertia: [1, 1, 1], position: [0, 0, 1], geometry: [{sphere: 0.1}]}
-      - {name: slab, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0], geometry: [{box: [1, 1, 0.1]}]}
+      - {name: slab, mass: 1, inertia: [1, 1, 1], position: [0, 0, 0],
+         geometry: [{box: [1, 1, 0.1]}]}
     forces:
       - {name: rests, type: sphere_plane, body_i: slab, body_j: ball, normal: {stiffness: 1},
          plane: {at: [0, 0, 0.05], normal: [0, 0, 1]}}

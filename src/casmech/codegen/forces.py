@@ -161,7 +161,8 @@ def unrolled(ir: ModelIR, force: ForceIR) -> ca.Function:
     their number, not with the model's)."""
     x = Coordinates.create(ir.n_bodies)
     generalized, energy = FORCE_ELEMENTS[force.type](force, x)
-    name = "force_" + "".join(c if c.isalnum() else "_" for c in force.name)
+    prefix = "stop_" if force.type in limits.COORDINATE else "force_"  # a stop: its joint's name
+    name = prefix + "".join(c if c.isalnum() else "_" for c in force.name)
     return ca.Function(name, [x.t, x.q, x.q_dot],
                        [x.ground_fixed(ca.SX(generalized)), x.ground_fixed(ca.SX(energy))])
 
@@ -224,7 +225,8 @@ def motor_reactions(ir: ModelIR, t, q, q_dot) -> tuple:
         at = eom.point(x, joint.body_i, joint.point_i)
         reaction = limits.reaction if motor.type in limits.COORDINATE else motors.reaction
         pair = [x.ground_fixed(ca.SX(e)) for e in reaction(motor, x, at)]
-        name = "motor_" + "".join(c if c.isalnum() else "_" for c in motor.name)
+        prefix = "stop_" if motor.type in limits.COORDINATE else "motor_"
+        name = prefix + "".join(c if c.isalnum() else "_" for c in motor.name)
         f_motor, t_motor = ca.Function(name, [x.t, x.q, x.q_dot], pair)(t, q, q_dot)
         select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [k]), 1.0)
         force, torque = force + f_motor @ select, torque + t_motor @ select

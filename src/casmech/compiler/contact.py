@@ -37,7 +37,6 @@ from casmech.schema.expressions import FUNCTIONS
 
 EPS = 1e-6  # slip speed regularization, relative to the stiction velocity
 STEP = FUNCTIONS["step"][2]  # CasADi implementation of step(x, x0, h0, x1, h1)
-TYPES = ("sphere_plane", "sphere_sphere", "points_plane", "capsule_plane")
 OUTPUTS = ("normal_force", "friction_force", "gap")  # results columns per element
 
 

@@ -195,7 +195,7 @@ def lower(model: ResolvedModel) -> ModelIR:
     effort = tuple(m for j in model.joints if j.motor
                    for m in motors.lower(j, joint_frame(j), poses))
     stops = tuple(limits.lower(j, geometry[j.name]) for j in model.joints
-                  if getattr(j, "limit", None))
+                  if j.limit)
     return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
                    forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters),
                    motors=effort, limits=stops)

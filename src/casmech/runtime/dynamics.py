@@ -63,8 +63,7 @@ from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly, projected_rk4
-from casmech.runtime import contact_steps
+from casmech.runtime import assembly, contact_steps, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 

@@ -19,9 +19,9 @@ import numpy as np
 from casmech.compiler.coordinates import BODY_STATES, JOINT_COORDINATES, split
 from casmech.errors import did_you_mean
 from casmech.schema import connections, resolved
-from casmech.schema.contact import SHAPES, contact
 from casmech.schema.bodies import orientation
 from casmech.schema.checker import Checker, failed
+from casmech.schema.contact import SHAPES, contact
 from casmech.schema.loader import Path
 
 STATE_KEYS = "force/torque value, tsda/rsda actuator"
