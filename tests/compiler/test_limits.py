@@ -158,11 +158,27 @@ def test_slider_rests_on_the_stop_with_the_reaction_of_the_pushing_force():
     np.testing.assert_allclose(end["rail.fx"], -30.0, rtol=1e-9, atol=0)
 
 
-def test_compiled_mode_equals_interpreted():
-    model = casmech.loads(SLIDER.format(joint="translational", c=2000, t_end=0.3))
+MOTORED = """
+casmech: 1
+name: motored_stop
+gravity: [0, -9.81, 0]
+bodies:
+  - {name: bar, mass: 1, inertia: [1e-4, 0.0833, 0.0833], position: [0.5, 0, 0]}
+joints:
+  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 0, 1],
+     motor: {torque: "2 * sin(t)"}, limit: {lower: -1.2, upper: 0.3, stiffness: 1e4, damping: 20}}
+analysis: {type: dynamics, t_end: 1.0, output_step: 0.01, rtol: 1e-10, atol: 1e-12}
+"""
+
+
+@pytest.mark.parametrize("text", [SLIDER.format(joint="translational", c=2000, t_end=0.3),
+                                  MOTORED], ids=["slider", "motor_and_stop"])
+def test_compiled_mode_equals_interpreted(text):
+    model = casmech.loads(text)
     results = [casmech.analyze(casmech.compile(model, mode), formulation="rp").to_dataframe()
                for mode in ("interpreted", "compiled")]
     assert list(results[0].columns) == list(results[1].columns)
-    # the same equations in C: round-off grown by the integration (rtol 1e-10)
+    # the same equations in C: round-off grown by the integration (rtol 1e-10) through the
+    # stop's impacts (measured 2.5e-4 absolute on up to 176 N m at rtol 1e-8)
     np.testing.assert_allclose(results[1].to_numpy(), results[0].to_numpy(), rtol=1e-5,
-                               atol=1e-6)
+                               atol=1e-5)
