@@ -177,7 +177,8 @@ analysis: {type: dynamics, t_end: 0.5, output_step: 1e-3, rtol: 1e-10, atol: 1e-
 
 def test_two_bodies_conserve_momentum_through_the_impact():
     result = run(TWO_BALLS)
-    assert result["hit.normal_force"].max() > 100  # they collided
+    assert result["hit.normal_force"].max() > 100  # they collided ...
+    assert result["b.vx"].iloc[-1] > 0.5  # ... and b bounced back (it came at -1 m/s)
     assert result["hit.friction_force"].max() > 1  # with friction
     masses = {"a": 2.0, "b": 0.5}
     momentum = sum(m * result[[f"{body}.v{c}" for c in "xyz"]].to_numpy()
