@@ -117,6 +117,8 @@ def located(text: str, line: int, col: int) -> str:
     ("  - {name: s, type: capsule_plane, body_j: ball, normal: {stiffness: 1},\n"
      "     ends: [[0, 0, 0], [0, 0, 0]]}\n",
      ("E410", "forces[0].ends", "[[0, 0, 0]")),
+    ("  - {name: s, type: points_plane, body_j: ball, normal: {stiffness: 1}, points: []}\n",
+     ("E103", "forces[0].points", "[]")),
     ("  - {name: s, type: sphere_plane, body_j: bal, normal: {stiffness: 1}}\n",
      ("E300", "forces[0].body_j", "bal")),
 ])

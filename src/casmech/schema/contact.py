@@ -21,16 +21,13 @@ from typing import Any
 
 import numpy as np
 
-from casmech.schema import resolved
 from casmech.schema.bodies import rotation_matrix
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
 
 HERTZ = 1.5  # Hunt-Crossley's default exponent: Hertz's sphere on a flat
 AXIS = {"x": 0, "y": 1, "z": 2}
-# the law's YAML keys that must be positive / non-negative; restitution in (0, 1]
-POSITIVE = ("stiffness", "impact_velocity")
-FRICTION_POSITIVE = ("stiction_velocity",)
+POSITIVE = ("stiffness", "impact_velocity")  # keys of the normal law that must be > 0
 
 
 def _positive(check: Checker, path: Path, value, what: str, allow_zero: bool = False):
@@ -83,7 +80,7 @@ def _hunt_crossley(check: Checker, path: Path, given, numbers) -> dict[str, floa
     e = numbers.get("restitution", 1.0)
     if e is not None and not 0 < e <= 1:
         check.error("E103", (*path, "restitution"), "restitution must be in (0, 1]", got=f"{e:g}",
-                    hint="1: no loss; Hunt-Crossley's damping holds for e near 1")
+                    hint="the ratio of release to impact speed; 1: no loss")
         e = None
     k, v_in = numbers["stiffness"], numbers["impact_velocity"]
     if failed([exponent, e, k, v_in]):
@@ -172,11 +169,12 @@ def sphere(check: Checker, path: Path, side: str, given, keys=("radius", "center
 
 
 def box_corners(check: Checker, path: Path, body: str, points) -> np.ndarray | None:
+    """The points of a point set, global at t = 0: the entry's, else the box item's corners."""
     if points is not None:
-        found = [check.numbers((*path, "points", k), p) for k, p in enumerate(points)]
         if not points:
             check.error("E103", (*path, "points"), "a point set needs at least one point")
             return None
+        found = [check.numbers((*path, "points", k), p) for k, p in enumerate(points)]
         return None if failed(found) else np.array(found)
     item = _item(check, body, "box")
     if item is None:
@@ -275,9 +273,3 @@ def limit(check: Checker, path: Path, given) -> dict[str, float] | None:
         return None
     return {"lower": float(lower), "upper": float(upper), "stiffness": k, "damping": c}
 
-
-def resolved_contact(check: Checker, index: int, given) -> resolved.Force | None:
-    path = ("forces", index)
-    fields = contact(check, path, given)
-    return None if fields is None else resolved.Force(
-        given.name, given.type, **fields, source=check.doc.locate(path))
