@@ -77,11 +77,11 @@ def test_damped_stop_dissipates_and_the_reaction_holds_the_stops_torque():
     result = run(PENDULUM.format(lower=-np.pi / 2, k=K_STOP, c=50.0, t_end=3.0))
     energy = result["energy"].to_numpy()
     assert np.max(np.diff(energy)) < 1e-8  # never gains energy (integration error only)
-    # it settles on the stop at the bottom where gravity has no torque: hanging, the stop
-    # pushes nothing; the stop torque enters the revolute's reaction tz (the joint itself
-    # transmits none about its axis)
-    end = result.iloc[-1]
-    np.testing.assert_allclose(end["pivot.tz"], end["pivot.limit_torque"], rtol=0, atol=1e-9)
+    # the stop torque enters the revolute's reaction tz at every row, through the impacts (an
+    # ideal revolute transmits no torque about its axis): equal to rounding of ~100 N m
+    assert result["pivot.limit_torque"].max() > 50  # it hit the stop
+    np.testing.assert_allclose(result["pivot.tz"], result["pivot.limit_torque"], rtol=0,
+                               atol=1e-9)
 
 
 HELD = """
