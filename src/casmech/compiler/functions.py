@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler, romega
+from casmech.compiler import contact, eom, euler, romega
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
 
@@ -110,6 +110,8 @@ def build_functions(ir: ModelIR) -> SystemFunctions:
                   {"force": fixed(force), "torque": fixed(torque)}),
         _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
                   {"omega": stack(omega), "alpha": stack(alpha)}),
+        _function("element_outputs", {"t": t, "q": q, "q_dot": q_dot},
+                  {"values": fixed(contact.element_outputs(ir, x))}),
     ]
     functions += [_function(*definition) for definition in romega.definitions(ir, cs)]
     names = tuple(b.name for b in ir.bodies)

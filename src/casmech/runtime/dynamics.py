@@ -63,7 +63,7 @@ from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly, events, projected_rk4
+from casmech.runtime import assembly, contact_steps, events, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -438,6 +438,7 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     located and recorded in Result.events; without any, no event work is done."""
     model = _Model(functions, formulation)
     stepper = _Stepper(model, rtol, atol, stabilization)
+    stepper.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     try:
         return _run(model, stepper, t0, t_end, step, atol, progress, extra_events)
     except _Restart as restart:

@@ -29,7 +29,7 @@ from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly, events
+from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -292,6 +292,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
                          loops.mask)
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
+    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
     recorder.watch = events.watch(functions, result, extra_events, rtol)

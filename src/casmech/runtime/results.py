@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import contact
 from casmech.compiler.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import BufferedCall
@@ -142,7 +143,7 @@ def column_names(functions: SystemFunctions) -> list[str]:
     names = ["t"]
     names += [f"{b}.{c}" for b in functions.body_names for c in BODY_COLUMNS]
     names += [f"{j.name}.{c}" for j in functions.joints for c in JOINT_COLUMNS]
-    return names + ["energy", "constraint_violation"]
+    return names + ["energy", "constraint_violation", *contact.output_names(functions.ir)]
 
 
 def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
@@ -158,7 +159,9 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
     per_joint = [np.concatenate([force[:, j], torque[:, j]]) for j in range(len(functions.joints))]
     kinetic, potential = functions.evaluate("energy", t, q, q_dot)
     violation = np.max(np.abs(functions.vector("phi", t, q)), initial=0.0)
-    return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation]])
+    elements = functions.vector("element_outputs", t, q, q_dot)  # contacts and stops
+    return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation],
+                           elements])
 
 
 def row_function(functions: SystemFunctions) -> ca.Function:
@@ -180,7 +183,7 @@ def row_function(functions: SystemFunctions) -> ca.Function:
         parts += [q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4], q_dot[3 * k:3 * k + 3],
                   omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
     parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
-    parts += [kinetic + potential, violation]
+    parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot)]
     return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],
                        [ca.densify(ca.vertcat(*parts))])
 
