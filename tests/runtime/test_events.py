@@ -332,3 +332,28 @@ def test_an_interval_narrower_than_the_tolerance_needs_no_trial():
     watch.record(0.0, None, times, lambda j: None, rows(times), probe)
     assert [e.t for e in result.events] == [times[5]] and watch.probes == 0
     np.testing.assert_array_equal(result.event_states.q, rows(times[5:6])[0])
+
+
+def test_contact_onset_and_release_of_the_bouncing_ball():
+    """Events on a contact's gap column (models/bouncing_ball.yaml): the first touch at
+    sqrt(2 h / g), touches and releases alternating, and each flight between a release and
+    the next touch the ballistic 2 vz / g of the speed at the release."""
+    from tests.conftest import MODELS
+
+    text = (MODELS / "bouncing_ball.yaml").read_text() + (
+        "\nevents:\n  - {name: touch, when: floor.gap, direction: falling}\n"
+        "  - {name: release, when: floor.gap, direction: rising}\n")
+    functions = casmech.compile(casmech.loads(text))
+    result = casmech.analyze(functions, "dynamics", t_end=2.0, rtol=1e-10, atol=1e-12)
+    records = result.events
+    names = [r.name for r in records]
+    assert names[:4] == ["touch", "release", "touch", "release"]
+    # free fall from h = 1 m: the run's tolerance locates it (1e-6 s required by issue 20)
+    np.testing.assert_allclose(records[0].t, math.sqrt(2 * 1.0 / G), rtol=0, atol=1e-6)
+    vz = result.event_states.q_dot[:, 2]  # the ball's vertical speed at each event
+    for k in range(1, len(records) - 1, 2):  # release k, touch k + 1
+        assert records[k].name == "release" and records[k + 1].name == "touch"
+        # a ballistic flight from the release: gap 0 again after 2 vz / g (rtol 1e-6: the
+        # release and touch times are each located to ~1e-9 s)
+        np.testing.assert_allclose(records[k + 1].t - records[k].t, 2 * vz[k] / G,
+                                   rtol=1e-6, atol=0)

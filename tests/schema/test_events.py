@@ -98,3 +98,26 @@ def test_the_body_columns_are_the_results_contracts():
     from casmech.schema.events import BODY_COLUMNS as READABLE
 
     assert READABLE == BODY_COLUMNS
+
+
+CONTACT = """casmech: 1
+name: ball
+bodies:
+  - {name: ball, mass: 1, inertia: [0.004, 0.004, 0.004], position: [0, 0, 1],
+     geometry: [{sphere: 0.1}]}
+forces:
+  - {name: floor, type: sphere_plane, body_i: ground, body_j: ball,
+     plane: {at: [0, 0, 0], normal: [0, 0, 1]}, normal: {law: linear, stiffness: 1.0e5}}
+events:
+"""
+
+
+def test_contact_columns_are_readable_and_misspelt_ones_located():
+    model = load_model_text(CONTACT + '  - {name: touch, when: "floor.gap", '
+                                      'direction: falling}\n', "ball.yaml")
+    assert model.analysis.events[0].when.variables == ("floor.gap",)
+    with pytest.raises(ModelError) as caught:
+        load_model_text(CONTACT + '  - {name: touch, when: "floor.gapp"}\n', "ball.yaml")
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.message, diagnostic.hint) == (
+        "E201", "'floor' has no column 'gapp'", "did you mean 'gap'?")

@@ -33,11 +33,11 @@ import numpy as np
 
 from casmech.compiler import euler, limits
 from casmech.compiler.ir import GROUND_INDEX, ForceIR
+from casmech.schema.contact import OUTPUTS  # results columns per element
 from casmech.schema.expressions import FUNCTIONS
 
 EPS = 1e-6  # slip speed regularization, relative to the stiction velocity
 STEP = FUNCTIONS["step"][2]  # CasADi implementation of step(x, x0, h0, x1, h1)
-OUTPUTS = ("normal_force", "friction_force", "gap")  # results columns per element
 
 
 @dataclass(frozen=True)

@@ -22,11 +22,13 @@ import casadi as ca
 
 from casmech.compiler import coordinates, motors
 from casmech.compiler.ir import ForceIR
+from casmech.schema.contact import LIMIT_COLUMNS
 
 # joint type -> (ForceIR type, coordinate of compiler/coordinates.py, results column of f)
-KINDS = {"revolute": ("limit_angle", "angle", "limit_torque"),
-         "translational": ("limit_displacement", "displacement", "limit_force"),
-         "cylindrical": ("limit_displacement", "displacement", "limit_force")}
+KINDS = {"revolute": ("limit_angle", "angle", LIMIT_COLUMNS["revolute"]),
+         "translational": ("limit_displacement", "displacement",
+                           LIMIT_COLUMNS["translational"]),
+         "cylindrical": ("limit_displacement", "displacement", LIMIT_COLUMNS["cylindrical"])}
 COORDINATE = {kind: name for kind, name, _ in KINDS.values()}
 COLUMN = {kind: column for kind, _, column in KINDS.values()}
 

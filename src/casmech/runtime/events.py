@@ -31,7 +31,7 @@ import casadi as ca
 import numpy as np
 
 from casmech import interrupts
-from casmech.compiler import coordinates, euler
+from casmech.compiler import contact, coordinates, euler
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import ForceIR
@@ -99,13 +99,19 @@ def _joint_geometry(joint) -> ForceIR:
 
 
 def state_values(functions: SystemFunctions, x: Coordinates, names) -> dict[str, Any]:
-    """The state names an event reads (schema.events.state_names) as expressions of x."""
+    """The state names an event reads (schema.events.state_names, and the contacts' and
+    stops' columns) as expressions of x."""
     bodies = {name: k for k, name in enumerate(functions.body_names)}
     joints = {joint.name: joint for joint in functions.ir.joints}
-    values, columns = {}, {}
+    elements = {name: k for k, name in enumerate(contact.output_names(functions.ir))}
+    values, columns, outputs = {}, {}, None
     for name in names:
         owner, attribute = coordinates.split(name)
-        if owner in bodies:
+        if name in elements:
+            if outputs is None:
+                outputs = contact.element_outputs(functions.ir, x)
+            values[name] = outputs[elements[name]]
+        elif owner in bodies:
             if owner not in columns:
                 columns[owner] = _body_columns(x, bodies[owner])
             values[name] = columns[owner][attribute]

@@ -26,6 +26,20 @@ from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
 
 HERTZ = 1.5  # Hunt-Crossley's default exponent: Hertz's sphere on a flat
+OUTPUTS = ("normal_force", "friction_force", "gap")  # results columns of a contact element
+# a joint stop's results columns: its force or torque (by joint type), then its gap
+LIMIT_COLUMNS = {"revolute": "limit_torque", "translational": "limit_force",
+                 "cylindrical": "limit_force"}
+
+
+def output_names(joints, forces) -> list[str]:
+    """The results columns of the contacts (OUTPUTS each, in file order), then the joint
+    stops' (resolved joints and forces; compiler.contact.output_names keeps the same order)."""
+    names = [f"{f.name}.{o}" for f in forces if f is not None and f.type in SHAPES
+             for o in OUTPUTS]
+    return names + [f"{j.name}.{column}" for j in joints
+                    if j is not None and j.limit is not None
+                    for column in (LIMIT_COLUMNS[j.type], "limit_gap")]
 AXIS = {"x": 0, "y": 1, "z": 2}
 POSITIVE = ("stiffness", "impact_velocity")  # keys of the normal law that must be > 0
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from casmech.errors import did_you_mean
-from casmech.schema import resolved, spec
+from casmech.schema import contact, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.expressions import ExpressionError, parse
 from casmech.schema.force_laws import joint_attributes
@@ -63,6 +63,10 @@ def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
     if owner in check.bodies:
         return (f"body '{owner}' has no '{attribute}'",
                 did_you_mean(attribute, BODY_COLUMNS) or f"bodies have {', '.join(BODY_COLUMNS)}")
+    columns = [state.rpartition(".")[2] for state in states if state.startswith(f"{owner}.")]
+    if columns:  # a contact element's or a joint stop's columns
+        return (f"'{owner}' has no column '{attribute}'",
+                did_you_mean(attribute, columns) or f"it has {', '.join(columns)}")
     known = [*check.joint_types, *check.bodies]
     hint = did_you_mean(name, states) or did_you_mean(owner, known)
     return f"unknown state '{name}': no body or joint '{owner}'", hint
@@ -104,9 +108,12 @@ def event(check: Checker, index: int, given: spec.Event, states) -> resolved.Eve
                           check.doc.locate(("events", index)))
 
 
-def events(check: Checker, given: tuple[spec.Event, ...]) -> tuple[resolved.Event, ...] | None:
-    """The resolved events (None when any is wrong; every finding reported)."""
-    states = state_names(check)
+def events(check: Checker, given: tuple[spec.Event, ...], joints=(), forces=()
+           ) -> tuple[resolved.Event, ...] | None:
+    """The resolved events (None when any is wrong; every finding reported). Besides the
+    states, `when` reads the contacts' and joint stops' columns (`floor.gap`,
+    `pivot.limit_torque`; value 0 for the finite check at t = 0)."""
+    states = state_names(check) | dict.fromkeys(contact.output_names(joints, forces), 0.0)
     first: dict[str, Path] = {}
     found = []
     for index, item in enumerate(given):

@@ -147,7 +147,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     settings = analysis(check, given.analysis)
-    watched = events.events(check, given.events)
+    watched = events.events(check, given.events, joints, forces)
     if settings is not None and watched:
         settings = replace(settings, events=watched)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None
