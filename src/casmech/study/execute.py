@@ -1,0 +1,101 @@
+"""Running a study's points: in this process (workers 0) or through Dask.
+
+Dask (`dask.distributed`, imported on use): a LocalCluster of `workers` processes with one
+thread each, or the existing cluster at `scheduler`. Every run is one task of
+runner.run_point; each worker process prepares the job's runner once (runner.runner_for).
+Outcomes are handed to `done(index, outcome)` as they finish, in any order. Ctrl-C (a
+KeyboardInterrupt) cancels what has not finished and returns with `interrupted` set; what
+finished was already handed over.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Sequence
+from contextlib import contextmanager
+
+from casmech.errors import UsageError
+from casmech.study.runner import Job, Outcome, run_point
+
+Done = Callable[[int, Outcome], None]
+
+
+def default_workers() -> int:
+    return os.cpu_count() or 1
+
+
+def distributed():
+    """dask.distributed, or a usage error saying how to install it."""
+    try:
+        import distributed as module
+    except ImportError:
+        raise UsageError("casmech sweep runs through Dask: install it with "
+                         "pip install 'dask[distributed]' (or run in this process with "
+                         "--workers 0)") from None
+    return module
+
+
+def execute(job: Job, points: Sequence[dict], done: Done, workers: int | None = None,
+            scheduler: str | None = None) -> bool:
+    """Run every point; True when all ran, False when interrupted."""
+    if scheduler is None and workers == 0:
+        return _serial(job, points, done)
+    return _dask(job, points, done, workers, scheduler)
+
+
+def _serial(job: Job, points: Sequence[dict], done: Done) -> bool:
+    try:
+        for index, values in enumerate(points):
+            try:
+                outcome = run_point(job, values)
+            except Exception as error:  # noqa: BLE001  (KeyboardInterrupt is not one)
+                outcome = unexpected(values, error)
+            done(index, outcome)
+    except KeyboardInterrupt:  # errors.Interrupted is one
+        return False
+    return True
+
+
+def unexpected(values: dict, error: BaseException) -> Outcome:
+    """A run that raised what runner.Runner does not record (a bug, a lost worker): failed,
+    with the exception's type and first line, so that the study goes on."""
+    text = str(error).strip().splitlines()
+    return Outcome(dict(values), "failed", f"{type(error).__name__}: {text[0] if text else ''}")
+
+
+@contextmanager
+def client(workers: int | None, scheduler: str | None):
+    """A dask.distributed Client of a new local cluster or of the one at `scheduler`."""
+    module = distributed()
+    if scheduler is not None:
+        with module.Client(scheduler) as connected:
+            yield connected
+        return
+    count = workers or default_workers()
+    with module.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
+                             dashboard_address=None, silence_logs=logging.ERROR,
+                             worker_class=module.Nanny) as cluster, \
+            module.Client(cluster) as connected:
+        yield connected
+
+
+def _dask(job: Job, points: Sequence[dict], done: Done, workers: int | None,
+          scheduler: str | None) -> bool:
+    module = distributed()
+    with client(workers, scheduler) as connected:
+        futures = connected.map(run_point, [job] * len(points), points, pure=False)
+        index = {future.key: k for k, future in enumerate(futures)}
+        try:
+            for future in module.as_completed(futures):
+                k = index[future.key]
+                try:
+                    outcome = future.result()
+                except Exception as error:  # noqa: BLE001
+                    outcome = unexpected(points[k], error)
+                done(k, outcome)
+                future.release()
+        except KeyboardInterrupt:
+            connected.cancel(futures)
+            return False
+    return True
