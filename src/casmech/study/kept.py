@@ -4,7 +4,9 @@
     max(COLUMN)     min(COLUMN)     final(COLUMN)
     integral(COLUMN)   trapezoid rule over the output rows (accurate to O(output_step^2))
     crossing(COLUMN)   the first time after the first row at which the column changes sign,
-                       by linear interpolation between the two rows around it (NaN if never)
+                       by linear interpolation between the two rows around it (NaN if never);
+                       for a sinusoid of angular frequency w sampled every h, off by at most
+                       w^2 h^3 / (36 sqrt 3) (the root of a cubic's interpolation error)
 
 COLUMN is a name of the results contract (runtime.results.column_names). A kept output's
 column in sweep.csv is its text as written (`max(bar.z)`). A run with no rows keeps NaN.
