@@ -27,6 +27,7 @@ class Problem:
     code: str  # errors.CODES: E300 unknown name, E103 malformed value, E409 inconsistent
     message: str
     hint: str | None = None
+    at_key: bool = False  # located at the mapping key (a name) rather than its value
 
 
 class StudyProblems(Exception):
@@ -44,10 +45,10 @@ def _name_problem(path: tuple, name: str, parameters: Mapping, others: Mapping[s
     if what:
         return Problem(path, "E300", f"'{name}' is a {what}, not a parameter",
                        "a study varies entries of `parameters:`; name the quantity there and "
-                       "use it in the model")
+                       "use it in the model", at_key=True)
     return Problem(path, "E300", f"unknown parameter '{name}'",
                    did_you_mean(name, parameters) or
-                   f"the model's parameters: {', '.join(parameters) or 'none'}")
+                   f"the model's parameters: {', '.join(parameters) or 'none'}", at_key=True)
 
 
 def build(form: Mapping, parameters: Mapping, others: Mapping[str, str] | None = None) -> Study:
@@ -94,9 +95,12 @@ def check_keep(study: Study, names: Sequence[str], t_end: float) -> None:
 
 def located(problems: StudyProblems, document) -> ModelError:
     """The problems of a YAML `study:` block, located in its file."""
-    return ModelError([Diagnostic(p.code, _dotted(("study", *p.path)), p.message,
-                                  document.locate(("study", *p.path)), hint=p.hint)
-                       for p in problems.problems])
+    def where(p: Problem):
+        path = ("study", *p.path)
+        return document.locate_key(path) if p.at_key else document.locate(path)
+
+    return ModelError([Diagnostic(p.code, _dotted(("study", *p.path)), p.message, where(p),
+                                  hint=p.hint) for p in problems.problems])
 
 
 def usage(problems: StudyProblems) -> UsageError:

@@ -74,7 +74,7 @@ def client(workers: int | None, scheduler: str | None):
         return
     count = workers or default_workers()
     with module.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
-                             dashboard_address=None, silence_logs=logging.ERROR,
+                             dashboard_address=":0", silence_logs=logging.ERROR,
                              worker_class=module.Nanny) as cluster, \
             module.Client(cluster) as connected:
         yield connected
