@@ -5,17 +5,14 @@ and --uniform, --seed, --keep; a grid or sampling given here replaces the block'
 Runs go through Dask: a local cluster of --workers processes (default: the machine's cores),
 an existing cluster at --scheduler ADDRESS, or this process with --workers 0. A run that fails
 is a row with status failed and its reason; the study goes on. Ctrl-C (or SIGTERM) stops it:
-the finished runs are written and the exit code is 130 (143). Writes DIR/sweep.csv,
+the finished runs are written and the exit code is 130. Writes DIR/sweep.csv,
 DIR/sweep.parquet (when pyarrow is installed), DIR/metadata.json and with --full DIR/runs.h5.
 docs/sweeps.md.
 """
 
 from __future__ import annotations
 
-import signal
 import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
 from casmech.commands.common import add_overrides, overrides
@@ -74,19 +71,6 @@ def study_form(args) -> dict:
             "samples": args.samples, "seed": args.seed, "keep": args.keep}
 
 
-@contextmanager
-def _sigterm_interrupts() -> Iterator[None]:
-    """SIGTERM stops the study as Ctrl-C does (a KeyboardInterrupt)."""
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGTERM, handler)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
 def run(args) -> int:
     from casmech.study import sweep as study
 
@@ -101,10 +85,8 @@ def run(args) -> int:
     where = args.scheduler or ("this process" if args.workers == 0 else
                                f"{args.workers or study.execute.default_workers()} local workers")
     print(f"sweep: {total} runs on {where}", file=sys.stderr)
-    with _sigterm_interrupts():
-        (rows, finished), seconds = study.timed(
-            study.collect, prepared, args.workers, args.scheduler,
-            out / "runs.h5" if args.full else None)
+    (rows, finished), seconds = study.timed(study.collect, prepared, args.workers,
+                                            args.scheduler, out / "runs.h5" if args.full else None)
     table = study.dataframe(rows, prepared.study)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}

@@ -3,18 +3,22 @@
 Dask (`dask.distributed`, imported on use): a LocalCluster of `workers` processes with one
 thread each, or the existing cluster at `scheduler`. Every run is one task of
 runner.run_point; each worker process prepares the job's runner once (runner.runner_for).
-Outcomes are handed to `done(index, outcome)` as they finish, in any order. Ctrl-C (a
-KeyboardInterrupt) cancels what has not finished and returns with `interrupted` set; what
-finished was already handed over.
+Outcomes are handed to `done(index, outcome)` as they finish, in any order. SIGINT (Ctrl-C)
+or SIGTERM stops the study: in this process through casmech.interrupts (the run in progress
+stops at its next row and is not recorded); on Dask as a KeyboardInterrupt of the waiting
+loop, which cancels what has not finished. What finished was already handed over.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import signal
+import threading
 from collections.abc import Callable, Sequence
 from contextlib import contextmanager
 
+from casmech import interrupts
 from casmech.errors import UsageError
 from casmech.study.runner import Job, Outcome, run_point
 
@@ -45,11 +49,20 @@ def execute(job: Job, points: Sequence[dict], done: Done, workers: int | None = 
 
 
 def _serial(job: Job, points: Sequence[dict], done: Done) -> bool:
+    with _signals(interrupts.trap):
+        return _serial_runs(job, points, done)
+
+
+def _serial_runs(job: Job, points: Sequence[dict], done: Done) -> bool:
+    """SIGINT/SIGTERM (interrupts.trap) stop a run inside its integrator or at its next row,
+    or after the run in progress when it came outside the analysis."""
     try:
         for index, values in enumerate(points):
+            interrupts.check()
             try:
                 outcome = run_point(job, values)
             except Exception as error:  # noqa: BLE001  (KeyboardInterrupt is not one)
+                interrupts.check(error)  # CasADi's RuntimeError made of a Ctrl-C: raised back
                 outcome = unexpected(values, error)
             done(index, outcome)
     except KeyboardInterrupt:  # errors.Interrupted is one
@@ -65,6 +78,40 @@ def unexpected(values: dict, error: BaseException) -> Outcome:
 
 
 @contextmanager
+def _signals(handling):
+    """`handling()`'s signal handlers when this is the main thread (signals reach no other)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    with handling():
+        yield
+
+
+@contextmanager
+def _terminate_interrupts():
+    """SIGTERM stops the study as Ctrl-C does (a KeyboardInterrupt in the waiting loop)."""
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+@contextmanager
+def _workers_ignore_ctrl_c():
+    """SIGINT ignored while the local workers start: they inherit it, so a Ctrl-C at the
+    terminal (sent to every process of the group) stops the study here, not them mid-task."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
 def client(workers: int | None, scheduler: str | None):
     """A dask.distributed Client of a new local cluster or of the one at `scheduler`."""
     module = distributed()
@@ -73,17 +120,18 @@ def client(workers: int | None, scheduler: str | None):
             yield connected
         return
     count = workers or default_workers()
-    with module.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
-                             dashboard_address=":0", silence_logs=logging.ERROR,
-                             worker_class=module.Nanny) as cluster, \
-            module.Client(cluster) as connected:
+    with _signals(_workers_ignore_ctrl_c):  # the worker processes are started here
+        cluster = module.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
+                                      dashboard_address=":0", silence_logs=logging.ERROR,
+                                      worker_class=module.Nanny)
+    with cluster, module.Client(cluster) as connected:
         yield connected
 
 
 def _dask(job: Job, points: Sequence[dict], done: Done, workers: int | None,
           scheduler: str | None) -> bool:
     module = distributed()
-    with client(workers, scheduler) as connected:
+    with client(workers, scheduler) as connected, _signals(_terminate_interrupts):
         futures = connected.map(run_point, [job] * len(points), points, pure=False)
         index = {future.key: k for k, future in enumerate(futures)}
         try:

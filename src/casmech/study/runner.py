@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from casmech import interrupts
 from casmech.errors import AnalysisError, Interrupted, ModelError
 from casmech.study import kept as kept_outputs
 
@@ -84,7 +85,8 @@ class Runner:
         functions = result = None
         try:
             functions = self.build(values)
-            result = casmech.analyze(functions, **self.settings)
+            result = casmech.analyze(functions, progress=interrupts.watch(None),
+                                     **self.settings)
         except Interrupted:
             raise
         except AnalysisError as error:
