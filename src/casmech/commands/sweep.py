@@ -23,7 +23,8 @@ AXES = {"grid": "NAME=VALUES", "normal": "NAME=MEAN,SIGMA", "uniform": "NAME=LOW
 
 def add_arguments(parser) -> None:
     parser.add_argument("model", type=Path, help="the model file")
-    parser.add_argument("--out", type=Path, help="output directory (default MODEL_sweep/)")
+    parser.add_argument("--out", type=Path,
+                        help="output directory (default MODEL_sweep_results/)")
     parser.add_argument("--grid", action="append", default=[], metavar="NAME=VALUES",
                         help="a grid axis: NAME=START:STOP:COUNT (ends included) or "
                              "NAME=V1,V2,...; several axes make their product (repeatable)")
@@ -80,7 +81,7 @@ def run(args) -> int:
                 "atol": args.atol}
     given = overrides(args.set)
     prepared = study.prepare(args.model, study_form(args), settings, given, full=args.full)
-    out = args.out or args.model.with_name(args.model.stem + "_sweep")
+    out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
     total = prepared.study.size()
     where = args.scheduler or ("this process" if args.workers == 0 else
                                f"{args.workers or study.execute.default_workers()} local workers")
