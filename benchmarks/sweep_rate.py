@@ -4,8 +4,9 @@
     python benchmarks/sweep_rate.py --runs 40 --big 400 --repeats 3
 
 For each model: a grid of --runs points run in this process (workers 0) and on local Dask
-clusters of 1, 2 and the machine's workers (each the median of --repeats studies; the cluster's
-start-up, about 1-2 s, is timed separately and not counted in the rate); the per-run overhead
+clusters of 1, 2 and the machine's workers (each the median of --repeats studies on one cluster;
+its start-up and a first warm-up study are timed separately, not counted in the rate); the
+per-run overhead
 against one `casmech run` of the same model (a new process, as a user runs it, and the same
 run in a warm process); and the time of a 10,000-run study of the pendulum on the machine's
 workers, run in full with --big 10000 or estimated from --big runs (say which).
@@ -41,26 +42,28 @@ MODELS = {
 
 
 def study_rate(model: str, runs: int, workers: int, repeats: int) -> tuple[float, float]:
-    """(median runs per second, median cluster start-up [s]) of a study of `runs` points."""
+    """(median runs per second, start-up [s]) of a study of `runs` points. On a cluster the
+    start-up is the cluster's start plus a first, untimed study (each worker process imports
+    casmech and CasADi on its first task, about 1.5 s); the studies timed after it reuse the
+    cluster."""
     path, name, values, keep, settings = MODELS[model]
     prepared = study.prepare(path, {"grid": {name: values.format(n=runs)}, "keep": keep},
                              settings)
-    rates, starts = [], []
-    for _ in range(repeats):
-        if workers == 0:
-            clock = time.perf_counter()
-            rows, _ = study.collect(prepared, workers=0)
-            rates.append(len(rows) / (time.perf_counter() - clock))
-            starts.append(0.0)
-            continue
+
+    def timed(**where) -> float:
         clock = time.perf_counter()
-        with execute.client(workers, None) as connected:
-            connected.wait_for_workers(workers)
-            started = time.perf_counter()
-            starts.append(started - clock)
-            rows, _ = study.collect(prepared, scheduler=connected.scheduler.address)
-            rates.append(len(rows) / (time.perf_counter() - started))
-    return statistics.median(rates), statistics.median(starts)
+        rows, _ = study.collect(prepared, **where)
+        return len(rows) / (time.perf_counter() - clock)
+
+    if workers == 0:
+        return statistics.median(timed(workers=0) for _ in range(repeats)), 0.0
+    clock = time.perf_counter()
+    with execute.client(workers, None) as connected:
+        connected.wait_for_workers(workers)
+        address = connected.scheduler.address
+        timed(scheduler=address)  # warm-up
+        start = time.perf_counter() - clock
+        return statistics.median(timed(scheduler=address) for _ in range(repeats)), start
 
 
 def single_run(model: str, repeats: int) -> tuple[float, float]:
@@ -101,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     counts = sorted({0, 1, 2, cores})
     print(header(), "\n")
     print("| model | " + " | ".join(f"runs/s, {w} workers" for w in counts)
-          + " | cluster start [s] | `casmech run` [s] | warm run [s] | sweep s/run, 0 workers |")
+          + " | start + warm-up [s] | `casmech run` [s] | warm run [s] | sweep s/run, 0 workers |")
     print("|---" * (len(counts) + 5) + "|")
     for model in MODELS:
         measured = {w: study_rate(model, args.runs, w, args.repeats) for w in counts}
@@ -110,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {model} | " + " | ".join(f"{measured[w][0]:.1f}" for w in counts)
               + f" | {start:.2f} | {cli:.2f} | {warm:.3f} | {1 / measured[0][0]:.3f} |")
     rate, start = study_rate("pendulum", args.big, cores, 1)
-    minutes = (10_000 / rate + start) / 60
+    minutes = (10_000 / rate + start) / 60  # start includes a warm-up study of args.big runs
     how = "measured" if args.big >= 10_000 else f"estimated from {args.big} runs"
     print(f"\n10,000-run pendulum study on {cores} workers: {minutes:.1f} min ({how}; "
           f"{rate:.1f} runs/s, cluster start {start:.1f} s)")
