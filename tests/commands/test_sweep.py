@@ -51,6 +51,8 @@ def test_usage_errors_exit_2(tmp_path, capsys):
     assert cli.main(["sweep", str(PENDULUM), "--out", str(tmp_path), "--grid", "L=1:2:x",
                      "--workers", "0"]) == 2
     assert "error[E409] --grid L: range '1:2:x'" in capsys.readouterr().err
+    assert cli.main(["sweep", str(SPRING_MASS), "--workers", "0"]) == 2  # no study: no block
+    assert "error[E409] --samples: the study names no parameter" in capsys.readouterr().err
 
 
 def test_ctrl_c_keeps_the_finished_runs(tmp_path):

@@ -63,6 +63,7 @@ def test_grid_times_samples():
     ({"distributions": {"m": ("normal", 1.0, 0.1)}}, "sample count"),
     ({"samples": 5}, "no parameter to sample"),
     ({}, "names no parameter"),
+    ({"grid": {"m": (1.0,)}, "seed": -1}, "seed must be >= 0"),
     ({"grid": {"m": (1.0,)}, "distributions": {"m": ("normal", 1.0, 0.1)}, "samples": 2},
      "both"),
 ])

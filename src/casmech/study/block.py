@@ -78,7 +78,8 @@ def build(form: Mapping, parameters: Mapping, others: Mapping[str, str] | None =
                      int(form.get("samples") or 0), int(form.get("seed") or 0),
                      tuple(form.get("keep") or ()))
     except StudyError as error:
-        raise StudyProblems([Problem(("samples",), "E409", str(error), error.hint)]) from None
+        where = "seed" if str(error).startswith("seed") else "samples"
+        raise StudyProblems([Problem((where,), error.code, str(error), error.hint)]) from None
 
 
 def check_keep(study: Study, names: Sequence[str], t_end: float) -> None:

@@ -103,21 +103,26 @@ class Study:
 
     def __post_init__(self) -> None:
         if self.samples < 0:
-            raise StudyError(f"samples must be >= 0, got {self.samples}")
+            raise StudyError(f"samples must be >= 0, got {self.samples}", code="E409")
+        if self.seed < 0:
+            raise StudyError(f"seed must be >= 0, got {self.seed}", code="E409")
         if self.distributions and not self.samples:
             raise StudyError("sampled parameters need a sample count",
-                             hint="give samples: N (--samples N)")
+                             hint="give samples: N (--samples N)", code="E409")
         if self.samples and not self.distributions:
             raise StudyError("samples given but no parameter to sample",
-                             hint="name one with normal: or uniform: (--normal, --uniform)")
+                             hint="name one with normal: or uniform: (--normal, --uniform)",
+                             code="E409")
         both = set(self.grid) & set(self.distributions)
         if both:
-            raise StudyError(f"'{sorted(both)[0]}' is both on the grid and sampled")
+            raise StudyError(f"'{sorted(both)[0]}' is both on the grid and sampled", code="E409")
         if not self.grid and not self.samples:
             raise StudyError("the study names no parameter",
-                             hint="--grid NAME=VALUES, or --samples N with --normal/--uniform")
+                             hint="--grid NAME=VALUES, or --samples N with --normal/--uniform",
+                             code="E409")
         if self.size() > MAX_RUNS:
-            raise StudyError(f"the study has {self.size()} runs, more than {MAX_RUNS}")
+            raise StudyError(f"the study has {self.size()} runs, more than {MAX_RUNS}",
+                             code="E409")
 
     @property
     def parameters(self) -> tuple[str, ...]:

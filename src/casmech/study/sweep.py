@@ -69,7 +69,7 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
         checked = api.analysis_settings(functions, **settings)
         block.check_keep(study, column_names(functions), float(checked.t_end))
     except block.StudyProblems as problems:
-        raise _reported(problems, from_caller, document) from None
+        raise _reported(problems, from_caller if written else None, document) from None
     resolved = resolved_settings(functions.ir.analysis, type=checked.type, **{
         k: v for k, v in settings.items() if k != "analysis"})
     job = Job(str(model.file), model.text, tuple(sorted(settings.items())), study.keep, full,
@@ -77,9 +77,11 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     return Prepared(model, study, job, resolved, overrides)
 
 
-def _reported(problems: block.StudyProblems, from_caller: set[str], document):
-    """Located errors for what the YAML block wrote, else a usage error."""
-    written = [p for p in problems.problems if p.path[0] not in from_caller]
+def _reported(problems: block.StudyProblems, from_caller: set[str] | None, document):
+    """Located errors for what the YAML block wrote, else (from_caller None: the model has no
+    block) a usage error."""
+    written = [p for p in problems.problems
+               if from_caller is not None and p.path[0] not in from_caller]
     if written:
         return block.located(block.StudyProblems(written), document)
     return block.usage(problems)
