@@ -88,3 +88,9 @@ def test_no_library_is_built(tmp_path, monkeypatch):
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
     casmech.sweep(PENDULUM, grid={"L": [0.7, 0.8, 0.9]}, workers=0)
     assert not (tmp_path / "cache").exists() or not any((tmp_path / "cache").rglob("*.so"))
+
+
+def test_a_loaded_model_sweeps_as_its_file():
+    by_path = casmech.sweep(PENDULUM, grid={"L": [0.9, 1.1]}, workers=0)
+    by_model = casmech.sweep(casmech.load(PENDULUM), grid={"L": [0.9, 1.1]}, workers=0)
+    assert list(by_model["crossing(bob.y)"]) == list(by_path["crossing(bob.y)"])

@@ -20,7 +20,7 @@ from contextlib import contextmanager
 
 from casmech import interrupts
 from casmech.errors import UsageError
-from casmech.study.runner import Job, Outcome, run_point
+from casmech.study.runner import Job, Outcome, reason, run_point
 
 Done = Callable[[int, Outcome], None]
 
@@ -72,9 +72,8 @@ def _serial_runs(job: Job, points: Sequence[dict], done: Done) -> bool:
 
 def unexpected(values: dict, error: BaseException) -> Outcome:
     """A run that raised what runner.Runner does not record (a bug, a lost worker): failed,
-    with the exception's type and first line, so that the study goes on."""
-    text = str(error).strip().splitlines()
-    return Outcome(dict(values), "failed", f"{type(error).__name__}: {text[0] if text else ''}")
+    with the exception's type and message, so that the study goes on."""
+    return Outcome(dict(values), "failed", f"{type(error).__name__}: {reason(error)}")
 
 
 @contextmanager

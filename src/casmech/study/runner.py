@@ -90,10 +90,10 @@ class Runner:
         except Interrupted:
             raise
         except AnalysisError as error:
-            outcome.status, outcome.reason = "failed", _reason(error)
+            outcome.status, outcome.reason = "failed", reason(error)
             result = error.partial
         except ModelError as error:
-            outcome.status, outcome.reason = "failed", _reason(error)
+            outcome.status, outcome.reason = "failed", reason(error)
         if functions is not None and result is not None and len(result):
             names, table = casmech.results_table(functions, result)
             outcome.kept = kept_outputs.values(self.kept, names, table)
@@ -109,7 +109,7 @@ class Runner:
 REASON_CHARS = 500  # a failure's reason in sweep.csv: its message on one line, cut here
 
 
-def _reason(error: Exception) -> str:
+def reason(error: Exception) -> str:
     """The error's message on one line (its lines joined by ' | '), at most REASON_CHARS."""
     lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
     return " | ".join(lines)[:REASON_CHARS] or type(error).__name__

@@ -72,8 +72,9 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
         raise _reported(problems, from_caller if written else None, document) from None
     resolved = resolved_settings(functions.ir.analysis, type=checked.type, **{
         k: v for k, v in settings.items() if k != "analysis"})
-    job = Job(str(model.file), model.text, tuple(sorted(settings.items())), study.keep, full,
-              tuple(sorted(overrides.items())))
+    file = Path(model.file)  # absolute: workers may run elsewhere ("<string>" stays)
+    job = Job(str(file.resolve() if file.exists() else file), model.text,
+              tuple(sorted(settings.items())), study.keep, full, tuple(sorted(overrides.items())))
     return Prepared(model, study, job, resolved, overrides)
 
 
