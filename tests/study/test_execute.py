@@ -10,6 +10,8 @@ import pandas as pd
 import pytest
 
 import casmech
+from casmech.study.execute import MAX_BATCH, TASKS_PER_WORKER, batch_size
+from casmech.study.runner import Job, Outcome, Runner, run_batch
 from tests.study.conftest import FOUR_BAR, HERE
 
 pytest.importorskip("distributed")
@@ -62,3 +64,22 @@ def test_identical_rows_everywhere(scheduler):
     assert list(here["status"]) == ["complete"] * 2 + ["failed"] * 2 + ["complete"] * 2
     same_rows(local, here)
     same_rows(remote, here)
+
+
+def test_batches_keep_workers_busy_and_bounded():
+    assert batch_size(10_000, 2) == MAX_BATCH
+    assert batch_size(40, 2) == 40 // (2 * TASKS_PER_WORKER)
+    assert batch_size(5, 2) == 1 and batch_size(100, 0) == 100 // TASKS_PER_WORKER
+
+
+def test_a_run_that_raises_fails_alone(monkeypatch):
+    def run(self, values):
+        if values["L"] == 2.0:
+            raise ValueError("a bug\nsecond line")
+        return Outcome(dict(values), "complete")
+
+    monkeypatch.setattr(Runner, "run", run)
+    outcomes = run_batch(Job("model.yaml", "", keep=("max(x.z)",)), [{"L": 1.0}, {"L": 2.0},
+                                                                    {"L": 3.0}])
+    assert [o.status for o in outcomes] == ["complete", "failed", "complete"]
+    assert outcomes[1].reason == "ValueError: a bug | second line"

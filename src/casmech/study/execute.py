@@ -1,8 +1,9 @@
 """Running a study's points: in this process (workers 0) or through Dask.
 
 Dask (`dask.distributed`, imported on use): a LocalCluster of `workers` processes with one
-thread each, or the existing cluster at `scheduler`. Every run is one task of
-runner.run_point; each worker process prepares the job's runner once (runner.runner_for).
+thread each, or the existing cluster at `scheduler`. Consecutive runs go in one task of
+runner.run_batch (batch_size); each worker process prepares the job's runner once
+(runner.runner_for).
 Outcomes are handed to `done(index, outcome)` as they finish, in any order. SIGINT (Ctrl-C)
 or SIGTERM stops the study: in this process through casmech.interrupts (the run in progress
 stops at its next row and is not recorded); on Dask as a KeyboardInterrupt of the waiting
@@ -20,9 +21,11 @@ from contextlib import contextmanager
 
 from casmech import interrupts
 from casmech.errors import UsageError
-from casmech.study.runner import Job, Outcome, reason, run_point
+from casmech.study.runner import Job, Outcome, run_batch, unexpected
 
 Done = Callable[[int, Outcome], None]
+TASKS_PER_WORKER = 8  # batch_size: at least this many tasks per worker
+MAX_BATCH = 16  # batch_size: at most this many runs per task
 
 
 def default_workers() -> int:
@@ -59,21 +62,11 @@ def _serial_runs(job: Job, points: Sequence[dict], done: Done) -> bool:
     try:
         for index, values in enumerate(points):
             interrupts.check()
-            try:
-                outcome = run_point(job, values)
-            except Exception as error:  # noqa: BLE001  (KeyboardInterrupt is not one)
-                interrupts.check(error)  # CasADi's RuntimeError made of a Ctrl-C: raised back
-                outcome = unexpected(values, error)
+            (outcome,) = run_batch(job, [values])
             done(index, outcome)
     except KeyboardInterrupt:  # errors.Interrupted is one
         return False
     return True
-
-
-def unexpected(values: dict, error: BaseException) -> Outcome:
-    """A run that raised what runner.Runner does not record (a bug, a lost worker): failed,
-    with the exception's type and message, so that the study goes on."""
-    return Outcome(dict(values), "failed", f"{type(error).__name__}: {reason(error)}")
 
 
 @contextmanager
@@ -127,20 +120,32 @@ def client(workers: int | None, scheduler: str | None):
         yield connected
 
 
+def batch_size(points: int, workers: int) -> int:
+    """Runs per task: TASKS_PER_WORKER tasks per worker or more (so that the workers stay
+    evenly loaded to the end), at most MAX_BATCH runs each (so that progress and Ctrl-C stay
+    prompt)."""
+    return max(1, min(MAX_BATCH, points // (max(workers, 1) * TASKS_PER_WORKER)))
+
+
 def _dask(job: Job, points: Sequence[dict], done: Done, workers: int | None,
           scheduler: str | None) -> bool:
     module = distributed()
     with client(workers, scheduler) as connected, _signals(_terminate_interrupts):
-        futures = connected.map(run_point, [job] * len(points), points, pure=False)
-        index = {future.key: k for k, future in enumerate(futures)}
+        size = batch_size(len(points), len(connected.scheduler_info()["workers"]))
+        starts = range(0, len(points), size)
+        batches = [list(points[k:k + size]) for k in starts]
+        futures = connected.map(run_batch, [job] * len(batches), batches, pure=False)
+        first = {future.key: k for k, future in zip(starts, futures, strict=True)}
         try:
             for future in module.as_completed(futures):
-                k = index[future.key]
+                k = first[future.key]
+                batch = points[k:k + size]
                 try:
-                    outcome = future.result()
-                except Exception as error:  # noqa: BLE001
-                    outcome = unexpected(points[k], error)
-                done(k, outcome)
+                    outcomes = future.result()
+                except Exception as error:  # noqa: BLE001  (a lost worker, a bug)
+                    outcomes = [unexpected(values, error) for values in batch]
+                for j, outcome in enumerate(outcomes):
+                    done(k + j, outcome)
                 future.release()
         except KeyboardInterrupt:
             connected.cancel(futures)

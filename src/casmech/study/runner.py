@@ -122,5 +122,24 @@ def runner_for(job: Job) -> Runner:
 
 
 def run_point(job: Job, values: Mapping[str, float]) -> Outcome:
-    """A worker's task: one run through the process's runner."""
+    """One run through the process's runner."""
     return runner_for(job).run(values)
+
+
+def run_batch(job: Job, batch: list[Mapping[str, float]]) -> list[Outcome]:
+    """A worker's task: consecutive runs (one task each would cost the scheduler's round trip
+    per run); a run that raises what Runner does not record fails alone."""
+    outcomes = []
+    for values in batch:
+        try:
+            outcomes.append(run_point(job, values))
+        except Exception as error:  # noqa: BLE001  (KeyboardInterrupt is not one)
+            interrupts.check(error)  # CasADi's RuntimeError made of a Ctrl-C: raised back
+            outcomes.append(unexpected(values, error))
+    return outcomes
+
+
+def unexpected(values: Mapping[str, float], error: BaseException) -> Outcome:
+    """A run that raised what Runner does not record (a bug, a lost worker): failed, with the
+    exception's type and message, so that the study goes on."""
+    return Outcome(dict(values), "failed", f"{type(error).__name__}: {reason(error)}")
