@@ -24,7 +24,7 @@ from casmech.errors import UsageError
 from casmech.study.runner import Job, Outcome, run_batch, unexpected
 
 Done = Callable[[int, Outcome], None]
-TASKS_PER_WORKER = 8  # batch_size: at least this many tasks per worker
+TASKS_PER_WORKER = 8  # batch_size: this many tasks per worker or more (when there are points)
 MAX_BATCH = 16  # batch_size: at most this many runs per task
 
 
