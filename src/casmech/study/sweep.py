@@ -56,7 +56,12 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     from casmech.schema.loader import load_document
 
     overrides = dict(overrides or {})
-    model = source if hasattr(source, "text") else casmech.load(source, overrides)
+    if not hasattr(source, "text"):
+        model = casmech.load(source, overrides)
+    elif overrides:  # a loaded model, at these values as every run will be
+        model = casmech.loads(source.text, file=str(source.file), overrides=overrides)
+    else:
+        model = source
     document = load_document(model.text, str(model.file))
     written = document.data.get("study") if isinstance(document.data, dict) else None
     form, from_caller = _merged(dict(written or {}), dict(given or {}))
