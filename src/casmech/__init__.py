@@ -14,10 +14,11 @@ _LAZY = {
     **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
                     "casmech.errors"),
     "load_results": "casmech.output.frames",
+    "sweep": "casmech.study.api",
 }
 # subpackages and modules reachable as attributes (`casmech.api.ANALYSES`) without an import
 _SUBMODULES = ("api", "cli", "codegen", "commands", "compiler", "errors", "importers", "optimal",
-               "output", "runtime", "schema")
+               "output", "runtime", "schema", "study")
 __all__ = [*_LAZY, "__version__"]
 
 

@@ -10,6 +10,8 @@ code generation) inside the functions that use it.
 COMMANDS = {
     "check": ("check", "validate a model; print DOF, rank, redundancy"),
     "run": ("run", "run the model's analysis; write results.csv (or results.h5)"),
+    "sweep": ("sweep", "run the model at every point of a parameter study (grid or samples; "
+                       "Dask); write sweep.csv"),
     "sensitivity": ("sensitivity",
                     "derivatives of results columns w.r.t. parameters (IDAS sensitivities)"),
     "optimize": ("optimize",

@@ -589,6 +589,23 @@ class OptimalControl(Spec):
     stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
 
 
+# ---------------------------------------------------------- parameter studies (issue 18)
+Number = Union[StrictInt, StrictFloat]  # noqa: UP007
+
+
+class Study(Spec):
+    """A parameter study: `casmech sweep` (casmech.study; docs/sweeps.md). Values are numbers
+    or the command line's texts ("0.8:1.2:5", "100,200,400", "2,0.05"), checked by
+    casmech.study.block with located errors."""
+
+    grid: dict[StrictStr, StrictStr | Number | tuple[Number, ...]] = Field(default_factory=dict)
+    samples: StrictInt = 0
+    normal: dict[StrictStr, StrictStr | tuple[Number, ...]] = Field(default_factory=dict)
+    uniform: dict[StrictStr, StrictStr | tuple[Number, ...]] = Field(default_factory=dict)
+    seed: StrictInt = 0
+    keep: tuple[StrictStr, ...] = ()
+
+
 # ------------------------------------------------------ components and instances (issue 6)
 class Instance(Spec):
     """One use of a component: its parameters (expressions of the user's parameters) and the
@@ -644,6 +661,7 @@ class ModelSpec(Spec):
     events: tuple[Event, ...] = ()
     estimate: Estimate | None = None
     ocp: OptimalControl | None = None
+    study: Study | None = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
     instances: tuple[Instance, ...] = ()
 

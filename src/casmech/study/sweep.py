@@ -1,0 +1,173 @@
+"""A parameter study end to end: prepare (load, check, build once), run every point, tabulate.
+
+    prepared = prepare(path_or_model, form, settings)   # the study checked against the model
+    table, finished = collect(prepared, workers=2)       # one row per finished run
+    write(out, prepared, table, finished, ...)           # sweep.csv, sweep.parquet, metadata
+
+The table has a row per run that finished, in run order: `run` (its index in the study),
+the parameter values, `status` (complete | failed), `wall_s` (the run's own time in its
+worker), the kept outputs, and `reason` (why a run failed; empty otherwise).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+from casmech.study import block, execute
+from casmech.study.design import Study
+from casmech.study.progress import runs_bar
+from casmech.study.runner import SETTINGS, Job, Outcome
+
+FIXED = ("run",)  # columns before the parameters; after them:
+STATUS = ("status", "wall_s")  # then the kept outputs, then "reason"
+
+
+@dataclass
+class Prepared:
+    model: object  # schema.resolved.ResolvedModel at the file's (and --set) values
+    study: Study
+    job: Job
+    settings: dict  # the analysis settings of every run (output.metadata.resolved_settings)
+    overrides: dict[str, str]
+
+
+def _merged(written: Mapping, given: Mapping) -> tuple[dict, set[str]]:
+    """The study of the YAML block with the given (command line, API) keys over it: a given
+    grid or sampling replaces the block's whole design. Returns it and the given keys."""
+    given = {k: v for k, v in given.items() if v not in (None, {}, (), [])}
+    design = {"grid", "normal", "uniform", "samples"}
+    form = {k: v for k, v in written.items() if not (design & set(given) and k in design)}
+    return {**form, **given}, set(given)
+
+
+def prepare(source, given: Mapping | None = None, settings: Mapping | None = None,
+            overrides: Mapping[str, str] | None = None, full: bool = False) -> Prepared:
+    """The study of `source` (a model path or a ResolvedModel) checked: located errors for its
+    `study:` block, usage errors for `given` (grid, normal, uniform, samples, seed, keep);
+    the model built once, its analysis settings and kept outputs checked."""
+    import casmech
+    from casmech import api
+    from casmech.output.metadata import resolved_settings
+    from casmech.runtime.results import column_names
+    from casmech.schema.loader import load_document
+
+    overrides = dict(overrides or {})
+    if not hasattr(source, "text"):
+        model = casmech.load(source, overrides)
+    elif overrides:  # a loaded model, at these values as every run will be
+        model = casmech.loads(source.text, file=str(source.file), overrides=overrides)
+    else:
+        model = source
+    document = load_document(model.text, str(model.file))
+    written = document.data.get("study") if isinstance(document.data, dict) else None
+    form, from_caller = _merged(dict(written or {}), dict(given or {}))
+    others = {**{b.name: "body" for b in model.bodies}, **{j.name: "joint" for j in model.joints},
+              **{f.name: "force" for f in model.forces}}
+    settings = {k: v for k, v in (settings or {}).items() if k in SETTINGS and v is not None}
+    try:
+        study = block.build(form, model.parameters, others)
+        functions = casmech.compile(model, "interpreted")
+        checked = api.analysis_settings(functions, **settings)
+        block.check_keep(study, column_names(functions), float(checked.t_end))
+    except block.StudyProblems as problems:
+        raise _reported(problems, from_caller if written else None, document) from None
+    resolved = resolved_settings(functions.ir.analysis, type=checked.type, **{
+        k: v for k, v in settings.items() if k != "analysis"})
+    file = Path(model.file)  # absolute: workers may run elsewhere ("<string>" stays)
+    job = Job(str(file.resolve() if file.exists() else file), model.text,
+              tuple(sorted(settings.items())), study.keep, full, tuple(sorted(overrides.items())))
+    return Prepared(model, study, job, resolved, overrides)
+
+
+def _reported(problems: block.StudyProblems, from_caller: set[str] | None, document):
+    """Located errors for what the YAML block wrote, else (from_caller None: the model has no
+    block) a usage error."""
+    written = [p for p in problems.problems
+               if from_caller is not None and p.path[0] not in from_caller]
+    if written:
+        return block.located(block.StudyProblems(written), document)
+    return block.usage(problems)
+
+
+def collect(prepared: Prepared, workers: int | None = None, scheduler: str | None = None,
+            full_path: Path | None = None) -> tuple[list[dict], bool]:
+    """Run every point (execute.execute); the rows of the finished runs, in run order, and
+    whether every run finished. With full_path, every run's results go into one HDF5 file as
+    they arrive (study.full)."""
+    points = prepared.study.points()
+    rows: dict[int, dict] = {}
+    writer = None
+    if full_path is not None:
+        from casmech.study.full import FullWriter
+
+        writer = FullWriter(full_path, prepared.study.parameters)
+    try:
+        with runs_bar(len(points)) as bar:
+            def done(index: int, outcome: Outcome) -> None:
+                rows[index] = row(index, outcome, prepared.study)
+                if writer is not None:
+                    writer.add(index, outcome)
+                if bar is not None:
+                    bar(outcome.status)
+
+            finished = execute.execute(prepared.job, points, done, workers, scheduler)
+    finally:
+        if writer is not None:
+            writer.close()
+    return [rows[k] for k in sorted(rows)], finished
+
+
+def row(index: int, outcome: Outcome, study: Study) -> dict:
+    kept = {text: outcome.kept.get(text, float("nan")) for text in study.keep}
+    return {"run": index, **{name: outcome.values[name] for name in study.parameters},
+            "status": outcome.status, "wall_s": outcome.wall_s, **kept,
+            "reason": outcome.reason}
+
+
+def dataframe(rows: list[dict], study: Study):
+    import pandas as pd
+
+    columns = [*FIXED, *study.parameters, *STATUS, *study.keep, "reason"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def parquet_available() -> bool:
+    return importlib.util.find_spec("pyarrow") is not None
+
+
+def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping[str, float],
+          options: Mapping) -> list[Path]:
+    """sweep.csv, sweep.parquet (when pyarrow is installed) and metadata.json in `out`."""
+    from casmech.output.atomic import atomic
+    from casmech.output.metadata import run_metadata, write_json
+
+    out.mkdir(parents=True, exist_ok=True)
+    paths = [out / "sweep.csv"]
+    with atomic(paths[0]) as handle:
+        table.to_csv(handle, index=False)
+    parquet = parquet_available()
+    if parquet:
+        from casmech.output.atomic import replaced
+
+        paths.append(out / "sweep.parquet")
+        with replaced(paths[-1]) as temporary:
+            table.to_parquet(temporary, index=False)
+    counts = table["status"].value_counts().to_dict() if len(table) else {}
+    metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, timings, {},
+                            len(table), status="complete" if finished else "interrupted",
+                            options=dict(options))
+    metadata["study"] = {**prepared.study.describe(), "finished_runs": len(table),
+                         "statuses": {str(k): int(v) for k, v in counts.items()},
+                         "parquet": parquet, "runner": "interpreted, one build per run"}
+    paths.append(write_json(out / "metadata.json", metadata))
+    return paths
+
+
+def timed(function, *args, **kwargs):
+    clock = time.perf_counter()
+    value = function(*args, **kwargs)
+    return value, time.perf_counter() - clock
