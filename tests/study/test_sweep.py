@@ -94,3 +94,21 @@ def test_a_loaded_model_sweeps_as_its_file():
     by_path = casmech.sweep(PENDULUM, grid={"L": [0.9, 1.1]}, workers=0)
     by_model = casmech.sweep(casmech.load(PENDULUM), grid={"L": [0.9, 1.1]}, workers=0)
     assert list(by_model["crossing(bob.y)"]) == list(by_path["crossing(bob.y)"])
+
+
+def test_event_times_kept_at_every_grid_point(tmp_path):
+    """event(NAME): the pendulum released at 1 rad reaches the bottom (bob.y falls through 0) at
+    the exact quarter period sqrt((J + m L^2) / (m g L)) K(sin^2(theta0 / 2)) for each L."""
+    from scipy.special import ellipk
+
+    model = tmp_path / "pendulum.yaml"
+    model.write_text(PENDULUM.read_text().replace("study:", "events:\n  - {name: bottom, "
+                                                  "when: bob.y, direction: falling}\nstudy:"))
+    table = casmech.sweep(model, grid={"L": [0.5, 1.0, 2.0]}, keep=["event(bottom)"],
+                          workers=0, overrides={"theta0": "1.0"})
+    L, m, J = table["L"].to_numpy(), 1.0, 0.01
+    quarter = np.sqrt((J + m * L**2) / (m * G * L)) * ellipk(np.sin(0.5) ** 2)
+    # located to the run's tolerance (rtol 1e-10), not to the 0.01 s output grid
+    np.testing.assert_allclose(table["event(bottom)"], quarter, rtol=0, atol=1e-8)
+    with pytest.raises(casmech.errors.UsageError, match="no event 'botom'"):
+        casmech.sweep(model, grid={"L": [1.0]}, keep=["event(botom)"], workers=0)

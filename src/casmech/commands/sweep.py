@@ -38,7 +38,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--keep", action="append", default=[], metavar="OUTPUT",
                         help="a number kept per run: COLUMN@T, max(COLUMN), min(COLUMN), "
                              "final(COLUMN), integral(COLUMN) (trapezoid over the output rows), "
-                             "crossing(COLUMN) (first sign change, interpolated) (repeatable)")
+                             "crossing(COLUMN) (first sign change, interpolated), event(NAME) "
+                             "(time of the model's event NAME) (repeatable)")
     parser.add_argument("--full", action="store_true",
                         help="also write every run's whole results into DIR/runs.h5, one group "
                              "per run")

@@ -82,12 +82,13 @@ def build(form: Mapping, parameters: Mapping, others: Mapping[str, str] | None =
         raise StudyProblems([Problem((where,), error.code, str(error), error.hint)]) from None
 
 
-def check_keep(study: Study, names: Sequence[str], t_end: float) -> None:
-    """Every kept output names a results column, at a time within the run."""
+def check_keep(study: Study, names: Sequence[str], t_end: float,
+               events: Sequence[str] = ()) -> None:
+    """Every kept output names a results column (at a time within the run) or an event."""
     problems = []
     for index, text in enumerate(study.keep):
         try:
-            kept.check(kept.parse(text), names, t_end)
+            kept.check(kept.parse(text), names, t_end, events)
         except StudyError as error:
             problems.append(Problem(("keep", index), "E300", str(error), error.hint))
     if problems:

@@ -7,6 +7,8 @@
                        by linear interpolation between the two rows around it (NaN if never);
                        for a sinusoid of angular frequency w sampled every h, off by at most
                        w^2 h^3 / (36 sqrt 3) (the root of a cubic's interpolation error)
+    event(NAME)        the time of the first event NAME of the model's `events:` (located to
+                       the run's tolerance, runtime.events; NaN if it never happened)
 
 COLUMN is a name of the results contract (runtime.results.column_names). A kept output's
 column in sweep.csv is its text as written (`max(bar.z)`). A run with no rows keeps NaN.
@@ -60,7 +62,9 @@ class Kept:
     column: str
     when: float | None = None
 
-    def value(self, names: Sequence[str], values: np.ndarray) -> float:
+    def value(self, names: Sequence[str], values: np.ndarray, events=()) -> float:
+        if self.reduction == "event":
+            return next((float(e.t) for e in events if e.name == self.column), float("nan"))
         if not len(values):
             return float("nan")
         index = list(names).index
@@ -73,11 +77,13 @@ def parse(text: str) -> Kept:
     call = _CALL.match(text)
     if call:
         reduction, column = call.groups()
+        if reduction == "event":
+            return Kept(text, reduction, column)
         if reduction not in REDUCTIONS or reduction == "at":
             forms = ", ".join(f"{name}(COLUMN)" for name in REDUCTIONS if name != "at")
             raise StudyError(f"unknown kept output '{reduction}(...)'",
-                             hint=did_you_mean(reduction, REDUCTIONS) or f"one of {forms}, "
-                                                                         "COLUMN@T")
+                             hint=did_you_mean(reduction, [*REDUCTIONS, "event"])
+                             or f"one of {forms}, event(NAME), COLUMN@T")
         return Kept(text, reduction, column)
     column, sep, when = text.rpartition("@")
     if not sep or not column.strip():
@@ -90,8 +96,16 @@ def parse(text: str) -> Kept:
     return Kept(text, "at", column.strip(), time)
 
 
-def check(kept: Kept, names: Sequence[str], t_end: float) -> None:
-    """The column exists and the time of @ is within the run."""
+def check(kept: Kept, names: Sequence[str], t_end: float, events: Sequence[str] = ()) -> None:
+    """The column (or the event) exists and the time of @ is within the run."""
+    if kept.reduction == "event":
+        if kept.column not in events:
+            raise StudyError(f"kept output '{kept.text}': the model has no event "
+                             f"'{kept.column}'",
+                             hint=did_you_mean(kept.column, events) or (
+                                 f"its events: {', '.join(events)}" if events else
+                                 "declare it in the model's events: block"))
+        return
     if kept.column not in names:
         raise StudyError(f"kept output '{kept.text}': no results column '{kept.column}'",
                          hint=did_you_mean(kept.column, names))
@@ -100,5 +114,7 @@ def check(kept: Kept, names: Sequence[str], t_end: float) -> None:
                          f"[0, {t_end:g}]")
 
 
-def values(kept: Sequence[Kept], names: Sequence[str], table: np.ndarray) -> dict[str, float]:
-    return {k.text: k.value(names, table) for k in kept}
+def values(kept: Sequence[Kept], names: Sequence[str], table: np.ndarray,
+           events=()) -> dict[str, float]:
+    """Every kept output of a run (events: its runtime.events records)."""
+    return {k.text: k.value(names, table, events) for k in kept}

@@ -96,7 +96,7 @@ class Runner:
             outcome.status, outcome.reason = "failed", reason(error)
         if functions is not None and result is not None and len(result):
             names, table = casmech.results_table(functions, result)
-            outcome.kept = kept_outputs.values(self.kept, names, table)
+            outcome.kept = kept_outputs.values(self.kept, names, table, result.events)
             outcome.rows = len(table)
             if self.job.full:
                 outcome.names, outcome.table = list(names), table

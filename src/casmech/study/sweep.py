@@ -72,7 +72,8 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
         study = block.build(form, model.parameters, others)
         functions = casmech.compile(model, "interpreted")
         checked = api.analysis_settings(functions, **settings)
-        block.check_keep(study, column_names(functions), float(checked.t_end))
+        block.check_keep(study, column_names(functions), float(checked.t_end),
+                         [event.name for event in checked.events])
     except block.StudyProblems as problems:
         raise _reported(problems, from_caller if written else None, document) from None
     resolved = resolved_settings(functions.ir.analysis, type=checked.type, **{
