@@ -1,0 +1,121 @@
+"""A lowered model split into its structure and its numbers: the model data `d`.
+
+Every number that the lowering computed from the parameters (masses, inertias, gravity, body-frame
+joint points and axes, a distance's length, spring constants, the constants of drivers and force
+laws, initial poses and velocities) becomes one entry of a vector of CasADi symbols `d`, in a
+fixed order; what is left is the structure (which bodies, rows, force elements, kernels, the
+texts of the expressions). Zeros are symbols too: a value that is 0 at one parameter value is
+often not at another (a joint point in a body frame computed from the file's poses), so the
+functions have the sparsity of the structure, a superset of the numeric build's. `split(ir)`
+returns the IR with symbols in place of those numbers, their values and the structure's
+signature: two lowerings of one file with different parameter values have the same signature,
+and then the same symbolic IR, unless a value changed the structure (a repeat count), which a
+build keyed on the signature sees as a different model.
+
+`data(ir)` is the vector alone (the numeric lowering at other values gives the values to bind to
+a build made once). Indices, names, texts, sources and the analysis settings are structure.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, is_dataclass, replace
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler.ir import ModelIR, RowInfo
+from casmech.errors import Source
+from casmech.schema.expressions import Expr
+from casmech.schema.resolved import Analysis
+from casmech.schema.tables import TableExpr
+
+# ModelIR fields that are not part of what the system functions compute from
+STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
+# structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
+OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
+
+
+@dataclass(frozen=True)
+class Split:
+    ir: ModelIR  # numbers replaced by entries of `symbols` (structural zeros kept)
+    symbols: ca.SX  # d, the column of every symbol in `ir`, in walk order
+    values: np.ndarray  # d of the lowering that was split
+    signature: str  # sha256 of the structure (module docstring)
+
+
+class _Walk:
+    """One pass over an IR: collects the numbers (and, when `symbolic`, makes their symbols)."""
+
+    def __init__(self, symbolic: bool):
+        self.symbolic = symbolic
+        self.values: list[float] = []
+        self.symbols: list[ca.SX] = []
+        self.tokens: list[str] = []
+
+    def number(self, value) -> object:
+        array = np.asarray(value, float)
+        self.tokens.append(f"#{array.shape}")
+        flat = array.ravel(order="F")
+        self.values.extend(flat)
+        if not self.symbolic:
+            return value
+        entries = [ca.SX.sym(f"d{len(self.symbols) + k}") for k in range(flat.size)]
+        self.symbols.extend(entries)
+        if array.ndim == 0:
+            return entries[0]
+        rows, cols = (array.shape[0], 1) if array.ndim == 1 else array.shape
+        return ca.reshape(ca.vertcat(*entries), rows, cols)
+
+    def __call__(self, value):
+        if isinstance(value, bool) or isinstance(value, OPAQUE):
+            self.tokens.append(repr(value) if isinstance(value, (str, bool, range)) else
+                               type(value).__name__ + str(getattr(value, "text", "")))
+            return value
+        if isinstance(value, (float, np.floating)):
+            return self.number(value)
+        if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+            return self.number(value)
+        if isinstance(value, int):
+            self.tokens.append(str(value))
+            return value
+        if is_dataclass(value):
+            self.tokens.append(type(value).__name__)
+            changed = {}
+            for item in fields(value):
+                if isinstance(value, ModelIR) and item.name in STRUCTURE_FIELDS:
+                    continue
+                self.tokens.append(item.name)
+                changed[item.name] = self(getattr(value, item.name))
+            return replace(value, **changed) if self.symbolic else value
+        if isinstance(value, Mapping):
+            self.tokens.append(f"{{{len(value)}")
+            out = {}
+            for key, item in value.items():
+                self.tokens.append(str(key))
+                out[key] = self(item)
+            return out if self.symbolic else value
+        if isinstance(value, (tuple, list)):
+            self.tokens.append(f"({len(value)}")
+            out = [self(item) for item in value]
+            return type(value)(out) if self.symbolic else value
+        raise TypeError(f"parametric: no rule for a {type(value).__name__} in a ModelIR")
+
+    def signature(self) -> str:
+        return hashlib.sha256("\0".join(self.tokens).encode()).hexdigest()
+
+
+def split(ir: ModelIR) -> Split:
+    """The IR with its numbers as symbols, their values and the structure's signature."""
+    walk = _Walk(symbolic=True)
+    symbolic = walk(ir)
+    symbols = ca.vertcat(*walk.symbols) if walk.symbols else ca.SX(0, 1)
+    return Split(symbolic, symbols, np.array(walk.values, float), walk.signature())
+
+
+def data(ir: ModelIR) -> tuple[np.ndarray, str]:
+    """(d, signature) of a numeric IR without building symbols."""
+    walk = _Walk(symbolic=False)
+    walk(ir)
+    return np.array(walk.values, float), walk.signature()
