@@ -72,12 +72,32 @@ def parameters(functions: dict[str, ca.Function], name: str, stabilization: str)
     return 1 + 2 * m + (functions["phi"].size1_out(0) if stabilization == "ggl" else 0)
 
 
+DATA = "d"  # the trailing input of a parametric bundle (compiler.parametric): the model data
+
+
+def data_size(functions: dict[str, ca.Function]) -> int:
+    """Entries of the model data the bundle's functions take last (0: none); a residual over
+    such a bundle takes them after its own p: p = [t0, w, s (, s_phi), d]."""
+    phi = functions["phi"]
+    return phi.size1_in(phi.n_in() - 1) if phi.name_in()[-1] == DATA else 0
+
+
+def _with_data(functions: dict[str, ca.Function], p, start: int) -> dict:
+    """The bundle's functions called with p[start:] as their model data, if they take any."""
+    if not data_size(functions):
+        return functions
+    data = p[start:]
+    return {name: (lambda *args, f=f: f(*args, data)) for name, f in functions.items()}
+
+
 def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     sym = _symbols(functions)
+    n_p = parameters(functions, name, "projection")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
-                    sym.sym("p", parameters(functions, name, "projection")))
+                    sym.sym("p", n_p + data_size(functions)))
+    functions = _with_data(functions, p, n_p)
     t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
     w, s = p[1:1 + m], p[1 + m:1 + 2 * m]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
@@ -111,10 +131,12 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     n_q, n_v, m = sizes(functions, name)
     n_phi = functions["phi"].size1_out(0)
     sym = _symbols(functions)
+    n_p = parameters(functions, name, "ggl")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
-                    sym.sym("p", parameters(functions, name, "ggl")))
+                    sym.sym("p", n_p + data_size(functions)))
+    functions = _with_data(functions, p, n_p)
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
-    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:]
+    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:n_p]
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
     nu = functions[form.nu](t, q) * s

@@ -37,6 +37,9 @@ class SystemFunctions:
     ir: ModelIR = field(repr=False)
     # what analyses derive from the bundle once and reuse (e.g. the joint formulation's system)
     derived: dict = field(default_factory=dict, repr=False, compare=False)
+    # a compiled parametric bundle (codegen.parametric): the model data `ir` was lowered to,
+    # bound in every function but the DAE residuals, which take it after their own p
+    data: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
