@@ -136,15 +136,18 @@ def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
 
 
 def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
-             root: Path | None = None, dae: bool = True) -> SystemFunctions:
+             root: Path | None = None, dae: bool = True,
+             parametric_library: bool = True) -> SystemFunctions:
     """The model's SystemFunctions loaded from its compiled libraries, built only when the
     cache holds none for this model (for a parametric library: this structure, whatever the
     parameter values; codegen.parametric), casmech/CasADi version, compiler and flags. With
     `dae`, the bundle also carries the DAE residuals dae_[ggl_]<formulation> as IDAS integrates
     them (t, x, z, p, u) -> (ode, alg, quad, zero) (compiler.dae.residual takes them from the
-    bundle, compiler.dae.problem hands them to casadi as they are)."""
+    bundle, compiler.dae.problem hands them to casadi as they are). `parametric_library` False:
+    the mapped library even where the parametric one applies."""
     ir = lower(model)
-    entry, build, is_parametric = _entry(model, ir, toolchain or Toolchain(), dae)
+    entry, build, is_parametric = _entry(model, ir, toolchain or Toolchain(), dae,
+                                         not parametric_library)
     directory, _ = cache.lookup(entry, build, root)
     if is_parametric:
         return parametric.load(directory, ir, data(ir)[0])

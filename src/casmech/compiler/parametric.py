@@ -4,13 +4,14 @@ Every number that the lowering computed from the parameters (masses, inertias, g
 joint points and axes, a distance's length, spring constants, the constants of drivers and force
 laws, initial poses and velocities) becomes one entry of a vector of CasADi symbols `d`, in a
 fixed order; what is left is the structure (which bodies, rows, force elements, kernels, the
-texts of the expressions). Zeros are symbols too: a value that is 0 at one parameter value is
-often not at another (a joint point in a body frame computed from the file's poses), so the
-functions have the sparsity of the structure, a superset of the numeric build's. `split(ir)`
-returns the IR with symbols in place of those numbers, their values and the structure's
-signature: two lowerings of one file with different parameter values have the same signature,
-and then the same symbolic IR, unless a value changed the structure (a repeat count), which a
-build keyed on the signature sees as a different model.
+texts of the expressions) and which numbers are zero (or round-off: ROUNDOFF): those stay
+structural zeros, so the functions have the sparsity (and nearly the arithmetic) of the numeric
+build. `split(ir)` returns
+the IR with symbols in place of the other numbers, their values and the structure's signature:
+two lowerings of one file with different parameter values have the same signature, and then the
+same symbolic IR, unless a value changed the structure (a repeat count, a zero that became
+non-zero: an initial angle moved from 0, a joint point moved off an axis), which a build keyed
+on the signature sees as a different model.
 
 `data(ir)` is the vector alone (the numeric lowering at other values gives the values to bind to
 a build made once). Indices, names, texts, sources and the analysis settings are structure.
@@ -34,6 +35,9 @@ from casmech.schema.tables import TableExpr
 # ModelIR fields that are not part of what the system functions compute from
 STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
 # structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
+# entries below this fraction of their array's largest are round-off of the lowering's rotations
+# (a joint point on an axis, in a body frame: 0 or 1e-17 depending on the values): structural 0
+ROUNDOFF = 1e-13
 OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
 
 
@@ -56,13 +60,16 @@ class _Walk:
 
     def number(self, value) -> object:
         array = np.asarray(value, float)
-        self.tokens.append(f"#{array.shape}")
         flat = array.ravel(order="F")
-        self.values.extend(flat)
+        nonzero = np.abs(flat) > ROUNDOFF * np.abs(flat).max(initial=0.0)
+        self.tokens.append(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}")
+        self.values.extend(flat[nonzero])
         if not self.symbolic:
             return value
-        entries = [ca.SX.sym(f"d{len(self.symbols) + k}") for k in range(flat.size)]
-        self.symbols.extend(entries)
+        entries = []
+        for keep in nonzero:
+            entries.append(ca.SX.sym(f"d{len(self.symbols)}") if keep else ca.SX(0.0))
+            self.symbols += [entries[-1]] if keep else []
         if array.ndim == 0:
             return entries[0]
         rows, cols = (array.shape[0], 1) if array.ndim == 1 else array.shape
