@@ -3,7 +3,8 @@ model's parameters.
 
 The bundle is compiler.functions over compiler.parametric's symbolic IR (every function with the
 trailing input `d`, the model data), unrolled SX generated as C with the derivatives
-codegen.generate adds; each DAE residual is compiler.dae's over that bundle, (t, x, z, [p; d]),
+codegen.generate adds (and, for kinematics and inverse dynamics, compiler.prescribed's step over
+it, with `d` its third input); each DAE residual is compiler.dae's over that bundle, (t, x, z, [p; d]),
 with its daeF and jacF (codegen.residuals.from_residual). The cache key is the model's structure
 (compiler.parametric's signature) with its text, component files and tables, never the values.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
@@ -26,13 +27,14 @@ from casmech.codegen import cache, generate, manifest, residuals
 from casmech.codegen.build import LIBRARY, Toolchain
 from casmech.codegen.load import externals, metadata
 from casmech.compiler import dae as dae_residuals
-from casmech.compiler import parametric
+from casmech.compiler import parametric, prescribed
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.schema.resolved import ResolvedModel
 
 MAX_BODIES = 32  # above: the mapped library (codegen.mapped), values in its key
+PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
 
 
 def applies(model: ResolvedModel) -> bool:
@@ -57,6 +59,8 @@ def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca
     """(the system functions with input d, the DAE residuals over them by name)."""
     split = parametric.split(ir)
     functions = build_functions(split.ir, split.symbols).functions
+    if ir.analysis.type in PRESCRIBED_ANALYSES:  # as codegen.bundle, d its third input
+        functions["prescribed_step"] = prescribed.step(functions)
     oracles = {}
     if dae:
         for form in FORMULATIONS:

@@ -30,6 +30,9 @@ position and velocity constraints themselves at every step instead of their seco
 scaled by s_phi; in r-p P is Phi_q, and s_phi = s; mu is 0 along the exact motion.) The
 masked rows become lam_k = 0 and mu_k = 0. IDAS integrates it with the algebraic unknowns out
 of its error test.
+
+Over a parametric bundle (every function with the trailing input d, the model data:
+compiler.parametric) either residual takes d after its own parameters: p = [t0, w, s (, s_phi), d].
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.parametric import data_size, with_data
 
 
 def _symbols(functions: dict[str, ca.Function]):
@@ -72,24 +76,6 @@ def parameters(functions: dict[str, ca.Function], name: str, stabilization: str)
     return 1 + 2 * m + (functions["phi"].size1_out(0) if stabilization == "ggl" else 0)
 
 
-DATA = "d"  # the trailing input of a parametric bundle (compiler.parametric): the model data
-
-
-def data_size(functions: dict[str, ca.Function]) -> int:
-    """Entries of the model data the bundle's functions take last (0: none); a residual over
-    such a bundle takes them after its own p: p = [t0, w, s (, s_phi), d]."""
-    phi = functions["phi"]
-    return phi.size1_in(phi.n_in() - 1) if phi.name_in()[-1] == DATA else 0
-
-
-def _with_data(functions: dict[str, ca.Function], p, start: int) -> dict:
-    """The bundle's functions called with p[start:] as their model data, if they take any."""
-    if not data_size(functions):
-        return functions
-    data = p[start:]
-    return {name: (lambda *args, f=f: f(*args, data)) for name, f in functions.items()}
-
-
 def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
@@ -97,7 +83,7 @@ def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Functi
     n_p = parameters(functions, name, "projection")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
                     sym.sym("p", n_p + data_size(functions)))
-    functions = _with_data(functions, p, n_p)
+    functions = with_data(functions, p[n_p:])
     t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
     w, s = p[1:1 + m], p[1 + m:1 + 2 * m]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
@@ -134,7 +120,7 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     n_p = parameters(functions, name, "ggl")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
                     sym.sym("p", n_p + data_size(functions)))
-    functions = _with_data(functions, p, n_p)
+    functions = with_data(functions, p[n_p:])
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
     w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:n_p]
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]

@@ -126,3 +126,20 @@ def data(ir: ModelIR) -> tuple[np.ndarray, str]:
     walk = _Walk(symbolic=False)
     walk(ir)
     return np.array(walk.values, float), walk.signature()
+
+
+DATA = "d"  # the name of the model data input, last in every function of a parametric bundle
+
+
+def data_size(functions: Mapping[str, ca.Function]) -> int:
+    """Entries of the model data a bundle's functions take last (0: none)."""
+    phi = functions["phi"]
+    return phi.size1_in(phi.n_in() - 1) if phi.name_in()[-1] == DATA else 0
+
+
+def with_data(functions: Mapping[str, ca.Function], d) -> Mapping:
+    """The bundle's functions called with `d` (symbols) as their model data, if they take any
+    (what compiler.dae and compiler.prescribed build over)."""
+    if not data_size(functions):
+        return functions
+    return {name: (lambda *args, f=f: f(*args, d)) for name, f in functions.items()}
