@@ -78,7 +78,9 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, 
     build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
     return manifest.write(directory, {**functions, **{n: o[n] for n, o in oracles.items()}},
                           generate.differentiated(functions), {
-                              **info, "parametric": True, "casmech": casmech.__version__,
+                              **info, "parametric": True, "parameters": list(ir.parameters),
+                              "data": int(functions["phi"].size1_in(2)),
+                              "casmech": casmech.__version__,
                               "casadi": ca.__version__, "compiler": toolchain.compiler,
                               "compiler_version": toolchain.version(),
                               "flags": list(toolchain.all_flags), "library": LIBRARY,
