@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import importlib
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,9 +22,11 @@ from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, Interrupted, UsageError
 from casmech.runtime import assembly, solver_messages
 from casmech.runtime.dynamics import run_dynamics
+from casmech.runtime.events import Event
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, column_names, table
+from casmech.runtime.singular_poses import singular_poses
 from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
 
@@ -77,7 +79,7 @@ DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
                     "stabilization": dae.STABILIZATIONS, "method": ("auto", *METHODS)}
 
 
-def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
+def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
     r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
     and no DAE stabilization other than the default was asked for; with loops the joint DAE
@@ -89,10 +91,17 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress) -> Result:
         tree = stabilization == "ggl" and tree_of(f).is_tree
         formulation = "joint" if tree else "rp"
     if formulation == "joint":
-        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, progress=progress,
-                                  method=s.options.get("method", "auto"))
-    return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol, formulation=formulation,
-                        progress=progress, stabilization=stabilization)
+        result = run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                                    progress=progress, method=s.options.get("method", "auto"),
+                                    extra_events=extra_events)
+    else:
+        result = run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                              formulation=formulation, progress=progress,
+                              stabilization=stabilization, extra_events=extra_events)
+    poses = singular_poses(f, result, loops=not tree_of(f).is_tree)
+    if poses is not None:
+        result.metadata["singular_poses"] = poses
+    return result
 
 
 def _runtime(name: str):
@@ -118,18 +127,25 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             output_step: float | None = None, rtol: float | None = None,
             atol: float | None = None, formulation: str | None = None,
             progress: Callable[[float], None] | None = None,
-            stabilization: str | None = None, method: str | None = None) -> Result:
+            stabilization: str | None = None, method: str | None = None,
+            events: Sequence[Event] = ()) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
     formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
     DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
     `progress`, when given, is called with the time of every output row as it is computed.
-    The Result keeps `functions`: `result.to_dataframe()` is its results table as a DataFrame."""
+    The Result keeps `functions`: `result.to_dataframe()` is its results table as a DataFrame.
+    `events`: runtime.events.Event declared by code, watched by dynamics besides the model's
+    `events:` (Result.events, Result.events_dataframe())."""
     settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
                                  formulation, stabilization, method)
+    if events and settings.type != "dynamics":
+        raise UsageError(f"events are watched by dynamics, not by {settings.type}")
+    run = ANALYSES[settings.type] if not events else (
+        lambda f, s, p: _dynamics(f, s, p, tuple(events)))
     messages: list[str] = []  # the solvers' own stderr lines (runtime.solver_messages)
     try:
         with solver_messages.collected(messages) as stream:
-            result = ANALYSES[settings.type](functions, settings, progress)
+            result = run(functions, settings, progress)
     except AnalysisError as error:  # the rows before a failure tabulate like a whole run's
         if error.partial is not None:
             error.partial.functions = functions

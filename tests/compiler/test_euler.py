@@ -150,3 +150,14 @@ def test_numpy_oracles_of_the_other_test_files(rng):
     np.testing.assert_allclose(helpers.b_matrix(p, a_bar), fd, rtol=1e-8, atol=1e-8)
     np.testing.assert_allclose(helpers.e_matrix(p) @ helpers.g_matrix(p).T, helpers.rotation(p),
                                rtol=RTOL, atol=ATOL)
+
+
+def test_numeric_columns_equals_numeric_per_column(rng):
+    """euler.numeric_columns (one mapped call) = euler.numeric column by column."""
+    p = rng.normal(size=(4, 5))
+    p /= np.linalg.norm(p, axis=0)
+    columns = euler.numeric_columns(euler.e_matrix, p)
+    for k in range(5):
+        # the same SX evaluated twice: identical up to rounding
+        np.testing.assert_allclose(columns[:, 4 * k:4 * k + 4],
+                                   euler.numeric(euler.e_matrix, p[:, k]), rtol=0, atol=1e-15)

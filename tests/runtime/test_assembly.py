@@ -215,3 +215,23 @@ def test_projection_equals_the_dense_solve(sparse):
     # the same iterations up to roundoff (condition of M / a + P^T P ~1e6)
     np.testing.assert_allclose(projected_q, dense_q, rtol=0, atol=1e-12)
     np.testing.assert_allclose(projected_v, dense_v, rtol=0, atol=1e-10)
+
+
+def test_velocities_from_rest_without_drivers_need_no_solve(monkeypatch):
+    """nu structurally zero and a zero guess: q_dot = 0 exactly, without evaluating Phi_q; a
+    driven model at rest still solves (its nu is not zero)."""
+    from casmech.runtime.assembly import solve_velocities
+    from tests.conftest import count_calls
+
+    free = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"))
+    driven = casmech.compile(casmech.load(MODELS / "four_bar.yaml"))
+    q_free, q_driven = (assembly.assemble_positions(f) for f in (free, driven))
+    calls = count_calls(monkeypatch)
+    assert not np.any(solve_velocities(free, 0.0, q_free, np.zeros(len(q_free))))
+    assert calls == []
+    q_dot = solve_velocities(driven, 0.0, q_driven, np.zeros(len(q_driven)))
+    assert "phi_q" in calls
+    # the driven four-bar's crank turns from t = 0: the velocities satisfy Phi_q q_dot = nu
+    np.testing.assert_allclose(driven.matrix("phi_q", 0.0, q_driven) @ q_dot,
+                               driven.vector("nu", 0.0, q_driven), rtol=0, atol=1e-12)
+    assert np.any(q_dot)

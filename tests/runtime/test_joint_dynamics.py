@@ -5,9 +5,12 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.compiler.articulated import local_motion
+from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, ModelError
-from tests.conftest import MODELS, ROOT, Table
+from casmech.runtime.joint_dynamics import constant_inverse
+from tests.conftest import MODELS, ROOT, Table, count_calls
 from tests.runtime.test_dynamics import FREE_BODY, G, W
 
 ZOO = ROOT / "tests" / "runtime" / "joint_zoo.yaml"
@@ -197,6 +200,37 @@ def test_method_auto_takes_bdf_for_a_stiff_tree_and_both_agree():
         np.testing.assert_allclose(adams[name], bdf[name], rtol=0, atol=1e-6, err_msg=name)
 
 
+def test_method_auto_does_not_examine_a_tree_without_force_elements(monkeypatch):
+    """Gravity, inertia and drivers only: Adams without the ODE's Jacobian (the stiffness
+    test is for force elements); the stiff arm above is examined."""
+    chain = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"))
+    casmech.analyze(chain, t_end=0.02)  # the joint system built outside the count
+    calls = count_calls(monkeypatch)
+    assert casmech.analyze(chain, t_end=0.02).metadata["method"] == "adams"
+    assert not any("jac" in name or "fwd" in name for name in calls), calls
+
+
+@pytest.mark.parametrize("kind", [k for k in MOTIONS if MOTIONS[k].n_v])
+def test_joint_velocities_by_the_constant_inverse_equal_least_squares(kind):
+    """Where a joint type's S_J is constant, S_J^+ twist is lstsq(S_J(theta), twist) at random
+    coordinates; universal, planar and free have a varying S_J and get none."""
+    motion, rng = MOTIONS[kind], np.random.default_rng(7)
+    inverse = constant_inverse(kind)
+    assert (inverse is None) == (kind in ("universal", "planar", "free"))
+    if inverse is None:
+        return
+    for _ in range(3):
+        theta = rng.normal(size=motion.n_q)
+        for start in motion.quaternions:
+            theta[start:start + 4] /= np.linalg.norm(theta[start:start + 4])
+        subspace = np.array(local_motion(kind)(theta, np.zeros(motion.n_v))[2].full())
+        twist = subspace @ rng.normal(size=motion.n_v) + 1e-3 * rng.normal(size=6)
+        # both are the least-squares solution of a well-conditioned 6 x n_v system
+        np.testing.assert_allclose(inverse @ twist,
+                                   np.linalg.lstsq(subspace, twist, rcond=None)[0],
+                                   rtol=0, atol=1e-13)
+
+
 def test_method_adams_on_a_dae_is_a_located_error():
     text = STIFF_ARM.replace("atol: 1.0e-10}", "atol: 1.0e-10, formulation: rp,\n  method: adams}")
     with pytest.raises(ModelError) as error:
@@ -224,3 +258,22 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
     np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
     assert np.max(np.abs(other.q - first.q)) > 0  # the options are part of what is kept
     assert len(functions.derived["cvodes"]) <= KEPT_INTEGRATORS
+
+
+def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
+    """The tree's ODE above QUICK_BUILD_INSTRUCTIONS compiles at -O0, below at the default
+    flags; $CASMECH_CFLAGS always wins."""
+    from casmech.codegen import build
+    from casmech.runtime import joint_dynamics
+
+    system = joint_dynamics.joint_system(
+        casmech.compile(casmech.load(MODELS / "double_pendulum.yaml")))
+    monkeypatch.delenv(build.FLAGS_ENVIRONMENT, raising=False)
+    size = system.dynamics.n_instructions()
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
+    assert joint_dynamics._toolchain(system).flags == ("-O0",)
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size)
+    assert joint_dynamics._toolchain(system).flags == build.DEFAULT_FLAGS
+    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
+    monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
+    assert joint_dynamics._toolchain(system).flags == ("-O2", "-march=native")

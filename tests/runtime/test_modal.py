@@ -213,3 +213,26 @@ def test_triple_pendulum_frequencies_and_mode_shapes():
         turns = result.mode_shapes[mode, :, 4].real
         np.testing.assert_allclose(turns / turns[np.argmax(np.abs(turns))], shapes[:, mode],
                                    rtol=0, atol=1e-9)
+
+
+def test_state_space_frequency_response_is_the_compound_pendulum():
+    """python-control's StateSpace of the rod driven at its pivot: the response of the rod's
+    rotation to the torque at omega is 1 / (m g l - J omega^2) (J about the pivot), names kept
+    ('.' as '_')."""
+    import control
+
+    text = HANGING_ROD.replace("axis: [0, 1, 0]}", "axis: [0, 1, 0],\n     motor: {torque: \"0\"}}")
+    _, result = modal(text)
+    system = result.linear_model.state_space()
+    assert isinstance(system, control.StateSpace)
+    assert system.input_labels == ["pivot_torque"] and system.state_labels == ["z1", "z1_dot"]
+    m, length, w = 1.5, 0.8, 0.03
+    arm = length / 2
+    inertia = m * (length**2 + w**2) / 12 + m * arm**2
+    output = system.output_labels.index("rod_ry")
+    for omega in (0.5, 2.0, 11.0):
+        response = system(1j * omega)[output, 0]
+        # a 2 x 2 linear model at an equilibrium converged to roundoff: rtol 1e-9
+        np.testing.assert_allclose(response.real, 1 / (m * G * arm - inertia * omega**2),
+                                   rtol=1e-9, atol=0)
+        assert abs(response.imag) <= 1e-12

@@ -51,6 +51,7 @@ REFERENCES = {
     "min": ((2.0, -1.5), min),
     "max": ((2.0, -1.5), max),
     "step": ((0.3, 0.1, 1.0, 0.6, 3.0), step_reference),
+    "if": ((-0.5, 2.0, 3.0), lambda c, a, b: a if c != 0 else b),
 }
 
 # double-precision evaluation of the same elementary function: a few ulps
@@ -192,12 +193,60 @@ def test_unknown_function_or_arity(text, offset, length, hint):
         "x = 1",
         "1 @ 2",
         "not x",
-        "x < 2",
+        "x == 2",
+        "x < 2 < 3",
+        "x <> 2",
+        "x =< 2",
     ],
 )
 def test_python_is_rejected(text):
     with pytest.raises(ExpressionError):
         parse(text)
+
+
+@pytest.mark.parametrize(
+    ("text", "x", "value"),
+    [
+        ("x < 2", 1.0, 1.0),
+        ("x < 2", 2.0, 0.0),
+        ("x <= 2", 2.0, 1.0),
+        ("x > 2", 2.0, 0.0),
+        ("x >= 2", 2.0, 1.0),
+        ("1 + x > 2 * x", 0.5, 1.0),  # comparison binds loosest
+        ("if(x > 0, x**2, -x)", -3.0, 3.0),
+        ("if(x > 0, x**2, -x)", 3.0, 9.0),
+        ("if(x, 1, 2)", 0.0, 2.0),  # any non-zero is true
+        ("(x < 1) * 10 + (x >= 1) * 20", 1.0, 20.0),
+        ("max(0, 1 - x) ** 1.5", 0.75, 0.125),
+        ("min(x, 2) + if(x < 0, 0, 1)", -1.0, -1.0),
+    ],
+)
+def test_comparisons_and_if(text, x, value):
+    # exact in binary: comparisons and branches of small dyadic numbers round nowhere
+    for backend in ("numpy", "casadi"):
+        np.testing.assert_allclose(numeric(text, backend, x=x), value, rtol=0, atol=0)
+
+
+def test_if_and_comparison_over_arrays_and_symbols():
+    x = np.array([-1.0, 0.0, 2.0])
+    got = parse("if(x > 0, x, 0) + (x <= 0)").evaluate({"x": x}, "numpy")
+    np.testing.assert_array_equal(got, [1.0, 1.0, 2.0])  # exact: small integers
+    s = casadi.SX.sym("s")
+    f = casadi.Function("f", [s], [parse("if(s > 0, s**2, 0)").evaluate({"s": s}, "casadi")])
+    df = casadi.Function("df", [s], [casadi.jacobian(f(s), s)])
+    # the branch taken is differentiated: 2 s above 0, 0 below (exact)
+    assert (float(df(3.0)), float(df(-3.0))) == (6.0, 0.0)
+    # the branch not taken never poisons the value (1/s at 0 is inf)
+    g = parse("if(s > 0, 1 / s, 0)")
+    h = casadi.Function("h", [s], [g.evaluate({"s": s}, "casadi")])
+    assert float(h(0.0)) == 0.0
+
+
+def test_chained_comparison_error():
+    with pytest.raises(ExpressionSyntaxError) as caught:
+        parse("0 < x < 1")
+    assert (caught.value.offset, caught.value.length) == (6, 1)
+    assert "if(" in caught.value.hint
 
 
 def test_nesting_and_length_limits_are_errors_not_crashes():

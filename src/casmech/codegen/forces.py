@@ -17,7 +17,7 @@ import numpy as np
 
 from casmech.codegen.elements import assemble
 from casmech.codegen.kernels import Layout, mapped
-from casmech.compiler import eom, euler, motors
+from casmech.compiler import contact, eom, euler, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS, relative_angle, spring_law
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
@@ -161,7 +161,8 @@ def unrolled(ir: ModelIR, force: ForceIR) -> ca.Function:
     their number, not with the model's)."""
     x = Coordinates.create(ir.n_bodies)
     generalized, energy = FORCE_ELEMENTS[force.type](force, x)
-    name = "force_" + "".join(c if c.isalnum() else "_" for c in force.name)
+    prefix = "stop_" if force.type in limits.COORDINATE else "force_"  # a stop: its joint's name
+    name = prefix + "".join(c if c.isalnum() else "_" for c in force.name)
     return ca.Function(name, [x.t, x.q, x.q_dot],
                        [x.ground_fixed(ca.SX(generalized)), x.ground_fixed(ca.SX(energy))])
 
@@ -172,7 +173,7 @@ def applied(ir: ModelIR, t, q, q_dot) -> tuple:
     padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
     groups: dict = {}
     total, potential = ca.MX(layout.n, 1), ca.MX(0)
-    for force in (*ir.forces, *getattr(ir, "motors", ())):  # effort motors: eom's elements
+    for force in (*ir.forces, *ir.motors, *ir.limits):  # motors and stops: eom's elements
         if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
             continue  # acts on ground: no generalized force
         if kernelised(force):
@@ -217,14 +218,24 @@ def motor_reactions(ir: ModelIR, t, q, q_dot) -> tuple:
     n_joints = len(ir.joints)
     force, torque = ca.MX(3, n_joints), ca.MX(3, n_joints)
     column = {joint.name: k for k, joint in enumerate(ir.joints)}
-    for motor in getattr(ir, "motors", ()):
+    for motor in (*ir.motors, *ir.limits):
         k = column[motor.name]
         joint = ir.joints[k]
         x = Coordinates.create(ir.n_bodies)
         at = eom.point(x, joint.body_i, joint.point_i)
-        pair = [x.ground_fixed(ca.SX(e)) for e in motors.reaction(motor, x, at)]
-        name = "motor_" + "".join(c if c.isalnum() else "_" for c in motor.name)
+        reaction = limits.reaction if motor.type in limits.COORDINATE else motors.reaction
+        pair = [x.ground_fixed(ca.SX(e)) for e in reaction(motor, x, at)]
+        prefix = "stop_" if motor.type in limits.COORDINATE else "motor_"
+        name = prefix + "".join(c if c.isalnum() else "_" for c in motor.name)
         f_motor, t_motor = ca.Function(name, [x.t, x.q, x.q_dot], pair)(t, q, q_dot)
         select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [k]), 1.0)
         force, torque = force + f_motor @ select, torque + t_motor @ select
     return force, torque
+
+
+def element_outputs(ir: ModelIR, t, q, q_dot):
+    """The contacts' and stops' results columns (compiler.contact.element_outputs), one SX
+    function over the whole model's coordinates (a few per model: no kernel)."""
+    x = Coordinates.create(ir.n_bodies)
+    values = x.ground_fixed(ca.SX(contact.element_outputs(ir, x)))
+    return ca.Function("element_outputs", [x.t, x.q, x.q_dot], [values])(t, q, q_dot)

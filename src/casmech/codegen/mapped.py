@@ -60,6 +60,8 @@ def rp_functions(ir: ModelIR, x: dict) -> list[ca.Function]:
                   {"force": force, "torque": torque}),
         _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": x["q_ddot"]},
                   {"omega": omega, "alpha": alpha}),
+        _function("element_outputs", {"t": t, "q": q, "q_dot": q_dot},
+                  {"values": forces.element_outputs(ir, t, q, q_dot)}),
     ]
 
 

@@ -181,7 +181,7 @@ def _nonzeros(c):
 def force_groups(ir: ModelIR, ix: Indices, t) -> list[Group]:
     by_key: dict = {}
     out = []
-    for force in (*ir.forces, *getattr(ir, "motors", ())):  # as codegen.forces.applied
+    for force in (*ir.forces, *ir.motors, *ir.limits):  # as codegen.forces.applied
         if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
             continue
         if forces.kernelised(force):

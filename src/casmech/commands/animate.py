@@ -1,4 +1,5 @@
-"""casmech animate MODEL.yaml RESULTS.csv -o DIR: a ParaView time series and an HTML player."""
+"""casmech animate MODEL.yaml RESULTS.csv -o DIR: a ParaView time series and an HTML player;
+with --mode N, mode N of a modal run (RESULTS: its results.csv, linear_model.npz beside it)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ from casmech.errors import UsageError
 from casmech.output.animate import build_scene
 from casmech.output.csv import read_csv
 from casmech.output.html_player import write_html
+from casmech.output.mode_animation import mode_table, read_linear_model
 from casmech.output.vtk import write_vtk
 
 
@@ -23,6 +25,15 @@ def add_arguments(parser) -> None:
                         help="draw every K-th row (and the last); default: every row")
     frames.add_argument("--fps", type=float,
                         help="draw the row nearest each multiple of 1/FPS of simulated time")
+    modes = parser.add_argument_group("mode shapes (a modal run)")
+    modes.add_argument("--mode", type=int, metavar="N",
+                       help="play mode N of the modal run (numbered as in modes.csv) instead of "
+                            "the results' rows")
+    modes.add_argument("--amplitude", type=float, default=0.1, metavar="A",
+                       help="largest body motion of the mode, in metres or radians "
+                            "(default 0.1)")
+    modes.add_argument("--cycles", type=float, default=2.0, metavar="C",
+                       help="periods of the mode to play (default 2)")
     parser.add_argument("--no-vtk", action="store_true", help="write only the HTML player")
     parser.add_argument("--no-html", action="store_true", help="write only the VTK series")
     add_overrides(parser)
@@ -41,7 +52,12 @@ def run(args) -> int:
     if args.no_vtk and args.no_html:
         raise UsageError("--no-vtk and --no-html together leave nothing to write")
     model = casmech.load(args.model, overrides(args.set))
-    names, values = _results(args.results)
+    if args.mode is None:
+        names, values = _results(args.results)
+    else:
+        linear = read_linear_model(args.results.parent / "linear_model.npz")
+        names, values = mode_table(linear, tuple(b.name for b in model.bodies), args.mode,
+                                   args.amplitude, args.cycles)
     scene = build_scene(model, names, values, every=args.every, fps=args.fps)
     out = args.out or args.results.parent / "animation"
     written = []

@@ -41,7 +41,7 @@ def replayed(args: argparse.Namespace) -> argparse.Namespace:
         files.allow(folder)
     check_files(record, args.replay)
     settings = record["analysis"]
-    complete = record.get("status") == "complete"
+    complete = record.get("status") in ("complete", "stopped by event")
     folder = args.replay.resolve().parent
     return argparse.Namespace(**{
         **vars(args),

@@ -3,7 +3,8 @@
 --format csv (default) writes results.csv per the results contract plus metadata.json beside it
 (versions, model hash and text, overrides, settings, timings, mode); --format hdf5 writes
 results.h5 holding the same table and metadata; --format csv,hdf5 writes both. An analysis
-may write further files (modal: modes.csv, linear_model.npz). A progress bar
+may write further files (modal: modes.csv, linear_model.npz; dynamics of a model with
+`events:`: events.csv, one line printed per event). A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
 
 SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.interrupts): the rows computed
@@ -29,15 +30,16 @@ import casmech
 from casmech import api, interrupts
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import AnalysisError, Interrupted
+from casmech.output import events as events_output
 from casmech.output.csv import write_csv
 from casmech.output.hdf5 import h5py, write_hdf5
 from casmech.output.metadata import resolved_settings, run_metadata, write_json
 from casmech.output.progress import progress_bar
-from casmech.runtime import reaction_frames
+from casmech.runtime import events, reaction_frames, singular_poses
 from casmech.runtime.results import column_names
 
 # further files an analysis may write (Result.files), removed with an earlier run's results
-ANALYSIS_FILES = ("modes.csv", "linear_model.npz")
+ANALYSIS_FILES = ("modes.csv", "linear_model.npz", events_output.FILE)
 # format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
 FORMATS = {
     "csv": ("results.csv", lambda path, names, values, meta: write_csv(path, names, values),
@@ -146,6 +148,11 @@ def _run(args) -> int:
         paths = _save(args, out, functions, result, run)
     print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
           f"-> {', '.join(map(str, paths))}")
+    for record in result.events:
+        print(f"event {record.name} ({record.direction}) at t = {record.t:.10g} s"
+              f"{': run stopped' if record.action == 'stop' else ''}")
+    for pose in result.metadata.get("singular_poses") or ():
+        print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
     return 0
 
 
@@ -194,6 +201,8 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
         names, values = casmech.results_table(functions, result, args.reactions_frame)
         meta, rows = result.metadata, len(values)
     model, given, settings, timings, options = run
+    if status is None and result is not None and result.status == events.STOPPED:
+        status = events.STOPPED
     metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal,
                             options)
     ir = functions.ir
@@ -203,6 +212,13 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
              for name in args.format]
     files = {} if result is None else result.files
     paths += [write(out / name) for name, write in files.items()]
+    if result is not None and result.event_states is not None:  # the run watched events
+        event_names, event_rows = events.table(functions, result, args.reactions_frame)
+        paths.append(events_output.write_events(out / events_output.FILE, event_names,
+                                                event_rows))
+        # in metadata.json only: results.h5's metadata holds no list of records
+        metadata["events"] = events_output.metadata_rows(result.events, event_names,
+                                                         event_rows)
     if "csv" in args.format:
         write_json(out / "metadata.json", metadata)
     return paths

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.compiler import bushing, coordinates, euler, motors  # coordinates: force laws
+from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR, ModelIR, constant
 
@@ -122,6 +122,13 @@ FORCE_ELEMENTS: dict[str, Callable] = {
     "force": _point_force,
     "torque": _torque,
     "bushing": lambda force, x: bushing.generalized_force(force, x),
+    # (lambdas: compiler.contact and compiler.limits import this module through coordinates)
+    "sphere_plane": lambda force, x: contact.generalized_force(force, x),
+    "sphere_sphere": lambda force, x: contact.generalized_force(force, x),
+    "points_plane": lambda force, x: contact.generalized_force(force, x),
+    "capsule_plane": lambda force, x: contact.generalized_force(force, x),
+    "limit_angle": lambda force, x: limits.generalized_force(force, x),  # stops (ir.limits)
+    "limit_displacement": lambda force, x: limits.generalized_force(force, x),
 }
 FORCE_ELEMENTS.update(motors.FORCE_ELEMENTS)  # effort motors of joints (ir.motors)
 
@@ -131,7 +138,7 @@ def applied_forces(ir: ModelIR, x: Coordinates):
     nb = ir.n_bodies
     gravity = ca.vertcat(*[b.mass * constant(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
     total, potential = gravity, 0.0
-    for force in (*ir.forces, *ir.motors):
+    for force in (*ir.forces, *ir.motors, *ir.limits):
         generalized, energy = FORCE_ELEMENTS[force.type](force, x)
         total, potential = total + generalized, potential + energy
     return total, potential
@@ -168,6 +175,9 @@ def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
         for motor in (m for m in ir.motors if m.name == joint.name):  # its actuation
             motor_force, motor_torque = motors.reaction(motor, x, at)
             force, torque = force + motor_force, torque + motor_torque
+        for stop in (s for s in ir.limits if s.name == joint.name):  # its stop
+            stop_force, stop_torque = limits.reaction(stop, x, at)
+            force, torque = force + stop_force, torque + stop_torque
         forces.append(force)
         torques.append(torque)
     empty = ca.SX(3, 0)

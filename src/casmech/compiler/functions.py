@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler, romega
+from casmech.compiler import contact, eom, euler, romega
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
 
@@ -116,6 +116,8 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
          {"force": fixed(force), "torque": fixed(torque)}),
         ("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
          {"omega": stack(omega), "alpha": stack(alpha)}),
+        ("element_outputs", {"t": t, "q": q, "q_dot": q_dot},
+         {"values": fixed(contact.element_outputs(ir, x))}),
     ]
     definitions += romega.definitions(ir, cs)
     functions = [_function(name, inputs | extra, outputs) for name, inputs, outputs in definitions]

@@ -106,6 +106,7 @@ class ModelIR:
     analysis: Analysis
     parameters: Mapping[str, float] = field(default_factory=dict)
     motors: tuple[ForceIR, ...] = ()  # effort motors of joints (compiler/motors.py), by joint name
+    limits: tuple[ForceIR, ...] = ()  # joint stops (compiler/limits.py), by joint name
 
     @property
     def n_bodies(self) -> int:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import bushing, coordinates, euler, motors
+from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
 from casmech.compiler import joints as joint_tables
 from casmech.compiler.ir import (
     GROUND_INDEX,
@@ -148,6 +148,8 @@ def lower_force(force: Force, model: ResolvedModel, poses: _Poses) -> ForceIR:
     v = force.vectors
     if force.type == "bushing":
         return bushing.lower(force, model, poses)
+    if force.type in contact.SHAPES:
+        return contact.lower(force, poses)
     params = {"stiffness": force.stiffness, "damping": force.damping}
     if force.type == "tsda":
         at_i, at_j = np.asarray(v["at_i"], float), np.asarray(v["at_j"], float)
@@ -192,6 +194,8 @@ def lower(model: ResolvedModel) -> ModelIR:
                    for f in model.forces)
     effort = tuple(m for j in model.joints if j.motor
                    for m in motors.lower(j, joint_frame(j), poses))
+    stops = tuple(limits.lower(j, geometry[j.name]) for j in model.joints
+                  if j.limit)
     return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
                    forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters),
-                   motors=effort)
+                   motors=effort, limits=stops)

@@ -83,7 +83,12 @@ def reaction(motor: ForceIR, x, at):
     """(force, torque about `at`) the motor exerts on body j, global, as functions of
     (t, q, q_dot): a motor law may read the joint rate, so `reactions` takes q_dot."""
     coordinate, value = coordinate_and_value(motor, x)
-    b = motor.body_j
+    return coordinate_reaction(coordinate, value, x, motor.body_j, at)
+
+
+def coordinate_reaction(coordinate, value, x, b: int, at):
+    """(force, torque about `at`) on body b of a generalized force `value` along a joint
+    coordinate (coordinate_q^T value, the part acting on body b's coordinates)."""
     p = x.p(b)
     force = ca.jacobian(coordinate, x.r(b)).T * value
     n_bar = 0.5 * euler.g_matrix(p) @ ca.jacobian(coordinate, p).T * value

@@ -43,7 +43,7 @@ def sha256(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
 
-STATUSES = ("running", "complete", "failed", "interrupted")
+STATUSES = ("running", "complete", "failed", "interrupted", "stopped by event")
 
 
 def source_files(model: ResolvedModel) -> dict[str, dict[str, str]]:
@@ -64,7 +64,8 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
                  signal: str | None = None, options: Mapping | None = None) -> dict:
     """Everything needed to tell how a results table was made and to make it again
     (JSON-serialisable). `status`: running (written when the analysis starts: a results file
-    from an earlier run is gone), complete, failed or interrupted (`signal` names the signal);
+    from an earlier run is gone), complete, failed, interrupted (`signal` names the signal) or
+    stopped by event (a dynamics run a `stop` event ended, runtime.events);
     default: failed when there is an error, else complete. `options`: the command-line
     options besides overrides and settings (mode asked for, formats, allowed folders)."""
     status = status or ("failed" if error else "complete")

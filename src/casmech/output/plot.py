@@ -29,6 +29,13 @@ QUANTITIES: dict[str, tuple[str, str, str]] = {
     **{f"t{s}": ("torque", "N m", "joint reaction torque about the joint point (global)")
        for s in "xyz"},
     "energy": ("energy", "J", "energy (kinetic + potential)"),
+    # contact elements and joint stops (docs/forces.md#contact); a stop's gap is m or rad
+    "normal_force": ("contact normal force", "N", "contact normal force"),
+    "friction_force": ("contact friction force", "N", "contact friction force (magnitude)"),
+    "gap": ("contact gap", "m", "contact gap (negative: overlap)"),
+    "limit_torque": ("stop torque", "N m", "joint stop torque along the joint axis"),
+    "limit_force": ("stop force", "N", "joint stop force along the joint axis"),
+    "limit_gap": ("stop gap", "m or rad", "joint stop gap (negative: past the bound)"),
     "constraint_violation": ("constraint violation", "-", "constraint violation max |Φ|"),
     "t": ("time", "s", "time"),
 }

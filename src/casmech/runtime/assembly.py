@@ -35,11 +35,14 @@ def initial_guess(functions: SystemFunctions) -> np.ndarray:
 
 def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
     """q_dot from the file's global velocities: p_dot = 1/2 E(p)^T omega."""
-    nb = functions.n_bodies
-    r_dot = [b.r_dot0 for b in functions.ir.bodies]
-    p_dot = [0.5 * euler.numeric(euler.e_matrix, q[3 * nb + 4 * k:3 * nb + 4 * k + 4]).T @ b.omega0
-             for k, b in enumerate(functions.ir.bodies)]
-    return np.concatenate(r_dot + p_dot) if nb else np.zeros(0)
+    bodies = functions.ir.bodies
+    if not bodies:
+        return np.zeros(0)
+    nb = len(bodies)
+    e = euler.numeric_columns(euler.e_matrix, q[3 * nb:].reshape(nb, 4).T)  # 3 x 4 nb
+    omega = np.array([b.omega0 for b in bodies])  # nb x 3
+    p_dot = 0.5 * np.einsum("ikj,ki->kj", e.reshape(3, nb, 4), omega)
+    return np.concatenate([np.concatenate([b.r_dot0 for b in bodies]), p_dot.ravel()])
 
 
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
@@ -76,9 +79,10 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
 def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
     q = initial_guess(functions) if q is None else np.array(q, float)
     steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
-    for k in range(1, steps + 1):
-        q = newton(functions, t, q, scale=k / steps, tolerance=1e-8 if k < steps else 1e-12)
-    return newton(functions, t, q)
+    for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
+        q = newton(functions, t, q, scale=k / steps,
+                   tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
+    return q
 
 
 def initial_state(functions: SystemFunctions, t0: float = 0.0):
@@ -89,7 +93,10 @@ def initial_state(functions: SystemFunctions, t0: float = 0.0):
 
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
                      q_dot_guess: np.ndarray) -> np.ndarray:
-    """Phi_q q_dot = nu, closest (least squares) to the guess."""
+    """Phi_q q_dot = nu, closest (least squares) to the guess (the guess itself when it is
+    zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
+    if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
+        return np.array(q_dot_guess, float)
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()

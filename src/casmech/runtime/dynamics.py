@@ -63,7 +63,7 @@ from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly, projected_rk4
+from casmech.runtime import assembly, contact_steps, events, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 
@@ -209,13 +209,18 @@ class _Rows:
         drifted = (phi[0] > self.tolerance) | (velocity[0] * self.step > self.tolerance)
         return int(np.argmax(drifted)) if drifted.any() else None
 
-    def record(self, result: Result, times: np.ndarray, states: np.ndarray,
-               multipliers: np.ndarray) -> None:
-        """Appends the rows: r-p velocities and accelerations, every multiplier (the least-
-        norm ones where rows were dropped; 0 for r-omega's normalization rows)."""
+    def rows(self, times: np.ndarray, states: np.ndarray, multipliers: np.ndarray):
+        """(q, q_dot, q_ddot, lam), one row per time: r-p velocities and accelerations, every
+        multiplier (the least-norm ones where rows were dropped; 0 for r-omega's
+        normalization rows)."""
         q, v, v_dot = self.split(states)
         q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers)
-        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+    def record(self, result: Result, times: np.ndarray, states: np.ndarray,
+               multipliers: np.ndarray) -> None:
+        """Appends the rows."""
+        result.extend(times, *self.rows(times, states, multipliers))
 
 
 class _Stepper:
@@ -276,17 +281,30 @@ class _Stepper:
             interrupts.check(error)
             raise _Restart(float(t0), solver_reason(error)) from None
 
+    def probe(self, kind: str, t0: float, t: float, t1: float, q, v, mask):
+        """(states, lam) at the one time t in (t0, t1) from (t0, q, v), by what made the block
+        (`kind` as integrate returns it): an event's trial point (runtime.events). The DAE
+        integrates to t1 with the first step of the interval (t0, t1) and gives t from its
+        interpolant: a trial point just after t0 would otherwise start the index-2 DAE with
+        a step too short for its iteration matrix (the four-bar failed at 1e-9 s), and every
+        trial of one interval reads the same steps."""
+        if kind == "ode":
+            return self._ode(t0, np.array([t]), q, v)
+        states, lam = self._dae(t0, np.array([t, t1]), q, v, mask, kind, t1 - t0)
+        return states[:, :1], lam[:, :1]
+
     def _problem(self, kind: str) -> dict:
         if kind not in self.problems:
             functions = self.model.functions.functions
             self.problems[kind] = dae.problem(dae.residual(functions, self.model.name, kind))
         return self.problems[kind]
 
-    def _dae(self, t0, times, q, v, mask, kind: str):
+    def _dae(self, t0, times, q, v, mask, kind: str, first: float | None = None):
         """IDAS on the DAE from the exact consistent state, handed over with its derivative
         (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
         started by IDACalcIC was slower (its line search often failed, measured on the
-        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia."""
+        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia. `first`: the
+        output interval the first step is sized by (default the first of `times`)."""
         model = self.model
         s, s_phi = model.scales(t0, q)
         v_dot, lam = model.consistent(t0, q, v, mask, s)
@@ -301,7 +319,8 @@ class _Stepper:
         p = [[t0], mask, s]
         if kind == "ggl":
             n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
-            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol, times[0] - t0)
+            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol,
+                                            first or times[0] - t0)
             p.append(s_phi)
         integrator = ca.integrator("dynamics", "idas", self._problem(kind), 0.0,
                                    list(times - t0), self.options | options)
@@ -402,7 +421,7 @@ class _Restart(Exception):
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
-                 progress=None, stabilization: str = "ggl") -> Result:
+                 progress=None, stabilization: str = "ggl", extra_events=()) -> Result:
     """By the stabilized index-2 DAE (ggl) or the index-1 DAE with projections; a chunk of
     output intervals the index-2 DAE fails on is done by the index-1 one (metadata
     ggl_failed_at, ggl_failures: benchmarks chain32 at rtol 1e-10 failed right after a chunk
@@ -415,30 +434,38 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
     r-omega's DAE got past the first flat pose (0.72 s) and failed only in the chunk from
     1.2 s, so the rows kept from it had passed a singular pose on a DAE singular there (B0
     error 1e-6 m, against 3.7e-7 m from t0). Starting over costs the DAE's time to its
-    failure; it keeps every row off a DAE that has met a singular pose."""
+    failure; it keeps every row off a DAE that has met a singular pose.
+
+    The model's `events:` and `extra_events` (runtime.events.Event, declared by code) are
+    located and recorded in Result.events; without any, no event work is done."""
     model = _Model(functions, formulation)
     stepper = _Stepper(model, rtol, atol, stabilization)
+    stepper.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     try:
-        return _run(model, stepper, t0, t_end, step, atol, progress)
+        return _run(model, stepper, t0, t_end, step, atol, progress, extra_events)
     except _Restart as restart:
         stepper.on_ode, stepper.switched_at, stepper.dae_reason = True, restart.t, restart.reason
-        return _run(model, stepper, t0, t_end, step, atol, progress)
+        return _run(model, stepper, t0, t_end, step, atol, progress, extra_events)
 
 
 def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
-         progress) -> Result:
+         progress, extra_events=()) -> Result:
     functions = model.functions
     result = Result("dynamics", on_row=progress)
+    watch = events.watch(functions, result, extra_events, stepper.options["reltol"])
     q, q_dot = assembly.initial_state(functions, t0)
     v = velocities(functions, model.name, q, q_dot)
     mask = model.mask(t0, q)
     rows = _Rows(model, mask, drift_tolerance(atol), step)
     times = output_times(t0, t_end, step)
     k, projections = 0, 0
-    stepper.start(len(times) - 1, progress is not None)
+    stepper.start(len(times) - 1, progress is not None or events.has_stop(watch))
     try:
         v_dot, lam = model.accelerations(times[0], q, v, mask)
-        rows.record(result, times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
+        first = rows.rows(times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
+        result.extend(times[:1], *first)
+        if watch is not None:
+            watch.start(times[0], first)
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + stepper.chunk]
             states, lams, kind = stepper.integrate(times[k], chunk, q, v, mask)
@@ -453,10 +480,16 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                 v_dot, lam = model.accelerations(t, q, v, mask)
                 states[:, drifted], lams[:, drifted] = np.concatenate([q, v, v_dot]), lam
                 projections += 1
-            rows.record(result, chunk[:used], states[:, :used], lams[:, :used])
+            if watch is None:
+                rows.record(result, chunk[:used], states[:, :used], lams[:, :used])
+            else:
+                _watched(watch, rows, stepper, kind, mask, times[k], (q, v), chunk[:used],
+                         states[:, :used], lams[:, :used])
             q, v, _ = rows.split(states[:, used - 1])
             k += used
             stepper.adapt(used, drifted is not None)
+    except events.Stopped:
+        pass
     except AnalysisError as error:
         error.partial = result
         raise
@@ -473,3 +506,15 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()),
                            idas_calls=stepper.idas_calls, idas_steps=stepper.idas_steps)
     return result
+
+
+def _watched(watch: events.Watch, rows: _Rows, stepper: _Stepper, kind: str, mask, t0: float,
+             start, times, states, lams) -> None:
+    """Records a block through the events' watch: an event's trial points integrate from the
+    row before them by what made the block."""
+    def probe(t_start: float, state, t: float, t_end: float):
+        found, lam = stepper.probe(kind, t_start, t, t_end, *state, mask)
+        return rows.rows(np.array([t]), found, lam), rows.split(found[:, 0])[:2]
+
+    watch.record(t0, start, times, lambda j: rows.split(states[:, j])[:2],
+                 rows.rows(times, states, lams), probe)

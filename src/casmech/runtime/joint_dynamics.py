@@ -14,7 +14,9 @@ row's multiplier.
 
 from __future__ import annotations
 
+import os
 from dataclasses import replace
+from functools import cache
 
 import casadi as ca
 import numpy as np
@@ -27,7 +29,7 @@ from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import assembly
+from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -51,6 +53,11 @@ STIFF = 10.0
 # (called once per output block, so interpreted costs little). Larger trees stay interpreted.
 COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
+# ... and above QUICK_BUILD_INSTRUCTIONS SX instructions (chain32's ODE: 18k, chain128's: 76k)
+# at -O0 unless $CASMECH_CFLAGS says otherwise: gcc -O1 on one unrolled function grows faster
+# than its size (chain64 5.7 s against 0.9 s, chain128 5.2 against 2.0) for calls ~1.5x
+# faster, which a first run rarely repays (docs/decisions.md).
+QUICK_BUILD_INSTRUCTIONS = 30000
 
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
@@ -91,9 +98,35 @@ def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSyste
         functions["joint_motion"] = system.motion
     if system.layout.n_x <= STIFF_STATES:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
-    built = codegen.compile_functions(functions)
+    built = codegen.compile_functions(functions, toolchain=_toolchain(system))
     return replace(system, dynamics=built["joint_ode"],
                    motion=built.get("joint_motion", system.motion))
+
+
+@cache
+def constant_inverse(kind: str) -> np.ndarray | None:
+    """The pseudo-inverse of a joint type's motion subspace S_J where S_J is the same at every
+    theta (revolute, spherical, ...: u = S_J^+ twist with no per-state work), else None.
+    Whether it is constant is seen at sample coordinates (its SX does not simplify
+    sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
+    motion, samples = MOTIONS[kind], np.random.default_rng(0).normal(size=(4, MOTIONS[kind].n_q))
+    for start in motion.quaternions:
+        samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
+    zero = np.zeros(motion.n_v)
+    subspaces = [np.array(local_motion(kind)(theta, zero)[2].full()) for theta in samples]
+    if max(np.max(np.abs(s - subspaces[0])) for s in subspaces) > 1e-14:
+        return None
+    return np.linalg.pinv(subspaces[0])
+
+
+def _toolchain(system: JointSystem):
+    """The default toolchain, at -O0 for a large tree (QUICK_BUILD_INSTRUCTIONS) when the
+    user chose no flags."""
+    from casmech.codegen.build import FLAGS_ENVIRONMENT, Toolchain
+
+    quick = (system.dynamics.n_instructions() > QUICK_BUILD_INSTRUCTIONS
+             and os.environ.get(FLAGS_ENVIRONMENT) is None)
+    return Toolchain(flags=("-O0",)) if quick else Toolchain()
 
 
 def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.ndarray]:
@@ -102,6 +135,9 @@ def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.
     n_v = MOTIONS[joint.type].n_v
     if not n_v:
         return theta, np.zeros(0)
+    inverse = constant_inverse(joint.type)
+    if inverse is not None:
+        return theta, inverse @ twist
     subspace = np.array(local_motion(joint.type)(theta, np.zeros(n_v))[2].full())
     return theta, np.linalg.lstsq(subspace, twist, rcond=None)[0]
 
@@ -168,18 +204,26 @@ class _Integrator:
             self.options |= METHODS[method]
         self.steps = 0
 
-    def __call__(self, t0: float, times, x, z) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(self, t0: float, times, x, z, trial: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """States and algebraic states at `times` from (t0, x, z). trial: times are an event's
+        trial point (runtime.events) and the end of its interval; CVODES integrates to the
+        trial point only (its instance not kept for later runs), IDAS to the end with its
+        first step sized by the whole interval (an index-2 DAE fails on a very short one)."""
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times)
+            integrator = self._cvodes(problem, t0, times) if not trial else ca.integrator(
+                "joint", "cvodes", problem, t0, list(times[:1]), self.options)
             out = integrator(x0=x)
         else:
+            first = times[-1] - t0 if trial else None
             integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
-                                       self.options | self._dae_options(t0, times, x, z))
+                                       self.options | self._dae_options(t0, times, x, z,
+                                                                        first))
             out = integrator(x0=x, z0=z, p=self.loops.mask)
         self.steps += int(integrator.stats().get("nsteps", 0))
         states = np.array(out["xf"].full())
@@ -198,12 +242,13 @@ class _Integrator:
             problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
             KEPT_INTEGRATORS)[1]
 
-    def _dae_options(self, t0, times, x, z) -> dict:
+    def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
         test per group (algebraic_tolerances: with Z_TOL on every multiplier the four-bar failed
         at t0 at rtol 1e-12, and Andrews' squeezer at t0 at any rtol; it now runs to 0.018 s
-        and fails there, where the r-p DAE passes)."""
+        and fails there, where the r-p DAE passes). `first`: the interval the first step is
+        sized by (default the first output interval)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
@@ -212,14 +257,18 @@ class _Integrator:
         n = 3 * nb
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
                 "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], times[0] - t0),
+                                      self.options["abstol"], first or times[0] - t0),
                 "abstolv": [self.options["abstol"]] * len(x) + list(algebraic_tolerances(
                     self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
 
 
-def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
-    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams"."""
-    if system.n_cut or not 0 < len(x0) <= STIFF_STATES:
+def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True) -> str:
+    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams".
+
+    Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
+    source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
+    solution follows, so it is not examined."""
+    if system.n_cut or not forces or not 0 < len(x0) <= STIFF_STATES:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
     jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
@@ -229,7 +278,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float) -> str:
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "auto") -> Result:
+                       method: str = "auto", extra_events=()) -> Result:
+    """The model's `events:` and `extra_events` (runtime.events.Event) are located and
+    recorded in Result.events; without any, no event work is done."""
     system = joint_system(functions)
     nb = functions.n_bodies
     q0, q_dot0 = assembly.initial_state(functions, t0)
@@ -237,19 +288,27 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     loops = _Loops(system, t0, x)
     z = loops.z(t0, x)
     if method == "auto":
-        method = choose_method(system, t0, x, step)
+        method = choose_method(system, t0, x, step,
+                               bool(functions.ir.forces or functions.ir.motors))
     recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
                          loops.mask)
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
+    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
+    recorder.watch = events.watch(functions, result, extra_events, rtol)
     try:
-        recorder(result, times[:1], x[:, None], z[:, None])
+        first = recorder.rows(times[:1], x[:, None], z[:, None])
+        result.extend(times[:1], *first)
+        if recorder.watch is not None:
+            recorder.watch.start(times[0], first)
         k = 0
         while k < len(times) - 1:
             chunk = times[k + 1:k + 1 + CHUNK]
             x, z = _advance(integrate, loops, recorder, result, times[k], chunk, x, z)
             k += len(chunk)
+    except events.Stopped:
+        pass
     except AnalysisError as error:
         error.partial = result
         raise
@@ -275,7 +334,7 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
         half = len(times) // 2
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
-    recorder(result, times, states, algebraic)
+    recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
     return states[:, -1], loops.z(times[-1], states[:, -1])
 
 
@@ -294,13 +353,15 @@ class _Recorder:
         self.functions, self.system, self.signs = functions, system, signs
         self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
         self.maps = functions.derived.setdefault("joint_motion_maps", {})
+        self.watch = None  # runtime.events.Watch of the run, when it has events
 
     def _mapped(self, n: int) -> BufferedCall:
         """The results rows' function mapped over n rows (kept with the functions)."""
         return kept(self.maps, (self.system.motion, n),
                     lambda: BufferedCall(self.system.motion.map(n)), KEPT_MAPS)
 
-    def __call__(self, result: Result, times, states, algebraic) -> None:
+    def rows(self, times, states, algebraic):
+        """(q, q_dot, q_ddot, lam), one row per time."""
         n = len(times)
         times = np.asarray(times, float)
         rows = self._mapped(n)(times[None, :], states, algebraic,
@@ -308,7 +369,28 @@ class _Recorder:
         q, q_dot, q_ddot, lam = rows
         if self.least_norm is not None:
             lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
-        result.extend(times, q.T, q_dot.T, q_ddot.T, lam.T)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+    def __call__(self, result: Result, times, states, algebraic, start, integrate,
+                 loops) -> None:
+        """Appends the rows of a block integrated from `start` = (t0, x, z); through the
+        events' watch when there is one (an event's trial points integrate from the row
+        before them)."""
+        if self.watch is None:
+            result.extend(times, *self.rows(times, states, algebraic))
+            return
+
+        def probe(t_start: float, state, t: float, t_end: float):
+            """To t_end, t from the interpolant (as runtime.dynamics' probe: with loops, the
+            index-2 DAE's first step is sized by the whole interval)."""
+            x, z = state
+            found, found_z = integrate(t_start, [t, t_end], x, z, trial=True)
+            return self.rows([t], found[:, :1], found_z[:, :1]), (found[:, 0], found_z[:, 0])
+
+        t0, x, z = start
+        self.watch.record(t0, (x, z), np.asarray(times, float), lambda j: (
+            states[:, j], loops.z(times[j], states[:, j])),
+            self.rows(times, states, algebraic), probe)
 
 
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:

@@ -62,6 +62,22 @@ class LinearModel:
     eigenvalues: np.ndarray  # one per mode (complex)
     mode_shapes: np.ndarray  # (modes, bodies, 6) complex
     body_names: list[str] = field(default_factory=list)
+    mode_vectors: np.ndarray | None = None  # (k, modes) complex: modes in z, scaled as shapes
+
+    def state_space(self):
+        """The linear model as a python-control StateSpace (states, inputs and outputs named,
+        '.' written '_': python-control keeps '.' for subsystem names, so `pivot.torque` is
+        `pivot_torque`); python-control is optional (`pip install 'casmech[control]'`)."""
+        try:
+            import control
+        except ImportError:
+            raise ImportError("LinearModel.state_space needs python-control: "
+                              "pip install 'casmech[control]'") from None
+        def names(labels):
+            return [label.replace(".", "_") for label in labels]
+
+        return control.ss(self.A, self.B, self.C, self.D, states=names(self.state_names),
+                          inputs=names(self.input_names), outputs=names(self.output_names))
 
     @property
     def frequency_hz(self) -> np.ndarray:
@@ -101,7 +117,7 @@ class LinearModel:
                      input_names=np.array(self.input_names, dtype=str),
                      output_names=np.array(self.output_names, dtype=str),
                      q_equilibrium=self.q, basis=self.basis, eigenvalues=self.eigenvalues,
-                     mode_shapes=self.mode_shapes,
+                     mode_shapes=self.mode_shapes, mode_vectors=self.mode_vectors,
                      mode_shape_names=np.array(
                          [f"{b}.{m}" for b in self.body_names for m in MOTION], dtype=str))
         return path
@@ -119,14 +135,14 @@ def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> Line
     b = np.vstack([np.zeros((k, len(names))), driven])
     outputs = _output_map(functions, system)
     c = np.hstack([outputs, np.zeros_like(outputs)])
-    eigenvalues, shapes = _modes(functions, system, a)
+    eigenvalues, shapes, vectors = _modes(functions, system, a)
     bodies = list(functions.body_names)
     return LinearModel(
         A=a, B=b, C=c, D=np.zeros((c.shape[0], len(names))),
         state_names=[f"z{i + 1}" for i in range(k)] + [f"z{i + 1}_dot" for i in range(k)],
         input_names=names, output_names=[f"{body}.{m}" for body in bodies for m in MOTION],
         q=system.q, basis=system.basis, eigenvalues=eigenvalues, mode_shapes=shapes,
-        body_names=bodies)
+        body_names=bodies, mode_vectors=vectors)
 
 
 INPUT_NAMES = {"motor_torque": "torque", "motor_force": "force"}
@@ -153,13 +169,15 @@ def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np
 
 
 def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):
-    """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions). A DOF of zero
+    """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions; the same modes
+    in z, scaled alike: N z is the shape's motion of the coordinates). A DOF of zero
     stiffness is one mode at s = 0 shaped as its null vector of K (A's eigenvalues there, a
     double zero or 0 and a real decay, are split by roundoff: |s| <= sqrt(neutral_threshold)
     counts as 0)."""
     k = system.dof
     if not k:
-        return np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex)
+        return (np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex),
+                np.zeros((0, 0), complex))
     threshold = statics.neutral_threshold(system.omega2())
     neutral = system.basis.T @ statics.neutral_directions(system)  # N orthonormal
     values, vectors = np.linalg.eig(a)
@@ -170,12 +188,16 @@ def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndar
     values = np.concatenate([np.zeros(neutral.shape[1]), values]).astype(complex)
     vectors = np.hstack([neutral, vectors]).astype(complex)
     order = np.lexsort((-values.real, np.abs(values)))
-    motions = statics.motion_map(system.q) @ system.basis @ vectors[:, order]
-    shapes = []
-    for motion in motions.T:
+    vectors = vectors[:, order]
+    motions = statics.motion_map(system.q) @ system.basis @ vectors
+    shapes, scaled = [], []
+    for motion, vector in zip(motions.T, vectors.T, strict=True):
         largest = motion[np.argmax(np.abs(motion))]
-        shapes.append((motion / largest if abs(largest) > 0 else motion).reshape(-1, 6))
-    return values[order], np.array(shapes).reshape(len(order), functions.n_bodies, 6)
+        scale = 1 / largest if abs(largest) > 0 else 1.0
+        shapes.append((scale * motion).reshape(-1, 6))
+        scaled.append(scale * vector)
+    return (values[order], np.array(shapes).reshape(len(order), functions.n_bodies, 6),
+            np.array(scaled).T.reshape(k, len(order)))
 
 
 def run_modal(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:

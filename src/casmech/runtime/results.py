@@ -7,6 +7,7 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import contact
 from casmech.compiler.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import BufferedCall
@@ -32,6 +33,10 @@ class Result:
         # further files of the analysis: name in the output folder -> writer(path) (modal)
         self.files: dict[str, Callable] = {}
         self.linear_model = None  # modal: runtime.modal.LinearModel
+        # dynamics with events (runtime.events): the EventRecords in time order, and a Result
+        # holding each one's row (None: the run watched no events)
+        self.events: list = []
+        self.event_states: Result | None = None
         self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
@@ -86,7 +91,8 @@ class Result:
     # the SystemFunctions that computed the rows (casmech.analyze sets it): the source of the
     # results table, the DataFrame and the summary's model name and column count
     functions: SystemFunctions | None = None
-    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError
+    status = "complete"  # or "failed" / "interrupted": the rows kept by an AnalysisError;
+    # "stopped by event": a stop event ended a dynamics run (runtime.events)
 
     def to_dataframe(self):
         """The results table as a pandas DataFrame, as casmech.load_results reads it from the
@@ -102,6 +108,15 @@ class Result:
         chosen = reaction_frames_of.describe(ir, reaction_frames_of.chosen(ir),
                                              self.functions.body_names)
         return frames.frame(names, values, {**self.metadata, "reaction_frames": chosen})
+
+    def events_dataframe(self):
+        """The events (runtime.events) as a pandas DataFrame, as events.csv holds them:
+        columns t, name, then every results column at the event (no rows without events)."""
+        from casmech.runtime import events
+
+        if self.functions is None:
+            raise ValueError("this Result has no system functions to tabulate its events with")
+        return events.dataframe(self.functions, self)
 
     def _facts(self) -> dict[str, str]:
         from casmech.output import frames
@@ -128,7 +143,7 @@ def column_names(functions: SystemFunctions) -> list[str]:
     names = ["t"]
     names += [f"{b}.{c}" for b in functions.body_names for c in BODY_COLUMNS]
     names += [f"{j.name}.{c}" for j in functions.joints for c in JOINT_COLUMNS]
-    return names + ["energy", "constraint_violation"]
+    return names + ["energy", "constraint_violation", *contact.output_names(functions.ir)]
 
 
 def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
@@ -144,7 +159,9 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
     per_joint = [np.concatenate([force[:, j], torque[:, j]]) for j in range(len(functions.joints))]
     kinetic, potential = functions.evaluate("energy", t, q, q_dot)
     violation = np.max(np.abs(functions.vector("phi", t, q)), initial=0.0)
-    return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation]])
+    elements = functions.vector("element_outputs", t, q, q_dot)  # contacts and stops
+    return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation],
+                           elements])
 
 
 def row_function(functions: SystemFunctions) -> ca.Function:
@@ -166,7 +183,7 @@ def row_function(functions: SystemFunctions) -> ca.Function:
         parts += [q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4], q_dot[3 * k:3 * k + 3],
                   omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
     parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
-    parts += [kinetic + potential, violation]
+    parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot)]
     return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],
                        [ca.densify(ca.vertcat(*parts))])
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from casmech.schema import resolved
+from casmech.schema import contact, resolved
 from casmech.schema.checker import ZERO, Checker, failed
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
@@ -37,6 +37,8 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     if given.reactions is not None and given.reactions.point is not None:
         extra["reaction_point"] = check.numbers((*path, "reactions", "point"),
                                                 given.reactions.point)
+    if getattr(given, "limit", None) is not None:
+        extra["limit"] = contact.limit(check, (*path, "limit"), given.limit)
     if given.type in JOINT_CHECKS and not failed(vectors.values()):
         JOINT_CHECKS[given.type](check, path, vectors)
     if hasattr(given, "f"):

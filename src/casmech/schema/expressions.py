@@ -1,6 +1,6 @@
 """The safe expression language of model files (never `eval`).
 
-    expr    := sum
+    expr    := sum (COMPARE sum)?          # COMPARE: '<' | '<=' | '>' | '>=' (not chained)
     sum     := product (('+' | '-') product)*
     product := unary (('*' | '/') unary)*
     unary   := ('+' | '-') unary | power
@@ -10,6 +10,10 @@
 Names are parameters or variables (`t`, `length`, ...) and may be dotted (`pivot.angle`,
 `bar.vx`: states of the mechanism, resolved in semantic); `pi` and `e` are builtin constants;
 calls are limited to the functions of `FUNCTIONS`, checked (name and arity) at parse time.
+A comparison is 1.0 when it holds and 0.0 when not; `if(c, a, b)` is `a` where c != 0, else `b`
+(CasADi `if_else`, numpy `where`), `max`/`min` are exact (`fmax`/`fmin`): all three are
+continuous only where their branches meet, so a contact law written with them has a kink
+the integrator sees (docs/format.md).
 An `Expr` evaluates with the "numpy" backend (floats or arrays) or the "casadi" backend
 (SX/MX/DM or floats), both defined by tables, not branches.
 """
@@ -73,6 +77,19 @@ def _step_casadi(x, x0, h0, x1, h1):
     return casadi.if_else(x <= x0, h0, casadi.if_else(x >= x1, h1, cubic))
 
 
+def _if_numpy(condition, a, b):
+    return np.where(np.asarray(condition) != 0, a, b)[()]
+
+
+def _if_casadi(condition, a, b):
+    return casadi.if_else(condition, a, b)
+
+
+def _compare(numpy_op: Callable, casadi_op: Callable):
+    """(numpy, casadi) of a comparison: 1.0 where it holds, else 0.0, in both backends."""
+    return (lambda a, b: np.multiply(numpy_op(a, b), 1.0)), casadi_op
+
+
 # name -> (arity, numpy implementation, casadi implementation)
 FUNCTIONS: dict[str, tuple[int, Callable[..., Any], Callable[..., Any]]] = {
     "sin": (1, np.sin, casadi.sin),
@@ -94,6 +111,7 @@ FUNCTIONS: dict[str, tuple[int, Callable[..., Any], Callable[..., Any]]] = {
     "min": (2, np.minimum, casadi.fmin),
     "max": (2, np.maximum, casadi.fmax),
     "step": (5, _step_numpy, _step_casadi),
+    "if": (3, _if_numpy, _if_casadi),
 }
 
 CONSTANTS: dict[str, float] = {"pi": math.pi, "e": math.e}
@@ -105,7 +123,12 @@ BINARY: dict[str, tuple[Callable[[Any, Any], Any], Callable[[Any, Any], Any]]] =
     "*": (np.multiply, casadi.times),
     "/": (np.divide, casadi.rdivide),
     "**": (np.float_power, casadi.power),
+    "<": _compare(np.less, casadi.lt),
+    "<=": _compare(np.less_equal, casadi.le),
+    ">": _compare(np.greater, casadi.gt),
+    ">=": _compare(np.greater_equal, casadi.ge),
 }
+COMPARISONS = ("<", "<=", ">", ">=")
 UNARY: dict[str, Callable[[Any], Any]] = {"+": operator.pos, "-": operator.neg}
 BACKENDS = {"numpy": 0, "casadi": 1}
 
@@ -235,7 +258,7 @@ _TOKEN = re.compile(
     r"(?P<space>\s+)"
     r"|(?P<number>(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)"
     r"|(?P<name>[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z][A-Za-z0-9_]*)*)"  # dotted: pivot.angle
-    r"|(?P<op>\*\*|[-+*/(),])"
+    r"|(?P<op>\*\*|<=|>=|[-+*/(),<>])"
 )
 
 
@@ -305,9 +328,21 @@ class _Parser:
     def parse(self) -> Any:
         if self.token.kind == "end":
             raise ExpressionSyntaxError("empty expression", 0, max(len(self.text), 1))
-        node = self.sum()
+        node = self.comparison()
         if self.token.kind != "end":
             raise self.unexpected("expected an operator")
+        return node
+
+    def comparison(self) -> Any:
+        """sum (COMPARE sum)?: one comparison, so `a < b < c` is an error, not Python's chain."""
+        node = self.sum()
+        token = self.accept(*COMPARISONS)
+        if token is None:
+            return node
+        node = Binary(token.text, node, self.sum(), token.offset)
+        if self.token.kind == "op" and self.token.text in COMPARISONS:
+            raise ExpressionSyntaxError("comparisons do not chain", self.token.offset,
+                                        len(self.token.text), "write the two with if(...)")
         return node
 
     def binary_chain(self, ops: tuple[str, ...], operand: Callable[[], Any]) -> Any:
@@ -360,7 +395,7 @@ class _Parser:
             return Name(token.text, token.offset, len(token.text))
         if self.accept("(") is not None:
             self.enter(token)
-            node = self.sum()
+            node = self.comparison()
             self.expect(")", "')'")
             self.depth -= 1
             return node
@@ -369,9 +404,9 @@ class _Parser:
     def call(self, name: Token) -> Call:
         self.enter(name)
         self.expect("(", "'('")
-        args = [self.sum()]
+        args = [self.comparison()]
         while self.accept(",") is not None:
-            args.append(self.sum())
+            args.append(self.comparison())
         close = self.expect(")", "',' or ')'")
         self.depth -= 1
         node = Call(name.text, tuple(args), name.offset, close.offset + 1 - name.offset)

@@ -21,6 +21,7 @@ from casmech.errors import did_you_mean
 from casmech.schema import connections, resolved
 from casmech.schema.bodies import orientation
 from casmech.schema.checker import Checker, failed
+from casmech.schema.contact import SHAPES, contact
 from casmech.schema.loader import Path
 
 STATE_KEYS = "force/torque value, tsda/rsda actuator"
@@ -124,7 +125,8 @@ def bushing(check: Checker, path: Path, given) -> dict[str, Any] | None:
     return dict(body_i=given.body_i, body_j=given.body_j, vectors=vectors)
 
 
-LAWS = {"bushing": bushing}  # force types resolved here; the others in connections.py
+# force types resolved here (contact: schema/contact.py); the others in connections.py
+LAWS = {"bushing": bushing, **dict.fromkeys(SHAPES, contact)}
 
 
 def force(check: Checker, index: int, given) -> resolved.Force | None:

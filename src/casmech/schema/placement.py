@@ -23,8 +23,9 @@ from casmech.schema import resolved
 from casmech.schema.expressions import Binary, Expr, Name, Number
 from casmech.schema.resolved import GROUND
 
-POINT = frozenset({"at", "at_i", "at_j"})
-DIRECTION = frozenset({"axis", "axis_i", "axis_j", "c"})
+POINT = frozenset({"at", "at_i", "at_j", "center", "center_i", "center_j"})  # + contact centres
+DIRECTION = frozenset({"axis", "axis_i", "axis_j", "c", "normal"})  # + a contact plane's normal
+POINT_SETS = frozenset({"points", "ends"})  # contact point sets (k x 3): each row a point
 ORIENTATION = frozenset({"orientation"})
 GROUND_SIDE = {"a_i": ("body_i", DIRECTION), "s_i": ("body_i", POINT),
                "a_j": ("body_j", DIRECTION), "s_j": ("body_j", POINT)}
@@ -126,6 +127,9 @@ def _vectors(frame: Frame, item, vectors: Mapping[str, np.ndarray]) -> dict[str,
         side = GROUND_SIDE.get(key)
         if side is not None and getattr(item, side[0], None) == GROUND:
             kind = side[1]
+        if key in POINT_SETS and value is not None:
+            placed[key] = np.array([frame.point(row) for row in value])
+            continue
         placed[key] = value if kind is None or value is None else frame.vector(kind, value)
     return placed
 

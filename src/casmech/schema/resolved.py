@@ -82,6 +82,8 @@ class Joint:
     cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
     reaction_frame: str = "global"  # `reactions: {frame: ...}` (runtime.reaction_frames)
     reaction_point: np.ndarray | None = None  # `reactions: {point: ...}`, global at t = 0
+    # `limit:` (schema/contact.py): lower, upper (+-inf when absent), stiffness, damping
+    limit: Mapping[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +98,8 @@ class Force:
     bushing: body_i, body_j, vectors at, orientation (Euler parameters of the frame at t = 0),
              stiffness, damping, rotational_stiffness, rotational_damping, preload_force,
              preload_torque (3 each, components in the frame)
+    sphere_plane, sphere_sphere, points_plane, capsule_plane: body_i, body_j, vectors (plane
+             at, normal; center, center_i, center_j, points, ends), params (schema/contact.py)
     value and actuator may read the state (`pivot.angle`, `bar.vx`): compiler/coordinates.py
     """
 
@@ -114,6 +118,20 @@ class Force:
     value: tuple[ScalarFunction, ScalarFunction, ScalarFunction] | None = None
     frame: str = "global"
     source: Source | None = None
+    # contact (schema/contact.py): radii, the normal law and friction as numbers
+    params: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Event:
+    """One entry of `events:` (schema/events.py): `when` reads the names of
+    schema.events.state_names besides t and parameters."""
+
+    name: str
+    when: ScalarFunction
+    direction: str = "both"  # rising | falling | both
+    action: str = "log"  # stop | log
+    source: Source | None = None
 
 
 @dataclass(frozen=True)
@@ -125,6 +143,7 @@ class Analysis:
     atol: float = 1e-10
     options: Mapping[str, Any] = field(default_factory=dict)  # further keys (formulation, ...)
     source: Source | None = None
+    events: tuple[Event, ...] = ()  # the model's `events:` (dynamics runs watch them)
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 from casmech.errors import Diagnostic
-from casmech.schema import files, limits, motors, resolved, spec
+from casmech.schema import events, files, limits, motors, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
@@ -146,6 +147,9 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     settings = analysis(check, given.analysis)
+    watched = events.events(check, given.events, joints, forces)
+    if settings is not None and watched:
+        settings = replace(settings, events=watched)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None
     ocp = optimal_control(check, given.ocp) if given.ocp is not None else None
     if check.found:

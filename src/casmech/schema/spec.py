@@ -252,10 +252,21 @@ class Composite(JointBase):
     cut: StrictBool = False
 
 
+class Limit(Spec):
+    """A joint stop (compiler/limits.py): a one-sided spring-damper in the joint coordinate
+    (revolute: the angle, translational and cylindrical: the slide) outside [lower, upper]."""
+
+    lower: Scalar | None = None
+    upper: Scalar | None = None
+    stiffness: Scalar
+    damping: Scalar = 0
+
+
 class Revolute(Composite):
     type: Literal["revolute"]
     at: Vector
     axis: Vector
+    limit: Limit | None = None
 
 
 class Spherical(Composite):
@@ -274,12 +285,14 @@ class Cylindrical(Composite):
     type: Literal["cylindrical"]
     at: Vector
     axis: Vector
+    limit: Limit | None = None
 
 
 class Translational(Composite):
     type: Literal["translational"]
     at: Vector
     axis: Vector
+    limit: Limit | None = None
 
 
 class Fixed(Composite):
@@ -425,7 +438,76 @@ for _key, _vectors in BUSHING_PARAMS.items():
     for _n in range(6):
         setattr(Bushing, f"{_key}{_n}", _component(_vectors[_n // 3], _n % 3))
 
-FORCES = (TSDA, RSDA, PointForce, Torque, Bushing)
+# contact (compiler/contact.py, schema/contact.py; docs/forces.md#contact)
+class NormalLaw(Spec):
+    """hunt_crossley: F = k d^n (1 + alpha d_dot), alpha giving restitution e at v_in
+    (schema/contact.py); linear: F = k d + c d_dot."""
+
+    law: Literal["hunt_crossley", "linear"] = "hunt_crossley"
+    stiffness: Scalar
+    exponent: Scalar | None = None  # hunt_crossley: default 1.5 (Hertz); linear: always 1
+    restitution: Scalar | None = None  # hunt_crossley: e at impact_velocity, default 1
+    impact_velocity: Scalar = 1  # hunt_crossley: the v_in the damping is scaled by
+    damping: Scalar | None = None  # linear: c, default 0
+
+
+class Friction(Spec):
+    """Regularized Coulomb friction: mu from 0 at slip 0 up to `static` at stiction_velocity,
+    down to `dynamic` at transition_velocity, then constant (Adams' STEP curve)."""
+
+    static: Scalar
+    dynamic: Scalar | None = None  # default: static
+    stiction_velocity: Scalar = 1e-3
+    transition_velocity: Scalar | None = None  # default: 2 stiction_velocity
+
+
+class Plane(Spec):
+    at: Vector = (0, 0, 0)  # a point of the plane, global at t = 0
+    normal: Vector = (0, 0, 1)  # its outward normal (towards the other body), global at t = 0
+
+
+class ContactBase(Spec):
+    name: Name
+    body_j: Name
+    normal: NormalLaw
+    friction: Friction | None = None
+    repeat: Repeats | None = None
+
+
+class SpherePlane(ContactBase):
+    type: Literal["sphere_plane"]
+    body_i: Name = "ground"  # carries the plane
+    plane: Plane = Plane()
+    radius: Scalar | None = None  # default: body_j's sphere geometry
+    center: Vector | None = None  # global at t = 0; default: that sphere's centre
+
+
+class SphereSphere(ContactBase):
+    type: Literal["sphere_sphere"]
+    body_i: Name
+    radius_i: Scalar | None = None  # default: the body's sphere geometry
+    radius_j: Scalar | None = None
+    center_i: Vector | None = None  # global at t = 0; default: that sphere's centre
+    center_j: Vector | None = None
+
+
+class PointsPlane(ContactBase):
+    type: Literal["points_plane"]
+    body_i: Name = "ground"
+    plane: Plane = Plane()
+    points: tuple[Vector, ...] | None = None  # global at t = 0; default: body_j's box corners
+
+
+class CapsulePlane(ContactBase):
+    type: Literal["capsule_plane"]
+    body_i: Name = "ground"
+    plane: Plane = Plane()
+    radius: Scalar | None = None  # default: body_j's cylinder geometry
+    ends: Annotated[tuple[Vector, ...], Field(min_length=2, max_length=2)] | None = None
+
+
+CONTACTS = (SpherePlane, SphereSphere, PointsPlane, CapsulePlane)
+FORCES = (TSDA, RSDA, PointForce, Torque, Bushing, *CONTACTS)
 Force = Annotated[Union[FORCES], Field(discriminator="type")]  # noqa: UP007
 
 
@@ -446,6 +528,18 @@ class Analysis(Spec):
     # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
     # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
     method: Literal["auto", "adams", "bdf"] = "auto"
+
+
+# ----------------------------------------------------------------------------------- events
+class Event(Spec):
+    """An event: where `when` (an expression of the results columns, joint coordinates, t and
+    parameters) crosses zero in `direction`; `action` stop ends the run there, log records it
+    (docs/format.md#events, casmech.schema.events)."""
+
+    name: Name
+    when: Scalar
+    direction: Literal["rising", "falling", "both"] = "both"
+    action: Literal["stop", "log"] = "log"
 
 
 # ------------------------------------------------------- estimation and optimal control (issue 7)
@@ -547,6 +641,7 @@ class ModelSpec(Spec):
     joints: tuple[Joint, ...] = ()
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
+    events: tuple[Event, ...] = ()
     estimate: Estimate | None = None
     ocp: OptimalControl | None = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)

@@ -1,0 +1,106 @@
+"""Singular poses a mechanism with loops passed during a dynamics run, by joint and YAML line.
+
+At a singular pose the constraint Jacobian Phi_q loses rank: rows that were independent at t0
+become dependent (a four-bar's flat pose). After a run, the rows of Phi_q independent at the
+first output row (checks.structure), each scaled to unit length, are evaluated at every output
+row by one mapped call; where the determinant of their Gram matrix falls below NEAR times its
+value at t0 (one singular value of the unit rows shrinking ~1/sqrt(NEAR) times), the run passed
+near a singular pose. Each such stretch of rows is reported once, at its smallest
+determinant: the time, the smallest singular value of the unit rows there, and the joints whose
+rows make up the dependency (its singular vector), each with its file:line:col.
+
+Measured (2026-11-24) on every loop model of the gallery and the benchmarks: IFToMM A02 (N = 2,
+flat poses every ~1.9 s) falls to 1e-4..1e-5 of its t0 value at the output rows nearest its
+flat poses; the benchmark four-bar, Bricard's mechanism and Andrews' squeezer stay within 0.5
+of theirs. A tree has no loop to close (its joints' rows are independent at every pose) and is
+not examined; nor is a model above MAX_ENTRIES (output rows x kept rows x coordinates).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler.checks import structure, worst_joints
+from casmech.compiler.functions import SystemFunctions
+from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.memo import kept
+from casmech.runtime.results import Result
+
+NEAR = 1e-3  # Gram determinant of the unit rows against its value at t0
+MAX_ENTRIES = 20_000_000  # rows x kept constraint rows x coordinates examined at most
+KEPT_MAPS = 8
+
+
+def _jacobians(functions: SystemFunctions, n: int) -> BufferedCall:
+    """Phi_q, dense, at n output rows by one call (kept with the bundle)."""
+    def build() -> BufferedCall:
+        phi_q = functions["phi_q"]
+        t, q = ca.MX.sym("t"), ca.MX.sym("q", phi_q.size1_in(1))
+        dense = ca.Function("phi_q_dense", [t, q], [ca.densify(phi_q(t, q))])
+        return BufferedCall(dense.map(n))
+
+    store = functions.derived.setdefault("singular_pose_maps", {})
+    return kept(store, n, build, KEPT_MAPS)
+
+
+def unit_gram_logdet(functions: SystemFunctions, times, q, rows) -> np.ndarray:
+    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q)."""
+    n = len(times)
+    m, columns = functions["phi_q"].size_out(0)
+    flat, = _jacobians(functions, n)(np.asarray(times, float)[None, :], np.asarray(q).T)
+    jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
+    jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
+    _, logdet = np.linalg.slogdet(np.einsum("kij,klj->kil", jacobian, jacobian))
+    return logdet
+
+
+def singular_poses(functions: SystemFunctions, result: Result, loops: bool) -> list[dict] | None:
+    """The singular poses the run passed near (module docstring); None when not examined."""
+    times, q = np.asarray(result.times), np.asarray(result.q)
+    if not loops or len(times) < 2:
+        return None
+    m, columns = functions["phi_q"].size_out(0)
+    rows = _independent(functions, result, float(times[0]), q[0])
+    if len(times) * len(rows) * columns > MAX_ENTRIES:
+        return None
+    drop = unit_gram_logdet(functions, times, q, rows)
+    near = drop - drop[0] < np.log(NEAR)
+    return [_pose(functions, float(times[k]), q[k], rows) for k in _deepest(near, drop)]
+
+
+def _independent(functions: SystemFunctions, result: Result, t: float, q) -> list[int]:
+    """The rows of Phi independent at the first row: every row when the r-p / r-omega run
+    dropped none (its own check at t0, runtime.dynamics), else checks.structure's."""
+    meta = result.metadata
+    if meta.get("formulation") in ("rp", "romega") and meta.get("dropped_rows") == 0:
+        return list(range(functions.n_rows))
+    return list(structure(functions, t, q).independent)
+
+
+def _deepest(near: np.ndarray, drop: np.ndarray) -> list[int]:
+    """The row of smallest determinant in each stretch of consecutive near rows."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], near.astype(int), [0]])))
+    return [start + int(np.argmin(drop[start:stop])) for start, stop in edges.reshape(-1, 2)]
+
+
+def _pose(functions: SystemFunctions, t: float, q: np.ndarray, rows: list[int]) -> dict:
+    """The pose at a row: the smallest singular value of the unit kept rows, and the joints
+    weighted by its left singular vector (the dependency among their rows)."""
+    phi_q = np.array(ca.DM(functions["phi_q"](t, q)))
+    unit = phi_q[rows] / np.linalg.norm(phi_q[rows], axis=1, keepdims=True)
+    u, s, _ = np.linalg.svd(unit)
+    weights = np.zeros(len(phi_q))
+    weights[rows] = np.abs(u[:, s.size - 1])
+    joints = worst_joints(functions, weights)
+    return {"t": t, "smallest_singular_value": float(s[-1]),
+            "joints": [str(name) for name, _, _ in joints],
+            "sources": [str(source) if source else "" for _, source, _ in joints]}
+
+
+def describe(pose: dict) -> str:
+    """One line for the command line."""
+    joints = ", ".join(f"{name} ({source})" if source else name
+                       for name, source in zip(pose["joints"], pose["sources"], strict=True))
+    return (f"near a singular pose at t = {pose['t']:.6g} (smallest singular value "
+            f"{pose['smallest_singular_value']:.2e} of the unit constraint rows): {joints}")

@@ -1,0 +1,130 @@
+"""The `events:` block: names, the `when` expression and what it may read (docs/format.md#events).
+
+`when` is an expression of t, the parameters and the state: every body column of the results
+table (`bar.x` ... `bar.alphaz`, runtime.results.BODY_COLUMNS) and the coordinates of revolute,
+cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the table of
+compiler/coordinates.py). A misspelt or unknown name is E201 at its place in the expression, with
+a did-you-mean hint; a duplicate event name is E301.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from casmech.errors import did_you_mean
+from casmech.schema import contact, resolved, spec
+from casmech.schema.checker import Checker
+from casmech.schema.expressions import ExpressionError, parse
+from casmech.schema.force_laws import joint_attributes
+from casmech.schema.loader import Path, format_path
+
+# the body columns of the results contract (runtime.results.BODY_COLUMNS), in its order
+BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
+                "ax", "ay", "az", "alphax", "alphay", "alphaz")
+JOINT_RESULTS = ("fx", "fy", "fz", "tx", "ty", "tz")  # reaction columns: not readable here
+
+
+def _initial(body: resolved.Body | None, column: str) -> float:
+    """The column's value at t = 0 as the file writes it (accelerations 0; a body that failed
+    its checks: 0), for the finite-value check of `when`."""
+    if body is None or column.startswith("a"):
+        return 0.0
+    if column.startswith("e"):
+        return float(body.euler_parameters[int(column[1])])
+    vector = {"": body.position, "v": body.velocity, "w": body.angular_velocity}[column[:-1]]
+    return float(vector["xyz".index(column[-1])])
+
+
+def state_names(check: Checker) -> dict[str, float]:
+    """Every state name `when` may read, with its value at t = 0 (joint coordinates: 0)."""
+    names = {f"{joint}.{attribute}": 0.0 for joint, kind in check.joint_types.items()
+             for attribute in joint_attributes(kind)}
+    names.update({f"{name}.{column}": _initial(body, column)
+                  for name, body in check.bodies.items() for column in BODY_COLUMNS})
+    return names
+
+
+def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
+    """Message and hint for a dotted name `when` cannot read."""
+    owner, _, attribute = name.rpartition(".")
+    if owner == resolved.GROUND:
+        return "'ground' does not move: it has no state", "name a moving body or a joint"
+    if owner in check.joint_types:
+        kind = check.joint_types[owner]
+        has = joint_attributes(kind)
+        if attribute in JOINT_RESULTS:
+            return (f"reaction column '{name}' cannot be read by an event",
+                    f"events read body columns and joint coordinates ({', '.join(has)})"
+                    if has else "events read body columns and joint coordinates")
+        listed = ", ".join(has) if has else "no coordinates (revolute, cylindrical and " \
+            "translational joints have)"
+        return (f"{kind} joint '{owner}' has no '{attribute}'",
+                did_you_mean(attribute, has) or f"{kind} joints have {listed}")
+    if owner in check.bodies:
+        return (f"body '{owner}' has no '{attribute}'",
+                did_you_mean(attribute, BODY_COLUMNS) or f"bodies have {', '.join(BODY_COLUMNS)}")
+    columns = [state.rpartition(".")[2] for state in states if state.startswith(f"{owner}.")]
+    if columns:  # a contact element's or a joint stop's columns
+        return (f"'{owner}' has no column '{attribute}'",
+                did_you_mean(attribute, columns) or f"it has {', '.join(columns)}")
+    known = [*check.joint_types, *check.bodies]
+    hint = did_you_mean(name, states) or did_you_mean(owner, known)
+    return f"unknown state '{name}': no body or joint '{owner}'", hint
+
+
+def _names(text) -> tuple[str, ...]:
+    """The names `text` uses (none when it is a number or does not parse: Checker.function
+    reports the syntax error)."""
+    try:
+        expr = parse(text) if isinstance(text, str) else None
+    except ExpressionError:
+        return ()
+    return tuple(name for name, _, _ in expr.names_with_offsets()) if expr else ()
+
+
+def _unknown_states(check: Checker, path: Path, text, states) -> set[str]:
+    """Report (E201) every dotted name of `text` that is not a state; those names."""
+    unknown: set[str] = set()
+    for name, offset, _ in (parse(text).names_with_offsets() if _names(text) else ()):
+        if "." in name and name not in states and name not in unknown:
+            message, hint = _misnamed(check, name, states)
+            check.error("E201", path, message, source=check.inside(path, offset), hint=hint)
+            unknown.add(name)
+    return unknown
+
+
+def event(check: Checker, index: int, given: spec.Event, states) -> resolved.Event | None:
+    """One entry of `events:`; its `when` reads t, parameters and the states it names (checked
+    finite at their values at t = 0)."""
+    path: Path = ("events", index, "when")
+    unknown = _unknown_states(check, path, given.when, states)
+    used = {name: states[name] for name in _names(given.when) if name in states}
+    at = {"t": 0.0, **used, **dict.fromkeys(unknown, 0.0)}  # unknown: reported above
+    found = check.function(path, given.when, at)
+    if found is None or unknown:
+        return None
+    when = replace(found, variables=tuple(name for name in at if name in found.expr.symbols))
+    return resolved.Event(given.name, when, given.direction, given.action,
+                          check.doc.locate(("events", index)))
+
+
+def events(check: Checker, given: tuple[spec.Event, ...], joints=(), forces=()
+           ) -> tuple[resolved.Event, ...] | None:
+    """The resolved events (None when any is wrong; every finding reported). Besides the
+    states, `when` reads the contacts' and joint stops' columns (`floor.gap`,
+    `pivot.limit_torque`; value 0 for the finite check at t = 0)."""
+    states = state_names(check) | dict.fromkeys(contact.output_names(joints, forces), 0.0)
+    first: dict[str, Path] = {}
+    found = []
+    for index, item in enumerate(given):
+        name_path: Path = ("events", index, "name")
+        named = check.valid_name(name_path, item.name, check.doc.locate(name_path), set(), "")
+        if named and item.name in first:
+            line = check.doc.locate(first[item.name]).line
+            check.error("E301", name_path, f"duplicate event name '{item.name}' (first used "
+                        f"by {format_path(first[item.name][:2])}, line {line})")
+            named = False
+        first.setdefault(item.name, name_path)
+        resolved_event = event(check, index, item, states)  # its findings, named or not
+        found.append(resolved_event if named else None)
+    return None if any(item is None for item in found) else tuple(found)
