@@ -41,6 +41,24 @@ ROUNDOFF = 1e-13
 OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
 
 
+class Entry(ca.SX):
+    """A scalar of the model data: non-zero by construction (zeros are structure, in the
+    signature), so comparing it with 0 is a fact of the structure that the compiler's Python
+    may branch on (a contact's damping exponent); any other comparison stays symbolic."""
+
+    def __eq__(self, other):
+        return False if _zero(other) else ca.SX.__eq__(self, other)
+
+    def __ne__(self, other):
+        return True if _zero(other) else ca.SX.__ne__(self, other)
+
+    __hash__ = ca.SX.__hash__
+
+
+def _zero(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and value == 0
+
+
 @dataclass(frozen=True)
 class Split:
     ir: ModelIR  # numbers replaced by entries of `symbols` (structural zeros kept)
@@ -71,7 +89,7 @@ class _Walk:
             entries.append(ca.SX.sym(f"d{len(self.symbols)}") if keep else ca.SX(0.0))
             self.symbols += [entries[-1]] if keep else []
         if array.ndim == 0:
-            return entries[0]
+            return Entry(entries[0]) if nonzero[0] else 0.0
         rows, cols = (array.shape[0], 1) if array.ndim == 1 else array.shape
         return ca.reshape(ca.vertcat(*entries), rows, cols)
 
