@@ -52,7 +52,8 @@ def test_parametric_bundle_equals_a_fresh_build(name):
                              fresh.evaluate(function_name, *args), strict=True):
             # one expression graph with the numbers as inputs or as constants: round-off,
             # relative to the largest entry (a sum of large terms may cancel to near 0)
-            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * (1 + np.abs(want).max(initial=0)))
+            scale = 1 + np.abs(want).max(initial=0)
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * scale)
 
 
 def test_values_are_the_numbers_of_the_numeric_lowering():

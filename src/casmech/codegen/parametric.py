@@ -4,9 +4,10 @@ model's parameters.
 The bundle is compiler.functions over compiler.parametric's symbolic IR (every function with the
 trailing input `d`, the model data), unrolled SX generated as C with the derivatives
 codegen.generate adds (and, for kinematics and inverse dynamics, compiler.prescribed's step over
-it, with `d` its third input); each DAE residual is compiler.dae's over that bundle, (t, x, z, [p; d]),
-with its daeF and jacF (codegen.residuals.from_residual). The cache key is the model's structure
-(compiler.parametric's signature) with its text, component files and tables, never the values.
+it, with `d` its third input); each DAE residual is compiler.dae's over that bundle,
+(t, x, z, [p; d]), with its daeF and jacF (codegen.residuals.from_residual). The cache key is
+the model's structure (compiler.parametric's signature) with its text, component files and
+tables, never the values.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the

@@ -21,8 +21,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-import casadi as ca
-
 from casmech.compiler import eom, euler
 from casmech.compiler.ir import constant
 from casmech.schema.resolved import ScalarFunction

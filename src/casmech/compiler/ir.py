@@ -20,7 +20,8 @@ GROUND_INDEX = -1
 
 def constant(value):
     """A field of the IR as a CasADi matrix: DM for numbers, as it is when symbolic (the model
-    data of compiler.parametric)."""
+    data of compiler.parametric). The compiler reads IR vectors through this, never ca.DM,
+    which turns a symbol into NaN without an error."""
     return value if isinstance(value, (ca.SX, ca.MX)) else ca.DM(value)
 
 

@@ -6,9 +6,8 @@ laws, initial poses and velocities) becomes one entry of a vector of CasADi symb
 fixed order; what is left is the structure (which bodies, rows, force elements, kernels, the
 texts of the expressions) and which numbers are zero (or round-off: ROUNDOFF): those stay
 structural zeros, so the functions have the sparsity (and nearly the arithmetic) of the numeric
-build. `split(ir)` returns
-the IR with symbols in place of the other numbers, their values and the structure's signature:
-two lowerings of one file with different parameter values have the same signature, and then the
+build. `split(ir)` returns the IR with symbols in place of the other numbers, their values and
+the structure's signature: two lowerings of one file with different parameter values have the same signature, and then the
 same symbolic IR, unless a value changed the structure (a repeat count, a zero that became
 non-zero: an initial angle moved from 0, a joint point moved off an axis), which a build keyed
 on the signature sees as a different model.
@@ -34,10 +33,10 @@ from casmech.schema.tables import TableExpr
 
 # ModelIR fields that are not part of what the system functions compute from
 STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
-# structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
 # entries below this fraction of their array's largest are round-off of the lowering's rotations
 # (a joint point on an axis, in a body frame: 0 or 1e-17 depending on the values): structural 0
 ROUNDOFF = 1e-13
+# structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
 OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
 
 
