@@ -18,7 +18,7 @@ RESIDUALS = ["dae_ggl_rp", "dae_rp", "dae_ggl_romega", "dae_romega"]
 
 
 @pytest.fixture(scope="module", params=["parametric", "mapped"])
-def compiled(request, model, toolchain, cache_root, build_dir):
+def compiled(request, model, toolchain, cache_root):
     """Both libraries of the session's model: the parametric one (codegen.parametric: it has
     parameters), the mapped one (codegen.mapped, the values built in)."""
     return codegen.compiled(model, toolchain, root=cache_root,
