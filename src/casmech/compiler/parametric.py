@@ -7,10 +7,10 @@ fixed order; what is left is the structure (which bodies, rows, force elements, 
 texts of the expressions) and which numbers are zero (or round-off: ROUNDOFF): those stay
 structural zeros, so the functions have the sparsity (and nearly the arithmetic) of the numeric
 build. `split(ir)` returns the IR with symbols in place of the other numbers, their values and
-the structure's signature: two lowerings of one file with different parameter values have the same signature, and then the
-same symbolic IR, unless a value changed the structure (a repeat count, a zero that became
-non-zero: an initial angle moved from 0, a joint point moved off an axis), which a build keyed
-on the signature sees as a different model.
+the structure's signature: two lowerings of one file with different parameter values have the
+same signature, and then the same symbolic IR, unless a value changed the structure (a repeat
+count, a zero that became non-zero: an initial angle moved from 0, a joint point moved off an
+axis), which a build keyed on the signature sees as a different model.
 
 `data(ir)` is the vector alone (the numeric lowering at other values gives the values to bind to
 a build made once). Indices, names, texts, sources and the analysis settings are structure.
