@@ -17,6 +17,14 @@ from .test_mapped import SUBSET
 RESIDUALS = ["dae_ggl_rp", "dae_rp", "dae_ggl_romega", "dae_romega"]
 
 
+@pytest.fixture(scope="module", params=["parametric", "mapped"])
+def compiled(request, model, toolchain, cache_root):
+    """Both libraries of the session's model: the parametric one (codegen.parametric: it has
+    parameters), the mapped one (codegen.mapped, the values built in)."""
+    return codegen.compiled(model, toolchain, root=cache_root,
+                            parametric_library=request.param == "parametric")
+
+
 def _random_inputs(function: ca.Function, rng) -> list[ca.DM]:
     return [ca.DM(function.sparsity_in(k), rng.uniform(-1, 1, function.nnz_in(k)))
             for k in range(function.n_in())]
@@ -132,12 +140,15 @@ def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted, bu
         m = dae.sizes(interpreted.functions, form)[2]
         inputs[3][1:] = rng.uniform(0.5, 2.0, want.nnz_in(3) - 1)  # row scales s (, s_phi)
         inputs[3][1:1 + m] = rng.integers(0, 2, m)  # w: rows kept or masked
+        # a parametric library's residuals take the model data after p (codegen.parametric)
+        given = [*inputs[:3], ca.vertcat(inputs[3], ca.DM(
+            compiled.data if compiled.data is not None else ca.DM(0, 1))), ca.DM(0, 1)]
         # same equations, sums in another order: the issue's compiled-vs-interpreted bound
-        for a, b in zip(got.call([*inputs, ca.DM(0, 1)])[:2], want.call(inputs), strict=True):
+        for a, b in zip(got.call(given)[:2], want.call(inputs), strict=True):
             np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12, err_msg=name)
-        for a, b in zip(dae_f.call([*inputs, ca.DM(0, 1)]), want.call(inputs), strict=True):
+        for a, b in zip(dae_f.call(given), want.call(inputs), strict=True):
             np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12, err_msg=name)
         blocks = _sx_blocks(want).call(inputs)
-        for a, b in zip(jac_f.call([*inputs, ca.DM(0, 1)]), blocks, strict=True):
+        for a, b in zip(jac_f.call(given), blocks, strict=True):
             np.testing.assert_allclose(ca.densify(a).full(), ca.densify(b).full(), rtol=1e-12,
                                        atol=1e-12, err_msg=name)  # the same bound

@@ -1,13 +1,30 @@
 """The joint formulation on a compiled bundle: its tree's ODE and results rows compiled
-(runtime.joint_dynamics.compiled_system) and equal to the interpreted ones."""
+(runtime.joint_dynamics.compiled_system) and equal to the interpreted ones. That is the mapped
+library's; a parametric library (codegen.parametric) keeps the tree's functions interpreted, which
+would otherwise be built once per parameter value."""
 
 import numpy as np
+import pytest
 
 import casmech
+from casmech import codegen
 from casmech.runtime.joint_dynamics import joint_system
 from tests.conftest import Table
 
 RNG = np.random.default_rng(11)
+
+
+@pytest.fixture(scope="module")
+def compiled(model, toolchain, cache_root):
+    """The mapped library of the session's model (it has parameters: by default parametric)."""
+    return codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
+
+
+def test_a_parametric_bundle_keeps_the_tree_interpreted(model, toolchain, cache_root):
+    bundle = codegen.compiled(model, toolchain, root=cache_root)
+    assert bundle.data is not None and codegen.mode_of(bundle) == "compiled"
+    system = joint_system(bundle)
+    assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
 
 
 def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):

@@ -1,6 +1,8 @@
 """Code generation: SystemFunctions -> C -> shared libraries -> casadi.external, with a cache.
 
     functions = compiled(model)           # SystemFunctions; built once per content, then cached
+                                          # (once per structure for every parameter value when
+                                          # codegen.parametric applies)
     export(model, Path("out"))            # `casmech compile`: sources, headers, manifest, libraries
     auto_mode(model)                      # "compiled" or "interpreted"
     compile_functions({"f": f}, ...)      # any named casadi Functions (codegen.library)
@@ -40,12 +42,13 @@ from __future__ import annotations
 import os
 import shutil
 import signal
+from collections.abc import Callable
 from pathlib import Path
 
 import casadi as ca
 
 import casmech
-from casmech.codegen import cache, generate, manifest, residuals
+from casmech.codegen import cache, generate, manifest, parametric, residuals
 from casmech.codegen.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.codegen.library import compile_functions
 from casmech.codegen.load import load as load_build
@@ -56,6 +59,7 @@ from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
+from casmech.compiler.parametric import data
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 
@@ -109,27 +113,45 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
                                                for p in group]]}, libraries)
 
 
-def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
-            dae: bool = False) -> tuple[Path, bool]:
+def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
+           mapped: bool = False) -> tuple[str, Callable[[Path], None], bool]:
+    """(cache key, build(directory), parametric): the parametric library (codegen.parametric)
+    where it applies and `mapped` is not asked for, else the mapped one with the values baked
+    in (and in its key)."""
+    if not mapped and parametric.applies(model):
+        entry = parametric.key(model, data(ir)[1], toolchain, dae)
+        info = {"model": model.name, "key": entry}
+        return entry, lambda directory: parametric.write_build(
+            ir, directory, toolchain, info, dae, build_libraries), True
     model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
+    info = {"model": model.name, "model_hash": model_hash, "key": entry}
+    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), False
 
-    def build(directory: Path) -> None:
-        write_build(lower(model), directory, toolchain,
-                    {"model": model.name, "model_hash": model_hash, "key": entry}, dae)
 
+def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
+            dae: bool = False, mapped: bool = False) -> tuple[Path, bool]:
+    entry, build, _ = _entry(model, lower(model), toolchain, dae, mapped)
     return cache.lookup(entry, build, root)
 
 
 def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
-             root: Path | None = None, dae: bool = True) -> SystemFunctions:
+             root: Path | None = None, dae: bool = True,
+             parametric_library: bool = True) -> SystemFunctions:
     """The model's SystemFunctions loaded from its compiled libraries, built only when the
-    cache holds none for this model content, casmech/CasADi version, compiler and flags. With
+    cache holds none for this model (for a parametric library: this structure, whatever the
+    parameter values; codegen.parametric), casmech/CasADi version, compiler and flags. With
     `dae`, the bundle also carries the DAE residuals dae_[ggl_]<formulation> as IDAS integrates
     them (t, x, z, p, u) -> (ode, alg, quad, zero) (compiler.dae.residual takes them from the
-    bundle, compiler.dae.problem hands them to casadi as they are)."""
-    directory, _ = _cached(model, toolchain or Toolchain(), root, dae)
-    return load_build(directory, lower(model))
+    bundle, compiler.dae.problem hands them to casadi as they are). `parametric_library` False:
+    the mapped library even where the parametric one applies."""
+    ir = lower(model)
+    entry, build, is_parametric = _entry(model, ir, toolchain or Toolchain(), dae,
+                                         not parametric_library)
+    directory, _ = cache.lookup(entry, build, root)
+    if is_parametric:
+        return parametric.load(directory, ir, data(ir)[0])
+    return load_build(directory, ir)
 
 
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
@@ -138,9 +160,7 @@ AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, dae: bool = True) -> bool:
     """Whether the cache holds the model's library for this toolchain (nothing is built)."""
-    toolchain = toolchain or Toolchain()
-    entry = cache.key(cache.model_digest(model), toolchain.version(),
-                      toolchain.all_flags, dae)
+    entry = _entry(model, lower(model), toolchain or Toolchain(), dae)[0]
     return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
 
 
@@ -199,7 +219,7 @@ def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
     (manifest path, cache hit)."""
     if out.exists() and not out.is_dir():
         raise UsageError(f"{out} is a file; -o expects a directory (created if missing)")
-    directory, hit = _cached(model, toolchain or Toolchain(), root, dae)
+    directory, hit = _cached(model, toolchain or Toolchain(), root, dae, mapped=True)
     out.mkdir(parents=True, exist_ok=True)
     shutil.copytree(directory, out, dirs_exist_ok=True)
     return out / manifest.MANIFEST, hit

@@ -1,7 +1,9 @@
 """The build cache: one directory per key, published atomically.
 
 Key: the model's content (its text, the texts of the component files it was composed from, the
-data of every table it reads, and its resolved parameters, so --set overrides count), the
+data of every table it reads, and its resolved parameters, so --set overrides count; a
+parametric library's key has the model's structure instead of the parameter values,
+codegen.parametric), the
 casmech version and a digest of its compiler sources, the CasADi version, the C compiler and its
 flags. A build happens in a private temporary directory under the cache and is published with
 one rename; a lock file makes a second process wait for the first instead of building the same
@@ -72,11 +74,13 @@ def _tables(value, found: list, seen: set) -> list:
     return found
 
 
-def model_digest(model: ResolvedModel) -> str:
-    """sha256 of everything the generated code of a model depends on."""
+def model_digest(model: ResolvedModel, values: bool = True) -> str:
+    """sha256 of everything the generated code of a model depends on; without `values`, of
+    everything but its parameter values (a parametric library takes them as an input)."""
+    parameters = {k: float(v) for k, v in sorted(model.parameters.items())} if values else {}
     digest = hashlib.sha256(json.dumps({
         "text": model.text, "files": dict(sorted(model.files.items())),
-        "parameters": {k: float(v) for k, v in sorted(model.parameters.items())}}).encode())
+        "parameters": parameters}).encode())
     for table in _tables(model, [], set()):
         polynomial = table.polynomial
         digest.update(json.dumps([table.text, polynomial.periodic, list(polynomial.slopes),

@@ -41,4 +41,5 @@ def load(directory: Path, ir: ModelIR) -> SystemFunctions:
 def mode_of(functions: SystemFunctions) -> str:
     """'compiled' when the bundle's functions are loaded from a library, else 'interpreted'."""
     kinds = {f.class_name() for f in functions.functions.values()}
-    return "compiled" if kinds == {"External"} else "interpreted"
+    bound = functions.data is not None  # externals with the model data bound (parametric)
+    return "compiled" if kinds == {"External"} or bound else "interpreted"

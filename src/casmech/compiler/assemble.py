@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import euler
-from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
+from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR, constant
 from casmech.compiler.primitives import PRIMITIVES, Frame
 
 GROUND_POSE = np.array([0.0, 0, 0, 1, 0, 0, 0])
@@ -77,7 +77,7 @@ def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
     rows = []
     for prim in ir.primitives:
         phi_fun, keys = PRIMITIVES[prim.kind]
-        vectors = {k: ca.DM(prim.vectors[k]) for k in keys}
+        vectors = {k: constant(prim.vectors[k]) for k in keys}
         rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
                             driver_value(prim, x.t, scale)))
     rows += [x.p(k).T @ x.p(k) - 1 for k in range(ir.n_bodies)]

@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import euler
-from casmech.compiler.ir import ForceIR
+from casmech.compiler.ir import ForceIR, constant
 from casmech.schema.spec import BUSHING_PARAMS
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -63,12 +63,12 @@ def rotation_vector(p):
 
 def deflection(force: ForceIR, x):
     """s = [d; theta] (6x1), I-frame components."""
-    marker = ca.DM(force.axes["marker_i"])  # I frame axes in body_i (columns)
+    marker = constant(force.axes["marker_i"])  # I frame axes in body_i (columns)
     fi, fj = x.frame(force.body_i), x.frame(force.body_j)
-    gap = fj.r + fj.A @ ca.DM(force.points["s_j"]) - fi.r - fi.A @ ca.DM(force.points["s_i"])
+    gap = fj.r + fj.A @ constant(force.points["s_j"]) - fi.r - fi.A @ constant(force.points["s_i"])
     d = marker.T @ fi.A.T @ gap
     s = relative(_conjugate(relative(x.p(force.body_i), x.p(force.body_j))),
-                 ca.DM(force.axes["rest"]))
+                 constant(force.axes["rest"]))
     return ca.vertcat(d, marker.T @ rotation_vector(s))
 
 

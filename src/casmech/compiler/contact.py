@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import euler, limits
-from casmech.compiler.ir import GROUND_INDEX, ForceIR
+from casmech.compiler.ir import GROUND_INDEX, ForceIR, constant
 from casmech.schema.contact import OUTPUTS  # results columns per element
 from casmech.schema.expressions import FUNCTIONS
 
@@ -51,13 +51,13 @@ class Point:
 
 def _point(x, k: int, s_bar):
     f = x.frame(k)
-    return f.r + f.A @ ca.DM(s_bar)
+    return f.r + f.A @ constant(s_bar)
 
 
 def _plane(force: ForceIR, x):
     """(point, unit normal) of the plane carried by body_i."""
     return _point(x, force.body_i, force.points["plane_at"]), \
-        x.frame(force.body_i).A @ ca.DM(force.axes["normal"])
+        x.frame(force.body_i).A @ constant(force.axes["normal"])
 
 
 def _sphere_on_plane(at, normal, center, radius) -> Point:

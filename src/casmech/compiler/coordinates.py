@@ -21,9 +21,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-import casadi as ca
-
 from casmech.compiler import eom, euler
+from casmech.compiler.ir import constant
 from casmech.schema.resolved import ScalarFunction
 
 ROTATING = ("revolute", "cylindrical")
@@ -32,7 +31,7 @@ SLIDING = ("translational", "cylindrical")
 
 def displacement(geometry, x):
     """Slide of body_j's joint point along the axis on body_i, from body_i's joint point."""
-    axis = x.frame(geometry.body_i).A @ ca.DM(geometry.axes["w_i"])
+    axis = x.frame(geometry.body_i).A @ constant(geometry.axes["w_i"])
     gap = eom.point(x, geometry.body_j, geometry.points["s_j"]) - eom.point(
         x, geometry.body_i, geometry.points["s_i"])
     return axis.T @ gap

@@ -30,6 +30,9 @@ position and velocity constraints themselves at every step instead of their seco
 scaled by s_phi; in r-p P is Phi_q, and s_phi = s; mu is 0 along the exact motion.) The
 masked rows become lam_k = 0 and mu_k = 0. IDAS integrates it with the algebraic unknowns out
 of its error test.
+
+Over a parametric bundle (every function with the trailing input d, the model data:
+compiler.parametric) either residual takes d after its own parameters: p = [t0, w, s (, s_phi), d].
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.parametric import data_size, with_data
 
 
 def _symbols(functions: dict[str, ca.Function]):
@@ -76,8 +80,10 @@ def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Functi
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     sym = _symbols(functions)
+    n_p = parameters(functions, name, "projection")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
-                    sym.sym("p", parameters(functions, name, "projection")))
+                    sym.sym("p", n_p + data_size(functions)))
+    functions = with_data(functions, p[n_p:])
     t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
     w, s = p[1:1 + m], p[1 + m:1 + 2 * m]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
@@ -111,10 +117,12 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     n_q, n_v, m = sizes(functions, name)
     n_phi = functions["phi"].size1_out(0)
     sym = _symbols(functions)
+    n_p = parameters(functions, name, "ggl")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
-                    sym.sym("p", parameters(functions, name, "ggl")))
+                    sym.sym("p", n_p + data_size(functions)))
+    functions = with_data(functions, p[n_p:])
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
-    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:]
+    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:n_p]
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
     nu = functions[form.nu](t, q) * s

@@ -15,7 +15,7 @@ import casadi as ca
 
 from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
 from casmech.compiler.assemble import Coordinates
-from casmech.compiler.ir import ForceIR, ModelIR
+from casmech.compiler.ir import ForceIR, ModelIR, constant
 
 
 def mass_matrix(ir: ModelIR, x: Coordinates):
@@ -23,7 +23,7 @@ def mass_matrix(ir: ModelIR, x: Coordinates):
     blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies]
     for k, b in enumerate(ir.bodies):
         g = euler.g_matrix(x.p(k))
-        blocks.append(4 * g.T @ ca.DM(b.inertia) @ g)
+        blocks.append(4 * g.T @ constant(b.inertia) @ g)
     return ca.diagcat(*blocks) if blocks else ca.SX(0, 0)
 
 
@@ -33,14 +33,14 @@ def quadratic_velocity(ir: ModelIR, x: Coordinates):
     terms = [ca.SX.zeros(3 * nb, 1)]
     for k, b in enumerate(ir.bodies):
         g_dot = euler.g_matrix(x.p(k, x.q_dot))
-        terms.append(8 * g_dot.T @ ca.DM(b.inertia) @ g_dot @ x.p(k))
+        terms.append(8 * g_dot.T @ constant(b.inertia) @ g_dot @ x.p(k))
     return ca.vertcat(*terms)
 
 
 def point(x: Coordinates, k: int, s_bar):
     """Global position of a body-fixed point (ground: s_bar is already global)."""
     f = x.frame(k)
-    return f.r + f.A @ ca.DM(s_bar)
+    return f.r + f.A @ constant(s_bar)
 
 
 def rate(expr, x: Coordinates):
@@ -62,7 +62,7 @@ def relative_angle(ai, aj, u_i, v_i, u_j):
 def rsda_angle(force: ForceIR, x: Coordinates):
     """Rotation of body j about the joint axis (relative_angle)."""
     return relative_angle(x.frame(force.body_i).A, x.frame(force.body_j).A,
-                          *(ca.DM(force.axes[k]) for k in ("u_i", "v_i", "u_j")))
+                          *(constant(force.axes[k]) for k in ("u_i", "v_i", "u_j")))
 
 
 def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str],
@@ -136,7 +136,7 @@ FORCE_ELEMENTS.update(motors.FORCE_ELEMENTS)  # effort motors of joints (ir.moto
 def applied_forces(ir: ModelIR, x: Coordinates):
     """(generalized applied forces incl. gravity, spring potential energy)."""
     nb = ir.n_bodies
-    gravity = ca.vertcat(*[b.mass * ca.DM(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
+    gravity = ca.vertcat(*[b.mass * constant(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
     total, potential = gravity, 0.0
     for force in (*ir.forces, *ir.motors, *ir.limits):
         generalized, energy = FORCE_ELEMENTS[force.type](force, x)
@@ -150,8 +150,8 @@ def energy(ir: ModelIR, x: Coordinates, spring_potential):
     for k, b in enumerate(ir.bodies):
         v = x.r(k, x.q_dot)
         w_bar = 2 * euler.g_matrix(x.p(k)) @ x.p(k, x.q_dot)
-        kinetic += 0.5 * b.mass * (v.T @ v) + 0.5 * w_bar.T @ ca.DM(b.inertia) @ w_bar
-        potential -= b.mass * (ca.DM(ir.gravity).T @ x.r(k))
+        kinetic += 0.5 * b.mass * (v.T @ v) + 0.5 * w_bar.T @ constant(b.inertia) @ w_bar
+        potential -= b.mass * (constant(ir.gravity).T @ x.r(k))
     return kinetic, potential
 
 

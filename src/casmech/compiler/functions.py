@@ -37,6 +37,9 @@ class SystemFunctions:
     ir: ModelIR = field(repr=False)
     # what analyses derive from the bundle once and reuse (e.g. the joint formulation's system)
     derived: dict = field(default_factory=dict, repr=False, compare=False)
+    # a compiled parametric bundle (codegen.parametric): the model data `ir` was lowered to,
+    # bound in every function but the DAE residuals, which take it after their own p
+    data: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
@@ -80,7 +83,10 @@ def _function(name, inputs: dict, outputs: dict) -> ca.Function:
                        list(inputs), list(outputs))
 
 
-def build_functions(ir: ModelIR) -> SystemFunctions:
+def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
+    """The bundle of a numeric IR; of a symbolic one (compiler.parametric.split) with `data`,
+    its symbols, as every function's trailing input "d"."""
+    extra = {} if data is None else {"d": data}
     cs = build_constraints(ir)
     x = cs.x
     t, q, q_dot, q_ddot = x.t, x.q, x.q_dot, x.q_ddot
@@ -93,27 +99,28 @@ def build_functions(ir: ModelIR) -> SystemFunctions:
     omega = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_dot) for k in range(ir.n_bodies)]
     alpha = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_ddot) for k in range(ir.n_bodies)]
     stack = (lambda vs: ca.horzcat(*vs)) if ir.n_bodies else (lambda vs: ca.SX(3, 0))
-    functions = [
-        _function("phi", {"t": t, "q": q}, {"phi": cs.phi}),
-        _function("phi_q", {"t": t, "q": q}, {"phi_q": cs.phi_q}),
-        _function("nu", {"t": t, "q": q}, {"nu": cs.nu}),
-        _function("gamma", {"t": t, "q": q, "q_dot": q_dot}, {"gamma": cs.gamma}),
-        _function("variations", {"t": t, "q": q}, {"phi_r": cs.phi_r, "pi_bar": cs.pi_bar}),
-        _function("phi_scaled", {"t": t, "q": q, "s": cs.scale},
-                  {"phi": cs.phi_scaled, "phi_q": cs.phi_q_scaled}),
-        _function("mass_matrix", {"q": q}, {"mass_matrix": mass}),
-        _function("generalized_forces", {"t": t, "q": q, "q_dot": q_dot},
-                  {"generalized_forces": fixed(applied + eom.quadratic_velocity(ir, x))}),
-        _function("energy", {"t": t, "q": q, "q_dot": q_dot},
-                  {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
-        _function("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": lam},
-                  {"force": fixed(force), "torque": fixed(torque)}),
-        _function("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
-                  {"omega": stack(omega), "alpha": stack(alpha)}),
-        _function("element_outputs", {"t": t, "q": q, "q_dot": q_dot},
-                  {"values": fixed(contact.element_outputs(ir, x))}),
+    definitions = [
+        ("phi", {"t": t, "q": q}, {"phi": cs.phi}),
+        ("phi_q", {"t": t, "q": q}, {"phi_q": cs.phi_q}),
+        ("nu", {"t": t, "q": q}, {"nu": cs.nu}),
+        ("gamma", {"t": t, "q": q, "q_dot": q_dot}, {"gamma": cs.gamma}),
+        ("variations", {"t": t, "q": q}, {"phi_r": cs.phi_r, "pi_bar": cs.pi_bar}),
+        ("phi_scaled", {"t": t, "q": q, "s": cs.scale},
+         {"phi": cs.phi_scaled, "phi_q": cs.phi_q_scaled}),
+        ("mass_matrix", {"q": q}, {"mass_matrix": mass}),
+        ("generalized_forces", {"t": t, "q": q, "q_dot": q_dot},
+         {"generalized_forces": fixed(applied + eom.quadratic_velocity(ir, x))}),
+        ("energy", {"t": t, "q": q, "q_dot": q_dot},
+         {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
+        ("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": lam},
+         {"force": fixed(force), "torque": fixed(torque)}),
+        ("body_rates", {"q": q, "q_dot": q_dot, "q_ddot": q_ddot},
+         {"omega": stack(omega), "alpha": stack(alpha)}),
+        ("element_outputs", {"t": t, "q": q, "q_dot": q_dot},
+         {"values": fixed(contact.element_outputs(ir, x))}),
     ]
-    functions += [_function(*definition) for definition in romega.definitions(ir, cs)]
+    definitions += romega.definitions(ir, cs)
+    functions = [_function(name, inputs | extra, outputs) for name, inputs, outputs in definitions]
     names = tuple(b.name for b in ir.bodies)
 
     def body_name(k: int) -> str:

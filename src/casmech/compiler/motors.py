@@ -19,7 +19,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.compiler import euler
-from casmech.compiler.ir import ForceIR
+from casmech.compiler.ir import ForceIR, constant
 
 # joint motion -> (ForceIR type, axes on body i / j, points on body i / j)
 KINDS = {
@@ -47,19 +47,19 @@ def lower(joint, frame, poses) -> list[ForceIR]:
 
 def _point(x, k: int, s_bar):
     f = x.frame(k)
-    return f.r + f.A @ ca.DM(s_bar)
+    return f.r + f.A @ constant(s_bar)
 
 
 def angle(motor: ForceIR, x):
     ai, aj = x.frame(motor.body_i).A, x.frame(motor.body_j).A
-    u_j = aj @ ca.DM(motor.axes["u_j"])
-    u_i, v_i = ai @ ca.DM(motor.axes["u_i"]), ai @ ca.DM(motor.axes["v_i"])
+    u_j = aj @ constant(motor.axes["u_j"])
+    u_i, v_i = ai @ constant(motor.axes["u_i"]), ai @ constant(motor.axes["v_i"])
     return ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
 
 
 def displacement(motor: ForceIR, x):
     d = _point(x, motor.body_j, motor.points["s_j"]) - _point(x, motor.body_i, motor.points["s_i"])
-    return (x.frame(motor.body_i).A @ ca.DM(motor.axes["w_i"])).T @ d
+    return (x.frame(motor.body_i).A @ constant(motor.axes["w_i"])).T @ d
 
 
 COORDINATE = {"motor_torque": angle, "motor_force": displacement}

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.compiler.parametric import data_size, with_data
 from casmech.compiler.sparse_qr import sparse_qr
 
 ITERATIONS = 3  # chord Newton steps per row; rows that need more go to the per-row code
@@ -41,12 +42,13 @@ def step(functions: dict[str, ca.Function], iterations: int = ITERATIONS) -> ca.
     """prescribed_step over a bundle (module docstring); the bundle's own when it has one."""
     if "prescribed_step" in functions and iterations == ITERATIONS:
         return functions["prescribed_step"]
-    phi, phi_q, nu, gamma = (functions[k] for k in ("phi", "phi_q", "nu", "gamma"))
-    mass, forces = functions["mass_matrix"], functions["generalized_forces"]
-    n = phi_q.size2_out(0)
-    qr = sparse_qr(phi_q.sparsity_out(0), "phi_q_qr")
+    n = functions["phi_q"].size2_out(0)
+    qr = sparse_qr(functions["phi_q"].sparsity_out(0), "phi_q_qr")
     sym = _symbols(functions)
-    s, u = sym.sym("s", 3 * n), sym.sym("u", 2)
+    s, u, d = sym.sym("s", 3 * n), sym.sym("u", 2), sym.sym("d", data_size(functions))
+    called = with_data(functions, d)  # a parametric bundle's: d, a third input of the step
+    phi, phi_q, nu, gamma = (called[k] for k in ("phi", "phi_q", "nu", "gamma"))
+    mass, forces = called["mass_matrix"], called["generalized_forces"]
     t, h = u[0], u[1]
     q, q_dot, q_ddot = s[:n], s[n:2 * n], s[2 * n:]
     q = q + h * q_dot + 0.5 * h * h * q_ddot
@@ -59,9 +61,10 @@ def step(functions: dict[str, ca.Function], iterations: int = ITERATIONS) -> ca.
     lam = qr.solve_transposed(*factors, forces(t, q, q_dot) - ca.mtimes(mass(q), q_ddot))
     residual = phi(t, q)
     worst = ca.mmax(ca.fabs(residual)) if residual.numel() else sym(1, 1)
-    return ca.Function("prescribed_step", [s, u],
+    extra = [d] if d.numel() else []
+    return ca.Function("prescribed_step", [s, u, *extra],
                        [ca.vertcat(q, q_dot, q_ddot), ca.vertcat(lam, worst, ratio)],
-                       ["s", "u"], ["s_next", "checks"])
+                       ["s", "u", *["d"] * len(extra)], ["s_next", "checks"])
 
 
 def grid(step_function: ca.Function, rows: int) -> tuple[ca.Function, int]:

@@ -19,7 +19,7 @@ import casadi as ca
 
 from casmech.compiler import eom, euler
 from casmech.compiler.assemble import ConstraintSystem, Coordinates
-from casmech.compiler.ir import ModelIR
+from casmech.compiler.ir import ModelIR, constant
 
 
 def omega_bar(x: Coordinates, v, k: int):
@@ -37,7 +37,7 @@ def q_dot_of(x: Coordinates, v):
 
 def mass(ir: ModelIR):
     """blkdiag(m_k I_3 ..., J_bar_k ...) (6 nb x 6 nb, v layout)."""
-    blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies] + [ca.DM(b.inertia) for b in ir.bodies]
+    blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies] + [constant(b.inertia) for b in ir.bodies]
     return ca.SX(ca.diagcat(*blocks)) if blocks else ca.SX(0, 0)
 
 
@@ -48,7 +48,7 @@ def forces(ir: ModelIR, x: Coordinates, v, q_dot):
     torques = []
     for k, b in enumerate(ir.bodies):
         q_p = applied[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-        w, inertia = omega_bar(x, v, k), ca.DM(b.inertia)
+        w, inertia = omega_bar(x, v, k), constant(b.inertia)
         torques.append(0.5 * euler.g_matrix(x.p(k)) @ q_p - ca.cross(w, inertia @ w))
     return ca.vertcat(applied[:3 * nb], *torques)
 

@@ -328,7 +328,9 @@ class _Stepper:
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         self.idas_calls += 1
         try:
-            out = integrator(x0=np.concatenate([q, v]), z0=z0, p=np.concatenate(p))
+            data = model.functions.data  # a compiled parametric DAE's model data
+            out = integrator(x0=np.concatenate([q, v]), z0=z0,
+                             p=np.concatenate(p if data is None else [*p, data]))
         finally:
             self.idas_steps += int(integrator.stats().get("nsteps", 0))
         states, lam = self._dae_states(out)

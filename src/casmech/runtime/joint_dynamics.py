@@ -79,8 +79,9 @@ def joint_system(functions: SystemFunctions) -> JointSystem:
         system = build(functions.ir, tree_of(functions))
         from casmech import codegen  # imported on use: interpreted runs never need it
 
+        # a parametric bundle's (functions.data) would compile per value: interpreted
         if codegen.mode_of(functions) == "compiled" and not system.n_cut \
-                and functions.n_bodies <= COMPILED_ODE_BODIES:
+                and functions.n_bodies <= COMPILED_ODE_BODIES and functions.data is None:
             system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
         functions.derived["joint_system"] = system
     return functions.derived["joint_system"]

@@ -1,0 +1,105 @@
+"""Compiled libraries that take the model data as an input: one build serves every value of the
+model's parameters.
+
+The bundle is compiler.functions over compiler.parametric's symbolic IR (every function with the
+trailing input `d`, the model data), unrolled SX generated as C with the derivatives
+codegen.generate adds (and, for kinematics and inverse dynamics, compiler.prescribed's step over
+it, with `d` its third input); each DAE residual is compiler.dae's over that bundle,
+(t, x, z, [p; d]), with its daeF and jacF (codegen.residuals.from_residual). The cache key is
+the model's structure (compiler.parametric's signature) with its text, component files and
+tables, never the values.
+Loading binds the values of this run: every function but the DAE residuals becomes an MX
+wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
+their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
+integrator's p.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+import casmech
+from casmech.codegen import cache, generate, manifest, residuals
+from casmech.codegen.build import LIBRARY, Toolchain
+from casmech.codegen.load import externals, metadata
+from casmech.compiler import dae as dae_residuals
+from casmech.compiler import parametric, prescribed
+from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.ir import ModelIR
+from casmech.schema.resolved import ResolvedModel
+
+MAX_BODIES = 32  # above: the mapped library (codegen.mapped), values in its key
+PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
+
+
+def applies(model: ResolvedModel) -> bool:
+    """Whether `compiled` builds the parametric library: a model with parameters, up to
+    MAX_BODIES bodies (unrolled C grows with the model; codegen.mapped's does not)."""
+    return bool(model.parameters) and len(model.bodies) <= MAX_BODIES
+
+
+def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -> str:
+    """The cache key: the model's content without its parameter values, its structure, the
+    versions and the toolchain."""
+    content = json.dumps({"format": manifest.FORMAT, "kind": "parametric",
+                          "model": cache.model_digest(model, values=False),
+                          "structure": signature, "casmech": casmech.__version__,
+                          "sources": cache.source_digest(), "casadi": ca.__version__,
+                          "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
+                          "dae": dae})
+    return hashlib.sha256(content.encode()).hexdigest()[:32]
+
+
+def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
+    """(the system functions with input d, the DAE residuals over them by name)."""
+    split = parametric.split(ir)
+    functions = build_functions(split.ir, split.symbols).functions
+    if ir.analysis.type in PRESCRIBED_ANALYSES:  # as codegen.bundle, d its third input
+        functions["prescribed_step"] = prescribed.step(functions)
+    oracles = {}
+    if dae:
+        for form in FORMULATIONS:
+            for kind in dae_residuals.STABILIZATIONS:
+                residual = dae_residuals.residual(functions, form, kind)
+                oracles[residual.name()] = residuals.from_residual(residual)
+    return functions, oracles
+
+
+def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, dae: bool,
+                build_libraries) -> Path:
+    functions, oracles = bundle(ir, dae)
+    sources = generate.write_sources(functions, directory, toolchain.jobs)
+    dae_sources = generate.write_dae_sources(oracles, directory)
+    build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
+    return manifest.write(directory, {**functions, **{n: o[n] for n, o in oracles.items()}},
+                          generate.differentiated(functions), {
+                              **info, "parametric": True, "parameters": list(ir.parameters),
+                              "data": int(functions["phi"].size1_in(2)),
+                              "casmech": casmech.__version__,
+                              "casadi": ca.__version__, "compiler": toolchain.compiler,
+                              "compiler_version": toolchain.version(),
+                              "flags": list(toolchain.all_flags), "library": LIBRARY,
+                              "header": generate.HEADER},
+                          {n: generate.dae_library(n) for n in oracles})
+
+
+def bind(function: ca.Function, values: np.ndarray) -> ca.Function:
+    """The function without its trailing input d, called with d = values."""
+    inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k))
+              for k in range(function.n_in() - 1)]
+    outputs = function.call([*inputs, ca.DM(values)])
+    return ca.Function(function.name(), inputs, outputs, function.name_in()[:-1],
+                       function.name_out())
+
+
+def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
+    loaded = externals(directory)
+    functions = {name: f if name.startswith("dae_") else bind(f, values)
+                 for name, f in loaded.items()}
+    return SystemFunctions(functions, **metadata(ir), data=values)
