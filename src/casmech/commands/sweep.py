@@ -49,6 +49,10 @@ def add_arguments(parser) -> None:
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="run on the existing Dask cluster at ADDRESS (tcp://host:8786); "
                              "its workers need casmech and the model's files")
+    parser.add_argument("--mode", choices=("auto", "interpreted", "compiled"), default="auto",
+                        help="compiled: the model's parametric library, built once, bound to "
+                             "each run's values; interpreted: CasADi functions built per run; "
+                             "auto (default): compiled from 200 runs or when cached")
     parser.add_argument("--t-end", type=float, help="end time of every run [s]")
     parser.add_argument("--output-step", type=float, help="output interval [s]")
     parser.add_argument("--rtol", type=float, help="relative tolerance (dynamics)")
@@ -81,16 +85,18 @@ def run(args) -> int:
     settings = {"t_end": args.t_end, "output_step": args.output_step, "rtol": args.rtol,
                 "atol": args.atol}
     given = overrides(args.set)
-    prepared = study.prepare(args.model, study_form(args), settings, given, full=args.full)
+    prepared = study.prepare(args.model, study_form(args), settings, given, full=args.full,
+                             mode=args.mode)
     out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
     total = prepared.study.size()
     where = args.scheduler or ("this process" if args.workers == 0 else
                                f"{args.workers or study.execute.default_workers()} local workers")
-    print(f"sweep: {total} runs on {where}", file=sys.stderr)
+    print(f"sweep: {total} runs on {where}, {prepared.job.mode}", file=sys.stderr)
     (rows, finished), seconds = study.timed(study.collect, prepared, args.workers,
                                             args.scheduler, out / "runs.h5" if args.full else None)
     table = study.dataframe(rows, prepared.study)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
+               "mode": prepared.job.mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     paths = study.write(out, prepared, table, finished, {"runs": seconds}, options)
     if args.full:

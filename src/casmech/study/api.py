@@ -16,26 +16,30 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
           normal: Mapping | None = None, uniform: Mapping | None = None, seed: int | None = None,
           keep: Sequence[str] = (), workers: int | None = None, scheduler: str | None = None,
           out: str | Path | None = None, full: bool = False,
-          overrides: Mapping[str, str] | None = None, **settings):
+          overrides: Mapping[str, str] | None = None, mode: str = "auto", **settings):
     """Run `model` (a path or a casmech.load result) at every point of the study and return
     one row per run (docs/sweeps.md): `run`, the parameter values, `status`, `wall_s`, the
     kept outputs, `reason`. The arguments take the YAML `study:` block's values (grid values as
     "0.8:1.2:5", "100,200" or a list; normal as (mean, sigma); uniform as (low, high)) and
     replace the block's where given. workers: processes of a local Dask cluster (default: the
     machine's cores; 0: run in this process, without Dask); scheduler: the address of an
-    existing Dask cluster. settings: casmech.analyze's (t_end, output_step, rtol, ...).
+    existing Dask cluster. mode: "interpreted", "compiled" (the model's parametric library,
+    built once) or "auto" (compiled for a study of 200 runs or more, or when the library is
+    cached). settings: casmech.analyze's (t_end, output_step, rtol, ...).
     With `out`, writes sweep.csv (and sweep.parquet with pyarrow), metadata.json and with
     `full` runs.h5 there, as `casmech sweep` does. The DataFrame's attrs["finished"] says
     whether every run finished (False after Ctrl-C)."""
     given = {"grid": grid, "normal": normal, "uniform": uniform, "samples": samples or None,
              "seed": seed, "keep": list(keep) or None}
-    prepared = study.prepare(model, given, settings, overrides, full=bool(out and full))
+    prepared = study.prepare(model, given, settings, overrides, full=bool(out and full),
+                             mode=mode)
     full_path = Path(out) / "runs.h5" if out is not None and full else None
     (rows, finished), seconds = study.timed(study.collect, prepared, workers, scheduler,
                                             full_path)
     table = study.dataframe(rows, prepared.study)
     if out is not None:
         study.write(Path(out), prepared, table, finished, {"runs": seconds},
-                    {"workers": workers, "scheduler": scheduler, "full": bool(full)})
+                    {"workers": workers, "scheduler": scheduler, "full": bool(full),
+                     "mode": prepared.job.mode})
     table.attrs["finished"] = finished
     return table

@@ -4,11 +4,13 @@
 settings, the kept outputs). `runner_for(job)` prepares it once per process; `Runner.run(values)`
 makes one run and returns an `Outcome`. Nothing else in casmech.study knows how a run is made.
 
-Today a run loads the model text with the values as `--set` overrides and builds interpreted
-CasADi functions for it (`casmech.loads` + `casmech.compile`): parameters are numbers in the
-built functions, so each value needs its own build (about 50 ms for the four-bar) and compiled
-C would need a library per value. When parameters become inputs of the built system (issue 15
-item 1) `prepare` builds once and `run` binds the values; the rest of the study is unchanged.
+A run loads the model text with the values as `--set` overrides and compiles it in the job's
+mode (`casmech.loads` + `casmech.compile`). "interpreted": CasADi functions built for these
+values (about 50 ms for the four-bar). "compiled": the model's parametric library
+(codegen.parametric: the model data as an input, keyed on the model's structure), built once
+by the study before its runs (study.sweep.prepare), loaded from the cache and bound to the
+run's values (milliseconds); a value that changes the structure (a repeat count, a parameter
+that is 0 in the file) builds one more library, once.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ class Job:
     keep: tuple[str, ...] = ()
     full: bool = False  # return each run's whole results table
     base: tuple[tuple[str, str], ...] = ()  # --set overrides of every run (a run's values win)
+    mode: str = "interpreted"  # casmech.compile's mode for every run
 
 
 @dataclass
@@ -73,7 +76,7 @@ class Runner:
 
         given = {**dict(self.job.base), **overrides(values)}
         model = casmech.loads(self.job.text, file=self.job.file, overrides=given)
-        return casmech.compile(model, "interpreted")
+        return casmech.compile(model, self.job.mode)
 
     def run(self, values: Mapping[str, float]) -> Outcome:
         """One run: complete, or failed with its reason (a model error at these values, an

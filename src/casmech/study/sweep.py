@@ -44,11 +44,37 @@ def _merged(written: Mapping, given: Mapping) -> tuple[dict, set[str]]:
     return {**form, **given}, set(given)
 
 
+COMPILE_RUNS = 200  # mode auto compiles a study of at least this many runs (see study_mode)
+
+
+def study_mode(model, runs: int, mode: str) -> str:
+    """casmech.compile's mode for every run. auto: "compiled" when the model's parametric
+    library applies (codegen.parametric: parameters, at most 32 bodies; one library for every
+    value) and is cached or the study has COMPILE_RUNS runs or more (a build of 5-15 s against
+    ~50 ms saved per run of the four-bar: benchmarks/notes_sweep.md), else "interpreted"."""
+    from casmech import codegen
+    from casmech.codegen import parametric
+    from casmech.errors import UsageError
+
+    applies = parametric.applies(model)
+    if mode == "compiled" and not applies:
+        raise UsageError("--mode compiled: this model has no parametric library (it needs "
+                         f"parameters and at most {parametric.MAX_BODIES} bodies), so every "
+                         "run would build its own (hint: --mode interpreted)")
+    if mode != "auto":
+        return mode
+    if not (codegen.available() and applies):
+        return "interpreted"
+    return "compiled" if runs >= COMPILE_RUNS or codegen.is_cached(model) else "interpreted"
+
+
 def prepare(source, given: Mapping | None = None, settings: Mapping | None = None,
-            overrides: Mapping[str, str] | None = None, full: bool = False) -> Prepared:
+            overrides: Mapping[str, str] | None = None, full: bool = False,
+            mode: str = "auto") -> Prepared:
     """The study of `source` (a model path or a ResolvedModel) checked: located errors for its
     `study:` block, usage errors for `given` (grid, normal, uniform, samples, seed, keep);
-    the model built once, its analysis settings and kept outputs checked."""
+    the model built once (in compiled mode: its library, which every run then loads), its
+    analysis settings and kept outputs checked."""
     import casmech
     from casmech import api
     from casmech.output.metadata import resolved_settings
@@ -70,7 +96,8 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     settings = {k: v for k, v in (settings or {}).items() if k in SETTINGS and v is not None}
     try:
         study = block.build(form, model.parameters, others)
-        functions = casmech.compile(model, "interpreted")
+        mode = study_mode(model, len(study.points()), mode)
+        functions = casmech.compile(model, mode)
         checked = api.analysis_settings(functions, **settings)
         block.check_keep(study, column_names(functions), float(checked.t_end),
                          [event.name for event in checked.events])
@@ -80,7 +107,8 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
         k: v for k, v in settings.items() if k != "analysis"})
     file = Path(model.file)  # absolute: workers may run elsewhere ("<string>" stays)
     job = Job(str(file.resolve() if file.exists() else file), model.text,
-              tuple(sorted(settings.items())), study.keep, full, tuple(sorted(overrides.items())))
+              tuple(sorted(settings.items())), study.keep, full, tuple(sorted(overrides.items())),
+              mode)
     return Prepared(model, study, job, resolved, overrides)
 
 
