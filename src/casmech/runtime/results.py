@@ -11,10 +11,8 @@ from casmech.compiler import contact
 from casmech.compiler.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import BufferedCall
+from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
-BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
-                "ax", "ay", "az", "alphax", "alphay", "alphaz")
-JOINT_COLUMNS = ("fx", "fy", "fz", "tx", "ty", "tz")
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
 

@@ -1,7 +1,7 @@
 """The `events:` block: names, the `when` expression and what it may read (docs/format.md#events).
 
 `when` is an expression of t, the parameters and the state: every body column of the results
-table (`bar.x` ... `bar.alphaz`, runtime.results.BODY_COLUMNS) and the coordinates of revolute,
+table (`bar.x` ... `bar.alphaz`, resolved.BODY_COLUMNS) and the coordinates of revolute,
 cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the table of
 compiler/coordinates.py). A misspelt or unknown name is E201 at its place in the expression, with
 a did-you-mean hint; a duplicate event name is E301.
@@ -15,33 +15,14 @@ from casmech.errors import did_you_mean
 from casmech.schema import contact, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.expressions import ExpressionError, parse
-from casmech.schema.force_laws import joint_attributes
+from casmech.schema.force_laws import initial_states, joint_attributes
 from casmech.schema.loader import Path, format_path
-
-# the body columns of the results contract (runtime.results.BODY_COLUMNS), in its order
-BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
-                "ax", "ay", "az", "alphax", "alphay", "alphaz")
-JOINT_RESULTS = ("fx", "fy", "fz", "tx", "ty", "tz")  # reaction columns: not readable here
-
-
-def _initial(body: resolved.Body | None, column: str) -> float:
-    """The column's value at t = 0 as the file writes it (accelerations 0; a body that failed
-    its checks: 0), for the finite-value check of `when`."""
-    if body is None or column.startswith("a"):
-        return 0.0
-    if column.startswith("e"):
-        return float(body.euler_parameters[int(column[1])])
-    vector = {"": body.position, "v": body.velocity, "w": body.angular_velocity}[column[:-1]]
-    return float(vector["xyz".index(column[-1])])
+from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
 
 def state_names(check: Checker) -> dict[str, float]:
     """Every state name `when` may read, with its value at t = 0 (joint coordinates: 0)."""
-    names = {f"{joint}.{attribute}": 0.0 for joint, kind in check.joint_types.items()
-             for attribute in joint_attributes(kind)}
-    names.update({f"{name}.{column}": _initial(body, column)
-                  for name, body in check.bodies.items() for column in BODY_COLUMNS})
-    return names
+    return initial_states(check, BODY_COLUMNS)
 
 
 def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
@@ -52,7 +33,7 @@ def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
     if owner in check.joint_types:
         kind = check.joint_types[owner]
         has = joint_attributes(kind)
-        if attribute in JOINT_RESULTS:
+        if attribute in JOINT_COLUMNS:
             return (f"reaction column '{name}' cannot be read by an event",
                     f"events read body columns and joint coordinates ({', '.join(has)})"
                     if has else "events read body columns and joint coordinates")

@@ -36,19 +36,23 @@ def joint_attributes(joint_type: str) -> list[str]:
     return [name for name, (types, _) in JOINT_COORDINATES.items() if joint_type in types]
 
 
-def _body_value(body: resolved.Body | None, attribute: str) -> float:
-    """The state's value at t = 0 as the file writes it (0 for a body that failed its checks)."""
-    if body is None:
+def _body_value(body: resolved.Body | None, column: str) -> float:
+    """A body column's value at t = 0 as the file writes it (accelerations 0; a body that
+    failed its checks: 0)."""
+    if body is None or column.startswith("a"):
         return 0.0
-    return float(getattr(body, BODY_INITIAL[attribute[:-1]])["xyz".index(attribute[-1])])
+    if column.startswith("e"):
+        return float(body.euler_parameters[int(column[1])])
+    return float(getattr(body, BODY_INITIAL[column[:-1]])["xyz".index(column[-1])])
 
 
-def initial_states(check: Checker) -> dict[str, float]:
-    """Every state name a force law may read, with its value at t = 0 (joint coordinates: 0)."""
+def initial_states(check: Checker, columns=BODY_STATES) -> dict[str, float]:
+    """Every state name a force law may read (an event: `columns` of each body), with its value
+    at t = 0 (joint coordinates: 0)."""
     states = {f"{joint}.{attribute}": 0.0 for joint, kind in check.joint_types.items()
               for attribute in joint_attributes(kind)}
-    states.update({f"{name}.{attribute}": _body_value(body, attribute)
-                   for name, body in check.bodies.items() for attribute in BODY_STATES})
+    states.update({f"{name}.{column}": _body_value(body, column)
+                   for name, body in check.bodies.items() for column in columns})
     return states
 
 

@@ -18,6 +18,10 @@ from casmech.errors import Source
 from casmech.schema.expressions import Expr
 
 GROUND = "ground"
+# the body columns of the results contract (docs/format.md), in their order
+BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
+                "ax", "ay", "az", "alphax", "alphay", "alphaz")
+JOINT_COLUMNS = ("fx", "fy", "fz", "tx", "ty", "tz")  # each joint's reaction columns
 
 
 @dataclass(frozen=True)
