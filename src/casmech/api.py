@@ -82,14 +82,13 @@ DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
 def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
     r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
-    and no DAE stabilization other than the default was asked for; with loops the joint DAE
-    passes singular poses less reliably than the r-p fallback (IFToMM A02 N = 2: 6.5e-6 m at
-    rtol 1e-10, a failure at 1e-11; r-p: 7.9e-8 m), so auto takes r-p there."""
+    and no DAE stabilization other than the default was asked for, else r-p (loops:
+    docs/formulations.md). A mechanism with loops is then examined for singular poses."""
     formulation = s.options.get("formulation", "auto")
     stabilization = s.options.get("stabilization", "ggl")
+    is_tree = tree_of(f).is_tree
     if formulation == "auto":
-        tree = stabilization == "ggl" and tree_of(f).is_tree
-        formulation = "joint" if tree else "rp"
+        formulation = "joint" if stabilization == "ggl" and is_tree else "rp"
     if formulation == "joint":
         result = run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
                                     progress=progress, method=s.options.get("method", "auto"),
@@ -98,7 +97,7 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Res
         result = run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
                               formulation=formulation, progress=progress,
                               stabilization=stabilization, extra_events=extra_events)
-    poses = singular_poses(f, result, loops=not tree_of(f).is_tree)
+    poses = singular_poses(f, result, loops=not is_tree)
     if poses is not None:
         result.metadata["singular_poses"] = poses
     return result

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import UsageError
+from casmech.output.animate import POSE
 
-POSE = ("x", "y", "z", "e0", "e1", "e2", "e3")
 FRAMES_PER_CYCLE = 48
 STILL_FREQUENCY_HZ = 1.0  # playback rate of a mode that does not oscillate
 

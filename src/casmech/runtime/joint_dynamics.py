@@ -41,22 +41,17 @@ CHUNK = 1000  # output intervals per integrator call (a restart between calls)
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
-# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF.
-# Measured (an arm with a bushing of stiffness k to a tip mass, 2 s, rtol 1e-8): rho h = 2.8:
-# Adams 0.032 s (1621 steps), BDF 0.045 s (496); 28: 0.148 s against 0.065 s; 2800: 19 s
-# against 4.8 s. The gallery's trees have rho h <= 2.3 and run faster by Adams (e.g. the
-# bushing mount 0.019 s against 0.051 s, the joint zoo 0.078 against 0.63 s).
+# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF
+# (the measurements behind it: docs/decisions.md).
 STIFF = 10.0
 
 # On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
-# with the tree: measured at 128 bodies (-O1) 4.9 s for the ODE, 22.7 s for the results rows
-# (called once per output block, so interpreted costs little). Larger trees stay interpreted.
+# with the tree: the ODE up to COMPILED_ODE_BODIES, the results rows (called once per output
+# block) up to COMPILED_MOTION_BODIES; larger trees stay interpreted. An ODE above
+# QUICK_BUILD_INSTRUCTIONS SX instructions is built at -O0 unless $CASMECH_CFLAGS says
+# otherwise (gcc -O1 time grows faster than the function; docs/decisions.md).
 COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
-# ... and above QUICK_BUILD_INSTRUCTIONS SX instructions (chain32's ODE: 18k, chain128's: 76k)
-# at -O0 unless $CASMECH_CFLAGS says otherwise: gcc -O1 on one unrolled function grows faster
-# than its size (chain64 5.7 s against 0.9 s, chain128 5.2 against 2.0) for calls ~1.5x
-# faster, which a first run rarely repays (docs/decisions.md).
 QUICK_BUILD_INSTRUCTIONS = 30000
 
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)

@@ -73,6 +73,7 @@ class LinearModel:
         except ImportError:
             raise ImportError("LinearModel.state_space needs python-control: "
                               "pip install 'casmech[control]'") from None
+
         def names(labels):
             return [label.replace(".", "_") for label in labels]
 

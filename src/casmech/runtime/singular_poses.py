@@ -9,11 +9,9 @@ near a singular pose. Each such stretch of rows is reported once, at its smalles
 determinant: the time, the smallest singular value of the unit rows there, and the joints whose
 rows make up the dependency (its singular vector), each with its file:line:col.
 
-Measured (2026-11-24) on every loop model of the gallery and the benchmarks: IFToMM A02 (N = 2,
-flat poses every ~1.9 s) falls to 1e-4..1e-5 of its t0 value at the output rows nearest its
-flat poses; the benchmark four-bar, Bricard's mechanism and Andrews' squeezer stay within 0.5
-of theirs. A tree has no loop to close (its joints' rows are independent at every pose) and is
-not examined; nor is a model above MAX_ENTRIES (output rows x kept rows x coordinates).
+A tree has no loop to close (its joints' rows are independent at every pose) and is not
+examined; nor is a run above MAX_ENTRIES (output rows x rows of Phi x coordinates: the dense
+Jacobians held at once). NEAR's measurements: docs/decisions.md.
 """
 
 from __future__ import annotations
@@ -28,7 +26,7 @@ from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
 
 NEAR = 1e-3  # Gram determinant of the unit rows against its value at t0
-MAX_ENTRIES = 20_000_000  # rows x kept constraint rows x coordinates examined at most
+MAX_ENTRIES = 20_000_000  # output rows x rows of Phi x coordinates examined at most
 KEPT_MAPS = 8
 
 
@@ -61,9 +59,9 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool) -> l
     if not loops or len(times) < 2:
         return None
     m, columns = functions["phi_q"].size_out(0)
-    rows = _independent(functions, result, float(times[0]), q[0])
-    if len(times) * len(rows) * columns > MAX_ENTRIES:
+    if len(times) * m * columns > MAX_ENTRIES:
         return None
+    rows = _independent(functions, result, float(times[0]), q[0])
     drop = unit_gram_logdet(functions, times, q, rows)
     near = drop - drop[0] < np.log(NEAR)
     return [_pose(functions, float(times[k]), q[k], rows) for k in _deepest(near, drop)]
