@@ -170,6 +170,14 @@ def null_space(phi_q: np.ndarray) -> np.ndarray:
     return q_factor[:, rank:]
 
 
+def independent_rows(phi_q: np.ndarray) -> np.ndarray:
+    """Indices of a maximal set of independent rows of Phi_q (the QR's pivots up to its rank)."""
+    if phi_q.shape[0] == 0:
+        return np.zeros(0, int)
+    _, _, pivots, rank = _factor(phi_q)
+    return np.sort(pivots[:rank])
+
+
 def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
                    minimum_norm: bool = False) -> ReducedSystem:
     """The reduced quantities at q. lam solves Phi_q^T lam = Q in least squares: the basic

@@ -12,6 +12,7 @@ from dataclasses import replace
 
 from casmech.errors import Diagnostic
 from casmech.schema import events, files, limits, motors, resolved, spec
+from casmech.schema.modal import modal_settings
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
@@ -146,7 +147,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
-    settings = analysis(check, given.analysis)
+    settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
+                              forces)
     watched = events.events(check, given.events, joints, forces)
     if settings is not None and watched:
         settings = replace(settings, events=watched)
