@@ -10,7 +10,7 @@ of Phi_q(t*, q*) (statics.null_space). The state x = [z; w] obeys x' = f(x, u, t
 
 with I the independent constraint rows at q* (the column-pivoted QR's pivots: redundant rows
 dropped, so both matrices are square). A = df/dx and B = df/du at (x*, 0, t*) come from CasADi's
-AD through this graph (MX, the linear solves included): the velocity terms (Coriolis,
+forward AD through this graph (MX, the linear solves included): the velocity terms (Coriolis,
 gyroscopic, the constraint curvature with q_dot* != 0) are in it. Away from an equilibrium a
 linearization depends on the coordinates: these describe perturbations measured as N^T dq, and
 the chart's curvature enters A with q_dot*^2 (docs/analyses.md#modal). At an equilibrium
@@ -140,7 +140,11 @@ def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.n
     rhs = ca.vertcat(forces, bundle["gamma"](t, position, velocity)[rows])
     acceleration = ca.solve(lhs, rhs)[:n]
     f = ca.vertcat(ca.mtimes(n_basis.T, velocity), ca.mtimes(n_basis.T, acceleration))
-    jacobians = ca.Function("linearization", [z, w, u],
-                            [ca.jacobian(f, ca.vertcat(z, w)), ca.jacobian(f, u)])
-    a, b = jacobians(np.zeros(k), basis.T @ q_dot, np.zeros(count))
-    return np.array(a).reshape(2 * k, 2 * k), np.array(b).reshape(2 * k, count)
+    # forward AD in every direction at once: ~5x quicker to build than ca.jacobian of the MX
+    # graph for 40 bodies (benchmarks/notes_linearize.md)
+    ode = ca.Function("chart_ode", [z, w, u], [f])
+    x = [np.zeros(k), basis.T @ q_dot, np.zeros(count)]
+    seeds = np.eye(2 * k + count)
+    columns = ode.forward(2 * k + count)(*x, ode(*x), seeds[:k], seeds[k:2 * k], seeds[2 * k:])
+    columns = np.array(columns).reshape(2 * k, 2 * k + count)
+    return columns[:, :2 * k], columns[:, 2 * k:]

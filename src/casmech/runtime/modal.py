@@ -156,7 +156,7 @@ def linearize_at(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.
                  inputs: Sequence[str] | None = None) -> LinearModel:
     """The linear model and modes at a state (t, q, q_dot) of a run (runtime.linearize)."""
     phi_q = functions.matrix("phi_q", t, q)
-    basis, rows = statics.null_space(phi_q), statics.independent_rows(phi_q)
+    basis, rows = statics.basis_and_rows(phi_q)
     names, forces = linear.input_forces(functions, inputs)
     a, b = linear.state_space(functions, t, q, q_dot, basis, rows, forces)
     return _model(functions, q, basis, a, b, names, t, q_dot)

@@ -170,12 +170,14 @@ def null_space(phi_q: np.ndarray) -> np.ndarray:
     return q_factor[:, rank:]
 
 
-def independent_rows(phi_q: np.ndarray) -> np.ndarray:
-    """Indices of a maximal set of independent rows of Phi_q (the QR's pivots up to its rank)."""
-    if phi_q.shape[0] == 0:
-        return np.zeros(0, int)
-    _, _, pivots, rank = _factor(phi_q)
-    return np.sort(pivots[:rank])
+def basis_and_rows(phi_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(null_space(phi_q), the indices of a maximal set of independent rows: the QR's pivots
+    up to its rank, ascending), from one factorization."""
+    m, n = phi_q.shape
+    if m == 0:
+        return np.eye(n), np.zeros(0, int)
+    q_factor, _, pivots, rank = _factor(phi_q)
+    return q_factor[:, rank:], np.sort(pivots[:rank])
 
 
 def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,

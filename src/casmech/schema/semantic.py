@@ -12,12 +12,12 @@ from dataclasses import replace
 
 from casmech.errors import Diagnostic
 from casmech.schema import events, files, limits, motors, resolved, spec
-from casmech.schema.modal import modal_settings
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
 from casmech.schema.loader import Document, Path
+from casmech.schema.modal import modal_settings
 
 ANALYSIS_HINTS = {
     "output_step": "a larger output_step or a shorter t_end (output_step is the interval of "
