@@ -1,4 +1,6 @@
-"""Linearization and modes at the static equilibrium (runtime.statics).
+"""Linearization and modes at the static equilibrium (runtime.statics), or with `analysis:
+{at: t}` at that time of a dynamics run (linearize_at: runtime.linearize, the same chart and
+state, A and B by AD through the chart's ODE, velocity terms included).
 
 Independent coordinates: z with q = q* + N z, N the orthonormal null-space basis of Phi_q(q*)
 from a column-pivoted QR of Phi_q^T (statics.null_space; Euler-parameter normalization rows
@@ -10,9 +12,10 @@ removes the multipliers; to first order about the equilibrium (where Q - Phi_q^T
 
 all derivatives by CasADi's AD (statics.tangent_function). State x = [z; z'],
 A = [[0, I], [-M_r^-1 K_r, -M_r^-1 C_r]]. Inputs u: a torque or force added to each effort
-motor (`<joint>.torque` / `<joint>.force`; none without effort motors), B = [0; M_r^-1 N^T
-G] with G the motors' generalized forces per unit input. Outputs y = C x (D = 0): every
-body's translation and small global rotation (2 E(p) dp) away from the equilibrium:
+motor (`<joint>.torque` / `<joint>.force`), or the effort-motor joints and force elements
+`analysis: {inputs: [...]}` names (runtime.linearize.INPUT_KINDS), B = [0; M_r^-1 N^T G] with
+G their generalized forces per unit input. Outputs y = C x (D = 0): every
+body's translation and small global rotation (2 E(p) dp) away from q*:
 `<body>.dx .dy .dz .rx .ry .rz`.
 
 Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
