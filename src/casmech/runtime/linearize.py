@@ -140,7 +140,7 @@ def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.n
     rhs = ca.vertcat(forces, bundle["gamma"](t, position, velocity)[rows])
     acceleration = ca.solve(lhs, rhs)[:n]
     f = ca.vertcat(ca.mtimes(n_basis.T, velocity), ca.mtimes(n_basis.T, acceleration))
-    # forward AD in every direction at once: ~5x quicker to build than ca.jacobian of the MX
+    # forward AD in every direction at once: ~4x quicker to build than ca.jacobian of the MX
     # graph for 40 bodies (benchmarks/notes_linearize.md)
     ode = ca.Function("chart_ode", [z, w, u], [f])
     x = [np.zeros(k), basis.T @ q_dot, np.zeros(count)]
