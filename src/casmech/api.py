@@ -113,7 +113,7 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
     "dynamics": _dynamics,
     "statics": lambda f, s, p: _runtime("statics").run_statics(f, progress=p),
-    "modal": lambda f, s, p: _runtime("modal").run_modal(f, progress=p),
+    "modal": lambda f, s, p: _runtime("modal").run_modal(f, s, progress=p),
 }
 
 
