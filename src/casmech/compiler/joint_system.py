@@ -34,6 +34,11 @@ from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
 
 
+# a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
+# the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
+ROW_NORM_FLOOR = 1e-9
+
+
 @dataclass(frozen=True)
 class Layout:
     """Which coordinates and velocities are states: per tree joint, the indices into x of its
@@ -198,7 +203,10 @@ class _Builder:
         phi = ca.vertcat(*[self.rows(joint)[0] for joint in self.tree.cut])
         rate = ca.jacobian(phi, theta) @ self.theta_dot + ca.jacobian(phi, self.t)
         u = self.x[self.layout.n_theta:]
-        scale = 1 / ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        norm = ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        # a row the tree's motions cannot violate (a planar loop's out-of-plane rows) has no
+        # velocity Jacobian: scale 0, so the rank test at t0 masks it
+        scale = ca.if_else(norm > ROW_NORM_FLOOR, 1 / norm, 0)
         return phi, rate, scale, self.z[:m], self.z[m:]
 
     def cut_wrenches(self, lam) -> list:
