@@ -222,7 +222,7 @@ def sensitivity(model: ResolvedModel, parameters: Sequence[str], outputs: Sequen
 def simulate(model: ResolvedModel, outputs: Sequence[str], times: Sequence[float],
              rtol: float = 1e-10, atol: float = 1e-12) -> np.ndarray:
     """Results columns at `times` from the same IDAS problem, without derivatives."""
-    system = parametric_system(model, ())
+    system = parametric_system(model, (), "auto")
     dae = build_dae(system)
     times = check_times(times, dae.t0)
     theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)

@@ -165,7 +165,7 @@ def geometry_moved(model: ResolvedModel, names: Iterable[str]) -> str | None:
     parameters) that does, found by lowering the model again with it bumped; None if none
     does. A composed model counts as moved (its expressions are not re-read here)."""
     names = tuple(names)
-    if names and _composed(model):
+    if _composed(model):
         return f"{model.file} is composed (components, instances or repeat)"
     ir = lower(model)
     written = load_document(model.text, model.file).data.get("parameters") or {}
