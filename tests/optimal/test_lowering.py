@@ -30,11 +30,11 @@ def test_initial_pose_against_closed_forms():
     want_r0 = np.array([[0, 0], [np.sin(a0) / 2, length * np.cos(a0) / 2],
                         [-np.cos(a0) / 2, length * np.sin(a0) / 2]])
     want_p0 = np.array([[0, -np.sin(a0 / 2) / 2], [0, np.cos(a0 / 2) / 2], [0, 0], [0, 0]])
-    # sixth-order differences at h = 1e-2: measured 2e-15 against the closed forms
+    # sixth-order differences at step 5e-3: measured 1.4e-14 against the closed forms
     np.testing.assert_allclose(_selected(derivative, bar.r0), want_r0, rtol=0, atol=1e-12)
     np.testing.assert_allclose(_selected(derivative, bar.p0), want_p0, rtol=0, atol=1e-12)
-    # the estimate bounds the error: below 1e-9 for both (measured 2e-15 and 3e-10)
-    assert np.all(derivative.error < 1e-9)
+    # the estimate covers the error (measured 3.5e-13 for both, mostly its round-off term)
+    assert np.all(derivative.error < 1e-11)
 
 
 def test_mass_and_inertia_against_the_symbolic_lowering():
@@ -48,7 +48,7 @@ def test_mass_and_inertia_against_the_symbolic_lowering():
     bar, symbolic = derivative.split.ir.bodies[0], exact.ir.bodies[0]
     for got, want in ((bar.mass, symbolic.mass), (bar.inertia, symbolic.inertia)):
         jacobian = ca.Function("j", [exact.theta], [ca.jacobian(want, exact.theta)])
-        # sixth-order differences of exp and a square: measured 3e-16 relative
+        # sixth-order differences of exp and a square: round-off (1e-12 relative bound)
         np.testing.assert_allclose(_selected(derivative, ca.vec(got)),
                                    np.array(jacobian(exact.values).full()), rtol=1e-12,
                                    atol=1e-14)

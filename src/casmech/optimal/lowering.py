@@ -11,7 +11,7 @@ error estimate is the difference to the same formula with step h (64 times the t
 at h / 2, asymptotically: a conservative estimate), plus the round-off of the numbers that move
 through the weights (ROUNDING |d| / (h / 2)), which dominates for a number much larger than its
 derivative (an initial spin of 87 rad/s that moves by 0.007 per unit of a disc's thickness:
-2e-8 relative). Measured: 2e-15 against the closed form of a quaternion of an initial angle
+2e-8 relative). Measured: 1e-14 against the closed form of a quaternion of an initial angle
 (cos, sin of a0 / 2); numbers linear in theta (a mass, a length written as a position) are
 exact to round-off (~1e-14 relative); over the first three parameters of every model in
 models/ the estimate is below 2e-9 but for heavy_top.yaml's disc thickness (1.2e-7, round-off).
