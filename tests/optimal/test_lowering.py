@@ -81,3 +81,12 @@ def test_structure_changes_are_located():
                                          r"changes the model's structure at a0 = .*'bar'.r0: 1 "
                                          "non-zero of 3 entries, now 2"):
         lowering.derivative(model, ["a0"])
+
+
+def test_an_overridden_dependent_is_a_usage_error():
+    """Cx is computed from d in four_bar.yaml; with Cx set on the command line, moving d
+    cannot reproduce the model that was given."""
+    model = casmech.load(MODELS / "four_bar.yaml", {"Cx": "1.7"})
+    with pytest.raises(UsageError, match="four_bar.yaml:15:3: parameter 'd' cannot be moved "
+                                         "alone.*Cx"):
+        lowering.derivative(model, ["d"])

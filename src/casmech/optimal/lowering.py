@@ -139,8 +139,10 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
         value = float(model.parameters[name])
         again = parametric.data(lowering.ir(name, value))
         if again[1] != split.signature or not np.array_equal(again[0], split.values):
-            raise _located(model, name, "is defined through other parameters that were set "
-                           "on the command line; the model cannot be re-loaded with it moved")
+            computed = sorted(dependents(model, [name]) - {name})
+            raise _located(model, name, "cannot be moved alone: the model re-loaded with it "
+                           "differs from the one given (was a parameter computed from it set "
+                           f"on the command line? {', '.join(computed) or 'none'} follow it)")
         problems = []
         for step in STEPS:
             h = step * (abs(value) or 1.0)
