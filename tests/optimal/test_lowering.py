@@ -40,8 +40,8 @@ def test_initial_pose_against_closed_forms():
 def test_mass_and_inertia_against_the_symbolic_lowering():
     """A mass m exp(s) and an inertia Ic (1 + s^2): non-linear in s, exact through CasADi."""
     text = PENDULUM.read_text().replace("  Ic: 0.02", "  s: 0.3\n  Ic: 0.02").replace(
-        "mass: m\n", "mass: m * exp(s)\n").replace("inertia: [Ic, Ic, 1.0e-4]",
-                                                   "inertia: [Ic * (1 + s**2), Ic * (1 + s**2), 1.0e-4]")
+        "mass: m\n", "mass: m * exp(s)\n").replace(
+        "inertia: [Ic, Ic, 1.0e-4]", "inertia: [Ic * (1 + s**2), Ic * (1 + s**2), 1.0e-4]")
     model = casmech.loads(text)
     derivative = lowering.derivative(model, ["s", "m"])
     exact = symbolic_model(model, ["s", "m"])

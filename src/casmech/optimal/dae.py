@@ -7,10 +7,10 @@
 over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
 state is a function of theta: positions are casmech's assembly (runtime/assembly.py: driver
 continuation, then least-squares Newton from the file's pose, itself a function of theta)
-unrolled as a CasADi graph with the
-iteration counts the nominal assembly takes plus one (so the result is the same map near the
-nominal theta, and its derivative the derivative of the converged point, also when the mechanism
-has degrees of freedom and the pose depends on the path Newton takes); velocities are the file's
+unrolled as a CasADi graph with the iteration counts the nominal assembly takes plus one (so the
+result is the same map near the nominal theta, and its derivative the derivative of the
+converged point, also when the mechanism has degrees of freedom and the pose depends on the path
+Newton takes); velocities are the file's
 velocities corrected by the least-squares step onto Phi_q q_dot = nu.
 """
 

@@ -69,20 +69,19 @@ def dependents(model: ResolvedModel, names: Sequence[str]) -> set[str]:
 
 
 class Lowering:
-    """d of the model re-loaded with one parameter moved, the others as they are."""
+    """d of the model re-loaded with one parameter moved and every top-level parameter that
+    does not depend on it at the value it has (overrides included)."""
 
-    def __init__(self, model: ResolvedModel, names: Sequence[str]):
+    def __init__(self, model: ResolvedModel):
         self.model = model
-        written = load_document(model.text, model.file).data.get("parameters") or {}
-        moved = dependents(model, names)
-        # every other top-level parameter keeps its value (overrides included)
-        self.fixed = {k: repr(float(model.parameters[k])) for k in written
-                      if k not in moved and k in model.parameters}
+        self.written = load_document(model.text, model.file).data.get("parameters") or {}
 
     def ir(self, name: str, value: float) -> ModelIR:
-        model = self.model
+        model, follow = self.model, dependents(self.model, [name])
+        fixed = {k: repr(float(model.parameters[k])) for k in self.written
+                 if k not in follow and k in model.parameters}
         return lower(load_model_text(model.text, model.file,
-                                     {**self.fixed, name: repr(float(value))}))
+                                     {**fixed, name: repr(float(value))}))
 
 
 def _located(model: ResolvedModel, name: str, message: str) -> UsageError:
@@ -133,7 +132,7 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
     names = tuple(names)
     reference = lower(model)
     split = parametric.split(reference)
-    lowering = Lowering(model, names)
+    lowering = Lowering(model)
     columns, errors = [], []
     for name in names:
         value = float(model.parameters[name])

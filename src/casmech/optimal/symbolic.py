@@ -22,9 +22,8 @@ import numpy as np
 
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
-from casmech.optimal.lowering import dependents
 from casmech.errors import ModelError, UsageError
-from casmech.schema import load_model_text
+from casmech.optimal.lowering import Lowering
 from casmech.schema.components import uses_composition
 from casmech.schema.expressions import parse
 from casmech.schema.loader import load_document
@@ -167,15 +166,11 @@ def geometry_moved(model: ResolvedModel, names: Iterable[str]) -> str | None:
     names = tuple(names)
     if _composed(model):
         return f"{model.file} is composed (components, instances or repeat)"
-    ir = lower(model)
-    written = load_document(model.text, model.file).data.get("parameters") or {}
+    ir, lowering = lower(model), Lowering(model)
     for name in names:
-        fixed = {k: repr(float(model.parameters[k])) for k in written
-                 if k not in dependents(model, [name]) and k in model.parameters}
         value = model.parameters[name]
-        bumped = {**fixed, name: repr(value + 1e-3 * (1.0 + abs(value)))}
         try:
-            moved = _moved(ir, lower(load_model_text(model.text, model.file, bumped)))
+            moved = _moved(ir, lowering.ir(name, value + 1e-3 * (1.0 + abs(value))))
         except (ModelError, ValueError):  # another structure: the "data" method says so
             moved = ["its structure"]
         if moved:

@@ -57,7 +57,7 @@ class ParametricSystem:
     names: tuple[str, ...]  # what theta holds, in order
     values: np.ndarray  # theta in the file (initial-velocity offsets: 0)
     method: str = "symbolic"  # how theta entered (module docstring)
-    # "data": the estimated truncation error of dd/dtheta per file parameter (lowering.py)
+    # "data": the estimated relative error of dd/dtheta per file parameter (lowering.py)
     lowering_error: dict[str, float] | None = None
 
     def __getitem__(self, name: str) -> ca.Function:
