@@ -90,3 +90,19 @@ def test_an_overridden_dependent_is_a_usage_error():
     with pytest.raises(UsageError, match="four_bar.yaml:15:3: parameter 'd' cannot be moved "
                                          "alone.*Cx"):
         lowering.derivative(model, ["d"])
+
+
+def test_a_kink_near_the_value_takes_a_smaller_step_or_is_refused():
+    """mass 1 + |s - 0.5|: a kink at s = 0.5. At s = 0.501 the stencil at h = 1e-2 |s| crosses
+    it, the estimate says so, and the step 1e-4 |s| does not: dm/ds = 1. At s = 0.50001 every
+    step crosses it: a located usage error."""
+    text = PENDULUM.read_text().replace("  Ic: 0.02", "  s: 0.501\n  Ic: 0.02").replace(
+        "mass: m\n", "mass: 1 + abs(s - 0.5)\n")
+    derivative = lowering.derivative(casmech.loads(text), ["s"])
+    mass = derivative.split.ir.bodies[0].mass
+    # piecewise linear: the small step is exact to round-off
+    np.testing.assert_allclose(_selected(derivative, mass), [[1.0]], rtol=1e-10, atol=0)
+    line = 1 + text[:text.index("  s: 0.501")].count("\n")
+    with pytest.raises(UsageError, match=rf"<string>:{line}:3: parameter 's' moves the model's "
+                                         "numbers non-smoothly"):
+        lowering.derivative(casmech.loads(text.replace("s: 0.501", "s: 0.50001")), ["s"])

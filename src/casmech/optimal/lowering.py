@@ -51,7 +51,8 @@ ROUNDING = 4 * np.finfo(float).eps  # relative error of a number of the lowering
 class DataDerivative:
     split: parametric.Split  # the model's symbolic IR, d's symbols and values
     jacobian: np.ndarray  # (len(d), len(names)): dd/dtheta
-    error: np.ndarray  # (len(names),): estimated truncation error, relative to each column
+    error: np.ndarray  # (len(names),): estimated error (truncation, round-off) of each column,
+    # relative to its largest entry
     names: tuple[str, ...]
 
 
@@ -75,13 +76,16 @@ class Lowering:
     def __init__(self, model: ResolvedModel):
         self.model = model
         self.written = load_document(model.text, model.file).data.get("parameters") or {}
+        self.fixed: dict[str, dict[str, str]] = {}  # parameter moved -> overrides of the others
 
     def ir(self, name: str, value: float) -> ModelIR:
-        model, follow = self.model, dependents(self.model, [name])
-        fixed = {k: repr(float(model.parameters[k])) for k in self.written
-                 if k not in follow and k in model.parameters}
+        model = self.model
+        if name not in self.fixed:
+            follow = dependents(model, [name])
+            self.fixed[name] = {k: repr(float(model.parameters[k])) for k in self.written
+                                if k not in follow and k in model.parameters}
         return lower(load_model_text(model.text, model.file,
-                                     {**fixed, name: repr(float(value))}))
+                                     {**self.fixed[name], name: repr(float(value))}))
 
 
 def _located(model: ResolvedModel, name: str, message: str) -> UsageError:
@@ -157,7 +161,8 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
                             f"{value:.9g} (estimated error {error:.1e} with step {h:.1e})")
         else:
             raise _located(model, name, f"{problems[-1]}; sensitivities need a parameter that "
-                           "keeps the structure (which numbers are zero, repeat counts)")
+                           "keeps the structure (which numbers are zero, repeat counts) and "
+                           "moves the model's numbers smoothly")
         columns.append(column)
         errors.append(error)
     jacobian = np.stack(columns, axis=1) if columns else np.zeros((split.values.size, 0))
