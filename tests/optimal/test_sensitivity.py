@@ -46,8 +46,8 @@ forces:
 
 TIGHT = {"rtol": 1e-12, "atol": 1e-14}  # finite differences need the integrator far below h^4
 # the 4-link spherical chain fails IDAS's corrector at rtol 1e-12: rtol 1e-10, h^4 at h = 3e-3
-# is 1e-10, solver noise / h 3e-8 (measured agreement 1e-8)
-LOOSE = {"tight": {"rtol": 1e-10, "atol": 1e-12}, "tolerance": 1e-6}
+# is 1e-10, solver noise / h up to ~1e-7 (measured agreement 7e-8 for L, 3e-7 for w0)
+LOOSE = {"tight": {"rtol": 1e-10, "atol": 1e-12}}
 
 
 def central_difference(load, name, value, outputs, times, step, tight=TIGHT):
@@ -239,7 +239,8 @@ def test_pendulum_length_and_initial_angle():
     results = check(load, ["L", "a0"], ["bar.e1", "bar.y", "bar.z", "pivot.fz", "energy"],
                     [0.5, 1.0])
     assert all(r.method == "data" for r in results)
-    # both are smooth in the lowering: L enters linearly (round-off), a0 through sin, cos
+    # both are smooth in the lowering: L enters linearly, a0 through sin, cos (measured
+    # estimate 3.5e-13 for both, its round-off term)
     assert max(results[0].lowering_error.values()) < 1e-9
 
 
@@ -274,7 +275,7 @@ def test_four_bar_joint_point_through_assembly():
 
     outputs = ["crank.x", "crank.wz", "rocker.y", "rocker_pivot.fx", "coupler.fx", "energy"]
     forward, _ = check(load, ["cx"], outputs, [1e-6, 0.3, 0.6])
-    # the assembled pose moves with cx (d crank.x / d cx at t = 0 is ~ -0.1): the derivative
+    # the assembled pose moves with cx (d crank.x / d cx at t = 0 is ~0.1): the derivative
     # checked above includes the assembly's
     assert abs(forward.jacobian[0, 0, 0]) > 0.05
 
