@@ -74,12 +74,26 @@ class _Walk:
         self.values: list[float] = []
         self.symbols: list[ca.SX] = []
         self.tokens: list[str] = []
+        self.where: list[str] = []  # the IR path being walked ("bodies", "bar", "r0")
+        self.places: list[str] = []  # the path of each token
+
+    def token(self, text: str) -> None:
+        self.tokens.append(text)
+        self.places.append(".".join(self.where))
+
+    def inside(self, name: str, value):
+        """self(value) with `name` on the path."""
+        self.where.append(name)
+        try:
+            return self(value)
+        finally:
+            self.where.pop()
 
     def number(self, value) -> object:
         array = np.asarray(value, float)
         flat = array.ravel(order="F")
         nonzero = np.abs(flat) > ROUNDOFF * np.abs(flat).max(initial=0.0)
-        self.tokens.append(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}")
+        self.token(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}")
         self.values.extend(flat[nonzero])
         if not self.symbolic:
             return value
@@ -94,40 +108,79 @@ class _Walk:
 
     def __call__(self, value):
         if isinstance(value, bool) or isinstance(value, OPAQUE):
-            self.tokens.append(repr(value) if isinstance(value, (str, bool, range)) else
-                               type(value).__name__ + str(getattr(value, "text", "")))
+            self.token(repr(value) if isinstance(value, (str, bool, range)) else
+                       type(value).__name__ + str(getattr(value, "text", "")))
             return value
         if isinstance(value, (float, np.floating)):
             return self.number(value)
         if isinstance(value, np.ndarray) and value.dtype.kind == "f":
             return self.number(value)
         if isinstance(value, int):
-            self.tokens.append(str(value))
+            self.token(str(value))
             return value
         if is_dataclass(value):
-            self.tokens.append(type(value).__name__)
+            self.token(type(value).__name__)
             changed = {}
             for item in fields(value):
                 if isinstance(value, ModelIR) and item.name in STRUCTURE_FIELDS:
                     continue
-                self.tokens.append(item.name)
-                changed[item.name] = self(getattr(value, item.name))
+                self.token(item.name)
+                changed[item.name] = self.inside(item.name, getattr(value, item.name))
             return replace(value, **changed) if self.symbolic else value
         if isinstance(value, Mapping):
-            self.tokens.append(f"{{{len(value)}")
+            self.token(f"{{{len(value)}")
             out = {}
             for key, item in value.items():
-                self.tokens.append(str(key))
-                out[key] = self(item)
+                self.token(str(key))
+                out[key] = self.inside(str(key), item)
             return out if self.symbolic else value
         if isinstance(value, (tuple, list)):
-            self.tokens.append(f"({len(value)}")
-            out = [self(item) for item in value]
+            self.token(f"({len(value)}")
+            out = [self.inside(_label(k, item), item) for k, item in enumerate(value)]
             return type(value)(out) if self.symbolic else value
         raise TypeError(f"parametric: no rule for a {type(value).__name__} in a ModelIR")
 
     def signature(self) -> str:
         return hashlib.sha256("\0".join(self.tokens).encode()).hexdigest()
+
+
+def _label(index: int, item) -> str:
+    """An item of a sequence on a path: its name when it has one ('bar'), a primitive's joint
+    and kind (3 ('pivot' dp1)), else its index."""
+    name, row = getattr(item, "name", None), getattr(item, "row", None)
+    if isinstance(name, str) and name:
+        return f"'{name}'"
+    if isinstance(row, RowInfo):
+        return f"{index} ('{row.joint}' {row.kind})"
+    return str(index)
+
+
+def difference(a: ModelIR, b: ModelIR) -> str | None:
+    """Where the structures of two lowerings first differ ("bodies.'bar'.r0: 3 non-zero
+    entries, now 2"), or None when their signatures are equal."""
+    walks = [_Walk(symbolic=False), _Walk(symbolic=False)]
+    for walk, ir in zip(walks, (a, b), strict=True):
+        walk(ir)
+    first, second = walks
+    for k, (x, y) in enumerate(zip(first.tokens, second.tokens, strict=False)):
+        if x != y:
+            place = first.places[k] or "the model"
+            return f"{place}: {_describe(x)}, now {_describe(y)}"
+    if len(first.tokens) != len(second.tokens):
+        return f"{first.places[-1] if first.places else 'the model'}: more or fewer items"
+    return None
+
+
+def _describe(token: str) -> str:
+    """A token of the walk in words: an array's zero pattern, or the token itself."""
+    if not token.startswith("#"):
+        return repr(token)
+    shape, pattern = token[1:].split(")", 1)
+    bits = np.unpackbits(np.frombuffer(bytes.fromhex(pattern), np.uint8))
+    size = int(np.prod([int(n) for n in shape.strip("(,").split(",") if n.strip()]))
+    nonzero = int(bits[:size].sum())
+    return f"{nonzero} non-zero of {size} entries" if size > 1 else \
+        ("non-zero" if nonzero else "zero")
 
 
 def split(ir: ModelIR) -> Split:

@@ -6,10 +6,11 @@
 
 over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
 state is a function of theta: positions are casmech's assembly (runtime/assembly.py: driver
-continuation, then least-squares Newton from the file's pose) unrolled as a CasADi graph with the
-iteration counts the nominal assembly takes plus one (so the result is the same map near the
-nominal theta, and its derivative the derivative of the converged point, also when the mechanism
-has degrees of freedom and the pose depends on the path Newton takes); velocities are the file's
+continuation, then least-squares Newton from the file's pose, itself a function of theta)
+unrolled as a CasADi graph with the iteration counts the nominal assembly takes plus one (so the
+result is the same map near the nominal theta, and its derivative the derivative of the
+converged point, also when the mechanism has degrees of freedom and the pose depends on the path
+Newton takes); velocities are the file's
 velocities corrected by the least-squares step onto Phi_q q_dot = nu.
 """
 
@@ -123,7 +124,7 @@ def _assembly_graph(dae: DAE, theta) -> ca.MX:
     """Assembled positions as a function of theta: the nominal Newton iterations unrolled, one
     more per stage, least-squares steps on the independent rows."""
     system, rows, t0 = dae.system, list(dae.rows), dae.t0
-    q = ca.MX(ca.DM(assembly.initial_guess(system.nominal)))
+    q = system["initial_guess"](theta)
     for scale, count in _newton_counts(dae):
         for _ in range(count + 1):
             if scale is None:

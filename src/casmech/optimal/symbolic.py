@@ -4,8 +4,9 @@ The compiler evaluates every parameter to a number while lowering. Here the fiel
 the chosen parameters are evaluated again from the file's expressions with the CasADi backend:
 masses, inertias, gravity, force-law coefficients, functions of time (drivers, actuators, applied
 forces) and initial velocities. A parameter that moves the geometry written in the file (positions,
-orientations, joint points and axes) is refused: which fields move is found by lowering the model
-again at a perturbed value, so nothing here enumerates the geometry keys of the format.
+orientations, joint points and axes) is refused (system.py's method "data" takes those): which
+fields move is found by lowering the model again at a perturbed value, so nothing here enumerates
+the geometry keys of the format.
 
 Initial conditions are "parameters" too: `<body>.vx .. .vz`, `<body>.wx .. .wz` name an offset
 added to that body's initial velocity in the file (before it is projected onto the constraints).
@@ -21,8 +22,8 @@ import numpy as np
 
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
-from casmech.errors import UsageError
-from casmech.schema import load_model_text
+from casmech.errors import ModelError, UsageError
+from casmech.optimal.lowering import Lowering
 from casmech.schema.components import uses_composition
 from casmech.schema.expressions import parse
 from casmech.schema.loader import load_document
@@ -133,7 +134,7 @@ def _forces(ir: ModelIR, spec, env, dependent):
     return tuple(forces)
 
 
-def _offsets(names: Iterable[str], symbols: Mapping[str, ca.SX], bodies: tuple[str, ...]):
+def offsets(names: Iterable[str], symbols: Mapping[str, ca.SX]):
     """Initial-velocity offsets: (body, field) -> 3-vector of symbols and zeros."""
     offsets: dict = {}
     for name in names:
@@ -158,16 +159,27 @@ def _moved(a: ModelIR, b: ModelIR) -> list[str]:
     return moved
 
 
-def _check_geometry(model: ResolvedModel, ir: ModelIR, names, dependent) -> None:
-    fixed = {k: repr(float(v)) for k, v in model.parameters.items() if k not in dependent}
+def geometry_moved(model: ResolvedModel, names: Iterable[str]) -> str | None:
+    """'parameter NAME moves the model's geometry (FIELD)' for the first of `names` (file
+    parameters) that does, found by lowering the model again with it bumped; None if none
+    does. A composed model counts as moved (its expressions are not re-read here)."""
+    names = tuple(names)
+    if _composed(model):
+        return f"{model.file} is composed (components, instances or repeat)"
+    ir, lowering = lower(model), Lowering(model)
     for name in names:
         value = model.parameters[name]
-        bumped = {**fixed, name: repr(value + 1e-3 * (1.0 + abs(value)))}
-        moved = _moved(ir, lower(load_model_text(model.text, model.file, bumped)))
+        try:
+            moved = _moved(ir, lowering.ir(name, value + 1e-3 * (1.0 + abs(value))))
+        except (ModelError, ValueError):  # another structure: the "data" method says so
+            moved = ["its structure"]
         if moved:
-            raise UsageError(f"parameter '{name}' moves the model's geometry ({moved[0]}); "
-                             "sensitivities are available for parameters of masses, inertias, "
-                             "gravity, forces, drivers and initial velocities")
+            return f"parameter '{name}' moves the model's geometry ({moved[0]})"
+    return None
+
+
+def _composed(model: ResolvedModel) -> bool:
+    return bool(model.files) or uses_composition(load_document(model.text, model.file).data)
 
 
 def classify(model: ResolvedModel, names: Iterable[str]) -> tuple[list[str], list[str]]:
@@ -196,15 +208,20 @@ def symbolic_model(model: ResolvedModel, names: Iterable[str]) -> SymbolicModel:
     document = load_document(model.text, model.file)
     if model.files or uses_composition(document.data):
         raise UsageError(f"{model.file} is composed (components, instances or repeat): "
-                         "sensitivities and optimisation re-read a model's own expressions and "
-                         "do not support composed models yet; write the model out flat")
+                         "optimisation re-reads a model's own expressions and does not support "
+                         "composed models yet; write the model out flat (sensitivities: "
+                         "method 'data')")
     spec, _ = validate(document)
     env, dependent = _environment(spec, model, {n: symbols[n] for n in parameters})
     numeric = lower(model)
-    _check_geometry(model, numeric, parameters, dependent)
+    moved = geometry_moved(model, parameters)
+    if moved:
+        raise UsageError(f"{moved}; method 'symbolic' takes parameters of masses, inertias, "
+                         "gravity, forces, drivers and initial velocities (sensitivities to "
+                         "geometry: method 'data' or 'auto')")
     gravity = _vector(spec.gravity, numeric.gravity, env, dependent)
     ir = replace(numeric, bodies=_bodies(numeric, spec, env, dependent,
-                                         _offsets(velocities, symbols, numeric_names(numeric))),
+                                         offsets(velocities, symbols)),
                  forces=_forces(numeric, spec, env, dependent), gravity=gravity,
                  primitives=tuple(replace(p, f=_bind(p.f, env)) for p in numeric.primitives),
                  motors=tuple(replace(m, actuator=_bind(m.actuator, env))  # effort motors
@@ -212,6 +229,3 @@ def symbolic_model(model: ResolvedModel, names: Iterable[str]) -> SymbolicModel:
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
     return SymbolicModel(ir, numeric, names, values, theta)
 
-
-def numeric_names(ir: ModelIR) -> tuple[str, ...]:
-    return tuple(b.name for b in ir.bodies)

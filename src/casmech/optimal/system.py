@@ -1,10 +1,21 @@
 """The system functions of a model with a `theta` input: the parametric bundle.
 
-The same builders as `casmech.compile` (compiler/assemble.py, compiler/eom.py) run on the symbolic
-IR of `symbolic.py`, and every function gets one more input, `theta`. Inertias and gravity enter
-the compiler's builders as numeric matrices; both enter the equations linearly, so a symbolic
-inertia or gravity is applied exactly as a linear combination of the builders evaluated at unit
-entries (the builders stay the single source of the formulas).
+Two ways to make theta an input (`method`):
+
+- "symbolic": the same builders as `casmech.compile` (compiler/assemble.py, compiler/eom.py) run
+  on the symbolic IR of `symbolic.py` (the file's expressions re-evaluated with CasADi), and
+  every function gets one more input, `theta`. Inertias and gravity enter the compiler's builders
+  as numeric matrices; both enter the equations linearly, so a symbolic inertia or gravity is
+  applied exactly as a linear combination of the builders evaluated at unit entries (the
+  builders stay the single source of the formulas). Exact at every theta; geometry refused.
+- "data": compiler.functions over compiler.parametric's split IR (every number of the lowering
+  an entry of the model data d), with d = d0 + D (theta - theta0) and D = dd/dtheta from
+  `lowering.py` (central differences of the NumPy lowering). Any parameter that keeps the
+  structure, geometry included; the functions are the model's at theta0 and their first
+  derivatives there (what sensitivities need), not the model at another theta.
+
+Both add `file_velocities(q, theta)` (the file's velocities, with the `<body>.vx`.. offsets)
+and `initial_guess(theta)` (the file's pose: where assembly starts).
 """
 
 from __future__ import annotations
@@ -16,11 +27,25 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import eom, euler
-from casmech.compiler.assemble import build_constraints
+from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
-from casmech.compiler.ir import ModelIR
-from casmech.optimal.symbolic import SymbolicModel, symbolic_model
+from casmech.compiler.ir import ModelIR, constant
+from casmech.compiler.lower import lower
+from casmech.errors import UsageError
+from casmech.optimal import lowering
+from casmech.optimal.symbolic import (
+    SymbolicModel,
+    classify,
+    geometry_moved,
+    offsets,
+    symbolic_model,
+)
 from casmech.schema.resolved import ResolvedModel
+
+METHODS = ("auto", "symbolic", "data")
+# the functions of a ParametricSystem that come from compiler.functions' bundle
+BUNDLE = ("phi", "phi_q", "phi_scaled", "nu", "gamma", "mass_matrix", "generalized_forces",
+          "energy", "reactions")
 
 
 @dataclass(frozen=True)
@@ -31,6 +56,9 @@ class ParametricSystem:
     nominal: SystemFunctions  # casmech.compile of the same model (theta = values)
     names: tuple[str, ...]  # what theta holds, in order
     values: np.ndarray  # theta in the file (initial-velocity offsets: 0)
+    method: str = "symbolic"  # how theta entered (module docstring)
+    # "data": the estimated relative error of dd/dtheta per file parameter (lowering.py)
+    lowering_error: dict[str, float] | None = None
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
@@ -97,12 +125,6 @@ def build_parametric(symbolic: SymbolicModel) -> dict[str, ca.Function]:
     quadratic, = linear(lambda i: (eom.quadratic_velocity(i, x),), ir)
     kinetic, potential = linear(lambda i: eom.energy(i, x, spring), ir)
     force, torque = eom.reactions(ir, x, cs.phi_with_ground, lam)
-    nb = ir.n_bodies
-    guess = [ca.vertcat(*[ca.DM(b.r_dot0) if not _is_symbolic(b.r_dot0) else b.r_dot0
-                          for b in ir.bodies])]
-    guess += [0.5 * euler.e_matrix(x.p(k)).T @ (b.omega0 if _is_symbolic(b.omega0)
-                                                 else ca.DM(b.omega0))
-              for k, b in enumerate(ir.bodies)]
     definitions = [
         ("phi", {"t": t, "q": q, "theta": theta}, {"phi": cs.phi}),
         ("phi_q", {"t": t, "q": q, "theta": theta}, {"phi_q": cs.phi_q}),
@@ -117,14 +139,78 @@ def build_parametric(symbolic: SymbolicModel) -> dict[str, ca.Function]:
          {"kinetic": fixed(kinetic), "potential": fixed(potential)}),
         ("reactions", {"t": t, "q": q, "q_dot": q_dot, "lam": lam, "theta": theta},
          {"force": fixed(force), "torque": fixed(torque)}),
-        ("file_velocities", {"q": q, "theta": theta},
-         {"q_dot": ca.vertcat(*guess) if nb else ca.SX(0, 1)}),
     ]
-    return {name: _function(name, *io) for name, *io in definitions}
+    functions = {name: _function(name, *io) for name, *io in definitions}
+    return functions | _start(ir, x, theta)
 
 
-def parametric_system(model: ResolvedModel, names: Iterable[str] = ()) -> ParametricSystem:
-    """The model's system functions with `names` (parameters, `<body>.vx`..) as `theta`."""
+def _start(ir: ModelIR, x, theta) -> dict[str, ca.Function]:
+    """file_velocities(q, theta) and initial_guess(theta) of an IR whose bodies' r0, p0, r_dot0
+    and omega0 are expressions of theta (or numbers)."""
+    q, bodies = x.q, ir.bodies
+    velocities = [constant(b.r_dot0) for b in bodies]
+    velocities += [0.5 * euler.e_matrix(x.p(k)).T @ constant(b.omega0)
+                   for k, b in enumerate(bodies)]
+    pose = [constant(b.r0) for b in bodies] + [constant(b.p0) for b in bodies]
+    empty = ca.SX(0, 1)
+    return {"file_velocities": _function("file_velocities", {"q": q, "theta": theta},
+                                         {"q_dot": ca.vertcat(*velocities) if bodies
+                                          else empty}),
+            "initial_guess": _function("initial_guess", {"theta": theta},
+                                       {"q": ca.vertcat(*pose) if bodies else empty})}
+
+
+def _bound(function: ca.Function, theta: ca.SX, d) -> ca.Function:
+    """A bundle function (trailing input d) with theta in place of d = d(theta)."""
+    inputs = [ca.SX.sym(function.name_in(k), function.sparsity_in(k))
+              for k in range(function.n_in() - 1)]
+    return ca.Function(function.name(), [*inputs, theta], function.call([*inputs, d]),
+                       [*function.name_in()[:-1], "theta"], function.name_out())
+
+
+def _with_offsets(ir: ModelIR, velocity_offsets: dict) -> ModelIR:
+    bodies = tuple(replace(b, **{field: constant(getattr(b, field)) + vector
+                                 for (name, field), vector in velocity_offsets.items()
+                                 if name == b.name}) for b in ir.bodies)
+    return replace(ir, bodies=bodies)
+
+
+def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
+    """The "data" method (module docstring): theta through the model data d."""
+    names = tuple(dict.fromkeys(names))
+    parameters, velocities = classify(model, names)
+    derivative = lowering.derivative(model, parameters)
+    split = derivative.split
+    theta = ca.SX.sym("theta", len(names))
+    values = np.array([model.parameters.get(n, 0.0) for n in names], float)
+    chosen = [names.index(n) for n in parameters]
+    moved = ca.sparsify(ca.DM(derivative.jacobian)) @ (theta[chosen] - values[chosen]) \
+        if chosen else ca.DM.zeros(split.values.size)
+    d = ca.DM(split.values) + moved
+    bundle = build_functions(split.ir, split.symbols)
+    functions = {name: _bound(bundle[name], theta, d) for name in BUNDLE}
+    # the start functions read d and theta (the velocity offsets): input [d; theta]
+    both = ca.vertcat(split.symbols, ca.SX.sym("offsets", len(names)))
+    symbols = {n: both[split.values.size + k] for k, n in enumerate(names)}
+    ir = _with_offsets(split.ir, offsets(velocities, symbols))
+    start = _start(ir, Coordinates.create(ir.n_bodies), both)
+    functions |= {name: _bound(f, theta, ca.vertcat(d, theta)) for name, f in start.items()}
+    return ParametricSystem(functions, build_functions(lower(model)), names, values, "data",
+                            dict(zip(parameters, derivative.error.tolist(), strict=True)))
+
+
+def parametric_system(model: ResolvedModel, names: Iterable[str] = (),
+                      method: str = "symbolic") -> ParametricSystem:
+    """The model's system functions with `names` (parameters, `<body>.vx`..) as `theta`;
+    `method` "auto": "symbolic" unless a parameter moves the geometry or the model is composed,
+    then "data" (module docstring)."""
+    if method not in METHODS:
+        raise UsageError(f"method '{method}' is not one of {', '.join(METHODS)}")
+    names = tuple(dict.fromkeys(names))
+    if method == "auto":
+        method = "data" if geometry_moved(model, classify(model, names)[0]) else "symbolic"
+    if method == "data":
+        return data_system(model, names)
     symbolic = symbolic_model(model, names)
     return ParametricSystem(build_parametric(symbolic), build_functions(symbolic.numeric),
                             symbolic.names, symbolic.values)
