@@ -49,5 +49,10 @@ def test_cli_warns_and_records_them(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "warning: near a singular pose at t = 0.71 " in err
     assert "b1_left (" in err
+    # auto tried joint coordinates first and says why it ran rp
+    assert "note: formulation auto ran the model again in rp: joint coordinates went near a " \
+           "singular pose at t = 0.71" in err
     metadata = json.loads((tmp_path / "metadata.json").read_text())
     assert [round(p["t"], 2) for p in metadata["result"]["singular_poses"]] == [0.71]
+    assert metadata["result"]["formulation"] == "rp"
+    assert "formulation_fallback" in metadata["result"]

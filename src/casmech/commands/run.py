@@ -151,6 +151,9 @@ def _run(args) -> int:
     for record in result.events:
         print(f"event {record.name} ({record.direction}) at t = {record.t:.10g} s"
               f"{': run stopped' if record.action == 'stop' else ''}")
+    if "formulation_fallback" in result.metadata:
+        print(f"note: formulation auto ran the model again in rp: "
+              f"{result.metadata['formulation_fallback']}", file=sys.stderr)
     for pose in result.metadata.get("singular_poses") or ():
         print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
     return 0
