@@ -17,6 +17,17 @@ class _AllowDir(argparse.Action):
         getattr(namespace, self.dest).append(value)
 
 
+def add_span(parser: argparse.ArgumentParser) -> None:
+    """--t-end, --output-step, --rtol, --atol: the analysis settings a run or a study
+    overrides."""
+    parser.add_argument("--t-end", type=float, help="end time [s]")
+    parser.add_argument("--output-step", type=float, help="output interval [s]")
+    parser.add_argument("--rtol", type=float,
+                        help="relative tolerance of the integrator (dynamics)")
+    parser.add_argument("--atol", type=float,
+                        help="absolute tolerance of the integrator (dynamics)")
+
+
 def add_overrides(parser: argparse.ArgumentParser) -> None:
     """--set NAME=VALUE and --allow-dir DIR: options of every command that loads a model."""
     parser.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",

@@ -28,7 +28,7 @@ import numpy as np
 
 import casmech
 from casmech import api, interrupts
-from casmech.commands.common import add_overrides, overrides
+from casmech.commands.common import add_overrides, add_span, overrides
 from casmech.errors import AnalysisError, Interrupted
 from casmech.output import events as events_output
 from casmech.output.csv import write_csv
@@ -67,15 +67,11 @@ def add_arguments(parser) -> None:
                              "by sha256, overrides, settings, options); default --out: "
                              "DIR_replay/ beside its DIR")
     parser.add_argument("--out", type=Path, help="output directory (default MODEL_results/)")
-    parser.add_argument("--t-end", type=float, help="end time [s]")
-    parser.add_argument("--output-step", type=float, help="output interval [s]")
-    parser.add_argument("--rtol", type=float,
-                        help="relative tolerance of the integrator (dynamics)")
-    parser.add_argument("--atol", type=float,
-                        help="absolute tolerance of the integrator (dynamics)")
+    add_span(parser)
     parser.add_argument("--formulation", choices=api.DYNAMICS_OPTIONS["formulation"],
                         help="equations of motion for dynamics (default: the model's, else auto: "
-                             "joint coordinates for a tree, rp with loops)")
+                             "joint coordinates, rp after a loop run that failed or passed a "
+                             "singular pose, or with a floating body in a loop)")
     parser.add_argument("--stabilization", choices=api.DYNAMICS_OPTIONS["stabilization"],
                         help="how dynamics keeps the constraints: the stabilized index-2 DAE "
                              "(ggl) or projections of the index-1 DAE (default: the model's, "

@@ -15,7 +15,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from casmech.commands.common import add_overrides, overrides
+from casmech.commands.common import add_overrides, add_span, overrides
 from casmech.errors import UsageError
 
 AXES = {"grid": "NAME=VALUES", "normal": "NAME=MEAN,SIGMA", "uniform": "NAME=LOW,HIGH"}
@@ -53,10 +53,7 @@ def add_arguments(parser) -> None:
                         help="compiled: the model's parametric library, built once, bound to "
                              "each run's values; interpreted: CasADi functions built per run; "
                              "auto (default): compiled from 200 runs or when cached")
-    parser.add_argument("--t-end", type=float, help="end time of every run [s]")
-    parser.add_argument("--output-step", type=float, help="output interval [s]")
-    parser.add_argument("--rtol", type=float, help="relative tolerance (dynamics)")
-    parser.add_argument("--atol", type=float, help="absolute tolerance (dynamics)")
+    add_span(parser)
     add_overrides(parser)
 
 
