@@ -36,10 +36,12 @@ def squeezer_angles(table: Table) -> tuple[np.ndarray, np.ndarray]:
     return relative(body), relative(rate)
 
 
-@pytest.mark.parametrize("stabilization", ["ggl", "projection"])
+@pytest.mark.parametrize("stabilization", ["ggl", "projection", None])
 @pytest.mark.parametrize("rtol", [1e-6, 1e-8, 1e-10])
 def test_squeezer_matches_the_reference_through_the_dae(rtol, stabilization):
-    """Through IDAS on the DAE (no fallback to the augmented-Lagrangian steps), the angles at
+    """Through IDAS on a DAE (no fallback to the augmented-Lagrangian steps): the r-p DAE with
+    either stabilization, and (None: formulation auto) the joint DAE (measured 2026-11-24:
+    within 1.8e-10 m of the r-p DAE's positions at rtol 1e-10). The angles at
     t = 0.03 within 100 rtol of the largest (|beta| = 15.8 rad), and the rates within 300 rtol
     of the largest (|theta_dot| = 1424 rad/s). Measured (rtol 1e-6, 1e-8, 1e-10): angles
     3.2e-6, 2.6e-6, 5.8e-8 rad with ggl, 5.6e-5, 7.2e-7, 1.2e-8 with projection; an
@@ -50,7 +52,9 @@ def test_squeezer_matches_the_reference_through_the_dae(rtol, stabilization):
     functions = casmech.compile(casmech.load(MODEL))
     result = casmech.analyze(functions, rtol=rtol, atol=rtol / 100,
                              stabilization=stabilization)
-    assert result.metadata["integrator"] == "idas" and result.metadata["augmented_from"] is None
+    assert result.metadata["integrator"] == "idas"
+    assert result.metadata.get("augmented_from") is None
+    assert result.metadata["formulation"] == ("joint" if stabilization is None else "rp")
     table = Table(*casmech.results_table(functions, result))
     assert table["t"][-1] == pytest.approx(0.03)
     angles, rates = squeezer_angles(table)
@@ -59,7 +63,7 @@ def test_squeezer_matches_the_reference_through_the_dae(rtol, stabilization):
     want_rates = np.array([expected[f"{name}_dot"] for name in ANGLES])
     error = np.abs(angles[:, -1] - want)
     print(f"\nrtol {rtol:g} {stabilization}: angle errors {np.array2string(error, precision=1)}, "
-          f"{result.metadata['idas_steps']} IDAS steps")
+          f"{result.metadata.get('idas_steps', result.metadata.get('steps'))} IDAS steps")
     np.testing.assert_allclose(angles[:, -1], want, rtol=0, atol=100 * rtol * np.max(np.abs(want)))
     np.testing.assert_allclose(rates[:, -1], want_rates, rtol=0,
                                atol=300 * rtol * np.max(np.abs(want_rates)))
