@@ -71,10 +71,12 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool) -> l
 
 
 def _independent(functions: SystemFunctions, result: Result, t: float, q) -> list[int]:
-    """The rows of Phi independent at the first row: every row when the r-p / r-omega run
-    dropped none (its own check at t0, runtime.dynamics), else checks.structure's."""
+    """The rows of Phi independent at the first row: every row when the run dropped none (its
+    own check at t0: runtime.dynamics for r-p / r-omega; for joint coordinates, the cut rows
+    independent on the tree's motions, with which the tree joints' own rows are independent
+    too), else checks.structure's."""
     meta = result.metadata
-    if meta.get("formulation") in ("rp", "romega") and meta.get("dropped_rows") == 0:
+    if meta.get("formulation") in ("rp", "romega", "joint") and meta.get("dropped_rows") == 0:
         return list(range(functions.n_rows))
     return list(structure(functions, t, q).independent)
 
