@@ -91,6 +91,15 @@ class JointSystem:
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
+    def acceleration_system(self) -> ca.Function:
+        """(t, x) -> (d acceleration_residual / dz, acceleration_residual at z = 0): the
+        residual is affine in z (the multipliers enter the recursion as forces)."""
+        t, x, z = self.acceleration_residual.sx_in()
+        residual = self.acceleration_residual(t, x, z)
+        return ca.Function("joint_acceleration_system", [t, x], [
+            ca.jacobian(residual, z), ca.substitute(residual, z, ca.DM.zeros(z.shape))])
+
+    @cached_property
     def jacobian(self) -> ca.Function:
         """lazy_jacobian.jacobian of `dynamics`, built once."""
         return lazy_jacobian.jacobian(self.dynamics)

@@ -174,18 +174,12 @@ class _Loops:
         m = self.system.n_cut
         if not m:
             return np.zeros(0)
-        residual = self.system.acceleration_residual
-        base = np.array(residual(t, x, np.zeros(2 * m)).full()).ravel()
+        matrix, base = (np.array(v.full()) for v in self.system.acceleration_system(t, x))
         keep = np.flatnonzero(self.mask == 0)
-        columns = []
-        for k in keep:
-            unit = np.zeros(2 * m)
-            unit[k] = 1.0
-            columns.append(np.array(residual(t, x, unit).full()).ravel() - base)
         z = np.zeros(2 * m)
         if len(keep):
-            matrix = np.array(columns).T[keep]
-            z[keep] = np.linalg.lstsq(matrix, -base[keep], rcond=None)[0]
+            z[keep] = np.linalg.lstsq(matrix[np.ix_(keep, keep)], -base[keep, 0],
+                                      rcond=None)[0]
         return z
 
 
@@ -329,7 +323,11 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
 
 def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
     """Integrate over `times` from (t0, x, z) and record the rows; on a failure, the same in
-    halves, so the rows before it are kept and the error names the output interval."""
+    halves, so the rows before it are kept and the error names the output interval. Returns
+    the state at the last time and None for its multipliers (z None: consistent ones from x,
+    computed here; the last chunk's are never needed)."""
+    if z is None:
+        z = loops.z(t0, x)
     try:
         states, algebraic = integrate(t0, times, x, z)
     except RuntimeError as error:
@@ -340,7 +338,7 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
         x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
         return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
     recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
-    return states[:, -1], loops.z(times[-1], states[:, -1])
+    return states[:, -1], None
 
 
 def _failure(t0: float, t1: float, why: str) -> AnalysisError:
