@@ -4,9 +4,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
-from casmech.compiler.joint_motions import MOTIONS, from_matrix
+from casmech.compiler.joint_motions import MOTIONS
+from casmech.geometry import euler
+from casmech.geometry.quaternions import from_matrix
 
 RNG = np.random.default_rng(7)
 

@@ -19,11 +19,13 @@ from functools import cache, cached_property
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler, spatial
+from casmech.compiler import eom, spatial
 from casmech.compiler.assemble import GROUND_POSE, Coordinates
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
-from casmech.compiler.joint_motions import MOTIONS, conjugate, from_matrix, product
+from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.tree import TreeJoint
+from casmech.geometry import euler
+from casmech.geometry.quaternions import conjugate, from_matrix, product
 
 
 @cache

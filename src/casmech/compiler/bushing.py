@@ -28,8 +28,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
 from casmech.compiler.ir import ForceIR, constant
+from casmech.geometry import euler
 from casmech.schema.spec import BUSHING_PARAMS
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)

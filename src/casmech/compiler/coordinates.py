@@ -1,6 +1,6 @@
 """The state a user force law reads: joint coordinates and body positions and velocities.
 
-One table says which names exist and how each is computed from the coordinates `x`:
+The names are casmech.geometry.states'; here is how each is computed from the coordinates `x`:
 
 - `<joint>.angle`, `<joint>.angle_dot` (revolute, cylindrical): rotation of body_j about the joint
   axis, measured from the pose written in the file like a driver angle; the formula is the rsda's
@@ -21,12 +21,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom
 from casmech.compiler.ir import constant
+from casmech.geometry import euler, states
+from casmech.geometry.states import split
 from casmech.schema.resolved import ScalarFunction
-
-ROTATING = ("revolute", "cylindrical")
-SLIDING = ("translational", "cylindrical")
 
 
 def displacement(geometry, x):
@@ -45,12 +44,12 @@ def _rate(coordinate: Callable) -> Callable:
     return lambda geometry, x: eom.rate(coordinate(geometry, x), x)
 
 
-# attribute -> (joint types that have it, value(joint geometry, x))
-JOINT_COORDINATES: dict[str, tuple[tuple[str, ...], Callable]] = {
-    "angle": (ROTATING, _angle),
-    "angle_dot": (ROTATING, _rate(_angle)),
-    "displacement": (SLIDING, displacement),
-    "displacement_dot": (SLIDING, _rate(displacement)),
+# attribute of states.JOINT_COORDINATES -> value(joint geometry, x)
+JOINT_VALUES: dict[str, Callable] = {
+    "angle": _angle,
+    "angle_dot": _rate(_angle),
+    "displacement": displacement,
+    "displacement_dot": _rate(displacement),
 }
 
 
@@ -63,19 +62,17 @@ _BODY_VECTORS = {
     "v": lambda x, k: x.r(k, x.q_dot),
     "w": _omega,
 }
-# attribute -> value(x, body index); names and meanings of the results columns
-BODY_STATES: dict[str, Callable] = {
+# attribute of states.BODY_STATES -> value(x, body index); meanings of the results columns
+BODY_VALUES: dict[str, Callable] = {
     f"{kind}{axis}": (lambda x, k, vector=vector, n=n: vector(x, k)[n])
     for kind, vector in _BODY_VECTORS.items()
     for n, axis in enumerate("xyz")
 }
-JOINT_TYPES = frozenset(kind for kinds, _ in JOINT_COORDINATES.values() for kind in kinds)
 
 
-def split(name: str) -> tuple[str, str]:
-    """'leg1.knee.angle' -> ('leg1.knee', 'angle')."""
-    owner, _, attribute = name.rpartition(".")
-    return owner, attribute
+def has_coordinates(joint_type: str) -> bool:
+    """Whether a joint of this type has a coordinate a force law may read."""
+    return bool(states.joint_attributes(joint_type))
 
 
 @dataclass(frozen=True)
@@ -87,9 +84,9 @@ class BoundFunction(ScalarFunction):
 
 def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
     owner, attribute = split(name)
-    if owner in joints and attribute in JOINT_COORDINATES:
+    if owner in joints and attribute in JOINT_VALUES:
         return "joint", attribute, joints[owner]
-    if owner in bodies and attribute in BODY_STATES:
+    if owner in bodies and attribute in BODY_VALUES:
         return "body", attribute, bodies[owner]
     return None
 
@@ -117,8 +114,8 @@ def bind(force, bodies: Mapping[str, int], joints: Mapping[str, Any]):
 
 
 EVALUATE = {
-    "joint": lambda attribute, geometry, x: JOINT_COORDINATES[attribute][1](geometry, x),
-    "body": lambda attribute, index, x: BODY_STATES[attribute](x, index),
+    "joint": lambda attribute, geometry, x: JOINT_VALUES[attribute](geometry, x),
+    "body": lambda attribute, index, x: BODY_VALUES[attribute](x, index),
 }
 
 

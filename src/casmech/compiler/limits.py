@@ -39,7 +39,7 @@ def lower(joint, geometry: ForceIR) -> ForceIR:
 
 
 def coordinate(limit: ForceIR, x):
-    return coordinates.JOINT_COORDINATES[COORDINATE[limit.type]][1](limit, x)
+    return coordinates.JOINT_VALUES[COORDINATE[limit.type]](limit, x)
 
 
 def law(limit: ForceIR, x) -> tuple:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
+from casmech.compiler import bushing, contact, coordinates, limits, motors
 from casmech.compiler import joints as joint_tables
 from casmech.compiler.ir import (
     GROUND_INDEX,
@@ -19,6 +19,7 @@ from casmech.compiler.ir import (
     PrimitiveIR,
     RowInfo,
 )
+from casmech.geometry import euler
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
 
 POINTS = frozenset({"P", "Q", "Pi", "Pj"})
@@ -189,7 +190,7 @@ def lower(model: ResolvedModel) -> ModelIR:
         for b in model.bodies
     )
     geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
-                if j.type in coordinates.JOINT_TYPES}  # for force laws reading the state
+                if coordinates.has_coordinates(j.type)}  # for force laws reading the state
     forces = tuple(coordinates.bind(lower_force(f, model, poses), poses.index, geometry)
                    for f in model.forces)
     effort = tuple(m for j in model.joints if j.motor

@@ -15,10 +15,11 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
+from casmech.geometry import euler
 from casmech.optimal.symbolic import SymbolicModel, symbolic_model
 from casmech.schema.resolved import ResolvedModel
 

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.geometry import euler
 from casmech.schema import files, resolved, spec
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
@@ -42,7 +42,7 @@ GEOMETRY_EXTRAS = {
 
 # ------------------------------------------------------------------------------ rotations
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p): body -> global; columns are the body axes (compiler/euler.py's, on numbers)."""
+    """A(p): body -> global; columns are the body axes (geometry/euler.py's, on numbers)."""
     return euler.numeric(euler.rotation, np.asarray(p, float))
 
 

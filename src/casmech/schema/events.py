@@ -2,8 +2,8 @@
 
 `when` is an expression of t, the parameters and the state: every body column of the results
 table (`bar.x` ... `bar.alphaz`, resolved.BODY_COLUMNS) and the coordinates of revolute,
-cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the table of
-compiler/coordinates.py). A misspelt or unknown name is E201 at its place in the expression, with
+cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the names of
+casmech.geometry.states). A misspelt or unknown name is E201 at its place in the expression, with
 a did-you-mean hint; a duplicate event name is E301.
 """
 
@@ -12,10 +12,11 @@ from __future__ import annotations
 from dataclasses import replace
 
 from casmech.errors import did_you_mean
+from casmech.geometry.states import joint_attributes
 from casmech.schema import contact, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.expressions import ExpressionError, parse
-from casmech.schema.force_laws import initial_states, joint_attributes
+from casmech.schema.force_laws import initial_states
 from casmech.schema.loader import Path, format_path
 from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
