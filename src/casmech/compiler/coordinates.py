@@ -23,8 +23,9 @@ from typing import Any
 
 from casmech.compiler import eom
 from casmech.compiler.ir import constant
-from casmech.geometry import euler, states
+from casmech.geometry import euler
 from casmech.geometry.states import split
+from casmech.joint_types import attributes
 from casmech.schema.resolved import ScalarFunction
 
 
@@ -72,7 +73,7 @@ BODY_VALUES: dict[str, Callable] = {
 
 def has_coordinates(joint_type: str) -> bool:
     """Whether a joint of this type has a coordinate a force law may read."""
-    return bool(states.joint_attributes(joint_type))
+    return bool(attributes(joint_type))
 
 
 @dataclass(frozen=True)

@@ -25,10 +25,10 @@ from casmech.compiler import articulated, lazy_jacobian
 from casmech.compiler.articulated import Joint
 from casmech.compiler.assemble import driver_value
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
-from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
 from casmech.geometry import euler
+from casmech.joint_types import MOTIONS
 
 
 @dataclass(frozen=True)

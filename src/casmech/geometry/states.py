@@ -27,13 +27,3 @@ def split(name: str) -> tuple[str, str]:
     owner, _, attribute = name.rpartition(".")
     return owner, attribute
 
-
-# joint coordinate -> joint types that have it
-JOINT_TYPES: dict[str, tuple[str, ...]] = {"angle": ("revolute", "cylindrical"),
-                                           "displacement": ("translational", "cylindrical")}
-
-
-def joint_attributes(joint_type: str) -> list[str]:
-    """The attributes a joint of this type has (`angle`, `angle_dot`, ...)."""
-    return [name for name, coordinate in JOINT_COORDINATES.items()
-            if joint_type in JOINT_TYPES[coordinate]]

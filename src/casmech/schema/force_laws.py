@@ -17,7 +17,9 @@ from typing import Any
 import numpy as np
 
 from casmech.errors import did_you_mean
-from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, joint_attributes, split
+from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
+from casmech.joint_types import attributes as joint_attributes
+from casmech.joint_types import coordinate_types, listed
 from casmech.schema import connections, resolved
 from casmech.schema.bodies import orientation
 from casmech.schema.checker import Checker, failed
@@ -97,9 +99,9 @@ class StateChecker(Checker):
         if owner in self.joint_types:
             kind = self.joint_types[owner]
             has = joint_attributes(kind)
-            listed = ", ".join(has) if has else "no coordinates (revolute, cylindrical and " \
-                "translational joints have)"
-            hint = did_you_mean(attribute, has) or f"{kind} joints have {listed}"
+            known = ", ".join(has) if has else "no coordinates (" \
+                f"{listed(coordinate_types())} joints have)"
+            hint = did_you_mean(attribute, has) or f"{kind} joints have {known}"
             return f"{kind} joint '{owner}' has no '{attribute}'", hint
         if owner in self.bodies:
             hint = did_you_mean(attribute, BODY_STATES) or f"bodies have {', '.join(BODY_STATES)}"

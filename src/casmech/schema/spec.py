@@ -22,9 +22,13 @@ from pydantic import (
     Tag,
     ValidationError,
     WrapValidator,
+    create_model,
     model_validator,
 )
+from pydantic.fields import FieldInfo
 from pydantic_core import PydanticCustomError
+
+from casmech.joint_types import REGISTRY, JointType, on_change
 
 
 def _scalar(value: Any, handler: Any) -> Any:
@@ -262,97 +266,45 @@ class Limit(Spec):
     damping: Scalar = 0
 
 
-class Revolute(Composite):
-    type: Literal["revolute"]
-    at: Vector
-    axis: Vector
-    limit: Limit | None = None
-
-
-class Spherical(Composite):
-    type: Literal["spherical"]
-    at: Vector
-
-
-class Universal(Composite):
-    type: Literal["universal"]
-    at: Vector
-    axis_i: Vector
-    axis_j: Vector
-
-
-class Cylindrical(Composite):
-    type: Literal["cylindrical"]
-    at: Vector
-    axis: Vector
-    limit: Limit | None = None
-
-
-class Translational(Composite):
-    type: Literal["translational"]
-    at: Vector
-    axis: Vector
-    limit: Limit | None = None
-
-
-class Fixed(Composite):
-    type: Literal["fixed"]
-    at: Vector
-
-
-class Distance(Composite):
-    type: Literal["distance"]
-    at_i: Vector
-    at_j: Vector
-    length: Scalar | None = None
-
-
-class RevoluteSpherical(Composite):
-    type: Literal["revolute_spherical"]
-    at: Vector
-    axis: Vector
-    at_j: Vector
-
-
-class Planar(Composite):
-    type: Literal["planar"]
-    at: Vector
-    axis: Vector
-
-
 class Basic(JointBase):
     f: TimeFunction = "0"
 
 
-class DP1(Basic):
-    type: Literal["dp1"]
-    a_i: Vector
-    a_j: Vector
+def joint_class(entry: JointType) -> type[Spec]:
+    """The YAML class of a joint type, from its registry entry: `type`, its vector keys, its
+    optional scalars, and `limit` when the type has a stop."""
+    fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
+    fields |= {key: (Vector, ...) for key in entry.vectors}
+    fields |= {key: (Scalar | None, None) for key in entry.options}
+    if entry.limit is not None:
+        fields["limit"] = (Limit | None, None)
+    return create_model(entry.class_name, __base__=Basic if entry.basic else Composite,
+                        __module__=__name__, **fields)
 
 
-class DP2(Basic):
-    type: Literal["dp2"]
-    a_i: Vector
-    s_i: Vector
-    s_j: Vector
+JOINT_CLASSES: dict[str, type[Spec]] = {}  # joint type -> its class (joint_types.REGISTRY's)
 
 
-class D(Basic):
-    type: Literal["d"]
-    s_i: Vector
-    s_j: Vector
+def _joint_union():
+    """The `joints:` item: a union of the registered types' classes, discriminated on `type`."""
+    for name, entry in REGISTRY.items():
+        if name not in JOINT_CLASSES or JOINT_CLASSES[name].__name__ != entry.class_name:
+            JOINT_CLASSES[name] = joint_class(entry)
+    for name in set(JOINT_CLASSES) - set(REGISTRY):
+        del JOINT_CLASSES[name]
+    classes = tuple(JOINT_CLASSES[name] for name in REGISTRY)
+    return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
 
-class CD(Basic):
-    type: Literal["cd"]
-    c: Vector
-    s_i: Vector
-    s_j: Vector
+Joint = _joint_union()
 
 
-JOINTS = (Revolute, Spherical, Universal, Cylindrical, Translational, Fixed, Distance)
-JOINTS += (RevoluteSpherical, Planar, DP1, DP2, D, CD)
-Joint = Annotated[Union[JOINTS], Field(discriminator="type")]  # noqa: UP007
+def __getattr__(name: str) -> type[Spec]:
+    """A joint type's class by its name (spec.Revolute, spec.DP1, ...)."""
+    found = [cls for cls in JOINT_CLASSES.values() if cls.__name__ == name]
+    if not found:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return found[0]
 
 
 # ------------------------------------------------------------------------------------ forces
@@ -678,3 +630,15 @@ def _model_schema(schema: dict) -> None:
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["required"] = [key for key in schema.get("required", []) if key != "bodies"]
     schema["anyOf"] = [{"required": ["bodies"]}, {"required": ["instances"]}]
+
+
+def _joints_changed() -> None:
+    """A joint type was (un)registered: rebuild the union and the classes that hold it."""
+    global Joint
+    Joint = _joint_union()
+    for cls in (Component, ModelSpec):
+        cls.model_fields["joints"] = FieldInfo.from_annotated_attribute(tuple[Joint, ...], ())
+        cls.model_rebuild(force=True)
+
+
+on_change(_joints_changed)

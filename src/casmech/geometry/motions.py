@@ -1,4 +1,5 @@
-"""Tree joints of the joint-coordinate formulation: one entry per joint type.
+"""Tree joints of the joint-coordinate formulation: the motion a joint type allows (the
+`motion` of its casmech.joint_types entry; `FREE` for a body no tree joint reaches).
 
 A tree joint moves the child's joint frame F_c relative to the parent's F_p by a rotation (a
 quaternion of the joint coordinates theta) and a translation (F_c's origin in F_p
@@ -7,7 +8,7 @@ velocities are the relative angular velocity in F_c (theta_dot = 1/2 G(theta)^T 
 law of Euler parameters). Everything else (the motion subspace, its rate) comes from AD of
 these two maps (compiler/articulated.py). `coordinates` inverts them numerically, for initial
 states. `drivers` names the coordinate a joint driver prescribes: the driver rows of
-compiler/joints.py measure the same angle (atan2 of the joint frames, 0 at the file's pose)
+casmech.joint_types measure the same angle (atan2 of the joint frames, 0 at the file's pose)
 and the same slide along the axis.
 
 Frames (tree.frames): "axes" uses the joint's triad u, v, w (w the axis; ex, ey, ez when the
@@ -24,10 +25,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.geometry import euler
-from casmech.geometry.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
-
-# the relative angular velocity (in F_c) of a joint whose rotation is one quaternion block:
-# its velocities u[0:3] by definition (their rate law is theta_dot = 1/2 G^T u)
+from casmech.geometry.quaternions import from_matrix, unit
 
 
 @dataclass(frozen=True)
@@ -62,35 +60,20 @@ class Motion:
         return ca.vertcat(*parts)
 
 
-def _zero(theta):
+def no_translation(theta):
     return ca.DM.zeros(3, 1)
 
 
-def _slide(theta):
+def slide(theta):
+    """F_c's origin moved along F_p's z (the joint axis) by the last coordinate."""
     return ca.vertcat(0, 0, theta[-1])
 
 
-def _universal_angles(r: np.ndarray, d: np.ndarray) -> np.ndarray:
+def universal_angles(r: np.ndarray, d: np.ndarray) -> np.ndarray:
     """(alpha, beta) of R = Rx(alpha) Ry(beta)."""
     return np.array([np.arctan2(r[2, 1], r[1, 1]), np.arctan2(r[0, 2], r[0, 0])])
 
 
-MOTIONS: dict[str, Motion] = {
-    "revolute": Motion(1, 1, lambda th: about(2, th[0]), _zero,
-                       lambda r, d: np.array([angle_about(r, 2)]), drivers={"angle": 0}),
-    "translational": Motion(1, 1, lambda th: IDENTITY, _slide,
-                            lambda r, d: np.array([d[2]]), drivers={"displacement": 0}),
-    "cylindrical": Motion(2, 2, lambda th: about(2, th[0]), _slide,
-                          lambda r, d: np.array([angle_about(r, 2), d[2]]),
-                          drivers={"angle": 0, "displacement": 1}),
-    "spherical": Motion(4, 3, lambda th: unit(th[0:4]), _zero,
-                        lambda r, d: from_matrix(r), quaternions=(0,)),
-    "universal": Motion(2, 2, lambda th: product(about(0, th[0]), about(1, th[1])), _zero,
-                        _universal_angles, frame="cross"),
-    "planar": Motion(3, 3, lambda th: about(2, th[2]), lambda th: ca.vertcat(th[0], th[1], 0),
-                     lambda r, d: np.array([d[0], d[1], angle_about(r, 2)])),
-    "fixed": Motion(0, 0, lambda th: IDENTITY, _zero, lambda r, d: np.zeros(0)),
-    # a body that no tree joint reaches floats: quaternion, then its origin (F_p: ground's)
-    "free": Motion(7, 6, lambda th: unit(th[0:4]), lambda th: th[4:7],
-                   lambda r, d: np.concatenate([from_matrix(r), d]), quaternions=(0,)),
-}
+# a body that no tree joint reaches floats: quaternion, then its origin (F_p: ground's)
+FREE = Motion(7, 6, lambda th: unit(th[0:4]), lambda th: th[4:7],
+              lambda r, d: np.concatenate([from_matrix(r), d]), quaternions=(0,))
