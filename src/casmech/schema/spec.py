@@ -283,15 +283,16 @@ def joint_class(entry: JointType) -> type[Spec]:
 
 
 JOINT_CLASSES: dict[str, type[Spec]] = {}  # joint type -> its class (joint_types.REGISTRY's)
+_BUILT_FROM: dict[str, JointType] = {}  # joint type -> the entry its class was built from
 
 
 def _joint_union():
     """The `joints:` item: a union of the registered types' classes, discriminated on `type`."""
-    for name, entry in REGISTRY.items():
-        if name not in JOINT_CLASSES or JOINT_CLASSES[name].__name__ != entry.class_name:
-            JOINT_CLASSES[name] = joint_class(entry)
     for name in set(JOINT_CLASSES) - set(REGISTRY):
-        del JOINT_CLASSES[name]
+        del JOINT_CLASSES[name], _BUILT_FROM[name]
+    for name, entry in REGISTRY.items():
+        if _BUILT_FROM.get(name) is not entry:
+            JOINT_CLASSES[name], _BUILT_FROM[name] = joint_class(entry), entry
     classes = tuple(JOINT_CLASSES[name] for name in REGISTRY)
     return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
