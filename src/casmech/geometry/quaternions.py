@@ -37,7 +37,8 @@ def unit(p):
 
 
 def from_matrix(rotation: np.ndarray) -> np.ndarray:
-    """Unit quaternion (e0 >= 0) of a rotation matrix (Shepperd's method)."""
+    """Unit quaternion (e0 >= 0) of a rotation matrix (Shepperd's method), normalised (so a
+    matrix orthonormal to roundoff gives a unit quaternion)."""
     r = np.asarray(rotation, float)
     trace = np.trace(r)
     candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
@@ -54,6 +55,7 @@ def from_matrix(rotation: np.ndarray) -> np.ndarray:
         q[0] = (r[m, j] - r[j, m]) / s
         q[1 + j] = (r[j, i] + r[i, j]) / s
         q[1 + m] = (r[m, i] + r[i, m]) / s
+    q /= np.linalg.norm(q)
     return q if q[0] >= 0 else -q
 
 
