@@ -77,7 +77,9 @@ class JointType:
     """One joint type (module docstring)."""
 
     name: str  # YAML `type:`
-    vectors: tuple[str, ...]  # its vector keys, in the order of the YAML class's fields
+    # its vector keys, in the order of the YAML class's fields; axis, axis_i, axis_j are unit
+    # directions, a_i, a_j, c nonzero ones (schema/connections.py), any other name a point
+    vectors: tuple[str, ...]
     rows: tuple[Template, ...]  # its constraint rows
     reaction_point: str | None = "P"  # quantity on body i the reaction torque is taken about
     # (a key of `vectors` for basic constraints; None: body i's origin)

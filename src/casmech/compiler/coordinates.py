@@ -2,12 +2,14 @@
 
 The names are casmech.geometry.states'; here is how each is computed from the coordinates `x`:
 
-- `<joint>.angle`, `<joint>.angle_dot` (revolute, cylindrical): rotation of body_j about the joint
-  axis, measured from the pose written in the file like a driver angle; the formula is the rsda's
+- `<joint>.angle`, `<joint>.angle_dot` (joint types whose casmech.joint_types entry has the
+  coordinate "angle": revolute, cylindrical): rotation of body_j about the joint axis, measured
+  from the pose written in the file like a driver angle; the formula is the rsda's
   (`eom.rsda_angle`, atan2 of the joint frames, so in (-pi, pi]); the rate is its time
   derivative by AD.
-- `<joint>.displacement`, `<joint>.displacement_dot` (translational, cylindrical): slide of body_j's
-  copy of the joint point along the axis carried by body_i, 0 at the pose in the file.
+- `<joint>.displacement`, `<joint>.displacement_dot` ("displacement": translational,
+  cylindrical): slide of body_j's copy of the joint point along the axis carried by body_i, 0
+  at the pose in the file.
 - `<body>.x .y .z .vx .vy .vz .wx .wy .wz`: what the results columns of that name hold (CM
   position and velocity, angular velocity, all global).
 

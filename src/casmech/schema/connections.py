@@ -12,7 +12,6 @@ from casmech.schema.checker import ZERO, Checker, failed
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
 
-VECTOR_KEYS = ("at", "axis", "axis_i", "axis_j", "at_i", "at_j", "a_i", "a_j", "s_i", "s_j", "c")
 UNIT_KEYS = frozenset({"axis", "axis_i", "axis_j"})  # normalised
 NONZERO_KEYS = frozenset({"axis", "axis_i", "axis_j", "a_i", "a_j", "c"})  # E404 when zero
 DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.joint_types)
@@ -23,9 +22,9 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
     check.joint_types[given.name] = given.type
     check.joint_bodies[given.name] = (given.body_i, given.body_j)
-    keys = [key for key in VECTOR_KEYS if key in type(given).model_fields]
-    vectors = {key: joint_vector(check, (*path, key), key, getattr(given, key)) for key in keys}
     entry = REGISTRY[given.type]
+    vectors = {key: joint_vector(check, (*path, key), key, getattr(given, key))
+               for key in entry.vectors}
     extra = (
         {"length": distance_length(check, path, given, vectors)}
         if "length" in entry.options else {}
