@@ -20,13 +20,12 @@ from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.lower import lower
 from casmech.errors import AnalysisError, Interrupted, UsageError
-from casmech.runtime import assembly, solver_messages
+from casmech.runtime import assembly, auto_formulation, solver_messages
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
-from casmech.runtime.kinematics import run_assembly, run_prescribed_motion
+from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
 from casmech.runtime.results import Result, column_names, table
-from casmech.runtime.singular_poses import singular_poses
 from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
 
@@ -81,26 +80,22 @@ DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
-    r-omega DAE (runtime.dynamics). auto takes joint coordinates when the joints form a tree
-    and no DAE stabilization other than the default was asked for, else r-p (loops:
-    docs/formulations.md). A mechanism with loops is then examined for singular poses."""
-    formulation = s.options.get("formulation", "auto")
+    r-omega DAE (runtime.dynamics); auto: runtime.auto_formulation, which also examines a
+    mechanism with loops for singular poses."""
+    def joint() -> Result:
+        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                                  progress=progress, method=s.options.get("method", "auto"),
+                                  extra_events=extra_events)
+
+    def other(formulation: str) -> Result:
+        return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+                            formulation=formulation, progress=progress,
+                            stabilization=stabilization, extra_events=extra_events)
+
     stabilization = s.options.get("stabilization", "ggl")
-    is_tree = tree_of(f).is_tree
-    if formulation == "auto":
-        formulation = "joint" if stabilization == "ggl" and is_tree else "rp"
-    if formulation == "joint":
-        result = run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                    progress=progress, method=s.options.get("method", "auto"),
-                                    extra_events=extra_events)
-    else:
-        result = run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                              formulation=formulation, progress=progress,
-                              stabilization=stabilization, extra_events=extra_events)
-    poses = singular_poses(f, result, loops=not is_tree)
-    if poses is not None:
-        result.metadata["singular_poses"] = poses
-    return result
+    rows = len(output_times(0.0, s.t_end, s.output_step))
+    return auto_formulation.run(f, tree_of(f), s.options.get("formulation", "auto"),
+                                stabilization, rows, joint, other)
 
 
 def _runtime(name: str):
@@ -118,7 +113,7 @@ ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Resul
     "assembly": lambda f, s, p: run_assembly(f, progress=p),
     "dynamics": _dynamics,
     "statics": lambda f, s, p: _runtime("statics").run_statics(f, progress=p),
-    "modal": lambda f, s, p: _runtime("modal").run_modal(f, progress=p),
+    "modal": lambda f, s, p: _runtime("modal").run_modal(f, s, progress=p),
 }
 
 

@@ -137,14 +137,6 @@ def test_loops_move_as_in_the_rp_dae(path):
     assert np.max(joint["constraint_violation"]) <= 1e-9
 
 
-def test_auto_keeps_loops_on_the_rp_dae():
-    """The joint DAE passes singular poses less reliably than the r-p fallback (IFToMM A02
-    at rtol 1e-11 failed at its 9th flat pose), so auto takes joint coordinates for trees only."""
-    functions = casmech.compile(casmech.load(MODELS / "bricard.yaml"))
-    assert casmech.analyze(functions, formulation="auto", t_end=0.05).metadata[
-        "formulation"] == "rp"
-
-
 BLOWING_UP = """
 casmech: 1
 name: blowing_up

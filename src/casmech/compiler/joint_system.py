@@ -7,11 +7,15 @@ their constraint rows Phi_c(t, q(theta)) (compiler/tree.py). Their multipliers a
 bodies as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the DAE is the stabilized
 index-2 form of Gear, Gupta and Leimkuhler (as compiler/dae.py's for r-p):
 
-    theta' = theta_dot(theta, u) + Phi_c_theta^T mu,   u' = ABA(t, theta, u; lam)
-    0 = Phi_c(t, theta),   0 = d/dt Phi_c (t, theta, u),   z = [lam, mu]
+    theta' = theta_dot(theta, u) + Phi_c_theta^T S mu,   u' = ABA(t, theta, u; lam)
+    0 = S Phi_c(t, theta),   0 = S d/dt Phi_c (t, theta, u),   z = [lam, mu]
 
-with the rows scaled to unit velocity-Jacobian norm (lam in force units) and masked by p = w
-(w_k = 1 turns row k into lam_k = 0 and mu_k = 0: rows that depend on the others at t0).
+with S = diag(s(theta)) scaling each row to unit velocity-Jacobian norm (lam in force units)
+and the rows masked by p = w (w_k = 1 turns row k into lam_k = 0 and mu_k = 0: rows that
+depend on the others at t0). The stabilizing term takes S as a factor, not differentiated
+(d S/d theta multiplies Phi_c, zero on the constraint manifold): any matrix B with
+Phi_c_theta B nonsingular gives the same projection, and this one costs half the residual's
+instructions of (S Phi_c)_theta (measured in docs/decisions.md).
 """
 
 from __future__ import annotations
@@ -29,6 +33,11 @@ from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
 from casmech.geometry import euler
 from casmech.joint_types import MOTIONS
+
+
+# a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
+# the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
+ROW_NORM_FLOOR = 1e-9
 
 
 @dataclass(frozen=True)
@@ -74,7 +83,12 @@ class JointSystem:
 
     @cached_property
     def problem(self) -> dict:
-        """casadi.integrator's problem (MX, with lazy_jacobian's cheap Jacobian)."""
+        """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
+        sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
+        (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
+        per evaluation on the gallery's loops, measured in docs/decisions.md)."""
+        if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
@@ -190,7 +204,10 @@ class _Builder:
         phi = ca.vertcat(*[self.rows(joint)[0] for joint in self.tree.cut])
         rate = ca.jacobian(phi, theta) @ self.theta_dot + ca.jacobian(phi, self.t)
         u = self.x[self.layout.n_theta:]
-        scale = 1 / ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        norm = ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        # a row the tree's motions cannot violate (a planar loop's out-of-plane rows) has no
+        # velocity Jacobian: scale 0, so the rank test at t0 masks it
+        scale = ca.if_else(norm > ROW_NORM_FLOOR, 1 / norm, 0)
         return phi, rate, scale, self.z[:m], self.z[m:]
 
     def cut_wrenches(self, lam) -> list:
@@ -268,7 +285,7 @@ def build(ir: ModelIR, tree: Tree) -> JointSystem:
         dyn = b.dynamics(lam_cut)
         x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
         theta = x[:b.layout.n_theta]
-        ode = x_dot + ca.vertcat(ca.jacobian(scale * phi, theta).T @ mu,
+        ode = x_dot + ca.vertcat(ca.jacobian(phi, theta).T @ (scale * mu),
                                  ca.SX.zeros(b.layout.n_x - b.layout.n_theta, 1))
         alg = ca.vertcat((1 - w) * scale * phi - w * mu, (1 - w) * scale * rate - w * lam_unit)
         dynamics = ca.Function("joint_dae", [t, x, z, w], [ode, alg],

@@ -14,14 +14,17 @@ from __future__ import annotations
 import casadi as ca
 
 
-def forward_jacobian(function: ca.Function, exact: bool = True) -> ca.Function:
+def forward_jacobian(function: ca.Function, exact: bool = True,
+                     given: ca.Function | None = None) -> ca.Function:
     """`function` with the custom Jacobian of the module docstring (an MX call of it, so a
-    compiled function stays compiled); exact=False: declared not differentiable, for an
-    integrator that never evaluates the Jacobian (CVODES's functional iteration), since
-    creating one still analyses the Jacobian's sparsity for a linear solver (a dense one:
-    0.8 s for a 128-link chain, 4.7 s for 256, 574 s for 1000)."""
+    compiled function stays compiled), or `given` (a Function of jacobian()'s signature, built
+    once by the caller: creating an integrator then builds no Jacobian); exact=False: declared
+    not differentiable, for an integrator that never evaluates the Jacobian (CVODES's
+    functional iteration), since creating one still analyses the Jacobian's sparsity for a
+    linear solver (a dense one: 0.8 s for a 128-link chain, 4.7 s for 256, 574 s for 1000)."""
     symbols = function.mx_in()
-    options = ({"custom_jacobian": jacobian(function), "jac_penalty": 0} if exact
+    custom = given if given is not None else jacobian(function) if exact else None
+    options = ({"custom_jacobian": custom, "jac_penalty": 0} if exact
                else {"is_diff_in": [False] * function.n_in()})
     return ca.Function(function.name(), symbols, function.call(symbols), function.name_in(),
                        function.name_out(), options)
@@ -51,9 +54,10 @@ def jacobian(function: ca.Function) -> ca.Function:
         [f"jac_{o}_{i}" for o in names_out for i in names_in])
 
 
-def problem(dynamics: ca.Function, exact: bool = True) -> dict:
+def problem(dynamics: ca.Function, exact: bool = True,
+            jacobian: ca.Function | None = None) -> dict:
     """casadi.integrator's problem over (t, x) -> ode or (t, x, z, p) -> (ode, alg), as MX
-    (exact: see forward_jacobian)."""
-    function = forward_jacobian(dynamics, exact)
+    (exact, jacobian: see forward_jacobian)."""
+    function = forward_jacobian(dynamics, exact, jacobian)
     symbols = {name: ca.MX.sym(name, dynamics.sparsity_in(name)) for name in dynamics.name_in()}
     return symbols | function.call(symbols)

@@ -67,34 +67,44 @@ def tree_of(functions: SystemFunctions) -> Tree:
     return functions.derived["spanning_tree"]
 
 
+def lags_bundle(functions: SystemFunctions) -> bool:
+    """Whether the bundle is compiled and its joint system would not be: a parametric bundle's
+    (functions.data: it would compile per value) or one above COMPILED_ODE_BODIES."""
+    from casmech import codegen  # imported on use: interpreted runs never need it
+
+    return codegen.mode_of(functions) == "compiled" and (
+        functions.n_bodies > COMPILED_ODE_BODIES or functions.data is not None)
+
+
 def joint_system(functions: SystemFunctions) -> JointSystem:
-    """The bundle's joint system, built once per bundle; with a compiled bundle, a tree's ODE
-    and results rows are compiled too (compiled_system)."""
+    """The bundle's joint system, built once per bundle; with a compiled bundle, the tree's ODE
+    or the loops' DAE and the results rows are compiled too (compiled_system, lags_bundle)."""
     if "joint_system" not in functions.derived:
         system = build(functions.ir, tree_of(functions))
-        from casmech import codegen  # imported on use: interpreted runs never need it
+        from casmech import codegen
 
-        # a parametric bundle's (functions.data) would compile per value: interpreted
-        if codegen.mode_of(functions) == "compiled" and not system.n_cut \
-                and functions.n_bodies <= COMPILED_ODE_BODIES and functions.data is None:
+        if codegen.mode_of(functions) == "compiled" and not lags_bundle(functions):
             system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
         functions.derived["joint_system"] = system
     return functions.derived["joint_system"]
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSystem:
-    """A tree's ODE (and with_motion its results rows) compiled through codegen's cache, and
-    the ODE's forward derivative where method auto may choose BDF (its Jacobian by forward
-    sweeps: casadi's externals find fwd1_<name> in their library)."""
+    """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
+    codegen's cache; with the tree's ODE its forward derivative where method auto may choose
+    BDF (its Jacobian by forward sweeps: casadi's externals find fwd1_<name> in their
+    library), with the DAE its Jacobian (JointSystem.problem)."""
     from casmech import codegen
 
-    functions = {"joint_ode": system.dynamics}
+    name = "joint_dae" if system.n_cut else "joint_ode"
+    functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
-    if system.layout.n_x <= STIFF_STATES:
+    if not system.n_cut and system.layout.n_x <= STIFF_STATES:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
-    built = codegen.compile_functions(functions, toolchain=_toolchain(system))
-    return replace(system, dynamics=built["joint_ode"],
+    built = codegen.compile_functions(functions, toolchain=_toolchain(system),
+                                      with_jacobian=[name] if system.n_cut else ())
+    return replace(system, dynamics=built[name],
                    motion=built.get("joint_motion", system.motion))
 
 

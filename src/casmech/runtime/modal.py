@@ -1,4 +1,6 @@
-"""Linearization and modes at the static equilibrium (runtime.statics).
+"""Linearization and modes at the static equilibrium (runtime.statics), or with `analysis:
+{at: t}` at that time of a dynamics run (linearize_at: runtime.linearize, the same chart and
+state, A and B by AD through the chart's ODE, velocity terms included).
 
 Independent coordinates: z with q = q* + N z, N the orthonormal null-space basis of Phi_q(q*)
 from a column-pivoted QR of Phi_q^T (statics.null_space; Euler-parameter normalization rows
@@ -10,9 +12,10 @@ removes the multipliers; to first order about the equilibrium (where Q - Phi_q^T
 
 all derivatives by CasADi's AD (statics.tangent_function). State x = [z; z'],
 A = [[0, I], [-M_r^-1 K_r, -M_r^-1 C_r]]. Inputs u: a torque or force added to each effort
-motor (`<joint>.torque` / `<joint>.force`; none without effort motors), B = [0; M_r^-1 N^T
-G] with G the motors' generalized forces per unit input. Outputs y = C x (D = 0): every
-body's translation and small global rotation (2 E(p) dp) away from the equilibrium:
+motor (`<joint>.torque` / `<joint>.force`), or the effort-motor joints and force elements
+`analysis: {inputs: [...]}` names (runtime.linearize.INPUT_KINDS), B = [0; M_r^-1 N^T G] with
+G their generalized forces per unit input. Outputs y = C x (D = 0): every
+body's translation and small global rotation (2 E(p) dp) away from q*:
 `<body>.dx .dy .dz .rx .ry .rz`.
 
 Modes: the eigenvalues s of A, a complex pair once (Im s > 0), a real eigenvalue (an
@@ -24,18 +27,19 @@ body motions (n_modes x n_bodies x 6), scaled so that the largest entry is 1.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 
-from casmech.compiler import motors as compiler_motors
-from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import SystemFunctions
+from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.output.atomic import atomic
-from casmech.runtime import statics
+from casmech.runtime import kinematics, statics
+from casmech.runtime import linearize as linear
 from casmech.runtime.results import Result
+from casmech.schema.resolved import Analysis
 
 MODE_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "eigenvalue_real", "eigenvalue_imag",
                 "damped_frequency_hz")
@@ -48,7 +52,8 @@ REAL_CUT = 1e-9  # |Im s| <= REAL_CUT |s|: a real eigenvalue
 
 @dataclass
 class LinearModel:
-    """x' = A x + B u, y = C x + D u about the equilibrium q (states z, z'), and its modes."""
+    """x' = A x + B u, y = C x + D u about q (states z, z'): the static equilibrium or a state
+    (t, q, q_dot) of a run; and its modes."""
 
     A: np.ndarray  # noqa: N815 (the usual names)
     B: np.ndarray  # noqa: N815
@@ -63,6 +68,13 @@ class LinearModel:
     mode_shapes: np.ndarray  # (modes, bodies, 6) complex
     body_names: list[str] = field(default_factory=list)
     mode_vectors: np.ndarray | None = None  # (k, modes) complex: modes in z, scaled as shapes
+    t: float | None = None  # the time of the run linearized at; None: the static equilibrium
+    q_dot: np.ndarray | None = None  # the velocities there (zero at the equilibrium)
+
+    @property
+    def linearized_at(self) -> str:
+        """'equilibrium' or 't = <time>' (metadata.json's `linearized_at`)."""
+        return "equilibrium" if self.t is None else f"t = {self.t:.12g}"
 
     def state_space(self):
         """The linear model as a python-control StateSpace (states, inputs and outputs named,
@@ -117,70 +129,84 @@ class LinearModel:
                      state_names=np.array(self.state_names, dtype=str),
                      input_names=np.array(self.input_names, dtype=str),
                      output_names=np.array(self.output_names, dtype=str),
-                     q_equilibrium=self.q, basis=self.basis, eigenvalues=self.eigenvalues,
+                     q_equilibrium=self.q, q_dot=self.q_dot, linearized_at=self.linearized_at,
+                     t=np.nan if self.t is None else self.t,
+                     basis=self.basis, eigenvalues=self.eigenvalues,
                      mode_shapes=self.mode_shapes, mode_vectors=self.mode_vectors,
                      mode_shape_names=np.array(
                          [f"{b}.{m}" for b in self.body_names for m in MOTION], dtype=str))
         return path
 
 
-def linearize(functions: SystemFunctions, system: statics.ReducedSystem) -> LinearModel:
-    """The linear model and modes at an equilibrium's reduced system."""
+def linearize(functions: SystemFunctions, system: statics.ReducedSystem,
+              inputs: Sequence[str] | None = None) -> LinearModel:
+    """The linear model and modes at an equilibrium's reduced system; `inputs`: the elements
+    whose force is an input (runtime.linearize; None: every effort motor)."""
     k = system.dof
     stiffness = np.linalg.solve(system.mass, system.stiffness) if k else np.zeros((0, 0))
     damping = np.linalg.solve(system.mass, system.damping) if k else np.zeros((0, 0))
     a = np.block([[np.zeros((k, k)), np.eye(k)], [-stiffness, -damping]])
-    names, generalized = _inputs(functions, system.q)
+    names, forces = linear.input_forces(functions, inputs)
+    n = system.q.size
+    generalized = np.array(forces(0.0, system.q, np.zeros(n))).reshape(n, len(names))
     driven = np.linalg.solve(system.mass, system.basis.T @ generalized) if k else \
         np.zeros((0, len(names)))
     b = np.vstack([np.zeros((k, len(names))), driven])
-    outputs = _output_map(functions, system)
+    return _model(functions, system.q, system.basis, a, b, names)
+
+
+def linearize_at(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.ndarray,
+                 inputs: Sequence[str] | None = None) -> LinearModel:
+    """The linear model and modes at a state (t, q, q_dot) of a run (runtime.linearize)."""
+    phi_q = functions.matrix("phi_q", t, q)
+    basis, rows = statics.basis_and_rows(phi_q)
+    names, forces = linear.input_forces(functions, inputs)
+    a, b = linear.state_space(functions, t, q, q_dot, basis, rows, forces)
+    return _model(functions, q, basis, a, b, names, t, q_dot)
+
+
+def _model(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.ndarray,
+           b: np.ndarray, names: list[str], t: float | None = None,
+           q_dot: np.ndarray | None = None) -> LinearModel:
+    """The LinearModel of A, B at q (outputs: the body motions of N z; D = 0)."""
+    k = basis.shape[1]
+    outputs = statics.motion_map(q) @ basis
     c = np.hstack([outputs, np.zeros_like(outputs)])
-    eigenvalues, shapes, vectors = _modes(functions, system, a)
+    eigenvalues, shapes, vectors = _modes(functions, q, basis, a)
     bodies = list(functions.body_names)
     return LinearModel(
         A=a, B=b, C=c, D=np.zeros((c.shape[0], len(names))),
         state_names=[f"z{i + 1}" for i in range(k)] + [f"z{i + 1}_dot" for i in range(k)],
         input_names=names, output_names=[f"{body}.{m}" for body in bodies for m in MOTION],
-        q=system.q, basis=system.basis, eigenvalues=eigenvalues, mode_shapes=shapes,
-        body_names=bodies, mode_vectors=vectors)
+        q=q, basis=basis, eigenvalues=eigenvalues, mode_shapes=shapes,
+        body_names=bodies, mode_vectors=vectors, t=t,
+        q_dot=np.zeros_like(q) if q_dot is None else q_dot)
 
 
-INPUT_NAMES = {"motor_torque": "torque", "motor_force": "force"}
+def _neutral(a: np.ndarray) -> tuple[np.ndarray, float]:
+    """(the DOF of zero stiffness as orthonormal columns in z, the threshold of |omega^2|
+    below which a frequency counts as 0): the eigenvectors of S = -A[k:, :k] (M_r^-1 K_r at an
+    equilibrium) whose eigenvalues are 0 within statics.neutral_threshold."""
+    k = a.shape[0] // 2
+    values, vectors = np.linalg.eig(-a[k:, :k])
+    threshold = statics.neutral_threshold(values.real)
+    zero = np.abs(values) <= threshold
+    if not zero.any():
+        return np.zeros((k, 0)), threshold
+    return np.linalg.qr(vectors[:, zero].real)[0], threshold
 
 
-def _inputs(functions: SystemFunctions, q: np.ndarray) -> tuple[list[str], np.ndarray]:
-    """The inputs: a torque or force added to each effort motor's (`<joint>.torque`,
-    `<joint>.force`), and their generalized forces at q (n x inputs): the gradient of the joint
-    coordinate the motor drives (virtual work, as compiler.motors applies it)."""
-    motors = functions.ir.motors
-    if not motors:
-        return [], np.zeros((q.size, 0))
-    x = Coordinates.create(functions.n_bodies)
-    columns = [x.ground_fixed(ca.jacobian(compiler_motors.COORDINATE[m.type](m, x), x.q).T)
-               for m in motors]
-    gradient = ca.Function("motor_inputs", [x.q], [ca.horzcat(*columns)])
-    return ([f"{m.name}.{INPUT_NAMES[m.type]}" for m in motors],
-            np.array(gradient(q)).reshape(q.size, len(motors)))
-
-
-def _output_map(functions: SystemFunctions, system: statics.ReducedSystem) -> np.ndarray:
-    """(6 n_bodies, k): z -> every body's translation and small rotation."""
-    return statics.motion_map(system.q) @ system.basis
-
-
-def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndarray):
+def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.ndarray):
     """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions; the same modes
     in z, scaled alike: N z is the shape's motion of the coordinates). A DOF of zero
-    stiffness is one mode at s = 0 shaped as its null vector of K (A's eigenvalues there, a
-    double zero or 0 and a real decay, are split by roundoff: |s| <= sqrt(neutral_threshold)
-    counts as 0)."""
-    k = system.dof
+    stiffness is one mode at s = 0 shaped as its null vector of the stiffness block (A's
+    eigenvalues there, a double zero or 0 and a real decay, are split by roundoff: |s| <=
+    sqrt(neutral_threshold) counts as 0)."""
+    k = basis.shape[1]
     if not k:
         return (np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex),
                 np.zeros((0, 0), complex))
-    threshold = statics.neutral_threshold(system.omega2())
-    neutral = system.basis.T @ statics.neutral_directions(system)  # N orthonormal
+    neutral, threshold = _neutral(a)
     values, vectors = np.linalg.eig(a)
     size = np.abs(values)
     real = np.abs(values.imag) <= REAL_CUT * np.maximum(size, 1e-300)
@@ -190,7 +216,7 @@ def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndar
     vectors = np.hstack([neutral, vectors]).astype(complex)
     order = np.lexsort((-values.real, np.abs(values)))
     vectors = vectors[:, order]
-    motions = statics.motion_map(system.q) @ system.basis @ vectors
+    motions = statics.motion_map(q) @ basis @ vectors
     shapes, scaled = [], []
     for motion, vector in zip(motions.T, vectors.T, strict=True):
         largest = motion[np.argmax(np.abs(motion))]
@@ -201,14 +227,50 @@ def _modes(functions: SystemFunctions, system: statics.ReducedSystem, a: np.ndar
             np.array(scaled).T.reshape(k, len(order)))
 
 
-def run_modal(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:
-    """The modal analysis: the equilibrium row (statics), the linear model and the modes; a
-    zero-stiffness DOF is kept (a zero-frequency mode), no equilibrium is an AnalysisError."""
-    equilibrium = statics.solve(functions, t)
-    result = statics.equilibrium_result(functions, t, equilibrium, "modal", progress)
-    model = linearize(functions, equilibrium.system)
+def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
+              progress=None) -> Result:
+    """The modal analysis: at the static equilibrium (the default: its row, the linear model,
+    the modes; a zero-stiffness DOF is kept as a zero-frequency mode, no equilibrium is an
+    AnalysisError), or with `at` at that time of a dynamics run (its rows up to `at`, the
+    linear model at the last). `settings`: the resolved `analysis:` block (options `at`,
+    `inputs`; default the model's)."""
+    settings = functions.ir.analysis if settings is None else settings
+    at, inputs = settings.options.get("at"), settings.options.get("inputs")
+    if at is None:
+        equilibrium = statics.solve(functions, 0.0)
+        result = statics.equilibrium_result(functions, 0.0, equilibrium, "modal", progress)
+        model = linearize(functions, equilibrium.system, inputs)
+    else:
+        result = _run_to(functions, settings, float(at), progress)
+        model = linearize_at(functions, result.times[-1], result.q[-1], result.q_dot[-1], inputs)
     result.linear_model = model
     result.files = {FILES[0]: model.write_modes, FILES[1]: model.write_npz}
-    result.metadata.update(frequencies_hz=model.frequency_hz.tolist(),
+    result.metadata.update(linearized_at=model.linearized_at,
+                           frequencies_hz=model.frequency_hz.tolist(),
                            damping_ratios=model.damping_ratio.tolist())
+    return result
+
+
+def _run_to(functions: SystemFunctions, settings: Analysis, at: float, progress) -> Result:
+    """The dynamics run from 0 to `at` (casmech.analyze with the settings' tolerances and
+    formulation; at = 0: the assembled initial state), its last row at `at`."""
+    if not 0.0 <= at <= settings.t_end:
+        raise UsageError(f"modal at = {at:g}: must be a time of the run, within [0, t_end = "
+                         f"{settings.t_end:g}]")
+    if at == 0.0:
+        result = kinematics.run_assembly(functions, 0.0, progress)
+    else:
+        from casmech import api  # the dynamics path (api imports this module on use)
+
+        options = settings.options
+        result = api.analyze(functions, "dynamics", t_end=at,
+                             output_step=min(settings.output_step, at), rtol=settings.rtol,
+                             atol=settings.atol, formulation=options.get("formulation", "auto"),
+                             stabilization=options.get("stabilization", "ggl"),
+                             method=options.get("method", "auto"), progress=progress)
+    if not result.times or abs(result.times[-1] - at) > 1e-12 * max(at, 1.0):
+        last = result.times[-1] if result.times else 0.0
+        raise AnalysisError(FailureContext(last, f"the run ended ({result.status}) before the "
+                                           f"linearization time at = {at:.10g}"), result)
+    result.analysis = "modal"
     return result

@@ -53,13 +53,16 @@ def unit_gram_logdet(functions: SystemFunctions, times, q, rows) -> np.ndarray:
     return logdet
 
 
+def examinable(functions: SystemFunctions, rows: int) -> bool:
+    """Whether a run of `rows` output rows is examined (MAX_ENTRIES)."""
+    m, columns = functions["phi_q"].size_out(0)
+    return rows * m * columns <= MAX_ENTRIES
+
+
 def singular_poses(functions: SystemFunctions, result: Result, loops: bool) -> list[dict] | None:
     """The singular poses the run passed near (module docstring); None when not examined."""
     times, q = np.asarray(result.times), np.asarray(result.q)
-    if not loops or len(times) < 2:
-        return None
-    m, columns = functions["phi_q"].size_out(0)
-    if len(times) * m * columns > MAX_ENTRIES:
+    if not loops or len(times) < 2 or not examinable(functions, len(times)):
         return None
     rows = _independent(functions, result, float(times[0]), q[0])
     drop = unit_gram_logdet(functions, times, q, rows)

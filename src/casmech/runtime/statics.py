@@ -170,6 +170,16 @@ def null_space(phi_q: np.ndarray) -> np.ndarray:
     return q_factor[:, rank:]
 
 
+def basis_and_rows(phi_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(null_space(phi_q), the indices of a maximal set of independent rows: the QR's pivots
+    up to its rank, ascending), from one factorization."""
+    m, n = phi_q.shape
+    if m == 0:
+        return np.eye(n), np.zeros(0, int)
+    q_factor, _, pivots, rank = _factor(phi_q)
+    return q_factor[:, rank:], np.sort(pivots[:rank])
+
+
 def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
                    minimum_norm: bool = False) -> ReducedSystem:
     """The reduced quantities at q. lam solves Phi_q^T lam = Q in least squares: the basic

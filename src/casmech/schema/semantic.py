@@ -17,6 +17,7 @@ from casmech.schema.checker import Checker, failed
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
 from casmech.schema.loader import Document, Path
+from casmech.schema.modal import modal_settings
 
 ANALYSIS_HINTS = {
     "output_step": "a larger output_step or a shorter t_end (output_step is the interval of "
@@ -146,7 +147,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
-    settings = analysis(check, given.analysis)
+    settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
+                              forces)
     watched = events.events(check, given.events, joints, forces)
     if settings is not None and watched:
         settings = replace(settings, events=watched)

@@ -33,6 +33,11 @@ class Analysis(Spec):
     # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
     # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
     method: Literal["auto", "adams", "bdf"] = "auto"
+    # modal: linearize at this time of a dynamics run (0 <= at <= t_end) instead of at the static
+    # equilibrium; inputs: the effort-motor joints and force elements whose force is an input
+    # (default: every effort motor). runtime/modal.py
+    at: Scalar | None = None
+    inputs: tuple[Name, ...] | None = None
 
 
 # ----------------------------------------------------------------------------------- events

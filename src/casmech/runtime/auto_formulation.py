@@ -1,0 +1,75 @@
+"""`formulation: auto` for a dynamics run: which formulation runs, and the loops' fallback.
+
+- A tree: joint coordinates (an ODE on CVODES).
+- Loops whose spanning tree reaches every body through the file's joints (no `free` joint),
+  in a run whose rows can be examined (singular_poses.MAX_ENTRIES): joint coordinates (the tree's ODE and the cut joints' rows: a small DAE on IDAS). After the
+  run the rows are examined for singular poses (runtime.singular_poses); a run that failed or
+  passed one is run again in `rp`, whose augmented-Lagrangian fallback is built for them (the
+  joint DAE can pass a flat pose of a four-bar without failing, off the exact motion:
+  docs/formulations.md), and `metadata.formulation_fallback` says why.
+- Loops with a floating body in the tree (held only by basic or composite constraints, all
+  cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
+  Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle):
+  `rp`, compiled. (Measurements: docs/decisions.md.)
+- A DAE stabilization other than the default (ggl) was asked for: `rp`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.tree import Tree
+from casmech.errors import AnalysisError, Interrupted
+from casmech.runtime.joint_dynamics import lags_bundle
+from casmech.runtime.results import Result
+from casmech.runtime.singular_poses import describe, examinable, singular_poses
+
+
+def choice(tree: Tree, formulation: str, stabilization: str, examinable: bool,
+           lags: bool) -> str:
+    """The formulation to run first: "joint" or the one asked for (rp, romega); examinable:
+    whether the run's rows can be examined for singular poses; lags: lags_bundle."""
+    if formulation != "auto":
+        return formulation
+    if stabilization != "ggl":
+        return "rp"
+    floating = any(joint.joint is None for joint in tree.joints)
+    return "joint" if tree.is_tree or (examinable and not floating and not lags) else "rp"
+
+
+def run(functions: SystemFunctions, tree: Tree, formulation: str, stabilization: str,
+        rows: int, joint: Callable[[], Result], other: Callable[[str], Result]) -> Result:
+    """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows);
+    with loops in auto, the rp run after a joint run that failed or passed a singular pose.
+    Singular poses are recorded in the metadata of a run with loops."""
+    first = choice(tree, formulation, stabilization, examinable(functions, rows),
+                   not tree.is_tree and lags_bundle(functions))
+    fallback = formulation == "auto" and first == "joint" and not tree.is_tree
+    if first != "joint":
+        return _examined(functions, tree, other(first))
+    try:
+        result = joint()
+    except Interrupted:
+        raise
+    except AnalysisError as error:
+        if not fallback:
+            raise
+        why = f"the joint DAE failed ({str(error).splitlines()[0]})"
+    else:
+        poses = singular_poses(functions, result, loops=not tree.is_tree)
+        if poses is not None:
+            result.metadata["singular_poses"] = poses
+        if not (fallback and poses):
+            return result
+        why = f"joint coordinates went {describe(poses[0])}"
+    result = _examined(functions, tree, other("rp"))
+    result.metadata["formulation_fallback"] = why
+    return result
+
+
+def _examined(functions: SystemFunctions, tree: Tree, result: Result) -> Result:
+    poses = singular_poses(functions, result, loops=not tree.is_tree)
+    if poses is not None:
+        result.metadata["singular_poses"] = poses
+    return result

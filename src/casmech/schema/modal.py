@@ -1,0 +1,42 @@
+"""The modal analysis's own keys of `analysis:` (runtime/modal.py): `at`, a time of a dynamics
+run to linearize at (0 <= at <= t_end; default: the static equilibrium), and `inputs`, the
+effort-motor joints and force elements whose force is an input of the linear model."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from casmech.schema import resolved, spec
+from casmech.schema.checker import Checker
+from casmech.schema.loader import Path
+
+# force element types that may be inputs (runtime/linearize.INPUT_KINDS gives their columns)
+INPUT_FORCES = ("tsda", "rsda", "force", "torque", "bushing")
+
+
+def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Analysis | None,
+                   joints, forces) -> resolved.Analysis | None:
+    """`settings` with options `at` (seconds or None) and `inputs` (names or None), checked:
+    E409 for an `at` outside [0, t_end], E300 for an input that is no effort-motor joint or
+    force element."""
+    path: Path = ("analysis",)
+    at = None
+    if given.at is not None:
+        at = check.number((*path, "at"), given.at)
+        t_end = settings.t_end if settings is not None else None
+        if at is not None and (at < 0 or (t_end is not None and at > t_end)):
+            check.error("E409", (*path, "at"), "at must be a time of the run, within [0, t_end]",
+                        got=f"{at:g}", hint=f"0 <= at <= t_end = {t_end:g}" if t_end else None)
+            at = None
+    known = {j.name: "joint" for j in joints if j is not None and j.motor}
+    known |= {f.name: f.type for f in forces if f is not None and f.type in INPUT_FORCES}
+    inputs_ok = True
+    for index, name in enumerate(given.inputs or ()):
+        if not check.reference((*path, "inputs", index), name, known,
+                               "input (an effort-motor joint or a tsda, rsda, force, torque or "
+                               "bushing element)"):
+            inputs_ok = False
+    if settings is None or (given.at is not None and at is None) or not inputs_ok:
+        return None
+    inputs = None if given.inputs is None else tuple(dict.fromkeys(given.inputs))
+    return replace(settings, options={**settings.options, "at": at, "inputs": inputs})
