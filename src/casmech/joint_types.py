@@ -68,6 +68,8 @@ COORDINATES: dict[str, Coordinate] = {
                                ("displacement", "velocity", "force"),
                                ("limit_displacement", "limit_force")),
 }
+# YAML vector key -> joint-frame quantity; a new point key may name a new quantity (a point),
+# a direction must map to axis_i / axis_j (compiler/lower.DIRECTIONS)
 FRAME = MappingProxyType({"at": "P", "at_i": "Pi", "at_j": "Pj", "axis": "w",
                           "axis_i": "axis_i", "axis_j": "axis_j"})
 

@@ -22,7 +22,9 @@ from casmech.geometry import euler
 from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
 
-POINTS = frozenset({"P", "Q", "Pi", "Pj"})
+# joint-frame quantities that are directions (rotated into a body's frame); every other one
+# (P, Q, Pi, Pj, a new entry's point) is a point (moved, then rotated)
+DIRECTIONS = frozenset({"u", "v", "w", "axis", "axis_i", "axis_j", "ex", "ey", "ez"})
 UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array([0, 0, 1.0])}
 
 
@@ -45,7 +47,7 @@ class _Poses:
 
     def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
         r0, a0 = self.pose[body]
-        return a0.T @ (value - r0) if quantity in POINTS else a0.T @ value
+        return a0.T @ value if quantity in DIRECTIONS else a0.T @ (value - r0)
 
 
 def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
