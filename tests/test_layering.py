@@ -96,3 +96,18 @@ def test_no_module_is_over_500_lines():
     sizes = {str(path.relative_to(SRC)): len(path.read_text().splitlines())
              for path in SRC.rglob("*.py")}
     assert {path: n for path, n in sizes.items() if n > 500 and path not in OVER_500} == {}
+
+
+def test_the_build_cache_digests_every_package_the_generated_code_depends_on():
+    """codegen/cache.source_digest covers compiler/, codegen/ and whatever they import (an
+    edit there must not reuse a stale build); errors.py only words messages."""
+    from casmech.codegen import cache
+
+    graph, needed, stack = package_graph(), set(), ["compiler", "codegen"]
+    while stack:
+        node = stack.pop()
+        if node not in needed:
+            needed.add(node)
+            stack.extend(graph.get(node, ()))
+    covered = {*cache.SOURCE_PACKAGES, *(name.removesuffix(".py") for name in cache.SOURCE_MODULES)}
+    assert needed - {"errors"} <= covered
