@@ -44,13 +44,11 @@ def one_size(n: int, repeats: int, mode: str, t_sim: float) -> dict:
     """Medians of each stage for chain(n) (runs in the child process)."""
     sys.path[:0] = [str(ROOT / "src"), str(ROOT / "benchmarks")]
     from casmech_model import yaml_text
-    from systems import chain
+    from systems import T_END, chain
 
     import casmech
     from casmech.compiler.checks import structure
     from casmech.runtime import assembly
-
-    from systems import T_END
 
     # the model's own span is the simulated one: its output grid (rows x results columns) is
     # bounded at load time (schema.limits.MAX_VALUES), which the 10 s default exceeds at N = 1000

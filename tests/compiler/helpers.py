@@ -2,7 +2,7 @@
 
 Two kinds of things live here:
 - plain-numpy geometry (A, G, E, B, skew, quaternions, rigid motions), written from the formulas of
-  docs/architecture.md / Haug (1989) independently of casmech.compiler.euler, so that tests can
+  docs/architecture.md / Haug (1989) independently of casmech.geometry.euler, so that tests can
   compare the code under test against it;
 - hand-built models: `ResolvedModel`s (schema contract) compiled with compiler.lower.lower and
   compiler.functions.build_functions, without going through YAML.

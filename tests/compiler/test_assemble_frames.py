@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import euler
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import build_functions
 from casmech.compiler.lower import lower
 from casmech.compiler.primitives import Frame
+from casmech.geometry import euler
 from tests.conftest import MODELS
 
 

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import build
 from casmech.compiler.tree import spanning_tree
+from casmech.joint_types import MOTIONS
 from casmech.runtime import assembly
 from tests.conftest import MODELS, ROOT
 

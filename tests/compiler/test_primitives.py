@@ -11,8 +11,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler import euler, primitives
+from casmech.compiler import primitives
 from casmech.compiler.primitives import Frame
+from casmech.geometry import euler
 from tests.compiler import oracles
 from tests.compiler.helpers import (
     body,
@@ -104,7 +105,7 @@ def test_delta_p_flavour_rotation_blocks(kind, rng):
     DP2's p_i block is d_ij^T B(p_i, a_bar_i) - a_i^T B(p_i, s_bar_i^P) (lecture typo corrected,
     see oracles.dp2_q).
 
-    FAILS with the current compiler/euler.rotation (reported bug): AD of the non-homogeneous
+    FAILS with the current geometry/euler.rotation (reported bug): AD of the non-homogeneous
     A(p) = 2[(e0^2 - 1/2) I + e e^T + e0 e~] adds 2 a_bar p^T to every B(p, a_bar), so each p
     block is off by a multiple of p^T (e.g. DP1: 2 (a_j . a_bar_i) p_i^T).
     """

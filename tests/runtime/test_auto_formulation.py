@@ -11,8 +11,8 @@ from casmech.runtime import auto_formulation
 from casmech.runtime.joint_dynamics import joint_system, tree_of
 from casmech.runtime.results import Result
 from tests.conftest import MODELS, ROOT
-from tests.runtime.statics_models import HANGING_FOUR_BAR
 from tests.runtime.reference_data import read_analytic
+from tests.runtime.statics_models import HANGING_FOUR_BAR
 from tests.runtime.test_validation_iftomm import A02, a02_b0_error
 
 FOUR_BAR = ROOT / "benchmarks" / "models" / "four_bar.yaml"

@@ -6,9 +6,9 @@ import pytest
 
 import casmech
 from casmech.compiler.articulated import local_motion
-from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.tree import spanning_tree
 from casmech.errors import AnalysisError, ModelError
+from casmech.joint_types import MOTIONS
 from casmech.runtime.joint_dynamics import constant_inverse
 from tests.conftest import MODELS, ROOT, Table, count_calls
 from tests.runtime.test_dynamics import FREE_BODY, G, W

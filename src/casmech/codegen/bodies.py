@@ -16,8 +16,8 @@ import casadi as ca
 import numpy as np
 
 from casmech.codegen.kernels import mapped, scatter
-from casmech.compiler import euler
 from casmech.compiler.ir import ModelIR
+from casmech.geometry import euler
 
 
 def columns(vector, size: int, nb: int, start: int = 0):

@@ -35,7 +35,9 @@ from casmech.schema.tables import TableExpr
 
 ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(casmech.__file__).parent
-SOURCE_PACKAGES = ("schema", "compiler", "codegen")  # what the generated code depends on
+# what the generated code depends on: these packages and top-level modules
+SOURCE_PACKAGES = ("schema", "compiler", "codegen", "geometry")
+SOURCE_MODULES = ("joint_types.py",)
 
 
 def cache_dir() -> Path:
@@ -51,6 +53,8 @@ def source_digest() -> str:
     for package in SOURCE_PACKAGES:
         for path in sorted((PACKAGE / package).glob("*.py")):
             digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    for path in (PACKAGE / name for name in SOURCE_MODULES):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()
 
 

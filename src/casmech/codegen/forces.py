@@ -17,11 +17,12 @@ import numpy as np
 
 from casmech.codegen.elements import assemble
 from casmech.codegen.kernels import Layout, mapped
-from casmech.compiler import contact, eom, euler, limits, motors
+from casmech.compiler import contact, eom, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS, relative_angle, spring_law
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
 from casmech.compiler.primitives import Frame
+from casmech.geometry import euler
 from casmech.schema.resolved import ScalarFunction
 
 ROW = 14

@@ -23,7 +23,7 @@ import casadi as ca
 
 from casmech.codegen import bodies
 from casmech.codegen import rows as row_kernels
-from casmech.compiler import euler
+from casmech.geometry import euler
 
 ROW = row_kernels.ROW  # x = [r_i, p_i, r_j, p_j]
 V_WIDTH = {"rp": 14, "romega": 12}  # a joint's velocity entries: q_dot, or [r_dot, omega_bar]

@@ -23,10 +23,10 @@ from casmech.codegen import residual_kernels as kernels
 from casmech.codegen import rows as row_kernels
 from casmech.codegen.elements import DROPPED, ElementSum, Group
 from casmech.codegen.kernels import Layout, by_joint_keys, taylor_or_constant
-from casmech.compiler import euler
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
+from casmech.geometry import euler
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 

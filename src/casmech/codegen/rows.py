@@ -26,10 +26,10 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.ir import GROUND_INDEX, PrimitiveIR
 from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.geometry import euler
 
 ROW = 14  # x = [r_i, p_i, r_j, p_j]
 V_ROW = 12  # v = [r_dot_i, omega_bar_i, r_dot_j, omega_bar_j]

@@ -6,7 +6,7 @@ each tree joint's constraint wrench.
 Spatial vectors are per body, in its frame at its CM, angular part first (compiler/spatial.py):
 velocity V = (omega_bar, A^T r_dot), inertia [[J_bar, 0], [0, m 1]], force (n_bar, A^T F). A
 tree joint's motion subspace S and the rate term c_J = S_dot u come from AD of its registry
-entry (compiler/joint_motions.py). Applied forces are the r-p ones (eom.applied_forces: gravity,
+entry (casmech.joint_types.MOTIONS). Applied forces are the r-p ones (eom.applied_forces: gravity,
 force elements, effort motors) evaluated on the tree's poses and velocities, as body wrenches; a
 driver's coordinate is a function of time (its rate and acceleration by AD).
 """
@@ -19,11 +19,13 @@ from functools import cache, cached_property
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler, spatial
+from casmech.compiler import eom, spatial
 from casmech.compiler.assemble import GROUND_POSE, Coordinates
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
-from casmech.compiler.joint_motions import MOTIONS, conjugate, from_matrix, product
 from casmech.compiler.tree import TreeJoint
+from casmech.geometry import euler
+from casmech.geometry.quaternions import conjugate, from_matrix, product
+from casmech.joint_types import MOTIONS
 
 
 @cache

@@ -16,9 +16,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR, constant
 from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.geometry import euler
 
 GROUND_POSE = np.array([0.0, 0, 0, 1, 0, 0, 0])
 

@@ -28,17 +28,14 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
 from casmech.compiler.ir import ForceIR, constant
+from casmech.geometry import euler
+from casmech.geometry.quaternions import conjugate
 from casmech.schema.spec import BUSHING_PARAMS
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 SERIES = 1e-3  # below |e|^2 / e0^2 = SERIES, atan(u)/u by its series (5 terms: error < 1e-16)
 KEYS = tuple(BUSHING_PARAMS)  # params: f"{key}{n}" for n in 0..5 (along d, then theta)
-
-
-def _conjugate(p):
-    return ca.vertcat(p[0], -p[1:4])
 
 
 def relative(a, b):
@@ -67,7 +64,7 @@ def deflection(force: ForceIR, x):
     fi, fj = x.frame(force.body_i), x.frame(force.body_j)
     gap = fj.r + fj.A @ constant(force.points["s_j"]) - fi.r - fi.A @ constant(force.points["s_i"])
     d = marker.T @ fi.A.T @ gap
-    s = relative(_conjugate(relative(x.p(force.body_i), x.p(force.body_j))),
+    s = relative(conjugate(relative(x.p(force.body_i), x.p(force.body_j))),
                  constant(force.axes["rest"]))
     return ca.vertcat(d, marker.T @ rotation_vector(s))
 
@@ -88,7 +85,7 @@ def lower(force, model, poses) -> ForceIR:
     marker = euler.numeric(euler.rotation, force.vectors["orientation"])
     initial = {b.name: b.euler_parameters for b in model.bodies}
     p0 = [ca.DM(initial.get(name, IDENTITY)) for name in (force.body_i, force.body_j)]
-    rest = np.array(ca.DM(_conjugate(relative(*p0))).full()).ravel()
+    rest = np.array(ca.DM(conjugate(relative(*p0))).full()).ravel()
     params = {}
     for key, vectors in BUSHING_PARAMS.items():  # e.g. stiffness then rotational_stiffness
         values = np.concatenate([force.vectors[name] for name in vectors])

@@ -31,8 +31,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler, limits
+from casmech.compiler import limits
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, constant
+from casmech.geometry import euler
 from casmech.schema.contact import OUTPUTS  # results columns per element
 from casmech.schema.expressions import FUNCTIONS
 

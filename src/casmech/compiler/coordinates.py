@@ -1,13 +1,15 @@
 """The state a user force law reads: joint coordinates and body positions and velocities.
 
-One table says which names exist and how each is computed from the coordinates `x`:
+The names are casmech.geometry.states'; here is how each is computed from the coordinates `x`:
 
-- `<joint>.angle`, `<joint>.angle_dot` (revolute, cylindrical): rotation of body_j about the joint
-  axis, measured from the pose written in the file like a driver angle; the formula is the rsda's
+- `<joint>.angle`, `<joint>.angle_dot` (joint types whose casmech.joint_types entry has the
+  coordinate "angle": revolute, cylindrical): rotation of body_j about the joint axis, measured
+  from the pose written in the file like a driver angle; the formula is the rsda's
   (`eom.rsda_angle`, atan2 of the joint frames, so in (-pi, pi]); the rate is its time
   derivative by AD.
-- `<joint>.displacement`, `<joint>.displacement_dot` (translational, cylindrical): slide of body_j's
-  copy of the joint point along the axis carried by body_i, 0 at the pose in the file.
+- `<joint>.displacement`, `<joint>.displacement_dot` ("displacement": translational,
+  cylindrical): slide of body_j's copy of the joint point along the axis carried by body_i, 0
+  at the pose in the file.
 - `<body>.x .y .z .vx .vy .vz .wx .wy .wz`: what the results columns of that name hold (CM
   position and velocity, angular velocity, all global).
 
@@ -21,12 +23,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom
 from casmech.compiler.ir import constant
+from casmech.geometry import euler
+from casmech.geometry.states import split
+from casmech.joint_types import attributes
 from casmech.schema.resolved import ScalarFunction
-
-ROTATING = ("revolute", "cylindrical")
-SLIDING = ("translational", "cylindrical")
 
 
 def displacement(geometry, x):
@@ -45,12 +47,12 @@ def _rate(coordinate: Callable) -> Callable:
     return lambda geometry, x: eom.rate(coordinate(geometry, x), x)
 
 
-# attribute -> (joint types that have it, value(joint geometry, x))
-JOINT_COORDINATES: dict[str, tuple[tuple[str, ...], Callable]] = {
-    "angle": (ROTATING, _angle),
-    "angle_dot": (ROTATING, _rate(_angle)),
-    "displacement": (SLIDING, displacement),
-    "displacement_dot": (SLIDING, _rate(displacement)),
+# attribute of states.JOINT_COORDINATES -> value(joint geometry, x)
+JOINT_VALUES: dict[str, Callable] = {
+    "angle": _angle,
+    "angle_dot": _rate(_angle),
+    "displacement": displacement,
+    "displacement_dot": _rate(displacement),
 }
 
 
@@ -63,19 +65,17 @@ _BODY_VECTORS = {
     "v": lambda x, k: x.r(k, x.q_dot),
     "w": _omega,
 }
-# attribute -> value(x, body index); names and meanings of the results columns
-BODY_STATES: dict[str, Callable] = {
+# attribute of states.BODY_STATES -> value(x, body index); meanings of the results columns
+BODY_VALUES: dict[str, Callable] = {
     f"{kind}{axis}": (lambda x, k, vector=vector, n=n: vector(x, k)[n])
     for kind, vector in _BODY_VECTORS.items()
     for n, axis in enumerate("xyz")
 }
-JOINT_TYPES = frozenset(kind for kinds, _ in JOINT_COORDINATES.values() for kind in kinds)
 
 
-def split(name: str) -> tuple[str, str]:
-    """'leg1.knee.angle' -> ('leg1.knee', 'angle')."""
-    owner, _, attribute = name.rpartition(".")
-    return owner, attribute
+def has_coordinates(joint_type: str) -> bool:
+    """Whether a joint of this type has a coordinate a force law may read."""
+    return bool(attributes(joint_type))
 
 
 @dataclass(frozen=True)
@@ -87,9 +87,9 @@ class BoundFunction(ScalarFunction):
 
 def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
     owner, attribute = split(name)
-    if owner in joints and attribute in JOINT_COORDINATES:
+    if owner in joints and attribute in JOINT_VALUES:
         return "joint", attribute, joints[owner]
-    if owner in bodies and attribute in BODY_STATES:
+    if owner in bodies and attribute in BODY_VALUES:
         return "body", attribute, bodies[owner]
     return None
 
@@ -117,8 +117,8 @@ def bind(force, bodies: Mapping[str, int], joints: Mapping[str, Any]):
 
 
 EVALUATE = {
-    "joint": lambda attribute, geometry, x: JOINT_COORDINATES[attribute][1](geometry, x),
-    "body": lambda attribute, index, x: BODY_STATES[attribute](x, index),
+    "joint": lambda attribute, geometry, x: JOINT_VALUES[attribute](geometry, x),
+    "body": lambda attribute, index, x: BODY_VALUES[attribute](x, index),
 }
 
 

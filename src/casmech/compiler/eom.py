@@ -13,9 +13,10 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
+from casmech.compiler import bushing, contact, coordinates, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR, ModelIR, constant
+from casmech.geometry import euler
 
 
 def mass_matrix(ir: ModelIR, x: Coordinates):

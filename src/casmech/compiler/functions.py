@@ -11,9 +11,10 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import contact, eom, euler, romega
+from casmech.compiler import contact, eom, romega
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
+from casmech.geometry import euler
 
 
 @dataclass(frozen=True)

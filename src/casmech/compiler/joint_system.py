@@ -25,14 +25,14 @@ from functools import cached_property
 
 import casadi as ca
 
-from casmech.compiler import articulated, euler, lazy_jacobian
+from casmech.compiler import articulated, lazy_jacobian
 from casmech.compiler.articulated import Joint
 from casmech.compiler.assemble import driver_value
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
-from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
-
+from casmech.geometry import euler
+from casmech.joint_types import MOTIONS
 
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0

@@ -1,8 +1,9 @@
 """Joint limits (stops): a one-sided spring-damper in a joint's coordinate.
 
-The coordinate s is the one effort motors and force laws read (compiler/coordinates.py):
-the angle of a revolute joint, the slide of a translational or cylindrical one, 0 at the
-file's pose. Outside [lower, upper] the stop pushes back along s, never pulls:
+The coordinate s is the one effort motors and force laws read (compiler/coordinates.py) that
+the joint type's entry names as its `limit` (casmech.joint_types): the angle of a revolute
+joint, the slide of a translational or cylindrical one, 0 at the file's pose. Outside
+[lower, upper] the stop pushes back along s, never pulls:
 
     f = max(0, k (lower - s) - c s_dot)   where s < lower
     f = min(0, k (upper - s) - c s_dot)   where s > upper,    0 in between,
@@ -22,24 +23,22 @@ import casadi as ca
 
 from casmech.compiler import coordinates, motors
 from casmech.compiler.ir import ForceIR
-from casmech.schema.contact import LIMIT_COLUMNS
+from casmech.joint_types import COORDINATES, REGISTRY
 
-# joint type -> (ForceIR type, coordinate of compiler/coordinates.py, results column of f)
-KINDS = {"revolute": ("limit_angle", "angle", LIMIT_COLUMNS["revolute"]),
-         "translational": ("limit_displacement", "displacement",
-                           LIMIT_COLUMNS["translational"]),
-         "cylindrical": ("limit_displacement", "displacement", LIMIT_COLUMNS["cylindrical"])}
-COORDINATE = {kind: name for kind, name, _ in KINDS.values()}
-COLUMN = {kind: column for kind, _, column in KINDS.values()}
+# ForceIR type of a stop -> (the coordinate it stops, results column of f)
+COORDINATE = {c.limit[0]: name for name, c in COORDINATES.items()}
+COLUMN = {c.limit[0]: c.limit[1] for c in COORDINATES.values()}
 
 
 def lower(joint, geometry: ForceIR) -> ForceIR:
-    """The stop of a resolved joint with a `limit:`; `geometry` is lower.joint_coordinates."""
-    return replace(geometry, type=KINDS[joint.type][0], params=dict(joint.limit))
+    """The stop of a resolved joint with a `limit:` (on the coordinate its joint type's entry
+    names); `geometry` is lower.joint_coordinates."""
+    kind = COORDINATES[REGISTRY[joint.type].limit].limit[0]
+    return replace(geometry, type=kind, params=dict(joint.limit))
 
 
 def coordinate(limit: ForceIR, x):
-    return coordinates.JOINT_COORDINATES[COORDINATE[limit.type]][1](limit, x)
+    return coordinates.JOINT_VALUES[COORDINATE[limit.type]](limit, x)
 
 
 def law(limit: ForceIR, x) -> tuple:

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import bushing, contact, coordinates, euler, limits, motors
-from casmech.compiler import joints as joint_tables
+from casmech.compiler import bushing, contact, coordinates, limits, motors
 from casmech.compiler.ir import (
     GROUND_INDEX,
     BodyIR,
@@ -19,9 +18,13 @@ from casmech.compiler.ir import (
     PrimitiveIR,
     RowInfo,
 )
+from casmech.geometry import euler
+from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
 
-POINTS = frozenset({"P", "Q", "Pi", "Pj"})
+# joint-frame quantities that are directions (rotated into a body's frame); every other one
+# (P, Q, Pi, Pj, a new entry's point) is a point (moved, then rotated)
+DIRECTIONS = frozenset({"u", "v", "w", "axis", "axis_i", "axis_j", "ex", "ey", "ez"})
 UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array([0, 0, 1.0])}
 
 
@@ -44,18 +47,17 @@ class _Poses:
 
     def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
         r0, a0 = self.pose[body]
-        return a0.T @ (value - r0) if quantity in POINTS else a0.T @ value
+        return a0.T @ value if quantity in DIRECTIONS else a0.T @ (value - r0)
 
 
 def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
-    """Global joint-frame quantities at t = 0 (see joints.py)."""
+    """Global joint-frame quantities at t = 0 (casmech.joint_types: the entry's `frame` names
+    the quantity of each vector key)."""
     v = joint.vectors
     frame = dict(UNIT) | {"u": UNIT["ex"], "v": UNIT["ey"], "w": UNIT["ez"]}  # fixed: no axis
-    for key, name in (("at", "P"), ("at_i", "Pi"), ("axis_i", "axis_i"), ("axis_j", "axis_j")):
-        if key in v:
+    for key, name in REGISTRY[joint.type].frame.items():
+        if key in v and key != "axis":
             frame[name] = np.asarray(v[key], float)
-    if "at_j" in v:
-        frame["Q" if joint.type == "revolute_spherical" else "Pj"] = np.asarray(v["at_j"], float)
     if "axis" in v:
         w = np.asarray(v["axis"], float) / np.linalg.norm(v["axis"])
         frame["u"], frame["v"] = perpendicular_pair(w)
@@ -76,23 +78,24 @@ def _vectors(template: dict[str, str], joint: Joint, frame, poses: _Poses) -> di
 
 
 def _offset(joint: Joint, frame) -> float:
-    """The constant part of f for a composite joint's D rows: the squared length."""
-    if joint.type == "distance":
-        if joint.length is not None:
-            return float(joint.length) ** 2
-        return float(np.sum((frame["Pj"] - frame["Pi"]) ** 2))
-    if joint.type == "revolute_spherical":
-        return float(np.sum((frame["Q"] - frame["P"]) ** 2))
-    return 0.0
+    """The constant part of f for a composite joint's D rows: the squared length (`length`,
+    else the entry's arm at t = 0)."""
+    arm = REGISTRY[joint.type].arm
+    if arm is None:
+        return 0.0
+    if joint.length is not None:
+        return float(joint.length) ** 2
+    return float(np.sum((frame[arm[1]] - frame[arm[0]]) ** 2))
 
 
 def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[PrimitiveIR], JointIR]:
     frame = joint_frame(joint)
     bi, bj = poses.index[joint.body_i], poses.index[joint.body_j]
-    templates = [(t, joint.f, False) for t in joint_tables.rows_of(joint.type)]
+    entry = REGISTRY[joint.type]
+    templates = [(t, joint.f, False) for t in entry.rows]
     for key, fun in (("angle", joint.driver_angle), ("displacement", joint.driver_displacement)):
         if fun is not None:
-            templates.append((joint_tables.DRIVER_ROWS[key], fun, True))
+            templates.append((COORDINATES[key].driver, fun, True))
     offset = _offset(joint, frame)
     prims = []
     for (kind, template, label), fun, is_driver in templates:
@@ -100,7 +103,7 @@ def lower_joint(joint: Joint, poses: _Poses, first_row: int) -> tuple[list[Primi
         row = RowInfo(joint.name, kind, f"{joint.type} '{joint.name}': {label}", source)
         prims.append(PrimitiveIR(kind, bi, bj, _vectors(template, joint, frame, poses), fun,
                                  offset if kind == "d" and not is_driver else 0.0, is_driver, row))
-    point_name = joint_tables.REACTION_POINT[joint.type]
+    point_name = entry.reaction_point
     if point_name is None:
         point = np.zeros(3) if joint.body_i != GROUND else poses.pose[GROUND][0]
     elif point_name in joint.vectors and point_name.startswith("s_"):
@@ -189,7 +192,7 @@ def lower(model: ResolvedModel) -> ModelIR:
         for b in model.bodies
     )
     geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
-                if j.type in coordinates.JOINT_TYPES}  # for force laws reading the state
+                if coordinates.has_coordinates(j.type)}  # for force laws reading the state
     forces = tuple(coordinates.bind(lower_force(f, model, poses), poses.index, geometry)
                    for f in model.forces)
     effort = tuple(m for j in model.joints if j.motor

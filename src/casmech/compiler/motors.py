@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import casadi as ca
 
-from casmech.compiler import euler
 from casmech.compiler.ir import ForceIR, constant
+from casmech.geometry import euler
 
 # joint motion -> (ForceIR type, axes on body i / j, points on body i / j)
 KINDS = {

@@ -17,9 +17,10 @@ from __future__ import annotations
 
 import casadi as ca
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom
 from casmech.compiler.assemble import ConstraintSystem, Coordinates
 from casmech.compiler.ir import ModelIR, constant
+from casmech.geometry import euler
 
 
 def omega_bar(x: Coordinates, v, k: int):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.geometry import euler
 
 
 def cross_motion(v, m):

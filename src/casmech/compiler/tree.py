@@ -2,7 +2,7 @@
 
 Rule: breadth first from ground, visiting each body's joints in file order; the first joint
 that reaches a body is its tree joint (the body is its child), if its type has a tree motion
-(compiler/joint_motions.py) and the file does not say `cut: true`. Every other joint is cut: it
+(casmech.joint_types.MOTIONS) and the file does not say `cut: true`. Every other joint is cut: it
 stays a set of constraint rows (a loop closure). A body no tree joint reaches from ground
 floats: a `free` tree joint from ground (then the breadth-first search continues from it, in
 file order of the bodies).
@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
-from casmech.compiler.joint_motions import MOTIONS
+from casmech.joint_types import MOTIONS
 from casmech.schema.resolved import ScalarFunction
 
 Frame = tuple[np.ndarray, np.ndarray]  # (axes as columns, origin), in a body's frame

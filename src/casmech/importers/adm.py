@@ -18,8 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
+from casmech.geometry.quaternions import from_matrix
 from casmech.importers import adm_connections, adm_forces, adm_loads, adm_motion, read_source
-from casmech.importers.adm_frames import euler_parameters, tidy
+from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_model import Deck, Part, Reader, read_markers, read_parts, read_units
 from casmech.importers.adm_parser import Statement, Value, parse_adm
 from casmech.importers.emit import Imported, Item
@@ -87,7 +88,7 @@ def _body(deck: Deck, part: Part) -> Item:
     omega = [(reader.numbers(statement, key, 1) or [0.0])[0] for key in ("WX", "WY", "WZ")]
     data = {"name": part.name, "mass": mass[0] * units.mass, "inertia": inertia,
             "position": tidy(frame.origin),
-            "orientation": {"euler_parameters": tidy(euler_parameters(frame.rotation))}}
+            "orientation": {"euler_parameters": tidy(from_matrix(frame.rotation))}}
     if any(velocity):
         data["velocity"] = tidy(np.array(velocity) * units.velocity)
     if any(omega):  # Adams: about the CM marker's axes; casmech: global

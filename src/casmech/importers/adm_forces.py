@@ -21,6 +21,7 @@ from casmech.importers.adm_functions import NotTranslated, affine
 from casmech.importers.adm_model import Deck, Marker
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Imported, Item
+from casmech.joint_types import having
 
 
 def _pair(measure, i: int, j: int, allowed: dict[str, tuple]) -> str:
@@ -79,7 +80,7 @@ def _find_joint(deck, statement, joints: list[Item], i: Marker, j: Marker):
     z = j.frame.axis(2)
     for item in joints:
         data = item.data
-        if data.get("type") in ("revolute", "cylindrical") and \
+        if data.get("type") in having("angle") and \
                 {data["body_i"], data["body_j"]} == parts:
             axis = np.asarray(data["axis"], float)
             if np.linalg.norm(np.cross(axis, z)) < 1e-9:

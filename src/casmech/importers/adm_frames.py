@@ -119,28 +119,6 @@ class Frame:
 IDENTITY = Frame(np.zeros(3), np.eye(3))
 
 
-def euler_parameters(rotation: np.ndarray) -> np.ndarray:
-    """Unit quaternion (e0 >= 0) of a rotation matrix (Shepperd's method)."""
-    r = rotation
-    trace = np.trace(r)
-    candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
-    k = int(np.argmax(candidates))
-    if k == 0:
-        e0 = np.sqrt(1 + trace) / 2
-        e = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / (4 * e0)
-        p = np.concatenate([[e0], e])
-    else:
-        i, j, m = k - 1, k % 3, (k + 1) % 3
-        ei = np.sqrt(1 + 2 * r[i, i] - trace) / 2
-        p = np.zeros(4)
-        p[1 + i] = ei
-        p[0] = (r[m, j] - r[j, m]) / (4 * ei)
-        p[1 + j] = (r[j, i] + r[i, j]) / (4 * ei)
-        p[1 + m] = (r[m, i] + r[i, m]) / (4 * ei)
-    p = p / np.linalg.norm(p)
-    return -p if p[0] < 0 else p
-
-
 def tidy(values, scale: float = 1.0) -> list[float]:
     """Plain floats, with roundoff below 1e-14 * scale written as exact zeros and +-1."""
     out = []

@@ -19,8 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.geometry.quaternions import from_matrix
 from casmech.importers.adm_connections import marker_notes
-from casmech.importers.adm_frames import euler_parameters, tidy
+from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_functions import NotTranslated, time_function
 from casmech.importers.adm_model import Deck, Marker
 from casmech.importers.adm_parser import Statement
@@ -44,7 +45,7 @@ def bushing(deck: Deck, model, statement: Statement, joints) -> list[Item]:
             "body_i": deck.part_name(j), "body_j": deck.part_name(i),
             "at": tidy(j.frame.origin)}
     if not np.allclose(j.frame.rotation, np.eye(3), rtol=0, atol=1e-15):
-        data["orientation"] = {"euler_parameters": tidy(euler_parameters(j.frame.rotation))}
+        data["orientation"] = {"euler_parameters": tidy(from_matrix(j.frame.rotation))}
     for key, (name, factor) in factors.items():
         values = reader.numbers(statement, key, 3)
         if values is not None and any(values):

@@ -23,10 +23,11 @@ from casmech.importers.adm_functions import NotTranslated, time_function
 from casmech.importers.adm_model import Deck
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Item
+from casmech.joint_types import COORDINATES, having
 
 # (Adams flag, casmech joint types it drives) -> (driver/motor key: displacement, velocity)
-KINDS = {"ROTATION": (("revolute", "cylindrical"), ("angle", "speed")),
-         "TRANSLATION": (("translational", "cylindrical"), ("displacement", "velocity"))}
+KINDS = {flag: (having(name), COORDINATES[name].motor[:2])
+         for flag, name in (("ROTATION", "angle"), ("TRANSLATION", "displacement"))}
 MODES = ("DISPLACEMENT", "VELOCITY", "ACCELERATION")
 
 

@@ -27,12 +27,12 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import UsageError, did_you_mean
+from casmech.geometry.quaternions import from_matrix
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item, identifier
 from casmech.importers.urdf_geometry import geometry_items
 from casmech.importers.urdf_read import Reader
 from casmech.importers.urdf_tree import MOVING, Frame, Joint, Link, State, Tree, pose, read_tree
-from casmech.schema.bodies import euler_parameters
 
 GRAVITY = [0.0, 0.0, -9.81]
 DAMPER_LENGTH = 1.0  # [m] distance between the two points of a prismatic joint's damper
@@ -137,7 +137,7 @@ class Translator:
         data = {"name": name, "mass": mass, "inertia": self.inertia(inertia),
                 "position": tidy(position)}
         if not np.allclose(frame.rotation, np.eye(3), rtol=0, atol=1e-15):
-            data["orientation"] = {"euler_parameters": tidy(euler_parameters(frame.rotation))}
+            data["orientation"] = {"euler_parameters": tidy(from_matrix(frame.rotation))}
         if np.any(velocity):
             data["velocity"] = tidy(velocity)
         if np.any(omega):

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.geometry.quaternions import from_matrix
 from casmech.importers.adm_frames import tidy
 from casmech.importers.urdf_read import Element, Reader
 from casmech.importers.urdf_tree import Frame, Link, frame
-from casmech.schema.bodies import euler_parameters
 
 
 def _box(reader: Reader, element: Element, path: str) -> dict:
@@ -71,6 +71,6 @@ def geometry_items(reader: Reader, members: list[tuple[Link, Frame]], centre) ->
                 item["offset"] = tidy(offset, max(1.0, np.max(np.abs(centre))))
             if not np.allclose(placed.rotation, np.eye(3), rtol=0, atol=1e-15):
                 item["orientation"] = {"euler_parameters":
-                                       tidy(euler_parameters(placed.rotation))}
+                                       tidy(from_matrix(placed.rotation))}
             items.append(item)
     return items

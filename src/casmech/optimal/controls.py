@@ -1,5 +1,6 @@
-"""Control inputs on joints: a torque about a revolute/cylindrical axis or a force along a
-translational/cylindrical axis, as generalized forces by virtual work (AD):
+"""Control inputs on joints: a torque about the axis of a joint type that rotates or a force
+along the axis of one that slides (their entries in casmech.joint_types: revolute, cylindrical,
+translational), as generalized forces by virtual work (AD):
 
     torque tau on joint J: Q = (d angle_J / d q)^T tau, angle_J the joint's relative rotation
     (the same angle an rsda on J measures);
@@ -19,9 +20,11 @@ from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.lower import _Poses, lower_force
 from casmech.errors import UsageError
+from casmech.joint_types import COORDINATES, having
 from casmech.schema.resolved import Force, ResolvedModel
 
-KINDS = {"torque": ("revolute", "cylindrical"), "force": ("translational", "cylindrical")}
+# control kind -> the joint coordinate it acts along (its effort motor mode)
+KINDS = {c.motor[2]: name for name, c in COORDINATES.items()}
 
 
 @dataclass(frozen=True)
@@ -63,9 +66,10 @@ def control_forces(model: ResolvedModel, controls: Sequence[Control]) -> ca.Func
         joint = joints.get(control.joint)
         if control.kind not in KINDS:
             raise UsageError(f"control kind '{control.kind}' is not one of {', '.join(KINDS)}")
-        if joint is None or joint.type not in KINDS[control.kind]:
+        types = having(KINDS[control.kind])
+        if joint is None or joint.type not in types:
             raise UsageError(f"control on '{control.joint}': a {control.kind} needs a joint of "
-                             f"type {' or '.join(KINDS[control.kind])} by name")
+                             f"type {' or '.join(types)} by name")
         if control.kind == "torque":
             total += ca.jacobian(_torque_coordinate(model, poses, joint, x), x.q).T * u[k]
         else:

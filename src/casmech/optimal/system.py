@@ -26,12 +26,13 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, euler
+from casmech.compiler import eom
 from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR, constant
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
+from casmech.geometry import euler
 from casmech.optimal import lowering
 from casmech.optimal.symbolic import (
     SymbolicModel,

@@ -20,8 +20,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
 from casmech.errors import Diagnostic, ModelError, UsageError
+from casmech.geometry import euler
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import GROUND, ResolvedModel
 
@@ -179,7 +179,7 @@ _ROTATION = ca.Function("A", [_P], [ca.vec(euler.rotation(_P))], ["p"], ["A"])
 
 
 def rotations(p: np.ndarray) -> np.ndarray:
-    """A(p) (compiler/euler.py's) for an array (..., 4) of unit Euler parameters -> (..., 3, 3)."""
+    """A(p) (geometry/euler.py's) for an array (..., 4) of unit Euler parameters -> (..., 3, 3)."""
     flat = np.asarray(p, float).reshape(-1, 4)
     if not len(flat):
         return np.zeros((*p.shape[:-1], 3, 3))

@@ -18,10 +18,11 @@ import math
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler, numeric_qr
+from casmech.compiler import numeric_qr
 from casmech.compiler.checks import dependent_joints, worst_joints
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
+from casmech.geometry import euler
 
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50

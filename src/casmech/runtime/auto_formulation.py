@@ -2,11 +2,12 @@
 
 - A tree: joint coordinates (an ODE on CVODES).
 - Loops whose spanning tree reaches every body through the file's joints (no `free` joint),
-  in a run whose rows can be examined (singular_poses.MAX_ENTRIES): joint coordinates (the tree's ODE and the cut joints' rows: a small DAE on IDAS). After the
-  run the rows are examined for singular poses (runtime.singular_poses); a run that failed or
-  passed one is run again in `rp`, whose augmented-Lagrangian fallback is built for them (the
-  joint DAE can pass a flat pose of a four-bar without failing, off the exact motion:
-  docs/formulations.md), and `metadata.formulation_fallback` says why.
+  in a run whose rows can be examined (singular_poses.MAX_ENTRIES): joint coordinates (the
+  tree's ODE and the cut joints' rows: a small DAE on IDAS). After the run the rows are
+  examined for singular poses (runtime.singular_poses); a run that failed or passed one is
+  run again in `rp`, whose augmented-Lagrangian fallback is built for them (the joint DAE can
+  pass a flat pose of a four-bar without failing, off the exact motion: docs/formulations.md),
+  and `metadata.formulation_fallback` says why.
 - Loops with a floating body in the tree (held only by basic or composite constraints, all
   cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
   Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle):

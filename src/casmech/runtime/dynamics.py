@@ -58,11 +58,12 @@ import casadi as ca
 import numpy as np
 
 from casmech import interrupts
-from casmech.compiler import augmented, dae, euler
+from casmech.compiler import augmented, dae
 from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
+from casmech.geometry import euler
 from casmech.runtime import assembly, contact_steps, events, projected_rk4
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result

@@ -31,11 +31,13 @@ import casadi as ca
 import numpy as np
 
 from casmech import interrupts
-from casmech.compiler import contact, coordinates, euler
+from casmech.compiler import contact, coordinates
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.functions import SystemFunctions
 from casmech.compiler.ir import ForceIR
 from casmech.errors import AnalysisError, FailureContext, solver_reason
+from casmech.geometry import euler
+from casmech.geometry.states import split
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.memo import kept
 from casmech.runtime.results import BODY_COLUMNS, Result, column_names
@@ -106,7 +108,7 @@ def state_values(functions: SystemFunctions, x: Coordinates, names) -> dict[str,
     elements = {name: k for k, name in enumerate(contact.output_names(functions.ir))}
     values, columns, outputs = {}, {}, None
     for name in names:
-        owner, attribute = coordinates.split(name)
+        owner, attribute = split(name)
         if name in elements:
             if outputs is None:
                 outputs = contact.element_outputs(functions.ir, x)
@@ -116,7 +118,7 @@ def state_values(functions: SystemFunctions, x: Coordinates, names) -> dict[str,
                 columns[owner] = _body_columns(x, bodies[owner])
             values[name] = columns[owner][attribute]
         else:
-            value = coordinates.JOINT_COORDINATES[attribute][1]
+            value = coordinates.JOINT_VALUES[attribute]
             values[name] = value(_joint_geometry(joints[owner]), x)
     return values
 

@@ -25,10 +25,10 @@ from casmech import interrupts
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.joint_motions import MOTIONS
 from casmech.compiler.joint_system import JointSystem, build
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
+from casmech.joint_types import MOTIONS
 from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm

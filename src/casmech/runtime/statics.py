@@ -42,10 +42,10 @@ import numpy as np
 import scipy.linalg
 
 from casmech import interrupts
-from casmech.compiler import euler
 from casmech.compiler.checks import RANK_TOLERANCE
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.errors import AnalysisError, BodyName, FailureContext
+from casmech.geometry import euler
 from casmech.runtime import assembly
 from casmech.runtime.results import Result
 

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.geometry import euler, quaternions
 from casmech.schema import files, resolved, spec
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
@@ -42,25 +42,8 @@ GEOMETRY_EXTRAS = {
 
 # ------------------------------------------------------------------------------ rotations
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p): body -> global; columns are the body axes (compiler/euler.py's, on numbers)."""
+    """A(p): body -> global; columns are the body axes (geometry/euler.py's, on numbers)."""
     return euler.numeric(euler.rotation, np.asarray(p, float))
-
-
-def euler_parameters(a: np.ndarray) -> np.ndarray:
-    """Shepperd's method: Euler parameters (e0 >= 0) of a rotation matrix."""
-    trace = np.trace(a)
-    k = np.array(
-        [
-            [1 + trace, a[2, 1] - a[1, 2], a[0, 2] - a[2, 0], a[1, 0] - a[0, 1]],
-            [a[2, 1] - a[1, 2], 1 + 2 * a[0, 0] - trace, a[0, 1] + a[1, 0], a[0, 2] + a[2, 0]],
-            [a[0, 2] - a[2, 0], a[0, 1] + a[1, 0], 1 + 2 * a[1, 1] - trace, a[1, 2] + a[2, 1]],
-            [a[1, 0] - a[0, 1], a[0, 2] + a[2, 0], a[1, 2] + a[2, 1], 1 + 2 * a[2, 2] - trace],
-        ]
-    )  # k[i, j] = 4 p_i p_j
-    largest = int(np.argmax(np.diag(k)))
-    p = k[largest] / (2.0 * math.sqrt(k[largest, largest]))
-    p = -p if p[0] < 0 else p
-    return p / np.linalg.norm(p)
 
 
 # ---------------------------------------------------------------------------------- checks
@@ -123,7 +106,7 @@ def from_matrix(check: Checker, path: Path, given: spec.Orientation) -> np.ndarr
             hint="columns are the body x, y, z axes in the global frame",
         )
         return None
-    return euler_parameters(a)
+    return quaternions.from_matrix(a)
 
 
 def from_axes(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
@@ -139,7 +122,7 @@ def from_axes(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray
     axes = {first: u, second: v / np.linalg.norm(v)}
     third = next(form for form in AXES if form not in axes)
     axes[third] = np.cross(*(axes[form] for form in CROSS[third]))
-    return euler_parameters(np.column_stack([axes[form] for form in AXES]))
+    return quaternions.from_matrix(np.column_stack([axes[form] for form in AXES]))
 
 
 def inertia(check: Checker, path: Path, values) -> np.ndarray | None:

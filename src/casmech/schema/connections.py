@@ -6,17 +6,15 @@ from typing import Any
 
 import numpy as np
 
+from casmech.joint_types import COORDINATES, REGISTRY, having, listed
 from casmech.schema import contact, resolved
 from casmech.schema.checker import ZERO, Checker, failed
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
 
-VECTOR_KEYS = ("at", "axis", "axis_i", "axis_j", "at_i", "at_j", "a_i", "a_j", "s_i", "s_j", "c")
 UNIT_KEYS = frozenset({"axis", "axis_i", "axis_j"})  # normalised
 NONZERO_KEYS = frozenset({"axis", "axis_i", "axis_j", "a_i", "a_j", "c"})  # E404 when zero
-DRIVERS = {"angle": ("revolute", "cylindrical"), "displacement": ("translational", "cylindrical")}
-RSDA_JOINTS = ("revolute", "cylindrical")
-PERPENDICULAR = 1e-6  # |cos| above which two axes are not perpendicular
+DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.joint_types)
 
 
 def joint(check: Checker, index: int, given) -> resolved.Joint | None:
@@ -24,10 +22,12 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
     check.joint_types[given.name] = given.type
     check.joint_bodies[given.name] = (given.body_i, given.body_j)
-    keys = [key for key in VECTOR_KEYS if key in type(given).model_fields]
-    vectors = {key: joint_vector(check, (*path, key), key, getattr(given, key)) for key in keys}
+    entry = REGISTRY[given.type]
+    vectors = {key: joint_vector(check, (*path, key), key, getattr(given, key))
+               for key in entry.vectors}
     extra = (
-        {"length": distance_length(check, path, given, vectors)} if given.type == "distance" else {}
+        {"length": distance_length(check, path, given, vectors)}
+        if "length" in entry.options else {}
     )
     extra.update(drivers(check, path, given))
     if getattr(given, "cut", False):
@@ -39,8 +39,9 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
                                                 given.reactions.point)
     if getattr(given, "limit", None) is not None:
         extra["limit"] = contact.limit(check, (*path, "limit"), given.limit)
-    if given.type in JOINT_CHECKS and not failed(vectors.values()):
-        JOINT_CHECKS[given.type](check, path, vectors)
+    if entry.check is not None and not failed(vectors.values()):
+        for code, key, message, details in entry.check(vectors):
+            check.error(code, (*path, key), message, **details)
     if hasattr(given, "f"):
         extra["f"] = check.function((*path, "f"), given.f, {"t": 0.0})
     if not bodies_ok or failed([*vectors.values(), *extra.values()]):
@@ -78,16 +79,16 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
     keys = [key for key in DRIVERS if driver is not None and getattr(driver, key) is not None]
     found = {}
     if driver is not None and not keys:
+        ways = " or ".join(f"`driver: {{{key}: ...}}` ({', '.join(having(key))})"
+                           for key in DRIVERS)
         check.error("E100", (*path, "driver"), "a driver needs a motion",
                     expected=" or ".join(DRIVERS),
-                    hint="write `driver: {angle: ...}` (revolute, cylindrical) or "
-                         "`driver: {displacement: ...}` (translational, cylindrical); leave "
-                         "`driver:` out for a joint that moves freely")
+                    hint=f"write {ways}; leave `driver:` out for a joint that moves freely")
         found["driver"] = None
     for key in keys:
         where = (*path, "driver", key)
-        if given.type not in DRIVERS[key]:
-            allowed = " and ".join(DRIVERS[key])
+        if given.type not in having(key):
+            allowed = " and ".join(having(key))
             check.error(
                 "E408",
                 where,
@@ -119,36 +120,6 @@ def distance_length(check: Checker, path: Path, given, vectors) -> float | None:
         )
         return None
     return length
-
-
-def check_universal(check: Checker, path: Path, vectors) -> None:
-    cosine = abs(vectors["axis_i"] @ vectors["axis_j"])
-    if cosine > PERPENDICULAR:
-        check.error(
-            "E405",
-            (*path, "axis_j"),
-            "axis_i and axis_j must be perpendicular",
-            got=f"|cos| = {cosine:.3g}",
-        )
-
-
-def check_revolute_spherical(check: Checker, path: Path, vectors) -> None:
-    arm = vectors["at_j"] - vectors["at"]
-    length = np.linalg.norm(arm)
-    if length < ZERO:
-        check.error(
-            "E404",
-            (*path, "at_j"),
-            "at_j coincides with at",
-            hint="the arm from `at` to `at_j` must have a positive length",
-        )
-    elif abs(arm @ vectors["axis"]) > PERPENDICULAR * length:
-        check.error(
-            "E405",
-            (*path, "at_j"),
-            "at_j - at must be perpendicular to axis",
-            got=f"|cos| = {abs(arm @ vectors['axis']) / length:.3g}",
-        )
 
 
 def force(check: Checker, index: int, given) -> resolved.Force | None:
@@ -185,11 +156,11 @@ def rsda(check: Checker, path: Path, given) -> dict[str, Any] | None:
     joint = (*path, "joint")
     if not check.reference(joint, given.joint, list(check.joint_types), "joint"):
         return None
-    if check.joint_types[given.joint] not in RSDA_JOINTS:
+    if check.joint_types[given.joint] not in having("angle"):
         check.error(
             "E103",
             joint,
-            "an rsda acts about the axis of a revolute or cylindrical joint",
+            f"an rsda acts about the axis of a {listed(having('angle'), 'or')} joint",
             got=f"'{given.joint}' is {check.joint_types[given.joint]}",
         )
         return None
@@ -228,8 +199,4 @@ def load(check: Checker, path: Path, given) -> dict[str, Any] | None:
     return fields
 
 
-JOINT_CHECKS = {
-    "universal": check_universal,
-    "revolute_spherical": check_revolute_spherical,
-}
 FORCES = {"tsda": tsda, "rsda": rsda, "force": load, "torque": load}

@@ -21,15 +21,13 @@ from typing import Any
 
 import numpy as np
 
+from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.bodies import rotation_matrix
 from casmech.schema.checker import Checker, failed
 from casmech.schema.loader import Path
 
 HERTZ = 1.5  # Hunt-Crossley's default exponent: Hertz's sphere on a flat
 OUTPUTS = ("normal_force", "friction_force", "gap")  # results columns of a contact element
-# a joint stop's results columns: its force or torque (by joint type), then its gap
-LIMIT_COLUMNS = {"revolute": "limit_torque", "translational": "limit_force",
-                 "cylindrical": "limit_force"}
 
 
 def output_names(joints, forces) -> list[str]:
@@ -39,7 +37,14 @@ def output_names(joints, forces) -> list[str]:
              for o in OUTPUTS]
     return names + [f"{j.name}.{column}" for j in joints
                     if j is not None and j.limit is not None
-                    for column in (LIMIT_COLUMNS[j.type], "limit_gap")]
+                    for column in (limit_column(j.type), "limit_gap")]
+
+
+def limit_column(joint_type: str) -> str:
+    """A joint stop's force or torque column: by the coordinate it stops (casmech.joint_types)."""
+    return COORDINATES[REGISTRY[joint_type].limit].limit[1]
+
+
 AXIS = {"x": 0, "y": 1, "z": 2}
 POSITIVE = ("stiffness", "impact_velocity")  # keys of the normal law that must be > 0
 

@@ -2,8 +2,8 @@
 
 `when` is an expression of t, the parameters and the state: every body column of the results
 table (`bar.x` ... `bar.alphaz`, resolved.BODY_COLUMNS) and the coordinates of revolute,
-cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the table of
-compiler/coordinates.py). A misspelt or unknown name is E201 at its place in the expression, with
+cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the names of
+casmech.geometry.states). A misspelt or unknown name is E201 at its place in the expression, with
 a did-you-mean hint; a duplicate event name is E301.
 """
 
@@ -12,10 +12,12 @@ from __future__ import annotations
 from dataclasses import replace
 
 from casmech.errors import did_you_mean
+from casmech.joint_types import attributes as joint_attributes
+from casmech.joint_types import coordinate_types, listed
 from casmech.schema import contact, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.expressions import ExpressionError, parse
-from casmech.schema.force_laws import initial_states, joint_attributes
+from casmech.schema.force_laws import initial_states
 from casmech.schema.loader import Path, format_path
 from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
@@ -37,10 +39,10 @@ def _misnamed(check: Checker, name: str, states) -> tuple[str, str | None]:
             return (f"reaction column '{name}' cannot be read by an event",
                     f"events read body columns and joint coordinates ({', '.join(has)})"
                     if has else "events read body columns and joint coordinates")
-        listed = ", ".join(has) if has else "no coordinates (revolute, cylindrical and " \
-            "translational joints have)"
+        known = ", ".join(has) if has else "no coordinates (" \
+            f"{listed(coordinate_types())} joints have)"
         return (f"{kind} joint '{owner}' has no '{attribute}'",
-                did_you_mean(attribute, has) or f"{kind} joints have {listed}")
+                did_you_mean(attribute, has) or f"{kind} joints have {known}")
     if owner in check.bodies:
         return (f"body '{owner}' has no '{attribute}'",
                 did_you_mean(attribute, BODY_COLUMNS) or f"bodies have {', '.join(BODY_COLUMNS)}")

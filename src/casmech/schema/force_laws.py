@@ -1,7 +1,7 @@
 """Force laws that read the state of the mechanism, and the bushing (docs/forces.md).
 
 A force's or torque's `value` and a tsda's or rsda's `actuator` may name the state
-(`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the table is compiler/coordinates.py)
+(`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the names are casmech.geometry.states)
 besides t and parameters. `StateChecker` lets those expressions (and only those) read it, and
 says what is wrong with a dotted name anywhere: a state where none is allowed, a misspelt one
 (did you mean), an attribute the joint type does not have, ground.
@@ -16,8 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from casmech.compiler.coordinates import BODY_STATES, JOINT_COORDINATES, split
 from casmech.errors import did_you_mean
+from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
+from casmech.joint_types import attributes as joint_attributes
+from casmech.joint_types import coordinate_types, listed
 from casmech.schema import connections, resolved
 from casmech.schema.bodies import orientation
 from casmech.schema.checker import Checker, failed
@@ -30,10 +32,6 @@ BUSHING_VECTORS = ("at", "stiffness", "damping", "rotational_stiffness", "rotati
                    "preload_force", "preload_torque")
 NON_NEGATIVE = ("stiffness", "damping", "rotational_stiffness", "rotational_damping")
 BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
-
-
-def joint_attributes(joint_type: str) -> list[str]:
-    return [name for name, (types, _) in JOINT_COORDINATES.items() if joint_type in types]
 
 
 def _body_value(body: resolved.Body | None, column: str) -> float:
@@ -101,9 +99,9 @@ class StateChecker(Checker):
         if owner in self.joint_types:
             kind = self.joint_types[owner]
             has = joint_attributes(kind)
-            listed = ", ".join(has) if has else "no coordinates (revolute, cylindrical and " \
-                "translational joints have)"
-            hint = did_you_mean(attribute, has) or f"{kind} joints have {listed}"
+            known = ", ".join(has) if has else "no coordinates (" \
+                f"{listed(coordinate_types())} joints have)"
+            hint = did_you_mean(attribute, has) or f"{kind} joints have {known}"
             return f"{kind} joint '{owner}' has no '{attribute}'", hint
         if owner in self.bodies:
             hint = did_you_mean(attribute, BODY_STATES) or f"bodies have {', '.join(BODY_STATES)}"

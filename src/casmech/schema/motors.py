@@ -21,6 +21,7 @@ from dataclasses import replace
 from typing import Any
 
 from casmech.errors import did_you_mean
+from casmech.joint_types import COORDINATES, REGISTRY, coordinate_types, listed
 from casmech.schema import files, spec
 from casmech.schema.antiderivative import NoClosedForm, integral
 from casmech.schema.checker import Checker, failed
@@ -28,13 +29,9 @@ from casmech.schema.resolved import ScalarFunction
 from casmech.schema.tables import TableError, is_table, table_function
 from casmech.schema.tables import integral as table_integral
 
-ROTATION = ("angle", "speed", "torque")
-TRANSLATION = ("displacement", "velocity", "force")
-MOTIONS = {"revolute": (ROTATION,), "translational": (TRANSLATION,),
-           "cylindrical": (ROTATION, TRANSLATION)}
-DRIVEN = {"angle": "angle", "speed": "angle", "displacement": "displacement",
-          "velocity": "displacement"}  # mode -> the driver it becomes
-EFFORT_VARIABLES = {"torque": ("angle", "angle_dot"), "force": ("displacement", "displacement_dot")}
+# position and speed mode -> the driver it becomes; effort mode -> the variables its law reads
+DRIVEN = {mode: name for name, c in COORDINATES.items() for mode in c.motor[:2]}
+EFFORT_VARIABLES = {c.motor[2]: (name, f"{name}_dot") for name, c in COORDINATES.items()}
 NO_CLOSED_FORM_HINT = ("write the motion itself as `{position}:` (position mode); a speed needs "
                        "polynomials, sin/cos/exp of a*t + b, step() or a table")
 
@@ -82,17 +79,22 @@ def _strip_tables(given) -> tuple[Any, dict[tuple, spec.Table]]:
 
 
 # ---------------------------------------------------------------------------------- motors
+def motions(joint_type: str) -> tuple[tuple[str, ...], ...]:
+    """The motor modes of each free motion of the joint type (position, speed, effort)."""
+    entry = REGISTRY.get(joint_type)
+    return tuple(COORDINATES[c].motor for c in entry.coordinates) if entry else ()
+
+
 def _allowed(joint_type: str) -> str:
-    motions = MOTIONS.get(joint_type, ())
-    return " | ".join(" | ".join(keys) for keys in motions)
+    return " | ".join(" | ".join(keys) for keys in motions(joint_type))
 
 
 def _check_keys(check: Checker, path: tuple, given, motor: spec.Motor) -> list[str]:
     """The motor's keys if they fit the joint type, else report (E101, E408) and []."""
     keys = [k for k in spec.Motor.model_fields if getattr(motor, k) is not None]
-    allowed = [k for motion in MOTIONS.get(given.type, ()) for k in motion]
+    allowed = [k for motion in motions(given.type) for k in motion]
     hint = f"a {given.type} joint's motor takes {_allowed(given.type)}" if allowed else \
-        "motors act on revolute, translational and cylindrical joints"
+        f"motors act on {listed(coordinate_types())} joints"
     ok = True
     for key in motor.model_extra or {}:
         close = did_you_mean(key, allowed)
@@ -104,7 +106,7 @@ def _check_keys(check: Checker, path: tuple, given, motor: spec.Motor) -> list[s
             check.error("E408", (*path, key), f"a {key} motor is not allowed on a {given.type} "
                         "joint", source=check.doc.locate_key((*path, key)), hint=hint)
             ok = False
-    for motion in MOTIONS.get(given.type, ()):
+    for motion in motions(given.type):
         modes = [k for k in keys if k in motion]
         if len(modes) > 1:
             check.error("E408", (*path, modes[1]), f"one mode per motion: {' and '.join(modes)} "

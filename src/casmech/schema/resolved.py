@@ -104,7 +104,7 @@ class Force:
              preload_torque (3 each, components in the frame)
     sphere_plane, sphere_sphere, points_plane, capsule_plane: body_i, body_j, vectors (plane
              at, normal; center, center_i, center_j, points, ends), params (schema/contact.py)
-    value and actuator may read the state (`pivot.angle`, `bar.vx`): compiler/coordinates.py
+    value and actuator may read the state (`pivot.angle`, `bar.vx`): casmech.geometry.states
     """
 
     name: str

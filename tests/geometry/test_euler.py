@@ -1,4 +1,4 @@
-"""Euler-parameter geometry (compiler/euler.py) against its defining properties.
+"""Euler-parameter geometry (geometry/euler.py) against its defining properties.
 
 Oracles: orthonormality, Rodrigues' formula, the identities of Haug (1989) ch. 6
 (A = E G^T, G p = 0, E p = 0, omega_bar = 2 G p_dot, omega = 2 E p_dot), and the definition
@@ -8,7 +8,7 @@ B(p, a_bar) = d(A(p) a_bar)/dp checked by finite differences and by CasADi AD.
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import euler
+from casmech.geometry import euler
 from tests.compiler import helpers
 from tests.compiler.helpers import axis_angle_p, dense, rodrigues, skew, unit
 
@@ -53,7 +53,7 @@ def test_g_and_e_annihilate_p(rng):
 
 
 def fd_jacobian_of_rotation(p, a_bar, h=1e-6):
-    """Central finite differences of p -> A(p) a_bar (compiler/euler.rotation) along e_0..e_3."""
+    """Central finite differences of p -> A(p) a_bar (geometry/euler.rotation) along e_0..e_3."""
     return np.column_stack([
         (dense(euler.rotation(p + h * e)) - dense(euler.rotation(p - h * e))) @ a_bar / (2 * h)
         for e in np.eye(4)])
@@ -139,7 +139,7 @@ def test_symbolic_inputs_stay_symbolic():
 def test_numpy_oracles_of_the_other_test_files(rng):
     """helpers.rotation / b_matrix / g_matrix / e_matrix (numpy, used to write the lecture's
     closed forms) agree with Rodrigues' formula and with finite differences, independently of
-    compiler/euler.py."""
+    geometry/euler.py."""
     axis, angle = unit(rng.normal(size=3)), rng.uniform(-np.pi, np.pi)
     p, a_bar = axis_angle_p(axis, angle), rng.normal(size=3)
     np.testing.assert_allclose(helpers.rotation(p), rodrigues(axis, angle), rtol=RTOL, atol=ATOL)

@@ -1,12 +1,13 @@
-"""Tree-joint motions (compiler/joint_motions.py) against finite differences and inverses."""
+"""Tree-joint motions (geometry/motions.py, joint_types.MOTIONS) against FD and inverses."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler import euler
 from casmech.compiler.articulated import local_motion
-from casmech.compiler.joint_motions import MOTIONS, from_matrix
+from casmech.geometry import euler
+from casmech.geometry.quaternions import from_matrix
+from casmech.joint_types import MOTIONS
 
 RNG = np.random.default_rng(7)
 

@@ -1,0 +1,116 @@
+"""The model's analysis settings, events, estimation, optimal control and parameter studies
+(schema/spec.py)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import (
+    Field,
+    StrictBool,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+)
+
+from casmech.schema.spec_base import Name, Scalar, Spec
+
+
+# ---------------------------------------------------------------------------------- analysis
+class Analysis(Spec):
+    type: Literal["kinematics", "dynamics", "inverse_dynamics", "statics", "assembly",
+                  "modal"] = "dynamics"
+    t_end: Scalar = 1.0
+    output_step: Scalar = 0.01
+    rtol: Scalar = 1e-8
+    atol: Scalar = 1e-10
+    # dynamics: r-p or r-omega DAE, joint coordinates (casmech.compiler.tree), or auto (the
+    # fastest the model allows)
+    formulation: Literal["rp", "romega", "joint", "auto"] = "auto"
+    # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
+    # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
+    stabilization: Literal["ggl", "projection"] = "ggl"
+    # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
+    # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
+    method: Literal["auto", "adams", "bdf"] = "auto"
+    # modal: linearize at this time of a dynamics run (0 <= at <= t_end) instead of at the static
+    # equilibrium; inputs: the effort-motor joints and force elements whose force is an input
+    # (default: every effort motor). runtime/modal.py
+    at: Scalar | None = None
+    inputs: tuple[Name, ...] | None = None
+
+
+# ----------------------------------------------------------------------------------- events
+class Event(Spec):
+    """An event: where `when` (an expression of the results columns, joint coordinates, t and
+    parameters) crosses zero in `direction`; `action` stop ends the run there, log records it
+    (docs/format.md#events, casmech.schema.events)."""
+
+    name: Name
+    when: Scalar
+    direction: Literal["rising", "falling", "both"] = "both"
+    action: Literal["stop", "log"] = "log"
+
+
+# ------------------------------------------------------- estimation and optimal control (issue 7)
+Pair = Annotated[tuple[Scalar, ...], Field(min_length=2, max_length=2)]
+
+
+class Estimate(Spec):
+    """Fit parameters to measurements: `casmech optimize` (see casmech.optimal.estimate)."""
+
+    parameters: Annotated[tuple[Name, ...], Field(min_length=1)]
+    data: StrictStr  # CSV with a `t` column and measured results columns (path from the model)
+    outputs: tuple[StrictStr, ...] | None = None  # default: every column of data but t
+    weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> weight (1)
+    bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # parameter -> [low, high]
+
+
+class Control(Spec):
+    joint: Name
+    type: Literal["torque", "force"] = "torque"
+    bounds: Pair | None = None
+
+
+class TerminalCost(Spec):
+    weight: Scalar
+    target: Scalar = 0
+
+
+class Objective(Spec):
+    effort: Scalar = 1  # weight of the integral of u^T u
+    time: Scalar = 0  # weight of the final time (with free_time)
+    terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
+
+
+class OptimalControl(Spec):
+    """An optimal control problem on the model: `casmech optimize` (casmech.optimal.ocp)."""
+
+    horizon: Scalar
+    intervals: StrictInt = 30
+    transcription: Literal["collocation", "shooting"] = "collocation"
+    controls: Annotated[tuple[Control, ...], Field(min_length=1)]
+    objective: Objective = Field(default_factory=Objective)
+    terminal: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at the end
+    path: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [low, high] at nodes
+    free_time: Pair | None = None  # [low, high] of a free final time; horizon is its guess
+    initial_guess: Literal["simulation", "interpolation"] = "simulation"  # casmech.optimal.guess
+    elements: StrictInt = 1  # collocation elements per control interval
+    stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
+
+
+# ---------------------------------------------------------- parameter studies (issue 18)
+Number = Union[StrictInt, StrictFloat]  # noqa: UP007
+
+
+class Study(Spec):
+    """A parameter study: `casmech sweep` (casmech.study; docs/sweeps.md). Values are numbers
+    or the command line's texts ("0.8:1.2:5", "100,200,400", "2,0.05"), checked by
+    casmech.study.block with located errors."""
+
+    grid: dict[StrictStr, StrictStr | Number | tuple[Number, ...]] = Field(default_factory=dict)
+    samples: StrictInt = 0
+    normal: dict[StrictStr, StrictStr | tuple[Number, ...]] = Field(default_factory=dict)
+    uniform: dict[StrictStr, StrictStr | tuple[Number, ...]] = Field(default_factory=dict)
+    seed: StrictInt = 0
+    keep: tuple[StrictStr, ...] = ()

@@ -1,0 +1,116 @@
+"""Scalars, vectors and the base class of the format's pydantic models (schema/spec.py), and the
+items every section uses: orientations and `repeat`."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Discriminator,
+    Field,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+    Tag,
+    ValidationError,
+    WrapValidator,
+    model_validator,
+)
+from pydantic_core import PydanticCustomError
+
+
+def _scalar(value: Any, handler: Any) -> Any:
+    try:
+        return handler(value)
+    except ValidationError:
+        raise PydanticCustomError("scalar_type", "expected a number or an expression") from None
+
+
+def _version(value: Any) -> Any:
+    if type(value) is not int or value != 1:  # not True, not 1.0
+        raise PydanticCustomError("format_version", "unsupported format version")
+    return value
+
+
+Version = Annotated[Literal[1], BeforeValidator(_version)]
+Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
+Vector = Annotated[tuple[Scalar, ...], Field(min_length=3, max_length=3)]
+Vector4 = Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)]
+Vector6 = Annotated[tuple[Scalar, ...], Field(min_length=6, max_length=6)]
+Matrix = Annotated[tuple[Vector, ...], Field(min_length=3, max_length=3)]
+Name = StrictStr
+
+
+def _inertia_shape(value: Any) -> str:
+    if isinstance(value, list | tuple):
+        if len(value) == 6:
+            return "full"
+        if any(isinstance(item, list | tuple) for item in value):
+            return "matrix"
+    return "principal"
+
+
+Inertia = Annotated[
+    Union[  # noqa: UP007
+        Annotated[Vector, Tag("principal")],
+        Annotated[Vector6, Tag("full")],
+        Annotated[Matrix, Tag("matrix")],
+    ],
+    Discriminator(_inertia_shape),
+]
+
+
+class Spec(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _empty_is_absent(cls, data: Any) -> Any:
+        """An optional key written without a value (`joints:`) takes its default."""
+        if not isinstance(data, dict):
+            return data
+        fields = cls.model_fields
+        return {
+            key: value
+            for key, value in data.items()
+            if value is not None or key not in fields or fields[key].is_required()
+        }
+
+
+# ------------------------------------------------------------------------------- orientation
+class AxisAngle(Spec):
+    axis: Vector
+    angle: Scalar
+
+
+class Orientation(Spec):
+    """Exactly one form must be given (checked in semantic, E407)."""
+
+    euler_parameters: Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)] | None = None
+    axis_angle: AxisAngle | None = None
+    matrix: Matrix | None = None
+    x_axis: Vector | None = None
+    y_axis: Vector | None = None
+    z_axis: Vector | None = None
+
+
+# --------------------------------------------------------------- repeat (docs/components.md)
+class Repeat(Spec):
+    """One copy of the item per integer `index` from `from` to `to` (inclusive; none if to <
+    from); the index is a number in the item's expressions and `{expr}` in its names."""
+
+    index: Name
+    from_: Scalar = Field(alias="from")
+    to: Scalar
+
+
+Repeats = Annotated[
+    Union[  # noqa: UP007
+        Annotated[Repeat, Tag("one")],
+        Annotated[tuple[Repeat, ...], Field(min_length=1), Tag("nested")],
+    ],
+    Discriminator(lambda v: "nested" if isinstance(v, list | tuple) else "one"),
+]

@@ -1,0 +1,77 @@
+"""`bodies:` items (schema/spec.py): mass, inertia, pose, velocities, geometry."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import (
+    Discriminator,
+    StrictStr,
+    Tag,
+)
+
+from casmech.schema.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
+
+
+# ---------------------------------------------------------------------------------- geometry
+class Placement(Spec):
+    offset: Vector | None = None
+    orientation: Orientation | None = None
+
+
+class Cylinder(Spec):
+    radius: Scalar
+    length: Scalar
+    axis: Literal["x", "y", "z"] = "z"
+
+
+class BoxItem(Placement):
+    box: Vector
+
+
+class CylinderItem(Placement):
+    cylinder: Cylinder
+
+
+class SphereItem(Placement):
+    sphere: Scalar
+
+
+class MeshItem(Placement):
+    mesh: StrictStr
+    scale: Scalar = 1
+
+
+GEOMETRY_KINDS = ("box", "cylinder", "sphere", "mesh")
+
+
+def _geometry_kind(value: Any) -> str | None:
+    kinds = [kind for kind in GEOMETRY_KINDS if isinstance(value, dict) and kind in value]
+    return kinds[0] if len(kinds) == 1 else None
+
+
+Geometry = Annotated[
+    Union[  # noqa: UP007
+        Annotated[BoxItem, Tag("box")],
+        Annotated[CylinderItem, Tag("cylinder")],
+        Annotated[SphereItem, Tag("sphere")],
+        Annotated[MeshItem, Tag("mesh")],
+    ],
+    Discriminator(
+        _geometry_kind,
+        custom_error_type="geometry_kind",
+        custom_error_message="a geometry item needs exactly one of box, cylinder, sphere, mesh",
+    ),
+]
+
+
+class Body(Spec):
+    name: Name
+    mass: Scalar
+    inertia: Inertia
+    position: Vector
+    orientation: Orientation | None = None
+    velocity: Vector | None = None
+    angular_velocity: Vector | None = None
+    geometry: tuple[Geometry, ...] = ()
+    repeat: Repeats | None = None

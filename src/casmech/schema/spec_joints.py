@@ -1,0 +1,145 @@
+"""`joints:` items (schema/spec.py): the keys every joint has, drivers, motors, tables, limits,
+and one class per registered joint type, built from its casmech.joint_types entry."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import (
+    ConfigDict,
+    Discriminator,
+    Field,
+    StrictBool,
+    StrictStr,
+    Tag,
+    create_model,
+)
+
+from casmech.joint_types import REGISTRY, JointType
+from casmech.schema.spec_base import Name, Repeats, Scalar, Spec, Vector
+
+
+# ------------------------------------------------------------------------------------ joints
+class Table(Spec):
+    """A function of t from a CSV table (casmech.schema.tables; docs/motors.md)."""
+
+    table: StrictStr  # CSV file with a `t` column, path relative to the model file's folder
+    column: StrictStr
+    interpolation: Literal["linear", "cubic"] = "cubic"
+    periodic: StrictBool = False
+
+
+def _time_function_kind(value: Any) -> str:
+    return "table" if isinstance(value, dict | Table) else "scalar"
+
+
+TimeFunction = Annotated[  # an expression of t, or a data table
+    Union[Annotated[Scalar, Tag("scalar")], Annotated[Table, Tag("table")]],  # noqa: UP007
+    Discriminator(_time_function_kind),
+]
+
+
+class Driver(Spec):
+    """Which keys a joint type allows is checked in semantic (E408)."""
+
+    angle: TimeFunction | None = None
+    displacement: TimeFunction | None = None
+
+
+class Motor(Spec):
+    """One mode per motion (casmech.schema.motors checks the keys against the joint type:
+    revolute angle | speed | torque, translational displacement | velocity | force, cylindrical
+    one of each). Unknown keys are reported there too, with the keys the joint type allows."""
+
+    model_config = ConfigDict(extra="allow", frozen=True,
+                              json_schema_extra={"additionalProperties": False})
+
+    angle: TimeFunction | None = None
+    speed: TimeFunction | None = None
+    torque: TimeFunction | None = None
+    displacement: TimeFunction | None = None
+    velocity: TimeFunction | None = None
+    force: TimeFunction | None = None
+
+
+class Reactions(Spec):
+    """How a joint's reaction columns are written (casmech.runtime.reaction_frames): the frame
+    of their components and the point the torque is taken about (global at t = 0, carried by
+    body_i; default the joint point)."""
+
+    frame: Literal["global", "body_i", "body_j", "joint"] = "global"
+    point: Vector | None = None
+
+
+class JointBase(Spec):
+    name: Name
+    body_i: Name
+    body_j: Name
+    repeat: Repeats | None = None
+    reactions: Reactions | None = None
+
+
+class Composite(JointBase):
+    driver: Driver | None = None
+    motor: Motor | None = None
+    # joint formulation: keep this joint as a loop-closure constraint, never a tree joint
+    cut: StrictBool = False
+
+
+class Limit(Spec):
+    """A joint stop (compiler/limits.py): a one-sided spring-damper in the joint coordinate
+    (revolute: the angle, translational and cylindrical: the slide) outside [lower, upper]."""
+
+    lower: Scalar | None = None
+    upper: Scalar | None = None
+    stiffness: Scalar
+    damping: Scalar = 0
+
+
+class Basic(JointBase):
+    f: TimeFunction = "0"
+
+
+def joint_class(entry: JointType) -> type[Spec]:
+    """The YAML class of a joint type, from its registry entry: `type`, its vector keys, its
+    optional scalars, and `limit` when the type has a stop."""
+    fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
+    fields |= {key: (Vector, ...) for key in entry.vectors}
+    fields |= {key: (Scalar | None, None) for key in entry.options}
+    if entry.limit is not None:
+        fields["limit"] = (Limit | None, None)
+    return create_model(entry.class_name, __base__=Basic if entry.basic else Composite,
+                        __module__=__name__, **fields)
+
+
+JOINT_CLASSES: dict[str, type[Spec]] = {}  # joint type -> its class (joint_types.REGISTRY's)
+_BUILT_FROM: dict[str, JointType] = {}  # joint type -> the entry its class was built from
+
+
+def _joint_union():
+    """The `joints:` item: a union of the registered types' classes, discriminated on `type`."""
+    for name in set(JOINT_CLASSES) - set(REGISTRY):
+        del JOINT_CLASSES[name], _BUILT_FROM[name]
+    for name, entry in REGISTRY.items():
+        if _BUILT_FROM.get(name) is not entry:
+            JOINT_CLASSES[name], _BUILT_FROM[name] = joint_class(entry), entry
+    classes = tuple(JOINT_CLASSES[name] for name in REGISTRY)
+    return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
+
+
+Joint = _joint_union()
+
+
+def rebuild():
+    """The union after a joint type was (un)registered (schema/spec.py rebuilds its users)."""
+    global Joint
+    Joint = _joint_union()
+    return Joint
+
+
+def __getattr__(name: str) -> type[Spec]:
+    """A joint type's class by its name (spec.Revolute, spec.DP1, ...)."""
+    found = [cls for cls in JOINT_CLASSES.values() if cls.__name__ == name]
+    if not found:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return found[0]
