@@ -55,7 +55,6 @@ from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.codegen.mapped import mapped_functions
 from casmech.compiler import prescribed
-from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
@@ -69,8 +68,7 @@ __all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled
 
 def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF."""
-    return {residuals.name(form, kind): residuals.oracle(ir, form, kind)
-            for form in FORMULATIONS for kind in residuals.KINDS}
+    return residuals.oracles(ir)
 
 
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")

@@ -23,12 +23,21 @@ from casmech.codegen import residual_kernels as kernels
 from casmech.codegen import rows as row_kernels
 from casmech.codegen.elements import DROPPED, ElementSum, Group
 from casmech.codegen.kernels import Layout, by_joint_keys, taylor_or_constant
-from casmech.compiler import euler
+from casmech.compiler import dae, euler
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.functions import build_functions
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
+# A DAE of a model of at most UNROLLED_BODIES bodies is compiled from compiler.dae's unrolled
+# SX (from_residual) when its residual and Jacobian take at most UNROLLED_INSTRUCTIONS SX
+# instructions together, instead of from the element kernels (benchmarks/notes_rpstep.md, the
+# four-bar's GGL DAE at -O2: residual 0.9 us against 2.1 us per call, Jacobian 2.5 us against
+# 4.3 us, gcc 2.5 s against 3.9 s; chain8's, 14300 instructions: residual 2.1 against 2.5 us,
+# gcc 5.9 s against 1.2 s).
+UNROLLED_BODIES = 4
+UNROLLED_INSTRUCTIONS = 12_000
 
 
 def name(form: str, kind: str) -> str:
@@ -248,6 +257,22 @@ def element_sum(ir: ModelIR, ix: Indices, t, constants: list) -> ElementSum:
 
 
 INTEGRATOR_IN = ["t", "x", "z", "p", "u"]  # casadi's DAE inputs (ca.dyn_in())
+
+
+def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
+    """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF: the
+    unrolled SX one where the model is small (UNROLLED_BODIES, UNROLLED_INSTRUCTIONS), else
+    the element sum (oracle)."""
+    sx = build_functions(ir).functions if len(ir.bodies) <= UNROLLED_BODIES else None
+    out = {}
+    for form in FORMULATIONS:
+        for kind in KINDS:
+            unrolled = None if sx is None else from_residual(dae.residual(sx, form, kind))
+            if unrolled is None or sum(unrolled[f].n_instructions()
+                                       for f in ("daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
+                unrolled = None
+            out[name(form, kind)] = unrolled or oracle(ir, form, kind)
+    return out
 
 
 def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:
