@@ -19,7 +19,7 @@ from casmech.compiler import dae
 from casmech.compiler.functions import SystemFunctions
 from casmech.runtime.memo import kept
 
-KEPT_INTEGRATORS = 8  # per system
+KEPT_INTEGRATORS = 4  # per system (each holds IDAS's memory and its Newton matrix)
 
 
 def problem(functions: SystemFunctions, name: str, kind: str) -> dict | ca.Function:
@@ -34,8 +34,8 @@ def problem(functions: SystemFunctions, name: str, kind: str) -> dict | ca.Funct
 def integrator(functions: SystemFunctions, name: str, kind: str, times, options: dict,
                keep: bool = True) -> ca.Function:
     """IDAS on the DAE from tau = 0 over `times` (relative to the start) with `options`: the
-    one kept for the same grid and options, else a new one (kept unless keep is False: an
-    event's trial points, each over its own grid)."""
+    one kept for the same grid and options, else a new one (kept unless keep is False: a
+    restart within a run, an event's trial points)."""
     grid = tuple(float(t) for t in times)
 
     def build() -> ca.Function:

@@ -22,7 +22,9 @@ casadi.Function call, never Python per row.
 
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
-the same equations, so IDACalcIC is never needed.
+the same equations, so IDACalcIC is never needed. Those are options of the integrator, so
+integrators are kept per start (runtime.dae_integrators), and so are the mask and the
+consistent state (_Model): a run repeated from the same state creates and solves neither.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
 its flat poses) both DAEs are singular and IDAS fails; the run then starts over from t0 on the
@@ -32,24 +34,8 @@ per output interval set by step doubling (metadata augmented_from = t0, dae_fail
 start of the chunk that failed, rk4_steps, rk4_rejected, rk4_stalled_at). A failure of that
 one is reported with the output interval, the time and the joints.
 
-That fallback was IDAS on the same ODE until 2026-11-22: A02 N = 40 did not finish in 45
-minutes (the ODE's Jacobian, dense in the accelerations' rows, cost 0.61 s by AD with 1134
-states, 147 of them in the first simulated second), and whether A02 N = 2 stayed on its branch
-at the flat poses depended on roundoff in IDAS's Newton iteration (an exact Jacobian assembled
-from the iteration's structure, equal to AD's to 3e-10, took r-omega onto the other branch).
-The projected steps, on the same machine (benchmarks/RESULTS.md, medians of 3): N = 40 over 20
-s in 82 s (r-p) and 110 s (r-omega), B0 within 5.4e-7 and 1.3e-7 m of the exact solution; N = 2
-over 10 s in 2.1 and 2.3 s, 7.9e-8 and 4.3e-8 m (IDAS: 5.4e-7 and 6.7e-7 m). Also measured on
-A02 and not adopted: a regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as
-extra algebraic unknowns (it lost 5e-7 J per flat pose at eps = 1e-8 max(diag M)^-1 and N = 40
-took 698 s for a 3e-5 m error); sparse LU (csparse) in IDAS, 5x slower per step on N = 20 and
-failing at the poses; GMRES on the ODE, 3-4x slower; explicit adaptive Runge-Kutta without
-projections (scipy DOP853), 4.9 million right-hand sides at rtol 1e-12 on N = 2 against 21000
-at 1e-10 (where an order-8 method needs ~2x: stiff or not smooth at the poses). Also measured
-for per-step speed: one integrator per relative output grid reused by every restart, the
-initial derivative passed by integrating y = x - tau x_dot0 instead of init_xdot:
-benchmarks/run.py medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 (IDAS took other
-steps as the weights rtol |y| + atol changed along a chunk).
+Measurements behind these choices (the fallback's history, the rejected alternatives):
+benchmarks/notes_rpstep.md, section "Moved from runtime/dynamics.py".
 """
 
 from __future__ import annotations
@@ -193,10 +179,13 @@ class _Stepper:
         self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
         self.on_ode, self.switched_at, self.dae_reason = False, None, ""
         self.idas_calls, self.idas_steps = 0, 0
+        self.t_start = None  # the run's t0: integrators from there are kept (_dae)
 
-    def start(self, intervals: int, progress: bool) -> None:
-        """The first chunk of a run over `intervals` output intervals: all of them for the
-        index-2 DAE unless it failed before or a progress callback wants rows as they come."""
+    def start(self, t0: float, intervals: int, progress: bool) -> None:
+        """The first chunk of a run from t0 over `intervals` output intervals: all of them for
+        the index-2 DAE unless it failed before or a progress callback wants rows as they
+        come."""
+        self.t_start = t0
         whole = (self.stabilization == "ggl" and not self.on_ode and not progress
                  and self.limit is None)
         self.chunk = max(intervals, 1) if whole else CHUNK
@@ -249,7 +238,9 @@ class _Stepper:
         (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
         started by IDACalcIC was slower (its line search often failed, measured on the
         benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia. `first`: the
-        output interval the first step is sized by (default the first of `times`)."""
+        output interval the first step is sized by (default the first of `times`). Only an
+        integrator from the run's start is kept (a repeated run starts there; a restart
+        within the run from there on is not repeated but by the same run again)."""
         model = self.model
         s, s_phi, v_dot, lam = model.start(t0, q, v, mask)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
@@ -267,7 +258,8 @@ class _Stepper:
                                             first or times[0] - t0)
             p.append(s_phi)
         integrator = dae_integrators.integrator(model.functions, model.name, kind, times - t0,
-                                                self.options | options, keep=first is None)
+                                                self.options | options,
+                                                keep=first is None and t0 == self.t_start)
         z0 = np.zeros(n_z)  # GGL's mu is 0 along the exact motion
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         self.idas_calls += 1
@@ -404,7 +396,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                 drift_tolerance(atol), step)
     times = output_times(t0, t_end, step)
     k, projections = 0, 0
-    stepper.start(len(times) - 1, progress is not None or events.has_stop(watch))
+    stepper.start(t0, len(times) - 1, progress is not None or events.has_stop(watch))
     try:
         v_dot, lam = model.accelerations(times[0], q, v, mask)
         first = rows.rows(times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
