@@ -16,8 +16,8 @@ What is compiled (write_build):
     grid;
   - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (codegen.residuals: one
     kernel per joint, body and force element, the Jacobian from the kernels' own SX
-    Jacobians), in a library of its own with the daeF and jacF casadi's IDAS interface loads
-    from it.
+    Jacobians; for a small model compiler.dae's unrolled SX: residuals.oracles), in a library
+    of its own with the daeF and jacF casadi's IDAS interface loads from it.
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). Measured (benchmarks/RESULTS_codegen.md): IDAS's residual 3.3-4x and
 Jacobian 4-8x faster than the interpreted SX from 2 to 128 bodies; YAML -> loaded library in

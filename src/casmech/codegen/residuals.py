@@ -1,7 +1,8 @@
 """The DAE residuals of compiler.dae (both formulations, both stabilizations) as sums of
 elements (codegen.elements): one per joint, one per body, one per force element, whose kernels
 are codegen.residual_kernels. The code does not grow with the model (only index tables do), and
-the Jacobian comes from the kernels' own SX Jacobians. Each residual is compiled as the DAE
+the Jacobian comes from the kernels' own SX Jacobians (a small model's DAE is compiled from
+compiler.dae's unrolled SX instead: oracles). Each residual is compiled as the DAE
 casadi's IDAS interface integrates together with `daeF` and `jacF`, the residual and its
 Jacobian blocks, which that interface takes from the DAE's library instead of building them
 (so each DAE gets a library of its own: codegen.generate). Equal to compiler.dae's residuals
@@ -32,10 +33,9 @@ from casmech.compiler.ir import GROUND_INDEX, ModelIR
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 # A DAE of a model of at most UNROLLED_BODIES bodies is compiled from compiler.dae's unrolled
 # SX (from_residual) when its residual and Jacobian take at most UNROLLED_INSTRUCTIONS SX
-# instructions together, instead of from the element kernels (benchmarks/notes_rpstep.md, the
-# four-bar's GGL DAE at -O2: residual 0.9 us against 2.1 us per call, Jacobian 2.5 us against
-# 4.3 us, gcc 2.5 s against 3.9 s; chain8's, 14300 instructions: residual 2.1 against 2.5 us,
-# gcc 5.9 s against 1.2 s).
+# instructions together, instead of from the element kernels: the four-bar's GGL residual
+# runs 2.3x faster per call and builds sooner; chain8's (14300 instructions) gains little and
+# builds 5x slower (benchmarks/notes_rpstep.md).
 UNROLLED_BODIES = 4
 UNROLLED_INSTRUCTIONS = 12_000
 
@@ -267,11 +267,11 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     out = {}
     for form in FORMULATIONS:
         for kind in KINDS:
-            unrolled = None if sx is None else from_residual(dae.residual(sx, form, kind))
-            if unrolled is None or sum(unrolled[f].n_instructions()
-                                       for f in ("daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
-                unrolled = None
-            out[name(form, kind)] = unrolled or oracle(ir, form, kind)
+            chosen = None if sx is None else from_residual(dae.residual(sx, form, kind))
+            if chosen is not None and sum(chosen[f].n_instructions() for f in (
+                    "daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
+                chosen = None
+            out[name(form, kind)] = chosen or oracle(ir, form, kind)
     return out
 
 
