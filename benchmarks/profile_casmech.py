@@ -41,8 +41,9 @@ TIMERS = ("t_wall_total", "t_wall_daeF", "t_wall_jacF")
 
 
 class IntegratorSpy:
-    """Wraps casadi.integrator as the DAE runtime (runtime.dae_integrators) sees it: records every integrator it
-    makes (with record_time on), the time spent making them, and their options."""
+    """Wraps casadi.integrator as the DAE runtime (runtime.dae_integrators) sees it: records
+    every integrator it makes (with record_time on), the time spent making them, and their
+    options."""
 
     def __init__(self, module, extra: dict | None = None):
         self.module, self.original = module, module.ca.integrator

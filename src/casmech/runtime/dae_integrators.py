@@ -6,8 +6,10 @@ IDAS's Jacobian and analyse its sparsity: 9 ms on the four-bar, more than a quar
 run (a compiled DAE brings its Jacobian: 0.5 ms). IDAS takes the start's derivative
 (init_xdot), its first step (step0) and the algebraic tolerances (abstolv) as options, which
 depend on the initial state, so an integrator is kept per DAE, relative output grid and
-option values: a run from the same state over the same grid (an analysis repeated, a sweep
-over the grid's end, a benchmark) reuses it, and its results are those of a new one.
+option values: a run from the same state over the same grid (an analysis repeated, a
+benchmark's runs) reuses it, and its results are those of a new one. Whatever depends on the
+state cannot be an input instead (benchmarks/notes_rpstep.md: integrating x - tau x_dot0 lost
+accuracy, IDAS's own first step failed at rtol 1e-10).
 """
 
 from __future__ import annotations
