@@ -88,14 +88,11 @@ def test_no_two_packages_import_each_other():
     assert cycles == []
 
 
-# being split by its owner (issue 15's "no module over 500 lines"); remove when it is
-OVER_500 = {"runtime/dynamics.py"}
-
-
 def test_no_module_is_over_500_lines():
+    """Issue 15: modules stay small enough to hold one job."""
     sizes = {str(path.relative_to(SRC)): len(path.read_text().splitlines())
              for path in SRC.rglob("*.py")}
-    assert {path: n for path, n in sizes.items() if n > 500 and path not in OVER_500} == {}
+    assert {path: n for path, n in sizes.items() if n > 500} == {}
 
 
 def test_the_build_cache_digests_every_package_the_generated_code_depends_on():

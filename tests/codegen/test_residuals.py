@@ -123,3 +123,17 @@ def test_elements_per_joint_and_body():
     t, p = ca.MX.sym("t"), ca.MX.sym("p", ix.n_p)
     groups = residuals.element_sum(ir, ix, t, ix.constants(p)).groups
     assert [g.count for g in groups] == [1, 3, 4]
+
+
+def test_small_models_compile_the_unrolled_dae():
+    """oracles: a model of at most UNROLLED_BODIES bodies whose unrolled residual and Jacobian
+    stay within UNROLLED_INSTRUCTIONS gets compiler.dae's SX residual itself (an SXFunction,
+    with AD's jacF); a larger one the element sum (an MX graph over the kernels)."""
+    from .test_mapped import chain_text
+
+    for bodies, unrolled in ((2, True), (residuals.UNROLLED_BODIES + 1, False)):
+        ir = lower(casmech.loads(chain_text(bodies)))
+        for name, functions in residuals.oracles(ir).items():
+            assert functions["daeF"].is_a("SXFunction") == unrolled, (bodies, name)
+            size = sum(functions[f].n_instructions() for f in ("daeF", "jacF"))
+            assert not unrolled or size <= residuals.UNROLLED_INSTRUCTIONS

@@ -16,8 +16,8 @@ What is compiled (write_build):
     grid;
   - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (codegen.residuals: one
     kernel per joint, body and force element, the Jacobian from the kernels' own SX
-    Jacobians), in a library of its own with the daeF and jacF casadi's IDAS interface loads
-    from it.
+    Jacobians; for a small model compiler.dae's unrolled SX: residuals.oracles), in a library
+    of its own with the daeF and jacF casadi's IDAS interface loads from it.
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). Measured (benchmarks/RESULTS_codegen.md): IDAS's residual 3.3-4x and
 Jacobian 4-8x faster than the interpreted SX from 2 to 128 bodies; YAML -> loaded library in
@@ -55,7 +55,6 @@ from casmech.codegen.load import load as load_build
 from casmech.codegen.load import mode_of
 from casmech.codegen.mapped import mapped_functions
 from casmech.compiler import prescribed
-from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
@@ -69,8 +68,7 @@ __all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled
 
 def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF."""
-    return {residuals.name(form, kind): residuals.oracle(ir, form, kind)
-            for form in FORMULATIONS for kind in residuals.KINDS}
+    return residuals.oracles(ir)
 
 
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")

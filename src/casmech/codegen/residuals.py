@@ -1,7 +1,8 @@
 """The DAE residuals of compiler.dae (both formulations, both stabilizations) as sums of
 elements (codegen.elements): one per joint, one per body, one per force element, whose kernels
 are codegen.residual_kernels. The code does not grow with the model (only index tables do), and
-the Jacobian comes from the kernels' own SX Jacobians. Each residual is compiled as the DAE
+the Jacobian comes from the kernels' own SX Jacobians (a small model's DAE is compiled from
+compiler.dae's unrolled SX instead: oracles). Each residual is compiled as the DAE
 casadi's IDAS interface integrates together with `daeF` and `jacF`, the residual and its
 Jacobian blocks, which that interface takes from the DAE's library instead of building them
 (so each DAE gets a library of its own: codegen.generate). Equal to compiler.dae's residuals
@@ -23,12 +24,21 @@ from casmech.codegen import residual_kernels as kernels
 from casmech.codegen import rows as row_kernels
 from casmech.codegen.elements import DROPPED, ElementSum, Group
 from casmech.codegen.kernels import Layout, by_joint_keys, taylor_or_constant
+from casmech.compiler import dae
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.functions import build_functions
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
 from casmech.geometry import euler
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
+# A DAE of a model of at most UNROLLED_BODIES bodies is compiled from compiler.dae's unrolled
+# SX (from_residual) when its residual and Jacobian take at most UNROLLED_INSTRUCTIONS SX
+# instructions together, instead of from the element kernels: the four-bar's GGL residual
+# runs 2.3x faster per call and builds sooner; chain8's (14300 instructions) gains little and
+# builds 5x slower (benchmarks/notes_rpstep.md).
+UNROLLED_BODIES = 4
+UNROLLED_INSTRUCTIONS = 12_000
 
 
 def name(form: str, kind: str) -> str:
@@ -248,6 +258,22 @@ def element_sum(ir: ModelIR, ix: Indices, t, constants: list) -> ElementSum:
 
 
 INTEGRATOR_IN = ["t", "x", "z", "p", "u"]  # casadi's DAE inputs (ca.dyn_in())
+
+
+def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
+    """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF: the
+    unrolled SX one where the model is small (UNROLLED_BODIES, UNROLLED_INSTRUCTIONS), else
+    the element sum (oracle)."""
+    sx = build_functions(ir).functions if len(ir.bodies) <= UNROLLED_BODIES else None
+    out = {}
+    for form in FORMULATIONS:
+        for kind in KINDS:
+            chosen = None if sx is None else from_residual(dae.residual(sx, form, kind))
+            if chosen is not None and sum(chosen[f].n_instructions() for f in (
+                    "daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
+                chosen = None
+            out[name(form, kind)] = chosen or oracle(ir, form, kind)
+    return out
 
 
 def oracle(ir: ModelIR, form: str, kind: str) -> dict[str, ca.Function]:

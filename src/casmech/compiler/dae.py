@@ -85,14 +85,25 @@ def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Functi
                     sym.sym("p", n_p + data_size(functions)))
     functions = with_data(functions, p[n_p:])
     t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
-    w, s = p[1:1 + m], p[1 + m:1 + 2 * m]
+    w, s = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m)
     jacobian = _scaled(functions[form.jacobian](t, q), s)
     alg = ca.vertcat(
         functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
         jacobian @ v_dot - functions[form.gamma](t, q, v) * s - w * lam)
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
     return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
-                       ["t", "x", "z", "p"], ["ode", "alg"])
+                       ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
+
+
+def _options(sym) -> dict:
+    """An SX residual with its common subexpressions merged (four-bar GGL: 2651 -> 2275
+    instructions, its Jacobian by AD 6286 -> 4643; benchmarks/notes_rpstep.md)."""
+    return {"cse": True} if sym is ca.SX else {}
+
+
+def _column(p, start: int, stop: int):
+    """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
+    return ca.reshape(p[start:stop], stop - start, 1)
 
 
 def _scaled(matrix, s):
@@ -122,7 +133,7 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
                     sym.sym("p", n_p + data_size(functions)))
     functions = with_data(functions, p[n_p:])
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
-    w, s, s_phi = p[1:1 + m], p[1 + m:1 + 2 * m], p[1 + 2 * m:n_p]
+    w, s, s_phi = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m), _column(p, 1 + 2 * m, n_p)
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
     jacobian = _scaled(functions[form.jacobian](t, q), s)
     nu = functions[form.nu](t, q) * s
@@ -136,7 +147,7 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
         (1 - w) * (jacobian @ v - nu) - w * lam)
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
     return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot + phi_q.T @ mu, v_dot), alg],
-                       ["t", "x", "z", "p"], ["ode", "alg"])
+                       ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
 
 
 def problem(function: ca.Function) -> dict | ca.Function:

@@ -22,7 +22,9 @@ casadi.Function call, never Python per row.
 
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
-the same equations, so IDACalcIC is never needed.
+the same equations, so IDACalcIC is never needed. Those are options of the integrator, so
+integrators are kept per start (runtime.dae_integrators), and so are the mask and the
+consistent state (_Model): a run repeated from the same state creates and solves neither.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
 its flat poses) both DAEs are singular and IDAS fails; the run then starts over from t0 on the
@@ -32,29 +34,12 @@ per output interval set by step doubling (metadata augmented_from = t0, dae_fail
 start of the chunk that failed, rk4_steps, rk4_rejected, rk4_stalled_at). A failure of that
 one is reported with the output interval, the time and the joints.
 
-That fallback was IDAS on the same ODE until 2026-11-22: A02 N = 40 did not finish in 45
-minutes (the ODE's Jacobian, dense in the accelerations' rows, cost 0.61 s by AD with 1134
-states, 147 of them in the first simulated second), and whether A02 N = 2 stayed on its branch
-at the flat poses depended on roundoff in IDAS's Newton iteration (an exact Jacobian assembled
-from the iteration's structure, equal to AD's to 3e-10, took r-omega onto the other branch).
-The projected steps, on the same machine (benchmarks/RESULTS.md, medians of 3): N = 40 over 20
-s in 82 s (r-p) and 110 s (r-omega), B0 within 5.4e-7 and 1.3e-7 m of the exact solution; N = 2
-over 10 s in 2.1 and 2.3 s, 7.9e-8 and 4.3e-8 m (IDAS: 5.4e-7 and 6.7e-7 m). Also measured on
-A02 and not adopted: a regularised DAE, [M P^T; P -eps I] with augmented-Lagrangian iterates as
-extra algebraic unknowns (it lost 5e-7 J per flat pose at eps = 1e-8 max(diag M)^-1 and N = 40
-took 698 s for a 3e-5 m error); sparse LU (csparse) in IDAS, 5x slower per step on N = 20 and
-failing at the poses; GMRES on the ODE, 3-4x slower; explicit adaptive Runge-Kutta without
-projections (scipy DOP853), 4.9 million right-hand sides at rtol 1e-12 on N = 2 against 21000
-at 1e-10 (where an order-8 method needs ~2x: stiff or not smooth at the poses). Also measured
-for per-step speed: one integrator per relative output grid reused by every restart, the
-initial derivative passed by integrating y = x - tau x_dot0 instead of init_xdot:
-benchmarks/run.py medians of 3 gave chain8 20.6 s vs 13.5 s at rtol 1e-10 (IDAS took other
-steps as the weights rtol |y| + atol changed along a chunk).
+Measurements behind these choices (the fallback's history, the rejected alternatives):
+benchmarks/notes_rpstep.md, section "Moved from runtime/dynamics.py".
 """
 
 from __future__ import annotations
 
-import casadi as ca
 import numpy as np
 
 from casmech import interrupts
@@ -64,8 +49,10 @@ from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.geometry import euler
-from casmech.runtime import assembly, contact_steps, events, projected_rk4
+from casmech.runtime import assembly, contact_steps, dae_integrators, events, projected_rk4
+from casmech.runtime.dae_rows import Rows, mapped, minimum_norm  # noqa: F401 (joint_dynamics)
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
 
 CHUNK = 256  # output intervals per IDAS call: after a failure, with projections, with progress
@@ -76,6 +63,7 @@ DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_toler
 # at rtol 1e-12, atol 1e-14, Bricard failed at t = 0), and MU_TOL for its mu.
 Z_TOL = 1e-8
 MU_TOL = 1.0
+KEPT_STARTS = 8  # masks and consistent starts kept per system (_Model)
 GGL_FAILURES = 3  # chunks the index-2 DAE may fail on before the index-1 one does the rest
 
 
@@ -102,21 +90,33 @@ def penalty(functions: SystemFunctions, form: Formulation, q) -> float:
     return augmented.PENALTY * np.max(np.diag(functions.matrix(form.mass, q)), initial=1.0)
 
 
-def mapped(function: ca.Function, *columns) -> list[np.ndarray]:
-    """`function` evaluated at every column of its arguments (one mapped call); every output
-    as a 2-D array with one column per evaluation."""
-    count = max(np.shape(c)[1] for c in columns)
-    outputs = function.map(count)(*columns)
-    outputs = outputs if isinstance(outputs, (tuple, list)) else [outputs]
-    return [np.array(out).reshape(-1, count) for out in outputs]
+def _frozen(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The arrays, read-only (kept ones are shared by later runs)."""
+    for a in arrays:
+        a.setflags(write=False)
+    return arrays
 
 
 class _Model:
-    """The numeric side of one formulation: row scales, consistent (v_dot, lam), q_dot."""
+    """The numeric side of one formulation: row scales, consistent (v_dot, lam), q_dot. The
+    mask and the consistent state at a start are kept with the system (KEPT_STARTS each), so
+    a run from the same state computes neither again."""
 
     def __init__(self, functions: SystemFunctions, name: str):
         self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
         self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
+        self.kept = functions.derived.setdefault("dae_starts", {})
+
+    def start(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(s, s_phi, v_dot, lam / s) at (t, q, v): scales, then consistent."""
+        key = ("start", self.name, float(t), *(np.asarray(a, float).tobytes()
+                                                for a in (q, v, mask)))
+
+        def build():
+            s, s_phi = self.scales(t, q)
+            return _frozen(s, s_phi, *self.consistent(t, q, v, mask, s))
+
+        return kept(self.kept, key, build, KEPT_STARTS)
 
     def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
         """(s, s_phi): the DAEs' row scales (compiler.dae), inverse row norms of P and of
@@ -129,9 +129,13 @@ class _Model:
         """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
         redundant (the same joint rows in both formulations; r-p rows are ordered as Phi's,
         r-omega's are Phi's joint rows)."""
-        keep = np.zeros(self.functions.n_rows)
-        keep[list(structure(self.functions, t, q).independent)] = 1.0
-        return 1.0 - keep[:self.m]
+        def build():
+            keep = np.zeros(self.functions.n_rows)
+            keep[list(structure(self.functions, t, q).independent)] = 1.0
+            return _frozen(1.0 - keep[:self.m])[0]
+
+        key = ("mask", self.name, float(t), np.asarray(q, float).tobytes())
+        return kept(self.kept, key, build, KEPT_STARTS)
 
     def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
@@ -149,79 +153,13 @@ class _Model:
 
     def accelerations(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, true multipliers) at (t, q, v)."""
-        s = self.scales(t, q)[0]
-        v_dot, lam = self.consistent(t, q, v, mask, s)
+        s, _, v_dot, lam = self.start(t, q, v, mask)
         return v_dot, s * lam
 
     def q_dot(self, q, v) -> np.ndarray:
         if self.form.q_dot is None:
             return np.asarray(v, float)
         return self.functions.vector(self.form.q_dot, q, v)
-
-
-def minimum_norm(jacobian, lam, keep: list[int]):
-    """The multipliers of least norm giving the same generalized force jacobian^T lam, for a
-    jacobian whose rows outside `keep` depend on the rows in it: lam* = C (C^T C)^-1 y, with
-    jacobian = C jacobian_S (C = jacobian jacobian_S^T (jacobian_S jacobian_S^T)^-1) and
-    jacobian_S^T y = jacobian^T lam (lam* lies in the range of C, the least-norm solutions'
-    space; non-singular solves only, so it maps over rows)."""
-    kept = jacobian[keep, :]
-    gram = kept @ kept.T
-    y = ca.solve(gram, kept @ (jacobian.T @ lam), "qr")
-    c = ca.solve(gram, kept @ jacobian.T, "qr").T
-    return c @ ca.solve(c.T @ c, y, "qr")
-
-
-class _Rows:
-    """The output rows of a block of states, each by one mapped casadi.Function call: the
-    drift check (index-1 DAE only) and the results' r-p rates and multipliers."""
-
-    def __init__(self, model: _Model, mask: np.ndarray, tolerance: float, step: float):
-        self.model, self.tolerance, self.step = model, tolerance, step
-        f, form = model.functions, model.form
-        t, q, v = ca.MX.sym("t"), ca.MX.sym("q", model.n_q), ca.MX.sym("v", model.n_v)
-        v_dot, multipliers = ca.MX.sym("v_dot", model.n_v), ca.MX.sym("lam", model.m)
-        lam, n = multipliers, f.n_joint_rows
-        if mask.any():  # joint rows: [Phi_r, Pi_bar], the same in both formulations
-            keep = [k for k in range(n) if not mask[k]]
-            lam = ca.vertcat(minimum_norm(f["romega_jacobian"](t, q), lam[:n], keep), lam[n:])
-        if form.q_dot is None:
-            q_dot, q_ddot = v, v_dot
-        else:  # normalization rows carry no reaction
-            (q_dot, q_ddot), lam = f["romega_to_rp"](q, v, v_dot), ca.vertcat(
-                lam, ca.MX(f.n_rows - model.m, 1))
-        self.rates = ca.Function("result_rows", [t, q, v, v_dot, multipliers],
-                                 [q_dot, q_ddot, lam])
-        phi = f["phi"](t, q)
-        velocity = f[form.jacobian](t, q) @ v - f[form.nu](t, q)
-        self.drift = ca.Function("drift", [t, q, v], [
-            ca.mmax(ca.fabs(phi)) if phi.numel() else ca.MX(1, 1),
-            ca.mmax(ca.fabs(velocity)) if velocity.numel() else ca.MX(1, 1)])
-
-    def split(self, states: np.ndarray):
-        n_q, n_v = self.model.n_q, self.model.n_v
-        return states[:n_q], states[n_q:n_q + n_v], states[n_q + n_v:]
-
-    def first_drifted(self, times: np.ndarray, states: np.ndarray) -> int | None:
-        """The first column where |Phi| passed the tolerance, or the velocity-constraint
-        residual passed what would move the positions by as much before the next output."""
-        q, v, _ = self.split(states)
-        phi, velocity = mapped(self.drift, times[None, :], q, v)
-        drifted = (phi[0] > self.tolerance) | (velocity[0] * self.step > self.tolerance)
-        return int(np.argmax(drifted)) if drifted.any() else None
-
-    def rows(self, times: np.ndarray, states: np.ndarray, multipliers: np.ndarray):
-        """(q, q_dot, q_ddot, lam), one row per time: r-p velocities and accelerations, every
-        multiplier (the least-norm ones where rows were dropped; 0 for r-omega's
-        normalization rows)."""
-        q, v, v_dot = self.split(states)
-        q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers)
-        return q.T, q_dot.T, q_ddot.T, lam.T
-
-    def record(self, result: Result, times: np.ndarray, states: np.ndarray,
-               multipliers: np.ndarray) -> None:
-        """Appends the rows."""
-        result.extend(times, *self.rows(times, states, multipliers))
 
 
 class _Stepper:
@@ -236,17 +174,19 @@ class _Stepper:
     def __init__(self, model: _Model, rtol: float, atol: float, stabilization: str = "ggl"):
         self.model, self.stabilization = model, stabilization
         self.chunk, self.limit = CHUNK, None  # intervals in the next chunk, most in any
-        self.problems: dict[str, dict] = {}  # stabilization -> casadi DAE dict, when first used
         self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
         self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
                         "disable_internal_warnings": True}
         self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
         self.on_ode, self.switched_at, self.dae_reason = False, None, ""
         self.idas_calls, self.idas_steps = 0, 0
+        self.t_start = None  # the run's t0: integrators from there are kept (_dae)
 
-    def start(self, intervals: int, progress: bool) -> None:
-        """The first chunk of a run over `intervals` output intervals: all of them for the
-        index-2 DAE unless it failed before or a progress callback wants rows as they come."""
+    def start(self, t0: float, intervals: int, progress: bool) -> None:
+        """The first chunk of a run from t0 over `intervals` output intervals: all of them for
+        the index-2 DAE unless it failed before or a progress callback wants rows as they
+        come."""
+        self.t_start = t0
         whole = (self.stabilization == "ggl" and not self.on_ode and not progress
                  and self.limit is None)
         self.chunk = max(intervals, 1) if whole else CHUNK
@@ -294,21 +234,16 @@ class _Stepper:
         states, lam = self._dae(t0, np.array([t, t1]), q, v, mask, kind, t1 - t0)
         return states[:, :1], lam[:, :1]
 
-    def _problem(self, kind: str) -> dict:
-        if kind not in self.problems:
-            functions = self.model.functions.functions
-            self.problems[kind] = dae.problem(dae.residual(functions, self.model.name, kind))
-        return self.problems[kind]
-
     def _dae(self, t0, times, q, v, mask, kind: str, first: float | None = None):
         """IDAS on the DAE from the exact consistent state, handed over with its derivative
         (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
         started by IDACalcIC was slower (its line search often failed, measured on the
         benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia. `first`: the
-        output interval the first step is sized by (default the first of `times`)."""
+        output interval the first step is sized by (default the first of `times`). Only an
+        integrator from the run's start is kept (a repeated run starts there; a restart
+        within the run from there on is not repeated but by the same run again)."""
         model = self.model
-        s, s_phi = model.scales(t0, q)
-        v_dot, lam = model.consistent(t0, q, v, mask, s)
+        s, s_phi, v_dot, lam = model.start(t0, q, v, mask)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
         n_z = model.n_v + dae.multipliers(model.functions.functions, model.name, kind)
         rtol, atol = self.options["reltol"], self.options["abstol"]
@@ -323,8 +258,9 @@ class _Stepper:
             options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol,
                                             first or times[0] - t0)
             p.append(s_phi)
-        integrator = ca.integrator("dynamics", "idas", self._problem(kind), 0.0,
-                                   list(times - t0), self.options | options)
+        integrator = dae_integrators.integrator(model.functions, model.name, kind, times - t0,
+                                                self.options | options,
+                                                keep=first is None and t0 == self.t_start)
         z0 = np.zeros(n_z)  # GGL's mu is 0 along the exact motion
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         self.idas_calls += 1
@@ -457,10 +393,11 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
     q, q_dot = assembly.initial_state(functions, t0)
     v = velocities(functions, model.name, q, q_dot)
     mask = model.mask(t0, q)
-    rows = _Rows(model, mask, drift_tolerance(atol), step)
+    rows = Rows(functions, model.name, (model.n_q, model.n_v, model.m), mask,
+                drift_tolerance(atol), step)
     times = output_times(t0, t_end, step)
     k, projections = 0, 0
-    stepper.start(len(times) - 1, progress is not None or events.has_stop(watch))
+    stepper.start(t0, len(times) - 1, progress is not None or events.has_stop(watch))
     try:
         v_dot, lam = model.accelerations(times[0], q, v, mask)
         first = rows.rows(times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
@@ -509,7 +446,7 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
     return result
 
 
-def _watched(watch: events.Watch, rows: _Rows, stepper: _Stepper, kind: str, mask, t0: float,
+def _watched(watch: events.Watch, rows: Rows, stepper: _Stepper, kind: str, mask, t0: float,
              start, times, states, lams) -> None:
     """Records a block through the events' watch: an event's trial points integrate from the
     row before them by what made the block."""

@@ -1,0 +1,58 @@
+"""The IDAS integrators of the r-p / r-omega DAEs (compiler.dae), kept with the system
+(SystemFunctions.derived) for later runs.
+
+Creating an integrator over an interpreted (SX) DAE makes CasADi differentiate the residual for
+IDAS's Jacobian and analyse its sparsity: 9 ms on the four-bar, more than a quarter of a 1 s
+run (a compiled DAE brings its Jacobian: 0.5 ms). IDAS takes the start's derivative
+(init_xdot), its first step (step0) and the algebraic tolerances (abstolv) as options, which
+depend on the initial state, so an integrator is kept per DAE, relative output grid and
+option values: a run from the same state over the same grid (an analysis repeated, a
+benchmark's runs) reuses it, and its results are those of a new one. Whatever depends on the
+state cannot be an input instead (benchmarks/notes_rpstep.md: integrating x - tau x_dot0 lost
+accuracy, IDAS's own first step failed at rtol 1e-10).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler import dae
+from casmech.compiler.functions import SystemFunctions
+from casmech.runtime.memo import kept
+
+KEPT_INTEGRATORS = 4  # per system (each holds IDAS's memory and its Newton matrix)
+
+
+def problem(functions: SystemFunctions, name: str, kind: str) -> dict | ca.Function:
+    """The DAE of formulation `name` and stabilization `kind` as casadi.integrator takes it,
+    built once per system."""
+    store = functions.derived.setdefault("dae_problems", {})
+    if (name, kind) not in store:
+        store[name, kind] = dae.problem(dae.residual(functions.functions, name, kind))
+    return store[name, kind]
+
+
+def integrator(functions: SystemFunctions, name: str, kind: str, times, options: dict,
+               keep: bool = True) -> ca.Function:
+    """IDAS on the DAE from tau = 0 over `times` (relative to the start) with `options`: the
+    one kept for the same grid and options, else a new one (kept unless keep is False: a
+    restart within a run, an event's trial points)."""
+    grid = tuple(float(t) for t in times)
+
+    def build() -> ca.Function:
+        return ca.integrator("dynamics", "idas", problem(functions, name, kind), 0.0,
+                             list(grid), options)
+
+    if not keep:
+        return build()
+    store = functions.derived.setdefault("dae_integrators", {})
+    return kept(store, (name, kind, grid, _frozen(options)), build, KEPT_INTEGRATORS)
+
+
+def _frozen(options: dict) -> tuple:
+    """The options as a hashable key (vectors as tuples of floats)."""
+    def value(v):
+        return tuple(float(x) for x in v) if isinstance(v, (list, tuple, np.ndarray)) else v
+
+    return tuple(sorted((key, value(v)) for key, v in options.items()))

@@ -1,0 +1,111 @@
+"""The output rows of the r-p / r-omega DAE runs (runtime.dynamics) for a block of states, each
+by one mapped casadi.Function call: the drift check (index-1 DAE only) and the results' r-p
+rates and multipliers. The Functions and their maps are kept with the system
+(SystemFunctions.derived), so a later run builds none of them."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.functions import SystemFunctions
+from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.memo import kept
+from casmech.runtime.results import Result
+
+KEPT_FUNCTIONS = 8  # row Functions per system (one per formulation and mask)
+KEPT_MAPS = 16  # mapped Functions per system (one per Function and block length)
+
+
+def mapped(function: ca.Function, *columns, store: dict | None = None) -> list[np.ndarray]:
+    """`function` evaluated at every column of its arguments (one mapped call); every output
+    as a 2-D array with one column per evaluation. `store` keeps the mapped Function per
+    (function, count) (with the function, so that its id is not reused while kept)."""
+    count = max(np.shape(c)[1] for c in columns)
+    if store is None:
+        call = BufferedCall(function.map(count))
+    else:
+        call = kept(store, (id(function), count),
+                    lambda: (function, BufferedCall(function.map(count))), KEPT_MAPS)[1]
+    return [np.asarray(out).reshape(-1, count) for out in call(*columns)]
+
+
+def minimum_norm(jacobian, lam, keep: list[int]):
+    """The multipliers of least norm giving the same generalized force jacobian^T lam, for a
+    jacobian whose rows outside `keep` depend on the rows in it: lam* = C (C^T C)^-1 y, with
+    jacobian = C jacobian_S (C = jacobian jacobian_S^T (jacobian_S jacobian_S^T)^-1) and
+    jacobian_S^T y = jacobian^T lam (lam* lies in the range of C, the least-norm solutions'
+    space; non-singular solves only, so it maps over rows)."""
+    kept_rows = jacobian[keep, :]
+    gram = kept_rows @ kept_rows.T
+    y = ca.solve(gram, kept_rows @ (jacobian.T @ lam), "qr")
+    c = ca.solve(gram, kept_rows @ jacobian.T, "qr").T
+    return c @ ca.solve(c.T @ c, y, "qr")
+
+
+def _functions(f: SystemFunctions, name: str, sizes: tuple[int, int, int],
+               mask: np.ndarray) -> tuple[ca.Function, ca.Function]:
+    """(result_rows, drift) of formulation `name` with the rows `mask` drops."""
+    form = FORMULATIONS[name]
+    n_q, n_v, m = sizes
+    t, q, v = ca.MX.sym("t"), ca.MX.sym("q", n_q), ca.MX.sym("v", n_v)
+    v_dot, multipliers = ca.MX.sym("v_dot", n_v), ca.MX.sym("lam", m)
+    lam, n = multipliers, f.n_joint_rows
+    if mask.any():  # joint rows: [Phi_r, Pi_bar], the same in both formulations
+        keep = [k for k in range(n) if not mask[k]]
+        lam = ca.vertcat(minimum_norm(f["romega_jacobian"](t, q), lam[:n], keep), lam[n:])
+    if form.q_dot is None:
+        q_dot, q_ddot = v, v_dot
+    else:  # normalization rows carry no reaction
+        (q_dot, q_ddot), lam = f["romega_to_rp"](q, v, v_dot), ca.vertcat(
+            lam, ca.MX(f.n_rows - m, 1))
+    rates = ca.Function(f"result_rows_{name}", [t, q, v, v_dot, multipliers],
+                        [q_dot, q_ddot, lam])
+    phi = f["phi"](t, q)
+    velocity = f[form.jacobian](t, q) @ v - f[form.nu](t, q)
+    drift = ca.Function(f"drift_{name}", [t, q, v], [
+        ca.mmax(ca.fabs(phi)) if phi.numel() else ca.MX(1, 1),
+        ca.mmax(ca.fabs(velocity)) if velocity.numel() else ca.MX(1, 1)])
+    return rates, drift
+
+
+class Rows:
+    """The rows of one run: formulation `name` with sizes (n_q, n_v, rows of P), the rows
+    `mask` drops, the drift tolerance and the output step."""
+
+    def __init__(self, functions: SystemFunctions, name: str, sizes: tuple[int, int, int],
+                 mask: np.ndarray, tolerance: float, step: float):
+        self.n_q, self.n_v = sizes[:2]
+        self.tolerance, self.step = tolerance, step
+        store = functions.derived.setdefault("dae_rows", {})
+        self.maps = functions.derived.setdefault("dae_row_maps", {})
+        key = (name, np.asarray(mask, bool).tobytes())
+        self.rates, self.drift = kept(store, key, lambda: _functions(functions, name, sizes,
+                                                                      mask), KEPT_FUNCTIONS)
+
+    def split(self, states: np.ndarray):
+        n_q, n_v = self.n_q, self.n_v
+        return states[:n_q], states[n_q:n_q + n_v], states[n_q + n_v:]
+
+    def first_drifted(self, times: np.ndarray, states: np.ndarray) -> int | None:
+        """The first column where |Phi| passed the tolerance, or the velocity-constraint
+        residual passed what would move the positions by as much before the next output."""
+        q, v, _ = self.split(states)
+        phi, velocity = mapped(self.drift, times[None, :], q, v, store=self.maps)
+        drifted = (phi[0] > self.tolerance) | (velocity[0] * self.step > self.tolerance)
+        return int(np.argmax(drifted)) if drifted.any() else None
+
+    def rows(self, times: np.ndarray, states: np.ndarray, multipliers: np.ndarray):
+        """(q, q_dot, q_ddot, lam), one row per time: r-p velocities and accelerations, every
+        multiplier (the least-norm ones where rows were dropped; 0 for r-omega's
+        normalization rows)."""
+        q, v, v_dot = self.split(states)
+        q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers,
+                                    store=self.maps)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+    def record(self, result: Result, times: np.ndarray, states: np.ndarray,
+               multipliers: np.ndarray) -> None:
+        """Appends the rows."""
+        result.extend(times, *self.rows(times, states, multipliers))
