@@ -269,3 +269,24 @@ def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
     monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
     assert joint_dynamics._toolchain(system).flags == ("-O2", "-march=native")
+
+
+def test_a_second_run_from_the_same_start_reuses_its_initial_state(monkeypatch):
+    """The assembled initial state, its joint coordinates, multipliers and quaternion signs are
+    a function of the bundle and t0: a second run computes none of them (no assembly call)
+    and gives the first run's rows bit for bit; another t0 assembles again."""
+    from casmech.runtime import assembly
+
+    functions = casmech.compile(casmech.load(MODELS / "bricard.yaml"))
+    first = casmech.analyze(functions, formulation="joint", t_end=0.1)
+    assembled = []
+    original = assembly.initial_state
+    monkeypatch.setattr(assembly, "initial_state",
+                        lambda f, t0: assembled.append(t0) or original(f, t0))
+    again = casmech.analyze(functions, formulation="joint", t_end=0.1)
+    assert assembled == []
+    for name in ("q", "q_dot", "q_ddot", "lam"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(first, name))
+    from casmech.runtime.joint_dynamics import run_joint_dynamics
+    run_joint_dynamics(functions, 0.2, 0.05, 1e-8, 1e-10, t0=0.1)
+    assert assembled == [0.1]

@@ -39,7 +39,11 @@ def load(directory: Path, ir: ModelIR) -> SystemFunctions:
 
 
 def mode_of(functions: SystemFunctions) -> str:
-    """'compiled' when the bundle's functions are loaded from a library, else 'interpreted'."""
-    kinds = {f.class_name() for f in functions.functions.values()}
-    bound = functions.data is not None  # externals with the model data bound (parametric)
-    return "compiled" if kinds == {"External"} or bound else "interpreted"
+    """'compiled' when the bundle's functions are loaded from a library, else 'interpreted'
+    (found once per bundle)."""
+    if "mode" not in functions.derived:
+        kinds = {f.class_name() for f in functions.functions.values()}
+        bound = functions.data is not None  # externals with the model data bound (parametric)
+        functions.derived["mode"] = ("compiled" if kinds == {"External"} or bound
+                                     else "interpreted")
+    return functions.derived["mode"]

@@ -56,6 +56,7 @@ QUICK_BUILD_INSTRUCTIONS = 30000
 
 KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
 KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
+KEPT_STARTS = 8  # initial states kept per bundle (by t0)
 
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
@@ -275,22 +276,35 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     return "bdf" if radius * step > STIFF else "adams"
 
 
+def _start(functions: SystemFunctions, system: JointSystem, t0: float):
+    """(x, z, loops, signs) of a run from t0: the file's state assembled (runtime.assembly),
+    mapped to joint coordinates, the loops' consistent multipliers and the quaternion signs;
+    a function of the bundle and t0 alone, so kept with the bundle (arrays read-only)."""
+    def build():
+        q0, q_dot0 = assembly.initial_state(functions, t0)
+        x = initial_state(system, q0, q_dot0)
+        loops = _Loops(system, t0, x)
+        z = loops.z(t0, x)
+        signs = quaternion_signs(system, t0, x, z, q0, functions.n_bodies)
+        for array in (x, z, signs, loops.mask):
+            array.setflags(write=False)
+        return x, z, loops, signs
+
+    return kept(functions.derived.setdefault("joint_starts", {}), float(t0), build,
+                KEPT_STARTS)
+
+
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
                        method: str = "auto", extra_events=()) -> Result:
     """The model's `events:` and `extra_events` (runtime.events.Event) are located and
     recorded in Result.events; without any, no event work is done."""
     system = joint_system(functions)
-    nb = functions.n_bodies
-    q0, q_dot0 = assembly.initial_state(functions, t0)
-    x = initial_state(system, q0, q_dot0)
-    loops = _Loops(system, t0, x)
-    z = loops.z(t0, x)
+    x, z, loops, signs = _start(functions, system, t0)
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors))
-    recorder = _Recorder(functions, system, quaternion_signs(system, t0, x, z, q0, nb),
-                         loops.mask)
+    recorder = _Recorder(functions, system, signs, loops.mask)
     integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
     integrate.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
     times = output_times(t0, t_end, step)
@@ -354,7 +368,9 @@ class _Recorder:
 
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
         self.functions, self.system, self.signs = functions, system, signs
-        self.least_norm = _least_norm(functions, system, mask) if mask.any() else None
+        self.least_norm = kept(
+            functions.derived.setdefault("joint_least_norm", {}), mask.tobytes(),
+            lambda: _least_norm(functions, system, mask), KEPT_STARTS) if mask.any() else None
         self.maps = functions.derived.setdefault("joint_motion_maps", {})
         self.watch = None  # runtime.events.Watch of the run, when it has events
 
