@@ -290,3 +290,23 @@ def test_a_second_run_from_the_same_start_reuses_its_initial_state(monkeypatch):
     from casmech.runtime.joint_dynamics import run_joint_dynamics
     run_joint_dynamics(functions, 0.2, 0.05, 1e-8, 1e-10, t0=0.1)
     assert assembled == [0.1]
+
+
+def test_a_repeated_loop_run_creates_no_integrator_and_repeats_exactly(monkeypatch):
+    """The loops' IDAS instance depends on the run's start (its first step, initial
+    derivative and tolerances): a run from the same start over the same grid reuses it, with
+    the same rows bit for bit; another grid creates one."""
+    from casmech.runtime import joint_dynamics
+
+    functions = casmech.compile(casmech.load(ROOT / "benchmarks" / "models" / "four_bar.yaml"))
+    first = casmech.analyze(functions, formulation="joint", t_end=0.3)
+    created = []
+    original = joint_dynamics.ca.integrator
+    monkeypatch.setattr(joint_dynamics.ca, "integrator",
+                        lambda *a, **k: created.append(a[1]) or original(*a, **k))
+    again = casmech.analyze(functions, formulation="joint", t_end=0.3)
+    assert created == []
+    for name in ("q", "q_dot", "q_ddot", "lam"):
+        np.testing.assert_array_equal(getattr(again, name), getattr(first, name))
+    casmech.analyze(functions, formulation="joint", t_end=0.2)
+    assert created == ["idas"]

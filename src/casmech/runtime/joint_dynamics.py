@@ -220,10 +220,7 @@ class _Integrator:
                 "joint", "cvodes", problem, t0, list(times[:1]), self.options)
             out = integrator(x0=x)
         else:
-            first = times[-1] - t0 if trial else None
-            integrator = ca.integrator("joint", "idas", system.problem, t0, list(times),
-                                       self.options | self._dae_options(t0, times, x, z,
-                                                                        first))
+            integrator = self._idas(t0, times, x, z, times[-1] - t0 if trial else None)
             out = integrator(x0=x, z0=z, p=self.loops.mask)
         self.steps += int(integrator.stats().get("nsteps", 0))
         states = np.array(out["xf"].full())
@@ -240,6 +237,18 @@ class _Integrator:
                tuple(sorted(self.options.items())))
         return kept(self.system_cache.setdefault("cvodes", {}), key, lambda: (
             problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
+            KEPT_INTEGRATORS)[1]
+
+    def _idas(self, t0: float, times, x, z, first: float | None) -> ca.Function:
+        """IDAS over the grid from (t0, x, z); its options depend on that state (_dae_options),
+        so it is kept for a later run from the same state over the same grid (a repeated
+        run: its start is kept too, runtime.joint_dynamics._start)."""
+        key = ("idas", float(t0), tuple(float(t) for t in times), np.asarray(x).tobytes(),
+               np.asarray(z).tobytes(), first, tuple(sorted(self.options.items())))
+        problem = self.system.problem
+        return kept(self.system_cache.setdefault("idas", {}), key, lambda: (
+            problem, ca.integrator("joint", "idas", problem, t0, list(times), self.options
+                                   | self._dae_options(t0, times, x, z, first))),
             KEPT_INTEGRATORS)[1]
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
