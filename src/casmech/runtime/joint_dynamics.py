@@ -54,7 +54,7 @@ COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
 QUICK_BUILD_INSTRUCTIONS = 30000
 
-KEPT_INTEGRATORS = 8  # CVODES instances kept per system (by grid and options)
+KEPT_INTEGRATORS = 8  # CVODES (by grid, options) and IDAS (also by start) instances kept
 KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
 KEPT_STARTS = 8  # initial states kept per bundle (by t0)
 
