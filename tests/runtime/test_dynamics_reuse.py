@@ -7,20 +7,12 @@ import pytest
 
 import casmech
 from casmech.runtime import dae_integrators
-
-PENDULUM = """
-casmech: 1
-name: pendulum
-bodies:
-  - {name: bar, mass: 1.0, inertia: [0.1, 0.1, 0.01], position: [0, 1, 0]}
-joints:
-  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0]}
-analysis: {type: dynamics, t_end: 0.5, output_step: 0.01}
-"""
+from tests.runtime.test_dynamics import PENDULUM
 
 
 def counted(monkeypatch) -> list:
-    """Every casadi.integrator the DAE runtime creates from now on (its plugin name)."""
+    """Every casadi.integrator created from now on (its plugin name): the DAE runtime's and
+    runtime.joint_dynamics' (both call the casadi module's)."""
     made, original = [], dae_integrators.ca.integrator
 
     def integrator(*args, **kwargs):
@@ -35,9 +27,9 @@ def counted(monkeypatch) -> list:
 def test_repeated_runs_create_no_integrator(monkeypatch, formulation):
     functions = casmech.compile(casmech.loads(PENDULUM))
     made = counted(monkeypatch)
-    first = casmech.analyze(functions, formulation=formulation)
+    first = casmech.analyze(functions, formulation=formulation, t_end=0.5)
     assert made == ["idas"]  # the index-2 DAE over the whole grid: one IDAS call
-    again = [casmech.analyze(functions, formulation=formulation) for _ in range(3)]
+    again = [casmech.analyze(functions, formulation=formulation, t_end=0.5) for _ in range(3)]
     assert made == ["idas"]
     for result in again:  # the same integrator from the same inputs: the same numbers
         np.testing.assert_array_equal(result.q, first.q)
@@ -46,9 +38,10 @@ def test_repeated_runs_create_no_integrator(monkeypatch, formulation):
 
 def test_a_kept_integrator_gives_the_results_of_a_new_one():
     functions = casmech.compile(casmech.loads(PENDULUM))
-    casmech.analyze(functions, formulation="rp")
-    kept = casmech.analyze(functions, formulation="rp")
-    fresh = casmech.analyze(casmech.compile(casmech.loads(PENDULUM)), formulation="rp")
+    casmech.analyze(functions, formulation="rp", t_end=0.5)
+    kept = casmech.analyze(functions, formulation="rp", t_end=0.5)
+    fresh = casmech.analyze(casmech.compile(casmech.loads(PENDULUM)), formulation="rp",
+                             t_end=0.5)
     np.testing.assert_array_equal(kept.q, fresh.q)  # deterministic: equal to the last bit
     np.testing.assert_array_equal(kept.q_ddot, fresh.q_ddot)
 

@@ -296,14 +296,11 @@ def test_a_repeated_loop_run_creates_no_integrator_and_repeats_exactly(monkeypat
     """The loops' IDAS instance depends on the run's start (its first step, initial
     derivative and tolerances): a run from the same start over the same grid reuses it, with
     the same rows bit for bit; another grid creates one."""
-    from casmech.runtime import joint_dynamics
+    from tests.runtime.test_dynamics_reuse import counted
 
     functions = casmech.compile(casmech.load(ROOT / "benchmarks" / "models" / "four_bar.yaml"))
     first = casmech.analyze(functions, formulation="joint", t_end=0.3)
-    created = []
-    original = joint_dynamics.ca.integrator
-    monkeypatch.setattr(joint_dynamics.ca, "integrator",
-                        lambda *a, **k: created.append(a[1]) or original(*a, **k))
+    created = counted(monkeypatch)
     again = casmech.analyze(functions, formulation="joint", t_end=0.3)
     assert created == []
     for name in ("q", "q_dot", "q_ddot", "lam"):
