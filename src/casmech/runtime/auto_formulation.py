@@ -58,9 +58,7 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, stabilization:
             raise
         why = f"the joint DAE failed ({str(error).splitlines()[0]})"
     else:
-        poses = singular_poses(functions, result, loops=not tree.is_tree)
-        if poses is not None:
-            result.metadata["singular_poses"] = poses
+        poses = _examined(functions, tree, result).metadata.get("singular_poses")
         if not (fallback and poses):
             return result
         why = f"joint coordinates went {describe(poses[0])}"
@@ -70,6 +68,7 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, stabilization:
 
 
 def _examined(functions: SystemFunctions, tree: Tree, result: Result) -> Result:
+    """`result` with the singular poses of a run with loops in its metadata."""
     poses = singular_poses(functions, result, loops=not tree.is_tree)
     if poses is not None:
         result.metadata["singular_poses"] = poses
