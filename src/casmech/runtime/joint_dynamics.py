@@ -254,10 +254,8 @@ class _Integrator:
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
-        test per group (algebraic_tolerances: with Z_TOL on every multiplier the four-bar failed
-        at t0 at rtol 1e-12, and Andrews' squeezer at t0 at any rtol; it now runs to 0.018 s
-        and fails there, where the r-p DAE passes). `first`: the interval the first step is
-        sized by (default the first output interval)."""
+        test per group (algebraic_tolerances; docs/decisions.md). `first`: the interval the
+        first step is sized by (default the first output interval)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
