@@ -1,7 +1,9 @@
 """results.csv numbers: shortest round-trip text, read back bit for bit."""
 
 import numpy as np
+import pytest
 
+from casmech.output import csv
 from casmech.output.csv import read_csv, write_csv
 
 SPECIAL = [0.0, -0.0, 0.03, 0.1 + 0.2, 1.0, 1 / 3, 1e16, 2.0**53 + 2, -1.5e-300, 5e-324,
@@ -50,3 +52,19 @@ def test_nan_is_written_and_read_as_nan(tmp_path):
     _, read = read_csv(write_csv(tmp_path / "results.csv", ["t", "x"], values))
     np.testing.assert_array_equal(np.isnan(read), np.isnan(values))
     np.testing.assert_array_equal(read[~np.isnan(read)], values[~np.isnan(values)])
+
+
+@pytest.mark.parametrize("chunk", [csv.CHUNK_VALUES, 7])  # one block of rows; many
+def test_rows_with_and_without_special_values_keep_their_order(tmp_path, monkeypatch, chunk):
+    """Rows holding NaN or an infinity are written apart from the others (orjson writes
+    neither): every row stays in its place, in any memory layout and block size, for one
+    column and none."""
+    monkeypatch.setattr(csv, "CHUNK_VALUES", chunk)
+    values = np.asfortranarray(table())
+    values[[5, 50], 3] = [np.nan, -np.inf]
+    _, read = read_csv(write_csv(tmp_path / "results.csv", ["t", "a", "b", "c"], values))
+    np.testing.assert_array_equal(bits(read), bits(values))
+    _, single = read_csv(write_csv(tmp_path / "one.csv", ["t"], values[:, :1]))
+    np.testing.assert_array_equal(bits(single), bits(values[:, :1]))
+    path = write_csv(tmp_path / "none.csv", [], np.zeros((3, 0)))
+    assert path.read_text() == "\n\n\n\n"  # the header and three empty rows

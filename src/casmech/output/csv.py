@@ -5,20 +5,43 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import orjson
 
 from casmech.output.atomic import atomic
+
+CHUNK_VALUES = 1 << 18  # numbers formatted per block of rows (a few MB of text at a time)
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
     """Write atomically (a reader never sees a half-written file). Numbers in the shortest form
-    that reads back to the same binary64 value (Python's `repr`: 0.03, not
-    0.029999999999999999)."""
+    that reads back to the same binary64 value (0.03, not 0.029999999999999999)."""
     path = Path(path)
-    with atomic(path, newline="") as handle:
-        handle.write(",".join(names) + "\n")
-        handle.writelines(",".join(map(repr, row)) + "\n"
-                          for row in np.atleast_2d(values).tolist())
+    values = np.atleast_2d(np.asarray(values, dtype=np.float64))
+    with atomic(path, "wb") as handle:
+        handle.write((",".join(names) + "\n").encode())
+        rows = max(1, CHUNK_VALUES // max(1, values.shape[1]))
+        for start in range(0, values.shape[0], rows):
+            handle.write(rows_text(values[start:start + rows]))
     return path
+
+
+def rows_text(values: np.ndarray) -> bytes:
+    """The rows as comma-separated lines. orjson writes the shortest round-trip digits of a
+    float (Ryu) ~30x faster than Python's repr, but writes NaN and infinities as null: rows
+    holding one are written by repr (nan, inf, -inf)."""
+    if values.shape[0] == 0:
+        return b""
+    if values.shape[1] == 0:
+        return b"\n" * values.shape[0]
+    finite = np.isfinite(values)
+    text = orjson.dumps(np.ascontiguousarray(np.where(finite, values, 0.0)),
+                        option=orjson.OPT_SERIALIZE_NUMPY)[2:-2]
+    if finite.all():
+        return text.replace(b"],[", b"\n") + b"\n"
+    lines = text.split(b"],[")
+    for k in np.flatnonzero(~finite.all(axis=1)):
+        lines[k] = ",".join(map(repr, values[k].tolist())).encode()
+    return b"\n".join(lines) + b"\n"
 
 
 def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:
