@@ -10,7 +10,7 @@ import pytest
 
 import casmech
 from casmech.errors import AnalysisError
-from casmech.runtime import assembly
+from casmech.runtime import assembly, kinematics
 from casmech.runtime.kinematics import output_times, state_at
 from tests.conftest import MODELS, count_calls
 
@@ -115,6 +115,18 @@ def test_function_calls_do_not_grow_with_rows(monkeypatch, mode):
         counts[len(result)] = len(calls)
     assert set(counts) == {101, 1001}
     assert counts[101] == counts[1001] > 0
+
+
+def test_long_grids_in_blocks_give_the_same_rows(monkeypatch):
+    """A grid longer than MAX_SPAN is called in blocks, each starting from the row before it:
+    the same rows, bit for bit, as one call over the grid."""
+    functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"), "interpreted")
+    whole = casmech.analyze(functions, "kinematics", t_end=3.0, output_step=0.01)
+    monkeypatch.setattr(kinematics, "MAX_SPAN", 64)
+    blocks = casmech.analyze(functions, "kinematics", t_end=3.0, output_step=0.01)
+    assert len(whole) == len(blocks) == 301 and whole.metadata["per_row_rows"] == 0
+    for name in ("times", "q", "q_dot", "q_ddot", "lam"):
+        np.testing.assert_array_equal(getattr(blocks, name), getattr(whole, name), err_msg=name)
 
 
 @pytest.mark.parametrize("driver, failed_at, cause", [

@@ -61,22 +61,28 @@ def state_at(functions: SystemFunctions, t: float, q_guess: np.ndarray, q_dot_gu
 
 KEPT_GRIDS = 16  # mapped grids (one per padded block length) kept with the functions
 MIN_SPAN = 16  # rows of the first mapped call after a row the per-row code had to do
+# Most rows per mapped call: casadi builds a grid's nested mapaccum in time growing faster than
+# its length (four-bar: 0.06 s for 2048 rows, 8.5 s for 10^5), so long grids are called in
+# blocks of this many rows through one kept Function (calls cost ~1e-4 of a block's rows).
+MAX_SPAN = 2048
 
 
 def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
                           analysis: str = "kinematics", t0: float = 0.0,
                           progress=None) -> Result:
-    """Rows by the mapped prescribed step over the whole grid; after a row it rejects (done by
-    state_at) it resumes over max(MIN_SPAN, twice the rows that last passed), doubling while
-    they pass, so the mapped rows computed and discarded are at most twice those kept plus
-    MIN_SPAN per rejected row. metadata per_row_rows: how many rows state_at did."""
+    """Rows by the mapped prescribed step over the grid in blocks of up to MAX_SPAN rows; after a
+    row it rejects (done by state_at) it resumes over max(MIN_SPAN, twice the rows that last
+    passed), doubling while they pass, so the mapped rows computed and discarded are at most
+    twice those kept plus MIN_SPAN per rejected row. metadata per_row_rows: how many rows
+    state_at did."""
     result = Result(analysis, on_row=progress)
     result.metadata["per_row_rows"] = 0
     q = assembly.assemble_positions(functions, t0)
     require_fully_driven(functions, t0, q, analysis)
     times = output_times(t0, t_end, step)
     mapped = _MappedGrid(functions)
-    state, previous, done, span = np.concatenate([q, 0 * q, 0 * q]), t0, 0, len(times)
+    state, previous, done = np.concatenate([q, 0 * q, 0 * q]), t0, 0
+    span = min(len(times), MAX_SPAN)
     try:
         while done < len(times):
             block = times[done:done + span]
@@ -85,7 +91,7 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
             done += passed
             if passed:
                 state, previous = states[passed - 1], block[passed - 1]
-            span = 2 * span if passed == len(block) else max(MIN_SPAN, 2 * passed)
+            span = min(MAX_SPAN, 2 * span if passed == len(block) else max(MIN_SPAN, 2 * passed))
             if passed < len(block):  # the per-row code does (or reports) the rejected row
                 state, lam_row = _per_row(functions, state, previous, times[done])
                 result.append(times[done], *np.split(state, 3), lam_row)
