@@ -2,8 +2,9 @@
 
 import casadi as ca
 import numpy as np
+import pytest
 
-from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.buffers import BufferedCall, NamedCall
 
 RNG = np.random.default_rng(5)
 
@@ -28,3 +29,23 @@ def test_sparse_output_falls_back_to_the_ordinary_call():
     a = RNG.normal(size=3)
     (got,) = call(a)
     np.testing.assert_allclose(got, np.diag(a), rtol=0, atol=0)  # exact: no arithmetic
+
+
+def test_integrator_by_names_equals_the_ordinary_call():
+    """An integrator over a grid, inputs by name (the others zero): the ordinary call's
+    outputs, and its failure as the same RuntimeError with the solver's flag."""
+    x, z, p = ca.SX.sym("x", 2), ca.SX.sym("z"), ca.SX.sym("p")
+    problem = {"x": x, "z": z, "p": p, "ode": ca.vertcat(x[1], -p * x[0] + z), "alg": z - 0.5}
+    grid = list(np.linspace(0.1, 2.0, 20))
+    integrator = ca.integrator("i", "idas", problem, 0.0, grid, {"abstol": 1e-10})
+    call = NamedCall(integrator)
+    got = call(x0=np.array([1.0, 0.0]), z0=np.array([0.5]), p=np.array([4.0]))
+    want = integrator(x0=[1.0, 0.0], z0=0.5, p=4.0)
+    for name in ("xf", "zf"):
+        # the same integration of the same numbers
+        np.testing.assert_allclose(got[name], np.array(want[name]), rtol=0, atol=0)
+    blowing_up = ca.integrator("b", "cvodes", {"x": x, "ode": x * x}, 0.0, [1.0, 2.0],
+                               {"max_num_steps": 50})
+    with pytest.raises(RuntimeError, match="CV_TOO_MUCH_WORK"):
+        NamedCall(blowing_up)(x0=np.ones(2))
+    assert call.stats()["nsteps"] > 0  # the integrator's own statistics of that call
