@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.buffers import BufferedCall, ColumnCall
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
@@ -27,23 +27,35 @@ class Table:
 def count_calls(monkeypatch) -> list[str]:
     """The names of every casadi.Function evaluation made from Python from now on (symbolic,
     numeric, or buffered: runtime.buffers), with a mapped function's row count left out
-    (mapN_f -> map_f), for tests that no analysis calls CasADi once per row."""
-    calls = []
-    call, buffered = ca.Function.call, BufferedCall.__call__
+    (mapN_f -> map_f) and a ColumnCall's blocks counted as one call of its function, for
+    tests that no analysis calls CasADi once per row."""
+    calls, inside = [], []
+    call, buffered, columns = ca.Function.call, BufferedCall.__call__, ColumnCall.__call__
 
     def name(function) -> str:
         return re.sub(r"^map\d+_", "map_", function.name())
 
     def counting(self, *args, **kwargs):
-        calls.append(name(self))
+        if not inside:
+            calls.append(name(self))
         return call(self, *args, **kwargs)
 
     def counting_buffered(self, *args):
-        calls.append(name(self.function))
+        if not inside:
+            calls.append(name(self.function))
         return buffered(self, *args)
+
+    def counting_columns(self, *args):
+        calls.append(f"map_{self.function.name()}")
+        inside.append(self)
+        try:
+            return columns(self, *args)
+        finally:
+            inside.pop()
 
     monkeypatch.setattr(ca.Function, "call", counting)  # Function.__call__ goes through call
     monkeypatch.setattr(BufferedCall, "__call__", counting_buffered)
+    monkeypatch.setattr(ColumnCall, "__call__", counting_columns)
     return calls
 
 

@@ -4,7 +4,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.runtime.buffers import BufferedCall, NamedCall
+from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
 
 RNG = np.random.default_rng(5)
 
@@ -49,3 +49,20 @@ def test_integrator_by_names_equals_the_ordinary_call():
     with pytest.raises(RuntimeError, match="CV_TOO_MUCH_WORK"):
         NamedCall(blowing_up)(x0=np.ones(2))
     assert call.stats()["nsteps"] > 0  # the integrator's own statistics of that call
+
+
+@pytest.mark.parametrize("count", [0, 1, 3, 256, 257, 600])
+def test_columns_in_blocks_equal_one_mapped_call(monkeypatch, count):
+    """Evaluations in blocks (short ones padded) give the one map's outputs, for inputs with
+    one or two columns per evaluation and an input shared by all; with a sparse output too."""
+    x, m, c = ca.SX.sym("x", 2), ca.SX.sym("m", 2, 2), ca.SX.sym("c", 3)
+    f = ca.Function("f", [x, m, c], [ca.vertcat(ca.mtimes(m, x), ca.sum1(c)), ca.diag(x) * c[0]])
+    xs, ms, shared = RNG.normal(size=(2, count)), RNG.normal(size=(2, 2 * count)), RNG.normal(
+        size=3)
+    got = ColumnCall(f)(xs, ms, shared)
+    assert [g.shape for g in got] == [(3, count), (2, 2 * count)]
+    if count:
+        want = f.map(count)(xs, ms, shared)
+        for g, w in zip(got, want, strict=True):
+            # the same operations on the same numbers, one evaluation at a time
+            np.testing.assert_allclose(g, np.array(w), rtol=0, atol=0)

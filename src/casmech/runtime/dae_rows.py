@@ -1,5 +1,5 @@
 """The output rows of the r-p / r-omega DAE runs (runtime.dynamics) for a block of states, each
-by one mapped casadi.Function call: the drift check (index-1 DAE only) and the results' r-p
+by mapped casadi.Function calls: the drift check (index-1 DAE only) and the results' r-p
 rates and multipliers. The Functions and their maps are kept with the system
 (SystemFunctions.derived), so a later run builds none of them."""
 
@@ -10,24 +10,24 @@ import numpy as np
 
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions
-from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
 
 KEPT_FUNCTIONS = 8  # row Functions per system (one per formulation and mask)
-KEPT_MAPS = 16  # mapped Functions per system (one per Function and block length)
+KEPT_MAPS = 16  # column calls per system (one per Function; each keeps its block maps)
 
 
 def mapped(function: ca.Function, *columns, store: dict | None = None) -> list[np.ndarray]:
-    """`function` evaluated at every column of its arguments (one mapped call); every output
-    as a 2-D array with one column per evaluation. `store` keeps the mapped Function per
-    (function, count) (with the function, so that its id is not reused while kept)."""
+    """`function` evaluated at every column of its arguments (mapped calls in blocks:
+    runtime.buffers.ColumnCall); every output as a 2-D array with one column per evaluation.
+    `store` keeps the ColumnCall per function (with the function, so that its id is not
+    reused while kept)."""
     count = max(np.shape(c)[1] for c in columns)
     if store is None:
-        call = BufferedCall(function.map(count))
+        call = ColumnCall(function)
     else:
-        call = kept(store, (id(function), count),
-                    lambda: (function, BufferedCall(function.map(count))), KEPT_MAPS)[1]
+        call = kept(store, id(function), lambda: (function, ColumnCall(function)), KEPT_MAPS)[1]
     return [np.asarray(out).reshape(-1, count) for out in call(*columns)]
 
 

@@ -38,8 +38,7 @@ from casmech.compiler.ir import ForceIR
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.geometry import euler
 from casmech.geometry.states import split
-from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.memo import kept
+from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import BODY_COLUMNS, Result, column_names
 from casmech.runtime.results import table as results_table
 
@@ -49,7 +48,6 @@ ACTIONS = ("stop", "log")
 STOPPED = "stopped by event"  # Result.status of a run a stop event ended
 MAX_ITERATIONS = 100  # Illinois steps per crossing (a few tens at most in practice)
 ULPS = 64  # the narrowest bracket location stops at, in units of eps * |t|
-KEPT_MAPS = 16  # the events' function mapped over a block length
 
 
 @dataclass(frozen=True)
@@ -194,18 +192,16 @@ class Watch:
     def __init__(self, events: Sequence[Event], result: Result, rtol: float = 0.0):
         self.events, self.result, self.rtol = tuple(events), result, rtol
         self.values = stacked([e.function for e in events])
-        self.maps: dict = {}
+        self.values_at = ColumnCall(self.values)
         self.last: np.ndarray | None = None  # the events' values at the last row
         self.probes = 0
         result.events, result.event_states = [], Result("events")
         result.metadata["event_probes"] = 0
 
     def evaluate(self, times, rows: Rows) -> np.ndarray:
-        """The events' values at every row (n_events x k), one mapped call."""
+        """The events' values at every row (n_events x k), by mapped calls in blocks."""
         times = np.asarray(times, float)
-        mapped = kept(self.maps, len(times),
-                      lambda: BufferedCall(self.values.map(len(times))), KEPT_MAPS)
-        (out,) = mapped(times[None, :], *(np.asarray(r).T for r in rows))
+        (out,) = self.values_at(times[None, :], *(np.asarray(r).T for r in rows))
         return out.reshape(len(self.events), len(times))
 
     def start(self, t0: float, rows: Rows) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 from casmech.compiler import contact
 from casmech.compiler.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
-from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.buffers import ColumnCall
 from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
 STATES = ("q", "q_dot", "q_ddot", "lam")
@@ -189,20 +189,20 @@ def row_function(functions: SystemFunctions) -> ca.Function:
 def table(functions: SystemFunctions, result: Result,
           reaction_frames: str | Mapping[str, str] | None = None
           ) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_function (built once per bundle) mapped over the rows, one call
-    writing into NumPy memory (runtime.buffers); then each joint's reaction columns in its
-    frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for every joint
-    (a frame name) or the joints it names (a mapping)."""
+    """Every row at once: row_function (built once per bundle) mapped over the rows in blocks,
+    writing into NumPy memory (runtime.buffers.ColumnCall); then each joint's reaction columns
+    in its frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for
+    every joint (a frame name) or the joints it names (a mapping)."""
     frames = reaction_frames_of.chosen(functions.ir, reaction_frames)
     names = column_names(functions)
     rows = len(result)
     if rows == 0:
         return names, np.zeros((0, len(names)))
     if "results_row" not in functions.derived:
-        functions.derived["results_row"] = row_function(functions)
-    mapped = BufferedCall(functions.derived["results_row"].map(rows))
-    (values,) = mapped(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
-                       result.q_ddot.T, result.lam.T)
+        functions.derived["results_row"] = ColumnCall(row_function(functions))
+    rows_of = functions.derived["results_row"]
+    (values,) = rows_of(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
+                        result.q_ddot.T, result.lam.T)
     values = values.T
     start = 1 + len(BODY_COLUMNS) * functions.n_bodies
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))

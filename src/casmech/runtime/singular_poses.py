@@ -21,32 +21,28 @@ import numpy as np
 
 from casmech.compiler.checks import structure, worst_joints
 from casmech.compiler.functions import SystemFunctions
-from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.memo import kept
+from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
 
 NEAR = 1e-3  # Gram determinant of the unit rows against its value at t0
 MAX_ENTRIES = 20_000_000  # output rows x rows of Phi x coordinates examined at most
-KEPT_MAPS = 8
 
 
-def _jacobians(functions: SystemFunctions, n: int) -> BufferedCall:
-    """Phi_q, dense, at n output rows by one call (kept with the bundle)."""
-    def build() -> BufferedCall:
+def _jacobians(functions: SystemFunctions) -> ColumnCall:
+    """Phi_q, dense, at output rows by mapped calls (kept with the bundle)."""
+    if "singular_pose_jacobian" not in functions.derived:
         phi_q = functions["phi_q"]
         t, q = ca.MX.sym("t"), ca.MX.sym("q", phi_q.size1_in(1))
         dense = ca.Function("phi_q_dense", [t, q], [ca.densify(phi_q(t, q))])
-        return BufferedCall(dense.map(n))
-
-    store = functions.derived.setdefault("singular_pose_maps", {})
-    return kept(store, n, build, KEPT_MAPS)
+        functions.derived["singular_pose_jacobian"] = ColumnCall(dense)
+    return functions.derived["singular_pose_jacobian"]
 
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows) -> np.ndarray:
     """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q)."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
-    flat, = _jacobians(functions, n)(np.asarray(times, float)[None, :], np.asarray(q).T)
+    flat, = _jacobians(functions)(np.asarray(times, float)[None, :], np.asarray(q).T)
     jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
     jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
     _, logdet = np.linalg.slogdet(np.einsum("kij,klj->kil", jacobian, jacobian))
