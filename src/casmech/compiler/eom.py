@@ -13,44 +13,51 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.compiler import bushing, contact, coordinates, limits, motors
+from casmech.compiler import body, bushing, contact, coordinates, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ForceIR, ModelIR, constant
+from casmech.compiler.primitives import Frame
 from casmech.geometry import euler
 
 
 def mass_matrix(ir: ModelIR, x: Coordinates):
     """blkdiag(m_k I_3 ..., 4 G_k^T J_bar_k G_k ...) (7 nb x 7 nb)."""
     blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies]
-    for k, b in enumerate(ir.bodies):
-        g = euler.g_matrix(x.p(k))
-        blocks.append(4 * g.T @ constant(b.inertia) @ g)
+    blocks += [body.mass_block(x.p(k), constant(b.inertia)) for k, b in enumerate(ir.bodies)]
     return ca.diagcat(*blocks) if blocks else ca.SX(0, 0)
 
 
 def quadratic_velocity(ir: ModelIR, x: Coordinates):
     """[0; 8 G_dot^T J_bar G_dot p] for every body (G_dot = G(p_dot))."""
     nb = ir.n_bodies
-    terms = [ca.SX.zeros(3 * nb, 1)]
-    for k, b in enumerate(ir.bodies):
-        g_dot = euler.g_matrix(x.p(k, x.q_dot))
-        terms.append(8 * g_dot.T @ constant(b.inertia) @ g_dot @ x.p(k))
-    return ca.vertcat(*terms)
+    return ca.vertcat(ca.SX.zeros(3 * nb, 1), *[
+        body.quadratic_velocity(x.p(k), x.p(k, x.q_dot), constant(b.inertia))
+        for k, b in enumerate(ir.bodies)])
+
+
+def at(frame: Frame, s_bar):
+    """Global position of the point s_bar (body frame) of a frame."""
+    return frame.r + frame.A @ s_bar
 
 
 def point(x: Coordinates, k: int, s_bar):
     """Global position of a body-fixed point (ground: s_bar is already global)."""
-    f = x.frame(k)
-    return f.r + f.A @ constant(s_bar)
+    return at(x.frame(k), constant(s_bar))
 
 
 def rate(expr, x: Coordinates):
     return ca.jacobian(expr, x.q) @ x.q_dot
 
 
-def tsda_length(force: ForceIR, x: Coordinates):
-    d = point(x, force.body_j, force.points["s_j"]) - point(x, force.body_i, force.points["s_i"])
+def distance(fi: Frame, s_i, fj: Frame, s_j):
+    """|point s_j of frame j - point s_i of frame i|: a tsda's length."""
+    d = at(fj, s_j) - at(fi, s_i)
     return ca.sqrt(d.T @ d)
+
+
+def tsda_length(force: ForceIR, x: Coordinates):
+    return distance(x.frame(force.body_i), constant(force.points["s_i"]),
+                    x.frame(force.body_j), constant(force.points["s_j"]))
 
 
 def relative_angle(ai, aj, u_i, v_i, u_j):
@@ -77,13 +84,21 @@ def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str]
     return tension, 0.5 * k * (value - rest) ** 2
 
 
+def spring(coordinate, q, q_dot, t, k, c, rest, actuator, names: tuple[str, str],
+           states=None) -> tuple:
+    """(generalized force over q, potential) of a spring-damper-actuator acting along
+    `coordinate`(q) (spring_law at its rate along q_dot)."""
+    coordinate_q = ca.jacobian(coordinate, q)
+    tension, potential = spring_law(coordinate, coordinate_q @ q_dot, t, k, c, rest, actuator,
+                                    names, states)
+    return -coordinate_q.T * tension, potential
+
+
 def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tuple[str, str]):
     """(generalized force, potential) of a spring-damper-actuator acting along `coordinate`."""
     states = coordinates.values(force.actuator, x) if force.actuator is not None else None
-    tension, potential = spring_law(coordinate, rate(coordinate, x), x.t,
-                                    force.params["stiffness"], force.params["damping"], rest,
-                                    force.actuator, names, states)
-    return -ca.jacobian(coordinate, x.q).T * tension, potential
+    return spring(coordinate, x.q, x.q_dot, x.t, force.params["stiffness"],
+                  force.params["damping"], rest, force.actuator, names, states)
 
 
 def _tsda(force, x):
@@ -96,24 +111,39 @@ def _rsda(force, x):
                    ("angle", "angle_dot"))
 
 
+def in_global(frame_name: str, rotation, vector):
+    """A force or torque vector given in frame_name ("body": body i's, else global) in the
+    global frame."""
+    return rotation @ vector if frame_name == "body" else vector
+
+
 def _value(force: ForceIR, x: Coordinates):
     """The force/torque vector in the global frame."""
     v = ca.vertcat(*[component.casadi(t=x.t, **coordinates.values(component, x))
                      for component in force.value])
-    return x.frame(force.body_i).A @ v if force.frame == "body" else v
+    return in_global(force.frame, x.frame(force.body_i).A, v)
+
+
+def point_force(frame: Frame, s_bar, q, force):
+    """The generalized force over q of a global force at the point s_bar of a frame."""
+    return ca.jacobian(at(frame, s_bar), q).T @ force
+
+
+def torque(frame: Frame, p, torque_vector):
+    """Q_p of a global torque on the body of frame (Euler parameters p)."""
+    return body.generalized_torque(p, frame.A.T @ torque_vector)
 
 
 def _point_force(force, x):
-    at = point(x, force.body_i, force.points.get("s", [0.0, 0.0, 0.0]))
-    return ca.jacobian(at, x.q).T @ _value(force, x), 0.0
+    s_bar = constant(force.points.get("s", [0.0, 0.0, 0.0]))
+    return point_force(x.frame(force.body_i), s_bar, x.q, _value(force, x)), 0.0
 
 
 def _torque(force, x):
     k = force.body_i
-    n_bar = x.frame(k).A.T @ _value(force, x)
     generalized = ca.SX.zeros(x.q.numel(), 1)
     start = 3 * x.n_bodies + 4 * k
-    generalized[start:start + 4] = 2 * euler.g_matrix(x.p(k)).T @ n_bar
+    generalized[start:start + 4] = torque(x.frame(k), x.p(k), _value(force, x))
     return generalized, 0.0
 
 
@@ -149,30 +179,33 @@ def energy(ir: ModelIR, x: Coordinates, spring_potential):
     """(kinetic, potential): 1/2 m v.v + 1/2 w_bar^T J_bar w_bar; -m g.r + springs."""
     kinetic, potential = 0.0, spring_potential
     for k, b in enumerate(ir.bodies):
-        v = x.r(k, x.q_dot)
-        w_bar = 2 * euler.g_matrix(x.p(k)) @ x.p(k, x.q_dot)
-        kinetic += 0.5 * b.mass * (v.T @ v) + 0.5 * w_bar.T @ constant(b.inertia) @ w_bar
-        potential -= b.mass * (constant(ir.gravity).T @ x.r(k))
+        kinetic += body.kinetic_energy(b.mass, constant(b.inertia), x.r(k, x.q_dot), x.p(k),
+                                       x.p(k, x.q_dot))
+        potential += body.gravity_potential(b.mass, constant(ir.gravity), x.r(k))
     return kinetic, potential
 
 
-def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
-    """Force and torque each joint exerts ON body_j: global, torque about body_i's joint point.
+def reaction(phi, lam, r_j, p_j, at) -> tuple:
+    """(force, torque) that the rows phi (with multipliers lam) exert on body j (CM r_j, Euler
+    parameters p_j), global, the torque about the point `at`.
 
     From the lecture: force -Phi_r_j^T lam, body-frame torque about the CM -Pi_bar_j^T lam,
-    moved to the joint point P: T_P = A_j n_bar + (r_j - r_P) x F.
+    moved to the point P: T_P = A_j n_bar + (r_j - r_P) x F.
     """
+    force = -ca.jacobian(phi, r_j).T @ lam
+    n_bar = -0.5 * euler.g_matrix(p_j) @ ca.jacobian(phi, p_j).T @ lam
+    return force, euler.rotation(p_j) @ n_bar + ca.cross(r_j - at, force)
+
+
+def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
+    """Force and torque each joint exerts ON body_j: global, torque about body_i's joint point
+    (reaction of its rows, plus its motor's and its stop's)."""
     forces, torques = [], []
     for joint in ir.joints:
         rows = list(joint.rows)
-        phi = phi_with_ground[rows]
-        lam_j = lam[rows]
         b = joint.body_j
-        p = x.p(b)
-        force = -ca.jacobian(phi, x.r(b)).T @ lam_j
-        n_bar = -0.5 * euler.g_matrix(p) @ ca.jacobian(phi, p).T @ lam_j
         at = point(x, joint.body_i, joint.point_i)
-        torque = euler.rotation(p) @ n_bar + ca.cross(x.r(b) - at, force)
+        force, torque = reaction(phi_with_ground[rows], lam[rows], x.r(b), x.p(b), at)
         for motor in (m for m in ir.motors if m.name == joint.name):  # its actuation
             motor_force, motor_torque = motors.reaction(motor, x, at)
             force, torque = force + motor_force, torque + motor_torque
