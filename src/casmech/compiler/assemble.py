@@ -81,7 +81,7 @@ def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
         vectors = {k: constant(prim.vectors[k]) for k in keys}
         rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
                             driver_value(prim, x.t, scale)))
-    rows += [x.p(k).T @ x.p(k) - 1 for k in range(ir.n_bodies)]
+    rows += [body.normalization(x.p(k)) for k in range(ir.n_bodies)]
     return ca.vertcat(*rows) if rows else ca.SX(0, 1)
 
 

@@ -14,6 +14,11 @@ import casadi as ca
 from casmech.geometry import euler
 
 
+def normalization(p):
+    """p^T p - 1: the Euler parameters' normalization constraint."""
+    return p.T @ p - 1
+
+
 def mass_block(p, inertia):
     """4 G^T J_bar G: the rotational block of the r-p mass matrix."""
     g = euler.g_matrix(p)

@@ -114,9 +114,14 @@ def scaled(matrix, s):
 # The residual's terms, written once for the whole system (here) and for one element
 # (codegen.residual_kernels). P_s, phi_s, ...: the rows already scaled by their s (or s_phi).
 
+def constraint_forces(p_s, lam):
+    """P_s^T lam."""
+    return p_s.T @ lam
+
+
 def dynamics(mass, v_dot, p_s, lam, forces):
     """M v_dot + P_s^T lam - F."""
-    return mass @ v_dot + p_s.T @ lam - forces
+    return mass @ v_dot + constraint_forces(p_s, lam) - forces
 
 
 def acceleration_rows(p_s, v_dot, gamma_s, w, lam):
@@ -136,7 +141,7 @@ def velocity_rows(p_s, v, nu_s, w, lam):
 
 def ggl_q_dot(q_dot, phi_q_s, mu):
     """q_dot + Phi_q_s^T mu (ggl)."""
-    return q_dot + phi_q_s.T @ mu
+    return q_dot + constraint_forces(phi_q_s, mu)
 
 
 def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
