@@ -10,6 +10,7 @@ global position x(q) contributes x_q^T F; a spring with length l(q) and tension 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import casadi as ca
 
@@ -49,15 +50,10 @@ def rate(expr, x: Coordinates):
     return ca.jacobian(expr, x.q) @ x.q_dot
 
 
-def distance(fi: Frame, s_i, fj: Frame, s_j):
+def distance(fi: Frame, fj: Frame, s_i, s_j):
     """|point s_j of frame j - point s_i of frame i|: a tsda's length."""
     d = at(fj, s_j) - at(fi, s_i)
     return ca.sqrt(d.T @ d)
-
-
-def tsda_length(force: ForceIR, x: Coordinates):
-    return distance(x.frame(force.body_i), constant(force.points["s_i"]),
-                    x.frame(force.body_j), constant(force.points["s_j"]))
 
 
 def relative_angle(ai, aj, u_i, v_i, u_j):
@@ -67,10 +63,43 @@ def relative_angle(ai, aj, u_i, v_i, u_j):
     return ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
 
 
-def rsda_angle(force: ForceIR, x: Coordinates):
-    """Rotation of body j about the joint axis (relative_angle)."""
-    return relative_angle(x.frame(force.body_i).A, x.frame(force.body_j).A,
-                          *(constant(force.axes[k]) for k in ("u_i", "v_i", "u_j")))
+@dataclass(frozen=True)
+class SpringKind:
+    """A spring-damper-actuator element type: the coordinate it acts along, of its two frames
+    and its vectors; the vectors' keys (in ForceIR.points | ForceIR.axes); the parameter of the
+    coordinate's rest value; the names under which its actuator reads the coordinate and its
+    rate."""
+
+    coordinate: Callable
+    vectors: tuple[str, ...]
+    rest: str
+    names: tuple[str, str]
+
+    def parameters(self, force: ForceIR) -> tuple:
+        """(stiffness, damping, rest value) of an element."""
+        return tuple(force.params[k] for k in ("stiffness", "damping", self.rest))
+
+    def vector_values(self, force: ForceIR) -> list:
+        return [(force.points | force.axes)[k] for k in self.vectors]
+
+
+SPRINGS = {
+    "tsda": SpringKind(distance, ("s_i", "s_j"), "free_length", ("length", "length_dot")),
+    "rsda": SpringKind(lambda fi, fj, *axes: relative_angle(fi.A, fj.A, *axes),
+                       ("u_i", "v_i", "u_j"), "free_angle", ("angle", "angle_dot")),
+}
+
+
+def rsda_angle(geometry, x: Coordinates):
+    """Rotation of body j about the joint axis (relative_angle) of an rsda or a joint."""
+    return SPRINGS["rsda"].coordinate(x.frame(geometry.body_i), x.frame(geometry.body_j),
+                                      *(constant(geometry.axes[k]) for k in ("u_i", "v_i", "u_j")))
+
+
+def _coordinate(force: ForceIR, x: Coordinates):
+    kind = SPRINGS[force.type]
+    return kind.coordinate(x.frame(force.body_i), x.frame(force.body_j),
+                           *(constant(v) for v in kind.vector_values(force)))
 
 
 def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str],
@@ -84,31 +113,24 @@ def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str]
     return tension, 0.5 * k * (value - rest) ** 2
 
 
-def spring(coordinate, q, q_dot, t, k, c, rest, actuator, names: tuple[str, str],
-           states=None) -> tuple:
-    """(generalized force over q, potential) of a spring-damper-actuator acting along
-    `coordinate`(q) (spring_law at its rate along q_dot)."""
+def spring(kind: SpringKind, coordinate, motion: tuple, parameters, actuator, states=None
+           ) -> tuple:
+    """(generalized force over q, potential) of a spring-damper-actuator of a kind acting
+    along `coordinate`(q), motion = (q, q_dot, t), parameters = (stiffness, damping, rest)
+    (spring_law at the coordinate's rate along q_dot)."""
+    q, q_dot, t = motion
     coordinate_q = ca.jacobian(coordinate, q)
-    tension, potential = spring_law(coordinate, coordinate_q @ q_dot, t, k, c, rest, actuator,
-                                    names, states)
+    tension, potential = spring_law(coordinate, coordinate_q @ q_dot, t, *parameters, actuator,
+                                    kind.names, states)
     return -coordinate_q.T * tension, potential
 
 
-def _spring(force: ForceIR, x: Coordinates, coordinate, rest: float, names: tuple[str, str]):
-    """(generalized force, potential) of a spring-damper-actuator acting along `coordinate`."""
+def _spring(force: ForceIR, x: Coordinates):
+    """(generalized force, potential) of a tsda or rsda."""
     states = coordinates.values(force.actuator, x) if force.actuator is not None else None
-    return spring(coordinate, x.q, x.q_dot, x.t, force.params["stiffness"],
-                  force.params["damping"], rest, force.actuator, names, states)
-
-
-def _tsda(force, x):
-    return _spring(force, x, tsda_length(force, x), force.params["free_length"],
-                   ("length", "length_dot"))
-
-
-def _rsda(force, x):
-    return _spring(force, x, rsda_angle(force, x), force.params["free_angle"],
-                   ("angle", "angle_dot"))
+    kind = SPRINGS[force.type]
+    return spring(kind, _coordinate(force, x), (x.q, x.q_dot, x.t), kind.parameters(force),
+                  force.actuator, states)
 
 
 def in_global(frame_name: str, rotation, vector):
@@ -148,8 +170,8 @@ def _torque(force, x):
 
 
 FORCE_ELEMENTS: dict[str, Callable] = {
-    "tsda": _tsda,
-    "rsda": _rsda,
+    "tsda": _spring,
+    "rsda": _spring,
     "force": _point_force,
     "torque": _torque,
     "bushing": lambda force, x: bushing.generalized_force(force, x),
