@@ -17,7 +17,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.codegen.kernels import mapped, scatter
-from casmech.compiler import body, romega
+from casmech.compiler import body, eom, romega
 from casmech.compiler.ir import ModelIR
 
 
@@ -116,11 +116,9 @@ def quadratic_velocity(ir: ModelIR, q, q_dot):
 
 
 def gravity(ir: ModelIR) -> ca.DM:
-    nb = ir.n_bodies
-    """m_k g on every body's r rows (zero entries structurally zero, as they vanish from the
+    """compiler.eom.gravity, its zero entries structurally zero (as they vanish from the
     unrolled expressions)."""
-    return ca.sparsify(ca.vertcat(*[b.mass * ca.DM(ir.gravity) for b in ir.bodies],
-                                  ca.DM.zeros(4 * nb)))
+    return ca.sparsify(ca.evalf(eom.gravity(ir)))
 
 
 def energy(ir: ModelIR, q, q_dot) -> tuple:

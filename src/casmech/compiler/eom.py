@@ -186,11 +186,15 @@ FORCE_ELEMENTS: dict[str, Callable] = {
 FORCE_ELEMENTS.update(motors.FORCE_ELEMENTS)  # effort motors of joints (ir.motors)
 
 
+def gravity(ir: ModelIR):
+    """[m_k g ...; 0 (4 nb)]: the generalized force of gravity."""
+    return ca.vertcat(*[b.mass * constant(ir.gravity) for b in ir.bodies],
+                      ca.DM.zeros(4 * ir.n_bodies))
+
+
 def applied_forces(ir: ModelIR, x: Coordinates):
     """(generalized applied forces incl. gravity, spring potential energy)."""
-    nb = ir.n_bodies
-    gravity = ca.vertcat(*[b.mass * constant(ir.gravity) for b in ir.bodies], ca.DM.zeros(4 * nb))
-    total, potential = gravity, 0.0
+    total, potential = gravity(ir), 0.0
     for force in (*ir.forces, *ir.motors, *ir.limits):
         generalized, energy = FORCE_ELEMENTS[force.type](force, x)
         total, potential = total + generalized, potential + energy
