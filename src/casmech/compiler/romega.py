@@ -86,5 +86,6 @@ def definitions(ir: ModelIR, cs: ConstraintSystem) -> list[tuple[str, dict, dict
         ("romega_nu", {"t": t, "q": q}, {"nu": nu}),
         ("romega_gamma", {"t": t, "q": q, "v": v}, {"gamma": gamma}),
         ("romega_q_dot", {"q": q, "v": v}, {"q_dot": q_dot}),
-        ("romega_to_rp", {"q": q, "v": v, "v_dot": v_dot}, {"q_dot": q_dot, "q_ddot": q_ddot(q_dot, q, v, v_dot)}),
+        ("romega_to_rp", {"q": q, "v": v, "v_dot": v_dot},
+         {"q_dot": q_dot, "q_ddot": q_ddot(q_dot, q, v, v_dot)}),
     ]
