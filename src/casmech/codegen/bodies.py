@@ -74,7 +74,7 @@ def _kernels(pattern: tuple[bool, ...], gravity_vector: tuple[float, ...]
             body.kinetic_energy(m, inertia, r_dot, p, p_dot),
             body.gravity_potential(m, gravity, r)]),
         "rates": ca.Function("body_rates", [p, p_dot, p_ddot],
-                             [body.global_rate(p, p_dot), body.global_rate(p, p_ddot)]),
+                             body.global_rates(p, p_dot, p_ddot)),
         "q_dot": ca.Function("body_p_dot", [p, w], [p_dot_of]),
         "q_ddot": ca.Function("body_p_ddot", [p, w, w_dot],
                               [romega.q_ddot(p_dot_of, p, w, w_dot)]),

@@ -36,9 +36,11 @@ def angular_velocity(p, p_dot):
     return 2 * euler.g_matrix(p) @ p_dot
 
 
-def global_rate(p, p_rate):
-    """2 E(p) p_rate: the global angular velocity from p_dot (or acceleration from p_ddot)."""
-    return 2 * euler.e_matrix(p) @ p_rate
+def global_rates(p, *p_rates) -> list:
+    """2 E(p) p_rate for each rate: the global angular velocity from p_dot, its acceleration
+    from p_ddot (E(p) formed once)."""
+    e = euler.e_matrix(p)
+    return [2 * e @ rate for rate in p_rates]
 
 
 def kinetic_energy(mass, inertia, r_dot, p, p_dot):

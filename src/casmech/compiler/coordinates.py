@@ -56,7 +56,7 @@ JOINT_VALUES: dict[str, Callable] = {
 
 
 def _omega(x, k):
-    return body.global_rate(x.p(k), x.p(k, x.q_dot))
+    return body.global_rates(x.p(k), x.p(k, x.q_dot))[0]
 
 
 _BODY_VECTORS = {
