@@ -94,7 +94,7 @@ def _torque(key, x, x_dot, t, data, value, actuator):
 
 # Element types with a kernel; any other type of compiler.eom.FORCE_ELEMENTS is built per
 # instance from eom (`unrolled`): correct for every element, compact for these.
-KERNELS = {"tsda": _spring, "rsda": _spring, "force": _point_force, "torque": _torque}
+KERNELS = {**dict.fromkeys(eom.SPRINGS, _spring), "force": _point_force, "torque": _torque}
 
 
 def _digest(key: ForceKey) -> str:

@@ -79,8 +79,10 @@ class SpringKind:
         """(stiffness, damping, rest value) of an element."""
         return tuple(force.params[k] for k in ("stiffness", "damping", self.rest))
 
-    def vector_values(self, force: ForceIR) -> list:
-        return [(force.points | force.axes)[k] for k in self.vectors]
+    def vector_values(self, geometry) -> list:
+        """The vectors of an element (or of a joint: rsda_angle)."""
+        return [geometry.axes[k] if k in geometry.axes else geometry.points[k]
+                for k in self.vectors]
 
 
 SPRINGS = {
@@ -92,14 +94,12 @@ SPRINGS = {
 
 def rsda_angle(geometry, x: Coordinates):
     """Rotation of body j about the joint axis (relative_angle) of an rsda or a joint."""
-    return SPRINGS["rsda"].coordinate(x.frame(geometry.body_i), x.frame(geometry.body_j),
-                                      *(constant(geometry.axes[k]) for k in ("u_i", "v_i", "u_j")))
+    return _coordinate(SPRINGS["rsda"], geometry, x)
 
 
-def _coordinate(force: ForceIR, x: Coordinates):
-    kind = SPRINGS[force.type]
-    return kind.coordinate(x.frame(force.body_i), x.frame(force.body_j),
-                           *(constant(v) for v in kind.vector_values(force)))
+def _coordinate(kind: SpringKind, geometry, x: Coordinates):
+    return kind.coordinate(x.frame(geometry.body_i), x.frame(geometry.body_j),
+                           *(constant(v) for v in kind.vector_values(geometry)))
 
 
 def spring_law(value, value_dot, t, k, c, rest, actuator, names: tuple[str, str],
@@ -129,7 +129,7 @@ def _spring(force: ForceIR, x: Coordinates):
     """(generalized force, potential) of a tsda or rsda."""
     states = coordinates.values(force.actuator, x) if force.actuator is not None else None
     kind = SPRINGS[force.type]
-    return spring(kind, _coordinate(force, x), (x.q, x.q_dot, x.t), kind.parameters(force),
+    return spring(kind, _coordinate(kind, force, x), (x.q, x.q_dot, x.t), kind.parameters(force),
                   force.actuator, states)
 
 
@@ -170,8 +170,7 @@ def _torque(force, x):
 
 
 FORCE_ELEMENTS: dict[str, Callable] = {
-    "tsda": _spring,
-    "rsda": _spring,
+    **dict.fromkeys(SPRINGS, _spring),  # tsda, rsda
     "force": _point_force,
     "torque": _torque,
     "bushing": lambda force, x: bushing.generalized_force(force, x),
@@ -211,16 +210,16 @@ def energy(ir: ModelIR, x: Coordinates, spring_potential):
     return kinetic, potential
 
 
-def reaction(phi, lam, r_j, p_j, at) -> tuple:
+def reaction(phi, lam, r_j, p_j, about) -> tuple:
     """(force, torque) that the rows phi (with multipliers lam) exert on body j (CM r_j, Euler
-    parameters p_j), global, the torque about the point `at`.
+    parameters p_j), global, the torque about the point `about`.
 
     From the lecture: force -Phi_r_j^T lam, body-frame torque about the CM -Pi_bar_j^T lam,
     moved to the point P: T_P = A_j n_bar + (r_j - r_P) x F.
     """
     force = -ca.jacobian(phi, r_j).T @ lam
     n_bar = -0.5 * euler.g_matrix(p_j) @ ca.jacobian(phi, p_j).T @ lam
-    return force, euler.rotation(p_j) @ n_bar + ca.cross(r_j - at, force)
+    return force, euler.rotation(p_j) @ n_bar + ca.cross(r_j - about, force)
 
 
 def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
@@ -230,13 +229,13 @@ def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
     for joint in ir.joints:
         rows = list(joint.rows)
         b = joint.body_j
-        at = point(x, joint.body_i, joint.point_i)
-        force, torque = reaction(phi_with_ground[rows], lam[rows], x.r(b), x.p(b), at)
+        joint_point = point(x, joint.body_i, joint.point_i)
+        force, torque = reaction(phi_with_ground[rows], lam[rows], x.r(b), x.p(b), joint_point)
         for motor in (m for m in ir.motors if m.name == joint.name):  # its actuation
-            motor_force, motor_torque = motors.reaction(motor, x, at)
+            motor_force, motor_torque = motors.reaction(motor, x, joint_point)
             force, torque = force + motor_force, torque + motor_torque
         for stop in (s for s in ir.limits if s.name == joint.name):  # its stop
-            stop_force, stop_torque = limits.reaction(stop, x, at)
+            stop_force, stop_torque = limits.reaction(stop, x, joint_point)
             force, torque = force + stop_force, torque + stop_torque
         forces.append(force)
         torques.append(torque)
