@@ -103,6 +103,18 @@ def body_constants(form: str, kind: str) -> int:
     return 1 if kind == "ggl" else 0
 
 
+def _mass_and_forces(form: str, gravity, p, rate, mass, inertia) -> tuple:
+    """M and F of one body over its velocity (rate: p_dot in rp, omega_bar in romega): blkdiag(m
+    I, 4 G^T J G) and [m g; 8 G_dot^T J G_dot p] (rp), blkdiag(m I, J) and [m g; -omega~ J
+    omega] (romega)."""
+    if form == "rp":
+        block = body_terms.mass_block(p, inertia)
+        torque = body_terms.quadratic_velocity(p, rate, inertia)
+    else:
+        block, torque = inertia, romega.body_torque(p, ca.SX(4, 1), rate, inertia)
+    return ca.diagcat(mass * ca.SX.eye(3), block), ca.vertcat(mass * ca.DM(gravity), torque)
+
+
 @lru_cache(maxsize=64)
 def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind: str
          ) -> ca.Function:
@@ -110,42 +122,34 @@ def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind:
     ggl: a row of Phi only).
 
     y = [q (7), v, v_dot, lam_n (rp), mu_n (ggl)]; out = [q_dot + Phi_q_s^T mu_n (7), v_dot,
-    M v_dot - F + P_s^T lam_n, then the normalization row's alg entries]; F: gravity and
-    quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's constants
-    (body_constants), m, J_bar]."""
-    n_v, rp, n_c = BODY_V[form], form == "rp", body_constants(form, kind)
-    y = ca.SX.sym("y", 7 + 2 * n_v + (1 if rp else 0) + (1 if kind == "ggl" else 0))
+    M v_dot + P_s^T lam_n - F, then the normalization row's alg entries] (compiler.dae's terms);
+    F: gravity and quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's
+    constants (body_constants), m, J_bar]."""
+    n_v, n_c = BODY_V[form], body_constants(form, kind)
+    y = ca.SX.sym("y", 7 + 2 * n_v + (1 if form == "rp" else 0) + (1 if kind == "ggl" else 0))
     d = ca.SX.sym("d", n_c + 1 + sum(pattern))
-    mass = d[n_c]
     inertia = ca.reshape(ca.densify(ca.SX(bodies.inertia_sparsity(pattern), d[n_c + 1:])), 3, 3)
     q, v, v_dot = y[:7], y[7:7 + n_v], y[7 + n_v:7 + 2 * n_v]
-    p, w = q[3:], v[3:]
-    if rp:
-        block = body_terms.mass_block(p, inertia)
-        torque = body_terms.quadratic_velocity(p, w, inertia)
-    else:
-        block, torque = inertia, romega.body_torque(p, ca.SX(4, 1), w, inertia)
-    matrix = ca.diagcat(mass * ca.SX.eye(3), block)
-    forces = ca.vertcat(mass * ca.DM(gravity), torque)
+    p = q[3:]
+    matrix, forces = _mass_and_forces(form, gravity, p, v[3:], d[n_c], inertia)
     ode = q_dot(form, q, v)
-    # the normalization row (over q: zero on r)
-    norm = assemble.derivatives(body_terms.normalization(p), p, ca.SX.sym("t"), ode[3:])
+    # the normalization row, over q (zero on r)
+    phi = body_terms.normalization(p)
+    norm = assemble.derivatives(phi, p, ca.SX.sym("t"), ode[3:])
     jac = ca.horzcat(ca.SX(1, 3), norm["phi_q"])
-    if rp:
-        w_row, scale, lam = d[0], d[1], y[7 + 2 * n_v]
+    p_s, lam, rows = ca.SX(0, n_v), ca.SX(0, 1), []  # romega: not a row of P
+    if form == "rp":
+        w, scale, lam = d[0], d[1], y[7 + 2 * n_v]
         p_s = jac * scale
         if kind == "ggl":
-            mu = y[-1]
-            rows = [dae.position_rows(body_terms.normalization(p) * d[2], w_row, mu),
-                    dae.velocity_rows(p_s, v, norm["nu"] * scale, w_row, lam)]
-            ode = dae.ggl_q_dot(ode, p_s, mu)
+            rows = [dae.position_rows(phi * d[2], w, y[-1]),
+                    dae.velocity_rows(p_s, v, norm["nu"] * scale, w, lam)]
+            ode = dae.ggl_q_dot(ode, p_s, y[-1])
         else:
-            rows = [dae.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w_row, lam)]
-    else:
-        p_s, lam, rows = ca.SX(0, n_v), ca.SX(0, 1), []
-        if kind == "ggl":  # a row of Phi only: w = 0
-            rows = [dae.position_rows(body_terms.normalization(p) * d[0], 0, y[-1])]
-            ode = dae.ggl_q_dot(ode, jac * d[0], y[-1])
+            rows = [dae.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w, lam)]
+    elif kind == "ggl":  # a row of Phi only: w = 0
+        rows = [dae.position_rows(phi * d[0], 0, y[-1])]
+        ode = dae.ggl_q_dot(ode, jac * d[0], y[-1])
     alg = dae.dynamics(matrix, v_dot, p_s, lam, forces)
     digest = "".join("1" if on else "0" for on in pattern)
     return _function(f"element_{form}_{kind}_body_{digest}", y, d, [ode, v_dot, alg, *rows])
