@@ -103,7 +103,7 @@ def test_mapped_functions_equal_unrolled(name):
     _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
 
 
-# every model of the repository (the ones MODELS does not build: C-free, seconds each)
+# every model of models/ (no C compiler: about a second each)
 EVERY_MODEL = sorted(path.name for path in (ROOT / "models").glob("*.yaml"))
 
 
