@@ -53,13 +53,10 @@ MODELS = {
     "codegen_test": lambda: casmech.load(MODEL),  # driven revolute, tsda, body torque
     "chain4": lambda: casmech.loads(chain_text(4)),
     "slider_crank": lambda: casmech.load(ROOT / "models" / "slider_crank.yaml"),
-    "flyball_governor": lambda: casmech.load(ROOT / "models" / "flyball_governor.yaml"),  # rsda
-    "cart_pole": lambda: casmech.load(ROOT / "models" / "cart_pole.yaml"),  # point force
     # effort motors (in the forces and the joints' reactions, laws reading the joint rate too),
     # laws reading joint and body state
     "motors": lambda: casmech.loads(MOTORS),
-    "user_force": lambda: casmech.load(ROOT / "models" / "user_force_pendulum.yaml"),
-}
+}  # and every model of models/ (EVERY_MODEL: rsda, point forces, user forces, contacts ...)
 
 
 def _random(function: ca.Function, rng) -> list[ca.DM]:
@@ -103,6 +100,16 @@ def _compare_bundles(got: dict, want: dict, seed: int = 3) -> None:
 @pytest.mark.parametrize("name", list(MODELS))
 def test_mapped_functions_equal_unrolled(name):
     model = MODELS[name]()
+    _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
+
+
+# every model of models/ (no C compiler: about a second each)
+EVERY_MODEL = sorted(path.name for path in (ROOT / "models").glob("*.yaml"))
+
+
+@pytest.mark.parametrize("file", EVERY_MODEL)
+def test_every_model_mapped_equals_unrolled(file):
+    model = casmech.load(ROOT / "models" / file)
     _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
 
 

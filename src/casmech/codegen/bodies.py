@@ -1,8 +1,9 @@
 """Per-body functions (mass matrices, quadratic-velocity terms, kinetic and gravity energy, body
 rates, the r-omega kinematic map and torques) as one SX kernel per quantity, mapped over the
 bodies with their masses and inertias as data: code whose size does not grow with the number
-of bodies. Each kernel writes the expression of compiler.eom / compiler.romega for ONE body;
-tests/codegen/test_mapped.py checks them against the unrolled functions.
+of bodies. Each kernel wraps the term of ONE body that compiler.eom / compiler.romega sum over
+the bodies (compiler.body); tests/codegen/test_mapped.py checks the mapped functions against
+the unrolled ones.
 
 q = [r (3 nb); p (4 nb)] and v = [r_dot (3 nb); omega_bar (3 nb)] keep each quantity of all
 bodies contiguous, so a body's r, p, r_dot or omega_bar is a column of a reshape (no gather).
@@ -16,8 +17,8 @@ import casadi as ca
 import numpy as np
 
 from casmech.codegen.kernels import mapped, scatter
+from casmech.compiler import body, eom, romega
 from casmech.compiler.ir import ModelIR
-from casmech.geometry import euler
 
 
 def columns(vector, size: int, nb: int, start: int = 0):
@@ -37,10 +38,11 @@ def inertias(ir: ModelIR) -> ca.DM:
     chosen = [k for k in range(9) if pattern[k]]
     values = np.concatenate([np.asarray(b.inertia, float).ravel(order="F")[chosen]
                              for b in ir.bodies])
-    return ca.DM(ca.repmat(_sparsity(pattern), 1, ir.n_bodies), values)
+    return ca.DM(ca.repmat(inertia_sparsity(pattern), 1, ir.n_bodies), values)
 
 
-def _sparsity(pattern) -> ca.Sparsity:
+def inertia_sparsity(pattern) -> ca.Sparsity:
+    """The (9 x 1) sparsity of J_bar's entries (column-major) that `pattern` marks non-zero."""
     nonzero = [k for k, on in enumerate(pattern) if on]
     return ca.Sparsity.triplet(len(pattern), 1, nonzero, [0] * len(nonzero))
 
@@ -56,31 +58,30 @@ def kernels(ir: ModelIR) -> dict[str, ca.Function]:
 @lru_cache(maxsize=16)
 def _kernels(pattern: tuple[bool, ...], gravity_vector: tuple[float, ...]
              ) -> dict[str, ca.Function]:
-    """The per-body kernels for inertias with this sparsity and this gravity (a constant)."""
+    """The per-body kernels (compiler.body's terms) for inertias with this sparsity and this
+    gravity (a constant)."""
     p, p_dot, p_ddot = ca.SX.sym("p", 4), ca.SX.sym("p_dot", 4), ca.SX.sym("p_ddot", 4)
     r, r_dot, gravity = ca.SX.sym("r", 3), ca.SX.sym("r_dot", 3), ca.DM(gravity_vector)
     w, w_dot, q_p = ca.SX.sym("w", 3), ca.SX.sym("w_dot", 3), ca.SX.sym("q_p", 4)
-    m, j_flat = ca.SX.sym("m"), ca.SX.sym("J", _sparsity(pattern))
+    m, j_flat = ca.SX.sym("m"), ca.SX.sym("J", inertia_sparsity(pattern))
     inertia = ca.reshape(ca.densify(j_flat), 3, 3)
-    g, g_dot = euler.g_matrix(p), euler.g_matrix(p_dot)
-    e = euler.e_matrix(p)
-    w_bar = 2 * g @ p_dot
-    p_dot_of = 0.5 * g.T @ w
+    p_dot_of = body.p_dot(p, w)
     return {
-        "mass": ca.Function("body_mass", [p, j_flat], [4 * g.T @ inertia @ g]),
+        "mass": ca.Function("body_mass", [p, j_flat], [body.mass_block(p, inertia)]),
         "quadratic": ca.Function("body_quadratic", [p, p_dot, j_flat],
-                                 [8 * g_dot.T @ inertia @ g_dot @ p]),
+                                 [body.quadratic_velocity(p, p_dot, inertia)]),
         "energy": ca.Function("body_energy", [r, p, r_dot, p_dot, m, j_flat], [
-            0.5 * m * (r_dot.T @ r_dot) + 0.5 * w_bar.T @ inertia @ w_bar,
-            -(m * (gravity.T @ r))]),
+            body.kinetic_energy(m, inertia, r_dot, p, p_dot),
+            body.gravity_potential(m, gravity, r)]),
         "rates": ca.Function("body_rates", [p, p_dot, p_ddot],
-                             [2 * e @ p_dot, 2 * e @ p_ddot]),
+                             body.global_rates(p, p_dot, p_ddot)),
         "q_dot": ca.Function("body_p_dot", [p, w], [p_dot_of]),
-        "q_ddot": ca.Function("body_p_ddot", [p, w, w_dot], [
-            ca.jacobian(p_dot_of, p) @ p_dot_of + ca.jacobian(p_dot_of, w) @ w_dot]),
-        "torque": ca.Function("body_torque", [p, q_p, w, j_flat], [
-            0.5 * g @ q_p - ca.cross(w, inertia @ w)]),
-        "gyroscopic": ca.Function("body_gyroscopic", [p, w, j_flat], [-ca.cross(w, inertia @ w)]),
+        "q_ddot": ca.Function("body_p_ddot", [p, w, w_dot],
+                              [romega.q_ddot(p_dot_of, p, w, w_dot)]),
+        "torque": ca.Function("body_torque", [p, q_p, w, j_flat],
+                              [romega.body_torque(p, q_p, w, inertia)]),
+        "gyroscopic": ca.Function("body_gyroscopic", [p, w, j_flat],
+                                  [romega.body_torque(p, ca.SX(4, 1), w, inertia)]),
     }
 
 
@@ -103,8 +104,7 @@ def romega_mass(ir: ModelIR):
     """blkdiag(m_k I_3 ..., J_bar_k ...) (compiler.romega.mass): a constant. Its zero entries
     are left out of the pattern (the unrolled function lists them), so that the DAE's Jacobian
     has the unrolled sparsity: there they vanish when M v_dot is formed."""
-    blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies] + [ca.DM(b.inertia) for b in ir.bodies]
-    return ca.MX(ca.sparsify(ca.diagcat(*blocks))) if blocks else ca.MX(0, 0)
+    return ca.MX(ca.sparsify(ca.evalf(romega.mass(ir))))
 
 
 def quadratic_velocity(ir: ModelIR, q, q_dot):
@@ -116,11 +116,9 @@ def quadratic_velocity(ir: ModelIR, q, q_dot):
 
 
 def gravity(ir: ModelIR) -> ca.DM:
-    nb = ir.n_bodies
-    """m_k g on every body's r rows (zero entries structurally zero, as they vanish from the
+    """compiler.eom.gravity, its zero entries structurally zero (as they vanish from the
     unrolled expressions)."""
-    return ca.sparsify(ca.vertcat(*[b.mass * ca.DM(ir.gravity) for b in ir.bodies],
-                                  ca.DM.zeros(4 * nb)))
+    return ca.sparsify(ca.evalf(eom.gravity(ir)))
 
 
 def energy(ir: ModelIR, q, q_dot) -> tuple:

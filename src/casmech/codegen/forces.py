@@ -19,7 +19,7 @@ from casmech.codegen.elements import assemble
 from casmech.codegen.kernels import Layout, mapped
 from casmech.compiler import contact, eom, limits, motors
 from casmech.compiler.assemble import Coordinates
-from casmech.compiler.eom import FORCE_ELEMENTS, relative_angle, spring_law
+from casmech.compiler.eom import FORCE_ELEMENTS
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
 from casmech.compiler.primitives import Frame
 from casmech.geometry import euler
@@ -43,13 +43,9 @@ def _actuator_key(function: ScalarFunction | None):
 
 
 def data_of(force: ForceIR) -> np.ndarray:
-    p = force.params
-    if force.type == "tsda":
-        return np.concatenate([force.points["s_i"], force.points["s_j"],
-                               [p["stiffness"], p["damping"], p["free_length"]]])
-    if force.type == "rsda":
-        return np.concatenate([force.axes["u_i"], force.axes["v_i"], force.axes["u_j"],
-                               [p["stiffness"], p["damping"], p["free_angle"]]])
+    if force.type in eom.SPRINGS:
+        kind = eom.SPRINGS[force.type]
+        return np.concatenate([*kind.vector_values(force), kind.parameters(force)])
     if force.type == "force":
         return np.asarray(force.points.get("s", [0.0, 0.0, 0.0]), float)
     return np.zeros(0)
@@ -73,44 +69,32 @@ def _frame(x):
     return Frame(x[0:3], euler.rotation(x[3:7]))
 
 
-def _spring(actuator, coordinate, x, x_dot, t, params, names) -> tuple:
-    """(generalized [14], potential) of a spring-damper-actuator along `coordinate`
-    (compiler.eom.spring_law; kernelised actuators read no other state)."""
-    tension, potential = spring_law(coordinate, ca.jacobian(coordinate, x) @ x_dot, t,
-                                    params[0], params[1], params[2], actuator, names)
-    return -ca.jacobian(coordinate, x).T * tension, potential
-
-
-def _tsda(key, x, x_dot, t, data, value, actuator):
-    fi, fj = _frame(x[:7]), _frame(x[7:])
-    d = fj.r + fj.A @ data[3:6] - (fi.r + fi.A @ data[0:3])
-    return _spring(actuator, ca.sqrt(d.T @ d), x, x_dot, t, data[6:9], ("length", "length_dot"))
-
-
-def _rsda(key, x, x_dot, t, data, value, actuator):
-    angle = relative_angle(_frame(x[:7]).A, _frame(x[7:]).A, data[0:3], data[3:6], data[6:9])
-    return _spring(actuator, angle, x, x_dot, t, data[9:12], ("angle", "angle_dot"))
-
-
-def _global(key, frame, value):
-    return frame.A @ value if key.frame == "body" else value
+def _spring(key, x, x_dot, t, data, value, actuator):
+    """A tsda or rsda (compiler.eom.SPRINGS): data = [its vectors, stiffness, damping, rest]
+    (kernelised actuators read no other state)."""
+    kind = eom.SPRINGS[key.type]
+    n = 3 * len(kind.vectors)
+    coordinate = kind.coordinate(_frame(x[:7]), _frame(x[7:]),
+                                 *(data[k:k + 3] for k in range(0, n, 3)))
+    return eom.spring(kind, coordinate, (x, x_dot, t), (data[n], data[n + 1], data[n + 2]),
+                      actuator)
 
 
 def _point_force(key, x, x_dot, t, data, value, actuator):
     frame = _frame(x[:7])
-    at = frame.r + frame.A @ data[0:3]
-    return ca.jacobian(at, x[:7]).T @ _global(key, frame, value), ca.SX(0)
+    force = eom.in_global(key.frame, frame.A, value)
+    return eom.point_force(frame, data[0:3], x[:7], force), ca.SX(0)
 
 
 def _torque(key, x, x_dot, t, data, value, actuator):
     frame = _frame(x[:7])
-    n_bar = frame.A.T @ _global(key, frame, value)
-    return ca.vertcat(ca.SX(3, 1), 2 * euler.g_matrix(x[3:7]).T @ n_bar), ca.SX(0)
+    torque = eom.in_global(key.frame, frame.A, value)
+    return ca.vertcat(ca.SX(3, 1), eom.torque(frame, x[3:7], torque)), ca.SX(0)
 
 
 # Element types with a kernel; any other type of compiler.eom.FORCE_ELEMENTS is built per
 # instance from eom (`unrolled`): correct for every element, compact for these.
-KERNELS = {"tsda": _tsda, "rsda": _rsda, "force": _point_force, "torque": _torque}
+KERNELS = {**dict.fromkeys(eom.SPRINGS, _spring), "force": _point_force, "torque": _torque}
 
 
 def _digest(key: ForceKey) -> str:

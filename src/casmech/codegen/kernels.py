@@ -280,7 +280,7 @@ def reactions(ir: ModelIR, t, q, lam) -> tuple:
     layout = Layout(ir.n_bodies)
     padded = layout.pad_q(q)
     joint_of = {row: j for j, joint in enumerate(ir.joints) for row in joint.rows}
-    forces, torques, columns = [], [], []
+    forces, torques, groups = [], [], []
     for keys, members in by_joint_keys(ir).items():
         first = [ir.primitives[rows[0]] for rows in members]
         x = ca.reshape(padded[[c for p in first for c in layout.q(p.body_i) + layout.q(p.body_j)]],
@@ -296,20 +296,32 @@ def reactions(ir: ModelIR, t, q, lam) -> tuple:
                                  len(members))
         points = ca.DM(np.array([ir.joints[joint_of[rows[0]]].point_i if rows[0] in joint_of
                                  else np.zeros(3) for rows in members], float).T)
-        force, torque = mapped(joint_reaction(keys), len(members))(x, c, f, multipliers,
-                                                                  points)
+        kernel = joint_reaction(keys)
+        force, torque = mapped(kernel, len(members))(x, c, f, multipliers, points)
         forces.append(force)
         torques.append(torque)
-        columns += [joint_of.get(rows[0], -1) for rows in members]
+        groups.append((kernel, [joint_of.get(rows[0], -1) for rows in members]))
     n_joints = len(ir.joints)
-    keep = [k for k, column in enumerate(columns) if column >= 0]
-    if not keep:
-        return ca.MX(3, n_joints), ca.MX(3, n_joints)
-    rows = np.tile(np.arange(3), len(keep))
-    positions = (3 * np.asarray(keep)[:, None] + np.arange(3)[None, :]).ravel()
-    cols = np.repeat(np.asarray(columns)[keep], 3)
-    return tuple(elements.assemble([(3, n_joints, rows, cols, positions)], parts)[0]
-                 for parts in (forces, torques))
+    return tuple(_joint_columns(n_joints, groups, output, parts)
+                 for output, parts in enumerate((forces, torques)))
+
+
+def _joint_columns(n_joints: int, groups: list, output: int, parts: list) -> ca.MX:
+    """The (3 x joints) matrix of the kernels' outputs added into their joints' columns
+    (column -1: a row of no joint, dropped); the entries a kernel's output leaves structurally
+    zero are left out, as they are in the unrolled reactions."""
+    rows, cols, positions, offset = [], [], [], 0
+    for kernel, columns in groups:
+        nonzero = sorted(set(kernel.sparsity_out(output).row()))
+        for k, column in enumerate(columns):
+            if column >= 0:
+                rows += nonzero
+                cols += [column] * len(nonzero)
+                positions += [offset + 3 * k + a for a in nonzero]
+        offset += 3 * len(columns)
+    if not rows:
+        return ca.MX(3, n_joints)
+    return elements.assemble([(3, n_joints, rows, cols, positions)], parts)[0]
 
 
 def taylor_or_constant(prim, key, t):

@@ -1,9 +1,9 @@
 """The element kernels of the DAE residuals of compiler.dae (codegen.residuals sums them):
 for one joint, one body, one force element, both formulations (rp, romega) and both
 stabilizations (ggl: the index-2 GGL DAE; projection: the index-1 DAE). Each is an SX
-Function (y, d) -> out of the element's unknowns y and data d (not differentiated), written
-with the row, body and force kernels of codegen.rows, codegen.bodies and codegen.forces; the
-terms are compiler.dae's, element by element:
+Function (y, d) -> out of the element's unknowns y and data d (not differentiated), built
+from the row and force kernels of codegen.rows and codegen.forces and from the terms of
+compiler.dae (the rows), compiler.body and compiler.romega (the bodies), element by element:
 
     ode:  q_dot(q, v) + Phi_q^T mu (ggl),  v_dot
     alg:  M v_dot + P^T lam - F,  then per row either (1 - w) phi - w mu and
@@ -23,7 +23,8 @@ import casadi as ca
 
 from casmech.codegen import bodies
 from casmech.codegen import rows as row_kernels
-from casmech.geometry import euler
+from casmech.compiler import assemble, dae, romega
+from casmech.compiler import body as body_terms
 
 ROW = row_kernels.ROW  # x = [r_i, p_i, r_j, p_j]
 V_WIDTH = {"rp": 14, "romega": 12}  # a joint's velocity entries: q_dot, or [r_dot, omega_bar]
@@ -51,8 +52,8 @@ def joint(keys: tuple, form: str, kind: str) -> ca.Function:
     every row of P scaled by its constant s (and of Phi, Phi_q by s_phi: compiler.dae).
 
     y = [x (14), v, lam (r), mu (r)] (ggl) or [x, v, v_dot, lam (r)] (projection);
-    out = [sum Phi_q_s^T mu (14), sum P_s^T lam, (1 - w) phi_s - w mu (r), (1 - w) (P_s v -
-    nu_s) - w lam (r)] (ggl) or [sum P_s^T lam, P_s v_dot - gamma_s - w lam (r)] (projection);
+    out = [Phi_q_s^T mu (14), P_s^T lam, (1 - w) phi_s - w mu (r), (1 - w) (P_s v -
+    nu_s) - w lam (r)] (ggl) or [P_s^T lam, P_s v_dot - gamma_s - w lam (r)] (projection);
     d = [w, s (, s_phi) (r each), f, f', f'' of each row (3 r), each row's vectors unless
     baked]. In r-p, P is Phi_q: Phi_q_s = P_s (s) and phi_s = s_phi phi, as compiler.dae."""
     r, n_v, n_c = len(keys), V_WIDTH[form], n_scales(kind)
@@ -60,35 +61,38 @@ def joint(keys: tuple, form: str, kind: str) -> ca.Function:
     d = ca.SX.sym("d", (n_c + 3) * r + sum(sizes))
     y = ca.SX.sym("y", ROW + n_v + (2 * r if kind == "ggl" else n_v + r))
     x, v = y[:ROW], y[ROW:ROW + n_v]
-    w, scale, scale_phi = d[:r], d[r:2 * r], d[2 * r:3 * r] if kind == "ggl" else None
+    w, scale = d[:r], d[r:2 * r]
     lam = y[-2 * r:-r] if kind == "ggl" else y[-r:]
-    sum_mu, sum_lam, first, second = ca.SX(ROW, 1), ca.SX(n_v, 1), [], []
-    start = (n_c + 3) * r
+    rows, start = [], (n_c + 3) * r
     for k, key in enumerate(keys):
         pattern = row_kernels.constraint(key).sparsity_in(1)
         c = ca.SX(pattern, d[start:start + sizes[k]]) if sizes[k] else ca.SX(pattern)
         f, start = d[n_c * r + 3 * k:n_c * r + 3 * k + 3], start + sizes[k]
         phi, jac, nu = row_kernels.constraint(key)(x, c, f)
         raw = row_kernels.variation(key)(x, c, f) if form == "romega" else jac
-        p = raw * scale[k]
-        if kind == "ggl":
-            mu = y[-r + k]
-            sum_mu += (p if form == "rp" else jac * scale_phi[k]).T * mu
-            first.append((1 - w[k]) * phi * scale_phi[k] - w[k] * mu)
-            second.append((1 - w[k]) * (p @ v - nu * scale[k]) - w[k] * lam[k])
-        else:
-            gamma = row_kernels.romega_gamma(key)(x, v, c, f) if form == "romega" \
-                else row_kernels.gamma(key)(x, v, c, f)
-            first.append(p @ y[ROW + n_v:ROW + 2 * n_v] - gamma * scale[k] - w[k] * lam[k])
-        sum_lam += p.T * lam[k]
-    out = [sum_mu, sum_lam, *first, *second] if kind == "ggl" else [sum_lam, *first]
+        gamma = (row_kernels.romega_gamma(key)(x, v, c, f) if form == "romega"
+                 else row_kernels.gamma(key)(x, v, c, f)) if kind == "projection" else None
+        rows.append((phi, jac, nu, raw, gamma))
+    phi, jac, nu, raw, gamma = (ca.vertcat(*column) if column[0] is not None else None
+                                for column in zip(*rows, strict=True))
+    p_s = dae.scaled(raw, scale)
+    if kind == "ggl":
+        scale_phi, mu = d[2 * r:3 * r], y[-r:]
+        phi_q_s = p_s if form == "rp" else dae.scaled(jac, scale_phi)
+        out = [dae.constraint_forces(phi_q_s, mu), dae.constraint_forces(p_s, lam),
+               dae.position_rows(phi * scale_phi, w, mu),
+               dae.velocity_rows(p_s, v, nu * scale, w, lam)]
+    else:
+        v_dot = y[ROW + n_v:ROW + 2 * n_v]
+        out = [dae.constraint_forces(p_s, lam),
+               dae.acceleration_rows(p_s, v_dot, gamma * scale, w, lam)]
     digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
     return _function(f"element_{form}_{kind}_joint_{digest}", y, d, out)
 
 
 def q_dot(form: str, q, v):
     """A body's q_dot from its velocity: v (rp), [r_dot; 1/2 G^T omega_bar] (romega)."""
-    return v if form == "rp" else ca.vertcat(v[:3], 0.5 * euler.g_matrix(q[3:]).T @ v[3:])
+    return v if form == "rp" else ca.vertcat(v[:3], body_terms.p_dot(q[3:], v[3:]))
 
 
 def body_constants(form: str, kind: str) -> int:
@@ -99,6 +103,18 @@ def body_constants(form: str, kind: str) -> int:
     return 1 if kind == "ggl" else 0
 
 
+def _mass_and_forces(form: str, gravity, p, rate, mass, inertia) -> tuple:
+    """M and F of one body over its velocity (rate: p_dot in rp, omega_bar in romega): blkdiag(m
+    I, 4 G^T J G) and [m g; 8 G_dot^T J G_dot p] (rp), blkdiag(m I, J) and [m g; -omega~ J
+    omega] (romega)."""
+    if form == "rp":
+        block = body_terms.mass_block(p, inertia)
+        torque = body_terms.quadratic_velocity(p, rate, inertia)
+    else:
+        block, torque = inertia, romega.body_torque(p, ca.SX(4, 1), rate, inertia)
+    return ca.diagcat(mass * ca.SX.eye(3), block), ca.vertcat(mass * ca.DM(gravity), torque)
+
+
 @lru_cache(maxsize=64)
 def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind: str
          ) -> ca.Function:
@@ -106,44 +122,37 @@ def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind:
     ggl: a row of Phi only).
 
     y = [q (7), v, v_dot, lam_n (rp), mu_n (ggl)]; out = [q_dot + Phi_q_s^T mu_n (7), v_dot,
-    M v_dot - F + P_s^T lam_n, then the normalization row's alg entries]; F: gravity and
-    quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's constants
-    (body_constants), m, J_bar]."""
-    kernels = bodies._kernels(pattern, gravity)
-    n_v, rp, n_c = BODY_V[form], form == "rp", body_constants(form, kind)
-    y = ca.SX.sym("y", 7 + 2 * n_v + (1 if rp else 0) + (1 if kind == "ggl" else 0))
+    M v_dot + P_s^T lam_n - F, then the normalization row's alg entries] (compiler.dae's terms);
+    F: gravity and quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's
+    constants (body_constants), m, J_bar]."""
+    n_v, n_c = BODY_V[form], body_constants(form, kind)
+    y = ca.SX.sym("y", 7 + 2 * n_v + (1 if form == "rp" else 0) + (1 if kind == "ggl" else 0))
     d = ca.SX.sym("d", n_c + 1 + sum(pattern))
-    mass, inertia = d[n_c], ca.SX(kernels["mass"].sparsity_in(1), d[n_c + 1:])
+    inertia = ca.reshape(ca.densify(ca.SX(bodies.inertia_sparsity(pattern), d[n_c + 1:])), 3, 3)
     q, v, v_dot = y[:7], y[7:7 + n_v], y[7 + n_v:7 + 2 * n_v]
-    p, zero = q[3:], ca.SX(3, 1)
-    translation = mass * v_dot[:3] - mass * ca.DM(gravity)
-    if rp:
-        rotation = kernels["mass"](p, inertia) @ v_dot[3:] - kernels["quadratic"](
-            p, v[3:], inertia)
-    else:
-        dense = ca.reshape(ca.densify(inertia), 3, 3)
-        rotation = dense @ v_dot[3:] - kernels["gyroscopic"](p, v[3:], inertia)
-    alg = ca.vertcat(translation, rotation)
-    ode = [q_dot(form, q, v), v_dot]
-    phi, jac, nu = row_kernels.normalization()[0](p)
-    rows = []
-    if rp:
+    p = q[3:]
+    matrix, forces = _mass_and_forces(form, gravity, p, v[3:], d[n_c], inertia)
+    ode = q_dot(form, q, v)
+    # the normalization row, over q (zero on r)
+    phi = body_terms.normalization(p)
+    norm = assemble.derivatives(phi, p, ca.SX.sym("t"), ode[3:])
+    jac = ca.horzcat(ca.SX(1, 3), norm["phi_q"])
+    p_s, lam, rows = ca.SX(0, n_v), ca.SX(0, 1), []  # romega: not a row of P
+    if form == "rp":
         w, scale, lam = d[0], d[1], y[7 + 2 * n_v]
-        jac_s = jac * scale
+        p_s = jac * scale
         if kind == "ggl":
-            mu = y[-1]
-            rows = [(1 - w) * phi * d[2] - w * mu, (1 - w) * (jac_s @ v[3:] - nu * scale)
-                    - w * lam]
-            ode[0] += ca.vertcat(zero, jac_s.T * mu)
+            rows = [dae.position_rows(phi * d[2], w, y[-1]),
+                    dae.velocity_rows(p_s, v, norm["nu"] * scale, w, lam)]
+            ode = dae.ggl_q_dot(ode, p_s, y[-1])
         else:
-            gamma = row_kernels.normalization()[1](p, v[3:])
-            rows = [jac_s @ v_dot[3:] - gamma * scale - w * lam]
-        alg += ca.vertcat(zero, jac_s.T * lam)
-    elif kind == "ggl":
-        rows = [phi * d[0]]
-        ode[0] += ca.vertcat(zero, (jac * d[0]).T * y[-1])
+            rows = [dae.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w, lam)]
+    elif kind == "ggl":  # a row of Phi only: w = 0
+        rows = [dae.position_rows(phi * d[0], 0, y[-1])]
+        ode = dae.ggl_q_dot(ode, jac * d[0], y[-1])
+    alg = dae.dynamics(matrix, v_dot, p_s, lam, forces)
     digest = "".join("1" if on else "0" for on in pattern)
-    return _function(f"element_{form}_{kind}_body_{digest}", y, d, [*ode, alg, *rows])
+    return _function(f"element_{form}_{kind}_body_{digest}", y, d, [ode, v_dot, alg, *rows])
 
 
 def generalized_to(form: str, x, generalized):
@@ -154,7 +163,7 @@ def generalized_to(form: str, x, generalized):
     parts = []
     for s in range(generalized.numel() // 7):
         q_s, g_s = x[7 * s:7 * s + 7], generalized[7 * s:7 * s + 7]
-        parts += [g_s[:3], 0.5 * euler.g_matrix(q_s[3:]) @ g_s[3:]]
+        parts += [g_s[:3], body_terms.moment(q_s[3:], g_s[3:])]
     return ca.vertcat(*parts)
 
 

@@ -24,12 +24,11 @@ from casmech.codegen import residual_kernels as kernels
 from casmech.codegen import rows as row_kernels
 from casmech.codegen.elements import DROPPED, ElementSum, Group
 from casmech.codegen.kernels import Layout, by_joint_keys, taylor_or_constant
-from casmech.compiler import dae
+from casmech.compiler import body, dae
 from casmech.compiler.assemble import GROUND_POSE
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import build_functions
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
-from casmech.geometry import euler
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 # A DAE of a model of at most UNROLLED_BODIES bodies is compiled from compiler.dae's unrolled
@@ -225,16 +224,14 @@ def _unrolled_force(ir: ModelIR, ix: Indices, force, t) -> Group:
     if ix.form == "rp":
         q_dot, per_body = v, None
     else:
-        p = [q[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]
-        q_dot = ca.vertcat(v[:3 * nb], *[0.5 * euler.g_matrix(p[k]).T @ v[3 * nb + 3 * k:
-                                                                        3 * nb + 3 * k + 3]
-                                          for k in range(nb)])
-        per_body = p
+        per_body = [q[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]
+        q_dot = ca.vertcat(v[:3 * nb], *[body.p_dot(p, v[3 * nb + 3 * k:3 * nb + 3 * k + 3])
+                                          for k, p in enumerate(per_body)])
     generalized = function(tt, q, q_dot)[0]
     if per_body is not None:
         generalized = ca.vertcat(generalized[:3 * nb], *[
-            0.5 * euler.g_matrix(per_body[k]) @ generalized[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-            for k in range(nb)])
+            body.moment(p, generalized[3 * nb + 4 * k:3 * nb + 4 * k + 4])
+            for k, p in enumerate(per_body)])
     variables = ca.vertcat(q, v)
     columns = sorted(set(ca.jacobian(generalized, variables).sparsity().get_col()))
     rows = sorted(set(ca.sparsify(generalized).sparsity().row())) or [0]

@@ -26,7 +26,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.assemble import GROUND_POSE
+from casmech.compiler import body, eom, romega
+from casmech.compiler.assemble import GROUND_POSE, derivatives, driver_value
 from casmech.compiler.ir import GROUND_INDEX, PrimitiveIR
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.geometry import euler
@@ -43,14 +44,6 @@ class RowKey:
     pattern: tuple[bool, ...]  # which entries of the stacked vectors are non-zero
     f_class: str  # ZERO (f = 0), CONSTANT (f = f0), TIME (Taylor coefficients)
     values: tuple[float, ...] | None = None  # the vectors as constants (baked), else an input
-
-
-def f_expression(prim: PrimitiveIR, t, scale=1.0):
-    """f(t) + offset of a row, drivers multiplied by `scale` (compiler.assemble.driver_value)."""
-    value = prim.f.casadi(t=t) if prim.f is not None else 0.0
-    if prim.is_driver:
-        value = scale * value
-    return ca.SX(value) + prim.offset
 
 
 def f_constant(prim: PrimitiveIR) -> float | None:
@@ -82,7 +75,7 @@ def key_of(prim: PrimitiveIR, baked: bool = False) -> RowKey:
 def taylor(prim: PrimitiveIR, t, scale=1.0):
     """[f, f', f''] at t (an MX expression, the SX of f inlined: no call node per row)."""
     tt, ss = ca.SX.sym("t"), ca.SX.sym("s")
-    f = f_expression(prim, tt, ss)
+    f = ca.SX(driver_value(prim, tt, ss))
     first = ca.jacobian(f, tt)
     of = ca.Function("f", [tt, ss], [ca.vertcat(f, first, ca.jacobian(first, tt))])
     return of.call([t, scale], True, False)[0]
@@ -127,13 +120,16 @@ class _Row:
     def at_instant(self, *expressions):
         return [ca.substitute(e, self.tau, 0) for e in expressions]
 
+    def derivatives(self, phi, x_dot=None) -> dict:
+        """Phi_q (1 x 14), nu and (given x_dot) gamma of the row (compiler.assemble)."""
+        return derivatives(phi, self.x, self.tau, ca.SX(ROW, 1) if x_dot is None else x_dot)
+
     def romega_jacobian(self, phi):
         """[Phi_r_i, Pi_bar_i, Phi_r_j, Pi_bar_j] of the row (1 x 12)."""
         jac = ca.jacobian(phi, self.x)
         parts = []
         for s, (_, p) in enumerate(self.halves):
-            parts += [jac[:, 7 * s:7 * s + 3],
-                      0.5 * jac[:, 7 * s + 3:7 * s + 7] @ euler.g_matrix(p).T]
+            parts += [jac[:, 7 * s:7 * s + 3], body.pi_bar(jac[:, 7 * s + 3:7 * s + 7], p)]
         return ca.horzcat(*parts)
 
 
@@ -142,7 +138,8 @@ def constraint(key: RowKey) -> ca.Function:
     """(x, c, f) -> (phi, jac [1 x 14], nu) of one row at the instant."""
     row = _Row(key)
     phi = row.phi()
-    out = row.at_instant(phi, ca.jacobian(phi, row.x), -ca.jacobian(phi, row.tau))
+    derived = row.derivatives(phi)
+    out = row.at_instant(phi, derived["phi_q"], derived["nu"])
     return ca.Function(f"row_{_name(key)}", [row.x, row.c, row.f], out,
                        ["x", "c", "f"], ["phi", "jac", "nu"])
 
@@ -152,10 +149,7 @@ def gamma(key: RowKey) -> ca.Function:
     """(x, x_dot, c, f) -> gamma = -(Phi_q q_dot)_q q_dot - 2 Phi_qt q_dot - Phi_tt."""
     row = _Row(key)
     x_dot = ca.SX.sym("x_dot", ROW)
-    phi = row.phi()
-    jac_x_dot = ca.jacobian(phi, row.x) @ x_dot
-    value = (-ca.jacobian(jac_x_dot, row.x) @ x_dot - 2 * ca.jacobian(jac_x_dot, row.tau)
-             - ca.jacobian(ca.jacobian(phi, row.tau), row.tau))
+    value = row.derivatives(row.phi(), x_dot)["gamma"]
     return ca.Function(f"gamma_{_name(key)}", [row.x, x_dot, row.c, row.f],
                        row.at_instant(value), ["x", "x_dot", "c", "f"], ["gamma"])
 
@@ -177,10 +171,10 @@ def romega_gamma(key: RowKey) -> ca.Function:
     v = ca.SX.sym("v", V_ROW)
     phi = row.phi()
     x_dot = ca.vertcat(*[ca.vertcat(v[6 * s:6 * s + 3],
-                                    0.5 * euler.g_matrix(row.x[7 * s + 3:7 * s + 7]).T
-                                    @ v[6 * s + 3:6 * s + 6]) for s in range(2)])
-    c = row.romega_jacobian(phi) @ v + ca.jacobian(phi, row.tau)
-    value = -(ca.jacobian(c, row.x) @ x_dot + ca.jacobian(c, row.tau))
+                                    body.p_dot(row.x[7 * s + 3:7 * s + 7], v[6 * s + 3:6 * s + 6]))
+                         for s in range(2)])
+    value = romega.gamma_hat(row.romega_jacobian(phi), row.derivatives(phi)["nu"], v, row.x,
+                             x_dot, row.tau)
     return ca.Function(f"romega_gamma_{_name(key)}", [row.x, v, row.c, row.f],
                        row.at_instant(value), ["x", "v", "c", "f"], ["gamma"])
 
@@ -193,11 +187,9 @@ def reaction(key: RowKey) -> ca.Function:
     row = _Row(key, symbolic_ground=True)
     lam, s = ca.SX.sym("lam"), ca.SX.sym("s", 3)
     phi = row.at_instant(row.phi())[0]
-    (r_i, p_i), (r_j, p_j) = row.halves
-    force = -ca.jacobian(phi, r_j).T @ lam
-    n_bar = -0.5 * euler.g_matrix(p_j) @ ca.jacobian(phi, p_j).T @ lam
-    at = r_i + euler.rotation(p_i) @ s
-    torque = euler.rotation(p_j) @ n_bar + ca.cross(r_j - at, force)
+    frame_i, _ = row.frames()
+    r_j, p_j = row.halves[1]
+    force, torque = eom.reaction(phi, lam, r_j, p_j, eom.at(frame_i, s))
     return ca.Function(f"reaction_{_name(key)}", [row.x, row.c, row.f, lam, s],
                        [force, torque], ["x", "c", "f", "lam", "s"], ["force", "torque"])
 
@@ -213,10 +205,8 @@ def normalization() -> tuple[ca.Function, ca.Function, ca.Function]:
     """p^T p - 1 of one body: (p) -> (phi, jac [1 x 4], nu); (p, p_dot) -> gamma;
     (p) -> Pi_bar (1 x 3: 1/2 Phi_p G^T, zero in value, as in the unrolled functions)."""
     p, p_dot = ca.SX.sym("p", 4), ca.SX.sym("p_dot", 4)
-    phi = p.T @ p - 1
-    jac = ca.jacobian(phi, p)
-    jac_p_dot = jac @ p_dot
-    return (ca.Function("normalization", [p], [phi, jac, ca.SX(1, 1)]),
-            ca.Function("normalization_gamma", [p, p_dot],
-                        [-ca.jacobian(jac_p_dot, p) @ p_dot]),
-            ca.Function("normalization_pi_bar", [p], [0.5 * jac @ euler.g_matrix(p).T]))
+    phi = body.normalization(p)
+    derived = derivatives(phi, p, ca.SX.sym("t"), p_dot)
+    return (ca.Function("normalization", [p], [phi, derived["phi_q"], derived["nu"]]),
+            ca.Function("normalization_gamma", [p, p_dot], [derived["gamma"]]),
+            ca.Function("normalization_pi_bar", [p], [body.pi_bar(derived["phi_q"], p)]))

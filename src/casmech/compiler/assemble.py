@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import body
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR, constant
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.geometry import euler
@@ -80,7 +81,7 @@ def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
         vectors = {k: constant(prim.vectors[k]) for k in keys}
         rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
                             driver_value(prim, x.t, scale)))
-    rows += [x.p(k).T @ x.p(k) - 1 for k in range(ir.n_bodies)]
+    rows += [body.normalization(x.p(k)) for k in range(ir.n_bodies)]
     return ca.vertcat(*rows) if rows else ca.SX(0, 1)
 
 
@@ -88,7 +89,7 @@ def rotational_jacobian(phi_q, x: Coordinates, k: int):
     """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation), from
     body k's columns of Phi_q (docs/decisions.md)."""
     start = 3 * x.n_bodies + 4 * k
-    return 0.5 * phi_q[:, start:start + 4] @ euler.g_matrix(x.p(k)).T
+    return body.pi_bar(phi_q[:, start:start + 4], x.p(k))
 
 
 @dataclass(frozen=True)
@@ -108,11 +109,17 @@ class ConstraintSystem:
 
 def derive(phi, x: Coordinates) -> dict[str, ca.SX]:
     """Phi_q, nu, gamma of any phi(t, q) by AD."""
-    phi_q = ca.jacobian(phi, x.q)
-    phi_t = ca.jacobian(phi, x.t)
-    phi_q_qdot = phi_q @ x.q_dot
-    gamma = (-ca.jacobian(phi_q_qdot, x.q) @ x.q_dot - 2 * ca.jacobian(phi_q_qdot, x.t)
-             - ca.jacobian(phi_t, x.t))
+    return derivatives(phi, x.q, x.t, x.q_dot)
+
+
+def derivatives(phi, q, t, q_dot) -> dict[str, ca.SX]:
+    """Phi_q, nu, gamma of phi(t, q) by AD, for any symbols q, t, q_dot (the whole system's,
+    or one row's: codegen.rows)."""
+    phi_q = ca.jacobian(phi, q)
+    phi_t = ca.jacobian(phi, t)
+    phi_q_qdot = phi_q @ q_dot
+    gamma = (-ca.jacobian(phi_q_qdot, q) @ q_dot - 2 * ca.jacobian(phi_q_qdot, t)
+             - ca.jacobian(phi_t, t))
     return {"phi_q": phi_q, "nu": -phi_t, "gamma": gamma}
 
 

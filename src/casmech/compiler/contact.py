@@ -31,9 +31,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import body as body_terms
 from casmech.compiler import limits
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, constant
-from casmech.geometry import euler
 from casmech.schema.contact import OUTPUTS  # results columns per element
 from casmech.schema.expressions import FUNCTIONS
 
@@ -114,7 +114,7 @@ def _velocity(x, k: int, at):
     """Velocity of body k's material point at the global point `at` (ground: 0)."""
     if k == GROUND_INDEX:
         return ca.SX.zeros(3, 1)
-    omega = 2 * euler.e_matrix(x.p(k)) @ x.p(k, x.q_dot)
+    omega = body_terms.global_rates(x.p(k), x.p(k, x.q_dot))[0]
     return x.r(k, x.q_dot) + ca.cross(omega, at - x.r(k))
 
 

@@ -23,9 +23,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from casmech.compiler import eom
+from casmech.compiler import body, eom
 from casmech.compiler.ir import constant
-from casmech.geometry import euler
 from casmech.geometry.states import split
 from casmech.joint_types import attributes
 from casmech.schema.resolved import ScalarFunction
@@ -57,7 +56,7 @@ JOINT_VALUES: dict[str, Callable] = {
 
 
 def _omega(x, k):
-    return 2 * euler.e_matrix(x.p(k)) @ x.p(k, x.q_dot)
+    return body.global_rates(x.p(k), x.p(k, x.q_dot))[0]
 
 
 _BODY_VECTORS = {

@@ -86,10 +86,10 @@ def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Functi
     functions = with_data(functions, p[n_p:])
     t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
     w, s = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m)
-    jacobian = _scaled(functions[form.jacobian](t, q), s)
+    jacobian = scaled(functions[form.jacobian](t, q), s)
     alg = ca.vertcat(
-        functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
-        jacobian @ v_dot - functions[form.gamma](t, q, v) * s - w * lam)
+        dynamics(functions[form.mass](q), v_dot, jacobian, lam, functions[form.forces](t, q, v)),
+        acceleration_rows(jacobian, v_dot, functions[form.gamma](t, q, v) * s, w, lam))
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
     return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
                        ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
@@ -106,9 +106,42 @@ def _column(p, start: int, stop: int):
     return ca.reshape(p[start:stop], stop - start, 1)
 
 
-def _scaled(matrix, s):
+def scaled(matrix, s):
     """diag(s) matrix."""
     return matrix * ca.repmat(s, 1, matrix.size2())
+
+
+# The residual's terms, written once for the whole system (here) and for one element
+# (codegen.residual_kernels). P_s, phi_s, ...: the rows already scaled by their s (or s_phi).
+
+def constraint_forces(p_s, lam):
+    """P_s^T lam."""
+    return p_s.T @ lam
+
+
+def dynamics(mass, v_dot, p_s, lam, forces):
+    """M v_dot + P_s^T lam - F."""
+    return mass @ v_dot + constraint_forces(p_s, lam) - forces
+
+
+def acceleration_rows(p_s, v_dot, gamma_s, w, lam):
+    """P_s v_dot - gamma_s - w lam (projection)."""
+    return p_s @ v_dot - gamma_s - w * lam
+
+
+def position_rows(phi_s, w_phi, mu):
+    """(1 - w) phi_s - w mu (ggl)."""
+    return (1 - w_phi) * phi_s - w_phi * mu
+
+
+def velocity_rows(p_s, v, nu_s, w, lam):
+    """(1 - w) (P_s v - nu_s) - w lam (ggl)."""
+    return (1 - w) * (p_s @ v - nu_s) - w * lam
+
+
+def ggl_q_dot(q_dot, phi_q_s, mu):
+    """q_dot + Phi_q_s^T mu (ggl)."""
+    return q_dot + constraint_forces(phi_q_s, mu)
 
 
 def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
@@ -135,18 +168,17 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
     w, s, s_phi = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m), _column(p, 1 + 2 * m, n_p)
     v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
-    jacobian = _scaled(functions[form.jacobian](t, q), s)
+    jacobian = scaled(functions[form.jacobian](t, q), s)
     nu = functions[form.nu](t, q) * s
     # r-p: P is Phi_q (one evaluation; s_phi = s)
-    phi_q = jacobian if form.jacobian == "phi_q" else _scaled(functions["phi_q"](t, q), s_phi)
+    phi_q = jacobian if form.jacobian == "phi_q" else scaled(functions["phi_q"](t, q), s_phi)
     phi = functions["phi"](t, q) * s_phi
     w_phi = ca.vertcat(w, sym(n_phi - m, 1))  # r-omega: + normalization rows (structural 0)
     alg = ca.vertcat(
-        functions[form.mass](q) @ v_dot + jacobian.T @ lam - functions[form.forces](t, q, v),
-        (1 - w_phi) * phi - w_phi * mu,
-        (1 - w) * (jacobian @ v - nu) - w * lam)
+        dynamics(functions[form.mass](q), v_dot, jacobian, lam, functions[form.forces](t, q, v)),
+        position_rows(phi, w_phi, mu), velocity_rows(jacobian, v, nu, w, lam))
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
-    return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot + phi_q.T @ mu, v_dot), alg],
+    return ca.Function(key, [tau, x, z, p], [ca.vertcat(ggl_q_dot(q_dot, phi_q, mu), v_dot), alg],
                        ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
 
 

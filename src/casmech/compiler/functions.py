@@ -11,10 +11,9 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import contact, eom, romega
+from casmech.compiler import body, contact, eom, romega
 from casmech.compiler.assemble import build_constraints
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, RowInfo
-from casmech.geometry import euler
 
 
 @dataclass(frozen=True)
@@ -97,8 +96,8 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
     applied, spring_potential = eom.applied_forces(ir, x)
     kinetic, potential = eom.energy(ir, x, spring_potential)
     force, torque = eom.reactions(ir, x, cs.phi_with_ground, lam)
-    omega = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_dot) for k in range(ir.n_bodies)]
-    alpha = [2 * euler.e_matrix(x.p(k)) @ x.p(k, q_ddot) for k in range(ir.n_bodies)]
+    rates = [body.global_rates(x.p(k), x.p(k, q_dot), x.p(k, q_ddot)) for k in range(ir.n_bodies)]
+    omega, alpha = [w for w, _ in rates], [a for _, a in rates]
     stack = (lambda vs: ca.horzcat(*vs)) if ir.n_bodies else (lambda vs: ca.SX(3, 0))
     definitions = [
         ("phi", {"t": t, "q": q}, {"phi": cs.phi}),

@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import casadi as ca
 
-from casmech.compiler import eom
+from casmech.compiler import body, eom
 from casmech.compiler.assemble import ConstraintSystem, Coordinates
 from casmech.compiler.ir import ModelIR, constant
-from casmech.geometry import euler
 
 
 def omega_bar(x: Coordinates, v, k: int):
@@ -32,8 +31,25 @@ def omega_bar(x: Coordinates, v, k: int):
 def q_dot_of(x: Coordinates, v):
     """q_dot(q, v) = [r_dot; 1/2 G(p_k)^T omega_bar_k ...]."""
     nb = x.n_bodies
-    p_dot = [0.5 * euler.g_matrix(x.p(k)).T @ omega_bar(x, v, k) for k in range(nb)]
+    p_dot = [body.p_dot(x.p(k), omega_bar(x, v, k)) for k in range(nb)]
     return ca.vertcat(v[:3 * nb], *p_dot)
+
+
+def q_ddot(q_dot, q, v, v_dot):
+    """The time derivative of q_dot(q, v) (e.g. q_dot_of, or one body's p_dot)."""
+    return ca.jacobian(q_dot, q) @ q_dot + ca.jacobian(q_dot, v) @ v_dot
+
+
+def gamma_hat(jacobian, nu, v, q, q_dot, t):
+    """-d/dt (jacobian v - nu) along q_dot(q, v) at constant v: the acceleration constraint's
+    right-hand side (rows of [Phi_r, Pi_bar] over q and t)."""
+    c = jacobian @ v - nu
+    return -(ca.jacobian(c, q) @ q_dot + ca.jacobian(c, t))
+
+
+def body_torque(p, q_p, w, inertia):
+    """n_bar - omega_bar~ J_bar omega_bar of one body, n_bar = 1/2 G Q_p."""
+    return body.moment(p, q_p) - body.gyroscopic(w, inertia)
 
 
 def mass(ir: ModelIR):
@@ -49,8 +65,7 @@ def forces(ir: ModelIR, x: Coordinates, v, q_dot):
     torques = []
     for k, b in enumerate(ir.bodies):
         q_p = applied[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-        w, inertia = omega_bar(x, v, k), constant(b.inertia)
-        torques.append(0.5 * euler.g_matrix(x.p(k)) @ q_p - ca.cross(w, inertia @ w))
+        torques.append(body_torque(x.p(k), q_p, omega_bar(x, v, k), constant(b.inertia)))
     return ca.vertcat(applied[:3 * nb], *torques)
 
 
@@ -62,9 +77,7 @@ def definitions(ir: ModelIR, cs: ConstraintSystem) -> list[tuple[str, dict, dict
     q_dot = q_dot_of(x, v)
     jacobian = ca.horzcat(cs.phi_r, cs.pi_bar)[:n, :]
     nu = cs.nu[:n, :]
-    c = jacobian @ v - nu
-    gamma = -(ca.jacobian(c, q) @ q_dot + ca.jacobian(c, t))
-    q_ddot = ca.jacobian(q_dot, q) @ q_dot + ca.jacobian(q_dot, v) @ v_dot
+    gamma = gamma_hat(jacobian, nu, v, q, q_dot, t)
     fixed = x.ground_fixed
     return [
         ("romega_mass", {"q": q}, {"mass": mass(ir)}),
@@ -73,5 +86,6 @@ def definitions(ir: ModelIR, cs: ConstraintSystem) -> list[tuple[str, dict, dict
         ("romega_nu", {"t": t, "q": q}, {"nu": nu}),
         ("romega_gamma", {"t": t, "q": q, "v": v}, {"gamma": gamma}),
         ("romega_q_dot", {"q": q, "v": v}, {"q_dot": q_dot}),
-        ("romega_to_rp", {"q": q, "v": v, "v_dot": v_dot}, {"q_dot": q_dot, "q_ddot": q_ddot}),
+        ("romega_to_rp", {"q": q, "v": v, "v_dot": v_dot},
+         {"q_dot": q_dot, "q_ddot": q_ddot(q_dot, q, v, v_dot)}),
     ]
