@@ -149,7 +149,7 @@ def dense_initial_state(functions, q):
 
 
 @pytest.mark.parametrize("path", DENSE_CASES, ids=lambda path: path.stem)
-def test_initial_state_equals_the_dense_code(path, sparse):
+def test_least_squares_stage_equals_the_dense_code(path, sparse):
     """From the file's pose and from a pose 1e-3 away (so Newton takes real steps). Bricard
     from the perturbed pose is left out: near the solution its Phi_q has a singular value
     of 1e-13 of the largest (the redundant row), which dense lstsq still inverts (|Phi| went
@@ -161,13 +161,59 @@ def test_initial_state_equals_the_dense_code(path, sparse):
     if path.stem != "bricard":
         starts.append(guess + 1e-3 * np.random.default_rng(0).standard_normal(guess.size))
     for start in starts:
-        q = assembly.assemble_positions(functions, 0.0, start)
+        q = assembly.least_squares_positions(functions, 0.0, start)
         q_dot = assembly.solve_velocities(functions, 0.0, q, assembly.file_velocities(functions, q))
         dense_q, dense_q_dot = dense_initial_state(functions, start)
         # the same Newton steps up to roundoff, both stopped at |Phi| <= 1e-12: measured <= 4e-18
         np.testing.assert_allclose(q, dense_q, rtol=0, atol=1e-13)
         # velocities of O(1..50): roundoff of the solves, measured <= 1e-14
         np.testing.assert_allclose(q_dot, dense_q_dot, rtol=0, atol=1e-12)
+
+
+def off_the_constraints(path, size=1e-2, seed=0):
+    """The model's bundle and its file pose moved by `size` (random, every coordinate)."""
+    functions = casmech.compile(casmech.load(path))
+    guess = assembly.initial_guess(functions)
+    return functions, guess + size * np.random.default_rng(seed).standard_normal(guess.size)
+
+
+def normal_part(functions, q, direction):
+    """The part of `direction` outside range(Phi_q(q)^T) (0 for a KKT point's q - q_ref)."""
+    phi_q = functions.matrix("phi_q", 0.0, q)
+    return direction - phi_q.T @ np.linalg.lstsq(phi_q.T, direction, rcond=None)[0]
+
+
+@pytest.mark.parametrize("model", ["double_pendulum", "flyball_governor", "triple_pendulum", "heavy_top"])
+def test_assembled_pose_is_the_closest_point_with_degrees_of_freedom(model):
+    """q - q_ref in range(Phi_q^T) (first-order optimality of min |q - q_ref| on Phi = 0),
+    where the least-squares Newton's end point is not, and nearer to q_ref than that one."""
+    functions, reference = off_the_constraints(MODELS / f"{model}.yaml")
+    q = assembly.assemble_positions(functions, 0.0, reference)
+    newton_q = assembly.least_squares_positions(functions, 0.0, reference)
+    assert np.max(np.abs(functions.vector("phi", 0.0, q))) <= assembly.POSITION_TOLERANCE
+    # the rootfinder stops at |KKT residual| <= 1e-14 (measured <= 1e-13 after the lstsq split)
+    np.testing.assert_allclose(normal_part(functions, q, q - reference), 0, rtol=0, atol=1e-10)
+    # Newton's point is off by O(1e-2 ^ 2) (measured 4e-6..2e-4): the polish did the work
+    assert np.max(np.abs(normal_part(functions, newton_q, newton_q - reference))) > 1e-7
+    assert np.linalg.norm(q - reference) < np.linalg.norm(newton_q - reference)
+
+
+@pytest.mark.parametrize("model", ["four_bar", "slider_crank", "spatial_rsur"])
+def test_fully_driven_pose_is_the_least_squares_one(model):
+    """Without degrees of freedom the root is isolated: the rootfinder keeps Newton's point."""
+    functions, reference = off_the_constraints(MODELS / f"{model}.yaml", 1e-3)
+    q = assembly.assemble_positions(functions, 0.0, reference)
+    # both converged to the same root (|Phi| <= 1e-12 and O(1) Jacobians): measured <= 1e-15
+    np.testing.assert_allclose(q, assembly.least_squares_positions(functions, 0.0, reference),
+                               rtol=0, atol=1e-12)
+
+
+def test_a_pose_on_the_constraints_is_kept():
+    """The closest point of a pose that meets Phi = 0 is itself: returned as it is."""
+    functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"))
+    guess = assembly.initial_guess(functions)
+    assert np.max(np.abs(functions.vector("phi", 0.0, guess))) <= assembly.POSITION_TOLERANCE
+    np.testing.assert_array_equal(assembly.assemble_positions(functions), guess)
 
 
 @pytest.mark.parametrize("model", ["bricard", "flyball_governor", "four_bar", "quadruped_legs"])

@@ -1,14 +1,19 @@
-"""Assembly: positions by Newton from the file's pose, then velocities and accelerations.
+"""Assembly: positions from the file's pose, then velocities and accelerations.
+
+The assembled pose is the point of Phi(t, q) = 0 closest to the file's pose (Euclidean in q):
+the root of compiler.kkt.closest_point's KKT system, reached in two stages. First the
+least-squares Newton of `newton` gets onto the right branch: drivers of composite joints are
+reached by continuation, their values scaled from 0 (the pose in the file) to 1 in steps of at
+most MAX_DRIVER_STEP radians/metres, so Newton never jumps to the mirrored root of a rotation
+driver. Its end point depends on Newton's path where the mechanism has degrees of freedom
+(within O(distance^2) of the closest point); the rootfinder then converges to the closest point
+in a few iterations. casmech.optimal differentiates the same rootfinder.
 
 Linear algebra on the bundle's sparse matrices (CasADi DM) by compiler.numeric_qr (least
 squares as numpy.linalg.lstsq gives it, square solves; dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
 step rejects) stays dense.
-
-Drivers of composite joints are reached by continuation: the driver values are scaled from 0
-(the pose in the file) to 1 in steps of at most MAX_DRIVER_STEP radians/metres, so Newton never
-jumps to the mirrored root of a rotation driver.
 """
 
 from __future__ import annotations
@@ -18,15 +23,17 @@ import math
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import numeric_qr
-from casmech.compiler.checks import dependent_joints, worst_joints
+from casmech.compiler import kkt, numeric_qr
+from casmech.compiler.checks import dependent_joints, structure, worst_joints
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.geometry import euler
+from casmech.runtime.memo import kept
 
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
 MAX_DRIVER_STEP = 0.5
+KEPT_ROOTFINDERS = 4  # closest_point Functions kept per system (one per set of rows)
 
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
@@ -78,12 +85,42 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
 
 
 def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
-    q = initial_guess(functions) if q is None else np.array(q, float)
+    """The point of Phi(t, .) = 0 closest to q (default: the file's pose); q itself when it
+    meets the constraints (module docstring)."""
+    reference = initial_guess(functions) if q is None else np.array(q, float)
+    if _worst(functions.vector("phi", t, reference)) <= POSITION_TOLERANCE:
+        return reference
+    return closest_point(functions, t, least_squares_positions(functions, t, reference),
+                         reference)
+
+
+def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
+    """Driver continuation, then Newton with least-squares steps, from q."""
     steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
         q = newton(functions, t, q, scale=k / steps,
                    tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
     return q
+
+
+def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
+                  reference: np.ndarray) -> np.ndarray:
+    """compiler.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
+    itself where the rootfinder does not reach |Phi| <= POSITION_TOLERANCE (a Jacobian
+    losing rank at q makes the KKT matrix nearly singular)."""
+    rows = structure(functions, t, q).independent
+    solve = kept(functions.derived.setdefault("closest_point", {}), rows,
+                 lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
+                 KEPT_ROOTFINDERS)
+    polished = np.array(solve(q, t, reference)[0]).ravel()
+    worst = _worst(functions.vector("phi", t, polished))
+    return polished if worst <= POSITION_TOLERANCE else q
+
+
+def _worst(phi: np.ndarray) -> float:
+    """max |phi| (inf when not finite)."""
+    worst = np.max(np.abs(phi), initial=0.0)
+    return worst if np.isfinite(worst) else math.inf
 
 
 def initial_state(functions: SystemFunctions, t0: float = 0.0):
