@@ -17,7 +17,7 @@ of runtime.assembly lands within O(|q_ref - q|^2) of it and hands it the start. 
 KKT system needs the redundant rows dropped (the matrix is singular otherwise): `rows` are the
 ones compiler.checks.structure keeps.
 
-saddle solves the equations of motion's linear part by a sparse direct solve (CasADi "qr":
+saddle solves the equations of motion's linear part by a sparse direct solve (CSparse LU:
 the matrix is symmetric but indefinite). w masks rows (w_k = 1 turns row k into
 lam_k = P_k v_dot - gamma_k, which is 0 for a redundant row: compiler.dae's masked DAE); w = 0
 is the plain KKT system. The augmented-Lagrangian iteration of compiler.augmented is the
@@ -30,7 +30,7 @@ import casadi as ca
 
 ROOT_TOLERANCE = 1e-14  # max |KKT residual| the rootfinder's Newton iterates to
 ROOT_ITERATIONS = 20  # Newton iterations from the least-squares start (2-4 are typical)
-SADDLE_SOLVER = "qr"
+SADDLE_SOLVER = "csparse"  # sparse LU with partial pivoting (the matrix is indefinite)
 
 
 def _symbols(*functions: ca.Function):
@@ -67,7 +67,7 @@ def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
 
 def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
     """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
-    [F; gamma] (module docstring), M and P with the given sparsity, by CasADi's sparse QR.
+    [F; gamma] (module docstring), M and P with the given sparsity, by SADDLE_SOLVER.
     Called with symbols it inlines into a graph (casmech.optimal), with numbers it is the
     numeric solve (runtime)."""
     n, m = mass.size1(), jacobian.size1()
