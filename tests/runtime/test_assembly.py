@@ -118,7 +118,6 @@ def test_progress_is_called_with_every_row_time():
 @pytest.fixture
 def sparse(monkeypatch):
     monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)
-    monkeypatch.setattr(numeric_qr, "DENSE_SQUARE_ENTRIES", 0)
 
 
 DENSE_CASES = [*sorted(MODELS.glob("*.yaml")),
@@ -183,7 +182,8 @@ def normal_part(functions, q, direction):
     return direction - phi_q.T @ np.linalg.lstsq(phi_q.T, direction, rcond=None)[0]
 
 
-@pytest.mark.parametrize("model", ["double_pendulum", "flyball_governor", "triple_pendulum", "heavy_top"])
+@pytest.mark.parametrize("model", ["double_pendulum", "flyball_governor", "triple_pendulum",
+                                   "heavy_top"])
 def test_assembled_pose_is_the_closest_point_with_degrees_of_freedom(model):
     """q - q_ref in range(Phi_q^T) (first-order optimality of min |q - q_ref| on Phi = 0),
     where the least-squares Newton's end point is not, and nearer to q_ref than that one."""
@@ -217,9 +217,10 @@ def test_a_pose_on_the_constraints_is_kept():
 
 
 @pytest.mark.parametrize("model", ["bricard", "flyball_governor", "four_bar", "quadruped_legs"])
-def test_dynamic_accelerations_equal_the_dense_least_squares(model, sparse):
-    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]; singular with Bricard's redundant row,
-    where lstsq gives the minimum-norm multipliers."""
+def test_dynamic_accelerations_equal_the_dense_least_squares(model):
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma] (compiler.kkt.saddle over the
+    independent rows); singular with Bricard's redundant row, where lstsq gives the
+    minimum-norm multipliers."""
     functions = casmech.compile(casmech.load(MODELS / f"{model}.yaml"))
     q, _ = assembly.initial_state(functions)
     q_dot = assembly.solve_velocities(functions, 0.0, q, np.ones_like(q))  # moving: gamma != 0
@@ -236,8 +237,9 @@ def test_dynamic_accelerations_equal_the_dense_least_squares(model, sparse):
                                atol=1e-10 * scale)
 
 
-def test_projection_equals_the_dense_solve(sparse):
-    """project's damped Gauss-Newton steps, sparse against dense, from a drifted state."""
+def test_projection_equals_the_dense_solve():
+    """project's damped Gauss-Newton steps (compiler.augmented.projection's sparse LDL) against
+    dense NumPy iterations, from a drifted state."""
     from casmech.compiler.formulations import FORMULATIONS
 
     functions = casmech.compile(casmech.load(MODELS / "flyball_governor.yaml"))

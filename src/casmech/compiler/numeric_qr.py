@@ -179,19 +179,9 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
 FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
 # Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
 # the factorization here (one Python step per nonzero of R, a few us). Measured on chains:
-# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state;
-# the square M / a + P^T P of assembly.project, 32 links (224 x 224): 9 ms dense, 28 ms sparse.
+# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state.
 DENSE_ENTRIES = 20_000  # lstsq
-DENSE_SQUARE_ENTRIES = 250_000  # factorize
 DENSE_NORM_ENTRIES = 20_000  # norm2: SVD 0.1-3 ms up to here, like the power iteration
-
-
-def factorize(a: ca.DM):
-    """b -> the solution of a x = b, for a square, nonsingular a (factored once if sparse)."""
-    if a.numel() <= DENSE_SQUARE_ENTRIES:
-        dense = np.array(a)
-        return lambda b: np.linalg.solve(dense, np.ravel(b))
-    return NumericQR(a).solve
 
 
 def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:

@@ -9,8 +9,10 @@ driver. Its end point depends on Newton's path where the mechanism has degrees o
 (within O(distance^2) of the closest point); the rootfinder then converges to the closest point
 in a few iterations. casmech.optimal differentiates the same rootfinder.
 
-Linear algebra on the bundle's sparse matrices (CasADi DM) by compiler.numeric_qr (least
-squares as numpy.linalg.lstsq gives it, square solves; dense below its size limits),
+Accelerations and multipliers are compiler.kkt.saddle's, the projection back onto the
+constraints compiler.augmented.projection's: the Functions casmech.optimal and the integrators
+use. The least-squares steps (Newton, velocities) run on the bundle's sparse matrices
+(CasADi DM) by compiler.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
 step rejects) stays dense.
@@ -35,7 +37,7 @@ from casmech.runtime.memo import kept
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
 MAX_DRIVER_STEP = 0.5
-KEPT_ROOTFINDERS = 4  # closest_point and saddle Functions kept per system (one per rows)
+KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
 
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
@@ -113,7 +115,7 @@ def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
     rows = structure(functions, t, q).independent
     solve = kept(functions.derived.setdefault("closest_point", {}), rows,
                  lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
-                 KEPT_ROOTFINDERS)
+                 KEPT_SOLVERS)
     polished = np.array(solve(q, t, reference)[0]).ravel()
     worst = _worst(functions.vector("phi", t, polished))
     return polished if worst <= POSITION_TOLERANCE else q
@@ -187,7 +189,7 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     phi_q = functions["phi_q"](t, q)[rows, :]
     mass = functions["mass_matrix"](q)
     saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
-                  lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_ROOTFINDERS)
+                  lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
     q_ddot, lam = saddle(mass, phi_q, functions["generalized_forces"](t, q, q_dot),
                          functions["gamma"](t, q, q_dot)[rows], ca.DM.zeros(len(rows)))
     return np.array(q_ddot).ravel(), np.array(lam).ravel()
