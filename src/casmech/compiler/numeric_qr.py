@@ -164,7 +164,7 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
         candidates = kept[:a.size2()]  # a^T must not be wider than tall
         if not candidates:  # no coordinates: every row is zero
             break
-        diagonal = NumericQR(a[candidates, :].T, order=False).diagonal()
+        diagonal = _distances(a[candidates, :].T)
         small = [k for k in range(start, len(candidates)) if not diagonal[k] > tolerance * scale]
         if small:  # drop the first dependent row, factor the others again
             keep[kept.pop(small[0])] = False
@@ -176,12 +176,23 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
     return keep
 
 
+def _distances(a: ca.DM) -> np.ndarray:
+    """|R_kk| of the QR of a in its own column order: by LAPACK up to DENSE_QR_ENTRIES."""
+    if a.numel() <= DENSE_QR_ENTRIES:
+        return np.abs(np.diag(np.linalg.qr(np.array(a), mode="r")))
+    return NumericQR(a, order=False).diagonal()
+
+
 FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
 # Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
 # the factorization here (one Python step per nonzero of R, a few us). Measured on chains:
 # lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state.
 DENSE_ENTRIES = 20_000  # lstsq
 DENSE_NORM_ENTRIES = 20_000  # norm2: SVD 0.1-3 ms up to here, like the power iteration
+# independent_rows' QR of Phi_q^T (R only), dense against the sparse factorization here: 0.05
+# against 0.45 ms on the four-bar, 1.2 against 25 ms on a 32-link chain, 103 against 367 ms
+# on 128 links (benchmarks/notes_numerics2.md)
+DENSE_QR_ENTRIES = 500_000
 
 
 def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:

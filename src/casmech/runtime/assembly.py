@@ -110,9 +110,13 @@ def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray)
 def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
                   reference: np.ndarray) -> np.ndarray:
     """compiler.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
-    itself where the rootfinder does not reach |Phi| <= POSITION_TOLERANCE (a Jacobian
-    losing rank at q makes the KKT matrix nearly singular)."""
+    itself where those rows fix every coordinate (no degree of freedom: an isolated root, the
+    closest point of its neighbourhood) or where the rootfinder does not reach
+    |Phi| <= POSITION_TOLERANCE (a Jacobian losing rank at q makes the KKT matrix nearly
+    singular)."""
     rows = structure(functions, t, q).independent
+    if len(rows) == functions.n_coordinates:
+        return q
     solve = kept(functions.derived.setdefault("closest_point", {}), rows,
                  lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
                  KEPT_SOLVERS)
