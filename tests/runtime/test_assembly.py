@@ -113,12 +113,15 @@ def test_progress_is_called_with_every_row_time():
 
 
 # Sparse linear algebra (compiler.numeric_qr) against the dense numpy code it replaced; the
-# gallery's matrices are below numeric_qr's dense limits, so the sparse path is forced.
+# gallery's matrices are below numeric_qr's dense limits, so its sparse path and its dense QR
+# path are forced.
 
 
-@pytest.fixture
-def sparse(monkeypatch):
+@pytest.fixture(params=["sparse", "dense_qr"])
+def sparse(monkeypatch, request):
     monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)
+    if request.param == "sparse":
+        monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", 0)
 
 
 DENSE_CASES = [*sorted(MODELS.glob("*.yaml")),
