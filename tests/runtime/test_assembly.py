@@ -1,6 +1,7 @@
 """Assembly: positions from the file's pose, drivers reached by continuation, velocities
 projected onto the constraints, accelerations and reactions from the equations of motion."""
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -293,3 +294,25 @@ def test_velocities_from_rest_without_drivers_need_no_solve(monkeypatch):
     np.testing.assert_allclose(driven.matrix("phi_q", 0.0, q_driven) @ q_dot,
                                driven.vector("nu", 0.0, q_driven), rtol=0, atol=1e-12)
     assert np.any(q_dot)
+
+
+def test_saddle_solution_of_a_singular_system_is_the_least_squares_one():
+    """A pendulum's constraint rows with its first row repeated: the KKT matrix is singular,
+    the LU of kkt.saddle refuses it and saddle_solution gives numpy's least-squares solution."""
+    functions = casmech.compile(casmech.loads(pendulum(0.4, 1.0)))
+    q, q_dot = assembly.initial_state(functions)
+    mass, phi_q = functions["mass_matrix"](q), functions["phi_q"](0.0, q)
+    phi_q = ca.vertcat(phi_q, phi_q[0, :])
+    gamma = functions.vector("gamma", 0.0, q, q_dot)
+    gamma = np.append(gamma, gamma[0])
+    forces, w = functions["generalized_forces"](0.0, q, q_dot), np.zeros(len(gamma))
+    saddle = kkt.saddle(mass.sparsity(), phi_q.sparsity())
+    with pytest.raises(RuntimeError, match="singular"):
+        saddle(mass, phi_q, forces, gamma, w)
+    v_dot, lam = assembly.saddle_solution(saddle, mass, phi_q, forces, gamma, w)
+    lhs = np.block([[np.array(mass), np.array(phi_q).T],
+                    [np.array(phi_q), np.zeros((len(w), len(w)))]])
+    expected = np.linalg.lstsq(lhs, np.concatenate([np.array(forces).ravel(), gamma]),
+                               rcond=None)[0]
+    # the same dense lstsq call: identical
+    np.testing.assert_allclose(np.concatenate([v_dot, lam]), expected, rtol=0, atol=0)

@@ -2,7 +2,7 @@
 runtime and casmech.optimal both call:
 
     closest_point(phi, phi_q, rows)    assembly: the point of Phi(t, q) = 0 nearest to q_ref
-    saddle(sym, n, m)                  accelerations and multipliers:
+    saddle(M pattern, P pattern)       accelerations and multipliers:
                                        [M P^T; P -diag(w)] [v_dot; lam] = [F; gamma]
 
 closest_point is a CasADi rootfinder on the first-order optimality (KKT) conditions of

@@ -25,6 +25,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from casmech import interrupts
 from casmech.compiler import augmented, kkt, numeric_qr
 from casmech.compiler.checks import dependent_joints, structure, worst_joints
 from casmech.compiler.formulations import FORMULATIONS
@@ -194,9 +195,23 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     mass = functions["mass_matrix"](q)
     saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
                   lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
-    q_ddot, lam = saddle(mass, phi_q, functions["generalized_forces"](t, q, q_dot),
-                         functions["gamma"](t, q, q_dot)[rows], ca.DM.zeros(len(rows)))
-    return np.array(q_ddot).ravel(), np.array(lam).ravel()
+    return saddle_solution(saddle, mass, phi_q, functions["generalized_forces"](t, q, q_dot),
+                           functions.vector("gamma", t, q, q_dot)[rows], np.zeros(len(rows)))
+
+
+def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma: np.ndarray,
+                    w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(v_dot, lam) by a compiler.kkt.saddle Function; where its LU meets a zero pivot (P lost
+    rank exactly and no row is masked), the least-squares solution."""
+    try:
+        v_dot, lam = (np.array(out).ravel() for out in saddle(mass, jac, forces, gamma, w))
+        if np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam)):
+            return v_dot, lam
+    except RuntimeError as error:
+        interrupts.check(error)
+    lhs = np.block([[np.array(mass), np.array(jac).T], [np.array(jac), -np.diag(w)]])
+    z = np.linalg.lstsq(lhs, np.concatenate([np.ravel(np.array(forces)), gamma]), rcond=None)[0]
+    return z[:mass.size1()], z[mass.size1():]
 
 
 def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,

@@ -141,20 +141,14 @@ class _Model:
     def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
         scales s (the DAE's lam: the true multipliers are s * lam): compiler.kkt.saddle on
-        [M P_s^T; P_s -diag(mask)]. Where that is singular (a singular configuration at the
-        start) its factorization gives no finite solution; the least-squares one then."""
+        [M P_s^T; P_s -diag(mask)] (the least-squares solution where that is singular: a
+        singular configuration at the start)."""
         f, form = self.functions, self.form
         mass, jac = f[form.mass](q), ca.mtimes(ca.diag(ca.DM(s)), f[form.jacobian](t, q))
         gamma, forces = f.vector(form.gamma, t, q, v) * s, f[form.forces](t, q, v)
-        saddle = kept(f.derived.setdefault("saddle", {}), self.name,
-                      lambda: kkt.saddle(mass.sparsity(), jac.sparsity()), KEPT_STARTS)
-        v_dot, lam = (np.array(out).ravel() for out in saddle(mass, jac, forces, gamma, mask))
-        if np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam)):
-            return v_dot, lam
-        lhs = np.block([[np.array(mass), np.array(jac).T], [np.array(jac), -np.diag(mask)]])
-        rhs = np.concatenate([np.array(forces).ravel(), gamma])
-        z = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
-        return z[:self.n_v], z[self.n_v:]
+        saddle = kept(f.derived.setdefault("dae_saddle", {}), self.name,
+                      lambda: kkt.saddle(mass.sparsity(), jac.sparsity()), len(FORMULATIONS))
+        return assembly.saddle_solution(saddle, mass, jac, forces, gamma, mask)
 
     def accelerations(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, true multipliers) at (t, q, v)."""
