@@ -45,8 +45,9 @@ def test_accelerations_solve_the_saddle_point_system(chain, name):
 
 @pytest.mark.parametrize("name", ["rp", "romega"])
 def test_projection_is_assembly_project(chain, name):
-    """From a state 1e-6 off the constraints, the graph's two Gauss-Newton steps land where
-    assembly.project's iterations (to |Phi| <= 1e-12) do, with the constraints held."""
+    """From a state 1e-6 off the constraints, one call of the graph (two Gauss-Newton steps)
+    lands where assembly.project's calls of it until |Phi| <= 1e-12 do, with the constraints
+    held."""
     functions, q, q_dot = chain
     form = FORMULATIONS[name]
     rng = np.random.default_rng(3)

@@ -82,9 +82,12 @@ def test_a02_flat_pose_equals_dense(n):
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_random_sparse_rows_with_planted_dependencies(seed):
+@pytest.mark.parametrize("dense_qr", [0, numeric_qr.DENSE_QR_ENTRIES], ids=["sparse", "dense"])
+def test_random_sparse_rows_with_planted_dependencies(seed, dense_qr, monkeypatch):
     """Rows that are combinations of earlier rows (or zero, or a copy) are found, in a sparse
-    matrix as wide as the r-p Jacobians (more coordinates than rows) and a square one."""
+    matrix as wide as the r-p Jacobians (more coordinates than rows) and a square one, by
+    numeric_qr's own factorization and by LAPACK's (its dense path)."""
+    monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", dense_qr)
     rng = np.random.default_rng(seed)
     rows, columns = (30, 45) if seed % 2 else (40, 40)
     matrix = rng.standard_normal((rows, columns)) * (rng.random((rows, columns)) < 0.15)

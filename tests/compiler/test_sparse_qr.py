@@ -53,9 +53,11 @@ def test_numeric_solves_equal_lstsq(m, n, order):
 
 
 @pytest.mark.parametrize("m, n", [(10, 16), (16, 10), (12, 12)])
-def test_numeric_lstsq_of_rank_deficient_matrices(m, n, monkeypatch):
+@pytest.mark.parametrize("dense_qr", [0, numeric_qr.DENSE_QR_ENTRIES])
+def test_numeric_lstsq_of_rank_deficient_matrices(m, n, dense_qr, monkeypatch):
     """Rows that are combinations of others (and, for a tall matrix, a repeated column): the
-    least-squares solution of least norm, as the SVD gives it, for an inconsistent b."""
+    least-squares solution of least norm, as the SVD gives it, for an inconsistent b (the
+    dense QR path sees the rank loss and leaves these to the sparse one)."""
     rng = np.random.default_rng(7 * m + n)
     a = sparse_random(rng, m, n)
     a[3], a[7] = 2 * a[1] - a[0], a[2]
@@ -63,6 +65,7 @@ def test_numeric_lstsq_of_rank_deficient_matrices(m, n, monkeypatch):
         a[:, 4] = a[:, 2]
     b = rng.standard_normal(m)
     monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)  # the sparse path at this size
+    monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", dense_qr)
     np.testing.assert_allclose(numeric_qr.lstsq(ca.sparsify(ca.DM(a)), b),
                                np.linalg.lstsq(a, b, rcond=None)[0], rtol=0, atol=1e-12)
 

@@ -1,11 +1,13 @@
 """Assembly: positions from the file's pose, drivers reached by continuation, velocities
 projected onto the constraints, accelerations and reactions from the equations of motion."""
 
+import casadi as ca
 import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import numeric_qr
+from casmech.compiler import kkt, numeric_qr
+from casmech.compiler.checks import structure
 from casmech.errors import AnalysisError
 from casmech.runtime import assembly
 from tests.conftest import MODELS, Table
@@ -112,13 +114,15 @@ def test_progress_is_called_with_every_row_time():
 
 
 # Sparse linear algebra (compiler.numeric_qr) against the dense numpy code it replaced; the
-# gallery's matrices are below numeric_qr's dense limits, so the sparse path is forced.
+# gallery's matrices are below numeric_qr's dense limits, so its sparse path and its dense QR
+# path are forced.
 
 
-@pytest.fixture
-def sparse(monkeypatch):
+@pytest.fixture(params=["sparse", "dense_qr"])
+def sparse(monkeypatch, request):
     monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)
-    monkeypatch.setattr(numeric_qr, "DENSE_SQUARE_ENTRIES", 0)
+    if request.param == "sparse":
+        monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", 0)
 
 
 DENSE_CASES = [*sorted(MODELS.glob("*.yaml")),
@@ -149,7 +153,7 @@ def dense_initial_state(functions, q):
 
 
 @pytest.mark.parametrize("path", DENSE_CASES, ids=lambda path: path.stem)
-def test_initial_state_equals_the_dense_code(path, sparse):
+def test_least_squares_stage_equals_the_dense_code(path, sparse):
     """From the file's pose and from a pose 1e-3 away (so Newton takes real steps). Bricard
     from the perturbed pose is left out: near the solution its Phi_q has a singular value
     of 1e-13 of the largest (the redundant row), which dense lstsq still inverts (|Phi| went
@@ -161,7 +165,7 @@ def test_initial_state_equals_the_dense_code(path, sparse):
     if path.stem != "bricard":
         starts.append(guess + 1e-3 * np.random.default_rng(0).standard_normal(guess.size))
     for start in starts:
-        q = assembly.assemble_positions(functions, 0.0, start)
+        q = assembly.least_squares_positions(functions, 0.0, start)
         q_dot = assembly.solve_velocities(functions, 0.0, q, assembly.file_velocities(functions, q))
         dense_q, dense_q_dot = dense_initial_state(functions, start)
         # the same Newton steps up to roundoff, both stopped at |Phi| <= 1e-12: measured <= 4e-18
@@ -170,10 +174,79 @@ def test_initial_state_equals_the_dense_code(path, sparse):
         np.testing.assert_allclose(q_dot, dense_q_dot, rtol=0, atol=1e-12)
 
 
+def off_the_constraints(path, size=1e-2, seed=0):
+    """The model's bundle and its file pose moved by `size` (random, every coordinate)."""
+    functions = casmech.compile(casmech.load(path))
+    guess = assembly.initial_guess(functions)
+    return functions, guess + size * np.random.default_rng(seed).standard_normal(guess.size)
+
+
+def normal_part(functions, q, direction):
+    """The part of `direction` outside range(Phi_q(q)^T) (0 for a KKT point's q - q_ref)."""
+    phi_q = functions.matrix("phi_q", 0.0, q)
+    return direction - phi_q.T @ np.linalg.lstsq(phi_q.T, direction, rcond=None)[0]
+
+
+@pytest.mark.parametrize("model", ["double_pendulum", "flyball_governor", "triple_pendulum",
+                                   "heavy_top"])
+def test_assembled_pose_is_the_closest_point_with_degrees_of_freedom(model):
+    """q - q_ref in range(Phi_q^T) (first-order optimality of min |q - q_ref| on Phi = 0),
+    where the least-squares Newton's end point is not, and nearer to q_ref than that one."""
+    functions, reference = off_the_constraints(MODELS / f"{model}.yaml")
+    q = assembly.assemble_positions(functions, 0.0, reference)
+    newton_q = assembly.least_squares_positions(functions, 0.0, reference)
+    assert np.max(np.abs(functions.vector("phi", 0.0, q))) <= assembly.POSITION_TOLERANCE
+    # the rootfinder stops at |KKT residual| <= 1e-14 (measured <= 1e-13 after the lstsq split)
+    np.testing.assert_allclose(normal_part(functions, q, q - reference), 0, rtol=0, atol=1e-10)
+    # Newton's point is off by O(1e-2 ^ 2) (measured 4e-6..2e-4): the polish did the work
+    assert np.max(np.abs(normal_part(functions, newton_q, newton_q - reference))) > 1e-7
+    assert np.linalg.norm(q - reference) < np.linalg.norm(newton_q - reference)
+
+
+def test_closest_point_of_a_compiled_bundle():
+    """Through the C functions (the rootfinder's Jacobian then differentiates the externals'
+    phi_q by its generated forward derivative): the interpreted bundle's point."""
+    points = []
+    for mode in ("interpreted", "compiled"):
+        functions = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"), mode)
+        guess = assembly.initial_guess(functions)
+        reference = guess + 1e-2 * np.random.default_rng(0).standard_normal(guess.size)
+        points.append(assembly.assemble_positions(functions, 0.0, reference))
+        assert np.max(np.abs(points[-1] - assembly.least_squares_positions(
+            functions, 0.0, reference))) > 1e-6  # the rootfinder moved it
+    # the same expressions evaluated in C and by CasADi's VM: roundoff (measured 1.1e-16)
+    np.testing.assert_allclose(points[1], points[0], rtol=0, atol=1e-13)
+
+
+@pytest.mark.parametrize("model", ["four_bar", "slider_crank", "spatial_rsur"])
+def test_fully_driven_pose_is_the_least_squares_one(model):
+    """Without degrees of freedom the root is isolated: the rootfinder from Newton's point
+    stays there, which is why assembly does not call it then."""
+    functions, reference = off_the_constraints(MODELS / f"{model}.yaml", 1e-3)
+    newton_q = assembly.least_squares_positions(functions, 0.0, reference)
+    rows = structure(functions, 0.0, newton_q).independent
+    assert len(rows) == functions.n_coordinates
+    closest = kkt.closest_point(functions["phi"], functions["phi_q"], rows)
+    q = np.array(closest(newton_q, 0.0, reference)[0]).ravel()
+    # both converged to the same root (|Phi| <= 1e-12 and O(1) Jacobians): measured <= 1e-15
+    np.testing.assert_allclose(q, newton_q, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(assembly.assemble_positions(functions, 0.0, reference),
+                                  newton_q)
+
+
+def test_a_pose_on_the_constraints_is_kept():
+    """The closest point of a pose that meets Phi = 0 is itself: returned as it is."""
+    functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"))
+    guess = assembly.initial_guess(functions)
+    assert np.max(np.abs(functions.vector("phi", 0.0, guess))) <= assembly.POSITION_TOLERANCE
+    np.testing.assert_array_equal(assembly.assemble_positions(functions), guess)
+
+
 @pytest.mark.parametrize("model", ["bricard", "flyball_governor", "four_bar", "quadruped_legs"])
-def test_dynamic_accelerations_equal_the_dense_least_squares(model, sparse):
-    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]; singular with Bricard's redundant row,
-    where lstsq gives the minimum-norm multipliers."""
+def test_dynamic_accelerations_equal_the_dense_least_squares(model):
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma] (compiler.kkt.saddle over the
+    independent rows); singular with Bricard's redundant row, where lstsq gives the
+    minimum-norm multipliers."""
     functions = casmech.compile(casmech.load(MODELS / f"{model}.yaml"))
     q, _ = assembly.initial_state(functions)
     q_dot = assembly.solve_velocities(functions, 0.0, q, np.ones_like(q))  # moving: gamma != 0
@@ -190,8 +263,9 @@ def test_dynamic_accelerations_equal_the_dense_least_squares(model, sparse):
                                atol=1e-10 * scale)
 
 
-def test_projection_equals_the_dense_solve(sparse):
-    """project's damped Gauss-Newton steps, sparse against dense, from a drifted state."""
+def test_projection_equals_the_dense_solve():
+    """project's damped Gauss-Newton steps (compiler.augmented.projection's sparse LDL) against
+    dense NumPy iterations, from a drifted state."""
     from casmech.compiler.formulations import FORMULATIONS
 
     functions = casmech.compile(casmech.load(MODELS / "flyball_governor.yaml"))
@@ -235,3 +309,25 @@ def test_velocities_from_rest_without_drivers_need_no_solve(monkeypatch):
     np.testing.assert_allclose(driven.matrix("phi_q", 0.0, q_driven) @ q_dot,
                                driven.vector("nu", 0.0, q_driven), rtol=0, atol=1e-12)
     assert np.any(q_dot)
+
+
+def test_saddle_solution_of_a_singular_system_is_the_least_squares_one():
+    """A pendulum's constraint rows with its first row repeated: the KKT matrix is singular,
+    the LU of kkt.saddle refuses it and saddle_solution gives numpy's least-squares solution."""
+    functions = casmech.compile(casmech.loads(pendulum(0.4, 1.0)))
+    q, q_dot = assembly.initial_state(functions)
+    mass, phi_q = functions["mass_matrix"](q), functions["phi_q"](0.0, q)
+    phi_q = ca.vertcat(phi_q, phi_q[0, :])
+    gamma = functions.vector("gamma", 0.0, q, q_dot)
+    gamma = np.append(gamma, gamma[0])
+    forces, w = functions["generalized_forces"](0.0, q, q_dot), np.zeros(len(gamma))
+    saddle = kkt.saddle(mass.sparsity(), phi_q.sparsity())
+    with pytest.raises(RuntimeError, match="singular"):
+        saddle(mass, phi_q, forces, gamma, w)
+    v_dot, lam = assembly.saddle_solution(saddle, mass, phi_q, forces, gamma, w)
+    lhs = np.block([[np.array(mass), np.array(phi_q).T],
+                    [np.array(phi_q), np.zeros((len(w), len(w)))]])
+    expected = np.linalg.lstsq(lhs, np.concatenate([np.array(forces).ravel(), gamma]),
+                               rcond=None)[0]
+    # the same dense lstsq call: identical
+    np.testing.assert_allclose(np.concatenate([v_dot, lam]), expected, rtol=0, atol=0)

@@ -20,8 +20,12 @@ corrections, 1e-16 (tests/compiler/test_augmented.py).
 
 The penalty a is an input: the runtime scales it to the model (PENALTY times mass over
 constraint-gradient size), so no user constant is involved. `projection` takes the same
-a-damped, mass-orthogonal steps back onto the position and velocity constraints
-(runtime.projected_rk4 takes one after every Runge-Kutta step).
+a-damped, mass-orthogonal steps back onto the position and velocity constraints: the one
+projection of casmech (runtime.projected_rk4 takes one after every Runge-Kutta step,
+runtime.assembly.project calls it until |Phi| is at its tolerance).
+
+These are kept beside compiler.kkt.saddle (the direct solve of [M P^T; P 0]) because they stay
+well-posed where P loses rank, where that matrix is singular.
 """
 
 from __future__ import annotations
@@ -61,9 +65,9 @@ def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
 
 
 def projection(functions: dict[str, ca.Function], name: str) -> ca.Function:
-    """(t, q, v, penalty) -> (q, v) moved back onto Phi = 0 and then onto P v = nu, by the
-    mass-orthogonal steps of runtime.assembly.project, (M / a + P^T P) dx = -P^T r (positions
-    in r-p coordinates, velocities in the formulation's), as a sparse MX graph. A fixed
+    """(t, q, v, penalty) -> (q, v) moved back onto Phi = 0 and then onto P v = nu, by
+    mass-orthogonal steps (M / a + P^T P) dx = -P^T r (positions in r-p coordinates,
+    velocities in the formulation's), as a sparse MX graph. A fixed
     PROJECTION_ITERATIONS Gauss-Newton steps for the positions: a Runge-Kutta step's drift was
     at most 4.7e-12 on A02 N = 2 (2.5 ms steps over its first second, a flat pose included)
     and 4.7e-16 after the projection; the caller checks |Phi| at the outputs all the same.

@@ -164,7 +164,7 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
         candidates = kept[:a.size2()]  # a^T must not be wider than tall
         if not candidates:  # no coordinates: every row is zero
             break
-        diagonal = NumericQR(a[candidates, :].T, order=False).diagonal()
+        diagonal = _distances(a[candidates, :].T)
         small = [k for k in range(start, len(candidates)) if not diagonal[k] > tolerance * scale]
         if small:  # drop the first dependent row, factor the others again
             keep[kept.pop(small[0])] = False
@@ -176,26 +176,39 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
     return keep
 
 
+def _distances(a: ca.DM) -> np.ndarray:
+    """|R_kk| of the QR of a in its own column order: by LAPACK up to DENSE_QR_ENTRIES."""
+    if a.numel() <= DENSE_QR_ENTRIES:
+        return np.abs(np.diag(np.linalg.qr(np.array(a), mode="r")))
+    return NumericQR(a, order=False).diagonal()
+
+
 FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
 # Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
 # the factorization here (one Python step per nonzero of R, a few us). Measured on chains:
-# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state;
-# the square M / a + P^T P of assembly.project, 32 links (224 x 224): 9 ms dense, 28 ms sparse.
+# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state.
 DENSE_ENTRIES = 20_000  # lstsq
-DENSE_SQUARE_ENTRIES = 250_000  # factorize
 DENSE_NORM_ENTRIES = 20_000  # norm2: SVD 0.1-3 ms up to here, like the power iteration
+# independent_rows' QR of Phi_q^T (R only) and lstsq's of a full-rank matrix, dense against
+# the sparse factorization here: 0.05 against 0.45 ms on the four-bar, 1.2 against 25 ms on a
+# 32-link chain, 103 against 367 ms on 128 links (benchmarks/notes_numerics2.md)
+DENSE_QR_ENTRIES = 500_000
 
 
-def factorize(a: ca.DM):
-    """b -> the solution of a x = b, for a square, nonsingular a (factored once if sparse)."""
-    if a.numel() <= DENSE_SQUARE_ENTRIES:
-        dense = np.array(a)
-        return lambda b: np.linalg.solve(dense, np.ravel(b))
-    return NumericQR(a).solve
+def _dense_full_rank(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """lstsq's answer by LAPACK's QR where a has full rank (None otherwise): of a^T when a is
+    wide (the minimum-norm solution), of a when tall (least squares)."""
+    wide = a.shape[0] <= a.shape[1]
+    q, r = np.linalg.qr(a.T if wide else a)
+    diagonal = np.abs(np.diag(r))
+    if not diagonal.min() > FULL_RANK * diagonal.max():
+        return None
+    return q @ np.linalg.solve(r.T, b) if wide else np.linalg.solve(r, q.T @ b)
 
 
 def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:
-    """numpy.linalg.lstsq(a, b)[0]: by NumPy up to DENSE_ENTRIES; above, for a sparse a: full row
+    """numpy.linalg.lstsq(a, b)[0]: by NumPy's SVD up to DENSE_ENTRIES, its QR up to
+    DENSE_QR_ENTRIES where a has full rank; otherwise, for a sparse a: full row
     rank: the minimum-norm solution (QR of a^T); full column rank: least squares (QR of a).
     Otherwise the rows D within tolerance * |a|_2 of the span of earlier rows I are taken as
     a_D = C a_I exactly (C by least squares); then a x = b in least squares is a_I x = y with
@@ -207,6 +220,10 @@ def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:
         return np.zeros(n)
     if a.numel() <= DENSE_ENTRIES:
         return np.linalg.lstsq(np.array(a), b, rcond=None)[0]
+    if a.numel() <= DENSE_QR_ENTRIES:
+        x = _dense_full_rank(np.array(a), b)
+        if x is not None:
+            return x
     qr = NumericQR(a.T) if m <= n else NumericQR(a)
     diagonal = qr.diagonal()
     if diagonal.min() > FULL_RANK * diagonal.max():

@@ -17,6 +17,10 @@ minimum norm are what the per-row code computes with numpy.linalg.lstsq, so redu
 (max |Phi| <= assembly.POSITION_TOLERANCE) and whether Phi_q may have lost rank (a small pivot
 ratio); such rows are left to the per-row code, which reports the failure with its joints.
 
+For a fully driven mechanism Phi_q alone fixes q_ddot, so the step solves with Phi_q's QR
+rather than compiler.kkt.saddle's [M Phi_q^T; Phi_q 0] (twice the unknowns): one
+factorization serves velocities, accelerations and the multipliers.
+
 `grid(step, rows)` maps the step over a grid with mapaccum, nested (an inner map of CHUNK
 rows inside an outer one), so building the mapped Function costs O(CHUNK + rows / CHUNK)
 instead of O(rows); the grid is padded to a multiple of CHUNK.

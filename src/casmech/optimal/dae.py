@@ -5,28 +5,29 @@
     alg: [M q_ddot + Phi_q^T lam - Q - B^T u;  Phi_q q_ddot - gamma]
 
 over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
-state is a function of theta: positions are casmech's assembly (runtime/assembly.py: driver
-continuation, then least-squares Newton from the file's pose, itself a function of theta)
-unrolled as a CasADi graph with the iteration counts the nominal assembly takes plus one (so the
-result is the same map near the nominal theta, and its derivative the derivative of the
-converged point, also when the mechanism has degrees of freedom and the pose depends on the path
-Newton takes); velocities are the file's
-velocities corrected by the least-squares step onto Phi_q q_dot = nu.
-"""
+state is a function of theta: positions are casmech's assembly, the point of Phi = 0 closest to
+the file's pose (itself a function of theta), by the rootfinder of compiler.kkt.closest_point
+that the runtime's assembly ends with, so its derivative is the implicit one; velocities are
+the file's velocities corrected by the least-squares step onto Phi_q q_dot = nu."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import kkt
 from casmech.compiler.checks import structure
 from casmech.optimal.system import ParametricSystem
-from casmech.runtime import assembly
 from casmech.runtime.assembly import initial_state
 from casmech.runtime.results import column_names
+
+# The linear solver of the DAE's algebraic states in the integrators' graphs: QR, as CasADi's
+# MX solve does by default (compiler.kkt.saddle's CSparse LU builds far faster on big models;
+# tests/optimal's finite differences of a structurally zero derivative sit at their noise floor
+# and were measured with this one: benchmarks/notes_numerics2.md).
+SADDLE_SOLVER = "qr"
 
 
 @dataclass(frozen=True)
@@ -95,52 +96,14 @@ def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
                q_nom, q_dot_nom)
 
 
-def _newton_counts(dae: DAE) -> list[tuple[float | None, int]]:
-    """(driver scale or None, Newton iterations) of each stage of the nominal assembly, as
-    runtime/assembly.py runs it (continuation stages, then the unscaled solve)."""
-    nominal, t0 = dae.system.nominal, dae.t0
-    q = assembly.initial_guess(nominal)
-    steps = max(1, math.ceil(assembly.driver_span(nominal, t0) / assembly.MAX_DRIVER_STEP))
-    stages = [(k / steps, 1e-8 if k < steps else assembly.POSITION_TOLERANCE)
-              for k in range(1, steps + 1)] + [(None, assembly.POSITION_TOLERANCE)]
-    counts = []
-    for scale, tolerance in stages:
-        count = 0
-        while count < assembly.MAX_ITERATIONS:
-            if scale is None:
-                phi, phi_q = nominal.vector("phi", t0, q), nominal.matrix("phi_q", t0, q)
-            else:
-                phi, phi_q = nominal.evaluate("phi_scaled", t0, q, scale)
-                phi = phi.ravel()
-            if np.max(np.abs(phi), initial=0.0) <= tolerance:
-                break
-            q = q + np.linalg.lstsq(phi_q, -phi, rcond=None)[0]
-            count += 1
-        counts.append((scale, count))
-    return counts
-
-
-def _assembly_graph(dae: DAE, theta) -> ca.MX:
-    """Assembled positions as a function of theta: the nominal Newton iterations unrolled, one
-    more per stage, least-squares steps on the independent rows."""
-    system, rows, t0 = dae.system, list(dae.rows), dae.t0
-    q = system["initial_guess"](theta)
-    for scale, count in _newton_counts(dae):
-        for _ in range(count + 1):
-            if scale is None:
-                phi, jac = system["phi"](t0, q, theta), system["phi_q"](t0, q, theta)
-            else:
-                phi, jac = system["phi_scaled"](t0, q, scale, theta)
-            phi, jac = phi[rows], jac[rows, :]
-            q = q - jac.T @ ca.solve(jac @ jac.T, phi)
-    return q
-
-
 def initial_state_function(dae: DAE) -> ca.Function:
-    """x0(theta): consistent positions and velocities (differentiable in theta)."""
+    """x0(theta): consistent positions and velocities (differentiable in theta). Positions:
+    compiler.kkt.closest_point (the runtime's assembly) to the file's pose at theta, over the
+    DAE's rows, from the nominal assembled pose; its derivative is the implicit one."""
     system, rows, t0 = dae.system, list(dae.rows), dae.t0
     th = ca.MX.sym("theta", dae.theta.numel())
-    q0 = _assembly_graph(dae, th)
+    closest = kkt.closest_point(system["phi"], system["phi_q"], rows)
+    q0 = closest(dae.q_assembled, t0, system["initial_guess"](th), th)[0]
     guess = system["file_velocities"](q0, th)
     jac = system["phi_q"](t0, q0, th)[rows, :]
     rhs = system["nu"](t0, q0, th)[rows] - jac @ guess
@@ -149,14 +112,19 @@ def initial_state_function(dae: DAE) -> ca.Function:
 
 
 def algebraic_function(dae: DAE) -> ca.Function:
-    """z(t, x, p) = [q_ddot, lam] solving alg = 0 (alg is linear in z): a sparse linear solve
-    in an MX graph, so outputs can be written in x alone (what adjoint sweeps need)."""
-    zeros = ca.DM.zeros(dae.z.numel())
-    parts = ca.Function("kkt", [dae.t, dae.x, dae.p],
-                        [ca.jacobian(dae.alg, dae.z), ca.substitute(dae.alg, dae.z, zeros)])
+    """z(t, x, p) = [q_ddot, lam] solving alg = 0: compiler.kkt.saddle with M, P, F and gamma
+    read off alg (linear in z), in an MX graph, so outputs can be written in x alone (what
+    adjoint sweeps need)."""
+    n, zeros = dae.n, ca.DM.zeros(dae.z.numel())
+    q_ddot = dae.z[:n]
+    rest = ca.substitute(dae.alg, dae.z, zeros)  # [-F; -gamma]
+    mass, jac = ca.jacobian(dae.alg[:n], q_ddot), ca.jacobian(dae.alg[n:], q_ddot)
+    parts = ca.Function("kkt", [dae.t, dae.x, dae.p], [mass, jac, -rest[:n], -rest[n:]])
     t, x, p = ca.MX.sym("t"), ca.MX.sym("x", dae.x.numel()), ca.MX.sym("p", dae.p.numel())
-    matrix, residual = parts(t, x, p)
-    return ca.Function("z", [t, x, p], [ca.solve(matrix, -residual)], ["t", "x", "p"], ["z"])
+    m, a, f, gamma = parts(t, x, p)
+    saddle = kkt.saddle(parts.sparsity_out(0), parts.sparsity_out(1), SADDLE_SOLVER)
+    v_dot, lam = saddle(m, a, f, gamma, ca.DM.zeros(jac.size1()))
+    return ca.Function("z", [t, x, p], [ca.vertcat(v_dot, lam)], ["t", "x", "p"], ["z"])
 
 
 def consistent_algebraic(dae: DAE, x0: np.ndarray, theta: np.ndarray, u=None) -> np.ndarray:

@@ -22,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.optimal.dae import DAE
-from casmech.runtime.assembly import newton
+from casmech.runtime.assembly import newton, solve_velocities
 
 MAX_ITERATIONS = 50
 TOLERANCE = 1e-10
@@ -62,14 +62,7 @@ class Guess:
 
     def state(self, t: float) -> np.ndarray:
         q, q_dot, _ = self.rates(t)
-        return np.concatenate([q, _project_velocity(self.dae, t, q, q_dot)])
-
-
-def _project_velocity(dae: DAE, t, q, q_dot):
-    nominal = dae.system.nominal
-    jac = nominal.matrix("phi_q", t, q)[list(dae.rows), :]
-    residual = nominal.vector("nu", t, q)[list(dae.rows)] - jac @ q_dot
-    return q_dot + np.linalg.lstsq(jac, residual, rcond=None)[0]
+        return np.concatenate([q, solve_velocities(self.dae.system.nominal, t, q, q_dot)])
 
 
 def target_pose(dae: DAE, columns: ca.Function, names: list[str], terminal: dict,

@@ -1,14 +1,21 @@
-"""Assembly: positions by Newton from the file's pose, then velocities and accelerations.
+"""Assembly: positions from the file's pose, then velocities and accelerations.
 
-Linear algebra on the bundle's sparse matrices (CasADi DM) by compiler.numeric_qr (least
-squares as numpy.linalg.lstsq gives it, square solves; dense below its size limits),
+The assembled pose is the point of Phi(t, q) = 0 closest to the file's pose (Euclidean in q):
+the root of compiler.kkt.closest_point's KKT system, reached in two stages. First the
+least-squares Newton of `newton` gets onto the right branch: drivers of composite joints are
+reached by continuation, their values scaled from 0 (the pose in the file) to 1 in steps of at
+most MAX_DRIVER_STEP radians/metres, so Newton never jumps to the mirrored root of a rotation
+driver. Its end point depends on Newton's path where the mechanism has degrees of freedom
+(within O(distance^2) of the closest point); the rootfinder then converges to the closest point
+in a few iterations. casmech.optimal differentiates the same rootfinder.
+
+Accelerations and multipliers are compiler.kkt.saddle's, the projection back onto the
+constraints compiler.augmented.projection's: the Functions casmech.optimal and the integrators
+use. The least-squares steps (Newton, velocities) run on the bundle's sparse matrices
+(CasADi DM) by compiler.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
 step rejects) stays dense.
-
-Drivers of composite joints are reached by continuation: the driver values are scaled from 0
-(the pose in the file) to 1 in steps of at most MAX_DRIVER_STEP radians/metres, so Newton never
-jumps to the mirrored root of a rotation driver.
 """
 
 from __future__ import annotations
@@ -18,15 +25,20 @@ import math
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import numeric_qr
-from casmech.compiler.checks import dependent_joints, worst_joints
+from casmech import interrupts
+from casmech.compiler import augmented, kkt, numeric_qr
+from casmech.compiler.checks import dependent_joints, structure, worst_joints
+from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.geometry import euler
+from casmech.runtime.dae_rows import minimum_norm
+from casmech.runtime.memo import kept
 
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
 MAX_DRIVER_STEP = 0.5
+KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
 
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
@@ -78,12 +90,46 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
 
 
 def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
-    q = initial_guess(functions) if q is None else np.array(q, float)
+    """The point of Phi(t, .) = 0 closest to q (default: the file's pose); q itself when it
+    meets the constraints (module docstring)."""
+    reference = initial_guess(functions) if q is None else np.array(q, float)
+    if _worst(functions.vector("phi", t, reference)) <= POSITION_TOLERANCE:
+        return reference
+    return closest_point(functions, t, least_squares_positions(functions, t, reference),
+                         reference)
+
+
+def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
+    """Driver continuation, then Newton with least-squares steps, from q."""
     steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
         q = newton(functions, t, q, scale=k / steps,
                    tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
     return q
+
+
+def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
+                  reference: np.ndarray) -> np.ndarray:
+    """compiler.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
+    itself where those rows fix every coordinate (no degree of freedom: an isolated root, the
+    closest point of its neighbourhood) or where the rootfinder does not reach
+    |Phi| <= POSITION_TOLERANCE (a Jacobian losing rank at q makes the KKT matrix nearly
+    singular)."""
+    rows = structure(functions, t, q).independent
+    if len(rows) == functions.n_coordinates:
+        return q
+    solve = kept(functions.derived.setdefault("closest_point", {}), rows,
+                 lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
+                 KEPT_SOLVERS)
+    polished = np.array(solve(q, t, reference)[0]).ravel()
+    worst = _worst(functions.vector("phi", t, polished))
+    return polished if worst <= POSITION_TOLERANCE else q
+
+
+def _worst(phi: np.ndarray) -> float:
+    """max |phi| (inf when not finite)."""
+    worst = np.max(np.abs(phi), initial=0.0)
+    return worst if np.isfinite(worst) else math.inf
 
 
 def initial_state(functions: SystemFunctions, t0: float = 0.0):
@@ -129,59 +175,64 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
 
 def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
                                 q_dot: np.ndarray, rows=None) -> tuple[np.ndarray, np.ndarray]:
-    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now.
-    `rows` restricts the constraints to an independent subset (lam then has their length)."""
-    n = functions.n_coordinates
-    phi_q = functions["phi_q"](t, q)
-    gamma = functions.vector("gamma", t, q, q_dot)
-    if rows is not None:
-        phi_q, gamma = phi_q[list(rows), :], gamma[list(rows)]
-    m = phi_q.size1()
-    lhs = ca.blockcat([[functions["mass_matrix"](q), phi_q.T], [phi_q, ca.DM(m, m)]])
-    rhs = np.concatenate([functions.vector("generalized_forces", t, q, q_dot), gamma])
-    solution = numeric_qr.lstsq(lhs, rhs)
-    return solution[:n], solution[n:]
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now, by
+    compiler.kkt.saddle over the rows independent at q (checks.structure; the normalization
+    rows and every joint row of a mechanism without redundant joints). lam covers every row:
+    on redundant rows, the multipliers of least norm with the same reaction (what least
+    squares of the whole singular system gives). `rows` restricts the constraints to an
+    independent subset instead (lam then has their length)."""
+    if rows is None:
+        independent = list(structure(functions, t, q).independent)
+        q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent)
+        if len(independent) == functions.n_rows:
+            return q_ddot, lam
+        phi_q = functions["phi_q"](t, q)
+        full = np.zeros(functions.n_rows)
+        full[independent] = lam
+        return q_ddot, np.array(minimum_norm(phi_q, ca.DM(full), independent)).ravel()
+    rows = list(rows)
+    phi_q = functions["phi_q"](t, q)[rows, :]
+    mass = functions["mass_matrix"](q)
+    saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
+                  lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
+    return saddle_solution(saddle, mass, phi_q, functions["generalized_forces"](t, q, q_dot),
+                           functions.vector("gamma", t, q, q_dot)[rows], np.zeros(len(rows)))
+
+
+def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma: np.ndarray,
+                    w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(v_dot, lam) by a compiler.kkt.saddle Function; where its LU meets a zero pivot (P lost
+    rank exactly and no row is masked), the least-squares solution."""
+    try:
+        v_dot, lam = (np.array(out).ravel() for out in saddle(mass, jac, forces, gamma, w))
+        if np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam)):
+            return v_dot, lam
+    except RuntimeError as error:
+        interrupts.check(error)
+    lhs = np.block([[np.array(mass), np.array(jac).T], [np.array(jac), -np.diag(w)]])
+    z = np.linalg.lstsq(lhs, np.concatenate([np.ravel(np.array(forces)), gamma]), rcond=None)[0]
+    return z[:mass.size1()], z[mass.size1():]
 
 
 def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,
             penalty: float, accept: float = POSITION_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
-    """Back onto Phi = 0, then onto the velocity constraints, each by mass-orthogonal
-    corrections damped with the augmented-Lagrangian penalty: (M / a + P^T P) dx = -P^T r.
-    Where P is well-conditioned this is the Gauss-Newton step of least kinetic energy; near a
-    singular configuration the damping keeps the step from jumping along the nearly lost
-    direction (a Euclidean least-squares step there moved A02 onto the wrong branch), at the
-    price of slow progress along it: iterations stop at POSITION_TOLERANCE, and a residual
-    below `accept` after MAX_ITERATIONS is taken as converged."""
-    mass = functions["mass_matrix"](q)
-    for _ in range(MAX_ITERATIONS):
+    """Back onto Phi = 0, then onto the velocity constraints: compiler.augmented.projection
+    (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty) called
+    until |Phi| <= POSITION_TOLERANCE. Near a singular configuration the damping keeps a step
+    from jumping along the nearly lost direction (a Euclidean least-squares step there moved
+    A02 onto the wrong branch), at the price of slow progress along it: a residual below
+    `accept` after MAX_ITERATIONS steps is taken as converged."""
+    name = next(key for key, value in FORMULATIONS.items() if value == form)
+    step = kept(functions.derived.setdefault("projection", {}), name,
+                lambda: augmented.projection(functions.functions, name), len(FORMULATIONS))
+    for _ in range(math.ceil(MAX_ITERATIONS / augmented.PROJECTION_ITERATIONS)):
+        q, v = (np.array(out).ravel() for out in step(t, q, v, penalty))
         phi = functions.vector("phi", t, q)
-        if np.max(np.abs(phi), initial=0.0) <= POSITION_TOLERANCE:
-            break
-        q = q - _damped_step(mass, functions["phi_q"](t, q), phi, penalty)
-    else:
-        phi = functions.vector("phi", t, q)
-        if np.max(np.abs(phi), initial=0.0) > accept:
-            cause = (f"the projection onto the constraints did not converge in "
-                     f"{MAX_ITERATIONS} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); the "
-                     "joints with the largest residuals:")
-            raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
-    jac = functions[form.jacobian](t, q)
-    residual = np.array(ca.mtimes(jac, ca.DM(v))).ravel() - functions.vector(form.nu, t, q)
-    return q, v - _damped_step(functions[form.mass](q), jac, residual, penalty)
-
-
-REFINEMENTS = 2  # iterative-refinement steps of the damped solve
-
-
-def _damped_step(mass: ca.DM, jac: ca.DM, residual: np.ndarray, penalty: float) -> np.ndarray:
-    """(M / a + P^T P)^-1 P^T r, with the sparse matrices of the bundle. The matrix's condition
-    is ~1e12 (the penalty ratio times M's); the sparse QR's solution was 1e-4 off (relative)
-    on a chain where numpy's LU was 5e-8 off, and REFINEMENTS steps on the residual bring it
-    to the LU's (both backward stable; the refinement makes the QR's componentwise so)."""
-    lhs = mass / penalty + ca.mtimes(jac.T, jac)
-    rhs = np.array(ca.mtimes(jac.T, ca.DM(residual))).ravel()
-    solve = numeric_qr.factorize(lhs)
-    step = solve(rhs)
-    for _ in range(REFINEMENTS):
-        step += solve(rhs - np.array(ca.mtimes(lhs, ca.DM(step))).ravel())
-    return step
+        if _worst(phi) <= POSITION_TOLERANCE:
+            return q, v
+    if _worst(phi) > accept:
+        cause = (f"the projection onto the constraints did not converge in "
+                 f"{MAX_ITERATIONS} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); the "
+                 "joints with the largest residuals:")
+        raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
+    return q, v

@@ -40,10 +40,11 @@ benchmarks/notes_rpstep.md, section "Moved from runtime/dynamics.py".
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
 from casmech import interrupts
-from casmech.compiler import augmented, dae
+from casmech.compiler import augmented, dae, kkt
 from casmech.compiler.checks import dependent_joints, structure
 from casmech.compiler.formulations import FORMULATIONS, Formulation
 from casmech.compiler.functions import SystemFunctions
@@ -139,17 +140,15 @@ class _Model:
 
     def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
-        scales s (the DAE's lam: the true multipliers are s * lam)."""
-        f = self.functions
-        jac = f.matrix(self.form.jacobian, t, q) * s[:, None]
-        gamma = f.vector(self.form.gamma, t, q, v) * s
-        lhs = np.block([[f.matrix(self.form.mass, q), jac.T], [jac, -np.diag(mask)]])
-        rhs = np.concatenate([f.vector(self.form.forces, t, q, v), gamma])
-        try:
-            z = np.linalg.solve(lhs, rhs)
-        except np.linalg.LinAlgError:  # singular configuration: the least-squares solution
-            z = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
-        return z[:self.n_v], z[self.n_v:]
+        scales s (the DAE's lam: the true multipliers are s * lam): compiler.kkt.saddle on
+        [M P_s^T; P_s -diag(mask)] (the least-squares solution where that is singular: a
+        singular configuration at the start)."""
+        f, form = self.functions, self.form
+        mass, jac = f[form.mass](q), ca.mtimes(ca.diag(ca.DM(s)), f[form.jacobian](t, q))
+        gamma, forces = f.vector(form.gamma, t, q, v) * s, f[form.forces](t, q, v)
+        saddle = kept(f.derived.setdefault("dae_saddle", {}), self.name,
+                      lambda: kkt.saddle(mass.sparsity(), jac.sparsity()), len(FORMULATIONS))
+        return assembly.saddle_solution(saddle, mass, jac, forces, gamma, mask)
 
     def accelerations(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, true multipliers) at (t, q, v)."""
