@@ -39,8 +39,11 @@ def test_integrator_by_names_equals_the_ordinary_call():
     grid = list(np.linspace(0.1, 2.0, 20))
     integrator = ca.integrator("i", "idas", problem, 0.0, grid, {"abstol": 1e-10})
     call = NamedCall(integrator)
+    assert call.stats() == {}  # before a call
     got = call(x0=np.array([1.0, 0.0]), z0=np.array([0.5]), p=np.array([4.0]))
+    steps = call.stats()["nsteps"]  # the buffered call's own statistics
     want = integrator(x0=[1.0, 0.0], z0=0.5, p=4.0)
+    assert steps == integrator.stats()["nsteps"] > 0
     for name in ("xf", "zf"):
         # the same integration of the same numbers
         np.testing.assert_allclose(got[name], np.array(want[name]), rtol=0, atol=0)
@@ -48,7 +51,6 @@ def test_integrator_by_names_equals_the_ordinary_call():
                                {"max_num_steps": 50})
     with pytest.raises(RuntimeError, match="CV_TOO_MUCH_WORK"):
         NamedCall(blowing_up)(x0=np.ones(2))
-    assert call.stats()["nsteps"] > 0  # the integrator's own statistics of that call
 
 
 @pytest.mark.parametrize("count", [0, 1, 3, 256, 257, 600])

@@ -57,7 +57,11 @@ class NamedCall:
         return dict(zip(self.function.name_out(), self.call(*args), strict=True))
 
     def stats(self) -> dict:
-        return self.function.stats()
+        """The statistics of the last call (kept by the buffer's own memory), {} before one."""
+        try:
+            return self.call.buffer.stats() if self.call.dense else self.function.stats()
+        except RuntimeError:  # no call yet
+            return {}
 
 
 # Columns per mapped call. casadi builds a Map in time growing with its length and the

@@ -19,6 +19,7 @@ import numpy as np
 
 from casmech.compiler import dae
 from casmech.compiler.functions import SystemFunctions
+from casmech.runtime.buffers import NamedCall
 from casmech.runtime.memo import kept
 
 KEPT_INTEGRATORS = 4  # per system (each holds IDAS's memory and its Newton matrix)
@@ -34,15 +35,16 @@ def problem(functions: SystemFunctions, name: str, kind: str) -> dict | ca.Funct
 
 
 def integrator(functions: SystemFunctions, name: str, kind: str, times, options: dict,
-               keep: bool = True) -> ca.Function:
+               keep: bool = True) -> NamedCall:
     """IDAS on the DAE from tau = 0 over `times` (relative to the start) with `options`: the
     one kept for the same grid and options, else a new one (kept unless keep is False: a
-    restart within a run, an event's trial points)."""
+    restart within a run, an event's trial points). Called by input names, its outputs
+    written into NumPy (runtime.buffers.NamedCall)."""
     grid = tuple(float(t) for t in times)
 
-    def build() -> ca.Function:
-        return ca.integrator("dynamics", "idas", problem(functions, name, kind), 0.0,
-                             list(grid), options)
+    def build() -> NamedCall:
+        return NamedCall(ca.integrator("dynamics", "idas", problem(functions, name, kind), 0.0,
+                                       list(grid), options))
 
     if not keep:
         return build()
