@@ -8,10 +8,16 @@ it, with `d` its third input); each DAE residual is compiler.dae's over that bun
 (t, x, z, [p; d]), with its daeF and jacF (codegen.residuals.from_residual). The cache key is
 the model's structure (compiler.parametric's signature) with its text, component files and
 tables, never the values.
+For a dynamics analysis the library also holds the joint formulation's functions
+(compiler.joint_system over the same symbolic IR, their trailing input the model data with the
+tree's constants): the tree's ODE with its forward derivative or the loops' DAE with its
+Jacobian, the results rows, the loops' start functions and joint_data, which computes that
+input from d.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
-integrator's p.
+integrator's p. The joint functions are bound to joint_data(d) and kept apart from the system
+functions, in SystemFunctions.derived[LIBRARY_FUNCTIONS] (runtime.joint_dynamics takes them).
 """
 
 from __future__ import annotations
@@ -32,10 +38,15 @@ from casmech.compiler import parametric, prescribed
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
+from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
+from casmech.compiler.joint_system import build as build_joint_system
+from casmech.compiler.tree import spanning_tree
 from casmech.schema.resolved import ResolvedModel
 
 MAX_BODIES = 32  # above: the mapped library (codegen.mapped), values in its key
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
+JOINT_ANALYSES = ("dynamics",)  # the joint formulation's functions too
+JOINT_DATA = "joint_data"
 
 
 def applies(model: ResolvedModel) -> bool:
@@ -56,6 +67,17 @@ def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 
+def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
+    """The joint formulation's functions by name, each with the derivatives generated with it
+    (what runtime.joint_dynamics.compiled_system compiles for a numeric bundle)."""
+    system = build_joint_system(split.ir, spanning_tree(split.ir), split.symbols)
+    dynamics = system.dynamics
+    derivative = dynamics.jacobian() if system.n_cut else dynamics.forward(1)
+    return {dynamics.name(): [dynamics, derivative], "joint_motion": [system.motion],
+            "joint_acceleration_system": [system.acceleration_system],
+            "joint_velocity_jacobian": [system.velocity_jacobian], JOINT_DATA: [system.data]}
+
+
 def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
     """(the system functions with input d, the DAE residuals over them by name)."""
     split = parametric.split(ir)
@@ -74,11 +96,17 @@ def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca
 def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, dae: bool,
                 build_libraries) -> Path:
     functions, oracles = bundle(ir, dae)
-    sources = generate.write_sources(functions, directory, toolchain.jobs)
+    joint = (joint_functions(parametric.split(ir)) if ir.analysis.type in JOINT_ANALYSES
+             else {})
+    groups = generate.units(functions) | joint
+    sources = generate.write_units(groups, directory, toolchain.jobs,
+                                   generate.HEADER.removesuffix(".h"))
     dae_sources = generate.write_dae_sources(oracles, directory)
     build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
-    return manifest.write(directory, {**functions, **{n: o[n] for n, o in oracles.items()}},
-                          generate.differentiated(functions), {
+    listed = {**functions, **{n: members[0] for n, members in joint.items()},
+              **{n: o[n] for n, o in oracles.items()}}
+    jacobians = generate.differentiated(functions) | ({"joint_dae"} & set(joint))
+    return manifest.write(directory, listed, jacobians, {
                               **info, "parametric": True, "parameters": list(ir.parameters),
                               "data": int(functions["phi"].size1_in(2)),
                               "casmech": casmech.__version__,
@@ -100,6 +128,12 @@ def bind(function: ca.Function, values: np.ndarray) -> ca.Function:
 
 def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
     loaded = externals(directory)
+    joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
     functions = {name: f if name.startswith("dae_") else bind(f, values)
                  for name, f in loaded.items()}
-    return SystemFunctions(functions, **metadata(ir), data=values)
+    bundle_ = SystemFunctions(functions, **metadata(ir), data=values)
+    if joint:
+        joint_data = np.array(joint.pop(JOINT_DATA)(values).full()).ravel()
+        bundle_.derived[LIBRARY_FUNCTIONS] = {name: bind(f, joint_data)
+                                            for name, f in joint.items()}
+    return bundle_
