@@ -70,28 +70,27 @@ def test_a_failed_joint_run_is_redone_in_rp_and_an_interrupt_is_not():
         assert formulation == "rp"
         return done
 
-    result = auto_formulation.run(functions, tree, "auto", "ggl", 11, failing, other)
+    result = auto_formulation.run(functions, tree, "auto", 11, failing, other)
     assert result is done
     assert "the joint DAE failed" in result.metadata["formulation_fallback"]
     # asked for explicitly, joint coordinates are not replaced
     with pytest.raises(AnalysisError):
-        auto_formulation.run(functions, tree, "joint", "ggl", 11, failing, other)
+        auto_formulation.run(functions, tree, "joint", 11, failing, other)
 
     def interrupted():
         raise Interrupted(2)  # SIGINT
 
     with pytest.raises(Interrupted):
-        auto_formulation.run(functions, tree, "auto", "ggl", 11, interrupted, other)
+        auto_formulation.run(functions, tree, "auto", 11, interrupted, other)
 
 
 def test_choice_table():
     """What runs first, by the facts choice() is given."""
     tree = tree_of(casmech.compile(casmech.load(FOUR_BAR)))
-    assert auto_formulation.choice(tree, "auto", "ggl", True, False) == "joint"
-    assert auto_formulation.choice(tree, "auto", "projection", True, False) == "rp"
-    assert auto_formulation.choice(tree, "auto", "ggl", False, False) == "rp"  # unexamined
-    assert auto_formulation.choice(tree, "auto", "ggl", True, True) == "rp"  # not compiled
-    assert auto_formulation.choice(tree, "romega", "ggl", True, False) == "romega"
+    assert auto_formulation.choice(tree, "auto", True, False) == "joint"
+    assert auto_formulation.choice(tree, "auto", False, False) == "rp"  # unexamined
+    assert auto_formulation.choice(tree, "auto", True, True) == "rp"  # not compiled
+    assert auto_formulation.choice(tree, "romega", True, False) == "romega"
 
 
 def test_compiled_loops_equal_interpreted(tmp_path, monkeypatch):
