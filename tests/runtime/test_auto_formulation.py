@@ -124,3 +124,23 @@ def test_a_planar_loop_of_revolutes_masks_the_rows_its_tree_cannot_violate():
     # both within ~1e-9 of the exact motion at rtol 1e-10; reactions of ~20 N to 1e-6
     np.testing.assert_allclose(np.asarray(auto) / scale, np.asarray(rp) / scale, rtol=0,
                                atol=1e-6, err_msg=str(names))
+
+
+def test_an_explicit_stabilization_means_rp():
+    """api.analysis_settings, the one place of the rule: formulation auto with a stabilization
+    asked for (by the caller, even ggl, or a file's other than the default) resolves to rp;
+    without one auto stays auto, and an explicit formulation is kept."""
+    from casmech.api import analysis_settings
+
+    functions = casmech.compile(casmech.load(FOUR_BAR))
+    formulation = lambda f, **given: analysis_settings(f, **given).options.get(  # noqa: E731
+        "formulation", "auto")
+    assert formulation(functions) == "auto"
+    assert formulation(functions, stabilization="ggl") == "rp"
+    assert formulation(functions, stabilization="projection") == "rp"
+    assert formulation(functions, stabilization="projection", formulation="romega") == "romega"
+    text = FOUR_BAR.read_text().replace("atol: 1.0e-10",
+                                        "atol: 1.0e-10\n  stabilization: projection")
+    in_file = casmech.compile(casmech.loads(text))
+    assert formulation(in_file) == "rp"
+    assert formulation(in_file, formulation="joint") == "joint"
