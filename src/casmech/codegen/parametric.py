@@ -10,8 +10,8 @@ the model's structure (compiler.parametric's signature) with its text, component
 tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions
 (compiler.joint_system over the same symbolic IR, their trailing input the model data with the
-tree's constants): the tree's ODE with its forward derivative or the loops' DAE with its
-Jacobian, the results rows, the loops' start functions and joint_data, which computes that
+tree's constants): the tree's ODE or the loops' DAE and its Jacobian by the states
+(joint_jacobian: never by d), the results rows, the loops' start functions and joint_data, which computes that
 input from d.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
@@ -34,7 +34,7 @@ from casmech.codegen import cache, generate, manifest, residuals
 from casmech.codegen.build import LIBRARY, Toolchain
 from casmech.codegen.load import externals, metadata
 from casmech.compiler import dae as dae_residuals
-from casmech.compiler import parametric, prescribed
+from casmech.compiler import lazy_jacobian, parametric, prescribed
 from casmech.compiler.formulations import FORMULATIONS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
@@ -47,6 +47,7 @@ MAX_BODIES = 32  # above: the mapped library (codegen.mapped), values in its key
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
 JOINT_ANALYSES = ("dynamics",)  # the joint formulation's functions too
 JOINT_DATA = "joint_data"
+JOINT_JACOBIAN = "joint_jacobian"  # the ODE's or DAE's Jacobian by the states, not by d
 
 
 def applies(model: ResolvedModel) -> bool:
@@ -71,9 +72,9 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     """The joint formulation's functions by name, each with the derivatives generated with it
     (what runtime.joint_dynamics.compiled_system compiles for a numeric bundle)."""
     system = build_joint_system(split.ir, spanning_tree(split.ir), split.symbols)
-    dynamics = system.dynamics
-    derivative = dynamics.jacobian() if system.n_cut else dynamics.forward(1)
-    return {dynamics.name(): [dynamics, derivative], "joint_motion": [system.motion],
+    jacobian = lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)
+    return {system.dynamics.name(): [system.dynamics], JOINT_JACOBIAN: [jacobian],
+            "joint_motion": [system.motion],
             "joint_acceleration_system": [system.acceleration_system],
             "joint_velocity_jacobian": [system.velocity_jacobian], JOINT_DATA: [system.data]}
 
@@ -105,8 +106,7 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, 
     build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
     listed = {**functions, **{n: members[0] for n, members in joint.items()},
               **{n: o[n] for n, o in oracles.items()}}
-    jacobians = generate.differentiated(functions) | ({"joint_dae"} & set(joint))
-    return manifest.write(directory, listed, jacobians, {
+    return manifest.write(directory, listed, generate.differentiated(functions), {
                               **info, "parametric": True, "parameters": list(ir.parameters),
                               "data": int(functions["phi"].size1_in(2)),
                               "casmech": casmech.__version__,
@@ -117,12 +117,12 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, 
                           {n: generate.dae_library(n) for n in oracles})
 
 
-def bind(function: ca.Function, values: np.ndarray) -> ca.Function:
-    """The function without its trailing input d, called with d = values."""
+def bind(function: ca.Function, values: np.ndarray, name: str | None = None) -> ca.Function:
+    """The function without its trailing input d, called with d = values (under `name`)."""
     inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k))
               for k in range(function.n_in() - 1)]
     outputs = function.call([*inputs, ca.DM(values)])
-    return ca.Function(function.name(), inputs, outputs, function.name_in()[:-1],
+    return ca.Function(name or function.name(), inputs, outputs, function.name_in()[:-1],
                        function.name_out())
 
 
@@ -134,6 +134,8 @@ def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
     bundle_ = SystemFunctions(functions, **metadata(ir), data=values)
     if joint:
         joint_data = np.array(joint.pop(JOINT_DATA)(values).full()).ravel()
-        bundle_.derived[LIBRARY_FUNCTIONS] = {name: bind(f, joint_data)
-                                            for name, f in joint.items()}
+        dynamics = "joint_dae" if "joint_dae" in joint else "joint_ode"
+        bundle_.derived[LIBRARY_FUNCTIONS] = {  # the Jacobian under casadi's name for it
+            name: bind(f, joint_data, f"jac_{dynamics}" if name == JOINT_JACOBIAN else None)
+            for name, f in joint.items()}
     return bundle_

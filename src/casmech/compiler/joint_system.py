@@ -89,6 +89,8 @@ class JointSystem:
     velocity_jacobian: ca.Function  # loops: (t, x) -> d/du of d/dt Phi_c (unit rows)
     # a parametric build's d -> its functions' trailing input (None: a numeric build)
     data: ca.Function | None = None
+    # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
+    given_jacobian: ca.Function | None = None
 
     @property
     def n_cut(self) -> int:
@@ -100,14 +102,16 @@ class JointSystem:
         sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
         (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
         per evaluation on the gallery's loops, measured in docs/decisions.md)."""
+        if self.given_jacobian is not None:
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
             return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
     def jacobian(self) -> ca.Function:
-        """lazy_jacobian.jacobian of `dynamics`, built once."""
-        return lazy_jacobian.jacobian(self.dynamics)
+        """The given Jacobian, else lazy_jacobian.jacobian of `dynamics`, built once."""
+        return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
 
     @cached_property
     def relative_states(self) -> ca.Function:

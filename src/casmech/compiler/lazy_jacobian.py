@@ -54,6 +54,23 @@ def jacobian(function: ca.Function) -> ca.Function:
         [f"jac_{o}_{i}" for o in names_out for i in names_in])
 
 
+def data_jacobian(function: ca.Function, name: str | None = None) -> ca.Function:
+    """The Function jacobian() of `function` without its trailing input (the model data of a
+    parametric build: never differentiated, bound at run time) would give: inputs, then nominal
+    outputs, then that trailing input; every output's Jacobian by every other input (SX, by
+    symbolic AD: what a compiled library holds, so no column of the data is computed)."""
+    inputs = function.sx_in()
+    outputs = function.call(inputs)
+    nominal = [ca.SX.sym(function.name_out(k), function.sparsity_out(k))
+               for k in range(function.n_out())]
+    names_in, names_out = function.name_in()[:-1], function.name_out()
+    return ca.Function(
+        name or f"jac_{function.name()}", [*inputs[:-1], *nominal, inputs[-1]],
+        [ca.jacobian(o, i) for o in outputs for i in inputs[:-1]],
+        [*names_in, *names_out, function.name_in()[-1]],
+        [f"jac_{o}_{i}" for o in names_out for i in names_in])
+
+
 def problem(dynamics: ca.Function, exact: bool = True,
             jacobian: ca.Function | None = None) -> dict:
     """casadi.integrator's problem over (t, x) -> ode or (t, x, z, p) -> (ode, alg), as MX
