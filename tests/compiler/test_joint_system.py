@@ -97,7 +97,7 @@ PARAMETRIC_CASES = {
 def test_joint_functions_with_the_model_data_equal_the_numeric_ones(case):
     """build over compiler.parametric.split's IR, bound to each value's data through
     JointSystem.data, equals build over the IR lowered at that value, at random (t, x, z)."""
-    from casmech.compiler import parametric
+    from casmech.compiler import lazy_jacobian, parametric
     from casmech.compiler.lower import lower
 
     text, values = PARAMETRIC_CASES[case]
@@ -110,8 +110,12 @@ def test_joint_functions_with_the_model_data_equal_the_numeric_ones(case):
         assert signature == split.signature  # the same structure: one build serves both
         numeric = build(ir, spanning_tree(ir))
         joint_data = symbolic.data(model_data)
-        for name in ("dynamics", "motion", "acceleration_system", "velocity_jacobian"):
-            want_f, got_f = getattr(numeric, name), getattr(symbolic, name)
+        pairs = {name: (getattr(numeric, name), getattr(symbolic, name)) for name in (
+            "dynamics", "motion", "acceleration_system", "velocity_jacobian")}
+        # the Jacobian a parametric library gives the integrators (by the states, not by d)
+        pairs["jacobian"] = (numeric.dynamics.jacobian(),
+                             lazy_jacobian.data_jacobian(symbolic.dynamics))
+        for name, (want_f, got_f) in pairs.items():
             assert got_f.name_in() == [*want_f.name_in(), "d"]
             for _ in range(3):
                 args = [rng.uniform(-1, 1, want_f.sparsity_in(k).shape)
