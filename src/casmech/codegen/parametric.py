@@ -11,8 +11,8 @@ tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions
 (compiler.joint_system over the same symbolic IR, their trailing input the model data with the
 tree's constants): the tree's ODE or the loops' DAE and its Jacobian by the states
-(joint_jacobian: never by d), the results rows, the loops' start functions and joint_data, which computes that
-input from d.
+(joint_jacobian: never by d), the results rows, the loops' start functions and joint_data,
+which computes that input from d.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
@@ -69,8 +69,7 @@ def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -
 
 
 def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
-    """The joint formulation's functions by name, each with the derivatives generated with it
-    (what runtime.joint_dynamics.compiled_system compiles for a numeric bundle)."""
+    """The joint formulation's functions by name (each a group of one: a unit of the C)."""
     system = build_joint_system(split.ir, spanning_tree(split.ir), split.symbols)
     jacobian = lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)
     return {system.dynamics.name(): [system.dynamics], JOINT_JACOBIAN: [jacobian],

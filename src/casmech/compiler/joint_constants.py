@@ -13,15 +13,10 @@ not recomputed at every evaluation of the ODE).
 from __future__ import annotations
 
 import casadi as ca
-import numpy as np
 
 from casmech.geometry.quaternions import from_matrix
 
 DATA = "d"  # the trailing input of a parametric build's functions
-
-
-def is_symbolic(value) -> bool:
-    return isinstance(value, ca.SX) and not value.is_constant()
 
 
 class Constants:
@@ -72,10 +67,10 @@ class Constants:
 
     def quaternion(self, rotation):
         """The unit quaternion (e0 >= 0) of a constant rotation matrix (quaternions.from_matrix:
-        Shepperd's method; in a parametric build its branches chosen by the values)."""
-        if not self.symbolic and not is_symbolic(rotation):
-            return ca.DM(from_matrix(np.array(ca.DM(rotation).full())
-                                     if isinstance(rotation, ca.SX) else rotation))
+        Shepperd's method; in a parametric build in SX, its branch chosen where joint_data is
+        evaluated, by the values)."""
+        if not self.symbolic:
+            return ca.DM(from_matrix(rotation))
         return self.once("quaternion", rotation, lambda r: self(shepperd(ca.SX(r))))
 
     @property

@@ -101,7 +101,8 @@ class JointSystem:
         """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
         sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
         (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
-        per evaluation on the gallery's loops, measured in docs/decisions.md)."""
+        per evaluation on the gallery's loops, measured in docs/decisions.md); a compiled
+        library's when given."""
         if self.given_jacobian is not None:
             return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
