@@ -8,7 +8,8 @@ import pytest
 import casmech
 from casmech import codegen
 from casmech.cli import main
-from casmech.codegen import cache
+from casmech.codegen import cache, parametric
+from casmech.codegen.load import externals
 from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
 from casmech.runtime.joint_dynamics import joint_system
 
@@ -122,7 +123,7 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
     ("four_bar", [{"b": 2.2}, {"b": 1.9, "m": 1.5}]),  # a loop: the joint DAE on IDAS
 ])
 def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain, cache_root,
-                                                             builds, case, sets):
+                                                             builds, monkeypatch, case, sets):
     """`casmech run --set` twice on a compiled model: the first run builds the parametric
     library (with the joint functions), the second builds nothing; both run in joint
     coordinates from that library and move as the r-p DAE at the same values does."""
@@ -149,9 +150,14 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
             np.testing.assert_allclose(joint[name], rp[name], rtol=0, atol=1e-4 * scale,
                                        err_msg=f"{name} at {values}")
     assert len(set(cache.entries(cache_root)) - before) == 1  # one library for every value
-    # in process: the joint system is the library's, bound to these values (nothing built)
-    values = {name: str(value) for name, value in sets[-1].items()}
-    functions = codegen.compiled(casmech.load(path, values), toolchain, root=cache_root)
-    system = joint_system(functions)
-    assert system.dynamics is functions.derived[LIBRARY_FUNCTIONS][system.dynamics.name()]
-    assert len(builds) == 1
+    # in process: the joint system is the library's, bound to these values (nothing built),
+    # its externals loaded once for every value (a sweep's samples)
+    loads = []
+    monkeypatch.setattr(parametric, "externals", lambda *a: loads.append(a) or externals(*a))
+    parametric._externals.cache_clear()
+    for values in sets:
+        given = {name: str(value) for name, value in values.items()}
+        functions = codegen.compiled(casmech.load(path, given), toolchain, root=cache_root)
+        system = joint_system(functions)
+        assert system.dynamics is functions.derived[LIBRARY_FUNCTIONS][system.dynamics.name()]
+    assert len(builds) == 1 and len(loads) == 1

@@ -22,6 +22,7 @@ functions, in SystemFunctions.derived[LIBRARY_FUNCTIONS] (runtime.joint_dynamics
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from pathlib import Path
@@ -125,8 +126,17 @@ def bind(function: ca.Function, values: np.ndarray, name: str | None = None) -> 
                        function.name_out())
 
 
+@functools.lru_cache(maxsize=8)
+def _externals(directory: str, built: int) -> dict[str, ca.Function]:
+    """The library's externals, loaded once per process and build (`built`: its manifest's
+    mtime): a sweep binds them to every sample's values (18 ms a sample on the double
+    pendulum, benchmarks/notes_jointparam.md)."""
+    return externals(Path(directory))
+
+
 def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
-    loaded = externals(directory)
+    built = (directory / manifest.MANIFEST).stat().st_mtime_ns
+    loaded = dict(_externals(str(directory.resolve()), built))
     joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
     functions = {name: f if name.startswith("dae_") else bind(f, values)
                  for name, f in loaded.items()}
