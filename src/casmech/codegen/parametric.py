@@ -10,9 +10,9 @@ the model's structure (compiler.parametric's signature) with its text, component
 tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions
 (compiler.joint_system over the same symbolic IR, their trailing input the model data with the
-tree's constants): the tree's ODE or the loops' DAE and its Jacobian by the states
-(joint_jacobian: never by d), the results rows, the loops' start functions and joint_data,
-which computes that input from d.
+tree's constants): the tree's ODE with its forward derivative or the loops' DAE and its
+Jacobian by the states (joint_jacobian: never by d), the results rows, the loops' start
+functions and joint_data, which computes that input from d.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
@@ -70,11 +70,17 @@ def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -
 
 
 def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
-    """The joint formulation's functions by name (each a group of one: a unit of the C)."""
+    """The joint formulation's functions by name, each with what is generated with it (as
+    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
+    derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
+    with its Jacobian by the states as a function of its own)."""
     system = build_joint_system(split.ir, spanning_tree(split.ir), split.symbols)
-    jacobian = lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)
-    return {system.dynamics.name(): [system.dynamics], JOINT_JACOBIAN: [jacobian],
-            "joint_motion": [system.motion],
+    dynamics = {system.dynamics.name(): [system.dynamics]}
+    if system.n_cut:  # the DAE's Jacobian by the states, never by d
+        dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]
+    else:  # a tree's: by forward sweeps (JointSystem.problem), the derivative casadi looks up
+        dynamics["joint_ode"].append(system.dynamics.forward(1))
+    return {**dynamics, "joint_motion": [system.motion],
             "joint_acceleration_system": [system.acceleration_system],
             "joint_velocity_jacobian": [system.velocity_jacobian], JOINT_DATA: [system.data]}
 

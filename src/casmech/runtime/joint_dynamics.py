@@ -105,7 +105,7 @@ def library_system(functions: SystemFunctions) -> JointSystem:
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
                        library["joint_velocity_jacobian"],
-                       given_jacobian=library["joint_jacobian"])
+                       given_jacobian=library.get("joint_jacobian"))
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSystem:
