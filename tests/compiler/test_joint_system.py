@@ -111,7 +111,7 @@ def test_joint_functions_with_the_model_data_equal_the_numeric_ones(case):
         numeric = build(ir, spanning_tree(ir))
         joint_data = symbolic.data(model_data)
         pairs = {name: (getattr(numeric, name), getattr(symbolic, name)) for name in (
-            "dynamics", "motion", "acceleration_system", "velocity_jacobian")}
+            "dynamics", "motion", "acceleration_system", "velocity_jacobian", "relative_states")}
         # the Jacobian a parametric library gives the integrators (by the states, not by d)
         pairs["jacobian"] = (numeric.dynamics.jacobian(),
                              lazy_jacobian.data_jacobian(symbolic.dynamics))

@@ -82,7 +82,8 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
         dynamics["joint_ode"].append(system.dynamics.forward(1))
     return {**dynamics, "joint_motion": [system.motion],
             "joint_acceleration_system": [system.acceleration_system],
-            "joint_velocity_jacobian": [system.velocity_jacobian], JOINT_DATA: [system.data]}
+            "joint_velocity_jacobian": [system.velocity_jacobian],
+            "joint_relative_states": [system.relative_states], JOINT_DATA: [system.data]}
 
 
 def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:

@@ -87,6 +87,7 @@ class JointSystem:
     # residual d^2/dt^2 Phi_c (unit rows) is affine in z (multipliers enter as forces)
     acceleration_system: ca.Function
     velocity_jacobian: ca.Function  # loops: (t, x) -> d/du of d/dt Phi_c (unit rows)
+    relative_states: ca.Function  # (q, q_dot) -> each tree joint's relative pose (_relative)
     # a parametric build's d -> its functions' trailing input (None: a numeric build)
     data: ca.Function | None = None
     # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
@@ -115,12 +116,6 @@ class JointSystem:
         return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
 
     @cached_property
-    def relative_states(self) -> ca.Function:
-        """relative_states of the tree's joints, built once (a tree of numbers: a parametric
-        build's is replaced by the numeric IR's, runtime.joint_dynamics)."""
-        return relative_states(self.tree.joints)
-
-    @cached_property
     def functional_problem(self) -> dict:
         """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
         return lazy_jacobian.problem(self.dynamics, exact=False)
@@ -137,22 +132,23 @@ def _body_state(q, q_dot, n_bodies: int, k: int):
     return q[3 * k:3 * k + 3], euler.rotation(p), q_dot[3 * k:3 * k + 3], omega
 
 
-def relative_states(tree_joints) -> ca.Function:
-    """(q, q_dot) -> (rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint: the
+def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
+    """(rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint at (q, q_dot): the
     child frame F_c's rotation and origin relative to the parent frame F_p (in F_p), and its
-    twist relative to F_p (angular, then the origin's velocity, in F_c): one call for the whole
-    tree (runtime.joint_dynamics takes each joint's coordinates and velocities from them).
-    Every body is the child of one tree joint."""
+    twist relative to F_p (angular, then the origin's velocity, in F_c), JointSystem's
+    relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
+    from them). Every body is the child of one tree joint."""
     n_bodies = len(tree_joints)
-    q, q_dot = ca.SX.sym("q", 7 * n_bodies), ca.SX.sym("q_dot", 7 * n_bodies)
+    frame, vector = (constants, lambda v: v) if constants.symbolic else (lambda v: v, ca.DM)
     rotations, gaps, twists = [], [], []
     for joint in tree_joints:
         (r_p, a_p, r_p_dot, w_p), (r_c, a_c, r_c_dot, w_c) = (
             _body_state(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
-        (c_p, s_p), (c_c, s_c) = joint.parent_frame, joint.child_frame
+        (c_p, s_p), (c_c, s_c) = ((frame(v) for v in f)
+                                  for f in (joint.parent_frame, joint.child_frame))
         o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
-        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, ca.DM(s_p))
-        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, ca.DM(s_c))
+        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, vector(s_p))
+        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, vector(s_c))
         rotation = c_p.T @ a_p.T @ a_c @ c_c
         gap = a_p.T @ (o_c - o_p)
         omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
@@ -160,8 +156,7 @@ def relative_states(tree_joints) -> ca.Function:
         rotations.append(rotation)
         gaps.append(c_p.T @ gap)
         twists.append(ca.vertcat(omega, rotation.T @ gap_dot))
-    return ca.Function("relative_states", [q, q_dot],
-                       [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)])
+    return [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)]
 
 
 def joint_rows(ir: ModelIR, joint: JointIR, data: ca.SX | None = None) -> ca.Function:
@@ -324,6 +319,9 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
         velocity = ca.jacobian(scale * rate, x[b.layout.n_theta:])
     motion = dict(zip(("q", "q_dot", "q_ddot", "lam"), b.motion(dyn, lam_cut, signs),
                       strict=True))
+    poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
+    relative = dict(zip(("rotations", "gaps", "twists"),
+                        _relative(tree.joints, *poses.values(), constants), strict=True))
     extra = {} if data is None else {DATA: constants.inputs}
 
     def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
@@ -336,4 +334,5 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
         function("joint_motion", {"t": t, "x": x, "z": z, "signs": signs}, motion),
         function("joint_acceleration_system", {"t": t, "x": x}, acceleration),
         function("joint_velocity_jacobian", {"t": t, "x": x}, {"jacobian": velocity}),
+        function("joint_relative_states", poses, relative),
         None if data is None else constants.function())

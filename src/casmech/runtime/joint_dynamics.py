@@ -99,12 +99,12 @@ def joint_system(functions: SystemFunctions) -> JointSystem:
 
 def library_system(functions: SystemFunctions) -> JointSystem:
     """The joint system of a parametric library's functions, bound to this bundle's values
-    (codegen.parametric), over the numeric IR's tree (its frames: relative_states)."""
+    (codegen.parametric), over the numeric IR's tree."""
     library, tree = functions.derived[LIBRARY_FUNCTIONS], tree_of(functions)
     dynamics = library["joint_dae" if tree.cut else "joint_ode"]
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
-                       library["joint_velocity_jacobian"],
+                       library["joint_velocity_jacobian"], library["joint_relative_states"],
                        given_jacobian=library.get("joint_jacobian"))
 
 
@@ -133,7 +133,9 @@ def constant_inverse(kind: str) -> np.ndarray | None:
     theta (revolute, spherical, ...: u = S_J^+ twist with no per-state work), else None.
     Whether it is constant is seen at sample coordinates (its SX does not simplify
     sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
-    motion, samples = MOTIONS[kind], np.random.default_rng(0).normal(size=(4, MOTIONS[kind].n_q))
+    motion = MOTIONS[kind]
+    # four scattered coordinates (not numpy.random: importing it costs a run 10 ms)
+    samples = np.sin(1.7 * np.arange(1, 4 * motion.n_q + 1)).reshape(4, motion.n_q) * 1.5
     for start in motion.quaternions:
         samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
     zero = np.zeros(motion.n_v)
