@@ -161,3 +161,17 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
         system = joint_system(functions)
         assert system.dynamics is functions.derived[LIBRARY_FUNCTIONS][system.dynamics.name()]
     assert len(builds) == 1 and len(loads) == 1
+
+
+def test_no_joint_functions_for_loops_through_a_floating_body():
+    """ocp_arm3d's payload is held by six basic constraints: formulation auto runs rp there
+    (runtime.auto_formulation), so its library compiles no joint functions; a tree's has them."""
+    from casmech.compiler import parametric as model_data
+    from casmech.compiler.lower import lower
+    from tests.conftest import MODELS
+
+    def names(path) -> set:
+        return set(parametric.joint_functions(model_data.split(lower(casmech.load(path)))))
+
+    assert names(MODELS / "ocp_arm3d.yaml") == set()
+    assert {"joint_ode", "joint_motion", "joint_data"} <= names(MODELS / "double_pendulum.yaml")

@@ -73,8 +73,12 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     """The joint formulation's functions by name, each with what is generated with it (as
     runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
     derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
-    with its Jacobian by the states as a function of its own)."""
-    system = build_joint_system(split.ir, spanning_tree(split.ir), split.symbols)
+    with its Jacobian by the states as a function of its own); none for loops through a
+    floating body."""
+    tree = spanning_tree(split.ir)
+    if tree.floating_loops:  # formulation auto runs rp (runtime.auto_formulation)
+        return {}
+    system = build_joint_system(split.ir, tree, split.symbols)
     dynamics = {system.dynamics.name(): [system.dynamics]}
     if system.n_cut:  # the DAE's Jacobian by the states, never by d
         dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]

@@ -51,6 +51,12 @@ class Tree:
     def is_tree(self) -> bool:
         return not self.cut
 
+    @property
+    def floating_loops(self) -> bool:
+        """Loops through a floating body (a `free` tree joint, its body held by cut rows only):
+        its joint coordinates are its r-p ones plus the recursion's overhead (auto runs rp)."""
+        return not self.is_tree and any(joint.joint is None for joint in self.joints)
+
 
 def spanning_tree(ir: ModelIR) -> Tree:
     """The tree of the module docstring."""

@@ -35,8 +35,8 @@ def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
     whether the run's rows can be examined for singular poses; lags: lags_bundle."""
     if formulation != "auto":
         return formulation
-    floating = any(joint.joint is None for joint in tree.joints)
-    return "joint" if tree.is_tree or (examinable and not floating and not lags) else "rp"
+    return "joint" if tree.is_tree or (examinable and not tree.floating_loops and not lags) \
+        else "rp"
 
 
 def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
