@@ -94,8 +94,8 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Res
 
     stabilization = s.options.get("stabilization", "ggl")
     rows = len(output_times(0.0, s.t_end, s.output_step))
-    return auto_formulation.run(f, tree_of(f), s.options.get("formulation", "auto"),
-                                stabilization, rows, joint, other)
+    return auto_formulation.run(f, tree_of(f), s.options.get("formulation", "auto"), rows,
+                                joint, other)
 
 
 def _runtime(name: str):
@@ -179,8 +179,10 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
             raise UsageError(f"{name} '{value}' is not one of "
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
         settings = replace(settings, options={**settings.options, name: value})
-    if stabilization is not None and formulation is None and settings.options.get(
-            "formulation", "auto") == "auto":  # a DAE stabilization asked for: the r-p DAE
+    if settings.options.get("formulation", "auto") == "auto" and (
+            stabilization is not None or settings.options.get("stabilization", "ggl") != "ggl"):
+        # a DAE stabilization asked for (by the caller, or the file's other than the default)
+        # means the r-p DAE: decided here only (runtime.auto_formulation never sees it)
         settings = replace(settings, options={**settings.options, "formulation": "rp"})
     if settings.type not in ANALYSES:
         raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "

@@ -1,13 +1,13 @@
 """The joint formulation on a compiled bundle: its tree's ODE and results rows compiled
-(runtime.joint_dynamics.compiled_system) and equal to the interpreted ones. That is the mapped
-library's; a parametric library (codegen.parametric) keeps the tree's functions interpreted, which
-would otherwise be built once per parameter value."""
+(runtime.joint_dynamics.compiled_system for the mapped library; for a parametric library
+(codegen.parametric) compiled in it over the model data) and equal to the interpreted ones."""
 
 import numpy as np
 import pytest
 
 import casmech
 from casmech import codegen
+from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
 from casmech.runtime.joint_dynamics import joint_system
 from tests.conftest import Table
 
@@ -20,11 +20,21 @@ def compiled(model, toolchain, cache_root):
     return codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
 
 
-def test_a_parametric_bundle_keeps_the_tree_interpreted(model, toolchain, cache_root):
+def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, cache_root,
+                                                            interpreted):
     bundle = codegen.compiled(model, toolchain, root=cache_root)
     assert bundle.data is not None and codegen.mode_of(bundle) == "compiled"
-    system = joint_system(bundle)
-    assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
+    fast, slow = joint_system(bundle), joint_system(interpreted)
+    assert fast.dynamics is bundle.derived[LIBRARY_FUNCTIONS]["joint_ode"]
+    nb = interpreted.n_bodies
+    for _ in range(3):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        # the same equations, the model's constants computed from d: roundoff
+        np.testing.assert_allclose(np.array(fast.dynamics(t, x)), np.array(slow.dynamics(t, x)),
+                                   rtol=1e-12, atol=1e-12)
+        for a, b in zip(fast.motion(t, x, [], np.ones(nb)), slow.motion(t, x, [], np.ones(nb)),
+                        strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
 
 
 def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):

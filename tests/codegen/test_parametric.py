@@ -8,7 +8,10 @@ import pytest
 import casmech
 from casmech import codegen
 from casmech.cli import main
-from casmech.codegen import cache
+from casmech.codegen import cache, parametric
+from casmech.codegen.load import externals
+from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
+from casmech.runtime.joint_dynamics import joint_system
 
 # a spring-mass on a slide (period 2 pi sqrt(m / k)) and, independent of it, a pendulum of
 # length L (small amplitude: 2 pi sqrt((I + M L^2) / (M g L)) with I = 1e-3 M)
@@ -113,3 +116,62 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
             want = interpreted_dae(*args)
             for g, w in zip(got[:2], want, strict=True):
                 np.testing.assert_allclose(np.array(g), np.array(w), rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("case, sets", [
+    ("double_pendulum", [{"m1": 2.0, "L2": 1.3}, {"m2": 0.4, "L1": 0.7}]),  # a tree: CVODES
+    ("four_bar", [{"b": 2.2}, {"b": 1.9, "m": 1.5}]),  # a loop: the joint DAE on IDAS
+])
+def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain, cache_root,
+                                                             builds, monkeypatch, case, sets):
+    """`casmech run --set` twice on a compiled model: the first run builds the parametric
+    library (with the joint functions), the second builds nothing; both run in joint
+    coordinates from that library and move as the r-p DAE at the same values does."""
+    import json
+
+    from tests.compiler.test_joint_system import PARAMETRIC_CASES
+
+    path = tmp_path / f"{case}.yaml"
+    path.write_text(PARAMETRIC_CASES[case][0].replace("t_end: 2", "t_end: 1"))
+    before = set(cache.entries(cache_root))
+    for number, values in enumerate(sets):
+        out = tmp_path / f"joint{number}"
+        joint = run(path, out, "compiled", values, "auto")
+        metadata = json.loads((out / "metadata.json").read_text())
+        assert metadata["mode"] == "compiled"
+        assert metadata["result"]["formulation"] == "joint"
+        assert metadata["result"]["integrator"] == ("idas" if case == "four_bar" else "cvodes")
+        assert len(builds) == 1  # the first run only
+        rp = run(path, tmp_path / f"rp{number}", "compiled", values, "rp")
+        for name in joint.dtype.names:
+            scale = max(1.0, float(np.max(np.abs(rp[name]))))
+            # two formulations at rtol 1e-8 over 1 s, relative to each column's largest
+            # value: the chaotic double pendulum's accelerations differ by 1.3e-5 at most
+            np.testing.assert_allclose(joint[name], rp[name], rtol=0, atol=1e-4 * scale,
+                                       err_msg=f"{name} at {values}")
+    assert len(set(cache.entries(cache_root)) - before) == 1  # one library for every value
+    # in process: the joint system is the library's, bound to these values (nothing built),
+    # its externals loaded once for every value (a sweep's samples)
+    loads = []
+    monkeypatch.setattr(parametric, "externals", lambda *a: loads.append(a) or externals(*a))
+    parametric._externals.cache_clear()
+    for values in sets:
+        given = {name: str(value) for name, value in values.items()}
+        functions = codegen.compiled(casmech.load(path, given), toolchain, root=cache_root)
+        system = joint_system(functions)
+        assert system.dynamics is functions.derived[LIBRARY_FUNCTIONS][system.dynamics.name()]
+    assert len(builds) == 1 and len(loads) == 1
+
+
+def test_no_joint_functions_for_loops_through_a_floating_body():
+    """ocp_arm3d's payload is held by six basic constraints: formulation auto runs rp there
+    (runtime.auto_formulation), so its library compiles no joint functions; a tree's has them."""
+    from casmech.compiler import parametric as model_data
+    from casmech.compiler.lower import lower
+    from tests.conftest import MODELS
+
+    def names(path) -> set:
+        return set(parametric.joint_functions(model_data.split(lower(casmech.load(path)))))
+
+    assert names(MODELS / "ocp_arm3d.yaml") == set()
+    assert {"joint_ode", "joint_motion", "joint_data"} <= names(MODELS / "double_pendulum.yaml")

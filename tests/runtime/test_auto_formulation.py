@@ -70,28 +70,27 @@ def test_a_failed_joint_run_is_redone_in_rp_and_an_interrupt_is_not():
         assert formulation == "rp"
         return done
 
-    result = auto_formulation.run(functions, tree, "auto", "ggl", 11, failing, other)
+    result = auto_formulation.run(functions, tree, "auto", 11, failing, other)
     assert result is done
     assert "the joint DAE failed" in result.metadata["formulation_fallback"]
     # asked for explicitly, joint coordinates are not replaced
     with pytest.raises(AnalysisError):
-        auto_formulation.run(functions, tree, "joint", "ggl", 11, failing, other)
+        auto_formulation.run(functions, tree, "joint", 11, failing, other)
 
     def interrupted():
         raise Interrupted(2)  # SIGINT
 
     with pytest.raises(Interrupted):
-        auto_formulation.run(functions, tree, "auto", "ggl", 11, interrupted, other)
+        auto_formulation.run(functions, tree, "auto", 11, interrupted, other)
 
 
 def test_choice_table():
     """What runs first, by the facts choice() is given."""
     tree = tree_of(casmech.compile(casmech.load(FOUR_BAR)))
-    assert auto_formulation.choice(tree, "auto", "ggl", True, False) == "joint"
-    assert auto_formulation.choice(tree, "auto", "projection", True, False) == "rp"
-    assert auto_formulation.choice(tree, "auto", "ggl", False, False) == "rp"  # unexamined
-    assert auto_formulation.choice(tree, "auto", "ggl", True, True) == "rp"  # not compiled
-    assert auto_formulation.choice(tree, "romega", "ggl", True, False) == "romega"
+    assert auto_formulation.choice(tree, "auto", True, False) == "joint"
+    assert auto_formulation.choice(tree, "auto", False, False) == "rp"  # unexamined
+    assert auto_formulation.choice(tree, "auto", True, True) == "rp"  # not compiled
+    assert auto_formulation.choice(tree, "romega", True, False) == "romega"
 
 
 def test_compiled_loops_equal_interpreted(tmp_path, monkeypatch):
@@ -125,3 +124,23 @@ def test_a_planar_loop_of_revolutes_masks_the_rows_its_tree_cannot_violate():
     # both within ~1e-9 of the exact motion at rtol 1e-10; reactions of ~20 N to 1e-6
     np.testing.assert_allclose(np.asarray(auto) / scale, np.asarray(rp) / scale, rtol=0,
                                atol=1e-6, err_msg=str(names))
+
+
+def test_an_explicit_stabilization_means_rp():
+    """api.analysis_settings, the one place of the rule: formulation auto with a stabilization
+    asked for (by the caller, even ggl, or a file's other than the default) resolves to rp;
+    without one auto stays auto, and an explicit formulation is kept."""
+    from casmech.api import analysis_settings
+
+    functions = casmech.compile(casmech.load(FOUR_BAR))
+    formulation = lambda f, **given: analysis_settings(f, **given).options.get(  # noqa: E731
+        "formulation", "auto")
+    assert formulation(functions) == "auto"
+    assert formulation(functions, stabilization="ggl") == "rp"
+    assert formulation(functions, stabilization="projection") == "rp"
+    assert formulation(functions, stabilization="projection", formulation="romega") == "romega"
+    text = FOUR_BAR.read_text().replace("atol: 1.0e-10",
+                                        "atol: 1.0e-10\n  stabilization: projection")
+    in_file = casmech.compile(casmech.loads(text))
+    assert formulation(in_file) == "rp"
+    assert formulation(in_file, formulation="joint") == "joint"

@@ -8,7 +8,10 @@ velocity V = (omega_bar, A^T r_dot), inertia [[J_bar, 0], [0, m 1]], force (n_ba
 tree joint's motion subspace S and the rate term c_J = S_dot u come from AD of its registry
 entry (casmech.joint_types.MOTIONS). Applied forces are the r-p ones (eom.applied_forces: gravity,
 force elements, effort motors) evaluated on the tree's poses and velocities, as body wrenches; a
-driver's coordinate is a function of time (its rate and acceleration by AD).
+driver's coordinate is a function of time (its rate and acceleration by AD). The quantities
+of the model alone (frames, their quaternions, inertias in reference frames) go through a
+joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
+in a parametric one.
 """
 
 from __future__ import annotations
@@ -17,14 +20,14 @@ from dataclasses import dataclass
 from functools import cache, cached_property
 
 import casadi as ca
-import numpy as np
 
 from casmech.compiler import eom, spatial
 from casmech.compiler.assemble import GROUND_POSE, Coordinates
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
-from casmech.compiler.tree import TreeJoint
+from casmech.compiler.joint_constants import Constants
+from casmech.compiler.tree import Frame, TreeJoint
 from casmech.geometry import euler
-from casmech.geometry.quaternions import conjugate, from_matrix, product
+from casmech.geometry.quaternions import conjugate, product
 from casmech.joint_types import MOTIONS
 
 
@@ -48,13 +51,16 @@ def local_motion(kind: str) -> ca.Function:
                        ["theta", "u"], ["rotation", "translation", "S", "c", "theta_dot"])
 
 
-Frame = tuple[np.ndarray, np.ndarray]  # (axes as columns, origin) in a body's frame
+NUMERIC = Constants()  # a numeric build's: every constant a casadi.DM
 
 
-def to_center(frame: Frame) -> tuple[ca.DM, ca.DM]:
+def to_center(frame: Frame, constants: Constants = NUMERIC) -> tuple:
     """(E, r) of the motion transform from a body's reference frame to its CM frame."""
-    axes, origin = (ca.DM(v) for v in frame)
-    return axes, -axes.T @ origin
+    if not constants.symbolic:
+        axes, origin = (ca.DM(v) for v in frame)
+        return axes, -axes.T @ origin
+    return constants.once("center", frame, lambda f: (constants(f[0]),
+                                                       constants(-ca.SX(f[0]).T @ f[1])))
 
 
 class Joint:
@@ -64,7 +70,7 @@ class Joint:
     frame (ground, or the child frame of the parent's own tree joint)."""
 
     def __init__(self, joint: TreeJoint, t, theta_free: dict, u_free: dict,
-                 parent_reference: Frame | None):
+                 parent_reference: Frame | None, constants: Constants = NUMERIC):
         """theta_free / u_free: coordinate index -> its state symbol."""
         motion = MOTIONS[joint.type]
         self.joint = joint
@@ -88,12 +94,12 @@ class Joint:
         if known:
             self.c_joint += subspace[:, known] @ ca.vertcat(*[u_dot[c] for c in known])
         # parent reference -> F_p (constant), then F_p -> F_c (the joint's motion)
-        c_p, s_p = (ca.DM(v) for v in joint.parent_frame)
+        c_p, s_p = (constants.raw(v) for v in joint.parent_frame)
         if parent_reference is None:  # ground: the global frame
-            e_t, r_t = c_p.T, s_p
+            e_t, r_t = constants(c_p.T), constants(s_p)
         else:
-            c_ref, o_ref = (ca.DM(v) for v in parent_reference)
-            e_t, r_t = c_p.T @ c_ref, c_ref.T @ (s_p - o_ref)
+            c_ref, o_ref = (constants.raw(v) for v in parent_reference)
+            e_t, r_t = constants(c_p.T @ c_ref), constants(c_ref.T @ (s_p - o_ref))
         self.e = euler.rotation(rotation).T @ e_t
         self.r = r_t + e_t.T @ translation
 
@@ -108,10 +114,11 @@ class Kinematics:
     rotation: list
     frame_velocity: list
     frames: list  # each body's reference frame (the child frame of its tree joint)
+    constants: Constants
 
     @cached_property
     def velocity(self) -> list:
-        return [spatial.motion(*to_center(f), v)
+        return [spatial.motion(*to_center(f, self.constants), v)
                 for f, v in zip(self.frames, self.frame_velocity, strict=True)]
 
     def r_dot(self, k: int):
@@ -121,7 +128,8 @@ class Kinematics:
         return 0.5 * euler.g_matrix(self.p[k]).T @ self.velocity[k][0:3]
 
 
-def kinematics(joints: list[Joint], n_bodies: int) -> Kinematics:
+def kinematics(joints: list[Joint], n_bodies: int, constants: Constants = NUMERIC
+               ) -> Kinematics:
     r, p, rot, vel, frames = ([None] * n_bodies for _ in range(5))
     for j in joints:
         tj = j.joint
@@ -130,14 +138,15 @@ def kinematics(joints: list[Joint], n_bodies: int) -> Kinematics:
         else:
             r_p, p_p, rot_p, v_p = r[tj.parent], p[tj.parent], rot[tj.parent], vel[tj.parent]
         (c_p, s_p), (c_c, s_c) = tj.parent_frame, tj.child_frame
-        p_k = product(product(product(p_p, ca.DM(from_matrix(c_p))), j.rotation),
-                      conjugate(ca.DM(from_matrix(c_c))))
+        p_k = product(product(product(p_p, constants.quaternion(c_p)), j.rotation),
+                      conjugate(constants.quaternion(c_c)))
         rot_k = euler.rotation(p_k)
-        r_k = r_p + rot_p @ (ca.DM(s_p) + ca.DM(c_p) @ j.translation) - rot_k @ ca.DM(s_c)
+        r_k = (r_p + rot_p @ (constants(s_p) + constants(c_p) @ j.translation)
+               - rot_k @ constants(s_c))
         v_k = j.relative if v_p is None else spatial.motion(j.e, j.r, v_p) + j.relative
         r[tj.child], p[tj.child], rot[tj.child], vel[tj.child] = r_k, p_k, rot_k, v_k
         frames[tj.child] = tj.child_frame
-    return Kinematics(r, p, rot, vel, frames)
+    return Kinematics(r, p, rot, vel, frames, constants)
 
 
 def state(kin: Kinematics, n_bodies: int) -> tuple:
@@ -149,12 +158,14 @@ def state(kin: Kinematics, n_bodies: int) -> tuple:
 
 
 def applied_wrenches(ir: ModelIR, t, kin: Kinematics) -> list:
-    """Body wrenches (n_bar, A^T F) of every applied force at the tree's state."""
+    """Body wrenches (n_bar, A^T F) of every applied force at the tree's state (a parametric
+    IR's forces over its model data, kin.constants.data)."""
     nb = ir.n_bodies
     x = Coordinates.create(nb)
     generalized, _ = eom.applied_forces(ir, x)
-    applied = ca.Function("applied", [x.t, x.q, x.q_dot, x.q_ground], [generalized])
-    forces = applied(t, *state(kin, nb), ca.DM(GROUND_POSE))
+    data = [kin.constants.data] if kin.constants.symbolic else []
+    applied = ca.Function("applied", [x.t, x.q, x.q_dot, x.q_ground, *data], [generalized])
+    forces = applied(t, *state(kin, nb), ca.DM(GROUND_POSE), *data)
     wrenches = []
     for k in range(nb):
         f_global = forces[3 * k:3 * k + 3]
@@ -174,18 +185,23 @@ class Dynamics:
     bias: list
     inertia: list
     frames: list
+    constants: Constants
 
     @cached_property
     def accelerations(self) -> list:
-        return [spatial.motion(*to_center(f), a)
+        return [spatial.motion(*to_center(f, self.constants), a)
                 for f, a in zip(self.frames, self.frame_accelerations, strict=True)]
 
 
-def reference_inertia(mass: float, inertia: np.ndarray, frame: Frame) -> ca.DM:
-    """A body's spatial inertia in its reference frame (numeric)."""
-    e, r = to_center(frame)
-    return ca.DM(ca.evalf(spatial.transformed_inertia(e, r, ca.SX(spatial.inertia(mass,
-                                                                                 inertia)))))
+def reference_inertia(mass, inertia, frame: Frame, constants: Constants = NUMERIC):
+    """A body's spatial inertia in its reference frame (a constant of the model)."""
+    if not constants.symbolic:
+        e, r = to_center(frame)
+        return ca.DM(ca.evalf(spatial.transformed_inertia(
+            e, r, ca.SX(spatial.inertia(mass, inertia)))))
+    axes, origin = (ca.SX(v) for v in frame)
+    at_center = ca.diagcat(ca.SX(inertia), mass * ca.SX.eye(3))
+    return constants(spatial.transformed_inertia(axes, -axes.T @ origin, at_center))
 
 
 def articulated_body(ir: ModelIR, joints: list[Joint], kin: Kinematics, external: list,
@@ -196,16 +212,17 @@ def articulated_body(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
     articulated inertia's eliminated rows are exact zeros: the generic IA - U D^-1 U^T left
     roundoff there that grew by ~2.5x per body along a chain with a small axial inertia (a
     48-link chain: accelerations 1.6e-2 off)."""
-    nb = ir.n_bodies
+    nb, constants = ir.n_bodies, kin.constants
     frames = kin.frames
-    inertia = [reference_inertia(b.mass, b.inertia, frames[k]) for k, b in enumerate(ir.bodies)]
+    inertia = [reference_inertia(b.mass, b.inertia, frames[k], constants)
+               for k, b in enumerate(ir.bodies)]
     bias, c, art_inertia, art_bias = [None] * nb, [None] * nb, [None] * nb, [None] * nb
     for j in joints:  # pass 1, root to leaves: velocity-product terms
         k = j.joint.child
         v = kin.frame_velocity[k]
         c[k] = j.c_joint + spatial.cross_motion(v, j.relative)
         bias[k] = (spatial.cross_force(v, inertia[k] @ v)
-                   - spatial.force_back(*to_center(frames[k]), external[k]))
+                   - spatial.force_back(*to_center(frames[k], constants), external[k]))
         art_inertia[k], art_bias[k] = ca.SX(inertia[k]), bias[k]
     solved = {}
     for j, tau in zip(reversed(joints), reversed(torques), strict=True):  # pass 2
@@ -231,7 +248,7 @@ def articulated_body(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
         else:
             u_dot.append(ca.SX(0, 1))
         accelerations[k] = a
-    return Dynamics(u_dot, accelerations, bias, inertia, frames)
+    return Dynamics(u_dot, accelerations, bias, inertia, frames, constants)
 
 
 def _eliminate(j: Joint, ia, pa, c, tau):
@@ -264,11 +281,12 @@ def joint_wrenches(joints: list[Joint], dynamics: Dynamics) -> list:
                      + dynamics.bias[k])
         if parent != GROUND_INDEX:
             wrench[parent] = wrench.get(parent, 0) + spatial.force_back(j.e, j.r, wrench[k])
-    return [_at_center(dynamics.frames[j.joint.child], wrench[j.joint.child]) for j in joints]
+    return [_at_center(dynamics.frames[j.joint.child], wrench[j.joint.child], dynamics.constants)
+            for j in joints]
 
 
-def _at_center(frame: Frame, f):
+def _at_center(frame: Frame, f, constants: Constants):
     """A force in a body's reference frame, at its CM in body axes."""
-    axes, origin = (ca.DM(v) for v in frame)
+    axes, origin = (constants(v) for v in frame)
     lin = axes @ f[3:6]
     return ca.vertcat(axes @ f[0:3] + ca.cross(origin, lin), lin)

@@ -16,6 +16,11 @@ depend on the others at t0). The stabilizing term takes S as a factor, not diffe
 (d S/d theta multiplies Phi_c, zero on the constraint manifold): any matrix B with
 Phi_c_theta B nonsingular gives the same projection, and this one costs half the residual's
 instructions of (S Phi_c)_theta (measured in docs/decisions.md).
+
+Over a parametric IR (compiler.parametric.split, `build(ir, tree, data=symbols)`) every function
+takes a trailing input "d": the model data extended by the constants of the tree
+(compiler/joint_constants.py), which JointSystem.data computes from the model data once per
+parameter value.
 """
 
 from __future__ import annotations
@@ -29,10 +34,15 @@ from casmech.compiler import articulated, lazy_jacobian
 from casmech.compiler.articulated import Joint
 from casmech.compiler.assemble import driver_value
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
+from casmech.compiler.joint_constants import DATA, Constants
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.compiler.tree import Tree
 from casmech.geometry import euler
 from casmech.joint_types import MOTIONS
+
+# SystemFunctions.derived's key of a parametric library's joint functions, bound to the
+# bundle's values (codegen.parametric writes them, runtime.joint_dynamics reads them)
+LIBRARY_FUNCTIONS = "joint_functions"
 
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
@@ -73,8 +83,15 @@ class JointSystem:
     cut_rows: tuple[int, ...]  # rows of Phi the cut joints own (the DAE's algebraic rows)
     dynamics: ca.Function  # tree: (t, x) -> ode; loops: (t, x, z, p) -> (ode, alg)
     motion: ca.Function  # (t, x, z, signs) -> (q, q_dot, q_ddot, lam, velocity_jacobian)
-    acceleration_residual: ca.Function  # loops: (t, x, z) -> d^2/dt^2 Phi_c (unit rows)
+    # loops: (t, x) -> (d acceleration residual / dz, that residual at z = 0), where the
+    # residual d^2/dt^2 Phi_c (unit rows) is affine in z (multipliers enter as forces)
+    acceleration_system: ca.Function
     velocity_jacobian: ca.Function  # loops: (t, x) -> d/du of d/dt Phi_c (unit rows)
+    relative_states: ca.Function  # (q, q_dot) -> each tree joint's relative pose (_relative)
+    # a parametric build's d -> its functions' trailing input (None: a numeric build)
+    data: ca.Function | None = None
+    # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
+    given_jacobian: ca.Function | None = None
 
     @property
     def n_cut(self) -> int:
@@ -85,29 +102,18 @@ class JointSystem:
         """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
         sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
         (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
-        per evaluation on the gallery's loops, measured in docs/decisions.md)."""
+        per evaluation on the gallery's loops, measured in docs/decisions.md); a compiled
+        library's when given."""
+        if self.given_jacobian is not None:
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
             return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
-    def acceleration_system(self) -> ca.Function:
-        """(t, x) -> (d acceleration_residual / dz, acceleration_residual at z = 0): the
-        residual is affine in z (the multipliers enter the recursion as forces)."""
-        t, x, z = self.acceleration_residual.sx_in()
-        residual = self.acceleration_residual(t, x, z)
-        return ca.Function("joint_acceleration_system", [t, x], [
-            ca.jacobian(residual, z), ca.substitute(residual, z, ca.DM.zeros(z.shape))])
-
-    @cached_property
     def jacobian(self) -> ca.Function:
-        """lazy_jacobian.jacobian of `dynamics`, built once."""
-        return lazy_jacobian.jacobian(self.dynamics)
-
-    @cached_property
-    def relative_states(self) -> ca.Function:
-        """relative_states of the tree's joints, built once."""
-        return relative_states(self.tree.joints)
+        """The given Jacobian, else lazy_jacobian.jacobian of `dynamics`, built once."""
+        return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
 
     @cached_property
     def functional_problem(self) -> dict:
@@ -126,22 +132,23 @@ def _body_state(q, q_dot, n_bodies: int, k: int):
     return q[3 * k:3 * k + 3], euler.rotation(p), q_dot[3 * k:3 * k + 3], omega
 
 
-def relative_states(tree_joints) -> ca.Function:
-    """(q, q_dot) -> (rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint: the
+def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
+    """(rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint at (q, q_dot): the
     child frame F_c's rotation and origin relative to the parent frame F_p (in F_p), and its
-    twist relative to F_p (angular, then the origin's velocity, in F_c): one call for the whole
-    tree (runtime.joint_dynamics takes each joint's coordinates and velocities from them).
-    Every body is the child of one tree joint."""
+    twist relative to F_p (angular, then the origin's velocity, in F_c), JointSystem's
+    relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
+    from them). Every body is the child of one tree joint."""
     n_bodies = len(tree_joints)
-    q, q_dot = ca.SX.sym("q", 7 * n_bodies), ca.SX.sym("q_dot", 7 * n_bodies)
+    frame, vector = (constants, lambda v: v) if constants.symbolic else (lambda v: v, ca.DM)
     rotations, gaps, twists = [], [], []
     for joint in tree_joints:
         (r_p, a_p, r_p_dot, w_p), (r_c, a_c, r_c_dot, w_c) = (
             _body_state(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
-        (c_p, s_p), (c_c, s_c) = joint.parent_frame, joint.child_frame
+        (c_p, s_p), (c_c, s_c) = ((frame(v) for v in f)
+                                  for f in (joint.parent_frame, joint.child_frame))
         o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
-        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, ca.DM(s_p))
-        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, ca.DM(s_c))
+        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, vector(s_p))
+        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, vector(s_c))
         rotation = c_p.T @ a_p.T @ a_c @ c_c
         gap = a_p.T @ (o_c - o_p)
         omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
@@ -149,14 +156,14 @@ def relative_states(tree_joints) -> ca.Function:
         rotations.append(rotation)
         gaps.append(c_p.T @ gap)
         twists.append(ca.vertcat(omega, rotation.T @ gap_dot))
-    return ca.Function("relative_states", [q, q_dot],
-                       [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)])
+    return [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)]
 
 
-def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
+def joint_rows(ir: ModelIR, joint: JointIR, data: ca.SX | None = None) -> ca.Function:
     """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega
     Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame rotation; zero for
-    ground), built from the joint's own primitives so that the cost stays per joint."""
+    ground), built from the joint's own primitives so that the cost stays per joint; over a
+    parametric IR with its model data `data` as a trailing input."""
     t = ca.SX.sym("t")
     sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
     frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if body == GROUND_INDEX
@@ -165,21 +172,24 @@ def joint_rows(ir: ModelIR, joint: JointIR) -> ca.Function:
     rows = []
     for prim in ir.primitives[joint.rows.start:joint.rows.stop]:
         function, keys = PRIMITIVES[prim.kind]
-        rows.append(function(*frames, {k: ca.DM(prim.vectors[k]) for k in keys},
-                             driver_value(prim, t)))
+        vectors = {k: prim.vectors[k] if data is not None else ca.DM(prim.vectors[k])
+                   for k in keys}
+        rows.append(function(*frames, vectors, driver_value(prim, t)))
     phi = ca.vertcat(*rows)
     blocks = [ca.horzcat(ca.jacobian(phi, r), 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T)
               for r, p in sides]
-    return ca.Function("joint_rows", [t, *(v for side in sides for v in side)],
-                       [phi, *blocks], ["t", "r_i", "p_i", "r_j", "p_j"],
+    extra = [] if data is None else [data]
+    return ca.Function("joint_rows", [t, *(v for side in sides for v in side), *extra],
+                       [phi, *blocks], ["t", "r_i", "p_i", "r_j", "p_j", *[DATA] * len(extra)],
                        ["phi", "B_i", "B_j"])
 
 
 class _Builder:
     """The SX of one model's tree; see build."""
 
-    def __init__(self, ir: ModelIR, tree: Tree):
+    def __init__(self, ir: ModelIR, tree: Tree, constants: Constants):
         self.ir, self.tree, self.layout = ir, tree, layout(tree)
+        self.constants = constants
         lay = self.layout
         self.t, self.x = ca.SX.sym("t"), ca.SX.sym("x", lay.n_x)
         self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
@@ -189,10 +199,10 @@ class _Builder:
         self.joints = [
             Joint(j, self.t, {c: self.x[k] for c, k in zip(ft, th, strict=True)},
                   {c: self.x[k] for c, k in zip(fu, us, strict=True)},
-                  reference.get(j.parent))
+                  reference.get(j.parent), constants)
             for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                          lay.free_u, strict=True)]
-        self.kin = articulated.kinematics(self.joints, ir.n_bodies)
+        self.kin = articulated.kinematics(self.joints, ir.n_bodies, constants)
         self.theta_dot = ca.vertcat(*[j.theta_dot[list(free)] if free else ca.SX(0, 1)
                                       for j, free in zip(self.joints, lay.free_theta,
                                                          strict=True)])
@@ -203,7 +213,10 @@ class _Builder:
             if body == GROUND_INDEX:
                 return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
             return self.kin.r[body], self.kin.p[body]
-        return joint_rows(self.ir, joint)(self.t, *pose(joint.body_i), *pose(joint.body_j))
+        data = self.constants.data
+        extra = [] if data is None else [data]
+        return joint_rows(self.ir, joint, data)(self.t, *pose(joint.body_i),
+                                                *pose(joint.body_j), *extra)
 
     def loop_closure(self):
         """(Phi_c, d/dt Phi_c, the unit-row scale, lam, mu) of the cut rows."""
@@ -276,16 +289,19 @@ class _Builder:
                 ca.vertcat(*r_ddot, *p_ddot), self.multipliers(dynamics, lam_cut)]
 
 
-def build(ir: ModelIR, tree: Tree) -> JointSystem:
-    b = _Builder(ir, tree)
+def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
+    """The joint system of a numeric IR, or (data: the symbols of compiler.parametric.split)
+    of a parametric one, every function with the trailing input "d" (module docstring)."""
+    constants = Constants(data)
+    b = _Builder(ir, tree, constants)
     t, x, z, w = b.t, b.x, b.z, b.w
     signs = ca.SX.sym("signs", ir.n_bodies)
     if not b.cut_rows:
         dyn = b.dynamics(ca.SX(0, 1))
         x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
-        dynamics = ca.Function("joint_ode", [t, x], [x_dot], ["t", "x"], ["ode"])
-        acceleration = ca.Function("joint_acceleration", [t, x, z], [ca.SX(0, 1)])
-        velocity = ca.Function("joint_velocity_jacobian", [t, x], [ca.SX(0, b.layout.n_x)])
+        dynamics = ("joint_ode", {"t": t, "x": x}, {"ode": x_dot})
+        acceleration = {"matrix": ca.SX(0, 0), "base": ca.SX(0, 1)}
+        velocity = ca.SX(0, b.layout.n_x)
         lam_cut = ca.SX(0, 1)
     else:
         phi, rate, scale, lam_unit, mu = b.loop_closure()
@@ -296,13 +312,27 @@ def build(ir: ModelIR, tree: Tree) -> JointSystem:
         ode = x_dot + ca.vertcat(ca.jacobian(phi, theta).T @ (scale * mu),
                                  ca.SX.zeros(b.layout.n_x - b.layout.n_theta, 1))
         alg = ca.vertcat((1 - w) * scale * phi - w * mu, (1 - w) * scale * rate - w * lam_unit)
-        dynamics = ca.Function("joint_dae", [t, x, z, w], [ode, alg],
-                               ["t", "x", "z", "p"], ["ode", "alg"])
-        second = ca.jacobian(rate, x) @ x_dot + ca.jacobian(rate, t)
-        acceleration = ca.Function("joint_acceleration", [t, x, z], [scale * second])
-        u = x[b.layout.n_theta:]
-        velocity = ca.Function("joint_velocity_jacobian", [t, x],
-                               [ca.jacobian(scale * rate, u)])
-    motion = ca.Function("joint_motion", [t, x, z, signs], b.motion(dyn, lam_cut, signs),
-                         ["t", "x", "z", "signs"], ["q", "q_dot", "q_ddot", "lam"])
-    return JointSystem(tree, b.layout, b.cut_rows, dynamics, motion, acceleration, velocity)
+        dynamics = ("joint_dae", {"t": t, "x": x, "z": z, "p": w}, {"ode": ode, "alg": alg})
+        residual = scale * (ca.jacobian(rate, x) @ x_dot + ca.jacobian(rate, t))
+        acceleration = {"matrix": ca.jacobian(residual, z),
+                        "base": ca.substitute(residual, z, ca.DM.zeros(z.shape))}
+        velocity = ca.jacobian(scale * rate, x[b.layout.n_theta:])
+    motion = dict(zip(("q", "q_dot", "q_ddot", "lam"), b.motion(dyn, lam_cut, signs),
+                      strict=True))
+    poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
+    relative = dict(zip(("rotations", "gaps", "twists"),
+                        _relative(tree.joints, *poses.values(), constants), strict=True))
+    extra = {} if data is None else {DATA: constants.inputs}
+
+    def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
+        inputs = inputs | extra
+        return ca.Function(name, list(inputs.values()), list(outputs.values()), list(inputs),
+                           list(outputs))
+
+    return JointSystem(
+        tree, b.layout, b.cut_rows, function(*dynamics),
+        function("joint_motion", {"t": t, "x": x, "z": z, "signs": signs}, motion),
+        function("joint_acceleration_system", {"t": t, "x": x}, acceleration),
+        function("joint_velocity_jacobian", {"t": t, "x": x}, {"jacobian": velocity}),
+        function("joint_relative_states", poses, relative),
+        None if data is None else constants.function())

@@ -12,6 +12,7 @@ sweeps when a Newton iteration needs it.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 
 def forward_jacobian(function: ca.Function, exact: bool = True,
@@ -51,6 +52,28 @@ def jacobian(function: ca.Function) -> ca.Function:
         f"jac_{function.name()}", [*inputs, *outputs],
         [blocks[o, k] for o in range(n_out) for k in range(n_in)],
         [*names_in, *names_out],
+        [f"jac_{o}_{i}" for o in names_out for i in names_in])
+
+
+def data_jacobian(function: ca.Function, name: str | None = None) -> ca.Function:
+    """The Function jacobian() of `function` without its trailing input (the model data of a
+    parametric build: never differentiated, bound at run time) would give: inputs, then nominal
+    outputs, then that trailing input; every output's Jacobian by every other input (SX, by
+    symbolic AD: what a compiled library holds, so no column of the data is computed; one
+    Jacobian of the stacked outputs, so the blocks share their work)."""
+    inputs = function.sx_in()
+    outputs = function.call(inputs)
+    nominal = [ca.SX.sym(function.name_out(k), function.sparsity_out(k))
+               for k in range(function.n_out())]
+    names_in, names_out = function.name_in()[:-1], function.name_out()
+    whole = ca.jacobian(ca.vertcat(*map(ca.vec, outputs)), ca.vertcat(*map(ca.vec, inputs[:-1])))
+    rows = np.cumsum([0, *(o.numel() for o in outputs)])
+    columns = np.cumsum([0, *(i.numel() for i in inputs[:-1])])
+    blocks = [whole[int(rows[o]):int(rows[o + 1]), int(columns[i]):int(columns[i + 1])]
+              for o in range(len(outputs)) for i in range(len(inputs) - 1)]
+    return ca.Function(
+        name or f"jac_{function.name()}", [*inputs[:-1], *nominal, inputs[-1]], blocks,
+        [*names_in, *(f"out_{o}" for o in names_out), function.name_in()[-1]],
         [f"jac_{o}_{i}" for o in names_out for i in names_in])
 
 

@@ -6,6 +6,9 @@ that reaches a body is its tree joint (the body is its child), if its type has a
 stays a set of constraint rows (a loop closure). A body no tree joint reaches from ground
 floats: a `free` tree joint from ground (then the breadth-first search continues from it, in
 file order of the bodies).
+
+The joint frames are numbers (NumPy) for a numeric IR, SX of the model data for a parametric
+one (compiler.parametric.split); the tree itself depends on the structure alone.
 """
 
 from __future__ import annotations
@@ -13,13 +16,14 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, field
 
+import casadi as ca
 import numpy as np
 
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.joint_types import MOTIONS
 from casmech.schema.resolved import ScalarFunction
 
-Frame = tuple[np.ndarray, np.ndarray]  # (axes as columns, origin), in a body's frame
+Frame = tuple  # (axes as columns, origin), in a body's frame: NumPy arrays or SX
 
 
 @dataclass(frozen=True)
@@ -46,6 +50,12 @@ class Tree:
     @property
     def is_tree(self) -> bool:
         return not self.cut
+
+    @property
+    def floating_loops(self) -> bool:
+        """Loops through a floating body (a `free` tree joint, its body held by cut rows only):
+        its joint coordinates are its r-p ones plus the recursion's overhead (auto runs rp)."""
+        return not self.is_tree and any(joint.joint is None for joint in self.joints)
 
 
 def spanning_tree(ir: ModelIR) -> Tree:
@@ -107,8 +117,10 @@ def tree_joint(joint: JointIR, parent: int) -> TreeJoint:
 def _axes_frames(geometry, parent: str, child: str) -> tuple[Frame, Frame]:
     """The joint's triad u, v, w and point P on both bodies."""
     def frame(side: str) -> Frame:
-        axes = np.column_stack([geometry[f"{k}@{side}"] for k in "uvw"])
-        return axes, geometry[f"P@{side}"]
+        columns = [geometry[f"{k}@{side}"] for k in "uvw"]
+        symbolic = any(isinstance(c, ca.SX) for c in columns)
+        return (ca.horzcat(*columns) if symbolic else np.column_stack(columns),
+                geometry[f"P@{side}"])
     return frame(parent), frame(child)
 
 
@@ -119,17 +131,23 @@ def _cross_frames(geometry, parent: str, child: str) -> tuple[Frame, Frame]:
     a_p, a_c = axis[parent], axis[child]
 
     def triad(x, y, exact: str):
-        x, y = x / np.linalg.norm(x), y / np.linalg.norm(y)
+        ops = SX_OPS if isinstance(x, ca.SX) or isinstance(y, ca.SX) else NUMPY_OPS
+        norm, dot, cross, columns = ops
+        x, y = x / norm(x), y / norm(y)
         if exact == "x":
-            y = y - (y @ x) * x
+            y = y - dot(y, x) * x
         else:
-            x = x - (x @ y) * y
-        x, y = x / np.linalg.norm(x), y / np.linalg.norm(y)
-        return np.column_stack([x, y, np.cross(x, y)])
+            x = x - dot(x, y) * y
+        x, y = x / norm(x), y / norm(y)
+        return columns([x, y, cross(x, y)])
 
     parent_axes = triad(geometry[f"{a_p}@{parent}"], geometry[f"{a_c}@{parent}"], "x")
     child_axes = triad(geometry[f"{a_p}@{child}"], geometry[f"{a_c}@{child}"], "y")
     return (parent_axes, geometry[f"P@{parent}"]), (child_axes, geometry[f"P@{child}"])
 
+
+# (norm, dot, cross, columns) on numbers and on SX
+NUMPY_OPS = (np.linalg.norm, lambda a, b: a @ b, np.cross, np.column_stack)
+SX_OPS = (ca.norm_2, ca.dot, ca.cross, lambda vs: ca.horzcat(*vs))
 
 FRAMES = {"axes": _axes_frames, "cross": _cross_frames}

@@ -10,9 +10,12 @@
   and `metadata.formulation_fallback` says why.
 - Loops with a floating body in the tree (held only by basic or composite constraints, all
   cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
-  Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle):
-  `rp`, compiled. (Measurements: docs/decisions.md.)
-- A DAE stabilization other than the default (ggl) was asked for: `rp`.
+  Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle:
+  above COMPILED_ODE_BODIES, or a parametric library built without the joint functions):
+  `rp`, compiled. (Measurements: docs/decisions.md.) A compiled parametric bundle's joint
+  system is compiled in its library (codegen.parametric), so its loops run joint coordinates.
+- A DAE stabilization asked for makes the formulation `rp` before this module is reached
+  (api.analysis_settings, the one place that rule lives).
 """
 
 from __future__ import annotations
@@ -27,24 +30,21 @@ from casmech.runtime.results import Result
 from casmech.runtime.singular_poses import describe, examinable, singular_poses
 
 
-def choice(tree: Tree, formulation: str, stabilization: str, examinable: bool,
-           lags: bool) -> str:
+def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
     """The formulation to run first: "joint" or the one asked for (rp, romega); examinable:
     whether the run's rows can be examined for singular poses; lags: lags_bundle."""
     if formulation != "auto":
         return formulation
-    if stabilization != "ggl":
-        return "rp"
-    floating = any(joint.joint is None for joint in tree.joints)
-    return "joint" if tree.is_tree or (examinable and not floating and not lags) else "rp"
+    return "joint" if tree.is_tree or (examinable and not tree.floating_loops and not lags) \
+        else "rp"
 
 
-def run(functions: SystemFunctions, tree: Tree, formulation: str, stabilization: str,
-        rows: int, joint: Callable[[], Result], other: Callable[[str], Result]) -> Result:
+def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
+        joint: Callable[[], Result], other: Callable[[str], Result]) -> Result:
     """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
-    first = choice(tree, formulation, stabilization, examinable(functions, rows),
+    first = choice(tree, formulation, examinable(functions, rows),
                    not tree.is_tree and lags_bundle(functions))
     fallback = formulation == "auto" and first == "joint" and not tree.is_tree
     if first != "joint":

@@ -25,7 +25,7 @@ from casmech import interrupts
 from casmech.compiler.articulated import local_motion
 from casmech.compiler.checks import independent_rows
 from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.joint_system import JointSystem, build
+from casmech.compiler.joint_system import LIBRARY_FUNCTIONS, JointSystem, build, layout
 from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.joint_types import MOTIONS
@@ -69,25 +69,43 @@ def tree_of(functions: SystemFunctions) -> Tree:
 
 
 def lags_bundle(functions: SystemFunctions) -> bool:
-    """Whether the bundle is compiled and its joint system would not be: a parametric bundle's
-    (functions.data: it would compile per value) or one above COMPILED_ODE_BODIES."""
+    """Whether the bundle is compiled and its joint system would not be: a parametric bundle
+    (functions.data) whose library holds no joint functions (built for another analysis; it
+    would compile per value) or a bundle above COMPILED_ODE_BODIES."""
     from casmech import codegen  # imported on use: interpreted runs never need it
 
     return codegen.mode_of(functions) == "compiled" and (
-        functions.n_bodies > COMPILED_ODE_BODIES or functions.data is not None)
+        functions.n_bodies > COMPILED_ODE_BODIES or (
+            functions.data is not None and LIBRARY_FUNCTIONS not in functions.derived))
 
 
 def joint_system(functions: SystemFunctions) -> JointSystem:
-    """The bundle's joint system, built once per bundle; with a compiled bundle, the tree's ODE
-    or the loops' DAE and the results rows are compiled too (compiled_system, lags_bundle)."""
+    """The bundle's joint system, built once per bundle: from a parametric library's joint
+    functions (library_system), else over the bundle's IR, and with a compiled bundle the
+    tree's ODE or the loops' DAE and the results rows compiled too (compiled_system,
+    lags_bundle)."""
     if "joint_system" not in functions.derived:
-        system = build(functions.ir, tree_of(functions))
-        from casmech import codegen
+        if LIBRARY_FUNCTIONS in functions.derived:
+            system = library_system(functions)
+        else:
+            system = build(functions.ir, tree_of(functions))
+            from casmech import codegen
 
-        if codegen.mode_of(functions) == "compiled" and not lags_bundle(functions):
-            system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
+            if codegen.mode_of(functions) == "compiled" and not lags_bundle(functions):
+                system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
         functions.derived["joint_system"] = system
     return functions.derived["joint_system"]
+
+
+def library_system(functions: SystemFunctions) -> JointSystem:
+    """The joint system of a parametric library's functions, bound to this bundle's values
+    (codegen.parametric), over the numeric IR's tree."""
+    library, tree = functions.derived[LIBRARY_FUNCTIONS], tree_of(functions)
+    dynamics = library["joint_dae" if tree.cut else "joint_ode"]
+    return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
+                       dynamics, library["joint_motion"], library["joint_acceleration_system"],
+                       library["joint_velocity_jacobian"], library["joint_relative_states"],
+                       given_jacobian=library.get("joint_jacobian"))
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSystem:
@@ -115,7 +133,9 @@ def constant_inverse(kind: str) -> np.ndarray | None:
     theta (revolute, spherical, ...: u = S_J^+ twist with no per-state work), else None.
     Whether it is constant is seen at sample coordinates (its SX does not simplify
     sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
-    motion, samples = MOTIONS[kind], np.random.default_rng(0).normal(size=(4, MOTIONS[kind].n_q))
+    motion = MOTIONS[kind]
+    # four scattered coordinates (not numpy.random: importing it costs a run 10 ms)
+    samples = np.sin(1.7 * np.arange(1, 4 * motion.n_q + 1)).reshape(4, motion.n_q) * 1.5
     for start in motion.quaternions:
         samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
     zero = np.zeros(motion.n_v)
