@@ -30,7 +30,7 @@ from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.joint_types import MOTIONS
 from casmech.runtime import assembly, contact_steps, events
-from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.memo import kept
@@ -55,7 +55,7 @@ COMPILED_MOTION_BODIES = 32
 QUICK_BUILD_INSTRUCTIONS = 30000
 
 KEPT_INTEGRATORS = 8  # CVODES (by grid, options) and IDAS (also by start) instances kept
-KEPT_MAPS = 16  # results rows' functions mapped over a block length, kept per system
+KEPT_MAPS = 16  # results rows' column calls (one per motion function), kept per system
 KEPT_STARTS = 8  # initial states kept per bundle (by t0)
 
 STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
@@ -236,30 +236,31 @@ class _Integrator:
         if not system.n_cut:
             functional = self.options["nonlinear_solver_iteration"] == "functional"
             problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times) if not trial else ca.integrator(
-                "joint", "cvodes", problem, t0, list(times[:1]), self.options)
+            integrator = self._cvodes(problem, t0, times) if not trial else NamedCall(
+                ca.integrator("joint", "cvodes", problem, t0, list(times[:1]), self.options))
             out = integrator(x0=x)
         else:
             integrator = self._idas(t0, times, x, z, times[-1] - t0 if trial else None)
             out = integrator(x0=x, z0=z, p=self.loops.mask)
         self.steps += int(integrator.stats().get("nsteps", 0))
-        states = np.array(out["xf"].full())
-        algebraic = np.array(out["zf"].full()) if system.n_cut else np.zeros((0, len(times)))
+        states = out["xf"]
+        algebraic = out["zf"] if system.n_cut else np.zeros((0, len(times)))
         if not (np.all(np.isfinite(states)) and np.all(np.isfinite(algebraic))):
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
 
-    def _cvodes(self, problem, t0: float, times) -> ca.Function:
+    def _cvodes(self, problem, t0: float, times) -> NamedCall:
         """CVODES over the grid, kept with the system for a later run over the same grid with
-        the same options (creating one costs about as much as integrating a small tree for 1 s).
-        An entry keeps its problem alive, so the problem's id in the key is not reused."""
+        the same options (creating one costs about as much as integrating a small tree for 1 s),
+        called through a buffer (runtime.buffers.NamedCall). An entry keeps its problem alive,
+        so the problem's id in the key is not reused."""
         key = (id(problem), float(t0), tuple(float(t) for t in times),
                tuple(sorted(self.options.items())))
         return kept(self.system_cache.setdefault("cvodes", {}), key, lambda: (
-            problem, ca.integrator("joint", "cvodes", problem, t0, list(times), self.options)),
-            KEPT_INTEGRATORS)[1]
+            problem, NamedCall(ca.integrator("joint", "cvodes", problem, t0, list(times),
+                                             self.options))), KEPT_INTEGRATORS)[1]
 
-    def _idas(self, t0: float, times, x, z, first: float | None) -> ca.Function:
+    def _idas(self, t0: float, times, x, z, first: float | None) -> NamedCall:
         """IDAS over the grid from (t0, x, z); its options depend on that state (_dae_options),
         so it is kept for a later run from the same state over the same grid (a repeated
         run: its start is kept too, runtime.joint_dynamics._start)."""
@@ -267,8 +268,9 @@ class _Integrator:
                np.asarray(z).tobytes(), first, tuple(sorted(self.options.items())))
         problem = self.system.problem
         return kept(self.system_cache.setdefault("idas", {}), key, lambda: (
-            problem, ca.integrator("joint", "idas", problem, t0, list(times), self.options
-                                   | self._dae_options(t0, times, x, z, first))),
+            problem, NamedCall(ca.integrator("joint", "idas", problem, t0, list(times),
+                                             self.options | self._dae_options(t0, times, x, z,
+                                                                              first)))),
             KEPT_INTEGRATORS)[1]
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
@@ -397,24 +399,23 @@ class _Recorder:
         self.functions, self.system, self.signs = functions, system, signs
         self.least_norm = kept(
             functions.derived.setdefault("joint_least_norm", {}), mask.tobytes(),
-            lambda: _least_norm(functions, system, mask), KEPT_STARTS) if mask.any() else None
+            lambda: ColumnCall(_least_norm(functions, system, mask)), KEPT_STARTS
+        ) if mask.any() else None
         self.maps = functions.derived.setdefault("joint_motion_maps", {})
         self.watch = None  # runtime.events.Watch of the run, when it has events
 
-    def _mapped(self, n: int) -> BufferedCall:
-        """The results rows' function mapped over n rows (kept with the functions)."""
-        return kept(self.maps, (self.system.motion, n),
-                    lambda: BufferedCall(self.system.motion.map(n)), KEPT_MAPS)
+    def _mapped(self) -> ColumnCall:
+        """The results rows' function over columns (kept with the functions)."""
+        return kept(self.maps, self.system.motion, lambda: ColumnCall(self.system.motion),
+                    KEPT_MAPS)
 
     def rows(self, times, states, algebraic):
         """(q, q_dot, q_ddot, lam), one row per time."""
-        n = len(times)
         times = np.asarray(times, float)
-        rows = self._mapped(n)(times[None, :], states, algebraic,
-                               np.repeat(self.signs[:, None], n, axis=1))
-        q, q_dot, q_ddot, lam = rows
+        q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
+                                               self.signs[:, None])
         if self.least_norm is not None:
-            lam = np.array(self.least_norm.map(n)(times[None, :], q, lam).full())
+            (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T
 
     def __call__(self, result: Result, times, states, algebraic, start, integrate,
