@@ -8,6 +8,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech.runtime.memo import kept
+
 
 class BufferedCall:
     """function(*arrays) -> tuple of dense NumPy arrays, one per output."""
@@ -67,9 +69,10 @@ class NamedCall:
 # Columns per mapped call. casadi builds a Map in time growing with its length and the
 # function's size (chain32's results row: 6 ms for 101 columns, 1.0 s for 10^4, 15 s for 10^5;
 # the four-bar's 0.4 ms, 77 ms, 1.1 s), so columns are evaluated in blocks of this many through
-# one kept map; a shorter block is padded (its last column repeated) to a power of two, so a
-# function keeps at most 9 maps. A call costs ~20 us over its columns.
+# kept maps (one per block length: BLOCK and the lengths of shorter blocks, at most KEPT_MAPS).
+# A call costs ~20 us over its columns.
 BLOCK = 256
+KEPT_MAPS = 8
 
 
 class ColumnCall:
@@ -80,29 +83,28 @@ class ColumnCall:
     def __init__(self, function: ca.Function):
         self.function = function
         self.widths = [function.size2_in(k) for k in range(function.n_in())]
-        self.maps: dict[int, BufferedCall] = {}  # by block length, a power of two
+        self.maps: dict[int, BufferedCall] = {}  # by block length
 
     def _map(self, count: int) -> BufferedCall:
-        if count not in self.maps:
-            self.maps[count] = BufferedCall(self.function.map(count))
-        return self.maps[count]
+        return kept(self.maps, count, lambda: BufferedCall(self.function.map(count)), KEPT_MAPS)
 
     def __call__(self, *arguments) -> tuple[np.ndarray, ...]:
         arguments = [self._matrix(np.asarray(a, float), k) for k, a in enumerate(arguments)]
-        count = max((a.shape[1] // max(w, 1) for a, w in zip(arguments, self.widths,
-                                                             strict=True) if a.shape[1] != w),
-                    default=1)
+        shared = [a.shape[1] == w for a, w in zip(arguments, self.widths, strict=True)]
+        count = max((a.shape[1] // max(w, 1) for a, w, one in zip(arguments, self.widths,
+                                                                  shared, strict=True)
+                     if not one), default=1)
         if count == 0:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
         blocks = []
         for start in range(0, count, BLOCK):
             size = min(BLOCK, count - start)
-            padded = min(BLOCK, 1 << (size - 1).bit_length())
-            picked = np.minimum(np.arange(start, start + padded), start + size - 1)
-            outputs = self._map(padded)(*(self._columns(a, w, count, picked)
-                                          for a, w in zip(arguments, self.widths, strict=True)))
-            blocks.append([out[:, :size * out.shape[1] // padded] for out in outputs])
+            blocks.append(self._map(size)(*(
+                np.tile(a, (1, size)) if one else a[:, start * w:(start + size) * w]
+                for a, w, one in zip(arguments, self.widths, shared, strict=True))))
+        if len(blocks) == 1:
+            return blocks[0]
         return tuple(np.concatenate(parts, axis=1) for parts in zip(*blocks, strict=True))
 
     def _matrix(self, argument: np.ndarray, k: int) -> np.ndarray:
@@ -111,11 +113,3 @@ class ColumnCall:
             return argument
         rows = self.function.size1_in(k)
         return argument.reshape(rows, -1) if rows else np.zeros((0, self.widths[k]))
-
-    @staticmethod
-    def _columns(argument: np.ndarray, width: int, count: int, picked: np.ndarray):
-        """The columns of the evaluations `picked` (all of them for a shared argument)."""
-        if width == 0 or argument.shape[1] == width:
-            return np.tile(argument, (1, len(picked)))
-        index = (picked[:, None] * width + np.arange(width)[None, :]).ravel()
-        return argument[:, index]
