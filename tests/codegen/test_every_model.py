@@ -29,6 +29,7 @@ def _libraries(model) -> list[bool]:
     return [True, False] if parametric.applies(model) else [False]
 
 
+@pytest.mark.slow  # C for every model: ~2 min on 2 cores
 @pytest.mark.parametrize("name", NAMES)
 def test_compiled_equals_interpreted(name, toolchain, cache_root):
     model = casmech.load(MODELS / name)
