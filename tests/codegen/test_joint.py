@@ -26,10 +26,14 @@ def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, ca
     assert bundle.data is not None and codegen.mode_of(bundle) == "compiled"
     fast, slow = joint_system(bundle), joint_system(interpreted)
     assert fast.dynamics is bundle.derived[LIBRARY_FUNCTIONS]["joint_ode"]
-    nb = interpreted.n_bodies
+    # the same equations, the model's constants computed from d: roundoff
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+
+
+def _assert_same_tree_functions(fast, slow, nb: int) -> None:
+    """The ODE and the results rows of two joint systems at random (t, x), to 1e-12."""
     for _ in range(3):
         t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
-        # the same equations, the model's constants computed from d: roundoff
         np.testing.assert_allclose(np.array(fast.dynamics(t, x)), np.array(slow.dynamics(t, x)),
                                    rtol=1e-12, atol=1e-12)
         for a, b in zip(fast.motion(t, x, [], np.ones(nb)), slow.motion(t, x, [], np.ones(nb)),
@@ -40,15 +44,8 @@ def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, ca
 def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):
     fast, slow = joint_system(compiled), joint_system(interpreted)
     assert fast.dynamics.class_name() == "External" and slow.dynamics.is_a("SXFunction")
-    nb = interpreted.n_bodies
-    for _ in range(3):
-        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
-        # the same SX compiled to C: equal to roundoff
-        np.testing.assert_allclose(np.array(fast.dynamics(t, x)), np.array(slow.dynamics(t, x)),
-                                   rtol=1e-12, atol=1e-12)
-        for a, b in zip(fast.motion(t, x, [], np.ones(nb)), slow.motion(t, x, [], np.ones(nb)),
-                        strict=True):
-            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+    # the same SX compiled to C: equal to roundoff
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
 
 
 def test_compiled_run_is_the_interpreted_run(interpreted, compiled):
