@@ -21,7 +21,7 @@ from functools import cache, cached_property
 
 import casadi as ca
 
-from casmech.compiler import eom, spatial
+from casmech.compiler import body, eom, spatial
 from casmech.compiler.assemble import GROUND_POSE, Coordinates
 from casmech.compiler.ir import GROUND_INDEX, ModelIR
 from casmech.compiler.joint_constants import Constants
@@ -42,7 +42,7 @@ def local_motion(kind: str) -> ca.Function:
     theta_dot = motion.rates(theta, u)
     omega = motion.angular_velocity(theta, u)
     if omega is None:
-        omega = 2 * euler.g_matrix(rotation) @ ca.jtimes(rotation, theta, theta_dot)
+        omega = body.angular_velocity(rotation, ca.jtimes(rotation, theta, theta_dot))
     velocity = euler.rotation(rotation).T @ ca.jtimes(translation, theta, theta_dot)
     subspace = ca.jacobian(ca.vertcat(omega, velocity), u)
     rate = ca.jtimes(subspace @ u, theta, theta_dot)
@@ -125,7 +125,7 @@ class Kinematics:
         return self.rotation[k] @ self.velocity[k][3:6]
 
     def p_dot(self, k: int):
-        return 0.5 * euler.g_matrix(self.p[k]).T @ self.velocity[k][0:3]
+        return body.p_dot(self.p[k], self.velocity[k][0:3])
 
 
 def kinematics(joints: list[Joint], n_bodies: int, constants: Constants = NUMERIC
@@ -169,7 +169,7 @@ def applied_wrenches(ir: ModelIR, t, kin: Kinematics) -> list:
     wrenches = []
     for k in range(nb):
         f_global = forces[3 * k:3 * k + 3]
-        torque = 0.5 * euler.g_matrix(kin.p[k]) @ forces[3 * nb + 4 * k:3 * nb + 4 * k + 4]
+        torque = body.moment(kin.p[k], forces[3 * nb + 4 * k:3 * nb + 4 * k + 4])
         wrenches.append(ca.vertcat(torque, kin.rotation[k].T @ f_global))
     return wrenches
 

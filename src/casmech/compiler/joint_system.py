@@ -30,7 +30,7 @@ from functools import cached_property
 
 import casadi as ca
 
-from casmech.compiler import articulated, lazy_jacobian
+from casmech.compiler import articulated, body, lazy_jacobian
 from casmech.compiler.articulated import Joint
 from casmech.compiler.assemble import driver_value
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
@@ -128,7 +128,7 @@ def _body_state(q, q_dot, n_bodies: int, k: int):
         return ca.DM.zeros(3), ca.DM.eye(3), ca.DM.zeros(3), ca.DM.zeros(3)
     p = q[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
     p_dot = q_dot[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
-    omega = 2 * euler.g_matrix(p) @ p_dot
+    omega = body.angular_velocity(p, p_dot)
     return q[3 * k:3 * k + 3], euler.rotation(p), q_dot[3 * k:3 * k + 3], omega
 
 
@@ -176,7 +176,7 @@ def joint_rows(ir: ModelIR, joint: JointIR, data: ca.SX | None = None) -> ca.Fun
                    for k in keys}
         rows.append(function(*frames, vectors, driver_value(prim, t)))
     phi = ca.vertcat(*rows)
-    blocks = [ca.horzcat(ca.jacobian(phi, r), 0.5 * ca.jacobian(phi, p) @ euler.g_matrix(p).T)
+    blocks = [ca.horzcat(ca.jacobian(phi, r), body.pi_bar(ca.jacobian(phi, p), p))
               for r, p in sides]
     extra = [] if data is None else [data]
     return ca.Function("joint_rows", [t, *(v for side in sides for v in side), *extra],
@@ -240,12 +240,12 @@ class _Builder:
             _, *blocks = self.rows(joint)
             lam_j = lam[start:start + len(joint.rows)]
             start += len(joint.rows)
-            for body, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
-                if body == GROUND_INDEX:
+            for k, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
+                if k == GROUND_INDEX:
                     continue
                 generalized = -block.T @ lam_j  # global force, body-frame torque
-                wrenches[body] += ca.vertcat(generalized[3:6],
-                                             self.kin.rotation[body].T @ generalized[0:3])
+                wrenches[k] += ca.vertcat(generalized[3:6],
+                                          self.kin.rotation[k].T @ generalized[0:3])
         return wrenches
 
     def dynamics(self, lam):
@@ -281,7 +281,7 @@ class _Builder:
         r_ddot = [kin.rotation[k] @ (dynamics.accelerations[k][3:6]
                                      + ca.cross(omega[k], kin.velocity[k][3:6]))
                   for k in range(nb)]
-        p_dot = [0.5 * euler.g_matrix(p[k]).T @ omega[k] for k in range(nb)]
+        p_dot = [body.p_dot(p[k], omega[k]) for k in range(nb)]
         p_ddot = [0.5 * (euler.g_matrix(p_dot[k]).T @ omega[k] + euler.g_matrix(p[k]).T @ alpha[k])
                   for k in range(nb)]
         return [ca.vertcat(*kin.r, *p),
