@@ -46,6 +46,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 
 import casmech
 from casmech.codegen import cache, generate, manifest, parametric, residuals
@@ -112,19 +113,20 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
 
 
 def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
-           mapped: bool = False) -> tuple[str, Callable[[Path], None], bool]:
-    """(cache key, build(directory), parametric): the parametric library (codegen.parametric)
-    where it applies and `mapped` is not asked for, else the mapped one with the values baked
-    in (and in its key)."""
+           mapped: bool = False) -> tuple[str, Callable[[Path], None], np.ndarray | None]:
+    """(cache key, build(directory), model data): the parametric library (codegen.parametric)
+    where it applies and `mapped` is not asked for, with the values its load binds, else the
+    mapped one with the values baked in (and in its key), and None."""
     if not mapped and parametric.applies(model):
-        entry = parametric.key(model, data(ir)[1], toolchain, dae)
+        values, signature = data(ir)  # one lowering's split serves key and load (~10 ms)
+        entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
-            ir, directory, toolchain, info, dae, build_libraries), True
+            ir, directory, toolchain, info, dae, build_libraries), values
     model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
     info = {"model": model.name, "model_hash": model_hash, "key": entry}
-    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), False
+    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), None
 
 
 def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
@@ -144,11 +146,11 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     bundle, compiler.dae.problem hands them to casadi as they are). `parametric_library` False:
     the mapped library even where the parametric one applies."""
     ir = lower(model)
-    entry, build, is_parametric = _entry(model, ir, toolchain or Toolchain(), dae,
-                                         not parametric_library)
+    entry, build, values = _entry(model, ir, toolchain or Toolchain(), dae,
+                                  not parametric_library)
     directory, _ = cache.lookup(entry, build, root)
-    if is_parametric:
-        return parametric.load(directory, ir, data(ir)[0])
+    if values is not None:
+        return parametric.load(directory, ir, values)
     return load_build(directory, ir)
 
 
