@@ -68,3 +68,16 @@ def test_rows_with_and_without_special_values_keep_their_order(tmp_path, monkeyp
     np.testing.assert_array_equal(bits(single), bits(values[:, :1]))
     path = write_csv(tmp_path / "none.csv", [], np.zeros((3, 0)))
     assert path.read_text() == "\n\n\n\n"  # the header and three empty rows
+
+
+def test_large_files_read_by_pandas_bit_for_bit(tmp_path, monkeypatch):
+    """Above PANDAS_BYTES the rows come from pandas' parser: the same bits, special values
+    included, as numpy's parser gives."""
+    values = table()
+    values[[5, 50], 3] = [np.nan, -np.inf]
+    path = write_csv(tmp_path / "results.csv", ["t", "a", "b", "c"], values)
+    _, by_numpy = read_csv(path)
+    monkeypatch.setattr(csv, "PANDAS_BYTES", 0)
+    _, by_pandas = read_csv(path)
+    np.testing.assert_array_equal(bits(by_pandas), bits(values))
+    np.testing.assert_array_equal(bits(by_pandas), bits(by_numpy))
