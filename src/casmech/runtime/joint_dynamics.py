@@ -250,28 +250,28 @@ class _Integrator:
         return states, algebraic
 
     def _cvodes(self, problem, t0: float, times) -> NamedCall:
-        """CVODES over the grid, kept with the system for a later run over the same grid with
-        the same options (creating one costs about as much as integrating a small tree for 1 s),
-        called through a buffer (runtime.buffers.NamedCall). An entry keeps its problem alive,
-        so the problem's id in the key is not reused."""
-        key = (id(problem), float(t0), tuple(float(t) for t in times),
-               tuple(sorted(self.options.items())))
-        return kept(self.system_cache.setdefault("cvodes", {}), key, lambda: (
-            problem, NamedCall(ca.integrator("joint", "cvodes", problem, t0, list(times),
-                                             self.options))), KEPT_INTEGRATORS)[1]
+        """CVODES over the grid, kept for a later run over the same grid with the same options
+        (creating one costs about as much as integrating a small tree for 1 s)."""
+        return self._kept("cvodes", (id(problem),), problem, t0, times, lambda: self.options)
 
     def _idas(self, t0: float, times, x, z, first: float | None) -> NamedCall:
         """IDAS over the grid from (t0, x, z); its options depend on that state (_dae_options),
         so it is kept for a later run from the same state over the same grid (a repeated
         run: its start is kept too, runtime.joint_dynamics._start)."""
-        key = ("idas", float(t0), tuple(float(t) for t in times), np.asarray(x).tobytes(),
-               np.asarray(z).tobytes(), first, tuple(sorted(self.options.items())))
-        problem = self.system.problem
-        return kept(self.system_cache.setdefault("idas", {}), key, lambda: (
-            problem, NamedCall(ca.integrator("joint", "idas", problem, t0, list(times),
-                                             self.options | self._dae_options(t0, times, x, z,
-                                                                              first)))),
-            KEPT_INTEGRATORS)[1]
+        return self._kept("idas", (np.asarray(x).tobytes(), np.asarray(z).tobytes(), first),
+                          self.system.problem, t0, times,
+                          lambda: self.options | self._dae_options(t0, times, x, z, first))
+
+    def _kept(self, plugin: str, key: tuple, problem, t0: float, times, options) -> NamedCall:
+        """casadi's `plugin` integrator of `problem` over the grid with options(), kept with
+        the system by `key`, the start and grid and self.options, and called through a buffer
+        (runtime.buffers.NamedCall). An entry keeps its problem alive, so a problem's id in a
+        key is not reused."""
+        key = (*key, float(t0), tuple(float(t) for t in times),
+               tuple(sorted(self.options.items())))
+        return kept(self.system_cache.setdefault(plugin, {}), key, lambda: (
+            problem, NamedCall(ca.integrator("joint", plugin, problem, t0, list(times),
+                                             options()))), KEPT_INTEGRATORS)[1]
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
