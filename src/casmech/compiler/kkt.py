@@ -68,9 +68,8 @@ def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
 def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity, solver: str = SADDLE_SOLVER) -> ca.Function:
     """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
     [F; gamma] (module docstring), M and P with the given sparsity, by a CasADi linear
-    solver plugin (CSparse's LU: built in 1 ms for a 32-link chain, where "qr" took 5.5 s).
-    Called with symbols it inlines into a graph (casmech.optimal), with numbers it is the
-    numeric solve (runtime)."""
+    solver plugin (default CSparse's LU; docs/decisions.md). Called with symbols it inlines
+    into a graph (casmech.optimal), with numbers it is the numeric solve (runtime)."""
     n, m = mass.size1(), jacobian.size1()
     m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)
     forces, gamma, w = ca.MX.sym("F", n), ca.MX.sym("gamma", m), ca.MX.sym("w", m)

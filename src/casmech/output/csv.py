@@ -27,8 +27,8 @@ def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
 
 def rows_text(values: np.ndarray) -> bytes:
     """The rows as comma-separated lines. orjson writes the shortest round-trip digits of a
-    float (Ryu) ~30x faster than Python's repr, but writes NaN and infinities as null: rows
-    holding one are written by repr (nan, inf, -inf)."""
+    float (Ryu; docs/decisions.md), but NaN and infinities as null: rows holding one are
+    written by repr (nan, inf, -inf)."""
     if values.shape[0] == 0:
         return b""
     if values.shape[1] == 0:

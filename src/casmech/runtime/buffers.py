@@ -43,10 +43,9 @@ class BufferedCall:
 
 class NamedCall:
     """function(name=array, ...) -> {output name: dense array} through a BufferedCall, the
-    inputs not given zero: how a kept integrator is called (its xf and zf over a grid of 10^5
-    rows came back as DMs in 0.24 s, through the buffer with the integration in 0.009 s).
-    A solver failure raises the RuntimeError the ordinary call raises (its text without
-    casadi's "Error in Function::call" lines)."""
+    inputs not given zero: how a kept integrator is called, its outputs over the grid written
+    into NumPy (docs/decisions.md). A solver failure raises the RuntimeError the ordinary call
+    raises (its text without casadi's "Error in Function::call" lines)."""
 
     def __init__(self, function: ca.Function):
         self.function, self.call = function, BufferedCall(function)

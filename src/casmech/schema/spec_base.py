@@ -65,8 +65,7 @@ Inertia = Annotated[
 
 class Spec(BaseModel):
     # defer_build: a class's validator is built when first used, so a run builds the document's
-    # one validator (ModelSpec's, which holds the nested classes) instead of one per class at
-    # import (57 classes: ~80 ms of CPU per process, benchmarks/RESULTS.md)
+    # one validator (ModelSpec's, which holds the nested classes), not one per class at import
     model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     @model_validator(mode="before")
