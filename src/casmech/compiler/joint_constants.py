@@ -41,7 +41,7 @@ class Constants:
 
     def raw(self, value):
         """A number of the IR as a matrix for arithmetic that `self` then hoists: a casadi.DM
-        (the numeric build computes in DM, as before its constants existed), or SX."""
+        (a numeric build computes its constants in DM, folded into the graphs), or SX."""
         return ca.DM(value) if not self.symbolic else ca.SX(value)
 
     def once(self, kind: str, value, make):
