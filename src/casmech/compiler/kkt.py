@@ -65,15 +65,15 @@ def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
                        ["q_guess", "t", "q_ref", *["theta"] * len(theta_in)], ["q", "lam"])
 
 
-def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity, solver: str = SADDLE_SOLVER) -> ca.Function:
+def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
     """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
-    [F; gamma] (module docstring), M and P with the given sparsity, by a CasADi linear
-    solver plugin (default CSparse's LU; docs/decisions.md). Called with symbols it inlines
+    [F; gamma] (module docstring), M and P with the given sparsity, by CSparse's LU
+    (SADDLE_SOLVER; docs/decisions.md). Called with symbols it inlines
     into a graph (casmech.optimal), with numbers it is the numeric solve (runtime)."""
     n, m = mass.size1(), jacobian.size1()
     m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)
     forces, gamma, w = ca.MX.sym("F", n), ca.MX.sym("gamma", m), ca.MX.sym("w", m)
     lhs = ca.blockcat([[m_in, p_in.T], [p_in, -ca.diag(w)]])
-    z = ca.solve(lhs, ca.vertcat(forces, gamma), solver)
+    z = ca.solve(lhs, ca.vertcat(forces, gamma), SADDLE_SOLVER)
     return ca.Function("saddle", [m_in, p_in, forces, gamma, w], [z[:n], z[n:]],
                        ["M", "P", "F", "gamma", "w"], ["v_dot", "lam"])

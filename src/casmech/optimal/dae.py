@@ -23,12 +23,6 @@ from casmech.optimal.system import ParametricSystem
 from casmech.runtime.assembly import initial_state
 from casmech.runtime.results import column_names
 
-# The linear solver of the DAE's algebraic states in the integrators' graphs: QR, as CasADi's
-# MX solve does by default (compiler.kkt.saddle's CSparse LU builds far faster on big models;
-# tests/optimal's finite differences of a structurally zero derivative sit at their noise floor
-# and were measured with this one: benchmarks/notes_numerics2.md).
-SADDLE_SOLVER = "qr"
-
 
 @dataclass(frozen=True)
 class DAE:
@@ -122,7 +116,7 @@ def algebraic_function(dae: DAE) -> ca.Function:
     parts = ca.Function("kkt", [dae.t, dae.x, dae.p], [mass, jac, -rest[:n], -rest[n:]])
     t, x, p = ca.MX.sym("t"), ca.MX.sym("x", dae.x.numel()), ca.MX.sym("p", dae.p.numel())
     m, a, f, gamma = parts(t, x, p)
-    saddle = kkt.saddle(parts.sparsity_out(0), parts.sparsity_out(1), SADDLE_SOLVER)
+    saddle = kkt.saddle(parts.sparsity_out(0), parts.sparsity_out(1))
     v_dot, lam = saddle(m, a, f, gamma, ca.DM.zeros(jac.size1()))
     return ca.Function("z", [t, x, p], [ca.vertcat(v_dot, lam)], ["t", "x", "p"], ["z"])
 
