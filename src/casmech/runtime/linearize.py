@@ -9,9 +9,10 @@ of Phi_q(t*, q*) (statics.null_space). The state x = [z; w] obeys x' = f(x, u, t
     [M(q) Phi_I^T; Phi_I 0] [q_ddot; lam_I] = [Q(t, q, q_dot) + G(q) u; gamma_I(t, q, q_dot)],
 
 with I the independent constraint rows at q* (the column-pivoted QR's pivots: redundant rows
-dropped, so both matrices are square). A = df/dx and B = df/du at (x*, 0, t*) come from CasADi's
-forward AD through this graph (MX, the linear solves included): the velocity terms (Coriolis,
-gyroscopic, the constraint curvature with q_dot* != 0) are in it. Away from an equilibrium a
+dropped, so both matrices are square; the saddle system is compiler.kkt.saddle's). A = df/dx and
+B = df/du at (x*, 0, t*) come from CasADi's forward AD through this graph (MX, the linear solves
+included): the velocity terms (Coriolis, gyroscopic, the constraint curvature with
+q_dot* != 0) are in it. Away from an equilibrium a
 linearization depends on the coordinates: these describe perturbations measured as N^T dq, and
 the chart's curvature enters A with q_dot*^2 (docs/analyses.md#modal). At an equilibrium
 (q_dot* = 0, q_ddot* = 0) A and B equal runtime/modal.py's reduced M, C, K form.
@@ -32,6 +33,7 @@ from dataclasses import replace
 import casadi as ca
 import numpy as np
 
+from casmech.compiler import kkt
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS
 from casmech.compiler.functions import SystemFunctions, build_functions
@@ -125,7 +127,7 @@ def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.n
     """(A, B) of x = [z; w] at (t, q, q_dot) (module docstring); `rows` the independent rows
     of Phi_q there, `inputs` the G of input_forces."""
     bundle = sx_bundle(functions)
-    n, k, count = q.size, basis.shape[1], inputs.size2_out(0)
+    k, count = basis.shape[1], inputs.size2_out(0)
     z, w, u = ca.MX.sym("z", k), ca.MX.sym("w", k), ca.MX.sym("u", count)
     n_basis = ca.DM(basis)
     position = ca.DM(q) + ca.mtimes(n_basis, z)
@@ -135,10 +137,10 @@ def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.n
                         ca.vertcat(bundle["nu"](t, position)[rows], w))
     forces = bundle["generalized_forces"](t, position, velocity) + ca.mtimes(
         inputs(t, position, velocity), u)
-    lhs = ca.blockcat([[bundle["mass_matrix"](position), phi_q.T],
-                       [phi_q, ca.MX(len(rows), len(rows))]])
-    rhs = ca.vertcat(forces, bundle["gamma"](t, position, velocity)[rows])
-    acceleration = ca.solve(lhs, rhs)[:n]
+    mass = bundle["mass_matrix"](position)
+    saddle = kkt.saddle(mass.sparsity(), phi_q.sparsity())
+    acceleration, _ = saddle(mass, phi_q, forces, bundle["gamma"](t, position, velocity)[rows],
+                             ca.DM.zeros(len(rows)))
     f = ca.vertcat(ca.mtimes(n_basis.T, velocity), ca.mtimes(n_basis.T, acceleration))
     # forward AD in every direction at once: ~4x quicker to build than ca.jacobian of the MX
     # graph for 40 bodies (benchmarks/notes_linearize.md)
