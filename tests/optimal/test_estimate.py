@@ -63,3 +63,56 @@ def test_measurements_need_a_time_column(tmp_path):
     path = write_csv(tmp_path / "bad.csv", ["time", "bar.y"], np.zeros((3, 2)))
     with pytest.raises(UsageError, match="'t' column"):
         read_measurements(path)
+
+
+def runtime_columns(model, columns, times) -> np.ndarray:
+    """Columns of casmech's own dynamics run (the runtime, not casmech.optimal's IDAS graph)
+    at `times`, interpolated from a 1 ms output grid by cubic splines."""
+    from scipy.interpolate import CubicSpline
+    result = casmech.analyze(casmech.compile(model), "dynamics", t_end=float(times[-1]),
+                             output_step=1e-3, rtol=1e-11, atol=1e-13)
+    frame = result.to_dataframe()
+    return np.column_stack([CubicSpline(frame.index, frame[c])(times) for c in columns])
+
+
+def test_pendulum_length_and_initial_angle_from_positions():
+    """Geometry: the bar's length L (its joint point, centre and inertia-free positions) and
+    initial angle a0 (its orientation) fitted to positions of casmech's runtime at L = 1.2,
+    a0 = 0.8, from the file's L = 1, a0 = 1."""
+    times = TIMES[::4]
+    truth = casmech.load(PENDULUM, {"L": "1.2", "a0": "0.8"})
+    clean = runtime_columns(truth, ["bar.y", "bar.z"], times)
+    fit = estimate(casmech.load(PENDULUM), ["L", "a0"], times,
+                   {"bar.y": clean[:, 0], "bar.z": clean[:, 1]}, bounds={"L": (0.5, 2.0)})
+    assert fit.status == "Solve_Succeeded"
+    np.testing.assert_allclose(fit.initial, [1.0, 1.0], rtol=0, atol=0)  # the file's values
+    # noise-free data: the fit is limited by the spline of the 1 ms grid (~1e-9 m) and the
+    # integrators' tolerances (1e-9 relative), both far below 1e-6 of the parameters
+    np.testing.assert_allclose(fit.values, [1.2, 0.8], rtol=1e-6, atol=0)
+
+
+def test_composed_chain_link_length():
+    """A composed model (repeat): the link length of a 2-link chain fitted to the tip's
+    positions of casmech's runtime at L = 0.6, from the file's L = 0.5."""
+    times = np.arange(1, 11) * 0.05
+    columns = ["link2.bar.x", "link2.bar.z"]
+    truth = casmech.load(MODELS / "chain_repeat.yaml", {"N": "2", "L": "0.6"})
+    clean = runtime_columns(truth, columns, times)
+    start = casmech.load(MODELS / "chain_repeat.yaml", {"N": "2"})
+    fit = estimate(start, ["L"], times, dict(zip(columns, clean.T, strict=True)))
+    assert fit.status == "Solve_Succeeded"
+    # noise-free data, as above
+    np.testing.assert_allclose(fit.values, [0.6], rtol=1e-6, atol=0)
+
+
+def test_a_length_that_changes_the_structure_is_a_located_error():
+    """d(theta) exists only where the model keeps its structure: at a0 = 0 the bar's position
+    loses its y entry; the data callback returns NaN there (an IPOPT step gets shortened) and
+    keeps the error located at the parameter's line."""
+    from casmech.optimal.model_data import ModelData
+    data = ModelData(casmech.load(PENDULUM), ["a0"])
+    assert data.failure() is None
+    assert np.all(np.isnan(np.array(data(np.array([0.0])))))  # no data there: NaN
+    assert isinstance(data.failure(), UsageError)
+    assert "estimate_pendulum.yaml:15:3" in str(data.failure())
+    assert "changes the model's structure at a0 = 0" in str(data.failure())

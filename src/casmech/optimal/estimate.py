@@ -19,7 +19,8 @@ import numpy as np
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
 from casmech.optimal.sensitivity import check_times, output_graph
-from casmech.optimal.system import parametric_system
+from casmech.optimal.symbolic import classify, geometry_moved
+from casmech.optimal.system import data_inputs, parametric_system
 from casmech.output.csv import read_csv
 from casmech.schema.resolved import ResolvedModel
 
@@ -56,7 +57,7 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
              bounds: Mapping[str, tuple[float, float]] | None = None, rtol: float = 1e-9,
              atol: float = 1e-11, max_iter: int = 100, verbose: bool = False) -> Estimate:
     """Fit `parameters` (starting from the model's values) to measured columns."""
-    system = parametric_system(model, parameters)
+    system, inputs = _system(model, parameters)
     dae = build_dae(system)
     times = check_times(times, dae.t0)
     outputs = list(data)
@@ -65,17 +66,22 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
         raise UsageError(f"{measured.shape[0]} measurements per column for {times.size} times")
     weights = weights or {}
     w = np.array([float(weights.get(o, 1.0)) for o in outputs])
-    theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
+    inner, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
+    names = tuple(dict.fromkeys(parameters))
+    theta = ca.MX.sym("theta", len(names))
+    response = ca.Function("y", [theta], [ca.Function("y", [inner], [y])(
+        theta if inputs is None else inputs.inputs(theta))])
     n_y = y.numel()
     # lifted least squares: variables [theta / scale, r], r = y(theta) - data; the constraint
     # Jacobian (n_y x n_theta) comes from forward IDAS sensitivities
-    scale = np.where(system.values != 0, np.abs(system.values), 1.0)
-    scaled, r = ca.MX.sym("s", theta.numel()), ca.MX.sym("r", n_y)
-    model_y = ca.Function("y", [theta], [y])(scaled * ca.DM(scale))
+    start = np.array([model.parameters.get(n, 0.0) for n in names], float)
+    scale = np.where(start != 0, np.abs(start), 1.0)
+    scaled, r = ca.MX.sym("s", len(names)), ca.MX.sym("r", n_y)
+    model_y = response(scaled * ca.DM(scale))
     weight = np.tile(w, times.size)
     bounds = bounds or {}
-    low = np.array([bounds.get(n, (-np.inf, np.inf))[0] for n in system.names]) / scale
-    high = np.array([bounds.get(n, (-np.inf, np.inf))[1] for n in system.names]) / scale
+    low = np.array([bounds.get(n, (-np.inf, np.inf))[0] for n in names]) / scale
+    high = np.array([bounds.get(n, (-np.inf, np.inf))[1] for n in names]) / scale
     nlp = {"x": ca.vertcat(scaled, r), "f": ca.sum1(ca.DM(weight) * r ** 2),
            "g": model_y - ca.DM(measured.ravel()) - r}
     options = {"ipopt.hessian_approximation": "limited-memory", "ipopt.max_iter": max_iter,
@@ -84,14 +90,26 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
     solver = ca.nlpsol("estimate", "ipopt", nlp, options)
     n_r = np.full(n_y, np.inf)
     try:
-        solution = solver(x0=np.concatenate([np.ones(theta.numel()), np.zeros(n_y)]),
+        solution = solver(x0=np.concatenate([np.ones(len(names)), np.zeros(n_y)]),
                           lbx=np.concatenate([low, -n_r]), ubx=np.concatenate([high, n_r]),
                           lbg=0, ubg=0)
     except RuntimeError as error:
+        if inputs is not None and inputs.data.failure() is not None:
+            raise inputs.data.failure() from None
         raise AnalysisError(FailureContext(float(times[-1]), f"estimation failed: {error}"[:600],
                                            [])) from None
     stats = solver.stats()
-    values = np.array(solution["x"].full()).ravel()[:theta.numel()] * scale
-    at = ca.Function("y", [theta], [y])(values).full().reshape(measured.shape) - measured
-    return Estimate(system.names, values, system.values, float(solution["f"]), at,
+    values = np.array(solution["x"].full()).ravel()[:len(names)] * scale
+    at = response(values).full().reshape(measured.shape) - measured
+    return Estimate(names, values, start, float(solution["f"]), at,
                     int(stats.get("iter_count", -1)), str(stats.get("return_status")))
+
+
+def _system(model: ResolvedModel, names: Sequence[str]):
+    """(the parametric system, None) when the file's expressions can be re-read with symbols
+    (system.py's "symbolic"); otherwise (geometry moves, a composed model) the system over the
+    model data and its DataInputs (theta -> [d(theta); theta], exact at every theta)."""
+    if geometry_moved(model, classify(model, names)[0]) is None:
+        return parametric_system(model, names), None
+    inputs = data_inputs(model, names)
+    return inputs.system, inputs

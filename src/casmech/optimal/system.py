@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom
+from casmech.compiler import eom, parametric
 from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR, constant
@@ -34,6 +34,7 @@ from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.geometry import euler
 from casmech.optimal import lowering
+from casmech.optimal.model_data import ModelData
 from casmech.optimal.symbolic import (
     SymbolicModel,
     classify,
@@ -176,6 +177,18 @@ def _with_offsets(ir: ModelIR, velocity_offsets: dict) -> ModelIR:
     return replace(ir, bodies=bodies)
 
 
+def _over_data(split, names: tuple[str, ...], velocities) -> tuple[dict, ca.SX]:
+    """The bundle's and the start functions over theta_d = [d; theta] (theta: the velocity
+    offsets; the file parameters reach the functions only through d), and theta_d."""
+    both = ca.vertcat(split.symbols, ca.SX.sym("offsets", len(names)))
+    symbols = {n: both[split.values.size + k] for k, n in enumerate(names)}
+    bundle = build_functions(split.ir, split.symbols)
+    functions = {name: _bound(bundle[name], both, split.symbols) for name in BUNDLE}
+    ir = _with_offsets(split.ir, offsets(velocities, symbols))
+    start = _start(ir, Coordinates.create(ir.n_bodies), both)
+    return functions | start, both
+
+
 def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
     """The "data" method (module docstring): theta through the model data d."""
     names = tuple(dict.fromkeys(names))
@@ -188,16 +201,39 @@ def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
     moved = ca.sparsify(ca.DM(derivative.jacobian)) @ (theta[chosen] - values[chosen]) \
         if chosen else ca.DM.zeros(split.values.size)
     d = ca.DM(split.values) + moved
-    bundle = build_functions(split.ir, split.symbols)
-    functions = {name: _bound(bundle[name], theta, d) for name in BUNDLE}
-    # the start functions read d and theta (the velocity offsets): input [d; theta]
-    both = ca.vertcat(split.symbols, ca.SX.sym("offsets", len(names)))
-    symbols = {n: both[split.values.size + k] for k, n in enumerate(names)}
-    ir = _with_offsets(split.ir, offsets(velocities, symbols))
-    start = _start(ir, Coordinates.create(ir.n_bodies), both)
-    functions |= {name: _bound(f, theta, ca.vertcat(d, theta)) for name, f in start.items()}
+    over, both = _over_data(split, names, velocities)
+    functions = {name: _bound(f, theta, ca.vertcat(d, theta)) for name, f in over.items()}
     return ParametricSystem(functions, build_functions(lower(model)), names, values, "data",
                             dict(zip(parameters, derivative.error.tolist(), strict=True)))
+
+
+@dataclass(frozen=True)
+class DataInputs:
+    """A system whose theta is [d; theta] (the model data, then the names' values), exact at
+    every theta through `data` (model_data.ModelData: keep it alive while `inputs` is used)."""
+
+    system: ParametricSystem
+    data: ModelData
+    inputs: ca.Function  # theta -> [d(theta); theta] (MX, through the callback)
+
+
+def data_inputs(model: ResolvedModel, names: Iterable[str]) -> DataInputs:
+    """The model over its data d for evaluations at other theta values (estimation), any
+    parameter that keeps the structure, geometry and composed models included."""
+    names = tuple(dict.fromkeys(names))
+    parameters, velocities = classify(model, names)
+    values = np.array([model.parameters.get(n, 0.0) for n in names], float)
+    data = ModelData(model, parameters)
+    split = parametric.split(lower(model))
+    functions, both = _over_data(split, names, velocities)
+    inner = np.concatenate([split.values, values])
+    labels = (*(f"d[{k}]" for k in range(split.values.size)), *names)
+    system = ParametricSystem(functions, build_functions(lower(model)), labels, inner, "data")
+    theta = ca.MX.sym("theta", len(names))
+    chosen = [names.index(n) for n in parameters]
+    d = data(theta[chosen]) if chosen else ca.DM(split.values)
+    return DataInputs(system, data, ca.Function("data_inputs", [theta], [ca.vertcat(d, theta)],
+                                                ["theta"], ["theta_d"]))
 
 
 def parametric_system(model: ResolvedModel, names: Iterable[str] = (),
