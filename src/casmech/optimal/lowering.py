@@ -54,6 +54,7 @@ class DataDerivative:
     error: np.ndarray  # (len(names),): estimated error (truncation, round-off) of each column,
     # relative to its largest entry
     names: tuple[str, ...]
+    moved: np.ndarray  # (len(d),) bool: the entries any parameter's stencil changed
 
 
 def dependents(model: ResolvedModel, names: Sequence[str]) -> set[str]:
@@ -117,18 +118,19 @@ def _sixth(points: Mapping[int, np.ndarray], unit: int, half: float) -> np.ndarr
     return sum(w * (points[k * unit] - points[-k * unit]) for k, w in SIXTH) / (unit * half)
 
 
-def _column(points: Mapping[int, np.ndarray], half: float) -> tuple[np.ndarray, float]:
+def _column(points: Mapping[int, np.ndarray], half: float) -> tuple[np.ndarray, float,
+                                                                   np.ndarray]:
     """(the sixth-order derivative at step h / 2, its error estimate relative to its largest
-    entry): truncation, as its difference to the same formula at step h (64 times its own
-    truncation error, asymptotically), plus round-off (ROUNDING of each number that moves,
-    through the weights, over h / 2), entry by entry."""
+    entry, the entries that moved): truncation, as its difference to the same formula at step
+    h (64 times its own truncation error, asymptotically), plus round-off (ROUNDING of each
+    number that moves, through the weights, over h / 2), entry by entry."""
     fine, coarse = _sixth(points, 1, half), _sixth(points, 2, half)
     stacked = np.array(list(points.values()))
     moved = np.any(stacked != stacked[0], axis=0)  # numbers theta does not reach are exact
     rounding = ROUNDING * np.abs(stacked).max(axis=0) * moved * 2 * sum(
         abs(w) for _, w in SIXTH) / half
     scale = max(np.abs(fine).max(initial=0.0), 1e-300)
-    return fine, float((np.abs(fine - coarse) + rounding).max(initial=0.0) / scale)
+    return fine, float((np.abs(fine - coarse) + rounding).max(initial=0.0) / scale), moved
 
 
 def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
@@ -137,7 +139,7 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
     reference = lower(model)
     split = parametric.split(reference)
     lowering = Lowering(model)
-    columns, errors = [], []
+    columns, errors, moved = [], [], np.zeros(split.values.size, bool)
     for name in names:
         value = float(model.parameters[name])
         again = parametric.data(lowering.ir(name, value))
@@ -150,8 +152,8 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
         for step in STEPS:
             h = step * (abs(value) or 1.0)
             try:
-                column, error = _column(_stencil(lowering, name, value, h / 2, reference,
-                                                 split.signature), h / 2)
+                column, error, changed = _column(_stencil(lowering, name, value, h / 2,
+                                                          reference, split.signature), h / 2)
             except ValueError as problem:
                 problems.append(str(problem))
                 continue
@@ -165,5 +167,6 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
                            "moves the model's numbers smoothly")
         columns.append(column)
         errors.append(error)
+        moved |= changed
     jacobian = np.stack(columns, axis=1) if columns else np.zeros((split.values.size, 0))
-    return DataDerivative(split, jacobian, np.array(errors), names)
+    return DataDerivative(split, jacobian, np.array(errors), names, moved)

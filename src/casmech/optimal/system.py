@@ -26,7 +26,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom, parametric
+from casmech.compiler import eom
 from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR, constant
@@ -177,16 +177,16 @@ def _with_offsets(ir: ModelIR, velocity_offsets: dict) -> ModelIR:
     return replace(ir, bodies=bodies)
 
 
-def _over_data(split, names: tuple[str, ...], velocities) -> tuple[dict, ca.SX]:
-    """The bundle's and the start functions over theta_d = [d; theta] (theta: the velocity
-    offsets; the file parameters reach the functions only through d), and theta_d."""
+def _over_data(split, names: tuple[str, ...], velocities) -> dict[str, ca.Function]:
+    """The bundle's and the start functions over [d; theta] (theta: the velocity offsets; the
+    file parameters reach the functions only through d)."""
     both = ca.vertcat(split.symbols, ca.SX.sym("offsets", len(names)))
     symbols = {n: both[split.values.size + k] for k, n in enumerate(names)}
     bundle = build_functions(split.ir, split.symbols)
     functions = {name: _bound(bundle[name], both, split.symbols) for name in BUNDLE}
     ir = _with_offsets(split.ir, offsets(velocities, symbols))
     start = _start(ir, Coordinates.create(ir.n_bodies), both)
-    return functions | start, both
+    return functions | start
 
 
 def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
@@ -201,7 +201,7 @@ def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
     moved = ca.sparsify(ca.DM(derivative.jacobian)) @ (theta[chosen] - values[chosen]) \
         if chosen else ca.DM.zeros(split.values.size)
     d = ca.DM(split.values) + moved
-    over, both = _over_data(split, names, velocities)
+    over = _over_data(split, names, velocities)
     functions = {name: _bound(f, theta, ca.vertcat(d, theta)) for name, f in over.items()}
     return ParametricSystem(functions, build_functions(lower(model)), names, values, "data",
                             dict(zip(parameters, derivative.error.tolist(), strict=True)))
@@ -209,31 +209,43 @@ def data_system(model: ResolvedModel, names: Iterable[str]) -> ParametricSystem:
 
 @dataclass(frozen=True)
 class DataInputs:
-    """A system whose theta is [d; theta] (the model data, then the names' values), exact at
-    every theta through `data` (model_data.ModelData: keep it alive while `inputs` is used)."""
+    """A system whose theta is [d_moving; theta] (the entries of the model data the parameters
+    move, then the names' values; the other entries are constants), exact at every theta
+    through `data` (model_data.ModelData: keep it alive while `inputs` is used)."""
 
     system: ParametricSystem
     data: ModelData
-    inputs: ca.Function  # theta -> [d(theta); theta] (MX, through the callback)
+    inputs: ca.Function  # theta -> [d(theta)[moving]; theta] (MX, through the callback)
 
 
 def data_inputs(model: ResolvedModel, names: Iterable[str]) -> DataInputs:
     """The model over its data d for evaluations at other theta values (estimation), any
-    parameter that keeps the structure, geometry and composed models included."""
+    parameter that keeps the structure, geometry and composed models included. Only the
+    entries that move with the parameters (lowering.derivative's stencils) are inputs, so
+    IDAS carries only those as parameters."""
     names = tuple(dict.fromkeys(names))
     parameters, velocities = classify(model, names)
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
+    derivative = lowering.derivative(model, parameters)
+    split, moving = derivative.split, np.flatnonzero(derivative.moved)
+    over = _over_data(split, names, velocities)
+    entries = ca.SX.sym("d_moving", moving.size)
+    d = ca.SX(ca.DM(split.values))
+    for k, index in enumerate(moving):
+        d[int(index)] = entries[k]
+    velocity = ca.SX.sym("offsets", len(names))
+    inner = ca.vertcat(entries, velocity)
+    functions = {name: _bound(f, inner, ca.vertcat(d, velocity)) for name, f in over.items()}
+    labels = (*(f"d[{k}]" for k in moving), *names)
+    system = ParametricSystem(functions, build_functions(lower(model)), labels,
+                              np.concatenate([split.values[moving], values]), "data")
     data = ModelData(model, parameters)
-    split = parametric.split(lower(model))
-    functions, both = _over_data(split, names, velocities)
-    inner = np.concatenate([split.values, values])
-    labels = (*(f"d[{k}]" for k in range(split.values.size)), *names)
-    system = ParametricSystem(functions, build_functions(lower(model)), labels, inner, "data")
     theta = ca.MX.sym("theta", len(names))
     chosen = [names.index(n) for n in parameters]
-    d = data(theta[chosen]) if chosen else ca.DM(split.values)
-    return DataInputs(system, data, ca.Function("data_inputs", [theta], [ca.vertcat(d, theta)],
-                                                ["theta"], ["theta_d"]))
+    moved = data(theta[chosen])[moving.tolist()] if chosen else ca.MX(0, 1)
+    return DataInputs(system, data, ca.Function("data_inputs", [theta],
+                                                [ca.vertcat(moved, theta)], ["theta"],
+                                                ["theta_d"]))
 
 
 def parametric_system(model: ResolvedModel, names: Iterable[str] = (),
