@@ -208,9 +208,9 @@ def symbolic_model(model: ResolvedModel, names: Iterable[str]) -> SymbolicModel:
     document = load_document(model.text, model.file)
     if model.files or uses_composition(document.data):
         raise UsageError(f"{model.file} is composed (components, instances or repeat): "
-                         "optimisation re-reads a model's own expressions and does not support "
-                         "composed models yet; write the model out flat (sensitivities: "
-                         "method 'data')")
+                         "method 'symbolic' re-reads a flat model's own expressions; a composed "
+                         "model's parameters go through its model data (method 'data' or "
+                         "'auto')")
     spec, _ = validate(document)
     env, dependent = _environment(spec, model, {n: symbols[n] for n in parameters})
     numeric = lower(model)
