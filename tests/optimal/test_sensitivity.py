@@ -233,7 +233,7 @@ def test_composed_model_goes_through_the_model_data():
     with pytest.raises(UsageError, match=rf"chain_repeat.yaml:{line}:3: parameter 'N' makes the "
                                          "model invalid .* repeat bound must be an integer"):
         sensitivity(model, ["N"], ["link2.bar.z"], [0.15])
-    with pytest.raises(UsageError, match="composed .* method 'data' or 'auto'"):
+    with pytest.raises(UsageError, match="composed .*method 'data' or 'auto'"):
         sensitivity(model, ["m"], ["link2.bar.z"], [0.15], method="symbolic")
 
 
