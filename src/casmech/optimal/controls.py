@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import GROUND_INDEX
 from casmech.compiler.lower import _Poses, lower_force
 from casmech.errors import UsageError
+from casmech.forces.springs import joint_angle
 from casmech.joint_types import COORDINATES, having
 from casmech.schema.resolved import Force, ResolvedModel
 
@@ -41,7 +41,7 @@ class Control:
 
 def _torque_coordinate(model: ResolvedModel, poses, joint, x: Coordinates):
     force = lower_force(Force(f"_{joint.name}", "rsda", joint=joint.name), model, poses)
-    return eom.rsda_angle(force, x)
+    return joint_angle(force, x)
 
 
 def _force_coordinate(model: ResolvedModel, poses, joint, x: Coordinates):

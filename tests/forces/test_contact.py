@@ -1,4 +1,4 @@
-"""Contact elements (compiler/contact.py) against closed forms.
+"""Contact elements (casmech/forces/contact.py) against closed forms.
 
 Every model is a YAML text run through the public API. The references are the free fall
 (impact time sqrt(2h/g)), the exact restitution of the Hunt-Crossley law (its phase-plane
@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 import casmech
-from casmech.compiler import contact
+from casmech.forces import contact
 
 G = 9.81
 H = 1.0  # drop height of the ball's lowest point [m]
