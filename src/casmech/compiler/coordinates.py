@@ -95,10 +95,12 @@ def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
 
 
 def bind_function(function, bodies: Mapping[str, int], joints: Mapping[str, Any]):
-    """`function` with the state names it uses bound (unchanged when it uses none)."""
+    """`function` with the state names it uses bound (unchanged when it uses none), in sorted
+    order: the set of names iterates by string hash, which differs between processes, and the
+    order is part of the parametric library's structure signature (its cache key)."""
     if function is None:
         return None
-    found = {name: _binding(name, bodies, joints) for name in function.expr.symbols}
+    found = {name: _binding(name, bodies, joints) for name in sorted(function.expr.symbols)}
     states = {name: binding for name, binding in found.items() if binding is not None}
     if not states:
         return function
