@@ -105,9 +105,9 @@ def _value(force: ForceIR, t, pattern):
 
 
 def kernelised(force: ForceIR) -> bool:
-    """Whether a force element has a kernel: a type whose entry has one, whose laws read no other
-    state
-    than t and its own length/angle and rate (compiler.coordinates binds the others)."""
+    """Whether a force element has a kernel: a type whose entry has one, whose laws read no
+    other state than t and its own length/angle and rate (compiler.coordinates binds the
+    others)."""
     laws = ([force.actuator] if force.actuator is not None else []) + list(force.value or ())
     entry = entry_of(force.type)
     return entry is not None and entry.kernel is not None and \

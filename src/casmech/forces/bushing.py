@@ -21,6 +21,9 @@ small angles AX, AY, AZ agree with theta to first order too). docs/forces.md.
 The rotation vector comes from Euler parameters: s = conj(p_i) p_j c, where the constant c undoes
 the relative rotation at t = 0, so S = A_i^T A_j (A_i0^T A_j0)^T and theta = M_i^T theta(S) with
 M_i the I frame in body_i. theta(S) = 2 e atan2(|e|, e0)/|e|, by its series near identity.
+
+Here: its YAML class, checks (`resolve`), lowering, law and linearization inputs (its
+casmech.force_types entry).
 """
 
 from __future__ import annotations
@@ -114,7 +117,7 @@ def deflection(force, x):
 
 
 def law(force, x, read):
-    """(generalized force on q, potential energy) of one bushing."""
+    """(generalized force on q, potential energy) of one bushing (it reads no state)."""
     # vertcat, not DM: optimal/symbolic.py puts SX parameters here (a DM of SX is silently NaN)
     k, c, preload = (ca.vertcat(*[force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
     s = deflection(force, x)
