@@ -147,7 +147,7 @@ def outputs_of(force_type: str) -> tuple[str, ...]:
     return () if entry is None else entry.outputs
 
 
-def state_keys() -> str:
+def state_reading() -> str:
     """Where force laws read the state, e.g. 'force/torque value, tsda/rsda actuator': the
     types by key, keys in reverse alphabetical order."""
     keys: dict[str, list[str]] = {}

@@ -169,3 +169,19 @@ def test_unregistered_the_type_is_unknown_again(anchor_spring):
         assert export.schema_text() == export.DEFAULT_PATH.read_text(encoding="utf-8")
     finally:
         force_types.register(ANCHOR_SPRING)
+
+
+class AnchorActuated(AnchorSpring):
+    type: Literal["anchor_actuated"]
+
+
+def test_where_states_are_read_follows_the_entries(anchor_spring):
+    """The hint of a misplaced state lists the keys the entries name in `state_keys`."""
+    assert force_types.state_reading() == "force/torque value, tsda/rsda actuator"
+    force_types.register(ForceType("anchor_actuated", AnchorActuated, resolve, lower_anchor,
+                                   law, state_keys=("actuator",)))
+    try:
+        assert force_types.state_reading() == \
+            "force/torque value, tsda/rsda/anchor_actuated actuator"
+    finally:
+        force_types.unregister("anchor_actuated")

@@ -270,3 +270,10 @@ def test_compiled_mode_equals_interpreted():
     # accelerations at the row where the contact force rises (measured 5e-6 relative there)
     np.testing.assert_allclose(results[1].to_numpy(), results[0].to_numpy(), rtol=1e-4,
                                atol=1e-6)
+
+
+def test_the_contact_law_names_ground_as_the_compiler_does():
+    """forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
+    from casmech.compiler.ir import GROUND_INDEX
+
+    assert contact.GROUND == GROUND_INDEX

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from casmech.errors import did_you_mean
-from casmech.force_types import REGISTRY, state_keys
+from casmech.force_types import REGISTRY, state_reading
 from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.joint_types import attributes as joint_attributes
 from casmech.joint_types import coordinate_types, listed
@@ -89,9 +89,10 @@ class StateChecker(Checker):
     def misplaced_state(self, name: str) -> tuple[str, str]:
         _, attribute = split(name)
         if attribute in JOINT_COORDINATES or attribute in BODY_STATES:
-            return f"the state '{name}' is not allowed here", f"states are read in: {state_keys()}"
+            return (f"the state '{name}' is not allowed here",
+                    f"states are read in: {state_reading()}")
         return (f"unknown symbol '{name}'",
-                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {state_keys()}")
+                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {state_reading()}")
 
     def misnamed_state(self, name: str) -> tuple[str, str | None]:
         owner, attribute = split(name)
