@@ -16,9 +16,10 @@ The callables receive what they need from the calling layer as arguments, so thi
 casmech.forces import nothing from schema/ or compiler/:
 
 - resolve(check, path, given) -> dict | None: the resolved.Force fields of the YAML item
-  `given` (its class), or None after reporting a problem through `check` (schema/checker.py's
-  Checker: error, number, numbers, vector, direction, function, reference, two_bodies,
-  orientation; bodies, joint_types, joint_bodies). `path` locates the item.
+  `given` (its class), or None after reporting a problem through `check` (the schema's
+  StateChecker, schema/force_laws.py: error, number, numbers, vector, direction, function,
+  reference, two_bodies, orientation; bodies, joint_types, joint_bodies). `path` locates the
+  item; the fields hold no None.
 - lower(force, model, poses) -> dict: the ForceIR fields besides name, type and source
   (body_i, body_j as indices, points and axes in the bodies' frames, params, actuator, value,
   frame) of a resolved.Force. `poses` (compiler/lower.py): `index[body]`, `local(body,
