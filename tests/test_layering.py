@@ -1,8 +1,10 @@
 """Layering of the packages (issue 15), read from the source by ast: schema/ never imports
-compiler/, the bottom layer (casmech.geometry) no other casmech package and the joint registry
-(casmech.joint_types) only the bottom layer, not even inside a function; no two packages
-import each other at import time (module-level imports, through any chain; an import inside a
-function, done on use, is allowed to point upwards)."""
+compiler/, the bottom layer (casmech.geometry) no other casmech package, the YAML base classes
+(casmech.spec_base) none either, the joint registry (casmech.joint_types) only the bottom layer
+and the force element registry (casmech.force_types, the built-in types' code casmech.forces)
+only those, not even inside a function; no two packages import each other at import time
+(module-level imports, through any chain; an import inside a function, done on use, is allowed
+to point upwards)."""
 
 import ast
 from pathlib import Path
@@ -57,10 +59,17 @@ def package_graph() -> dict[str, set[str]]:
     return graph
 
 
+# what the force element registry and its code may import (besides third-party libraries)
+BOTTOM = {"force_types", "forces", "geometry", "joint_types", "spec_base", "errors"}
+
+
 @pytest.mark.parametrize("package, forbidden", [
     ("schema", {"compiler", "runtime", "codegen", "optimal", "output", "study", "commands"}),
     ("geometry", set(package_graph()) - {"geometry"}),
     ("joint_types", set(package_graph()) - {"joint_types", "geometry"}),
+    ("spec_base", set(package_graph()) - {"spec_base"}),
+    ("forces", set(package_graph()) - BOTTOM),
+    ("force_types", set(package_graph()) - BOTTOM),
 ])
 def test_a_package_imports_nothing_above_it(package, forbidden):
     files = [SRC / f"{package}.py"] if (SRC / f"{package}.py").exists() else \

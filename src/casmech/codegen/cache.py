@@ -36,8 +36,8 @@ from casmech.schema.tables import TableExpr
 ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(casmech.__file__).parent
 # what the generated code depends on: these packages and top-level modules
-SOURCE_PACKAGES = ("schema", "compiler", "codegen", "geometry")
-SOURCE_MODULES = ("joint_types.py",)
+SOURCE_PACKAGES = ("schema", "compiler", "codegen", "geometry", "forces")
+SOURCE_MODULES = ("joint_types.py", "force_types.py", "spec_base.py")
 
 
 def cache_dir() -> Path:

@@ -2,9 +2,10 @@
 instances of each element type: one SX kernel per (type, frame, actuator expression, which
 data entries are non-zero), its parameters (points, axes, stiffness, damping, free length or
 angle) as data, and the generalized forces of each instance summed into Q by a constant sparse
-matrix. A time function in a force's value (`value: [...]`) is evaluated outside the kernel and
-passed in, so forces with different time functions share code; a tsda/rsda actuator depends on
-the motion and is part of its kernel (forces with the same actuator text share it).
+matrix; the kernels are the casmech.force_types entries' `kernel`. A time function in a force's
+value (`value: [...]`) is evaluated outside the kernel and passed in, so forces with different
+time functions share code; a spring's actuator depends on the motion and is part of its kernel
+(springs with the same actuator text share it).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS
 from casmech.compiler.ir import GROUND_INDEX, ForceIR, ModelIR
 from casmech.compiler.primitives import Frame
+from casmech.force_types import REGISTRY, entry_of
 from casmech.geometry import euler
 from casmech.schema.resolved import ScalarFunction
 
@@ -32,7 +34,7 @@ ROW = 14
 class ForceKey:
     type: str
     frame: str
-    actuator: tuple | None  # (text, constants) of a tsda/rsda actuator
+    actuator: tuple | None  # (text, constants) of a spring's actuator
     pattern: tuple[bool, ...]  # non-zero entries of the data (then of the value)
 
 
@@ -43,12 +45,7 @@ def _actuator_key(function: ScalarFunction | None):
 
 
 def data_of(force: ForceIR) -> np.ndarray:
-    if force.type in eom.SPRINGS:
-        kind = eom.SPRINGS[force.type]
-        return np.concatenate([*kind.vector_values(force), kind.parameters(force)])
-    if force.type == "force":
-        return np.asarray(force.points.get("s", [0.0, 0.0, 0.0]), float)
-    return np.zeros(0)
+    return REGISTRY[force.type].kernel.data(force)
 
 
 def value_pattern(force: ForceIR) -> tuple[bool, ...]:
@@ -69,41 +66,13 @@ def _frame(x):
     return Frame(x[0:3], euler.rotation(x[3:7]))
 
 
-def _spring(key, x, x_dot, t, data, value, actuator):
-    """A tsda or rsda (compiler.eom.SPRINGS): data = [its vectors, stiffness, damping, rest]
-    (kernelised actuators read no other state)."""
-    kind = eom.SPRINGS[key.type]
-    n = 3 * len(kind.vectors)
-    coordinate = kind.coordinate(_frame(x[:7]), _frame(x[7:]),
-                                 *(data[k:k + 3] for k in range(0, n, 3)))
-    return eom.spring(kind, coordinate, (x, x_dot, t), (data[n], data[n + 1], data[n + 2]),
-                      actuator)
-
-
-def _point_force(key, x, x_dot, t, data, value, actuator):
-    frame = _frame(x[:7])
-    force = eom.in_global(key.frame, frame.A, value)
-    return eom.point_force(frame, data[0:3], x[:7], force), ca.SX(0)
-
-
-def _torque(key, x, x_dot, t, data, value, actuator):
-    frame = _frame(x[:7])
-    torque = eom.in_global(key.frame, frame.A, value)
-    return ca.vertcat(ca.SX(3, 1), eom.torque(frame, x[3:7], torque)), ca.SX(0)
-
-
-# Element types with a kernel; any other type of compiler.eom.FORCE_ELEMENTS is built per
-# instance from eom (`unrolled`): correct for every element, compact for these.
-KERNELS = {**dict.fromkeys(eom.SPRINGS, _spring), "force": _point_force, "torque": _torque}
-
-
 def _digest(key: ForceKey) -> str:
     return hashlib.sha256(repr(key).encode()).hexdigest()[:8]
 
 
 def n_value(key: ForceKey) -> int:
     """Entries of the value input: a force or torque vector, else none."""
-    return 3 if key.type in ("force", "torque") else 0
+    return REGISTRY[key.type].kernel.n_value
 
 
 def kernel(key: ForceKey, actuator: ScalarFunction | None) -> ca.Function:
@@ -113,8 +82,10 @@ def kernel(key: ForceKey, actuator: ScalarFunction | None) -> ca.Function:
     x, x_dot, t = ca.SX.sym("x", ROW), ca.SX.sym("x_dot", ROW), ca.SX.sym("t")
     data = _sparse_symbol("data", key.pattern[:n_data])
     value = _sparse_symbol("value", key.pattern[n_data:])
-    generalized, potential = KERNELS[key.type](key, x, x_dot, t, ca.densify(data),
-                                               ca.densify(value), actuator)
+    frames = (x[:7], x[7:])
+    generalized, potential = REGISTRY[key.type].kernel.build(
+        key.type, lambda k: _frame(frames[k]), (x, x_dot, t), ca.densify(data),
+        ca.densify(value), actuator, key.frame)
     return ca.Function(f"force_{key.type}_{_digest(key)}", [x, x_dot, t, data, value],
                        [generalized, potential], ["x", "x_dot", "t", "data", "value"],
                        ["generalized", "potential"])
@@ -134,10 +105,19 @@ def _value(force: ForceIR, t, pattern):
 
 
 def kernelised(force: ForceIR) -> bool:
-    """Whether a force element has a kernel: a type of KERNELS whose laws read no other state
-    than t and its own length/angle and rate (compiler.coordinates binds the others)."""
+    """Whether a force element has a kernel: a type whose entry has one, whose laws read no
+    other state than t and its own length/angle and rate (compiler.coordinates binds the
+    others)."""
     laws = ([force.actuator] if force.actuator is not None else []) + list(force.value or ())
-    return force.type in KERNELS and not any(getattr(f, "states", None) for f in laws)
+    entry = entry_of(force.type)
+    return entry is not None and entry.kernel is not None and \
+        not any(getattr(f, "states", None) for f in laws)
+
+
+def on_ground(force: ForceIR) -> bool:
+    """Whether an element acts on ground only (a one-body type on ground): no generalized
+    force."""
+    return getattr(entry_of(force.type), "one_body", False) and force.body_i == GROUND_INDEX
 
 
 def unrolled(ir: ModelIR, force: ForceIR) -> ca.Function:
@@ -159,8 +139,8 @@ def applied(ir: ModelIR, t, q, q_dot) -> tuple:
     groups: dict = {}
     total, potential = ca.MX(layout.n, 1), ca.MX(0)
     for force in (*ir.forces, *ir.motors, *ir.limits):  # motors and stops: eom's elements
-        if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
-            continue  # acts on ground: no generalized force
+        if on_ground(force):
+            continue
         if kernelised(force):
             groups.setdefault(key_of(force), []).append(force)
         else:

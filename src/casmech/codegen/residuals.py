@@ -191,7 +191,7 @@ def force_groups(ir: ModelIR, ix: Indices, t) -> list[Group]:
     by_key: dict = {}
     out = []
     for force in (*ir.forces, *ir.motors, *ir.limits):  # as codegen.forces.applied
-        if force.type in ("force", "torque") and force.body_i == GROUND_INDEX:
+        if forces.on_ground(force):
             continue
         if forces.kernelised(force):
             by_key.setdefault(forces.key_of(force), []).append(force)

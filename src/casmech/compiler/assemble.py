@@ -17,9 +17,10 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import body
-from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR, constant
+from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
 from casmech.compiler.primitives import PRIMITIVES, Frame
 from casmech.geometry import euler
+from casmech.geometry.values import constant
 
 GROUND_POSE = np.array([0.0, 0, 0, 1, 0, 0, 0])
 

@@ -65,11 +65,6 @@ def moment(p, q_p):
     return 0.5 * euler.g_matrix(p) @ q_p
 
 
-def generalized_torque(p, n_bar):
-    """Q_p = 2 G(p)^T n_bar: the generalized force on p of a body-frame torque n_bar."""
-    return 2 * euler.g_matrix(p).T @ n_bar
-
-
 def gyroscopic(omega_bar, inertia):
     """omega_bar~ J_bar omega_bar."""
     return ca.cross(omega_bar, inertia @ omega_bar)

@@ -5,7 +5,7 @@ The names are casmech.geometry.states'; here is how each is computed from the co
 - `<joint>.angle`, `<joint>.angle_dot` (joint types whose casmech.joint_types entry has the
   coordinate "angle": revolute, cylindrical): rotation of body_j about the joint axis, measured
   from the pose written in the file like a driver angle; the formula is the rsda's
-  (`eom.rsda_angle`, atan2 of the joint frames, so in (-pi, pi]); the rate is its time
+  (`forces.springs.joint_angle`, atan2 of the joint frames, so in (-pi, pi]); the rate is its time
   derivative by AD.
 - `<joint>.displacement`, `<joint>.displacement_dot` ("displacement": translational,
   cylindrical): slide of body_j's copy of the joint point along the axis carried by body_i, 0
@@ -24,8 +24,9 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from casmech.compiler import body, eom
-from casmech.compiler.ir import constant
+from casmech.forces.springs import joint_angle
 from casmech.geometry.states import split
+from casmech.geometry.values import constant
 from casmech.joint_types import attributes
 from casmech.schema.resolved import ScalarFunction
 
@@ -39,7 +40,7 @@ def displacement(geometry, x):
 
 
 def _angle(geometry, x):
-    return eom.rsda_angle(geometry, x)
+    return joint_angle(geometry, x)
 
 
 def _rate(coordinate: Callable) -> Callable:
@@ -94,10 +95,12 @@ def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
 
 
 def bind_function(function, bodies: Mapping[str, int], joints: Mapping[str, Any]):
-    """`function` with the state names it uses bound (unchanged when it uses none)."""
+    """`function` with the state names it uses bound (unchanged when it uses none), in sorted
+    order: the set of names iterates by string hash, which differs between processes, and the
+    order is part of the parametric library's structure signature (its cache key)."""
     if function is None:
         return None
-    found = {name: _binding(name, bodies, joints) for name in function.expr.symbols}
+    found = {name: _binding(name, bodies, joints) for name in sorted(function.expr.symbols)}
     states = {name: binding for name, binding in found.items() if binding is not None}
     if not states:
         return function

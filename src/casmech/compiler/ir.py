@@ -9,20 +9,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-import casadi as ca
 import numpy as np
 
 from casmech.errors import Source
 from casmech.schema.resolved import Analysis, ScalarFunction
 
 GROUND_INDEX = -1
-
-
-def constant(value):
-    """A field of the IR as a CasADi matrix: DM for numbers, as it is when symbolic (the model
-    data of compiler.parametric). The compiler reads IR vectors through this, never ca.DM,
-    which turns a symbol into NaN without an error."""
-    return value if isinstance(value, (ca.SX, ca.MX)) else ca.DM(value)
 
 
 @dataclass(frozen=True)

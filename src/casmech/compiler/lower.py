@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import bushing, contact, coordinates, limits, motors
+from casmech.compiler import coordinates, limits, motors
 from casmech.compiler.ir import (
     GROUND_INDEX,
     BodyIR,
@@ -18,6 +18,7 @@ from casmech.compiler.ir import (
     PrimitiveIR,
     RowInfo,
 )
+from casmech.force_types import REGISTRY as FORCE_TYPES
 from casmech.geometry import euler
 from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
@@ -37,9 +38,11 @@ def perpendicular_pair(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _Poses:
-    """Initial poses by body name (ground: origin, identity) and their indices."""
+    """Initial poses by body name (ground: origin, identity), their indices, the joints by name
+    (the helper force_types' `lower` receives)."""
 
     def __init__(self, model: ResolvedModel):
+        self.joints = {j.name: j for j in model.joints}
         self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
         self.pose = {b.name: (b.position, euler.numeric(euler.rotation, b.euler_parameters))
                      for b in model.bodies}
@@ -48,6 +51,11 @@ class _Poses:
     def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
         r0, a0 = self.pose[body]
         return a0.T @ value if quantity in DIRECTIONS else a0.T @ (value - r0)
+
+    def joint(self, name: str) -> tuple[Joint, dict[str, np.ndarray]]:
+        """A joint by name and its global joint frame at t = 0 (joint_frame)."""
+        joint = self.joints[name]
+        return joint, joint_frame(joint)
 
 
 def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
@@ -148,33 +156,9 @@ def joint_coordinates(joint: Joint, poses: _Poses) -> ForceIR:
 
 
 def lower_force(force: Force, model: ResolvedModel, poses: _Poses) -> ForceIR:
-    v = force.vectors
-    if force.type == "bushing":
-        return bushing.lower(force, model, poses)
-    if force.type in contact.SHAPES:
-        return contact.lower(force, poses)
-    params = {"stiffness": force.stiffness, "damping": force.damping}
-    if force.type == "tsda":
-        at_i, at_j = np.asarray(v["at_i"], float), np.asarray(v["at_j"], float)
-        length = force.free_length if force.free_length is not None else np.linalg.norm(at_j - at_i)
-        points = {"s_i": poses.local(force.body_i, "P", at_i),
-                  "s_j": poses.local(force.body_j, "P", at_j)}
-        return ForceIR(force.name, "tsda", poses.index[force.body_i], poses.index[force.body_j],
-                       points, params | {"free_length": float(length)}, force.actuator,
-                       source=force.source)
-    if force.type == "rsda":
-        joint = next(j for j in model.joints if j.name == force.joint)
-        frame = joint_frame(joint)
-        axes = {"u_i": poses.local(joint.body_i, "u", frame["u"]),
-                "v_i": poses.local(joint.body_i, "v", frame["v"]),
-                "u_j": poses.local(joint.body_j, "u", frame["u"])}
-        return ForceIR(force.name, "rsda", poses.index[joint.body_i], poses.index[joint.body_j],
-                       {}, params | {"free_angle": force.free_angle}, force.actuator,
-                       axes=axes, source=force.source)
-    body = poses.index[force.body]
-    points = {"s": poses.local(force.body, "P", np.asarray(v["at"], float))} if "at" in v else {}
-    return ForceIR(force.name, force.type, body, body, points, {}, value=force.value,
-                   frame=force.frame, source=force.source)
+    """A force element, lowered by its casmech.force_types entry."""
+    fields = FORCE_TYPES[force.type].lower(force, model, poses)
+    return ForceIR(force.name, force.type, **fields, source=force.source)
 
 
 def lower(model: ResolvedModel) -> ModelIR:

@@ -16,10 +16,14 @@ its actuation), via `reaction`.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import casadi as ca
 
-from casmech.compiler.ir import ForceIR, constant
+from casmech.compiler.ir import ForceIR
+from casmech.forces.terms import Input
 from casmech.geometry import euler
+from casmech.geometry.values import constant
 
 # joint motion -> (ForceIR type, axes on body i / j, points on body i / j)
 KINDS = {
@@ -97,3 +101,11 @@ def coordinate_reaction(coordinate, value, x, b: int, at):
 
 
 FORCE_ELEMENTS = {"motor_torque": generalized_force, "motor_force": generalized_force}
+
+
+def _input_law(motor: ForceIR, u) -> ForceIR:
+    return replace(motor, actuator=Input(u[0]))
+
+
+# linearization inputs (compiler/eom.INPUT_KINDS): suffixes, the motor with its law the input
+INPUTS = {"motor_torque": (("torque",), _input_law), "motor_force": (("force",), _input_law)}

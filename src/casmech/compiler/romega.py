@@ -19,7 +19,8 @@ import casadi as ca
 
 from casmech.compiler import body, eom
 from casmech.compiler.assemble import ConstraintSystem, Coordinates
-from casmech.compiler.ir import ModelIR, constant
+from casmech.compiler.ir import ModelIR
+from casmech.geometry.values import constant
 
 
 def omega_bar(x: Coordinates, v, k: int):

@@ -7,4 +7,5 @@ and the joint registry (`casmech.joint_types`) can all read it.
     quaternions  quaternion products, axis rotations, rotation matrix -> quaternion, angles
     motions      the relative motion a tree joint allows (joint-coordinate formulation)
     states       names of the state a force law or event reads (`bar.vx`, `pivot.angle`)
+    values       `constant`: IR data (numbers or CasADi symbols) as CasADi matrices
 """

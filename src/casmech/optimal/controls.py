@@ -15,13 +15,13 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import GROUND_INDEX
-from casmech.compiler.lower import _Poses, lower_force
+from casmech.compiler.lower import _Poses, joint_coordinates
 from casmech.errors import UsageError
+from casmech.forces.springs import joint_angle
 from casmech.joint_types import COORDINATES, having
-from casmech.schema.resolved import Force, ResolvedModel
+from casmech.schema.resolved import ResolvedModel
 
 # control kind -> the joint coordinate it acts along (its effort motor mode)
 KINDS = {c.motor[2]: name for name, c in COORDINATES.items()}
@@ -40,8 +40,8 @@ class Control:
 
 
 def _torque_coordinate(model: ResolvedModel, poses, joint, x: Coordinates):
-    force = lower_force(Force(f"_{joint.name}", "rsda", joint=joint.name), model, poses)
-    return eom.rsda_angle(force, x)
+    """The joint's angle, as an rsda about it measures it."""
+    return joint_angle(joint_coordinates(joint, poses), x)
 
 
 def _force_coordinate(model: ResolvedModel, poses, joint, x: Coordinates):

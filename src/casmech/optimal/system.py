@@ -29,10 +29,11 @@ import numpy as np
 from casmech.compiler import eom
 from casmech.compiler.assemble import Coordinates, build_constraints
 from casmech.compiler.functions import SystemFunctions, build_functions
-from casmech.compiler.ir import ModelIR, constant
+from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
 from casmech.errors import UsageError
 from casmech.geometry import euler
+from casmech.geometry.values import constant
 from casmech.optimal import lowering
 from casmech.optimal.model_data import ModelData
 from casmech.optimal.symbolic import (

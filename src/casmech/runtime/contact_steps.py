@@ -6,7 +6,8 @@ so a contact that starts between two far-apart steps is never sampled: measured,
 of radius 0.01 m closing at 1 m/s passed through each other with every formulation and method
 at the default tolerances (benchmarks/notes_contact.md). A plane or a stop is a half-space (the
 force grows with the depth), so a step past its onset is rejected; a sphere pair is only
-`R_i + R_j` thick. `options` caps the step:
+`R_i + R_j` thick (the `thickness` of its casmech.force_types entry). `options` caps the
+step:
 
 - at the output step, for any contact or stop: the force law is evaluated in every output
   interval;
@@ -19,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler.contact import SHAPES
 from casmech.compiler.ir import ModelIR
+from casmech.force_types import entry_of
 
 MIN_SPEED = 1.0  # [m/s] the least closing speed assumed for a sphere pair
 
@@ -32,15 +33,14 @@ def _speed_bound(ir: ModelIR, reach: float, duration: float) -> float:
 
 def max_step(ir: ModelIR, output_step: float, duration: float) -> float | None:
     """The largest step for this model, or None (no contact, no stop: SUNDIALS' own)."""
-    contacts = [f for f in ir.forces if f.type in SHAPES]
+    contacts = [f for f in ir.forces if getattr(entry_of(f.type), "contact", False)]
     if not contacts and not ir.limits:
         return None
     step = output_step
-    pairs = [f for f in contacts if f.type == "sphere_sphere"]
-    if pairs:
-        reach = max(f.params["radius_i"] + f.params["radius_j"] for f in pairs)
-        thinnest = min(f.params["radius_i"] + f.params["radius_j"] for f in pairs)
-        step = min(step, thinnest / _speed_bound(ir, reach, duration))
+    windows = [entry_of(f.type).thickness(f.params) for f in contacts
+               if entry_of(f.type).thickness is not None]  # sphere pairs: R_i + R_j
+    if windows:
+        step = min(step, min(windows) / _speed_bound(ir, max(windows), duration))
     return float(step)
 
 

@@ -27,62 +27,16 @@ torque on body_j in its frame (`.fx .fy .fz .tx .ty .tz`, as its preload).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Sequence
 
 import casadi as ca
 import numpy as np
 
 from casmech.compiler import kkt
 from casmech.compiler.assemble import Coordinates
-from casmech.compiler.eom import FORCE_ELEMENTS
+from casmech.compiler.eom import FORCE_ELEMENTS, INPUT_KINDS
 from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ForceIR
-from casmech.schema.spec import BUSHING_PARAMS
-
-
-class _Input:
-    """A force law that is one input symbol (the ScalarFunction interface force elements call)."""
-
-    states: dict = {}
-
-    def __init__(self, symbol):
-        self.symbol = symbol
-
-    def casadi(self, **_):
-        return self.symbol
-
-
-def _law(force: ForceIR, u) -> ForceIR:
-    return replace(force, actuator=_Input(u[0]))
-
-
-def _spring(force: ForceIR, u) -> ForceIR:
-    return replace(force, actuator=_Input(u[0]),
-                   params={**force.params, "stiffness": 0.0, "damping": 0.0})
-
-
-def _vector(force: ForceIR, u) -> ForceIR:
-    return replace(force, value=tuple(_Input(u[k]) for k in range(3)))
-
-
-def _bushing(force: ForceIR, u) -> ForceIR:
-    """Stiffness and damping 0, the preload u: the force on body_j is +u (I frame)."""
-    params = {f"{key}{n}": 0.0 for key in BUSHING_PARAMS for n in range(6)}
-    params |= {f"preload{n}": u[n] for n in range(6)}
-    return replace(force, params=params)
-
-
-# element type -> (input name suffixes, the element with its law replaced by the inputs u)
-INPUT_KINDS: dict[str, tuple[tuple[str, ...], Callable]] = {
-    "motor_torque": (("torque",), _law),
-    "motor_force": (("force",), _law),
-    "tsda": (("force",), _spring),
-    "rsda": (("torque",), _spring),
-    "force": (("fx", "fy", "fz"), _vector),
-    "torque": (("tx", "ty", "tz"), _vector),
-    "bushing": (("fx", "fy", "fz", "tx", "ty", "tz"), _bushing),
-}
 
 
 def input_elements(functions: SystemFunctions, names: Sequence[str] | None) -> list[ForceIR]:

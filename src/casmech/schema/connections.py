@@ -1,4 +1,5 @@
-"""Joints and forces: references, vectors, drivers, functions of time."""
+"""Joints: references, vectors, drivers, functions of time (force elements:
+schema/force_laws.py)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from casmech.joint_types import COORDINATES, REGISTRY, having, listed
+from casmech.joint_types import COORDINATES, REGISTRY, having
 from casmech.schema import contact, resolved
 from casmech.schema.checker import ZERO, Checker, failed
 from casmech.schema.loader import Path
@@ -120,83 +121,3 @@ def distance_length(check: Checker, path: Path, given, vectors) -> float | None:
         )
         return None
     return length
-
-
-def force(check: Checker, index: int, given) -> resolved.Force | None:
-    path = ("forces", index)
-    fields = FORCES[given.type](check, path, given)
-    if fields is None or failed([*fields.values(), *fields.get("value", ())]):
-        return None
-    return resolved.Force(given.name, given.type, **fields, source=check.doc.locate(path))
-
-
-def tsda(check: Checker, path: Path, given) -> dict[str, Any] | None:
-    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
-    at = {key: check.numbers((*path, key), getattr(given, key)) for key in ("at_i", "at_j")}
-    if not bodies_ok or failed(at.values()):
-        return None
-    length = float(np.linalg.norm(at["at_j"] - at["at_i"]))
-    free = (
-        length
-        if given.free_length is None
-        else (check.number((*path, "free_length"), given.free_length))
-    )
-    at_zero = {"t": 0.0, "length": length, "length_dot": 0.0}
-    return dict(
-        body_i=given.body_i,
-        body_j=given.body_j,
-        vectors=at,
-        free_length=free,
-        **coefficients(check, path, given),
-        actuator=check.function((*path, "actuator"), given.actuator, at_zero),
-    )
-
-
-def rsda(check: Checker, path: Path, given) -> dict[str, Any] | None:
-    joint = (*path, "joint")
-    if not check.reference(joint, given.joint, list(check.joint_types), "joint"):
-        return None
-    if check.joint_types[given.joint] not in having("angle"):
-        check.error(
-            "E103",
-            joint,
-            f"an rsda acts about the axis of a {listed(having('angle'), 'or')} joint",
-            got=f"'{given.joint}' is {check.joint_types[given.joint]}",
-        )
-        return None
-    body_i, body_j = check.joint_bodies[given.joint]
-    at_zero = {"t": 0.0, "angle": 0.0, "angle_dot": 0.0}
-    return dict(
-        joint=given.joint,
-        body_i=body_i,
-        body_j=body_j,
-        free_angle=check.number((*path, "free_angle"), given.free_angle),
-        **coefficients(check, path, given),
-        actuator=check.function((*path, "actuator"), given.actuator, at_zero),
-    )
-
-
-def coefficients(check: Checker, path: Path, given) -> dict[str, float | None]:
-    return {
-        key: check.number((*path, key), getattr(given, key)) for key in ("stiffness", "damping")
-    }
-
-
-def load(check: Checker, path: Path, given) -> dict[str, Any] | None:
-    """A point force or a torque on one moving body."""
-    if not check.reference((*path, "body"), given.body, list(check.bodies), "moving body"):
-        return None
-    value = tuple(
-        check.function((*path, "value", k), component, {"t": 0.0})
-        for k, component in enumerate(given.value)
-    )
-    fields = dict(body=given.body, value=value, frame=given.frame)
-    if given.type == "force":
-        body = check.bodies[given.body]
-        default = None if body is None else body.position
-        at = check.vector((*path, "at"), given.at, default) if default is not None else None
-        fields["vectors"] = None if at is None else {"at": at}
-    return fields
-
-
-FORCES = {"tsda": tsda, "rsda": rsda, "force": load, "torque": load}

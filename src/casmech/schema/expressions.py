@@ -31,6 +31,7 @@ import casadi
 import numpy as np
 
 from casmech.errors import did_you_mean
+from casmech.forces.terms import step
 
 # limits that keep the recursive parser and evaluator far from Python's recursion limit
 MAX_DEPTH = 50  # nested parentheses, calls, signs and powers
@@ -71,12 +72,6 @@ def _step_numpy(x, x0, h0, x1, h1):
     return h0 + (h1 - h0) * a * a * (3.0 - 2.0 * a)
 
 
-def _step_casadi(x, x0, h0, x1, h1):
-    a = (x - x0) / (x1 - x0)
-    cubic = h0 + (h1 - h0) * a * a * (3.0 - 2.0 * a)
-    return casadi.if_else(x <= x0, h0, casadi.if_else(x >= x1, h1, cubic))
-
-
 def _if_numpy(condition, a, b):
     return np.where(np.asarray(condition) != 0, a, b)[()]
 
@@ -110,7 +105,7 @@ FUNCTIONS: dict[str, tuple[int, Callable[..., Any], Callable[..., Any]]] = {
     "atan2": (2, np.arctan2, casadi.atan2),
     "min": (2, np.minimum, casadi.fmin),
     "max": (2, np.maximum, casadi.fmax),
-    "step": (5, _step_numpy, _step_casadi),
+    "step": (5, _step_numpy, step),
     "if": (3, _if_numpy, _if_casadi),
 }
 

@@ -1,6 +1,8 @@
-"""Force laws that read the state of the mechanism, and the bushing (docs/forces.md).
+"""Force elements (their checks: casmech.force_types) and the force laws that read the state of
+the mechanism (docs/forces.md).
 
-A force's or torque's `value` and a tsda's or rsda's `actuator` may name the state
+The keys a force type's entry names in `state_keys` (a force's or torque's `value`, a tsda's or
+rsda's `actuator`) may name the state
 (`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the names are casmech.geometry.states)
 besides t and parameters. `StateChecker` lets those expressions (and only those) read it, and
 says what is wrong with a dotted name anywhere: a state where none is allowed, a misspelt one
@@ -17,20 +19,15 @@ from typing import Any
 import numpy as np
 
 from casmech.errors import did_you_mean
+from casmech.force_types import REGISTRY, state_reading
 from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.joint_types import attributes as joint_attributes
 from casmech.joint_types import coordinate_types, listed
-from casmech.schema import connections, resolved
-from casmech.schema.bodies import orientation
+from casmech.schema import bodies, resolved
 from casmech.schema.checker import Checker, failed
-from casmech.schema.contact import SHAPES, contact
 from casmech.schema.loader import Path
 
-STATE_KEYS = "force/torque value, tsda/rsda actuator"
 STATE_NAMES = ("<joint>.angle", "<joint>.displacement", "<body>.vx", "...")
-BUSHING_VECTORS = ("at", "stiffness", "damping", "rotational_stiffness", "rotational_damping",
-                   "preload_force", "preload_torque")
-NON_NEGATIVE = ("stiffness", "damping", "rotational_stiffness", "rotational_damping")
 BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
 
 
@@ -77,6 +74,10 @@ class StateChecker(Checker):
         used = tuple(name for name in self.states if name in found.expr.symbols)
         return replace(found, variables=(*at, *used))
 
+    def orientation(self, path: Path, given) -> np.ndarray | None:
+        """An `orientation:` item as Euler parameters (a bushing's frame)."""
+        return bodies.orientation(self, path, given)
+
     def unknown_symbol(self, path, name: str, source, variables) -> None:
         if "." not in name:
             super().unknown_symbol(path, name, source, variables)
@@ -88,9 +89,10 @@ class StateChecker(Checker):
     def misplaced_state(self, name: str) -> tuple[str, str]:
         _, attribute = split(name)
         if attribute in JOINT_COORDINATES or attribute in BODY_STATES:
-            return f"the state '{name}' is not allowed here", f"states are read in: {STATE_KEYS}"
+            return (f"the state '{name}' is not allowed here",
+                    f"states are read in: {state_reading()}")
         return (f"unknown symbol '{name}'",
-                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {STATE_KEYS}")
+                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {state_reading()}")
 
     def misnamed_state(self, name: str) -> tuple[str, str | None]:
         owner, attribute = split(name)
@@ -111,34 +113,17 @@ class StateChecker(Checker):
         return f"unknown state '{name}': no body or joint '{owner}'", hint
 
 
-# --------------------------------------------------------------------------------- bushing
-def bushing(check: Checker, path: Path, given) -> dict[str, Any] | None:
-    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
-    vectors = {key: check.numbers((*path, key), getattr(given, key)) for key in BUSHING_VECTORS}
-    for key in NON_NEGATIVE:
-        if vectors[key] is not None and np.any(vectors[key] < 0):
-            got = ", ".join(f"{v:g}" for v in vectors[key])
-            check.error("E103", (*path, key), f"bushing {key.replace('_', ' ')} must not be "
-                        "negative", got=got, hint="zero leaves that direction free")
-            vectors[key] = None
-    vectors["orientation"] = orientation(check, (*path, "orientation"), given.orientation)
-    if not bodies_ok or failed(vectors.values()):
+# ------------------------------------------------------------------------- force elements
+def force(check: StateChecker, index: int, given) -> resolved.Force | None:
+    """One entry of `forces:`, checked by its casmech.force_types entry; the keys the entry
+    names in `state_keys` read the state."""
+    path = ("forces", index)
+    entry = REGISTRY[given.type]
+    if entry.state_keys:
+        with check.reading_state():
+            fields = entry.resolve(check, path, given)
+    else:
+        fields = entry.resolve(check, path, given)
+    if fields is None or failed([*fields.values(), *(fields.get("value") or ())]):
         return None
-    return dict(body_i=given.body_i, body_j=given.body_j, vectors=vectors)
-
-
-# force types resolved here (contact: schema/contact.py); the others in connections.py
-LAWS = {"bushing": bushing, **dict.fromkeys(SHAPES, contact)}
-
-
-def force(check: Checker, index: int, given) -> resolved.Force | None:
-    """One entry of `forces:`; value and actuator read the state when `check` can."""
-    if given.type in LAWS:
-        path = ("forces", index)
-        fields = LAWS[given.type](check, path, given)
-        return None if fields is None else resolved.Force(
-            given.name, given.type, **fields, source=check.doc.locate(path))
-    if not isinstance(check, StateChecker):
-        return connections.force(check, index, given)
-    with check.reading_state():
-        return connections.force(check, index, given)
+    return resolved.Force(given.name, given.type, **fields, source=check.doc.locate(path))

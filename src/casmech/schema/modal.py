@@ -6,12 +6,11 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from casmech.force_types import input_types
+from casmech.joint_types import listed
 from casmech.schema import resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
-
-# force element types that may be inputs (runtime/linearize.INPUT_KINDS gives their columns)
-INPUT_FORCES = ("tsda", "rsda", "force", "torque", "bushing")
 
 
 def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Analysis | None,
@@ -29,12 +28,12 @@ def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Anal
                         got=f"{at:g}", hint=f"0 <= at <= t_end = {t_end:g}" if t_end else None)
             at = None
     known = {j.name: "joint" for j in joints if j is not None and j.motor}
-    known |= {f.name: f.type for f in forces if f is not None and f.type in INPUT_FORCES}
+    types = input_types()  # force element types that may be inputs (casmech.force_types)
+    known |= {f.name: f.type for f in forces if f is not None and f.type in types}
     inputs_ok = True
+    what = f"input (an effort-motor joint or a {listed(types, 'or')} element)"
     for index, name in enumerate(given.inputs or ()):
-        if not check.reference((*path, "inputs", index), name, known,
-                               "input (an effort-motor joint or a tsda, rsda, force, torque or "
-                               "bushing element)"):
+        if not check.reference((*path, "inputs", index), name, known, what):
             inputs_ok = False
     if settings is None or (given.at is not None and at is None) or not inputs_ok:
         return None

@@ -4,8 +4,8 @@ Frozen, `extra="forbid"`; joints and forces are unions discriminated on `type`, 
 geometry items on their shape. Every scalar is a number or an expression string (evaluated in
 `semantic`); `spec_errors.validate` turns pydantic's errors into Diagnostics.
 
-The classes live in the parts, by what they hold: spec_base (scalars, vectors, orientation,
-repeat), spec_bodies, spec_joints (one class per joint type of casmech.joint_types),
+The classes live in the parts, by what they hold: casmech.spec_base (scalars, vectors,
+orientation, repeat), spec_bodies, spec_joints (one class per joint type of casmech.joint_types),
 spec_forces, spec_analysis (analysis, events, estimation, optimal control, studies); this
 module holds the whole file (ModelSpec) and components, and gives every part's names as its
 own (`spec.Body`, `from casmech.schema.spec import Revolute`).
@@ -18,13 +18,14 @@ from typing import Annotated, Any, Union
 from pydantic import ConfigDict, Discriminator, Field, StrictStr, Tag
 from pydantic.fields import FieldInfo
 
+from casmech import force_types, spec_base
 from casmech.joint_types import on_change
-from casmech.schema import spec_analysis, spec_base, spec_bodies, spec_forces, spec_joints
+from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
 from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Study
-from casmech.schema.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
 from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
+from casmech.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
 
 PARTS = (spec_base, spec_bodies, spec_joints, spec_forces, spec_analysis)
 
@@ -113,6 +114,19 @@ def _joints_changed() -> None:
 
 
 on_change(_joints_changed)
+
+
+def _forces_changed() -> None:
+    """A force element type was (un)registered: rebuild the union and the classes that hold
+    it."""
+    global Force
+    Force = spec_forces.rebuild()
+    for cls in (Component, ModelSpec):
+        cls.model_fields["forces"] = FieldInfo.from_annotated_attribute(tuple[Force, ...], ())
+        cls.model_rebuild(force=True)
+
+
+force_types.on_change(_forces_changed)
 
 
 def __getattr__(name: str) -> Any:

@@ -13,7 +13,7 @@ from pydantic import (
     StrictStr,
 )
 
-from casmech.schema.spec_base import Name, Scalar, Spec
+from casmech.spec_base import Name, Scalar, Spec
 
 
 # ---------------------------------------------------------------------------------- analysis

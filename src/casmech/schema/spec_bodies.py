@@ -10,7 +10,7 @@ from pydantic import (
     Tag,
 )
 
-from casmech.schema.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
 
 
 # ---------------------------------------------------------------------------------- geometry

@@ -16,7 +16,7 @@ from pydantic import (
 )
 
 from casmech.joint_types import REGISTRY, JointType
-from casmech.schema.spec_base import Name, Repeats, Scalar, Spec, Vector
+from casmech.spec_base import Name, Repeats, Scalar, Spec, Vector
 
 
 # ------------------------------------------------------------------------------------ joints

@@ -1,4 +1,4 @@
-"""Contact elements (compiler/contact.py) against closed forms.
+"""Contact elements (casmech/forces/contact.py) against closed forms.
 
 Every model is a YAML text run through the public API. The references are the free fall
 (impact time sqrt(2h/g)), the exact restitution of the Hunt-Crossley law (its phase-plane
@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 import casmech
-from casmech.compiler import contact
+from casmech.forces import contact
 
 G = 9.81
 H = 1.0  # drop height of the ball's lowest point [m]
@@ -270,3 +270,10 @@ def test_compiled_mode_equals_interpreted():
     # accelerations at the row where the contact force rises (measured 5e-6 relative there)
     np.testing.assert_allclose(results[1].to_numpy(), results[0].to_numpy(), rtol=1e-4,
                                atol=1e-6)
+
+
+def test_the_contact_law_names_ground_as_the_compiler_does():
+    """forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
+    from casmech.compiler.ir import GROUND_INDEX
+
+    assert contact.GROUND == GROUND_INDEX

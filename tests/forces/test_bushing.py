@@ -1,4 +1,5 @@
-"""The bushing (compiler/bushing.py) against closed forms, finite differences and a fixed joint.
+"""The bushing (casmech/forces/bushing.py) against closed forms, finite differences and a fixed
+joint.
 
 Every model is a YAML text run through the public API; expectations are closed forms of the
 linear oscillator, numpy's own rotation-vector arithmetic, or a second formulation (fixed joint).
