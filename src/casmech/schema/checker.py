@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from casmech import force_types
 from casmech.errors import Diagnostic, Source, did_you_mean
 from casmech.schema import limits, resolved, spec
 from casmech.schema.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
@@ -26,7 +27,7 @@ RESERVED = frozenset({"t", *CONSTANTS, *FUNCTIONS})
 ZERO = 1e-12  # a vector shorter than this is zero-length (its direction is meaningless)
 WHY_RESERVED = "pi, e, t and the function names cannot be parameters"
 WHY_GROUND = "'ground' is the fixed global frame, always present; choose another name"
-TIME_KEYS = "joint f, driver angle/displacement, force/torque value, tsda/rsda actuator"
+TIME_KEYS = "joint f, driver angle/displacement"  # and the force elements' state keys
 
 
 def _is_number(text: str) -> bool:
@@ -92,7 +93,8 @@ class Checker:
                 path,
                 "time 't' is not allowed here",
                 source=source,
-                hint=f"functions of time are allowed in: {TIME_KEYS}",
+                hint="functions of time are allowed in: "
+                     f"{TIME_KEYS}, {force_types.state_reading()}",
             )
         elif name in self.declared:
             message = f"'{name}' is used before it is defined"

@@ -103,7 +103,9 @@ class Force:
              stiffness, damping, rotational_stiffness, rotational_damping, preload_force,
              preload_torque (3 each, components in the frame)
     sphere_plane, sphere_sphere, points_plane, capsule_plane: body_i, body_j, vectors (plane
-             at, normal; center, center_i, center_j, points, ends), params (schema/contact.py)
+             at, normal; center, center_i, center_j, points, ends), params
+             (casmech/forces/contact_spec.py)
+    (each type's entry of casmech.force_types resolves its fields: `resolve`)
     value and actuator may read the state (`pivot.angle`, `bar.vx`): casmech.geometry.states
     """
 
@@ -122,7 +124,7 @@ class Force:
     value: tuple[ScalarFunction, ScalarFunction, ScalarFunction] | None = None
     frame: str = "global"
     source: Source | None = None
-    # contact (schema/contact.py): radii, the normal law and friction as numbers
+    # contact (casmech/forces/contact_spec.py): radii, the normal law and friction
     params: Mapping[str, float] = field(default_factory=dict)
 
 
