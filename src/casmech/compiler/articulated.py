@@ -58,10 +58,14 @@ NUMERIC = Constants()  # a numeric build's: every constant a casadi.DM
 def to_center(frame: Frame, constants: Constants = NUMERIC) -> tuple:
     """(E, r) of the motion transform from a body's reference frame to its CM frame."""
     if not constants.symbolic:
-        axes, origin = (ca.DM(v) for v in frame)
-        return axes, -axes.T @ origin
+        return constants.once("center", frame, _numeric_center)
     return constants.once("center", frame, lambda f: (constants(f[0]),
                                                        constants(-ca.SX(f[0]).T @ f[1])))
+
+
+def _numeric_center(frame: Frame) -> tuple:
+    axes, origin = (ca.DM(v) for v in frame)
+    return axes, -axes.T @ origin
 
 
 class Joint:
@@ -101,8 +105,14 @@ class Joint:
         else:
             c_ref, o_ref = (constants.raw(v) for v in parent_reference)
             e_t, r_t = constants(c_p.T @ c_ref), constants(c_ref.T @ (s_p - o_ref))
-        self.e = euler.rotation(rotation).T @ e_t
-        self.r = r_t + e_t.T @ translation
+        self.e, self.r = _joint_transform(rotation, translation, e_t, r_t)
+
+
+@traced
+def _joint_transform(rotation, translation, e_t, r_t):
+    """(E, r) of the motion transform from the parent's reference frame to the child's: the
+    constant one (e_t, r_t) to F_p, then the joint's motion."""
+    return euler.rotation(rotation).T @ e_t, r_t + e_t.T @ translation
 
 
 @dataclass(frozen=True)
@@ -228,7 +238,7 @@ class Dynamics:
 def reference_inertia(mass, inertia, frame: Frame, constants: Constants = NUMERIC):
     """A body's spatial inertia in its reference frame (a constant of the model)."""
     if not constants.symbolic:
-        e, r = to_center(frame)
+        e, r = to_center(frame, constants)
         return ca.DM(ca.evalf(_transformed_inertia(e, r, spatial.inertia(mass, inertia))[0]))
     axes, origin = (ca.SX(v) for v in frame)
     at_center = ca.diagcat(ca.SX(inertia), mass * ca.SX.eye(3))
