@@ -1,0 +1,51 @@
+"""The interpreted bundle (compiler/functions.py): its functions built on first use."""
+
+import numpy as np
+
+import casmech
+from casmech.compiler import eom, romega
+from casmech.compiler.functions import all_sx, build_functions
+from casmech.compiler.lower import lower
+from tests.conftest import MODELS
+
+NAMES = ("phi", "phi_q", "nu", "gamma", "variations", "phi_scaled", "mass_matrix",
+         "generalized_forces", "energy", "reactions", "body_rates", "element_outputs")
+
+
+def test_reading_one_function_builds_no_other(monkeypatch):
+    """An analysis that reads phi does not pay for the mass matrix or the r-omega functions."""
+    calls = {"mass_matrix": 0, "definitions": 0}
+    for module, name in ((eom, "mass_matrix"), (romega, "definitions")):
+        original = getattr(module, name)
+
+        def counted(*args, original=original, name=name):
+            calls[name] += 1
+            return original(*args)
+        monkeypatch.setattr(module, name, counted)
+    bundle = build_functions(lower(casmech.load(MODELS / "four_bar.yaml")))
+    bundle["phi"]
+    bundle["phi_q"]
+    assert calls == {"mass_matrix": 0, "definitions": 0}
+    assert all_sx(bundle.functions) and calls == {"mass_matrix": 0, "definitions": 0}
+    bundle["romega_mass"], bundle["mass_matrix"], bundle["mass_matrix"]
+    assert calls == {"mass_matrix": 1, "definitions": 1}
+
+
+def test_the_bundle_lists_every_function_in_order_and_each_equals_a_fresh_build():
+    """Listing the names builds what is needed to know them; each function, built alone in a
+    bundle of its own, equals the one built alongside the others (the same graph)."""
+    ir = lower(casmech.load(MODELS / "slider_crank.yaml"))
+    whole = build_functions(ir)
+    names = list(whole.functions)
+    assert tuple(names[:len(NAMES)]) == NAMES
+    assert names[len(NAMES):] and all(n.startswith("romega_") for n in names[len(NAMES):])
+    rng = np.random.default_rng(2)
+    for name in names:
+        alone = build_functions(ir)[name]
+        together = whole[name]
+        assert alone.name_in() == together.name_in()
+        args = [rng.uniform(-1, 1, together.sparsity_in(k).shape)
+                for k in range(together.n_in())]
+        for a, b in zip(alone.call(args), together.call(args), strict=True):
+            # the same SX graph evaluated on the same numbers: bitwise equal
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=0, atol=0)
