@@ -36,7 +36,7 @@ class Constants:
     def __call__(self, value):
         """`value` (numbers, or SX of the model data alone) as the build uses it."""
         if not self.symbolic:
-            return ca.DM(ca.evalf(value)) if isinstance(value, ca.SX) else ca.DM(value)
+            return self.once("value", value, _numeric)
         return self.once("value", value, self._hoisted)
 
     def raw(self, value):
@@ -70,7 +70,7 @@ class Constants:
         Shepperd's method; in a parametric build in SX, its branch chosen where joint_data is
         evaluated, by the values)."""
         if not self.symbolic:
-            return ca.DM(from_matrix(rotation))
+            return self.once("quaternion", rotation, lambda r: ca.DM(from_matrix(r)))
         return self.once("quaternion", rotation, lambda r: self(shepperd(ca.SX(r))))
 
     @property
@@ -82,6 +82,10 @@ class Constants:
         """d -> the trailing input's values (`inputs`)."""
         return ca.Function("joint_data", [self.data], [ca.vertcat(self.data, *self.expressions)],
                            ["model_data"], [DATA])
+
+
+def _numeric(value) -> ca.DM:
+    return ca.DM(ca.evalf(value)) if isinstance(value, ca.SX) else ca.DM(value)
 
 
 def shepperd(r: ca.SX) -> ca.SX:

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from functools import cache, cached_property
 
 import casadi as ca
+import numpy as np
 
 from casmech.compiler import articulated, body, lazy_jacobian
 from casmech.compiler.articulated import Joint
@@ -129,7 +130,6 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
     relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
     from them). Every body is the child of one tree joint."""
     n_bodies = len(tree_joints)
-    frame = constants if constants.symbolic else ca.DM
     poses = [ca.vertsplit(v, [*range(0, 3 * n_bodies, 3), *range(3 * n_bodies, 7 * n_bodies + 1,
                                                                    4)]) for v in (q, q_dot)]
 
@@ -140,7 +140,7 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
         return [poses[0][k], poses[0][n_bodies + k], poses[1][k], poses[1][n_bodies + k]]
 
     steps = [_relative_step(*state(joint.parent), *state(joint.child),
-                            *(frame(v) for v in (*joint.parent_frame, *joint.child_frame)))
+                            *(constants(v) for v in (*joint.parent_frame, *joint.child_frame)))
              for joint in tree_joints]
     return [ca.horzcat(*parts) for parts in zip(*steps, strict=True)]
 
@@ -168,34 +168,43 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, data=None) -> li
     values as inputs (_rows_template); `data` the model data of a parametric IR, whose
     vectors are SX of it."""
     prims = ir.primitives[joint.rows.start:joint.rows.stop]
-    vectors = [ca.SX(prim.vectors[k]) if data is not None else ca.DM(prim.vectors[k])
-               for prim in prims for k in PRIMITIVES[prim.kind][1]]
-    drivers = [driver_value(prim, t) for prim in prims]
+    vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
+    shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
+    if data is not None:
+        stacked = ca.vertcat(ca.SX(0, 1), *(ca.vec(ca.SX(v)) for v in vectors))
+    else:
+        stacked = ca.SX(np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]))
+    drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
     grounds = (joint.body_i == GROUND_INDEX, joint.body_j == GROUND_INDEX)
-    template = _rows_template(tuple(p.kind for p in prims), grounds,
-                              tuple(v.shape for v in vectors))
-    return template.call([ca.SX(v) for v in (r_i, p_i, r_j, p_j, *vectors, *drivers)])
+    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes)
+    return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
+                          for v in (r_i, p_i, r_j, p_j, stacked, drivers)])
 
 
 @cache
 def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, bool],
-                   shapes: tuple[tuple[int, int], ...]) -> ca.Function:
-    """(r_i, p_i, r_j, p_j, vectors..., driver values...) -> (phi, B_i, B_j) of rows of these
-    kinds (rows_of), built from the rows' primitives so that the cost stays per joint."""
+                   shapes: tuple[tuple[int, ...], ...]) -> ca.Function:
+    """(r_i, p_i, r_j, p_j, the rows' vectors stacked, their driver values) -> (phi, B_i, B_j)
+    of rows of these kinds (rows_of), built from the rows' primitives so that the cost stays
+    per joint."""
     sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
     frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if ground else Frame(r, euler.rotation(p))
               for ground, (r, p) in zip(grounds, sides, strict=True)]
-    vectors = [ca.SX.sym(f"v{k}", *shape) for k, shape in enumerate(shapes)]
-    drivers = [ca.SX.sym(f"f{k}") for k in range(len(kinds))]
+    sizes = [int(np.prod(shape)) for shape in shapes]
+    stacked = ca.SX.sym("v", sum(sizes))
+    parts = ca.vertsplit(stacked, list(np.cumsum([0, *sizes]))) if sizes else []
+    vectors = [ca.reshape(part, *(shape if len(shape) == 2 else (size, 1)))
+               for part, shape, size in zip(parts, shapes, sizes, strict=True)]
+    drivers = ca.SX.sym("f", len(kinds))
     rows, given = [], iter(vectors)
-    for kind, driver in zip(kinds, drivers, strict=True):
+    for k, kind in enumerate(kinds):
         function, keys = PRIMITIVES[kind]
-        rows.append(function(*frames, {k: next(given) for k in keys}, driver))
+        rows.append(function(*frames, {key: next(given) for key in keys}, drivers[k]))
     phi = ca.vertcat(*rows)
     blocks = [ca.horzcat(ca.jacobian(phi, r), body.pi_bar(ca.jacobian(phi, p), p))
               for r, p in sides]
-    return ca.Function("joint_rows", [*(v for side in sides for v in side), *vectors,
-                                      *drivers], [phi, *blocks])
+    return ca.Function("joint_rows", [*(v for side in sides for v in side), stacked, drivers],
+                       [phi, *blocks])
 
 
 class _Builder:

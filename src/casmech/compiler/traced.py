@@ -13,6 +13,7 @@ on its arguments instead (the tests compare both).
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
 from contextlib import contextmanager
 
@@ -33,7 +34,7 @@ class Traced:
     def __call__(self, *args, **static) -> list:
         if _DIRECT[0]:
             return list(self.fn(*args, **static))
-        args = [a if isinstance(a, ca.SX) else ca.SX(_dm(a)) for a in args]
+        args = [a if isinstance(a, ca.SX) else _as_sx(a) for a in args]
         key = (tuple(sorted(static.items())), *(_structure(a) for a in args))
         function = self.functions.get(key)
         if function is None:
@@ -58,13 +59,25 @@ def direct():
         _DIRECT[0] = False
 
 
-def _dm(value) -> ca.DM:
-    return value if isinstance(value, ca.DM) else ca.DM(np.asarray(value, float))
+# id(DM) -> (a weak reference to it, its SX): a constant passed to several steps (a frame, an
+# inertia; joint_constants.Constants gives the same DM for the same value) converted once
+_CONVERTED: dict[int, tuple[weakref.ref, ca.SX]] = {}
+
+
+def _as_sx(value) -> ca.SX:
+    """A constant argument as SX (a DM's conversion kept while the DM lives)."""
+    if not isinstance(value, ca.DM):
+        return ca.SX(ca.DM(np.asarray(value, float)))
+    key = id(value)
+    seen = _CONVERTED.get(key)
+    if seen is None or seen[0]() is not value:
+        seen = _CONVERTED[key] = (weakref.ref(value, lambda _, key=key: _CONVERTED.pop(key, None)),
+                                  ca.SX(value))
+    return seen[1]
 
 
 def _structure(matrix: ca.SX) -> tuple:
+    if matrix.is_dense():
+        return matrix.size()
     sparsity = matrix.sparsity()
-    if sparsity.is_dense():
-        return sparsity.size1(), sparsity.size2()
-    return (sparsity.size1(), sparsity.size2(), tuple(sparsity.colind()),
-            tuple(sparsity.row()))
+    return matrix.size(), tuple(sparsity.colind()), tuple(sparsity.row())
