@@ -11,7 +11,9 @@ force elements, effort motors) evaluated on the tree's poses and velocities, as 
 driver's coordinate is a function of time (its rate and acceleration by AD). The quantities
 of the model alone (frames, their quaternions, inertias in reference frames) go through a
 joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
-in a parametric one.
+in a parametric one. Each pass's work on one body is a step traced once per structure and
+evaluated inside CasADi (compiler/traced.py), so the build costs ~1 us per SX node instead of
+~10-30 us per Python-level SX operation.
 """
 
 from __future__ import annotations

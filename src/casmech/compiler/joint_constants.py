@@ -2,9 +2,10 @@
 quaternions, each body's spatial inertia in its reference frame, the constant transforms between
 frames), as the build of compiler/joint_system.py uses them.
 
-A numeric build (a lowered IR) gets them as casadi.DM constants, folded into the functions'
-graphs. A parametric build (compiler.parametric.split's IR, numbers as symbols of the model data
-d) gets each entry that is not structurally zero as a new symbol; `data()` is the function
+A numeric build (a lowered IR) gets them as casadi.DM constants (one per value object, so a
+frame used by several recursions is converted once), folded into the functions' graphs. A
+parametric build (compiler.parametric.split's IR, numbers as symbols of the model data d) gets
+each entry that is not structurally zero as a new symbol; `data()` is the function
 d -> [d; those entries] that computes them once per parameter value, and the joint functions
 take its output as their trailing input "d" (so a frame's rotation or a transformed inertia is
 not recomputed at every evaluation of the ODE).
