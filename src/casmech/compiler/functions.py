@@ -116,6 +116,12 @@ class LazyFunctions(Mapping):
             self._build(self._group_of[name])  # a KeyError for a name no group makes
         return self._built[name]
 
+    def __contains__(self, name) -> bool:
+        """Without building the function."""
+        if name not in self._group_of:
+            self._name_all()
+        return name in self._group_of
+
     def __iter__(self) -> Iterator[str]:
         self._name_all()
         return iter([name for names, _ in self._groups for name in names])
