@@ -51,3 +51,23 @@ def test_the_bundle_lists_every_function_in_order_and_each_equals_a_fresh_build(
         for a, b in zip(alone.call(args), together.call(args), strict=True):
             # the same SX graph evaluated on the same numbers: bitwise equal
             np.testing.assert_allclose(np.array(a), np.array(b), rtol=0, atol=0)
+
+
+def test_a_function_set_by_a_caller_is_kept_and_listed_last():
+    """codegen adds prescribed_step to an interpreted bundle: it is listed after the bundle's
+    own, survives the build of the group it would shadow, and all_sx sees its kind."""
+    import casadi as ca
+
+    bundle = build_functions(lower(casmech.load(MODELS / "four_bar.yaml")))
+    x = ca.MX.sym("x")
+    step = ca.Function("prescribed_step", [x], [2 * x])
+    bundle.functions["prescribed_step"] = step
+    names = list(bundle.functions)
+    assert names[-1] == "prescribed_step" and len(names) == len(set(names))
+    assert bundle["prescribed_step"] is step and not all_sx(bundle.functions)
+    romega_mass = bundle["romega_mass"]
+    bundle.functions["romega_mass"] = step  # replaces a built one
+    assert bundle["romega_mass"] is step and romega_mass is not step
+    del bundle.functions["prescribed_step"], bundle.functions["romega_mass"]
+    assert "prescribed_step" not in bundle.functions and all_sx(bundle.functions)
+    assert "romega_mass" not in list(bundle.functions)

@@ -6,7 +6,7 @@ Interpreted (SX) and compiled bundles are interchangeable: analyses only call
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -85,7 +85,7 @@ def _function(name, inputs: dict, outputs: dict) -> ca.Function:
                        list(inputs), list(outputs))
 
 
-class LazyFunctions(Mapping):
+class LazyFunctions(MutableMapping):
     """An interpreted bundle's functions by name, each group built on first use: a
     joint-coordinate run reads 7 of the 19 (phi, phi_q, nu for the assembly; the results
     row's), and the others cost ~1/3 of the bundle's build on a 1000-link chain
@@ -96,10 +96,12 @@ class LazyFunctions(Mapping):
         self._groups = list(groups)
         self._built: dict[str, ca.Function] = {}
         self._group_of = {name: k for k, (names, _) in enumerate(groups) for name in names or ()}
+        self.given: dict[str, ca.Function] = {}  # set by callers (the rest: SX, built here)
 
     def _build(self, k: int) -> None:
         functions = self._groups[k][1]()
-        self._built.update((f.name(), f) for f in functions)
+        for function in functions:  # (a function set in its place is kept)
+            self._built.setdefault(function.name(), function)
         self._groups[k] = (tuple(f.name() for f in functions), lambda: [])
         self._group_of.update((f.name(), k) for f in functions)
 
@@ -115,6 +117,20 @@ class LazyFunctions(Mapping):
                 self._name_all()
             self._build(self._group_of[name])  # a KeyError for a name no group makes
         return self._built[name]
+
+    def __setitem__(self, name: str, function: ca.Function) -> None:
+        """Add or replace a function (codegen adds prescribed_step)."""
+        if name not in self:
+            self._groups.append(((name,), lambda: []))
+            self._group_of[name] = len(self._groups) - 1
+        self._built[name] = self.given[name] = function
+
+    def __delitem__(self, name: str) -> None:
+        self[name]  # its group built (a KeyError when no group makes it)
+        k = self._group_of.pop(name)
+        self._groups[k] = (tuple(n for n in self._groups[k][0] if n != name), lambda: [])
+        del self._built[name]
+        self.given.pop(name, None)
 
     def __contains__(self, name) -> bool:
         """Without building the function."""
@@ -132,10 +148,10 @@ class LazyFunctions(Mapping):
 
 
 def all_sx(functions: Mapping) -> bool:
-    """Whether every function of a bundle's mapping is an SXFunction (a LazyFunctions' are,
-    built or not: it is not built to tell)."""
-    return isinstance(functions, LazyFunctions) or all(
-        f.is_a("SXFunction") for f in functions.values())
+    """Whether every function of a bundle's mapping is an SXFunction (a LazyFunctions' own
+    are, built or not: it is not built to tell)."""
+    given = functions.given if isinstance(functions, LazyFunctions) else functions
+    return all(f.is_a("SXFunction") for f in given.values())
 
 
 def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
