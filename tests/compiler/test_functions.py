@@ -71,3 +71,13 @@ def test_a_function_set_by_a_caller_is_kept_and_listed_last():
     del bundle.functions["prescribed_step"], bundle.functions["romega_mass"]
     assert "prescribed_step" not in bundle.functions and all_sx(bundle.functions)
     assert "romega_mass" not in list(bundle.functions)
+
+
+def test_a_first_read_of_a_function_whose_name_needs_its_group_keeps_the_listing():
+    """Reading romega_mass first (its group's names are known only once built) leaves every
+    name listed, as after listing first."""
+    ir = lower(casmech.load(MODELS / "four_bar.yaml"))
+    fresh, listed = build_functions(ir), build_functions(ir)
+    expected = list(listed.functions)
+    fresh["romega_mass"]
+    assert list(fresh.functions) == expected and len(fresh.functions) == len(expected)

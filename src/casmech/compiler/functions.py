@@ -97,12 +97,16 @@ class LazyFunctions(MutableMapping):
         self._built: dict[str, ca.Function] = {}
         self._group_of = {name: k for k, (names, _) in enumerate(groups) for name in names or ()}
         self.given: dict[str, ca.Function] = {}  # set by callers (the rest: SX, built here)
+        self._done: set[int] = set()  # groups built
 
     def _build(self, k: int) -> None:
+        if k in self._done:
+            return
+        self._done.add(k)
         functions = self._groups[k][1]()
         for function in functions:  # (a function set in its place is kept)
             self._built.setdefault(function.name(), function)
-        self._groups[k] = (tuple(f.name() for f in functions), lambda: [])
+        self._groups[k] = (tuple(f.name() for f in functions), self._groups[k][1])
         self._group_of.update((f.name(), k) for f in functions)
 
     def _name_all(self) -> None:
@@ -116,19 +120,20 @@ class LazyFunctions(MutableMapping):
             if name not in self._group_of:
                 self._name_all()
             self._build(self._group_of[name])  # a KeyError for a name no group makes
-        return self._built[name]
+        return self._built[name]  # (a KeyError for a name deleted from a built group)
 
     def __setitem__(self, name: str, function: ca.Function) -> None:
         """Add or replace a function (codegen adds prescribed_step)."""
         if name not in self:
             self._groups.append(((name,), lambda: []))
             self._group_of[name] = len(self._groups) - 1
+            self._done.add(self._group_of[name])
         self._built[name] = self.given[name] = function
 
     def __delitem__(self, name: str) -> None:
         self[name]  # its group built (a KeyError when no group makes it)
         k = self._group_of.pop(name)
-        self._groups[k] = (tuple(n for n in self._groups[k][0] if n != name), lambda: [])
+        self._groups[k] = (tuple(n for n in self._groups[k][0] if n != name), self._groups[k][1])
         del self._built[name]
         self.given.pop(name, None)
 
