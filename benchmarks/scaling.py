@@ -7,7 +7,8 @@
 Stages, each timed on its own (CPU and wall seconds, medians over --repeats, a fresh process
 per N so that one size's memory does not slow the next):
 - load: casmech.loads of the YAML text (validation, evaluation);
-- build: casmech.compile (interpreted: the SX functions; compiled: C generated, built and
+- build: casmech.compile (interpreted: the bundle, whose SX functions are built when first
+  used, so their cost falls in the stages that use them; compiled: C generated, built and
   loaded, with a private empty cache per repeat, so the build is measured);
 - initial_state: runtime.assembly.initial_state (Newton assembly from the file's pose and the
   file's velocities projected onto the constraints);

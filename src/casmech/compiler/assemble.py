@@ -134,6 +134,9 @@ def build_constraints(ir: ModelIR) -> ConstraintSystem:
     pi_bar = ca.horzcat(*[rotational_jacobian(d["phi_q"], x, k) for k in range(nb)]) \
         if nb else phi_r
     scale = ca.SX.sym("s")
+    if not any(prim.is_driver for prim in ir.primitives):  # the scale multiplies drivers only
+        return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r,
+                                pi_bar, scale, phi, d["phi_q"])
     phi_scaled = x.ground_fixed(constraint_rows(ir, x, scale))
     return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r, pi_bar,
                             scale, phi_scaled, ca.jacobian(phi_scaled, x.q))

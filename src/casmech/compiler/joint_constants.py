@@ -2,9 +2,10 @@
 quaternions, each body's spatial inertia in its reference frame, the constant transforms between
 frames), as the build of compiler/joint_system.py uses them.
 
-A numeric build (a lowered IR) gets them as casadi.DM constants, folded into the functions'
-graphs. A parametric build (compiler.parametric.split's IR, numbers as symbols of the model data
-d) gets each entry that is not structurally zero as a new symbol; `data()` is the function
+A numeric build (a lowered IR) gets them as casadi.DM constants (one per value object, so a
+frame used by several recursions is converted once), folded into the functions' graphs. A
+parametric build (compiler.parametric.split's IR, numbers as symbols of the model data d) gets
+each entry that is not structurally zero as a new symbol; `data()` is the function
 d -> [d; those entries] that computes them once per parameter value, and the joint functions
 take its output as their trailing input "d" (so a frame's rotation or a transformed inertia is
 not recomputed at every evaluation of the ODE).
@@ -36,7 +37,7 @@ class Constants:
     def __call__(self, value):
         """`value` (numbers, or SX of the model data alone) as the build uses it."""
         if not self.symbolic:
-            return ca.DM(ca.evalf(value)) if isinstance(value, ca.SX) else ca.DM(value)
+            return self.once("value", value, _numeric)
         return self.once("value", value, self._hoisted)
 
     def raw(self, value):
@@ -70,7 +71,7 @@ class Constants:
         Shepperd's method; in a parametric build in SX, its branch chosen where joint_data is
         evaluated, by the values)."""
         if not self.symbolic:
-            return ca.DM(from_matrix(rotation))
+            return self.once("quaternion", rotation, lambda r: ca.DM(from_matrix(r)))
         return self.once("quaternion", rotation, lambda r: self(shepperd(ca.SX(r))))
 
     @property
@@ -82,6 +83,10 @@ class Constants:
         """d -> the trailing input's values (`inputs`)."""
         return ca.Function("joint_data", [self.data], [ca.vertcat(self.data, *self.expressions)],
                            ["model_data"], [DATA])
+
+
+def _numeric(value) -> ca.DM:
+    return ca.DM(ca.evalf(value)) if isinstance(value, ca.SX) else ca.DM(value)
 
 
 def shepperd(r: ca.SX) -> ca.SX:

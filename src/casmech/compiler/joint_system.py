@@ -26,9 +26,10 @@ parameter value.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 
 import casadi as ca
+import numpy as np
 
 from casmech.compiler import articulated, body, lazy_jacobian
 from casmech.compiler.articulated import Joint
@@ -36,6 +37,7 @@ from casmech.compiler.assemble import driver_value
 from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.compiler.joint_constants import DATA, Constants
 from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.compiler.traced import traced
 from casmech.compiler.tree import Tree
 from casmech.geometry import euler
 from casmech.joint_types import MOTIONS
@@ -121,17 +123,6 @@ class JointSystem:
         return lazy_jacobian.problem(self.dynamics, exact=False)
 
 
-def _body_state(q, q_dot, n_bodies: int, k: int):
-    """Global position, rotation, velocity and body-frame angular velocity of body k (SX; the
-    ground fixed at the origin)."""
-    if k == GROUND_INDEX:
-        return ca.DM.zeros(3), ca.DM.eye(3), ca.DM.zeros(3), ca.DM.zeros(3)
-    p = q[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
-    p_dot = q_dot[3 * n_bodies + 4 * k:3 * n_bodies + 4 * k + 4]
-    omega = body.angular_velocity(p, p_dot)
-    return q[3 * k:3 * k + 3], euler.rotation(p), q_dot[3 * k:3 * k + 3], omega
-
-
 def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
     """(rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint at (q, q_dot): the
     child frame F_c's rotation and origin relative to the parent frame F_p (in F_p), and its
@@ -139,49 +130,81 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
     relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
     from them). Every body is the child of one tree joint."""
     n_bodies = len(tree_joints)
-    frame, vector = (constants, lambda v: v) if constants.symbolic else (lambda v: v, ca.DM)
-    rotations, gaps, twists = [], [], []
-    for joint in tree_joints:
-        (r_p, a_p, r_p_dot, w_p), (r_c, a_c, r_c_dot, w_c) = (
-            _body_state(q, q_dot, n_bodies, k) for k in (joint.parent, joint.child))
-        (c_p, s_p), (c_c, s_c) = ((frame(v) for v in f)
-                                  for f in (joint.parent_frame, joint.child_frame))
-        o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
-        o_p_dot = r_p_dot + a_p @ ca.cross(w_p, vector(s_p))
-        o_c_dot = r_c_dot + a_c @ ca.cross(w_c, vector(s_c))
-        rotation = c_p.T @ a_p.T @ a_c @ c_c
-        gap = a_p.T @ (o_c - o_p)
-        omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
-        gap_dot = c_p.T @ (a_p.T @ (o_c_dot - o_p_dot) - ca.cross(w_p, gap))
-        rotations.append(rotation)
-        gaps.append(c_p.T @ gap)
-        twists.append(ca.vertcat(omega, rotation.T @ gap_dot))
-    return [ca.horzcat(*rotations), ca.horzcat(*gaps), ca.horzcat(*twists)]
+    poses = [ca.vertsplit(v, [*range(0, 3 * n_bodies, 3), *range(3 * n_bodies, 7 * n_bodies + 1,
+                                                                   4)]) for v in (q, q_dot)]
+
+    def state(k: int) -> list:
+        """(r, p, r_dot, p_dot) of body k (ground: at rest at the origin)."""
+        if k == GROUND_INDEX:
+            return [ca.DM.zeros(3), ca.DM([1, 0, 0, 0]), ca.DM.zeros(3), ca.DM.zeros(4)]
+        return [poses[0][k], poses[0][n_bodies + k], poses[1][k], poses[1][n_bodies + k]]
+
+    steps = [_relative_step(*state(joint.parent), *state(joint.child),
+                            *(constants(v) for v in (*joint.parent_frame, *joint.child_frame)))
+             for joint in tree_joints]
+    return [ca.horzcat(*parts) for parts in zip(*steps, strict=True)]
 
 
-def joint_rows(ir: ModelIR, joint: JointIR, data: ca.SX | None = None) -> ca.Function:
-    """(t, r_i, p_i, r_j, p_j) -> (phi, B_i, B_j): a joint's constraint rows and their r-omega
-    Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame rotation; zero for
-    ground), built from the joint's own primitives so that the cost stays per joint; over a
-    parametric IR with its model data `data` as a trailing input."""
-    t = ca.SX.sym("t")
+@traced
+def _relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s_p, c_c, s_c):
+    """(rotation, gap, twist) of one tree joint (_relative) from its bodies' r-p states."""
+    a_p, a_c = euler.rotation(p_p), euler.rotation(p_c)
+    w_p, w_c = body.angular_velocity(p_p, p_p_dot), body.angular_velocity(p_c, p_c_dot)
+    o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
+    o_p_dot = r_p_dot + a_p @ ca.cross(w_p, s_p)
+    o_c_dot = r_c_dot + a_c @ ca.cross(w_c, s_c)
+    rotation = c_p.T @ a_p.T @ a_c @ c_c
+    gap = a_p.T @ (o_c - o_p)
+    omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
+    gap_dot = c_p.T @ (a_p.T @ (o_c_dot - o_p_dot) - ca.cross(w_p, gap))
+    return rotation, c_p.T @ gap, ca.vertcat(omega, rotation.T @ gap_dot)
+
+
+def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, data=None) -> list:
+    """(phi, B_i, B_j): a joint's constraint rows at the bodies' poses (SX; ground's ignored)
+    and their r-omega Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame
+    rotation; zero for ground); through one Function per structure of the joint's rows (their
+    kinds, which side is ground, the vectors' shapes) that takes the rows' vectors and driver
+    values as inputs (_rows_template); `data` the model data of a parametric IR, whose
+    vectors are SX of it."""
+    prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
+    shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
+    if data is not None:
+        stacked = ca.vertcat(ca.SX(0, 1), *(ca.vec(ca.SX(v)) for v in vectors))
+    else:
+        stacked = ca.SX(np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]))
+    drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
+    grounds = (joint.body_i == GROUND_INDEX, joint.body_j == GROUND_INDEX)
+    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes)
+    return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
+                          for v in (r_i, p_i, r_j, p_j, stacked, drivers)])
+
+
+@cache
+def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, bool],
+                   shapes: tuple[tuple[int, ...], ...]) -> ca.Function:
+    """(r_i, p_i, r_j, p_j, the rows' vectors stacked, their driver values) -> (phi, B_i, B_j)
+    of rows of these kinds (rows_of), built from the rows' primitives so that the cost stays
+    per joint."""
     sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
-    frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if body == GROUND_INDEX
-              else Frame(r, euler.rotation(p))
-              for body, (r, p) in zip((joint.body_i, joint.body_j), sides, strict=True)]
-    rows = []
-    for prim in ir.primitives[joint.rows.start:joint.rows.stop]:
-        function, keys = PRIMITIVES[prim.kind]
-        vectors = {k: prim.vectors[k] if data is not None else ca.DM(prim.vectors[k])
-                   for k in keys}
-        rows.append(function(*frames, vectors, driver_value(prim, t)))
+    frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if ground else Frame(r, euler.rotation(p))
+              for ground, (r, p) in zip(grounds, sides, strict=True)]
+    sizes = [int(np.prod(shape)) for shape in shapes]
+    stacked = ca.SX.sym("v", sum(sizes))
+    parts = ca.vertsplit(stacked, list(np.cumsum([0, *sizes]))) if sizes else []
+    vectors = [ca.reshape(part, *(shape if len(shape) == 2 else (size, 1)))
+               for part, shape, size in zip(parts, shapes, sizes, strict=True)]
+    drivers = ca.SX.sym("f", len(kinds))
+    rows, given = [], iter(vectors)
+    for k, kind in enumerate(kinds):
+        function, keys = PRIMITIVES[kind]
+        rows.append(function(*frames, {key: next(given) for key in keys}, drivers[k]))
     phi = ca.vertcat(*rows)
     blocks = [ca.horzcat(ca.jacobian(phi, r), body.pi_bar(ca.jacobian(phi, p), p))
               for r, p in sides]
-    extra = [] if data is None else [data]
-    return ca.Function("joint_rows", [t, *(v for side in sides for v in side), *extra],
-                       [phi, *blocks], ["t", "r_i", "p_i", "r_j", "p_j", *[DATA] * len(extra)],
-                       ["phi", "B_i", "B_j"])
+    return ca.Function("joint_rows", [*(v for side in sides for v in side), stacked, drivers],
+                       [phi, *blocks])
 
 
 class _Builder:
@@ -190,6 +213,7 @@ class _Builder:
     def __init__(self, ir: ModelIR, tree: Tree, constants: Constants):
         self.ir, self.tree, self.layout = ir, tree, layout(tree)
         self.constants = constants
+        self.joint_rows: dict[str, list] = {}  # joint name -> rows_of at the tree's state
         lay = self.layout
         self.t, self.x = ca.SX.sym("t"), ca.SX.sym("x", lay.n_x)
         self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
@@ -213,10 +237,10 @@ class _Builder:
             if body == GROUND_INDEX:
                 return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
             return self.kin.r[body], self.kin.p[body]
-        data = self.constants.data
-        extra = [] if data is None else [data]
-        return joint_rows(self.ir, joint, data)(self.t, *pose(joint.body_i),
-                                                *pose(joint.body_j), *extra)
+        if joint.name not in self.joint_rows:
+            self.joint_rows[joint.name] = rows_of(self.ir, joint, self.t, *pose(joint.body_i),
+                                                  *pose(joint.body_j), self.constants.data)
+        return self.joint_rows[joint.name]
 
     def loop_closure(self):
         """(Phi_c, d/dt Phi_c, the unit-row scale, lam, mu) of the cut rows."""
@@ -268,25 +292,41 @@ class _Builder:
                 continue
             _, block_i, block_j = self.rows(joint)
             block = block_i if j.joint.child == joint.body_i else block_j
-            force = ca.vertcat(self.kin.rotation[j.joint.child] @ w[3:6], w[0:3])
-            lam[list(joint.rows)] = -ca.solve(block @ block.T, block @ force)
+            lam[list(joint.rows)] = _tree_multipliers(block, self.kin.rotation[j.joint.child],
+                                                      w)[0]
         return lam
 
     def motion(self, dynamics, lam_cut, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row: r-p, Euler parameters times signs."""
         nb, kin = self.ir.n_bodies, self.kin
-        p = [signs[k] * kin.p[k] for k in range(nb)]
-        omega = [kin.velocity[k][0:3] for k in range(nb)]
-        alpha = [dynamics.accelerations[k][0:3] for k in range(nb)]
-        r_ddot = [kin.rotation[k] @ (dynamics.accelerations[k][3:6]
-                                     + ca.cross(omega[k], kin.velocity[k][3:6]))
-                  for k in range(nb)]
-        p_dot = [body.p_dot(p[k], omega[k]) for k in range(nb)]
-        p_ddot = [0.5 * (euler.g_matrix(p_dot[k]).T @ omega[k] + euler.g_matrix(p[k]).T @ alpha[k])
-                  for k in range(nb)]
+        signed = ca.vertsplit(signs)
+        p, p_dot, r_ddot, p_ddot = zip(*[
+            _body_rates(signed[k], kin.p[k], kin.rotation[k], kin.velocity[k],
+                        dynamics.accelerations[k]) for k in range(nb)], strict=True)
         return [ca.vertcat(*kin.r, *p),
                 ca.vertcat(*[kin.r_dot(k) for k in range(nb)], *p_dot),
                 ca.vertcat(*r_ddot, *p_ddot), self.multipliers(dynamics, lam_cut)]
+
+
+@traced
+def _tree_multipliers(block, rotation, wrench):
+    """A tree joint's row multipliers from its constraint wrench on the child (CM frame):
+    -B^T lam = the wrench (global force, body-frame torque), B the rows' r-omega Jacobian at
+    the child, solved in the least-squares sense."""
+    force = ca.vertcat(rotation @ wrench[3:6], wrench[0:3])
+    return (-ca.solve(block @ block.T, block @ force),)
+
+
+@traced
+def _body_rates(sign, p, rotation, velocity, acceleration):
+    """A body's results-row (p, p_dot, r_ddot, p_ddot), its Euler parameters times sign, from
+    its CM-frame spatial velocity and acceleration."""
+    p = sign * p
+    omega, alpha = velocity[0:3], acceleration[0:3]
+    r_ddot = rotation @ (acceleration[3:6] + ca.cross(omega, velocity[3:6]))
+    p_dot = body.p_dot(p, omega)
+    p_ddot = 0.5 * (euler.g_matrix(p_dot).T @ omega + euler.g_matrix(p).T @ alpha)
+    return p, p_dot, r_ddot, p_ddot
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:

@@ -63,12 +63,16 @@ def spanning_tree(ir: ModelIR) -> Tree:
     reached = {GROUND_INDEX}
     tree: list[TreeJoint] = []
     used: set[str] = set()
+    at: dict[int, list[JointIR]] = {}  # body -> its joints, in file order
+    for joint in ir.joints:
+        for k in dict.fromkeys((joint.body_i, joint.body_j)):
+            at.setdefault(k, []).append(joint)
 
     def search(start: int) -> None:
         queue = deque([start])
         while queue:
             body = queue.popleft()
-            for joint in ir.joints:
+            for joint in at.get(body, ()):
                 other = _other(joint, body)
                 if other is None or other in reached or not _can_be_tree(joint):
                     continue

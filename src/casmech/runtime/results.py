@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.compiler import contact
-from casmech.compiler.functions import SystemFunctions
+from casmech.compiler.functions import SystemFunctions, all_sx
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
 from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
@@ -166,7 +166,7 @@ def row_function(functions: SystemFunctions) -> ca.Function:
     """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it: one
     casadi.Function over the bundle's own (SX: inlined; compiled: called)."""
     bundle = functions.functions
-    sym = ca.SX if all(f.is_a("SXFunction") for f in bundle.values()) else ca.MX
+    sym = ca.SX if all_sx(bundle) else ca.MX
     n, m = functions.n_coordinates, functions.n_rows
     t, q, q_dot, q_ddot, lam = (sym.sym("t"), sym.sym("q", n), sym.sym("q_dot", n),
                                 sym.sym("q_ddot", n), sym.sym("lam", m))
