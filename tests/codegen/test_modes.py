@@ -4,6 +4,8 @@ writes its files into -o DIR."""
 
 import time
 import warnings
+from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +15,8 @@ from casmech.cli import main
 from casmech.errors import AnalysisError, UsageError
 
 from .conftest import MODEL
+
+MODELS = Path(__file__).parents[2] / "models"
 
 
 @pytest.fixture
@@ -77,8 +81,10 @@ def failing_compiler(tmp_path, monkeypatch):
 @pytest.fixture
 def auto_compiles(monkeypatch):
     """auto decides to compile this small model on a cache miss (as it does from AUTO_BODIES
-    bodies on), so what happens when compiling fails is exercised."""
+    bodies on, but for trees in joint coordinates), so what happens when compiling fails is
+    exercised."""
     monkeypatch.setattr(codegen, "AUTO_BODIES", 1)
+    monkeypatch.setattr(codegen, "_joint_tree", lambda model: False)
 
 
 def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_path,
@@ -118,7 +124,8 @@ def test_output_path_that_is_a_file(tmp_path, capsys):
 
 def test_auto_mode_rule(model, compiled, cache_root, tmp_path, monkeypatch):
     """codegen.auto_mode: compiled when the library is cached; on a cache miss compiled from
-    AUTO_BODIES bodies on, interpreted below; interpreted without a compiler."""
+    AUTO_BODIES bodies on (but for a tree run in joint coordinates), interpreted below;
+    interpreted without a compiler."""
     assert len(model.bodies) < codegen.AUTO_BODIES
     assert codegen.is_cached(model, root=cache_root)  # the session fixture built it
     assert codegen.auto_mode(model, root=cache_root) == "compiled"
@@ -127,7 +134,17 @@ def test_auto_mode_rule(model, compiled, cache_root, tmp_path, monkeypatch):
     assert codegen.auto_mode(model, root=empty) == "interpreted"
     assert not empty.exists()  # deciding builds nothing
     monkeypatch.setattr(codegen, "AUTO_BODIES", len(model.bodies))
-    assert codegen.auto_mode(model, root=empty) == "compiled"
+    # a tree whose dynamics run in joint coordinates stays interpreted at every size; in rp, or
+    # another analysis, it compiles from AUTO_BODIES bodies on, as loops do
+    assert model.analysis.type == "dynamics"
+    assert codegen.auto_mode(model, root=empty) == "interpreted"
+    for analysis in (replace(model.analysis, options={"formulation": "rp"}),
+                     replace(model.analysis, type="kinematics")):
+        assert codegen.auto_mode(replace(model, analysis=analysis), root=empty) == "compiled"
+    four_bar = casmech.load(MODELS / "four_bar.yaml")
+    dynamics = replace(four_bar, analysis=replace(four_bar.analysis, type="dynamics"))
+    monkeypatch.setattr(codegen, "AUTO_BODIES", len(four_bar.bodies))
+    assert codegen.auto_mode(dynamics, root=empty) == "compiled"
     monkeypatch.setenv("CC", "casmech-no-such-compiler")
     assert codegen.auto_mode(model, root=cache_root) == "interpreted"
 

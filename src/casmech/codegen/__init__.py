@@ -26,12 +26,14 @@ for 1000.
 
 `--mode auto` (auto_mode):
   - compiled when the library is in the cache (loading it takes 0.02-0.3 s);
-  - otherwise compiled from AUTO_BODIES bodies on, interpreted below, on these measurements of
-    a first run over 1 s of simulated time: YAML -> ready interpreted takes 0.02-1.6 s for 2-128
-    bodies and a build 2-4 s, and the interpreted run is the sooner up to 128 bodies (6.3 s
-    against 7.1 s at 128); at 256 bodies setup 4.6 s against 3.8 s and the compiled run is
-    sooner (11.6 s against 14.1 s for 0.2 s simulated), at 512 the setup alone 12.8 s against
-    5.4 s. Later runs of an unchanged model load the cached library.
+  - otherwise compiled from AUTO_BODIES bodies on, interpreted below: interpreted is ready
+    sooner up to 128 bodies (YAML -> ready 0.02-1.6 s, a build 2-4 s), compiled from 256 for
+    r-p dynamics (docs/decisions.md);
+  - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
+    joint, no DAE stabilization): its ODE stays interpreted from COMPILED_ODE_BODIES bodies on
+    (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
+    runs interpreted at every size (a formulation given on the command line is not seen here).
+    Later runs of an unchanged model load the cached library.
   - with $CASMECH_BACKGROUND_BUILD=1, a cache miss below AUTO_BODIES also builds the library
     in a detached process (build_in_background) while the run goes on interpreted, so the
     next run is compiled.
@@ -60,6 +62,7 @@ from casmech.compiler.functions import SystemFunctions, build_functions
 from casmech.compiler.ir import ModelIR
 from casmech.compiler.lower import lower
 from casmech.compiler.parametric import data
+from casmech.compiler.tree import spanning_tree
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 
@@ -157,6 +160,15 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
+def _joint_tree(model: ResolvedModel) -> bool:
+    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
+    options = model.analysis.options
+    if model.analysis.type != "dynamics" or options.get("formulation", "auto") not in (
+            "auto", "joint") or options.get("stabilization", "ggl") != "ggl":
+        return False
+    return spanning_tree(lower(model)).is_tree
+
+
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, dae: bool = True) -> bool:
     """Whether the cache holds the model's library for this toolchain (nothing is built)."""
@@ -173,7 +185,8 @@ def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
         return "interpreted"
-    if is_cached(model, toolchain, root) or len(model.bodies) >= AUTO_BODIES:
+    if is_cached(model, toolchain, root) or (len(model.bodies) >= AUTO_BODIES
+                                             and not _joint_tree(model)):
         return "compiled"
     if background and os.environ.get(BACKGROUND_ENVIRONMENT) == "1":
         build_in_background(model, toolchain, root)
