@@ -87,8 +87,8 @@ def add_arguments(parser) -> None:
                         help="results file format(s), comma-separated (default csv)")
     parser.add_argument("--mode", choices=api.COMPILE_MODES,
                         help="compiled C (built once, cached) or interpreted CasADi functions "
-                             "(default auto: compiled when cached or from 200 bodies, else "
-                             "interpreted)")
+                             "(default auto: compiled when cached or from 200 bodies, but "
+                             "trees in joint coordinates; else interpreted)")
     add_overrides(parser)
 
 
