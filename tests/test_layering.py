@@ -1,6 +1,7 @@
 """Layering of the packages (issue 15), read from the source by ast: schema/ never imports
 compiler/, the bottom layer (casmech.geometry) no other casmech package, the YAML base classes
-(casmech.spec_base) none either, the joint registry (casmech.joint_types) only the bottom layer
+(casmech.spec_base) and the registry table (casmech.registry) none either, the joint registry
+(casmech.joint_types) only the bottom layer
 and the force element registry (casmech.force_types, the built-in types' code casmech.forces)
 only those, not even inside a function; no two packages import each other at import time
 (module-level imports, through any chain; an import inside a function, done on use, is allowed
@@ -60,13 +61,15 @@ def package_graph() -> dict[str, set[str]]:
 
 
 # what the force element registry and its code may import (besides third-party libraries)
-BOTTOM = {"force_types", "forces", "geometry", "joint_types", "spec_base", "errors"}
+BOTTOM = {"force_types", "forces", "geometry", "joint_types", "spec_base", "errors",
+          "registry"}
 
 
 @pytest.mark.parametrize("package, forbidden", [
     ("schema", {"compiler", "runtime", "codegen", "optimal", "output", "study", "commands"}),
     ("geometry", set(package_graph()) - {"geometry"}),
-    ("joint_types", set(package_graph()) - {"joint_types", "geometry"}),
+    ("joint_types", set(package_graph()) - {"joint_types", "geometry", "registry"}),
+    ("registry", set(package_graph()) - {"registry"}),
     ("spec_base", set(package_graph()) - {"spec_base"}),
     ("forces", set(package_graph()) - BOTTOM),
     ("force_types", set(package_graph()) - BOTTOM),

@@ -40,6 +40,7 @@ from functools import partial
 import numpy as np
 
 from casmech.forces import bushing, contact, contact_spec, loads, springs
+from casmech.registry import Registry
 
 
 @dataclass(frozen=True)
@@ -107,29 +108,10 @@ BUILT_IN = (
              contact.capsule_plane),
 )
 
-REGISTRY: dict[str, ForceType] = {entry.name: entry for entry in BUILT_IN}
-_LISTENERS: list[Callable[[], None]] = []
-
-
-def register(entry: ForceType) -> None:
-    """Add (or replace) a force element type; every stage sees it from now on."""
-    REGISTRY[entry.name] = entry
-    _changed()
-
-
-def unregister(name: str) -> None:
-    del REGISTRY[name]
-    _changed()
-
-
-def on_change(listener: Callable[[], None]) -> None:
-    """Call `listener()` after every register/unregister (schema/spec.py rebuilds its union)."""
-    _LISTENERS.append(listener)
-
-
-def _changed() -> None:
-    for listener in _LISTENERS:
-        listener()
+REGISTRY: Registry = Registry(BUILT_IN)  # name -> ForceType
+# register(entry) adds or replaces a type, unregister(name) removes it, on_change(listener)
+# follows both (casmech.registry)
+register, unregister, on_change = REGISTRY.register, REGISTRY.unregister, REGISTRY.on_change
 
 
 def entry_of(force_type: str) -> ForceType | None:

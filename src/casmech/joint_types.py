@@ -41,6 +41,7 @@ from casmech.geometry.motions import (
 )
 from casmech.geometry.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
 from casmech.geometry.states import JOINT_COORDINATES
+from casmech.registry import Registry
 
 Template = tuple[str, dict[str, str], str]  # (kind, {vector key: quantity@body}, label)
 Problem = tuple[str, str, str, dict]  # (code, key, message, {got/hint: text}) of a check
@@ -187,29 +188,10 @@ BUILT_IN = (
     _basic("cd", ("c", "s_i", "s_j"), "c . d_ij = f(t)", "s_i"),
 )
 
-REGISTRY: dict[str, JointType] = {entry.name: entry for entry in BUILT_IN}
-_LISTENERS: list[Callable[[], None]] = []
-
-
-def register(entry: JointType) -> None:
-    """Add (or replace) a joint type; every stage sees it from now on."""
-    REGISTRY[entry.name] = entry
-    _changed()
-
-
-def unregister(name: str) -> None:
-    del REGISTRY[name]
-    _changed()
-
-
-def on_change(listener: Callable[[], None]) -> None:
-    """Call `listener()` after every register/unregister (schema/spec.py rebuilds its union)."""
-    _LISTENERS.append(listener)
-
-
-def _changed() -> None:
-    for listener in _LISTENERS:
-        listener()
+REGISTRY: Registry = Registry(BUILT_IN)  # name -> JointType
+# register(entry) adds or replaces a type, unregister(name) removes it, on_change(listener)
+# follows both (casmech.registry)
+register, unregister, on_change = REGISTRY.register, REGISTRY.unregister, REGISTRY.on_change
 
 
 def having(coordinate: str) -> tuple[str, ...]:

@@ -37,7 +37,7 @@ ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(casmech.__file__).parent
 # what the generated code depends on: these packages and top-level modules
 SOURCE_PACKAGES = ("schema", "compiler", "codegen", "geometry", "forces")
-SOURCE_MODULES = ("joint_types.py", "force_types.py", "spec_base.py")
+SOURCE_MODULES = ("joint_types.py", "force_types.py", "spec_base.py", "registry.py")
 
 
 def cache_dir() -> Path:
