@@ -12,8 +12,7 @@ driver's coordinate is a function of time (its rate and acceleration by AD). The
 of the model alone (frames, their quaternions, inertias in reference frames) go through a
 joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
 in a parametric one. Each pass's work on one body is a step traced once per structure and
-evaluated inside CasADi (compiler/traced.py), so the build costs ~1 us per SX node instead of
-~10-30 us per Python-level SX operation.
+evaluated inside CasADi (compiler/traced.py).
 """
 
 from __future__ import annotations
