@@ -16,6 +16,9 @@ Two ways to make theta an input (`method`):
 
 Both add `file_velocities(q, theta)` (the file's velocities, with the `<body>.vx`.. offsets)
 and `initial_guess(theta)` (the file's pose: where assembly starts).
+
+For evaluations away from theta0 (estimation), `data_inputs` builds the system over the moving
+entries of d themselves, with d(theta) exact at every theta through model_data.ModelData.
 """
 
 from __future__ import annotations
