@@ -18,7 +18,8 @@ import numpy as np
 
 from casmech.compiler import body
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
-from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.compiler.primitives import PRIMITIVES, ROW, Frame
+from casmech.compiler.traced import traced
 from casmech.geometry import euler
 from casmech.geometry.values import constant
 
@@ -58,12 +59,23 @@ class Coordinates:
         """Body k's (or ground's) position and A(p), built once: every primitive, force and
         reaction on the body shares the same expression nodes."""
         if k not in self._frames:
-            self._frames[k] = Frame(self.r(k), euler.rotation(self.p(k)))
+            self._frames[k] = Frame(self.r(k), _ROTATION(self.p(k))[0])
         return self._frames[k]
 
     def ground_fixed(self, expr):
         """Substitute ground's constant pose."""
         return ca.substitute(expr, self.q_ground, ca.DM(GROUND_POSE))
+
+
+def _rotation(p):
+    return (euler.rotation(p),)
+
+
+def _g_transpose(p):
+    return (euler.g_matrix(p).T,)
+
+
+_ROTATION, _G_TRANSPOSE = traced(_rotation), traced(_g_transpose)  # per-body steps
 
 
 def driver_value(prim: PrimitiveIR, t, scale=1.0):
@@ -76,21 +88,33 @@ def driver_value(prim: PrimitiveIR, t, scale=1.0):
 
 def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
     """Phi with ground symbolic: the joint rows, then p^T p - 1 for every body."""
-    rows = []
-    for prim in ir.primitives:
-        phi_fun, keys = PRIMITIVES[prim.kind]
-        vectors = {k: constant(prim.vectors[k]) for k in keys}
-        rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
-                            driver_value(prim, x.t, scale)))
+    rows, known = [], {}
+    for prim in ir.primitives:  # each row through its kind's traced step (primitives.ROW)
+        fi, fj = x.frame(prim.body_i), x.frame(prim.body_j)
+        rows += ROW(fi.r, fi.A, fj.r, fj.A, _as_sx(driver_value(prim, x.t, scale), known),
+                    *(_as_sx(prim.vectors[k], known) for k in PRIMITIVES[prim.kind][1]),
+                    kind=prim.kind)
     rows += [body.normalization(x.p(k)) for k in range(ir.n_bodies)]
     return ca.vertcat(*rows) if rows else ca.SX(0, 1)
 
 
+def _as_sx(value, known: dict):
+    """A primitive's vector or driver value as SX; numbers converted once per value (`known`:
+    their bytes -> SX), symbols as they are."""
+    if isinstance(value, (ca.SX, ca.MX)):
+        return value
+    array = np.asarray(value, float)
+    key = (array.shape, array.tobytes())
+    if key not in known:
+        known[key] = ca.SX(constant(array))
+    return known[key]
+
+
 def rotational_jacobian(phi_q, x: Coordinates, k: int):
-    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation), from
-    body k's columns of Phi_q (docs/decisions.md)."""
+    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation, as
+    body.pi_bar, with G^T a traced step), from body k's columns of Phi_q (docs/decisions.md)."""
     start = 3 * x.n_bodies + 4 * k
-    return body.pi_bar(phi_q[:, start:start + 4], x.p(k))
+    return 0.5 * phi_q[:, start:start + 4] @ _G_TRANSPOSE(x.p(k))[0]
 
 
 @dataclass(frozen=True)
