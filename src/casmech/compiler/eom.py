@@ -16,6 +16,7 @@ import casadi as ca
 from casmech.compiler import body, coordinates, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ModelIR
+from casmech.compiler.traced import traced
 from casmech.force_types import REGISTRY as FORCE_TYPES
 from casmech.forces.terms import at
 from casmech.geometry import euler
@@ -109,13 +110,24 @@ def applied_forces(ir: ModelIR, x: Coordinates):
     return total, potential
 
 
+def _body_energy(mass, inertia, r_dot, p, p_dot, gravity, r):
+    """(kinetic, gravity potential) of one body."""
+    return (body.kinetic_energy(mass, inertia, r_dot, p, p_dot),
+            body.gravity_potential(mass, gravity, r))
+
+
+BODY_ENERGY = traced(_body_energy)  # traced once per argument structure
+
+
 def energy(ir: ModelIR, x: Coordinates, spring_potential):
     """(kinetic, potential): 1/2 m v.v + 1/2 w_bar^T J_bar w_bar; -m g.r + springs."""
     kinetic, potential = 0.0, spring_potential
+    gravity = constant(ir.gravity)
     for k, b in enumerate(ir.bodies):
-        kinetic += body.kinetic_energy(b.mass, constant(b.inertia), x.r(k, x.q_dot), x.p(k),
-                                       x.p(k, x.q_dot))
-        potential += body.gravity_potential(b.mass, constant(ir.gravity), x.r(k))
+        body_kinetic, body_potential = BODY_ENERGY(
+            b.mass, constant(b.inertia), x.r(k, x.q_dot), x.p(k), x.p(k, x.q_dot), gravity,
+            x.r(k))
+        kinetic, potential = kinetic + body_kinetic, potential + body_potential
     return kinetic, potential
 
 
