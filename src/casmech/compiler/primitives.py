@@ -78,7 +78,8 @@ def _row(r_i, a_i, r_j, a_j, f, *vectors, kind: str):
     """(phi,) of one primitive of `kind` from the two frames, f(t) and its vectors (in the
     order of its PRIMITIVES keys)."""
     phi_fun, keys = PRIMITIVES[kind]
-    return (phi_fun(Frame(r_i, a_i), Frame(r_j, a_j), dict(zip(keys, vectors)), f),)
+    return (phi_fun(Frame(r_i, a_i), Frame(r_j, a_j), dict(zip(keys, vectors, strict=True)),
+                    f),)
 
 
 ROW = traced(_row)  # a primitive's row, traced once per kind and argument structure
