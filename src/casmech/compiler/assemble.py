@@ -12,6 +12,7 @@ Pi_bar_k = 1/2 Phi_p_k G(p_k)^T.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
@@ -119,48 +120,63 @@ def rotational_jacobian(phi_q, x: Coordinates, k: int):
 
 @dataclass(frozen=True)
 class ConstraintSystem:
+    """Phi and phi_q, nu; the other parts are built when first read (a run in joint
+    coordinates reads phi, phi_q and nu only)."""
+
+    ir: ModelIR
     x: Coordinates
     phi: ca.SX  # ground substituted
     phi_with_ground: ca.SX  # ground symbolic (for reactions on ground)
     phi_q: ca.SX
     nu: ca.SX
-    gamma: ca.SX
-    phi_r: ca.SX  # (m, 3 nb)
-    pi_bar: ca.SX  # (m, 3 nb)
     scale: ca.SX  # continuation parameter of the drivers (assembly)
-    phi_scaled: ca.SX
-    phi_q_scaled: ca.SX
 
+    @cached_property
+    def gamma(self) -> ca.SX:
+        return gamma_of(self.phi_q, self.nu, self.x.q, self.x.t, self.x.q_dot)
 
-def derive(phi, x: Coordinates) -> dict[str, ca.SX]:
-    """Phi_q, nu, gamma of any phi(t, q) by AD."""
-    return derivatives(phi, x.q, x.t, x.q_dot)
+    @property
+    def phi_r(self) -> ca.SX:  # (m, 3 nb)
+        return self.phi_q[:, :3 * self.x.n_bodies]
+
+    @cached_property
+    def pi_bar(self) -> ca.SX:  # (m, 3 nb)
+        nb = self.x.n_bodies
+        if not nb:
+            return self.phi_r
+        return ca.horzcat(*[rotational_jacobian(self.phi_q, self.x, k) for k in range(nb)])
+
+    @cached_property
+    def phi_scaled(self) -> ca.SX:
+        if not any(prim.is_driver for prim in self.ir.primitives):  # scale multiplies drivers
+            return self.phi
+        return self.x.ground_fixed(constraint_rows(self.ir, self.x, self.scale))
+
+    @cached_property
+    def phi_q_scaled(self) -> ca.SX:
+        if self.phi_scaled is self.phi:
+            return self.phi_q
+        return ca.jacobian(self.phi_scaled, self.x.q)
 
 
 def derivatives(phi, q, t, q_dot) -> dict[str, ca.SX]:
     """Phi_q, nu, gamma of phi(t, q) by AD, for any symbols q, t, q_dot (the whole system's,
     or one row's: codegen.rows)."""
     phi_q = ca.jacobian(phi, q)
-    phi_t = ca.jacobian(phi, t)
+    nu = -ca.jacobian(phi, t)
+    return {"phi_q": phi_q, "nu": nu, "gamma": gamma_of(phi_q, nu, q, t, q_dot)}
+
+
+def gamma_of(phi_q, nu, q, t, q_dot) -> ca.SX:
+    """gamma = -(Phi_q q_dot)_q q_dot - 2 Phi_qt q_dot - Phi_tt (Phi_t = -nu)."""
     phi_q_qdot = phi_q @ q_dot
-    gamma = (-ca.jacobian(phi_q_qdot, q) @ q_dot - 2 * ca.jacobian(phi_q_qdot, t)
-             - ca.jacobian(phi_t, t))
-    return {"phi_q": phi_q, "nu": -phi_t, "gamma": gamma}
+    return (-ca.jacobian(phi_q_qdot, q) @ q_dot - 2 * ca.jacobian(phi_q_qdot, t)
+            - ca.jacobian(-nu, t))
 
 
 def build_constraints(ir: ModelIR) -> ConstraintSystem:
     x = Coordinates.create(ir.n_bodies)
     phi_ground = constraint_rows(ir, x)
     phi = x.ground_fixed(phi_ground)
-    d = derive(phi, x)
-    nb = ir.n_bodies
-    phi_r = d["phi_q"][:, :3 * nb]
-    pi_bar = ca.horzcat(*[rotational_jacobian(d["phi_q"], x, k) for k in range(nb)]) \
-        if nb else phi_r
-    scale = ca.SX.sym("s")
-    if not any(prim.is_driver for prim in ir.primitives):  # the scale multiplies drivers only
-        return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r,
-                                pi_bar, scale, phi, d["phi_q"])
-    phi_scaled = x.ground_fixed(constraint_rows(ir, x, scale))
-    return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r, pi_bar,
-                            scale, phi_scaled, ca.jacobian(phi_scaled, x.q))
+    return ConstraintSystem(ir, x, phi, phi_ground, ca.jacobian(phi, x.q),
+                            -ca.jacobian(phi, x.t), ca.SX.sym("s"))
