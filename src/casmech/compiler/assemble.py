@@ -12,13 +12,15 @@ Pi_bar_k = 1/2 Phi_p_k G(p_k)^T.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
 from casmech.compiler import body
 from casmech.compiler.ir import GROUND_INDEX, ModelIR, PrimitiveIR
-from casmech.compiler.primitives import PRIMITIVES, Frame
+from casmech.compiler.primitives import PRIMITIVES, ROW, Frame
+from casmech.compiler.traced import traced
 from casmech.geometry import euler
 from casmech.geometry.values import constant
 
@@ -58,12 +60,23 @@ class Coordinates:
         """Body k's (or ground's) position and A(p), built once: every primitive, force and
         reaction on the body shares the same expression nodes."""
         if k not in self._frames:
-            self._frames[k] = Frame(self.r(k), euler.rotation(self.p(k)))
+            self._frames[k] = Frame(self.r(k), _ROTATION(self.p(k))[0])
         return self._frames[k]
 
     def ground_fixed(self, expr):
         """Substitute ground's constant pose."""
         return ca.substitute(expr, self.q_ground, ca.DM(GROUND_POSE))
+
+
+def _rotation(p):
+    return (euler.rotation(p),)
+
+
+def _g_transpose(p):
+    return (euler.g_matrix(p).T,)
+
+
+_ROTATION, _G_TRANSPOSE = traced(_rotation), traced(_g_transpose)  # per-body steps
 
 
 def driver_value(prim: PrimitiveIR, t, scale=1.0):
@@ -76,67 +89,94 @@ def driver_value(prim: PrimitiveIR, t, scale=1.0):
 
 def constraint_rows(ir: ModelIR, x: Coordinates, scale=1.0):
     """Phi with ground symbolic: the joint rows, then p^T p - 1 for every body."""
-    rows = []
-    for prim in ir.primitives:
-        phi_fun, keys = PRIMITIVES[prim.kind]
-        vectors = {k: constant(prim.vectors[k]) for k in keys}
-        rows.append(phi_fun(x.frame(prim.body_i), x.frame(prim.body_j), vectors,
-                            driver_value(prim, x.t, scale)))
+    rows, known = [], {}
+    for prim in ir.primitives:  # each row through its kind's traced step (primitives.ROW)
+        fi, fj = x.frame(prim.body_i), x.frame(prim.body_j)
+        rows += ROW(fi.r, fi.A, fj.r, fj.A, _as_sx(driver_value(prim, x.t, scale), known),
+                    *(_as_sx(prim.vectors[k], known) for k in PRIMITIVES[prim.kind][1]),
+                    kind=prim.kind)
     rows += [body.normalization(x.p(k)) for k in range(ir.n_bodies)]
     return ca.vertcat(*rows) if rows else ca.SX(0, 1)
 
 
+def _as_sx(value, known: dict):
+    """A primitive's vector or driver value as SX; numbers converted once per value (`known`:
+    their bytes -> SX), symbols as they are."""
+    if isinstance(value, (ca.SX, ca.MX)):
+        return value
+    array = np.asarray(value, float)
+    key = (array.shape, array.tobytes())
+    if key not in known:
+        known[key] = ca.SX(constant(array))
+    return known[key]
+
+
 def rotational_jacobian(phi_q, x: Coordinates, k: int):
-    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation), from
-    body k's columns of Phi_q (docs/decisions.md)."""
+    """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation, as
+    body.pi_bar, with G^T a traced step), from body k's columns of Phi_q (docs/decisions.md)."""
     start = 3 * x.n_bodies + 4 * k
-    return body.pi_bar(phi_q[:, start:start + 4], x.p(k))
+    return 0.5 * phi_q[:, start:start + 4] @ _G_TRANSPOSE(x.p(k))[0]
 
 
 @dataclass(frozen=True)
 class ConstraintSystem:
+    """Phi and phi_q, nu; the other parts are built when first read (a run in joint
+    coordinates reads phi, phi_q and nu only)."""
+
+    ir: ModelIR
     x: Coordinates
     phi: ca.SX  # ground substituted
     phi_with_ground: ca.SX  # ground symbolic (for reactions on ground)
     phi_q: ca.SX
     nu: ca.SX
-    gamma: ca.SX
-    phi_r: ca.SX  # (m, 3 nb)
-    pi_bar: ca.SX  # (m, 3 nb)
     scale: ca.SX  # continuation parameter of the drivers (assembly)
-    phi_scaled: ca.SX
-    phi_q_scaled: ca.SX
 
+    @cached_property
+    def gamma(self) -> ca.SX:
+        return gamma_of(self.phi_q, self.nu, self.x.q, self.x.t, self.x.q_dot)
 
-def derive(phi, x: Coordinates) -> dict[str, ca.SX]:
-    """Phi_q, nu, gamma of any phi(t, q) by AD."""
-    return derivatives(phi, x.q, x.t, x.q_dot)
+    @property
+    def phi_r(self) -> ca.SX:  # (m, 3 nb)
+        return self.phi_q[:, :3 * self.x.n_bodies]
+
+    @cached_property
+    def pi_bar(self) -> ca.SX:  # (m, 3 nb)
+        nb = self.x.n_bodies
+        if not nb:
+            return self.phi_r
+        return ca.horzcat(*[rotational_jacobian(self.phi_q, self.x, k) for k in range(nb)])
+
+    @cached_property
+    def phi_scaled(self) -> ca.SX:
+        if not any(prim.is_driver for prim in self.ir.primitives):  # scale multiplies drivers
+            return self.phi
+        return self.x.ground_fixed(constraint_rows(self.ir, self.x, self.scale))
+
+    @cached_property
+    def phi_q_scaled(self) -> ca.SX:
+        if self.phi_scaled is self.phi:
+            return self.phi_q
+        return ca.jacobian(self.phi_scaled, self.x.q)
 
 
 def derivatives(phi, q, t, q_dot) -> dict[str, ca.SX]:
     """Phi_q, nu, gamma of phi(t, q) by AD, for any symbols q, t, q_dot (the whole system's,
     or one row's: codegen.rows)."""
     phi_q = ca.jacobian(phi, q)
-    phi_t = ca.jacobian(phi, t)
+    nu = -ca.jacobian(phi, t)
+    return {"phi_q": phi_q, "nu": nu, "gamma": gamma_of(phi_q, nu, q, t, q_dot)}
+
+
+def gamma_of(phi_q, nu, q, t, q_dot) -> ca.SX:
+    """gamma = -(Phi_q q_dot)_q q_dot - 2 Phi_qt q_dot - Phi_tt (Phi_t = -nu)."""
     phi_q_qdot = phi_q @ q_dot
-    gamma = (-ca.jacobian(phi_q_qdot, q) @ q_dot - 2 * ca.jacobian(phi_q_qdot, t)
-             - ca.jacobian(phi_t, t))
-    return {"phi_q": phi_q, "nu": -phi_t, "gamma": gamma}
+    return (-ca.jacobian(phi_q_qdot, q) @ q_dot - 2 * ca.jacobian(phi_q_qdot, t)
+            - ca.jacobian(-nu, t))
 
 
 def build_constraints(ir: ModelIR) -> ConstraintSystem:
     x = Coordinates.create(ir.n_bodies)
     phi_ground = constraint_rows(ir, x)
     phi = x.ground_fixed(phi_ground)
-    d = derive(phi, x)
-    nb = ir.n_bodies
-    phi_r = d["phi_q"][:, :3 * nb]
-    pi_bar = ca.horzcat(*[rotational_jacobian(d["phi_q"], x, k) for k in range(nb)]) \
-        if nb else phi_r
-    scale = ca.SX.sym("s")
-    if not any(prim.is_driver for prim in ir.primitives):  # the scale multiplies drivers only
-        return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r,
-                                pi_bar, scale, phi, d["phi_q"])
-    phi_scaled = x.ground_fixed(constraint_rows(ir, x, scale))
-    return ConstraintSystem(x, phi, phi_ground, d["phi_q"], d["nu"], d["gamma"], phi_r, pi_bar,
-                            scale, phi_scaled, ca.jacobian(phi_scaled, x.q))
+    return ConstraintSystem(ir, x, phi, phi_ground, ca.jacobian(phi, x.q),
+                            -ca.jacobian(phi, x.t), ca.SX.sym("s"))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.compiler.traced import traced
 from casmech.geometry import euler
 
 
@@ -41,6 +42,13 @@ def global_rates(p, *p_rates) -> list:
     from p_ddot (E(p) formed once)."""
     e = euler.e_matrix(p)
     return [2 * e @ rate for rate in p_rates]
+
+
+def _rates(p, p_dot, p_ddot):
+    return global_rates(p, p_dot, p_ddot)
+
+
+RATES = traced(_rates)  # global_rates(p, p_dot, p_ddot) traced (the unrolled results row)
 
 
 def kinetic_energy(mass, inertia, r_dot, p, p_dot):

@@ -16,6 +16,7 @@ import casadi as ca
 from casmech.compiler import body, coordinates, limits, motors
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.ir import ModelIR
+from casmech.compiler.traced import traced
 from casmech.force_types import REGISTRY as FORCE_TYPES
 from casmech.forces.terms import at
 from casmech.geometry import euler
@@ -109,13 +110,24 @@ def applied_forces(ir: ModelIR, x: Coordinates):
     return total, potential
 
 
+def _body_energy(mass, inertia, r_dot, p, p_dot, gravity, r):
+    """(kinetic, gravity potential) of one body."""
+    return (body.kinetic_energy(mass, inertia, r_dot, p, p_dot),
+            body.gravity_potential(mass, gravity, r))
+
+
+BODY_ENERGY = traced(_body_energy)  # traced once per argument structure
+
+
 def energy(ir: ModelIR, x: Coordinates, spring_potential):
     """(kinetic, potential): 1/2 m v.v + 1/2 w_bar^T J_bar w_bar; -m g.r + springs."""
     kinetic, potential = 0.0, spring_potential
+    gravity = constant(ir.gravity)
     for k, b in enumerate(ir.bodies):
-        kinetic += body.kinetic_energy(b.mass, constant(b.inertia), x.r(k, x.q_dot), x.p(k),
-                                       x.p(k, x.q_dot))
-        potential += body.gravity_potential(b.mass, constant(ir.gravity), x.r(k))
+        body_kinetic, body_potential = BODY_ENERGY(
+            b.mass, constant(b.inertia), x.r(k, x.q_dot), x.p(k), x.p(k, x.q_dot), gravity,
+            x.r(k))
+        kinetic, potential = kinetic + body_kinetic, potential + body_potential
     return kinetic, potential
 
 
@@ -126,9 +138,26 @@ def reaction(phi, lam, r_j, p_j, about) -> tuple:
     From the lecture: force -Phi_r_j^T lam, body-frame torque about the CM -Pi_bar_j^T lam,
     moved to the point P: T_P = A_j n_bar + (r_j - r_P) x F.
     """
-    force = -ca.jacobian(phi, r_j).T @ lam
-    n_bar = -0.5 * euler.g_matrix(p_j) @ ca.jacobian(phi, p_j).T @ lam
+    return _reaction(ca.jacobian(phi, r_j), ca.jacobian(phi, p_j), lam, r_j, p_j, about)
+
+
+def _reaction(phi_r, phi_p, lam, r_j, p_j, about) -> tuple:
+    """reaction's (force, torque) from the rows' Jacobians Phi_r_j, Phi_p_j (codegen.rows
+    builds its kernels through reaction, run directly: their C stays as it was)."""
+    force = -phi_r.T @ lam
+    n_bar = -0.5 * euler.g_matrix(p_j) @ phi_p.T @ lam
     return force, euler.rotation(p_j) @ n_bar + ca.cross(r_j - about, force)
+
+
+REACTION = traced(_reaction)  # traced once per structure of the Jacobian blocks
+
+
+def _rows(rows) -> slice | list:
+    """A joint's row indices as a slice when consecutive (one cheaper SX slice)."""
+    rows = list(rows)
+    if rows and rows == list(range(rows[0], rows[-1] + 1)):
+        return slice(rows[0], rows[-1] + 1)
+    return rows
 
 
 def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
@@ -136,10 +165,12 @@ def reactions(ir: ModelIR, x: Coordinates, phi_with_ground, lam):
     (reaction of its rows, plus its motor's and its stop's)."""
     forces, torques = [], []
     for joint in ir.joints:
-        rows = list(joint.rows)
+        rows = _rows(joint.rows)
         b = joint.body_j
         joint_point = point(x, joint.body_i, joint.point_i)
-        force, torque = reaction(phi_with_ground[rows], lam[rows], x.r(b), x.p(b), joint_point)
+        phi, r_j, p_j = phi_with_ground[rows], x.r(b), x.p(b)
+        force, torque = REACTION(ca.jacobian(phi, r_j), ca.jacobian(phi, p_j), lam[rows], r_j,
+                                 p_j, joint_point)
         for motor in (m for m in ir.motors if m.name == joint.name):  # its actuation
             motor_force, motor_torque = motors.reaction(motor, x, joint_point)
             force, torque = force + motor_force, torque + motor_torque

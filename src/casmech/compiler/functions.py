@@ -234,7 +234,7 @@ def _reactions(s: _Shared) -> tuple:
 
 def _body_rates(s: _Shared) -> tuple:
     x = s.x
-    rates = [body.global_rates(x.p(k), x.p(k, x.q_dot), x.p(k, x.q_ddot))
+    rates = [body.RATES(x.p(k), x.p(k, x.q_dot), x.p(k, x.q_ddot))
              for k in range(s.ir.n_bodies)]
     stack = (lambda vs: ca.horzcat(*vs)) if s.ir.n_bodies else (lambda vs: ca.SX(3, 0))
     return ({"q": x.q, "q_dot": x.q_dot, "q_ddot": x.q_ddot},

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from casmech.compiler.traced import traced
+
 
 @dataclass(frozen=True)
 class Frame:
@@ -70,3 +72,14 @@ PRIMITIVES: dict[str, tuple[PhiFunction, tuple[str, ...]]] = {
     "cd": (cd, ("c", "s_i", "s_j")),
     "angle": (angle, ("u_i", "v_i", "u_j")),
 }
+
+
+def _row(r_i, a_i, r_j, a_j, f, *vectors, kind: str):
+    """(phi,) of one primitive of `kind` from the two frames, f(t) and its vectors (in the
+    order of its PRIMITIVES keys)."""
+    phi_fun, keys = PRIMITIVES[kind]
+    return (phi_fun(Frame(r_i, a_i), Frame(r_j, a_j), dict(zip(keys, vectors, strict=True)),
+                    f),)
+
+
+ROW = traced(_row)  # a primitive's row, traced once per kind and argument structure
