@@ -219,3 +219,8 @@ class Interrupted(AnalysisError, KeyboardInterrupt):
 
     def __str__(self) -> str:
         return f"interrupted by {self.signal_name}"
+
+
+def failed(values) -> bool:
+    """Whether any of `values` is None (a check that failed and was reported)."""
+    return any(value is None for value in values)

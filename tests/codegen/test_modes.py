@@ -84,7 +84,7 @@ def auto_compiles(monkeypatch):
     bodies on, but for trees in joint coordinates), so what happens when compiling fails is
     exercised."""
     monkeypatch.setattr(codegen, "AUTO_BODIES", 1)
-    monkeypatch.setattr(codegen, "_joint_tree", lambda model: False)
+    monkeypatch.setattr(codegen, "_joint_tree", lambda model, ir: False)
 
 
 def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_path,

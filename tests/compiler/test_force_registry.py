@@ -18,9 +18,9 @@ import casmech
 from casmech import force_types
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.lower import lower
-from casmech.errors import ModelError
+from casmech.errors import ModelError, failed
 from casmech.force_types import ForceType
-from casmech.forces.terms import at, missing
+from casmech.forces.terms import at
 from casmech.geometry.values import constant
 from casmech.schema import export
 from casmech.spec_base import Name, Scalar, Spec, Vector
@@ -44,7 +44,7 @@ def resolve(check, path, given):
     if k is not None and k < 0:
         check.error("E103", (*path, "stiffness"), "stiffness must not be negative", got=f"{k:g}")
         k = None
-    if not bodies_ok or missing([*points.values(), k]):
+    if not bodies_ok or failed([*points.values(), k]):
         return None
     return dict(body_i=given.body_i, body_j=given.body_j, vectors=points,
                 params={"stiffness": k})

@@ -160,20 +160,25 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
-def _joint_tree(model: ResolvedModel) -> bool:
+def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
     options = model.analysis.options
     if model.analysis.type != "dynamics" or options.get("formulation", "auto") not in (
             "auto", "joint") or options.get("stabilization", "ggl") != "ggl":
         return False
-    return spanning_tree(lower(model)).is_tree
+    return spanning_tree(ir).is_tree
+
+
+def _in_cache(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, root: Path | None,
+              dae: bool = True) -> bool:
+    entry = _entry(model, ir, toolchain, dae)[0]
+    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
 
 
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, dae: bool = True) -> bool:
     """Whether the cache holds the model's library for this toolchain (nothing is built)."""
-    entry = _entry(model, lower(model), toolchain or Toolchain(), dae)[0]
-    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
+    return _in_cache(model, lower(model), toolchain or Toolchain(), root, dae)
 
 
 def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
@@ -185,8 +190,9 @@ def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
         return "interpreted"
-    if is_cached(model, toolchain, root) or (len(model.bodies) >= AUTO_BODIES
-                                             and not _joint_tree(model)):
+    ir = lower(model)
+    if _in_cache(model, ir, toolchain, root) or (len(model.bodies) >= AUTO_BODIES
+                                                 and not _joint_tree(model, ir)):
         return "compiled"
     if background and os.environ.get(BACKGROUND_ENVIRONMENT) == "1":
         build_in_background(model, toolchain, root)

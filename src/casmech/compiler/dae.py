@@ -40,12 +40,8 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.compiler.formulations import FORMULATIONS
+from casmech.compiler.functions import symbol_type
 from casmech.compiler.parametric import data_size, with_data
-
-
-def _symbols(functions: dict[str, ca.Function]):
-    """SX symbols when every function is SX (calls inline), MX otherwise (compiled externals)."""
-    return ca.SX if all(f.is_a("SXFunction") for f in functions.values()) else ca.MX
 
 
 def sizes(functions: dict[str, ca.Function], name: str) -> tuple[int, int, int]:
@@ -79,7 +75,7 @@ def parameters(functions: dict[str, ca.Function], name: str, stabilization: str)
 def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
-    sym = _symbols(functions)
+    sym = symbol_type(functions)
     n_p = parameters(functions, name, "projection")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
                     sym.sym("p", n_p + data_size(functions)))
@@ -160,7 +156,7 @@ def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     n_phi = functions["phi"].size1_out(0)
-    sym = _symbols(functions)
+    sym = symbol_type(functions)
     n_p = parameters(functions, name, "ggl")
     tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
                     sym.sym("p", n_p + data_size(functions)))

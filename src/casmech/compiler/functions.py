@@ -88,9 +88,8 @@ def _function(name, inputs: dict, outputs: dict) -> ca.Function:
 class LazyFunctions(MutableMapping):
     """An interpreted bundle's functions by name, each group built on first use: a
     joint-coordinate run reads 7 of the 19 (phi, phi_q, nu for the assembly; the results
-    row's), and the others cost ~1/3 of the bundle's build on a 1000-link chain
-    (benchmarks/notes_scale.md). `groups`: (the names a group makes, or None when only
-    building it tells them, and its maker () -> Functions), in the bundle's order."""
+    row's; docs/decisions.md). `groups`: (the names a group makes, or None when only building
+    it tells them, and its maker () -> Functions), in the bundle's order."""
 
     def __init__(self, groups: list[tuple[tuple[str, ...] | None, Callable[[], list]]]):
         self._groups = list(groups)
@@ -157,6 +156,12 @@ def all_sx(functions: Mapping) -> bool:
     are, built or not: it is not built to tell)."""
     given = functions.given if isinstance(functions, LazyFunctions) else functions
     return all(f.is_a("SXFunction") for f in given.values())
+
+
+def symbol_type(functions: Mapping):
+    """ca.SX when every function of the bundle's mapping is SX (calls inline), ca.MX otherwise
+    (compiled externals)."""
+    return ca.SX if all_sx(functions) else ca.MX
 
 
 def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:

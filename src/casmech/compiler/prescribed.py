@@ -30,16 +30,12 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.compiler.functions import symbol_type
 from casmech.compiler.parametric import data_size, with_data
 from casmech.compiler.sparse_qr import sparse_qr
 
 ITERATIONS = 3  # chord Newton steps per row; rows that need more go to the per-row code
 CHUNK = 32  # rows of the inner mapaccum
-
-
-def _symbols(functions: dict[str, ca.Function]):
-    """SX when every function is SX (calls inline), MX otherwise (compiled externals)."""
-    return ca.SX if all(f.is_a("SXFunction") for f in functions.values()) else ca.MX
 
 
 def step(functions: dict[str, ca.Function], iterations: int = ITERATIONS) -> ca.Function:
@@ -48,7 +44,7 @@ def step(functions: dict[str, ca.Function], iterations: int = ITERATIONS) -> ca.
         return functions["prescribed_step"]
     n = functions["phi_q"].size2_out(0)
     qr = sparse_qr(functions["phi_q"].sparsity_out(0), "phi_q_qr")
-    sym = _symbols(functions)
+    sym = symbol_type(functions)
     s, u, d = sym.sym("s", 3 * n), sym.sym("u", 2), sym.sym("d", data_size(functions))
     called = with_data(functions, d)  # a parametric bundle's: d, a third input of the step
     phi, phi_q, nu, gamma = (called[k] for k in ("phi", "phi_q", "nu", "gamma"))

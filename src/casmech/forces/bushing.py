@@ -34,7 +34,7 @@ from typing import Any, Literal
 import casadi as ca
 import numpy as np
 
-from casmech.forces.terms import missing
+from casmech.errors import failed
 from casmech.geometry import euler
 from casmech.geometry.quaternions import conjugate
 from casmech.geometry.values import constant
@@ -167,6 +167,6 @@ def resolve(check, path, given) -> dict[str, Any] | None:
                         "negative", got=got, hint="zero leaves that direction free")
             vectors[key] = None
     vectors["orientation"] = check.orientation((*path, "orientation"), given.orientation)
-    if not bodies_ok or missing(vectors.values()):
+    if not bodies_ok or failed(vectors.values()):
         return None
     return dict(body_i=given.body_i, body_j=given.body_j, vectors=vectors)

@@ -22,7 +22,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field
 
-from casmech.forces.terms import missing
+from casmech.errors import failed
 from casmech.geometry import euler
 from casmech.spec_base import Name, Repeats, Scalar, Spec, Vector
 
@@ -156,7 +156,7 @@ def _hunt_crossley(check, path, given, numbers) -> dict[str, float] | None:
                     hint="the ratio of release to impact speed; 1: no loss")
         e = None
     k, v_in = numbers["stiffness"], numbers["impact_velocity"]
-    if missing([exponent, e, k, v_in]):
+    if failed([exponent, e, k, v_in]):
         return None
     return {"stiffness": k, "exponent": exponent, "damping": k * hunt_crossley_damping(e) / v_in,
             "damping_exponent": exponent}
@@ -170,7 +170,7 @@ def _linear(check, path, given, numbers) -> dict[str, float] | None:
                         "to law: hunt_crossley")
             return None
     c = positive(check, (*path, "damping"), numbers.get("damping", 0.0), "damping", True)
-    if missing([c, numbers["stiffness"]]):
+    if failed([c, numbers["stiffness"]]):
         return None
     return {"stiffness": numbers["stiffness"], "exponent": 1.0, "damping": c,
             "damping_exponent": 0.0}
@@ -195,7 +195,7 @@ def friction(check, path, given) -> dict[str, float] | None:
             check.error("E103", (*path, "transition_velocity"), "transition velocity must be "
                         "above the stiction velocity", got=f"{v_t:g} <= {v_s:g}")
             v_t = None
-    if missing([mu_s, mu_d, v_s, v_t]):
+    if failed([mu_s, mu_d, v_s, v_t]):
         return None
     return {"mu_s": mu_s, "mu_d": mu_d, "v_s": v_s, "v_t": v_t}
 
@@ -253,7 +253,7 @@ def box_corners(check, path, body: str, points) -> np.ndarray | None:
             check.error("E103", (*path, "points"), "a point set needs at least one point")
             return None
         found = [check.numbers((*path, "points", k), p) for k, p in enumerate(points)]
-        return None if missing(found) else np.array(found)
+        return None if failed(found) else np.array(found)
     item = _item(check, body, "box")
     if item is None:
         if check.bodies.get(body) is not None:
@@ -278,11 +278,11 @@ def capsule(check, path, body: str, radius, ends):
         half[AXIS[item["axis"]]] = item["length"] / 2
         return r, _global(check, body, item, np.array([-half, half]))
     found = [check.numbers((*path, "ends", k), p) for k, p in enumerate(ends)]
-    if not missing(found) and np.linalg.norm(found[1] - found[0]) < 1e-12:
+    if not failed(found) and np.linalg.norm(found[1] - found[0]) < 1e-12:
         check.error("E410", (*path, "ends"), "a capsule's two ends coincide",
                     hint="a capsule of zero length is a sphere: type sphere_plane")
         return r, None
-    return r, None if missing(found) else np.array(found)
+    return r, None if failed(found) else np.array(found)
 
 
 # ----------------------------------------------------------------- the types' own keys
@@ -318,7 +318,7 @@ def resolve(check, path, given, shape) -> dict[str, Any] | None:
     law = normal_law(check, (*path, "normal"), given.normal)
     slip = friction(check, (*path, "friction"), given.friction)
     shape = shape(check, path, given) if bodies_ok else None
-    if shape is None or missing([law, slip, *shape["vectors"].values(),
+    if shape is None or failed([law, slip, *shape["vectors"].values(),
                                 *shape["params"].values()]):
         return None
     return dict(body_i=given.body_i, body_j=given.body_j, vectors=shape["vectors"],

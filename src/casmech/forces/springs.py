@@ -13,7 +13,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from casmech.forces.terms import Input, SpringKind, distance, missing, relative_angle, spring
+from casmech.errors import failed
+from casmech.forces.terms import Input, SpringKind, distance, relative_angle, spring
 from casmech.geometry.values import constant
 from casmech.joint_types import having, listed
 from casmech.spec_base import Name, Repeats, Scalar, Spec, Vector
@@ -61,7 +62,7 @@ def coefficients(check, path, given) -> dict[str, float | None]:
 def resolve_tsda(check, path, given) -> dict[str, Any] | None:
     bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
     at = {key: check.numbers((*path, key), getattr(given, key)) for key in ("at_i", "at_j")}
-    if not bodies_ok or missing(at.values()):
+    if not bodies_ok or failed(at.values()):
         return None
     length = float(np.linalg.norm(at["at_j"] - at["at_i"]))
     free = (

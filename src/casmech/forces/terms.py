@@ -17,11 +17,6 @@ import casadi as ca
 from casmech.geometry import euler
 
 
-def missing(values) -> bool:
-    """Whether any of `values` is None (a check that failed and was reported)."""
-    return any(value is None for value in values)
-
-
 def at(frame, s_bar):
     """Global position of the point s_bar (body frame) of a frame."""
     return frame.r + frame.A @ s_bar

@@ -19,8 +19,7 @@ import numpy as np
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
 from casmech.optimal.sensitivity import check_times, output_graph
-from casmech.optimal.symbolic import classify, geometry_moved
-from casmech.optimal.system import data_inputs, parametric_system
+from casmech.optimal.system import auto_method, data_inputs, parametric_system
 from casmech.output.csv import read_csv
 from casmech.schema.resolved import ResolvedModel
 
@@ -109,7 +108,7 @@ def _system(model: ResolvedModel, names: Sequence[str]):
     """(the parametric system, None) when the file's expressions can be re-read with symbols
     (system.py's "symbolic"); otherwise (geometry moves, a composed model) the system over the
     model data and its DataInputs (theta -> [d(theta); theta], exact at every theta)."""
-    if geometry_moved(model, classify(model, names)[0]) is None:
+    if auto_method(model, names) == "symbolic":
         return parametric_system(model, names), None
     inputs = data_inputs(model, names)
     return inputs.system, inputs

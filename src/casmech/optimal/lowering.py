@@ -71,25 +71,30 @@ def dependents(model: ResolvedModel, names: Sequence[str]) -> set[str]:
 
 
 class Lowering:
-    """d of the model re-loaded with one parameter moved and every top-level parameter that
-    does not depend on it at the value it has (overrides included)."""
+    """The model re-loaded with parameters moved and every top-level parameter that does not
+    depend on them at the value it has (overrides included)."""
 
     def __init__(self, model: ResolvedModel):
         self.model = model
         self.written = load_document(model.text, model.file).data.get("parameters") or {}
-        self.fixed: dict[str, dict[str, str]] = {}  # parameter moved -> overrides of the others
+        # parameters moved -> overrides of the others
+        self.fixed: dict[tuple[str, ...], dict[str, str]] = {}
+
+    def reloaded(self, values: Mapping[str, float]) -> ResolvedModel:
+        """The model with the parameters `values` moved (ModelError if that makes it invalid)."""
+        model, names = self.model, tuple(values)
+        if names not in self.fixed:
+            follow = dependents(model, names)
+            self.fixed[names] = {k: repr(float(model.parameters[k])) for k in self.written
+                                 if k not in follow and k in model.parameters}
+        return load_model_text(model.text, model.file, {
+            **self.fixed[names], **{n: repr(float(v)) for n, v in values.items()}})
 
     def ir(self, name: str, value: float) -> ModelIR:
-        model = self.model
-        if name not in self.fixed:
-            follow = dependents(model, [name])
-            self.fixed[name] = {k: repr(float(model.parameters[k])) for k in self.written
-                                if k not in follow and k in model.parameters}
-        return lower(load_model_text(model.text, model.file,
-                                     {**self.fixed[name], name: repr(float(value))}))
+        return lower(self.reloaded({name: value}))
 
 
-def _located(model: ResolvedModel, name: str, message: str) -> UsageError:
+def located(model: ResolvedModel, name: str, message: str) -> UsageError:
     source = load_document(model.text, model.file).locate_key(("parameters", name))
     return UsageError(f"{source}: parameter '{name}' {message}")
 
@@ -145,7 +150,7 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
         again = parametric.data(lowering.ir(name, value))
         if again[1] != split.signature or not np.array_equal(again[0], split.values):
             computed = sorted(dependents(model, [name]) - {name})
-            raise _located(model, name, "cannot be moved alone: the model re-loaded with it "
+            raise located(model, name, "cannot be moved alone: the model re-loaded with it "
                            "differs from the one given (was a parameter computed from it set "
                            f"on the command line? {', '.join(computed) or 'none'} follow it)")
         problems = []
@@ -162,7 +167,7 @@ def derivative(model: ResolvedModel, names: Sequence[str]) -> DataDerivative:
             problems.append(f"moves the model's numbers non-smoothly near {name} = "
                             f"{value:.9g} (estimated error {error:.1e} with step {h:.1e})")
         else:
-            raise _located(model, name, f"{problems[-1]}; sensitivities need a parameter that "
+            raise located(model, name, f"{problems[-1]}; sensitivities need a parameter that "
                            "keeps the structure (which numbers are zero, repeat counts) and "
                            "moves the model's numbers smoothly")
         columns.append(column)

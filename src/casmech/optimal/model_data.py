@@ -24,7 +24,7 @@ from casmech.compiler import parametric
 from casmech.compiler.lower import lower
 from casmech.errors import ModelError, UsageError
 from casmech.optimal import lowering
-from casmech.schema import load_model_text
+from casmech.runtime.memo import kept
 from casmech.schema.resolved import ResolvedModel
 
 KEPT = 8  # theta values whose model, data and Jacobian are kept
@@ -39,11 +39,8 @@ class _Cache:
 
     def __init__(self, model: ResolvedModel, names: Sequence[str]):
         self.model, self.names = model, tuple(names)
-        moving = lowering.dependents(model, self.names)
-        written = lowering.Lowering(model).written
-        self.fixed = {k: repr(float(model.parameters[k])) for k in written
-                      if k not in moving and k in model.parameters}
-        self.signature = parametric.split(lower(model)).signature
+        self.lowering = lowering.Lowering(model)
+        self.signature = parametric.data(lower(model))[1]
         self.models: dict[tuple, ResolvedModel] = {}
         self.data: dict[tuple, np.ndarray] = {}
         self.jacobians: dict[tuple, np.ndarray] = {}
@@ -55,50 +52,43 @@ class _Cache:
     def _located(self, key: tuple, what: str, detail: str) -> UsageError:
         """'parameter N <what> at N = v, ... (<detail>)', located at the first name."""
         at = ", ".join(f"{n} = {v:.9g}" for n, v in zip(self.names, key, strict=True))
-        return lowering._located(self.model, self.names[0], f"{what} at {at} ({detail})")
+        return lowering.located(self.model, self.names[0], f"{what} at {at} ({detail})")
 
     def _fail(self, error: UsageError):
         self.failure = error
         raise _Outside from None
 
-    def _keep(self, store: dict, key: tuple, value):
-        if len(store) >= KEPT:
-            store.pop(next(iter(store)))
-        store[key] = value
-        return value
-
     def model_at(self, key: tuple) -> ResolvedModel:
-        if key not in self.models:
-            overrides = {**self.fixed, **{n: repr(v) for n, v in zip(self.names, key,
-                                                                       strict=True)}}
-            try:
-                model = load_model_text(self.model.text, self.model.file, overrides)
-            except ModelError as error:
-                self._fail(self._located(key, "makes the model invalid",
-                                         error.diagnostics[0].format()))
-            self._keep(self.models, key, model)
-        return self.models[key]
+        return kept(self.models, key, lambda: self._reloaded(key), KEPT)
+
+    def _reloaded(self, key: tuple) -> ResolvedModel:
+        try:
+            return self.lowering.reloaded(dict(zip(self.names, key, strict=True)))
+        except ModelError as error:
+            self._fail(self._located(key, "makes the model invalid",
+                                     error.diagnostics[0].format()))
 
     def values(self, theta) -> np.ndarray:
         key = self._key(theta)
-        if key not in self.data:
-            ir = lower(self.model_at(key))
-            values, signature = parametric.data(ir)
-            if signature != self.signature:
-                change = parametric.difference(lower(self.model), ir)
-                self._fail(self._located(key, "changes the model's structure", change))
-            self._keep(self.data, key, values)
-        return self.data[key]
+        return kept(self.data, key, lambda: self._values(key), KEPT)
+
+    def _values(self, key: tuple) -> np.ndarray:
+        ir = lower(self.model_at(key))
+        values, signature = parametric.data(ir)
+        if signature != self.signature:
+            change = parametric.difference(lower(self.model), ir)
+            self._fail(self._located(key, "changes the model's structure", change))
+        return values
 
     def jacobian(self, theta) -> np.ndarray:
         key = self._key(theta)
-        if key not in self.jacobians:
-            try:
-                found = lowering.derivative(self.model_at(key), self.names).jacobian
-            except UsageError as error:
-                self._fail(error)
-            self._keep(self.jacobians, key, found)
-        return self.jacobians[key]
+        return kept(self.jacobians, key, lambda: self._jacobian(key), KEPT)
+
+    def _jacobian(self, key: tuple) -> np.ndarray:
+        try:
+            return lowering.derivative(self.model_at(key), self.names).jacobian
+        except UsageError as error:
+            self._fail(error)
 
 
 class _Jacobian(ca.Callback):

@@ -252,16 +252,21 @@ def data_inputs(model: ResolvedModel, names: Iterable[str]) -> DataInputs:
                                                 ["theta_d"]))
 
 
+def auto_method(model: ResolvedModel, names: Iterable[str]) -> str:
+    """"symbolic" unless a parameter among `names` moves the geometry or the model is
+    composed, then "data"."""
+    return "data" if geometry_moved(model, classify(model, names)[0]) else "symbolic"
+
+
 def parametric_system(model: ResolvedModel, names: Iterable[str] = (),
                       method: str = "symbolic") -> ParametricSystem:
     """The model's system functions with `names` (parameters, `<body>.vx`..) as `theta`;
-    `method` "auto": "symbolic" unless a parameter moves the geometry or the model is composed,
-    then "data" (module docstring)."""
+    `method` "auto": auto_method's choice (module docstring)."""
     if method not in METHODS:
         raise UsageError(f"method '{method}' is not one of {', '.join(METHODS)}")
     names = tuple(dict.fromkeys(names))
     if method == "auto":
-        method = "data" if geometry_moved(model, classify(model, names)[0]) else "symbolic"
+        method = auto_method(model, names)
     if method == "data":
         return data_system(model, names)
     symbolic = symbolic_model(model, names)

@@ -35,7 +35,7 @@ import numpy as np
 from casmech.compiler import kkt
 from casmech.compiler.assemble import Coordinates
 from casmech.compiler.eom import FORCE_ELEMENTS, INPUT_KINDS
-from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.functions import SystemFunctions, all_sx, build_functions
 from casmech.compiler.ir import ForceIR
 
 
@@ -68,7 +68,7 @@ def input_forces(functions: SystemFunctions, names: Sequence[str] | None = None
 
 def sx_bundle(functions: SystemFunctions) -> SystemFunctions:
     """The bundle as SX functions (a compiled bundle's model rebuilt once for AD)."""
-    if all(f.is_a("SXFunction") for f in functions.functions.values()):
+    if all_sx(functions.functions):
         return functions
     if "sx_bundle" not in functions.derived:
         functions.derived["sx_bundle"] = build_functions(functions.ir)

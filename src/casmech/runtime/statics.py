@@ -43,7 +43,7 @@ import scipy.linalg
 
 from casmech import interrupts
 from casmech.compiler.checks import RANK_TOLERANCE
-from casmech.compiler.functions import SystemFunctions, build_functions
+from casmech.compiler.functions import SystemFunctions, all_sx, build_functions
 from casmech.errors import AnalysisError, BodyName, FailureContext
 from casmech.geometry import euler
 from casmech.runtime import assembly
@@ -135,7 +135,7 @@ def tangent_function(functions: SystemFunctions) -> ca.Function:
     if "statics_tangent" in functions.derived:
         return functions.derived["statics_tangent"]
     bundle = functions
-    if not all(f.is_a("SXFunction") for f in functions.functions.values()):
+    if not all_sx(functions.functions):
         bundle = build_functions(functions.ir)
     n, m = functions.n_coordinates, functions.n_rows
     t, q, q_dot, lam = ca.SX.sym("t"), ca.SX.sym("q", n), ca.SX.sym("q_dot", n), ca.SX.sym("lam", m)

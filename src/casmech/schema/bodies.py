@@ -7,9 +7,10 @@ from typing import Any
 
 import numpy as np
 
+from casmech.errors import failed
 from casmech.geometry import euler, quaternions
 from casmech.schema import files, resolved, spec
-from casmech.schema.checker import Checker, failed
+from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
 UNIT = 1e-9  # tolerance of unit norms, orthonormality, det = 1, inertia symmetry and triangle

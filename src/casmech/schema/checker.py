@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from casmech import force_types
-from casmech.errors import Diagnostic, Source, did_you_mean
+from casmech.errors import Diagnostic, Source, did_you_mean, failed
 from casmech.schema import limits, resolved, spec
 from casmech.schema.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
 from casmech.schema.expressions import parse as parse_expression
@@ -36,11 +36,6 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
-
-
-def failed(values) -> bool:
-    """Whether any of `values` is None (a check that failed and was reported)."""
-    return any(value is None for value in values)
 
 
 class Checker:

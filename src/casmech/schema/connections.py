@@ -7,9 +7,10 @@ from typing import Any
 
 import numpy as np
 
+from casmech.errors import failed
 from casmech.joint_types import COORDINATES, REGISTRY, having
 from casmech.schema import contact, resolved
-from casmech.schema.checker import ZERO, Checker, failed
+from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
 

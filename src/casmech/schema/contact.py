@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.errors import failed
 from casmech.force_types import outputs_of
 from casmech.forces.contact_spec import positive
 from casmech.joint_types import COORDINATES, REGISTRY
-from casmech.schema.checker import Checker, failed
+from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
 

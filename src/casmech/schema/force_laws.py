@@ -18,13 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from casmech.errors import did_you_mean
+from casmech.errors import did_you_mean, failed
 from casmech.force_types import REGISTRY, state_reading
 from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.joint_types import attributes as joint_attributes
 from casmech.joint_types import coordinate_types, listed
 from casmech.schema import bodies, resolved
-from casmech.schema.checker import Checker, failed
+from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
 STATE_NAMES = ("<joint>.angle", "<joint>.displacement", "<body>.vx", "...")

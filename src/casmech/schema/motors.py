@@ -20,11 +20,11 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from casmech.errors import did_you_mean
+from casmech.errors import did_you_mean, failed
 from casmech.joint_types import COORDINATES, REGISTRY, coordinate_types, listed
 from casmech.schema import files, spec
 from casmech.schema.antiderivative import NoClosedForm, integral
-from casmech.schema.checker import Checker, failed
+from casmech.schema.checker import Checker
 from casmech.schema.resolved import ScalarFunction
 from casmech.schema.tables import TableError, is_table, table_function
 from casmech.schema.tables import integral as table_integral

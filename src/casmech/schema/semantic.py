@@ -10,10 +10,10 @@ import math
 from collections.abc import Mapping
 from dataclasses import replace
 
-from casmech.errors import Diagnostic
+from casmech.errors import Diagnostic, failed
 from casmech.schema import events, files, limits, motors, resolved, spec
 from casmech.schema.bodies import body
-from casmech.schema.checker import Checker, failed
+from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
 from casmech.schema.loader import Document, Path
