@@ -1,7 +1,7 @@
 """Compile time of casmech's code generation: YAML text -> loaded compiled model, by stage, for
 chains of N spherical-jointed bars (systems.chain), over optimisation levels and parallel
-translation units, for the bundle built from mapped kernels (codegen.mapped: what casmech
-compiles) and the unrolled SX bundle (compiler.functions: what it compiled before); plus the
+translation units, for the bundle built from mapped kernels (equations.mapped.bundle: what casmech
+compiles) and the unrolled SX bundle (equations.functions: what it compiled before); plus the
 simulation time of each library (and of the interpreted SX bundle).
 
     python benchmarks/codegen_times.py --bodies 32 128 1000 --repeats 3 --simulate 1
@@ -34,13 +34,14 @@ HERE = Path(__file__).resolve().parent
 
 def bundle(form: str, ir) -> tuple[dict, dict]:
     """What code generation compiles: (the system functions, {DAE name: its dae/daeF/jacF}).
-    compiled: what casmech builds (codegen.mapped's kernels mapped over instances, the DAEs as
-    sums of elements, codegen.residuals); unrolled: the SX bundle of compiler.functions and
-    compiler.dae's SX residuals with their SX Jacobians."""
-    from casmech import codegen
-    from casmech.codegen import mapped, residuals
-    from casmech.compiler import dae
-    from casmech.compiler.functions import build_functions
+    compiled: what casmech builds (equations.mapped.bundle's kernels mapped over instances, the
+    DAEs as
+    sums of elements, formulations.residuals); unrolled: the SX bundle of equations.functions and
+    formulations.dae's SX residuals with their SX Jacobians."""
+    from casmech.backends import codegen
+    from casmech.equations.functions import build_functions
+    from casmech.equations.mapped import bundle as mapped
+    from casmech.formulations import dae, residuals
 
     if form == "compiled":
         return mapped.mapped_functions(ir), codegen.dae_oracles(ir)
@@ -52,7 +53,7 @@ def bundle(form: str, ir) -> tuple[dict, dict]:
 def timed_dynamics(functions, t_end: float) -> dict:
     """casmech.analyze(..., "dynamics") over t_end (output every 0.01 s) in the r-p formulation
     (the one whose DAE is compiled; chains, being trees, default to joint coordinates, whose
-    system compiler.joint_system builds and runs interpreted): wall and CPU seconds,
+    system formulations.joint_system builds and runs interpreted): wall and CPU seconds,
     and from IDAS's own timers (record_time) the time inside the integrations and in its
     daeF/jacF calls, with its step and residual-evaluation counts."""
     import casadi as ca
@@ -98,9 +99,9 @@ def worker(bodies: str, flags: str, jobs: int, simulate: float, form: str = "com
     import systems
 
     import casmech
-    from casmech import codegen
-    from casmech.codegen import build, generate, kernels, load, manifest
-    from casmech.compiler.lower import lower
+    from casmech.backends import build, codegen, generate, load, manifest
+    from casmech.equations.mapped import kernels
+    from casmech.model.lower import lower
 
     if directions:
         kernels.MAX_DIRECTIONS = directions
@@ -288,7 +289,8 @@ def _library(functions: dict, directory: Path, flags: str) -> tuple[dict, float,
     """Compile functions into one library; (externals, gcc seconds, C megabytes)."""
     import casadi as ca
 
-    from casmech.codegen import Toolchain, build
+    from casmech.backends import build
+    from casmech.backends.codegen import Toolchain
 
     generator = ca.CodeGenerator("unit.c", {"with_header": False, "verbose": False})
     for function in functions.values():
@@ -313,10 +315,11 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
     import systems
 
     import casmech
-    from casmech.codegen import build, mapped, residuals
-    from casmech.compiler import dae
-    from casmech.compiler.functions import build_functions
-    from casmech.compiler.lower import lower
+    from casmech.backends import build
+    from casmech.equations.functions import build_functions
+    from casmech.equations.mapped import bundle as mapped
+    from casmech.formulations import dae, residuals
+    from casmech.model.lower import lower
 
     ir = lower(casmech.loads(casmech_model.yaml_text(systems.make(system))))
     out = {"system": system, "form": form, "flags": flags}
@@ -345,7 +348,7 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
                 functions = build_functions(ir).functions
                 chosen = {n: functions[n] for n in ROW_FUNCTIONS}
                 chosen |= residuals.from_residual(dae.residual(functions, "rp", "ggl"))
-            else:  # elements: what casmech compiles (codegen.mapped, codegen.residuals)
+            else:  # elements: what casmech compiles (mapped bundle, formulations.residuals)
                 chosen = {n: mapped.mapped_functions(ir)[n] for n in ROW_FUNCTIONS}
                 chosen |= residuals.oracle(ir, "rp", "ggl")
             loaded, out["gcc_s"], out["c_mb"] = _library(chosen, directory / "lib", flags)
@@ -483,7 +486,7 @@ def main() -> None:
                         help="also time dynamics over this many seconds (0: no)")
     parser.add_argument("--timeout", type=float, default=1800.0)
     parser.add_argument("--directions", type=int, nargs="+", default=[0],
-                        help="kernel derivative directions per call (codegen.kernels."
+                        help="kernel derivative directions per call (equations.mapped.kernels."
                              "MAX_DIRECTIONS; 0: its value)")
     parser.add_argument("--per-call", nargs="+", metavar="SYSTEM",
                         help="instead: per-call costs of IDAS's daeF/jacF and the row functions "

@@ -1,4 +1,4 @@
-"""n_instructions of the numeric joint functions (compiler.joint_system.build over a lowered
+"""n_instructions of the numeric joint functions (formulations.joint_system.build over a lowered
 IR), as JSON: run before and after a change of the joint build and diff the outputs
 (benchmarks/notes_jointparam.md).
 
@@ -16,8 +16,8 @@ import systems  # noqa: E402
 from casmech_model import yaml_text  # noqa: E402
 
 import casmech  # noqa: E402
-from casmech.compiler.joint_system import build  # noqa: E402
-from casmech.compiler.tree import spanning_tree  # noqa: E402
+from casmech.formulations.joint_system import build  # noqa: E402
+from casmech.formulations.tree import spanning_tree  # noqa: E402
 
 MODELS = {"chain8": lambda: casmech.loads(yaml_text(systems.chain(8))),
           "four_bar": lambda: casmech.load(ROOT / "benchmarks/models/four_bar.yaml"),

@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 import casmech  # noqa: E402
-from casmech.compiler import prescribed  # noqa: E402
+from casmech.formulations import prescribed  # noqa: E402
 from casmech.runtime import assembly  # noqa: E402
 from casmech.runtime.kinematics import output_times, state_at  # noqa: E402
 

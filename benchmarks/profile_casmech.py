@@ -301,7 +301,7 @@ def _newton_system(functions, result, options) -> tuple[dict, tuple]:
     """The DAE dictionary of the run's last integrator (GGL when it had step0, which only GGL
     sets) and (x, z, p) at the last output row (z: r-p accelerations or 0, multipliers 0, row
     scales 1; the Newton matrix's sparsity and conditioning hardly depend on them)."""
-    from casmech.compiler import dae
+    from casmech.formulations import dae
     from casmech.runtime.dynamics import velocities
 
     name = result.metadata["formulation"]

@@ -12,7 +12,7 @@ per N so that one size's memory does not slow the next):
   loaded, with a private empty cache per repeat, so the build is measured);
 - initial_state: runtime.assembly.initial_state (Newton assembly from the file's pose and the
   file's velocities projected onto the constraints);
-- structure: compiler.checks.structure at the assembled pose (rank, redundant rows);
+- structure: equations.checks.structure at the assembled pose (rank, redundant rows);
 - formulation: a first, 0.01 s analysis, which builds the default formulation's functions
   (joint coordinates for the chain: the tree's ODE and results rows);
 - simulate: casmech.analyze(..., "dynamics") over --t-sim seconds from horizontal rest,
@@ -48,7 +48,7 @@ def one_size(n: int, repeats: int, mode: str, t_sim: float) -> dict:
     from systems import T_END, chain
 
     import casmech
-    from casmech.compiler.checks import structure
+    from casmech.equations.checks import structure
     from casmech.runtime import assembly
 
     # the model's own span is the simulated one: its output grid (rows x results columns) is

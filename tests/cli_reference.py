@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 from casmech import cli
-from casmech.commands import COMMANDS
+from casmech.cli.commands import COMMANDS
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "cli.md"
 BLOCK = re.compile(r"(<!-- options: casmech (\S+) -->\n)(.*?)(<!-- end options -->)", re.S)

@@ -7,7 +7,7 @@ import re
 import pytest
 
 from casmech import cli
-from casmech.commands import COMMANDS
+from casmech.cli.commands import COMMANDS
 from tests import cli_reference
 
 TEXT = cli_reference.DOC.read_text(encoding="utf-8")
@@ -51,7 +51,7 @@ def test_top_level_options():
 
 def test_generator_sees_a_new_option(monkeypatch):
     """A parser change makes the generated text differ (the staleness test can fail)."""
-    from casmech.commands import cache
+    from casmech.cli import cache
 
     original = cache.add_arguments
 

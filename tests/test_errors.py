@@ -3,7 +3,7 @@
 import numpy as np
 
 import casmech
-from casmech.compiler.checks import worst_joints
+from casmech.equations.checks import worst_joints
 from casmech.errors import BodyName, FailureContext, Source, solver_reason
 from casmech.runtime import assembly
 from tests.conftest import MODELS

@@ -281,7 +281,7 @@ def test_interrupt_keeps_the_rows_computed(tmp_path, formulation, signum):
     assert process.returncode == 128 + signum, output
     meta = json.loads((tmp_path / "out/metadata.json").read_text())
     assert meta["status"] == "interrupted" and meta["signal"] == signal.Signals(signum).name
-    from casmech.output.csv import read_csv
+    from casmech.io.csv import read_csv
 
     names, values = read_csv(tmp_path / "out/results.csv")
     assert names[0] == "t" and len(values) == meta["rows"] > 6  # more than the first run's

@@ -1,4 +1,5 @@
-"""casmech.interrupts: a signal during an analysis ends it as an Interrupted carrying the rows
+"""casmech.runtime.interrupts: a signal during an analysis ends it as an Interrupted carrying the
+rows
 computed so far (the end-to-end SIGINT/SIGTERM runs are in tests/test_hostile.py)."""
 
 import signal
@@ -6,8 +7,8 @@ import signal
 import pytest
 
 import casmech
-from casmech import interrupts
 from casmech.errors import AnalysisError, CasmechError, Interrupted
+from casmech.runtime import interrupts
 from tests.conftest import MODELS
 
 

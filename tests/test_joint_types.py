@@ -1,13 +1,14 @@
-"""The joint registry (casmech.joint_types): every entry is complete and consistent, so that a
+"""The joint registry (casmech.elements.joint_types): every entry is complete and consistent, so
+that a
 malformed new entry fails here rather than in some stage that reads it."""
 
 import pytest
 
-from casmech import joint_types
-from casmech.compiler.primitives import PRIMITIVES
-from casmech.joint_types import BUILT_IN, COORDINATES, MOTIONS, JointType
+from casmech.elements import joint_types
+from casmech.elements.joint_types import BUILT_IN, COORDINATES, MOTIONS, JointType
+from casmech.elements.primitives import PRIMITIVES
 
-AXES = {"u", "v", "w", "ex", "ey", "ez"}  # always in the joint frame (compiler/lower.py)
+AXES = {"u", "v", "w", "ex", "ey", "ez"}  # always in the joint frame (model/lower.py)
 
 
 def quantities(entry: JointType) -> set[str]:

@@ -1,11 +1,10 @@
-"""Layering of the packages (issue 15), read from the source by ast: schema/ never imports
-compiler/, the bottom layer (casmech.geometry) no other casmech package, the YAML base classes
-(casmech.spec_base) and the registry table (casmech.registry) none either, the joint registry
-(casmech.joint_types) only the bottom layer
-and the force element registry (casmech.force_types, the built-in types' code casmech.forces)
-only those, not even inside a function; no two packages import each other at import time
-(module-level imports, through any chain; an import inside a function, done on use, is allowed
-to point upwards)."""
+"""Layering of casmech's packages, read from the source by ast (docs/architecture.md, Layout).
+
+Every import counts: at module level, inside functions and under `if TYPE_CHECKING:`. A unit
+(a subpackage of casmech, or a top-level module) imports only units of lower layers and
+itself; no module reaches itself through others (no cycle of modules, inside a package
+either); no module imports a private name (`_name`) of another module, by `from ... import`
+or as an attribute of an imported module."""
 
 import ast
 from pathlib import Path
@@ -14,109 +13,192 @@ import pytest
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "casmech"
 
+# low to high; a unit imports only units of earlier rows and its own
+LAYERS = (
+    ("errors", "core"),  # expressions, rotations, the registry table, the results columns
+    ("numerics",),  # least squares, the saddle solve, sums of elements: CasADi only
+    ("elements",),  # primitives, joint types and their coordinates, force types
+    ("schema",),  # YAML -> ResolvedModel
+    ("importers",),  # other formats -> casmech YAML (checked by the schema)
+    ("model",),  # ResolvedModel -> ModelIR, the model data
+    ("equations",),  # the system functions of one model (the builder)
+    ("formulations",),  # rp, romega, joint: DAEs, ODEs, the prescribed step
+    ("backends",),  # compiled libraries: generate, build, cache, load
+    ("runtime",),  # analyses over the functions
+    ("optimal",),  # sensitivities, estimation, optimal control
+    ("io",),  # results files, plots, animations
+    ("study",),  # parameter studies
+    ("api",),  # the Python API
+    ("cli",),  # the command line
+    ("casmech",),  # the package's own __init__ (lazy public names)
+)
+LAYER = {unit: k for k, row in enumerate(LAYERS) for unit in row}
 
-def imported(path: Path, module_level: bool = False) -> set[str]:
-    """The casmech modules a file imports (absolute and relative; `module_level`: only the
-    statements outside functions, under `if TYPE_CHECKING:` included)."""
-    package = ["casmech", *path.relative_to(SRC).parent.parts]
-    tree = ast.parse(path.read_text(), str(path))
-    names = set()
-    for node in (_module_level(tree) if module_level else ast.walk(tree)):
+
+def module_name(path: Path) -> str:
+    parts = ["casmech", *path.relative_to(SRC).with_suffix("").parts]
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {module_name(path): path for path in SRC.rglob("*.py")}
+
+
+def imports(path: Path) -> list[tuple[str, str | None, int]]:
+    """(module imported, name imported from it or None, line) for every casmech import of a
+    file: a name that is itself a module counts as that module."""
+    package = module_name(path).split(".")
+    if path.name != "__init__.py":
+        package = package[:-1]
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
         if isinstance(node, ast.Import):
-            names |= {alias.name for alias in node.names}
+            found += [(alias.name, None, node.lineno) for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
             base = package[:len(package) - node.level + 1] if node.level else []
             module = ".".join([*base, *([node.module] if node.module else [])])
-            names |= {f"{module}.{alias.name}" for alias in node.names} | {module}
-    return {name for name in names if name.split(".")[0] == "casmech"}
-
-
-def _module_level(tree: ast.Module):
-    stack = list(tree.body)
-    while stack:
-        node = stack.pop()
-        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda):
-            continue
-        yield node
-        stack.extend(ast.iter_child_nodes(node))
+            for alias in node.names:
+                if f"{module}.{alias.name}" in MODULES:
+                    found.append((f"{module}.{alias.name}", None, node.lineno))
+                else:
+                    found.append((module, alias.name, node.lineno))
+    return [item for item in found if item[0].split(".")[0] == "casmech"]
 
 
 def unit(module: str) -> str:
-    """casmech.compiler.eom -> compiler; casmech.api -> api (a top-level module)."""
+    """casmech.equations.eom -> equations; casmech.api -> api; casmech -> casmech."""
     parts = module.split(".")
     return parts[1] if len(parts) > 1 else "casmech"
 
 
-def package_graph() -> dict[str, set[str]]:
-    graph: dict[str, set[str]] = {}
-    for path in SRC.rglob("*.py"):
-        parts = path.relative_to(SRC).parts
-        owner = parts[0] if len(parts) > 1 else path.stem
-        if owner == "__init__":
-            continue
-        targets = {unit(name) for name in imported(path, module_level=True)}
-        targets -= {owner, "casmech"}
-        graph.setdefault(owner, set()).update(targets)
-    return graph
+def test_every_unit_has_a_layer():
+    assert {unit(name) for name in MODULES} - set(LAYER) == set()
 
 
-# what the force element registry and its code may import (besides third-party libraries)
-BOTTOM = {"force_types", "forces", "geometry", "joint_types", "spec_base", "errors",
-          "registry"}
+def test_no_upward_import():
+    upward = [f"{path.relative_to(SRC)}:{line}: {unit(module_name(path))} imports {target}"
+              for path in MODULES.values() for target, _, line in imports(path)
+              if LAYER[unit(target)] > LAYER[unit(module_name(path))]]
+    assert upward == []
 
 
-@pytest.mark.parametrize("package, forbidden", [
-    ("schema", {"compiler", "runtime", "codegen", "optimal", "output", "study", "commands"}),
-    ("geometry", set(package_graph()) - {"geometry"}),
-    ("joint_types", set(package_graph()) - {"joint_types", "geometry", "registry"}),
-    ("registry", set(package_graph()) - {"registry"}),
-    ("spec_base", set(package_graph()) - {"spec_base"}),
-    ("forces", set(package_graph()) - BOTTOM),
-    ("force_types", set(package_graph()) - BOTTOM),
-])
-def test_a_package_imports_nothing_above_it(package, forbidden):
-    files = [SRC / f"{package}.py"] if (SRC / f"{package}.py").exists() else \
-        (SRC / package).glob("*.py")
-    found = {str(path.relative_to(SRC)): sorted(unit(m) for m in imported(path)
-                                               if unit(m) in forbidden)
-             for path in files}
-    assert {path: units for path, units in found.items() if units} == {}
+def module_graph() -> dict[str, set[str]]:
+    return {name: {target for target, _, _ in imports(path) if target != name}
+            for name, path in MODULES.items()}
 
 
-def test_no_two_packages_import_each_other():
-    """The package graph has no cycle (a package reaching itself through others)."""
-    graph = package_graph()
-    cycles = []
-    for start in graph:
-        seen, stack = set(), list(graph[start])
-        while stack:
-            node = stack.pop()
-            if node == start:
-                cycles.append(start)
-                break
-            if node not in seen:
-                seen.add(node)
-                stack.extend(graph.get(node, ()))
-    assert cycles == []
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on_stack, found = {}, {}, [], set(), []
+
+    def visit(node):
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on_stack.add(node)
+        for other in graph.get(node, ()):
+            if other not in graph:
+                continue
+            if other not in index:
+                visit(other)
+                low[node] = min(low[node], low[other])
+            elif other in on_stack:
+                low[node] = min(low[node], index[other])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+def test_cycles_are_found():
+    """The cycle search on a graph with one (a test that cannot pass vacuously)."""
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_module_reaches_itself():
+    assert cycles(module_graph()) == []
+
+
+def private_uses(path: Path) -> list[str]:
+    """`from casmech.x import _name` and `module._name` of an imported casmech module."""
+    tree = ast.parse(path.read_text(), str(path))
+    bound = {}  # local name -> casmech module it names
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom | ast.Import):
+            for target, name, line in imports(path):
+                if line != node.lineno:
+                    continue
+                if name is not None and name.startswith("_") and not name.startswith("__"):
+                    found.append(f"{line}: {target}.{name}")
+            for alias in node.names:
+                full = (f"{node.module}.{alias.name}" if isinstance(node, ast.ImportFrom)
+                        and node.module else alias.name)
+                if full in MODULES:
+                    bound[alias.asname or alias.name.split(".")[-1]] = full
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                and node.value.id in bound and node.attr.startswith("_")
+                and not node.attr.startswith("__")):
+            found.append(f"{node.lineno}: {bound[node.value.id]}.{node.attr}")
+    return found
+
+
+def test_no_module_imports_a_private_name_of_another():
+    found = {str(path.relative_to(SRC)): uses for path in MODULES.values()
+             if (uses := private_uses(path))}
+    assert found == {}
+
+
+def test_private_names_are_found(tmp_path):
+    """The private-name search on a file using both forms."""
+    file = SRC / "runtime" / "_layering_probe.py"
+    file.write_text("from casmech.errors import _private\nfrom casmech.core import euler\n"
+                    "x = euler._helper\n")
+    try:
+        MODULES[module_name(file)] = file
+        assert private_uses(file) == ["1: casmech.errors._private", "3: casmech.core.euler._helper"]
+    finally:
+        MODULES.pop(module_name(file), None)
+        file.unlink()
 
 
 def test_no_module_is_over_500_lines():
-    """Issue 15: modules stay small enough to hold one job."""
+    """Modules stay small enough to hold one job."""
     sizes = {str(path.relative_to(SRC)): len(path.read_text().splitlines())
              for path in SRC.rglob("*.py")}
     assert {path: n for path, n in sizes.items() if n > 500} == {}
 
 
 def test_the_build_cache_digests_every_package_the_generated_code_depends_on():
-    """codegen/cache.source_digest covers compiler/, codegen/ and whatever they import (an
-    edit there must not reuse a stale build); errors.py only words messages."""
-    from casmech.codegen import cache
+    """backends/cache.source_digest covers backends/ and every unit below it that its code
+    imports (an edit there must not reuse a stale build); errors.py only words messages."""
+    from casmech.backends import cache
 
-    graph, needed, stack = package_graph(), set(), ["compiler", "codegen"]
+    needed = {unit(target) for name, path in MODULES.items() if unit(name) == "backends"
+              for target, _, _ in imports(path)}
+    stack = list(needed)
     while stack:
-        node = stack.pop()
-        if node not in needed:
-            needed.add(node)
-            stack.extend(graph.get(node, ()))
+        for name, path in MODULES.items():
+            if unit(name) == stack[-1]:
+                for target, _, _ in imports(path):
+                    if unit(target) not in needed:
+                        needed.add(unit(target))
+                        stack.insert(0, unit(target))
+        stack.pop()
     covered = {*cache.SOURCE_PACKAGES, *(name.removesuffix(".py") for name in cache.SOURCE_MODULES)}
     assert needed - {"errors"} <= covered
+
+
+@pytest.mark.parametrize("unit_name", [u for row in LAYERS for u in row if u != "casmech"])
+def test_each_unit_exists(unit_name):
+    assert (SRC / unit_name).is_dir() or (SRC / f"{unit_name}.py").is_file()

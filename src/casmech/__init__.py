@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 
-__version__ = "0.1.0"
+from casmech.core.version import VERSION as __version__  # noqa: E402, F401
 
 # public name -> module defining it; imported on first use (PEP 562), so `import casmech` and
 # the command line pay only for what a command uses (benchmarks/notes_startup.md)
@@ -13,12 +13,12 @@ _LAZY = {
                     "casmech.api"),
     **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
                     "casmech.errors"),
-    "load_results": "casmech.output.frames",
+    "load_results": "casmech.io.frames",
     "sweep": "casmech.study.api",
 }
 # subpackages and modules reachable as attributes (`casmech.api.ANALYSES`) without an import
-_SUBMODULES = ("api", "cli", "codegen", "commands", "compiler", "errors", "importers", "optimal",
-               "output", "runtime", "schema", "study")
+_SUBMODULES = ("api", "backends", "cli", "core", "elements", "equations", "errors", "formulations",
+               "importers", "io", "model", "numerics", "optimal", "runtime", "schema", "study")
 __all__ = [*_LAZY, "__version__"]
 
 

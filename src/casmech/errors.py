@@ -206,7 +206,7 @@ class AnalysisError(CasmechError):
 
 
 class Interrupted(AnalysisError, KeyboardInterrupt):
-    """SIGINT or SIGTERM stopped an analysis (casmech.interrupts). An AnalysisError, so that
+    """SIGINT or SIGTERM stopped an analysis (casmech.runtime.interrupts). An AnalysisError, so that
     the analyses keep the rows computed so far in `partial` as they do for a failure; a
     KeyboardInterrupt, so that a Python caller's Ctrl-C handling sees it. Exit code 128 + the
     signal's number (130 for SIGINT, 143 for SIGTERM)."""

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 import casmech
-from casmech import codegen
+from casmech.backends import codegen
 
 MODEL = Path(__file__).with_name("model.yaml")
 # -O0: the fastest build (tests measure agreement, not speed); -Wall -Werror: the issue asks

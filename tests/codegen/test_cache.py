@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
+from casmech.backends import cache, codegen
+from casmech.backends.manifest import MANIFEST
 from casmech.cli import main
-from casmech.codegen import cache
-from casmech.codegen.manifest import MANIFEST
+from casmech.runtime import assembly
 from tests.conftest import MODELS as MODELS_DIR
 
 from .conftest import MODEL
@@ -41,7 +41,7 @@ def test_unchanged_model_hits_changed_model_rebuilds(model, toolchain, cache_roo
     rebuilt = codegen.compiled(stiffer, toolchain, root=cache_root, dae=False)
     assert len(builds) == 1
     # the override reached the library: forces differ where the spring acts, as interpreted
-    args = (0.1, casmech.api.assembly.initial_guess(again), np.zeros(14))
+    args = (0.1, assembly.initial_guess(again), np.zeros(14))
     want = casmech.compile(stiffer).vector("generalized_forces", *args)
     np.testing.assert_allclose(rebuilt.vector("generalized_forces", *args), want,
                                rtol=1e-12, atol=1e-12)  # compiled == interpreted bound
@@ -76,7 +76,7 @@ def test_second_casmech_run_does_not_recompile(tmp_path, compiled, builds):
 BUILD_SCRIPT = """
 import sys, casmech
 from pathlib import Path
-from casmech import codegen
+from casmech.backends import codegen
 f = codegen.compiled(casmech.load(sys.argv[1]), codegen.Toolchain(flags=("-O0",)),
                      root=Path(sys.argv[2]), dae=False)
 print(repr(f.vector("phi", 0.2, [0.1 * k for k in range(14)]).tolist()))

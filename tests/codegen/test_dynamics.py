@@ -1,6 +1,6 @@
 """Compiled and interpreted simulations of one model agree to the solver tolerance, and each
 result says which mode ran. IDAS integrates the library's dae_<formulation> with its Jacobian
-(compiler.dae takes it from the bundle); the Runge-Kutta fallback at singular poses evaluates
+(formulations.dae takes it from the bundle); the Runge-Kutta fallback at singular poses evaluates
 the library's functions in an MX graph.
 
 "The solver tolerance" is measured, not assumed: the integration error of the rtol 1e-8 run is

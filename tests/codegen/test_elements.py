@@ -1,11 +1,12 @@
-"""codegen.elements: a sum of element kernels, and its Jacobian assembled from the kernels' own,
+"""numerics.element_sums: a sum of element kernels, and its Jacobian assembled from the kernels'
+own,
 equal the same sum written out in SX (outputs that overlap add up, dropped outputs and padded
 inputs take no part), whatever the blocks the Jacobian is cut into."""
 
 import casadi as ca
 import numpy as np
 
-from casmech.codegen.elements import DROPPED, ElementSum, Group, add_into
+from casmech.numerics.element_sums import DROPPED, ElementSum, Group, add_into
 
 
 def _kernel() -> ca.Function:

@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
-from casmech.codegen import parametric
-from casmech.compiler import dae
-from casmech.compiler.formulations import FORMULATIONS
+from casmech.backends import codegen, parametric
+from casmech.formulations import dae
+from casmech.formulations.table import FORMULATIONS
 from tests.conftest import MODELS
 
 NAMES = sorted(p.name for p in MODELS.glob("*.yaml"))
@@ -51,7 +50,7 @@ def test_compiled_equals_interpreted(name, toolchain, cache_root):
 
 def _compare_residuals(name: str, library: bool, bound, plain, rng) -> None:
     """Each DAE residual of the library (data appended to p in the parametric one) against
-    compiler.dae's over the interpreted bundle: the ode and alg outputs."""
+    formulations.dae's over the interpreted bundle: the ode and alg outputs."""
     data = np.zeros(0) if bound.data is None else np.asarray(bound.data, float)
     for form in FORMULATIONS:
         for kind in dae.STABILIZATIONS:

@@ -6,21 +6,21 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech import codegen
-from casmech.codegen import generate, manifest, mapped
-from casmech.compiler import dae
-from casmech.compiler.lower import lower
+from casmech.backends import codegen, generate, manifest
+from casmech.equations.mapped import bundle as mapped
+from casmech.formulations import dae
+from casmech.model.lower import lower
 
 from .test_mapped import SUBSET
 
-# the residuals a compiled bundle carries besides the interpreted functions (compiler.dae)
+# the residuals a compiled bundle carries besides the interpreted functions (formulations.dae)
 RESIDUALS = ["dae_ggl_rp", "dae_rp", "dae_ggl_romega", "dae_romega"]
 
 
 @pytest.fixture(scope="module", params=["parametric", "mapped"])
 def compiled(request, model, toolchain, cache_root):
     """Both libraries of the session's model: the parametric one (codegen.parametric: it has
-    parameters), the mapped one (codegen.mapped, the values built in)."""
+    parameters), the mapped one (equations.mapped.bundle, the values built in)."""
     return codegen.compiled(model, toolchain, root=cache_root,
                             parametric_library=request.param == "parametric")
 
@@ -43,7 +43,7 @@ def test_same_functions_names_and_sparsity(compiled, interpreted):
     constant 0 (test_mapped), so their patterns are contained in the interpreted ones."""
     assert codegen.mode_of(compiled) == "compiled"
     assert codegen.mode_of(interpreted) == "interpreted"
-    # the compiled bundle carries the DAE residuals as well (compiler.dae uses them)
+    # the compiled bundle carries the DAE residuals as well (formulations.dae uses them)
     assert list(compiled.functions) == [*interpreted.functions, *RESIDUALS]
     for name, expected in interpreted.functions.items():
         got = compiled[name]
@@ -91,8 +91,8 @@ def test_jacobians_through_the_library_equal_ad(compiled, interpreted):
 
 def test_manifest_describes_every_function(build_dir, interpreted, model):
     """Names, sizes, sparsity and library in manifest.json rebuild the functions' own patterns
-    (those code generation compiled: codegen.mapped, and the DAE residuals of
-    codegen.residuals, each in a library of its own)."""
+    (those code generation compiled: equations.mapped.bundle, and the DAE residuals of
+    formulations.residuals, each in a library of its own)."""
     info = manifest.read(build_dir)
     entries = {e["name"]: e for e in info["functions"]}
     ir = lower(model)
@@ -124,7 +124,7 @@ def _sx_blocks(residual: ca.Function) -> ca.Function:
 def test_dae_residuals_and_jacobians_equal_interpreted(compiled, interpreted, build_dir, seed):
     """The compiled DAEs (both stabilizations, both formulations) are what IDAS integrates:
     with the integrator's signature, and IDAS takes daeF and jacF from their libraries; their
-    values equal compiler.dae over the interpreted bundle and its SX Jacobian."""
+    values equal formulations.dae over the interpreted bundle and its SX Jacobian."""
     rng = np.random.default_rng(seed)
     for name in RESIDUALS:
         form, kind = name.split("_")[-1], "ggl" if "ggl" in name else "projection"

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
-from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
+from casmech.backends import codegen
+from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
 from casmech.runtime.joint_dynamics import joint_system
 from tests.conftest import Table
 

@@ -7,7 +7,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech import codegen
+from casmech.backends import codegen, library
 
 
 def _function(gain: float = 2.0) -> ca.Function:
@@ -17,7 +17,7 @@ def _function(gain: float = 2.0) -> ca.Function:
 
 
 def _oscillator() -> ca.Function:
-    """x' = v, v' = a with alg: a + k x = 0 (k = p): the residual of compiler.dae's shape."""
+    """x' = v, v' = a with alg: a + k x = 0 (k = p): the residual of formulations.dae's shape."""
     t, x, z, p = ca.SX.sym("t"), ca.SX.sym("x", 2), ca.SX.sym("z"), ca.SX.sym("p")
     return ca.Function("oscillator", [t, x, z, p], [ca.vertcat(x[1], z), z + p * x[0]],
                        ["t", "x", "z", "p"], ["ode", "alg"])
@@ -26,13 +26,13 @@ def _oscillator() -> ca.Function:
 @pytest.fixture
 def builds(monkeypatch) -> list:
     calls = []
-    original = codegen.library.build_libraries
+    original = library.build_libraries
 
     def counting(*args, **kwargs):
         calls.append(args)
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(codegen.library, "build_libraries", counting)
+    monkeypatch.setattr(library, "build_libraries", counting)
     return calls
 
 

@@ -1,7 +1,7 @@
-"""The bundle code generation compiles (codegen.mapped: every function from mapped kernels)
-equals the unrolled SX bundle (compiler.functions, an independent construction of the same
+"""The bundle code generation compiles (equations.mapped.bundle: every function from mapped kernels)
+equals the unrolled SX bundle (equations.functions, an independent construction of the same
 equations): values on random inputs, names, sparsity; and the code (with the DAE residuals of
-codegen.residuals, tested in test_residuals.py) does not grow with the number of bodies."""
+formulations.residuals, tested in test_residuals.py) does not grow with the number of bodies."""
 
 from pathlib import Path
 
@@ -10,15 +10,17 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
-from casmech.codegen import forces, generate, kernels, mapped
-from casmech.compiler.lower import lower
+from casmech.backends import codegen, generate
+from casmech.equations.mapped import bundle as mapped
+from casmech.equations.mapped import forces, kernels
+from casmech.model.lower import lower
 
 from .conftest import MODEL
 
 ROOT = Path(__file__).resolve().parents[2]
 # Functions whose mapped pattern leaves out entries that are the constant 0 in the kernels
-# (the unrolled functions list them): a subset, equal in value (see codegen.kernels._pattern).
+# (the unrolled functions list them): a subset, equal in value (see
+# equations.mapped.kernels._pattern).
 SUBSET = {"variations", "romega_jacobian", "romega_mass"}
 
 
@@ -129,7 +131,7 @@ def test_vectors_as_data_keep_values(monkeypatch):
 
 def test_force_elements_without_a_kernel(monkeypatch):
     """Elements without a kernel (laws reading other joints' state, new element types) are
-    built per instance from compiler.eom: the same functions."""
+    built per instance from equations.eom: the same functions."""
     monkeypatch.setattr(forces, "kernelised", lambda force: False)
     model = MODELS["codegen_test"]()
     got = mapped.mapped_functions(lower(model))
@@ -146,7 +148,7 @@ def _code(bodies: int) -> list[str]:
     for group in generate.units(mapped.mapped_functions(ir)).values():
         for function in group:
             generator.add(function)
-    for oracle in codegen.dae_oracles(ir).values():  # the DAE residuals (codegen.residuals)
+    for oracle in codegen.dae_oracles(ir).values():  # the DAE residuals (formulations.residuals)
         for function in oracle.values():
             generator.add(function)
     lines, table = [], False

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import casmech
-from casmech import codegen
+from casmech.backends import cache, codegen
 from casmech.cli import main
 from casmech.errors import AnalysisError, UsageError
 
@@ -97,7 +97,7 @@ def test_auto_falls_back_when_the_compiler_fails(model, failing_compiler, tmp_pa
     assert codegen.mode_of(functions) == "interpreted"
     with pytest.raises(AnalysisError, match="brokencc: internal error"):
         casmech.compile(model, "compiled")
-    assert codegen.cache.entries(tmp_path / "cache") == []  # nothing half-built published
+    assert cache.entries(tmp_path / "cache") == []  # nothing half-built published
 
 
 def test_unwritable_cache(model, tmp_path, monkeypatch, capsys, auto_compiles):

@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
+from casmech.backends import cache, codegen, parametric
+from casmech.backends.load import externals
 from casmech.cli import main
-from casmech.codegen import cache, parametric
-from casmech.codegen.load import externals
-from casmech.compiler.joint_system import LIBRARY_FUNCTIONS
+from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
 from casmech.runtime.joint_dynamics import joint_system
 
 # a spring-mass on a slide (period 2 pi sqrt(m / k)) and, independent of it, a pendulum of
@@ -108,7 +107,7 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
                 np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
         for name in ("dae_rp", "dae_ggl_romega"):
             compiled_dae = bound[name]
-            interpreted_dae = casmech.compiler.dae.residual(plain.functions, *(
+            interpreted_dae = casmech.formulations.dae.residual(plain.functions, *(
                 ("rp", "projection") if name == "dae_rp" else ("romega", "ggl")))
             args = [rng.standard_normal(interpreted_dae.sparsity_in(k).shape)
                     for k in range(4)]
@@ -166,8 +165,8 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
 def test_no_joint_functions_for_loops_through_a_floating_body():
     """ocp_arm3d's payload is held by six basic constraints: formulation auto runs rp there
     (runtime.auto_formulation), so its library compiles no joint functions; a tree's has them."""
-    from casmech.compiler import parametric as model_data
-    from casmech.compiler.lower import lower
+    from casmech.model import parametric as model_data
+    from casmech.model.lower import lower
     from tests.conftest import MODELS
 
     def names(path) -> set:

@@ -1,4 +1,5 @@
-"""The DAE residuals as sums of elements (codegen.residuals) equal compiler.dae's residuals over
+"""The DAE residuals as sums of elements (formulations.residuals) equal formulations.dae's
+residuals over
 the unrolled SX bundle (an independent construction of the same equations): the residual, and
 IDAS's Jacobian blocks d(ode, alg)/d(x, z) (jacF) against CasADi's SX Jacobian, in value and
 sparsity, and the Jacobian patterns of every block (t and p too) the library declares, for
@@ -13,10 +14,10 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.codegen import kernels, residuals
-from casmech.compiler import dae
-from casmech.compiler.formulations import FORMULATIONS
-from casmech.compiler.lower import lower
+from casmech.equations.mapped import kernels
+from casmech.formulations import dae, residuals
+from casmech.formulations.table import FORMULATIONS
+from casmech.model.lower import lower
 
 from .test_mapped import EVERY_MODEL, MODELS, ROOT
 
@@ -138,7 +139,7 @@ def test_elements_per_joint_and_body():
 
 def test_small_models_compile_the_unrolled_dae():
     """oracles: a model of at most UNROLLED_BODIES bodies whose unrolled residual and Jacobian
-    stay within UNROLLED_INSTRUCTIONS gets compiler.dae's SX residual itself (an SXFunction,
+    stay within UNROLLED_INSTRUCTIONS gets formulations.dae's SX residual itself (an SXFunction,
     with AD's jacF); a larger one the element sum (an MX graph over the kernels)."""
     from .test_mapped import chain_text
 

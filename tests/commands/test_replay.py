@@ -13,8 +13,8 @@ import pytest
 
 import casmech
 from casmech import cli
-from casmech.output.csv import read_csv
-from casmech.output.hdf5 import read_hdf5_metadata
+from casmech.io.csv import read_csv
+from casmech.io.hdf5 import read_hdf5_metadata
 from tests.conftest import MODELS
 
 # a driven pendulum reading a table (its driver) and naming a mesh (its picture)

@@ -8,7 +8,7 @@ import numpy as np
 
 import casmech
 from casmech import cli
-from casmech.output.csv import read_csv
+from casmech.io.csv import read_csv
 from tests.conftest import MODELS
 
 SLIDER = MODELS / "slider_crank.yaml"  # revolute, spherical, universal, translational

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from casmech import cli
-from casmech.output.csv import read_csv
+from casmech.io.csv import read_csv
 
 MODEL = """casmech: 1
 name: falling

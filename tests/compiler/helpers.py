@@ -2,10 +2,10 @@
 
 Two kinds of things live here:
 - plain-numpy geometry (A, G, E, B, skew, quaternions, rigid motions), written from the formulas of
-  docs/architecture.md / Haug (1989) independently of casmech.geometry.euler, so that tests can
+  docs/architecture.md / Haug (1989) independently of casmech.core.euler, so that tests can
   compare the code under test against it;
-- hand-built models: `ResolvedModel`s (schema contract) compiled with compiler.lower.lower and
-  compiler.functions.build_functions, without going through YAML.
+- hand-built models: `ResolvedModel`s (schema contract) compiled with model.lower.lower and
+  equations.functions.build_functions, without going through YAML.
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.functions import SystemFunctions, build_functions
-from casmech.compiler.lower import lower
-from casmech.schema.expressions import parse
+from casmech.core.expressions import parse
+from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.model.lower import lower
 from casmech.schema.resolved import Analysis, Body, Force, Joint, ResolvedModel, ScalarFunction
 
 # ---------------------------------------------------------------------------------------------

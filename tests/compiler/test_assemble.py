@@ -1,4 +1,4 @@
-"""The AD-derived constraint system (compiler/assemble.py via functions.build_functions).
+"""The AD-derived constraint system (equations/assemble.py via functions.build_functions).
 
 A hand-built model of two free bodies with time-dependent basic constraints (to and from ground
 too) and driven composite joints. Oracles: finite differences in time along arbitrary smooth

@@ -1,15 +1,15 @@
-"""compiler.assemble builds each body's A(p) once (Coordinates.frame): the functions built that
+"""equations.assemble builds each body's A(p) once (Coordinates.frame): the functions built that
 way compute what the functions built with a fresh A(p) for every primitive and force compute."""
 
 import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.assemble import Coordinates
-from casmech.compiler.functions import build_functions
-from casmech.compiler.lower import lower
-from casmech.compiler.primitives import Frame
-from casmech.geometry import euler
+from casmech.core import euler
+from casmech.elements.primitives import Frame
+from casmech.equations.assemble import Coordinates
+from casmech.equations.functions import build_functions
+from casmech.model.lower import lower
 from tests.conftest import MODELS
 
 

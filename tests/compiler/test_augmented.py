@@ -1,12 +1,12 @@
-"""The augmented-Lagrangian accelerations and projection (compiler.augmented) against the
+"""The augmented-Lagrangian accelerations and projection (formulations.augmented) against the
 saddle-point solve and runtime.assembly.project, on a state off the flat poses."""
 
 import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import augmented
-from casmech.compiler.formulations import FORMULATIONS
+from casmech.formulations import augmented
+from casmech.formulations.table import FORMULATIONS
 from casmech.runtime import assembly, dynamics
 from tests.runtime.test_stabilization import CHAIN
 

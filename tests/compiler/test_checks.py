@@ -1,4 +1,4 @@
-"""compiler.checks: rank and redundant rows by a sparse QR agree with dense Gram-Schmidt (the
+"""equations.checks: rank and redundant rows by a sparse QR agree with dense Gram-Schmidt (the
 former implementation, kept here as the reference) on the gallery, Bricard's redundant row,
 the IFToMM A02 four-bar at its flat (singular) pose, and random sparse matrices."""
 
@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import checks, numeric_qr
+from casmech.equations import checks
+from casmech.numerics import numeric_qr
 from casmech.runtime import assembly
 from tests.conftest import MODELS
 from tests.runtime.a02_model import a02_model

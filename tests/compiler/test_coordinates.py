@@ -1,4 +1,4 @@
-"""The state force laws read (compiler/coordinates.py): bound in an order independent of the
+"""The state force laws read (equations/coordinates.py): bound in an order independent of the
 process, so the parametric library's structure signature (its cache key) is too."""
 
 import os
@@ -10,8 +10,8 @@ from tests.conftest import MODELS
 
 SIGNATURE = """
 import casmech
-from casmech.compiler.lower import lower
-from casmech.compiler.parametric import split
+from casmech.model.lower import lower
+from casmech.model.parametric import split
 print(split(lower(casmech.load({path!r}))).signature)
 """
 

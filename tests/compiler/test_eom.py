@@ -1,4 +1,4 @@
-"""r-p equations-of-motion pieces (compiler/eom.py via functions.build_functions): mass matrix,
+"""r-p equations-of-motion pieces (equations/eom.py via functions.build_functions): mass matrix,
 energy, generalized forces of gravity, point forces, torques and springs.
 
 Oracles: the r-p formulas of Haug (1989) ch. 11 written in numpy, Euler's rigid-body equations,

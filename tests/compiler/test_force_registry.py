@@ -1,4 +1,5 @@
-"""Adding a force element is one registry entry (casmech.force_types; docs/architecture.md).
+"""Adding a force element is one registry entry (casmech.elements.force_types;
+docs/architecture.md).
 
 A test-only type, `anchor_spring` (a linear spring of zero free length between a point of body_i
 and a point of body_j: F = -k d on body j's point, d the vector between the points, potential
@@ -15,15 +16,15 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import force_types
-from casmech.compiler.assemble import Coordinates
-from casmech.compiler.lower import lower
+from casmech.core.spec_base import Name, Scalar, Spec, Vector
+from casmech.core.values import constant
+from casmech.elements import force_types
+from casmech.elements.force_types import ForceType
+from casmech.elements.forces.terms import at
+from casmech.equations.assemble import Coordinates
 from casmech.errors import ModelError, failed
-from casmech.force_types import ForceType
-from casmech.forces.terms import at
-from casmech.geometry.values import constant
+from casmech.model.lower import lower
 from casmech.schema import export
-from casmech.spec_base import Name, Scalar, Spec, Vector
 from tests.conftest import Table
 
 

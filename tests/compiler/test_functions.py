@@ -1,11 +1,11 @@
-"""The interpreted bundle (compiler/functions.py): its functions built on first use."""
+"""The interpreted bundle (equations/functions.py): its functions built on first use."""
 
 import numpy as np
 
 import casmech
-from casmech.compiler import eom, romega
-from casmech.compiler.functions import all_sx, build_functions
-from casmech.compiler.lower import lower
+from casmech.equations import eom, romega
+from casmech.equations.functions import all_sx, build_functions
+from casmech.model.lower import lower
 from tests.conftest import MODELS
 
 NAMES = ("phi", "phi_q", "nu", "gamma", "variations", "phi_scaled", "mass_matrix",

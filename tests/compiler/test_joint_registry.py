@@ -1,4 +1,4 @@
-"""Adding a joint type is one registry entry (casmech.joint_types; docs/architecture.md).
+"""Adding a joint type is one registry entry (casmech.elements.joint_types; docs/architecture.md).
 
 A test-only type, `point_on_line` (body j's point `at` stays on the line through `at` along
 `axis` carried by body i: 4 DOF, two DP2 rows; it slides along the axis and turns freely),
@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import joint_types
+from casmech.core.quaternions import from_matrix, unit
+from casmech.elements import joint_types
+from casmech.elements.joint_types import ON_AXIS, JointType
+from casmech.elements.motions import Motion
 from casmech.errors import ModelError
-from casmech.geometry.motions import Motion
-from casmech.geometry.quaternions import from_matrix, unit
-from casmech.joint_types import ON_AXIS, JointType
 from casmech.schema import export
 from casmech.schema.bodies import rotation_matrix
 from tests.conftest import Table

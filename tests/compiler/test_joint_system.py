@@ -1,5 +1,5 @@
-"""The joint formulation's equations of motion (compiler/joint_system.py, the recursions of
-compiler/articulated.py) against the r-p ones.
+"""The joint formulation's equations of motion (formulations/joint_system.py, the recursions of
+formulations/articulated.py) against the r-p ones.
 
 At random joint states, the tree's poses and velocities satisfy every joint, and its
 accelerations and multipliers must be the solution of the r-p saddle-point system
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.joint_system import build
-from casmech.compiler.tree import spanning_tree
-from casmech.joint_types import MOTIONS
+from casmech.elements.joint_types import MOTIONS
+from casmech.formulations.joint_system import build
+from casmech.formulations.tree import spanning_tree
 from casmech.runtime import assembly
 from tests.conftest import MODELS, ROOT
 
@@ -96,10 +96,11 @@ PARAMETRIC_CASES = {
 
 @pytest.mark.parametrize("case", PARAMETRIC_CASES)
 def test_joint_functions_with_the_model_data_equal_the_numeric_ones(case):
-    """build over compiler.parametric.split's IR, bound to each value's data through
+    """build over model.parametric.split's IR, bound to each value's data through
     JointSystem.data, equals build over the IR lowered at that value, at random (t, x, z)."""
-    from casmech.compiler import lazy_jacobian, parametric
-    from casmech.compiler.lower import lower
+    from casmech.model import parametric
+    from casmech.model.lower import lower
+    from casmech.numerics import lazy_jacobian
 
     text, values = PARAMETRIC_CASES[case]
     split = parametric.split(lower(casmech.loads(text)))
@@ -153,10 +154,10 @@ def chain_text(n: int) -> str:
 
 @pytest.mark.parametrize("case", TRACED_CASES)
 def test_traced_steps_equal_the_steps_run_directly(case):
-    """The recursions' per-body steps evaluated as traced Functions (compiler.traced) give the
+    """The recursions' per-body steps evaluated as traced Functions (core.traced) give the
     functions the same code gives run on the SX directly, at random (t, x, z): branched trees,
     a chain, a loop."""
-    from casmech.compiler import traced
+    from casmech.core import traced
 
     functions = casmech.compile(TRACED_CASES[case]())
     ir, tree = functions.ir, spanning_tree(functions.ir)
@@ -190,7 +191,7 @@ def test_each_joints_rows_equal_the_rp_bundles(path):
     each joint's rows of phi and their r-omega Jacobians [Phi_r, Pi_bar] at both bodies as the
     r-p bundle's phi and variations (built over the whole system), at random poses and times:
     every joint type of the zoo, drivers, ground on either side."""
-    from casmech.compiler.joint_system import rows_of
+    from casmech.formulations.joint_system import rows_of
 
     functions = casmech.compile(casmech.load(path))
     ir, nb = functions.ir, functions.n_bodies

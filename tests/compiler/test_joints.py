@@ -1,6 +1,6 @@
-"""Composite joints (casmech.joint_types rows, lowered by compiler/lower.py) between two FREE
+"""Composite joints (casmech.elements.joint_types rows, lowered by model/lower.py) between two FREE
 bodies: degrees of freedom, closure at the file's pose, and invariance under the joint's physical
-free motions; drivers; redundancy reporting (compiler/checks.py).
+free motions; drivers; redundancy reporting (equations/checks.py).
 
 Geometry: non-trivial orientations of both bodies, the joint point away from both CMs, the axis
 along no coordinate axis. Oracle: the kinematics of each joint type (what relative motions it
@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from casmech import joint_types
-from casmech.compiler import checks
+from casmech.elements import joint_types
+from casmech.equations import checks
 from tests.compiler.helpers import (
     compile_model,
     coordinates,

@@ -1,10 +1,10 @@
-"""compiler.kkt: the closest point of a constraint manifold (a rootfinder) and the saddle-point
+"""numerics.kkt: the closest point of a constraint manifold (a rootfinder) and the saddle-point
 solve, against closed forms and dense NumPy."""
 
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import kkt
+from casmech.numerics import kkt
 
 
 def sphere():

@@ -1,4 +1,4 @@
-"""Joint limits (compiler/limits.py) against closed forms: a pendulum released onto a revolute
+"""Joint limits (equations/limits.py) against closed forms: a pendulum released onto a revolute
 stop (the quarter period by the complete elliptic integral, the contact a half oscillation of
 the stop's stiffness plus gravity's, the rebound back to the release angle), a slider held on a
 translational stop (static penetration F / k, the energy bound on the overshoot), and the

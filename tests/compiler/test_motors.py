@@ -1,4 +1,4 @@
-"""Motors (compiler/motors.py, schema/motors.py) against closed forms of driven rigid bodies.
+"""Motors (equations/motors.py, schema/motors.py) against closed forms of driven rigid bodies.
 
 Speed mode: a rod pendulum turned at a prescribed speed under gravity; the angle rate equals the
 speed and the motor torque equals the inverse-dynamics closed form J_O theta'' + m g L/2 cos theta
@@ -274,5 +274,5 @@ def test_motor_on_a_spherical_joint_is_refused():
     text = text.replace("    axis: [1, 0, 0]\n", "")
     found = diagnostics(text)
     assert [d.code for d in found] == ["E408"]
-    # the hint names the joint types with a coordinate (casmech.joint_types)
+    # the hint names the joint types with a coordinate (casmech.elements.joint_types)
     assert found[0].hint == "motors act on revolute, cylindrical and translational joints"

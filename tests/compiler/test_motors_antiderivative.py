@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
+from casmech.core.expressions import parse
 from casmech.schema.antiderivative import NoClosedForm, integral
-from casmech.schema.expressions import parse
 
 PARAMETERS = {"w": 2.5, "a": -0.7, "c": 0.0}
 

@@ -1,4 +1,4 @@
-"""Compiled code (casmech.codegen) runs motors and tables like the interpreted functions: the
+"""Compiled code (casmech.backends) runs motors and tables like the interpreted functions: the
 effort motors live in ModelIR.motors beside ModelIR.forces, and a table is an if_else tree of
 plain SX, so generated C must give the same numbers, reactions of motors that read the joint
 rate included (one gcc build of the kernel C into a private cache: 5 s here)."""

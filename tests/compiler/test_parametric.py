@@ -1,4 +1,4 @@
-"""compiler.parametric: the bundle over the symbolic IR, given the model data of a lowering at
+"""model.parametric: the bundle over the symbolic IR, given the model data of a lowering at
 other parameter values, equals a fresh build of the model loaded with those values, on every
 model in models/ that has parameters; structure-changing values change the signature."""
 
@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import parametric
-from casmech.compiler.functions import build_functions
-from casmech.compiler.lower import lower
+from casmech.equations.functions import build_functions
+from casmech.model import parametric
+from casmech.model.lower import lower
 from casmech.schema.loader import load_document
 from tests.conftest import MODELS
 

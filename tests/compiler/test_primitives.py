@@ -1,4 +1,4 @@
-"""The basic constraints (compiler/primitives.py) against the lecture's closed-form variations.
+"""The basic constraints (elements/primitives.py) against the lecture's closed-form variations.
 
 Each primitive writes only phi; here CasADi differentiates it with respect to
 [r_i, p_i, r_j, p_j] and the result is compared with the lecture's formulas (tests/compiler/
@@ -11,9 +11,9 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler import primitives
-from casmech.compiler.primitives import Frame
-from casmech.geometry import euler
+from casmech.core import euler
+from casmech.elements import primitives
+from casmech.elements.primitives import Frame
 from tests.compiler import oracles
 from tests.compiler.helpers import (
     body,

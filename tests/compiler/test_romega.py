@@ -1,4 +1,4 @@
-"""r-omega (Newton-Euler) system functions (compiler/romega.py via functions.build_functions).
+"""r-omega (Newton-Euler) system functions (equations/romega.py via functions.build_functions).
 
 Oracles: the r-p functions of the same model (cross-formulation agreement: velocity and
 acceleration constraints, accelerations and multipliers of the augmented systems, kinetic

@@ -1,12 +1,12 @@
-"""compiler.sparse_qr (symbolic, SX Functions) and compiler.numeric_qr (numeric) against
+"""numerics.sparse_qr (symbolic, SX Functions) and numerics.numeric_qr (numeric) against
 numpy.linalg.lstsq: least squares, minimum norm, rank-deficient matrices, extreme entries."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler import numeric_qr
-from casmech.compiler.sparse_qr import sparse_qr
+from casmech.numerics import numeric_qr
+from casmech.numerics.sparse_qr import sparse_qr
 
 SHAPES = [(12, 12), (15, 9), (20, 11)]
 

@@ -1,9 +1,9 @@
-"""The spanning tree of the joint formulation (compiler/tree.py)."""
+"""The spanning tree of the joint formulation (formulations/tree.py)."""
 
 import casmech
-from casmech.compiler.ir import GROUND_INDEX
-from casmech.compiler.lower import lower
-from casmech.compiler.tree import spanning_tree
+from casmech.formulations.tree import spanning_tree
+from casmech.model.ir import GROUND_INDEX
+from casmech.model.lower import lower
 from tests.conftest import MODELS
 
 FOUR_BAR = MODELS / "four_bar.yaml"

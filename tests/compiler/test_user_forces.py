@@ -1,4 +1,4 @@
-"""Force laws that read the state (compiler/coordinates.py) against closed forms and against the
+"""Force laws that read the state (equations/coordinates.py) against closed forms and against the
 same law written as a tsda or rsda (a second formulation of the same physics)."""
 
 from __future__ import annotations
@@ -220,7 +220,7 @@ forces:
 def test_compiled_code_runs_the_laws_and_the_bushing_like_the_interpreted_one(tmp_path):
     """The C library built from a model with state-reading laws and a bushing gives the same
     motion as the interpreted CasADi functions."""
-    from casmech import codegen
+    from casmech.backends import codegen
 
     chain = codegen.Toolchain(flags=("-O0",))
     if not codegen.available(chain):

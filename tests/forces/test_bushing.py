@@ -12,7 +12,7 @@ import pytest
 
 import casmech
 import casmech.errors
-from casmech.compiler.functions import SystemFunctions
+from casmech.equations.functions import SystemFunctions
 from tests.compiler.helpers import rotation
 from tests.conftest import Table
 

@@ -13,7 +13,7 @@ import pytest
 from scipy.optimize import brentq
 
 import casmech
-from casmech.forces import contact
+from casmech.elements.forces import contact
 
 G = 9.81
 H = 1.0  # drop height of the ball's lowest point [m]
@@ -274,6 +274,6 @@ def test_compiled_mode_equals_interpreted():
 
 def test_the_contact_law_names_ground_as_the_compiler_does():
     """forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
-    from casmech.compiler.ir import GROUND_INDEX
+    from casmech.model.ir import GROUND_INDEX
 
     assert contact.GROUND == GROUND_INDEX

@@ -1,4 +1,4 @@
-"""Euler-parameter geometry (geometry/euler.py) against its defining properties.
+"""Euler-parameter geometry (core/euler.py) against its defining properties.
 
 Oracles: orthonormality, Rodrigues' formula, the identities of Haug (1989) ch. 6
 (A = E G^T, G p = 0, E p = 0, omega_bar = 2 G p_dot, omega = 2 E p_dot), and the definition
@@ -8,7 +8,7 @@ B(p, a_bar) = d(A(p) a_bar)/dp checked by finite differences and by CasADi AD.
 import casadi as ca
 import numpy as np
 
-from casmech.geometry import euler
+from casmech.core import euler
 from tests.compiler import helpers
 from tests.compiler.helpers import axis_angle_p, dense, rodrigues, skew, unit
 
@@ -139,7 +139,7 @@ def test_symbolic_inputs_stay_symbolic():
 def test_numpy_oracles_of_the_other_test_files(rng):
     """helpers.rotation / b_matrix / g_matrix / e_matrix (numpy, used to write the lecture's
     closed forms) agree with Rodrigues' formula and with finite differences, independently of
-    geometry/euler.py."""
+    core/euler.py."""
     axis, angle = unit(rng.normal(size=3)), rng.uniform(-np.pi, np.pi)
     p, a_bar = axis_angle_p(axis, angle), rng.normal(size=3)
     np.testing.assert_allclose(helpers.rotation(p), rodrigues(axis, angle), rtol=RTOL, atol=ATOL)

@@ -1,13 +1,13 @@
-"""Tree-joint motions (geometry/motions.py, joint_types.MOTIONS) against FD and inverses."""
+"""Tree-joint motions (elements/motions.py, joint_types.MOTIONS) against FD and inverses."""
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.compiler.articulated import local_motion
-from casmech.geometry import euler
-from casmech.geometry.quaternions import from_matrix
-from casmech.joint_types import MOTIONS
+from casmech.core import euler
+from casmech.core.quaternions import from_matrix
+from casmech.elements.joint_types import MOTIONS
+from casmech.formulations.articulated import local_motion
 
 RNG = np.random.default_rng(7)
 

@@ -60,7 +60,7 @@ def test_sources_are_read_with_a_bound(tmp_path, capsys, monkeypatch):
     file outside its folder (E305)."""
     import casmech.importers
 
-    monkeypatch.setattr(casmech.importers, "MAX_SOURCE_BYTES", 1000)
+    monkeypatch.setattr(casmech.importers.source, "MAX_SOURCE_BYTES", 1000)
     (tmp_path / "big.adm").write_text("ADAMS\n!" + "x" * 2000 + "\n")
     assert main(["import", str(tmp_path / "big.adm"), "-o", str(tmp_path / "x.yaml")]) == 1
     assert f"{tmp_path / 'big.adm'}:1:1: error[E006]" in capsys.readouterr().err

@@ -113,7 +113,7 @@ def test_not_a_robot_and_too_large(tmp_path, monkeypatch):
     assert ":1:1: error[E102]" in message and "xacro" in message
     import casmech.importers
 
-    monkeypatch.setattr(casmech.importers, "MAX_SOURCE_BYTES", 1000)
+    monkeypatch.setattr(casmech.importers.source, "MAX_SOURCE_BYTES", 1000)
     message = error_of(tmp_path, GOOD + "<!--" + "x" * 2000 + "-->")
     assert f"{tmp_path / 'robot.urdf'}:1:1: error[E006]" in message
 

@@ -8,9 +8,9 @@ import pytest
 import casmech
 from casmech.cli import main
 from casmech.errors import ModelError
+from casmech.io.csv import read_csv
 from casmech.optimal.ocp import from_block
 from casmech.optimal.sensitivity import simulate
-from casmech.output.csv import read_csv
 
 MODELS = Path(__file__).parents[2] / "models"
 SWING = (MODELS / "ocp_pendulum_swing_up.yaml").read_text()

@@ -8,9 +8,9 @@ import pytest
 import casmech
 from casmech.cli import main
 from casmech.errors import UsageError
-from casmech.optimal.estimate import estimate, read_measurements
+from casmech.io.csv import read_csv, read_measurements, write_csv
+from casmech.optimal.estimate import estimate
 from casmech.optimal.sensitivity import simulate
-from casmech.output.csv import read_csv, write_csv
 
 MODELS = Path(__file__).parents[2] / "models"
 PENDULUM = MODELS / "estimate_pendulum.yaml"

@@ -91,7 +91,7 @@ def test_bound_on_a_reaction_force_is_active_and_respected():
 def test_compiled_and_interpreted_collocation_reach_the_same_optimum():
     """The cart-pole swing-up on the C functions of casmech.compile(model, "compiled")
     and on the interpreted SX graphs: two NLPs, one optimum."""
-    from casmech import codegen
+    from casmech.backends import codegen
     if not codegen.available():
         pytest.skip("no C compiler")
     model = casmech.load(MODEL.with_name("ocp_cart_pole_swing_up.yaml"))

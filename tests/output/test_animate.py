@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from casmech import cli
-from casmech.output.animate import RINGS, SEGMENTS
+from casmech.io.animate import RINGS, SEGMENTS
 from tests.conftest import MODELS
 
 MODEL = """\

@@ -1,9 +1,9 @@
-"""output.atomic: a write is renamed into place when it completes and leaves nothing behind when
+"""core.atomic: a write is renamed into place when it completes and leaves nothing behind when
 it fails (the earlier file stays as it was)."""
 
 import pytest
 
-from casmech.output.atomic import atomic
+from casmech.core.atomic import atomic
 
 
 @pytest.mark.parametrize("mode, data", [("w", "new\n"), ("wb", b"new\n")])

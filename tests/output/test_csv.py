@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from casmech.output import csv
-from casmech.output.csv import read_csv, write_csv
+from casmech.io import csv
+from casmech.io.csv import read_csv, write_csv
 
 SPECIAL = [0.0, -0.0, 0.03, 0.1 + 0.2, 1.0, 1 / 3, 1e16, 2.0**53 + 2, -1.5e-300, 5e-324,
            np.finfo(float).max, np.finfo(float).tiny, np.inf, -np.inf]

@@ -2,7 +2,7 @@
 
 import csv
 
-from casmech.output.events import metadata_rows, write_events
+from casmech.io.events import metadata_rows, write_events
 from casmech.runtime.events import EventRecord
 
 

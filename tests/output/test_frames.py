@@ -8,8 +8,9 @@ import pytest
 
 import casmech
 from casmech.errors import UsageError
-from casmech.output.csv import write_csv
-from casmech.output.frames import frame, load_results
+from casmech.io.csv import write_csv
+from casmech.io.frames import load_results
+from casmech.runtime.frames import frame
 from casmech.runtime.results import Result, column_names
 from tests.conftest import MODELS
 

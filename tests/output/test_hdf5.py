@@ -14,10 +14,11 @@ import pytest
 import yaml
 
 import casmech
-from casmech import cli, codegen
+from casmech import cli
+from casmech.backends import codegen
 from casmech.errors import UsageError
-from casmech.output.csv import read_csv
-from casmech.output.hdf5 import read_hdf5, read_hdf5_metadata, write_hdf5
+from casmech.io.csv import read_csv
+from casmech.io.hdf5 import read_hdf5, read_hdf5_metadata, write_hdf5
 from tests.conftest import MODELS
 
 

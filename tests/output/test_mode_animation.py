@@ -6,7 +6,7 @@ import pytest
 
 from casmech.cli import main
 from casmech.errors import UsageError
-from casmech.output.mode_animation import mode_table, read_linear_model
+from casmech.io.mode_animation import mode_table, read_linear_model
 from tests.runtime.statics_models import HANGING_ROD, G
 
 M, LENGTH, W = 1.5, 0.8, 0.03  # HANGING_ROD's parameters

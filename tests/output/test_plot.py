@@ -10,12 +10,12 @@ import pytest
 
 from casmech import cli
 from casmech.errors import UsageError
-from casmech.output import plot
-from casmech.output.csv import read_csv
-from casmech.output.hdf5 import read_hdf5
+from casmech.io import plot
+from casmech.io.csv import read_csv
+from casmech.io.hdf5 import read_hdf5
 from tests.conftest import MODELS
 
-# the brief's unit table, written out independently of casmech.output.plot.QUANTITIES
+# the brief's unit table, written out independently of casmech.io.plot.QUANTITIES
 UNITS = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s", "ax": "m/s²",
          "ay": "m/s²", "az": "m/s²", "e0": "-", "e1": "-", "e2": "-", "e3": "-",
          "wx": "rad/s", "wy": "rad/s", "wz": "rad/s", "alphax": "rad/s²", "alphay": "rad/s²",
@@ -142,7 +142,7 @@ def test_reactions_in_another_frame_get_their_own_titled_panel():
 def test_plot_command_reads_the_frames_from_the_runs_metadata(tmp_path):
     """casmech plot takes each joint's frame from metadata.json beside results.csv (and from
     results.h5's own metadata)."""
-    from casmech.commands.plot import reaction_frames
+    from casmech.cli.plot import reaction_frames
 
     out = tmp_path / "run"
     assert cli.main(["run", str(MODELS / "slider_crank.yaml"), "--out", str(out), "--t-end",

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from casmech.output.csv import read_csv
-from casmech.output.progress import progress_bar
+from casmech.io.csv import read_csv
+from casmech.io.progress import progress_bar
 from tests.conftest import MODELS
 
 SCRIPT = Path(sys.executable).parent / "casmech"

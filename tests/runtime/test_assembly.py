@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler import kkt, numeric_qr
-from casmech.compiler.checks import structure
+from casmech.equations.checks import structure
 from casmech.errors import AnalysisError
+from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import assembly
 from tests.conftest import MODELS, Table
 
@@ -113,7 +113,7 @@ def test_progress_is_called_with_every_row_time():
     assert seen == result.times
 
 
-# Sparse linear algebra (compiler.numeric_qr) against the dense numpy code it replaced; the
+# Sparse linear algebra (numerics.numeric_qr) against the dense numpy code it replaced; the
 # gallery's matrices are below numeric_qr's dense limits, so its sparse path and its dense QR
 # path are forced.
 
@@ -244,7 +244,7 @@ def test_a_pose_on_the_constraints_is_kept():
 
 @pytest.mark.parametrize("model", ["bricard", "flyball_governor", "four_bar", "quadruped_legs"])
 def test_dynamic_accelerations_equal_the_dense_least_squares(model):
-    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma] (compiler.kkt.saddle over the
+    """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma] (numerics.kkt.saddle over the
     independent rows); singular with Bricard's redundant row, where lstsq gives the
     minimum-norm multipliers."""
     functions = casmech.compile(casmech.load(MODELS / f"{model}.yaml"))
@@ -264,9 +264,9 @@ def test_dynamic_accelerations_equal_the_dense_least_squares(model):
 
 
 def test_projection_equals_the_dense_solve():
-    """project's damped Gauss-Newton steps (compiler.augmented.projection's sparse LDL) against
+    """project's damped Gauss-Newton steps (formulations.augmented.projection's sparse LDL) against
     dense NumPy iterations, from a drifted state."""
-    from casmech.compiler.formulations import FORMULATIONS
+    from casmech.formulations.table import FORMULATIONS
 
     functions = casmech.compile(casmech.load(MODELS / "flyball_governor.yaml"))
     q, v = assembly.initial_state(functions)

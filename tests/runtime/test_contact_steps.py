@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.lower import lower
+from casmech.model.lower import lower
 from casmech.runtime import contact_steps
 
 SHOT = """

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.output.csv import read_csv
+from casmech.io.csv import read_csv
 from casmech.runtime.dynamics import DRIFT_TOLERANCE, drift_tolerance
 from tests.conftest import MODELS, Table
 from tests.models import closed_forms as cf

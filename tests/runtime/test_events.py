@@ -12,7 +12,7 @@ from scipy.optimize import brentq
 from scipy.special import ellipk, ellipkinc
 
 import casmech
-from casmech import codegen
+from casmech.backends import codegen
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime import dynamics, events
 from casmech.runtime.dynamics import run_dynamics

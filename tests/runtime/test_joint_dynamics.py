@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.compiler.articulated import local_motion
-from casmech.compiler.tree import spanning_tree
+from casmech.elements.joint_types import MOTIONS
 from casmech.errors import AnalysisError, ModelError
-from casmech.joint_types import MOTIONS
+from casmech.formulations.articulated import local_motion
+from casmech.formulations.tree import spanning_tree
 from casmech.runtime.joint_dynamics import constant_inverse
 from tests.conftest import MODELS, ROOT, Table, count_calls
 from tests.runtime.test_dynamics import FREE_BODY, G, W
@@ -255,7 +255,7 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
 def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     """The tree's ODE above QUICK_BUILD_INSTRUCTIONS compiles at -O0, below at the default
     flags; $CASMECH_CFLAGS always wins."""
-    from casmech.codegen import build
+    from casmech.backends import build
     from casmech.runtime import joint_dynamics
 
     system = joint_dynamics.joint_system(

@@ -1,4 +1,4 @@
-"""Kinematics and inverse dynamics by the mapped prescribed step (compiler.prescribed) against
+"""Kinematics and inverse dynamics by the mapped prescribed step (formulations.prescribed) against
 the per-row code (kinematics.state_at: Newton, velocity, acceleration and multiplier solves by
 numpy.linalg.lstsq), on every gallery model with such an analysis and a redundant one."""
 

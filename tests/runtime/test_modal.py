@@ -128,7 +128,7 @@ def test_linearization_matches_finite_differences_with_spring():
 
 def test_cli_modal_writes_modes_and_linear_model(tmp_path):
     from casmech.cli import main
-    from casmech.output.csv import read_csv
+    from casmech.io.csv import read_csv
 
     assert main(["run", str(MODELS / "double_pendulum.yaml"), "--analysis", "modal",
                  "--out", str(tmp_path)]) == 0

@@ -167,7 +167,7 @@ def test_cli_writes_where_it_linearized(tmp_path):
     import json
 
     from casmech.cli import main
-    from casmech.output.csv import read_csv
+    from casmech.io.csv import read_csv
 
     path = tmp_path / "rod.yaml"
     path.write_text(at_time(HANGING_ROD, 0.25).replace("t_end: 1,", "t_end: 1, output_step: 0.05,"))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core import euler
 from casmech.errors import AnalysisError
-from casmech.geometry import euler
 from casmech.runtime import assembly, dynamics, projected_rk4
 from tests.conftest import MODELS, Table
 from tests.runtime.reference_data import VALIDATION_MODELS, read_analytic

@@ -1,5 +1,5 @@
 """How dynamics keeps the constraints: the stabilized index-2 DAE (ggl, the default) against the
-index-1 DAE with projections (compiler.dae, runtime.dynamics)."""
+index-1 DAE with projections (formulations.dae, runtime.dynamics)."""
 
 import subprocess
 import sys

@@ -133,8 +133,8 @@ def test_cli_statics_exit_3_names_the_body(tmp_path, capsys):
 
 def test_cli_analysis_statics_overrides_the_model(tmp_path):
     from casmech.cli import main
-    from casmech.output.csv import read_csv
-    from casmech.output.metadata import read_json
+    from casmech.io.csv import read_csv
+    from casmech.io.metadata import read_json
 
     assert main(["run", str(MODELS / "double_pendulum.yaml"), "--analysis", "statics",
                  "--out", str(tmp_path)]) == 0
@@ -160,8 +160,8 @@ def test_null_space_is_orthonormal_and_annihilated():
 
 def test_cli_zero_stiffness_keeps_the_row_with_status_failed(tmp_path, capsys):
     from casmech.cli import main
-    from casmech.output.csv import read_csv
-    from casmech.output.metadata import read_json
+    from casmech.io.csv import read_csv
+    from casmech.io.metadata import read_json
 
     path = tmp_path / "hinge.yaml"
     path.write_text(VERTICAL_HINGE)

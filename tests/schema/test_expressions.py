@@ -6,7 +6,7 @@ import casadi
 import numpy as np
 import pytest
 
-from casmech.schema.expressions import (
+from casmech.core.expressions import (
     FUNCTIONS,
     ExpressionError,
     ExpressionFunctionError,

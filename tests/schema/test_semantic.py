@@ -6,8 +6,8 @@ import casadi
 import numpy as np
 import pytest
 
+from casmech.core.quaternions import from_matrix
 from casmech.errors import ModelError
-from casmech.geometry.quaternions import from_matrix
 from casmech.schema import load_model_text
 from casmech.schema.bodies import rotation_matrix
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech import codegen
+from casmech.backends import codegen
 from tests.study.conftest import FOUR_BAR, PENDULUM, SPRING_MASS, G
 
 
@@ -95,7 +95,7 @@ def test_no_library_is_built(tmp_path, monkeypatch):
 def test_compiled_study_builds_one_library_for_every_value(tmp_path, monkeypatch):
     """mode compiled: the pendulum's parametric library is built once, before the runs, and
     every L is bound to it; the kept outputs equal the interpreted study's."""
-    from casmech.codegen import cache
+    from casmech.backends import cache
 
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
     grid = {"L": [0.5, 1.0, 2.0]}

@@ -18,12 +18,13 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.geometry.quaternions import from_matrix
-from casmech.importers import adm_connections, adm_forces, adm_loads, adm_motion, read_source
+from casmech.core.quaternions import from_matrix
+from casmech.importers import adm_connections, adm_forces, adm_loads, adm_motion
 from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_model import Deck, Part, Reader, read_markers, read_parts, read_units
 from casmech.importers.adm_parser import Statement, Value, parse_adm
 from casmech.importers.emit import Imported, Item
+from casmech.importers.source import read_source
 
 # statement -> arguments it may carry (anything else: a warning)
 KNOWN = {

@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.elements.joint_types import having
 from casmech.importers.adm_connections import marker_notes
 from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_functions import NotTranslated, affine
 from casmech.importers.adm_model import Deck, Marker
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Imported, Item
-from casmech.joint_types import having
 
 
 def _pair(measure, i: int, j: int, allowed: dict[str, tuple]) -> str:

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from casmech.schema.expressions import ExpressionError, parse
+from casmech.core.expressions import ExpressionError, parse
 
 # Adams constants and the symbols of time
 CONSTANTS = {"rtod": 180.0 / 3.141592653589793, "dtor": 3.141592653589793 / 180.0}

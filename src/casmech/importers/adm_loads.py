@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.geometry.quaternions import from_matrix
+from casmech.core.quaternions import from_matrix
 from casmech.importers.adm_connections import marker_notes
 from casmech.importers.adm_frames import tidy
 from casmech.importers.adm_functions import NotTranslated, time_function

@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.elements.joint_types import COORDINATES, having
 from casmech.importers.adm_functions import NotTranslated, time_function
 from casmech.importers.adm_model import Deck
 from casmech.importers.adm_parser import Statement, function_text
 from casmech.importers.emit import Item
-from casmech.joint_types import COORDINATES, having
 
 # (Adams flag, casmech joint types it drives) -> (driver/motor key: displacement, velocity)
 KINDS = {flag: (having(name), COORDINATES[name].motor[:2])

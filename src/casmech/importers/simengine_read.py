@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core.expressions import ExpressionError, parse
 from casmech.errors import Diagnostic, ModelError, Source
-from casmech.importers import read_source
-from casmech.schema.expressions import ExpressionError, parse
+from casmech.importers.source import read_source
 from casmech.schema.loader import format_path, load_document
 
 

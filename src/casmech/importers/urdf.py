@@ -26,8 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from casmech.core.quaternions import from_matrix
 from casmech.errors import UsageError, did_you_mean
-from casmech.geometry.quaternions import from_matrix
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item, identifier
 from casmech.importers.urdf_geometry import geometry_items

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.geometry.quaternions import from_matrix
+from casmech.core.quaternions import from_matrix
 from casmech.importers.adm_frames import tidy
 from casmech.importers.urdf_read import Element, Reader
 from casmech.importers.urdf_tree import Frame, Link, frame

@@ -3,7 +3,8 @@
 The XML is parsed by the standard library's expat (no third-party parser keeps the line of an
 element, and casmech's errors need it). A URDF has no DOCTYPE: a document type or entity
 declaration is refused (E102) before any entity is expanded, so neither entity expansion nor
-external entities can happen. The file is read with importers.read_source's 16 MiB bound (E006).
+external entities can happen. The file is read with importers.source.read_source's 16 MiB bound
+(E006).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from xml.parsers import expat
 import numpy as np
 
 from casmech.errors import Diagnostic, ModelError, Source
-from casmech.importers import read_source
+from casmech.importers.source import read_source
 
 HINT = "see the URDF specification (wiki.ros.org/urdf/XML)"
 

@@ -1,5 +1,5 @@
 """The DAE residual and the kinematic constraints the collocation imposes, on the interpreted
-(SX, from the parametric system) or the compiled functions (casmech.compile(model, mode):
+(SX, from the parametric system) or the compiled functions (backends.compile(model, mode):
 C externals with first derivatives, so IPOPT runs with a limited-memory Hessian).
 
     residual(t, x, z, u) -> (ode, alg)          the index-1 DAE of dae.py
@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-import casmech
-from casmech import codegen
+from casmech import backends
+from casmech.backends import codegen
 from casmech.optimal.dae import DAE
 from casmech.schema.resolved import ResolvedModel
 
@@ -54,10 +54,10 @@ def _compiled(dae: DAE, functions, controls: ca.Function) -> Residuals:
 
 def residuals(model: ResolvedModel, dae: DAE, controls: ca.Function,
               mode: str = "interpreted") -> Residuals:
-    """`mode` as casmech.compile takes it (interpreted | compiled | auto)."""
+    """`mode` as backends.compile takes it (interpreted | compiled | auto)."""
     if mode == "interpreted":
         return _interpreted(dae)
-    functions = casmech.compile(model, mode)
+    functions = backends.compile(model, mode)
     if codegen.mode_of(functions) == "interpreted":
         return _interpreted(dae)
     return _compiled(dae, functions, controls)

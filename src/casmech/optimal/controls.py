@@ -1,5 +1,6 @@
 """Control inputs on joints: a torque about the axis of a joint type that rotates or a force
-along the axis of one that slides (their entries in casmech.joint_types: revolute, cylindrical,
+along the axis of one that slides (their entries in casmech.elements.joint_types: revolute,
+cylindrical,
 translational), as generalized forces by virtual work (AD):
 
     torque tau on joint J: Q = (d angle_J / d q)^T tau, angle_J the joint's relative rotation
@@ -15,12 +16,12 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.assemble import Coordinates
-from casmech.compiler.ir import GROUND_INDEX
-from casmech.compiler.lower import _Poses, joint_coordinates
+from casmech.elements.forces.springs import joint_angle
+from casmech.elements.joint_types import COORDINATES, having
+from casmech.equations.assemble import Coordinates
 from casmech.errors import UsageError
-from casmech.forces.springs import joint_angle
-from casmech.joint_types import COORDINATES, having
+from casmech.model.ir import GROUND_INDEX
+from casmech.model.lower import Poses, joint_coordinates
 from casmech.schema.resolved import ResolvedModel
 
 # control kind -> the joint coordinate it acts along (its effort motor mode)
@@ -57,7 +58,7 @@ def _force_coordinate(model: ResolvedModel, poses, joint, x: Coordinates):
 
 def control_forces(model: ResolvedModel, controls: Sequence[Control]) -> ca.Function:
     """Q_u(q, u): generalized forces of the controls."""
-    poses = _Poses(model)
+    poses = Poses(model)
     joints = {j.name: j for j in model.joints}
     x = Coordinates.create(len(model.bodies))
     u = ca.SX.sym("u", len(controls))

@@ -6,7 +6,7 @@
 
 over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
 state is a function of theta: positions are casmech's assembly, the point of Phi = 0 closest to
-the file's pose (itself a function of theta), by the rootfinder of compiler.kkt.closest_point
+the file's pose (itself a function of theta), by the rootfinder of numerics.kkt.closest_point
 that the runtime's assembly ends with, so its derivative is the implicit one; velocities are
 the file's velocities corrected by the least-squares step onto Phi_q q_dot = nu."""
 
@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import kkt
-from casmech.compiler.checks import structure
+from casmech.equations.checks import structure
+from casmech.numerics import kkt
 from casmech.optimal.system import ParametricSystem
 from casmech.runtime.assembly import initial_state
 from casmech.runtime.results import column_names
@@ -92,7 +92,7 @@ def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
 
 def initial_state_function(dae: DAE) -> ca.Function:
     """x0(theta): consistent positions and velocities (differentiable in theta). Positions:
-    compiler.kkt.closest_point (the runtime's assembly) to the file's pose at theta, over the
+    numerics.kkt.closest_point (the runtime's assembly) to the file's pose at theta, over the
     DAE's rows, from the nominal assembled pose; its derivative is the implicit one."""
     system, rows, t0 = dae.system, list(dae.rows), dae.t0
     th = ca.MX.sym("theta", dae.theta.numel())
@@ -106,7 +106,7 @@ def initial_state_function(dae: DAE) -> ca.Function:
 
 
 def algebraic_function(dae: DAE) -> ca.Function:
-    """z(t, x, p) = [q_ddot, lam] solving alg = 0: compiler.kkt.saddle with M, P, F and gamma
+    """z(t, x, p) = [q_ddot, lam] solving alg = 0: numerics.kkt.saddle with M, P, F and gamma
     read off alg (linear in z), in an MX graph, so outputs can be written in x alone (what
     adjoint sweeps need)."""
     n, zeros = dae.n, ca.DM.zeros(dae.z.numel())

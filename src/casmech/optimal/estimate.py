@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -20,7 +19,6 @@ from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
 from casmech.optimal.sensitivity import check_times, output_graph
 from casmech.optimal.system import auto_method, data_inputs, parametric_system
-from casmech.output.csv import read_csv
 from casmech.schema.resolved import ResolvedModel
 
 
@@ -33,22 +31,6 @@ class Estimate:
     residuals: np.ndarray  # (times, outputs): model - data at the estimate
     iterations: int
     status: str
-
-
-def read_measurements(path: str | Path, columns: Sequence[str] | None = None):
-    """(times, {column: values}) from a CSV with a `t` column (the results format)."""
-    try:
-        names, values = read_csv(path)
-    except (OSError, ValueError) as error:
-        raise UsageError(f"cannot read measurements from {path}: {error}") from None
-    if "t" not in names:
-        raise UsageError(f"{path}: the measurements need a 't' column (time) and one column per "
-                         "measured output, named as in results.csv")
-    columns = [n for n in names if n != "t"] if columns is None else list(columns)
-    missing = [c for c in columns if c not in names]
-    if missing:
-        raise UsageError(f"{path}: no column '{missing[0]}'; columns: {', '.join(names)}")
-    return values[:, names.index("t")], {c: values[:, names.index(c)] for c in columns}
 
 
 def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[float],

@@ -1,4 +1,4 @@
-"""dd/dtheta: the derivative of a model's data (compiler.parametric) with respect to file
+"""dd/dtheta: the derivative of a model's data (model.parametric) with respect to file
 parameters, by central differences of the NumPy lowering.
 
 The model data `d` is every number of the lowered model (masses, inertias, body-frame joint
@@ -30,12 +30,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casmech.compiler import parametric
-from casmech.compiler.ir import ModelIR
-from casmech.compiler.lower import lower
+from casmech.core.expressions import parse
 from casmech.errors import ModelError, UsageError
+from casmech.model import parametric
+from casmech.model.ir import ModelIR
+from casmech.model.lower import lower
 from casmech.schema import load_model_text
-from casmech.schema.expressions import parse
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
 

@@ -1,4 +1,4 @@
-"""d(theta): the model data of compiler.parametric as a CasADi Function of file parameters,
+"""d(theta): the model data of model.parametric as a CasADi Function of file parameters,
 exact at every theta (what estimation needs to fit a length, a joint point or an axis angle).
 
 Its value at theta is the numeric lowering of the model re-loaded with those parameter values
@@ -20,9 +20,9 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import parametric
-from casmech.compiler.lower import lower
 from casmech.errors import ModelError, UsageError
+from casmech.model import parametric
+from casmech.model.lower import lower
 from casmech.optimal import lowering
 from casmech.runtime.memo import kept
 from casmech.schema.resolved import ResolvedModel

@@ -20,12 +20,12 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.ir import ModelIR
-from casmech.compiler.lower import lower
+from casmech.core.expressions import parse
 from casmech.errors import ModelError, UsageError
+from casmech.model.ir import ModelIR
+from casmech.model.lower import lower
 from casmech.optimal.lowering import Lowering
 from casmech.schema.components import uses_composition
-from casmech.schema.expressions import parse
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.spec_errors import validate

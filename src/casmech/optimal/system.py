@@ -2,13 +2,13 @@
 
 Two ways to make theta an input (`method`):
 
-- "symbolic": the same builders as `casmech.compile` (compiler/assemble.py, compiler/eom.py) run
+- "symbolic": the same builders as `casmech.compile` (equations/assemble.py, equations/eom.py) run
   on the symbolic IR of `symbolic.py` (the file's expressions re-evaluated with CasADi), and
   every function gets one more input, `theta`. Inertias and gravity enter the compiler's builders
   as numeric matrices; both enter the equations linearly, so a symbolic inertia or gravity is
   applied exactly as a linear combination of the builders evaluated at unit entries (the
   builders stay the single source of the formulas). Exact at every theta; geometry refused.
-- "data": compiler.functions over compiler.parametric's split IR (every number of the lowering
+- "data": equations.functions over model.parametric's split IR (every number of the lowering
   an entry of the model data d), with d = d0 + D (theta - theta0) and D = dd/dtheta from
   `lowering.py` (central differences of the NumPy lowering). Any parameter that keeps the
   structure, geometry included; the functions are the model's at theta0 and their first
@@ -29,14 +29,14 @@ from dataclasses import dataclass, replace
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import eom
-from casmech.compiler.assemble import Coordinates, build_constraints
-from casmech.compiler.functions import SystemFunctions, build_functions
-from casmech.compiler.ir import ModelIR
-from casmech.compiler.lower import lower
+from casmech.core import euler
+from casmech.core.values import constant
+from casmech.equations import eom
+from casmech.equations.assemble import Coordinates, build_constraints
+from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.errors import UsageError
-from casmech.geometry import euler
-from casmech.geometry.values import constant
+from casmech.model.ir import ModelIR
+from casmech.model.lower import lower
 from casmech.optimal import lowering
 from casmech.optimal.model_data import ModelData
 from casmech.optimal.symbolic import (
@@ -49,7 +49,7 @@ from casmech.optimal.symbolic import (
 from casmech.schema.resolved import ResolvedModel
 
 METHODS = ("auto", "symbolic", "data")
-# the functions of a ParametricSystem that come from compiler.functions' bundle
+# the functions of a ParametricSystem that come from equations.functions' bundle
 BUNDLE = ("phi", "phi_q", "phi_scaled", "nu", "gamma", "mass_matrix", "generalized_forces",
           "energy", "reactions")
 

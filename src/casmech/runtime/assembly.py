@@ -1,7 +1,7 @@
 """Assembly: positions from the file's pose, then velocities and accelerations.
 
 The assembled pose is the point of Phi(t, q) = 0 closest to the file's pose (Euclidean in q):
-the root of compiler.kkt.closest_point's KKT system, reached in two stages. First the
+the root of numerics.kkt.closest_point's KKT system, reached in two stages. First the
 least-squares Newton of `newton` gets onto the right branch: drivers of composite joints are
 reached by continuation, their values scaled from 0 (the pose in the file) to 1 in steps of at
 most MAX_DRIVER_STEP radians/metres, so Newton never jumps to the mirrored root of a rotation
@@ -9,10 +9,10 @@ driver. Its end point depends on Newton's path where the mechanism has degrees o
 (within O(distance^2) of the closest point); the rootfinder then converges to the closest point
 in a few iterations. casmech.optimal differentiates the same rootfinder.
 
-Accelerations and multipliers are compiler.kkt.saddle's, the projection back onto the
-constraints compiler.augmented.projection's: the Functions casmech.optimal and the integrators
+Accelerations and multipliers are numerics.kkt.saddle's, the projection back onto the
+constraints formulations.augmented.projection's: the Functions casmech.optimal and the integrators
 use. The least-squares steps (Newton, velocities) run on the bundle's sparse matrices
-(CasADi DM) by compiler.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
+(CasADi DM) by numerics.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
 step rejects) stays dense.
@@ -25,13 +25,14 @@ import math
 import casadi as ca
 import numpy as np
 
-from casmech import interrupts
-from casmech.compiler import augmented, kkt, numeric_qr
-from casmech.compiler.checks import dependent_joints, structure, worst_joints
-from casmech.compiler.formulations import FORMULATIONS
-from casmech.compiler.functions import SystemFunctions
+from casmech.core import euler
+from casmech.equations.checks import dependent_joints, structure, worst_joints
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.geometry import euler
+from casmech.formulations import augmented
+from casmech.formulations.table import FORMULATIONS
+from casmech.numerics import kkt, numeric_qr
+from casmech.runtime import interrupts
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.memo import kept
 
@@ -110,7 +111,7 @@ def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray)
 
 def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
                   reference: np.ndarray) -> np.ndarray:
-    """compiler.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
+    """numerics.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
     itself where those rows fix every coordinate (no degree of freedom: an isolated root, the
     closest point of its neighbourhood) or where the rootfinder does not reach
     |Phi| <= POSITION_TOLERANCE (a Jacobian losing rank at q makes the KKT matrix nearly
@@ -176,7 +177,7 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
 def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
                                 q_dot: np.ndarray, rows=None) -> tuple[np.ndarray, np.ndarray]:
     """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now, by
-    compiler.kkt.saddle over the rows independent at q (checks.structure; the normalization
+    numerics.kkt.saddle over the rows independent at q (checks.structure; the normalization
     rows and every joint row of a mechanism without redundant joints). lam covers every row:
     on redundant rows, the multipliers of least norm with the same reaction (what least
     squares of the whole singular system gives). `rows` restricts the constraints to an
@@ -201,7 +202,7 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
 
 def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma: np.ndarray,
                     w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(v_dot, lam) by a compiler.kkt.saddle Function; where its LU meets a zero pivot (P lost
+    """(v_dot, lam) by a numerics.kkt.saddle Function; where its LU meets a zero pivot (P lost
     rank exactly and no row is masked), the least-squares solution."""
     try:
         v_dot, lam = (np.array(out).ravel() for out in saddle(mass, jac, forces, gamma, w))
@@ -216,7 +217,7 @@ def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma:
 
 def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,
             penalty: float, accept: float = POSITION_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
-    """Back onto Phi = 0, then onto the velocity constraints: compiler.augmented.projection
+    """Back onto Phi = 0, then onto the velocity constraints: formulations.augmented.projection
     (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty) called
     until |Phi| <= POSITION_TOLERANCE. Near a singular configuration the damping keeps a step
     from jumping along the nearly lost direction (a Euclidean least-squares step there moved

@@ -22,9 +22,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.tree import Tree
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted
+from casmech.formulations.tree import Tree
 from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
 from casmech.runtime.singular_poses import describe, examinable, singular_poses

@@ -6,7 +6,7 @@ so a contact that starts between two far-apart steps is never sampled: measured,
 of radius 0.01 m closing at 1 m/s passed through each other with every formulation and method
 at the default tolerances (benchmarks/notes_contact.md). A plane or a stop is a half-space (the
 force grows with the depth), so a step past its onset is rejected; a sphere pair is only
-`R_i + R_j` thick (the `thickness` of its casmech.force_types entry). `options` caps the
+`R_i + R_j` thick (the `thickness` of its casmech.elements.force_types entry). `options` caps the
 step:
 
 - at the output step, for any contact or stop: the force law is evaluated in every output
@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler.ir import ModelIR
-from casmech.force_types import entry_of
+from casmech.elements.force_types import entry_of
+from casmech.model.ir import ModelIR
 
 MIN_SPEED = 1.0  # [m/s] the least closing speed assumed for a sphere pair
 

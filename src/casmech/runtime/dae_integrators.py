@@ -1,4 +1,4 @@
-"""The IDAS integrators of the r-p / r-omega DAEs (compiler.dae), kept with the system
+"""The IDAS integrators of the r-p / r-omega DAEs (formulations.dae), kept with the system
 (SystemFunctions.derived) for later runs.
 
 Creating an integrator over an interpreted (SX) DAE makes CasADi differentiate the residual for
@@ -17,8 +17,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import dae
-from casmech.compiler.functions import SystemFunctions
+from casmech.equations.functions import SystemFunctions
+from casmech.formulations import dae
 from casmech.runtime.buffers import NamedCall
 from casmech.runtime.memo import kept
 

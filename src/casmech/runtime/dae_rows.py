@@ -8,8 +8,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.formulations import FORMULATIONS
-from casmech.compiler.functions import SystemFunctions
+from casmech.equations.functions import SystemFunctions
+from casmech.formulations.table import FORMULATIONS
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.memo import kept
 from casmech.runtime.results import Result

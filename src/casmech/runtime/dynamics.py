@@ -1,6 +1,6 @@
 """Forward dynamics in the r-p or r-omega form, integrated by SUNDIALS IDAS through CasADi.
 
-By default IDAS integrates the stabilized index-2 DAE of compiler.dae (stabilization "ggl",
+By default IDAS integrates the stabilized index-2 DAE of formulations.dae (stabilization "ggl",
 Gear-Gupta-Leimkuhler): x = [q, v], z = [v_dot, lam, mu] (v = q_dot in r-p, [r_dot; omega_bar]
 in r-omega), which holds Phi = 0 and P v = nu themselves at every step, with the algebraic
 unknowns out of the error test. Measured against the index-1 DAE with projections (below) on
@@ -28,7 +28,7 @@ consistent state (_Model): a run repeated from the same state creates and solves
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
 its flat poses) both DAEs are singular and IDAS fails; the run then starts over from t0 on the
-augmented-Lagrangian ODE (compiler.augmented), which stays well-posed there, integrated by
+augmented-Lagrangian ODE (formulations.augmented), which stays well-posed there, integrated by
 runtime.projected_rk4: Runge-Kutta steps each projected back onto the constraints, their number
 per output interval set by step doubling (metadata augmented_from = t0, dae_failed_at = the
 start of the chunk that failed, rk4_steps, rk4_rejected, rk4_stalled_at). A failure of that
@@ -43,14 +43,21 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech import interrupts
-from casmech.compiler import augmented, dae, kkt
-from casmech.compiler.checks import dependent_joints, structure
-from casmech.compiler.formulations import FORMULATIONS, Formulation
-from casmech.compiler.functions import SystemFunctions
+from casmech.core import euler
+from casmech.equations.checks import dependent_joints, structure
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.geometry import euler
-from casmech.runtime import assembly, contact_steps, dae_integrators, events, projected_rk4
+from casmech.formulations import augmented, dae
+from casmech.formulations.table import FORMULATIONS, Formulation
+from casmech.numerics import kkt
+from casmech.runtime import (
+    assembly,
+    contact_steps,
+    dae_integrators,
+    events,
+    interrupts,
+    projected_rk4,
+)
 from casmech.runtime.dae_rows import Rows, mapped, minimum_norm  # noqa: F401 (joint_dynamics)
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.memo import kept
@@ -120,7 +127,7 @@ class _Model:
         return kept(self.kept, key, build, KEPT_STARTS)
 
     def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
-        """(s, s_phi): the DAEs' row scales (compiler.dae), inverse row norms of P and of
+        """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
         Phi_q at (t, q)."""
         jacobian = self.functions.matrix(self.form.jacobian, t, q)
         phi_q = jacobian if self.form.jacobian == "phi_q" else self.functions.matrix("phi_q", t, q)
@@ -140,7 +147,7 @@ class _Model:
 
     def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
-        scales s (the DAE's lam: the true multipliers are s * lam): compiler.kkt.saddle on
+        scales s (the DAE's lam: the true multipliers are s * lam): numerics.kkt.saddle on
         [M P_s^T; P_s -diag(mask)] (the least-squares solution where that is singular: a
         singular configuration at the start)."""
         f, form = self.functions, self.form
@@ -203,23 +210,24 @@ class _Stepper:
 
         By the DAE until it first fails (then _Restart: the run starts over on the
         augmented-Lagrangian ODE), else by that ODE."""
-        if self.on_ode:
-            return (*self._ode(t0, times, q, v), "ode")
-        if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
+        with interrupts.solver():
+            if self.on_ode:
+                return (*self._ode(t0, times, q, v), "ode")
+            if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
+                try:
+                    return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
+                except RuntimeError as error:
+                    interrupts.check(error)  # a signal is not a solver failure
+                    if len(times) > CHUNK:  # the whole grid: again in chunks, as after a failure
+                        self.limit = self.chunk = CHUNK
+                        return self.integrate(t0, times[:CHUNK], q, v, mask)
+                    self.ggl_failures.append(float(t0))
+                    self.limit = CHUNK
             try:
-                return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
-            except RuntimeError as error:
-                interrupts.check(error)  # a signal is not a solver failure
-                if len(times) > CHUNK:  # the whole grid: again in chunks, as after a failure
-                    self.limit = self.chunk = CHUNK
-                    return self.integrate(t0, times[:CHUNK], q, v, mask)
-                self.ggl_failures.append(float(t0))
-                self.limit = CHUNK
-        try:
-            return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
-        except RuntimeError as error:  # IDAS failed (its construction is not guarded)
-            interrupts.check(error)
-            raise _Restart(float(t0), solver_reason(error)) from None
+                return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
+            except RuntimeError as error:  # IDAS failed (its construction is not guarded)
+                interrupts.check(error)
+                raise _Restart(float(t0), solver_reason(error)) from None
 
     def probe(self, kind: str, t0: float, t: float, t1: float, q, v, mask):
         """(states, lam) at the one time t in (t0, t1) from (t0, q, v), by what made the block

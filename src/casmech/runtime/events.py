@@ -30,17 +30,16 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from casmech import interrupts
-from casmech.compiler import contact, coordinates
-from casmech.compiler.assemble import Coordinates
-from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.ir import ForceIR
+from casmech.core import euler
+from casmech.core.states import split
+from casmech.equations import contact, coordinates
+from casmech.equations.assemble import Coordinates
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.geometry import euler
-from casmech.geometry.states import split
+from casmech.model.ir import ForceIR
+from casmech.runtime import interrupts
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.results import BODY_COLUMNS, Result, column_names
-from casmech.runtime.results import table as results_table
+from casmech.runtime.results import BODY_COLUMNS, Result
 
 DIRECTIONS = {"rising": (1,), "falling": (-1,), "both": (1, -1)}
 SIGNS = {1: "rising", -1: "falling"}
@@ -91,7 +90,7 @@ def _body_columns(x: Coordinates, k: int) -> dict[str, Any]:
 
 
 def _joint_geometry(joint) -> ForceIR:
-    """A joint's coordinate geometry (compiler.coordinates) from its JointIR frames."""
+    """A joint's coordinate geometry (equations.coordinates) from its JointIR frames."""
     g = joint.geometry
     axes = {f"{key}_i": g[f"{key}@i"] for key in "uvw"} | {"u_j": g["u@j"]}
     return ForceIR(joint.name, joint.type, joint.body_i, joint.body_j,
@@ -295,21 +294,3 @@ def has_stop(watcher: Watch | None) -> bool:
 
 
 # -------------------------------------------------------------------------------- output
-def table(functions: SystemFunctions, result: Result, reaction_frames=None
-          ) -> tuple[list[str], list[list]]:
-    """(names, rows) of events.csv: t, name, then every results column at the event (the
-    reaction columns in the frames runtime.results.table writes them in)."""
-    names = ["t", "name", *column_names(functions)[1:]]
-    if not result.events:
-        return names, []
-    _, values = results_table(functions, result.event_states, reaction_frames)
-    return names, [[record.t, record.name, *row[1:].tolist()]
-                   for record, row in zip(result.events, values, strict=True)]
-
-
-def dataframe(functions: SystemFunctions, result: Result):
-    """The events table as a pandas DataFrame (columns as events.csv's)."""
-    import pandas as pd
-
-    names, rows = table(functions, result)
-    return pd.DataFrame(rows, columns=names)

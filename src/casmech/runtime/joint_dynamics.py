@@ -1,6 +1,6 @@
 """Forward dynamics in joint coordinates (analysis.formulation: joint), through SUNDIALS via
 CasADi over the output grid: CVODES on a tree's ODE, IDAS on the stabilized index-2 DAE of a
-tree with loop closures (compiler/joint_system.py).
+tree with loop closures (formulations/joint_system.py).
 
 The initial state is the r-p one (assembly: the file's pose assembled, its velocities projected
 onto the constraints), mapped to joint coordinates joint by joint (relative pose -> theta,
@@ -21,15 +21,14 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from casmech import interrupts
-from casmech.compiler.articulated import local_motion
-from casmech.compiler.checks import independent_rows
-from casmech.compiler.functions import SystemFunctions
-from casmech.compiler.joint_system import LIBRARY_FUNCTIONS, JointSystem, build, layout
-from casmech.compiler.tree import Tree, TreeJoint, spanning_tree
+from casmech.elements.joint_types import MOTIONS
+from casmech.equations.checks import independent_rows
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.joint_types import MOTIONS
-from casmech.runtime import assembly, contact_steps, events
+from casmech.formulations.articulated import local_motion
+from casmech.formulations.joint_system import LIBRARY_FUNCTIONS, JointSystem, build, layout
+from casmech.formulations.tree import Tree, TreeJoint, spanning_tree
+from casmech.runtime import assembly, contact_steps, events, interrupts
 from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
 from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
@@ -62,7 +61,7 @@ STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem):
 
 
 def tree_of(functions: SystemFunctions) -> Tree:
-    """The bundle's spanning tree (compiler.tree), found once per bundle."""
+    """The bundle's spanning tree (formulations.tree), found once per bundle."""
     if "spanning_tree" not in functions.derived:
         functions.derived["spanning_tree"] = spanning_tree(functions.ir)
     return functions.derived["spanning_tree"]
@@ -72,7 +71,7 @@ def lags_bundle(functions: SystemFunctions) -> bool:
     """Whether the bundle is compiled and its joint system would not be: a parametric bundle
     (functions.data) whose library holds no joint functions (built for another analysis; it
     would compile per value) or a bundle above COMPILED_ODE_BODIES."""
-    from casmech import codegen  # imported on use: interpreted runs never need it
+    from casmech.backends import codegen  # imported on use: interpreted runs never need it
 
     return codegen.mode_of(functions) == "compiled" and (
         functions.n_bodies > COMPILED_ODE_BODIES or (
@@ -89,7 +88,7 @@ def joint_system(functions: SystemFunctions) -> JointSystem:
             system = library_system(functions)
         else:
             system = build(functions.ir, tree_of(functions))
-            from casmech import codegen
+            from casmech.backends import codegen
 
             if codegen.mode_of(functions) == "compiled" and not lags_bundle(functions):
                 system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
@@ -113,7 +112,7 @@ def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSyste
     codegen's cache; with the tree's ODE its forward derivative where method auto may choose
     BDF (its Jacobian by forward sweeps: casadi's externals find fwd1_<name> in their
     library), with the DAE its Jacobian (JointSystem.problem)."""
-    from casmech import codegen
+    from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
@@ -148,7 +147,7 @@ def constant_inverse(kind: str) -> np.ndarray | None:
 def _toolchain(system: JointSystem):
     """The default toolchain, at -O0 for a large tree (QUICK_BUILD_INSTRUCTIONS) when the
     user chose no flags."""
-    from casmech.codegen.build import FLAGS_ENVIRONMENT, Toolchain
+    from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
 
     quick = (system.dynamics.n_instructions() > QUICK_BUILD_INSTRUCTIONS
              and os.environ.get(FLAGS_ENVIRONMENT) is None)
@@ -369,19 +368,20 @@ def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
     halves, so the rows before it are kept and the error names the output interval. Returns
     the state at the last time and None for its multipliers (z None: consistent ones from x,
     computed here; the last chunk's are never needed)."""
-    if z is None:
-        z = loops.z(t0, x)
-    try:
-        states, algebraic = integrate(t0, times, x, z)
-    except RuntimeError as error:
-        interrupts.check(error)  # a signal is not a solver failure
-        if len(times) == 1:
-            raise _failure(t0, times[0], solver_reason(error)) from None
-        half = len(times) // 2
-        x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
-        return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
-    recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
-    return states[:, -1], None
+    with interrupts.solver():
+        if z is None:
+            z = loops.z(t0, x)
+        try:
+            states, algebraic = integrate(t0, times, x, z)
+        except RuntimeError as error:
+            interrupts.check(error)  # a signal is not a solver failure
+            if len(times) == 1:
+                raise _failure(t0, times[0], solver_reason(error)) from None
+            half = len(times) // 2
+            x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
+            return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
+        recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
+        return states[:, -1], None
 
 
 def _failure(t0: float, t1: float, why: str) -> AnalysisError:

@@ -6,7 +6,7 @@ equations of motion with the prescribed motion, Phi_q^T lam = Q - M q_ddot (inve
 With a fully driven mechanism the two analyses differ only in what they are asked for; both
 report the joint reactions, since the prescribed motion determines them.
 
-The rows come from one mapped CasADi Function over the output grid (compiler.prescribed); a
+The rows come from one mapped CasADi Function over the output grid (formulations.prescribed); a
 row it rejects (Newton not converged in its fixed steps, or Phi_q close to losing rank) is
 done by the per-row code (state_at: numpy least squares), which reports a failure with the
 joints involved, and the mapped step resumes after it.
@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from casmech.compiler import prescribed
-from casmech.compiler.checks import structure
-from casmech.compiler.functions import SystemFunctions
+from casmech.equations.checks import structure
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
+from casmech.formulations import prescribed
 from casmech.runtime import assembly
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.memo import kept

@@ -9,7 +9,7 @@ of Phi_q(t*, q*) (statics.null_space). The state x = [z; w] obeys x' = f(x, u, t
     [M(q) Phi_I^T; Phi_I 0] [q_ddot; lam_I] = [Q(t, q, q_dot) + G(q) u; gamma_I(t, q, q_dot)],
 
 with I the independent constraint rows at q* (the column-pivoted QR's pivots: redundant rows
-dropped, so both matrices are square; the saddle system is compiler.kkt.saddle's). A = df/dx and
+dropped, so both matrices are square; the saddle system is numerics.kkt.saddle's). A = df/dx and
 B = df/du at (x*, 0, t*) come from CasADi's forward AD through this graph (MX, the linear solves
 included): the velocity terms (Coriolis, gyroscopic, the constraint curvature with
 q_dot* != 0) are in it. Away from an equilibrium a
@@ -32,11 +32,11 @@ from collections.abc import Sequence
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import kkt
-from casmech.compiler.assemble import Coordinates
-from casmech.compiler.eom import FORCE_ELEMENTS, INPUT_KINDS
-from casmech.compiler.functions import SystemFunctions, all_sx, build_functions
-from casmech.compiler.ir import ForceIR
+from casmech.equations.assemble import Coordinates
+from casmech.equations.eom import FORCE_ELEMENTS, INPUT_KINDS
+from casmech.equations.functions import SystemFunctions, all_sx, build_functions
+from casmech.model.ir import ForceIR
+from casmech.numerics import kkt
 
 
 def input_elements(functions: SystemFunctions, names: Sequence[str] | None) -> list[ForceIR]:

@@ -27,15 +27,15 @@ body motions (n_modes x n_bodies x 6), scaled so that the largest entry is 1.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from casmech.compiler.functions import SystemFunctions
+from casmech.core.atomic import atomic
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, UsageError
-from casmech.output.atomic import atomic
 from casmech.runtime import kinematics, statics
 from casmech.runtime import linearize as linear
 from casmech.runtime.results import Result
@@ -44,7 +44,7 @@ from casmech.schema.resolved import Analysis
 MODE_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "eigenvalue_real", "eigenvalue_imag",
                 "damped_frequency_hz")
 MOTION = ("dx", "dy", "dz", "rx", "ry", "rz")
-# what a modal run writes beside results.csv (commands/run.py's ANALYSIS_FILES names them too,
+# what a modal run writes beside results.csv (cli/run.py's ANALYSIS_FILES names them too,
 # to remove an earlier run's without importing this module)
 FILES = ("modes.csv", "linear_model.npz")
 REAL_CUT = 1e-9  # |Im s| <= REAL_CUT |s|: a real eigenvalue
@@ -122,7 +122,7 @@ class LinearModel:
         return Path(path)
 
     def write_npz(self, path: Path) -> Path:
-        """linear_model.npz, atomically (output.atomic)."""
+        """linear_model.npz, atomically (core.atomic)."""
         path = Path(path)
         with atomic(path, "wb") as handle:
             np.savez(handle, A=self.A, B=self.B, C=self.C, D=self.D,
@@ -228,12 +228,13 @@ def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.n
 
 
 def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
-              progress=None) -> Result:
+              progress=None, dynamics: Callable | None = None) -> Result:
     """The modal analysis: at the static equilibrium (the default: its row, the linear model,
     the modes; a zero-stiffness DOF is kept as a zero-frequency mode, no equilibrium is an
     AnalysisError), or with `at` at that time of a dynamics run (its rows up to `at`, the
     linear model at the last). `settings`: the resolved `analysis:` block (options `at`,
-    `inputs`; default the model's)."""
+    `inputs`; default the model's); `dynamics(functions, settings, progress)`: the dynamics
+    run that reaches `at` (runtime.analyses)."""
     settings = functions.ir.analysis if settings is None else settings
     at, inputs = settings.options.get("at"), settings.options.get("inputs")
     if at is None:
@@ -241,7 +242,7 @@ def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
         result = statics.equilibrium_result(functions, 0.0, equilibrium, "modal", progress)
         model = linearize(functions, equilibrium.system, inputs)
     else:
-        result = _run_to(functions, settings, float(at), progress)
+        result = _run_to(functions, settings, float(at), progress, dynamics)
         model = linearize_at(functions, result.times[-1], result.q[-1], result.q_dot[-1], inputs)
     result.linear_model = model
     result.files = {FILES[0]: model.write_modes, FILES[1]: model.write_npz}
@@ -251,23 +252,21 @@ def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
     return result
 
 
-def _run_to(functions: SystemFunctions, settings: Analysis, at: float, progress) -> Result:
-    """The dynamics run from 0 to `at` (casmech.analyze with the settings' tolerances and
+def _run_to(functions: SystemFunctions, settings: Analysis, at: float, progress,
+            dynamics: Callable | None) -> Result:
+    """The dynamics run from 0 to `at` (`dynamics` with the settings' tolerances and
     formulation; at = 0: the assembled initial state), its last row at `at`."""
     if not 0.0 <= at <= settings.t_end:
         raise UsageError(f"modal at = {at:g}: must be a time of the run, within [0, t_end = "
                          f"{settings.t_end:g}]")
     if at == 0.0:
         result = kinematics.run_assembly(functions, 0.0, progress)
+    elif dynamics is None:
+        raise UsageError("modal at a time after 0 needs the dynamics run (runtime.analyses)")
     else:
-        from casmech import api  # the dynamics path (api imports this module on use)
-
-        options = settings.options
-        result = api.analyze(functions, "dynamics", t_end=at,
-                             output_step=min(settings.output_step, at), rtol=settings.rtol,
-                             atol=settings.atol, formulation=options.get("formulation", "auto"),
-                             stabilization=options.get("stabilization", "ggl"),
-                             method=options.get("method", "auto"), progress=progress)
+        result = dynamics(functions, replace(settings, type="dynamics", t_end=at,
+                                             output_step=min(settings.output_step, at)),
+                          progress)
     if not result.times or abs(result.times[-1] - at) > 1e-12 * max(at, 1.0):
         last = result.times[-1] if result.times else 0.0
         raise AnalysisError(FailureContext(last, f"the run ended ({result.status}) before the "

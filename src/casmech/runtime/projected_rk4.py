@@ -10,7 +10,7 @@ crossing, the step errs by h^5), and the mass-orthogonal projection takes the ne
 on A02 N = 2 over 10 s: with the projection, fixed steps of 10, 5, 2.5 and 1 ms kept both
 formulations on the branch (B0 error 7e-6 down to 1e-10 m; tests/runtime/test_projected_rk4);
 projecting only at the outputs, 2 ms stayed on and 1 ms left it (error 2 m; measured before
-the accelerations were solved as corrections, compiler.augmented), and IDAS on the same ODE
+the accelerations were solved as corrections, formulations.augmented), and IDAS on the same ODE
 stayed on only as long as its roundoff was lucky (runtime.dynamics).
 
 Error control: an output interval is integrated with n and with 2n steps; the fine result is
@@ -28,8 +28,8 @@ import math
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import augmented
-from casmech.compiler.formulations import FORMULATIONS
+from casmech.formulations import augmented
+from casmech.formulations.table import FORMULATIONS
 
 SAFETY = 0.5  # aim of the weighted error estimate (1 = the tolerance)
 MAX_STEPS = 50000  # fine steps per output interval before giving up
@@ -39,7 +39,7 @@ ORDER = 4
 def rk4_step(functions: dict[str, ca.Function], name: str,
              solve: ca.Function) -> ca.Function:
     """(t, x, h, penalty) -> x after one Runge-Kutta step of x' = [q_dot(q, v), v_dot(t, q, v)]
-    (v_dot by `solve`, augmented.accelerations) and the projection of compiler.augmented."""
+    (v_dot by `solve`, augmented.accelerations) and the projection of formulations.augmented."""
     form = FORMULATIONS[name]
     project = augmented.projection(functions, name)
     n_q, n_v = solve.size1_in(1), solve.size1_in(2)

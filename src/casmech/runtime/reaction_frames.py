@@ -1,6 +1,6 @@
 """The frame and point of each joint's reaction columns (docs/format.md, `reactions:`).
 
-compiler.eom.reactions gives every joint's reaction in global components: the force on body_j
+equations.eom.reactions gives every joint's reaction in global components: the force on body_j
 and the torque about body_i's joint point. A joint whose frame is not `global` has both vectors
 written along that frame's axes instead, at every row: v_frame = R^T v_global, where R (columns:
 the frame's axes in global components) is
@@ -9,7 +9,7 @@ the frame's axes in global components) is
     body_i  A_i, body i's orientation (ground: I)
     body_j  A_j
     joint   A_i U, U the joint frame's axes (u, v, w) in body i's frame: the triad the joint's
-            constraints and joint coordinates use (compiler.lower.joint_frame: w the joint's
+            constraints and joint coordinates use (model.lower.joint_frame: w the joint's
             `axis`, u and v perpendicular to it; a joint without `axis` has the global axes at
             the file's pose), carried by body i
 
@@ -24,8 +24,8 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from casmech.compiler.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.errors import UsageError
+from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 
 DEFAULT = "global"
 

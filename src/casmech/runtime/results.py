@@ -7,11 +7,11 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 import numpy as np
 
-from casmech.compiler import contact
-from casmech.compiler.functions import SystemFunctions, all_sx
+from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
+from casmech.equations import contact
+from casmech.equations.functions import SystemFunctions, all_sx
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
-from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
@@ -95,7 +95,7 @@ class Result:
     def to_dataframe(self):
         """The results table as a pandas DataFrame, as casmech.load_results reads it from the
         files of a run: index t, the contract's columns, attrs["units"], attrs["metadata"]."""
-        from casmech.output import frames
+        from casmech.runtime import frames
 
         if self.functions is None:
             raise ValueError("this Result has no system functions to tabulate its rows with; "
@@ -110,14 +110,15 @@ class Result:
     def events_dataframe(self):
         """The events (runtime.events) as a pandas DataFrame, as events.csv holds them:
         columns t, name, then every results column at the event (no rows without events)."""
-        from casmech.runtime import events
+        import pandas as pd
 
         if self.functions is None:
             raise ValueError("this Result has no system functions to tabulate its events with")
-        return events.dataframe(self.functions, self)
+        names, rows = events_table(self.functions, self)
+        return pd.DataFrame(rows, columns=names)
 
     def _facts(self) -> dict[str, str]:
-        from casmech.output import frames
+        from casmech.runtime import frames
 
         known = self.functions is not None
         extra = {key: self.metadata[key] for key in ("formulation", "mode")
@@ -127,12 +128,12 @@ class Result:
                               len(column_names(self.functions)) if known else 0, extra)
 
     def __repr__(self) -> str:
-        from casmech.output import frames
+        from casmech.runtime import frames
 
         return frames.summary_text(self._facts())
 
     def _repr_html_(self) -> str:
-        from casmech.output import frames
+        from casmech.runtime import frames
 
         return frames.summary_html(self._facts())
 
@@ -209,3 +210,15 @@ def table(functions: SystemFunctions, result: Result,
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
                                                   values[:, block])
     return names, values
+
+
+def events_table(functions: SystemFunctions, result: Result, reaction_frames=None
+                 ) -> tuple[list[str], list[list]]:
+    """(names, rows) of events.csv: t, name, then every results column at the event (the
+    reaction columns in the frames `table` writes them in)."""
+    names = ["t", "name", *column_names(functions)[1:]]
+    if not result.events:
+        return names, []
+    _, values = table(functions, result.event_states, reaction_frames)
+    return names, [[record.t, record.name, *row[1:].tolist()]
+                   for record, row in zip(result.events, values, strict=True)]

@@ -19,8 +19,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.compiler.checks import structure, worst_joints
-from casmech.compiler.functions import SystemFunctions
+from casmech.equations.checks import structure, worst_joints
+from casmech.equations.functions import SystemFunctions
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
 

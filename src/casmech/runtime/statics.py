@@ -41,12 +41,11 @@ import casadi as ca
 import numpy as np
 import scipy.linalg
 
-from casmech import interrupts
-from casmech.compiler.checks import RANK_TOLERANCE
-from casmech.compiler.functions import SystemFunctions, all_sx, build_functions
+from casmech.core import euler
+from casmech.equations.checks import RANK_TOLERANCE
+from casmech.equations.functions import SystemFunctions, all_sx, build_functions
 from casmech.errors import AnalysisError, BodyName, FailureContext
-from casmech.geometry import euler
-from casmech.runtime import assembly
+from casmech.runtime import assembly, interrupts
 from casmech.runtime.results import Result
 
 MAX_ITERATIONS = 200

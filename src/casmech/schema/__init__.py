@@ -8,7 +8,7 @@ physics), each rendered as `file:line:col: error[CODE] path: message`.
 
 The package imports its modules where they are used, so that importing one of them (the
 compiler reads `casmech.schema.resolved`) does not import pydantic and the whole checker. The
-schema reads the bottom layer (casmech.geometry, casmech.joint_types), never the compiler.
+schema reads the bottom layer (casmech.core, casmech.elements.joint_types), never the compiler.
 """
 
 from __future__ import annotations

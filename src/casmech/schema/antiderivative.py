@@ -16,7 +16,7 @@ parameters stay symbolic for casmech.optimal).
 
 from __future__ import annotations
 
-from casmech.schema.expressions import Binary, Call, Constant, Expr, Name, Number, Unary
+from casmech.core.expressions import Binary, Call, Constant, Expr, Name, Number, Unary
 
 T = "t"
 MAX_POWER = 12  # t**n expanded for integer 0 <= n <= MAX_POWER

@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core import euler, quaternions
 from casmech.errors import failed
-from casmech.geometry import euler, quaternions
 from casmech.schema import files, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
@@ -43,7 +43,7 @@ GEOMETRY_EXTRAS = {
 
 # ------------------------------------------------------------------------------ rotations
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p): body -> global; columns are the body axes (geometry/euler.py's, on numbers)."""
+    """A(p): body -> global; columns are the body axes (core/euler.py's, on numbers)."""
     return euler.numeric(euler.rotation, np.asarray(p, float))
 
 

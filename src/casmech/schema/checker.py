@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from casmech import force_types
+from casmech.core.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
+from casmech.core.expressions import parse as parse_expression
+from casmech.elements import force_types
 from casmech.errors import Diagnostic, Source, did_you_mean, failed
 from casmech.schema import limits, resolved, spec
-from casmech.schema.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
-from casmech.schema.expressions import parse as parse_expression
 from casmech.schema.loader import Document, Path, format_path
 from casmech.schema.resolved import GROUND, ScalarFunction
 

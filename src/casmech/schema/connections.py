@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from casmech.elements.joint_types import COORDINATES, REGISTRY, having
 from casmech.errors import failed
-from casmech.joint_types import COORDINATES, REGISTRY, having
 from casmech.schema import contact, resolved
 from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
@@ -16,7 +16,7 @@ from casmech.schema.resolved import ScalarFunction
 
 UNIT_KEYS = frozenset({"axis", "axis_i", "axis_j"})  # normalised
 NONZERO_KEYS = frozenset({"axis", "axis_i", "axis_j", "a_i", "a_j", "c"})  # E404 when zero
-DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.joint_types)
+DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.elements.joint_types)
 
 
 def joint(check: Checker, index: int, given) -> resolved.Joint | None:

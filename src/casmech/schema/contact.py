@@ -1,14 +1,14 @@
 """The results columns of contact elements and joint stops, and joint limits: their numbers and
-located errors (the contacts' own checks: casmech.forces.contact_spec)."""
+located errors (the contacts' own checks: casmech.elements.forces.contact_spec)."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from casmech.elements.force_types import outputs_of
+from casmech.elements.forces.contact_spec import positive
+from casmech.elements.joint_types import COORDINATES, REGISTRY
 from casmech.errors import failed
-from casmech.force_types import outputs_of
-from casmech.forces.contact_spec import positive
-from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
@@ -16,7 +16,7 @@ from casmech.schema.loader import Path
 def output_names(joints, forces) -> list[str]:
     """The results columns of the force elements with outputs (their entry's `outputs` each, in
     file order), then the joint stops' (resolved joints and forces;
-    compiler.contact.output_names keeps the same order)."""
+    equations.contact.output_names keeps the same order)."""
     names = [f"{f.name}.{o}" for f in forces if f is not None for o in outputs_of(f.type)]
     return names + [f"{j.name}.{column}" for j in joints
                     if j is not None and j.limit is not None
@@ -24,7 +24,8 @@ def output_names(joints, forces) -> list[str]:
 
 
 def limit_column(joint_type: str) -> str:
-    """A joint stop's force or torque column: by the coordinate it stops (casmech.joint_types)."""
+    """A joint stop's force or torque column: by the coordinate it stops
+    (casmech.elements.joint_types)."""
     return COORDINATES[REGISTRY[joint_type].limit].limit[1]
 
 

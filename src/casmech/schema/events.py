@@ -3,7 +3,7 @@
 `when` is an expression of t, the parameters and the state: every body column of the results
 table (`bar.x` ... `bar.alphaz`, resolved.BODY_COLUMNS) and the coordinates of revolute,
 cylindrical and translational joints (`pivot.angle`, `slide.displacement_dot`: the names of
-casmech.geometry.states). A misspelt or unknown name is E201 at its place in the expression, with
+casmech.core.states). A misspelt or unknown name is E201 at its place in the expression, with
 a did-you-mean hint; a duplicate event name is E301.
 """
 
@@ -11,15 +11,15 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
+from casmech.core.expressions import ExpressionError, parse
+from casmech.elements.joint_types import attributes as joint_attributes
+from casmech.elements.joint_types import coordinate_types, listed
 from casmech.errors import did_you_mean
-from casmech.joint_types import attributes as joint_attributes
-from casmech.joint_types import coordinate_types, listed
 from casmech.schema import contact, resolved, spec
 from casmech.schema.checker import Checker
-from casmech.schema.expressions import ExpressionError, parse
 from casmech.schema.force_laws import initial_states
 from casmech.schema.loader import Path, format_path
-from casmech.schema.resolved import BODY_COLUMNS, JOINT_COLUMNS
 
 
 def state_names(check: Checker) -> dict[str, float]:

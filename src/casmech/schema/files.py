@@ -12,7 +12,7 @@ A file is read up to a limit (E306 beyond it; E006 for the model file itself): a
 huge file costs at most the limit in time and memory.
 
 While a model loads (`rooted`), every file it names that exists is recorded; `digests` gives
-their sha256 for the run's metadata (output/metadata.py) and `casmech run --replay`.
+their sha256 for the run's metadata (io/metadata.py) and `casmech run --replay`.
 """
 
 from __future__ import annotations

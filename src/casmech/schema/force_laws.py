@@ -1,9 +1,10 @@
-"""Force elements (their checks: casmech.force_types) and the force laws that read the state of
+"""Force elements (their checks: casmech.elements.force_types) and the force laws that read the
+state of
 the mechanism (docs/forces.md).
 
 The keys a force type's entry names in `state_keys` (a force's or torque's `value`, a tsda's or
 rsda's `actuator`) may name the state
-(`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the names are casmech.geometry.states)
+(`pivot.angle`, `slide.displacement_dot`, `bar.vx`; the names are casmech.core.states)
 besides t and parameters. `StateChecker` lets those expressions (and only those) read it, and
 says what is wrong with a dotted name anywhere: a state where none is allowed, a misspelt one
 (did you mean), an attribute the joint type does not have, ground.
@@ -18,11 +19,11 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core.states import BODY_STATES, JOINT_COORDINATES, split
+from casmech.elements.force_types import REGISTRY, state_reading
+from casmech.elements.joint_types import attributes as joint_attributes
+from casmech.elements.joint_types import coordinate_types, listed
 from casmech.errors import did_you_mean, failed
-from casmech.force_types import REGISTRY, state_reading
-from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
-from casmech.joint_types import attributes as joint_attributes
-from casmech.joint_types import coordinate_types, listed
 from casmech.schema import bodies, resolved
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
@@ -115,7 +116,7 @@ class StateChecker(Checker):
 
 # ------------------------------------------------------------------------- force elements
 def force(check: StateChecker, index: int, given) -> resolved.Force | None:
-    """One entry of `forces:`, checked by its casmech.force_types entry; the keys the entry
+    """One entry of `forces:`, checked by its casmech.elements.force_types entry; the keys the entry
     names in `state_keys` read the state."""
     path = ("forces", index)
     entry = REGISTRY[given.type]

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from casmech.force_types import input_types
-from casmech.joint_types import listed
+from casmech.elements.force_types import input_types
+from casmech.elements.joint_types import listed
 from casmech.schema import resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
@@ -28,7 +28,7 @@ def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Anal
                         got=f"{at:g}", hint=f"0 <= at <= t_end = {t_end:g}" if t_end else None)
             at = None
     known = {j.name: "joint" for j in joints if j is not None and j.motor}
-    types = input_types()  # force element types that may be inputs (casmech.force_types)
+    types = input_types()  # force element types that may be inputs (casmech.elements.force_types)
     known |= {f.name: f.type for f in forces if f is not None and f.type in types}
     inputs_ok = True
     what = f"input (an effort-motor joint or a {listed(types, 'or')} element)"

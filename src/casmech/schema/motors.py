@@ -9,7 +9,7 @@ functions back and adds the motor:
   in closed form (schema/antiderivative.py; tables: schema/tables.py), so the speed holds
   exactly; no closed form is a located error (E204);
 - effort mode (`torque`, `force`): kept in `Joint.motor` as a function of t and the joint's
-  coordinate and rate; compiler/motors.py applies it as a generalized force pair.
+  coordinate and rate; equations/motors.py applies it as a generalized force pair.
 
 Mismatched and unknown keys, two modes on one motion and a motion driven by both `driver:` and
 `motor:` are E408/E101 with the keys the joint type allows.
@@ -20,8 +20,8 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from casmech.elements.joint_types import COORDINATES, REGISTRY, coordinate_types, listed
 from casmech.errors import did_you_mean, failed
-from casmech.joint_types import COORDINATES, REGISTRY, coordinate_types, listed
 from casmech.schema import files, spec
 from casmech.schema.antiderivative import NoClosedForm, integral
 from casmech.schema.checker import Checker

@@ -19,8 +19,8 @@ from dataclasses import dataclass, fields, is_dataclass, replace
 
 import numpy as np
 
+from casmech.core.expressions import Binary, Expr, Name, Number
 from casmech.schema import resolved
-from casmech.schema.expressions import Binary, Expr, Name, Number
 from casmech.schema.resolved import GROUND
 
 POINT = frozenset({"at", "at_i", "at_j", "center", "center_i", "center_j"})  # + contact centres

@@ -19,10 +19,10 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from casmech.core.expressions import CONSTANTS, ExpressionError, tokenize
+from casmech.core.expressions import parse as parse_expression
 from casmech.errors import Diagnostic, Source, did_you_mean
 from casmech.schema.checker import NAME, RESERVED
-from casmech.schema.expressions import CONSTANTS, ExpressionError, tokenize
-from casmech.schema.expressions import parse as parse_expression
 from casmech.schema.loader import Document, Path, ScalarText, SourceMap, format_path
 
 SECTIONS = ("bodies", "joints", "forces", "instances")

@@ -3,7 +3,7 @@
 Everything here is checked and evaluated: parameters are numbers, vectors are numpy arrays in the
 GLOBAL frame exactly as the file wrote them (at t = 0), orientations are unit Euler parameters,
 functions of time are parsed expressions with the parameters bound. Names are still names
-(`ground` included); turning them into indices is the compiler's job (compiler/lower.py).
+(`ground` included); turning them into indices is the compiler's job (model/lower.py).
 """
 
 from __future__ import annotations
@@ -14,16 +14,10 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core.expressions import Expr
 from casmech.errors import Source
-from casmech.schema.expressions import Expr
 
 GROUND = "ground"
-# the body columns of the results contract (docs/format.md), in their order
-BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
-                "ax", "ay", "az", "alphax", "alphay", "alphaz")
-JOINT_COLUMNS = ("fx", "fy", "fz", "tx", "ty", "tz")  # each joint's reaction columns
-
-
 @dataclass(frozen=True)
 class ScalarFunction:
     """A scalar expression of some named variables (t, length, ...) with parameters bound."""
@@ -104,9 +98,9 @@ class Force:
              preload_torque (3 each, components in the frame)
     sphere_plane, sphere_sphere, points_plane, capsule_plane: body_i, body_j, vectors (plane
              at, normal; center, center_i, center_j, points, ends), params
-             (casmech/forces/contact_spec.py)
-    (each type's entry of casmech.force_types resolves its fields: `resolve`)
-    value and actuator may read the state (`pivot.angle`, `bar.vx`): casmech.geometry.states
+             (casmech/elements/forces/contact_spec.py)
+    (each type's entry of casmech.elements.force_types resolves its fields: `resolve`)
+    value and actuator may read the state (`pivot.angle`, `bar.vx`): casmech.core.states
     """
 
     name: str
@@ -124,7 +118,7 @@ class Force:
     value: tuple[ScalarFunction, ScalarFunction, ScalarFunction] | None = None
     frame: str = "global"
     source: Source | None = None
-    # contact (casmech/forces/contact_spec.py): radii, the normal law and friction
+    # contact (casmech/elements/forces/contact_spec.py): radii, the normal law and friction
     params: Mapping[str, float] = field(default_factory=dict)
 
 

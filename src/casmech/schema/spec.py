@@ -4,8 +4,9 @@ Frozen, `extra="forbid"`; joints and forces are unions discriminated on `type`, 
 geometry items on their shape. Every scalar is a number or an expression string (evaluated in
 `semantic`); `spec_errors.validate` turns pydantic's errors into Diagnostics.
 
-The classes live in the parts, by what they hold: casmech.spec_base (scalars, vectors,
-orientation, repeat), spec_bodies, spec_joints (one class per joint type of casmech.joint_types),
+The classes live in the parts, by what they hold: casmech.core.spec_base (scalars, vectors,
+orientation, repeat), spec_bodies, spec_joints (one class per joint type of
+casmech.elements.joint_types),
 spec_forces, spec_analysis (analysis, events, estimation, optimal control, studies); this
 module holds the whole file (ModelSpec) and components, and gives every part's names as its
 own (`spec.Body`, `from casmech.schema.spec import Revolute`).
@@ -18,14 +19,15 @@ from typing import Annotated, Any, Union
 from pydantic import ConfigDict, Discriminator, Field, StrictStr, Tag
 from pydantic.fields import FieldInfo
 
-from casmech import force_types, spec_base
-from casmech.joint_types import on_change
+from casmech.core import spec_base
+from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
+from casmech.elements import force_types
+from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
 from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Study
 from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
-from casmech.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
 
 PARTS = (spec_base, spec_bodies, spec_joints, spec_forces, spec_analysis)
 

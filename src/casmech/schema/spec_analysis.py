@@ -13,7 +13,7 @@ from pydantic import (
     StrictStr,
 )
 
-from casmech.spec_base import Name, Scalar, Spec
+from casmech.core.spec_base import Name, Scalar, Spec
 
 
 # ---------------------------------------------------------------------------------- analysis
@@ -24,11 +24,11 @@ class Analysis(Spec):
     output_step: Scalar = 0.01
     rtol: Scalar = 1e-8
     atol: Scalar = 1e-10
-    # dynamics: r-p or r-omega DAE, joint coordinates (casmech.compiler.tree), or auto (the
+    # dynamics: r-p or r-omega DAE, joint coordinates (casmech.formulations.tree), or auto (the
     # fastest the model allows)
     formulation: Literal["rp", "romega", "joint", "auto"] = "auto"
     # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
-    # index-1 DAE's state back when it drifts (projection); see casmech.compiler.dae
+    # index-1 DAE's state back when it drifts (projection); see casmech.formulations.dae
     stabilization: Literal["ggl", "projection"] = "ggl"
     # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
     # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)

@@ -10,7 +10,7 @@ from pydantic import (
     Tag,
 )
 
-from casmech.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
 
 
 # ---------------------------------------------------------------------------------- geometry

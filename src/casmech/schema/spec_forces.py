@@ -1,5 +1,5 @@
 """`forces:` items (schema/spec.py): one class per registered force element type, the `spec`
-of its casmech.force_types entry (the built-in ones are in casmech.forces)."""
+of its casmech.elements.force_types entry (the built-in ones are in casmech.elements.forces)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from typing import Annotated, Union
 
 from pydantic import Field
 
-from casmech.force_types import REGISTRY
+from casmech.elements.force_types import REGISTRY
 
 
 def _force_union():

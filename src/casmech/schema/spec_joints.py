@@ -1,5 +1,5 @@
 """`joints:` items (schema/spec.py): the keys every joint has, drivers, motors, tables, limits,
-and one class per registered joint type, built from its casmech.joint_types entry."""
+and one class per registered joint type, built from its casmech.elements.joint_types entry."""
 
 from __future__ import annotations
 
@@ -15,8 +15,8 @@ from pydantic import (
     create_model,
 )
 
-from casmech.joint_types import REGISTRY, JointType
-from casmech.spec_base import Name, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
+from casmech.elements.joint_types import REGISTRY, JointType
 
 
 # ------------------------------------------------------------------------------------ joints
@@ -87,7 +87,7 @@ class Composite(JointBase):
 
 
 class Limit(Spec):
-    """A joint stop (compiler/limits.py): a one-sided spring-damper in the joint coordinate
+    """A joint stop (equations/limits.py): a one-sided spring-damper in the joint coordinate
     (revolute: the angle, translational and cylindrical: the slide) outside [lower, upper]."""
 
     lower: Scalar | None = None

@@ -5,7 +5,7 @@ thread each, or the existing cluster at `scheduler`. Consecutive runs go in one 
 runner.run_batch (batch_size); each worker process prepares the job's runner once
 (runner.runner_for).
 Outcomes are handed to `done(index, outcome)` as they finish, in any order. SIGINT (Ctrl-C)
-or SIGTERM stops the study: in this process through casmech.interrupts (the run in progress
+or SIGTERM stops the study: in this process through casmech.runtime.interrupts (the run in progress
 stops at its next row and is not recorded); on Dask as a KeyboardInterrupt of the waiting
 loop, which cancels what has not finished. What finished was already handed over.
 """
@@ -19,8 +19,8 @@ import threading
 from collections.abc import Callable, Sequence
 from contextlib import contextmanager
 
-from casmech import interrupts
 from casmech.errors import UsageError
+from casmech.runtime import interrupts
 from casmech.study.runner import Job, Outcome, run_batch, unexpected
 
 Done = Callable[[int, Outcome], None]

@@ -6,7 +6,7 @@ Layout of DIR/runs.h5:
         results         float64 [rows x columns] (no rows when a run failed before its first)
         attributes      the run's parameter values, status, reason, wall_s
 
-Written under a temporary name and renamed when closed (output.atomic), so an interrupted
+Written under a temporary name and renamed when closed (core.atomic), so an interrupted
 study leaves a complete file of the runs that finished.
 """
 
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.output.hdf5 import h5py
+from casmech.io.hdf5 import h5py
 from casmech.study.runner import Outcome
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import UsageError, did_you_mean
-from casmech.output import plot
+from casmech.io import plot
 
 FIRST = "run"  # sweep.csv: run, the parameters, status, wall_s, the kept outputs, reason
 
@@ -48,7 +48,7 @@ def figure(path: Path, specs: Sequence[str]):
             raise UsageError(f"'{name}' is not a kept output of {path.name}"
                              f"{f'; {hint}' if hint else ''} (kept: {', '.join(outputs)})")
     done = table[table["status"] == "complete"]
-    Figure = plot._matplotlib_figure()  # noqa: N806 - a class
+    Figure = plot.matplotlib_figure()  # noqa: N806 - a class
     fig = Figure(figsize=(8, 1.2 + 3.0 * len(chosen)), layout="constrained")
     axes = fig.subplots(len(chosen), 1, squeeze=False)[:, 0]
     for ax, name in zip(axes, chosen, strict=True):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from contextlib import contextmanager
 
-from casmech.output import progress
+from casmech.io import progress
 
 BAR = "{desc}{percentage:3.0f}%|{bar}| {n}/{total} runs [wall {elapsed}<{remaining}{postfix}]"
 
@@ -15,12 +15,13 @@ BAR = "{desc}{percentage:3.0f}%|{bar}| {n}/{total} runs [wall {elapsed}<{remaini
 def runs_bar(total: int, stream=None):
     """Yields callback(status) to call once per finished run (None: no bar)."""
     stream = sys.stderr if stream is None else stream
-    tqdm = progress._tqdm() if progress._is_terminal(stream) else None
+    tqdm = progress.tqdm_class() if progress.is_terminal(stream) else None
     if tqdm is None:
         yield None
         return
     bar = tqdm(total=total, file=stream, delay=progress.delay(), bar_format=BAR,
-               desc="casmech sweep ", ncols=progress._width(stream) or progress.FALLBACK_WIDTH)
+               desc="casmech sweep ",
+               ncols=progress.terminal_width(stream) or progress.FALLBACK_WIDTH)
     failed = 0
 
     def done(status: str) -> None:

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from casmech import interrupts
 from casmech.errors import AnalysisError, Interrupted, ModelError
+from casmech.runtime import interrupts
 from casmech.study import kept as kept_outputs
 
 # keyword arguments of casmech.analyze a study may set (None: the model's)
@@ -68,27 +68,29 @@ class Runner:
 
     def prepare(self) -> None:
         """Once per process: today, importing what a run uses (the build is per run)."""
-        import casmech.api  # noqa: F401
+        import casmech.runtime.analyses  # noqa: F401
 
     def build(self, values: Mapping[str, float]):
         """The system functions at these parameter values."""
-        import casmech
+        from casmech import backends
+        from casmech.schema import load_model_text
 
         given = {**dict(self.job.base), **overrides(values)}
-        model = casmech.loads(self.job.text, file=self.job.file, overrides=given)
-        return casmech.compile(model, self.job.mode)
+        model = load_model_text(self.job.text, file=self.job.file, overrides=given)
+        return backends.compile(model, self.job.mode)
 
     def run(self, values: Mapping[str, float]) -> Outcome:
         """One run: complete, or failed with its reason (a model error at these values, an
         analysis failure; the rows before a failure still give the kept outputs)."""
-        import casmech
+        from casmech.runtime.analyses import analyze
+        from casmech.runtime.results import table as results_table
 
         clock = time.perf_counter()
         outcome = Outcome(dict(values), "complete")
         functions = result = None
         try:
             functions = self.build(values)
-            result = casmech.analyze(functions, progress=interrupts.watch(None),
+            result = analyze(functions, progress=interrupts.watch(None),
                                      **self.settings)
         except Interrupted:
             raise
@@ -98,7 +100,7 @@ class Runner:
         except ModelError as error:
             outcome.status, outcome.reason = "failed", reason(error)
         if functions is not None and result is not None and len(result):
-            names, table = casmech.results_table(functions, result)
+            names, table = results_table(functions, result)
             outcome.kept = kept_outputs.values(self.kept, names, table, result.events)
             outcome.rows = len(table)
             if self.job.full:

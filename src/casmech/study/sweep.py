@@ -52,8 +52,7 @@ def study_mode(model, runs: int, mode: str) -> str:
     library applies (codegen.parametric: parameters, at most 32 bodies; one library for every
     value) and is cached or the study has COMPILE_RUNS runs or more (a build of 5-15 s against
     ~50 ms saved per run of the four-bar: benchmarks/notes_sweep.md), else "interpreted"."""
-    from casmech import codegen
-    from casmech.codegen import parametric
+    from casmech.backends import codegen, parametric
     from casmech.errors import UsageError
 
     applies = parametric.applies(model)
@@ -75,17 +74,18 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     `study:` block, usage errors for `given` (grid, normal, uniform, samples, seed, keep);
     the model built once (in compiled mode: its library, which every run then loads), its
     analysis settings and kept outputs checked."""
-    import casmech
-    from casmech import api
-    from casmech.output.metadata import resolved_settings
+    from casmech import backends
+    from casmech.io.metadata import resolved_settings
+    from casmech.runtime.analyses import analysis_settings
     from casmech.runtime.results import column_names
+    from casmech.schema import load_model, load_model_text
     from casmech.schema.loader import load_document
 
     overrides = dict(overrides or {})
     if not hasattr(source, "text"):
-        model = casmech.load(source, overrides)
+        model = load_model(source, overrides=overrides)
     elif overrides:  # a loaded model, at these values as every run will be
-        model = casmech.loads(source.text, file=str(source.file), overrides=overrides)
+        model = load_model_text(source.text, file=str(source.file), overrides=overrides)
     else:
         model = source
     document = load_document(model.text, str(model.file))
@@ -97,8 +97,8 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     try:
         study = block.build(form, model.parameters, others)
         mode = study_mode(model, len(study.points()), mode)
-        functions = casmech.compile(model, mode)
-        checked = api.analysis_settings(functions, **settings)
+        functions = backends.compile(model, mode)
+        checked = analysis_settings(functions, **settings)
         block.check_keep(study, column_names(functions), float(checked.t_end),
                          [event.name for event in checked.events])
     except block.StudyProblems as problems:
@@ -171,8 +171,8 @@ def parquet_available() -> bool:
 def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping[str, float],
           options: Mapping) -> list[Path]:
     """sweep.csv, sweep.parquet (when pyarrow is installed) and metadata.json in `out`."""
-    from casmech.output.atomic import atomic
-    from casmech.output.metadata import run_metadata, write_json
+    from casmech.core.atomic import atomic
+    from casmech.io.metadata import run_metadata, write_json
 
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "sweep.csv"]
@@ -180,7 +180,7 @@ def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping
         table.to_csv(handle, index=False)
     parquet = parquet_available()
     if parquet:
-        from casmech.output.atomic import replaced
+        from casmech.core.atomic import replaced
 
         paths.append(out / "sweep.parquet")
         with replaced(paths[-1]) as temporary:

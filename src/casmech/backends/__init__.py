@@ -1,0 +1,46 @@
+"""Backends: the system functions of a model evaluated interpreted (CasADi SX functions) or
+compiled (C generated from the same functions, built, cached and loaded: backends.codegen).
+A backend defines no physics; both give the same functions (names, inputs, outputs,
+sparsity). This module is light: code generation is imported only when a model is compiled.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.errors import AnalysisError, UsageError
+from casmech.model.lower import lower
+from casmech.schema.resolved import ResolvedModel
+
+COMPILE_MODES = ("interpreted", "compiled", "auto")
+
+
+def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
+    """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
+    "compiled" (C generated, built with the C compiler and loaded; cached by model content in
+    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (whichever runs sooner end to end,
+    codegen.auto_mode: compiled when the library is cached or the model is big, else
+    interpreted; interpreted with one warning without a C compiler). Both bundles have the
+    same functions."""
+    if mode not in COMPILE_MODES:
+        raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
+    if mode == "interpreted":  # before importing code generation, which this path never uses
+        return build_functions(lower(model))
+    from casmech.backends import codegen
+
+    if mode == "auto" and not codegen.available():
+        warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
+                      "functions, which is slower; install gcc to compile models", stacklevel=2)
+        mode = "interpreted"
+    if mode == "interpreted" or (mode == "auto" and codegen.auto_mode(
+            model, background=True) == "interpreted"):
+        return build_functions(lower(model))
+    try:
+        return codegen.compiled(model)
+    except (AnalysisError, UsageError) as error:  # the compiler failed; no writable cache
+        if mode == "compiled":
+            raise
+        warnings.warn(f"{str(error).splitlines()[0]}; casmech runs interpreted CasADi "
+                      "functions instead", stacklevel=2)
+        return build_functions(lower(model))

@@ -1,0 +1,175 @@
+"""The build cache: one directory per key, published atomically.
+
+Key: the model's content (its text, the texts of the component files it was composed from, the
+data of every table it reads, and its resolved parameters, so --set overrides count; a
+parametric library's key has the model's structure instead of the parameter values,
+codegen.parametric), the
+casmech version and a digest of its compiler sources, the CasADi version, the C compiler and its
+flags. A build happens in a private temporary directory under the cache and is published with
+one rename; a lock file makes a second process wait for the first instead of building the same
+key again, and the rename alone keeps the cache whole should the lock not hold (NFS).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping
+from contextlib import contextmanager
+from dataclasses import fields, is_dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from casmech.backends.manifest import FORMAT, MANIFEST
+from casmech.core.version import VERSION
+from casmech.errors import UsageError
+from casmech.schema.resolved import ResolvedModel
+from casmech.schema.tables import TableExpr
+
+ENVIRONMENT = "CASMECH_CACHE_DIR"
+PACKAGE = Path(__file__).resolve().parents[1]
+# what the generated code depends on: these packages (with their subpackages) and top-level
+# modules
+SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations", "formulations",
+                   "backends")
+SOURCE_MODULES = ()
+
+
+def cache_dir() -> Path:
+    configured = os.environ.get(ENVIRONMENT)
+    return Path(configured) if configured else Path.home() / ".cache" / "casmech"
+
+
+@lru_cache(maxsize=1)
+def source_digest() -> str:
+    """sha256 of casmech's own sources that shape the generated code (an edited compiler in a
+    development install must not reuse stale builds under the same version number)."""
+    digest = hashlib.sha256()
+    for package in SOURCE_PACKAGES:
+        for path in sorted((PACKAGE / package).rglob("*.py")):
+            name = path.relative_to(PACKAGE).as_posix()
+            digest.update(name.encode() + b"\0" + path.read_bytes())
+    for path in (PACKAGE / name for name in SOURCE_MODULES):
+        digest.update(path.name.encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()
+
+
+def _tables(value, found: list, seen: set) -> list:
+    """Every table (schema.tables.TableExpr) reachable from a resolved model's fields, in a
+    fixed order: a CSV's content lives only there, not in any text."""
+    if id(value) in seen or isinstance(value, (str, bytes, int, float, np.ndarray)):
+        return found
+    seen.add(id(value))
+    if isinstance(value, TableExpr):
+        found.append(value)
+    elif is_dataclass(value):
+        for item in fields(value):
+            _tables(getattr(value, item.name), found, seen)
+    elif isinstance(value, Mapping):
+        for item in value.values():
+            _tables(item, found, seen)
+    elif isinstance(value, (tuple, list)):
+        for item in value:
+            _tables(item, found, seen)
+    return found
+
+
+def model_digest(model: ResolvedModel, values: bool = True) -> str:
+    """sha256 of everything the generated code of a model depends on; without `values`, of
+    everything but its parameter values (a parametric library takes them as an input)."""
+    parameters = {k: float(v) for k, v in sorted(model.parameters.items())} if values else {}
+    digest = hashlib.sha256(json.dumps({
+        "text": model.text, "files": dict(sorted(model.files.items())),
+        "parameters": parameters}).encode())
+    for table in _tables(model, [], set()):
+        polynomial = table.polynomial
+        digest.update(json.dumps([table.text, polynomial.periodic, list(polynomial.slopes),
+                                  polynomial.increment]).encode())
+        digest.update(np.ascontiguousarray(polynomial.breaks, float).tobytes())
+        digest.update(np.ascontiguousarray(polynomial.coefficients, float).tobytes())
+    return digest.hexdigest()
+
+
+def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:
+    content = json.dumps({"format": FORMAT, "model": model_hash, "casmech": VERSION,
+                          "sources": source_digest(), "casadi": ca.__version__,
+                          "compiler": compiler, "flags": list(flags), "dae": dae})
+    return hashlib.sha256(content.encode()).hexdigest()[:32]
+
+
+@contextmanager
+def _locked(path: Path):
+    with open(path, "a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = None
+           ) -> tuple[Path, bool]:
+    """The cache directory of a key, building it with build(temporary_dir) when missing;
+    returns (directory, hit)."""
+    root = root or cache_dir()
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        probe = tempfile.TemporaryFile(dir=root)
+        probe.close()
+    except OSError as error:
+        raise UsageError(f"the compiled-model cache {root} is not writable ({error.strerror}); "
+                         f"set {ENVIRONMENT} to a writable directory") from None
+    final = root / entry_key
+    if (final / MANIFEST).is_file():
+        return final, True
+    with _locked(root / f"{entry_key}.lock"):
+        if (final / MANIFEST).is_file():
+            return final, True
+        temporary = Path(tempfile.mkdtemp(prefix=f".{entry_key}.", dir=root))
+        try:
+            build(temporary)
+            os.replace(temporary, final)  # atomic; fails if another process published first
+        except OSError:
+            if not (final / MANIFEST).is_file():
+                raise
+        finally:
+            shutil.rmtree(temporary, ignore_errors=True)
+    return final, False
+
+
+def entries(root: Path | None = None) -> list[Path]:
+    root = root or cache_dir()
+    return sorted(p for p in root.glob("*") if p.is_dir() and (p / MANIFEST).is_file()) \
+        if root.is_dir() else []
+
+
+def unfinished(root: Path | None = None) -> list[Path]:
+    """Hidden temporary build folders: builds in progress, or left by a killed one."""
+    root = root or cache_dir()
+    return sorted(p for p in root.glob(".*") if p.is_dir()) if root.is_dir() else []
+
+
+def size(path: Path) -> int:
+    return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+
+
+def clear(root: Path | None = None) -> int:
+    """Remove every entry (and stale temporary directories and locks); the bytes freed."""
+    root = root or cache_dir()
+    if not root.is_dir():
+        return 0
+    freed = 0
+    for path in root.iterdir():
+        if path.is_dir():
+            freed += size(path)
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.suffix == ".lock":
+            path.unlink(missing_ok=True)
+    return freed

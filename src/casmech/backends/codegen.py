@@ -1,0 +1,244 @@
+"""Code generation: SystemFunctions -> C -> shared libraries -> casadi.external, with a cache.
+
+    functions = compiled(model)           # SystemFunctions; built once per content, then cached
+                                          # (once per structure for every parameter value when
+                                          # codegen.parametric applies)
+    export(model, Path("out"))            # `casmech compile`: sources, headers, manifest, libraries
+    auto_mode(model)                      # "compiled" or "interpreted"
+    compile_functions({"f": f}, ...)      # any named casadi Functions (codegen.library)
+
+What is compiled (write_build):
+  - the bundle, equations.mapped.bundle: every system function from SX kernels (one per kind of
+    constraint row, joint, body quantity, force element) mapped over their instances, with the
+    derivatives casmech.optimal differentiates through (codegen.generate);
+  - for a model whose analysis is kinematics or inverse dynamics, the prescribed-motion step
+    over the bundle (formulations.prescribed.step), which runtime.kinematics maps over the output
+    grid;
+  - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (formulations.residuals: one
+    kernel per joint, body and force element, the Jacobian from the kernels' own SX
+    Jacobians; for a small model formulations.dae's unrolled SX: residuals.oracles), in a library
+    of its own with the daeF and jacF casadi's IDAS interface loads from it.
+The C holds each kernel once; only index tables grow with the model. Default flags -O1
+(build.DEFAULT_FLAGS). Measured (benchmarks/RESULTS_codegen.md): IDAS's residual 3.3-4x and
+Jacobian 4-8x faster than the interpreted SX from 2 to 128 bodies; YAML -> loaded library in
+2-4 s for chains of 2-128 bodies (the four-bar, whose joints share no kernel, ~6-10 s), 12 s
+for 1000.
+
+`--mode auto` (auto_mode):
+  - compiled when the library is in the cache (loading it takes 0.02-0.3 s);
+  - otherwise compiled from AUTO_BODIES bodies on, interpreted below: interpreted is ready
+    sooner up to 128 bodies (YAML -> ready 0.02-1.6 s, a build 2-4 s), compiled from 256 for
+    r-p dynamics (docs/decisions.md);
+  - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
+    joint, no DAE stabilization): its ODE stays interpreted from COMPILED_ODE_BODIES bodies on
+    (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
+    runs interpreted at every size (a formulation given on the command line is not seen here).
+    Later runs of an unchanged model load the cached library.
+  - with $CASMECH_BACKGROUND_BUILD=1, a cache miss below AUTO_BODIES also builds the library
+    in a detached process (build_in_background) while the run goes on interpreted, so the
+    next run is compiled.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from casmech.backends import cache, generate, manifest, parametric
+from casmech.backends.build import LIBRARY, Toolchain, available, build_libraries
+from casmech.backends.library import compile_functions
+from casmech.backends.load import load as load_build
+from casmech.backends.load import mode_of
+from casmech.core.version import VERSION
+from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.equations.mapped.bundle import mapped_functions
+from casmech.errors import UsageError
+from casmech.formulations import prescribed, residuals
+from casmech.formulations.tree import spanning_tree
+from casmech.model.ir import ModelIR
+from casmech.model.lower import lower
+from casmech.model.parametric import data
+from casmech.schema.resolved import ResolvedModel
+
+__all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled", "export",
+           "is_cached", "mode_of", "write_build"]
+
+
+def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
+    """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF."""
+    return residuals.oracles(ir)
+
+
+PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")
+
+
+INLINED_STEP_BODIES = 32  # up to here prescribed_step is one SX graph (benchmarks/RESULTS.md)
+
+
+def bundle(ir: ModelIR) -> dict[str, ca.Function]:
+    """The functions of the bundle's library (module docstring). prescribed_step is built over
+    the SX system functions (one inlined graph) for small models, over the mapped kernels for
+    larger ones."""
+    functions = mapped_functions(ir)
+    if ir.analysis.type in PRESCRIBED_ANALYSES:
+        over = build_functions(ir).functions if len(ir.bodies) <= INLINED_STEP_BODIES \
+            else functions
+        functions["prescribed_step"] = prescribed.step(over)
+    return functions
+
+
+def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
+                dae: bool = False) -> Path:
+    """Generate the sources and headers, build the libraries and write the manifest (last, so
+    a directory with a manifest is complete); `dae`: the DAE residuals dae_[ggl_]<formulation>
+    too, each in its own library."""
+    functions = bundle(ir)
+    sources = generate.write_sources(functions, directory, toolchain.jobs)
+    oracles = dae_oracles(ir) if dae else {}
+    dae_sources = generate.write_dae_sources(oracles, directory)
+    build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
+    libraries = {name: generate.dae_library(name) for name in oracles}
+    return manifest.write(directory, {**functions, **{name: oracle[name] for name, oracle in
+                                                      oracles.items()}},
+                          generate.differentiated(functions), {
+        **info, "casmech": VERSION, "casmech_sources": cache.source_digest(),
+        "casadi": ca.__version__, "compiler": toolchain.compiler,
+        "compiler_version": toolchain.version(), "flags": list(toolchain.all_flags),
+        "library": LIBRARY, "header": generate.HEADER,
+        "sources": [s.name for s in sources + [p for group in dae_sources.values()
+                                               for p in group]]}, libraries)
+
+
+def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
+           mapped: bool = False) -> tuple[str, Callable[[Path], None], np.ndarray | None]:
+    """(cache key, build(directory), model data): the parametric library (codegen.parametric)
+    where it applies and `mapped` is not asked for, with the values its load binds, else the
+    mapped one with the values baked in (and in its key), and None."""
+    if not mapped and parametric.applies(model):
+        values, signature = data(ir)  # one lowering's split serves key and load (~10 ms)
+        entry = parametric.key(model, signature, toolchain, dae)
+        info = {"model": model.name, "key": entry}
+        return entry, lambda directory: parametric.write_build(
+            ir, directory, toolchain, info, dae, build_libraries), values
+    model_hash = cache.model_digest(model)
+    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
+    info = {"model": model.name, "model_hash": model_hash, "key": entry}
+    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), None
+
+
+def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
+            dae: bool = False, mapped: bool = False) -> tuple[Path, bool]:
+    entry, build, _ = _entry(model, lower(model), toolchain, dae, mapped)
+    return cache.lookup(entry, build, root)
+
+
+def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
+             root: Path | None = None, dae: bool = True,
+             parametric_library: bool = True) -> SystemFunctions:
+    """The model's SystemFunctions loaded from its compiled libraries, built only when the
+    cache holds none for this model (for a parametric library: this structure, whatever the
+    parameter values; codegen.parametric), casmech/CasADi version, compiler and flags. With
+    `dae`, the bundle also carries the DAE residuals dae_[ggl_]<formulation> as IDAS integrates
+    them (t, x, z, p, u) -> (ode, alg, quad, zero) (formulations.dae.residual takes them from the
+    bundle, formulations.dae.problem hands them to casadi as they are). `parametric_library` False:
+    the mapped library even where the parametric one applies."""
+    ir = lower(model)
+    entry, build, values = _entry(model, ir, toolchain or Toolchain(), dae,
+                                  not parametric_library)
+    directory, _ = cache.lookup(entry, build, root)
+    if values is not None:
+        return parametric.load(directory, ir, values)
+    return load_build(directory, ir)
+
+
+AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
+
+
+def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
+    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
+    options = model.analysis.options
+    if model.analysis.type != "dynamics" or options.get("formulation", "auto") not in (
+            "auto", "joint") or options.get("stabilization", "ggl") != "ggl":
+        return False
+    return spanning_tree(ir).is_tree
+
+
+def _in_cache(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, root: Path | None,
+              dae: bool = True) -> bool:
+    entry = _entry(model, ir, toolchain, dae)[0]
+    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
+
+
+def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
+              root: Path | None = None, dae: bool = True) -> bool:
+    """Whether the cache holds the model's library for this toolchain (nothing is built)."""
+    return _in_cache(model, lower(model), toolchain or Toolchain(), root, dae)
+
+
+def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
+              root: Path | None = None, background: bool = False) -> str:
+    """"compiled" or "interpreted", whichever the model runs sooner without waiting long for a
+    build (module docstring); "interpreted" without a C compiler. With `background`, a cache
+    miss below AUTO_BODIES also starts building the library behind the run when
+    $CASMECH_BACKGROUND_BUILD is 1 (build_in_background), so later runs are compiled."""
+    toolchain = toolchain or Toolchain()
+    if not available(toolchain):
+        return "interpreted"
+    ir = lower(model)
+    if _in_cache(model, ir, toolchain, root) or (len(model.bodies) >= AUTO_BODIES
+                                                 and not _joint_tree(model, ir)):
+        return "compiled"
+    if background and os.environ.get(BACKGROUND_ENVIRONMENT) == "1":
+        build_in_background(model, toolchain, root)
+    return "interpreted"
+
+
+BACKGROUND_ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "1": auto builds behind the run
+BACKGROUND_LIMIT = 900  # s: a background build still running then stops (SIGALRM)
+
+
+def build_in_background(model: ResolvedModel, toolchain: Toolchain | None = None,
+                        root: Path | None = None) -> int:
+    """Build the model's library into the cache in a detached process (two forks: no zombie,
+    no wait at exit; one compiler process, niced), published atomically by cache.lookup, whose
+    lock makes a foreground build of the same key wait for it instead of building twice.
+    Returns the intermediate child's pid (0 where there is no fork)."""
+    if not hasattr(os, "fork"):
+        return 0
+    toolchain = toolchain or Toolchain()
+    pid = os.fork()
+    if pid:
+        os.waitpid(pid, 0)
+        return pid
+    try:
+        os.setsid()
+        if os.fork():
+            os._exit(0)
+        os.nice(10)
+        signal.alarm(BACKGROUND_LIMIT)
+        quiet = os.open(os.devnull, os.O_RDWR)
+        for stream in (0, 1, 2):
+            os.dup2(quiet, stream)
+        _cached(model, Toolchain(toolchain.compiler, toolchain.flags, 1), root, True)
+        os._exit(0)
+    except BaseException:  # noqa: BLE001 - a detached child reports nothing and never returns
+        os._exit(1)
+
+
+def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,
+           root: Path | None = None, dae: bool = True) -> tuple[Path, bool]:
+    """Copy the model's build (through the cache) into `out`, by default with the DAE
+    libraries (each DAE with daeF, jacF and its Jacobian: what a C integrator needs);
+    (manifest path, cache hit)."""
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"{out} is a file; -o expects a directory (created if missing)")
+    directory, hit = _cached(model, toolchain or Toolchain(), root, dae, mapped=True)
+    out.mkdir(parents=True, exist_ok=True)
+    shutil.copytree(directory, out, dirs_exist_ok=True)
+    return out / manifest.MANIFEST, hit

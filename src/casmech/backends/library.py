@@ -1,0 +1,102 @@
+"""Any named casadi Functions -> a cached compiled library -> loaded externals.
+
+    compiled = compile_functions({"f": f, "dae": residual}, with_jacobian={"f"},
+                                 integrators={"dae"})
+    compiled["f"](x)                      # casadi.external, the same inputs and outputs as f
+    ca.integrator("i", "idas", compiled["dae"], t0, grid)   # daeF/jacF from its library
+
+The cache key is the functions' content (casadi's serialization of each, with its name and
+what is generated with it), the CasADi and casmech versions, the C compiler and its flags: the
+same functions build once, in a directory of the compiled-model cache (codegen.cache), and load
+from it afterwards. `with_jacobian` adds jac_<name>, through which an MX graph over the external
+is differentiated in compiled code. `integrators` names DAE residuals (t, x, z, p) -> (ode, alg)
+(as formulations.dae builds them): each goes into a library of its own with its residual and
+Jacobian blocks under the names casadi's IDAS interface looks up (daeF, jacF; the Jacobian by
+CasADi's AD of the function), and comes back with the integrator's signature (t, x, z, p, u)
+-> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+import casadi as ca
+
+from casmech.backends import cache, generate, manifest
+from casmech.backends.build import LIBRARY, Toolchain, build_libraries
+from casmech.backends.load import externals
+from casmech.core.version import VERSION
+from casmech.formulations import residuals
+
+HEADER_PREFIX = "casmech_functions"
+
+
+def content_key(functions: Mapping[str, ca.Function], with_jacobian: set[str],
+                integrators: set[str], toolchain: Toolchain) -> str:
+    """The cache key: every function's serialized content and role, and the toolchain."""
+    entries = [[name, hashlib.sha256(function.serialize().encode()).hexdigest(),
+                name in with_jacobian, name in integrators]
+               for name, function in sorted(functions.items())]
+    content = json.dumps({"format": manifest.FORMAT, "kind": "functions", "entries": entries,
+                          "casmech": VERSION, "sources": cache.source_digest(),
+                          "casadi": ca.__version__, "compiler": toolchain.version(),
+                          "flags": list(toolchain.all_flags)})
+    return hashlib.sha256(content.encode()).hexdigest()[:32]
+
+
+def _named(name: str, function: ca.Function) -> ca.Function:
+    """The function under `name` (the C symbol the library exports)."""
+    if function.name() == name:
+        return function
+    symbols = function.sx_in() if function.is_a("SXFunction") else function.mx_in()
+    return ca.Function(name, symbols, function.call(symbols), function.name_in(),
+                       function.name_out())
+
+
+def _check(functions: Mapping[str, ca.Function], with_jacobian: set[str],
+           integrators: set[str]) -> None:
+    unknown = (with_jacobian | integrators) - set(functions)
+    if unknown:
+        raise ValueError(f"not among the functions: {', '.join(sorted(unknown))}")
+    for name in functions:
+        if not name.isidentifier() or name in ("daeF", "jacF"):
+            raise ValueError(f"{name!r} is not a usable C function name")
+    for name in integrators:
+        if functions[name].name_out() != ["ode", "alg"] or functions[name].n_in() != 4:
+            raise ValueError(f"{name}: a DAE residual (t, x, z, p) -> (ode, alg) is expected")
+
+
+def compile_functions(functions: Mapping[str, ca.Function], with_jacobian: Iterable[str] = (),
+                      integrators: Iterable[str] = (), toolchain: Toolchain | None = None,
+                      root: Path | None = None) -> dict[str, ca.Function]:
+    """The functions compiled and loaded (casadi.external), by name; built only when the cache
+    holds no library for this content and toolchain (module docstring)."""
+    with_jacobian, integrators = set(with_jacobian), set(integrators)
+    _check(functions, with_jacobian, integrators)
+    toolchain = toolchain or Toolchain()
+    named = {name: _named(name, f) for name, f in functions.items()}
+    key = content_key(named, with_jacobian, integrators, toolchain)
+
+    def build(directory: Path) -> None:
+        plain = {n: f for n, f in named.items() if n not in integrators}
+        groups = {n: [f, *([f.jacobian()] if n in with_jacobian else [])]
+                  for n, f in plain.items()}
+        sources = generate.write_units(groups, directory, toolchain.jobs, HEADER_PREFIX)
+        oracles = {n: residuals.from_residual(named[n]) for n in sorted(integrators)}
+        dae_sources = generate.write_dae_sources(oracles, directory)
+        build_libraries({LIBRARY: sources, **dae_sources} if sources else dae_sources,
+                        directory, toolchain)
+        manifest.write(directory, {**plain, **{n: o[n] for n, o in oracles.items()}},
+                       with_jacobian, {
+                           "model": "functions " + ", ".join(sorted(named)), "key": key,
+                           "casmech": VERSION, "casadi": ca.__version__,
+                           "compiler": toolchain.compiler,
+                           "compiler_version": toolchain.version(),
+                           "flags": list(toolchain.all_flags), "library": LIBRARY},
+                       {n: generate.dae_library(n) for n in oracles})
+
+    directory, _ = cache.lookup(key, build, root)
+    return externals(directory)

@@ -1,0 +1,49 @@
+"""A compiled SystemFunctions: casadi.external over the generated libraries, interchangeable
+with the interpreted bundle (same names, inputs, outputs and sparsity), plus the DAE residuals
+dae_[ggl_]<formulation> in the form IDAS integrates (formulations.residuals)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import casadi as ca
+
+from casmech.backends import manifest
+from casmech.backends.build import LIBRARY
+from casmech.equations.functions import JointMeta, SystemFunctions
+from casmech.model.ir import GROUND_INDEX, ModelIR
+
+
+def metadata(ir: ModelIR) -> dict:
+    """The SystemFunctions fields other than `functions` (as equations.functions builds them),
+    without building a symbolic graph."""
+    names = tuple(b.name for b in ir.bodies)
+
+    def body_name(k: int) -> str:
+        return "ground" if k == GROUND_INDEX else names[k]
+
+    joints = tuple(JointMeta(j.name, j.type, j.rows, body_name(j.body_i), body_name(j.body_j),
+                             j.source) for j in ir.joints)
+    return {"body_names": names, "joints": joints, "rows": tuple(ir.row_info()), "ir": ir}
+
+
+def externals(directory: Path) -> dict[str, ca.Function]:
+    """Every function the manifest of a build directory lists, loaded from its library."""
+    entries = manifest.read(directory)["functions"]
+    return {entry["name"]: ca.external(entry["name"], str(
+        (directory / (entry.get("library") or LIBRARY)).resolve())) for entry in entries}
+
+
+def load(directory: Path, ir: ModelIR) -> SystemFunctions:
+    return SystemFunctions(externals(directory), **metadata(ir))
+
+
+def mode_of(functions: SystemFunctions) -> str:
+    """'compiled' when the bundle's functions are loaded from a library, else 'interpreted'
+    (found once per bundle)."""
+    if "mode" not in functions.derived:
+        kinds = {f.class_name() for f in functions.functions.values()}
+        bound = functions.data is not None  # externals with the model data bound (parametric)
+        functions.derived["mode"] = ("compiled" if kinds == {"External"} or bound
+                                     else "interpreted")
+    return functions.derived["mode"]

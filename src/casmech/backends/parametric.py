@@ -1,0 +1,163 @@
+"""Compiled libraries that take the model data as an input: one build serves every value of the
+model's parameters.
+
+The bundle is equations.functions over model.parametric's symbolic IR (every function with the
+trailing input `d`, the model data), unrolled SX generated as C with the derivatives
+codegen.generate adds (and, for kinematics and inverse dynamics, formulations.prescribed's step over
+it, with `d` its third input); each DAE residual is formulations.dae's over that bundle,
+(t, x, z, [p; d]), with its daeF and jacF (formulations.residuals.from_residual). The cache key is
+the model's structure (model.parametric's signature) with its text, component files and
+tables, never the values.
+For a dynamics analysis the library also holds the joint formulation's functions
+(formulations.joint_system over the same symbolic IR, their trailing input the model data with the
+tree's constants): the tree's ODE with its forward derivative or the loops' DAE and its
+Jacobian by the states (joint_jacobian: never by d), the results rows, the loops' start
+functions and joint_data, which computes that input from d.
+Loading binds the values of this run: every function but the DAE residuals becomes an MX
+wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
+their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
+integrator's p. The joint functions are bound to joint_data(d) and kept apart from the system
+functions, in SystemFunctions.derived[LIBRARY_FUNCTIONS] (runtime.joint_dynamics takes them).
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from casmech.backends import cache, generate, manifest
+from casmech.backends.build import LIBRARY, Toolchain
+from casmech.backends.load import externals, metadata
+from casmech.core.version import VERSION
+from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.formulations import dae as dae_residuals
+from casmech.formulations import prescribed, residuals
+from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
+from casmech.formulations.joint_system import build as build_joint_system
+from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.tree import spanning_tree
+from casmech.model import parametric
+from casmech.model.ir import ModelIR
+from casmech.numerics import lazy_jacobian
+from casmech.schema.resolved import ResolvedModel
+
+MAX_BODIES = 32  # above: the mapped library (equations.mapped.bundle), values in its key
+PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
+JOINT_ANALYSES = ("dynamics",)  # the joint formulation's functions too
+JOINT_DATA = "joint_data"
+JOINT_JACOBIAN = "joint_jacobian"  # the ODE's or DAE's Jacobian by the states, not by d
+
+
+def applies(model: ResolvedModel) -> bool:
+    """Whether `compiled` builds the parametric library: a model with parameters, up to
+    MAX_BODIES bodies (unrolled C grows with the model; equations.mapped.bundle's does not)."""
+    return bool(model.parameters) and len(model.bodies) <= MAX_BODIES
+
+
+def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -> str:
+    """The cache key: the model's content without its parameter values, its structure, the
+    versions and the toolchain."""
+    content = json.dumps({"format": manifest.FORMAT, "kind": "parametric",
+                          "model": cache.model_digest(model, values=False),
+                          "structure": signature, "casmech": VERSION,
+                          "sources": cache.source_digest(), "casadi": ca.__version__,
+                          "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
+                          "dae": dae})
+    return hashlib.sha256(content.encode()).hexdigest()[:32]
+
+
+def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
+    """The joint formulation's functions by name, each with what is generated with it (as
+    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
+    derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
+    with its Jacobian by the states as a function of its own); none for loops through a
+    floating body."""
+    tree = spanning_tree(split.ir)
+    if tree.floating_loops:  # formulation auto runs rp (runtime.auto_formulation)
+        return {}
+    system = build_joint_system(split.ir, tree, split.symbols)
+    dynamics = {system.dynamics.name(): [system.dynamics]}
+    if system.n_cut:  # the DAE's Jacobian by the states, never by d
+        dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]
+    else:  # a tree's: by forward sweeps (JointSystem.problem), the derivative casadi looks up
+        dynamics["joint_ode"].append(system.dynamics.forward(1))
+    return {**dynamics, "joint_motion": [system.motion],
+            "joint_acceleration_system": [system.acceleration_system],
+            "joint_velocity_jacobian": [system.velocity_jacobian],
+            "joint_relative_states": [system.relative_states], JOINT_DATA: [system.data]}
+
+
+def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
+    """(the system functions with input d, the DAE residuals over them by name)."""
+    split = parametric.split(ir)
+    functions = build_functions(split.ir, split.symbols).functions
+    if ir.analysis.type in PRESCRIBED_ANALYSES:  # as codegen.bundle, d its third input
+        functions["prescribed_step"] = prescribed.step(functions)
+    oracles = {}
+    if dae:
+        for form in FORMULATIONS:
+            for kind in dae_residuals.STABILIZATIONS:
+                residual = dae_residuals.residual(functions, form, kind)
+                oracles[residual.name()] = residuals.from_residual(residual)
+    return functions, oracles
+
+
+def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, dae: bool,
+                build_libraries) -> Path:
+    functions, oracles = bundle(ir, dae)
+    joint = (joint_functions(parametric.split(ir)) if ir.analysis.type in JOINT_ANALYSES
+             else {})
+    groups = generate.units(functions) | joint
+    sources = generate.write_units(groups, directory, toolchain.jobs,
+                                   generate.HEADER.removesuffix(".h"))
+    dae_sources = generate.write_dae_sources(oracles, directory)
+    build_libraries({LIBRARY: sources, **dae_sources}, directory, toolchain)
+    listed = {**functions, **{n: members[0] for n, members in joint.items()},
+              **{n: o[n] for n, o in oracles.items()}}
+    return manifest.write(directory, listed, generate.differentiated(functions), {
+                              **info, "parametric": True, "parameters": list(ir.parameters),
+                              "data": int(functions["phi"].size1_in(2)),
+                              "casmech": VERSION,
+                              "casadi": ca.__version__, "compiler": toolchain.compiler,
+                              "compiler_version": toolchain.version(),
+                              "flags": list(toolchain.all_flags), "library": LIBRARY,
+                              "header": generate.HEADER},
+                          {n: generate.dae_library(n) for n in oracles})
+
+
+def bind(function: ca.Function, values: np.ndarray, name: str | None = None) -> ca.Function:
+    """The function without its trailing input d, called with d = values (under `name`)."""
+    inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k))
+              for k in range(function.n_in() - 1)]
+    outputs = function.call([*inputs, ca.DM(values)])
+    return ca.Function(name or function.name(), inputs, outputs, function.name_in()[:-1],
+                       function.name_out())
+
+
+@functools.lru_cache(maxsize=8)
+def _externals(directory: str, built: int) -> dict[str, ca.Function]:
+    """The library's externals, loaded once per process and build (`built`: its manifest's
+    mtime): a sweep binds them to every sample's values (18 ms a sample on the double
+    pendulum, benchmarks/notes_jointparam.md)."""
+    return externals(Path(directory))
+
+
+def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
+    built = (directory / manifest.MANIFEST).stat().st_mtime_ns
+    loaded = dict(_externals(str(directory.resolve()), built))
+    joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
+    functions = {name: f if name.startswith("dae_") else bind(f, values)
+                 for name, f in loaded.items()}
+    bundle_ = SystemFunctions(functions, **metadata(ir), data=values)
+    if joint:
+        joint_data = np.array(joint.pop(JOINT_DATA)(values).full()).ravel()
+        dynamics = "joint_dae" if "joint_dae" in joint else "joint_ode"
+        bundle_.derived[LIBRARY_FUNCTIONS] = {  # the Jacobian under casadi's name for it
+            name: bind(f, joint_data, f"jac_{dynamics}" if name == JOINT_JACOBIAN else None)
+            for name, f in joint.items()}
+    return bundle_

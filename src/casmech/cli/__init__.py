@@ -1,0 +1,68 @@
+"""casmech command line: parse arguments, call the API, render diagnostics.
+
+Each subcommand is a module of casmech.cli (listed in cli.commands.COMMANDS). Only the module
+of the command on the command line is imported, so each command pays for its own imports
+(`casmech --help` imports none; benchmarks/notes_startup.md).
+Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis failure,
+130/143 stopped by SIGINT/SIGTERM.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+
+# One BLAS thread unless the user chose: casmech's dense linear algebra is on small matrices,
+# and OpenBLAS's threads made it 10-60x slower on a busy 2-core machine (docs/decisions.md).
+# Set before a command imports NumPy.
+for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+from casmech.cli.commands import COMMANDS  # noqa: E402
+from casmech.core.version import VERSION  # noqa: E402
+from casmech.errors import CasmechError, ModelError, Source, UsageError  # noqa: E402
+
+DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
+
+
+def chosen(argv: list[str]) -> str | None:
+    """The command named on the command line: the first argument that is not an option (no
+    option before the command takes a value)."""
+    return next((arg for arg in argv if not arg.startswith("-")), None)
+
+
+def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
+    """The parser, with the arguments of the chosen command only, and that command's module."""
+    parser = argparse.ArgumentParser(prog="casmech", description=DESCRIPTION)
+    parser.add_argument("--version", action="version", version=f"casmech {VERSION}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    name = chosen(argv)
+    module = None
+    for command, (module_name, help_text) in COMMANDS.items():
+        sub = commands.add_parser(command, help=help_text, description=help_text)
+        if command == name:
+            module = importlib.import_module(f"casmech.cli.{module_name}")
+            module.add_arguments(sub)
+    return parser, module
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser, module = _parser(argv)
+    args = parser.parse_args(argv)
+    try:
+        return module.run(args)
+    except ModelError as error:
+        print(error.format(), file=sys.stderr)
+        return error.exit_code
+    except CasmechError as error:
+        print(f"casmech: {error}", file=sys.stderr)
+        return error.exit_code
+    except FileNotFoundError as error:
+        print(f"casmech: {Source(str(error.filename), 1, 1)}: no such file", file=sys.stderr)
+        return UsageError.exit_code
+    except KeyboardInterrupt:  # Ctrl-C in a command that keeps nothing (run: errors.Interrupted)
+        print("casmech: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,38 @@
+"""casmech cache info|clear: the compiled-model cache ($CASMECH_CACHE_DIR, ~/.cache/casmech)."""
+
+from __future__ import annotations
+
+import json
+
+from casmech.backends import cache
+from casmech.backends.manifest import MANIFEST
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("action", choices=["info", "clear"])
+
+
+def _describe(entry) -> str:
+    info = json.loads((entry / MANIFEST).read_text())
+    return (f"  {entry.name}  {info.get('model', '?')}  {cache.size(entry) / 1e6:.2f} MB  "
+            f"casmech {info.get('casmech')} casadi {info.get('casadi')} "
+            f"{' '.join(info.get('flags', []))}")
+
+
+def run(args) -> int:
+    root = cache.cache_dir()
+    if args.action == "clear":
+        freed = cache.clear(root)
+        print(f"cleared {root} ({freed / 1e6:.2f} MB freed)")
+        return 0
+    entries = cache.entries(root)
+    total = sum(cache.size(entry) for entry in entries)
+    print(f"{root}: {len(entries)} compiled models, {total / 1e6:.2f} MB")
+    for entry in entries:
+        print(_describe(entry))
+    unfinished = cache.unfinished(root)
+    if unfinished:
+        stale = sum(cache.size(path) for path in unfinished)
+        print(f"  and {len(unfinished)} unfinished builds ({stale / 1e6:.2f} MB: in progress, "
+              f"or left by a build that was killed; `casmech cache clear` removes them)")
+    return 0

@@ -1,0 +1,172 @@
+"""The bushing: a 6-DOF linear spring-damper between a frame I on body_i and a frame J on body_j.
+
+Both frames sit at the global point `at` with the given orientation at t = 0 and are fixed in
+their bodies. As in Adams' BUSHING, the deflection is measured in the I frame:
+
+    d     = A_I^T (P_J - P_I)          translational displacement of J from I, I components
+    theta = rotation vector of A_I^T A_J (I components; 0 at t = 0)
+
+and the bushing acts on J with force and torque (I components) -K d - C d_dot + F0 and
+-Kt theta - Ct theta_dot + T0, and on I with the opposite plus the moment of the force's arm.
+Here this is one generalized force from virtual work, like a tsda in six directions
+(s = [d; theta], tension = K s + C s_dot - preload):
+
+    Q = -s_q^T (K s + C s_dot - preload),   V = 1/2 s^T K s - preload^T s,
+
+so the elastic part is exactly -dV/dq (conservative: the energy column is constant without
+damping) and the reaction on I (opposite force plus moment arm) comes out of AD. The torque on J
+is -Kt theta exactly when Kt is isotropic (and T0 = 0), to first order in theta otherwise (Adams'
+small angles AX, AY, AZ agree with theta to first order too). docs/forces.md.
+
+The rotation vector comes from Euler parameters: s = conj(p_i) p_j c, where the constant c undoes
+the relative rotation at t = 0, so S = A_i^T A_j (A_i0^T A_j0)^T and theta = M_i^T theta(S) with
+M_i the I frame in body_i. theta(S) = 2 e atan2(|e|, e0)/|e|, by its series near identity.
+
+Here: its YAML class, checks (`resolve`), lowering, law and linearization inputs (its
+casmech.elements.force_types entry).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Literal
+
+import casadi as ca
+import numpy as np
+
+from casmech.core import euler
+from casmech.core.quaternions import conjugate
+from casmech.core.spec_base import Name, Orientation, Repeats, Spec, Vector
+from casmech.core.values import constant
+from casmech.errors import failed
+
+IDENTITY = (1.0, 0.0, 0.0, 0.0)
+SERIES = 1e-3  # below |e|^2 / e0^2 = SERIES, atan(u)/u by its series (5 terms: error < 1e-16)
+
+
+class Bushing(Spec):
+    """6-DOF linear spring-damper between a frame on body_i and one on body_j (docs/forces.md).
+
+    Both frames are at the global point `at` with `orientation` (default: global axes) at t = 0;
+    vectors are components along the I frame's x, y, z: force = -K d - C d_dot + preload.
+    """
+
+    name: Name
+    type: Literal["bushing"]
+    body_i: Name
+    body_j: Name
+    at: Vector
+    orientation: Orientation | None = None
+    stiffness: Vector = (0, 0, 0)
+    damping: Vector = (0, 0, 0)
+    rotational_stiffness: Vector = (0, 0, 0)
+    rotational_damping: Vector = (0, 0, 0)
+    preload_force: Vector = (0, 0, 0)
+    preload_torque: Vector = (0, 0, 0)
+    repeat: Repeats | None = None
+
+
+# Flat views of a bushing's coefficients under its params names (stiffness0..5 = stiffness then
+# rotational_stiffness, ...), so that optimal/symbolic.py, which re-evaluates
+# `getattr(spec, key)` for every params key of a force, gives sensitivities to them.
+BUSHING_PARAMS = {"stiffness": ("stiffness", "rotational_stiffness"),
+                  "damping": ("damping", "rotational_damping"),
+                  "preload": ("preload_force", "preload_torque")}
+
+
+def _component(vector: str, index: int) -> property:
+    return property(lambda self: getattr(self, vector)[index])
+
+
+for _key, _vectors in BUSHING_PARAMS.items():
+    for _n in range(6):
+        setattr(Bushing, f"{_key}{_n}", _component(_vectors[_n // 3], _n % 3))
+
+KEYS = tuple(BUSHING_PARAMS)  # params: f"{key}{n}" for n in 0..5 (along d, then theta)
+
+
+def relative(a, b):
+    """Euler parameters of conj(a) b (the rotation A(a)^T A(b)): [a.b; G(a) b]."""
+    return ca.vertcat(a.T @ b, euler.g_matrix(a) @ b)
+
+
+def _atan_ratio(z, e0):
+    """atan2(sqrt(z), e0) / sqrt(z): smooth at z = 0 (series), both branches finite."""
+    near = ca.logic_and(z < SERIES * e0**2, e0 > 0)
+    u = z / ca.if_else(near, e0**2, 1.0)
+    series = sum((-u) ** n / (2 * n + 1) for n in range(5)) / ca.if_else(near, e0, 1.0)
+    root = ca.sqrt(ca.fmax(z, SERIES * e0**2 + 1e-300))
+    return ca.if_else(near, series, ca.atan2(root, e0) / root)
+
+
+def rotation_vector(p):
+    """theta with A(p) = exp(theta~): 2 e atan2(|e|, e0) / |e| (|theta| < pi for e0 > 0)."""
+    e = p[1:4]
+    return 2 * e * _atan_ratio(e.T @ e, p[0])
+
+
+def deflection(force, x):
+    """s = [d; theta] (6x1), I-frame components."""
+    marker = constant(force.axes["marker_i"])  # I frame axes in body_i (columns)
+    fi, fj = x.frame(force.body_i), x.frame(force.body_j)
+    gap = fj.r + fj.A @ constant(force.points["s_j"]) - fi.r - fi.A @ constant(force.points["s_i"])
+    d = marker.T @ fi.A.T @ gap
+    s = relative(conjugate(relative(x.p(force.body_i), x.p(force.body_j))),
+                 constant(force.axes["rest"]))
+    return ca.vertcat(d, marker.T @ rotation_vector(s))
+
+
+def law(force, x, read):
+    """(generalized force on q, potential energy) of one bushing (it reads no state)."""
+    # vertcat, not DM: optimal/symbolic.py puts SX parameters here (a DM of SX is silently NaN)
+    k, c, preload = (ca.vertcat(*[force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
+    s = deflection(force, x)
+    s_q = ca.jacobian(s, x.q)
+    tension = k * s + c * (s_q @ x.q_dot) - preload
+    return -s_q.T @ tension, 0.5 * s.T @ (k * s) - preload.T @ s
+
+
+def lower(force, model, poses) -> dict[str, Any]:
+    """resolved.Force (type bushing) -> the ForceIR fields."""
+    at = np.asarray(force.vectors["at"], float)
+    marker = euler.numeric(euler.rotation, force.vectors["orientation"])
+    initial = {b.name: b.euler_parameters for b in model.bodies}
+    p0 = [ca.DM(initial.get(name, IDENTITY)) for name in (force.body_i, force.body_j)]
+    rest = np.array(ca.DM(conjugate(relative(*p0))).full()).ravel()
+    params = {}
+    for key, vectors in BUSHING_PARAMS.items():  # e.g. stiffness then rotational_stiffness
+        values = np.concatenate([force.vectors[name] for name in vectors])
+        params.update({f"{key}{n}": float(v) for n, v in enumerate(values)})
+    points = {"s_i": poses.local(force.body_i, "P", at), "s_j": poses.local(force.body_j, "P", at)}
+    axes = {"marker_i": poses.pose[force.body_i][1].T @ marker, "rest": rest}
+    return dict(body_i=poses.index[force.body_i], body_j=poses.index[force.body_j],
+                points=points, params=params, axes=axes)
+
+
+def with_inputs(force, u):
+    """Stiffness and damping 0, the preload u: the force on body_j is +u (I frame)."""
+    params = {f"{key}{n}": 0.0 for key in BUSHING_PARAMS for n in range(6)}
+    params |= {f"preload{n}": u[n] for n in range(6)}
+    return replace(force, params=params)
+
+
+# ---------------------------------------------------------------------------- resolution
+VECTORS = ("at", "stiffness", "damping", "rotational_stiffness", "rotational_damping",
+           "preload_force", "preload_torque")
+NON_NEGATIVE = ("stiffness", "damping", "rotational_stiffness", "rotational_damping")
+
+
+def resolve(check, path, given) -> dict[str, Any] | None:
+    """`check.orientation(path, given)` resolves the orientation (schema/force_laws.py)."""
+    bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
+    vectors = {key: check.numbers((*path, key), getattr(given, key)) for key in VECTORS}
+    for key in NON_NEGATIVE:
+        if vectors[key] is not None and np.any(vectors[key] < 0):
+            got = ", ".join(f"{v:g}" for v in vectors[key])
+            check.error("E103", (*path, key), f"bushing {key.replace('_', ' ')} must not be "
+                        "negative", got=got, hint="zero leaves that direction free")
+            vectors[key] = None
+    vectors["orientation"] = check.orientation((*path, "orientation"), given.orientation)
+    if not bodies_ok or failed(vectors.values()):
+        return None
+    return dict(body_i=given.body_i, body_j=given.body_j, vectors=vectors)

@@ -1,0 +1,101 @@
+"""Structural checks at a configuration: DOF, rank, redundant rows mapped to joints and lines."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.equations.functions import SystemFunctions
+from casmech.errors import BodyName
+from casmech.model.ir import RowInfo
+from casmech.numerics import numeric_qr
+
+RANK_TOLERANCE = 1e-9  # relative to the largest singular value of Phi_q
+
+
+@dataclass(frozen=True)
+class Structure:
+    n_coordinates: int
+    n_rows: int
+    rank: int
+    redundant: tuple[RowInfo, ...]  # rows that depend on earlier rows (file order)
+    nominal_dof: int  # 6 nb minus the joint rows (Gruebler count)
+    independent: tuple[int, ...] = ()  # indices of the rows kept, in row order
+
+    @property
+    def dof(self) -> int:
+        return self.n_coordinates - self.rank
+
+    def summary(self) -> str:
+        lines = [f"coordinates: {self.n_coordinates}  constraint rows: {self.n_rows} "
+                 f"(incl. normalization)  rank: {self.rank}",
+                 f"degrees of freedom: {self.dof} (count 6 nb - joint rows: {self.nominal_dof})"]
+        for row in self.redundant:
+            where = f"{row.source}: " if row.source else ""
+            lines.append(f"  redundant: {where}{row.label}")
+        return "\n".join(lines)
+
+
+def independent_rows(matrix, tolerance: float = RANK_TOLERANCE) -> list[bool]:
+    """Greedy in row order: is row k farther than tolerance * max(|matrix|_2, 1) from the span
+    of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the work follows
+    the factors' fill, not rows x columns)."""
+    matrix = ca.DM(matrix)
+    scale = max(numeric_qr.norm2(matrix), 1.0)
+    return numeric_qr.independent_rows(matrix, tolerance, scale)
+
+
+def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
+    """Rank and redundancy. The normalization rows are scanned first (they are never
+    redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
+    phi_q = functions["phi_q"](t, q)
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    order = _scan_order(functions)
+    keep = dict(zip(order, independent_rows(phi_q[order, :]), strict=True))
+    redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
+    independent = tuple(k for k in range(functions.n_rows) if keep[k])
+    return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
+                     6 * functions.n_bodies - n_joint_rows, independent)
+
+
+def _scan_order(functions: SystemFunctions) -> list[int]:
+    """Rows of Phi in the order structure scans them: normalization first, then the joints."""
+    n_joint_rows = functions.n_rows - functions.n_bodies
+    return list(range(n_joint_rows, functions.n_rows)) + list(range(n_joint_rows))
+
+
+def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 3):
+    """(joint name, source, largest |residual| of its rows), worst first, for failure messages."""
+    by_joint: dict[str, tuple[object, float]] = {}
+    for row, value in zip(functions.rows, np.abs(np.ravel(residual)), strict=True):
+        name = BodyName(row.joint) if row.kind == "normalization" else row.joint
+        source, worst = by_joint.get(name, (row.source, 0.0))
+        by_joint[name] = (source, max(worst, float(value)))
+    ranked = sorted(by_joint.items(), key=lambda item: -item[1][1])
+    return [(name, source, value) for name, (source, value) in ranked[:count]]
+
+
+DENSE_LIMIT = 250_000  # entries of Phi_q up to which dependent_joints uses a dense SVD
+
+
+def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3):
+    """Joints whose rows became dependent: a unit combination u of Phi_q's rows with
+    Phi_q^T u ~ 0 weighs each row by its part in the dependency. Up to DENSE_LIMIT entries u
+    is the left singular vector of the smallest singular value; above, the row (in
+    structure's scan order) closest to the span of the rows before it, combined with them by
+    least squares (sparse: numeric_qr)."""
+    rows, columns = phi_q.shape
+    if rows * columns <= DENSE_LIMIT:
+        u, s, _ = np.linalg.svd(np.array(ca.DM(phi_q)) if isinstance(phi_q, ca.DM) else phi_q)
+        return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
+    order = _scan_order(functions)[:columns]
+    a = ca.DM(phi_q)[order, :]
+    k = int(np.argmin(numeric_qr.NumericQR(a.T, order=False).diagonal()))
+    weights = np.zeros(rows)
+    weights[order[k]] = 1.0
+    if k:
+        earlier = numeric_qr.NumericQR(a[:k, :].T)
+        weights[order[:k]] = -earlier.solve(np.array(a[k, :]).ravel())
+    return worst_joints(functions, np.abs(weights) / np.linalg.norm(weights), count)

@@ -1,0 +1,380 @@
+"""The joint formulation as CasADi Functions: the ODE of a tree, the DAE of a tree with loop
+closures, and the results row's state.
+
+State x = [theta; u]: the coordinates and velocities of the tree joints that no driver
+prescribes (formulations/articulated.py). A tree is the ODE x' = (theta_dot, ABA). Cut joints keep
+their constraint rows Phi_c(t, q(theta)) (formulations/tree.py). Their multipliers act on the two
+bodies as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the DAE is the stabilized
+index-2 form of Gear, Gupta and Leimkuhler (as formulations/dae.py's for r-p):
+
+    theta' = theta_dot(theta, u) + Phi_c_theta^T S mu,   u' = ABA(t, theta, u; lam)
+    0 = S Phi_c(t, theta),   0 = S d/dt Phi_c (t, theta, u),   z = [lam, mu]
+
+with S = diag(s(theta)) scaling each row to unit velocity-Jacobian norm (lam in force units)
+and the rows masked by p = w (w_k = 1 turns row k into lam_k = 0 and mu_k = 0: rows that
+depend on the others at t0). The stabilizing term takes S as a factor, not differentiated
+(d S/d theta multiplies Phi_c, zero on the constraint manifold): any matrix B with
+Phi_c_theta B nonsingular gives the same projection, and this one costs half the residual's
+instructions of (S Phi_c)_theta (measured in docs/decisions.md).
+
+Over a parametric IR (model.parametric.split, `build(ir, tree, data=symbols)`) every function
+takes a trailing input "d": the model data extended by the constants of the tree
+(formulations/joint_constants.py), which JointSystem.data computes from the model data once per
+parameter value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache, cached_property
+
+import casadi as ca
+import numpy as np
+
+from casmech.core import euler
+from casmech.core.traced import traced
+from casmech.elements.joint_types import MOTIONS
+from casmech.elements.primitives import PRIMITIVES, Frame
+from casmech.equations import body
+from casmech.equations.assemble import driver_value
+from casmech.formulations import articulated
+from casmech.formulations.articulated import Joint
+from casmech.formulations.joint_constants import DATA, Constants
+from casmech.formulations.tree import Tree
+from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
+from casmech.numerics import lazy_jacobian
+
+# SystemFunctions.derived's key of a parametric library's joint functions, bound to the
+# bundle's values (codegen.parametric writes them, runtime.joint_dynamics reads them)
+LIBRARY_FUNCTIONS = "joint_functions"
+
+# a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
+# the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
+ROW_NORM_FLOOR = 1e-9
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Which coordinates and velocities are states: per tree joint, the indices into x of its
+    free coordinates and velocities, and which of its own they are."""
+
+    theta: tuple[tuple[int, ...], ...]
+    u: tuple[tuple[int, ...], ...]
+    free_theta: tuple[tuple[int, ...], ...]
+    free_u: tuple[tuple[int, ...], ...]
+    n_theta: int
+    n_x: int
+
+
+def layout(tree: Tree) -> Layout:
+    free_theta = [tuple(c for c in range(MOTIONS[j.type].n_q) if c not in j.prescribed)
+                  for j in tree.joints]
+    free_u = [tuple(c for c in range(MOTIONS[j.type].n_v) if c not in j.prescribed)
+              for j in tree.joints]
+    n, slots = 0, []
+    for free in (*free_theta, *free_u):
+        slots.append(tuple(range(n, n + len(free))))
+        n += len(free)
+    k = len(tree.joints)
+    return Layout(tuple(slots[:k]), tuple(slots[k:]), tuple(free_theta), tuple(free_u),
+                  sum(map(len, free_theta)), n)
+
+
+@dataclass(frozen=True)
+class JointSystem:
+    tree: Tree
+    layout: Layout
+    cut_rows: tuple[int, ...]  # rows of Phi the cut joints own (the DAE's algebraic rows)
+    dynamics: ca.Function  # tree: (t, x) -> ode; loops: (t, x, z, p) -> (ode, alg)
+    motion: ca.Function  # (t, x, z, signs) -> (q, q_dot, q_ddot, lam, velocity_jacobian)
+    # loops: (t, x) -> (d acceleration residual / dz, that residual at z = 0), where the
+    # residual d^2/dt^2 Phi_c (unit rows) is affine in z (multipliers enter as forces)
+    acceleration_system: ca.Function
+    velocity_jacobian: ca.Function  # loops: (t, x) -> d/du of d/dt Phi_c (unit rows)
+    relative_states: ca.Function  # (q, q_dot) -> each tree joint's relative pose (_relative)
+    # a parametric build's d -> its functions' trailing input (None: a numeric build)
+    data: ca.Function | None = None
+    # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
+    given_jacobian: ca.Function | None = None
+
+    @property
+    def n_cut(self) -> int:
+        return len(self.cut_rows)
+
+    @cached_property
+    def problem(self) -> dict:
+        """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
+        sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
+        (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
+        per evaluation on the gallery's loops, measured in docs/decisions.md); a compiled
+        library's when given."""
+        if self.given_jacobian is not None:
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
+        if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
+        return lazy_jacobian.problem(self.dynamics)
+
+    @cached_property
+    def jacobian(self) -> ca.Function:
+        """The given Jacobian, else lazy_jacobian.jacobian of `dynamics`, built once."""
+        return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
+
+    @cached_property
+    def functional_problem(self) -> dict:
+        """The same for CVODES's functional iteration, which never evaluates a Jacobian."""
+        return lazy_jacobian.problem(self.dynamics, exact=False)
+
+
+def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
+    """(rotations [3 x 3n], gaps [3 x n], twists [6 x n]) of every tree joint at (q, q_dot): the
+    child frame F_c's rotation and origin relative to the parent frame F_p (in F_p), and its
+    twist relative to F_p (angular, then the origin's velocity, in F_c), JointSystem's
+    relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
+    from them). Every body is the child of one tree joint."""
+    n_bodies = len(tree_joints)
+    poses = [ca.vertsplit(v, [*range(0, 3 * n_bodies, 3), *range(3 * n_bodies, 7 * n_bodies + 1,
+                                                                   4)]) for v in (q, q_dot)]
+
+    def state(k: int) -> list:
+        """(r, p, r_dot, p_dot) of body k (ground: at rest at the origin)."""
+        if k == GROUND_INDEX:
+            return [ca.DM.zeros(3), ca.DM([1, 0, 0, 0]), ca.DM.zeros(3), ca.DM.zeros(4)]
+        return [poses[0][k], poses[0][n_bodies + k], poses[1][k], poses[1][n_bodies + k]]
+
+    steps = [_relative_step(*state(joint.parent), *state(joint.child),
+                            *(constants(v) for v in (*joint.parent_frame, *joint.child_frame)))
+             for joint in tree_joints]
+    return [ca.horzcat(*parts) for parts in zip(*steps, strict=True)]
+
+
+@traced
+def _relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s_p, c_c, s_c):
+    """(rotation, gap, twist) of one tree joint (_relative) from its bodies' r-p states."""
+    a_p, a_c = euler.rotation(p_p), euler.rotation(p_c)
+    w_p, w_c = body.angular_velocity(p_p, p_p_dot), body.angular_velocity(p_c, p_c_dot)
+    o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
+    o_p_dot = r_p_dot + a_p @ ca.cross(w_p, s_p)
+    o_c_dot = r_c_dot + a_c @ ca.cross(w_c, s_c)
+    rotation = c_p.T @ a_p.T @ a_c @ c_c
+    gap = a_p.T @ (o_c - o_p)
+    omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
+    gap_dot = c_p.T @ (a_p.T @ (o_c_dot - o_p_dot) - ca.cross(w_p, gap))
+    return rotation, c_p.T @ gap, ca.vertcat(omega, rotation.T @ gap_dot)
+
+
+def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, data=None) -> list:
+    """(phi, B_i, B_j): a joint's constraint rows at the bodies' poses (SX; ground's ignored)
+    and their r-omega Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame
+    rotation; zero for ground); through one Function per structure of the joint's rows (their
+    kinds, which side is ground, the vectors' shapes) that takes the rows' vectors and driver
+    values as inputs (_rows_template); `data` the model data of a parametric IR, whose
+    vectors are SX of it."""
+    prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
+    shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
+    if data is not None:
+        stacked = ca.vertcat(ca.SX(0, 1), *(ca.vec(ca.SX(v)) for v in vectors))
+    else:
+        stacked = ca.SX(np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]))
+    drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
+    grounds = (joint.body_i == GROUND_INDEX, joint.body_j == GROUND_INDEX)
+    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes)
+    return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
+                          for v in (r_i, p_i, r_j, p_j, stacked, drivers)])
+
+
+@cache
+def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, bool],
+                   shapes: tuple[tuple[int, ...], ...]) -> ca.Function:
+    """(r_i, p_i, r_j, p_j, the rows' vectors stacked, their driver values) -> (phi, B_i, B_j)
+    of rows of these kinds (rows_of), built from the rows' primitives so that the cost stays
+    per joint."""
+    sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
+    frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if ground else Frame(r, euler.rotation(p))
+              for ground, (r, p) in zip(grounds, sides, strict=True)]
+    sizes = [int(np.prod(shape)) for shape in shapes]
+    stacked = ca.SX.sym("v", sum(sizes))
+    parts = ca.vertsplit(stacked, list(np.cumsum([0, *sizes]))) if sizes else []
+    vectors = [ca.reshape(part, *(shape if len(shape) == 2 else (size, 1)))
+               for part, shape, size in zip(parts, shapes, sizes, strict=True)]
+    drivers = ca.SX.sym("f", len(kinds))
+    rows, given = [], iter(vectors)
+    for k, kind in enumerate(kinds):
+        function, keys = PRIMITIVES[kind]
+        rows.append(function(*frames, {key: next(given) for key in keys}, drivers[k]))
+    phi = ca.vertcat(*rows)
+    blocks = [ca.horzcat(ca.jacobian(phi, r), body.pi_bar(ca.jacobian(phi, p), p))
+              for r, p in sides]
+    return ca.Function("joint_rows", [*(v for side in sides for v in side), stacked, drivers],
+                       [phi, *blocks])
+
+
+class _Builder:
+    """The SX of one model's tree; see build."""
+
+    def __init__(self, ir: ModelIR, tree: Tree, constants: Constants):
+        self.ir, self.tree, self.layout = ir, tree, layout(tree)
+        self.constants = constants
+        self.joint_rows: dict[str, list] = {}  # joint name -> rows_of at the tree's state
+        lay = self.layout
+        self.t, self.x = ca.SX.sym("t"), ca.SX.sym("x", lay.n_x)
+        self.cut_rows = tuple(r for j in tree.cut for r in j.rows)
+        m = len(self.cut_rows)
+        self.z, self.w = ca.SX.sym("z", 2 * m), ca.SX.sym("w", m)
+        reference = {j.child: j.child_frame for j in tree.joints}
+        self.joints = [
+            Joint(j, self.t, {c: self.x[k] for c, k in zip(ft, th, strict=True)},
+                  {c: self.x[k] for c, k in zip(fu, us, strict=True)},
+                  reference.get(j.parent), constants)
+            for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
+                                         lay.free_u, strict=True)]
+        self.kin = articulated.kinematics(self.joints, ir.n_bodies, constants)
+        self.theta_dot = ca.vertcat(*[j.theta_dot[list(free)] if free else ca.SX(0, 1)
+                                      for j, free in zip(self.joints, lay.free_theta,
+                                                         strict=True)])
+
+    def rows(self, joint: JointIR) -> tuple:
+        """(phi, B_i, B_j) of a joint's rows at the tree's state."""
+        def pose(body: int):
+            if body == GROUND_INDEX:
+                return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
+            return self.kin.r[body], self.kin.p[body]
+        if joint.name not in self.joint_rows:
+            self.joint_rows[joint.name] = rows_of(self.ir, joint, self.t, *pose(joint.body_i),
+                                                  *pose(joint.body_j), self.constants.data)
+        return self.joint_rows[joint.name]
+
+    def loop_closure(self):
+        """(Phi_c, d/dt Phi_c, the unit-row scale, lam, mu) of the cut rows."""
+        m = len(self.cut_rows)
+        theta = self.x[:self.layout.n_theta]
+        phi = ca.vertcat(*[self.rows(joint)[0] for joint in self.tree.cut])
+        rate = ca.jacobian(phi, theta) @ self.theta_dot + ca.jacobian(phi, self.t)
+        u = self.x[self.layout.n_theta:]
+        norm = ca.sqrt(ca.sum2(ca.jacobian(rate, u) ** 2))
+        # a row the tree's motions cannot violate (a planar loop's out-of-plane rows) has no
+        # velocity Jacobian: scale 0, so the rank test at t0 masks it
+        scale = ca.if_else(norm > ROW_NORM_FLOOR, 1 / norm, 0)
+        return phi, rate, scale, self.z[:m], self.z[m:]
+
+    def cut_wrenches(self, lam) -> list:
+        """Body wrenches (n_bar, A^T F) of the cut rows' multipliers lam (true units): each
+        body takes -B^T lam of the rows acting on it."""
+        wrenches = [ca.SX.zeros(6, 1) for _ in range(self.ir.n_bodies)]
+        start = 0
+        for joint in self.tree.cut:
+            _, *blocks = self.rows(joint)
+            lam_j = lam[start:start + len(joint.rows)]
+            start += len(joint.rows)
+            for k, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
+                if k == GROUND_INDEX:
+                    continue
+                generalized = -block.T @ lam_j  # global force, body-frame torque
+                wrenches[k] += ca.vertcat(generalized[3:6],
+                                          self.kin.rotation[k].T @ generalized[0:3])
+        return wrenches
+
+    def dynamics(self, lam):
+        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
+        cut = self.cut_wrenches(lam)
+        external = [a + c for a, c in zip(applied, cut, strict=True)]
+        torques = [ca.SX.zeros(len(j.free), 1) for j in self.joints]
+        return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
+
+    def multipliers(self, dynamics, lam_cut) -> ca.SX:
+        """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
+        from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
+        Jacobian at the child (global force, body-frame torque)."""
+        lam = ca.SX.zeros(len(self.ir.row_info()), 1)
+        lam[list(self.cut_rows)] = lam_cut
+        wrenches = articulated.joint_wrenches(self.joints, dynamics)
+        for j, w in zip(self.joints, wrenches, strict=True):
+            joint = j.joint.joint
+            if joint is None:  # a floating body's free joint has no rows
+                continue
+            _, block_i, block_j = self.rows(joint)
+            block = block_i if j.joint.child == joint.body_i else block_j
+            lam[list(joint.rows)] = _tree_multipliers(block, self.kin.rotation[j.joint.child],
+                                                      w)[0]
+        return lam
+
+    def motion(self, dynamics, lam_cut, signs) -> list:
+        """(q, q_dot, q_ddot, lam) of the results row: r-p, Euler parameters times signs."""
+        nb, kin = self.ir.n_bodies, self.kin
+        signed = ca.vertsplit(signs)
+        p, p_dot, r_ddot, p_ddot = zip(*[
+            _body_rates(signed[k], kin.p[k], kin.rotation[k], kin.velocity[k],
+                        dynamics.accelerations[k]) for k in range(nb)], strict=True)
+        return [ca.vertcat(*kin.r, *p),
+                ca.vertcat(*[kin.r_dot(k) for k in range(nb)], *p_dot),
+                ca.vertcat(*r_ddot, *p_ddot), self.multipliers(dynamics, lam_cut)]
+
+
+@traced
+def _tree_multipliers(block, rotation, wrench):
+    """A tree joint's row multipliers from its constraint wrench on the child (CM frame):
+    -B^T lam = the wrench (global force, body-frame torque), B the rows' r-omega Jacobian at
+    the child, solved in the least-squares sense."""
+    force = ca.vertcat(rotation @ wrench[3:6], wrench[0:3])
+    return (-ca.solve(block @ block.T, block @ force),)
+
+
+@traced
+def _body_rates(sign, p, rotation, velocity, acceleration):
+    """A body's results-row (p, p_dot, r_ddot, p_ddot), its Euler parameters times sign, from
+    its CM-frame spatial velocity and acceleration."""
+    p = sign * p
+    omega, alpha = velocity[0:3], acceleration[0:3]
+    r_ddot = rotation @ (acceleration[3:6] + ca.cross(omega, velocity[3:6]))
+    p_dot = body.p_dot(p, omega)
+    p_ddot = 0.5 * (euler.g_matrix(p_dot).T @ omega + euler.g_matrix(p).T @ alpha)
+    return p, p_dot, r_ddot, p_ddot
+
+
+def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
+    """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
+    of a parametric one, every function with the trailing input "d" (module docstring)."""
+    constants = Constants(data)
+    b = _Builder(ir, tree, constants)
+    t, x, z, w = b.t, b.x, b.z, b.w
+    signs = ca.SX.sym("signs", ir.n_bodies)
+    if not b.cut_rows:
+        dyn = b.dynamics(ca.SX(0, 1))
+        x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
+        dynamics = ("joint_ode", {"t": t, "x": x}, {"ode": x_dot})
+        acceleration = {"matrix": ca.SX(0, 0), "base": ca.SX(0, 1)}
+        velocity = ca.SX(0, b.layout.n_x)
+        lam_cut = ca.SX(0, 1)
+    else:
+        phi, rate, scale, lam_unit, mu = b.loop_closure()
+        lam_cut = scale * lam_unit
+        dyn = b.dynamics(lam_cut)
+        x_dot = ca.vertcat(b.theta_dot, *dyn.u_dot)
+        theta = x[:b.layout.n_theta]
+        ode = x_dot + ca.vertcat(ca.jacobian(phi, theta).T @ (scale * mu),
+                                 ca.SX.zeros(b.layout.n_x - b.layout.n_theta, 1))
+        alg = ca.vertcat((1 - w) * scale * phi - w * mu, (1 - w) * scale * rate - w * lam_unit)
+        dynamics = ("joint_dae", {"t": t, "x": x, "z": z, "p": w}, {"ode": ode, "alg": alg})
+        residual = scale * (ca.jacobian(rate, x) @ x_dot + ca.jacobian(rate, t))
+        acceleration = {"matrix": ca.jacobian(residual, z),
+                        "base": ca.substitute(residual, z, ca.DM.zeros(z.shape))}
+        velocity = ca.jacobian(scale * rate, x[b.layout.n_theta:])
+    motion = dict(zip(("q", "q_dot", "q_ddot", "lam"), b.motion(dyn, lam_cut, signs),
+                      strict=True))
+    poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
+    relative = dict(zip(("rotations", "gaps", "twists"),
+                        _relative(tree.joints, *poses.values(), constants), strict=True))
+    extra = {} if data is None else {DATA: constants.inputs}
+
+    def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
+        inputs = inputs | extra
+        return ca.Function(name, list(inputs.values()), list(outputs.values()), list(inputs),
+                           list(outputs))
+
+    return JointSystem(
+        tree, b.layout, b.cut_rows, function(*dynamics),
+        function("joint_motion", {"t": t, "x": x, "z": z, "signs": signs}, motion),
+        function("joint_acceleration_system", {"t": t, "x": x}, acceleration),
+        function("joint_velocity_jacobian", {"t": t, "x": x}, {"jacobian": velocity}),
+        function("joint_relative_states", poses, relative),
+        None if data is None else constants.function())

@@ -1,0 +1,88 @@
+"""results.h5: the results table plus the run's metadata, in one HDF5 file (h5py, imported on
+use).
+
+Layout:
+    /results    float64 [rows x columns], the results contract's table
+    /columns    the column names, in contract order (variable-length UTF-8 strings)
+    /metadata   casmech.io.metadata's dict: a nested dict is a group, a value an attribute,
+                except the model text, a string dataset /metadata/model/text; a key's '/'
+                (file paths under `files`) is written %2F and '%' %25 (HDF5 names hold no '/')
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from casmech.core.atomic import replaced
+from casmech.errors import UsageError
+
+DATASETS = ("text",)  # metadata keys stored as datasets (long), not attributes
+
+
+def h5py():
+    try:
+        import h5py as module
+    except ImportError:
+        raise UsageError("HDF5 output needs h5py, a dependency of casmech missing here; install "
+                         "it with: pip install h5py") from None
+    return module
+
+
+def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
+               metadata: Mapping | None = None) -> Path:
+    """Write atomically (core.atomic)."""
+    h5 = h5py()
+    path = Path(path)
+    strings = h5.string_dtype("utf-8")
+    with replaced(path) as temporary, h5.File(temporary, "w") as handle:
+        table = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(names))
+        handle.create_dataset("results", data=table)
+        handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
+        _write_group(handle.create_group("metadata"), metadata or {}, strings)
+    return path
+
+
+def _name(key: str) -> str:
+    return key.replace("%", "%25").replace("/", "%2F")
+
+
+def _key(name: str) -> str:
+    return name.replace("%2F", "/").replace("%25", "%")
+
+
+def _write_group(group, mapping: Mapping, strings) -> None:
+    for key, value in ((_name(k), v) for k, v in mapping.items()):
+        if isinstance(value, Mapping):
+            _write_group(group.create_group(key), value, strings)
+        elif key in DATASETS:
+            group.create_dataset(key, data=str(value), dtype=strings)
+        else:
+            group.attrs[key] = "" if value is None else value
+
+
+def read_hdf5(path: str | Path) -> tuple[list[str], np.ndarray]:
+    with h5py().File(path, "r") as handle:
+        names = [str(name) for name in handle["columns"].asstr()[()]]
+        return names, np.array(handle["results"][()], float)
+
+
+def read_hdf5_metadata(path: str | Path) -> dict:
+    with h5py().File(path, "r") as handle:
+        return _read_group(handle["metadata"])
+
+
+def _read_group(group) -> dict:
+    data = {_key(key): _plain(value) for key, value in group.attrs.items()}
+    for key, item in group.items():
+        data[_key(key)] = _read_group(item) if hasattr(item, "keys") else item.asstr()[()]
+    return data
+
+
+def _plain(value):
+    """h5py's numpy scalars and arrays as the Python values they were written from."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    return value.item() if isinstance(value, np.generic) else value

@@ -1,0 +1,90 @@
+"""What the lowering attaches to force elements and joints beyond their geometry: the state a
+force law reads, bound to the joint or body it names, and the ForceIR of a joint's effort
+motors and stop. The formulas that evaluate them are casmech.equations' (coordinates.py,
+motors.py, limits.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+from casmech.core.states import BODY_STATES, JOINT_COORDINATES, split
+from casmech.elements.joint_types import COORDINATES, REGISTRY, attributes
+from casmech.model.ir import ForceIR
+from casmech.schema.resolved import ScalarFunction
+
+
+def has_coordinates(joint_type: str) -> bool:
+    """Whether a joint of this type has a coordinate a force law may read."""
+    return bool(attributes(joint_type))
+
+
+@dataclass(frozen=True)
+class BoundFunction(ScalarFunction):
+    """A force law with the state it reads bound: name -> (kind, attribute, joint or body)."""
+
+    states: Mapping[str, tuple[str, str, Any]] = field(default_factory=dict)
+
+
+def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
+    owner, attribute = split(name)
+    if owner in joints and attribute in JOINT_COORDINATES:
+        return "joint", attribute, joints[owner]
+    if owner in bodies and attribute in BODY_STATES:
+        return "body", attribute, bodies[owner]
+    return None
+
+
+def bind_function(function, bodies: Mapping[str, int], joints: Mapping[str, Any]):
+    """`function` with the state names it uses bound (unchanged when it uses none), in sorted
+    order: the set of names iterates by string hash, which differs between processes, and the
+    order is part of the parametric library's structure signature (its cache key)."""
+    if function is None:
+        return None
+    found = {name: _binding(name, bodies, joints) for name in sorted(function.expr.symbols)}
+    states = {name: binding for name, binding in found.items() if binding is not None}
+    if not states:
+        return function
+    base = {f.name: getattr(function, f.name) for f in fields(ScalarFunction)}
+    return BoundFunction(**base, states=states)
+
+
+def bind(force, bodies: Mapping[str, int], joints: Mapping[str, Any]):
+    """A ForceIR whose actuator and value read the state they name.
+
+    `bodies`: body name -> index; `joints`: joint name -> its coordinate geometry (a ForceIR of
+    the joint's bodies with axes u_i, v_i, w_i, u_j and points s_i, s_j: lower.joint_coordinates).
+    """
+    value = force.value and tuple(bind_function(f, bodies, joints) for f in force.value)
+    return replace(force, actuator=bind_function(force.actuator, bodies, joints), value=value)
+
+
+# effort motor mode -> (ForceIR type, its axes: name -> (joint-frame quantity, body side))
+MOTOR_KINDS = {
+    "torque": ("motor_torque", {"u_i": ("u", "i"), "v_i": ("v", "i"), "u_j": ("u", "j")}),
+    "force": ("motor_force", {"w_i": ("w", "i")}),
+}
+
+
+def motors(joint, frame, poses) -> list[ForceIR]:
+    """The effort motors of one resolved joint (`frame`: its global joint frame at t = 0)."""
+    out = []
+    for key, function in joint.motor.items():
+        kind, axes = MOTOR_KINDS[key]
+        body = {"i": joint.body_i, "j": joint.body_j}
+        local = {name: poses.local(body[side], quantity, frame[quantity])
+                 for name, (quantity, side) in axes.items()}
+        points = {"s_i": poses.local(joint.body_i, "P", frame["P"]),
+                  "s_j": poses.local(joint.body_j, "P", frame["P"])}
+        out.append(ForceIR(joint.name, kind, poses.index[joint.body_i], poses.index[joint.body_j],
+                           points, {}, function, axes=local, source=joint.source))
+    return out
+
+
+def stop(joint, geometry: ForceIR) -> ForceIR:
+    """The stop of a resolved joint with a `limit:` (on the coordinate its joint type's entry
+    names); `geometry` is lower.joint_coordinates."""
+    kind = COORDINATES[REGISTRY[joint.type].limit].limit[0]
+    return replace(geometry, type=kind, params=dict(joint.limit))

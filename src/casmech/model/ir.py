@@ -1,0 +1,117 @@
+"""ModelIR: the mechanism with names turned into indices and joints expanded into primitives.
+
+Body index -1 is ground. Every vector here is in the frame the primitive expects (body-frame
+`_bar` vectors, global `c`); every constraint row carries its provenance (joint, YAML source).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from casmech.errors import Source
+from casmech.schema.resolved import Analysis, ScalarFunction
+
+GROUND_INDEX = -1
+
+
+@dataclass(frozen=True)
+class RowInfo:
+    """Provenance of one constraint row."""
+
+    joint: str  # joint name, or the body name for a normalization row
+    kind: str  # dp1 | dp2 | d | cd | angle | normalization
+    label: str  # human description, e.g. "revolute 'pivot': axis_j . u_i = 0"
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class PrimitiveIR:
+    kind: str
+    body_i: int
+    body_j: int
+    vectors: Mapping[str, np.ndarray]
+    f: ScalarFunction | None  # None means f = 0
+    offset: float = 0.0  # constant added to f (e.g. a distance's length squared)
+    is_driver: bool = False  # a composite joint's driver: scaled by assembly's continuation
+    row: RowInfo = field(default_factory=lambda: RowInfo("", ""))
+
+
+@dataclass(frozen=True)
+class BodyIR:
+    name: str
+    mass: float
+    inertia: np.ndarray  # (3, 3) body frame, about the CM
+    r0: np.ndarray
+    p0: np.ndarray
+    r_dot0: np.ndarray
+    omega0: np.ndarray  # global
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class JointIR:
+    """A joint of the file and the rows of phi it owns."""
+
+    name: str
+    type: str
+    body_i: int
+    body_j: int
+    rows: range
+    point_i: np.ndarray  # the joint point on body_i, body frame (global for ground)
+    source: Source | None = None
+    # joint-frame quantities (lower.joint_frame: P, u, v, w, axis_i, axis_j) in each body's
+    # frame, keyed "<name>@i" / "<name>@j" (ground: global): the joint formulation's frames
+    geometry: Mapping[str, np.ndarray] = field(default_factory=dict)
+    drivers: Mapping[str, ScalarFunction] = field(default_factory=dict)  # angle, displacement
+    cut: bool = False  # `cut: true`: never a tree joint of the joint formulation
+    reaction_frame: str = "global"  # the frame of its reaction columns (runtime.reaction_frames)
+    reaction_point: np.ndarray | None = None  # the torque's point instead of point_i, body_i frame
+
+
+@dataclass(frozen=True)
+class ForceIR:
+    name: str
+    type: str
+    body_i: int
+    body_j: int
+    points: Mapping[str, np.ndarray]  # body-frame points s_i, s_j (tsda), s (force)
+    params: Mapping[str, float]
+    actuator: ScalarFunction | None = None
+    value: tuple[ScalarFunction, ...] | None = None
+    frame: str = "global"
+    axes: Mapping[str, np.ndarray] = field(default_factory=dict)  # rsda: u_i, v_i, w_i, u_j
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
+class ModelIR:
+    name: str
+    file: str
+    text: str
+    bodies: tuple[BodyIR, ...]
+    primitives: tuple[PrimitiveIR, ...]
+    joints: tuple[JointIR, ...]
+    forces: tuple[ForceIR, ...]
+    gravity: np.ndarray
+    analysis: Analysis
+    parameters: Mapping[str, float] = field(default_factory=dict)
+    motors: tuple[ForceIR, ...] = ()  # effort motors of joints (equations/motors.py), by joint name
+    limits: tuple[ForceIR, ...] = ()  # joint stops (equations/limits.py), by joint name
+
+    @property
+    def n_bodies(self) -> int:
+        return len(self.bodies)
+
+    @property
+    def n_coordinates(self) -> int:
+        return 7 * len(self.bodies)
+
+    def row_info(self) -> list[RowInfo]:
+        """Provenance of every row of phi: joint rows, then one normalization row per body."""
+        rows = [p.row for p in self.primitives]
+        rows += [RowInfo(b.name, "normalization", f"p^T p - 1 of '{b.name}'", b.source)
+                 for b in self.bodies]
+        return rows

@@ -1,0 +1,181 @@
+"""ResolvedModel -> ModelIR: names to indices, joints expanded into primitives.
+
+Composite joints are defined in global coordinates at t = 0; here they become body-frame vectors
+using each body's pose in the file (ground: identity).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from casmech.core import euler
+from casmech.elements.force_types import REGISTRY as FORCE_TYPES
+from casmech.elements.joint_types import COORDINATES, REGISTRY
+from casmech.model import bindings
+from casmech.model.ir import GROUND_INDEX, BodyIR, ForceIR, JointIR, ModelIR, PrimitiveIR, RowInfo
+from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
+
+# joint-frame quantities that are directions (rotated into a body's frame); every other one
+# (P, Q, Pi, Pj, a new entry's point) is a point (moved, then rotated)
+DIRECTIONS = frozenset({"u", "v", "w", "axis", "axis_i", "axis_j", "ex", "ey", "ez"})
+UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array([0, 0, 1.0])}
+
+
+def perpendicular_pair(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit u, v with (u, v, w) right-handed orthonormal; deterministic in w."""
+    e = np.eye(3)[int(np.argmin(np.abs(w)))]
+    u = e - (e @ w) * w
+    u /= np.linalg.norm(u)
+    return u, np.cross(w, u)
+
+
+class Poses:
+    """Initial poses by body name (ground: origin, identity), their indices, the joints by name
+    (the helper force_types' `lower` receives)."""
+
+    def __init__(self, model: ResolvedModel):
+        self.joints = {j.name: j for j in model.joints}
+        self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
+        self.pose = {b.name: (b.position, euler.numeric(euler.rotation, b.euler_parameters))
+                     for b in model.bodies}
+        self.pose[GROUND] = (np.zeros(3), np.eye(3))
+
+    def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
+        r0, a0 = self.pose[body]
+        return a0.T @ value if quantity in DIRECTIONS else a0.T @ (value - r0)
+
+    def joint(self, name: str) -> tuple[Joint, dict[str, np.ndarray]]:
+        """A joint by name and its global joint frame at t = 0 (joint_frame)."""
+        joint = self.joints[name]
+        return joint, joint_frame(joint)
+
+
+def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
+    """Global joint-frame quantities at t = 0 (casmech.elements.joint_types: the entry's `frame`
+    names
+    the quantity of each vector key)."""
+    v = joint.vectors
+    frame = dict(UNIT) | {"u": UNIT["ex"], "v": UNIT["ey"], "w": UNIT["ez"]}  # fixed: no axis
+    for key, name in REGISTRY[joint.type].frame.items():
+        if key in v and key != "axis":
+            frame[name] = np.asarray(v[key], float)
+    if "axis" in v:
+        w = np.asarray(v["axis"], float) / np.linalg.norm(v["axis"])
+        frame["u"], frame["v"] = perpendicular_pair(w)
+        frame["w"] = w
+    return frame
+
+
+def _vectors(template: dict[str, str], joint: Joint, frame, poses: Poses) -> dict:
+    out = {}
+    for key, spec in template.items():
+        name, _, side = spec.partition("@")
+        if not side:  # basic constraint: as written in the file
+            out[key] = np.asarray(joint.vectors.get(name, frame.get(name)), float)
+        else:
+            body = joint.body_i if side == "i" else joint.body_j
+            out[key] = poses.local(body, name, frame[name])
+    return out
+
+
+def _offset(joint: Joint, frame) -> float:
+    """The constant part of f for a composite joint's D rows: the squared length (`length`,
+    else the entry's arm at t = 0)."""
+    arm = REGISTRY[joint.type].arm
+    if arm is None:
+        return 0.0
+    if joint.length is not None:
+        return float(joint.length) ** 2
+    return float(np.sum((frame[arm[1]] - frame[arm[0]]) ** 2))
+
+
+def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[PrimitiveIR], JointIR]:
+    frame = joint_frame(joint)
+    bi, bj = poses.index[joint.body_i], poses.index[joint.body_j]
+    entry = REGISTRY[joint.type]
+    templates = [(t, joint.f, False) for t in entry.rows]
+    for key, fun in (("angle", joint.driver_angle), ("displacement", joint.driver_displacement)):
+        if fun is not None:
+            templates.append((COORDINATES[key].driver, fun, True))
+    offset = _offset(joint, frame)
+    prims = []
+    for (kind, template, label), fun, is_driver in templates:
+        source = joint.sources.get("driver", joint.source) if is_driver else joint.source
+        row = RowInfo(joint.name, kind, f"{joint.type} '{joint.name}': {label}", source)
+        prims.append(PrimitiveIR(kind, bi, bj, _vectors(template, joint, frame, poses), fun,
+                                 offset if kind == "d" and not is_driver else 0.0, is_driver, row))
+    point_name = entry.reaction_point
+    if point_name is None:
+        point = np.zeros(3) if joint.body_i != GROUND else poses.pose[GROUND][0]
+    elif point_name in joint.vectors and point_name.startswith("s_"):
+        point = np.asarray(joint.vectors[point_name], float)
+    else:
+        point = poses.local(joint.body_i, point_name, frame[point_name])
+    rows = range(first_row, first_row + len(prims))
+    drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
+                                         ("displacement", joint.driver_displacement)) if fun}
+    return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
+                          _geometry(joint, frame, poses), drivers, joint.cut,
+                          joint.reaction_frame, _reaction_point(joint, poses))
+
+
+FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")
+
+
+def _reaction_point(joint: Joint, poses: Poses) -> np.ndarray | None:
+    """`reactions: {point: ...}` (global at t = 0) in body i's frame (ground: global)."""
+    if joint.reaction_point is None:
+        return None
+    return poses.local(joint.body_i, "P", np.asarray(joint.reaction_point, float))
+
+
+def _geometry(joint: Joint, frame, poses: Poses) -> dict[str, np.ndarray]:
+    """The joint frame's quantities in both bodies' frames, "<name>@i" and "<name>@j"."""
+    return {f"{name}@{side}": poses.local(body, name, frame[name])
+            for name in FRAME_QUANTITIES if name in frame
+            for side, body in (("i", joint.body_i), ("j", joint.body_j))}
+
+
+def joint_coordinates(joint: Joint, poses: Poses) -> ForceIR:
+    """Geometry of a joint's coordinates (equations/coordinates.py), 0 at the file's pose: the
+    joint frame's u, v, w on body_i, u on body_j (as an rsda's), the joint point on both."""
+    frame = joint_frame(joint)
+    axes = {f"{key}_i": poses.local(joint.body_i, key, frame[key]) for key in "uvw"}
+    axes["u_j"] = poses.local(joint.body_j, "u", frame["u"])
+    points = {f"s_{side}": poses.local(body, "P", frame["P"])
+              for side, body in (("i", joint.body_i), ("j", joint.body_j))}
+    return ForceIR(joint.name, joint.type, poses.index[joint.body_i], poses.index[joint.body_j],
+                   points, {}, axes=axes, source=joint.source)
+
+
+def lower_force(force: Force, model: ResolvedModel, poses: Poses) -> ForceIR:
+    """A force element, lowered by its casmech.elements.force_types entry."""
+    fields = FORCE_TYPES[force.type].lower(force, model, poses)
+    return ForceIR(force.name, force.type, **fields, source=force.source)
+
+
+def lower(model: ResolvedModel) -> ModelIR:
+    poses = Poses(model)
+    primitives: list[PrimitiveIR] = []
+    joints: list[JointIR] = []
+    for joint in model.joints:
+        prims, joint_ir = lower_joint(joint, poses, len(primitives))
+        primitives += prims
+        joints.append(joint_ir)
+    bodies = tuple(
+        BodyIR(b.name, float(b.mass), np.asarray(b.inertia, float), np.asarray(b.position, float),
+               np.asarray(b.euler_parameters, float), np.asarray(b.velocity, float),
+               np.asarray(b.angular_velocity, float), b.source)
+        for b in model.bodies
+    )
+    geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
+                if bindings.has_coordinates(j.type)}  # for force laws reading the state
+    forces = tuple(bindings.bind(lower_force(f, model, poses), poses.index, geometry)
+                   for f in model.forces)
+    effort = tuple(m for j in model.joints if j.motor
+                   for m in bindings.motors(j, joint_frame(j), poses))
+    stops = tuple(bindings.stop(j, geometry[j.name]) for j in model.joints
+                  if j.limit)
+    return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
+                   forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters),
+                   motors=effort, limits=stops)

@@ -1,0 +1,79 @@
+"""The saddle-point numerics of a constrained mechanism, each one CasADi Function that the
+runtime and casmech.optimal both call:
+
+    closest_point(phi, phi_q, rows)    assembly: the point of Phi(t, q) = 0 nearest to q_ref
+    saddle(M pattern, P pattern)       accelerations and multipliers:
+                                       [M P^T; P -diag(w)] [v_dot; lam] = [F; gamma]
+
+closest_point is a CasADi rootfinder on the first-order optimality (KKT) conditions of
+min 1/2 |q - q_ref|^2 subject to Phi_I(t, q) = 0 over the independent rows I:
+
+    q - q_ref + Phi_I,q^T lam = 0,   Phi_I(t, q) = 0,
+
+so its derivative with respect to t, q_ref and the parameters is the implicit one (CasADi's
+rootfinder differentiates the converged root, not the iterations). With degrees of freedom
+Phi = 0 has a manifold of solutions and only this condition picks one; the least-squares Newton
+of runtime.assembly lands within O(|q_ref - q|^2) of it and hands it the start. Newton on the
+KKT system needs the redundant rows dropped (the matrix is singular otherwise): `rows` are the
+ones equations.checks.structure keeps.
+
+saddle solves the equations of motion's linear part by a sparse direct solve (CSparse LU:
+the matrix is symmetric but indefinite). w masks rows (w_k = 1 turns row k into
+lam_k = P_k v_dot - gamma_k, which is 0 for a redundant row: formulations.dae's masked DAE); w = 0
+is the plain KKT system. The augmented-Lagrangian iteration of formulations.augmented is the
+algorithm for singular configurations, where this matrix is singular.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+ROOT_TOLERANCE = 1e-14  # max |KKT residual| the rootfinder's Newton iterates to
+ROOT_ITERATIONS = 20  # Newton iterations from the least-squares start (2-4 are typical)
+SADDLE_SOLVER = "csparse"  # sparse LU with partial pivoting (the matrix is indefinite)
+
+
+def _symbols(*functions: ca.Function):
+    """SX when every function is SX (calls inline), MX otherwise (compiled externals)."""
+    return ca.SX if all(f.is_a("SXFunction") for f in functions) else ca.MX
+
+
+def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
+                  name: str = "closest_point") -> ca.Function:
+    """(q_guess, t, q_ref[, theta]) -> (q, lam): the root of the KKT conditions (module
+    docstring) by CasADi's Newton rootfinder from (q_guess, lam = 0). phi and phi_q take
+    (t, q) or (t, q, theta); theta becomes the last input then. A root not reached within
+    ROOT_ITERATIONS is returned as the last iterate (no exception): callers check |Phi|."""
+    rows = list(rows)
+    n = phi_q.size2_out(0)
+    n_theta = phi.size1_in(2) if phi.n_in() > 2 else None
+    sym = _symbols(phi, phi_q)
+    x, t, q_ref = sym.sym("x", n + len(rows)), sym.sym("t"), sym.sym("q_ref", n)
+    theta = [sym.sym("theta", n_theta)] if n_theta is not None else []
+    q, lam = x[:n], x[n:]
+    jacobian = phi_q(t, q, *theta)[rows, :]
+    residual = ca.vertcat(q - q_ref + ca.mtimes(jacobian.T, lam), phi(t, q, *theta)[rows])
+    p = ca.vertcat(t, q_ref, *theta)
+    kkt = ca.Function(f"{name}_kkt", [x, p], [residual])
+    root = ca.rootfinder(f"{name}_root", "newton", kkt, {
+        "abstol": ROOT_TOLERANCE, "max_iter": ROOT_ITERATIONS, "error_on_fail": False})
+    guess, t_in, ref_in = ca.MX.sym("q_guess", n), ca.MX.sym("t"), ca.MX.sym("q_ref", n)
+    theta_in = [ca.MX.sym("theta", n_theta)] if n_theta is not None else []
+    solution = root(ca.vertcat(guess, ca.MX.zeros(len(rows))),
+                    ca.vertcat(t_in, ref_in, *theta_in))
+    return ca.Function(name, [guess, t_in, ref_in, *theta_in], [solution[:n], solution[n:]],
+                       ["q_guess", "t", "q_ref", *["theta"] * len(theta_in)], ["q", "lam"])
+
+
+def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
+    """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
+    [F; gamma] (module docstring), M and P with the given sparsity, by CSparse's LU
+    (SADDLE_SOLVER; docs/decisions.md). Called with symbols it inlines
+    into a graph (casmech.optimal), with numbers it is the numeric solve (runtime)."""
+    n, m = mass.size1(), jacobian.size1()
+    m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)
+    forces, gamma, w = ca.MX.sym("F", n), ca.MX.sym("gamma", m), ca.MX.sym("w", m)
+    lhs = ca.blockcat([[m_in, p_in.T], [p_in, -ca.diag(w)]])
+    z = ca.solve(lhs, ca.vertcat(forces, gamma), SADDLE_SOLVER)
+    return ca.Function("saddle", [m_in, p_in, forces, gamma, w], [z[:n], z[n:]],
+                       ["M", "P", "F", "gamma", "w"], ["v_dot", "lam"])
