@@ -11,7 +11,7 @@ simulation time of each library (and of the interpreted SX bundle).
         --repeats 3        # CPU us per call of what IDAS and a results row evaluate
 
 Each setting runs in a fresh process with an empty cache (so nothing is shared), repeated
---repeats times; the table reports medians. Results: RESULTS_codegen.md.
+--repeats times; the table reports medians. Results: docs/decisions/codegen-element-residuals.md.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """n_instructions of the numeric joint functions (formulations.joint_system.build over a lowered
 IR), as JSON: run before and after a change of the joint build and diff the outputs
-(benchmarks/notes_jointparam.md).
+(docs/decisions/joint-system-over-model-data.md).
 
     PYTHONPATH=src:. python benchmarks/jointparam_counts.py > counts.json
 """

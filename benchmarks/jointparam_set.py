@@ -1,6 +1,6 @@
 """`casmech run --set` on compiled models and a compiled sweep, two source trees side by side
-(benchmarks/notes_jointparam.md): a tree (models/double_pendulum.yaml) and a loop (the four-bar
-of models/four_bar.yaml without its driver, swinging under gravity).
+(docs/decisions/joint-system-over-model-data.md): a tree (models/double_pendulum.yaml) and a
+loop (the four-bar of models/four_bar.yaml without its driver, swinging under gravity).
 
     python benchmarks/jointparam_set.py --before /work/main/src --after src --repeats 3
 

@@ -1,5 +1,6 @@
-"""The documentation's links: every relative link in README.md and docs/*.md names a file that
-exists and, with a `#fragment`, a heading of that file (GitHub's anchor rule)."""
+"""The documentation's links: every relative link in README.md, docs/*.md, docs/decisions/*.md and
+benchmarks/*.md names a file that exists and, with a `#fragment`, a heading of that file
+(GitHub's anchor rule)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")),
+         *sorted((ROOT / "docs" / "decisions").glob("*.md")),
+         *sorted((ROOT / "benchmarks").glob("*.md"))]
 LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
 FENCE = re.compile(r"^```.*?^```", re.S | re.M)
 

@@ -1,4 +1,4 @@
-"""casmech run --replay (commands/replay.py) and the reproducibility metadata it reads: the
+"""casmech run --replay (cli/replay.py) and the reproducibility metadata it reads: the
 sha256 of every file a model read, the versions and platform, the options. A replay gives the
 rows of the recorded run; a changed or missing file is refused with a message naming it."""
 

@@ -1,4 +1,4 @@
-"""casmech run's --reactions-frame (commands/run.py): the reaction columns of every joint in
+"""casmech run's --reactions-frame (cli/run.py): the reaction columns of every joint in
 the frame asked for, as the Python API gives them, metadata.json naming each joint's frame, and
 --replay repeating it."""
 

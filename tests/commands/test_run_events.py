@@ -1,4 +1,4 @@
-"""casmech run with events (commands/run.py): events.csv beside results.csv, the event rows in
+"""casmech run with events (cli/run.py): events.csv beside results.csv, the event rows in
 metadata.json, status "stopped by event" with exit 0, one printed line per event."""
 
 import json

@@ -1,4 +1,4 @@
-"""casmech sweep (commands/sweep.py): the files it writes, --full, Ctrl-C, and a start-up that
+"""casmech sweep (cli/sweep.py): the files it writes, --full, Ctrl-C, and a start-up that
 does not import Dask for other commands."""
 
 import json

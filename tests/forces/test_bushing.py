@@ -1,4 +1,4 @@
-"""The bushing (casmech/forces/bushing.py) against closed forms, finite differences and a fixed
+"""The bushing (casmech/elements/forces/bushing.py) against closed forms, finite differences and a fixed
 joint.
 
 Every model is a YAML text run through the public API; expectations are closed forms of the

@@ -1,4 +1,4 @@
-"""Contact elements (casmech/forces/contact.py) against closed forms.
+"""Contact elements (casmech/elements/forces/contact.py) against closed forms.
 
 Every model is a YAML text run through the public API. The references are the free fall
 (impact time sqrt(2h/g)), the exact restitution of the Hunt-Crossley law (its phase-plane
@@ -273,7 +273,7 @@ def test_compiled_mode_equals_interpreted():
 
 
 def test_the_contact_law_names_ground_as_the_compiler_does():
-    """forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
+    """elements/forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
     from casmech.model.ir import GROUND_INDEX
 
     assert contact.GROUND == GROUND_INDEX

@@ -1,4 +1,4 @@
-"""events.csv (output/events.py): what it writes reads back exactly."""
+"""events.csv (io/events.py): what it writes reads back exactly."""
 
 import csv
 

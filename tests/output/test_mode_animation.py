@@ -1,4 +1,4 @@
-"""Mode shapes played by `casmech animate --mode` (output/mode_animation.py), against the
+"""Mode shapes played by `casmech animate --mode` (io/mode_animation.py), against the
 compound pendulum's closed form."""
 
 import numpy as np

@@ -139,8 +139,8 @@ def test_conservative_models_keep_energy_and_constraints(name, formulation):
     """At rtol 1e-10: energy constant to 2e-8 of its scale (the largest kinetic energy reached,
     since these models start at E = 0 or with little motion) and max |Phi| <= 1e-9. One run's
     drift moves by 2x with its step sequence (A01 and the ADAMS case at rtol 1e-9, 1e-10 and
-    1e-11, both formulations: 27-105 rtol, mean 45 rtol; benchmarks/notes_rpdyn.md), so the
-    bound is 200 rtol."""
+    1e-11, both formulations: 27-105 rtol, mean 45 rtol; docs/decisions/algebraic-tolerances.md),
+    so the bound is 200 rtol."""
     functions = casmech.compile(casmech.load(VALIDATION / name))
     result = casmech.analyze(functions, "dynamics", t_end=5, rtol=1e-10, atol=1e-12,
                              formulation=formulation)

@@ -13,9 +13,9 @@ from pathlib import Path
 
 from casmech.errors import AnalysisError, UsageError
 
-# -O1: the generated functions run 2-3x faster than at -O0 (benchmarks/RESULTS_codegen.md, per
-# call), and a 128-body chain's libraries build in ~6-8 s (-O2: ~10-12 s for 10-20 % faster
-# calls). casmech compile --flags, or CASMECH_CFLAGS, choose others.
+# -O1: the generated functions run much faster than at -O0 for a build -O2 would lengthen more
+# than it speeds the calls (docs/decisions/codegen-flags.md). casmech compile --flags, or
+# CASMECH_CFLAGS, choose others.
 DEFAULT_FLAGS = ("-O1",)
 REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
 LIBRARY = "libcasmech_model.so"

@@ -19,16 +19,12 @@ What is compiled (write_build):
     Jacobians; for a small model formulations.dae's unrolled SX: residuals.oracles), in a library
     of its own with the daeF and jacF casadi's IDAS interface loads from it.
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
-(build.DEFAULT_FLAGS). Measured (benchmarks/RESULTS_codegen.md): IDAS's residual 3.3-4x and
-Jacobian 4-8x faster than the interpreted SX from 2 to 128 bodies; YAML -> loaded library in
-2-4 s for chains of 2-128 bodies (the four-bar, whose joints share no kernel, ~6-10 s), 12 s
-for 1000.
+(build.DEFAULT_FLAGS). The measurements behind this: docs/decisions/codegen-element-residuals.md.
 
 `--mode auto` (auto_mode):
-  - compiled when the library is in the cache (loading it takes 0.02-0.3 s);
+  - compiled when the library is in the cache (loading it is quick at any size);
   - otherwise compiled from AUTO_BODIES bodies on, interpreted below: interpreted is ready
-    sooner up to 128 bodies (YAML -> ready 0.02-1.6 s, a build 2-4 s), compiled from 256 for
-    r-p dynamics (docs/decisions.md);
+    sooner up to 128 bodies, compiled from 256 for r-p dynamics (docs/decisions/mode-auto.md);
   - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
     joint, no DAE stabilization): its ODE stays interpreted from COMPILED_ODE_BODIES bodies on
     (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
@@ -78,7 +74,8 @@ def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")
 
 
-INLINED_STEP_BODIES = 32  # up to here prescribed_step is one SX graph (benchmarks/RESULTS.md)
+# Up to this many bodies prescribed_step is one SX graph (docs/decisions/prescribed-step.md).
+INLINED_STEP_BODIES = 32
 
 
 def bundle(ir: ModelIR) -> dict[str, ca.Function]:
@@ -121,7 +118,7 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
     where it applies and `mapped` is not asked for, with the values its load binds, else the
     mapped one with the values baked in (and in its key), and None."""
     if not mapped and parametric.applies(model):
-        values, signature = data(ir)  # one lowering's split serves key and load (~10 ms)
+        values, signature = data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(

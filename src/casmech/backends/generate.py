@@ -22,8 +22,8 @@ from casmech.formulations import residuals
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
 # graph over the library differentiates (casmech.optimal.compiled, r-p only). The romega_*
-# functions are evaluated only (the runtime's fallback steps): their derivatives were 40-50 %
-# of the bundle's gcc time on the four-bar (benchmarks/notes_codegen.md).
+# functions are evaluated only (the runtime's fallback steps), so their derivatives, a large
+# part of the bundle's gcc time, are not generated (docs/decisions/codegen-flags.md).
 DIFFERENTIATED = frozenset({"phi", "nu", "gamma", "generalized_forces"})
 # Matrix-valued functions that graph differentiates too get one forward and one reverse
 # derivative instead (`fwd1_<name>`, `adj1_<name>`, which casadi's External uses the same way):

@@ -142,8 +142,8 @@ def bind(function: ca.Function, values: np.ndarray, name: str | None = None) -> 
 @functools.lru_cache(maxsize=8)
 def _externals(directory: str, built: int) -> dict[str, ca.Function]:
     """The library's externals, loaded once per process and build (`built`: its manifest's
-    mtime): a sweep binds them to every sample's values (18 ms a sample on the double
-    pendulum, benchmarks/notes_jointparam.md)."""
+    mtime): a sweep binds them to every sample's values
+    (docs/decisions/joint-system-over-model-data.md)."""
     return externals(Path(directory))
 
 

@@ -2,7 +2,7 @@
 
 Each subcommand is a module of casmech.cli (listed in cli.commands.COMMANDS). Only the module
 of the command on the command line is imported, so each command pays for its own imports
-(`casmech --help` imports none; benchmarks/notes_startup.md).
+(`casmech --help` imports none; docs/decisions/lazy-imports.md).
 Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis failure,
 130/143 stopped by SIGINT/SIGTERM.
 """
@@ -15,7 +15,8 @@ import os
 import sys
 
 # One BLAS thread unless the user chose: casmech's dense linear algebra is on small matrices,
-# and OpenBLAS's threads made it 10-60x slower on a busy 2-core machine (docs/decisions.md).
+# where OpenBLAS's threads cost more than they gain on a busy machine
+# (docs/decisions/one-blas-thread.md).
 # Set before a command imports NumPy.
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")

@@ -3,8 +3,9 @@ traced once per structure of its arguments (shapes and sparsity patterns, and th
 values it branches on) and then evaluated on each body's arguments inside CasADi.
 
 One evaluation replaces the step's tens to hundreds of Python-level SX operations, whose
-wrappers (argument conversion, shape checks) cost ~10-30 us each: the unrolled recursions of a
-1000-link chain spent most of their build there. Evaluating an SX Function on SX arguments
+wrappers (argument conversion, shape checks) cost far more than the SX nodes they make: the
+unrolled recursions of a large tree spent most of their build there
+(docs/decisions/traced-steps.md). Evaluating an SX Function on SX arguments
 expands it (no call node), and CasADi's SX arithmetic folds operations on constants and drops
 x * 0, x + 0 and x * 1, so the expanded graph is the one the step's code builds when run on the
 arguments directly, up to the association of products of constants. `direct()` runs every step

@@ -122,7 +122,8 @@ def _as_sx(value, known: dict):
 
 def rotational_jacobian(phi_q, x: Coordinates, k: int):
     """Pi_bar of body k: 1/2 Phi_p_k G(p_k)^T (delta-pi_bar flavour of the variation, as
-    body.pi_bar, with G^T a traced step), from body k's columns of Phi_q (docs/decisions.md)."""
+    body.pi_bar, with G^T a traced step), from body k's columns of Phi_q
+    (docs/decisions/pi-bar-from-phi-q.md)."""
     start = 3 * x.n_bodies + 4 * k
     return 0.5 * phi_q[:, start:start + 4] @ _G_TRANSPOSE(x.p(k))[0]
 

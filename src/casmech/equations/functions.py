@@ -88,8 +88,8 @@ def _function(name, inputs: dict, outputs: dict) -> ca.Function:
 class LazyFunctions(MutableMapping):
     """An interpreted bundle's functions by name, each group built on first use: a
     joint-coordinate run reads 7 of the 19 (phi, phi_q, nu for the assembly; the results
-    row's; docs/decisions.md). `groups`: (the names a group makes, or None when only building
-    it tells them, and its maker () -> Functions), in the bundle's order."""
+    row's; docs/decisions/traced-steps.md). `groups`: (the names a group makes, or None when
+    only building it tells them, and its maker () -> Functions), in the bundle's order."""
 
     def __init__(self, groups: list[tuple[tuple[str, ...] | None, Callable[[], list]]]):
         self._groups = list(groups)

@@ -11,8 +11,7 @@ P_s = diag(s) P and gamma_s = s * gamma: P's rows scaled by constants the runtim
 inverse row norms at the start of each integration, so lam is in force units (the true
 multipliers are s * lam) and the rows are comparable. Constants, not the norms at the current
 q, keep P^T lam as sparse as P (with norms of q every entry of a row depends on every
-coordinate the row does: 1.5x the Newton matrix's nonzeros and 2.5x the Jacobian's
-instructions on benchmarks/chain8; benchmarks/notes_rpdyn.md). w masks rows: w_k = 0 keeps
+coordinate the row does: docs/decisions/rp-row-scales.md). w masks rows: w_k = 0 keeps
 row k, w_k = 1 turns it into lam_k = P_k v_dot - gamma_k, which is 0 for a row that depends on
 the others (redundant joints), so the row drops out smoothly and the algebraic Jacobian
 [M P^T; P -diag(w)] stays non-singular. The residual is pure SX: IDAS's Newton does the
@@ -92,8 +91,8 @@ def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Functi
 
 
 def _options(sym) -> dict:
-    """An SX residual with its common subexpressions merged (four-bar GGL: 2651 -> 2275
-    instructions, its Jacobian by AD 6286 -> 4643; benchmarks/notes_rpstep.md)."""
+    """An SX residual with its common subexpressions merged, and so its Jacobian by AD
+    (docs/decisions/codegen-small-dae-unrolled.md)."""
     return {"cse": True} if sym is ca.SX else {}
 
 

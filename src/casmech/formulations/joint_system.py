@@ -14,8 +14,8 @@ with S = diag(s(theta)) scaling each row to unit velocity-Jacobian norm (lam in 
 and the rows masked by p = w (w_k = 1 turns row k into lam_k = 0 and mu_k = 0: rows that
 depend on the others at t0). The stabilizing term takes S as a factor, not differentiated
 (d S/d theta multiplies Phi_c, zero on the constraint manifold): any matrix B with
-Phi_c_theta B nonsingular gives the same projection, and this one costs half the residual's
-instructions of (S Phi_c)_theta (measured in docs/decisions.md).
+Phi_c_theta B nonsingular gives the same projection, and this one costs fewer of the
+residual's instructions than (S Phi_c)_theta (docs/decisions/loop-dae-stabilization.md).
 
 Over a parametric IR (model.parametric.split, `build(ir, tree, data=symbols)`) every function
 takes a trailing input "d": the model data extended by the constants of the tree
@@ -105,8 +105,8 @@ class JointSystem:
     def problem(self) -> dict:
         """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
         sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
-        (IDAS evaluates it at every linear-solver setup: the forward sweeps cost 40x more
-        per evaluation on the gallery's loops, measured in docs/decisions.md); a compiled
+        (IDAS evaluates it at every linear-solver setup, where the forward sweeps cost far
+        more per evaluation: docs/decisions/loop-dae-stabilization.md); a compiled
         library's when given."""
         if self.given_jacobian is not None:
             return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)

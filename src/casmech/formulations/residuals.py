@@ -34,9 +34,9 @@ from casmech.numerics.element_sums import DROPPED, ElementSum, Group
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 # A DAE of a model of at most UNROLLED_BODIES bodies is compiled from formulations.dae's unrolled
 # SX (from_residual) when its residual and Jacobian take at most UNROLLED_INSTRUCTIONS SX
-# instructions together, instead of from the element kernels: the four-bar's GGL residual
-# runs 2.3x faster per call and builds sooner; chain8's (14300 instructions) gains little and
-# builds 5x slower (benchmarks/notes_rpstep.md).
+# instructions together, instead of from the element kernels: there the unrolled code runs
+# faster per call and builds sooner; above, it gains little and builds slower
+# (docs/decisions/codegen-small-dae-unrolled.md).
 UNROLLED_BODIES = 4
 UNROLLED_INSTRUCTIONS = 12_000
 
@@ -308,9 +308,9 @@ def jacobian_patterns(functions: dict[str, ca.Function]) -> dict[str, list[ca.Sp
     """The Jacobian sparsity of the DAE function and of daeF, block by block (output-major:
     d output_i / d input_j), for jac_<name>_sparsity_out in the DAE's library: casadi's
     External reads a function's Jacobian pattern there and counts it dense without it, which
-    made IDAS's setup (Integrator::sp_jac_dae, from daeF) take 1.9 s at 128 bodies (0.01 s with
-    it) and would need gigabytes at 1000. The (x, z) blocks are jacF's; the others come from
-    CasADi's sparsity propagation through the function. The library holds no jac_<name>
+    makes IDAS's setup (Integrator::sp_jac_dae, from daeF) grow with the square of the model
+    (docs/decisions/codegen-element-residuals.md). The (x, z) blocks are jacF's; the others
+    come from CasADi's sparsity propagation through the function. The library holds no jac_<name>
     itself: AD through these functions stops with an error instead of using a pattern alone."""
     jac = functions["jacF"]
     known = {("ode", "x"): jac.sparsity_out(0), ("alg", "x"): jac.sparsity_out(1),

@@ -29,8 +29,8 @@ def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
 
 def rows_text(values: np.ndarray) -> bytes:
     """The rows as comma-separated lines. orjson writes the shortest round-trip digits of a
-    float (Ryu; docs/decisions.md), but NaN and infinities as null: rows holding one are
-    written by repr (nan, inf, -inf)."""
+    float (Ryu; docs/decisions/csv-format.md), but NaN and infinities as null: rows holding
+    one are written by repr (nan, inf, -inf)."""
     if values.shape[0] == 0:
         return b""
     if values.shape[1] == 0:
@@ -46,8 +46,8 @@ def rows_text(values: np.ndarray) -> bytes:
     return b"\n".join(lines) + b"\n"
 
 
-# Files above this size are parsed by pandas' C reader (a 158 MB table: 0.3 s against 1.5 s
-# for numpy.loadtxt), smaller ones by numpy (importing pandas costs ~0.3 s)
+# Files above this size are parsed by pandas' C reader, smaller ones by numpy, which do not
+# repay importing pandas (docs/decisions/csv-format.md)
 PANDAS_BYTES = 8 << 20
 
 

@@ -7,9 +7,9 @@ The Jacobian dr/du is assembled the same way from each kernel's own SX Jacobian 
 sparse matrix per instance), every entry added in place into the global non-zeros (add_into),
 so its cost is that of the kernels' Jacobians plus one pass over their non-zeros, and its code
 does not grow with the number of instances (only index tables do). CasADi's MX Jacobian of a
-mapped residual instead costs a forward sweep of every kernel per colour of the Jacobian
-(benchmarks/RESULTS_codegen.md: 8-11x the interpreted SX Jacobian's time at -O1, where this is
-2.5-8x faster).
+mapped residual instead costs a forward sweep of every kernel per colour of the Jacobian,
+slower than the interpreted SX Jacobian, where this is faster
+(docs/decisions/codegen-element-residuals.md).
 """
 
 from __future__ import annotations

@@ -68,7 +68,7 @@ def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
 def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
     """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
     [F; gamma] (module docstring), M and P with the given sparsity, by CSparse's LU
-    (SADDLE_SOLVER; docs/decisions.md). Called with symbols it inlines
+    (SADDLE_SOLVER; docs/decisions/saddle-solve.md). Called with symbols it inlines
     into a graph (casmech.optimal), with numbers it is the numeric solve (runtime)."""
     n, m = mass.size1(), jacobian.size1()
     m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)

@@ -2,8 +2,8 @@
 
 SUNDIALS integrators created through casadi.integrator build the Jacobian of their right-hand
 side when they are constructed, even when they never evaluate it (CVODES's Adams method with
-functional iteration). By symbolic differentiation of the articulated-body ODE that took 12 s
-for a 32-body chain (a Jacobian of 14 million SX instructions). `forward_jacobian` gives the
+functional iteration), which by symbolic differentiation of the articulated-body ODE grows
+out of reach with the tree (docs/decisions/lazy-jacobian.md). `forward_jacobian` gives the
 function a custom Jacobian made of one forward-mode derivative mapped over the unit seeds:
 built in about the time of that one derivative, exact to roundoff, evaluated in n forward
 sweeps when a Newton iteration needs it.
@@ -22,7 +22,7 @@ def forward_jacobian(function: ca.Function, exact: bool = True,
     once by the caller: creating an integrator then builds no Jacobian); exact=False: declared
     not differentiable, for an integrator that never evaluates the Jacobian (CVODES's
     functional iteration), since creating one still analyses the Jacobian's sparsity for a
-    linear solver (a dense one: 0.8 s for a 128-link chain, 4.7 s for 256, 574 s for 1000)."""
+    linear solver (a dense one for a large tree: docs/decisions/lazy-jacobian.md)."""
     symbols = function.mx_in()
     custom = given if given is not None else jacobian(function) if exact else None
     options = ({"custom_jacobian": custom, "jac_penalty": 0} if exact

@@ -185,13 +185,12 @@ def _distances(a: ca.DM) -> np.ndarray:
 
 FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
 # Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
-# the factorization here (one Python step per nonzero of R, a few us). Measured on chains:
-# lstsq (an SVD) of Phi_q, 32 links (128 x 224): 13 ms dense, 7 ms sparse for initial_state.
+# the factorization here (one Python step per nonzero of R); the limits are where the two
+# cost the same on the benchmark chains (docs/decisions/sparse-rank-and-qr.md).
 DENSE_ENTRIES = 20_000  # lstsq
-DENSE_NORM_ENTRIES = 20_000  # norm2: SVD 0.1-3 ms up to here, like the power iteration
-# independent_rows' QR of Phi_q^T (R only) and lstsq's of a full-rank matrix, dense against
-# the sparse factorization here: 0.05 against 0.45 ms on the four-bar, 1.2 against 25 ms on a
-# 32-link chain, 103 against 367 ms on 128 links (benchmarks/notes_numerics2.md)
+DENSE_NORM_ENTRIES = 20_000  # norm2: the SVD up to here, like the power iteration above
+# independent_rows' QR of Phi_q^T (R only) and lstsq's of a full-rank matrix: LAPACK's QR up
+# to here, faster than the sparse factorization here on every chain measured
 DENSE_QR_ENTRIES = 500_000
 
 

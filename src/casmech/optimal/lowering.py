@@ -6,15 +6,12 @@ points and axes, initial poses, lengths, force and driver constants). Geometry g
 schema's placements and rotations in NumPy, so d(theta) is differentiated numerically: for each
 parameter, the model is re-loaded and lowered at theta +- k h / 2 (k = 1, 2, 3, 4, 6;
 h = STEP |theta|, or STEP when theta = 0) and the sixth-order central formula is applied with
-step h / 2. This is the lowering alone (a few milliseconds per point), never a simulation. The
-error estimate is the difference to the same formula with step h (64 times the truncation error
-at h / 2, asymptotically: a conservative estimate), plus the round-off of the numbers that move
+step h / 2. This is the lowering alone, never a simulation. The error estimate is the
+difference to the same formula with step h (64 times the truncation error at h / 2,
+asymptotically: a conservative estimate), plus the round-off of the numbers that move
 through the weights (ROUNDING |d| / (h / 2)), which dominates for a number much larger than its
 derivative (an initial spin of 87 rad/s that moves by 0.007 per unit of a disc's thickness:
-2e-8 relative). Measured: 1e-14 against the closed form of a quaternion of an initial angle
-(cos, sin of a0 / 2); numbers linear in theta (a mass, a length written as a position) are
-exact to round-off (~1e-14 relative); over the first three parameters of every model in
-models/ the estimate is below 2e-9 but for heavy_top.yaml's disc thickness (1.2e-7, round-off).
+2e-8 relative). Its accuracy on the gallery: docs/decisions/geometry-derivatives.md.
 Above SMOOTHNESS the lowering is not smooth at theta (a branch of the lowering switches inside
 the stencil) and a smaller step is tried.
 

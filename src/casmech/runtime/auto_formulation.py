@@ -12,8 +12,9 @@
   cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
   Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle:
   above COMPILED_ODE_BODIES, or a parametric library built without the joint functions):
-  `rp`, compiled. (Measurements: docs/decisions.md.) A compiled parametric bundle's joint
-  system is compiled in its library (codegen.parametric), so its loops run joint coordinates.
+  `rp`, compiled. (Measurements: docs/decisions/formulation-auto.md.) A compiled parametric
+  bundle's joint system is compiled in its library (codegen.parametric), so its loops run joint
+  coordinates.
 - A DAE stabilization asked for makes the formulation `rp` before this module is reached
   (api.analysis_settings, the one place that rule lives).
 """

@@ -44,8 +44,8 @@ class BufferedCall:
 class NamedCall:
     """function(name=array, ...) -> {output name: dense array} through a BufferedCall, the
     inputs not given zero: how a kept integrator is called, its outputs over the grid written
-    into NumPy (docs/decisions.md). A solver failure raises the RuntimeError the ordinary call
-    raises (its text without casadi's "Error in Function::call" lines)."""
+    into NumPy (docs/decisions/output-blocks.md). A solver failure raises the RuntimeError the
+    ordinary call raises (its text without casadi's "Error in Function::call" lines)."""
 
     def __init__(self, function: ca.Function):
         self.function, self.call = function, BufferedCall(function)
@@ -66,10 +66,9 @@ class NamedCall:
 
 
 # Columns per mapped call. casadi builds a Map in time growing with its length and the
-# function's size (chain32's results row: 6 ms for 101 columns, 1.0 s for 10^4, 15 s for 10^5;
-# the four-bar's 0.4 ms, 77 ms, 1.1 s), so columns are evaluated in blocks of this many through
-# kept maps (one per block length: BLOCK and the lengths of shorter blocks, at most KEPT_MAPS).
-# A call costs ~20 us over its columns.
+# function's size, so columns are evaluated in blocks of this many through kept maps (one per
+# block length: BLOCK and the lengths of shorter blocks, at most KEPT_MAPS); a call's own cost
+# is small beside its columns' (docs/decisions/output-blocks.md).
 BLOCK = 256
 KEPT_MAPS = 8
 

@@ -2,9 +2,9 @@
 
 SUNDIALS interpolates the output grid from its own steps, which grow without bound while the
 motion is force-free and smooth (a body in straight flight is integrated exactly by any order),
-so a contact that starts between two far-apart steps is never sampled: measured, two spheres
-of radius 0.01 m closing at 1 m/s passed through each other with every formulation and method
-at the default tolerances (benchmarks/notes_contact.md). A plane or a stop is a half-space (the
+so a contact that starts between two far-apart steps is never sampled: two small spheres
+closing head-on can pass through each other with every formulation and method
+(docs/decisions/contact-integration.md). A plane or a stop is a half-space (the
 force grows with the depth), so a step past its onset is rejected; a sphere pair is only
 `R_i + R_j` thick (the `thickness` of its casmech.elements.force_types entry). `options` caps the
 step:

@@ -2,14 +2,14 @@
 (SystemFunctions.derived) for later runs.
 
 Creating an integrator over an interpreted (SX) DAE makes CasADi differentiate the residual for
-IDAS's Jacobian and analyse its sparsity: 9 ms on the four-bar, more than a quarter of a 1 s
-run (a compiled DAE brings its Jacobian: 0.5 ms). IDAS takes the start's derivative
+IDAS's Jacobian and analyse its sparsity, a large part of a short run (a compiled DAE brings
+its Jacobian). IDAS takes the start's derivative
 (init_xdot), its first step (step0) and the algebraic tolerances (abstolv) as options, which
 depend on the initial state, so an integrator is kept per DAE, relative output grid and
 option values: a run from the same state over the same grid (an analysis repeated, a
 benchmark's runs) reuses it, and its results are those of a new one. Whatever depends on the
-state cannot be an input instead (benchmarks/notes_rpstep.md: integrating x - tau x_dot0 lost
-accuracy, IDAS's own first step failed at rtol 1e-10).
+state cannot be an input instead (docs/decisions/rp-integrators-kept.md: integrating
+x - tau x_dot0 lost accuracy, IDAS's own first step failed at rtol 1e-10).
 """
 
 from __future__ import annotations

@@ -3,11 +3,9 @@
 By default IDAS integrates the stabilized index-2 DAE of formulations.dae (stabilization "ggl",
 Gear-Gupta-Leimkuhler): x = [q, v], z = [v_dot, lam, mu] (v = q_dot in r-p, [r_dot; omega_bar]
 in r-omega), which holds Phi = 0 and P v = nu themselves at every step, with the algebraic
-unknowns out of the error test. Measured against the index-1 DAE with projections (below) on
-benchmarks/chain8 over 10 s at rtol 1e-8: 4.3 s with no projection against 12.2 s with 82,
-max |Phi| 1.5e-10 against 1e-8; at t = 1 s both are within 2e-8..4e-8 m of the rtol 1e-12
-run at rtol 1e-10. Its first step is sized by initial_step (IDAS's own guess is too short for
-an index-2 iteration matrix).
+unknowns out of the error test, and needs no projections (measured against the index-1 DAE
+below: docs/decisions/ggl-stabilization.md). Its first step is sized by initial_step (IDAS's
+own guess is too short for an index-2 iteration matrix).
 
 Stabilization "projection": the index-1 DAE, z = [v_dot, lam]. The position and velocity
 constraints then hold at the integration error; at the first output where either drifts past
@@ -35,7 +33,7 @@ start of the chunk that failed, rk4_steps, rk4_rejected, rk4_stalled_at). A fail
 one is reported with the output interval, the time and the joints.
 
 Measurements behind these choices (the fallback's history, the rejected alternatives):
-benchmarks/notes_rpstep.md, section "Moved from runtime/dynamics.py".
+docs/decisions/singular-fallback.md and docs/decisions/ggl-stabilization.md.
 """
 
 from __future__ import annotations
@@ -77,9 +75,9 @@ GGL_FAILURES = 3  # chunks the index-2 DAE may fail on before the index-1 one do
 
 def drift_tolerance(atol: float) -> float:
     """Constraint drift allowed before a projection: DRIFT_TOLERANCE, or 100 atol when the
-    integration itself is looser. Every projection restarts IDAS (a new integrator: 0.1 s for
-    a 32-body chain, interpreted); with 10 atol a 10 s run of benchmarks/chain2 at rtol 1e-8
-    projected 500 times and took 4x longer than with 100 atol (76 projections)."""
+    integration itself is looser. Every projection restarts IDAS (a new integrator), so a
+    tighter multiple of atol projects far more often for no accuracy
+    (docs/decisions/ggl-stabilization.md)."""
     return max(DRIFT_TOLERANCE, 100 * atol)
 
 
@@ -243,9 +241,8 @@ class _Stepper:
 
     def _dae(self, t0, times, q, v, mask, kind: str, first: float | None = None):
         """IDAS on the DAE from the exact consistent state, handed over with its derivative
-        (init_xdot, z0) instead of asking IDACalcIC: reusing one integrator per output grid
-        started by IDACalcIC was slower (its line search often failed, measured on the
-        benchmark chains) and IDACalcIC fails on IFToMM A01's 1e-9 inertia. `first`: the
+        (init_xdot, z0) instead of asking IDACalcIC, whose line search often fails (IFToMM
+        A01's 1e-9 inertia; docs/decisions/rp-integrators-kept.md). `first`: the
         output interval the first step is sized by (default the first of `times`). Only an
         integrator from the run's start is kept (a repeated run starts there; a restart
         within the run from there on is not repeated but by the same run again)."""
@@ -368,17 +365,11 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
                  progress=None, stabilization: str = "ggl", extra_events=()) -> Result:
     """By the stabilized index-2 DAE (ggl) or the index-1 DAE with projections; a chunk of
     output intervals the index-2 DAE fails on is done by the index-1 one (metadata
-    ggl_failed_at, ggl_failures: benchmarks chain32 at rtol 1e-10 failed right after a chunk
-    restart at 2.56 s). If the index-1 DAE fails too (IFToMM A02 at its flat poses), the whole
-    run again from t0 on the augmented-Lagrangian ODE. Measured on A02 N = 2 with IDAS on that
-    ODE: switching from the start of the failed chunk made the outcome depend on where chunks
-    and projections fell (one more restart before the first flat pose took r-omega onto the
-    wrong branch at the third). With the projected Runge-Kutta steps, switching there passed
-    at chunks of 4 to 256 intervals (B0 errors 4e-8..1.4e-6 m), but with chunks of 4 and 8
-    r-omega's DAE got past the first flat pose (0.72 s) and failed only in the chunk from
-    1.2 s, so the rows kept from it had passed a singular pose on a DAE singular there (B0
-    error 1e-6 m, against 3.7e-7 m from t0). Starting over costs the DAE's time to its
-    failure; it keeps every row off a DAE that has met a singular pose.
+    ggl_failed_at, ggl_failures). If the index-1 DAE fails too (IFToMM A02 at its flat poses),
+    the whole run again from t0 on the augmented-Lagrangian ODE, not from the failed chunk:
+    a DAE may pass a singular pose before it fails, and starting over keeps every row off a
+    DAE that has met one, at the cost of the DAE's time to its failure
+    (docs/decisions/singular-fallback.md).
 
     The model's `events:` and `extra_events` (runtime.events.Event, declared by code) are
     located and recorded in Result.events; without any, no event work is done."""

@@ -13,7 +13,7 @@ each of its values by integrating again from the interval's start to the trial t
 run's own integrator and tolerances (`probe`), until the bracket is rtol |t| wide (at least a
 few ulps; the trial values carry the integration error, so a narrower bracket only costs
 trials). The time found is exact to the integration error of the run, not to the output grid
-(benchmarks/notes_events.md has the measurements behind this choice). A sign change inside
+(docs/decisions/events.md has the measurements behind this choice). A sign change inside
 one output interval that returns before its end (two crossings) is not seen.
 
 Recorded: Result.events (EventRecord, in time order) and Result.event_states (a Result holding

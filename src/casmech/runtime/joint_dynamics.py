@@ -41,14 +41,14 @@ METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
 # method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF
-# (the measurements behind it: docs/decisions.md).
+# (the measurements behind it: docs/decisions/method-auto.md).
 STIFF = 10.0
 
 # On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
 # with the tree: the ODE up to COMPILED_ODE_BODIES, the results rows (called once per output
 # block) up to COMPILED_MOTION_BODIES; larger trees stay interpreted. An ODE above
 # QUICK_BUILD_INSTRUCTIONS SX instructions is built at -O0 unless $CASMECH_CFLAGS says
-# otherwise (gcc -O1 time grows faster than the function; docs/decisions.md).
+# otherwise (gcc -O1 time grows faster than the function; docs/decisions/joint-tree-compiled.md).
 COMPILED_ODE_BODIES = 128
 COMPILED_MOTION_BODIES = 32
 QUICK_BUILD_INSTRUCTIONS = 30000
@@ -133,7 +133,7 @@ def constant_inverse(kind: str) -> np.ndarray | None:
     Whether it is constant is seen at sample coordinates (its SX does not simplify
     sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
     motion = MOTIONS[kind]
-    # four scattered coordinates (not numpy.random: importing it costs a run 10 ms)
+    # four scattered coordinates (not numpy.random, which a run would have to import)
     samples = np.sin(1.7 * np.arange(1, 4 * motion.n_q + 1)).reshape(4, motion.n_q) * 1.5
     for start in motion.quaternions:
         samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
@@ -250,7 +250,7 @@ class _Integrator:
 
     def _cvodes(self, problem, t0: float, times) -> NamedCall:
         """CVODES over the grid, kept for a later run over the same grid with the same options
-        (creating one costs about as much as integrating a small tree for 1 s)."""
+        (docs/decisions/joint-run-fixed-costs.md)."""
         return self._kept("cvodes", (id(problem),), problem, t0, times, lambda: self.options)
 
     def _idas(self, t0: float, times, x, z, first: float | None) -> NamedCall:
@@ -275,8 +275,8 @@ class _Integrator:
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
-        test per group (algebraic_tolerances; docs/decisions.md). `first`: the interval the
-        first step is sized by (default the first output interval)."""
+        test per group (algebraic_tolerances; docs/decisions/algebraic-tolerances.md).
+        `first`: the interval the first step is sized by (default the first output interval)."""
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint

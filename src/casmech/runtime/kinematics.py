@@ -62,8 +62,8 @@ def state_at(functions: SystemFunctions, t: float, q_guess: np.ndarray, q_dot_gu
 KEPT_GRIDS = 16  # mapped grids (one per padded block length) kept with the functions
 MIN_SPAN = 16  # rows of the first mapped call after a row the per-row code had to do
 # Most rows per mapped call: casadi builds a grid's nested mapaccum in time growing faster than
-# its length (four-bar: 0.06 s for 2048 rows, 8.5 s for 10^5), so long grids are called in
-# blocks of this many rows through one kept Function (calls cost ~1e-4 of a block's rows).
+# its length, so long grids are called in blocks of this many rows through one kept Function
+# (docs/decisions/output-blocks.md).
 MAX_SPAN = 2048
 
 

@@ -96,8 +96,8 @@ def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.n
     acceleration, _ = saddle(mass, phi_q, forces, bundle["gamma"](t, position, velocity)[rows],
                              ca.DM.zeros(len(rows)))
     f = ca.vertcat(ca.mtimes(n_basis.T, velocity), ca.mtimes(n_basis.T, acceleration))
-    # forward AD in every direction at once: ~4x quicker to build than ca.jacobian of the MX
-    # graph for 40 bodies (benchmarks/notes_linearize.md)
+    # forward AD in every direction at once: quicker to build than ca.jacobian of the MX graph
+    # (docs/decisions/linearization.md)
     ode = ca.Function("chart_ode", [z, w, u], [f])
     x = [np.zeros(k), basis.T @ q_dot, np.zeros(count)]
     seeds = np.eye(2 * k + count)

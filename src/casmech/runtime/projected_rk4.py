@@ -6,12 +6,10 @@ configurations (IFToMM A02's flat poses), where both DAEs fail.
 Why a projection after every step: near a flat pose two branches of the constraint manifold
 cross. Each step starts on the manifold and moves along the motion's tangent, so the step's end
 lies far nearer the branch the mechanism is on than the other one (they part linearly from the
-crossing, the step errs by h^5), and the mass-orthogonal projection takes the nearest. Measured
-on A02 N = 2 over 10 s: with the projection, fixed steps of 10, 5, 2.5 and 1 ms kept both
-formulations on the branch (B0 error 7e-6 down to 1e-10 m; tests/runtime/test_projected_rk4);
-projecting only at the outputs, 2 ms stayed on and 1 ms left it (error 2 m; measured before
-the accelerations were solved as corrections, formulations.augmented), and IDAS on the same ODE
-stayed on only as long as its roundoff was lucky (runtime.dynamics).
+crossing, the step errs by h^5), and the mass-orthogonal projection takes the nearest. On A02
+N = 2 every fixed step tried kept both formulations on the branch this way
+(tests/runtime/test_projected_rk4); projecting only at the outputs, or IDAS on the same ODE,
+did not always (docs/decisions/singular-fallback.md).
 
 Error control: an output interval is integrated with n and with 2n steps; the fine result is
 kept when |fine - coarse| / 15 (its error for a 4th-order method) is within the tolerance,
@@ -106,15 +104,14 @@ class ProjectedRK4:
         either state is not finite. Two, because at a singular pose the velocity along the
         lost direction is the penalty's: on A02 N = 40 at its flat pose at 10.55 s the
         couplers' spin was 1.6e-3, 3e-5 and 1.5e-7 rad/s with a = 1e4, 1e6 and 1e8 times the
-        mass, where it is 0 (1.5e-7 again with the accelerations solved as corrections). Two
+        mass, where it is 0. Two
         resolutions differ there by what no step count removes (1e4 times the tolerance at
         rtol 1e-10 with any of 10 to 160 steps), until the projection removes it past the
         pose, while the positions, which integrate it, met the tolerance. So advance keeps
         an interval whose positions meet the tolerance and whose velocity estimate shrank by
         less than the square of the factor the steps were multiplied by (a 4th-order
-        discretization error shrinks by its 4th power; with "did not halve" as the rule, A02
-        N = 40 in r-omega took 22248 steps, with this one 13568, B0 within 1.3e-7 m either
-        way). On the whipping chain of tests/runtime, controlling the positions alone left
+        discretization error shrinks by its 4th power; docs/decisions/singular-fallback.md).
+        On the whipping chain of tests/runtime, controlling the positions alone left
         10x the error at rtol 1e-8 (3.6e-8 against 3.5e-9 m at t <= 1 s)."""
         if not (np.all(np.isfinite(coarse)) and np.all(np.isfinite(fine))):
             return math.inf, math.inf

@@ -11,7 +11,7 @@ rows make up the dependency (its singular vector), each with its file:line:col.
 
 A tree has no loop to close (its joints' rows are independent at every pose) and is not
 examined; nor is a run above MAX_ENTRIES (output rows x rows of Phi x coordinates: the dense
-Jacobians held at once). NEAR's measurements: docs/decisions.md.
+Jacobians held at once). NEAR's measurements: docs/decisions/singular-poses.md.
 """
 
 from __future__ import annotations

@@ -24,8 +24,7 @@ eigenvalues of M^-1 K have negative real parts (a pose above a stable one), or t
 turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free, with
 mu raised until no body turns more: a trust region). An equilibrium found unstable (a pendulum
 started upright) is left along its most unstable mode, at most MAX_ESCAPES times. All matrices
-are dense: statics is for mechanisms of tens of bodies (a 40-link chain released horizontal:
-52 steps, 1.7 s).
+are dense: statics is for mechanisms of tens of bodies (docs/decisions/statics-solver.md).
 
 No equilibrium (a free body falling: the residual does not fall in MAX_ITERATIONS steps) or a
 DOF of zero stiffness (neutral: every pose along it is an equilibrium) is an AnalysisError (exit

@@ -26,7 +26,8 @@ from contextvars import ContextVar
 from pathlib import Path
 
 MAX_MODEL_BYTES = 2 << 20  # a model or component file: the gallery's are 3-5 kB, a 1000-body
-#                           model written out 80 kB; PyYAML reads ~1 MB/s, so ~2 s here
+#                           model written out 80 kB; bounds the time to read one
+#                           (docs/decisions/hostile-input.md)
 MAX_TABLE_BYTES = 8 << 20  # a CSV table: 200 000 rows of a few columns
 ALLOWED_DIRS = "CASMECH_ALLOWED_DIRS"
 

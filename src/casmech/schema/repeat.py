@@ -31,8 +31,8 @@ TEXT_KEYS = NAME_KEYS | {"type", "frame", "component", "mesh", "axis", "file"}  
 BRACES = re.compile(r"\{([^{}]*)\}")
 MAX_COPIES = 10_000  # copies of one item: a bound gone wrong should not hang the loader
 MAX_ITEMS = 20_000  # bodies, joints, forces and instances of a whole model, the members of
-#                    instances (and theirs) included: each costs ~1 ms to check, and the
-#                    compiler's time grows faster than linearly beyond (2000 bodies: 27 s)
+#                    instances (and theirs) included: bounds the time to check and compile
+#                    (docs/decisions/hostile-input.md)
 INTEGRAL = 1e-9  # |x - round(x)| accepted as an integer
 TOO_MANY = (f"the model has more than {MAX_ITEMS} bodies, joints, forces and instances (the "
             "members of instances included)")

@@ -6,7 +6,7 @@ makes one run and returns an `Outcome`. Nothing else in casmech.study knows how 
 
 A run loads the model text with the values as `--set` overrides and compiles it in the job's
 mode (`casmech.loads` + `casmech.compile`). "interpreted": CasADi functions built for these
-values (about 50 ms for the four-bar). "compiled": the model's parametric library
+values. "compiled": the model's parametric library
 (codegen.parametric: the model data as an input, keyed on the model's structure), built once
 by the study before its runs (study.sweep.prepare), loaded from the cache and bound to the
 run's values (milliseconds); a value that changes the structure (a repeat count, a parameter

@@ -50,8 +50,8 @@ COMPILE_RUNS = 200  # mode auto compiles a study of at least this many runs (see
 def study_mode(model, runs: int, mode: str) -> str:
     """casmech.compile's mode for every run. auto: "compiled" when the model's parametric
     library applies (codegen.parametric: parameters, at most 32 bodies; one library for every
-    value) and is cached or the study has COMPILE_RUNS runs or more (a build of 5-15 s against
-    ~50 ms saved per run of the four-bar: benchmarks/notes_sweep.md), else "interpreted"."""
+    value) and is cached or the study has COMPILE_RUNS runs or more (where the runs repay the
+    library's build: docs/decisions/parameter-studies.md), else "interpreted"."""
     from casmech.backends import codegen, parametric
     from casmech.errors import UsageError
 

@@ -4,8 +4,8 @@ SX bundle, equal values (tests/codegen/test_mapped.py), and C whose size does no
 number of bodies, joints or force elements (only index tables and data do).
 
 The DAE residuals are not built over this bundle (formulations.dae over it is an MX graph whose
-Jacobian CasADi evaluates by a forward sweep per colour: 8-11x slower than the interpreted SX
-at -O1, benchmarks/RESULTS_codegen.md) but as sums of elements: formulations.residuals.
+Jacobian CasADi evaluates by a forward sweep per colour, slower than the interpreted SX:
+docs/decisions/codegen-element-residuals.md) but as sums of elements: formulations.residuals.
 """
 
 from __future__ import annotations

@@ -32,8 +32,8 @@ BAKE_LIMIT = 24
 
 
 # Derivative directions per call of a kernel's derivative. casadi batches up to 64 by default:
-# code 64 times the kernel's derivative; 1 halves the C of chain32 and builds it 1.6-3.5x
-# faster (benchmarks/RESULTS_codegen.md).
+# code 64 times the kernel's derivative; 1 gives less C, built sooner
+# (docs/decisions/codegen-flags.md).
 MAX_DIRECTIONS = 1
 
 
