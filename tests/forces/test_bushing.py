@@ -1,5 +1,5 @@
-"""The bushing (casmech/elements/forces/bushing.py) against closed forms, finite differences and a fixed
-joint.
+"""The bushing (casmech/elements/forces/bushing.py) against closed forms, finite differences
+and a fixed joint.
 
 Every model is a YAML text run through the public API; expectations are closed forms of the
 linear oscillator, numpy's own rotation-vector arithmetic, or a second formulation (fixed joint).

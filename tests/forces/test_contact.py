@@ -273,7 +273,8 @@ def test_compiled_mode_equals_interpreted():
 
 
 def test_the_contact_law_names_ground_as_the_compiler_does():
-    """elements/forces/contact.py cannot import compiler/ (bottom layer): its ground index is the IR's."""
+    """elements/forces/contact.py cannot import model/ (a lower layer): its ground index is
+    the IR's."""
     from casmech.model.ir import GROUND_INDEX
 
     assert contact.GROUND == GROUND_INDEX
