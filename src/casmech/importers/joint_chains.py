@@ -18,10 +18,10 @@ the sequence constrains only the relative motion of the two bodies, which is one
 
 Slides only are three `dp1` rows (no relative rotation) and, for two slides, a `dp2` (no motion
 along the plane's normal). The same configuration space, so the same motion of the two bodies
-(dynamics included: the intermediate frames carry no mass). The first joint's axis is fixed in the parent, the last
-one's in the child, as a universal joint's axes are. What does not transfer is written by the
-callers: per-joint springs and dampers (their coordinates are gone) and joint limits.
-Vectors are global, at the initial pose.
+(dynamics included: the intermediate frames carry no mass). The first joint's axis is fixed in
+the parent, the last one's in the child, as a universal joint's axes are. What does not
+transfer is written by the callers: per-joint springs and dampers (their coordinates are gone)
+and joint limits. Vectors are global, at the initial pose.
 """
 
 from __future__ import annotations
