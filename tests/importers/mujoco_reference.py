@@ -4,7 +4,8 @@ and by casmech, torque-free, and the centres of mass of the bodies compared.
 MuJoCo's model is the file as MuJoCo compiles it, less what casmech does not translate (said in
 docs/import.md): mesh geoms are removed (their files are not kept with the test data; every
 moving body of the compared models has an <inertial>, so they carry no mass), contacts, joint
-limits and actuators are disabled, armature and frictionloss set to zero, `joint` equalities
+limits and actuators are disabled, armature and frictionloss set to zero and so are the
+stiffness and damping of balls, free joints and bodies with several joints, `joint` equalities
 deactivated; the remaining (connect, weld) equality constraints are stiffened (time constant
 2 h, impedance 0.9999) so that MuJoCo's soft constraints approach casmech's exact joints. RK4
 at a small step h: its error (~h^4) is far below the comparison's tolerance.
@@ -19,7 +20,7 @@ from casmech.importers.emit import identifier, to_yaml
 from casmech.importers.mjcf import import_mjcf
 
 
-def mujoco_model(path, h: float, keyframe: str | None = None):
+def mujoco_model(path, h: float, keyframe: str | None = None, velocities=None):
     import mujoco
 
     spec = mujoco.MjSpec.from_file(str(path))
@@ -28,6 +29,8 @@ def mujoco_model(path, h: float, keyframe: str | None = None):
             spec.delete(geom)
     for mesh in list(spec.meshes):
         spec.delete(mesh)
+    for material in list(spec.materials):  # textures are files too
+        material.textures = [""] * len(material.textures)
     for texture in list(spec.textures):
         spec.delete(texture)
     model = spec.compile()
@@ -38,8 +41,16 @@ def mujoco_model(path, h: float, keyframe: str | None = None):
     model.opt.timestep = h
     model.dof_armature[:] = 0
     model.dof_frictionloss[:] = 0
+    for j in range(model.njnt):  # passive terms of balls, free joints and multi-joint bodies
+        body = model.jnt_bodyid[j]
+        if model.jnt_type[j] in (int(mujoco.mjtJoint.mjJNT_BALL), int(mujoco.mjtJoint.mjJNT_FREE)) or \
+                model.body_jntnum[body] > 1:
+            size = {int(mujoco.mjtJoint.mjJNT_BALL): 3, int(mujoco.mjtJoint.mjJNT_FREE): 6}
+            dofs = model.jnt_dofadr[j] + np.arange(size.get(int(model.jnt_type[j]), 1))
+            model.dof_damping[dofs] = 0
+            model.jnt_stiffness[j] = 0
     for k in range(model.neq):
-        if model.eq_type[k] not in (mujoco.mjtEq.mjEQ_CONNECT, mujoco.mjtEq.mjEQ_WELD):
+        if model.eq_type[k] not in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
             model.eq_active0[k] = 0
     model.eq_solref[:] = (2 * h, 1.0)
     model.eq_solimp[:] = (0.9999, 0.9999, 0.001, 0.5, 2)
@@ -47,6 +58,8 @@ def mujoco_model(path, h: float, keyframe: str | None = None):
     if keyframe is not None:
         mujoco.mj_resetDataKeyframe(model, data, model.key(keyframe).id)
         data.ctrl[:] = 0
+    for name, value in (velocities or {}).items():
+        data.qvel[model.joint(name).dofadr[0]] = value
     mujoco.mj_forward(model, data)
     return model, data
 
@@ -65,10 +78,10 @@ def centres(model, data) -> dict[str, np.ndarray]:
     return found
 
 
-def mujoco_run(path, t_end: float, h: float, keyframe: str | None = None):
+def mujoco_run(path, t_end: float, h: float, keyframe: str | None = None, velocities=None):
     import mujoco
 
-    model, data = mujoco_model(path, h, keyframe)
+    model, data = mujoco_model(path, h, keyframe, velocities)
     start = centres(model, data)
     mujoco.mj_step(model, data, nstep=int(round(t_end / h)))
     return start, centres(model, data), data.time

@@ -12,8 +12,9 @@ relative to its `meshdir`. The file is looked for, first found wins:
 
 A found file is written relative to the folder of the YAML when it is there or below, else as
 an absolute path, whose folder `casmech check`/`animate` then need allowed (`--allow-dir DIR`:
-`folders_outside` lists them). A file not found keeps its name (a `package://` prefix dropped)
-with a warning.
+`folders_outside` lists them). A file not found keeps its name as the source gives it (relative
+to the source's folder, a `package://` prefix dropped): copy the meshes there beside the YAML.
+The caller warns.
 """
 
 from __future__ import annotations
@@ -71,7 +72,7 @@ class MeshPaths:
             if name.startswith("file://"):
                 return name[len("file://"):], False
             relative = (base if base is not None else self.source.parent) / name
-            return os.path.relpath(relative.resolve(), self.output_dir.resolve()), False
+            return Path(os.path.relpath(relative, self.source.parent)).as_posix(), False
         found = found.resolve()
         output = self.output_dir.resolve()
         if found == output or output in found.parents:

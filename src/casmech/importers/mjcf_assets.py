@@ -20,7 +20,11 @@ def unknown_sections(reader: Reader) -> None:
     for element in reader.root.children:
         if element.tag in TRANSLATED or element.tag in QUIET:
             continue
-        if element.tag in ("tendon", "sensor", "extension", "deformable"):
+        if element.tag == "sensor" and element.children:
+            reader.warn(element, "sensor", f"<sensor> with {len(element.children)} sensors not "
+                        "translated (casmech's results hold positions, velocities and "
+                        "reactions)")
+        elif element.tag in ("tendon", "extension", "deformable"):
             for child in element.children:
                 reader.warn(child, element.tag, f"<{element.tag}><{child.tag}> not translated")
         else:
