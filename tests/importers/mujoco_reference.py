@@ -43,8 +43,8 @@ def mujoco_model(path, h: float, keyframe: str | None = None, velocities=None):
     model.dof_frictionloss[:] = 0
     for j in range(model.njnt):  # passive terms of balls, free joints and multi-joint bodies
         body = model.jnt_bodyid[j]
-        if model.jnt_type[j] in (int(mujoco.mjtJoint.mjJNT_BALL), int(mujoco.mjtJoint.mjJNT_FREE)) or \
-                model.body_jntnum[body] > 1:
+        kinds = (int(mujoco.mjtJoint.mjJNT_BALL), int(mujoco.mjtJoint.mjJNT_FREE))
+        if model.jnt_type[j] in kinds or model.body_jntnum[body] > 1:
             size = {int(mujoco.mjtJoint.mjJNT_BALL): 3, int(mujoco.mjtJoint.mjJNT_FREE): 6}
             dofs = model.jnt_dofadr[j] + np.arange(size.get(int(model.jnt_type[j]), 1))
             model.dof_damping[dofs] = 0

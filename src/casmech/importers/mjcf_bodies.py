@@ -80,6 +80,15 @@ class Tree:
             self._walk(element, self.world, IDENTITY, None)
         for body in self.bodies:
             body.mass = self._mass(body)
+        for body in self.bodies[1:]:  # compiler boundmass: a lower bound on each body's mass
+            if body.mass.mass < compiler.boundmass:
+                body.mass = Mass(compiler.boundmass, body.mass.centre, body.mass.tensor)
+        total = sum(body.mass.mass for body in self.bodies)
+        if compiler.settotalmass > 0 and total > 0:  # MuJoCo scales masses and inertias
+            scale = compiler.settotalmass / total
+            for body in self.bodies:
+                body.mass = Mass(body.mass.mass * scale, body.mass.centre,
+                                 body.mass.tensor * scale)
 
     def _walk(self, element: Element, body: Body, offset: Frame, childclass: str | None):
         for child in element.children:

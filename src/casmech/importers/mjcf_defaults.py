@@ -30,6 +30,7 @@ class Compiler:
     boundinertia: float = 0.0
     balanceinertia: bool = False
     autolimits: bool = True
+    settotalmass: float = -1.0  # > 0: every mass and inertia scaled to this total
 
     def angle(self, value: float) -> float:
         return math.radians(value) if self.degrees else value
@@ -56,6 +57,8 @@ def compiler(reader: Reader) -> Compiler:
     element = where.get("inertiafromgeom", reader.root)
     numbers = {key: reader.number(where.get(key, reader.root), values, key, "compiler", 0.0)
                for key in ("boundmass", "boundinertia")}
+    numbers["settotalmass"] = reader.number(where.get("settotalmass", reader.root), values,
+                                            "settotalmass", "compiler", -1.0)
     return Compiler(
         degrees=angle == "degree", eulerseq=sequence,
         inertiafromgeom=reader.choice(element, values, "inertiafromgeom", "compiler",

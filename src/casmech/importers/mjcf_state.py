@@ -127,9 +127,9 @@ def _move(joint: Joint, at: Frame, omega, velocity, q, dq):
     if joint.kind == "hinge":
         turn = axis_rotation(axis, q[0] - joint.ref)
         rate = dq[0] * axis
-    else:  # ball: q is the rotation in the body's frame, dq the angular velocity there
-        turn = at.rotation @ quaternion_matrix(q) @ at.rotation.T
-        rate = at.rotation @ dq
+    else:  # ball: q is the rotation in the body's frame, dq the angular velocity in the
+        turn = at.rotation @ quaternion_matrix(q) @ at.rotation.T  # body's turned frame
+        rate = turn @ at.rotation @ dq
     moved = Frame(turn @ at.rotation, anchor + turn @ (at.origin - anchor))
     velocity = velocity + np.cross(omega, moved.origin - at.origin) \
         + np.cross(rate, moved.origin - anchor)
