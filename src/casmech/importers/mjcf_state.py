@@ -59,7 +59,7 @@ def keyframe(reader: Reader, tree: Tree, name: str) -> tuple[Element, dict[str, 
 
 def _key_values(reader: Reader, key: Element, attrib: dict, field: str, size: int
                 ) -> np.ndarray | None:
-    values = reader.numbers(key, attrib, field, f"keyframe.{field}", (size,))
+    values = reader.numbers(key, attrib, field, "keyframe", (size,))
     return values
 
 
