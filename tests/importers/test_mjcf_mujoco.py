@@ -188,3 +188,111 @@ def test_actuators_and_springs_give_mujoco_s_motion(tmp_path):
         # a kink where the clamp starts limits both integrators' accuracy: 1e-7 m
         np.testing.assert_allclose(mine, np.array(positions)[:, k], rtol=0, atol=1e-7,
                                    err_msg=identifier(name))
+
+
+COMPOSITES = """<mujoco model="composites">
+  <option><flag contact="disable"/></option>
+  <default><geom density="1000"/></default>
+  <worldbody>
+    <body name="gimbal" pos="0 0 1">
+      <joint name="hip_z" axis="0 0 1" pos="0 0 0.1"/>
+      <joint name="hip_x" axis="1 0 0" pos="0 0 0.1"/>
+      <joint name="hip_y" axis="0 1 0" pos="0 0 0.1"/>
+      <geom type="box" size="0.05 0.08 0.1" pos="0.02 0 -0.05"/>
+      <body name="cross" pos="0 0 -0.2">
+        <joint name="ankle_y" axis="0 1 0"/>
+        <joint name="ankle_x" axis="1 0 0"/>
+        <geom type="box" size="0.12 0.04 0.03" pos="0.05 0.01 -0.02"/>
+      </body>
+    </body>
+    <body name="sleeve" pos="1 0 1" euler="20 10 0">
+      <joint name="turn" axis="0 0 1"/>
+      <joint name="push" type="slide" axis="0 0 1"/>
+      <geom type="box" size="0.1 0.05 0.2" pos="0.05 0 0"/>
+    </body>
+    <body name="sledge" pos="2 0 1">
+      <joint name="along_x" type="slide" axis="1 0 0"/>
+      <joint name="along_z" type="slide" axis="0 0 1"/>
+      <joint name="pitch" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.05"/>
+      <body name="puck" pos="0.3 0 0.1">
+        <joint name="puck_x" type="slide" axis="1 0 0"/>
+        <joint name="puck_y" type="slide" axis="0 1 0"/>
+        <geom type="sphere" size="0.05"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+MOVING = {"hip_z": 1.0, "hip_x": -0.7, "hip_y": 0.5, "ankle_y": 2.0, "ankle_x": -1.0,
+          "turn": 3.0, "push": 0.4, "along_x": 0.3, "along_z": 1.0, "pitch": 2.0,
+          "puck_x": -0.5, "puck_y": 0.8}
+
+
+def test_several_joints_in_one_body_move_as_in_mujoco(tmp_path):
+    """Bodies with several joints become the casmech joint they amount to: three hinges
+    meeting in a point (spherical), two perpendicular hinges (universal), a hinge and a slide
+    on one line (cylindrical), two slides and a normal hinge (planar), two slides (basic
+    constraints): the motion from moving joints is MuJoCo's."""
+    path = tmp_path / "composites.xml"
+    path.write_text(COMPOSITES)
+    model = casmech.loads(to_yaml(import_mjcf(path)), file=f"{path}.yaml")
+    assert [j.type for j in model.joints] == ["spherical", "universal", "cylindrical",
+                                             "planar", "dp1", "dp1", "dp1", "dp2"]
+    compare(path, 1e-5, velocities=MOVING)
+
+
+GIMBAL_URDF = """<robot name="gimbal">
+  <link name="base"/>
+  <joint name="hip_z" type="revolute"><parent link="base"/><child link="virtual_1"/>
+    <origin xyz="0 0 1.1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>
+  </joint>
+  <link name="virtual_1"/>
+  <joint name="hip_x" type="revolute"><parent link="virtual_1"/><child link="virtual_2"/>
+    <axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <link name="virtual_2"><inertial><mass value="0"/><inertia ixx="0" iyy="0" izz="0"/></inertial>
+  </link>
+  <joint name="hip_y" type="continuous"><parent link="virtual_2"/><child link="thigh"/>
+    <axis xyz="0 1 0"/></joint>
+  <link name="thigh"><inertial><origin xyz="0.02 0 -0.15"/><mass value="3"/>
+    <inertia ixx="0.02" iyy="0.025" izz="0.01" ixy="0.001"/></inertial></link>
+</robot>
+"""
+GIMBAL_MJCF = """<mujoco model="gimbal">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="thigh" pos="0 0 1.1">
+      <joint name="hip_z" axis="0 0 1"/><joint name="hip_x" axis="1 0 0"/>
+      <joint name="hip_y" axis="0 1 0"/>
+      <inertial pos="0.02 0 -0.15" mass="3" fullinertia="0.02 0.025 0.01 0.001 0 0"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_urdf_massless_gimbal_moves_as_mujoco_s_three_hinges(tmp_path):
+    """A URDF hip of three revolute joints through two massless links (as example-robot-
+    data's human.urdf) is imported as one spherical joint; MuJoCo refuses the massless links,
+    so the reference is the same hip written in MJCF as three hinges in one body. Started
+    turning about all three axes, the thigh's centre of mass follows MuJoCo's."""
+    from casmech.importers.urdf import import_urdf
+
+    urdf = tmp_path / "gimbal.urdf"
+    urdf.write_text(GIMBAL_URDF)
+    mjcf = tmp_path / "gimbal.xml"
+    mjcf.write_text(GIMBAL_MJCF)
+    rates = {"hip_z": 1.5, "hip_x": -2.0, "hip_y": 2.5}
+    imported = import_urdf(urdf, velocities=rates)
+    assert [item.data["type"] for item in imported.joints] == ["spherical"]
+    assert imported.joints[0].data["name"] == "hip"
+    model = casmech.loads(to_yaml(imported), file=f"{urdf}.yaml")
+    functions = casmech.compile(model)
+    result = casmech.analyze(functions, "dynamics", t_end=T_END, output_step=T_END, rtol=1e-10,
+                             atol=1e-12)
+    names, values = casmech.results_table(functions, result)
+    mine = values[-1, [names.index(f"thigh.{c}") for c in "xyz"]]
+    _, end, _ = mujoco_run(mjcf, T_END, 1e-5, velocities=rates)
+    assert np.abs(end["thigh"] - values[0, [names.index(f"thigh.{c}") for c in "xyz"]]).max() \
+        > 0.02  # it moves (0.15 m from the pivot)
+    np.testing.assert_allclose(mine, end["thigh"], rtol=0, atol=TOLERANCE)  # as compare()
