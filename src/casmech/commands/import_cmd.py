@@ -12,6 +12,7 @@ by absolute paths; the validation allows their folder, and the summary says whic
 from __future__ import annotations
 
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -63,6 +64,23 @@ def joint_values(flag: str, pairs: list[str]) -> dict[str, float]:
     return values
 
 
+def _validated(text: str, output: Path, outside: Path | None):
+    """The written model loaded by casmech, the meshes' folder allowed for this check only."""
+    if outside is None:
+        return casmech.loads(text, file=str(output))
+    from casmech.schema import files
+
+    before = os.environ.get(files.ALLOWED_DIRS)
+    os.environ[files.ALLOWED_DIRS] = os.pathsep.join(filter(None, (before, str(outside))))
+    try:
+        return casmech.loads(text, file=str(output))
+    finally:
+        if before is None:
+            del os.environ[files.ALLOWED_DIRS]
+        else:
+            os.environ[files.ALLOWED_DIRS] = before
+
+
 def run(args) -> int:
     output = args.output or args.source.with_suffix(".yaml")
     if output.resolve() == args.source.resolve():
@@ -83,11 +101,7 @@ def run(args) -> int:
     output.write_text(text)
     outside = getattr(model, "mesh_folder", None)
     try:
-        if outside is not None:
-            from casmech.schema import files
-
-            files.allow(outside)
-        loaded = casmech.loads(text, file=str(output))
+        loaded = _validated(text, output, outside)
     except ModelError as error:
         print(error.format(), file=sys.stderr)
         print(f"{output}: written, but it does not validate (see above)", file=sys.stderr)
