@@ -150,6 +150,23 @@ def test_inertia_repairs_are_options_with_warnings(tmp_path):
     assert model.bodies[1].inertia.diagonal().min() > 0.0039  # the compiler's own attribute
 
 
+def test_bounds_on_size_nesting_and_includes(tmp_path, monkeypatch):
+    """Hostile files end in a located error in bounded time: too large (E006), bodies nested
+    too deep (E105, before any recursion), includes nested too deep (E105)."""
+    import casmech.importers
+
+    deep = "<mujoco><worldbody>" + "<body>" * 5000 + "</body>" * 5000 + "</worldbody></mujoco>"
+    message = error_of(tmp_path, deep)
+    assert ":1:" in message and "error[E105]" in message and "more than 200 levels" in message
+    for k in range(10):
+        write(tmp_path, f'<mujoco><include file="i{k + 1}.xml"/></mujoco>', f"i{k}.xml")
+    message = error_of(tmp_path, '<mujoco><include file="i0.xml"/></mujoco>')
+    assert "i7.xml:1:9: error[E105] include: includes nest more than 8 levels" in message
+    monkeypatch.setattr(casmech.importers, "MAX_SOURCE_BYTES", 1000)
+    message = error_of(tmp_path, GOOD + "<!--" + "x" * 2000 + "-->")
+    assert f"{tmp_path / 'model.xml'}:1:1: error[E006]" in message
+
+
 # ---------------------------------------------------------------------------- translation
 def test_translation_of_the_good_model(tmp_path):
     model, imported = load(tmp_path, GOOD)

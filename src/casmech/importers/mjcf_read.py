@@ -5,8 +5,9 @@ entity declaration is refused (E102) before any entity is expanded. `<include fi
 is replaced by the children of the included file's `<mujoco>` element (MuJoCo's rule: the
 path is relative to the main file's folder); an included file must be in that folder or below
 (or an allowed folder, `--allow-dir`; E305), is read with the same 16 MiB bound, may not be
-included twice (E103), and includes nest at most MAX_DEPTH deep. Every element keeps the file
-it came from, so errors name the included file's line.
+included twice (E103), and includes nest at most MAX_DEPTH deep; elements nest at most
+MAX_NESTING deep (E105). Every element keeps the file it came from, so errors name the included
+file's line.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from casmech.importers import read_source
 
 HINT = "see MuJoCo's XML reference (mujoco.readthedocs.io, XML Reference)"
 MAX_DEPTH = 8  # nested <include> levels
+MAX_NESTING = 200  # nested elements (a chain of 200 bodies); the tree is walked recursively
 
 
 @dataclass(eq=False)
@@ -58,6 +60,11 @@ class _Refused(Exception):
     pass
 
 
+class _Deep(Exception):
+    def __init__(self, element: Element):
+        self.element = element
+
+
 def parse_xml(text: str, file: str) -> Element:
     """The root element of an XML text (E102 with the line and column of a syntax error)."""
     parser = expat.ParserCreate()
@@ -67,6 +74,8 @@ def parse_xml(text: str, file: str) -> Element:
     def start(tag, attrib):
         element = Element(tag, attrib, file, parser.CurrentLineNumber,
                           parser.CurrentColumnNumber + 1)
+        if len(stack) >= MAX_NESTING:
+            raise _Deep(element)
         (stack[-1].children if stack else roots).append(element)
         stack.append(element)
 
@@ -85,6 +94,10 @@ def parse_xml(text: str, file: str) -> Element:
                       "an MJCF file (<mujoco model=\"...\"> with <worldbody>)",
                       hint="check for a missing quote, '>' or closing tag before this point"
                       ) from None
+    except _Deep as deep:
+        raise located(file, deep.element.line, deep.element.col, "E105", f"elements nest more "
+                      f"than {MAX_NESTING} levels deep", "a shallower tree of bodies",
+                      hint="casmech reads MJCF trees up to this depth") from None
     except _Refused:
         raise located(file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1, "E102",
                       "a DOCTYPE or entity declaration: MJCF uses none, and casmech does not "
