@@ -296,3 +296,48 @@ def test_urdf_massless_gimbal_moves_as_mujoco_s_three_hinges(tmp_path):
     assert np.abs(end["thigh"] - values[0, [names.index(f"thigh.{c}") for c in "xyz"]]).max() \
         > 0.02  # it moves (0.15 m from the pivot)
     np.testing.assert_allclose(mine, end["thigh"], rtol=0, atol=TOLERANCE)  # as compare()
+
+
+WELDED = """<mujoco model="welded">
+  <compiler angle="radian"/>
+  <option><flag contact="disable"/></option>
+  <worldbody>
+    <body name="left" pos="0 0 1">
+      <joint name="left_hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.03"/>
+    </body>
+    <body name="right" pos="1 0 1">
+      <joint name="right_hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 -0.5 0 0" size="0.03"/>
+    </body>
+    <body name="hand" pos="0.5 0 1" euler="0 0.3 0">
+      <joint name="hand_ball" type="ball"/>
+      <geom type="box" size="0.1 0.05 0.02" pos="0.05 0 0"/>
+      <site name="hand_tip" pos="0 0 0"/>
+    </body>
+    <body name="rider" pos="0 0.5 1">
+      <joint name="rider_slide" type="slide" axis="1 0 0"/>
+      <geom type="sphere" size="0.05"/>
+    </body>
+  </worldbody>
+  <equality>
+    <connect body1="left" body2="right" anchor="0.5 0 0"/>
+    <weld body1="hand" body2="left"/>
+    <weld name="off" body1="rider" body2="world" active="false"/>
+  </equality>
+</mujoco>
+"""
+
+
+def test_connect_and_weld_loops_move_as_in_mujoco(tmp_path):
+    """Two bars joined by a `connect` (a closed loop of one DOF left), a body welded to one
+    of them by a `weld` (casmech's fixed joint at its pose), an inactive weld left out: the
+    motion under gravity from a moving start is MuJoCo's with stiffened constraints."""
+    path = tmp_path / "welded.xml"
+    path.write_text(WELDED)
+    imported = import_mjcf(path)
+    assert [(i.data["name"], i.data["type"]) for i in imported.joints][-2:] == [
+        ("connect1", "spherical"), ("weld2", "fixed")]
+    assert any("inactive equality off" in line for line in imported.trailer)
+    compare(path, 1e-5, velocities={"left_hinge": 2.0, "right_hinge": -2.0,
+                                    "rider_slide": 0.5})

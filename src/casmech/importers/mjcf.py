@@ -235,6 +235,14 @@ class Translator:
         for actuator in mjcf_actuators.actuators(self.reader, self.defaults,
                                                  self.compiler.autolimits, self.state.ctrl):
             target = self.joint_names.get(actuator.joint)
+            known = [j.name for j in self.tree.joints]
+            if actuator.joint not in known:
+                from casmech.errors import did_you_mean
+
+                raise self.reader.error(actuator.element, f"actuator[{actuator.name}].joint",
+                                        f"unknown joint '{actuator.joint}'", "the name of a "
+                                        "<joint>", code="E300", got=actuator.joint,
+                                        hint=did_you_mean(actuator.joint, known) or None)
             if target is None:
                 self.reader.warn(actuator.element, f"actuator[{actuator.name}]", f"the actuator"
                                  f"'s joint '{actuator.joint}' is not a single casmech revolute "
