@@ -69,8 +69,6 @@ def load(tmp_path, text: str, **initial):
     ('<child link="rod"/>', '<child link="rdo"/>', "6:5", "E300", "did you mean 'rod'"),
     ('<mass value="2"/>', '<mass value="two"/>', "14:7", "E102", "got: 'two'"),
     ('<mass value="2"/>', '<mass value="-2"/>', "14:7", "E400", "negative"),
-    ('<mass value="2"/>', '<mass value="0"/>', "11:3", "E400", "moves (joint 'hinge' is "
-     "revolute) but has no mass"),
     ('<origin xyz="0 0 1" rpy="0 0 0"/>', '<origin xyz="0 0 1 0"/>', "7:5", "E102",
      "must be 3 finite numbers"),
     ('<origin xyz="0 0 1" rpy="0 0 0"/>', '<origin xyz="0 nan 1"/>', "7:5", "E102",
@@ -92,10 +90,20 @@ def test_malformed_urdf_gives_a_located_error(tmp_path, old, new, where, code, w
     assert words in message
 
 
-def test_moving_link_without_inertial(tmp_path):
-    text = GOOD.replace(GOOD[GOOD.index("    <inertial>"):GOOD.index("    <visual>")], "")
-    message = error_of(tmp_path, text)
-    assert f"{tmp_path / 'robot.urdf'}:11:3: error[E100] link[rod]: link 'rod' moves" in message
+def test_massless_moving_leaf_is_locked_with_a_warning(tmp_path):
+    """A moving link with no mass below it (no <inertial>, or mass 0) cannot be moved by the
+    dynamics: its joint is locked, the link merged into the ground here, and the model has no
+    body (with a warning pointing at the joint and one saying nothing moves)."""
+    for text in (GOOD.replace(GOOD[GOOD.index("    <inertial>"):GOOD.index("    <visual>")], ""),
+                 GOOD.replace('<mass value="2"/>', '<mass value="0"/>')):
+        model, imported = load(tmp_path, text)
+        assert model.bodies == () and model.joints == ()
+        lines = [w.format().split("\n")[0] for w in imported.warnings]
+        assert lines == [
+            f"{tmp_path / 'robot.urdf'}:4:3: warning[E400] joint[hinge]: revolute joint 'hinge' "
+            "locked at 0: nothing below it has mass, so its links are merged into 'base'",
+            f"{tmp_path / 'robot.urdf'}:2:1: warning[E103] robot: no link of the robot moves "
+            "(every joint is fixed or locked): the model has no body"]
 
 
 def test_entities_are_refused_before_expansion(tmp_path):
@@ -223,7 +231,8 @@ def test_meshes_names_and_odd_links(tmp_path):
     assert [j.name for j in model.joints] == ["hinge"]
     (shape,) = model.bodies[0].geometry
     assert (shape["type"], shape["file"], shape["scale"]) == ("mesh", "meshes/rod.stl", 2.0)
-    assert "written as 'meshes/rod.stl'" in imported.warnings[0].message
+    assert "mesh 'package://arm/meshes/rod.stl' not found; written as 'meshes/rod.stl'" in \
+        imported.warnings[0].message
     assert any("floating: ball is a free body" in line for line in imported.trailer)
 
 
@@ -245,7 +254,7 @@ def test_command_line(tmp_path, capsys):
     assert "did you mean 'lift'" in capsys.readouterr().err
     deck = DECKS / "test_Revolute_Case01.adm"
     assert main(["import", str(deck), "-o", str(tmp_path / "d.yaml"), "--position", "a=1"]) == 2
-    assert "initial joint positions and velocities are for URDF files" in capsys.readouterr().err
+    assert "--position is not an option of a '.adm' import" in capsys.readouterr().err
     bad = write(tmp_path, GOOD.replace('type="revolute"', 'type="ball"'))
     assert main(["import", str(bad), "-o", str(tmp_path / "bad.yaml")]) == 1
     assert f"{bad}:4:3: error[E103]" in capsys.readouterr().err

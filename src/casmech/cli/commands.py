@@ -23,6 +23,7 @@ COMMANDS = {
     "inspect": ("inspect", "print coordinates, constraint rows by joint with YAML lines, DOF, "
                            "rank"),
     "import": ("import_cmd",
-               "convert an Adams .adm deck or a simEngine3D .mdl/.acf model to casmech YAML"),
+               "convert an Adams .adm deck, a simEngine3D .mdl/.acf model, a URDF robot or a "
+               "MuJoCo MJCF model (.xml) to casmech YAML"),
     "animate": ("animate", "write a VTK time series (ParaView) and a self-contained HTML player"),
 }

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import yaml
@@ -45,6 +46,7 @@ class Imported:
     analysis: Item | None = None
     trailer: list[str] = field(default_factory=list)  # comments of what was not translated
     warnings: list[Diagnostic] = field(default_factory=list)
+    mesh_folder: Path | None = None  # meshes are named outside the YAML's folder, under this
 
 
 class _Dumper(yaml.SafeDumper):
@@ -148,7 +150,7 @@ def to_yaml(model: Imported) -> str:
     if model.gravity is not None:
         lines += ["", *comment_lines(model.gravity_comments, ""),
                   *dump({"gravity": list(model.gravity)}).rstrip("\n").split("\n")]
-    lines += _section("bodies", model.bodies)
+    lines += _section("bodies", model.bodies) or ["", "bodies: []"]  # a model may have none
     lines += _section("joints", model.joints)
     lines += _section("forces", model.forces)
     if model.analysis is not None:

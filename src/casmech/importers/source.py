@@ -6,7 +6,7 @@ from pathlib import Path
 
 from casmech.errors import Diagnostic, ModelError, Source, UsageError
 
-MAX_SOURCE_BYTES = 16 << 20  # an Adams deck, simEngine3D or URDF file: the test files are 2-10 kB
+MAX_SOURCE_BYTES = 16 << 20  # an Adams deck, simEngine3D, URDF or MJCF file: tests' are 2-20 kB
 
 
 def read_source(path: Path) -> str:

@@ -1,14 +1,19 @@
 """URDF robot description (.urdf) -> casmech model (an `Imported`, written by emit.to_yaml).
 
 Translated:
-- the root link is the ground; a link joined by a `fixed` joint is merged into its parent's body
-  (masses, centres of mass and inertias combined; its visuals kept), as MuJoCo's URDF import
-  does (fusestatic);
+- the root link is the ground (or, with `floating_base`, a free body); a link joined by a
+  `fixed` joint is merged into its parent's body (masses, centres of mass and inertias
+  combined; its visuals kept), as MuJoCo's URDF import does (fusestatic); so is a link below
+  which nothing has mass (its joint locked at its initial value), and massless intermediate
+  links are merged into the joints around them (importers/urdf_groups.py);
 - every other link is a body: its frame's axes are the body's axes, its origin the combined
   centre of mass; mass and inertia from `inertial` (rotated from the inertial frame into the link
-  frame); `visual` box, cylinder, sphere and mesh become `geometry`;
+  frame; checked as casmech checks them, errors at the URDF's line, importers/inertia_check.py);
+  `visual` box, cylinder, sphere and mesh become `geometry` (meshes found by
+  importers/mesh_paths.py);
 - joints: revolute and continuous -> revolute, prismatic -> translational, planar -> planar
   (axis = the plane's normal), floating -> none (a free body); placed at the initial pose;
+  a chain through massless links -> the joint it amounts to (importers/joint_chains.py);
 - `dynamics damping` -> an rsda (revolute) or a tsda along the axis (prismatic) with that damping;
 - `limit` is written as a comment on the joint (casmech has no joint limits).
 Not translated (a warning naming the line): `mimic`, `friction`, `calibration`,
@@ -21,18 +26,21 @@ pose) with joint rates `velocities` (default 0); casmech's joint angles are meas
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from casmech.core.quaternions import from_matrix
 from casmech.errors import UsageError, did_you_mean
+from casmech.importers import inertia_check
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item, identifier
+from casmech.importers.joint_chains import BodyFrame, Elementary, basic_rows, compose, name_of
+from casmech.importers.mesh_paths import MeshPaths
 from casmech.importers.urdf_geometry import geometry_items
+from casmech.importers.urdf_groups import Group, Plan, plan
 from casmech.importers.urdf_read import Reader
-from casmech.importers.urdf_tree import MOVING, Frame, Joint, Link, State, Tree, pose, read_tree
+from casmech.importers.urdf_tree import MOVING, Joint, State, Tree, pose, read_tree
 
 GRAVITY = [0.0, 0.0, -9.81]
 DAMPER_LENGTH = 1.0  # [m] distance between the two points of a prismatic joint's damper
@@ -41,47 +49,7 @@ KNOWN = {"robot": {"link", "joint", "material"}, "link": {"inertial", "visual", 
          "joint": {"parent", "child", "origin", "axis", "limit", "dynamics"}}
 HINTS = {"mimic": "a mimic joint can be written by hand as a basic constraint (docs/import.md)",
          "transmission": "actuation: add motors or forces by hand (docs/motors.md)"}
-
-
-@dataclass
-class Group:
-    """Links welded together by fixed joints: one casmech body (or the ground)."""
-
-    head: str  # the link whose frame is the body's
-    members: list[tuple[Link, Frame]] = field(default_factory=list)  # frames in head's frame
-    fused: list[Joint] = field(default_factory=list)
-
-    def mass_properties(self) -> tuple[float, np.ndarray, np.ndarray]:
-        """Mass, centre of mass and inertia about it, in the head link's frame."""
-        parts = [(m.inertial.mass, at * m.inertial.frame, m.inertial.tensor)
-                 for m, at in self.members if m.inertial is not None and m.inertial.mass > 0]
-        mass = sum(p[0] for p in parts)
-        if mass <= 0:
-            return 0.0, np.zeros(3), np.zeros((3, 3))
-        centre = sum(m * f.origin for m, f, _ in parts) / mass
-        inertia = np.zeros((3, 3))
-        for m, f, tensor in parts:
-            d = f.origin - centre
-            inertia += f.rotation @ tensor @ f.rotation.T + m * (d @ d * np.eye(3) - np.outer(d, d))
-        return mass, centre, inertia
-
-
-def groups(tree: Tree) -> dict[str, Group]:
-    """Link name -> its group (the root's group is the ground's)."""
-    of = {tree.root: Group(tree.root, [(tree.links[tree.root], Frame(np.eye(3), np.zeros(3)))])}
-    at = {tree.root: of[tree.root].members[0][1]}
-    for joint in tree.joints:
-        link = tree.links[joint.child]
-        if joint.type == "fixed":
-            group = of[joint.parent]
-            at[joint.child] = at[joint.parent] * joint.origin
-            group.fused.append(joint)
-        else:
-            group = Group(joint.child)
-            at[joint.child] = Frame(np.eye(3), np.zeros(3))
-        group.members.append((link, at[joint.child]))
-        of[joint.child] = group
-    return of
+ELEMENTARY = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slide"}
 
 
 class Names:
@@ -102,13 +70,16 @@ class Names:
 
 
 class Translator:
-    def __init__(self, reader: Reader, tree: Tree, state: State):
-        self.reader, self.tree, self.state = reader, tree, state
+    def __init__(self, reader: Reader, tree: Tree, state: State, layout: Plan,
+                 meshes: MeshPaths, repair: inertia_check.Repair):
+        self.reader, self.tree, self.state, self.plan = reader, tree, state, layout
+        self.meshes, self.repair = meshes, repair
         self.model = Imported(name=reader.root.attrib.get("name", "robot"), description="",
                               header=[])
-        self.groups = groups(tree)
+        self.groups = layout.groups
         self.names = Names()
         self.body_names = {tree.root: "ground"}  # head link -> casmech body
+        self.frames: dict[str, BodyFrame] = {}  # casmech body -> its frame at the pose
 
     def warn_unknown(self, element, path: str, kind: str) -> None:
         for child in element.children:
@@ -120,21 +91,19 @@ class Translator:
         reader, link = self.reader, self.tree.links[group.head]
         path = f"link[{link.name}]"
         mass, centre, inertia = group.mass_properties()
-        if mass <= 0:
-            joint = self.tree.joint_of(link.name)
-            raise reader.error(link.element, path, f"link '{link.name}' moves (joint "
-                               f"'{joint.name}' is {joint.type}) but has no mass",
-                               "an <inertial> with a <mass value> > 0", code="E400"
-                               if link.inertial else "E100",
-                               hint="casmech bodies need mass and inertia; merge a massless "
-                               "link into a neighbour, or give it a small inertial")
+        if mass <= 0:  # only the root can be massless here (a floating base)
+            raise reader.error(link.element, path, f"the root link '{link.name}' has no mass "
+                               "(with its fixed children): it cannot be a free body",
+                               "an <inertial> with a <mass value> > 0", code="E400",
+                               hint="import without --floating-base: the root is the ground")
         frame = self.state.frames[link.name]
         omega = self.state.omega[link.name]
         position = frame.point(centre)
         velocity = self.state.velocity[link.name] + np.cross(omega, position - frame.origin)
         name = self.names(link.name, "_link")
         self.body_names[link.name] = name
-        data = {"name": name, "mass": mass, "inertia": self.inertia(inertia),
+        self.frames[name] = BodyFrame(frame.rotation, position)
+        data = {"name": name, "mass": mass, "inertia": self.inertia(group, inertia, path),
                 "position": tidy(position)}
         if not np.allclose(frame.rotation, np.eye(3), rtol=0, atol=1e-15):
             data["orientation"] = {"euler_parameters": tidy(from_matrix(frame.rotation))}
@@ -142,34 +111,61 @@ class Translator:
             data["velocity"] = tidy(velocity)
         if np.any(omega):
             data["angular_velocity"] = tidy(omega)
-        shapes = geometry_items(reader, group.members, centre)
+        shapes = geometry_items(reader, group.members, centre, self.meshes)
         if shapes:
             data["geometry"] = shapes
         comments = [f"link {link.name} (line {link.element.line}); body axes = the link frame's"]
         comments += [f"link {j.child} (line {self.tree.links[j.child].element.line}) merged in "
-                     f"by the fixed joint {j.name} (line {j.element.line})" for j in group.fused]
+                     f"by the {'fixed' if j.type == 'fixed' else 'locked'} joint {j.name} "
+                     f"(line {j.element.line})" for j in group.fused]
         for member, _ in group.members:
             self.warn_unknown(member.element, f"link[{member.name}]", "link")
         self.model.bodies.append(Item(data, comments))
 
-    @staticmethod
-    def inertia(tensor: np.ndarray) -> list[float]:
-        scale = np.max(np.abs(tensor))
-        (xx, xy, xz), (_, yy, yz), (_, _, zz) = tensor
-        values = tidy([xx, yy, zz, xy, xz, yz], scale)
+    def inertia(self, group: Group, tensor: np.ndarray, path: str) -> list[float]:
+        """The six numbers written, checked (and repaired when asked) at the URDF's line."""
+        link = next((m for m, _ in group.members if m.inertial is not None
+                     and m.inertial.mass > 0), self.tree.links[group.head])
+        element = link.element.find("inertial") or link.element
+        element = element.find("inertia") or element
+        tensor, change = inertia_check.repaired(tensor, self.repair)
+        if change:
+            self.reader.warn(element, f"{path}.inertial", f"inertia repaired: {change}",
+                             code="E401")
+        values = self._six(tensor)
+        problem = inertia_check.problem(_matrix(values))
+        if problem:
+            code, message, got = problem
+            merged = f" (link {group.head} with {len(group.members) - 1} merged links)" \
+                if len(group.members) > 1 else ""
+            raise self.reader.error(element, f"link[{link.name}].inertial", message + merged,
+                                    "a positive definite inertia whose principal moments "
+                                    "satisfy the triangle inequality", code=code, got=got,
+                                    hint=inertia_check.HINT)
         return values[:3] if not any(values[3:]) else values
 
-    def joint(self, joint: Joint) -> None:
+    @staticmethod
+    def _six(tensor: np.ndarray) -> list[float]:
+        scale = np.max(np.abs(tensor))
+        (xx, xy, xz), (_, yy, yz), (_, _, zz) = tensor
+        return tidy([xx, yy, zz, xy, xz, yz], scale)
+
+    def joint(self, head: str) -> None:
+        chain = self.plan.chains[head]
+        body_i = self.body_names[self.plan.parents[head]]
+        body_j = self.body_names[head]
+        for joint in chain:
+            self.warn_unknown(joint.element, f"joint[{joint.name}]", "joint")
+        if len(chain) == 1 and chain[0].type == "floating":
+            self.model.trailer.append(f"joint {chain[0].name} (line {chain[0].element.line}) "
+                                      f"is floating: {body_j} is a free body")
+            return
+        if len(chain) == 1:
+            return self.single(chain[0], body_i, body_j)
+        self.composite(chain, body_i, body_j)
+
+    def single(self, joint: Joint, body_i: str, body_j: str) -> None:
         path = f"joint[{joint.name}]"
-        self.warn_unknown(joint.element, path, "joint")
-        if joint.type == "fixed":
-            return
-        body_i = self.body_names[self.groups[joint.parent].head]
-        body_j = self.body_names[joint.child]
-        if joint.type == "floating":
-            self.model.trailer.append(f"joint {joint.name} (line {joint.element.line}) is "
-                                      f"floating: {body_j} is a free body")
-            return
         name = self.names(joint.name, "_joint")
         frame = self.state.frames[joint.child]
         axis = frame.rotation @ joint.axis
@@ -179,6 +175,45 @@ class Translator:
         comments += self.limit(joint, path)
         self.model.joints.append(Item(data, comments))
         self.damper(joint, path, data)
+
+    def composite(self, chain: list[Joint], body_i: str, body_j: str) -> None:
+        """Joints through massless links, composed into the one joint they amount to."""
+        first = chain[0]
+        elementary = []
+        for joint in chain:
+            frame = self.state.frames[joint.child]
+            elementary.append(Elementary(ELEMENTARY.get(joint.type, joint.type),
+                                         frame.rotation @ joint.axis, frame.origin, joint.name))
+        scale = max(1.0, max(float(np.max(np.abs(e.point))) for e in elementary))
+        composed = compose(elementary, scale)
+        names = ", ".join(f"{j.name} ({j.type}, line {j.element.line})" for j in chain)
+        if composed is None:
+            massless = self.tree.links[first.child]
+            raise self.reader.error(massless.element, f"link[{massless.name}]",
+                                    f"link '{massless.name}' has no mass and the joints through "
+                                    f"it ({names}) amount to no casmech joint",
+                                    "massless links between hinges whose axes meet (universal, "
+                                    "spherical), a hinge and a slide on one line (cylindrical), "
+                                    "two slides and a normal hinge (planar), or slides only",
+                                    code="E400", hint="give the link an <inertial> with a mass")
+        comments = [f"joints {names} through massless links, as one joint"]
+        for joint in chain:
+            comments += self.limit(joint, f"joint[{joint.name}]")
+            if joint.element.find("dynamics") is not None:
+                self.reader.warn(joint.element.find("dynamics"), f"joint[{joint.name}].dynamics",
+                                 "dynamics of a joint merged with others not translated "
+                                 "(its coordinate is not one of casmech's joint)", code="E101")
+        name = self.names(name_of([j.name for j in chain], f"{body_j}_joint"), "_joint")
+        if composed["type"] != "basic":
+            data = {"name": name, "body_i": body_i, "body_j": body_j, **composed}
+            self.model.joints.append(Item(data, comments))
+            return
+        rows = basic_rows(composed, self.frames.get(body_i, _GROUND), self.frames[body_j])
+        for k, row in enumerate(rows):
+            data = {"name": self.names(f"{name}_{k + 1}", "_joint"), "type": row.pop("type"),
+                    "body_i": body_i, **{key: v for key, v in row.items() if key.endswith("_i")},
+                    "body_j": body_j, **{key: v for key, v in row.items() if key.endswith("_j")}}
+            self.model.joints.append(Item(data, comments if k == 0 else []))
 
     def limit(self, joint: Joint, path: str) -> list[str]:
         element = joint.element.find("limit")
@@ -217,7 +252,15 @@ class Translator:
         self.model.forces.append(Item(force, comment))
 
 
-def _check_values(tree: Tree, values: dict[str, float], what: str) -> None:
+_GROUND = BodyFrame(np.eye(3), np.zeros(3))
+
+
+def _matrix(values: list[float]) -> np.ndarray:
+    xx, yy, zz, xy, xz, yz = values
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+def _check_values(tree: Tree, values: dict[str, float], what: str, locked: set[str]) -> None:
     movable = [j.name for j in tree.joints if j.type in ("revolute", "continuous", "prismatic")]
     for name, value in values.items():
         if name not in movable:
@@ -227,42 +270,79 @@ def _check_values(tree: Tree, values: dict[str, float], what: str) -> None:
                                 else f"; joints: {', '.join(movable)}"))
         if not np.isfinite(value):
             raise UsageError(f"initial joint {what} of '{name}' is not a finite number")
+        if what == "velocity" and value and name in locked:
+            raise UsageError(f"initial joint velocity of '{name}': the joint is locked "
+                             "(nothing below it has mass), it cannot move")
 
 
 def import_urdf(path: Path, positions: dict[str, float] | None = None,
-                velocities: dict[str, float] | None = None) -> Imported:
+                velocities: dict[str, float] | None = None, *, floating_base: bool = False,
+                mesh_dirs=(), output: Path | None = None, bound_inertia: float = 0.0,
+                balance_inertia: bool = False) -> Imported:
     """The casmech model of a URDF file, posed at the joint `positions` [rad or m] with joint
-    `velocities` [rad/s or m/s] (by URDF joint name; default 0)."""
-    reader = Reader.read(Path(path))
+    `velocities` [rad/s or m/s] (by URDF joint name; default 0). `floating_base`: the root
+    link is a free body instead of the ground. Meshes are looked for in `mesh_dirs` too and
+    named relative to the folder of `output` (default: the URDF's). `bound_inertia`,
+    `balance_inertia`: importers/inertia_check.py."""
+    path = Path(path)
+    reader = Reader.read(path)
     tree = read_tree(reader)
     positions, velocities = dict(positions or {}), dict(velocities or {})
-    _check_values(tree, positions, "position")
-    _check_values(tree, velocities, "velocity")
-    translator = Translator(reader, tree, pose(tree, positions, velocities))
-    heads = [tree.root] + [j.child for j in tree.joints if j.type != "fixed"]
-    for head in heads[1:]:
-        translator.body(translator.groups[head])
-    for joint in tree.joints:
-        translator.joint(joint)
+    _check_values(tree, positions, "position", set())
+    layout = plan(reader, tree, positions)
+    _check_values(tree, velocities, "velocity", {j.name for j in layout.locked})
+    inside = {j.child for j in layout.locked}
+    for joint in (j for j in layout.locked if j.parent not in inside):  # the topmost ones
+        reader.warn(joint.element, f"joint[{joint.name}]", f"{joint.type} joint "
+                    f"'{joint.name}' locked at {positions.get(joint.name, 0.0):g}: nothing "
+                    f"below it has mass, so its links are merged into "
+                    f"'{layout.groups[joint.parent].head}'", code="E400",
+                    hint="give the moving links an <inertial> with a mass to keep the joint")
+    meshes = MeshPaths(path, Path(output).parent if output else path.parent,
+                       tuple(Path(d) for d in mesh_dirs))
+    repair = inertia_check.Repair(bound_inertia, balance_inertia)
+    translator = Translator(reader, tree, pose(tree, positions, velocities), layout, meshes,
+                            repair)
+    if floating_base:
+        translator.body(layout.groups[tree.root])
+        translator.model.trailer.append(f"root link {tree.root}: a free body (--floating-base)")
+    for head in layout.heads:
+        translator.body(layout.groups[head])
+    for head in layout.heads:
+        translator.joint(head)
     translator.warn_unknown(reader.root, "robot", "robot")
-    return _finish(translator, Path(path), positions, velocities)
+    return _finish(translator, path, positions, velocities, floating_base)
 
 
-def _finish(translator: Translator, path: Path, positions: dict, velocities: dict) -> Imported:
+def _finish(translator: Translator, path: Path, positions: dict, velocities: dict,
+            floating_base: bool) -> Imported:
     model, tree = translator.model, translator.tree
     ground = translator.groups[tree.root]
     mass = ground.mass_properties()[0]
+    if not model.bodies:
+        translator.reader.warn(translator.reader.root, "robot", "no link of the robot moves "
+                               "(every joint is fixed or locked): the model has no body",
+                               code="E103", hint="--floating-base makes the root link a free "
+                               "body (a flying or floating robot)")
     model.description = f"URDF robot {model.name} ({path.name})"
+    root = (f"Root link {tree.root} is a free body" if floating_base else
+            f"Root link {tree.root} is the ground" + (
+                f" (with the links fixed to it: {mass:g} kg, not part of the model)"
+                if mass > 0 else ""))
     model.header = [f"Imported by `casmech import` from the URDF file {path.name}.",
-                    f"Root link {tree.root} is the ground" + (
-                        f" (with the links fixed to it: {mass:g} kg, not part of the model)"
-                        if mass > 0 else "") + "; links joined by fixed joints are merged.",
+                    root + "; links joined by fixed joints are merged.",
                     "Body frames: each link's axes at the link's centre of mass. collision "
                     "elements are not translated.",
                     "Initial joint values (URDF joint: position, velocity): " + (", ".join(
                         f"{name}: {positions.get(name, 0.0):g}, {velocities.get(name, 0.0):g}"
                         for name in sorted({*positions, *velocities})) or "all 0") + ".", ""]
+    if translator.meshes.folders_outside:
+        model.header.insert(-1, "Meshes outside this file's folder are named by absolute "
+                            f"paths: allow them with --allow-dir "
+                            f"{translator.meshes.common_outside()}")
+    model.mesh_folder = translator.meshes.common_outside()
     model.gravity = GRAVITY
     model.gravity_comments = ["URDF has no gravity: the ROS convention, z up"]
     model.warnings = translator.reader.warnings
     return model
+

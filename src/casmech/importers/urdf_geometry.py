@@ -1,9 +1,9 @@
 """URDF `visual` elements -> casmech `geometry` items (pictures only).
 
 Each item is placed in the body frame: the link's axes, origin at the body's centre of mass.
-URDF cylinders lie along their z axis (casmech's default cylinder axis). Mesh file names: a
-`package://PKG/` prefix is dropped (the path is then relative to the package's root: write the
-YAML there), a `file://` prefix too; a warning says so.
+URDF cylinders lie along their z axis (casmech's default cylinder axis). Mesh files are looked
+for (`package://`, `file://`, relative names, `--mesh-dir`: importers/mesh_paths.py) and named
+as the YAML can read them; a mesh's `scale` is kept per axis, signs included (a mirrored mesh).
 """
 
 from __future__ import annotations
@@ -12,47 +12,61 @@ import numpy as np
 
 from casmech.core.quaternions import from_matrix
 from casmech.importers.adm_frames import tidy
+from casmech.importers.mesh_paths import MeshPaths
 from casmech.importers.urdf_read import Element, Reader
 from casmech.importers.urdf_tree import Frame, Link, frame
 
 
-def _box(reader: Reader, element: Element, path: str) -> dict:
+def _box(reader: Reader, element: Element, path: str, meshes: MeshPaths) -> dict:
     return {"box": tidy(reader.numbers(element, path, "size", 3))}
 
 
-def _cylinder(reader: Reader, element: Element, path: str) -> dict:
+def _cylinder(reader: Reader, element: Element, path: str, meshes: MeshPaths) -> dict:
     return {"cylinder": {"radius": reader.number(element, path, "radius"),
                          "length": reader.number(element, path, "length"), "axis": "z"}}
 
 
-def _sphere(reader: Reader, element: Element, path: str) -> dict:
+def _sphere(reader: Reader, element: Element, path: str, meshes: MeshPaths) -> dict:
     return {"sphere": reader.number(element, path, "radius")}
 
 
-def _mesh(reader: Reader, element: Element, path: str) -> dict:
+def mesh_scale(scale: np.ndarray) -> float | list[float] | None:
+    """A mesh scale as written: none for 1, one number when uniform and positive, else the
+    three factors (docs/format.md: a vector keeps a mirror's signs)."""
+    if np.all(scale == 1):
+        return None
+    if np.all(scale == scale[0]) and scale[0] > 0:
+        return float(scale[0])
+    return tidy(scale)
+
+
+def _mesh(reader: Reader, element: Element, path: str, meshes: MeshPaths) -> dict:
     name = reader.text(element, path, "filename")
-    for prefix, note in (("package://", "relative to the ROS package's root: write the YAML "
-                                        "there, or copy the meshes beside it"),
-                         ("file://", "a local file")):
-        if name.startswith(prefix):
-            rest = name[len(prefix):]
-            name = rest.split("/", 1)[1] if prefix == "package://" and "/" in rest else rest
-            reader.warn(element, path, f"mesh '{element.attrib['filename']}' written as "
-                        f"'{name}' ({note})", code="E103")
-    item = {"mesh": name}
+    written, found = meshes.written(name)
+    if not found and name.startswith("file://"):
+        reader.warn(element, path, f"mesh '{name}' not found: not translated", code="E305",
+                    hint="give the folder holding the meshes with --mesh-dir DIR")
+        return {}
+    if not found:
+        reader.warn(element, path, f"mesh '{name}' not found; written as '{written}'",
+                    code="E305", hint="give the folder holding the meshes (or the ROS "
+                    "packages) with --mesh-dir DIR")
+    item = {"mesh": written}
     scale = reader.numbers(element, path, "scale", 3, (1.0, 1.0, 1.0))
-    if not np.allclose(scale, scale[0], rtol=1e-12, atol=0):
-        reader.warn(element, path, f"non-uniform mesh scale {scale.tolist()}: casmech scales "
-                    "meshes uniformly; the mean is used", code="E103")
-    if np.mean(scale) != 1:
-        item["scale"] = float(np.mean(scale))
+    if np.any(scale == 0):
+        reader.warn(element, path, f"mesh scale {scale.tolist()} has a zero factor: the mesh is "
+                    "not translated", code="E410")
+        return {}
+    if mesh_scale(scale) is not None:
+        item["scale"] = mesh_scale(scale)
     return item
 
 
 SHAPES = {"box": _box, "cylinder": _cylinder, "sphere": _sphere, "mesh": _mesh}
 
 
-def geometry_items(reader: Reader, members: list[tuple[Link, Frame]], centre) -> list[dict]:
+def geometry_items(reader: Reader, members: list[tuple[Link, Frame]], centre,
+                   meshes: MeshPaths) -> list[dict]:
     """The visuals of a body's links, placed in the body frame whose origin is `centre`."""
     items = []
     for link, at in members:
@@ -64,7 +78,10 @@ def geometry_items(reader: Reader, members: list[tuple[Link, Frame]], centre) ->
                 reader.warn(shape or visual, path, "a visual's <geometry> needs one of "
                             f"{', '.join(SHAPES)}: not translated", code="E103")
                 continue
-            item = SHAPES[kinds[0].tag](reader, kinds[0], f"{path}.geometry.{kinds[0].tag}")
+            item = SHAPES[kinds[0].tag](reader, kinds[0], f"{path}.geometry.{kinds[0].tag}",
+                                        meshes)
+            if not item:
+                continue
             placed = at * frame(reader, visual.find("origin"), f"{path}.origin")
             offset = placed.origin - centre
             if np.any(offset):

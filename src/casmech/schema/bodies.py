@@ -165,12 +165,25 @@ def geometry(check: Checker, path: Path, item) -> dict[str, Any] | None:
         where = (*path, *where)
         measure = check.numbers if isinstance(value, tuple) else check.number
         number = measure(where, value)
-        result[key] = check.positive("E410", where, number, f"{kind} {key}")
+        if kind == "mesh" and isinstance(value, tuple):  # per axis: signs mirror
+            result[key] = nonzero(check, where, number)
+        else:
+            result[key] = check.positive("E410", where, number, f"{kind} {key}")
     if kind == "mesh":
         result["file"] = mesh_file(check, (*path, "mesh"), item.mesh)
     result["offset"] = check.vector((*path, "offset"), item.offset)
     result["euler_parameters"] = orientation(check, (*path, "orientation"), item.orientation)
     return None if failed(result.values()) else result
+
+
+def nonzero(check: Checker, path: Path, factors) -> np.ndarray | None:
+    """A mesh's scale factors per axis if none is zero (a negative one mirrors that axis)."""
+    if factors is not None and np.any(np.asarray(factors) == 0):
+        check.error("E410", path, "mesh scale factors must be non-zero",
+                    got=", ".join(f"{x:g}" for x in factors),
+                    hint="a negative factor mirrors the mesh along that axis")
+        return None
+    return factors
 
 
 def mesh_file(check: Checker, path: Path, name: str) -> str | None:

@@ -39,7 +39,7 @@ class SphereItem(Placement):
 
 class MeshItem(Placement):
     mesh: StrictStr
-    scale: Scalar = 1
+    scale: Scalar | Vector = 1  # one factor (> 0), or one per axis (non-zero; < 0 mirrors)
 
 
 GEOMETRY_KINDS = ("box", "cylinder", "sphere", "mesh")
