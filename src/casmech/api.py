@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import importlib
+import sys
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
@@ -46,7 +47,7 @@ COMPILE_MODES = ("interpreted", "compiled", "auto")
 def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
     """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
     "compiled" (C generated, built with the C compiler and loaded; cached by model content in
-    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (whichever runs sooner end to end,
+    $CASMECH_CACHE_DIR, default the platform's user cache folder: codegen.cache) or "auto" (whichever runs sooner end to end,
     codegen.auto_mode: compiled when the library is cached or the model is big, else
     interpreted; interpreted with one warning without a C compiler). Both bundles have the
     same functions."""
@@ -147,11 +148,16 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             _keep_messages(error.partial, messages, stream.count)
         raise
     _keep_messages(result, messages, stream.count)
-    from casmech import codegen  # imported on use: `casmech check` never needs it
-
-    result.metadata.update(analysis=settings.type, mode=codegen.mode_of(functions))
+    result.metadata.update(analysis=settings.type, mode=mode_of(functions))
     result.functions = functions
     return result
+
+
+def mode_of(functions: SystemFunctions) -> str:
+    """"compiled" or "interpreted" (codegen.mode_of), without importing code generation
+    when it never was: a compiled bundle is loaded only through it."""
+    codegen = sys.modules.get("casmech.codegen")
+    return codegen.mode_of(functions) if codegen is not None else "interpreted"
 
 
 def _keep_messages(result: Result, messages: list[str], count: int) -> None:

@@ -17,6 +17,7 @@ from pathlib import Path
 import casadi as ca
 
 from casmech.codegen import manifest, residuals
+from casmech.codegen.build import SUFFIX
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
 # graph over the library differentiates (casmech.optimal.compiled, r-p only). The romega_*
@@ -95,7 +96,7 @@ def write_sources(functions: dict[str, ca.Function], directory: Path,
 
 
 def dae_library(name: str) -> str:
-    return f"libcasmech_{name}.so"
+    return f"libcasmech_{name}{SUFFIX}"
 
 
 def write_dae_sources(oracles: dict[str, dict[str, ca.Function]], directory: Path
