@@ -47,9 +47,10 @@ COMPILE_MODES = ("interpreted", "compiled", "auto")
 def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
     """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
     "compiled" (C generated, built with the C compiler and loaded; cached by model content in
-    $CASMECH_CACHE_DIR, default the platform's user cache folder: codegen.cache) or "auto" (whichever runs sooner end to end,
-    codegen.auto_mode: compiled when the library is cached or the model is big, else
-    interpreted; interpreted with one warning without a C compiler). Both bundles have the
+    $CASMECH_CACHE_DIR, default the platform's user cache folder: codegen.cache) or "auto"
+    (whichever runs sooner end to end, codegen.auto_mode: compiled when the library is cached
+    or the model is big, else interpreted; interpreted with one warning without a C
+    compiler). Both bundles have the
     same functions."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
