@@ -30,8 +30,8 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
     With `out`, writes sweep.csv (each run appended as it finishes, in run order at the end;
     sweep.parquet with pyarrow), metadata.json and with `full` runs.h5 there, as
     `casmech sweep` does; `resume` runs only the runs out/sweep.csv does not hold yet.
-    `dashboard`: serve the local cluster's Dask dashboard (on 127.0.0.1). The DataFrame's attrs["finished"] says
-    whether every run finished (False after Ctrl-C)."""
+    `dashboard`: serve the local cluster's Dask dashboard (on 127.0.0.1). The DataFrame's
+    attrs["finished"] says whether every run finished (False after Ctrl-C)."""
     given = {"grid": grid, "normal": normal, "uniform": uniform, "samples": samples or None,
              "seed": seed, "keep": list(keep) or None}
     prepared = study.prepare(model, given, settings, overrides, full=bool(out and full),

@@ -103,6 +103,8 @@ def local_cluster(module, workers: int, dashboard: bool = False):
             n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
             protocol="tls://", security=Security.temporary(),
             dashboard_address="127.0.0.1:0" if dashboard else None,
+            # the scheduler's HTTP server (no routes without the dashboard) on a free port
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
             worker_dashboard_address=None, silence_logs=logging.ERROR,
             worker_class=module.Nanny)
 
