@@ -4,6 +4,7 @@ marker file), a damaged entry (a library cut short or emptied, a manifest of `{`
 again with a warning, a file or folder others could write is refused with a usage error, a
 library is hashed once per process, and a build is private whatever the umask."""
 
+import json
 import os
 import shutil
 import stat
@@ -210,3 +211,20 @@ def test_each_library_is_hashed_once_per_process(toolchain, tmp_path, monkeypatc
     _cut(_entry(root) / LIBRARY)  # a changed file is hashed again ...
     with pytest.warns(UserWarning, match="is damaged"):
         _compiled(toolchain, root)  # ... and the entry rebuilt
+
+
+def test_cache_info_names_a_damaged_entry_and_escapes_names(toolchain, tmp_path, monkeypatch,
+                                                            capsys):
+    root = tmp_path / "cache"
+    _compiled(toolchain, root)
+    entry = _entry(root)
+    record = manifest.read(entry)
+    record["model"] = "evil\x1b[2J\nforged"
+    (entry / manifest.MANIFEST).write_text(json.dumps(record))
+    shutil.copytree(entry, root / ("0" * 32))
+    (root / ("0" * 32) / manifest.MANIFEST).write_text("{")
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(root))
+    assert main(["cache", "info"]) == 0
+    out = capsys.readouterr().out
+    assert f"{'0' * 32}  damaged: its manifest.json does not read" in out
+    assert "evil\\x1b[2J\\nforged" in out and "\x1b" not in out
