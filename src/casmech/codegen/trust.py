@@ -98,8 +98,10 @@ def _manifest(directory: Path) -> dict:
     except (OSError, UnicodeDecodeError, ValueError) as error:
         raise Corrupt(f"its {MANIFEST} does not read ({error})") from None
     if not isinstance(record, dict) or not isinstance(record.get("functions"), list) \
+            or not isinstance(record.get("library"), (str, type(None))) \
             or not isinstance(record.get(DIGESTS), dict) \
             or not all(isinstance(e, dict) and isinstance(e.get("name"), str)
+                       and isinstance(e.get("library"), (str, type(None)))
                        for e in record["functions"]):
         raise Corrupt(f"its {MANIFEST} is not one a casmech build writes")
     return record
@@ -117,7 +119,11 @@ _verified: dict[Path, tuple] = {}  # library -> (device, inode, size, mtime) whe
 def verify(directory: Path, default_library: str | None = None) -> dict:
     """The entry's manifest, once the entry is the user's (Untrusted otherwise) and every
     library it lists has its recorded sha256 (Corrupt otherwise)."""
-    for path, status in _files(directory):
+    try:
+        found = _files(directory)
+    except OSError as error:  # a file removed while it was listed
+        raise Corrupt(f"it changed while it was checked ({error.strerror})") from None
+    for path, status in found:
         reason = problem(path, status)
         if reason:
             raise refuse(path, reason, "Remove it (`casmech cache clear`) and look into who "
