@@ -66,5 +66,24 @@ def run_model(path, **kwargs):
 
 
 @pytest.fixture(scope="session")
+def session_cache(tmp_path_factory) -> Path:
+    """The compiled-model cache of the whole test session (a private temporary folder)."""
+    return tmp_path_factory.mktemp("session_cache")
+
+
+@pytest.fixture(autouse=True)
+def private_caches(session_cache, monkeypatch) -> Path:
+    """No test reads or writes the user's caches: casmech's compiled-model cache
+    (CASMECH_CACHE_DIR; subprocesses inherit it) and the folders derived from HOME that a
+    library may cache into (XDG_CACHE_HOME: platformdirs' user cache folder on Linux;
+    MPLCONFIGDIR: matplotlib's font cache) point into the session's temporary folder.
+    tests/test_private_cache.py proves it."""
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(session_cache / "casmech"))
+    monkeypatch.setenv("XDG_CACHE_HOME", str(session_cache / "xdg"))
+    monkeypatch.setenv("MPLCONFIGDIR", str(session_cache / "matplotlib"))
+    return session_cache / "casmech"
+
+
+@pytest.fixture(scope="session")
 def models_dir():
     return MODELS

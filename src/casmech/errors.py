@@ -8,6 +8,11 @@ A user mistake is never a traceback: every stage collects `Diagnostic`s and rais
       got: ...
       hint: ...
 
+Everything a diagnostic or an error message echoes goes through `escape`: a control character
+(an escape sequence that would restyle or rewrite the terminal, a carriage return, a newline
+that would forge a `file:1:1: error[...]` line of its own) or a Unicode direction override in a
+name, a key or a value is shown as its escape (\\x1b, \\n, \\u202e), once, here.
+
 Exit codes of the command line (docs/format.md): 0 success, 1 model error, 2 usage error,
 3 analysis failure, 128 + the signal's number when SIGINT (130) or SIGTERM (143) stopped it.
 """
@@ -70,6 +75,29 @@ CODES: dict[str, str] = {
 }
 
 
+# C0 and C1 control characters, DEL, and the invisible marks that reorder or break what a
+# terminal shows (direction marks, embeddings, overrides and isolates; line and paragraph
+# separators)
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069"
+                      "\u2028\u2029]")
+_NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def _escaped(match: re.Match) -> str:
+    character = match.group()
+    code = ord(character)
+    return _NAMED.get(character) or (f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}")
+
+
+def escape(text: object, keep_newlines: bool = False) -> str:
+    """`text` with every control character written as its escape (module docstring);
+    `keep_newlines`: a message's own line breaks stay (each line escaped)."""
+    text = str(text)
+    if keep_newlines:
+        return "\n".join(_CONTROL.sub(_escaped, line) for line in text.split("\n"))
+    return _CONTROL.sub(_escaped, text)
+
+
 @dataclass(frozen=True)
 class Source:
     """Where something came from: 1-based line and column in a file."""
@@ -79,7 +107,7 @@ class Source:
     col: int
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.col}"
+        return f"{escape(self.file)}:{self.line}:{self.col}"
 
 
 @dataclass(frozen=True)
@@ -99,11 +127,11 @@ class Diagnostic:
 
     def format(self) -> str:
         where = f"{self.source}: " if self.source else ""
-        path = f" {self.path}:" if self.path else ""
-        lines = [f"{where}{self.severity}[{self.code}]{path} {self.message}"]
+        path = f" {escape(self.path)}:" if self.path else ""
+        lines = [f"{where}{self.severity}[{self.code}]{path} {escape(self.message)}"]
         for label, text in (("expected", self.expected), ("got", self.got), ("hint", self.hint)):
             if text:
-                lines.append(f"  {label}: {text}")
+                lines.append(f"  {label}: {escape(text)}")
         return "\n".join(lines)
 
 
@@ -114,9 +142,13 @@ def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
 
 
 class CasmechError(Exception):
-    """Base of every error casmech raises on purpose."""
+    """Base of every error casmech raises on purpose; its message is shown escaped (its own
+    line breaks kept: module docstring)."""
 
     exit_code = 1
+
+    def __str__(self) -> str:
+        return escape(super().__str__(), keep_newlines=True)
 
 
 class ModelError(CasmechError):
@@ -186,11 +218,11 @@ class FailureContext:
 
     def format(self) -> str:
         at = f"at t = {self.time:.6g}: " if self.time is not None else ""
-        lines = [f"analysis failed {at}{self.cause}"]
+        lines = [f"analysis failed {at}{escape(self.cause, keep_newlines=True)}"]
         for name, source, residual in self.joints:
             where = f"{source}: " if source else ""
             what = "body" if isinstance(name, BodyName) else "joint"
-            lines.append(f"  {where}{what} '{name}' ({self.measure} {residual:.3e})")
+            lines.append(f"  {where}{what} '{escape(name)}' ({self.measure} {residual:.3e})")
         return "\n".join(lines)
 
 

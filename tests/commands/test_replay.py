@@ -139,12 +139,17 @@ def test_replay_takes_no_run_options(folder, extra, named, capsys):
     assert named in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("text, message", [("{", "not a metadata.json written by casmech"),
-                                           ('{"model": {}}', "no files, overrides")])
+@pytest.mark.parametrize("text, message", [
+    ("{", ":1:2: error[E001] not JSON: Expecting property name enclosed in double quotes"),
+    ('{"model": {}}', ":1:11: error[E100] model.absolute_path: missing required key"),
+    ("[1]", ":1:1: error[E003] the document is not a JSON object"),
+    ("\xff\xfe", ":1:1: error[E001] not UTF-8 text"),
+])
 def test_unreadable_record(tmp_path, text, message, capsys):
-    (tmp_path / "metadata.json").write_text(text)
+    (tmp_path / "metadata.json").write_bytes(text.encode("latin-1"))
     assert cli.main(["run", "--replay", str(tmp_path / "metadata.json")]) == 2
-    assert message in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'metadata.json'}{message}" in err and "Traceback" not in err
 
 
 def test_model_required_without_replay(capsys):
@@ -154,7 +159,7 @@ def test_model_required_without_replay(capsys):
 
 def test_allowed_folders_are_replayed(tmp_path, monkeypatch):
     """A table outside the model's folder, read under --allow-dir: the replay allows the same
-    folder (and checks the table's hash) without being told again."""
+    folder (and checks the table's hash) only when its command line names it again."""
     from casmech.schema import files
 
     monkeypatch.setattr(files, "_extra", [])  # the process-wide allowed folders, restored after
@@ -170,7 +175,10 @@ def test_allowed_folders_are_replayed(tmp_path, monkeypatch):
     assert meta["options"]["allow_dir"] == [str(data.resolve())]
     assert meta["files"][str((data / "profile.csv").resolve())]["sha256"] == sha(
         data / "profile.csv")  # outside the model's folder: keyed by its absolute path
-    files._extra.clear()  # a fresh process: only the record allows the folder
-    assert cli.main(["run", "--replay", str(out / "metadata.json")]) == 0
+    files._extra.clear()  # a fresh process: the record alone does not allow the folder ...
+    assert cli.main(["run", "--replay", str(out / "metadata.json")]) == 2
+    # ... the command line must repeat it
+    assert cli.main(["run", "--replay", str(out / "metadata.json"), "--allow-dir",
+                     str(data)]) == 0
     np.testing.assert_allclose(read_csv(model / "run_replay" / "results.csv")[1],
                                read_csv(out / "results.csv")[1], rtol=0, atol=0)  # same doubles

@@ -6,6 +6,7 @@ import os
 import shlex
 import shutil
 import subprocess
+import sys
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -17,9 +18,24 @@ from casmech.errors import AnalysisError, UsageError
 # than it speeds the calls (docs/decisions/codegen-flags.md). casmech compile --flags, or
 # CASMECH_CFLAGS, choose others.
 DEFAULT_FLAGS = ("-O1",)
-REQUIRED_FLAGS = ("-std=c99", "-fPIC")  # c99: glibc's gnu-mode gamma() clashes with ours
-LIBRARY = "libcasmech_model.so"
+# a shared library's file suffix on this platform (what casadi.external's dlopen/LoadLibrary
+# expects)
+SUFFIX = {"win32": ".dll", "cygwin": ".dll", "darwin": ".dylib"}.get(sys.platform, ".so")
+LIBRARY = f"libcasmech_model{SUFFIX}"
+# c99: glibc's gnu-mode gamma() clashes with ours; -fPIC: position-independent code where a
+# shared library needs it (Windows DLLs do not: gcc there warns of the flag)
+REQUIRED_FLAGS = ("-std=c99",) + (() if SUFFIX == ".dll" else ("-fPIC",))
+COMPILERS = ("gcc", "clang", "cc")  # the first found on PATH is the default without $CC
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
+
+
+def default_compiler() -> str:
+    """$CC, else the first of COMPILERS on PATH (else "gcc", which `available` reports
+    missing)."""
+    configured = os.environ.get("CC")
+    if configured:
+        return configured
+    return next((name for name in COMPILERS if shutil.which(name)), COMPILERS[0])
 
 
 def default_flags() -> tuple[str, ...]:
@@ -29,10 +45,11 @@ def default_flags() -> tuple[str, ...]:
 
 @dataclass(frozen=True)
 class Toolchain:
-    """A C compiler ($CC, default gcc; a launcher may lead: "ccache gcc") and the flags every
-    unit is compiled with ($CASMECH_CFLAGS, default DEFAULT_FLAGS; REQUIRED_FLAGS always)."""
+    """A C compiler ($CC, default the first of gcc, clang, cc found; a launcher may lead:
+    "ccache gcc") and the flags every unit is compiled with ($CASMECH_CFLAGS, default
+    DEFAULT_FLAGS; REQUIRED_FLAGS always)."""
 
-    compiler: str = field(default_factory=lambda: os.environ.get("CC", "gcc"))
+    compiler: str = field(default_factory=default_compiler)
     flags: tuple[str, ...] = field(default_factory=lambda: default_flags())
     jobs: int = field(default_factory=lambda: os.cpu_count() or 1)
 
@@ -74,7 +91,8 @@ def build_libraries(libraries: dict[str, list[Path]], directory: Path,
     """Compile every source to an object (toolchain.jobs at a time, all libraries in one pool)
     and link each library (file name -> its sources)."""
     if not available(toolchain):
-        raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or set CC, "
+        raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or clang "
+                         "(on Windows: MinGW-w64's gcc) or set CC, "
                          "or use mode='interpreted' (casmech run --mode interpreted)")
     compiler, flags = shlex.split(toolchain.compiler), list(toolchain.all_flags)
     sources = [src for group in libraries.values() for src in group]

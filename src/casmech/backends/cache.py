@@ -6,27 +6,37 @@ parametric library's key has the model's structure instead of the parameter valu
 codegen.parametric), the
 casmech version and a digest of its compiler sources, the CasADi version, the C compiler and its
 flags. A build happens in a private temporary directory under the cache and is published with
-one rename; a lock file makes a second process wait for the first instead of building the same
-key again, and the rename alone keeps the cache whole should the lock not hold (NFS).
+one rename; a lock file (filelock: fcntl on POSIX, msvcrt on Windows) makes a second process
+wait for the first instead of building the same key again, and the rename alone keeps the cache
+whole should the lock not hold (NFS).
+
+The cache folder is $CASMECH_CACHE_DIR, else the platform's user cache folder (platformdirs:
+~/.cache/casmech on Linux, ~/Library/Caches/casmech on macOS, %LOCALAPPDATA%/casmech/Cache on
+Windows), created 0700. An entry is loaded only after codegen.trust has found it the user's and
+unchanged; a corrupt one (a library cut short or edited, a manifest that does not read) is
+discarded with a warning and built again, never loaded.
 """
 
 from __future__ import annotations
 
-import fcntl
 import hashlib
 import json
 import os
 import shutil
 import tempfile
+import warnings
 from collections.abc import Callable, Mapping
-from contextlib import contextmanager
 from dataclasses import fields, is_dataclass
 from functools import lru_cache
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
+import platformdirs
+from filelock import FileLock
 
+from casmech.backends import trust
+from casmech.backends.build import LIBRARY
 from casmech.backends.manifest import FORMAT, MANIFEST
 from casmech.core.version import VERSION
 from casmech.errors import UsageError
@@ -43,8 +53,10 @@ SOURCE_MODULES = ()
 
 
 def cache_dir() -> Path:
+    """$CASMECH_CACHE_DIR, else the platform's user cache folder for casmech."""
     configured = os.environ.get(ENVIRONMENT)
-    return Path(configured) if configured else Path.home() / ".cache" / "casmech"
+    return Path(configured) if configured else platformdirs.user_cache_path("casmech",
+                                                                             appauthor=False)
 
 
 @lru_cache(maxsize=1)
@@ -104,43 +116,70 @@ def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 
-@contextmanager
-def _locked(path: Path):
-    with open(path, "a") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = None
-           ) -> tuple[Path, bool]:
-    """The cache directory of a key, building it with build(temporary_dir) when missing;
-    returns (directory, hit)."""
+def prepared(root: Path | None = None) -> Path:
+    """The cache folder, created 0700 where missing, checked writable and the user's alone
+    (codegen.trust: a usage error otherwise)."""
     root = root or cache_dir()
     try:
-        root.mkdir(parents=True, exist_ok=True)
+        root.mkdir(mode=0o700, parents=True, exist_ok=True)
         probe = tempfile.TemporaryFile(dir=root)
         probe.close()
     except OSError as error:
         raise UsageError(f"the compiled-model cache {root} is not writable ({error.strerror}); "
                          f"set {ENVIRONMENT} to a writable directory") from None
+    trust.check_root(root)
+    return root
+
+
+def usable(entry: Path) -> bool:
+    """Whether a published entry is there and may be loaded (codegen.trust.verify). A corrupt
+    one is removed with a warning (False: build it again); one someone else could have
+    written is refused (trust.Untrusted)."""
+    if not entry.exists() and not entry.is_symlink():
+        return False
+    try:
+        trust.verify(entry, LIBRARY)
+        return True
+    except trust.Corrupt as reason:
+        warnings.warn(f"the compiled-model cache entry {entry} is damaged ({reason}); "
+                      "building it again", stacklevel=3)
+    discard(entry)
+    return False
+
+
+def discard(entry: Path) -> None:
+    """Move an entry aside (one rename, so no reader sees half of it) and remove it."""
+    aside = Path(tempfile.mkdtemp(prefix=f".{entry.name}.discarded.", dir=entry.parent))
+    try:
+        os.replace(entry, aside / "entry")
+    except OSError:
+        pass  # another process moved it first
+    shutil.rmtree(aside, ignore_errors=True)
+
+
+def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = None
+           ) -> tuple[Path, bool]:
+    """The cache directory of a key, building it with build(temporary_dir) when missing or
+    damaged; returns (directory, hit). A hit is verified (codegen.trust) before it is
+    returned."""
+    root = prepared(root)
     final = root / entry_key
-    if (final / MANIFEST).is_file():
+    if usable(final):
         return final, True
-    with _locked(root / f"{entry_key}.lock"):
-        if (final / MANIFEST).is_file():
+    with FileLock(root / f"{entry_key}.lock"):
+        if usable(final):
             return final, True
         temporary = Path(tempfile.mkdtemp(prefix=f".{entry_key}.", dir=root))
         try:
             build(temporary)
+            trust.private(temporary)
             os.replace(temporary, final)  # atomic; fails if another process published first
         except OSError:
             if not (final / MANIFEST).is_file():
                 raise
         finally:
             shutil.rmtree(temporary, ignore_errors=True)
+    trust.verify(final, LIBRARY)
     return final, False
 
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import casadi as ca
 
 from casmech.backends import manifest
+from casmech.backends.build import SUFFIX
 from casmech.formulations import residuals
 
 # Functions whose Jacobian is generated as well (`jac_<name>`): the vector-valued ones an MX
@@ -97,7 +98,7 @@ def write_sources(functions: dict[str, ca.Function], directory: Path,
 
 
 def dae_library(name: str) -> str:
-    return f"libcasmech_{name}.so"
+    return f"libcasmech_{name}{SUFFIX}"
 
 
 def write_dae_sources(oracles: dict[str, dict[str, ca.Function]], directory: Path

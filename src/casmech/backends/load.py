@@ -8,7 +8,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from casmech.backends import manifest
+from casmech.backends import trust
 from casmech.backends.build import LIBRARY
 from casmech.equations.functions import JointMeta, SystemFunctions
 from casmech.model.ir import GROUND_INDEX, ModelIR
@@ -28,8 +28,10 @@ def metadata(ir: ModelIR) -> dict:
 
 
 def externals(directory: Path) -> dict[str, ca.Function]:
-    """Every function the manifest of a build directory lists, loaded from its library."""
-    entries = manifest.read(directory)["functions"]
+    """Every function the manifest of a build directory lists, loaded from its library once
+    codegen.trust has found the directory the user's and its libraries as built (a
+    UsageError naming what is wrong otherwise; nothing is loaded then)."""
+    entries = trust.verify(directory, LIBRARY)["functions"]
     return {entry["name"]: ca.external(entry["name"], str(
         (directory / (entry.get("library") or LIBRARY)).resolve())) for entry in entries}
 

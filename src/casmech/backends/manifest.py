@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 
@@ -10,7 +11,10 @@ import casadi as ca
 MANIFEST = "manifest.json"
 # generated with fwd1_<name> and adj1_<name> (codegen.generate); kept here to avoid a cycle
 DIRECTIONAL = frozenset({"mass_matrix", "phi_q"})
-FORMAT = 2  # bump when the layout of a build directory changes (2: a library per DAE)
+# bump when the layout of a build directory changes (2: a library per DAE; 3: the libraries'
+# sha256, codegen.trust)
+FORMAT = 3
+DIGESTS = "library_sha256"  # key: library file name -> sha256 of its bytes at build
 
 
 def _sparsity(sparsity: ca.Sparsity) -> dict:
@@ -30,16 +34,28 @@ def describe(function: ca.Function) -> dict:
     }
 
 
+def sha256(path: Path) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
 def write(directory: Path, functions: dict[str, ca.Function], differentiated, info: dict,
           libraries: dict[str, str] | None = None) -> Path:
     """Every function with its library file (`libraries`: name -> file; default: the
-    bundle's, info["library"]) and whether its derivatives are generated too."""
+    bundle's, info["library"]) and whether its derivatives are generated too, and the sha256
+    of every library (DIGESTS: what codegen.trust checks before a load)."""
     libraries = libraries or {}
     entries = [{**describe(f), "library": libraries.get(name, info.get("library")),
                 "jacobian": name in differentiated, "forward_reverse": name in DIRECTIONAL}
                for name, f in functions.items()]
+    files = sorted({entry["library"] for entry in entries if entry["library"]})
+    digests = {name: sha256(directory / name) for name in files}
     path = directory / MANIFEST
-    path.write_text(json.dumps({"format": FORMAT, **info, "functions": entries}, indent=1))
+    path.write_text(json.dumps({"format": FORMAT, **info, "functions": entries,
+                                DIGESTS: digests}, indent=1))
     return path
 
 

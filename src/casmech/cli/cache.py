@@ -1,4 +1,5 @@
-"""casmech cache info|clear: the compiled-model cache ($CASMECH_CACHE_DIR, ~/.cache/casmech)."""
+"""casmech cache info|clear: the compiled-model cache ($CASMECH_CACHE_DIR, else the platform's
+user cache folder: codegen.cache)."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import json
 
 from casmech.backends import cache
 from casmech.backends.manifest import MANIFEST
+from casmech.errors import escape
 
 
 def add_arguments(parser) -> None:
@@ -13,7 +15,13 @@ def add_arguments(parser) -> None:
 
 
 def _describe(entry) -> str:
-    info = json.loads((entry / MANIFEST).read_text())
+    try:
+        info = json.loads((entry / MANIFEST).read_text(encoding="utf-8"))
+        if not isinstance(info, dict):
+            raise ValueError("not a mapping")
+    except (OSError, UnicodeDecodeError, ValueError):
+        return (f"  {entry.name}  damaged: its {MANIFEST} does not read (the next build of "
+                "this key replaces it; `casmech cache clear` removes it)")
     return (f"  {entry.name}  {info.get('model', '?')}  {cache.size(entry) / 1e6:.2f} MB  "
             f"casmech {info.get('casmech')} casadi {info.get('casadi')} "
             f"{' '.join(info.get('flags', []))}")
@@ -29,7 +37,7 @@ def run(args) -> int:
     total = sum(cache.size(entry) for entry in entries)
     print(f"{root}: {len(entries)} compiled models, {total / 1e6:.2f} MB")
     for entry in entries:
-        print(_describe(entry))
+        print(escape(_describe(entry)))  # a model's name may hold control characters
     unfinished = cache.unfinished(root)
     if unfinished:
         stale = sum(cache.size(path) for path in unfinished)

@@ -106,6 +106,9 @@ def _run(args) -> int:
     given = overrides(args.set)
     clock = time.perf_counter()
     model = api.load(args.model, given)
+    from casmech.cli import replay
+
+    replay.check_read(model, args)  # a replay reads only what its record lists
     timings = {"load": time.perf_counter() - clock}
     interrupts.check()
     out = args.out or args.model.with_name(args.model.stem + "_results")

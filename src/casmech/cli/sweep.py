@@ -2,12 +2,15 @@
 
 The study is the model's `study:` block, or the command line's (--grid, --samples with --normal
 and --uniform, --seed, --keep; a grid or sampling given here replaces the block's design).
-Runs go through Dask: a local cluster of --workers processes (default: the machine's cores),
-an existing cluster at --scheduler ADDRESS, or this process with --workers 0. A run that fails
-is a row with status failed and its reason; the study goes on. Ctrl-C (or SIGTERM) stops it:
-the finished runs are written and the exit code is 130. Writes DIR/sweep.csv,
-DIR/sweep.parquet (when pyarrow is installed), DIR/metadata.json and with --full DIR/runs.h5.
-docs/sweeps.md.
+Runs go through Dask: a local cluster of --workers processes (default: the machine's cores;
+on loopback, TLS with temporary credentials, no dashboard unless --dashboard), an existing
+cluster at --scheduler ADDRESS, or this process with --workers 0. A run that fails is a row
+with status failed and its reason; the study goes on. Each finished run is appended to
+DIR/sweep.csv as it arrives, so a killed sweep keeps them and --resume runs only the others.
+Ctrl-C (or SIGTERM) stops it: the finished runs are written and the exit code is 130. Writes
+DIR/sweep.csv (in run order at the end), DIR/sweep.parquet (when pyarrow is installed),
+DIR/metadata.json (status running until the end) and with --full DIR/runs.h5. docs/sweeps.md,
+docs/security.md.
 """
 
 from __future__ import annotations
@@ -47,8 +50,15 @@ def add_arguments(parser) -> None:
                         help="processes of the local Dask cluster (default: the machine's "
                              "cores; 0: run in this process without Dask)")
     parser.add_argument("--scheduler", metavar="ADDRESS",
-                        help="run on the existing Dask cluster at ADDRESS (tcp://host:8786); "
-                             "its workers need casmech and the model's files")
+                        help="run on the existing Dask cluster at ADDRESS (tls://host:8786 "
+                             "with Dask's TLS settings, or tcp://); its workers need casmech "
+                             "and the model's files (docs/sweeps.md: how to secure it)")
+    parser.add_argument("--dashboard", action="store_true",
+                        help="serve the local cluster's Dask dashboard (on 127.0.0.1, a port "
+                             "printed at the start); off by default")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the study whose results DIR/sweep.csv holds (a sweep "
+                             "that was stopped or killed): run only the missing runs")
     parser.add_argument("--mode", choices=("auto", "interpreted", "compiled"), default="auto",
                         help="compiled: the model's parametric library, built once, bound to "
                              "each run's values; interpreted: CasADi functions built per run; "
@@ -79,6 +89,14 @@ def run(args) -> int:
 
     if args.workers is not None and args.workers < 0:
         raise UsageError(f"--workers must be >= 0, got {args.workers}")
+    if args.scheduler is not None:
+        study.execute.scheduler_address(args.scheduler)  # its form, before anything is built
+    if args.dashboard and (args.scheduler is not None or args.workers == 0):
+        raise UsageError("--dashboard serves a local cluster's dashboard; it takes no "
+                         "--scheduler and no --workers 0")
+    if args.resume and args.full:
+        raise UsageError("--resume cannot add to DIR/runs.h5 (--full writes it whole at the "
+                         "end): resume without --full, or start the study again")
     settings = {"t_end": args.t_end, "output_step": args.output_step, "rtol": args.rtol,
                 "atol": args.atol}
     given = overrides(args.set)
@@ -86,15 +104,19 @@ def run(args) -> int:
                              mode=args.mode)
     out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
     total = prepared.study.size()
+    earlier = study.resumed(out, prepared) if args.resume else []
     where = args.scheduler or ("this process" if args.workers == 0 else
                                f"{args.workers or study.execute.default_workers()} local workers")
-    print(f"sweep: {total} runs on {where}, {prepared.job.mode}", file=sys.stderr)
-    (rows, finished), seconds = study.timed(study.collect, prepared, args.workers,
-                                            args.scheduler, out / "runs.h5" if args.full else None)
-    table = study.dataframe(rows, prepared.study)
+    again = f", {len(earlier)} finished earlier" if args.resume else ""
+    print(f"sweep: {total} runs on {where}, {prepared.job.mode}{again}", file=sys.stderr)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
                "mode": prepared.job.mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
+    study.start(out, prepared, options)
+    (rows, finished), seconds = study.timed(
+        study.collect, prepared, args.workers, args.scheduler,
+        out / "runs.h5" if args.full else None, out / "sweep.csv", earlier, args.dashboard)
+    table = study.dataframe(rows, prepared.study)
     paths = study.write(out, prepared, table, finished, {"runs": seconds}, options)
     if args.full:
         paths.append(out / "runs.h5")

@@ -7,6 +7,7 @@ casmech.api re-exports `analyze`, `analysis_settings` and `check` as the public 
 from __future__ import annotations
 
 import importlib
+import sys
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
@@ -98,11 +99,16 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             _keep_messages(error.partial, messages, stream.count)
         raise
     _keep_messages(result, messages, stream.count)
-    from casmech.backends.load import mode_of  # on use: `casmech check` never needs it
-
     result.metadata.update(analysis=settings.type, mode=mode_of(functions))
     result.functions = functions
     return result
+
+
+def mode_of(functions: SystemFunctions) -> str:
+    """"compiled" or "interpreted" (backends.codegen.mode_of), without importing code generation
+    when it never was: a compiled bundle is loaded only through it."""
+    codegen = sys.modules.get("casmech.backends.codegen")
+    return codegen.mode_of(functions) if codegen is not None else "interpreted"
 
 
 def _keep_messages(result: Result, messages: list[str], count: int) -> None:

@@ -15,6 +15,7 @@ row's multiplier.
 from __future__ import annotations
 
 import os
+import sys
 from dataclasses import replace
 from functools import cache
 
@@ -67,13 +68,18 @@ def tree_of(functions: SystemFunctions) -> Tree:
     return functions.derived["spanning_tree"]
 
 
+def _compiled(functions: SystemFunctions) -> bool:
+    """Whether the bundle is compiled (codegen.mode_of), importing no code generation when
+    none was: a compiled bundle is loaded only through casmech.backends."""
+    codegen = sys.modules.get("casmech.backends.codegen")
+    return codegen is not None and codegen.mode_of(functions) == "compiled"
+
+
 def lags_bundle(functions: SystemFunctions) -> bool:
     """Whether the bundle is compiled and its joint system would not be: a parametric bundle
     (functions.data) whose library holds no joint functions (built for another analysis; it
     would compile per value) or a bundle above COMPILED_ODE_BODIES."""
-    from casmech.backends import codegen  # imported on use: interpreted runs never need it
-
-    return codegen.mode_of(functions) == "compiled" and (
+    return _compiled(functions) and (
         functions.n_bodies > COMPILED_ODE_BODIES or (
             functions.data is not None and LIBRARY_FUNCTIONS not in functions.derived))
 
@@ -88,9 +94,7 @@ def joint_system(functions: SystemFunctions) -> JointSystem:
             system = library_system(functions)
         else:
             system = build(functions.ir, tree_of(functions))
-            from casmech.backends import codegen
-
-            if codegen.mode_of(functions) == "compiled" and not lags_bundle(functions):
+            if _compiled(functions) and not lags_bundle(functions):
                 system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
         functions.derived["joint_system"] = system
     return functions.derived["joint_system"]

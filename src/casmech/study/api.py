@@ -16,7 +16,8 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
           normal: Mapping | None = None, uniform: Mapping | None = None, seed: int | None = None,
           keep: Sequence[str] = (), workers: int | None = None, scheduler: str | None = None,
           out: str | Path | None = None, full: bool = False,
-          overrides: Mapping[str, str] | None = None, mode: str = "auto", **settings):
+          overrides: Mapping[str, str] | None = None, mode: str = "auto",
+          resume: bool = False, dashboard: bool = False, **settings):
     """Run `model` (a path or a casmech.load result) at every point of the study and return
     one row per run (docs/sweeps.md): `run`, the parameter values, `status`, `wall_s`, the
     kept outputs, `reason`. The arguments take the YAML `study:` block's values (grid values as
@@ -26,20 +27,27 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
     existing Dask cluster. mode: "interpreted", "compiled" (the model's parametric library,
     built once) or "auto" (compiled for a study of 200 runs or more, or when the library is
     cached). settings: casmech.analyze's (t_end, output_step, rtol, ...).
-    With `out`, writes sweep.csv (and sweep.parquet with pyarrow), metadata.json and with
-    `full` runs.h5 there, as `casmech sweep` does. The DataFrame's attrs["finished"] says
-    whether every run finished (False after Ctrl-C)."""
+    With `out`, writes sweep.csv (each run appended as it finishes, in run order at the end;
+    sweep.parquet with pyarrow), metadata.json and with `full` runs.h5 there, as
+    `casmech sweep` does; `resume` runs only the runs out/sweep.csv does not hold yet.
+    `dashboard`: serve the local cluster's Dask dashboard (on 127.0.0.1). The DataFrame's
+    attrs["finished"] says whether every run finished (False after Ctrl-C)."""
     given = {"grid": grid, "normal": normal, "uniform": uniform, "samples": samples or None,
              "seed": seed, "keep": list(keep) or None}
     prepared = study.prepare(model, given, settings, overrides, full=bool(out and full),
                              mode=mode)
     full_path = Path(out) / "runs.h5" if out is not None and full else None
-    (rows, finished), seconds = study.timed(study.collect, prepared, workers, scheduler,
-                                            full_path)
+    options = {"workers": workers, "scheduler": scheduler, "full": bool(full),
+               "mode": prepared.job.mode}
+    earlier = []
+    if out is not None:
+        earlier = study.resumed(Path(out), prepared) if resume else []
+        study.start(Path(out), prepared, options)
+    (rows, finished), seconds = study.timed(
+        study.collect, prepared, workers, scheduler, full_path,
+        Path(out) / "sweep.csv" if out is not None else None, earlier, dashboard)
     table = study.dataframe(rows, prepared.study)
     if out is not None:
-        study.write(Path(out), prepared, table, finished, {"runs": seconds},
-                    {"workers": workers, "scheduler": scheduler, "full": bool(full),
-                     "mode": prepared.job.mode})
+        study.write(Path(out), prepared, table, finished, {"runs": seconds}, options)
     table.attrs["finished"] = finished
     return table

@@ -78,7 +78,7 @@ def build(form: Mapping, parameters: Mapping, others: Mapping[str, str] | None =
                      int(form.get("samples") or 0), int(form.get("seed") or 0),
                      tuple(form.get("keep") or ()))
     except StudyError as error:
-        where = "seed" if str(error).startswith("seed") else "samples"
+        where = error.where or ("seed" if str(error).startswith("seed") else "samples")
         raise StudyProblems([Problem((where,), error.code, str(error), error.hint)]) from None
 
 
@@ -110,7 +110,7 @@ def usage(problems: StudyProblems) -> UsageError:
     lines = []
     for p in problems.problems:
         option = OPTIONS.get(p.path[0], p.path[0])
-        subject = f" {p.path[1]}" if p.path[0] in AXES else ""
+        subject = f" {p.path[1]}" if p.path[0] in AXES and len(p.path) > 1 else ""
         hint = f" ({p.hint})" if p.hint else ""
         lines.append(f"error[{p.code}] {option}{subject}: {p.message}{hint}")
     return UsageError("\n".join(lines))

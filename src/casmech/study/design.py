@@ -30,10 +30,12 @@ class StudyError(ValueError):
     """A malformed study value; the caller says where it was written. code: E103 for a value
     of the wrong form, E409 for one out of range (errors.CODES)."""
 
-    def __init__(self, message: str, hint: str | None = None, code: str = "E103"):
+    def __init__(self, message: str, hint: str | None = None, code: str = "E103",
+                 where: str | None = None):
         super().__init__(message)
         self.hint = hint
         self.code = code
+        self.where = where  # the study's key at fault, when the caller cannot tell
 
 
 def _number(text: str) -> float:
@@ -66,6 +68,9 @@ def grid_values(given: str | Sequence[float] | float) -> tuple[float, ...]:
     if count < 1 or str(count) != parts[2].strip():
         raise StudyError(f"range '{given}': COUNT must be a whole number >= 1",
                          hint="e.g. 0.8:1.2:5 for 5 values from 0.8 to 1.2", code="E409")
+    if count > MAX_RUNS:  # refused before NumPy allocates the values
+        raise StudyError(f"range '{given}': {count} values, more than a study's {MAX_RUNS} runs",
+                         hint="a COUNT of at most a few thousand", code="E409")
     if count == 1 and start != stop:
         raise StudyError(f"range '{given}': one value cannot span {start:g} to {stop:g}",
                          hint="a COUNT of 2 or more, or a single number", code="E409")
@@ -121,8 +126,11 @@ class Study:
                              hint="--grid NAME=VALUES, or --samples N with --normal/--uniform",
                              code="E409")
         if self.size() > MAX_RUNS:
-            raise StudyError(f"the study has {self.size()} runs, more than {MAX_RUNS}",
-                             code="E409")
+            counts = " x ".join([*(str(len(v)) for v in self.grid.values()),
+                                 *([str(self.samples)] if self.samples else [])])
+            raise StudyError(f"the study has {self.size()} runs ({counts}), more than "
+                             f"{MAX_RUNS}", hint="fewer values or samples", code="E409",
+                             where="samples" if self.samples else "grid")
 
     @property
     def parameters(self) -> tuple[str, ...]:

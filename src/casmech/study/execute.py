@@ -1,7 +1,14 @@
 """Running a study's points: in this process (workers 0) or through Dask.
 
 Dask (`dask.distributed`, imported on use): a LocalCluster of `workers` processes with one
-thread each, or the existing cluster at `scheduler`. Consecutive runs go in one task of
+thread each, or the existing cluster at `scheduler`. A local cluster is this user's alone
+(docs/security.md): its scheduler and workers listen on the loopback interface only, speak TLS
+with temporary credentials made for it (distributed.security.Security.temporary: a client
+without them is refused, so no other local user or process can submit a task), and serve no
+HTTP routes (no dashboard, no metrics) unless `dashboard` asks for the dashboard, on loopback.
+A remote scheduler is reached with the security of Dask's configuration (its TLS files) and a
+short connection timeout: an address of the wrong form or where no scheduler answers is a
+usage error. Consecutive runs go in one task of
 runner.run_batch (batch_size); each worker process prepares the job's runner once
 (runner.runner_for).
 Outcomes are handed to `done(index, outcome)` as they finish, in any order. SIGINT (Ctrl-C)
@@ -15,6 +22,7 @@ from __future__ import annotations
 import logging
 import os
 import signal
+import sys
 import threading
 from collections.abc import Callable, Sequence
 from contextlib import contextmanager
@@ -44,11 +52,61 @@ def distributed():
 
 
 def execute(job: Job, points: Sequence[dict], done: Done, workers: int | None = None,
-            scheduler: str | None = None) -> bool:
+            scheduler: str | None = None, dashboard: bool = False) -> bool:
     """Run every point; True when all ran, False when interrupted."""
     if scheduler is None and workers == 0:
         return _serial(job, points, done)
-    return _dask(job, points, done, workers, scheduler)
+    return _dask(job, points, done, workers, scheduler, dashboard)
+
+
+SCHEMES = ("tcp", "tls")  # a --scheduler address: SCHEME://HOST:PORT (tcp when left out)
+CONNECT_TIMEOUT = "5s"  # a scheduler that does not answer by then is not there
+
+
+def scheduler_address(address: str) -> str:
+    """A scheduler's address checked for its form (a usage error otherwise), without
+    connecting: tcp://HOST:PORT or tls://HOST:PORT (HOST:PORT means tcp)."""
+    scheme, _, location = address.rpartition("://")
+    host, _, port = location.rpartition(":")
+    if (scheme or "tcp") not in SCHEMES or not host or not port.isdigit() \
+            or not 0 < int(port) < 65536 or any(c.isspace() for c in address):
+        raise UsageError(f"--scheduler '{address}' is not a Dask scheduler's address; "
+                         "expected tcp://HOST:PORT or tls://HOST:PORT (e.g. "
+                         "tls://cluster.example.org:8786)")
+    return address if scheme else f"tcp://{address}"
+
+
+def _connected(module, address: str):
+    """A Client of the scheduler at `address` (a usage error when none answers)."""
+    address = scheduler_address(address)
+    try:
+        return module.Client(address, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError, TypeError) as error:
+        reason = str(error).strip().splitlines()[0] if str(error).strip() else \
+            type(error).__name__
+        raise UsageError(f"--scheduler {address}: no Dask scheduler answered within "
+                         f"{CONNECT_TIMEOUT} ({reason[:200]}); is it running, and for tls://, "
+                         "are Dask's TLS settings configured (docs/sweeps.md)?") from None
+
+
+def local_cluster(module, workers: int, dashboard: bool = False):
+    """A LocalCluster of `workers` processes that only this process can use (module
+    docstring)."""
+    import dask
+    from distributed.security import Security
+
+    routes = {} if dashboard else {"distributed.scheduler.http.routes": [],
+                                   "distributed.worker.http.routes": []}
+    # the workers inherit this configuration through their nanny
+    with dask.config.set(routes), _signals(_workers_ignore_ctrl_c):
+        return module.LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+            protocol="tls://", security=Security.temporary(),
+            dashboard_address="127.0.0.1:0" if dashboard else None,
+            # the scheduler's HTTP server (no routes without the dashboard) on a free port
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+            worker_dashboard_address=None, silence_logs=logging.ERROR,
+            worker_class=module.Nanny)
 
 
 def _serial(job: Job, points: Sequence[dict], done: Done) -> bool:
@@ -104,19 +162,17 @@ def _workers_ignore_ctrl_c():
 
 
 @contextmanager
-def client(workers: int | None, scheduler: str | None):
+def client(workers: int | None, scheduler: str | None, dashboard: bool = False):
     """A dask.distributed Client of a new local cluster or of the one at `scheduler`."""
     module = distributed()
     if scheduler is not None:
-        with module.Client(scheduler) as connected:
+        with _connected(module, scheduler) as connected:
             yield connected
         return
-    count = workers or default_workers()
-    with _signals(_workers_ignore_ctrl_c):  # the worker processes are started here
-        cluster = module.LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
-                                      dashboard_address=":0", silence_logs=logging.ERROR,
-                                      worker_class=module.Nanny)
+    cluster = local_cluster(module, workers or default_workers(), dashboard)
     with cluster, module.Client(cluster) as connected:
+        if dashboard:
+            print(f"sweep: Dask dashboard at {connected.dashboard_link}", file=sys.stderr)
         yield connected
 
 
@@ -128,9 +184,9 @@ def batch_size(points: int, workers: int) -> int:
 
 
 def _dask(job: Job, points: Sequence[dict], done: Done, workers: int | None,
-          scheduler: str | None) -> bool:
+          scheduler: str | None, dashboard: bool = False) -> bool:
     module = distributed()
-    with client(workers, scheduler) as connected, _signals(_terminate_interrupts):
+    with client(workers, scheduler, dashboard) as connected, _signals(_terminate_interrupts):
         size = batch_size(len(points), len(connected.scheduler_info()["workers"]))
         starts = range(0, len(points), size)
         batches = [list(points[k:k + size]) for k in starts]

@@ -1,8 +1,13 @@
 """A parameter study end to end: prepare (load, check, build once), run every point, tabulate.
 
     prepared = prepare(path_or_model, form, settings)   # the study checked against the model
-    table, finished = collect(prepared, workers=2)       # one row per finished run
-    write(out, prepared, table, finished, ...)           # sweep.csv, sweep.parquet, metadata
+    start(out, prepared, options)                        # metadata.json: status running
+    rows, finished = collect(prepared, workers=2, journal_path=out / "sweep.csv")
+    write(out, prepared, dataframe(rows, ...), finished, ...)  # sweep.csv in run order, ...
+
+With `journal_path`, each finished run is appended to that file as it arrives (study.journal),
+so a sweep killed by any signal keeps its finished runs; `resumed(out, prepared)` reads them
+back and `collect(..., resumed=rows)` runs only the others.
 
 The table has a row per run that finished, in run order: `run` (its index in the study),
 the parameter values, `status` (complete | failed), `wall_s` (the run's own time in its
@@ -17,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from casmech.study import block, execute
+from casmech.study import block, execute, journal
 from casmech.study.design import Study
 from casmech.study.progress import runs_bar
 from casmech.study.runner import SETTINGS, Job, Outcome
@@ -123,31 +128,54 @@ def _reported(problems: block.StudyProblems, from_caller: set[str] | None, docum
 
 
 def collect(prepared: Prepared, workers: int | None = None, scheduler: str | None = None,
-            full_path: Path | None = None) -> tuple[list[dict], bool]:
-    """Run every point (execute.execute); the rows of the finished runs, in run order, and
-    whether every run finished. With full_path, every run's results go into one HDF5 file as
-    they arrive (study.full)."""
+            full_path: Path | None = None, journal_path: Path | None = None,
+            resumed: list[dict] | tuple = (), dashboard: bool = False
+            ) -> tuple[list[dict], bool]:
+    """Run every point not among the `resumed` rows (execute.execute); the rows of the
+    finished runs (resumed ones included), in run order, and whether every run finished. With
+    full_path, every run's results go into one HDF5 file as they arrive (study.full); with
+    journal_path, every row is appended to that CSV file as it arrives (study.journal)."""
     points = prepared.study.points()
-    rows: dict[int, dict] = {}
-    writer = None
+    rows: dict[int, dict] = {r["run"]: r for r in resumed}
+    pending = [k for k in range(len(points)) if k not in rows]
+    writer = log = None
     if full_path is not None:
         from casmech.study.full import FullWriter
 
         writer = FullWriter(full_path, prepared.study.parameters)
+    if journal_path is not None:
+        log = journal.Journal(journal_path, columns(prepared.study), list(resumed))
     try:
-        with runs_bar(len(points)) as bar:
-            def done(index: int, outcome: Outcome) -> None:
+        with runs_bar(len(pending)) as bar:
+            def done(position: int, outcome: Outcome) -> None:
+                index = pending[position]
                 rows[index] = row(index, outcome, prepared.study)
+                if log is not None:
+                    log.add(rows[index])
                 if writer is not None:
                     writer.add(index, outcome)
                 if bar is not None:
                     bar(outcome.status)
 
-            finished = execute.execute(prepared.job, points, done, workers, scheduler)
+            finished = execute.execute(prepared.job, [points[k] for k in pending], done,
+                                       workers, scheduler, dashboard) if pending else True
     finally:
         if writer is not None:
             writer.close()
+        if log is not None:
+            log.close()
     return [rows[k] for k in sorted(rows)], finished
+
+
+def resumed(out: Path, prepared: Prepared) -> list[dict]:
+    """The finished rows that an earlier run of this study left in out/sweep.csv (a usage
+    error when it holds another study's)."""
+    study = prepared.study
+    return journal.read(out / "sweep.csv", columns(study), study.points(), study.parameters)
+
+
+def columns(study: Study) -> list[str]:
+    return [*FIXED, *study.parameters, *STATUS, *study.keep, "reason"]
 
 
 def row(index: int, outcome: Outcome, study: Study) -> dict:
@@ -160,12 +188,22 @@ def row(index: int, outcome: Outcome, study: Study) -> dict:
 def dataframe(rows: list[dict], study: Study):
     import pandas as pd
 
-    columns = [*FIXED, *study.parameters, *STATUS, *study.keep, "reason"]
-    return pd.DataFrame(rows, columns=columns)
+    return pd.DataFrame(rows, columns=columns(study))
 
 
 def parquet_available() -> bool:
     return importlib.util.find_spec("pyarrow") is not None
+
+
+def start(out: Path, prepared: Prepared, options: Mapping) -> Path:
+    """metadata.json of a study that is running (status running), before its first run."""
+    from casmech.io.metadata import run_metadata, write_json
+
+    out.mkdir(parents=True, exist_ok=True)
+    metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, {}, {}, 0,
+                            status="running", options=dict(options))
+    metadata["study"] = prepared.study.describe()
+    return write_json(out / "metadata.json", metadata)
 
 
 def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping[str, float],
