@@ -158,26 +158,28 @@ def collada_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
     except ImportError:
         raise UsageError("Collada (.dae) meshes need pycollada, a dependency of casmech missing "
                          "here; install it with: pip install pycollada") from None
-    try:
-        document = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
-                                                      collada.common.DaeBrokenRefError])
-        unit = float(getattr(document.assetInfo, "unitmeter", None) or 1.0)
-        points, triangles, count = [], [], 0
-        for geometry in document.scene.objects("geometry") if document.scene else ():
-            for primitive in geometry.primitives():
-                if isinstance(primitive, collada.triangleset.BoundTriangleSet):
-                    found = primitive
-                elif isinstance(primitive, collada.polylist.BoundPolylist):  # polygons too
-                    found = primitive.triangleset()
-                else:
-                    continue  # lines
-                if found.vertex is None or not len(found.vertex_index):
-                    continue
-                points.append(np.asarray(found.vertex, float))
-                triangles.append(np.asarray(found.vertex_index, int).reshape(-1, 3) + count)
-                count += len(found.vertex)
-    except collada.common.DaeError as error:
-        raise ValueError(f"pycollada cannot read it: {error}") from None
+    with warnings.catch_warnings():  # pycollada's use of numpy.matrix
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        try:
+            document = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
+                                                          collada.common.DaeBrokenRefError])
+            unit = float(getattr(document.assetInfo, "unitmeter", None) or 1.0)
+            points, triangles, count = [], [], 0
+            for geometry in document.scene.objects("geometry") if document.scene else ():
+                for primitive in geometry.primitives():
+                    if isinstance(primitive, collada.triangleset.BoundTriangleSet):
+                        found = primitive
+                    elif isinstance(primitive, collada.polylist.BoundPolylist):  # polygons too
+                        found = primitive.triangleset()
+                    else:
+                        continue  # lines
+                    if found.vertex is None or not len(found.vertex_index):
+                        continue
+                    points.append(np.asarray(found.vertex, float))
+                    triangles.append(np.asarray(found.vertex_index, int).reshape(-1, 3) + count)
+                    count += len(found.vertex)
+        except collada.common.DaeError as error:
+            raise ValueError(f"pycollada cannot read it: {error}") from None
     if not triangles:
         raise ValueError("no triangles in the Collada scene")
     return np.vstack(points) * unit * scale, np.vstack(triangles)
