@@ -21,8 +21,8 @@ vector whose columns the table lacks is not drawn. Per frame (F frames):
   (the magnitude) against the slip there: v_t, the tangential part of v_j(P) - v_i(P) from the
   velocity columns.
 - trails: chosen points of bodies (global at t = 0, carried by the body), else every body's CM.
-- the extent: centre and radius of a sphere holding every part at each frame, for a camera that
-  frames the mechanism at the current time.
+- the extent: centre and radius of a sphere holding every part at each frame (the parts'
+  convex hulls), for a camera that frames the mechanism at the current time.
 
 The ground plane is the plane of a contact on ground whose normal is against gravity when there
 is one, else the plane normal to `up` through the lowest point any part reaches.
@@ -258,20 +258,17 @@ def planes(ir) -> list[Plane]:
 
 # ---------------------------------------------------------------------------------- extent
 def extent(scene: Scene, a) -> tuple[np.ndarray, np.ndarray]:
-    """Per frame: centre (F, 3) and radius (F,) of the sphere around the smallest box holding
-    every part's bounding sphere (moved with its body)."""
-    lows, highs = [], []
-    for part in scene.parts:
-        centre = (part.points.max(axis=0) + part.points.min(axis=0)) / 2
-        reach = float(np.linalg.norm(part.points - centre, axis=1).max())
-        path = _place(scene, a, part.body, centre)
-        lows.append(path - reach)
-        highs.append(path + reach)
-    if not lows:
-        lows = highs = [scene.r.reshape(len(scene.times), -1, 3).mean(axis=1)]
-    low, high = np.min(lows, axis=0), np.max(highs, axis=0)
-    radius = np.linalg.norm(high - low, axis=1) / 2
-    return (low + high) / 2, np.where(radius > 0, radius, 1.0)
+    """Per frame: a sphere holding every part, centre (F, 3) and radius (F,): the centre of the
+    smallest box holding the parts' convex hulls, the radius its largest distance to them."""
+    paths = [scene.place(part.body, _hull(part.points), a) for part in scene.parts]
+    if not paths:
+        paths = [scene.r]
+    low = np.min([path.min(axis=1) for path in paths], axis=0)
+    high = np.max([path.max(axis=1) for path in paths], axis=0)
+    centres = (low + high) / 2
+    radius = np.max([np.linalg.norm(path - centres[:, None], axis=2).max(axis=1)
+                     for path in paths], axis=0)
+    return centres, np.where(radius > 0, radius, 1.0)
 
 
 def _hull(points: np.ndarray) -> np.ndarray:

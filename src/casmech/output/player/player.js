@@ -26,7 +26,7 @@
   var VECTORS = {  // arrow kind -> [toggle, colour, double head (a torque)]
     force: ['forces', 0xe65100, false], torque: ['torques', 0x8e24aa, true],
     motor_torque: ['motors', 0x2e7d32, true], motor_force: ['motors', 0x2e7d32, false],
-    normal: ['contacts', 0x1565c0, false], friction: ['contacts', 0x00838f, false]
+    normal: ['contacts', 0xd81b60, false], friction: ['contacts', 0x6d4c41, false]
   };
   var SHOWN = { bodies: false, joints: false, frames: false, forces: false, torques: false,
     motors: true, contacts: true, trails: D.trails.some(function (t) { return t.chosen; }),
@@ -57,19 +57,23 @@
   var scene = new T.Scene();
   scene.background = new T.Color(BACKGROUND);
   var typical = D.radii.slice().sort(function (a, b) { return a - b; })[nFrames >> 1];
-  var reach = Math.max(typical, Math.min(D.radius, 4 * typical));  // what a view shows
+  // what a view shows: the mechanism, and around a small one travelling far some of its path
+  function around(radius) { return Math.max(radius, Math.min(0.5 * D.radius, 4 * radius)); }
+  var reach = around(typical);
   var camera = new T.PerspectiveCamera(40, 1, typical / 100, typical * 100);
   camera.up.copy(up);
   var controls = new T.OrbitControls(camera, renderer.domElement);
   controls.addEventListener('change', function () { render(); });
 
-  scene.add(new T.HemisphereLight(0xffffff, 0x8d8d8d, 1.6));
+  scene.add(new T.HemisphereLight(0xffffff, 0x8d8d8d, 1.3));
   var sun = new T.DirectionalLight(0xffffff, 2.2);
   sun.castShadow = true;
   sun.shadow.mapSize.set(2048, 2048);
   sun.shadow.bias = -0.0005;
   sun.shadow.normalBias = 0.02 * typical / 50;
   scene.add(sun, sun.target);
+  var fill = new T.DirectionalLight(0xffffff, 0.9);  // from the viewer: no face is left dark
+  scene.add(fill, fill.target);
   var across = new T.Vector3(1, 0, 0);
   if (Math.abs(across.dot(up)) > 0.9) across.set(0, 1, 0);
   across.sub(up.clone().multiplyScalar(across.dot(up))).normalize();
@@ -155,7 +159,8 @@
   var thick = 0.01 * reach;
   function arrow(colour, heads, onTop) {  // onTop: drawn over the bodies (forces inside them)
     var group = new T.Group();
-    var paint = new T.MeshStandardMaterial({ color: colour, roughness: 0.4, depthTest: !onTop });
+    var paint = new T.MeshStandardMaterial({ color: colour, roughness: 0.4, depthTest: !onTop,
+      emissive: new T.Color(colour).multiplyScalar(0.45) });
     var shaft = new T.Mesh(shaftGeometry, paint);
     group.add(shaft);
     var tips = [];
@@ -221,11 +226,13 @@
     frameOf(triad.body).add(group);
     return group;
   });
+  var dot = new T.SphereGeometry(0.012 * reach, 12, 8);
   var trails = D.trails.map(function (trail, n) {
-    var line = new T.Line(new T.BufferGeometry(), new T.LineBasicMaterial({
-      color: new T.Color(colourOf(trail.body >= 0 ? trail.body : n)).multiplyScalar(0.7) }));
+    var tint = new T.Color(colourOf(trail.body >= 0 ? trail.body : n)).multiplyScalar(0.7);
+    var line = new T.Line(new T.BufferGeometry(), new T.LineBasicMaterial({ color: tint }));
     line.geometry.setAttribute('position', new T.Float32BufferAttribute(trail.points, 3));
     line.frustumCulled = false;
+    line.add(new T.Mesh(dot, new T.MeshBasicMaterial({ color: tint })));  // the point now
     scene.add(line);
     return line;
   });
@@ -272,9 +279,7 @@
     camera.updateProjectionMatrix();
   }
   function fit(k, direction) {  // the whole mechanism at frame k in view, seen from direction
-    var centre = vector(D.centres, k);  // a small mechanism with some of its surroundings
-    var radius = Math.max(D.radii[k], Math.min(D.radius, 4 * D.radii[k]));
-
+    var centre = vector(D.centres, k), radius = around(D.radii[k]);
     var half = Math.PI / 360 * camera.fov;
     var narrow = Math.min(half, Math.atan(Math.tan(half) * camera.aspect));
     var distance = 1.08 * radius / Math.sin(narrow);
@@ -311,7 +316,10 @@
       pointArrow(v.group, vector(v.data.origin, k), value.normalize(), length);
       v.group.visible = v.group.visible && SHOWN[v.toggle];
     });
-    trails.forEach(function (line) { line.geometry.setDrawRange(0, k + 1); });
+    trails.forEach(function (line, n) {
+      line.geometry.setDrawRange(0, k + 1);
+      line.children[0].position.copy(vector(D.trails[n].points, k));
+    });
     var centre = vector(D.centres, k), radius = D.radii[k];
     var height = Math.max(0, centre.clone().sub(groundPoint).dot(groundUp));  // above the ground
     sun.target.position.copy(centre);
@@ -325,6 +333,8 @@
     box.updateProjectionMatrix();
   }
   function render() {
+    fill.position.copy(camera.position);
+    fill.target.position.copy(controls.target);
     renderer.render(scene, camera);
     labels.render(scene, camera);
     return renderer.info.render.triangles;
