@@ -5,10 +5,9 @@ import fnmatch
 import re
 import subprocess
 import sys
-import tomllib
-from pathlib import Path
 
 import pytest
+import tomllib
 
 import casmech
 from casmech.cli import main

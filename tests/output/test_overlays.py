@@ -179,7 +179,8 @@ def test_trails_follow_body_points(four_bar):
     local = rotate(conjugate(q0), point - coupler.position)  # independent quaternion algebra
     r = np.column_stack([column(names, values, f"coupler.{c}") for c in "xyz"])
     q = np.column_stack([column(names, values, f"coupler.e{k}") for k in range(4)])
-    expected = np.array([r_k + rotate(q_k / np.linalg.norm(q_k), local) for r_k, q_k in zip(r, q)])
+    expected = np.array([r_k + rotate(q_k / np.linalg.norm(q_k), local)
+                         for r_k, q_k in zip(r, q, strict=True)])
     # one rotation of O(1 m) points: rounding
     np.testing.assert_allclose(trail.points, expected, rtol=0, atol=1e-12)
     np.testing.assert_allclose(cm.points, np.column_stack(
@@ -218,7 +219,8 @@ COLLADA = """<?xml version="1.0" encoding="utf-8"?>
         <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
       </accessor></technique_common></source>
     <vertices id="vtx"><input semantic="POSITION" source="#pos"/></vertices>
-    <triangles count="2"><input semantic="VERTEX" source="#vtx" offset="0"/><p>0 2 1 0 1 3</p></triangles>
+    <triangles count="2"><input semantic="VERTEX" source="#vtx" offset="0"/>
+      <p>0 2 1 0 1 3</p></triangles>
     <polylist count="1"><input semantic="VERTEX" source="#vtx" offset="0"/><vcount>4</vcount>
       <p>0 3 2 1</p></polylist>
   </mesh></geometry></library_geometries>
@@ -254,3 +256,40 @@ def test_an_unreadable_collada_mesh_is_located(tmp_path, capsys):
     assert cli.main(["animate", str(model), str(results), "--no-vtk"]) == 1
     err = capsys.readouterr().err
     assert "error[E410]" in err and "bad.dae" in err and "Traceback" not in err
+
+
+CAPSULE = """\
+casmech: 1
+name: rod_on_floor
+gravity: [0, 0, -9.81]
+bodies:
+  - name: rod
+    mass: 1
+    inertia: [0.001, 0.02, 0.02]
+    position: [0, 0, 0.3]
+    orientation: {axis_angle: {axis: [0, 0, 1], angle: 0.4}}
+    geometry: [{cylinder: {radius: 0.05, length: 0.4, axis: x}}]
+forces:
+  - {name: floor, type: capsule_plane, body_i: ground, body_j: rod,
+     normal: {law: linear, stiffness: 1.0e5}}
+"""
+
+
+def test_contact_shapes_are_what_collides(tmp_path):
+    model_path = tmp_path / "rod.yaml"
+    model_path.write_text(CAPSULE)
+    names = ["t"] + [f"rod.{c}" for c in ("x", "y", "z", "e0", "e1", "e2", "e3")]
+    q = quaternion([0, 0, 1], 0.4)
+    values = np.array([[0, 0, 0, 0.3, *q]])
+    _, _, overlays = overlays_of(model_path, names, values)
+    shape, = overlays.shapes
+    assert (shape.name, shape.body) == ("contact floor", 0)
+    # every point of the capsule is its radius away from the axis segment x in [-0.2, 0.2]
+    # (the cylinder's axis in the rod's frame): distance to a segment, closed form
+    x = np.clip(shape.points[:, 0], -0.2, 0.2)
+    distance = np.linalg.norm(shape.points - np.column_stack([x, 0 * x, 0 * x]), axis=1)
+    np.testing.assert_allclose(distance, 0.05, rtol=0, atol=1e-12)  # rounding of O(0.2) numbers
+    assert shape.points[:, 0].min() == pytest.approx(-0.25, abs=1e-12)  # the rounded ends
+    assert shape.points[:, 0].max() == pytest.approx(0.25, abs=1e-12)
+    # the ground is the contact's plane (default: z = 0 on ground)
+    assert overlays.ground[0][2] == 0

@@ -95,7 +95,8 @@ def shots(tmp_path_factory, chromium):  # noqa: F811 - the fixture imported abov
     url = (out / "animation.html").resolve().as_uri()
     view = ",".join(f"{x:g}" for x in (*EYE, *TARGET))
     pictures = {t: folder / f"t{t}.png" for t in ("0.5", "1")}
-    jobs = [browse(chromium, f"{url}#t={t}&view={view}", f"--screenshot={path}") for t, path in pictures.items()]
+    jobs = [browse(chromium, f"{url}#t={t}&view={view}", f"--screenshot={path}")
+            for t, path in pictures.items()]
     jobs.append(browse(chromium, f"{url}#t=0.5&view={view}", "--dump-dom"))
     for job in jobs[:2]:
         finish(job)

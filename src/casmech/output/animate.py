@@ -8,7 +8,8 @@ read from results.csv (p normalised first, so a slightly drifted row still draws
 Shapes come from each body's `geometry` (box, cylinder, sphere, STL or any meshio surface mesh,
 Collada .dae through pycollada; each item placed in the body frame by its `offset` and
 `orientation`). A body without geometry is drawn as its equivalent inertia ellipsoid: the
-uniform solid ellipsoid with the body's mass and inertia, I_x = m (b^2 + c^2) / 5 etc., along the principal axes of inertia.
+uniform solid ellipsoid with the body's mass and inertia, I_x = m (b^2 + c^2) / 5 etc.,
+along the principal axes of inertia.
 """
 
 from __future__ import annotations

@@ -94,8 +94,12 @@ def overlays_json(overlays: Overlays) -> str:
     trails = items(overlays.trails, {**name, "body": lambda x: x.body,
                                      "chosen": lambda x: json.dumps(x.chosen),
                                      "points": lambda x: _numbers(x.points)})
+    shapes = items(overlays.shapes, {**name, "body": lambda x: x.body,
+                                     "points": lambda x: _numbers(x.points),
+                                     "triangles": lambda x: _integers(x.triangles)})
     point, normal = overlays.ground
-    return (f'"arrows":{arrows},"triads":{triads},"planes":{planes},"trails":{trails},'
+    return (f'"shapes":{shapes},"arrows":{arrows},"triads":{triads},"planes":{planes},'
+            f'"trails":{trails},'
             f'"ground":{{"point":{_numbers(point)},"normal":{_numbers(normal)}}},'
             f'"centres":{_numbers(overlays.centres)},"radii":{_numbers(overlays.radii)},'
             f'"follow":{json.dumps(follow(overlays))}')

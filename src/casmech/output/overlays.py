@@ -21,6 +21,7 @@ vector whose columns the table lacks is not drawn. Per frame (F frames):
   (the magnitude) against the slip there: v_t, the tangential part of v_j(P) - v_i(P) from the
   velocity columns.
 - trails: chosen points of bodies (global at t = 0, carried by the body), else every body's CM.
+- contact shapes: the spheres, capsules and points each contact element collides with.
 - the extent: centre and radius of a sphere holding every part at each frame (the parts'
   convex hulls), for a camera that frames the mechanism at the current time.
 
@@ -36,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from casmech.errors import UsageError
-from casmech.output.animate import GROUND_INDEX, Scene
+from casmech.output.animate import GROUND_INDEX, MARKER, Part, Scene, sphere
 from casmech.schema.resolved import ResolvedModel
 
 CONTACTS = ("sphere_plane", "sphere_sphere", "points_plane", "capsule_plane")
@@ -87,6 +88,7 @@ class Trail:
 
 @dataclass(frozen=True)
 class Overlays:
+    shapes: tuple[Part, ...]  # what each contact element collides with, in its body's frame
     arrows: tuple[Arrow, ...]
     triads: tuple[Triad, ...]
     planes: tuple[Plane, ...]
@@ -250,6 +252,45 @@ def contact_arrows(ir, scene: Scene, a, names, values, rows) -> list[Arrow]:
     return arrows
 
 
+def capsule(radius: float, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A capsule around the segment a-b: a UV sphere cut at its equator, the halves moved to
+    the two ends (the band between them is the cylinder), turned from z onto b - a."""
+    points, triangles = sphere(radius)
+    axis = np.asarray(b, float) - np.asarray(a, float)
+    length = float(np.linalg.norm(axis))
+    points = points + np.where(points[:, 2:] >= 0, 0.5, -0.5) * [0, 0, length]
+    w = axis / length
+    u = np.cross(w, [1.0, 0, 0] if abs(w[0]) < 0.9 else [0, 1.0, 0])
+    u /= np.linalg.norm(u)
+    turn = np.column_stack([u, np.cross(w, u), w])
+    return points @ turn.T + (np.asarray(a, float) + np.asarray(b, float)) / 2, triangles
+
+
+def shapes(ir, size: float) -> list[Part]:
+    """The spheres, capsules and points of the contact elements, in their bodies' frames."""
+    out = []
+    for force in ir.forces:
+        if force.type not in CONTACTS:
+            continue
+        points, params, name = force.points, force.params, f"contact {force.name}"
+        found = []
+        if force.type == "sphere_plane":
+            found.append((force.body_j, *sphere(params["radius"]), points["center"]))
+        elif force.type == "sphere_sphere":
+            found += [(force.body_i, *sphere(params["radius_i"]), points["center_i"]),
+                      (force.body_j, *sphere(params["radius_j"]), points["center_j"])]
+        elif force.type == "capsule_plane":
+            found.append((force.body_j, *capsule(params["radius"], points["end0"],
+                                                points["end1"]), np.zeros(3)))
+        else:
+            marker = sphere(0.5 * MARKER * size)
+            found += [(force.body_j, *marker, points[key]) for key in points
+                      if key.startswith("point")]
+        out += [Part(name, body, -1, shape + np.asarray(at, float), triangles)
+                for body, shape, triangles, at in found]
+    return out
+
+
 def planes(ir) -> list[Plane]:
     return [Plane(force.name, force.body_i, np.asarray(force.points["plane_at"], float),
                   np.asarray(force.axes["normal"], float))
@@ -357,6 +398,7 @@ def build_overlays(model: ResolvedModel, scene: Scene, names: Sequence[str], val
     arrows = joint_arrows(ir, scene, a, names, values, rows, metadata)
     arrows += contact_arrows(ir, scene, a, names, values, rows)
     centres, radii = extent(scene, a)
-    return Overlays(tuple(arrows), tuple(triads(ir)), tuple(planes(ir)),
+    return Overlays(tuple(shapes(ir, 2 * float(np.median(radii)))), tuple(arrows),
+                    tuple(triads(ir)), tuple(planes(ir)),
                     tuple(trails(model, scene, a, chosen_trails)),
                     ground(scene, ir, a), centres, radii)

@@ -28,7 +28,8 @@
     motor_torque: ['motors', 0x2e7d32, true], motor_force: ['motors', 0x2e7d32, false],
     normal: ['contacts', 0xd81b60, false], friction: ['contacts', 0x6d4c41, false]
   };
-  var SHOWN = { bodies: false, joints: false, frames: false, forces: false, torques: false,
+  var SHOWN = { bodies: false, joints: false, frames: false, shapes: false, forces: false,
+    torques: false,
     motors: true, contacts: true, trails: D.trails.some(function (t) { return t.chosen; }),
     grid: true, shadows: true };
 
@@ -107,6 +108,16 @@
     mesh.castShadow = true;
     mesh.receiveShadow = true;
     frameOf(part.body).add(mesh);
+  });
+
+  var ghost = material(0x78909c, { transparent: true, opacity: 0.35, depthWrite: false });
+  var contactShapes = D.shapes.map(function (shape) {
+    var geometry = new T.BufferGeometry();
+    geometry.setAttribute('position', new T.Float32BufferAttribute(shape.points, 3));
+    geometry.setIndex(shape.triangles);
+    var mesh = new T.Mesh(T.toCreasedNormals(geometry, Math.PI / 6), ghost);
+    frameOf(shape.body).add(mesh);
+    return mesh;
   });
 
   var linkPositions = new Float32Array(6 * D.links.length);
@@ -364,6 +375,7 @@
     bodyLabels.forEach(function (tag) { tag.visible = SHOWN.bodies; });
     jointLabels.forEach(function (tag) { tag.visible = SHOWN.joints; });
     triads.forEach(function (group) { group.visible = SHOWN.frames; });
+    contactShapes.forEach(function (mesh) { mesh.visible = SHOWN.shapes; });
     trails.forEach(function (line, n) {
       line.visible = SHOWN.trails && (D.trails[n].chosen || !D.trails.some(function (t) {
         return t.chosen;
@@ -473,8 +485,8 @@
   legend.appendChild(gridNote);
 
   // The URL's hash: #t=SECONDS shows the frame nearest that time, paused; besides it
-  // show=a,b / hide=a,b (the panel's names: bodies, joints, frames, forces, torques, motors,
-  // contacts, trails, grid, shadows), scale=LOG10, follow=free|mechanism|BODY and
+  // show=a,b / hide=a,b (the panel's names: bodies, joints, frames, shapes, forces, torques,
+  // motors, contacts, trails, grid, shadows), scale=LOG10, follow=free|mechanism|BODY and
   // view=EX,EY,EZ,TX,TY,TZ (camera position and target, global).
   function fromHash() {
     var hash = window.location.hash.replace(/^#/, ''), options = {};
