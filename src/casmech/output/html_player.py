@@ -81,9 +81,14 @@ def overlays_json(overlays: Overlays) -> str:
                                              fields.items()) + "}" for entry in entries) + "]"
 
     name = {"name": lambda x: json.dumps(x.name)}
+    def origin(arrow) -> str:  # a body-fixed point once, else the path
+        if arrow.carrier is None:
+            return _numbers(arrow.origin)
+        return f'{{"body":{arrow.carrier[0]},"point":{_numbers(arrow.carrier[1])}}}'
+
     arrows = items(overlays.arrows, {**name, "kind": lambda x: json.dumps(x.kind),
                                      "unit": lambda x: json.dumps(UNITS[x.kind]),
-                                     "origin": lambda x: _numbers(x.origin),
+                                     "origin": origin,
                                      "vector": lambda x: _numbers(x.vector)})
     triads = items(overlays.triads, {**name, "body": lambda x: x.body,
                                      "origin": lambda x: _numbers(x.origin),

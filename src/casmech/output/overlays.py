@@ -50,12 +50,14 @@ MOTORS = {"angle": ("motor_torque", 1), "torque": ("motor_torque", 1),
 
 @dataclass(frozen=True)
 class Arrow:
-    """A vector drawn at every frame: origin and value (F, 3), global; `kind` in UNITS."""
+    """A vector drawn at every frame: origin and value (F, 3), global; `kind` in UNITS.
+    `carrier`: (body, point in its frame) when the origin is a point fixed in a body."""
 
     kind: str
     name: str
     origin: np.ndarray
     vector: np.ndarray
+    carrier: tuple[int, np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
@@ -165,8 +167,9 @@ def joint_arrows(ir, scene: Scene, a, names, values, rows, metadata) -> list[Arr
             arm = _turn(a, joint.body_i, np.asarray(joint.point_i) - joint.reaction_point)
             torque = torque - np.cross(arm, force)
         origin = _place(scene, a, joint.body_i, joint.point_i)
-        arrows += [Arrow("force", joint.name, origin, force),
-                   Arrow("torque", joint.name, origin, torque)]
+        carrier = (joint.body_i, np.asarray(joint.point_i, float))
+        arrows += [Arrow("force", joint.name, origin, force, carrier),
+                   Arrow("torque", joint.name, origin, torque, carrier)]
         if "w@i" not in joint.geometry:
             continue
         axis = _turn(a, joint.body_i, joint.geometry["w@i"])
@@ -175,7 +178,7 @@ def joint_arrows(ir, scene: Scene, a, names, values, rows, metadata) -> list[Arr
             kind, about = MOTORS[drive]
             vector = torque if about else force
             along = np.einsum("fi,fi->f", vector, axis)[:, None] * axis
-            arrows.append(Arrow(kind, joint.name, origin, along))
+            arrows.append(Arrow(kind, joint.name, origin, along, carrier))
     return arrows
 
 

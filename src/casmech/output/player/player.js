@@ -2,7 +2,8 @@
 // Data (JSON in #casmech-data, html_player.py): parts (body-frame triangle surfaces), links, and
 // per frame the CM position r and unit Euler parameters p of every body (x = r + A(p) x_bar),
 // the mechanism's centre and radius; the ground plane, contact planes, joint frames, force
-// vectors (origin and value per frame, SI units), trails (overlays.py).
+// vectors (value per frame, SI units; origin per frame or a point fixed in a body), trails
+// (overlays.py).
 (function () {
   'use strict';
   var status = document.getElementById('status');
@@ -324,7 +325,9 @@
     links.geometry.attributes.position.needsUpdate = true;
     vectors.forEach(function (v) {
       var value = vector(v.data.vector, k), length = value.length() * metresPer(v.data.unit);
-      pointArrow(v.group, vector(v.data.origin, k), value.normalize(), length);
+      var at = v.data.origin;  // a path, or a point fixed in a body
+      at = at.point ? vector(at.point, 0).applyMatrix4(frameOf(at.body).matrixWorld) : vector(at, k);
+      pointArrow(v.group, at, value.normalize(), length);
       v.group.visible = v.group.visible && SHOWN[v.toggle];
     });
     trails.forEach(function (line, n) {
