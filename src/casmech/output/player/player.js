@@ -269,18 +269,20 @@
   });
 
   // ---------------------------------------------------------------------- the camera
-  var follow = D.follow;  // 'free', 'mechanism' or a body's name
+  var follow = D.follow;  // 'free', 'mechanism' or 'body:' and a body's name
   var cameraSelect = document.getElementById('camera');
-  ['free', 'mechanism'].concat(D.bodies).forEach(function (name, n) {
-    var option = document.createElement('option');
-    option.value = name;
-    option.textContent = n === 0 ? 'free' : n === 1 ? 'follow the mechanism' : 'follow ' + name;
-    cameraSelect.appendChild(option);
-  });
+  ['free', 'mechanism'].concat(D.bodies.map(function (name) { return 'body:' + name; }))
+    .forEach(function (value, n) {
+      var option = document.createElement('option');
+      option.value = value;
+      option.textContent = n === 0 ? 'free' : n === 1 ? 'follow the mechanism' :
+        'follow ' + value.slice(5);
+      cameraSelect.appendChild(option);
+    });
   cameraSelect.value = follow;
   function followed(k) {  // the point the camera follows at frame k, or null
     if (follow === 'mechanism') return vector(D.centres, k);
-    var b = D.bodies.indexOf(follow);
+    var b = follow.slice(0, 5) === 'body:' ? D.bodies.indexOf(follow.slice(5)) : -1;
     return b >= 0 ? vector(D.r, k * nb + b) : null;
   }
   function resize() {
@@ -503,11 +505,12 @@
       });
     });
     if (options.scale && isFinite(Number(options.scale))) scaleSlider.value = options.scale;
-    if (options.follow && (options.follow === 'free' || options.follow === 'mechanism' ||
-        D.bodies.indexOf(options.follow) >= 0)) {
+    if (D.bodies.indexOf(options.follow) >= 0) {  // a body's name first
+      follow = 'body:' + options.follow;
+    } else if (options.follow === 'free' || options.follow === 'mechanism') {
       follow = options.follow;
-      cameraSelect.value = follow;
     }
+    cameraSelect.value = follow;
     applyShown();
     var k = state.frame;
     var asked = options.t !== undefined && isFinite(Number(options.t));
