@@ -30,7 +30,7 @@ LAYERS = (
     ("study",),  # parameter studies
     ("api",),  # the Python API
     ("cli",),  # the command line
-    ("casmech",),  # the package's own __init__ (lazy public names)
+    ("casmech", "__main__"),  # the package's own __init__ (lazy public names); python -m casmech
 )
 LAYER = {unit: k for k, row in enumerate(LAYERS) for unit in row}
 

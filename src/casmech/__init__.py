@@ -14,6 +14,7 @@ _LAZY = {
     **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
                     "casmech.errors"),
     "load_results": "casmech.io.frames",
+    "show": "casmech.io.jupyter",
     "sweep": "casmech.study.api",
 }
 # subpackages and modules reachable as attributes (`casmech.api.ANALYSES`) without an import

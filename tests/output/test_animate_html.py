@@ -21,11 +21,14 @@ import pytest
 from casmech import cli
 from tests.output.test_animate import BODIES, TIMES, make_case
 
+# WebGL through SwiftShader, Chromium's software renderer (no GPU on CI machines)
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
          "--enable-logging=stderr", "--v=0", "--window-size=480,360"]
-BACKGROUND = (0xF4, 0xF5, 0xF7)  # the canvas clear colour in player.js
+BACKGROUND = (0xEE, 0xF1, 0xF5)  # the scene's background colour in player.js
 BAR = 41  # pixel rows of the control bar above the canvas (40 px + border)
+XHTML = "http://www.w3.org/1999/xhtml"  # a namespace name three.js creates elements in
 
 
 @pytest.fixture(scope="module")
@@ -47,8 +50,12 @@ def test_page_needs_no_network(page):
     text = page[0].read_text()
     assert "default-src 'none'" in text  # the page's CSP forbids every fetch
     assert not re.search(r"\b(src|href)\s*=", text, re.I)  # no external script, style or image
-    assert not re.search(r"https?://|//cdn|@import|url\(", text, re.I)
-    assert "<\\/script" not in text and text.count("</script>") == 2
+    assert not re.search(r"https?://|//cdn|@import", text.replace(XHTML, ""), re.I)
+    style = re.search(r"<style>(.*?)</style>", text, re.S).group(1)
+    assert "url(" not in style.lower()  # no image or font the style would fetch
+    # the data, three.js and the player: three scripts, none ended early
+    assert "<\\/script" not in text and text.count("</script>") == 3
+    assert "var THREE=" in text  # three.js is inlined
 
 
 def test_page_holds_the_tables_poses(page):
@@ -129,7 +136,10 @@ def finish(job):
     finally:
         shutil.rmtree(profile, ignore_errors=True)
     assert process.returncode == 0, err[-2000:]
-    console = [line for line in err.splitlines() if ":CONSOLE" in line]
+    # Chromium reports its GL driver's performance notes (the screenshot's read-back) as console
+    # lines of the page; anything else there is the page's own output
+    console = [line for line in err.splitlines()
+               if ":CONSOLE" in line and "GL Driver Message" not in line]
     assert not console, "the page wrote to the console:\n" + "\n".join(console)
     return out
 
@@ -162,9 +172,8 @@ def test_player_draws_frames_that_change_with_time(page, chromium, tmp_path):
     pictures = [read_png(shot) for shot in shots.values()]
     for picture in pictures:  # the decoder reads the page's known colours where nothing is drawn
         assert tuple(picture[2, 2]) == (255, 255, 255)  # the control bar
-        assert tuple(picture[BAR + 2, 2]) == BACKGROUND  # the canvas corner
     pictures = [picture[BAR:] for picture in pictures]
-    for picture in pictures:  # the canvas is not empty: many pixels differ from its background
+    for picture in pictures:  # the view is not empty: many pixels differ from its background
         drawn = np.any(picture != BACKGROUND, axis=-1)
         assert drawn.sum() > 500
     changed = np.any(pictures[0] != pictures[1], axis=-1)

@@ -12,6 +12,7 @@ from casmech.io.animate import build_scene
 from casmech.io.csv import read_csv
 from casmech.io.html_player import write_html
 from casmech.io.mode_animation import mode_table, read_linear_model
+from casmech.io.overlays import build_overlays
 from casmech.io.vtk import write_vtk
 
 
@@ -34,6 +35,10 @@ def add_arguments(parser) -> None:
                             "(default 0.1)")
     modes.add_argument("--cycles", type=float, default=2.0, metavar="C",
                        help="periods of the mode to play (default 2)")
+    parser.add_argument("--trail", action="append", default=[], metavar="BODY[@X,Y,Z]",
+                        help="draw the path of a body's CM, or of the point of the body at "
+                             "X,Y,Z (global at t = 0, like a joint's `at`), in the HTML player; "
+                             "repeatable (default: every body's CM, shown on demand)")
     parser.add_argument("--no-vtk", action="store_true", help="write only the HTML player")
     parser.add_argument("--no-html", action="store_true", help="write only the VTK series")
     add_overrides(parser)
@@ -48,6 +53,18 @@ def _results(path: Path):
         raise UsageError(f"{path}: not a results table of numbers ({error})") from None
 
 
+def _metadata(results: Path) -> dict:
+    """The run's metadata.json beside the results (its reaction frames), or nothing."""
+    from casmech.io.metadata import read_json
+
+    beside = results.parent / "metadata.json"
+    try:
+        found = read_json(beside) if beside.is_file() else {}
+    except (OSError, ValueError):
+        return {}
+    return found if isinstance(found, dict) else {}
+
+
 def run(args) -> int:
     if args.no_vtk and args.no_html:
         raise UsageError("--no-vtk and --no-html together leave nothing to write")
@@ -59,12 +76,15 @@ def run(args) -> int:
         names, values = mode_table(linear, tuple(b.name for b in model.bodies), args.mode,
                                    args.amplitude, args.cycles)
     scene = build_scene(model, names, values, every=args.every, fps=args.fps)
+    overlays = None if args.no_html else build_overlays(
+        model, scene, names, values, scene.rows,
+        _metadata(args.results) if args.mode is None else {}, args.trail)
     out = args.out or args.results.parent / "animation"
     written = []
     if not args.no_vtk:
         written.append(write_vtk(scene, out))
-    if not args.no_html:
-        written.append(write_html(scene, out / "animation.html"))
+    if overlays is not None:
+        written.append(write_html(scene, overlays, out / "animation.html"))
     print(f"{len(scene.times)} frames, {len(scene.bodies)} bodies, {len(scene.parts)} parts -> "
           + ", ".join(str(path) for path in written))
     return 0

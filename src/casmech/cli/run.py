@@ -89,6 +89,13 @@ def add_arguments(parser) -> None:
                         help="compiled C (built once, cached) or interpreted CasADi functions "
                              "(default auto: compiled when cached or from 200 bodies, but "
                              "trees in joint coordinates; else interpreted)")
+    talk = parser.add_mutually_exclusive_group()
+    talk.add_argument("--quiet", "-q", action="store_true",
+                      help="print nothing but errors: no progress bar, summary, events, notes "
+                           "or warnings (they stay in metadata.json)")
+    talk.add_argument("--verbose", "-v", action="store_true",
+                      help="print more: the time of each stage, the mode and formulation that "
+                           "ran, every singular pose on its own line and the solver's messages")
     add_overrides(parser)
 
 
@@ -131,7 +138,7 @@ def _run(args) -> int:
     _start(args, out, run)
     clock = time.perf_counter()
     try:
-        with progress_bar(settings["t_end"]) as callback:
+        with progress_bar(settings["t_end"], quiet=args.quiet) as callback:
             result = api.analyze(functions, args.analysis, args.t_end, args.output_step,
                                      rtol=args.rtol, atol=args.atol,
                                      formulation=args.formulation,
@@ -145,17 +152,54 @@ def _run(args) -> int:
     timings["analysis"] = time.perf_counter() - clock
     with interrupts.saving():
         paths = _save(args, out, functions, result, run)
-    print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
+    if not args.quiet:
+        _report(args, result, timings, paths)
+    return 0
+
+
+def _report(args, result, timings, paths) -> None:
+    """The summary line, the events, notes and warnings of a run (and more with --verbose)."""
+    meta = result.metadata
+    print(f"{meta['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
           f"-> {', '.join(map(str, paths))}")
     for record in result.events:
         print(f"event {record.name} ({record.direction}) at t = {record.t:.10g} s"
               f"{': run stopped' if record.action == 'stop' else ''}")
-    if "formulation_fallback" in result.metadata:
+    if args.verbose:
+        stages = ", ".join(f"{stage} {seconds:.3g} s" for stage, seconds in timings.items())
+        ran = ", ".join(f"{key} {meta[key]}" for key in ("mode", "formulation") if key in meta)
+        print(f"timings: {stages}; {ran}", file=sys.stderr)
+        for message in meta.get("solver_messages") or ():
+            print(f"solver: {message}", file=sys.stderr)
+    if "formulation_fallback" in meta:
         print(f"note: formulation auto ran the model again in rp: "
-              f"{result.metadata['formulation_fallback']}", file=sys.stderr)
-    for pose in result.metadata.get("singular_poses") or ():
-        print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
-    return 0
+              f"{meta['formulation_fallback']}", file=sys.stderr)
+    for line in singular_pose_warnings(meta.get("singular_poses") or (), args.verbose):
+        print(f"warning: {line}", file=sys.stderr)
+
+
+def singular_pose_warnings(poses, every: bool = False) -> list[str]:
+    """One line per set of joints the run passed singular poses of, with how many times and
+    when (`every`: one line per pose, as singular_poses.describe writes it)."""
+    groups: dict[tuple, list[dict]] = {}
+    for pose in poses:
+        key = tuple(sorted(zip(pose["joints"], pose["sources"], strict=True)))
+        groups.setdefault(key, []).append(pose)
+    if every:
+        return [singular_poses.describe(pose) for pose in poses]
+    lines = []
+    for found in groups.values():
+        if len(found) == 1:
+            lines.append(singular_poses.describe(found[0]))
+            continue
+        closest = min(found, key=lambda pose: pose["smallest_singular_value"])
+        joints = singular_poses.describe(closest).split("): ", 1)[1]
+        times = ", ".join(f"{pose['t']:.6g}" for pose in found)
+        lines.append(f"near a singular pose {len(found)} times, at t = {times} s (smallest "
+                     f"singular value of the unit constraint rows down to "
+                     f"{closest['smallest_singular_value']:.2e}; --verbose lists each): "
+                     f"{joints}")
+    return lines
 
 
 def _start(args, out: Path, run) -> None:

@@ -29,13 +29,29 @@ class Structure:
         return self.n_coordinates - self.rank
 
     def summary(self) -> str:
-        lines = [f"coordinates: {self.n_coordinates}  constraint rows: {self.n_rows} "
-                 f"(incl. normalization)  rank: {self.rank}",
-                 f"degrees of freedom: {self.dof} (count 6 nb - joint rows: {self.nominal_dof})"]
+        return "\n".join([f"coordinates: {self.n_coordinates}  constraint rows: {self.n_rows} "
+                          f"(incl. normalization)  rank: {self.rank}", *self.dof_lines()])
+
+    def dof_lines(self) -> list[str]:
+        """DOF in words: coordinates less the rank of the rows, against the count of 6 per
+        body less 1 per joint row (Gruebler), which redundant rows make smaller; then each
+        redundant row with its joint and YAML line."""
+        bodies = self.n_coordinates // 7
+        joint_rows = self.n_rows - bodies
+        extra = len(self.redundant)
+        count = f"6 per body - 1 per joint row: 6 x {bodies} - {joint_rows} = {self.nominal_dof}"
+        if extra:
+            words = ("row (below) repeats what the rows before it constrain and removes"
+                     if extra == 1 else "rows (below) repeat what the rows before them "
+                     "constrain and remove")
+            count += f"; {extra} redundant {words} no freedom: {self.nominal_dof} + {extra} = " \
+                     f"{self.dof}"
+        lines = [f"degrees of freedom: {self.dof} = {self.n_coordinates} coordinates - rank "
+                 f"{self.rank} of the {self.n_rows} constraint rows", f"  ({count})"]
         for row in self.redundant:
             where = f"{row.source}: " if row.source else ""
             lines.append(f"  redundant: {where}{row.label}")
-        return "\n".join(lines)
+        return lines
 
 
 def independent_rows(matrix, tolerance: float = RANK_TOLERANCE) -> list[bool]:

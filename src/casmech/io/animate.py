@@ -5,10 +5,11 @@ html_player.py as a self-contained browser player. Every part is a triangle surf
 body's frame (ground: the global frame); its global points at a frame are r + A(p) x_bar with r, p
 read from results.csv (p normalised first, so a slightly drifted row still draws a rigid body).
 
-Shapes come from each body's `geometry` (box, cylinder, sphere, STL or any meshio surface mesh;
-each item placed in the body frame by its `offset` and `orientation`). A body without geometry is
-drawn as its equivalent inertia ellipsoid: the uniform solid ellipsoid with the body's mass and
-inertia, I_x = m (b^2 + c^2) / 5 etc., along the principal axes of inertia.
+Shapes come from each body's `geometry` (box, cylinder, sphere, STL or any meshio surface mesh,
+Collada .dae through pycollada; each item placed in the body frame by its `offset` and
+`orientation`). A body without geometry is drawn as its equivalent inertia ellipsoid: the
+uniform solid ellipsoid with the body's mass and inertia, I_x = m (b^2 + c^2) / 5 etc.,
+along the principal axes of inertia.
 """
 
 from __future__ import annotations
@@ -66,6 +67,7 @@ class Scene:
     r: np.ndarray  # (F, nb, 3) CM positions
     p: np.ndarray  # (F, nb, 4) unit Euler parameters
     up: np.ndarray  # (3,) unit: against gravity (z when there is none)
+    rows: np.ndarray | None = None  # the results rows drawn, one per frame
 
     def rotations(self) -> np.ndarray:
         """A(p) of every body at every frame, (F, nb, 3, 3)."""
@@ -148,8 +150,47 @@ def meshio_module():
     return meshio
 
 
+def collada_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """A Collada (.dae) file read by pycollada: the triangles of every geometry its scene
+    places, with the scene's node transforms and its `<unit meter>` applied, then scaled. Its
+    `up_axis` is not applied: the coordinates are taken as written, like the other formats."""
+    try:
+        import collada
+    except ImportError:
+        raise UsageError("Collada (.dae) meshes need pycollada, a dependency of casmech missing "
+                         "here; install it with: pip install pycollada") from None
+    with warnings.catch_warnings():  # pycollada's use of numpy.matrix
+        warnings.simplefilter("ignore", PendingDeprecationWarning)
+        try:
+            document = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
+                                                          collada.common.DaeBrokenRefError])
+            unit = float(getattr(document.assetInfo, "unitmeter", None) or 1.0)
+            points, triangles, count = [], [], 0
+            for geometry in document.scene.objects("geometry") if document.scene else ():
+                for primitive in geometry.primitives():
+                    if isinstance(primitive, collada.triangleset.BoundTriangleSet):
+                        found = primitive
+                    elif isinstance(primitive, collada.polylist.BoundPolylist):  # polygons too
+                        found = primitive.triangleset()
+                    else:
+                        continue  # lines
+                    if found.vertex is None or not len(found.vertex_index):
+                        continue
+                    points.append(np.asarray(found.vertex, float))
+                    triangles.append(np.asarray(found.vertex_index, int).reshape(-1, 3) + count)
+                    count += len(found.vertex)
+        except collada.common.DaeError as error:
+            raise ValueError(f"pycollada cannot read it: {error}") from None
+    if not triangles:
+        raise ValueError("no triangles in the Collada scene")
+    return np.vstack(points) * unit * scale, np.vstack(triangles)
+
+
 def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """A surface mesh read by meshio (STL, OBJ, PLY, ...): its triangles (quads split), scaled."""
+    """A surface mesh read by meshio (STL, OBJ, PLY, ...; Collada .dae by collada_file): its
+    triangles (quads split), scaled."""
+    if path.suffix.lower() == ".dae":
+        return collada_file(path, scale)
     meshio = meshio_module()
     with warnings.catch_warnings():  # meshio's binary-STL size probe overflows on ASCII files
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -260,7 +301,7 @@ def _mesh_problem(model: ResolvedModel, body: int, item: int, given, error) -> D
     reason = getattr(error, "strerror", None) or str(error) or type(error).__name__
     return Diagnostic("E410", f"bodies[{body}].geometry[{item}].mesh",
                       f"cannot read mesh '{given['file']}': {reason}", source,
-                      expected="a surface mesh file meshio reads (STL, OBJ, PLY, ...), "
+                      expected="a surface mesh file: STL, OBJ, PLY (meshio) or Collada .dae, "
                                "relative to the model file",
                       hint=f"looked in {Path(model.file).parent.resolve()}")
 
@@ -322,7 +363,7 @@ def build_scene(model: ResolvedModel, names: list[str], values: np.ndarray,
     gravity = np.asarray(model.gravity, float)
     up = -gravity / np.linalg.norm(gravity) if np.linalg.norm(gravity) else np.array([0, 0, 1.0])
     return Scene(model.name, bodies, tuple(j.name for j in model.joints), tuple(parts),
-                 tuple(links), times[rows], r[rows], p[rows], up)
+                 tuple(links), times[rows], r[rows], p[rows], up, rows)
 
 
 def _apart(model: ResolvedModel, *ends: tuple[int, np.ndarray]) -> float:

@@ -1,10 +1,12 @@
 """A Scene as one self-contained HTML file that plays the motion offline.
 
-The page is player/player.html with player/player.css, player/player.js (casmech's own Canvas2D
-renderer) and the scene as JSON inlined: no network request of any kind (its Content-Security-
-Policy forbids them). The JSON holds each part's body-frame points and triangles once, and per
-frame the CM position and Euler parameters of every body, so the file grows with frames x bodies,
-not with frames x triangles.
+The page is player/player.html with player/player.css, player/three.min.js (three.js, bundled by
+player/vendor/build.sh; MIT licence in player/three.LICENSE), player/player.js (the player on
+three.js) and the scene with its overlays (overlays.py) as JSON inlined: no network request of
+any kind (its Content-Security-Policy forbids them). The JSON holds each part's body-frame
+points and triangles once, and per frame the CM position and Euler parameters of every body and
+the overlays' vectors, so the file grows with frames x (bodies + vectors), not with frames x
+triangles.
 """
 
 from __future__ import annotations
@@ -20,8 +22,10 @@ import numpy as np
 
 from casmech.core.version import VERSION
 from casmech.io.animate import Scene
+from casmech.io.overlays import UNITS, Overlays
 
 DIGITS = 7  # significant digits of coordinates and Euler parameters in the page
+DRIFT = 1.0  # the camera follows the mechanism when its centre moves more than this x its size
 
 
 def _numbers(values) -> str:
@@ -64,7 +68,49 @@ def view_direction(scene: Scene) -> np.ndarray:
     return view / np.linalg.norm(view)
 
 
-def scene_json(scene: Scene) -> str:
+def follow(overlays: Overlays) -> str:
+    """Where the camera starts: following the mechanism when its centre moves further than
+    DRIFT times its smallest radius (a body falling or driving away), else free."""
+    moved = np.linalg.norm(overlays.centres - overlays.centres[0], axis=1).max()
+    return "mechanism" if moved > DRIFT * overlays.radii.min() else "free"
+
+
+def overlays_json(overlays: Overlays) -> str:
+    def items(entries, fields):
+        return "[" + ",".join("{" + ",".join(f'"{key}":{value(entry)}' for key, value in
+                                             fields.items()) + "}" for entry in entries) + "]"
+
+    name = {"name": lambda x: json.dumps(x.name)}
+    def origin(arrow) -> str:  # a body-fixed point once, else the path
+        if arrow.carrier is None:
+            return _numbers(arrow.origin)
+        return f'{{"body":{arrow.carrier[0]},"point":{_numbers(arrow.carrier[1])}}}'
+
+    arrows = items(overlays.arrows, {**name, "kind": lambda x: json.dumps(x.kind),
+                                     "unit": lambda x: json.dumps(UNITS[x.kind]),
+                                     "origin": origin,
+                                     "vector": lambda x: _numbers(x.vector)})
+    triads = items(overlays.triads, {**name, "body": lambda x: x.body,
+                                     "origin": lambda x: _numbers(x.origin),
+                                     "axes": lambda x: _numbers(x.axes)})
+    planes = items(overlays.planes, {**name, "body": lambda x: x.body,
+                                     "point": lambda x: _numbers(x.point),
+                                     "normal": lambda x: _numbers(x.normal)})
+    trails = items(overlays.trails, {**name, "body": lambda x: x.body,
+                                     "chosen": lambda x: json.dumps(x.chosen),
+                                     "points": lambda x: _numbers(x.points)})
+    shapes = items(overlays.shapes, {**name, "body": lambda x: x.body,
+                                     "points": lambda x: _numbers(x.points),
+                                     "triangles": lambda x: _integers(x.triangles)})
+    point, normal = overlays.ground
+    return (f'"shapes":{shapes},"arrows":{arrows},"triads":{triads},"planes":{planes},'
+            f'"trails":{trails},'
+            f'"ground":{{"point":{_numbers(point)},"normal":{_numbers(normal)}}},'
+            f'"centres":{_numbers(overlays.centres)},"radii":{_numbers(overlays.radii)},'
+            f'"follow":{json.dumps(follow(overlays))}')
+
+
+def scene_json(scene: Scene, overlays: Overlays) -> str:
     centre, radius = bounds(scene)
     parts = ",".join(
         f'{{"name":{json.dumps(part.name)},"body":{part.body},"joint":{part.joint},'
@@ -77,7 +123,9 @@ def scene_json(scene: Scene) -> str:
     text = (f'{{"name":{json.dumps(scene.name)},"bodies":{json.dumps(list(scene.bodies))},'
             f'"joints":{json.dumps(list(scene.joints))},"parts":[{parts}],"links":[{links}],'
             f'"times":{_numbers(scene.times)},"r":{_numbers(scene.r)},"p":{_numbers(scene.p)},'
-            f'"up":{_numbers(scene.up)},"view":{_numbers(view_direction(scene))},"center":{_numbers(centre)},"radius":{radius:.{DIGITS}g}}}')
+            f'"up":{_numbers(scene.up)},"view":{_numbers(view_direction(scene))},'
+            f'"center":{_numbers(centre)},"radius":{radius:.{DIGITS}g},'
+            f'{overlays_json(overlays)}}}')
     return text.replace("<", "\\u003c")  # never ends or comments out the <script> element
 
 
@@ -85,21 +133,22 @@ def _asset(name: str) -> str:
     return resources.files("casmech.io").joinpath("player", name).read_text("utf-8")
 
 
-def render_html(scene: Scene) -> str:
+def render_html(scene: Scene, overlays: Overlays) -> str:
     values = {
         "TITLE": html.escape(f"casmech: {scene.name}"),
         "VERSION": html.escape(VERSION),
         "STYLE": _asset("player.css"),
+        "THREE": _asset("three.min.js"),
         "SCRIPT": _asset("player.js"),
-        "DATA": scene_json(scene),
+        "DATA": scene_json(scene, overlays),
     }
     return re.sub(r"\{\{(\w+)\}\}", lambda match: values[match[1]], _asset("player.html"))
 
 
-def write_html(scene: Scene, path: str | Path) -> Path:
+def write_html(scene: Scene, overlays: Overlays, path: str | Path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = path.with_name(path.name + ".tmp")
-    temporary.write_text(render_html(scene), encoding="utf-8")
+    temporary.write_text(render_html(scene, overlays), encoding="utf-8")
     os.replace(temporary, path)
     return path

@@ -41,11 +41,11 @@ class _Bar:
 
 
 @contextmanager
-def progress_bar(t_end: float, stream=None):
-    """Yields the callback for casmech.analyze, or None when no bar is to be drawn (the stream
-    is not a terminal, or tqdm is not installed)."""
+def progress_bar(t_end: float, stream=None, quiet: bool = False):
+    """Yields the callback for casmech.analyze, or None when no bar is to be drawn (quiet, the
+    stream is not a terminal, or tqdm is not installed)."""
     stream = sys.stderr if stream is None else stream
-    tqdm = tqdm_class() if is_terminal(stream) else None
+    tqdm = tqdm_class() if is_terminal(stream) and not quiet else None
     if tqdm is None:
         yield None
         return

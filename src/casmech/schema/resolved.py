@@ -206,3 +206,14 @@ class ResolvedModel:
     # sha256 of the model file and of every file it read or named (components, tables, meshes,
     # estimation data): absolute path -> digest (schema/files.py), for metadata.json and replay
     sources: Mapping[str, str] = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        """One line: name, file, counts, parameters and analysis, not the whole model."""
+        shown = ", ".join(f"{name}={value:.6g}" for name, value in
+                          list(self.parameters.items())[:6])
+        more = len(self.parameters) - 6
+        shown += f", ... ({more} more)" if more > 0 else ""
+        return (f"ResolvedModel('{self.name}' from {self.file}: {len(self.bodies)} bodies, "
+                f"{len(self.joints)} joints, {len(self.forces)} forces; parameters: "
+                f"{shown or 'none'}; analysis: {self.analysis.type}, t_end "
+                f"{self.analysis.t_end:g} s)")
