@@ -154,10 +154,10 @@ def chain_text(n: int) -> str:
 
 @pytest.mark.parametrize("case", TRACED_CASES)
 def test_traced_steps_equal_the_steps_run_directly(case):
-    """The recursions' per-body steps evaluated as traced Functions (core.traced) give the
+    """The recursions' per-body steps evaluated as traced Functions (core.traced_steps) give the
     functions the same code gives run on the SX directly, at random (t, x, z): branched trees,
     a chain, a loop."""
-    from casmech.core import traced
+    from casmech.core import traced_steps as traced
 
     functions = casmech.compile(TRACED_CASES[case]())
     ir, tree = functions.ir, spanning_tree(functions.ir)

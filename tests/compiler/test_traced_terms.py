@@ -1,6 +1,6 @@
 """The r-p bundle's per-primitive, per-body and per-joint terms built through traced steps
 (equations/assemble.py constraint rows and frames, equations/eom.py energy and reactions,
-equations/body.py RATES; core/traced.py) against the same code run directly on the SX
+equations/body.py RATES; core/traced_steps.py) against the same code run directly on the SX
 (traced.direct()): no more instructions, the same values at random inputs."""
 
 import casadi as ca
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.core import traced
+from casmech.core import traced_steps as traced
 from casmech.equations.functions import build_functions
 from casmech.model.lower import lower
 from tests.compiler.test_joint_system import ZOO, chain_text

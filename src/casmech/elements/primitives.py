@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 
 
 @dataclass(frozen=True)

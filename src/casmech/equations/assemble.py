@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 from casmech.core.values import constant
 from casmech.elements.primitives import PRIMITIVES, ROW, Frame
 from casmech.equations import body

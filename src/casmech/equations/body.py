@@ -13,7 +13,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.core import euler
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 
 
 def normalization(p):

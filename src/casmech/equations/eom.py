@@ -15,7 +15,7 @@ from functools import partial
 import casadi as ca
 
 from casmech.core import euler
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 from casmech.core.values import constant
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.equations import body, coordinates, limits, motors

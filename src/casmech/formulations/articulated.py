@@ -13,7 +13,7 @@ driver's coordinate is a function of time (its rate and acceleration by AD). The
 of the model alone (frames, their quaternions, inertias in reference frames) go through a
 joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
 in a parametric one. Each pass's work on one body is a step traced once per structure and
-evaluated inside CasADi (core/traced.py).
+evaluated inside CasADi (core/traced_steps.py).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import casadi as ca
 
 from casmech.core import euler, spatial
 from casmech.core.quaternions import conjugate, product
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations import body, eom
 from casmech.equations.assemble import GROUND_POSE, Coordinates

@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
-from casmech.core.traced import traced
+from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
