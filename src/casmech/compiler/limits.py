@@ -19,6 +19,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import math
+
 import casadi as ca
 
 from casmech.compiler import coordinates, motors
@@ -37,6 +39,12 @@ def lower(joint, geometry: ForceIR) -> ForceIR:
     return replace(geometry, type=kind, params=dict(joint.limit))
 
 
+def bounded(bound) -> bool:
+    """Whether a stop has this bound: an absent one is an infinity, which stays a number in
+    the model data's split (compiler.parametric); a present one may be an entry of it."""
+    return not (isinstance(bound, float) and math.isinf(bound))
+
+
 def coordinate(limit: ForceIR, x):
     return coordinates.JOINT_VALUES[COORDINATE[limit.type]](limit, x)
 
@@ -48,10 +56,10 @@ def law(limit: ForceIR, x) -> tuple:
     s_dot = ca.jacobian(s, x.q) @ x.q_dot
     k, c, lo, up = p["stiffness"], p["damping"], p["lower"], p["upper"]
     f, potential = 0, 0
-    if lo > -ca.inf:
+    if bounded(lo):
         f += ca.if_else(s < lo, ca.fmax(0, k * (lo - s) - c * s_dot), 0)
         potential += 0.5 * k * ca.fmax(0, lo - s) ** 2
-    if up < ca.inf:
+    if bounded(up):
         f += ca.if_else(s > up, ca.fmin(0, k * (up - s) - c * s_dot), 0)
         potential += 0.5 * k * ca.fmax(0, s - up) ** 2
     return s, f, potential
@@ -66,9 +74,9 @@ def generalized_force(limit: ForceIR, x):
 def gap(limit: ForceIR, s):
     """Distance to the nearer bound, negative past it."""
     lo, up = limit.params["lower"], limit.params["upper"]
-    if lo == -ca.inf:
+    if not bounded(lo):
         return up - s
-    if up == ca.inf:
+    if not bounded(up):
         return s - lo
     return ca.fmin(s - lo, up - s)
 

@@ -110,13 +110,18 @@ class Traced:
     def __abs__(self):
         return _call(np.absolute, self)
 
-    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+    def __array_ufunc__(self, ufunc, method, *inputs, out=None, **kwargs):
         if method != "__call__" or kwargs or ufunc not in UFUNCS:
             return NotImplemented
         if any(isinstance(x, np.ndarray) and x.ndim for x in inputs):
             elementwise = np.frompyfunc(lambda *xs: _call(ufunc, *xs), ufunc.nin, 1)
-            return elementwise(*(_boxed(x) for x in inputs))
-        return _call(ufunc, *inputs)
+            result = elementwise(*(_boxed(x) for x in inputs))
+        else:
+            result = _call(ufunc, *inputs)
+        if out is None:
+            return result
+        out[0][...] = result  # in place (u /= norm): a float array refuses traced numbers
+        return out[0]
 
 
 def _boxed(x):
@@ -300,3 +305,23 @@ def numeric(function, *args) -> np.ndarray:
     symbolic = function(*(expression(asarray(a)) for a in args))
     return np.array([Traced(values[k], symbolic[k])
                      for k in np.ndindex(values.shape)], dtype=object).reshape(values.shape)
+
+
+NEWTON = 6  # Newton steps `root` unrolls from the root at theta0 (quadratic: exact near it)
+
+
+def root(residual, found: float, *args):
+    """The root of residual(x, *args) = 0 that the plain path `found` at the values of `args`,
+    as a traced number when `args` are traced: Newton's iteration on SX from `found`, NEWTON
+    steps unrolled, so its value is `found` and CasADi differentiates the iteration (at
+    theta0 the implicit function's derivative, -residual_args / residual_x)."""
+    if not any(is_traced(a) for a in args):
+        return found
+    x = ca.SX.sym("x")
+    inputs = [ca.SX.sym(f"a{k}") for k in range(len(args))]
+    f = residual(x, *inputs)
+    step = ca.Function("newton", [x, *inputs], [x - f / ca.jacobian(f, x)])
+    estimate = ca.SX(found)
+    for _ in range(NEWTON):
+        estimate = step(estimate, *(_expr(a) for a in args))
+    return Traced(found, estimate)

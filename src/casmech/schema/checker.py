@@ -62,6 +62,9 @@ class Checker:
         self.doc = document
         self.overrides = dict(overrides or {})
         self.symbols = dict(symbols or {})
+        # parameter values an instance gives its component that are traced numbers (the
+        # document holds their values, which its validation reads)
+        self.given: dict[str, Any] = {}
         self.found: list[Diagnostic] = []
         self.parameters: dict[str, float] = {}
         self.declared: dict[str, int] = {}  # parameter -> line, for "defined later"
@@ -203,7 +206,7 @@ class Checker:
                 self.broken.add(name)
                 continue
             where = f"--set {name}" if name in self.overrides else path
-            result = self.number(where, self.overrides.get(name, value))
+            result = self.number(where, self.overrides.get(name, self.given.get(name, value)))
             if result is not None and name in self.symbols:
                 result = traced.seed(traced.value(result), self.symbols[name])
             del self.declared[name]

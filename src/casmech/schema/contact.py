@@ -7,6 +7,7 @@ import numpy as np
 
 from casmech.errors import failed
 from casmech.force_types import outputs_of
+from casmech.geometry import traced
 from casmech.forces.contact_spec import positive
 from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.checker import Checker
@@ -49,5 +50,6 @@ def limit(check: Checker, path: Path, given) -> dict[str, float] | None:
         check.error("E103", (*path, "upper"), "a limit's upper bound must be above its lower",
                     got=f"lower {lower:g}, upper {upper:g}")
         return None
-    return {"lower": float(lower), "upper": float(upper), "stiffness": k, "damping": c}
+    return {"lower": traced.scalar(lower), "upper": traced.scalar(upper), "stiffness": k,
+            "damping": c}
 

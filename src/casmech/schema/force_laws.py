@@ -20,6 +20,7 @@ import numpy as np
 
 from casmech.errors import did_you_mean, failed
 from casmech.force_types import REGISTRY, state_reading
+from casmech.geometry import traced
 from casmech.geometry.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.joint_types import attributes as joint_attributes
 from casmech.joint_types import coordinate_types, listed
@@ -33,12 +34,12 @@ BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
 
 def _body_value(body: resolved.Body | None, column: str) -> float:
     """A body column's value at t = 0 as the file writes it (accelerations 0; a body that
-    failed its checks: 0)."""
+    failed its checks: 0), for the checks of the expressions that read it."""
     if body is None or column.startswith("a"):
         return 0.0
     if column.startswith("e"):
-        return float(body.euler_parameters[int(column[1])])
-    return float(getattr(body, BODY_INITIAL[column[:-1]])["xyz".index(column[-1])])
+        return float(traced.value(body.euler_parameters[int(column[1])]))
+    return float(traced.value(getattr(body, BODY_INITIAL[column[:-1]])["xyz".index(column[-1])]))
 
 
 def initial_states(check: Checker, columns=BODY_STATES) -> dict[str, float]:
