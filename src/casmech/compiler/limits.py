@@ -17,9 +17,8 @@ reaction columns (compiler/eom.reactions, like a motor's), and the results hold
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import math
+from dataclasses import replace
 
 import casadi as ca
 

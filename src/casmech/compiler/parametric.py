@@ -109,7 +109,7 @@ class _Walk:
 
     def number(self, value) -> object:
         expressions = None
-        if isinstance(value, traced.Traced) or getattr(value, "dtype", None) == object:
+        if isinstance(value, traced.Traced) or traced.is_object_array(value):
             value, expressions = self.traced_number(value)
         array = np.asarray(value, float)
         flat = array.ravel(order="F")

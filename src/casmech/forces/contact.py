@@ -30,7 +30,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
 from casmech.forces.terms import step
 from casmech.geometry import euler, traced

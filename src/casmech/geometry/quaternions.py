@@ -40,7 +40,8 @@ def from_matrix(rotation: np.ndarray) -> np.ndarray:
     """Unit quaternion (e0 >= 0) of a rotation matrix (Shepperd's method), normalised (so a
     matrix orthonormal to roundoff gives a unit quaternion). An object array of traced numbers
     (geometry/traced.py) gives one: the branch is the one its values take."""
-    r = rotation if getattr(rotation, "dtype", None) == object else np.asarray(rotation, float)
+    r = rotation if isinstance(rotation, np.ndarray) and rotation.dtype.kind == "O" else \
+        np.asarray(rotation, float)
     trace = np.trace(r)
     candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
     k = int(np.argmax(candidates))

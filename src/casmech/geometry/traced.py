@@ -227,11 +227,17 @@ def seed(value: float, symbol) -> Traced:
     return Traced(value, symbol)
 
 
+def is_object_array(x) -> bool:
+    """Whether x is a NumPy array of Python objects (traced numbers, when the lowering made
+    it)."""
+    return isinstance(x, np.ndarray) and x.dtype.kind == "O"
+
+
 def is_traced(x) -> bool:
     """Whether `x` (a number or an array) depends on the symbolic parameters."""
     if isinstance(x, Traced):
         return not x.constant
-    if isinstance(x, np.ndarray) and x.dtype == object:
+    if is_object_array(x):
         return any(isinstance(v, Traced) and not v.constant for v in x.flat)
     if isinstance(x, (list, tuple)):
         return any(is_traced(v) for v in x)
@@ -242,7 +248,7 @@ def value(x):
     """The value of a number or array; a plain number or float array is returned as it is."""
     if isinstance(x, Traced):
         return x.value
-    if isinstance(x, np.ndarray) and x.dtype == object:
+    if is_object_array(x):
         return np.array([_value(v) for v in x.flat], float).reshape(x.shape)
     if isinstance(x, (list, tuple)) and is_traced(x):
         return value(array(x))
@@ -253,7 +259,7 @@ def expression(x):
     """The SX of a number or array (a constant where it does not depend on theta)."""
     if isinstance(x, Traced):
         return x.expr
-    if isinstance(x, np.ndarray) and x.dtype == object:
+    if is_object_array(x):
         flat = [_expr(v) for v in x.flat]
         rows, cols = (x.size, 1) if x.ndim < 2 else x.shape
         return ca.reshape(ca.vertcat(*flat), cols, rows).T if x.ndim == 2 else ca.vertcat(*flat)
@@ -273,7 +279,7 @@ def array(items) -> np.ndarray:
     """np.array(items); with a traced number among them, an object array of traced numbers
     only (NumPy's object loops call methods that floats do not have)."""
     result = np.array(items)
-    if result.dtype != object:
+    if not is_object_array(result):
         return result
     return np.frompyfunc(_wrap, 1, 1)(result).astype(object) if result.ndim else \
         np.array(_wrap(result[()]), dtype=object)

@@ -26,7 +26,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from casmech.errors import Diagnostic, ModelError
+from casmech.errors import Diagnostic, ModelError, UsageError
 
 if TYPE_CHECKING:
     from casmech.schema.loader import Document
@@ -51,11 +51,16 @@ def _resolve(document: Document, overrides: Mapping[str, str] | None,
     of the files it read or named (`sources`) and the overrides it was loaded with."""
     import numpy as np
 
+    from casmech.geometry.traced import NotANumber
     from casmech.schema import files
 
     symbols = _symbols(symbolic)
     with np.errstate(all="ignore"), files.rooted(document.file) as named:
-        model = _findings(document, overrides, symbols)
+        try:
+            model = _findings(document, overrides, symbols)
+        except NotANumber as error:  # a place that needs a plain number (never without symbols)
+            raise UsageError(f"{document.file}: {', '.join(symbols)} cannot be symbolic in "
+                             f"this model: {error}") from None
     return replace(model, sources=files.digests(document.file, named),
                    overrides=dict(overrides or {}), symbols=symbols)
 

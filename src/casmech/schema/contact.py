@@ -7,8 +7,8 @@ import numpy as np
 
 from casmech.errors import failed
 from casmech.force_types import outputs_of
-from casmech.geometry import traced
 from casmech.forces.contact_spec import positive
+from casmech.geometry import traced
 from casmech.joint_types import COORDINATES, REGISTRY
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
