@@ -313,7 +313,7 @@ def numeric(function, *args) -> np.ndarray:
                      for k in np.ndindex(values.shape)], dtype=object).reshape(values.shape)
 
 
-NEWTON = 6  # Newton steps `root` unrolls from the root at theta0 (quadratic: exact near it)
+NEWTON = 8  # Newton steps `root` unrolls from the root at theta0 (quadratic: exact near it)
 
 
 def root(residual, found: float, *args):
