@@ -66,21 +66,11 @@ class Bushing(Spec):
     repeat: Repeats | None = None
 
 
-# Flat views of a bushing's coefficients under its params names (stiffness0..5 = stiffness then
-# rotational_stiffness, ...), so that optimal/symbolic.py, which re-evaluates
-# `getattr(spec, key)` for every params key of a force, gives sensitivities to them.
+# a bushing's coefficients under its params names (stiffness0..5 = stiffness then
+# rotational_stiffness, ...)
 BUSHING_PARAMS = {"stiffness": ("stiffness", "rotational_stiffness"),
                   "damping": ("damping", "rotational_damping"),
                   "preload": ("preload_force", "preload_torque")}
-
-
-def _component(vector: str, index: int) -> property:
-    return property(lambda self: getattr(self, vector)[index])
-
-
-for _key, _vectors in BUSHING_PARAMS.items():
-    for _n in range(6):
-        setattr(Bushing, f"{_key}{_n}", _component(_vectors[_n // 3], _n % 3))
 
 KEYS = tuple(BUSHING_PARAMS)  # params: f"{key}{n}" for n in 0..5 (along d, then theta)
 
@@ -123,7 +113,7 @@ def rest_rotation(p_i, p_j):
 
 def law(force, x, read):
     """(generalized force on q, potential energy) of one bushing (it reads no state)."""
-    # vertcat, not DM: optimal/symbolic.py puts SX parameters here (a DM of SX is silently NaN)
+    # vertcat, not DM: the model data's split puts SX entries here (a DM of SX is silently NaN)
     k, c, preload = (ca.vertcat(*[force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
     s = deflection(force, x)
     s_q = ca.jacobian(s, x.q)
