@@ -5,11 +5,11 @@ parameters and for parameters that set a count."""
 import casadi as ca
 import numpy as np
 import pytest
+from tests.conftest import MODELS
 
 from casmech.errors import ModelError
 from casmech.geometry import traced
 from casmech.schema import load_model, load_model_text
-from tests.conftest import MODELS
 
 CHAIN = MODELS / "chain_repeat.yaml"
 

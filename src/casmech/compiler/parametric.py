@@ -26,6 +26,7 @@ rules above (zeros and round-off are structure).
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, is_dataclass, replace
 
@@ -44,6 +45,7 @@ STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
 # entries below this fraction of their array's largest are round-off of the lowering's rotations
 # (a joint point on an axis, in a body frame: 0 or 1e-17 depending on the values): structural 0
 ROUNDOFF = 1e-13
+FLOAT = np.dtype(float)
 # structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
 OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
 
@@ -109,30 +111,37 @@ class _Walk:
 
     def number(self, value) -> object:
         expressions = None
-        if isinstance(value, traced.Traced) or traced.is_object_array(value):
+        if isinstance(value, traced.Traced) or getattr(value, "dtype", FLOAT).kind == "O":
             value, expressions = self.traced_number(value)
         array = np.asarray(value, float)
         flat = array.ravel(order="F")
-        finite = np.isfinite(flat)  # an infinity (a stop's absent bound) is structure
-        nonzero = finite & (np.abs(flat) > ROUNDOFF * np.abs(flat[finite]).max(initial=0.0))
+        magnitude = np.abs(flat)
+        scale = magnitude.max(initial=0.0)
+        finite, infinite = None, ""
+        if scale < math.inf:
+            nonzero = magnitude > ROUNDOFF * scale
+        else:  # an infinity (a stop's absent bound) is structure
+            finite = np.isfinite(flat)
+            nonzero = finite & (magnitude > ROUNDOFF * magnitude[finite].max(initial=0.0))
+            infinite = "".join(f"!{n}{flat[n]!r}" for n in np.flatnonzero(~finite))
         if expressions is not None:  # a traced entry is never a structural zero
             moving = expressions.ravel(order="F")
             nonzero |= np.array([e is not None for e in moving], bool)
             for k, n in enumerate(np.flatnonzero(nonzero)):
                 if moving[n] is not None:
                     self.traced[len(self.values) + k] = moving[n]
-        infinite = "".join(f"!{n}{flat[n]!r}" for n in np.flatnonzero(~finite))
         self.token(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}{infinite}")
         self.values.extend(flat[nonzero])
         if not self.symbolic:
             return value
+        fixed = np.zeros(flat.size, bool) if finite is None else ~finite
         entries = []
-        for keep, number, fixed in zip(nonzero, flat, ~finite, strict=True):
+        for keep, number, structure in zip(nonzero, flat, fixed, strict=True):
             entries.append(ca.SX.sym(f"d{len(self.symbols)}") if keep else
-                           ca.SX(number if fixed else 0.0))
+                           ca.SX(number if structure else 0.0))
             self.symbols += [entries[-1]] if keep else []
         if array.ndim == 0:
-            return Entry(entries[0]) if nonzero[0] else float(flat[0]) if ~finite[0] else 0.0
+            return Entry(entries[0]) if nonzero[0] else float(flat[0]) if fixed[0] else 0.0
         rows, cols = (array.shape[0], 1) if array.ndim == 1 else array.shape
         return ca.reshape(ca.vertcat(*entries), rows, cols)
 
