@@ -39,7 +39,7 @@ CASES = [
     (lambda a, b: np.arccos(a) + np.tanh(b), lambda a, b: -1 / math.sqrt(1 - a**2),
      lambda a, b: 1 - math.tanh(b)**2),
     (lambda a, b: np.maximum(a, b) + np.minimum(a, b) * 2.0, lambda a, b: 1.0,
-     lambda a, b: 2.0),  # max picks a, min picks b at these values
+     lambda a, b: 2.0),  # fmax is a, fmin is b at these values
 ]
 
 

@@ -9,10 +9,12 @@ expression is the same computation on SX, from which CasADi differentiates.
   methods NumPy's object loops call (`sin`, `sqrt`, `arctan2`, ... on object arrays), give
   traced numbers. NumPy object arrays of them go through `@`, `np.cross`, `np.linalg.norm`,
   `np.column_stack`; LAPACK (eigvalsh, det, svd) does not take them: checks run on `value(x)`.
-- `<`, `<=`, `>`, `>=`, `min`, `max`, `abs`'s sign, `argmin` follow the value: the branch the
-  code takes at theta0 is part of the model's structure. `==` holds only for the same
-  function of theta (equal values and both constant, or the same expression), so a number
-  that is 0 at theta0 but moves with theta is never taken for a structural zero.
+- `<`, `<=`, `>`, `>=` (Python's `min`, `max`, `argmin` with them), `sign`, `floor` and an
+  expression's comparisons and `if` follow the value: the branch the code takes at theta0 is
+  part of the model's structure. NumPy's `minimum`, `maximum` and `absolute` stay functions
+  (CasADi's fmin, fmax, fabs). `==` holds only for the same function of theta (equal values
+  and both constant, or the same expression), so a number that is 0 at theta0 but moves with
+  theta is never taken for a structural zero.
 - `float(x)` of a number that depends on theta raises NotANumber (a TypeError): every place
   that would silently freeze a parameter is found. `value(x)` is the deliberate way to read
   the value (for a check, a count, a setting).
@@ -152,13 +154,6 @@ def _expr(x):
     return x.expr if isinstance(x, Traced) else float(x)
 
 
-def _pick(choose):
-    """min/max-like ufuncs: the operand the value selects (the branch at theta0)."""
-    def pick(a, b):
-        return a if choose(_value(a), _value(b)) == _value(a) else b
-    return pick
-
-
 # ufunc -> the SX operation (None: the result is a function of the value alone, a constant)
 UFUNCS = {
     np.add: operator.add, np.subtract: operator.sub, np.multiply: operator.mul,
@@ -168,14 +163,12 @@ UFUNCS = {
     np.log1p: ca.log1p, np.expm1: ca.expm1, np.sin: ca.sin, np.cos: ca.cos, np.tan: ca.tan,
     np.arcsin: ca.asin, np.arccos: ca.acos, np.arctan: ca.atan, np.arctan2: ca.atan2,
     np.sinh: ca.sinh, np.cosh: ca.cosh, np.tanh: ca.tanh, np.hypot: lambda a, b: ca.sqrt(
-        a * a + b * b),
+        a * a + b * b), np.minimum: ca.fmin, np.maximum: ca.fmax, np.fmin: ca.fmin,
+    np.fmax: ca.fmax,
     np.sign: None, np.floor: None, np.ceil: None, np.rint: None, np.isfinite: None,
     np.isnan: None, np.isinf: None, np.less: None, np.less_equal: None, np.greater: None,
     np.greater_equal: None, np.equal: None, np.not_equal: None,
 }
-PICK = {np.minimum: _pick(min), np.maximum: _pick(max), np.fmin: _pick(min),
-        np.fmax: _pick(max)}
-UFUNCS.update(dict.fromkeys(PICK))
 EQUALITY = {np.equal: operator.eq, np.not_equal: operator.ne}
 
 
@@ -183,8 +176,6 @@ def _call(ufunc, *args):
     """One ufunc on scalars: NumPy's on the values, its SX operation on the expressions."""
     if not any(isinstance(x, Traced) for x in args):
         return ufunc(*args)
-    if ufunc in PICK:
-        return PICK[ufunc](*args)
     if ufunc in EQUALITY:
         return np.bool_(EQUALITY[ufunc](*args) if isinstance(args[0], Traced) else
                         EQUALITY[ufunc](args[1], args[0]))
