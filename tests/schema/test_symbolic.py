@@ -77,3 +77,19 @@ def test_without_symbolic_no_traced_number():
     assert model.symbols == {} and model.overrides == {}
     assert all(b.position.dtype == float for b in model.bodies)
     assert not any(isinstance(v, traced.Traced) for v in model.parameters.values())
+
+
+def test_functions_of_the_expression_language():
+    """step, max and abs of a symbolic parameter: the mass 1 + step(s, 0, 0, 1, 2) +
+    max(s, 0.1) + abs(s - 1) at s = 0.3 has d/ds = 2 * 6 s (1 - s) + 1 - 1 (closed form)."""
+    text = (MODELS / "estimate_pendulum.yaml").read_text().replace(
+        "  Ic: 0.02", "  Ic: 0.02\n  s: 0.3").replace(
+        "mass: m\n", "mass: 1 + step(s, 0, 0, 1, 2) + max(s, 0.1) + abs(s - 1)\n")
+    model = load_model_text(text, symbolic=["s"])
+    mass = model.bodies[0].mass
+    plain = load_model_text(text).bodies[0].mass
+    assert traced.value(mass) == plain  # the float path's value
+    symbol = model.symbols["s"]
+    slope = float(ca.Function("d", [symbol], [ca.jacobian(mass.expr, symbol)])(0.3))
+    # the closed form; round-off
+    np.testing.assert_allclose(slope, 12 * 0.3 * 0.7, rtol=1e-14, atol=0)

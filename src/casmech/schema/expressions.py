@@ -32,6 +32,7 @@ import numpy as np
 
 from casmech.errors import did_you_mean
 from casmech.forces.terms import step
+from casmech.geometry import traced
 
 # limits that keep the recursive parser and evaluator far from Python's recursion limit
 MAX_DEPTH = 50  # nested parentheses, calls, signs and powers
@@ -68,7 +69,10 @@ class ExpressionNameError(ExpressionError):
 
 
 def _step_numpy(x, x0, h0, x1, h1):
-    a = np.clip((np.asarray(x, float) - x0) / (x1 - x0), 0.0, 1.0)
+    if isinstance(x, traced.Traced):  # a symbolic parameter's expression: fmin, fmax
+        a = np.minimum(np.maximum((x - x0) / (x1 - x0), 0.0), 1.0)
+    else:
+        a = np.clip((np.asarray(x, float) - x0) / (x1 - x0), 0.0, 1.0)
     return h0 + (h1 - h0) * a * a * (3.0 - 2.0 * a)
 
 
