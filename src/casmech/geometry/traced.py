@@ -21,7 +21,8 @@ expression is the same computation on SX, from which CasADi differentiates.
 
 Helpers keep the plain path as it is (float arrays, math functions, no traced number unless
 one is given): `asarray`, `array`, `scalar`, `numeric` (an euler.py function evaluated on
-numbers or traced numbers), `sin`, `cos`.
+numbers or traced numbers), `sin`, `cos`, `root` (a root the plain path found by iteration);
+`is_traced`, `value` and `expression` read them.
 """
 
 from __future__ import annotations
