@@ -74,3 +74,37 @@ def test_a_repeat_count_changes_the_signature():
     more = casmech.load(path, {counts[0]: repr(int(model.parameters[counts[0]]) + 1)})
     assert len(more.bodies) != len(model.bodies)
     assert parametric.data(lower(more))[1] != parametric.data(lower(model))[1]
+
+
+ONE_SIDED = """
+casmech: 1
+name: stop
+parameters: {k: 100.0, top: 0.3}
+gravity: [0, 0, -9.81]
+bodies:
+  - {name: bar, mass: 1, inertia: [0.1, 0.1, 0.1], position: [0, 0.5, 0]}
+joints:
+  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [1, 0, 0],
+     limit: {upper: top, stiffness: k, damping: 1}}
+"""
+
+
+@pytest.mark.parametrize("side", ["upper", "lower"])
+def test_a_one_sided_stop_stays_one_sided(side):
+    """A stop's absent bound is an infinity: the split keeps it a number of the structure (it
+    is no entry of d: an infinity is not data, and 0 in its place was a stop at 0), so the
+    bundle over d equals the numeric build on both sides of 0 and past the bound."""
+    model = casmech.loads(ONE_SIDED.replace("upper: top", f"{side}: top"))
+    ir = lower(model)
+    split = parametric.split(ir)
+    assert not np.isinf(split.values).any()
+    symbolic, fresh = build_functions(split.ir, split.symbols), build_functions(ir)
+    for angle in (-0.6, -0.25, 0.1, 0.5):
+        q = np.r_[0.0, 0.5 * np.cos(angle), 0.5 * np.sin(angle), np.cos(angle / 2),
+                  np.sin(angle / 2), 0.0, 0.0]
+        q_dot = np.r_[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        for name in ("element_outputs", "generalized_forces"):
+            got = symbolic.evaluate(name, 0.0, q, q_dot, split.values)
+            want = fresh.evaluate(name, 0.0, q, q_dot)
+            # the same expressions, numbers as inputs or constants: round-off
+            np.testing.assert_allclose(got[0], want[0], rtol=1e-13, atol=1e-13)

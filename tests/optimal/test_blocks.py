@@ -87,15 +87,13 @@ def test_sensitivity_command(tmp_path, capsys):
     np.testing.assert_allclose(table[:, 3], (ends[0] - ends[1]) / 3e-3, rtol=1e-5, atol=1e-9)
     assert main(["sensitivity", model, "--wrt", "L", "--output", "bar.y", "--at", "1",
                  "--csv", str(tmp_path / "L.csv")]) == 0
-    assert "through the model data" in capsys.readouterr().out
     _, table = read_csv(tmp_path / "L.csv")
     ends = [simulate(casmech.load(model, {"L": repr(1.0 + h)}), ["bar.y"], [1.0],
                      rtol=1e-12, atol=1e-14)[0, 0] for h in (1e-3, -1e-3)]
     # second-order differences at h = 1e-3: h^2 truncation (measured 1e-7 relative)
     np.testing.assert_allclose(table[0, 3], (ends[0] - ends[1]) / 2e-3, rtol=1e-5, atol=1e-9)
-    assert main(["sensitivity", model, "--wrt", "L", "--method", "symbolic", "--output",
-                 "bar.y", "--at", "1"]) == 2
-    assert "moves the model's geometry" in capsys.readouterr().err
+    assert main(["sensitivity", model, "--wrt", "N", "--output", "bar.y", "--at", "1"]) == 2
+    assert "neither a parameter of the model" in capsys.readouterr().err
     assert main(["sensitivity", model, "--parameter", "m", "--output", "bar.y",
                  "--at", "0"]) == 2
 

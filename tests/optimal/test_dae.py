@@ -21,7 +21,7 @@ def test_initial_positions_and_their_derivative_against_central_differences():
     """The four-bar of test_sensitivity (1 DOF): moving cx opens the loop at the file's pose,
     and assembly (the closest point) moves crank and rocker."""
     model = casmech.loads(FOUR_BAR)
-    system = parametric_system(model, ["cx"], "data")
+    system = parametric_system(model, ["cx"])
     dae = build_dae(system)
     x0 = initial_state_function(dae)
     theta = ca.MX.sym("theta", 1)
@@ -34,7 +34,6 @@ def test_initial_positions_and_their_derivative_against_central_differences():
     h = 1e-3
     fd = (8 * (assembled(cx + h) - assembled(cx - h))
           - (assembled(cx + 2 * h) - assembled(cx - 2 * h))) / (12 * h)
-    # 4th-order differences: h^4 truncation ~1e-12, assembly roundoff 1e-15 / h ~1e-12,
-    # the model data's dd/dtheta (lowering.py, itself central differences): measured 1.1e-13
+    # 4th-order differences: h^4 truncation ~1e-12, assembly roundoff 1e-15 / h ~1e-12
     np.testing.assert_allclose(derivative, fd, rtol=0, atol=1e-10)
     assert np.max(np.abs(derivative)) > 0.05  # the pose does move with cx

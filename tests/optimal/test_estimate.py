@@ -65,11 +65,11 @@ def test_measurements_need_a_time_column(tmp_path):
         read_measurements(path)
 
 
-def runtime_columns(model, columns, times) -> np.ndarray:
-    """Columns of casmech's own dynamics run (the runtime, not casmech.optimal's IDAS graph)
-    at `times`, interpolated from a 1 ms output grid by cubic splines."""
+def runtime_columns(model, columns, times, analysis="dynamics") -> np.ndarray:
+    """Columns of casmech's own run (the runtime, not casmech.optimal's IDAS graph) at `times`,
+    interpolated from a 1 ms output grid by cubic splines."""
     from scipy.interpolate import CubicSpline
-    result = casmech.analyze(casmech.compile(model), "dynamics", t_end=float(times[-1]),
+    result = casmech.analyze(casmech.compile(model), analysis, t_end=float(times[-1]),
                              output_step=1e-3, rtol=1e-11, atol=1e-13)
     frame = result.to_dataframe()
     return np.column_stack([CubicSpline(frame.index, frame[c])(times) for c in columns])
@@ -105,14 +105,40 @@ def test_composed_chain_link_length():
     np.testing.assert_allclose(fit.values, [0.6], rtol=1e-6, atol=0)
 
 
-def test_a_length_that_changes_the_structure_is_a_located_error():
-    """d(theta) exists only where the model keeps its structure: at a0 = 0 the bar's position
-    loses its y entry; the data callback returns NaN there (an IPOPT step gets shortened) and
-    keeps the error located at the parameter's line."""
-    from casmech.optimal.model_data import ModelData
-    data = ModelData(casmech.load(PENDULUM), ["a0"])
-    assert data.failure() is None
-    assert np.all(np.isnan(np.array(data(np.array([0.0])))))  # no data there: NaN
-    assert isinstance(data.failure(), UsageError)
-    assert "estimate_pendulum.yaml:15:3" in str(data.failure())
-    assert "changes the model's structure at a0 = 0" in str(data.failure())
+# the estimate_pendulum bar hung from a pivot at (0, py, pz)
+PIVOTED = PENDULUM.read_text().replace("  Ic: 0.02", "  Ic: 0.02\n  py: 0.0\n  pz: 0.0").replace(
+    "position: [0, L/2 * sin(a0), -L/2 * cos(a0)]",
+    "position: [0, py + L/2 * sin(a0), pz - L/2 * cos(a0)]").replace(
+    "at: [0, 0, 0]", "at: [0, py, pz]")
+
+
+def test_pendulum_length_and_pivot_from_positions():
+    """The bar's length and its pivot's position (a joint point and the bar's initial
+    position, both geometry) fitted to positions of casmech's runtime at L = 1.2,
+    pivot (0, 0.1, -0.2), from the file's L = 1 and pivot at the origin."""
+    times = TIMES[::4]
+    truth = casmech.loads(PIVOTED, overrides={"L": "1.2", "py": "0.1", "pz": "-0.2"})
+    clean = runtime_columns(truth, ["bar.y", "bar.z"], times)
+    fit = estimate(casmech.loads(PIVOTED), ["L", "py", "pz"], times,
+                   {"bar.y": clean[:, 0], "bar.z": clean[:, 1]}, bounds={"L": (0.5, 2.0)})
+    assert fit.status == "Solve_Succeeded"
+    np.testing.assert_allclose(fit.initial, [1.0, 0.0, 0.0], rtol=0, atol=0)  # the file's
+    # noise-free data: as for L and a0 above (the spline of the 1 ms grid, ~1e-9 m)
+    np.testing.assert_allclose(fit.values, [1.2, 0.1, -0.2], rtol=1e-6, atol=1e-7)
+
+
+def test_four_bar_link_lengths_from_positions():
+    """models/four_bar.yaml (driven crank, 0 DOF): the coupler and rocker lengths b and c,
+    which set the whole initial pose through the file's loop-closure expressions, fitted to
+    the coupler's and rocker's positions of casmech's kinematics at b = 2.1, c = 1.45, from
+    the file's b = 2, c = 1.5."""
+    path = MODELS / "four_bar.yaml"
+    times = np.arange(1, 21) * 0.05
+    columns = ["coupler.x", "coupler.y", "rocker.x", "rocker.y"]
+    clean = runtime_columns(casmech.load(path, {"b": "2.1", "c": "1.45"}), columns, times,
+                            "kinematics")
+    fit = estimate(casmech.load(path), ["b", "c"], times,
+                   dict(zip(columns, clean.T, strict=True)))
+    assert fit.status == "Solve_Succeeded"
+    # noise-free data, as above
+    np.testing.assert_allclose(fit.values, [2.1, 1.45], rtol=1e-6, atol=0)

@@ -12,7 +12,6 @@ from casmech import api
 from casmech.cli.common import add_overrides, overrides
 from casmech.io.csv import write_csv
 from casmech.optimal.sensitivity import MODES, sensitivity
-from casmech.optimal.system import METHODS
 
 
 def add_arguments(parser) -> None:
@@ -30,12 +29,6 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mode", choices=MODES, default="forward",
                         help="forward (one sweep per parameter) or adjoint (one backward sweep "
                              "per output); default forward")
-    parser.add_argument("--method", choices=METHODS, default="auto",
-                        help="how parameters enter: symbolic (the file's expressions "
-                             "re-evaluated with CasADi, exact; no geometry), data (every number "
-                             "of the lowered model an input, dd/dtheta by central differences "
-                             "of the lowering), auto (symbolic unless a parameter moves the "
-                             "geometry); default auto")
     parser.add_argument("--rtol", type=float, default=1e-10, help="IDAS relative tolerance")
     parser.add_argument("--atol", type=float, default=1e-12, help="IDAS absolute tolerance")
     parser.add_argument("--csv", type=Path, help="also write the table to this CSV file")
@@ -53,17 +46,13 @@ def table(result) -> tuple[list[str], np.ndarray]:
 def run(args) -> int:
     model = api.load(args.model, overrides(args.set))
     result = sensitivity(model, args.parameter, args.output, sorted(set(args.at)),
-                         mode=args.mode, rtol=args.rtol, atol=args.atol, method=args.method)
+                         mode=args.mode, rtol=args.rtol, atol=args.atol)
     names, values = table(result)
     outputs = [o for _ in result.times for o in result.outputs]
     width = max(len(o) for o in outputs)
     print(f"{'output':<{width}}  " + "  ".join(f"{n:>16}" for n in names))
     for output, row in zip(outputs, values, strict=True):
         print(f"{output:<{width}}  " + "  ".join(f"{x:>16.9g}" for x in row))
-    if result.lowering_error is not None:
-        errors = ", ".join(f"{k} {v:.1e}" for k, v in result.lowering_error.items())
-        print(f"parameters through the model data (dd/dtheta by central differences of the "
-              f"lowering, estimated relative error: {errors or 'none'})")
     if args.csv:
         path = write_csv(args.csv, ["output_index", *names],
                          np.column_stack([np.tile(np.arange(len(result.outputs)),

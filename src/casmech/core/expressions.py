@@ -30,6 +30,7 @@ from typing import Any
 import casadi
 import numpy as np
 
+from casmech.core import traced
 from casmech.errors import did_you_mean
 
 # limits that keep the recursive parser and evaluator far from Python's recursion limit
@@ -75,7 +76,10 @@ def step(x, x0, h0, x1, h1):
 
 
 def _step_numpy(x, x0, h0, x1, h1):
-    a = np.clip((np.asarray(x, float) - x0) / (x1 - x0), 0.0, 1.0)
+    if isinstance(x, traced.Traced):  # a symbolic parameter's expression: fmin, fmax
+        a = np.minimum(np.maximum((x - x0) / (x1 - x0), 0.0), 1.0)
+    else:
+        a = np.clip((np.asarray(x, float) - x0) / (x1 - x0), 0.0, 1.0)
     return h0 + (h1 - h0) * a * a * (3.0 - 2.0 * a)
 
 

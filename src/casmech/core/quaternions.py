@@ -38,12 +38,14 @@ def unit(p):
 
 def from_matrix(rotation: np.ndarray) -> np.ndarray:
     """Unit quaternion (e0 >= 0) of a rotation matrix (Shepperd's method), normalised (so a
-    matrix orthonormal to roundoff gives a unit quaternion)."""
-    r = np.asarray(rotation, float)
+    matrix orthonormal to roundoff gives a unit quaternion). An object array of traced numbers
+    (core/traced.py) gives one: the branch is the one its values take."""
+    r = rotation if isinstance(rotation, np.ndarray) and rotation.dtype.kind == "O" else \
+        np.asarray(rotation, float)
     trace = np.trace(r)
     candidates = [trace, r[0, 0], r[1, 1], r[2, 2]]
     k = int(np.argmax(candidates))
-    q = np.zeros(4)
+    q = np.zeros(4, r.dtype)
     if k == 0:
         q[0] = 0.5 * np.sqrt(1 + trace)
         q[1:] = np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / (4 * q[0])

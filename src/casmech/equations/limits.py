@@ -17,6 +17,8 @@ reaction columns (equations/eom.reactions, like a motor's), and the results hold
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from casmech.elements.joint_types import COORDINATES
@@ -26,6 +28,12 @@ from casmech.model.ir import ForceIR
 # ForceIR type of a stop -> (the coordinate it stops, results column of f)
 COORDINATE = {c.limit[0]: name for name, c in COORDINATES.items()}
 COLUMN = {c.limit[0]: c.limit[1] for c in COORDINATES.values()}
+
+
+def bounded(bound) -> bool:
+    """Whether a stop has this bound: an absent one is an infinity, which stays a number in
+    the model data's split (model.parametric); a present one may be an entry of it."""
+    return not (isinstance(bound, float) and math.isinf(bound))
 
 
 def coordinate(limit: ForceIR, x):
@@ -39,10 +47,10 @@ def law(limit: ForceIR, x) -> tuple:
     s_dot = x.rate(s)
     k, c, lo, up = p["stiffness"], p["damping"], p["lower"], p["upper"]
     f, potential = 0, 0
-    if lo > -ca.inf:
+    if bounded(lo):
         f += ca.if_else(s < lo, ca.fmax(0, k * (lo - s) - c * s_dot), 0)
         potential += 0.5 * k * ca.fmax(0, lo - s) ** 2
-    if up < ca.inf:
+    if bounded(up):
         f += ca.if_else(s > up, ca.fmin(0, k * (up - s) - c * s_dot), 0)
         potential += 0.5 * k * ca.fmax(0, s - up) ** 2
     return s, f, potential
@@ -57,9 +65,9 @@ def generalized_force(limit: ForceIR, x):
 def gap(limit: ForceIR, s):
     """Distance to the nearer bound, negative past it."""
     lo, up = limit.params["lower"], limit.params["upper"]
-    if lo == -ca.inf:
+    if not bounded(lo):
         return up - s
-    if up == ca.inf:
+    if not bounded(up):
         return s - lo
     return ca.fmin(s - lo, up - s)
 

@@ -2,13 +2,19 @@
 
 Composite joints are defined in global coordinates at t = 0; here they become body-frame vectors
 using each body's pose in the file (ground: identity).
+
+A model loaded with symbolic parameters (schema.load_model_text's `symbolic`) carries traced
+numbers (casmech.core.traced); the same code keeps them, so every number of its IR that
+depends on those parameters is a traced number or an object array of them
+(model.parametric makes the model data a function of the parameters from it). A plain
+model's IR holds floats and float arrays, exactly as without traced numbers.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from casmech.core import euler
+from casmech.core import euler, traced
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.elements.joint_types import COORDINATES, REGISTRY
 from casmech.model import bindings
@@ -23,7 +29,7 @@ UNIT = {"ex": np.array([1.0, 0, 0]), "ey": np.array([0, 1.0, 0]), "ez": np.array
 
 def perpendicular_pair(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit u, v with (u, v, w) right-handed orthonormal; deterministic in w."""
-    e = np.eye(3)[int(np.argmin(np.abs(w)))]
+    e = np.eye(3)[int(np.argmin(np.abs(w)))]  # the branch at theta0 (traced numbers)
     u = e - (e @ w) * w
     u /= np.linalg.norm(u)
     return u, np.cross(w, u)
@@ -36,7 +42,7 @@ class Poses:
     def __init__(self, model: ResolvedModel):
         self.joints = {j.name: j for j in model.joints}
         self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
-        self.pose = {b.name: (b.position, euler.numeric(euler.rotation, b.euler_parameters))
+        self.pose = {b.name: (b.position, traced.numeric(euler.rotation, b.euler_parameters))
                      for b in model.bodies}
         self.pose[GROUND] = (np.zeros(3), np.eye(3))
 
@@ -58,9 +64,9 @@ def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
     frame = dict(UNIT) | {"u": UNIT["ex"], "v": UNIT["ey"], "w": UNIT["ez"]}  # fixed: no axis
     for key, name in REGISTRY[joint.type].frame.items():
         if key in v and key != "axis":
-            frame[name] = np.asarray(v[key], float)
+            frame[name] = traced.asarray(v[key])
     if "axis" in v:
-        w = np.asarray(v["axis"], float) / np.linalg.norm(v["axis"])
+        w = traced.asarray(v["axis"]) / np.linalg.norm(v["axis"])
         frame["u"], frame["v"] = perpendicular_pair(w)
         frame["w"] = w
     return frame
@@ -71,7 +77,7 @@ def _vectors(template: dict[str, str], joint: Joint, frame, poses: Poses) -> dic
     for key, spec in template.items():
         name, _, side = spec.partition("@")
         if not side:  # basic constraint: as written in the file
-            out[key] = np.asarray(joint.vectors.get(name, frame.get(name)), float)
+            out[key] = traced.asarray(joint.vectors.get(name, frame.get(name)))
         else:
             body = joint.body_i if side == "i" else joint.body_j
             out[key] = poses.local(body, name, frame[name])
@@ -85,8 +91,8 @@ def _offset(joint: Joint, frame) -> float:
     if arm is None:
         return 0.0
     if joint.length is not None:
-        return float(joint.length) ** 2
-    return float(np.sum((frame[arm[1]] - frame[arm[0]]) ** 2))
+        return traced.scalar(joint.length) ** 2
+    return traced.scalar(np.sum((frame[arm[1]] - frame[arm[0]]) ** 2))
 
 
 def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[PrimitiveIR], JointIR]:
@@ -108,7 +114,7 @@ def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[Primit
     if point_name is None:
         point = np.zeros(3) if joint.body_i != GROUND else poses.pose[GROUND][0]
     elif point_name in joint.vectors and point_name.startswith("s_"):
-        point = np.asarray(joint.vectors[point_name], float)
+        point = traced.asarray(joint.vectors[point_name])
     else:
         point = poses.local(joint.body_i, point_name, frame[point_name])
     rows = range(first_row, first_row + len(prims))
@@ -126,7 +132,7 @@ def _reaction_point(joint: Joint, poses: Poses) -> np.ndarray | None:
     """`reactions: {point: ...}` (global at t = 0) in body i's frame (ground: global)."""
     if joint.reaction_point is None:
         return None
-    return poses.local(joint.body_i, "P", np.asarray(joint.reaction_point, float))
+    return poses.local(joint.body_i, "P", traced.asarray(joint.reaction_point))
 
 
 def _geometry(joint: Joint, frame, poses: Poses) -> dict[str, np.ndarray]:
@@ -163,9 +169,9 @@ def lower(model: ResolvedModel) -> ModelIR:
         primitives += prims
         joints.append(joint_ir)
     bodies = tuple(
-        BodyIR(b.name, float(b.mass), np.asarray(b.inertia, float), np.asarray(b.position, float),
-               np.asarray(b.euler_parameters, float), np.asarray(b.velocity, float),
-               np.asarray(b.angular_velocity, float), b.source)
+        BodyIR(b.name, traced.scalar(b.mass), traced.asarray(b.inertia),
+               traced.asarray(b.position), traced.asarray(b.euler_parameters),
+               traced.asarray(b.velocity), traced.asarray(b.angular_velocity), b.source)
         for b in model.bodies
     )
     geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
@@ -177,5 +183,5 @@ def lower(model: ResolvedModel) -> ModelIR:
     stops = tuple(bindings.stop(j, geometry[j.name]) for j in model.joints
                   if j.limit)
     return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
-                   forces, np.asarray(model.gravity, float), model.analysis, dict(model.parameters),
+                   forces, traced.asarray(model.gravity), model.analysis, dict(model.parameters),
                    motors=effort, limits=stops)

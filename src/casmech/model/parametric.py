@@ -14,17 +14,26 @@ axis), which a build keyed on the signature sees as a different model.
 
 `data(ir)` is the vector alone (the numeric lowering at other values gives the values to bind to
 a build made once). Indices, names, texts, sources and the analysis settings are structure.
+
+The lowering of a model loaded with symbolic parameters (schema.load_model_text's `symbolic`)
+holds traced numbers (casmech.core.traced): each is an entry of d whatever its value (it
+moves with the parameters even where it is 0 at their values), and the split records its
+expression, so `Split.expressions` is d as a function of the parameters' symbols (the model's
+`symbols`): d(theta), differentiable by CasADi. Numbers that do not depend on them keep the
+rules above (zeros and round-off are structure).
 """
 
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, is_dataclass, replace
 
 import casadi as ca
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.expressions import Expr
 from casmech.errors import Source
 from casmech.model.ir import ModelIR, RowInfo
@@ -36,6 +45,7 @@ STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
 # entries below this fraction of their array's largest are round-off of the lowering's rotations
 # (a joint point on an axis, in a body frame: 0 or 1e-17 depending on the values): structural 0
 ROUNDOFF = 1e-13
+FLOAT = np.dtype(float)
 # structure: recorded in the signature, never symbolic (a table's data is part of the cache key)
 OPAQUE = (str, bytes, range, Source, RowInfo, Analysis, Expr, TableExpr, type(None))
 
@@ -64,6 +74,15 @@ class Split:
     symbols: ca.SX  # d, the column of every symbol in `ir`, in walk order
     values: np.ndarray  # d of the lowering that was split
     signature: str  # sha256 of the structure (module docstring)
+    # d as expressions of the symbolic parameters (the traced numbers' expressions; the
+    # values where an entry does not depend on them)
+    expressions: ca.SX | None = None
+    traced: np.ndarray | None = None  # (len(d),) bool: the entries that are traced numbers
+
+    def data_function(self, theta) -> ca.Function:
+        """theta -> d: the model data as a function of the symbolic parameters (`theta`: a
+        column of the model's symbols, in the order wanted)."""
+        return ca.Function("model_data", [theta], [self.expressions], ["theta"], ["d"])
 
 
 class _Walk:
@@ -73,6 +92,7 @@ class _Walk:
         self.symbolic = symbolic
         self.values: list[float] = []
         self.symbols: list[ca.SX] = []
+        self.traced: dict[int, ca.SX] = {}  # entry of d -> its expression (traced numbers)
         self.tokens: list[str] = []
         self.where: list[str] = []  # the IR path being walked ("bodies", "bar", "r0")
         self.places: list[str] = []  # the path of each token
@@ -90,30 +110,62 @@ class _Walk:
             self.where.pop()
 
     def number(self, value) -> object:
+        expressions = None
+        if isinstance(value, traced.Traced) or getattr(value, "dtype", FLOAT).kind == "O":
+            value, expressions = self.traced_number(value)
         array = np.asarray(value, float)
         flat = array.ravel(order="F")
-        nonzero = np.abs(flat) > ROUNDOFF * np.abs(flat).max(initial=0.0)
-        self.token(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}")
+        magnitude = np.abs(flat)
+        scale = magnitude.max(initial=0.0)
+        finite, infinite = None, ""
+        if scale < math.inf:
+            nonzero = magnitude > ROUNDOFF * scale
+        else:  # an infinity (a stop's absent bound) is structure
+            finite = np.isfinite(flat)
+            nonzero = finite & (magnitude > ROUNDOFF * magnitude[finite].max(initial=0.0))
+            infinite = "".join(f"!{n}{flat[n]!r}" for n in np.flatnonzero(~finite))
+        if expressions is not None:  # a traced entry is never a structural zero
+            moving = expressions.ravel(order="F")
+            nonzero |= np.array([e is not None for e in moving], bool)
+            for k, n in enumerate(np.flatnonzero(nonzero)):
+                if moving[n] is not None:
+                    self.traced[len(self.values) + k] = moving[n]
+        self.token(f"#{array.shape}{np.packbits(nonzero).tobytes().hex()}{infinite}")
         self.values.extend(flat[nonzero])
         if not self.symbolic:
             return value
+        fixed = np.zeros(flat.size, bool) if finite is None else ~finite
         entries = []
-        for keep in nonzero:
-            entries.append(ca.SX.sym(f"d{len(self.symbols)}") if keep else ca.SX(0.0))
+        for keep, number, structure in zip(nonzero, flat, fixed, strict=True):
+            entries.append(ca.SX.sym(f"d{len(self.symbols)}") if keep else
+                           ca.SX(number if structure else 0.0))
             self.symbols += [entries[-1]] if keep else []
         if array.ndim == 0:
-            return Entry(entries[0]) if nonzero[0] else 0.0
+            return Entry(entries[0]) if nonzero[0] else float(flat[0]) if fixed[0] else 0.0
         rows, cols = (array.shape[0], 1) if array.ndim == 1 else array.shape
         return ca.reshape(ca.vertcat(*entries), rows, cols)
 
+    @staticmethod
+    def traced_number(value) -> tuple[np.ndarray, np.ndarray]:
+        """(the values, an object array of the expressions of the entries that depend on the
+        symbolic parameters, None elsewhere) of a traced number or array."""
+        array = np.asarray(value, object)
+        expressions = np.full(array.shape, None, object)
+        for index, item in np.ndenumerate(array):
+            if isinstance(item, traced.Traced) and not item.constant:
+                expressions[index] = item.expr
+        return traced.value(array).reshape(array.shape), expressions
+
     def __call__(self, value):
+        if isinstance(value, traced.Traced):
+            return self.number(value)
         if isinstance(value, bool) or isinstance(value, OPAQUE):
             self.token(repr(value) if isinstance(value, (str, bool, range)) else
                        type(value).__name__ + str(getattr(value, "text", "")))
             return value
         if isinstance(value, (float, np.floating)):
             return self.number(value)
-        if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+        if isinstance(value, np.ndarray) and value.dtype.kind in "fO":
             return self.number(value)
         if isinstance(value, int):
             self.token(str(value))
@@ -184,11 +236,18 @@ def _describe(token: str) -> str:
 
 
 def split(ir: ModelIR) -> Split:
-    """The IR with its numbers as symbols, their values and the structure's signature."""
+    """The IR with its numbers as symbols, their values, the structure's signature and d as
+    expressions of the symbolic parameters (module docstring)."""
     walk = _Walk(symbolic=True)
     symbolic = walk(ir)
     symbols = ca.vertcat(*walk.symbols) if walk.symbols else ca.SX(0, 1)
-    return Split(symbolic, symbols, np.array(walk.values, float), walk.signature())
+    values = np.array(walk.values, float)
+    expressions = ca.SX(ca.DM(values)) if values.size else ca.SX(0, 1)
+    for index, expression in walk.traced.items():
+        expressions[index] = expression
+    moving = np.zeros(values.size, bool)
+    moving[list(walk.traced)] = True
+    return Split(symbolic, symbols, values, walk.signature(), expressions, moving)
 
 
 def data(ir: ModelIR) -> tuple[np.ndarray, str]:

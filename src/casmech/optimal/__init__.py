@@ -1,7 +1,7 @@
 """Exact sensitivities, parameter estimation and optimal control on a compiled model (issue 7).
 
-    symbolic.py     re-lower a model with chosen parameters as CasADi symbols
-    system.py       the system functions with a `theta` input (ParametricSystem)
+    system.py       the system functions with a `theta` input (ParametricSystem): the model
+                    loaded with those parameters traced, its data d(theta) by CasADi
     dae.py          the index-1 DAE, its differentiable consistent initial state, results columns
     sensitivity.py  IDAS simulation and forward/adjoint sensitivities of columns and integrals
     estimate.py     weighted least squares against measurements (IPOPT)

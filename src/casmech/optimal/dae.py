@@ -142,7 +142,7 @@ def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
     per_joint = [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(nominal.joints))]
     kinetic, potential = system["energy"](t, q, q_dot, theta)
     violation = ca.mmax(ca.fabs(system["phi"](t, q, theta)))
-    elements = nominal["element_outputs"](t, q, q_dot)  # contacts and stops (nominal values)
+    elements = system["element_outputs"](t, q, q_dot, theta)  # contacts and stops
     values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements)
     return column_names(nominal)[1:], ca.Function("columns", [t, dae.x, dae.z, theta], [values],
                                                   ["t", "x", "z", "theta"], ["columns"])

@@ -3,8 +3,10 @@
     fit = casmech.optimal.estimate(model, ["m", "c"], times, {"bar.y": ys, "bar.z": zs})
 
 minimise  sum_k sum_i w_i (y_i(t_k; theta) - d_ik)^2  over theta (within optional bounds), with
-IPOPT (bundled in CasADi); the gradient is exact (adjoint IDAS sensitivities) and the Hessian is
-approximated by L-BFGS. Parameters are scaled by their starting values.
+IPOPT (bundled in CasADi); the residuals are lifted into variables whose constraint Jacobian
+comes from forward IDAS sensitivities, and the Hessian is approximated by L-BFGS. Parameters
+are scaled by their starting values. Any parameter system.py takes (geometry and composed
+models included) is exact at every theta the solver tries, through d(theta).
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
 from casmech.optimal.sensitivity import check_times, output_graph
-from casmech.optimal.system import auto_method, data_inputs, parametric_system
+from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 
@@ -38,7 +40,7 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
              bounds: Mapping[str, tuple[float, float]] | None = None, rtol: float = 1e-9,
              atol: float = 1e-11, max_iter: int = 100, verbose: bool = False) -> Estimate:
     """Fit `parameters` (starting from the model's values) to measured columns."""
-    system, inputs = _system(model, parameters)
+    system = parametric_system(model, parameters)
     dae = build_dae(system)
     times = check_times(times, dae.t0)
     outputs = list(data)
@@ -50,8 +52,7 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
     inner, y = output_graph(dae, outputs, times, rtol, atol, chained=False)
     names = tuple(dict.fromkeys(parameters))
     theta = ca.MX.sym("theta", len(names))
-    response = ca.Function("y", [theta], [ca.Function("y", [inner], [y])(
-        theta if inputs is None else inputs.inputs(theta))])
+    response = ca.Function("y", [theta], [ca.Function("y", [inner], [y])(theta)])
     n_y = y.numel()
     # lifted least squares: variables [theta / scale, r], r = y(theta) - data; the constraint
     # Jacobian (n_y x n_theta) comes from forward IDAS sensitivities
@@ -75,8 +76,6 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
                           lbx=np.concatenate([low, -n_r]), ubx=np.concatenate([high, n_r]),
                           lbg=0, ubg=0)
     except RuntimeError as error:
-        if inputs is not None and inputs.data.failure() is not None:
-            raise inputs.data.failure() from None
         raise AnalysisError(FailureContext(float(times[-1]), f"estimation failed: {error}"[:600],
                                            [])) from None
     stats = solver.stats()
@@ -84,13 +83,3 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
     at = response(values).full().reshape(measured.shape) - measured
     return Estimate(names, values, start, float(solution["f"]), at,
                     int(stats.get("iter_count", -1)), str(stats.get("return_status")))
-
-
-def _system(model: ResolvedModel, names: Sequence[str]):
-    """(the parametric system, None) when the file's expressions can be re-read with symbols
-    (system.py's "symbolic"); otherwise (geometry moves, a composed model) the system over the
-    model data and its DataInputs (theta -> [d(theta); theta], exact at every theta)."""
-    if auto_method(model, names) == "symbolic":
-        return parametric_system(model, names), None
-    inputs = data_inputs(model, names)
-    return inputs.system, inputs

@@ -3,9 +3,11 @@ and a pose meeting the terminal conditions, with the controls of inverse dynamic
 
     target  Gauss-Newton (least-squares steps) on [Phi(q); c(q) - c*] from the initial pose,
             c the terminal columns that depend on positions only (an `e0`, a CM coordinate)
-    path    q(t) = Newton projection onto Phi = 0 of the straight line between the two poses
-            (Euler parameters renormalised), timed by s = 3 tau^2 - 2 tau^3 (rest to rest)
-    rates   q_dot, q_ddot by central differences of the path, q_dot projected onto Phi_q q_dot = nu
+    path    q(s) = the point of Phi = 0 closest to the straight line between the two poses
+            (Euler parameters renormalised; numerics.kkt.closest_point, started from the
+            runtime's Newton projection), timed by s = 3 tau^2 - 2 tau^3 (rest to rest)
+    rates   q_dot, q_ddot from dq/ds and d2q/ds2 by CasADi through the rootfinder (the
+            implicit function's derivatives), q_dot projected onto Phi_q q_dot = nu
     u       per interval, the least-squares solution (multipliers and controls) of the equations
             of motion at its midpoint, clipped to the bounds
 
@@ -17,17 +19,18 @@ with guessed controls flails through poses far from the optimum.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from casmech.numerics import kkt
 from casmech.optimal.dae import DAE
 from casmech.runtime.assembly import newton, solve_velocities
 
 MAX_ITERATIONS = 50
 TOLERANCE = 1e-10
 MAX_STEP = 0.1  # largest change of a coordinate per Gauss-Newton step (far targets)
-DELTA = 1e-4  # central-difference step in the path parameter
 
 
 @dataclass(frozen=True)
@@ -39,26 +42,39 @@ class Guess:
     q_end: np.ndarray
     horizon: float
 
-    def positions(self, tau: float) -> np.ndarray:
-        """The projected straight-line pose at path parameter tau in [0, 1]."""
+    def line(self, s):
+        """The straight-line pose at path parameter s, Euler parameters renormalised (numbers
+        or a CasADi expression of s)."""
         nb = self.dae.system.nominal.n_bodies
-        q = (1 - tau) * self.q_start + tau * self.q_end
-        for k in range(nb):
-            p = q[3 * nb + 4 * k:3 * nb + 4 * k + 4]
-            q[3 * nb + 4 * k:3 * nb + 4 * k + 4] = p / np.linalg.norm(p)
-        return newton(self.dae.system.nominal, self.dae.t0, q)
+        q = (1 - s) * self.q_start + s * self.q_end
+        parts = [q[:3 * nb]] + [q[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]
+        unit = [p / (ca.norm_2(p) if isinstance(p, ca.MX) else np.linalg.norm(p))
+                for p in parts[1:]]
+        return ca.vertcat(parts[0], *unit) if isinstance(q, ca.MX) else \
+            np.concatenate([parts[0], *unit])
 
-    def _path(self, s: float) -> np.ndarray:
-        return self.positions(float(np.clip(s, 0.0, 1.0)))
+    def positions(self, tau: float) -> np.ndarray:
+        """The projected straight-line pose at path parameter tau in [0, 1] (the runtime's
+        Newton projection)."""
+        return newton(self.dae.system.nominal, self.dae.t0, self.line(tau))
+
+    @cached_property
+    def path(self) -> ca.Function:
+        """(q_guess, s) -> (q, dq/ds, d2q/ds2): the closest point of Phi = 0 to line(s)."""
+        dae, system = self.dae, self.dae.system
+        closest = kkt.closest_point(system["phi"], system["phi_q"], dae.rows)
+        guess, s = ca.MX.sym("q_guess", dae.n), ca.MX.sym("s")
+        q = closest(guess, dae.t0, self.line(s), ca.DM(system.values))[0]
+        dq = ca.jacobian(q, s)
+        return ca.Function("path", [guess, s], [q, dq, ca.jacobian(dq, s)])
 
     def rates(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(q, q_dot, q_ddot) at time t: s(tau) = 3 tau^2 - 2 tau^3, tau = (t - t0) / T."""
         tau = (t - self.dae.t0) / self.horizon
-        s = 3 * tau ** 2 - 2 * tau ** 3
+        s = float(np.clip(3 * tau ** 2 - 2 * tau ** 3, 0.0, 1.0))
         s_dot, s_ddot = (6 * tau - 6 * tau ** 2) / self.horizon, (6 - 12 * tau) / self.horizon ** 2
-        lo, mid, hi = (self._path(s + d) for d in (-DELTA, 0.0, DELTA))
-        dq, d2q = (hi - lo) / (2 * DELTA), (hi - 2 * mid + lo) / DELTA ** 2
-        return mid, dq * s_dot, d2q * s_dot ** 2 + dq * s_ddot
+        q, dq, d2q = (np.array(v).ravel() for v in self.path(self.positions(s), s))
+        return q, dq * s_dot, d2q * s_dot ** 2 + dq * s_ddot
 
     def state(self, t: float) -> np.ndarray:
         q, q_dot, _ = self.rates(t)

@@ -122,7 +122,7 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
     if problem.horizon <= 0 or problem.intervals < 1:
         raise UsageError("the horizon must be positive and intervals at least 1")
     controls = control_forces(model, problem.controls)
-    dae = build_dae(parametric_system(model, (), "auto"), controls)
+    dae = build_dae(parametric_system(model), controls)
     names, columns = columns_function(dae)
     for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
         if name not in names:

@@ -10,11 +10,9 @@ integral from t0 to the output time (an IDAS quadrature): a scalar of the trajec
 Derivatives come from CasADi's IDAS sensitivities: forward (`mode="forward"`: one sensitivity
 system per parameter) or adjoint (`mode="adjoint"`: one backward sweep per output), both through
 the consistent initial state (assembly and velocity projection differentiated as a graph).
-Parameters enter the DAE as system.py's `method` says: "auto" (the default) re-evaluates the
-file's expressions symbolically (exact) unless a parameter moves the geometry (a length, a joint
-point, an axis, an initial pose) or the model is composed; then through the model data d with
-dd/dtheta from central differences of the lowering (optimal/lowering.py), whose estimated error
-is `Sensitivity.lowering_error`.
+Parameters enter the DAE through the model data d(theta) of system.py (the lowering traced over
+them), so a geometry parameter (a length, a joint point, an axis, an initial pose) is as exact
+as a mass.
 """
 
 from __future__ import annotations
@@ -34,7 +32,7 @@ from casmech.optimal.dae import (
     columns_function,
     initial_state_function,
 )
-from casmech.optimal.system import METHODS, parametric_system
+from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 MODES = ("forward", "adjoint")
@@ -49,9 +47,6 @@ class Sensitivity:
     values: np.ndarray  # (times, outputs)
     jacobian: np.ndarray  # (times, outputs, parameters)
     mode: str
-    method: str = "symbolic"  # how the parameters entered (system.py)
-    # method "data": estimated relative truncation error of dd/dtheta, per file parameter
-    lowering_error: dict[str, float] | None = None
 
 
 def idas(dae: DAE, grid: Sequence[float], rtol: float, atol: float, t0: float | None = None,
@@ -193,17 +188,14 @@ def _evaluate(function: ca.Function, theta: np.ndarray, times: np.ndarray):
 
 def sensitivity(model: ResolvedModel, parameters: Sequence[str], outputs: Sequence[str],
                 times: Sequence[float], mode: str = "forward", rtol: float = 1e-10,
-                atol: float = 1e-12, method: str = "auto") -> Sensitivity:
+                atol: float = 1e-12) -> Sensitivity:
     """Values and derivatives of results columns at `times` w.r.t. `parameters` (file
-    parameters, geometry included, or initial velocities `<body>.vx` ... `<body>.wz`);
-    `method`: one of METHODS (module docstring)."""
+    parameters, geometry included, or initial velocities `<body>.vx` ... `<body>.wz`)."""
     if mode not in MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(MODES)}")
-    if method not in METHODS:
-        raise UsageError(f"method '{method}' is not one of {', '.join(METHODS)}")
     if not parameters:
         raise UsageError("name at least one parameter to differentiate with respect to")
-    system = parametric_system(model, parameters, method)
+    system = parametric_system(model, parameters)
     dae = build_dae(system)
     times = check_times(times, dae.t0)
     theta, y = output_graph(dae, outputs, times, rtol, atol, chained=mode == "adjoint")
@@ -215,14 +207,13 @@ def sensitivity(model: ResolvedModel, parameters: Sequence[str], outputs: Sequen
     values, jacobian = _evaluate(ca.Function("sens", [theta], [y, jac]), system.values, times)
     shape = (times.size, len(outputs))
     return Sensitivity(system.names, tuple(outputs), times, values.reshape(shape),
-                       jacobian.reshape(*shape, n_p), mode, system.method,
-                       system.lowering_error)
+                       jacobian.reshape(*shape, n_p), mode)
 
 
 def simulate(model: ResolvedModel, outputs: Sequence[str], times: Sequence[float],
              rtol: float = 1e-10, atol: float = 1e-12) -> np.ndarray:
     """Results columns at `times` from the same IDAS problem, without derivatives."""
-    system = parametric_system(model, (), "auto")
+    system = parametric_system(model)
     dae = build_dae(system)
     times = check_times(times, dae.t0)
     theta, y = output_graph(dae, outputs, times, rtol, atol, chained=False)

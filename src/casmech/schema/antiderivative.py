@@ -16,6 +16,7 @@ parameters stay symbolic for casmech.optimal).
 
 from __future__ import annotations
 
+from casmech.core import traced
 from casmech.core.expressions import Binary, Call, Constant, Expr, Name, Number, Unary
 
 T = "t"
@@ -56,7 +57,9 @@ def has_t(node) -> bool:
 
 
 def _value(node, constants) -> float:
-    return float(node.evaluate(dict(constants), 0))
+    """The value of a subtree without t, for a decision on the form of the integral (the
+    integral keeps the subtree itself, so a symbolic parameter stays an expression)."""
+    return float(traced.value(node.evaluate(dict(constants), 0)))
 
 
 # ------------------------------------------------------------------------- polynomials in t

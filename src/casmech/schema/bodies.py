@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
-from casmech.core import euler, quaternions
+from casmech.core import euler, quaternions, traced
 from casmech.errors import failed
 from casmech.schema import files, resolved, spec
 from casmech.schema.checker import Checker
@@ -21,8 +20,8 @@ CROSS = {"x_axis": AXES[1:], "y_axis": AXES[2::-2], "z_axis": AXES[:2]}  # right
 IDENTITY = np.array([1.0, 0.0, 0.0, 0.0])
 
 INERTIA_FORMS = {
-    3: np.diag,  # principal moments
-    6: lambda v: np.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]]),
+    3: lambda v: traced.array(np.diag(v)),  # principal moments
+    6: lambda v: traced.array([[v[0], v[3], v[4]], [v[3], v[1], v[5]], [v[4], v[5], v[2]]]),
 }
 GEOMETRY_SIZES = {  # kind -> {resolved key: (path inside the item, value)}, all must be > 0
     "box": lambda g: {"size": (("box",), g.box)},
@@ -43,8 +42,9 @@ GEOMETRY_EXTRAS = {
 
 # ------------------------------------------------------------------------------ rotations
 def rotation_matrix(p: np.ndarray) -> np.ndarray:
-    """A(p): body -> global; columns are the body axes (core/euler.py's, on numbers)."""
-    return euler.numeric(euler.rotation, np.asarray(p, float))
+    """A(p): body -> global; columns are the body axes (core/euler.py's, on numbers or
+    traced numbers)."""
+    return traced.numeric(euler.rotation, traced.asarray(p))
 
 
 # ---------------------------------------------------------------------------------- checks
@@ -88,7 +88,7 @@ def from_axis_angle(check: Checker, path: Path, given: spec.Orientation) -> np.n
     angle = check.number((*path, "angle"), given.axis_angle.angle)
     if axis is None or angle is None:
         return None
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
+    return traced.array(np.concatenate([[traced.cos(angle / 2)], traced.sin(angle / 2) * axis]))
 
 
 def from_matrix(check: Checker, path: Path, given: spec.Orientation) -> np.ndarray | None:
@@ -96,8 +96,9 @@ def from_matrix(check: Checker, path: Path, given: spec.Orientation) -> np.ndarr
     rows = [check.numbers((*path, row), values) for row, values in enumerate(given.matrix)]
     if failed(rows):
         return None
-    a = np.array(rows)
-    error, det = np.abs(a.T @ a - np.eye(3)).max(), np.linalg.det(a)
+    a = traced.array(rows)
+    values = traced.value(a)
+    error, det = np.abs(values.T @ values - np.eye(3)).max(), np.linalg.det(values)
     if error > UNIT or abs(det - 1.0) > UNIT:
         check.error(
             "E406",
@@ -132,12 +133,13 @@ def inertia(check: Checker, path: Path, values) -> np.ndarray | None:
     rows = rows or [check.numbers(path, values)]
     if failed(rows):
         return None
-    matrix = np.array(rows) if nested else INERTIA_FORMS[len(values)](rows[0])
-    scale = np.abs(matrix).max()
-    if np.abs(matrix - matrix.T).max() > UNIT * scale:
+    matrix = traced.array(rows) if nested else INERTIA_FORMS[len(values)](rows[0])
+    numbers = traced.value(matrix)  # the checks read the values
+    scale = np.abs(numbers).max()
+    if np.abs(numbers - numbers.T).max() > UNIT * scale:
         check.error("E401", path, "inertia matrix is not symmetric")
         return None
-    moments = np.linalg.eigvalsh(matrix)
+    moments = np.linalg.eigvalsh(numbers)
     if moments[0] <= 0:
         check.error(
             "E401",

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
 from casmech.core.expressions import parse as parse_expression
 from casmech.elements import force_types
@@ -30,6 +31,19 @@ WHY_GROUND = "'ground' is the fixed global frame, always present; choose another
 TIME_KEYS = "joint f, driver angle/displacement"  # and the force elements' state keys
 
 
+class _Given:
+    """An expression's root that is a number given as it is (a traced number)."""
+
+    def __init__(self, number):
+        self.number = number
+
+    def evaluate(self, env, backend):
+        return self.number
+
+    def names(self):
+        return ()
+
+
 def _is_number(text: str) -> bool:
     try:
         float(text)
@@ -39,9 +53,18 @@ def _is_number(text: str) -> bool:
 
 
 class Checker:
-    def __init__(self, document: Document, overrides: Mapping[str, str] | None):
+    """`symbols`: parameters evaluated as traced numbers (name -> CasADi symbol;
+    casmech.core.traced), so that every number computed from them carries its
+    expression."""
+
+    def __init__(self, document: Document, overrides: Mapping[str, str] | None,
+                 symbols: Mapping[str, Any] | None = None):
         self.doc = document
         self.overrides = dict(overrides or {})
+        self.symbols = dict(symbols or {})
+        # parameter values an instance gives its component that are traced numbers (the
+        # document holds their values, which its validation reads)
+        self.given: dict[str, Any] = {}
         self.found: list[Diagnostic] = []
         self.parameters: dict[str, float] = {}
         self.declared: dict[str, int] = {}  # parameter -> line, for "defined later"
@@ -101,7 +124,10 @@ class Checker:
             self.error("E201", path, f"unknown symbol '{name}'", source=source, hint=hint)
 
     def finite(self, path, expr: Expr, at: Mapping[str, float]) -> float | None:
-        value = float(expr.evaluate({**self.parameters, **at}, "numpy"))  # overflow: reported
+        """The value of `expr` (a traced number when it depends on a symbolic parameter), or
+        None when it is not finite or implausible (reported)."""
+        result = expr.evaluate({**self.parameters, **at}, "numpy")  # overflow: reported
+        value = result.value if isinstance(result, traced.Traced) else float(result)
         if not math.isfinite(value):
             where = ", ".join(f"{name} = {number:g}" for name, number in at.items())
             self.error(
@@ -117,11 +143,18 @@ class Checker:
                        got=f"{written}{value:.6g}",
                        hint="SI units: metres, kilograms, seconds, radians")
             return None
-        return value
+        return traced.scalar(result) if isinstance(result, traced.Traced) else value
 
     def number(self, path: Path | str, value: Any) -> float | None:
+        if isinstance(value, traced.Traced):  # an instance's value of a component parameter
+            return self.finite(path, Expr(repr(value.value), _Given(value)), {})
         expr = self.expression(path, value)
         return None if expr is None else self.finite(path, expr, {})
+
+    def setting(self, path: Path | str, value: Any) -> float | None:
+        """A number that is a setting, not model data (an analysis's t_end, a bound of an
+        estimate): its value even where it is computed from a symbolic parameter."""
+        return traced.value(self.number(path, value))
 
     def function(self, path: Path, value: Any, at: Mapping[str, float]) -> ScalarFunction | None:
         variables = tuple(at)
@@ -133,7 +166,7 @@ class Checker:
 
     def numbers(self, path: Path, values) -> np.ndarray | None:
         items = [self.number((*path, index), value) for index, value in enumerate(values)]
-        return None if failed(items) else np.array(items)
+        return None if failed(items) else traced.array(items)
 
     def positive(self, code: str, path: Path, value, what: str) -> Any:
         """`value` (a number or an array) if all positive; else report and return None."""
@@ -144,7 +177,7 @@ class Checker:
         return value
 
     def vector(self, path: Path, values, default=(0.0, 0.0, 0.0)) -> np.ndarray | None:
-        return np.array(default, float) if values is None else self.numbers(path, values)
+        return traced.asarray(default).copy() if values is None else self.numbers(path, values)
 
     def direction(self, path: Path, values, normalise: bool = True) -> np.ndarray | None:
         vector = self.numbers(path, values)
@@ -164,13 +197,18 @@ class Checker:
         for name in self.overrides.keys() - parameters.keys():
             hint = did_you_mean(name, parameters)
             self.error("E300", f"--set {name}", f"unknown parameter '{name}'", hint=hint)
+        for name in self.symbols.keys() - parameters.keys():
+            hint = did_you_mean(name, parameters)
+            self.error("E300", f"symbolic {name}", f"unknown parameter '{name}'", hint=hint)
         for name, value in parameters.items():
             path = ("parameters", name)
             if not self.valid_name(path, name, self.doc.locate_key(path), RESERVED, WHY_RESERVED):
                 self.broken.add(name)
                 continue
             where = f"--set {name}" if name in self.overrides else path
-            result = self.number(where, self.overrides.get(name, value))
+            result = self.number(where, self.overrides.get(name, self.given.get(name, value)))
+            if result is not None and name in self.symbols:
+                result = traced.seed(traced.value(result), self.symbols[name])
             del self.declared[name]
             self.parameters.update({name: result} if result is not None else {})
             self.broken.update({name} if result is None else set())

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path as FilePath
 from typing import Any
 
+from casmech.core import traced
 from casmech.errors import Diagnostic, ModelError, Source, UsageError, did_you_mean
 from casmech.schema import files, placement, repeat, spec
 from casmech.schema.bodies import orientation, rotation_matrix
@@ -48,8 +49,11 @@ def uses_composition(data: Mapping[str, Any]) -> bool:
 class ComposedChecker(BaseChecker):
     """The parent's Checker, knowing the instances' members and naming them in its messages."""
 
-    def __init__(self, document: Document, overrides, members: Members | None = None):
-        super().__init__(document, overrides)
+    def __init__(self, document: Document, overrides, members: Members | None = None,
+                 symbols: Mapping[str, Any] | None = None,
+                 given: Mapping[str, Any] | None = None):
+        super().__init__(document, overrides, symbols)
+        self.given = dict(given or {})
         self.instances: dict[str, str] = {}
         self.failed: set[str] = set()
         if members is not None:
@@ -229,9 +233,11 @@ class Instances:
     """Resolves the instances of one (expanded) document into Members."""
 
     def __init__(self, document: Document, check, scope: Scope, context: Context,
-                 overrides: Mapping[str, Mapping[str, str]]):
+                 overrides: Mapping[str, Mapping[str, str]],
+                 symbols: Mapping[str, Mapping[str, Any]] | None = None):
         self.doc, self.check, self.scope, self.context = document, check, scope, context
         self.overrides = overrides
+        self.symbols = symbols or {}  # instance -> its symbolic parameters (name -> symbol)
         self.members = Members()
         self.found: list[Diagnostic] = []
         self.inner: list[tuple[str, str, Diagnostic]] = []
@@ -250,6 +256,10 @@ class Instances:
         for name in unknown:
             hint = did_you_mean(name, first) or f"instances: {listing(list(first)) or 'none'}"
             self.check.error("E300", f"--set {name}.{next(iter(self.overrides[name]))}",
+                             f"unknown instance '{name}'", hint=hint)
+        for name in [name for name in self.symbols if name not in first]:
+            hint = did_you_mean(name, first) or f"instances: {listing(list(first)) or 'none'}"
+            self.check.error("E300", f"symbolic {name}.{next(iter(self.symbols[name]))}",
                              f"unknown instance '{name}'", hint=hint)
         self.found += grouped(self.inner)
 
@@ -300,8 +310,10 @@ class Instances:
             return False
         scope = self.scope if isinstance(ref, spec.Component) else None
         sets = self.overrides.get(given.name, {})
-        model, found, instances = compose_document(document, sets, self.context.push(
-            key, given.component), scope)
+        model, found, instances = compose_document(
+            document, sets, self.context.push(key, given.component), scope,
+            self.symbols.get(given.name),
+            {name: v for name, v in values.items() if traced.is_traced(v)})
         self.inner += [(given.name, given.component, d) for d in found]
         if model is not None:
             self.add(given, model, instances, frame)
@@ -345,7 +357,8 @@ class Instances:
                            hint=f"add parameters: {{{name}: ...}} to the instance (declared at "
                                 f"{line})")
         given_by_set = {name: sets[name] for name in sets if declared.get(name, 0) is None}
-        return with_values(document, {**values, **given_by_set}) if ok else None
+        written = {name: traced.value(v) for name, v in values.items()}  # traced: Checker.given
+        return with_values(document, {**written, **given_by_set}) if ok else None
 
     def add(self, given: spec.Instance, model: ResolvedModel, instances: Mapping[str, str],
             frame: placement.Frame) -> None:
@@ -382,14 +395,18 @@ def definitions(document: Document, given: spec.ModelSpec, scope: Scope | None) 
 
 
 def compose_document(document: Document, overrides, context: Context,
-                     scope: Scope | None = None):
-    """(model or None, findings, {instance path: component}) of one model document."""
+                     scope: Scope | None = None, symbols: Mapping[str, Any] | None = None,
+                     values: Mapping[str, Any] | None = None):
+    """(model or None, findings, {instance path: component}) of one model document;
+    `symbols`: its symbolic parameters (an instance's as `<instance>.<name>`), `values`: the
+    traced numbers an instance gives its parameters (the document holds their values)."""
     document = with_bodies(document)
     given, found = validate(document)
     if given is None:
         return None, [*document.diagnostics, *found], {}
     own, nested = split_overrides(overrides)
-    check = ComposedChecker(document, own)
+    own_symbols, nested_symbols = split_overrides(symbols)
+    check = ComposedChecker(document, own, symbols=own_symbols, given=values)
     check.parameter_values(given.parameters)
     if check.found:
         return None, [*document.diagnostics, *check.found], {}
@@ -399,12 +416,13 @@ def compose_document(document: Document, overrides, context: Context,
     given, found = validate(expanded)
     if given is None:  # pragma: no cover - substitution keeps every value's type
         return None, found, {}
-    check = ComposedChecker(expanded, own)
+    check = ComposedChecker(expanded, own, symbols=own_symbols, given=values)
     check.parameter_values(given.parameters)
-    instances = Instances(expanded, check, definitions(expanded, given, scope), context, nested)
+    instances = Instances(expanded, check, definitions(expanded, given, scope), context, nested,
+                          nested_symbols)
     instances.run(given.instances)
     members = instances.members
-    check = ComposedChecker(expanded, own, members)
+    check = ComposedChecker(expanded, own, members, own_symbols, values)
     model = resolve_model(check, given)
     found = repeat.relabel([*instances.check.found, *check.found], expanded)
     found = [*document.diagnostics, *found, *instances.found]
@@ -421,8 +439,10 @@ def merged(model: ResolvedModel, members: Members) -> ResolvedModel:
                    parameters={**model.parameters, **members.parameters}, **extra)
 
 
-def compose(document: Document, overrides: Mapping[str, str] | None):
-    """(the composed ResolvedModel or None, every finding)."""
+def compose(document: Document, overrides: Mapping[str, str] | None,
+            symbols: Mapping[str, Any] | None = None):
+    """(the composed ResolvedModel or None, every finding); `symbols`: the parameters (an
+    instance's as `<instance>.<name>`) evaluated as traced numbers."""
     top = (("file", str(FilePath(document.file).resolve())), FilePath(document.file).name)
-    model, found, _ = compose_document(document, overrides, Context((top,)))
+    model, found, _ = compose_document(document, overrides, Context((top,)), symbols=symbols)
     return model, found

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.elements.joint_types import COORDINATES, REGISTRY, having
 from casmech.errors import failed
 from casmech.schema import contact, resolved
@@ -111,7 +112,8 @@ def distance_length(check: Checker, path: Path, given, vectors) -> float | None:
     elif failed(vectors.values()):
         return None
     else:
-        length, where = float(np.linalg.norm(vectors["at_j"] - vectors["at_i"])), (*path, "at_j")
+        length = traced.scalar(np.linalg.norm(vectors["at_j"] - vectors["at_i"]))
+        where = (*path, "at_j")
     if length is not None and length <= ZERO:
         check.error(
             "E404",

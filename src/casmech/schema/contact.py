@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.elements.force_types import outputs_of
 from casmech.elements.forces.contact_spec import positive
 from casmech.elements.joint_types import COORDINATES, REGISTRY
@@ -50,5 +51,6 @@ def limit(check: Checker, path: Path, given) -> dict[str, float] | None:
         check.error("E103", (*path, "upper"), "a limit's upper bound must be above its lower",
                     got=f"lower {lower:g}, upper {upper:g}")
         return None
-    return {"lower": float(lower), "upper": float(upper), "stiffness": k, "damping": c}
+    return {"lower": traced.scalar(lower), "upper": traced.scalar(upper), "stiffness": k,
+            "damping": c}
 

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.elements.force_types import REGISTRY, state_reading
 from casmech.elements.joint_types import attributes as joint_attributes
@@ -34,12 +35,12 @@ BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
 
 def _body_value(body: resolved.Body | None, column: str) -> float:
     """A body column's value at t = 0 as the file writes it (accelerations 0; a body that
-    failed its checks: 0)."""
+    failed its checks: 0), for the checks of the expressions that read it."""
     if body is None or column.startswith("a"):
         return 0.0
     if column.startswith("e"):
-        return float(body.euler_parameters[int(column[1])])
-    return float(getattr(body, BODY_INITIAL[column[:-1]])["xyz".index(column[-1])])
+        return float(traced.value(body.euler_parameters[int(column[1])]))
+    return float(traced.value(getattr(body, BODY_INITIAL[column[:-1]])["xyz".index(column[-1])]))
 
 
 def initial_states(check: Checker, columns=BODY_STATES) -> dict[str, float]:

@@ -21,7 +21,7 @@ def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Anal
     path: Path = ("analysis",)
     at = None
     if given.at is not None:
-        at = check.number((*path, "at"), given.at)
+        at = check.setting((*path, "at"), given.at)
         t_end = settings.t_end if settings is not None else None
         if at is not None and (at < 0 or (t_end is not None and at > t_end)):
             check.error("E409", (*path, "at"), "at must be a time of the run, within [0, t_end]",

@@ -19,6 +19,7 @@ from dataclasses import dataclass, fields, is_dataclass, replace
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.expressions import Binary, Expr, Name, Number
 from casmech.schema import resolved
 from casmech.schema.resolved import GROUND
@@ -53,7 +54,7 @@ class Frame:
         return self.direction(x) + self.origin
 
     def direction(self, x: np.ndarray) -> np.ndarray:
-        return self.rotation @ x if self.rotated else np.asarray(x, float)
+        return self.rotation @ x if self.rotated else traced.asarray(x)
 
     def orientation(self, p: np.ndarray) -> np.ndarray:
         return quaternion_product(self.euler_parameters, p) if self.rotated else p
@@ -98,18 +99,30 @@ class Names:
 
 
 def rotate_functions(frame: Frame, functions):
-    """(f_x, f_y, f_z) -> R (f_x, f_y, f_z) as three expressions of the same variables."""
+    """(f_x, f_y, f_z) -> R (f_x, f_y, f_z) as three expressions of the same variables. An
+    entry of R that depends on symbolic parameters (a traced number) enters as a constant of
+    the function, named `R[row,column]`, so that it stays model data."""
     if not frame.rotated:
         return functions
     rotated = []
-    for row in frame.rotation:
-        terms = [(float(c), f) for c, f in zip(row, functions, strict=True) if c != 0.0]
-        root, text = Number(0.0, 0, 1), "0"
-        for k, (c, f) in enumerate(terms):
-            node = Binary("*", Number(c, 0, 1), f.expr.root, 0)
-            root = node if k == 0 else Binary("+", root, node, 0)
-        text = " + ".join(f"{c!r}*({f.text})" for c, f in terms) or text
-        rotated.append(replace(functions[0], text=text, expr=Expr(text, root)))
+    for r, row in enumerate(frame.rotation):
+        terms = [(traced.scalar(c), k, f) for k, (c, f) in enumerate(zip(row, functions,
+                                                                         strict=True))
+                 if c != 0.0]
+        root, pieces, constants = Number(0.0, 0, 1), [], {}
+        for n, (c, k, f) in enumerate(terms):
+            factor = Number(c, 0, 1)
+            if isinstance(c, traced.Traced):
+                factor = Name(f"R[{r},{k}]", 0, 1)
+                constants[factor.name] = c
+            node = Binary("*", factor, f.expr.root, 0)
+            root = node if n == 0 else Binary("+", root, node, 0)
+            pieces.append(f"{factor.name if isinstance(factor, Name) else repr(c)}*({f.text})")
+        text = " + ".join(pieces) or "0"
+        with_constants = {**functions[0].constants, **constants} if constants else \
+            functions[0].constants
+        rotated.append(replace(functions[0], text=text, expr=Expr(text, root),
+                               constants=with_constants))
     return tuple(rotated)
 
 

@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from typing import Any
 
+from casmech.core import traced
 from casmech.core.expressions import CONSTANTS, ExpressionError, tokenize
 from casmech.core.expressions import parse as parse_expression
 from casmech.errors import Diagnostic, Source, did_you_mean
@@ -104,7 +105,15 @@ def integer(report: _Findings, path: Path, value: Any, env: Mapping[str, float],
         report.error("E201", path, f"unknown symbol '{name}'", source, hint=hint)
     if unknown:
         return None
-    number = float(expr.evaluate(env, "numpy"))
+    result = expr.evaluate(env, "numpy")
+    if traced.is_traced(result):  # a count is structure: no derivative through it
+        symbolic = [name for name in expr.symbols if traced.is_traced(env.get(name))]
+        report.error("E103", path, f"{what} cannot depend on a symbolic parameter "
+                     f"({', '.join(sorted(symbolic))}): counts and names are the model's "
+                     "structure", report.doc.source_in_scalar(path, offset),
+                     hint="take other parameters as the variables")
+        return None
+    number = float(traced.value(result))
     if not math.isfinite(number) or abs(number - round(number)) > INTEGRAL:
         source = report.doc.source_in_scalar(path, offset)
         report.error("E103", path, f"{what} must be an integer", source, got=f"{text} = {number:g}")

@@ -206,6 +206,12 @@ class ResolvedModel:
     # sha256 of the model file and of every file it read or named (components, tables, meshes,
     # estimation data): absolute path -> digest (schema/files.py), for metadata.json and replay
     sources: Mapping[str, str] = field(default_factory=dict)
+    # the `--set` values it was loaded with (parameter -> text), so it can be loaded again
+    overrides: Mapping[str, str] = field(default_factory=dict)
+    # the parameters loaded as traced numbers (casmech.core.traced): name -> its CasADi
+    # symbol; every number computed from them is a traced number (load_model_text's
+    # `symbolic`)
+    symbols: Mapping[str, Any] = field(default_factory=dict)
 
     def __repr__(self) -> str:
         """One line: name, file, counts, parameters and analysis, not the whole model."""

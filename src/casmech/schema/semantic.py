@@ -10,6 +10,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import replace
 
+from casmech.core import traced
 from casmech.errors import Diagnostic, failed
 from casmech.schema import events, files, limits, motors, resolved, spec
 from casmech.schema.bodies import body
@@ -37,7 +38,7 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
     and joints are known (the output grid is bounded in rows x results columns)."""
     path: Path = ("analysis",)
     keys = ("t_end", "output_step", "rtol", "atol")
-    values = {key: check.number((*path, key), getattr(given, key)) for key in keys}
+    values = {key: check.setting((*path, key), getattr(given, key)) for key in keys}
     if failed(values.values()):
         return None
     columns = result_columns(len(check.bodies), len(check.joint_types))
@@ -62,6 +63,7 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
 def _pairs(check: Checker, path: Path, given) -> dict[str, tuple[float, float]] | None:
     """{name: (low, high)} with low <= high (E409)."""
     pairs = {name: check.numbers((*path, name), pair) for name, pair in given.items()}
+    pairs = {name: None if pair is None else traced.value(pair) for name, pair in pairs.items()}
     for name, pair in pairs.items():
         if pair is not None and pair[0] > pair[1]:
             check.error("E409", (*path, name), "bounds must be [low, high] with low <= high",
@@ -77,7 +79,8 @@ def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimati
              for k, name in enumerate(given.parameters)]
     names += [check.reference((*path, "bounds", name), name, given.parameters,
                               "estimated parameter") for name in given.bounds]
-    weights = {name: check.number((*path, "weights", name), w) for name, w in given.weights.items()}
+    weights = {name: check.setting((*path, "weights", name), w)
+               for name, w in given.weights.items()}
     bounds = _pairs(check, (*path, "bounds"), given.bounds)
     try:
         files.resolve(check.doc.file, given.data, must_exist=False)
@@ -102,7 +105,7 @@ def _control(check: Checker, path: Path, given: spec.Control) -> resolved.Contro
 
 def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.OptimalControl | None:
     path: Path = ("ocp",)
-    horizon = check.number((*path, "horizon"), given.horizon)
+    horizon = check.setting((*path, "horizon"), given.horizon)
     if horizon is not None and horizon <= 0:
         check.error("E409", (*path, "horizon"), "horizon must be positive", got=f"{horizon:g}")
         horizon = None
@@ -111,14 +114,14 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                     got=str(given.intervals))
     controls = [_control(check, (*path, "controls", k), c) for k, c in enumerate(given.controls)]
     objective = (*path, "objective")
-    effort = check.number((*objective, "effort"), given.objective.effort)
-    costs = {name: (check.number((*objective, "terminal", name, "weight"), cost.weight),
-                    check.number((*objective, "terminal", name, "target"), cost.target))
+    effort = check.setting((*objective, "effort"), given.objective.effort)
+    costs = {name: (check.setting((*objective, "terminal", name, "weight"), cost.weight),
+                    check.setting((*objective, "terminal", name, "target"), cost.target))
              for name, cost in given.objective.terminal.items()}
-    terminal = {name: check.number((*path, "terminal", name), value)
+    terminal = {name: check.setting((*path, "terminal", name), value)
                 for name, value in given.terminal.items()}
     bounds = _pairs(check, (*path, "path"), given.path)
-    time_weight = check.number((*objective, "time"), given.objective.time)
+    time_weight = check.setting((*objective, "time"), given.objective.time)
     free = _pairs(check, path, {"free_time": given.free_time}) if given.free_time else {}
     if free and free["free_time"][0] <= 0:
         check.error("E409", (*path, "free_time"), "the final time's bounds must be positive")
@@ -177,7 +180,9 @@ def resolve(
     document: Document,
     model: spec.ModelSpec,
     overrides: Mapping[str, str] | None = None,
+    symbols: Mapping | None = None,
 ) -> tuple[resolved.ResolvedModel | None, list[Diagnostic]]:
-    """The resolved model (None if anything is wrong) and every finding."""
-    check = StateChecker(document, overrides)
+    """The resolved model (None if anything is wrong) and every finding; `symbols`: the
+    parameters evaluated as traced numbers (Checker)."""
+    check = StateChecker(document, overrides, symbols)
     return resolve_model(check, model), check.found

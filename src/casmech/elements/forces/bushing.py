@@ -34,7 +34,7 @@ from typing import Any, Literal
 import casadi as ca
 import numpy as np
 
-from casmech.core import euler
+from casmech.core import euler, traced
 from casmech.core.quaternions import conjugate
 from casmech.core.spec_base import Name, Orientation, Repeats, Spec, Vector
 from casmech.core.values import constant
@@ -66,21 +66,11 @@ class Bushing(Spec):
     repeat: Repeats | None = None
 
 
-# Flat views of a bushing's coefficients under its params names (stiffness0..5 = stiffness then
-# rotational_stiffness, ...), so that optimal/symbolic.py, which re-evaluates
-# `getattr(spec, key)` for every params key of a force, gives sensitivities to them.
+# a bushing's coefficients under its params names (stiffness0..5 = stiffness then
+# rotational_stiffness, ...)
 BUSHING_PARAMS = {"stiffness": ("stiffness", "rotational_stiffness"),
                   "damping": ("damping", "rotational_damping"),
                   "preload": ("preload_force", "preload_torque")}
-
-
-def _component(vector: str, index: int) -> property:
-    return property(lambda self: getattr(self, vector)[index])
-
-
-for _key, _vectors in BUSHING_PARAMS.items():
-    for _n in range(6):
-        setattr(Bushing, f"{_key}{_n}", _component(_vectors[_n // 3], _n % 3))
 
 KEYS = tuple(BUSHING_PARAMS)  # params: f"{key}{n}" for n in 0..5 (along d, then theta)
 
@@ -116,9 +106,14 @@ def deflection(force, x):
     return ca.vertcat(d, marker.T @ rotation_vector(s))
 
 
+def rest_rotation(p_i, p_j):
+    """Euler parameters that undo the relative rotation of the two bodies at t = 0."""
+    return conjugate(relative(p_i, p_j))
+
+
 def law(force, x, read):
     """(generalized force on q, potential energy) of one bushing (it reads no state)."""
-    # vertcat, not DM: optimal/symbolic.py puts SX parameters here (a DM of SX is silently NaN)
+    # vertcat, not DM: the model data's split puts SX entries here (a DM of SX is silently NaN)
     k, c, preload = (ca.vertcat(*[force.params[f"{key}{n}"] for n in range(6)]) for key in KEYS)
     s = deflection(force, x)
     s_q = ca.jacobian(s, x.q)
@@ -128,15 +123,18 @@ def law(force, x, read):
 
 def lower(force, model, poses) -> dict[str, Any]:
     """resolved.Force (type bushing) -> the ForceIR fields."""
-    at = np.asarray(force.vectors["at"], float)
-    marker = euler.numeric(euler.rotation, force.vectors["orientation"])
+    at = traced.asarray(force.vectors["at"])
+    marker = traced.numeric(euler.rotation, force.vectors["orientation"])
     initial = {b.name: b.euler_parameters for b in model.bodies}
-    p0 = [ca.DM(initial.get(name, IDENTITY)) for name in (force.body_i, force.body_j)]
-    rest = np.array(ca.DM(conjugate(relative(*p0))).full()).ravel()
+    p0 = [initial.get(name, IDENTITY) for name in (force.body_i, force.body_j)]
+    if traced.is_traced(p0):
+        rest = traced.numeric(rest_rotation, *(traced.asarray(p) for p in p0)).ravel()
+    else:
+        rest = np.array(ca.DM(rest_rotation(*map(ca.DM, p0))).full()).ravel()
     params = {}
     for key, vectors in BUSHING_PARAMS.items():  # e.g. stiffness then rotational_stiffness
         values = np.concatenate([force.vectors[name] for name in vectors])
-        params.update({f"{key}{n}": float(v) for n, v in enumerate(values)})
+        params.update({f"{key}{n}": traced.scalar(v) for n, v in enumerate(values)})
     points = {"s_i": poses.local(force.body_i, "P", at), "s_j": poses.local(force.body_j, "P", at)}
     axes = {"marker_i": poses.pose[force.body_i][1].T @ marker, "rest": rest}
     return dict(body_i=poses.index[force.body_i], body_j=poses.index[force.body_j],

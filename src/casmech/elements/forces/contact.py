@@ -30,9 +30,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
-import numpy as np
 
-from casmech.core import euler
+from casmech.core import euler, traced
 from casmech.core.expressions import step
 from casmech.core.values import constant
 
@@ -174,13 +173,13 @@ def lower(force, model, poses) -> dict[str, Any]:
     v, i, j = force.vectors, force.body_i, force.body_j
     points, axes = {}, {}
     if "at" in v:
-        points["plane_at"] = poses.local(i, "P", np.asarray(v["at"], float))
-        axes["normal"] = poses.local(i, "axis", np.asarray(v["normal"], float))
+        points["plane_at"] = poses.local(i, "P", traced.asarray(v["at"]))
+        axes["normal"] = poses.local(i, "axis", traced.asarray(v["normal"]))
     for key, body in (("center", j), ("center_i", i), ("center_j", j)):
         if key in v:
-            points[key] = poses.local(body, "P", np.asarray(v[key], float))
+            points[key] = poses.local(body, "P", traced.asarray(v[key]))
     for key, prefix in (("points", "point"), ("ends", "end")):
         for n, p in enumerate(v.get(key, ())):
-            points[f"{prefix}{n}"] = poses.local(j, "P", np.asarray(p, float))
+            points[f"{prefix}{n}"] = poses.local(j, "P", traced.asarray(p))
     return dict(body_i=poses.index[i], body_j=poses.index[j], points=points,
                 params=dict(force.params), axes=axes)

@@ -19,10 +19,11 @@ from __future__ import annotations
 import math
 from typing import Annotated, Any, Literal
 
+import casadi as ca
 import numpy as np
 from pydantic import Field
 
-from casmech.core import euler
+from casmech.core import euler, traced
 from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
 from casmech.errors import failed
 
@@ -115,17 +116,24 @@ def hunt_crossley_damping(e: float) -> float:
     """a = alpha v_in of F = k d^n (1 + alpha d_dot) whose restitution at impact speed v_in is
     exactly e: the root in (0, 1/e) of  a e + ln(1 - a e) = -a + ln(1 + a)  (the law integrated
     over an impact, m v dv / (1 + alpha v) = -k d^n dd; Hunt and Crossley's a = 3/2 (1 - e) is
-    its first order in 1 - e). By bisection: f > 0 near 0, -> -inf at 1/e."""
+    its first order in 1 - e). By bisection: f > 0 near 0, -> -inf at 1/e. A traced e (a
+    symbolic parameter) gives a traced root (traced.root: Newton's steps on its expression)."""
     if e >= 1:
         return 0.0
-    low, high = 0.0, 1.0 / e
+    value = traced.value(e)
+    low, high = 0.0, 1.0 / value
     for _ in range(200):
         a = 0.5 * (low + high)
         if a in (low, high):
             break
-        f = a * e + math.log1p(-a * e) + a - math.log1p(a)
+        f = a * value + math.log1p(-a * value) + a - math.log1p(a)
         low, high = (a, high) if f > 0 else (low, a)
-    return 0.5 * (low + high)
+    return traced.root(_restitution, 0.5 * (low + high), e)
+
+
+def _restitution(a, e):
+    """The residual whose root hunt_crossley_damping finds (SX)."""
+    return a * e + ca.log1p(-a * e) + a - ca.log1p(a)
 
 
 AXIS = {"x": 0, "y": 1, "z": 2}
@@ -208,7 +216,7 @@ def plane(check, path, given) -> dict[str, np.ndarray | None]:
 # ---------------------------------------------------------------------------- body geometry
 def _rotation(p) -> np.ndarray:
     """A(p) on numbers: body -> global."""
-    return euler.numeric(euler.rotation, np.asarray(p, float))
+    return traced.numeric(euler.rotation, traced.asarray(p))
 
 
 def _item(check, body: str, kind: str) -> dict[str, Any] | None:
@@ -259,7 +267,7 @@ def box_corners(check, path, body: str, points) -> np.ndarray | None:
         if check.bodies.get(body) is not None:
             _no_shape(check, (*path, "body_j"), body, "box", "points")
         return None
-    half = np.asarray(item["size"], float) / 2
+    half = traced.asarray(item["size"]) / 2
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
     return _global(check, body, item, signs * half)
 
@@ -274,7 +282,7 @@ def capsule(check, path, body: str, radius, ends):
     r = item["radius"] if radius is None else positive(
         check, (*path, "radius"), check.number((*path, "radius"), radius), "capsule radius")
     if ends is None:
-        half = np.zeros(3)
+        half = np.zeros(3, object if traced.is_traced(item["length"]) else float)
         half[AXIS[item["axis"]]] = item["length"] / 2
         return r, _global(check, body, item, np.array([-half, half]))
     found = [check.numbers((*path, "ends", k), p) for k, p in enumerate(ends)]

@@ -14,6 +14,7 @@ from typing import Any, Literal
 import casadi as ca
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.spec_base import Name, Repeats, Spec, Vector
 from casmech.core.values import constant
 from casmech.elements.forces.terms import Input, in_global, point_force, torque
@@ -67,7 +68,7 @@ def resolve_torque(check, path, given) -> dict[str, Any] | None:
 # ------------------------------------------------------------------------------ lowering
 def lower(force, model, poses) -> dict[str, Any]:
     v, body = force.vectors, poses.index[force.body]
-    points = {"s": poses.local(force.body, "P", np.asarray(v["at"], float))} if "at" in v else {}
+    points = {"s": poses.local(force.body, "P", traced.asarray(v["at"]))} if "at" in v else {}
     return dict(body_i=body, body_j=body, points=points, params={}, value=force.value,
                 frame=force.frame)
 

@@ -13,6 +13,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
 from casmech.core.values import constant
 from casmech.elements.forces.terms import Input, SpringKind, distance, relative_angle, spring
@@ -64,7 +65,7 @@ def resolve_tsda(check, path, given) -> dict[str, Any] | None:
     at = {key: check.numbers((*path, key), getattr(given, key)) for key in ("at_i", "at_j")}
     if not bodies_ok or failed(at.values()):
         return None
-    length = float(np.linalg.norm(at["at_j"] - at["at_i"]))
+    length = traced.scalar(np.linalg.norm(at["at_j"] - at["at_i"]))
     free = (
         length
         if given.free_length is None
@@ -108,13 +109,13 @@ def resolve_rsda(check, path, given) -> dict[str, Any] | None:
 # ------------------------------------------------------------------------------ lowering
 def lower_tsda(force, model, poses) -> dict[str, Any]:
     v = force.vectors
-    at_i, at_j = np.asarray(v["at_i"], float), np.asarray(v["at_j"], float)
+    at_i, at_j = traced.asarray(v["at_i"]), traced.asarray(v["at_j"])
     length = force.free_length if force.free_length is not None else np.linalg.norm(at_j - at_i)
     points = {"s_i": poses.local(force.body_i, "P", at_i),
               "s_j": poses.local(force.body_j, "P", at_j)}
     params = {"stiffness": force.stiffness, "damping": force.damping}
     return dict(body_i=poses.index[force.body_i], body_j=poses.index[force.body_j],
-                points=points, params=params | {"free_length": float(length)},
+                points=points, params=params | {"free_length": traced.scalar(length)},
                 actuator=force.actuator)
 
 

@@ -1,0 +1,81 @@
+"""The plain lowering (no symbolic parameters) is bit for bit what it was before the lowering
+learned traced numbers: every number of the ModelIR of every model in models/ (all of them,
+zeros and round-off included, as float64 bytes) and its structure (names, indices, kinds,
+expression texts, settings) hash to the fingerprints in
+tests/reference/plain_lowering.json, which tests/reference/README.md says how they were made
+(this file's `fingerprint`, run on the source of commit 1365157, before traced numbers).
+
+`python -m tests.compiler.test_plain_lowering` prints the fingerprints of the source it runs.
+"""
+
+import hashlib
+import json
+from dataclasses import fields, is_dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from casmech.model.lower import lower
+from casmech.schema import load_model
+
+ROOT = Path(__file__).resolve().parents[2]
+MODELS = sorted(p for p in (ROOT / "models").rglob("*.yaml") if p.parent.name != "components")
+REFERENCE = ROOT / "tests" / "reference" / "plain_lowering.json"
+SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend on the checkout
+
+
+def _walk(value, numbers: list, tokens: list) -> None:
+    if isinstance(value, (bool, str, int, range, type(None))):
+        tokens.append(repr(value))
+    elif isinstance(value, (float, np.floating)):
+        numbers.append(float(value))
+        tokens.append("#")
+    elif isinstance(value, np.ndarray):
+        tokens.append(f"#{value.shape}{value.dtype}")
+        numbers.extend(np.asarray(value, float).ravel().tolist())
+    elif hasattr(value, "text") and hasattr(value, "root"):  # an expression: its text
+        tokens.append(f"expr {value.text}")
+    elif is_dataclass(value):
+        tokens.append(type(value).__name__)
+        for item in fields(value):
+            if item.name not in SKIPPED:
+                tokens.append(item.name)
+                _walk(getattr(value, item.name), numbers, tokens)
+    elif isinstance(value, dict) or hasattr(value, "items"):
+        tokens.append(f"{{{len(value)}")
+        for key, item in value.items():
+            tokens.append(str(key))
+            _walk(item, numbers, tokens)
+    elif isinstance(value, (tuple, list)):
+        tokens.append(f"({len(value)}")
+        for item in value:
+            _walk(item, numbers, tokens)
+    else:
+        tokens.append(type(value).__name__)
+
+
+def fingerprint(path: Path) -> dict:
+    """The count and sha256 of every number of the model's plain lowering, and the sha256 of
+    its structure."""
+    numbers: list[float] = []
+    tokens: list[str] = []
+    _walk(lower(load_model(path)), numbers, tokens)
+    return {"numbers": len(numbers),
+            "values": hashlib.sha256(np.array(numbers, float).tobytes()).hexdigest(),
+            "structure": hashlib.sha256("\0".join(tokens).encode()).hexdigest()}
+
+
+def _name(path: Path) -> str:
+    return str(path.relative_to(ROOT / "models"))
+
+
+@pytest.mark.parametrize("path", MODELS, ids=_name)
+def test_plain_lowering_is_unchanged(path):
+    reference = json.loads(REFERENCE.read_text())
+    assert _name(path) in reference, f"no fingerprint for {_name(path)}: add it (module doc)"
+    assert fingerprint(path) == reference[_name(path)]
+
+
+if __name__ == "__main__":
+    print(json.dumps({_name(p): fingerprint(p) for p in MODELS}, indent=1, sort_keys=True))
