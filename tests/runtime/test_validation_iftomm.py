@@ -63,6 +63,7 @@ def test_a02_four_bar_n2_through_its_singular_poses(formulation):
     assert result.metadata["integrator"] == "projected_rk4" and result.metadata["rk4_steps"] > 0
 
 
+@pytest.mark.slow  # 40 bodies through their singular poses: minutes on 2 cores
 def test_a02_four_bar_n40_through_its_singular_poses():
     """Both DAEs fail at the first flat pose and the run is done on projected Runge-Kutta steps
     (runtime.projected_rk4) from t0: 81 bodies over 20 s in 82 s (r-p, median of 3 on this
