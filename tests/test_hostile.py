@@ -150,6 +150,12 @@ CASES = {
     "cli_output_step_tiny": Case(BASE, "E409", exit=2,
                                  args=("run", "--out", "out", "--output-step", "1e-12")),
     "cli_rtol_10": Case(BASE, "E409", exit=2, args=("run", "--out", "out", "--rtol", "10")),
+    # issue 35 item 10: a subnormal output step overflowed t_end / output_step
+    "output_step_subnormal": Case(base(output_step="  output_step: 2e-320"), "E409", 18),
+    "output_step_subnormal_run": Case(base(output_step="  output_step: 2e-320"), "E409", 18,
+                                      args=("run", "--out", "out")),
+    "cli_output_step_subnormal": Case(BASE, "E409", exit=2,
+                                      args=("run", "--out", "out", "--output-step", "2e-320")),
     # 2. memory: aliases, repeat ranges, huge files and devices
     "billion_laughs": Case(_laughs(), "E006"),
     "repeat_1e9": Case(_repeat("1e9"), "E105", 5),

@@ -15,6 +15,7 @@ from casmech.errors import UsageError
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
 from casmech.output.csv import write_csv
+from casmech.schema import limits
 
 
 def add_arguments(parser) -> None:
@@ -36,8 +37,9 @@ def add_arguments(parser) -> None:
 def _optimal_control(model, args, out: Path) -> None:
     problem, transcription = ocp.from_block(model.ocp)
     if args.intervals is not None:
-        if args.intervals < 1:
-            raise UsageError(f"--intervals must be at least 1 (got {args.intervals})")
+        problems = limits.ocp_problems(None, args.intervals, problem.elements)
+        if problems:
+            raise UsageError(f"--intervals {args.intervals}: {next(iter(problems.values()))}")
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
     problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode})
     transcription = args.transcription or transcription
