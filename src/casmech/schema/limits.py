@@ -74,8 +74,9 @@ def grid_rows(t_end: float, output_step: float) -> float:
 def analysis_problems(settings: dict[str, float], columns: int,
                       step_within: bool = True) -> dict[str, str]:
     """{setting: problem} of t_end, output_step, rtol, atol (non-positive, not finite, out of
-    range (t_end and output_step below MIN_TIME included), or an output grid of more than MAX_ROWS rows or MAX_VALUES values; with
-    `step_within`, an output_step larger than t_end)."""
+    range (t_end and output_step below MIN_TIME included), or an output grid of more than
+    MAX_ROWS rows or MAX_VALUES values; with `step_within`, an output_step larger than
+    t_end)."""
     problems: dict[str, str] = {}
     for key, value in settings.items():
         if value is None:

@@ -16,8 +16,8 @@ from casmech.schema.loader import Path
 def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Analysis | None,
                    joints, forces) -> resolved.Analysis | None:
     """`settings` with options `at` (seconds or None) and `inputs` (names or None), checked:
-    E409 for an `at` outside [0, t_end] or in (0, limits.MIN_TIME), E300 for an input that is no effort-motor joint or
-    force element."""
+    E409 for an `at` outside [0, t_end] or in (0, limits.MIN_TIME), E300 for an input that is
+    no effort-motor joint or force element."""
     path: Path = ("analysis",)
     at = None
     if given.at is not None:

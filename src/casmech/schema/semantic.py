@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from casmech.errors import Diagnostic, failed
 from casmech.schema import events, files, limits, motors, resolved, spec
-from casmech.schema.bodies import body
+from casmech.schema.bodies import body, floors
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
@@ -146,6 +146,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     for index, item in enumerate(given.bodies):
         bodies.append(body(check, index, item))
         check.bodies.setdefault(item.name, bodies[-1])
+    floors(check, bodies)
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
