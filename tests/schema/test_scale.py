@@ -25,7 +25,8 @@ forces:
      stiffness: [1, 1, 1], damping: [1, 1, 1]}
 analysis: {type: dynamics, t_end: 1, output_step: 0.01}
 """
-LIGHT = "  - {name: light, mass: MASS, inertia: [INERTIA, INERTIA, INERTIA], position: [0, 0, -2]}\n"
+LIGHT = ("  - {name: light, mass: MASS, inertia: [INERTIA, INERTIA, INERTIA], "
+         "position: [0, 0, -2]}\n")
 
 
 def findings(text: str) -> list[tuple[str, str, str]]:

@@ -20,10 +20,10 @@ directions from below, relative to the model itself, because what breaks is a ra
   are not normalised: their length scales the constraint row, and at assembly's tolerance
   (1e-12 on |Phi|) one shorter than MIN_ROW_VECTOR leaves its angle free by more than 1e-9 rad.
 
-The length scale is the largest distance of a body's centre from the origin or radius of
-gyration (of a body of at least MIN_MASS, at most limits.LENGTH) among the bodies resolved so
-far: a body's own orientation axes are checked against it and the bodies before it, joints and
-forces against every body.
+The length scale is the larger of the farthest body centre from the origin and the heaviest
+body's radius of gyration (at most limits.LENGTH), among the bodies resolved so far: a body's
+own orientation axes are checked against it and the bodies before it, joints and forces against
+every body.
 """
 
 from __future__ import annotations
@@ -43,22 +43,30 @@ MIN_ROW_VECTOR = 1e-3  # least length of a basic constraint's a_i, a_j, c
 
 @dataclass
 class Scale:
-    """The heaviest body (name, mass [kg]) and the length scale [m] of the bodies so far."""
+    """The heaviest body (name, mass [kg], radius of gyration [m]) and the farthest centre from
+    the origin [m] among the bodies so far."""
 
     heaviest: str = ""
     mass: float = 0.0
-    length: float = 0.0
+    gyration: float = 0.0
+    reach: float = 0.0
+
+    @property
+    def length(self) -> float:
+        """The length scale [m]."""
+        return max(self.reach, self.gyration)
 
     def add(self, name: str, mass: float | None, inertia: np.ndarray | None,
             position: np.ndarray | None) -> None:
         """A body's mass, inertia and position (None: reported as wrong, left out)."""
-        if mass is not None and mass > self.mass:
-            self.heaviest, self.mass = name, mass
         if position is not None:
-            self.length = max(self.length, float(np.linalg.norm(position)))
-        if mass is not None and inertia is not None and mass >= MIN_MASS:
+            self.reach = max(self.reach, float(np.linalg.norm(position)))
+        if mass is None or mass <= self.mass:
+            return
+        self.heaviest, self.mass = name, mass
+        if inertia is not None:
             gyration = math.sqrt(float(np.max(np.abs(inertia))) / mass)
-            self.length = max(self.length, min(gyration, limits.LENGTH))
+            self.gyration = min(gyration, limits.LENGTH) if math.isfinite(gyration) else 0.0
 
     def direction_floor(self, normalised: bool) -> float:
         """The least length of a direction (normalised or a basic constraint's vector)."""
