@@ -21,6 +21,7 @@ step rejects) stays dense.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -58,21 +59,69 @@ def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
     return np.concatenate([np.concatenate([b.r_dot0 for b in bodies]), p_dot.ravel()])
 
 
+@dataclass
+class UnmetRows(FailureContext):
+    """A failure naming constraint rows (RowInfo, residual), worst first: the constraints that
+    cannot be met (`casmech check` reports each as an E502)."""
+
+    rows: list = field(default_factory=list)
+
+    def format(self) -> str:
+        at = f"at t = {self.time:.6g}: " if self.time is not None else ""
+        lines = [f"analysis failed {at}{self.cause}"]
+        for row, residual in self.rows:
+            where = f"{row.source}: " if row.source else ""
+            lines.append(f"  {where}{row_text(row)} (residual {residual:.3e})")
+        return "\n".join(lines)
+
+
+def row_text(row) -> str:
+    """"joint 'tether': |d_ij|^2 = length^2" or "body 'rod2': p^T p - 1" (a RowInfo)."""
+    if row.kind == "normalization":
+        return f"body '{row.joint}': p^T p - 1"
+    return f"joint '{row.joint}': {row.label.split(': ', 1)[-1]}"
+
+
+def unmet_rows(functions: SystemFunctions, start: np.ndarray, best: np.ndarray,
+               tolerance: float, count: int = 3) -> list:
+    """(RowInfo, residual at the best iterate) of the rows Newton left unmet from its start to
+    its best iterate: the worst row of each of the `count` joints (or bodies' normalization)
+    with the largest residuals, worst first. A row Newton met on the way is no culprit, and one
+    it broke on the way (diverging) was met at the start; when no row is unmet at both, those
+    unmet at the best iterate."""
+    start, best = np.abs(np.ravel(start)), np.abs(np.ravel(best))
+    unmet = (start > tolerance) & (best > tolerance)
+    unmet = unmet if unmet.any() else best > tolerance
+    worst: dict[str, tuple[object, float]] = {}
+    for row, value, chosen in zip(functions.rows, best, unmet, strict=True):
+        if chosen and value > worst.get(row.joint, (None, -1.0))[1]:
+            worst[row.joint] = (row, float(value))
+    return sorted(worst.values(), key=lambda item: -item[1])[:count]
+
+
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
            tolerance: float = POSITION_TOLERANCE) -> np.ndarray:
-    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed)."""
+    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed). When it
+    does not converge, the error names the rows it left unmet (unmet_rows): the constraints
+    that cannot be met together (a length no pose reaches)."""
     q = np.array(q, float)
+    start = best_phi = None
     for _ in range(MAX_ITERATIONS):
         phi, phi_q = _evaluate(functions, t, q, scale)
-        if np.max(np.abs(phi), initial=0.0) <= tolerance:
+        if _worst(phi) <= tolerance:
             return q
+        start = phi if start is None else start
+        best_phi = phi if best_phi is None or _worst(phi) < _worst(best_phi) else best_phi
         q += numeric_qr.lstsq(phi_q, -phi)
     phi, phi_q = _evaluate(functions, t, q, scale)
-    if np.max(np.abs(phi), initial=0.0) <= 1e3 * tolerance:
+    if _worst(phi) <= 1e3 * tolerance:
         return q
-    cause = (f"positions did not converge in {MAX_ITERATIONS} Newton iterations "
-             f"(max |Phi| = {np.max(np.abs(phi)):.3e}); the joints with the largest residuals:")
-    raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
+    best_phi = phi if _worst(phi) < _worst(best_phi) else best_phi
+    cause = (f"the constraints cannot be met: positions did not converge (max |Phi| = "
+             f"{_worst(best_phi):.3e} at best in {MAX_ITERATIONS} Newton iterations); the rows "
+             "left unmet:")
+    raise AnalysisError(UnmetRows(t, cause, worst_joints(functions, best_phi),
+                                  rows=unmet_rows(functions, start, best_phi, tolerance)))
 
 
 def _evaluate(functions, t, q, scale):
