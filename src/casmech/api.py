@@ -25,6 +25,7 @@ from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
+from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.results import Result, column_names, table
 from casmech.schema import limits, load_model, load_model_text
 from casmech.schema.resolved import Analysis, ResolvedModel
@@ -145,6 +146,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             error.partial.functions = functions
             error.partial.status = "interrupted" if isinstance(error, Interrupted) else "failed"
             _keep_messages(error.partial, messages, stream.count)
+        if isinstance(error, NonFinite):  # the results column and the elements, by name
+            error.explain(functions)
         raise
     _keep_messages(result, messages, stream.count)
     from casmech import codegen  # imported on use: `casmech check` never needs it

@@ -1,6 +1,7 @@
 """Physical ranges (issue 35 item 12): masses, inertias and directions above floors set by the
 model's own scale (schema/scale.py, E411/E404), stiffness and damping not negative unless the
-element says `allow_negative: true` (E103), a tsda's points apart."""
+element says `allow_negative: true` (E103). (A tsda whose points coincide: casmech check,
+tests/commands/test_check.py.)"""
 
 import numpy as np
 import pytest
@@ -112,13 +113,6 @@ def test_negative_coefficients_need_allow_negative(old, new, path, name):
     found = findings(text)
     assert [f[:2] for f in found] == [("E103", path)] and "must not be negative" in found[0][2]
     load_model_text(text.replace(f"{{name: {name}, ", f"{{name: {name}, allow_negative: true, "))
-
-
-def test_a_tsda_whose_points_coincide_is_located():
-    text = MODEL.replace("at_i: [0, 1, 0]", "at_i: [0, 0, -1]").replace(
-        "damping: 1}", "damping: 1, free_length: 0}")
-    [(code, path, message)] = findings(text)
-    assert (code, path) == ("E404", "forces[0].at_j") and "coincide" in message
 
 
 UNSTABLE = """\

@@ -5,7 +5,9 @@ a kinematic analysis (kinematics, inverse_dynamics) of a mechanism with free deg
 freedom (E501, as `run` words it), and constraints that cannot be met at t = 0 (E502: the
 assembly every analysis starts with does not converge; each unmet row named at its joint's
 line). A body's mesh file that is missing or that the animation's reader cannot read is an
-error too (E410), though `run` never reads it.
+error too (E410), though `run` never reads it, and so are drivers beyond plausible magnitudes
+over the run and a tsda whose points coincide (schema/check_only.py), which `run` meets as a
+results row that is not finite (exit 3).
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from pathlib import Path
 import casmech
 from casmech.commands.common import add_overrides, overrides
 from casmech.errors import AnalysisError, BodyName, Diagnostic, ModelError
+from casmech.schema import check_only
 
 PRESCRIBED = ("kinematics", "inverse_dynamics")  # analyses that need 0 degrees of freedom
 
@@ -111,7 +114,8 @@ def run(args) -> int:
           f"{len(model.forces)} forces; at the {where}:")
     print(report.summary())
     errors = [*(assembly_errors(failure) if failure is not None else ()),
-              *analysis_errors(functions.ir.analysis, report), *mesh_errors(model)]
+              *analysis_errors(functions.ir.analysis, report), *check_only.problems(model),
+              *mesh_errors(model)]
     if errors:
         raise ModelError(errors)
     return 0

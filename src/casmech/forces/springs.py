@@ -48,8 +48,6 @@ class RSDA(Spec):
     repeat: Repeats | None = None
 
 
-POINTS_APART = 1e-12  # [m] least distance of a tsda's points at t = 0 (schema ZERO)
-
 SPRINGS = {
     "tsda": SpringKind(distance, ("s_i", "s_j"), "free_length", ("length", "length_dot")),
     "rsda": SpringKind(lambda fi, fj, *axes: relative_angle(fi.A, fj.A, *axes),
@@ -88,12 +86,6 @@ def resolve_tsda(check, path, given) -> dict[str, Any] | None:
     if not bodies_ok or failed(at.values()):
         return None
     length = float(np.linalg.norm(at["at_j"] - at["at_i"]))
-    if length < POINTS_APART:
-        check.error("E404", (*path, "at_j"), "the tsda's points coincide at t = 0: the "
-                    "direction of its force is undefined there", got=f"|at_j - at_i| = "
-                    f"{length:g}", hint="attach the ends at distinct points (a spring of zero "
-                    "rest length is `free_length: 0` between points apart)")
-        return None
     free = (
         length
         if given.free_length is None

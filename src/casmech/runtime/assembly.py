@@ -35,6 +35,7 @@ from casmech.errors import AnalysisError, FailureContext
 from casmech.geometry import euler
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.memo import kept
+from casmech.runtime.nonfinite import NonFinite
 
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
@@ -108,6 +109,7 @@ def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | N
     start = best_phi = None
     for _ in range(MAX_ITERATIONS):
         phi, phi_q = _evaluate(functions, t, q, scale)
+        finite(t, "phi", phi, q)
         if _worst(phi) <= tolerance:
             return q
         start = phi if start is None else start
@@ -122,6 +124,16 @@ def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | N
              "left unmet:")
     raise AnalysisError(UnmetRows(t, cause, worst_joints(functions, best_phi),
                                   rows=unmet_rows(functions, start, best_phi, tolerance)))
+
+
+def finite(t: float, name: str, values: np.ndarray, q: np.ndarray, q_dot=None) -> None:
+    """NonFinite (runtime.nonfinite) when `values` (a constraint vector at (q, q_dot)) are not
+    all finite: no least squares is taken of them. (Accelerations and multipliers of forces
+    or a gamma that are not finite come out NaN instead: the Result they go to says which
+    column.)"""
+    if not np.all(np.isfinite(values)):
+        q_dot = np.zeros_like(q) if q_dot is None else q_dot
+        raise NonFinite(t, name, values, (q, q_dot))
 
 
 def _evaluate(functions, t, q, scale):
@@ -195,6 +207,7 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
         return np.array(q_dot_guess, float)
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
+    finite(t, "nu", nu, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()
     return q_dot_guess + numeric_qr.lstsq(phi_q, residual)
 
@@ -204,6 +217,8 @@ def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.nd
     """Phi_q q_ddot = gamma, for a fully driven (0-DOF) mechanism."""
     phi_q = functions.matrix("phi_q", t, q)
     gamma = functions.vector("gamma", t, q, q_dot)
+    if not np.all(np.isfinite(gamma)):  # no least squares of it: the row says (Result)
+        return np.full(functions.n_coordinates, np.nan)
     q_ddot, _, rank, _ = np.linalg.lstsq(phi_q, gamma, rcond=None)
     if rank < functions.n_coordinates:
         cause = ("singular configuration: the constraint Jacobian lost rank "
@@ -218,6 +233,8 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
     """Inverse dynamics: Phi_q^T lam = Q - M q_ddot (minimum norm where rows are redundant)."""
     mass = functions.matrix("mass_matrix", q)
     forces = functions.vector("generalized_forces", t, q, q_dot)
+    if not (np.all(np.isfinite(forces)) and np.all(np.isfinite(q_ddot))):
+        return np.full(functions.n_rows, np.nan)  # no least squares of them (as above)
     phi_q = functions.matrix("phi_q", t, q)
     return np.linalg.lstsq(phi_q.T, forces - mass @ q_ddot, rcond=None)[0]
 
@@ -244,8 +261,11 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     mass = functions["mass_matrix"](q)
     saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
                   lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
-    return saddle_solution(saddle, mass, phi_q, functions["generalized_forces"](t, q, q_dot),
-                           functions.vector("gamma", t, q, q_dot)[rows], np.zeros(len(rows)))
+    forces = functions["generalized_forces"](t, q, q_dot)
+    gamma = functions.vector("gamma", t, q, q_dot)
+    if not (np.all(np.isfinite(np.array(forces))) and np.all(np.isfinite(gamma))):
+        return np.full(functions.n_coordinates, np.nan), np.full(len(rows), np.nan)
+    return saddle_solution(saddle, mass, phi_q, forces, gamma[rows], np.zeros(len(rows)))
 
 
 def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma: np.ndarray,
