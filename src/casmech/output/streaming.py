@@ -28,8 +28,6 @@ from pathlib import Path
 import numpy as np
 
 from casmech.errors import CasmechError
-from casmech.runtime.nonfinite import NonFinite
-from casmech.runtime.results import STATES, Result, column_names, table
 
 FLUSH_VALUES = 1 << 18  # pending results numbers (rows x columns) that make a block
 FLUSH_SECONDS = 1.0  # longest a computed row waits for its block
@@ -62,10 +60,12 @@ class ResultsWriter:
 
     def __init__(self, functions, files: list, reactions_frame=None,
                  on_row: Callable[[float], None] | None = None):
+        from casmech.runtime.results import column_names  # (runtime imports output)
+
         self.functions, self.files, self.frames = functions, files, reactions_frame
         self.on_row = on_row
         self.columns = len(column_names(functions))
-        self.result: Result | None = None  # the Result whose rows are written
+        self.result = None  # the runtime.results.Result whose rows are written
         self.received = 0  # its rows handed over
         self.pending: list[tuple] = []  # blocks (times, q, q_dot, q_ddot, lam) not written
         self.written = 0  # rows in the files
@@ -76,7 +76,7 @@ class ResultsWriter:
         if self.on_row is not None:
             self.on_row(t)
 
-    def rows_added(self, result: Result, times, q, q_dot, q_ddot, lam) -> None:
+    def rows_added(self, result, times, q, q_dot, q_ddot, lam) -> None:
         """Result.extend's hand-over of a block."""
         if self.stopped:
             return
@@ -91,6 +91,9 @@ class ResultsWriter:
     def flush(self, strict: bool = True) -> None:
         """Write the pending rows; at a row that is not finite, the rows before it, then
         NonFinite (with `strict`; else stop there quietly)."""
+        from casmech.runtime.nonfinite import NonFinite
+        from casmech.runtime.results import Result, table
+
         self.flushed = time.monotonic()
         if self.stopped or not self.pending:
             return
@@ -117,7 +120,7 @@ class ResultsWriter:
         error.explain(self.functions, names[column])
         raise error
 
-    def finish(self, result: Result | None, strict: bool = True) -> int:
+    def finish(self, result, strict: bool = True) -> int:
         """The rows of `result` in the files (None: no rows at all): the pending ones written,
         or the files rewritten when `result` is not the Result streamed (or holds rows it was
         not handed). Returns the rows in the files."""
@@ -126,6 +129,8 @@ class ResultsWriter:
                 self._rewind(None)
             return 0
         if not self.stopped and (result is not self.result or len(result) != self.received):
+            from casmech.runtime.results import STATES
+
             self._rewind(result)
             self.pending = [tuple(getattr(result, name) if name != "t" else
                                   np.asarray(result.times) for name in ("t", *STATES))]
@@ -133,7 +138,7 @@ class ResultsWriter:
         self.flush(strict)
         return self.written
 
-    def _rewind(self, result: Result | None) -> None:
+    def _rewind(self, result) -> None:
         for file in self.files:
             writing(file.path, 0, file.rewind)
         self.result, self.received, self.pending, self.written = result, 0, [], 0
