@@ -202,6 +202,24 @@ CASES = {
                        "E005", 5),
     "custom_tag": Case(base(mass="    mass: !secret 1"), "E005", 5),
     "check_free_kinematics": Case(FREE, "E501", 16),
+    # issue 35: careless input, impossible models
+    "driver_rate_1e300": Case(base(axis="    axis: [1, 0, 0]\n    driver: {angle: 1e300*t}"),
+                              "E411", 15),
+    "mass_subnormal": Case(base(mass="    mass: 2e-320"), "E411", 5),
+    "mass_1e-300": Case(base(mass="    mass: 1e-300"), "E411", 5),
+    "inertia_1e-300": Case(base(inertia="    inertia: [1e-300, 1e-300, 1e-300]"), "E411", 6),
+    "negative_stiffness": Case(BASE.replace("analysis:", "forces:\n  - {name: s, type: rsda, "
+                                            "joint: pivot, stiffness: -1e3}\nanalysis:"),
+                               "E103", 16),
+    "dp1_axis_1e-12": Case(BASE.replace("analysis:", "  - {name: c, type: dp1, body_i: "
+                                        "ground, a_i: [0, 0, 1e-12], body_j: bar, "
+                                        "a_j: [1, 0, 0]}\nanalysis:"), "E404", 15),
+    "distance_unreachable": Case(BASE.replace("analysis:", "  - {name: tether, type: distance, "
+                                              "body_i: ground, body_j: bar, at_i: [0, 0, 0], "
+                                              "at_j: [0, 0, -1], length: 10}\nanalysis:"),
+                                 "E502", 15),
+    "mesh_missing": Case(base(position="    position: [0, 0, -1]\n    geometry: "
+                                       "[{mesh: missing.stl}]"), "E410", 8),
 }
 
 

@@ -242,3 +242,14 @@ def test_rows_are_on_disk_while_the_run_goes(tmp_path):
     assert len(values) > 49 and values.shape[1] == len(names)
     assert (np.diff(values[:, 0]) > 0).all()
     assert json.loads((tmp_path / "out/metadata.json").read_text())["status"] == "running"
+
+
+def test_a_model_error_found_by_the_analysis_leaves_no_results_file(tmp_path, capsys):
+    """kinematics of a pendulum without a driver: E501 from the analysis, exit 1; the results
+    file opened for the rows is removed, metadata.json says failed (not running)."""
+    text = DRIVEN.replace("    driver: {angle: 1e300*t}\n", "")
+    path = write(tmp_path, text, "kinematics")
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "out")]) == 1
+    assert "error[E501]" in capsys.readouterr().err
+    assert not (tmp_path / "out/results.csv").exists()
+    assert json.loads((tmp_path / "out/metadata.json").read_text())["status"] == "failed"

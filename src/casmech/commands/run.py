@@ -36,7 +36,7 @@ from pathlib import Path
 import casmech
 from casmech import api, interrupts
 from casmech.commands.common import add_overrides, add_span, overrides
-from casmech.errors import AnalysisError, Interrupted
+from casmech.errors import AnalysisError, CasmechError, Interrupted
 from casmech.output import events as events_output
 from casmech.output.csv import CsvRows
 from casmech.output.hdf5 import Hdf5Rows, h5py
@@ -155,6 +155,18 @@ def _run(args) -> int:
     except WriteError as error:
         with interrupts.saving():
             _write_failed(args, out, functions, error, run, writer)
+        raise
+    except CasmechError as error:  # a model or usage error the analysis found (E501, ...)
+        if isinstance(error, AnalysisError):  # (kept above)
+            raise
+        with interrupts.saving():
+            writer.discard()
+            if "csv" in args.format:
+                model, given, settings, timings, options = run
+                with contextlib.suppress(OSError):
+                    write_json(out / "metadata.json", run_metadata(
+                        model, given, settings, timings, {}, 0, str(error), "failed",
+                        options=options))
         raise
     print(f"{result.metadata['analysis']}: {len(result)} rows, {timings['analysis']:.3g} s "
           f"-> {', '.join(map(str, paths))}")
