@@ -71,35 +71,44 @@ def sample_times(analysis) -> np.ndarray:
 
 
 def _drivers(model, locate) -> list[Diagnostic]:
+    drivers = [(index, joint, key, function) for index, joint in enumerate(model.joints)
+               for key, function in (("angle", joint.driver_angle),
+                                     ("displacement", joint.driver_displacement), ("f", joint.f))
+               if function is not None]
+    if not drivers:
+        return []
     times = sample_times(model.analysis)
+    rows = _evaluate([function for *_, function in drivers], times)
     found = []
-    for index, joint in enumerate(model.joints):
-        for key, function in (("angle", joint.driver_angle),
-                              ("displacement", joint.driver_displacement), ("f", joint.f)):
-            if function is None:
-                continue
-            where = ("joints", index, "driver", key) if key != "f" else ("joints", index, "f")
-            source = joint.sources.get(f"driver.{key}" if key != "f" else "f", joint.source)
-            problem = _beyond(function, times, key)
-            if problem is not None:
-                code, message, expected = problem
-                found.append(Diagnostic(code, format_path(where), message,
-                                        locate(where, source), expected=expected,
-                                        got=function.text[:80],
-                                        hint="SI units: radians, metres, seconds; a motion "
-                                             "this fast leaves double precision in the "
-                                             "accelerations"))
+    for (index, joint, key, function), values in zip(drivers, rows, strict=True):
+        problem = _beyond(values, times, key)
+        if problem is None:
+            continue
+        where = ("joints", index, "driver", key) if key != "f" else ("joints", index, "f")
+        source = joint.sources.get(f"driver.{key}" if key != "f" else "f", joint.source)
+        code, message, expected = problem
+        found.append(Diagnostic(code, format_path(where), message, locate(where, source),
+                                expected=expected, got=function.text[:80],
+                                hint="SI units: radians, metres, seconds; a motion this fast "
+                                     "leaves double precision in the accelerations"))
     return found
 
 
-def _beyond(function, times: np.ndarray, key: str):
-    """(code, message, expected) of the first sample where the driver, its rate or its
-    acceleration is not finite or beyond BOUNDS; None when none is."""
+def _evaluate(functions, times: np.ndarray) -> np.ndarray:
+    """(drivers, 3, times): each driver's value, rate and acceleration at the times (one
+    CasADi Function over all of them, mapped over the times)."""
     t = ca.SX.sym("t")
-    value = ca.SX(function.casadi(t=t))
-    rate = ca.jacobian(value, t)
-    values = ca.Function("driver", [t], [value, rate, ca.jacobian(rate, t)]).map(len(times))
-    rows = np.vstack([np.array(out).ravel() for out in values(times.reshape(1, -1))])
+    values = ca.vertcat(*[ca.SX(function.casadi(t=t)) for function in functions])
+    rates = ca.jacobian(values, t)
+    mapped = ca.Function("drivers", [t], [values, rates, ca.jacobian(rates, t)]).map(len(times))
+    outputs = [np.array(out).reshape(len(functions), len(times))
+               for out in mapped(times.reshape(1, -1))]
+    return np.stack(outputs, axis=1)
+
+
+def _beyond(rows: np.ndarray, times: np.ndarray, key: str):
+    """(code, message, expected) of the first sample where a driver (`rows`: its value, rate
+    and acceleration at `times`) is not finite or beyond BOUNDS; None when none is."""
     (bounds, units) = BOUNDS[key]
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(rows) | (np.abs(rows) > np.array(bounds)[:, None])
