@@ -12,8 +12,11 @@ writes stay in memory until the file is dropped.
 
 from __future__ import annotations
 
+import errno
 import os
 from pathlib import Path
+
+UNSUPPORTED = (errno.EOPNOTSUPP, errno.EINVAL, errno.ENOSYS)  # posix_fallocate not available
 
 
 class StagedFile:
@@ -82,7 +85,7 @@ class StagedFile:
             return
         try:
             if self.length > self.size:
-                os.posix_fallocate(self.fd, self.size, self.length - self.size)
+                self._reserve(self.size, self.length - self.size)
             for offset, chunk in self.staged:
                 os.pwrite(self.fd, chunk, offset)
             if self.length < self.size:
@@ -91,6 +94,15 @@ class StagedFile:
             self.failure = error
             return
         self.staged, self.size = [], self.length
+
+    def _reserve(self, offset: int, length: int) -> None:
+        """The blocks of [offset, offset + length) allocated; a file system that cannot
+        reserve (no fallocate) is written without the reservation."""
+        try:
+            os.posix_fallocate(self.fd, offset, length)
+        except OSError as error:
+            if error.errno not in UNSUPPORTED:
+                raise
 
     def close(self) -> None:
         os.close(self.fd)
