@@ -137,10 +137,10 @@ def _run(args) -> int:
     try:
         try:
             with progress_bar(settings["t_end"]) as callback:
-                writer.on_row = interrupts.watch(callback)
                 result = casmech.analyze(functions, args.analysis, args.t_end,
                                          args.output_step, rtol=args.rtol, atol=args.atol,
-                                         formulation=args.formulation, progress=writer,
+                                         formulation=args.formulation,
+                                         progress=writer.watching(interrupts.watch(callback)),
                                          stabilization=args.stabilization, method=args.method)
             timings["analysis"] = time.perf_counter() - clock
             with interrupts.saving():

@@ -41,17 +41,17 @@ class CsvRows:
         self.handle = open(self.path, "wb", buffering=0)  # noqa: SIM115 - closed by close()
         self.end = self.rows = 0  # bytes of the header and complete rows; complete rows
         try:
-            self._write(self.header)
+            self._write(self.header, 0)
         except BaseException:
             self.handle.close()
             raise
-        self.rows = 0
 
     def append(self, values: np.ndarray) -> None:
         values = np.atleast_2d(np.asarray(values, dtype=np.float64))
         rows = max(1, CHUNK_VALUES // max(1, values.shape[1]))
         for start in range(0, values.shape[0], rows):
-            self._write(rows_text(values[start:start + rows]))
+            block = values[start:start + rows]
+            self._write(rows_text(block), len(block))
 
     def rewind(self) -> None:
         """Back to the header alone (an analysis that starts over)."""
@@ -59,7 +59,8 @@ class CsvRows:
         self.handle.seek(len(self.header))
         self.end, self.rows = len(self.header), 0
 
-    def _write(self, data: bytes) -> None:
+    def _write(self, data: bytes, rows: int) -> None:
+        """`rows` whole rows of text, in pieces (a failure: those of the pieces written)."""
         start = 0
         while start < len(data):
             cut = data.find(b"\n", start + PIECE) + 1 or len(data)
@@ -71,10 +72,11 @@ class CsvRows:
                 with contextlib.suppress(OSError):  # (a file it cannot cut stays as it is)
                     os.ftruncate(self.handle.fileno(), self.end)
                     self.handle.seek(self.end)
+                self.rows += data.count(b"\n", 0, start)
                 raise
             self.end += cut - start
-            self.rows += data.count(b"\n", start, cut)
             start = cut
+        self.rows += rows
 
     def close(self, metadata=None) -> None:
         """Close the file (`metadata` is metadata.json's, written beside it by the caller)."""

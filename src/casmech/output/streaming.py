@@ -1,18 +1,19 @@
 """The results files written while the analysis computes its rows (`casmech run`).
 
-A ResultsWriter is the analysis' row callback (casmech.analyze's `progress`): Result.extend
-hands it every block of states as it is added (its `rows_added`), and it appends the results
-rows of those blocks to every file asked for (output.csv.CsvRows, output.hdf5.Hdf5Rows) once
-FLUSH_VALUES numbers are pending or FLUSH_SECONDS have passed, and at the end. So the rows
-computed are on disk as the run goes: a run that fails, is interrupted, is killed or meets a
-full disk keeps them.
+A ResultsWriter rides on the analysis' row callback (casmech.analyze's `progress`, given its
+`rows_added`): Result.extend hands it every block of states as it is added, and it appends the
+results rows of those blocks to every file asked for (output.csv.CsvRows,
+output.hdf5.Hdf5Rows) in blocks of whole mapped calls of the results row (about FLUSH_VALUES
+numbers), or what is pending once FLUSH_SECONDS have passed, and the rest at the end. So the
+rows computed are on disk as the run goes: a run that fails, is interrupted, is killed or
+meets a full disk keeps them.
 
 - A results row that is not finite (a reaction or the energy of a state beyond double
   precision) is not written: the rows before it are, and runtime.nonfinite.NonFinite is raised
   (exit 3), naming the time, the column and the elements.
 - An OSError of a file (a full disk, a file-size limit, a read-only folder) is a WriteError
   (exit 4) naming the path and the cause; the rows written before it stay (CsvRows cuts a
-  partly written block off again).
+  partly written block off again, Hdf5Rows commits nothing it has no room for).
 - An analysis that starts over from t0 (a new Result: runtime.auto_formulation's rp run after
   a joint one, runtime.dynamics' augmented-Lagrangian restart) rewinds the files to their
   header; `finish` rewrites them from the final Result when it is not the one streamed.
@@ -29,7 +30,7 @@ import numpy as np
 
 from casmech.errors import CasmechError
 
-FLUSH_VALUES = 1 << 18  # pending results numbers (rows x columns) that make a block
+FLUSH_VALUES = 1 << 18  # results numbers (rows x columns) of a block written at once
 FLUSH_SECONDS = 1.0  # longest a computed row waits for its block
 
 
@@ -54,17 +55,18 @@ def writing(path: Path, rows: int, action: Callable, *args):
 
 
 class ResultsWriter:
-    """The row callback that writes the results files as the rows come (module docstring).
-    `files`: the open file writers (CsvRows, Hdf5Rows); `on_row`: the callback each row's
-    time is passed on to (progress, interrupts)."""
+    """Writes the results files as the rows come (module docstring): `watching(on_row)` is
+    the analysis' row callback. `files`: the open file writers (CsvRows, Hdf5Rows)."""
 
-    def __init__(self, functions, files: list, reactions_frame=None,
-                 on_row: Callable[[float], None] | None = None):
-        from casmech.runtime.results import column_names  # (runtime imports output)
+    def __init__(self, functions, files: list, reactions_frame=None):
+        from casmech.runtime.buffers import BLOCK  # (runtime imports output)
+        from casmech.runtime.results import column_names
 
         self.functions, self.files, self.frames = functions, files, reactions_frame
-        self.on_row = on_row
-        self.columns = len(column_names(functions))
+        columns = len(column_names(functions))
+        # rows per block: whole blocks of the results row's mapped calls (ColumnCall keeps a
+        # map per block length), about FLUSH_VALUES numbers
+        self.block = max(BLOCK, FLUSH_VALUES // columns // BLOCK * BLOCK)
         self.result = None  # the runtime.results.Result whose rows are written
         self.received = 0  # its rows handed over
         self.pending: list[tuple] = []  # blocks (times, q, q_dot, q_ddot, lam) not written
@@ -72,9 +74,11 @@ class ResultsWriter:
         self.stopped = False  # a row was not finite: nothing more is written
         self.flushed = time.monotonic()
 
-    def __call__(self, t: float) -> None:
-        if self.on_row is not None:
-            self.on_row(t)
+    def watching(self, on_row: Callable[[float], None]) -> Callable[[float], None]:
+        """`on_row` (the row callback: progress, interrupts), given this writer's `rows_added`:
+        the analysis' `progress`, calling no more per row than `on_row` does."""
+        on_row.rows_added = self.rows_added
+        return on_row
 
     def rows_added(self, result, times, q, q_dot, q_ddot, lam) -> None:
         """Result.extend's hand-over of a block."""
@@ -84,21 +88,27 @@ class ResultsWriter:
             self._rewind(result)
         self.pending.append((times, q, q_dot, q_ddot, lam))
         self.received += len(times)
-        waiting = (self.received - self.written) * self.columns
-        if waiting >= FLUSH_VALUES or time.monotonic() - self.flushed >= FLUSH_SECONDS:
+        waiting = sum(len(block[0]) for block in self.pending)
+        if waiting >= self.block:
+            self.flush(whole=True)
+        elif time.monotonic() - self.flushed >= FLUSH_SECONDS:
             self.flush()
 
-    def flush(self, strict: bool = True) -> None:
-        """Write the pending rows; at a row that is not finite, the rows before it, then
-        NonFinite (with `strict`; else stop there quietly)."""
+    def flush(self, strict: bool = True, whole: bool = False) -> None:
+        """Write the pending rows (`whole`: as many as fill whole blocks, the rest left
+        pending); at a row that is not finite, the rows before it, then NonFinite (with
+        `strict`; else stop there quietly)."""
         from casmech.runtime.nonfinite import NonFinite
         from casmech.runtime.results import Result, table
 
         self.flushed = time.monotonic()
         if self.stopped or not self.pending:
             return
-        blocks, self.pending = self.pending, []
-        states = [np.concatenate([block[k] for block in blocks]) for k in range(5)]
+        states = [np.concatenate([block[k] for block in self.pending]) for k in range(5)]
+        count = len(states[0]) // self.block * self.block if whole else len(states[0])
+        self.pending = [tuple(state[count:] for state in states)] if count < len(states[0]) \
+            else []
+        states = [state[:count] for state in states]
         names, values = table(self.functions, Result.of_rows(*states), self.frames)
         finite = np.isfinite(values).all(axis=1)
         good = len(values) if finite.all() else int(np.argmin(finite))
