@@ -218,6 +218,8 @@ CASES = {
                                               "body_i: ground, body_j: bar, at_i: [0, 0, 0], "
                                               "at_j: [0, 0, -1], length: 10}\nanalysis:"),
                                  "E502", 15),
+    "driver_far_at_start": Case(base(axis="    axis: [1, 0, 0]\n    driver: {angle: 2e6}"),
+                                "E502", 15),  # (the continuation took 4e6 Newton solves)
     "mesh_missing": Case(base(position="    position: [0, 0, -1]\n    geometry: "
                                        "[{mesh: missing.stl}]"), "E410", 8),
 }

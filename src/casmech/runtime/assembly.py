@@ -40,6 +40,7 @@ from casmech.runtime.nonfinite import NonFinite
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
 MAX_DRIVER_STEP = 0.5
+MAX_CONTINUATION = 1000  # steps of driver continuation at most: a bounded time to fail
 KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
 
 
@@ -144,6 +145,15 @@ def _evaluate(functions, t, q, scale):
     return np.array(phi).ravel(), phi_q
 
 
+def _far_drivers(functions: SystemFunctions, t: float) -> list:
+    """(joint, source, |f(t)|) of the drivers beyond the continuation's reach, farthest
+    first."""
+    reach = MAX_DRIVER_STEP * MAX_CONTINUATION
+    far = [(p.row.joint, p.row.source, abs(p.f.value(t=t))) for p in functions.ir.primitives
+           if p.is_driver and p.f and not abs(p.f.value(t=t)) <= reach]
+    return sorted(far, key=lambda item: -item[2] if math.isfinite(item[2]) else -math.inf)
+
+
 def driver_span(functions: SystemFunctions, t: float) -> float:
     """Largest |f(t)| over the composite-joint drivers (how far continuation must go)."""
     values = [abs(p.f.value(t=t)) for p in functions.ir.primitives if p.is_driver and p.f]
@@ -162,7 +172,14 @@ def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np
 
 def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
     """Driver continuation, then Newton with least-squares steps, from q."""
-    steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
+    span = driver_span(functions, t)
+    if not span <= MAX_DRIVER_STEP * MAX_CONTINUATION:  # (NaN included)
+        raise AnalysisError(FailureContext(
+            t, f"a driver's value is {span:.3g} (rad or m) away from the pose in the file, "
+               f"farther than assembly follows drivers (at most "
+               f"{MAX_DRIVER_STEP * MAX_CONTINUATION:g}); write the pose nearer the drivers' "
+               "values at the start", _far_drivers(functions, t), "|f(t)|"))
+    steps = max(1, math.ceil(span / MAX_DRIVER_STEP))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
         q = newton(functions, t, q, scale=k / steps,
                    tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
