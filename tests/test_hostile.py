@@ -150,6 +150,12 @@ CASES = {
     "cli_output_step_tiny": Case(BASE, "E409", exit=2,
                                  args=("run", "--out", "out", "--output-step", "1e-12")),
     "cli_rtol_10": Case(BASE, "E409", exit=2, args=("run", "--out", "out", "--rtol", "10")),
+    # issue 35 item 10: a subnormal output step overflowed t_end / output_step
+    "output_step_subnormal": Case(base(output_step="  output_step: 2e-320"), "E409", 18),
+    "output_step_subnormal_run": Case(base(output_step="  output_step: 2e-320"), "E409", 18,
+                                      args=("run", "--out", "out")),
+    "cli_output_step_subnormal": Case(BASE, "E409", exit=2,
+                                      args=("run", "--out", "out", "--output-step", "2e-320")),
     # 2. memory: aliases, repeat ranges, huge files and devices
     "billion_laughs": Case(_laughs(), "E006"),
     "repeat_1e9": Case(_repeat("1e9"), "E105", 5),
@@ -196,6 +202,26 @@ CASES = {
                        "E005", 5),
     "custom_tag": Case(base(mass="    mass: !secret 1"), "E005", 5),
     "check_free_kinematics": Case(FREE, "E501", 16),
+    # issue 35: careless input, impossible models
+    "driver_rate_1e300": Case(base(axis="    axis: [1, 0, 0]\n    driver: {angle: 1e300*t}"),
+                              "E411", 15),
+    "mass_subnormal": Case(base(mass="    mass: 2e-320"), "E411", 5),
+    "mass_1e-300": Case(base(mass="    mass: 1e-300"), "E411", 5),
+    "inertia_1e-300": Case(base(inertia="    inertia: [1e-300, 1e-300, 1e-300]"), "E411", 6),
+    "negative_stiffness": Case(BASE.replace("analysis:", "forces:\n  - {name: s, type: rsda, "
+                                            "joint: pivot, stiffness: -1e3}\nanalysis:"),
+                               "E103", 16),
+    "dp1_axis_1e-12": Case(BASE.replace("analysis:", "  - {name: c, type: dp1, body_i: "
+                                        "ground, a_i: [0, 0, 1e-12], body_j: bar, "
+                                        "a_j: [1, 0, 0]}\nanalysis:"), "E404", 15),
+    "distance_unreachable": Case(BASE.replace("analysis:", "  - {name: tether, type: distance, "
+                                              "body_i: ground, body_j: bar, at_i: [0, 0, 0], "
+                                              "at_j: [0, 0, -1], length: 10}\nanalysis:"),
+                                 "E502", 15),
+    "driver_far_at_start": Case(base(axis="    axis: [1, 0, 0]\n    driver: {angle: 2e6}"),
+                                "E502", 15),  # (the continuation took 4e6 Newton solves)
+    "mesh_missing": Case(base(position="    position: [0, 0, -1]\n    geometry: "
+                                       "[{mesh: missing.stl}]"), "E410", 8),
 }
 
 

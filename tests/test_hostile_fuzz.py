@@ -1,4 +1,4 @@
-"""Fuzz: thousands of mutated gallery models through `casmech check` (issue 16).
+"""Fuzz: thousands of mutated gallery models through `casmech check` (issues 16 and 35).
 
 Every model of models/ is mutated (seeded) by line and token edits: hostile values (1e300,
 nan, YAML 1.1 spellings, tags, aliases, devices, paths outside the folder, long text, deep
@@ -26,10 +26,13 @@ import time
 import traceback
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import MODELS, ROOT
 
 SEED = 16
-COUNT = 2400  # mutated models (issue 16 asks for at least 2000)
+COUNT = 2400  # mutated models in the README's test command (issue 16 asks for at least 2000)
+SLOW_COUNT = 5000  # mutated models under `-m slow` (issue 35 asks for at least 5000)
 WORKERS = 2
 MEMORY = 1536 << 20  # address space of a worker [bytes]
 PER_MODEL = 20.0  # [s] time limit of one check (the gallery's take 0.01-0.4 s) or run
@@ -49,12 +52,17 @@ HOSTILE = [
     "\"a\\nb: 1\"", "[1, 2]", "[1, 2, 3, 4, 5, 6, 7]", "[1e300, 1e300, 0]", "[0, 0, 0]",
     "{index: i, from: 1, to: 1e9}", "\"{i}\"", "link{1e9}", "- a", "a: b", "{a: 1, a: 2}",
     "true", "1e20", "-0", "+.5", "0.0000001", "1e6", "2e6", "1e12", "1e13",
+    # issue 35: subnormal and degenerate numbers, drivers leaving double precision, negative
+    # coefficients, directions of no length, laws undefined later in the run
+    "2e-320", "5e-324", "1e-16", "1e300*t", "-1e3", "-0.5", "[0, 0, 1e-12]", "[1e-12, 0, 0]",
+    "'log(0.5 - t)'", "'1/(t - 0.01)'", "'sqrt(0.01 - t)'", "'if(t < 0.01, 0, 1e308*10)'",
 ]
 KEYS = ["name", "type", "mass", "inertia", "position", "orientation", "velocity", "at", "axis",
         "body_i", "body_j", "driver", "angle", "displacement", "motor", "f", "repeat", "table",
         "column", "t_end", "output_step", "rtol", "atol", "gravity", "parameters", "bodies",
         "joints", "forces", "analysis", "components", "instances", "file", "stiffness",
-        "damping", "value", "frame", "geometry", "mesh", "casmech", "cut", "from", "to"]
+        "damping", "value", "frame", "geometry", "mesh", "casmech", "cut", "from", "to",
+        "allow_negative", "free_length", "length", "horizon", "intervals"]
 STRAY = ["\t", "\x00", "\x07", "\x1b", "\ufeff", "\u2028", "\x85", "é", "#", ":", "- ", "&",
          "*", "!", "|", ">", "%", "@", "`", "{", "}", "[", "]", ",", "? ", "---\n", "...\n"]
 VALUE = re.compile(r"(:\s+|[\[,]\s*)([^\s,\[\]{}:#][^,\[\]{}#\n]*?)(?=\s*[,\]\}]|\s*#|\s*$)",
@@ -243,9 +251,20 @@ def problems(result: dict) -> str | None:
 
 
 def test_mutated_gallery_models_give_located_errors(tmp_path):
+    fuzz(tmp_path, COUNT, SEED)
+
+
+@pytest.mark.slow
+def test_five_thousand_mutated_gallery_models_give_located_errors(tmp_path):
+    """The same over SLOW_COUNT other mutants (issue 35)."""
+    fuzz(tmp_path, SLOW_COUNT, SEED + 19)
+
+
+def fuzz(tmp_path, count: int, seed: int) -> None:
+    """`count` mutants (seeded) through check and, a sample, run: no finding (problems)."""
     folder = tmp_path / "models"
     shutil.copytree(MODELS, folder)
-    cases = mutants(COUNT)
+    cases = mutants(count, seed)
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "CASMECH_CACHE_DIR": str(tmp_path / "c"),
            "PYTHONPATH": os.pathsep.join([str(ROOT), str(ROOT / "src"),
                                           os.environ.get("PYTHONPATH", "")])}
@@ -260,14 +279,14 @@ def test_mutated_gallery_models_give_located_errors(tmp_path):
             preexec_fn=_limit, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)))
     results, died = [], []
     for report, process in processes:
-        output = process.communicate(timeout=1800)[0]
+        output = process.communicate(timeout=1800 * max(1, count / COUNT))[0]
         lines = [json.loads(line) for line in report.read_text().splitlines()]
         results += [line for line in lines if "code" in line]
         if process.returncode != 0:
             last = [line["start"] for line in lines if "start" in line][-1:]
             died.append(f"worker exit {process.returncode} at {last}: {output[-2000:]}")
     assert not died, died
-    assert len(results) == COUNT
+    assert len(results) == count
     found = {r["name"]: problems(r) for r in results if problems(r)}
     assert not found, "\n\n".join(f"{name}:\n{text}" for name, text in list(found.items())[:5])
     codes = {r["code"] for r in results}

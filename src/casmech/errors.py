@@ -72,6 +72,7 @@ CODES: dict[str, str] = {
     # E5xx: structure of the assembled mechanism (found by the compiler)
     "E500": "redundant constraints",
     "E501": "mechanism is not fully driven",
+    "E502": "the constraints cannot be met (assembly does not converge)",
 }
 
 

@@ -59,6 +59,9 @@ def test_parameters_are_not_bounded_where_they_are_used_they_are():
     ("rtol", "10", "between"), ("rtol", "1e-300", "between"), ("atol", "1e-300", "between"),
     ("atol", "0", "must be positive"), ("t_end", "1e300", "at most"),
     ("output_step", "1e-9", "output grid would have"),
+    # subnormal numbers: t_end / output_step overflowed to an OverflowError traceback
+    ("output_step", "2e-320", "at least"), ("output_step", "5e-324", "at least"),
+    ("t_end", "1e-320", "at least"), ("output_step", "1e-13", "at least"),
 ])
 def test_analysis_settings_within_limits(setting, value, words):
     text = MODEL.replace(f"{setting}: ", f"{setting}: {value}, _was: ")
@@ -79,6 +82,33 @@ def test_output_grid_counts_rows_and_columns():
                                                       3 + 19 * 2000)
     assert "output_step" in limits.analysis_problems({"t_end": 1e4, "output_step": 1e-3},
                                                       columns)
+
+
+def test_grid_rows_of_an_overflowing_ratio_are_infinite():
+    assert limits.grid_rows(1.0, 2e-320) == float("inf")
+    assert limits.grid_rows(1.0, 0.25) == 6  # 0, 0.25, ..., 1 and one row to spare
+
+
+OCP = MODEL + """\
+ocp:
+  horizon: 1
+  intervals: 20
+  controls: [{joint: pivot, type: torque}]
+"""
+
+
+@pytest.mark.parametrize("old, new, path", [
+    ("horizon: 1", "horizon: 2e-320", "ocp.horizon"),
+    ("horizon: 1", "horizon: 1e300", "ocp.horizon"),
+    ("intervals: 20", "intervals: 100000000", "ocp.intervals"),
+    ("intervals: 20", "intervals: 0", "ocp.intervals"),
+    ("intervals: 20", "intervals: 20\n  elements: 0", "ocp.elements"),
+    ("intervals: 20", "intervals: 200\n  elements: 100", "ocp.intervals"),
+    ("intervals: 20", "intervals: 20\n  free_time: [1e-300, 2]", "ocp.free_time"),
+])
+def test_degenerate_ocp_settings_are_located(old, new, path):
+    load_model_text(OCP)
+    assert findings(OCP.replace(old, new)) == [("E409", path)]
 
 
 JOINT = ("  - {name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], "

@@ -14,6 +14,7 @@ from casmech.errors import UsageError
 from casmech.io.csv import read_measurements, write_csv
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
+from casmech.schema import limits
 
 
 def add_arguments(parser) -> None:
@@ -35,8 +36,9 @@ def add_arguments(parser) -> None:
 def _optimal_control(model, args, out: Path) -> None:
     problem, transcription = ocp.from_block(model.ocp)
     if args.intervals is not None:
-        if args.intervals < 1:
-            raise UsageError(f"--intervals must be at least 1 (got {args.intervals})")
+        problems = limits.ocp_problems(None, args.intervals, problem.elements)
+        if problems:
+            raise UsageError(f"--intervals {args.intervals}: {next(iter(problems.values()))}")
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
     problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode})
     transcription = args.transcription or transcription

@@ -7,12 +7,19 @@ may write further files (modal: modes.csv, linear_model.npz; dynamics of a model
 `events:`: events.csv, one line printed per event). A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
 
-SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.runtime.interrupts): the rows
-computed
-so far are written with `status: interrupted` and the signal in the metadata, and the exit
-code is 128 + the signal's number (130, 143). When the analysis starts, the results files of an
-earlier run in DIR are removed and metadata.json says `status: running`, so that a run killed
-outright (SIGKILL) never leaves an older results file looking current.
+The results rows are written as the analysis computes them (output.streaming), so that a run
+that ends early keeps them. When the analysis starts, the results files of an earlier run in
+DIR are removed and metadata.json says `status: running`, so that a run killed outright
+(SIGKILL) never leaves an older results file looking current; then:
+
+- SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.runtime.interrupts): the rows
+  computed so far are kept with `status: interrupted` and the signal in the metadata, and the
+  exit code is 128 + the signal's number (130, 143);
+- an analysis failure (exit 3) keeps the rows before it, `status: failed`; a results row that
+  is not finite is such a failure (runtime.nonfinite), the rows before it kept;
+- a results file that cannot be written (a full disk, a file-size limit, a read-only folder)
+  ends the run with exit 4 naming the path and the cause, the rows written before kept and
+  metadata.json (where it can still be written) saying `status: failed`.
 
 --replay DIR/metadata.json runs a recorded run again (cli/replay.py): the same model file
 (every file it read checked against its recorded sha256), overrides, settings and options.
@@ -21,30 +28,29 @@ outright (SIGKILL) never leaves an older results file looking current.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from casmech import api
 from casmech.cli.common import add_overrides, add_span, overrides
-from casmech.errors import AnalysisError, Interrupted
+from casmech.errors import AnalysisError, CasmechError, Interrupted
 from casmech.io import events as events_output
-from casmech.io.csv import write_csv
-from casmech.io.hdf5 import h5py, write_hdf5
-from casmech.io.metadata import resolved_settings, run_metadata, write_json
+from casmech.io.csv import CsvRows
+from casmech.io.hdf5 import Hdf5Rows, h5py
+from casmech.io.metadata import resolved_settings, rewrite_json, run_metadata, write_json
 from casmech.io.progress import progress_bar
+from casmech.io.streaming import ResultsWriter, WriteError, writing
 from casmech.runtime import events, interrupts, reaction_frames, singular_poses
 from casmech.runtime.results import column_names, events_table
 
 # further files an analysis may write (Result.files), removed with an earlier run's results
 ANALYSIS_FILES = ("modes.csv", "linear_model.npz", events_output.FILE)
-# format -> (file name in DIR, writer(path, names, values, metadata), check run before the run)
+# format -> (file name in DIR, the writer of its rows as they come, check run before the run)
 FORMATS = {
-    "csv": ("results.csv", lambda path, names, values, meta: write_csv(path, names, values),
-            lambda: None),
-    "hdf5": ("results.h5", write_hdf5, h5py),
+    "csv": ("results.csv", CsvRows, lambda: None),
+    "hdf5": ("results.h5", lambda path, names: Hdf5Rows(path, names), h5py),
 }
 
 
@@ -135,23 +141,42 @@ def _run(args) -> int:
     api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
                           args.atol, args.formulation, args.stabilization,
                           args.method)  # a usage error before an earlier run's files go
-    _start(args, out, run)
+    writer = _start(args, out, functions, run)
     clock = time.perf_counter()
     try:
-        with progress_bar(settings["t_end"], quiet=args.quiet) as callback:
-            result = api.analyze(functions, args.analysis, args.t_end, args.output_step,
-                                     rtol=args.rtol, atol=args.atol,
-                                     formulation=args.formulation,
-                                     progress=interrupts.watch(callback),
-                                     stabilization=args.stabilization, method=args.method)
-    except AnalysisError as error:
-        timings["analysis"] = time.perf_counter() - clock
+        try:
+            with progress_bar(settings["t_end"], quiet=args.quiet) as callback:
+                result = api.analyze(functions, args.analysis, args.t_end,
+                                     args.output_step, rtol=args.rtol, atol=args.atol,
+                                         formulation=args.formulation,
+                                         progress=writer.watching(interrupts.watch(callback)),
+                                         stabilization=args.stabilization, method=args.method)
+            timings["analysis"] = time.perf_counter() - clock
+            with interrupts.saving():
+                writer.finish(result)  # the last rows (NonFinite: the rows before one)
+        except AnalysisError as error:
+            timings.setdefault("analysis", time.perf_counter() - clock)
+            with interrupts.saving():
+                _keep(args, out, functions, error, run, writer)
+            raise
         with interrupts.saving():
-            _keep(args, out, functions, error, run)
+            paths = _save(args, out, functions, result, run, writer)
+    except WriteError as error:
+        with interrupts.saving():
+            _write_failed(args, out, functions, error, run, writer)
         raise
-    timings["analysis"] = time.perf_counter() - clock
-    with interrupts.saving():
-        paths = _save(args, out, functions, result, run)
+    except CasmechError as error:  # a model or usage error the analysis found (E501, ...)
+        if isinstance(error, AnalysisError):  # (kept above)
+            raise
+        with interrupts.saving():
+            writer.discard()
+            if "csv" in args.format:
+                model, given, settings, timings, options = run
+                with contextlib.suppress(OSError):
+                    write_json(out / "metadata.json", run_metadata(
+                        model, given, settings, timings, {}, 0, str(error), "failed",
+                        options=options))
+        raise
     if not args.quiet:
         _report(args, result, timings, paths)
     return 0
@@ -202,69 +227,101 @@ def singular_pose_warnings(poses, every: bool = False) -> list[str]:
     return lines
 
 
-def _start(args, out: Path, run) -> None:
+def _start(args, out: Path, functions, run) -> ResultsWriter:
     """Before the analysis: the results files of an earlier run go, metadata.json says
-    running."""
+    running, and the results files are opened with their header (output.streaming); an
+    OSError of any of it is a WriteError (exit 4)."""
     with interrupts.saving():
-        for name in (*(f[0] for f in FORMATS.values()), *ANALYSIS_FILES):
-            (out / name).unlink(missing_ok=True)
-        (out / "metadata.json").unlink(missing_ok=True)
+        for name in (*(f[0] for f in FORMATS.values()), *ANALYSIS_FILES, "metadata.json"):
+            writing(out / name, 0, (out / name).unlink, True)
+        writing(out, 0, out.mkdir, 0o777, True, True)
         if "csv" in args.format:
             model, given, settings, timings, options = run
-            write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
-                                                           0, status="running",
-                                                           options=options))
+            writing(out / "metadata.json", 0, write_json, out / "metadata.json",
+                    run_metadata(model, given, settings, timings, {}, 0, status="running",
+                                 options=options))
+        names = column_names(functions)
+        files = []
+        try:
+            for name in args.format:
+                path = out / FORMATS[name][0]
+                files.append(writing(path, 0, FORMATS[name][1], path, names))
+        except WriteError:
+            for file in files:
+                file.close()
+            raise
+        return ResultsWriter(functions, files, args.reactions_frame)
 
 
-def _keep(args, out: Path, functions, error: AnalysisError, run) -> None:
+def _keep(args, out: Path, functions, error: AnalysisError, run, writer) -> None:
     """The rows computed before a failure or an interrupt, and the metadata saying which (an
-    interrupt before the first row: the header only; a failure: the metadata only)."""
+    interrupt before the first row: the header only; a failure: the metadata only). A
+    NonFinite's rows stop before the first row that is not finite."""
     interrupted = isinstance(error, Interrupted)
     partial = error.partial if error.partial is not None and len(error.partial) else None
+    model, given, settings, timings, options = run
     if partial is None and not interrupted:
+        writer.discard()
         if "csv" in args.format:
-            model, given, settings, timings, options = run
-            write_json(out / "metadata.json", run_metadata(model, given, settings, timings, {},
-                                                           0, str(error), "failed",
-                                                           options=options))
+            writing(out / "metadata.json", 0, write_json, out / "metadata.json",
+                    run_metadata(model, given, settings, timings, {}, 0, str(error), "failed",
+                                 options=options))
         return
-    paths = _save(args, out, functions, partial, run, str(error),
+    writer.finish(partial, strict=False)
+    paths = _save(args, out, functions, partial, run, writer, str(error),
                   "interrupted" if interrupted else "failed",
                   error.signal_name if interrupted else None)
-    rows, when = (len(partial), f" (t = {partial.times[-1]:.6g})") if partial else (0, "")
-    print(f"kept {rows} rows computed before the {'interrupt' if interrupted else 'failure'}"
+    kept = writer.written
+    when = f" (t = {partial.times[kept - 1]:.6g})" if partial is not None and kept else ""
+    print(f"kept {kept} rows computed before the {'interrupt' if interrupted else 'failure'}"
           f"{when} in {', '.join(map(str, paths))}", file=sys.stderr)
 
 
-def _save(args, out: Path, functions, result, run, error: str | None = None,
-          status: str | None = None, signal: str | None = None) -> list[Path]:
-    """The table in every requested format, plus metadata.json beside a CSV (result None:
-    no rows, the header only)."""
-    if result is None:
-        names = column_names(functions)
-        values, meta, rows = np.zeros((0, len(names))), {}, 0
-    else:
-        names, values = api.results_table(functions, result, args.reactions_frame)
-        meta, rows = result.metadata, len(values)
+def _write_failed(args, out: Path, functions, error: WriteError, run, writer) -> None:
+    """After a WriteError: the files closed with the rows written, metadata.json (when it can
+    be written) saying failed and why."""
     model, given, settings, timings, options = run
+    metadata = run_metadata(model, given, settings, timings, {}, writer.written if writer
+                            else 0, str(error), "failed", options=options)
+    if writer is not None:
+        with contextlib.suppress(WriteError):
+            writer.close(metadata)
+    if "csv" in args.format:
+        try:
+            write_json(out / "metadata.json", metadata)
+        except OSError:
+            with contextlib.suppress(OSError):  # no room for a new file: the old one's place
+                rewrite_json(out / "metadata.json", metadata)
+
+
+def _save(args, out: Path, functions, result, run, writer, error: str | None = None,
+          status: str | None = None, signal: str | None = None) -> list[Path]:
+    """The rows written (output.streaming), then the metadata: metadata.json beside a CSV,
+    the /metadata group of results.h5; and the analysis' further files (modal, events)."""
+    model, given, settings, timings, options = run
+    meta = {} if result is None else result.metadata
     if status is None and result is not None and result.status == events.STOPPED:
         status = events.STOPPED
-    metadata = run_metadata(model, given, settings, timings, meta, rows, error, status, signal,
-                            options)
+    metadata = run_metadata(model, given, settings, timings, meta, writer.written, error,
+                            status, signal, options)
     ir = functions.ir
     metadata["reaction_frames"] = reaction_frames.describe(
         ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
-    paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
-             for name in args.format]
+    paths = [out / FORMATS[name][0] for name in args.format]
     files = {} if result is None else result.files
-    paths += [write(out / name) for name, write in files.items()]
+    paths += [writing(out / name, writer.written, write, out / name)
+              for name, write in files.items()]
     if result is not None and result.event_states is not None:  # the run watched events
         event_names, event_rows = events_table(functions, result, args.reactions_frame)
-        paths.append(events_output.write_events(out / events_output.FILE, event_names,
-                                                event_rows))
+        path = out / events_output.FILE
+        paths.append(writing(path, writer.written, events_output.write_events, path,
+                             event_names, event_rows))
         # in metadata.json only: results.h5's metadata holds no list of records
-        metadata["events"] = events_output.metadata_rows(result.events, event_names,
-                                                         event_rows)
+        events_metadata = events_output.metadata_rows(result.events, event_names, event_rows)
+    writer.close(metadata)
+    if result is not None and result.event_states is not None:
+        metadata["events"] = events_metadata
     if "csv" in args.format:
-        write_json(out / "metadata.json", metadata)
+        writing(out / "metadata.json", writer.written, write_json, out / "metadata.json",
+                metadata)
     return paths

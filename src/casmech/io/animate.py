@@ -283,7 +283,7 @@ def body_parts(model: ResolvedModel) -> list[Part]:
             try:
                 points, triangles = SHAPES[item["type"]](item, folder)
             except (OSError, ValueError) as error:
-                problems.append(_mesh_problem(model, index, n, item, error))
+                problems.append(mesh_problem(model, index, n, item, error))
                 continue
             placed = points @ rotations(item["euler_parameters"]).T + item["offset"]
             parts.append(Part(body.name, index, -1, placed, np.asarray(triangles, int)))
@@ -292,7 +292,7 @@ def body_parts(model: ResolvedModel) -> list[Part]:
     return parts
 
 
-def _mesh_problem(model: ResolvedModel, body: int, item: int, given, error) -> Diagnostic:
+def mesh_problem(model: ResolvedModel, body: int, item: int, given, error) -> Diagnostic:
     path = ("bodies", body, "geometry", item, "mesh")
     try:
         source = load_document(model.text, model.file).locate(path)

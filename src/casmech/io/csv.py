@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -12,6 +14,7 @@ from casmech.core.atomic import atomic
 from casmech.errors import UsageError
 
 CHUNK_VALUES = 1 << 18  # numbers formatted per block of rows (a few MB of text at a time)
+PIECE = 1 << 16  # bytes of whole rows per write call of CsvRows
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
@@ -25,6 +28,61 @@ def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
         for start in range(0, values.shape[0], rows):
             handle.write(rows_text(values[start:start + rows]))
     return path
+
+
+class CsvRows:
+    """results.csv written as the rows come: the header at once, then blocks of rows appended
+    (`append`; whole rows, about PIECE bytes per write call to the OS, no Python buffer in
+    between). A piece whose write fails (a full disk, a file-size limit) is cut off again
+    (`os.ftruncate` to the end of the rows before it), so the file always ends at a row and
+    `rows` counts the rows in it; the OSError is raised."""
+
+    def __init__(self, path: str | Path, names: list[str]):
+        self.path, self.names = Path(path), list(names)
+        self.header = (",".join(self.names) + "\n").encode()
+        self.handle = open(self.path, "wb", buffering=0)  # noqa: SIM115 - closed by close()
+        self.end = self.rows = 0  # bytes of the header and complete rows; complete rows
+        try:
+            self._write(self.header, 0)
+        except BaseException:
+            self.handle.close()
+            raise
+
+    def append(self, values: np.ndarray) -> None:
+        values = np.atleast_2d(np.asarray(values, dtype=np.float64))
+        rows = max(1, CHUNK_VALUES // max(1, values.shape[1]))
+        for start in range(0, values.shape[0], rows):
+            block = values[start:start + rows]
+            self._write(rows_text(block), len(block))
+
+    def rewind(self) -> None:
+        """Back to the header alone (an analysis that starts over)."""
+        os.ftruncate(self.handle.fileno(), len(self.header))
+        self.handle.seek(len(self.header))
+        self.end, self.rows = len(self.header), 0
+
+    def _write(self, data: bytes, rows: int) -> None:
+        """`rows` whole rows of text, in pieces (a failure: those of the pieces written)."""
+        start = 0
+        while start < len(data):
+            cut = data.find(b"\n", start + PIECE) + 1 or len(data)
+            view = memoryview(data)[start:cut]
+            try:
+                while view:
+                    view = view[self.handle.write(view):]
+            except OSError:
+                with contextlib.suppress(OSError):  # (a file it cannot cut stays as it is)
+                    os.ftruncate(self.handle.fileno(), self.end)
+                    self.handle.seek(self.end)
+                self.rows += data.count(b"\n", 0, start)
+                raise
+            self.end += cut - start
+            start = cut
+        self.rows += rows
+
+    def close(self, metadata=None) -> None:
+        """Close the file (`metadata` is metadata.json's, written beside it by the caller)."""
+        self.handle.close()
 
 
 def rows_text(values: np.ndarray) -> bytes:

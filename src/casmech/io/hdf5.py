@@ -18,6 +18,7 @@ import numpy as np
 
 from casmech.core.atomic import replaced
 from casmech.errors import UsageError
+from casmech.io.staged import StagedFile
 
 DATASETS = ("text",)  # metadata keys stored as datasets (long), not attributes
 
@@ -43,6 +44,65 @@ def write_hdf5(path: str | Path, names: list[str], values: np.ndarray,
         handle.create_dataset("columns", data=np.array(names, dtype=object), dtype=strings)
         _write_group(handle.create_group("metadata"), metadata or {}, strings)
     return path
+
+
+class Hdf5Rows:
+    """results.h5 written as the rows come: /columns at once, /results a resizable dataset
+    (chunks of ROWS_PER_CHUNK rows) that each block extends, each block committed to the disk
+    (output.staged: a commit that finds no room writes nothing, and the file stays readable
+    with the rows before); /metadata when the run ends (`close`). A failed commit is raised
+    as its OSError."""
+
+    ROWS_PER_CHUNK = 1024
+
+    def __init__(self, path: str | Path, names: list[str]):
+        h5 = h5py()
+        self.path, self.names = Path(path), list(names)
+        self.strings = h5.string_dtype("utf-8")
+        self.file = StagedFile(self.path)
+        self.handle = h5.File(self.file, "w")
+        self.table = self.handle.create_dataset(
+            "results", shape=(0, len(names)), maxshape=(None, len(names)), dtype=float,
+            chunks=(self.ROWS_PER_CHUNK, max(1, len(names))))
+        self.handle.create_dataset("columns", data=np.array(names, dtype=object),
+                                   dtype=self.strings)
+        self.rows = 0  # rows committed to the disk
+        self._commit(0)
+
+    def append(self, values: np.ndarray) -> None:
+        """The rows, committed in pieces of ROWS_PER_CHUNK (a failure keeps those before)."""
+        values = np.atleast_2d(np.asarray(values, float)).reshape(-1, len(self.names))
+        for start in range(0, len(values), self.ROWS_PER_CHUNK):
+            piece = values[start:start + self.ROWS_PER_CHUNK]
+            rows = self.table.shape[0]
+            self.table.resize(rows + len(piece), axis=0)
+            self.table[rows:] = piece
+            self._commit(rows + len(piece))
+
+    def rewind(self) -> None:
+        self.table.resize(0, axis=0)
+        self._commit(0)
+
+    def _commit(self, rows: int) -> None:
+        self.handle.flush()
+        self.file.commit()
+        if self.file.failure is not None:
+            raise self.file.failure
+        self.rows = rows
+
+    def close(self, metadata: Mapping | None = None) -> None:
+        """Write /metadata (when given), close the file, commit it."""
+        try:
+            if metadata is not None and self.file.failure is None:
+                if "metadata" in self.handle:
+                    del self.handle["metadata"]
+                _write_group(self.handle.create_group("metadata"), metadata, self.strings)
+            self.handle.close()
+            self.file.commit()
+        finally:
+            self.file.close()
+        if self.file.failure is not None:
+            raise self.file.failure
 
 
 def _name(key: str) -> str:

@@ -120,3 +120,13 @@ def write_json(path: str | Path, metadata: Mapping) -> Path:
 
 def read_json(path: str | Path) -> dict:
     return json.loads(Path(path).read_text())
+
+
+def rewrite_json(path: str | Path, metadata: Mapping) -> Path:
+    """Write in place, over the file's own bytes: where there is no room for a new file (a
+    full disk), the old one's blocks are reused."""
+    path = Path(path)
+    with open(path, "r+") as handle:
+        handle.write(json.dumps(metadata, indent=2) + "\n")
+        handle.truncate()
+    return path

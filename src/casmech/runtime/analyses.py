@@ -21,6 +21,7 @@ from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
 from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
+from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.results import Result, column_names
 from casmech.schema import limits
 from casmech.schema.resolved import Analysis
@@ -97,6 +98,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             error.partial.functions = functions
             error.partial.status = "interrupted" if isinstance(error, Interrupted) else "failed"
             _keep_messages(error.partial, messages, stream.count)
+        if isinstance(error, NonFinite):  # the results column and the elements, by name
+            error.explain(functions)
         raise
     _keep_messages(result, messages, stream.count)
     result.metadata.update(analysis=settings.type, mode=mode_of(functions))

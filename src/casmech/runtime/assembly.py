@@ -21,6 +21,7 @@ step rejects) stays dense.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -35,10 +36,12 @@ from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import interrupts
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.memo import kept
+from casmech.runtime.nonfinite import NonFinite
 
 POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
 MAX_ITERATIONS = 50
 MAX_DRIVER_STEP = 0.5
+MAX_CONTINUATION = 1000  # steps of driver continuation at most: a bounded time to fail
 KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
 
 
@@ -59,21 +62,80 @@ def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
     return np.concatenate([np.concatenate([b.r_dot0 for b in bodies]), p_dot.ravel()])
 
 
+@dataclass
+class UnmetRows(FailureContext):
+    """A failure naming constraint rows (RowInfo, residual), worst first: the constraints that
+    cannot be met (`casmech check` reports each as an E502)."""
+
+    rows: list = field(default_factory=list)
+
+    def format(self) -> str:
+        at = f"at t = {self.time:.6g}: " if self.time is not None else ""
+        lines = [f"analysis failed {at}{self.cause}"]
+        for row, residual in self.rows:
+            where = f"{row.source}: " if row.source else ""
+            lines.append(f"  {where}{row_text(row)} (residual {residual:.3e})")
+        return "\n".join(lines)
+
+
+def row_text(row) -> str:
+    """"joint 'tether': |d_ij|^2 = length^2" or "body 'rod2': p^T p - 1" (a RowInfo)."""
+    if row.kind == "normalization":
+        return f"body '{row.joint}': p^T p - 1"
+    return f"joint '{row.joint}': {row.label.split(': ', 1)[-1]}"
+
+
+def unmet_rows(functions: SystemFunctions, start: np.ndarray, best: np.ndarray,
+               tolerance: float, count: int = 3) -> list:
+    """(RowInfo, residual at the best iterate) of the rows Newton left unmet from its start to
+    its best iterate: the worst row of each of the `count` joints (or bodies' normalization)
+    with the largest residuals, worst first. A row Newton met on the way is no culprit, and one
+    it broke on the way (diverging) was met at the start; when no row is unmet at both, those
+    unmet at the best iterate."""
+    start, best = np.abs(np.ravel(start)), np.abs(np.ravel(best))
+    unmet = (start > tolerance) & (best > tolerance)
+    unmet = unmet if unmet.any() else best > tolerance
+    worst: dict[str, tuple[object, float]] = {}
+    for row, value, chosen in zip(functions.rows, best, unmet, strict=True):
+        if chosen and value > worst.get(row.joint, (None, -1.0))[1]:
+            worst[row.joint] = (row, float(value))
+    return sorted(worst.values(), key=lambda item: -item[1])[:count]
+
+
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
            tolerance: float = POSITION_TOLERANCE) -> np.ndarray:
-    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed)."""
+    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed). When it
+    does not converge, the error names the rows it left unmet (unmet_rows): the constraints
+    that cannot be met together (a length no pose reaches)."""
     q = np.array(q, float)
+    start = best_phi = None
     for _ in range(MAX_ITERATIONS):
         phi, phi_q = _evaluate(functions, t, q, scale)
-        if np.max(np.abs(phi), initial=0.0) <= tolerance:
+        finite(t, "phi", phi, q)
+        if _worst(phi) <= tolerance:
             return q
+        start = phi if start is None else start
+        best_phi = phi if best_phi is None or _worst(phi) < _worst(best_phi) else best_phi
         q += numeric_qr.lstsq(phi_q, -phi)
     phi, phi_q = _evaluate(functions, t, q, scale)
-    if np.max(np.abs(phi), initial=0.0) <= 1e3 * tolerance:
+    if _worst(phi) <= 1e3 * tolerance:
         return q
-    cause = (f"positions did not converge in {MAX_ITERATIONS} Newton iterations "
-             f"(max |Phi| = {np.max(np.abs(phi)):.3e}); the joints with the largest residuals:")
-    raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
+    best_phi = phi if _worst(phi) < _worst(best_phi) else best_phi
+    cause = (f"the constraints cannot be met: positions did not converge (max |Phi| = "
+             f"{_worst(best_phi):.3e} at best in {MAX_ITERATIONS} Newton iterations); the rows "
+             "left unmet:")
+    raise AnalysisError(UnmetRows(t, cause, worst_joints(functions, best_phi),
+                                  rows=unmet_rows(functions, start, best_phi, tolerance)))
+
+
+def finite(t: float, name: str, values: np.ndarray, q: np.ndarray, q_dot=None) -> None:
+    """NonFinite (runtime.nonfinite) when `values` (a constraint vector at (q, q_dot)) are not
+    all finite: no least squares is taken of them. (Accelerations and multipliers of forces
+    or a gamma that are not finite come out NaN instead: the Result they go to says which
+    column.)"""
+    if not np.all(np.isfinite(values)):
+        q_dot = np.zeros_like(q) if q_dot is None else q_dot
+        raise NonFinite(t, name, values, (q, q_dot))
 
 
 def _evaluate(functions, t, q, scale):
@@ -82,6 +144,15 @@ def _evaluate(functions, t, q, scale):
         return functions.vector("phi", t, q), functions["phi_q"](t, q)
     phi, phi_q = functions["phi_scaled"](t, q, scale)
     return np.array(phi).ravel(), phi_q
+
+
+def _far_drivers(functions: SystemFunctions, t: float) -> list:
+    """(joint, source, |f(t)|) of the drivers beyond the continuation's reach, farthest
+    first."""
+    reach = MAX_DRIVER_STEP * MAX_CONTINUATION
+    far = [(p.row.joint, p.row.source, abs(p.f.value(t=t))) for p in functions.ir.primitives
+           if p.is_driver and p.f and not abs(p.f.value(t=t)) <= reach]
+    return sorted(far, key=lambda item: -item[2] if math.isfinite(item[2]) else -math.inf)
 
 
 def driver_span(functions: SystemFunctions, t: float) -> float:
@@ -102,7 +173,14 @@ def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np
 
 def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
     """Driver continuation, then Newton with least-squares steps, from q."""
-    steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
+    span = driver_span(functions, t)
+    if not span <= MAX_DRIVER_STEP * MAX_CONTINUATION:  # (NaN included)
+        raise AnalysisError(FailureContext(
+            t, f"a driver's value is {span:.3g} (rad or m) away from the pose in the file, "
+               f"farther than assembly follows drivers (at most "
+               f"{MAX_DRIVER_STEP * MAX_CONTINUATION:g}); write the pose nearer the drivers' "
+               "values at the start", _far_drivers(functions, t), "|f(t)|"))
+    steps = max(1, math.ceil(span / MAX_DRIVER_STEP))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
         q = newton(functions, t, q, scale=k / steps,
                    tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
@@ -147,6 +225,7 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
         return np.array(q_dot_guess, float)
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
+    finite(t, "nu", nu, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()
     return q_dot_guess + numeric_qr.lstsq(phi_q, residual)
 
@@ -156,6 +235,8 @@ def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.nd
     """Phi_q q_ddot = gamma, for a fully driven (0-DOF) mechanism."""
     phi_q = functions.matrix("phi_q", t, q)
     gamma = functions.vector("gamma", t, q, q_dot)
+    if not np.all(np.isfinite(gamma)):  # no least squares of it: the row says (Result)
+        return np.full(functions.n_coordinates, np.nan)
     q_ddot, _, rank, _ = np.linalg.lstsq(phi_q, gamma, rcond=None)
     if rank < functions.n_coordinates:
         cause = ("singular configuration: the constraint Jacobian lost rank "
@@ -170,6 +251,8 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
     """Inverse dynamics: Phi_q^T lam = Q - M q_ddot (minimum norm where rows are redundant)."""
     mass = functions.matrix("mass_matrix", q)
     forces = functions.vector("generalized_forces", t, q, q_dot)
+    if not (np.all(np.isfinite(forces)) and np.all(np.isfinite(q_ddot))):
+        return np.full(functions.n_rows, np.nan)  # no least squares of them (as above)
     phi_q = functions.matrix("phi_q", t, q)
     return np.linalg.lstsq(phi_q.T, forces - mass @ q_ddot, rcond=None)[0]
 
@@ -196,8 +279,11 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     mass = functions["mass_matrix"](q)
     saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
                   lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
-    return saddle_solution(saddle, mass, phi_q, functions["generalized_forces"](t, q, q_dot),
-                           functions.vector("gamma", t, q, q_dot)[rows], np.zeros(len(rows)))
+    forces = functions["generalized_forces"](t, q, q_dot)
+    gamma = functions.vector("gamma", t, q, q_dot)
+    if not (np.all(np.isfinite(np.array(forces))) and np.all(np.isfinite(gamma))):
+        return np.full(functions.n_coordinates, np.nan), np.full(len(rows), np.nan)
+    return saddle_solution(saddle, mass, phi_q, forces, gamma[rows], np.zeros(len(rows)))
 
 
 def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma: np.ndarray,

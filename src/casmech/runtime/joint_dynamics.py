@@ -304,6 +304,8 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
     jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    if not np.all(np.isfinite(jacobian)):  # a law not differentiable at t0 (or worse: the
+        return "adams"  # first row then says so); no stiffness to judge by
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
     return "bdf" if radius * step > STIFF else "adams"
 

@@ -12,6 +12,7 @@ from casmech.equations import contact
 from casmech.equations.functions import SystemFunctions, all_sx
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.nonfinite import NonFinite, check_states
 
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
@@ -21,7 +22,9 @@ class Result:
 
     Rows arrive one at a time (append) or as blocks (extend); `times` reads as a list of
     floats, q, q_dot, q_ddot and lam as 2-D arrays (rows x n). on_row, when given, is called
-    with the time of every row as it is added (progress)."""
+    with the time of every row as it is added (progress); when it has a `rows_added`
+    attribute, that is called with the Result after each block is added, before the times
+    (output.streaming writes the rows as they come)."""
 
     def __init__(self, analysis: str, metadata: dict | None = None,
                  on_row: Callable[[float], None] | None = None):
@@ -43,19 +46,43 @@ class Result:
                            for v in (q, q_dot, q_ddot, lam)))
 
     def extend(self, times, q, q_dot, q_ddot, lam) -> None:
-        """A block of rows: times (k,), the states 2-D arrays (k x n), row j at times[j]."""
+        """A block of rows: times (k,), the states 2-D arrays (k x n), row j at times[j]. A row
+        whose states are not all finite is refused: the rows before it are added, then
+        runtime.nonfinite.NonFinite is raised."""
         times = np.asarray(times, float).reshape(-1)
         values = dict(zip(STATES, (np.asarray(v, float) for v in (q, q_dot, q_ddot, lam)),
                           strict=True))
         for name, value in values.items():
             if value.ndim != 2 or value.shape[0] != len(times):
                 raise ValueError(f"{name}: expected {len(times)} rows, got shape {value.shape}")
+        bad = check_states(times, *values.values())
+        if bad is not None:
+            if bad:
+                self._add(times[:bad], {name: value[:bad] for name, value in values.items()})
+            name = next((name for name, value in values.items()
+                         if not np.isfinite(value[bad]).all()), "t")
+            raise NonFinite(float(times[bad]), name, values[name][bad] if name != "t" else
+                            times[bad:bad + 1], (values["q"][bad], values["q_dot"][bad]), self)
+        self._add(times, values)
+
+    def _add(self, times: np.ndarray, values: dict) -> None:
         self._blocks["t"].append(times)
         for name, value in values.items():
             self._blocks[name].append(value)
         if self.on_row is not None:
+            added = getattr(self.on_row, "rows_added", None)
+            if added is not None:  # a sink of the rows (output.streaming)
+                added(self, times, *values.values())
             for t in times.tolist():
                 self.on_row(t)
+
+    @classmethod
+    def of_rows(cls, times, q, q_dot, q_ddot, lam, analysis: str = "rows") -> Result:
+        """A Result holding these rows as they are (no checks, no callbacks)."""
+        result = cls(analysis)
+        for name, value in zip(("t", *STATES), (times, q, q_dot, q_ddot, lam), strict=True):
+            result._blocks[name].append(np.asarray(value, float))
+        return result
 
     def _array(self, name: str) -> np.ndarray:
         blocks = self._blocks[name]

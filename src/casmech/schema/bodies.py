@@ -8,7 +8,7 @@ import numpy as np
 
 from casmech.core import euler, quaternions, traced
 from casmech.errors import failed
-from casmech.schema import files, resolved, spec
+from casmech.schema import files, resolved, scale, spec
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
@@ -199,15 +199,36 @@ def mesh_file(check: Checker, path: Path, name: str) -> str | None:
     return name
 
 
+def floors(check: Checker, bodies) -> None:
+    """Masses and inertias below the floors of the model's scale (schema/scale.py), E411;
+    call it once every body is resolved (`bodies`: in file order, None where reported)."""
+    for index, item in enumerate(bodies):
+        if item is None:
+            continue
+        path = ("bodies", index)
+        problem = scale.mass_problem(check.scale, item.mass)
+        if problem is not None:
+            check.error("E411", (*path, "mass"), problem[0], expected=problem[1],
+                        got=f"{item.mass:.6g}", hint=problem[2])
+        moments = np.linalg.eigvalsh(item.inertia)
+        problem = scale.inertia_problem(check.scale, moments)
+        if problem is not None:
+            check.error("E411", (*path, "inertia"), problem[0], expected=problem[1],
+                        got=", ".join(f"{m:.6g}" for m in moments), hint=problem[2])
+
+
 def body(check: Checker, index: int, given: spec.Body) -> resolved.Body | None:
     path = ("bodies", index)
     mass = check.positive(
         "E400", (*path, "mass"), check.number((*path, "mass"), given.mass), "mass"
     )
+    moments = inertia(check, (*path, "inertia"), given.inertia)
+    position = check.vector((*path, "position"), given.position)
+    check.scale.add(given.name, mass, moments, position)  # before its orientation's axes
     fields = dict(
         mass=mass,
-        inertia=inertia(check, (*path, "inertia"), given.inertia),
-        position=check.vector((*path, "position"), given.position),
+        inertia=moments,
+        position=position,
         euler_parameters=orientation(check, (*path, "orientation"), given.orientation),
         velocity=check.vector((*path, "velocity"), given.velocity),
         angular_velocity=check.vector((*path, "angular_velocity"), given.angular_velocity),

@@ -22,6 +22,7 @@ from casmech.errors import Diagnostic, Source, did_you_mean, failed
 from casmech.schema import limits, resolved, spec
 from casmech.schema.loader import Document, Path, format_path
 from casmech.schema.resolved import GROUND, ScalarFunction
+from casmech.schema.scale import Scale
 
 NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 RESERVED = frozenset({"t", *CONSTANTS, *FUNCTIONS})
@@ -72,6 +73,7 @@ class Checker:
         self.bodies: dict[str, resolved.Body | None] = {}
         self.joint_types: dict[str, str] = {}
         self.joint_bodies: dict[str, tuple[str, str]] = {}
+        self.scale = Scale()  # the bodies' scale so far: the floors of directions
 
     # -- reporting
     def error(self, code: str, path: Path | str, message: str, **extra: Any) -> None:
@@ -186,6 +188,16 @@ class Checker:
         norm = np.linalg.norm(vector)
         if norm < ZERO:
             self.error("E404", path, "zero-length vector: its direction is undefined")
+            return None
+        floor = self.scale.direction_floor(normalise)
+        if norm < floor:
+            what = ("round-off in its components decides where it points" if normalise else
+                    "its length scales the constraint row, which then holds too loosely")
+            self.error("E404", path, f"a direction of length {norm:.3g} is too short: {what}",
+                       expected=f"a length of at least {floor:.3g}",
+                       hint="write the direction itself (e.g. [0, 0, 1]) rather than a tiny "
+                            "difference of points" if normalise else
+                            "write a unit vector (e.g. [0, 0, 1])")
             return None
         return vector / norm if normalise else vector
 

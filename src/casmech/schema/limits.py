@@ -36,6 +36,11 @@ MIN_RTOL, MAX_RTOL = 1e-14, 0.1  # below ~100 unit roundoffs IDAS/CVODES stop wi
 #                                  accuracy requested"; above 10% an integrator controls nothing
 MIN_ATOL, MAX_ATOL = 1e-20, 1.0  # the error weight 1/(rtol |y| + atol) stays finite
 MAX_T_END = 1e9  # [s] 30 years of simulated time
+MIN_TIME = 1e-12  # [s] least t_end and output_step: a picosecond is below every time scale of
+#                   a rigid-body model, and far above the subnormal numbers (2e-320) whose
+#                   ratios overflow and whose few significant digits make no grid
+MAX_ELEMENTS = 10_000  # ocp: intervals x elements, each a block of NLP variables and constraints
+#                        as large as the states (beyond, minutes to build and gigabytes)
 MAX_ROWS = 1_000_000  # rows of the output grid (t_end / output_step + 1)
 MAX_VALUES = 20_000_000  # rows x results columns: the results table passes through CasADi's
 #                          DM -> list -> NumPy conversion at ~50 bytes a value (1 GB here)
@@ -60,15 +65,18 @@ def implausible(path: Path | str, value: float) -> tuple[str, str] | None:
 
 
 def grid_rows(t_end: float, output_step: float) -> float:
-    """Rows of the output grid from 0 to t_end every output_step (as a float: may be huge)."""
-    return math.floor(t_end / output_step + 1e-9) + 2 if output_step > 0 else math.inf
+    """Rows of the output grid from 0 to t_end every output_step (as a float: may be huge; inf
+    when the ratio overflows, as for a subnormal output_step)."""
+    ratio = t_end / output_step if output_step > 0 else math.inf
+    return math.floor(ratio + 1e-9) + 2 if math.isfinite(ratio) else math.inf
 
 
 def analysis_problems(settings: dict[str, float], columns: int,
                       step_within: bool = True) -> dict[str, str]:
     """{setting: problem} of t_end, output_step, rtol, atol (non-positive, not finite, out of
-    range, or an output grid of more than MAX_ROWS rows or MAX_VALUES values; with
-    `step_within`, an output_step larger than t_end)."""
+    range (t_end and output_step below MIN_TIME included), or an output grid of more than
+    MAX_ROWS rows or MAX_VALUES values; with `step_within`, an output_step larger than
+    t_end)."""
     problems: dict[str, str] = {}
     for key, value in settings.items():
         if value is None:
@@ -81,6 +89,10 @@ def analysis_problems(settings: dict[str, float], columns: int,
     rtol, atol = settings.get("rtol"), settings.get("atol")
     if "t_end" not in problems and t_end is not None and t_end > MAX_T_END:
         problems["t_end"] = f"t_end must be at most {MAX_T_END:.0e} s"
+    for key in ("t_end", "output_step"):
+        value = settings.get(key)
+        if key not in problems and value is not None and value < MIN_TIME:
+            problems[key] = f"{key} must be at least {MIN_TIME:g} s"
     if "rtol" not in problems and rtol is not None and not MIN_RTOL <= rtol <= MAX_RTOL:
         problems["rtol"] = f"rtol must be between {MIN_RTOL:g} and {MAX_RTOL:g}"
     if "atol" not in problems and atol is not None and not MIN_ATOL <= atol <= MAX_ATOL:
@@ -95,4 +107,20 @@ def analysis_problems(settings: dict[str, float], columns: int,
         problems["output_step"] = (
             f"the output grid would have {rows:.3g} rows of {columns} columns; at most "
             f"{MAX_ROWS} rows and {MAX_VALUES:.0e} values")
+    return problems
+
+
+def ocp_problems(horizon: float | None, intervals: int, elements: int) -> dict[str, str]:
+    """{key: problem} of an ocp block's horizon (within [MIN_TIME, MAX_T_END]), intervals and
+    elements (at least 1, their product at most MAX_ELEMENTS)."""
+    problems: dict[str, str] = {}
+    if horizon is not None and not MIN_TIME <= horizon <= MAX_T_END:
+        problems["horizon"] = f"horizon must be between {MIN_TIME:g} and {MAX_T_END:g} s"
+    for key, value in (("intervals", intervals), ("elements", elements)):
+        if value < 1:
+            problems[key] = f"{key} must be at least 1"
+    if not problems.keys() & {"intervals", "elements"} and intervals * elements > MAX_ELEMENTS:
+        key = "intervals" if intervals >= elements else "elements"
+        problems[key] = (f"intervals x elements = {intervals * elements} collocation elements; "
+                         f"at most {MAX_ELEMENTS}")
     return problems

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 from casmech.elements.force_types import input_types
 from casmech.elements.joint_types import listed
-from casmech.schema import resolved, spec
+from casmech.schema import limits, resolved, spec
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
@@ -16,8 +16,8 @@ from casmech.schema.loader import Path
 def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Analysis | None,
                    joints, forces) -> resolved.Analysis | None:
     """`settings` with options `at` (seconds or None) and `inputs` (names or None), checked:
-    E409 for an `at` outside [0, t_end], E300 for an input that is no effort-motor joint or
-    force element."""
+    E409 for an `at` outside [0, t_end] or in (0, limits.MIN_TIME), E300 for an input that is
+    no effort-motor joint or force element."""
     path: Path = ("analysis",)
     at = None
     if given.at is not None:
@@ -26,6 +26,10 @@ def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Anal
         if at is not None and (at < 0 or (t_end is not None and at > t_end)):
             check.error("E409", (*path, "at"), "at must be a time of the run, within [0, t_end]",
                         got=f"{at:g}", hint=f"0 <= at <= t_end = {t_end:g}" if t_end else None)
+            at = None
+        elif at is not None and 0 < at < limits.MIN_TIME:
+            check.error("E409", (*path, "at"), f"at must be 0 or at least {limits.MIN_TIME:g} s",
+                        got=f"{at:g}", hint="at: 0 linearizes at the initial state")
             at = None
     known = {j.name: "joint" for j in joints if j is not None and j.motor}
     types = input_types()  # force element types that may be inputs (casmech.elements.force_types)

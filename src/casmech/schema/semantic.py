@@ -13,7 +13,7 @@ from dataclasses import replace
 from casmech.core import traced
 from casmech.errors import Diagnostic, failed
 from casmech.schema import events, files, limits, motors, resolved, spec
-from casmech.schema.bodies import body
+from casmech.schema.bodies import body, floors
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
 from casmech.schema.force_laws import StateChecker, force  # forces read the state
@@ -106,12 +106,11 @@ def _control(check: Checker, path: Path, given: spec.Control) -> resolved.Contro
 def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.OptimalControl | None:
     path: Path = ("ocp",)
     horizon = check.setting((*path, "horizon"), given.horizon)
-    if horizon is not None and horizon <= 0:
-        check.error("E409", (*path, "horizon"), "horizon must be positive", got=f"{horizon:g}")
-        horizon = None
-    if given.intervals < 1:
-        check.error("E409", (*path, "intervals"), "intervals must be at least 1",
-                    got=str(given.intervals))
+    problems = limits.ocp_problems(horizon, given.intervals, given.elements)
+    for key, problem in problems.items():
+        check.error("E409", (*path, key), problem,
+                    got=f"{horizon:g}" if key == "horizon" else str(getattr(given, key)))
+    horizon = None if "horizon" in problems else horizon
     controls = [_control(check, (*path, "controls", k), c) for k, c in enumerate(given.controls)]
     objective = (*path, "objective")
     effort = check.setting((*objective, "effort"), given.objective.effort)
@@ -123,12 +122,15 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
     bounds = _pairs(check, (*path, "path"), given.path)
     time_weight = check.setting((*objective, "time"), given.objective.time)
     free = _pairs(check, path, {"free_time": given.free_time}) if given.free_time else {}
-    if free and free["free_time"][0] <= 0:
-        check.error("E409", (*path, "free_time"), "the final time's bounds must be positive")
+    if free and not (limits.MIN_TIME <= free["free_time"][0]
+                     and free["free_time"][1] <= limits.MAX_T_END):
+        check.error("E409", (*path, "free_time"), "the final time's bounds must be between "
+                    f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
+                    got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
     values = [horizon, effort, bounds, time_weight, free, *controls, *terminal.values(),
               *(x for pair in costs.values() for x in pair)]
-    if failed(values) or given.intervals < 1:
+    if failed(values) or problems:
         return None
     return resolved.OptimalControl(horizon, given.intervals, given.transcription, tuple(controls),
                                    effort, costs, terminal, bounds,
@@ -147,6 +149,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     for index, item in enumerate(given.bodies):
         bodies.append(body(check, index, item))
         check.bodies.setdefault(item.name, bodies[-1])
+    floors(check, bodies)
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]

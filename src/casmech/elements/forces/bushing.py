@@ -33,11 +33,13 @@ from typing import Any, Literal
 
 import casadi as ca
 import numpy as np
+from pydantic import StrictBool
 
 from casmech.core import euler, traced
 from casmech.core.quaternions import conjugate
 from casmech.core.spec_base import Name, Orientation, Repeats, Spec, Vector
 from casmech.core.values import constant
+from casmech.elements.forces.springs import non_negative
 from casmech.errors import failed
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -63,6 +65,7 @@ class Bushing(Spec):
     rotational_damping: Vector = (0, 0, 0)
     preload_force: Vector = (0, 0, 0)
     preload_torque: Vector = (0, 0, 0)
+    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
     repeat: Repeats | None = None
 
 
@@ -159,11 +162,7 @@ def resolve(check, path, given) -> dict[str, Any] | None:
     bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
     vectors = {key: check.numbers((*path, key), getattr(given, key)) for key in VECTORS}
     for key in NON_NEGATIVE:
-        if vectors[key] is not None and np.any(vectors[key] < 0):
-            got = ", ".join(f"{v:g}" for v in vectors[key])
-            check.error("E103", (*path, key), f"bushing {key.replace('_', ' ')} must not be "
-                        "negative", got=got, hint="zero leaves that direction free")
-            vectors[key] = None
+        vectors[key] = non_negative(check, (*path, key), vectors[key], given.allow_negative)
     vectors["orientation"] = check.orientation((*path, "orientation"), given.orientation)
     if not bodies_ok or failed(vectors.values()):
         return None

@@ -12,6 +12,7 @@ from dataclasses import replace
 from typing import Any, Literal
 
 import numpy as np
+from pydantic import StrictBool
 
 from casmech.core import traced
 from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
@@ -32,6 +33,7 @@ class TSDA(Spec):
     free_length: Scalar | None = None
     damping: Scalar = 0
     actuator: Scalar = "0"
+    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
     repeat: Repeats | None = None
 
 
@@ -43,6 +45,7 @@ class RSDA(Spec):
     free_angle: Scalar = 0
     damping: Scalar = 0
     actuator: Scalar = "0"
+    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
     repeat: Repeats | None = None
 
 
@@ -55,9 +58,27 @@ SPRINGS = {
 
 # ---------------------------------------------------------------------------- resolution
 def coefficients(check, path, given) -> dict[str, float | None]:
-    return {
-        key: check.number((*path, key), getattr(given, key)) for key in ("stiffness", "damping")
-    }
+    """stiffness and damping; negative ones only with `allow_negative: true` (E103)."""
+    values = {key: check.number((*path, key), getattr(given, key))
+              for key in ("stiffness", "damping")}
+    return {key: non_negative(check, (*path, key), value, given.allow_negative)
+            for key, value in values.items()}
+
+
+def non_negative(check, path, value, allowed: bool):
+    """`value` (a number or an array) unless it is negative without `allowed` (then E103,
+    None). A negative stiffness or damping feeds energy into the mechanism (an unstable spring,
+    a negative resistance), and a negative free length is no length: a sign slip makes them
+    as readily as an intent, so the element's `allow_negative: true` says they are meant."""
+    values = np.atleast_1d(value) if value is not None else np.zeros(0)
+    if allowed or not np.any(values < 0):
+        return value
+    key = path[-1].replace("_", " ")
+    check.error("E103", path, f"{key} must not be negative", got=", ".join(f"{v:g}"
+                                                                          for v in values),
+                hint="write `allow_negative: true` on the element if it is meant (a negative "
+                     "stiffness or damping feeds energy into the mechanism)")
+    return None
 
 
 def resolve_tsda(check, path, given) -> dict[str, Any] | None:
@@ -69,7 +90,9 @@ def resolve_tsda(check, path, given) -> dict[str, Any] | None:
     free = (
         length
         if given.free_length is None
-        else (check.number((*path, "free_length"), given.free_length))
+        else non_negative(check, (*path, "free_length"),
+                          check.number((*path, "free_length"), given.free_length),
+                          given.allow_negative)
     )
     at_zero = {"t": 0.0, "length": length, "length_dot": 0.0}
     return dict(

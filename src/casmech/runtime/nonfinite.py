@@ -1,0 +1,166 @@
+"""Results that are not finite: the failure that stops a run at the first such row, naming
+the time, the results column and the elements whose values are not finite there.
+
+A NaN or an infinity in a results row is never a result: it comes from a number beyond double
+precision (a driver `angle: 1e300*t`, whose rate squared overflows in the accelerations) or
+from a law evaluated where it is undefined. `Result.extend` refuses a row whose states are not
+finite (NonFinite, keeping the rows before it), as do the per-row solvers before their least
+squares, and output.streaming refuses a table row whose derived columns (reactions, energy)
+are not. The error first knows only which state; `explain` (casmech.analyze, with the
+model's functions) names the results column and blames the elements:
+
+- constraint rows (a joint's, a driver's, a basic constraint's) whose phi, nu or gamma at the
+  state is not finite, or whose rate nu is beyond the square root of the largest double (its
+  square, in gamma, overflows);
+- force elements (and effort motors, joint stops) whose generalized force or potential at the
+  state is not finite.
+
+The elements are evaluated at the offending row's state when it is finite, else at the last
+finite row's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from casmech.errors import AnalysisError, FailureContext
+from casmech.schema.resolved import JOINT_COLUMNS
+
+OVERFLOWING = 1e150  # a rate beyond this overflows when squared (double precision: 1.8e308)
+STATES = ("q", "q_dot", "q_ddot", "lam")
+
+
+@dataclass
+class NotFinite(FailureContext):
+    """What a NonFinite names: the column and the elements (kind, name, source, what)."""
+
+    column: str = ""
+    value: float = float("nan")
+    elements: list = field(default_factory=list)
+
+    def format(self) -> str:
+        at = f"at t = {self.time:.6g}: " if self.time is not None else ""
+        lines = [f"analysis failed {at}{self.cause}"]
+        for kind, name, source, what in self.elements:
+            where = f"{source}: " if source else ""
+            lines.append(f"  {where}{kind} '{name}': {what}")
+        return "\n".join(lines)
+
+
+def cause(column: str, value: float, named: bool) -> str:
+    tail = ("; the elements not finite there:" if named else
+            "; no single element: the state itself left double precision's range")
+    return (f"the results are not finite from this row on ({column} = {value}); the rows "
+            f"before it are kept{tail}")
+
+
+class NonFinite(AnalysisError):
+    """A results row that is not finite: its time, the quantity (a state of Result, a
+    constraint vector, or `table` for a results column) and the index of its first entry that
+    is not finite; `state` (q, q_dot) where the elements are evaluated."""
+
+    def __init__(self, t: float, quantity: str, values, state=None, partial=None):
+        values = np.ravel(np.asarray(values, float))
+        bad = np.flatnonzero(~np.isfinite(values))
+        self.quantity, self.index = quantity, int(bad[0]) if bad.size else 0
+        self.value = float(values[self.index]) if values.size else float("nan")
+        self.state, self.explained = state, False
+        column = f"{quantity}[{self.index}]"
+        super().__init__(NotFinite(t, cause(column, self.value, False), column=column,
+                                   value=self.value), partial)
+
+    def explain(self, functions, column: str | None = None) -> None:
+        """Name the results column (or `column`) and blame the elements (module docstring);
+        once."""
+        if self.explained:
+            return
+        self.explained = True
+        context = self.context
+        column = column or column_of(functions, self.quantity, self.index)
+        state = self.state
+        if (state is None or not all(np.all(np.isfinite(v)) for v in state)) and \
+                self.partial is not None and len(self.partial):
+            state = (self.partial.q[-1], self.partial.q_dot[-1])
+        elements = blame(functions, context.time, *state) if state is not None else []
+        self.context = NotFinite(context.time, cause(column, self.value, bool(elements)),
+                                 column=column, value=self.value, elements=elements)
+        self.args = (self.context.format(),)
+
+
+def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
+    """The first row of a block whose states are not all finite (None: all are)."""
+    finite = np.isfinite(times)
+    for block in (q, q_dot, q_ddot, lam):
+        finite &= np.isfinite(block).all(axis=1) if block.size else True
+    return None if finite.all() else int(np.argmin(finite))
+
+
+def column_of(functions, quantity: str, index: int) -> str:
+    """The results column a state's entry feeds (a constraint vector's: its row's joint)."""
+    nb = functions.n_bodies
+    if quantity in ("phi", "nu", "gamma") or quantity == "lam":
+        row = functions.rows[index] if index < functions.n_rows else None
+        if row is None:
+            return f"{quantity}[{index}]"
+        if quantity == "lam" and row.kind != "normalization":
+            return f"{row.joint}.{JOINT_COLUMNS[0]}..{JOINT_COLUMNS[-1]}"
+        return f"{quantity} of {row.label}"
+    if quantity not in STATES or index >= 7 * nb:
+        return f"{quantity}[{index}]"
+    names = functions.body_names
+    translation = index < 3 * nb
+    body = names[index // 3] if translation else names[(index - 3 * nb) // 4]
+    if quantity == "q":
+        return f"{body}.{'xyz'[index % 3]}" if translation else \
+            f"{body}.e{(index - 3 * nb) % 4}"
+    group = {"q_dot": ("v", "w"), "q_ddot": ("a", "alpha")}[quantity]
+    suffix = f"{group[0]}{'xyz'[index % 3]}" if translation else f"{group[1]}x..{group[1]}z"
+    return f"{body}.{suffix}"
+
+
+def blame(functions, t: float, q, q_dot) -> list[tuple[str, str, object, str]]:
+    """(kind, name, source, what) of each element whose values at (t, q, q_dot) are not
+    finite (module docstring)."""
+    found: dict[tuple[str, str], tuple] = {}
+    vectors = {"phi": (functions, "phi", t, q), "nu": (functions, "nu", t, q),
+               "gamma": (functions, "gamma", t, q, q_dot)}
+    for name, (bundle, function, *args) in vectors.items():
+        values = bundle.vector(function, *args)
+        for row, value in zip(functions.rows, values, strict=True):
+            large = name == "nu" and abs(value) > OVERFLOWING
+            if np.isfinite(value) and not large:
+                continue
+            kind = "body" if row.kind == "normalization" else "joint"
+            what = (f"its rate {name} = {value:.3g} (squared, it overflows)" if large and
+                    np.isfinite(value) else f"its {name} = {value}")
+            label = "p^T p - 1" if kind == "body" else row.label.split(": ", 1)[-1]
+            found.setdefault((kind, row.joint), (kind, row.joint, row.source,
+                                                  f"{label}: {what}"))
+    for force, generalized, potential in _element_values(functions, t, q, q_dot):
+        if np.all(np.isfinite(generalized)) and np.isfinite(potential):
+            continue
+        kind = "force" if any(force is f for f in functions.ir.forces) else "joint"
+        found.setdefault((kind, force.name), (kind, force.name, force.source,
+                                              "its generalized force or potential is not "
+                                              "finite"))
+    return list(found.values())
+
+
+def _element_values(functions, t, q, q_dot):
+    """(element, generalized force, potential) of every force element, effort motor and
+    stop, each evaluated alone (SX built here: a failure's diagnosis, not a run's work)."""
+    from casmech.equations import eom
+    from casmech.equations.assemble import Coordinates
+
+    ir = functions.ir
+    x = Coordinates.create(ir.n_bodies)
+    for element in (*ir.forces, *ir.motors, *ir.limits):
+        generalized, potential = eom.FORCE_ELEMENTS[element.type](element, x)
+        function = ca.Function("element", [x.t, x.q, x.q_dot],
+                               [x.ground_fixed(ca.densify(ca.SX(generalized))),
+                                x.ground_fixed(ca.SX(potential))])
+        out = function(t, q, q_dot)
+        yield element, np.array(out[0]).ravel(), float(out[1])
