@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.core.columns import JOINT_COLUMNS
 from casmech.errors import AnalysisError, FailureContext
-from casmech.schema.resolved import JOINT_COLUMNS
 
 OVERFLOWING = 1e150  # a rate beyond this overflows when squared (double precision: 1.8e308)
 STATES = ("q", "q_dot", "q_ddot", "lam")

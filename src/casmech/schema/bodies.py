@@ -206,11 +206,12 @@ def floors(check: Checker, bodies) -> None:
         if item is None:
             continue
         path = ("bodies", index)
-        problem = scale.mass_problem(check.scale, item.mass)
+        mass = traced.value(item.mass)  # a check: on the values of traced numbers
+        problem = scale.mass_problem(check.scale, mass)
         if problem is not None:
             check.error("E411", (*path, "mass"), problem[0], expected=problem[1],
-                        got=f"{item.mass:.6g}", hint=problem[2])
-        moments = np.linalg.eigvalsh(item.inertia)
+                        got=f"{mass:.6g}", hint=problem[2])
+        moments = np.linalg.eigvalsh(traced.value(item.inertia))
         problem = scale.inertia_problem(check.scale, moments)
         if problem is not None:
             check.error("E411", (*path, "inertia"), problem[0], expected=problem[1],

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from casmech.core import traced
 from casmech.schema import limits
 
 MASS_RATIO = 1e-12  # least mass / heaviest mass, and least moment / (heaviest mass L^2)
@@ -58,7 +59,9 @@ class Scale:
 
     def add(self, name: str, mass: float | None, inertia: np.ndarray | None,
             position: np.ndarray | None) -> None:
-        """A body's mass, inertia and position (None: reported as wrong, left out)."""
+        """A body's mass, inertia and position (None: reported as wrong, left out); the values
+        of traced numbers (a check, not model data)."""
+        mass, inertia, position = (traced.value(x) for x in (mass, inertia, position))
         if position is not None:
             self.reach = max(self.reach, float(np.linalg.norm(position)))
         if mass is None or mass <= self.mass:
@@ -75,6 +78,7 @@ class Scale:
 
 def mass_problem(scale: Scale, mass: float) -> tuple[str, str, str] | None:
     """(problem, expected, hint) of a body's mass below the floors, or None."""
+    mass = traced.value(mass)
     if mass >= max(MIN_MASS, MASS_RATIO * scale.mass):
         return None
     if scale.mass * MASS_RATIO > MIN_MASS:
@@ -88,6 +92,7 @@ def mass_problem(scale: Scale, mass: float) -> tuple[str, str, str] | None:
 
 def inertia_problem(scale: Scale, moments: np.ndarray) -> tuple[str, str, str] | None:
     """(problem, expected, hint) of a body's smallest principal moment below the floor."""
+    moments = traced.value(moments)
     floor = MASS_RATIO * scale.mass * scale.length ** 2
     if moments[0] >= floor:
         return None
