@@ -1,0 +1,225 @@
+/* casmech FMU: the start state, the projection onto the loop closures and the
+   Co-Simulation integrator.
+
+   Start (fmi2ExitInitializationMode): Gauss-Newton steps (cm_closest) towards the point of the
+   tree's configurations, on the loop closures, closest to the file's pose at the parameters'
+   values (cm_file_pose), from the start state casmech computed at its own values; then the
+   velocities closest to the file's (cm_file_velocity). States set before initialization are
+   taken as they are (with loops: projected onto the closures).
+
+   Projection (loops): the same position problem with the current pose as the reference, then
+   the velocities closest to the current ones on the closures' velocity rows.
+
+   Co-Simulation: Dormand-Prince 5(4) (Hairer, Norsett, Wanner, Solving ODEs I, II.4 and
+   II.5): the 5th-order solution is kept, the embedded 4th-order one estimates the error;
+   a step is accepted when the error's RMS, weighted by atol + rtol |x|, is at most 1, and the
+   next step is 0.9 err^(-1/5) times this one (between 0.2 and 5 times). Inputs are linear in
+   time within a communication step (their derivatives from fmi2SetRealInputDerivatives). With
+   loops the state is projected after a step whenever the closures drifted past CM_DRIFT. */
+#include <math.h>
+#include <string.h>
+#include <stdio.h>
+
+#include "casmech_fmu.h"
+
+#define MAX_NEWTON 100        /* Gauss-Newton steps of a start or a projection */
+#define NEWTON_TOL 1e-12      /* largest step at convergence (joint coordinates: rad or m) */
+#define CLOSED_TOL 1e-8       /* largest closure residual accepted after a projection */
+#define MAX_STEPS 1000000     /* integrator steps in one fmi2DoStep */
+#define MIN_STEP 1e-14        /* relative to the time */
+
+static fmi2Status closest(Instance *c, double t, const double *q_ref) {
+    double step = 0.0;
+    for (int k = 0; k < MAX_NEWTON; ++k) {
+        const double *in[4] = {&t, c->s.x, c->jd, q_ref};
+        double *out[2] = {c->x_trial, &step};
+        if (cm_call(c, cm_closest, in, 4, out, 2)) return fmi2Error;
+        for (int i = 0; i < CM_NX; ++i) {
+            if (!isfinite(c->x_trial[i])) {
+                cm_log(c, fmi2Error, "logStatusError", "the closest configuration could not be "
+                       "found (a singular pose, or the closures cannot be met at these "
+                       "parameter values)");
+                return fmi2Error;
+            }
+        }
+        memcpy(c->s.x, c->x_trial, sizeof(double) * CM_NX);
+        if (step <= NEWTON_TOL) return fmi2OK;
+    }
+    cm_log(c, fmi2Error, "logStatusError", "the closest configuration did not converge in "
+           "100 Gauss-Newton steps");
+    return fmi2Error;
+}
+
+static fmi2Status velocity(Instance *c, double t, CmEval f) {
+    const double *in[3] = {&t, c->s.x, c->jd};
+    double *out[1] = {c->x_trial};
+    if (cm_call(c, f, in, 3, out, 1)) return fmi2Error;
+    memcpy(c->s.x, c->x_trial, sizeof(double) * CM_NX);
+    return fmi2OK;
+}
+
+static fmi2Status closed(Instance *c, double t) {
+    double position = 0.0, rate = 0.0;
+    const double *in[3] = {&t, c->s.x, c->jd};
+    double *out[2] = {&position, &rate};
+    if (cm_call(c, cm_drift, in, 3, out, 2)) return fmi2Error;
+    if (!(position <= CLOSED_TOL && rate <= CLOSED_TOL)) {
+        char message[160];
+        snprintf(message, sizeof message, "the loop closures are not met after the projection "
+                 "(position %.3g, velocity %.3g): a singular pose?", position, rate);
+        cm_log(c, fmi2Error, "logStatusError", message);
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+fmi2Status cm_project(Instance *c, double t) {
+    const double *in[3] = {&t, c->s.x, c->jd};
+    double *out[1] = {c->q_ref};
+    cm_data_update(c);
+    if (cm_call(c, cm_tree_pose, in, 3, out, 1)) return fmi2Error;
+    if (closest(c, t, c->q_ref) != fmi2OK) return fmi2Error;
+    if (velocity(c, t, cm_project_velocity) != fmi2OK) return fmi2Error;
+    c->projections += 1;
+    c->dx_valid = c->y_valid = 0;
+    c->s.project = 0;
+    return closed(c, t);
+}
+
+int cm_drifted(Instance *c, double t) {
+    double position = 0.0, rate = 0.0;
+    const double *in[3] = {&t, c->s.x, c->jd};
+    double *out[2] = {&position, &rate};
+    if (!CM_LOOPS) return 0;
+    cm_data_update(c);
+    if (cm_call(c, cm_drift, in, 3, out, 2)) return 1;
+    return !(position <= CM_DRIFT && rate <= CM_DRIFT);
+}
+
+fmi2Status cm_start_state(Instance *c) {
+    double t = c->s.time;
+    cm_data_update(c);
+    c->dx_valid = c->y_valid = 0;
+    if (c->s.states_given) return CM_LOOPS ? cm_project(c, t) : fmi2OK;
+    {
+        const double *in[1] = {c->jd};
+        double *out[1] = {c->q_ref};
+        if (cm_call(c, cm_file_pose, in, 1, out, 1)) return fmi2Error;
+    }
+    if (closest(c, t, c->q_ref) != fmi2OK) return fmi2Error;
+    if (velocity(c, t, cm_file_velocity) != fmi2OK) return fmi2Error;
+    return CM_LOOPS ? closed(c, t) : fmi2OK;
+}
+
+/* ---------------------------------------------------------------- Dormand-Prince 5(4) */
+
+static const double C[7] = {0.0, 1.0 / 5, 3.0 / 10, 4.0 / 5, 8.0 / 9, 1.0, 1.0};
+static const double A[7][6] = {
+    {0},
+    {1.0 / 5},
+    {3.0 / 40, 9.0 / 40},
+    {44.0 / 45, -56.0 / 15, 32.0 / 9},
+    {19372.0 / 6561, -25360.0 / 2187, 64448.0 / 6561, -212.0 / 729},
+    {9017.0 / 3168, -355.0 / 33, 46732.0 / 5247, 49.0 / 176, -5103.0 / 18656},
+    {35.0 / 384, 0.0, 500.0 / 1113, 125.0 / 192, -2187.0 / 6784, 11.0 / 84}};
+/* the 5th-order weights are A[6]; E: 5th minus embedded 4th order */
+static const double E[7] = {71.0 / 57600, 0.0, -71.0 / 16695, 71.0 / 1920, -17253.0 / 339200,
+                            22.0 / 525, -1.0 / 40};
+
+static int rhs(Instance *c, double t, const double *x, double *dx) {
+    const double *in[3] = {&t, x, c->jd};
+    double *out[1] = {dx};
+    cm_inputs_at(c, t);
+    return cm_call(c, cm_ode, in, 3, out, 1);
+}
+
+static double weighted_norm(Instance *c, const double *v, const double *x, const double *x_new) {
+    double sum = 0.0;
+    for (int i = 0; i < CM_NX; ++i) {
+        double scale = c->atol + c->rtol * fmax(fabs(x[i]), fabs(x_new[i]));
+        sum += (v[i] / scale) * (v[i] / scale);
+    }
+    return CM_NX ? sqrt(sum / CM_NX) : 0.0;
+}
+
+/* Hairer's initial step (Solving ODEs I, II.4): from the sizes of x, x' and x'' */
+static double initial_step(Instance *c, double t, double span) {
+    double *x = c->s.x, *f0 = c->k[0], *f1 = c->k[1], *x1 = c->x_trial;
+    double d0 = weighted_norm(c, x, x, x), d1 = weighted_norm(c, f0, x, x), h0, h1, d2;
+    h0 = (d0 < 1e-5 || d1 < 1e-5) ? 1e-6 : 0.01 * d0 / d1;
+    h0 = fmin(h0, span);
+    for (int i = 0; i < CM_NX; ++i) x1[i] = x[i] + h0 * f0[i];
+    if (rhs(c, t + h0, x1, f1)) return h0;
+    for (int i = 0; i < CM_NX; ++i) c->x_error[i] = f1[i] - f0[i];
+    d2 = weighted_norm(c, c->x_error, x, x) / h0;
+    h1 = fmax(d1, d2) <= 1e-15 ? fmax(1e-6, h0 * 1e-3) : pow(0.01 / fmax(d1, d2), 0.2);
+    return fmin(fmin(100 * h0, h1), span);
+}
+
+fmi2Status cm_integrate(Instance *c, double t_end) {
+    double t = c->s.time, h = c->s.h;
+    int fresh = 0; /* k[0] holds f(t, x) */
+    long taken = 0;
+    cm_data_update(c);
+    if (CM_NX == 0) {
+        c->s.time = t_end;
+        return fmi2OK;
+    }
+    while (t_end - t > MIN_STEP * fmax(1.0, fabs(t_end))) {
+        double err, factor;
+        if (!fresh) {
+            if (rhs(c, t, c->s.x, c->k[0])) return fmi2Error;
+            fresh = 1;
+        }
+        double wanted;
+        if (h <= 0.0) h = initial_step(c, t, t_end - t);
+        wanted = h;
+        if (t + 1.01 * h >= t_end) h = t_end - t;
+        for (int stage = 1; stage < 7; ++stage) {
+            for (int i = 0; i < CM_NX; ++i) {
+                double sum = 0.0;
+                for (int j = 0; j < stage; ++j) sum += A[stage][j] * c->k[j][i];
+                c->x_trial[i] = c->s.x[i] + h * sum;
+            }
+            if (rhs(c, t + C[stage] * h, c->x_trial, c->k[stage])) return fmi2Error;
+        }
+        /* x_trial is the 5th-order solution (stage 7 is evaluated there: FSAL) */
+        for (int i = 0; i < CM_NX; ++i) {
+            double sum = 0.0;
+            for (int j = 0; j < 7; ++j) sum += E[j] * c->k[j][i];
+            c->x_error[i] = h * sum;
+        }
+        err = weighted_norm(c, c->x_error, c->s.x, c->x_trial);
+        if (!isfinite(err)) {
+            err = 1e10;
+        }
+        factor = err > 0.0 ? 0.9 * pow(err, -0.2) : 5.0;
+        if (err <= 1.0) {
+            t += h;
+            memcpy(c->s.x, c->x_trial, sizeof(double) * CM_NX);
+            memcpy(c->k[0], c->k[6], sizeof(double) * CM_NX);
+            c->steps += 1;
+            c->s.time = t;
+            if (CM_LOOPS && cm_drifted(c, t)) {
+                if (cm_project(c, t) != fmi2OK) return fmi2Error;
+                fresh = 0;
+            }
+            h = fmax(h * fmin(5.0, fmax(0.2, factor)), factor >= 1.0 ? wanted : 0.0);
+        } else {
+            c->rejected += 1;
+            h *= fmin(1.0, fmax(0.2, factor));
+        }
+        if (++taken > MAX_STEPS || h < MIN_STEP * fmax(1.0, fabs(t))) {
+            char message[200];
+            snprintf(message, sizeof message, "the integrator stopped at t = %.9g: %s", t,
+                     taken > MAX_STEPS ? "too many steps in one communication step"
+                                       : "the step size fell below the round-off of t");
+            cm_log(c, fmi2Error, "logStatusError", message);
+            return fmi2Error;
+        }
+    }
+    c->s.time = t_end;
+    c->s.h = h;
+    c->dx_valid = c->y_valid = 0;
+    return fmi2OK;
+}
