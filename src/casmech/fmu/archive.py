@@ -130,8 +130,9 @@ def quantity_title(name: str) -> str:
     return description.quantity(name)[2]
 
 
-def export(model: ResolvedModel, path: Path, options: Options = Options()) -> Path:
-    """Write the model's FMU to `path` (module docstring); returns it."""
+def export(model: ResolvedModel, path: Path, options: Options = Options()) -> tuple[Path, str]:
+    """Write the model's FMU to `path` (module docstring); (the path, what it holds in
+    words)."""
     if path.suffix != ".fmu":
         raise UsageError(f"{path}: an FMU's file name ends in .fmu")
     if path.exists() and path.is_dir():
@@ -175,7 +176,21 @@ def export(model: ResolvedModel, path: Path, options: Options = Options()) -> Pa
             for name in sources:
                 archive.write(directory / name, f"sources/{name}")
         partial.replace(path)
-    return path
+    return path, summary(view, system)
+
+
+def summary(view: Exported, system: FmuSystem) -> str:
+    """'4 states, 1 input, 52 outputs, 7 parameters (4 fixed, 3 tunable)'."""
+    def count(n: int, word: str) -> str:
+        return f"{n} {word}{'' if n == 1 else 's'}"
+
+    kinds = [f"{len(view.named(k))} {k}" for k in ("fixed", "tunable", "calculated",
+                                                     "structural") if view.named(k)]
+    text = ", ".join([count(len(system.state_names), "state"), count(len(view.inputs), "input"),
+                      count(len(system.output_names), "output"),
+                      count(len(view.parameters), "parameter")])
+    loops = "; loops closed by projection" if system.loops else ""
+    return text + (f" ({', '.join(kinds)})" if kinds else "") + loops
 
 
 def platform_folder() -> str:

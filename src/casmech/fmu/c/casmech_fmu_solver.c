@@ -153,7 +153,9 @@ static double initial_step(Instance *c, double t, double span) {
     for (int i = 0; i < CM_NX; ++i) c->x_error[i] = f1[i] - f0[i];
     d2 = weighted_norm(c, c->x_error, x, x) / h0;
     h1 = fmax(d1, d2) <= 1e-15 ? fmax(1e-6, h0 * 1e-3) : pow(0.01 / fmax(d1, d2), 0.2);
-    return fmin(fmin(100 * h0, h1), span);
+    /* Hairer's min(100 h0, h1), but within 4 orders of h1: a state of round-off (1e-17
+       where atol is 1e-12) makes h0 vanish */
+    return fmin(fmax(fmin(100 * h0, h1), 1e-4 * h1), span);
 }
 
 fmi2Status cm_integrate(Instance *c, double t_end) {
@@ -209,7 +211,7 @@ fmi2Status cm_integrate(Instance *c, double t_end) {
             c->rejected += 1;
             h *= fmin(1.0, fmax(0.2, factor));
         }
-        if (++taken > MAX_STEPS || h < MIN_STEP * fmax(1.0, fabs(t))) {
+        if (++taken > MAX_STEPS || (err > 1.0 && h < MIN_STEP * fmax(1.0, fabs(t)))) {
             char message[200];
             snprintf(message, sizeof message, "the integrator stopped at t = %.9g: %s", t,
                      taken > MAX_STEPS ? "too many steps in one communication step"
