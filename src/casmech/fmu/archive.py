@@ -21,6 +21,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from casmech.backends import generate
 from casmech.backends.build import SUFFIX, Toolchain, build_libraries
 from casmech.equations.functions import build_functions
 from casmech.errors import UsageError
@@ -142,11 +143,7 @@ def export(model: ResolvedModel, path: Path, options: Options = Options()) -> tu
     bundle = build_functions(view.ir, view.data)
     system = build_system(view, begin, outputs.chosen(bundle, options.outputs))
     identifier = options.identifier or identifier_of(path)
-    listed = variables(view, system, begin)
-    sources = [*TEMPLATES, f"{FUNCTIONS}.c", f"{FUNCTIONS}.h", CONFIG]
-    xml, guid = description.model_description(
-        model.name, model.description or model.name, identifier, listed, sources,
-        system.loops, _settings(model))
+    toolchain = options.toolchain or Toolchain()
     sizes = {"CM_NP": sum(p.kind in ("fixed", "tunable") for p in view.parameters),
              "CM_NX": len(system.state_names), "CM_NU": len(view.inputs),
              "CM_NY": len(system.output_names), "CM_NC": len(view.named("calculated")),
@@ -154,20 +151,18 @@ def export(model: ResolvedModel, path: Path, options: Options = Options()) -> tu
              "CM_NQ": 7 * view.ir.n_bodies}
     with tempfile.TemporaryDirectory(prefix="casmech_fmu_") as folder:
         directory = Path(folder)
-        generator = ca.CodeGenerator(f"{FUNCTIONS}.c", {"with_header": True,
-                                                         "with_export": False})
-        for function in system.functions.values():
-            generator.add(_dense(function))
-        generator.generate(str(directory) + "/")
+        sources = [*TEMPLATES, *write_functions(system.functions, directory, toolchain.jobs),
+                   f"{FUNCTIONS}.h", CONFIG]
+        xml, guid = description.model_description(
+            model.name, model.description or model.name, identifier,
+            variables(view, system, begin), sources, system.loops, _settings(model))
         (directory / CONFIG).write_text(config_header(guid, system, view, begin, sizes))
         templates = resources.files("casmech.fmu") / "c"
         for name in TEMPLATES:
             (directory / name).write_text(templates.joinpath(name).read_text())
-        toolchain = options.toolchain or Toolchain()
-        toolchain = replace(toolchain, flags=(*toolchain.flags, *VISIBILITY))
         binary = f"{identifier}{SUFFIX}"
         build_libraries({binary: [directory / name for name in sources if name.endswith(".c")]},
-                        directory, toolchain)
+                        directory, replace(toolchain, flags=(*toolchain.flags, *VISIBILITY)))
         path.parent.mkdir(parents=True, exist_ok=True)
         partial = path.with_name(path.name + ".partial")
         with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as archive:
@@ -191,6 +186,28 @@ def summary(view: Exported, system: FmuSystem) -> str:
                       count(len(view.parameters), "parameter")])
     loops = "; loops closed by projection" if system.loops else ""
     return text + (f" ({', '.join(kinds)})" if kinds else "") + loops
+
+
+def write_functions(functions: dict[str, ca.Function], directory: Path, parts: int
+                    ) -> list[str]:
+    """CasADi's C of the functions (dense outputs) in `parts` translation units of about
+    equal size (backends.generate.partition: compiled in parallel) behind one header; the
+    units' file names."""
+    groups = generate.partition({name: [_dense(f)] for name, f in functions.items()}, parts)
+    names = []
+    for k, group in enumerate(groups):
+        generator = ca.CodeGenerator(f"{FUNCTIONS}_{k}.c", {"with_header": True,
+                                                             "with_export": False})
+        for function in group:
+            generator.add(function)
+        generator.generate(str(directory) + "/")
+        names += [f"{FUNCTIONS}_{k}.c", f"{FUNCTIONS}_{k}.h"]
+    (directory / f"{FUNCTIONS}.h").write_text(
+        "/* casmech FMU: CasADi's C of casmech.fmu.system's functions */\n"
+        "#ifndef CASMECH_FMU_FUNCTIONS_H\n#define CASMECH_FMU_FUNCTIONS_H\n"
+        + "".join(f'#include "{name}"\n' for name in names if name.endswith(".h"))
+        + "#endif\n")
+    return names
 
 
 def platform_folder() -> str:

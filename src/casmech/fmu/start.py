@@ -20,9 +20,9 @@ from casmech.equations.checks import independent_rows
 from casmech.equations.functions import build_functions
 from casmech.equations.motors import coordinate_and_value
 from casmech.errors import UsageError
+from casmech.fmu.model import Input
 from casmech.formulations.joint_system import build
 from casmech.formulations.tree import spanning_tree
-from casmech.fmu.model import Input
 from casmech.model.lower import lower
 from casmech.runtime import assembly, joint_dynamics
 from casmech.schema.resolved import ResolvedModel

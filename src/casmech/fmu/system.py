@@ -39,14 +39,14 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casmech.core import euler
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.functions import SystemFunctions, build_functions
-from casmech.formulations.joint_system import JointSystem, build
-from casmech.formulations.tree import spanning_tree
 from casmech.fmu import outputs
 from casmech.fmu.model import Exported
 from casmech.fmu.start import Start
-from casmech.core import euler
+from casmech.formulations.joint_system import JointSystem, build
+from casmech.formulations.tree import spanning_tree
 
 
 @dataclass(frozen=True)
