@@ -35,8 +35,7 @@ def toolchain() -> codegen.Toolchain:
 
 def build(model, folder: Path, toolchain, name: str = "model", **options) -> Path:
     """The model's FMU in `folder`."""
-    path, _ = export(model, folder / f"{name}.fmu", Options(toolchain=toolchain, **options))
-    return path
+    return export(model, folder / f"{name}.fmu", Options(toolchain=toolchain, **options)).path
 
 
 def reference(model, analysis: str = "dynamics") -> dict[str, float]:

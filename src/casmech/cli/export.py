@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
 from casmech import api
+from casmech.backends import build
 from casmech.cli.common import add_overrides, overrides
 from casmech.cli.compile import toolchain
 
@@ -22,8 +24,8 @@ def add_arguments(parser) -> None:
                              "<joint>.torque or <joint>.force, comma-separated (repeatable; "
                              "'none': no input; default: all of them)")
     parser.add_argument("--flags", metavar="'FLAGS'",
-                        help="C compiler flags (default: $CASMECH_CFLAGS, else as casmech "
-                             "compile)")
+                        help="C compiler flags (default: $CASMECH_CFLAGS, else "
+                             f"{' '.join(build.DEFAULT_FLAGS)}; -std=c99 -fPIC always)")
     add_overrides(parser)
 
 
@@ -40,6 +42,9 @@ def run(args) -> int:
     start = time.perf_counter()
     options = Options(outputs=_listed(args.outputs), inputs=_listed(args.inputs),
                       toolchain=toolchain(args.flags, None))
-    path, summary = export(model, args.out, options)
-    print(f"{args.model}: {path} ({summary}; built in {time.perf_counter() - start:.3g} s)")
+    written = export(model, args.out, options)
+    print(f"{args.model}: {written.path} ({written.summary}; built in "
+          f"{time.perf_counter() - start:.3g} s)")
+    for note in written.notes:
+        print(f"note: {note}", file=sys.stderr)
     return 0
