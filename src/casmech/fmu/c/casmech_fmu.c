@@ -146,6 +146,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component component, fmi2Boolean toleranceDef
     }
     c->start_time = startTime;
     c->s.time = startTime;
+    c->s.started = 0;
     c->s.u_time = startTime;
     return fmi2OK;
 }
@@ -157,10 +158,21 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component component) {
     return fmi2OK;
 }
 
+/* In initialization mode: the start state from the parameters, states and inputs set so far
+   (computed again after any of them changes), so that states, derivatives and outputs can be
+   read before initialization ends. */
+static fmi2Status started(Instance *c) {
+    if (c->s.mode == MODE_INITIALIZATION && !c->s.started) {
+        if (cm_start_state(c) != fmi2OK) return fmi2Error;
+        c->s.started = 1;
+    }
+    return fmi2OK;
+}
+
 fmi2Status fmi2ExitInitializationMode(fmi2Component component) {
     Instance *c = (Instance *)component;
     if (!c || c->s.mode != MODE_INITIALIZATION) return fmi2Error;
-    if (cm_start_state(c) != fmi2OK) {
+    if (started(c) != fmi2OK) {
         c->s.mode = MODE_ERROR;
         return fmi2Error;
     }
@@ -192,7 +204,7 @@ fmi2Status fmi2Reset(fmi2Component component) {
 /* ---------------------------------------------------------------- values */
 
 static int evaluated(Instance *c) {
-    return c->s.mode != MODE_INSTANTIATED && c->s.mode != MODE_INITIALIZATION;
+    return c->s.mode != MODE_INSTANTIATED;
 }
 
 static fmi2Status derivatives(Instance *c) {
@@ -226,16 +238,17 @@ fmi2Status fmi2GetReal(fmi2Component component, const fmi2ValueReference vr[], s
         if (r < VR_X) {
             value[k] = c->s.theta[r - VR_THETA];
         } else if (r < VR_DX) {
+            if (started(c) != fmi2OK) return fmi2Error;
             value[k] = c->s.x[r - VR_X];
         } else if (r < VR_U) {
-            if (!evaluated(c)) return fail(c, "derivatives are known after initialization");
-            if (derivatives(c) != fmi2OK) return fmi2Error;
+            if (!evaluated(c)) return fail(c, "derivatives are known from initialization on");
+            if (started(c) != fmi2OK || derivatives(c) != fmi2OK) return fmi2Error;
             value[k] = c->dx[r - VR_DX];
         } else if (r < VR_Y) {
             value[k] = c->s.u[r - VR_U];
         } else if (r < VR_C) {
-            if (!evaluated(c)) return fail(c, "outputs are known after initialization");
-            if (outputs(c) != fmi2OK) return fmi2Error;
+            if (!evaluated(c)) return fail(c, "outputs are known from initialization on");
+            if (started(c) != fmi2OK || outputs(c) != fmi2OK) return fmi2Error;
             value[k] = c->y[r - VR_Y];
         } else if (r < VR_S) {
             cm_data_update(c);
@@ -262,6 +275,7 @@ static fmi2Status set_parameter(Instance *c, fmi2ValueReference r, double value)
     }
     if (c->s.theta[k] != value) {
         c->s.theta[k] = value;
+        c->s.started = 0;
         c->s.data_valid = 0;
         c->dx_valid = c->y_valid = 0;
         c->s.project = late && CM_LOOPS;
@@ -278,10 +292,13 @@ fmi2Status fmi2SetReal(fmi2Component component, const fmi2ValueReference vr[], s
         if (r < VR_X) {
             if (set_parameter(c, r, value[k]) != fmi2OK) return fmi2Error;
         } else if (r < VR_DX) {
-            if (evaluated(c)) return fail(c, "states are set before initialization (Model "
-                                             "Exchange: fmi2SetContinuousStates)");
+            if (c->s.mode != MODE_INSTANTIATED && c->s.mode != MODE_INITIALIZATION) {
+                return fail(c, "states are set before initialization ends (Model Exchange: "
+                               "fmi2SetContinuousStates)");
+            }
             c->s.x[r - VR_X] = value[k];
             c->s.states_given = 1;
+            c->s.started = 0;
         } else if (r >= VR_U && r < VR_Y) {
             c->s.u[r - VR_U] = value[k];
             c->s.du[r - VR_U] = 0.0;

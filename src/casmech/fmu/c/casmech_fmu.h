@@ -47,6 +47,7 @@ typedef struct {
     int states_given;               /* states set before initialization: start from them */
     int data_valid;                 /* jd computed from theta */
     int project;                    /* loops: project the state before going on */
+    int started;                    /* the start state is computed from what was set */
     Mode mode;
 } Snapshot;
 

@@ -163,8 +163,9 @@ fmi2Status cm_integrate(Instance *c, double t_end) {
     int fresh = 0; /* k[0] holds f(t, x) */
     long taken = 0;
     cm_data_update(c);
-    if (CM_NX == 0) {
+    if (CM_NX == 0) {  /* every coordinate prescribed: nothing to integrate */
         c->s.time = t_end;
+        c->dx_valid = c->y_valid = 0;
         return fmi2OK;
     }
     while (t_end - t > MIN_STEP * fmax(1.0, fabs(t_end))) {
