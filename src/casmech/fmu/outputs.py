@@ -16,7 +16,6 @@ from collections.abc import Sequence
 import casadi as ca
 
 from casmech.core import euler
-from casmech.core.columns import JOINT_COLUMNS
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.model.ir import GROUND_INDEX, JointIR
@@ -87,5 +86,3 @@ def row(bundle: SystemFunctions, t, q, q_dot, q_ddot, lam, data) -> ca.SX:
     assert values.numel() == len(names(bundle)), "the row and the contract's columns differ"
     return values
 
-
-JOINT_WIDTH = len(JOINT_COLUMNS)

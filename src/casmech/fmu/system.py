@@ -206,6 +206,11 @@ class _Builder:
                                             ca.substitute(rate, u, zero))
         return ca.vertcat(self.x[:self.n_theta], solved)
 
+    def from_data(self, expression):
+        """An expression of the IR's numbers (the symbols d) with d read from jd."""
+        return ca.substitute(expression, self.exported.split.symbols,
+                             self.data[:self.exported.n_data])
+
     def file_velocities(self, q, q_dot):
         """The file's initial velocities as r-p rates at the pose q (runtime.assembly's
         file_velocities)."""
@@ -213,16 +218,12 @@ class _Builder:
         r_dot = [ca.SX(b.r_dot0) for b in ir.bodies]
         p_dot = [0.5 * euler.e_matrix(q[3 * nb + 4 * k:3 * nb + 4 * k + 4]).T @ ca.SX(b.omega0)
                  for k, b in enumerate(ir.bodies)]
-        values = ca.vertcat(ca.SX(0, 1), *r_dot, *p_dot)
-        return ca.substitute(values, self.exported.split.symbols, self.data[
-            :self.exported.n_data])
+        return self.from_data(ca.vertcat(ca.SX(0, 1), *r_dot, *p_dot))
 
     def file_pose(self):
         ir = self.exported.ir
-        pose = ca.vertcat(ca.SX(0, 1), *(ca.SX(b.r0) for b in ir.bodies),
-                          *(ca.SX(b.p0) for b in ir.bodies))
-        return ca.substitute(pose, self.exported.split.symbols,
-                             self.data[:self.exported.n_data])
+        return self.from_data(ca.vertcat(ca.SX(0, 1), *(ca.SX(b.r0) for b in ir.bodies),
+                                         *(ca.SX(b.p0) for b in ir.bodies)))
 
 
 def _constrained_least_squares(jacobian, residual, rows, values) -> ca.SX:
@@ -246,7 +247,8 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
     theta = exported.theta
     if b.n_x != len(begin.x0):
         raise AssertionError("the symbolic tree and the numeric start differ in their states")
-    row = outputs.row(b.bundle, t, *b.motion(), b.data)
+    # the reaction frames' vectors are the IR's own numbers: entries of d, read from jd
+    row = b.from_data(outputs.row(b.bundle, t, *b.motion(), b.data))
     data = b.system.data(ca.vertcat(exported.split.expressions, ca.DM(begin.inputs)))
     q_ref, closest, step = b.closest()
     phi, rate = b.closure(x)
