@@ -183,3 +183,42 @@ def test_outputs_are_known_in_initialization_mode(fmu):
     np.testing.assert_allclose(during[:2], [-0.65 * np.sin(0.4), -0.65 * np.cos(0.4)], rtol=0,
                                atol=1e-12)
     np.testing.assert_allclose(after, during, rtol=0, atol=1e-15)  # nothing moved at t0
+
+
+def test_a_tunable_parameter_changes_the_physics_from_then_on(fmu):
+    """m2 doubled between steps at t = 0.5: the energy (no damping) is constant before and
+    after, and jumps by rod 2's own energy there (it is linear in m2: its inertia is m2 times
+    a length squared), computed from the FMU's outputs."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    description = read_model_description(str(fmu))
+    refs = {v.name: v.valueReference for v in description.modelVariables}
+    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
+                      modelIdentifier=description.coSimulation.modelIdentifier)
+    slave.instantiate()
+    slave.setupExperiment(tolerance=1e-10, startTime=0.0)
+    slave.enterInitializationMode()
+    slave.exitInitializationMode()
+    rod2 = ["rod2.vx", "rod2.vy", "rod2.vz", "rod2.wy", "rod2.z"]
+    energy, t = [], 0.0
+    for k in range(100):
+        if k == 50:
+            vx, vy, vz, wy, z = slave.getReal([refs[n] for n in rod2])
+            # rod 2's energy per kg (L2 = 1, w = 0.04: J_yy = m2 (1 + 0.04^2) / 12)
+            per_kg = 0.5 * (vx**2 + vy**2 + vz**2) + 0.5 * (1 + 0.04**2) / 12 * wy**2 + 9.81 * z
+            slave.setReal([refs["m2"]], [2.0])
+            jump = energy[-1] + per_kg * (2.0 - 1.0)
+            energy.append(slave.getReal([refs["energy"]])[0])
+            # the energy at the new mass, of the same state
+            np.testing.assert_allclose(energy[-1], jump, rtol=0, atol=1e-12)  # round-off
+        slave.doStep(t, 0.01)
+        t += 0.01
+        energy.append(slave.getReal([refs["energy"]])[0])
+    slave.terminate()
+    slave.freeInstance()
+    before, after = np.array(energy[:50]), np.array(energy[50:])
+    # no damping: conserved to the integrator's tolerance (1e-10) times the motion
+    np.testing.assert_allclose(before, before[0], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(after, after[0], rtol=0, atol=1e-7)
+    assert abs(after[0] - before[0]) > 0.1
