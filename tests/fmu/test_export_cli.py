@@ -63,3 +63,12 @@ analysis: {type: dynamics, t_end: 1}
 
 def test_the_command_is_documented():
     assert "## casmech export" in (ROOT / "docs" / "cli.md").read_text()
+
+
+def test_a_parameter_named_as_a_column_is_refused(tmp_path, capsys):
+    text = (MODELS / "double_pendulum.yaml").read_text().replace(
+        "parameters:\n", "parameters:\n  energy: 1.0\n", 1)
+    model = tmp_path / "named.yaml"
+    model.write_text(text)
+    assert main(["export", str(model), "-o", str(tmp_path / "named.fmu")]) == 2
+    assert "'energy' names both a parameter and a results column" in capsys.readouterr().err

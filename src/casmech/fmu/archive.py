@@ -118,6 +118,11 @@ def variables(view: Exported, system: FmuSystem, begin: Start) -> list[descripti
             for p in view.named("calculated")]
     out += [Var(p.name, "local", "constant", "exact", p.value, words[p.kind])
             for p in view.named("structural")]
+    seen: set[str] = set()
+    twice = [v.name for v in out if v.name in seen or seen.add(v.name)]
+    if twice:
+        raise UsageError(f"'{twice[0]}' names both a parameter and a results column of the FMU; "
+                         "rename the parameter, or leave the column out with --outputs")
     return out
 
 
