@@ -72,3 +72,13 @@ def test_a_parameter_named_as_a_column_is_refused(tmp_path, capsys):
     model.write_text(text)
     assert main(["export", str(model), "-o", str(tmp_path / "named.fmu")]) == 2
     assert "'energy' names both a parameter and a results column" in capsys.readouterr().err
+
+
+def test_the_model_identifier_is_a_c_name():
+    from pathlib import Path
+
+    from casmech.fmu.archive import identifier_of
+
+    assert identifier_of(Path("out/my-arm v2.fmu")) == "my_arm_v2"
+    assert identifier_of(Path("2link.fmu")) == "m_2link"
+    assert identifier_of(Path("pendül.fmu")) == "pend_l"

@@ -2,7 +2,8 @@
 
     path = export(model, Path("pendulum.fmu"))           # `casmech export`
 
-The C is CasADi's code of fmu.system's functions (casmech_fmu_functions.c/.h), a
+The C is CasADi's code of fmu.system's functions (casmech_fmu_functions_<k>.c/.h, a few
+units of about equal size compiled in parallel, and casmech_fmu_functions.h), a
 configuration header (sizes, start values, tolerances) and the FMI functions of fmu/c/, built
 with the toolchain `casmech compile` uses (backends.build: $CC, $CASMECH_CFLAGS; here with
 hidden symbols but the FMI functions). The archive holds those sources too (`sources/`, listed
@@ -50,7 +51,7 @@ class Options:
 
 def identifier_of(path: Path) -> str:
     """A C identifier from the FMU's file name (FMI: the binary's name)."""
-    name = re.sub(r"\W", "_", path.stem) or "model"
+    name = re.sub(r"[^A-Za-z0-9_]", "_", path.stem) or "model"
     return name if not name[0].isdigit() else f"m_{name}"
 
 
