@@ -173,7 +173,8 @@ def export(model: ResolvedModel, path: Path, options: Options = Options()) -> Wr
              "CM_NX": len(system.state_names), "CM_NU": len(view.inputs),
              "CM_NY": len(system.output_names), "CM_NC": len(view.named("calculated")),
              "CM_NS": len(view.named("structural")), "CM_NJD": system.n_jd,
-             "CM_NQ": 7 * view.ir.n_bodies}
+             "CM_NQ": 7 * view.ir.n_bodies, "CM_NTH": system.n_theta,
+             "CM_NCP": system.position_rows, "CM_NCV": system.velocity_rows}
     with tempfile.TemporaryDirectory(prefix="casmech_fmu_") as folder:
         directory = Path(folder)
         sources = [*TEMPLATES, *write_functions(system.functions, directory, toolchain.jobs),

@@ -7,9 +7,8 @@ formulation and jd, the joint functions' data (formulations.joint_system over fm
     outputs(t, x, jd) -> y             the results columns chosen (fmu.outputs)
     file_pose(jd) -> q_ref             the file's initial pose (r-p) at the parameters
     tree_pose(t, x, jd) -> q           the r-p pose of the tree
-    closest(t, x, jd, q_ref) -> (x, step)   one Gauss-Newton step towards the closest point
-    file_velocity(t, x, jd) -> x       u closest to the file's initial velocities
-    project_velocity(t, x, jd) -> x    u closest to the tree's own velocity, on the closures
+    position_terms(t, x, jd, q_ref)    the closest-point problem's terms at x (below)
+    velocity_terms(t, x, jd)           the closest-velocity problem's terms at x
     drift(t, x, jd) -> (position, velocity)  the largest loop-closure residuals
     calculated(theta) -> values        the calculated parameters
 
@@ -26,7 +25,10 @@ The start and the projection solve `casmech run`'s assembly problem in joint coo
 positions min |q(theta) - q_ref|^2 (Euclidean in the r-p coordinates q, as
 runtime.assembly's closest point) subject to the kept closure rows and each quaternion
 coordinate's unit norm, by Gauss-Newton steps on the KKT system; velocities min
-|q_dot(theta, u) - q_dot_ref|^2 subject to the closures' velocity rows, one linear solve.
+|q_dot(theta, u) - q_dot_ref|^2 subject to the closures' velocity rows (q_dot_ref the file's
+velocities, or the current ones for a projection), one linear solve. These functions give the
+residuals and Jacobians; the C forms and solves the KKT systems (casmech_fmu_solver.c: dense
+LU with partial pivoting), whose symbolic solution would grow as the cube of the coordinates.
 The tree's poses satisfy every tree joint's constraints by construction, so on a tree this is
 exactly the closest point of the r-p assembly, and at the model's own values it is solved at
 the start state computed by casmech (fmu.start).
@@ -57,6 +59,9 @@ class FmuSystem:
     n_jd: int
     input_offset: int  # where the inputs sit in jd
     loops: bool
+    n_theta: int  # joint coordinates among the states (then velocities)
+    position_rows: int  # constraints of the position problem (closure rows, unit quaternions)
+    velocity_rows: int  # constraints of the velocity problem (closure rows)
 
 
 def _function(name: str, inputs: dict, results: dict) -> ca.Function:
@@ -178,40 +183,36 @@ class _Builder:
                     rows.append(ca.sumsqr(self.x[block]) - 1)
         return ca.vertcat(ca.SX(0, 1), *rows)
 
-    def closest(self):
-        """One Gauss-Newton step of the position problem (module docstring)."""
+    def position_terms(self) -> tuple[ca.SX, dict]:
+        """(q_ref, the position problem at x: residual q(theta) - q_ref and its Jacobian by
+        theta, the constraints (kept closure rows, unit quaternions) and theirs)."""
         theta = self.x[:self.n_theta]
         q_ref = ca.SX.sym("q_ref", 7 * self.exported.ir.n_bodies)
         q = self.system.motion(self.t, self.x, ca.SX.zeros(self.z.shape), self.signs,
                                self.jd)[0]
         residual = q - q_ref
         constraints = ca.vertcat(self.closure(self.x)[0], self.unit_quaternions())
-        step = _constrained_least_squares(ca.jacobian(residual, theta), residual,
-                                          ca.jacobian(constraints, theta), constraints)
-        x = ca.vertcat(theta + step, self.x[self.n_theta:])
-        return q_ref, x, ca.mmax(ca.fabs(step)) if self.n_theta else ca.SX(0)
+        return q_ref, {"jacobian": ca.jacobian(residual, theta), "residual": residual,
+                       "rows": ca.jacobian(constraints, theta), "values": constraints}
 
-    def velocity(self, reference) -> ca.SX:
-        """x with u closest to q_dot_ref = reference(q, q_dot) (module docstring)."""
+    def velocity_terms(self) -> dict:
+        """The velocity problem at x: q_dot = jacobian u + base, the closures' velocity rows
+        rows u + values = 0, and the file's initial velocities as r-p rates at q."""
         u = self.x[self.n_theta:]
         q, q_dot = self.system.motion(self.t, self.x, ca.SX.zeros(self.z.shape), self.signs,
                                       self.jd)[:2]
-        target = reference(q, q_dot)
         zero = ca.SX.zeros(u.shape)
-        jacobian = ca.jacobian(q_dot, u)
-        residual = ca.substitute(q_dot, u, zero) - target
         rate = self.closure(self.x)[1]
-        rows = ca.jacobian(rate, u)
-        solved = _constrained_least_squares(jacobian, residual, rows,
-                                            ca.substitute(rate, u, zero))
-        return ca.vertcat(self.x[:self.n_theta], solved)
+        return {"jacobian": ca.jacobian(q_dot, u), "base": ca.substitute(q_dot, u, zero),
+                "rows": ca.jacobian(rate, u), "values": ca.substitute(rate, u, zero),
+                "file": self.file_velocities(q)}
 
     def from_data(self, expression):
         """An expression of the IR's numbers (the symbols d) with d read from jd."""
         return ca.substitute(expression, self.exported.split.symbols,
                              self.data[:self.exported.n_data])
 
-    def file_velocities(self, q, q_dot):
+    def file_velocities(self, q):
         """The file's initial velocities as r-p rates at the pose q (runtime.assembly's
         file_velocities)."""
         ir, nb = self.exported.ir, self.exported.ir.n_bodies
@@ -226,20 +227,6 @@ class _Builder:
                                          *(ca.SX(b.p0) for b in ir.bodies)))
 
 
-def _constrained_least_squares(jacobian, residual, rows, values) -> ca.SX:
-    """delta minimizing |residual + jacobian delta|^2 subject to values + rows delta = 0."""
-    n = jacobian.size2()
-    if n == 0:
-        return ca.SX(0, 1)
-    normal = jacobian.T @ jacobian
-    gradient = jacobian.T @ residual
-    if rows.size1() == 0:
-        return -ca.solve(normal, gradient)
-    m = rows.size1()
-    kkt = ca.blockcat([[normal, rows.T], [rows, ca.SX.zeros(m, m)]])
-    return -ca.solve(kkt, ca.vertcat(gradient, values))[:n]
-
-
 def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSystem:
     """The FMU's functions (module docstring); `columns` the outputs (fmu.outputs.chosen)."""
     b = _Builder(exported, begin)
@@ -250,7 +237,7 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
     # the reaction frames' vectors are the IR's own numbers: entries of d, read from jd
     row = b.from_data(outputs.row(b.bundle, t, *b.motion(), b.data))
     data = b.system.data(ca.vertcat(exported.split.expressions, ca.DM(begin.inputs)))
-    q_ref, closest, step = b.closest()
+    q_ref, position = b.position_terms()
     phi, rate = b.closure(x)
     worst = (ca.mmax(ca.fabs(phi)), ca.mmax(ca.fabs(rate))) if phi.numel() else (
         ca.SX(0), ca.SX(0))
@@ -260,12 +247,8 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
         _function("cm_outputs", {"t": t, "x": x, "jd": jd}, {"y": row[columns]}),
         _function("cm_file_pose", {"jd": jd}, {"q": b.file_pose()}),
         _function("cm_tree_pose", {"t": t, "x": x, "jd": jd}, {"q": b.motion(x)[0]}),
-        _function("cm_closest", {"t": t, "x": x, "jd": jd, "q_ref": q_ref},
-                  {"x_next": closest, "step": step}),
-        _function("cm_file_velocity", {"t": t, "x": x, "jd": jd},
-                  {"x_next": b.velocity(b.file_velocities)}),
-        _function("cm_project_velocity", {"t": t, "x": x, "jd": jd},
-                  {"x_next": b.velocity(lambda q, q_dot: q_dot)}),
+        _function("cm_position_terms", {"t": t, "x": x, "jd": jd, "q_ref": q_ref}, position),
+        _function("cm_velocity_terms", {"t": t, "x": x, "jd": jd}, b.velocity_terms()),
         _function("cm_drift", {"t": t, "x": x, "jd": jd},
                   {"position": worst[0], "velocity": worst[1]}),
         _function("cm_calculated", {"theta": theta}, {"values": exported.calculated}),
@@ -274,4 +257,5 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
     return FmuSystem({f.name(): f for f in functions},
                      state_names(b.system, tuple(bd.name for bd in exported.ir.bodies)),
                      tuple(every[k] for k in columns), b.n_jd, exported.n_data,
-                     bool(b.system.n_cut))
+                     bool(b.system.n_cut), b.n_theta, position["values"].numel(),
+                     len(b.keep))

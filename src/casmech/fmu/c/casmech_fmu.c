@@ -54,8 +54,8 @@ void cm_data_update(Instance *c) {
 
 typedef int (*CmWork)(casadi_int *, casadi_int *, casadi_int *, casadi_int *);
 static const CmWork WORK[] = {cm_data_work, cm_ode_work, cm_outputs_work, cm_file_pose_work,
-                              cm_tree_pose_work, cm_closest_work, cm_file_velocity_work,
-                              cm_project_velocity_work, cm_drift_work, cm_calculated_work};
+                              cm_tree_pose_work, cm_position_terms_work,
+                              cm_velocity_terms_work, cm_drift_work, cm_calculated_work};
 
 static void *allocate(Instance *c, size_t n, size_t size) {
     return c->functions.allocateMemory(n ? n : 1, size);

@@ -69,6 +69,14 @@ typedef struct {
     double k[7][CM_SIZE(CM_NX)];
     double x_trial[CM_SIZE(CM_NX)], x_error[CM_SIZE(CM_NX)];
     double q_ref[CM_SIZE(CM_NQ)];
+    /* the closest-point problems (casmech_fmu_solver.c): their terms, KKT matrix and pivots */
+    double jacobian[CM_SIZE(CM_NQ * (CM_NTH > CM_NX - CM_NTH ? CM_NTH : CM_NX - CM_NTH))];
+    double residual[CM_SIZE(CM_NQ)], target[CM_SIZE(CM_NQ)];
+    double rows[CM_SIZE((CM_NCP > CM_NCV ? CM_NCP : CM_NCV) * CM_NX)];
+    double values[CM_SIZE(CM_NCP > CM_NCV ? CM_NCP : CM_NCV)];
+    double kkt[CM_SIZE((CM_NX + CM_NCP) * (CM_NX + CM_NCP))];
+    double solution[CM_SIZE(CM_NX + CM_NCP)];
+    int pivots[CM_SIZE(CM_NX + CM_NCP)];
     /* CasADi work */
     const casadi_real **arg;
     casadi_real **res;

@@ -1,11 +1,13 @@
 /* casmech FMU: the start state, the projection onto the loop closures and the
    Co-Simulation integrator.
 
-   Start (fmi2ExitInitializationMode): Gauss-Newton steps (cm_closest) towards the point of the
-   tree's configurations, on the loop closures, closest to the file's pose at the parameters'
-   values (cm_file_pose), from the start state casmech computed at its own values; then the
-   velocities closest to the file's (cm_file_velocity). States set before initialization are
-   taken as they are (with loops: projected onto the closures).
+   Start (fmi2ExitInitializationMode): Gauss-Newton steps towards the point of the tree's
+   configurations, on the loop closures, closest to the file's pose at the parameters' values
+   (cm_file_pose), from the start state casmech computed at its own values; then the
+   velocities closest to the file's. The generated functions give each problem's residual,
+   constraints and their Jacobians (cm_position_terms, cm_velocity_terms); the KKT system is
+   formed and solved here (dense LU with partial pivoting). States set before initialization
+   are taken as they are (with loops: projected onto the closures).
 
    Projection (loops): the same position problem with the current pose as the reference, then
    the velocities closest to the current ones on the closures' velocity rows.
@@ -28,21 +30,93 @@
 #define MAX_STEPS 1000000     /* integrator steps in one fmi2DoStep */
 #define MIN_STEP 1e-14        /* relative to the time */
 
+/* Solve the dense K x K system a z = b in place (a row-major, b becomes z) by LU with
+   partial pivoting; nonzero when a pivot vanishes (a singular configuration). */
+static int lu_solve(int k, double *a, double *b, int *pivots) {
+    for (int j = 0; j < k; ++j) {
+        int p = j;
+        double scale = 0.0;
+        for (int i = 0; i < k; ++i) scale = fmax(scale, fabs(a[i * k + j]));
+        for (int i = j + 1; i < k; ++i) {
+            if (fabs(a[i * k + j]) > fabs(a[p * k + j])) p = i;
+        }
+        if (!(fabs(a[p * k + j]) > 1e-14 * fmax(scale, 1e-300))) return 1;
+        pivots[j] = p;
+        if (p != j) {
+            for (int c = 0; c < k; ++c) {
+                double swap = a[j * k + c];
+                a[j * k + c] = a[p * k + c];
+                a[p * k + c] = swap;
+            }
+            double swap = b[j];
+            b[j] = b[p];
+            b[p] = swap;
+        }
+        for (int i = j + 1; i < k; ++i) {
+            double factor = a[i * k + j] / a[j * k + j];
+            if (factor == 0.0) continue;
+            for (int c = j; c < k; ++c) a[i * k + c] -= factor * a[j * k + c];
+            b[i] -= factor * b[j];
+        }
+    }
+    for (int i = k - 1; i >= 0; --i) {
+        double sum = b[i];
+        for (int c = i + 1; c < k; ++c) sum -= a[i * k + c] * b[c];
+        b[i] = sum / a[i * k + i];
+    }
+    return 0;
+}
+
+/* delta minimizing |r + J delta|^2 subject to v + R delta = 0 (J: nq x n, R: m x n, both
+   column-major as CasADi writes them), from the KKT system
+   [J^T J, R^T; R, 0] [delta; mu] = -[J^T r; v]; delta in c->solution[0..n). */
+static fmi2Status least_squares(Instance *c, int n, int m, const double *r) {
+    int k = n + m, nq = CM_NQ;
+    double *a = c->kkt, *b = c->solution;
+    const double *jac = c->jacobian, *rows = c->rows;
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j <= i; ++j) {
+            double sum = 0.0;
+            for (int q = 0; q < nq; ++q) sum += jac[i * nq + q] * jac[j * nq + q];
+            a[i * k + j] = a[j * k + i] = sum;
+        }
+        double gradient = 0.0;
+        for (int q = 0; q < nq; ++q) gradient += jac[i * nq + q] * r[q];
+        b[i] = -gradient;
+        for (int row = 0; row < m; ++row) {
+            a[(n + row) * k + i] = a[i * k + n + row] = rows[i * m + row];
+        }
+    }
+    for (int row = 0; row < m; ++row) {
+        for (int col = 0; col < m; ++col) a[(n + row) * k + n + col] = 0.0;
+        b[n + row] = -c->values[row];
+    }
+    if (lu_solve(k, a, b, c->pivots)) {
+        cm_log(c, fmi2Error, "logStatusError", "the closest configuration is not defined here "
+               "(a singular pose: the closures' rows lost rank)");
+        return fmi2Error;
+    }
+    return fmi2OK;
+}
+
+/* Gauss-Newton on the position problem towards q_ref (the module comment) */
 static fmi2Status closest(Instance *c, double t, const double *q_ref) {
-    double step = 0.0;
     for (int k = 0; k < MAX_NEWTON; ++k) {
+        double step = 0.0;
         const double *in[4] = {&t, c->s.x, c->jd, q_ref};
-        double *out[2] = {c->x_trial, &step};
-        if (cm_call(c, cm_closest, in, 4, out, 2)) return fmi2Error;
-        for (int i = 0; i < CM_NX; ++i) {
-            if (!isfinite(c->x_trial[i])) {
+        double *out[4] = {c->jacobian, c->residual, c->rows, c->values};
+        if (CM_NTH == 0) return fmi2OK;
+        if (cm_call(c, cm_position_terms, in, 4, out, 4)) return fmi2Error;
+        if (least_squares(c, CM_NTH, CM_NCP, c->residual) != fmi2OK) return fmi2Error;
+        for (int i = 0; i < CM_NTH; ++i) {
+            if (!isfinite(c->solution[i])) {
                 cm_log(c, fmi2Error, "logStatusError", "the closest configuration could not be "
-                       "found (a singular pose, or the closures cannot be met at these "
-                       "parameter values)");
+                       "found (the closures cannot be met at these parameter values?)");
                 return fmi2Error;
             }
+            c->s.x[i] += c->solution[i];
+            step = fmax(step, fabs(c->solution[i]));
         }
-        memcpy(c->s.x, c->x_trial, sizeof(double) * CM_NX);
         if (step <= NEWTON_TOL) return fmi2OK;
     }
     cm_log(c, fmi2Error, "logStatusError", "the closest configuration did not converge in "
@@ -50,11 +124,23 @@ static fmi2Status closest(Instance *c, double t, const double *q_ref) {
     return fmi2Error;
 }
 
-static fmi2Status velocity(Instance *c, double t, CmEval f) {
+/* the velocities closest to the file's (file != 0) or to the current ones, on the closures */
+static fmi2Status velocity(Instance *c, double t, int file) {
+    int n = CM_NX - CM_NTH;
     const double *in[3] = {&t, c->s.x, c->jd};
-    double *out[1] = {c->x_trial};
-    if (cm_call(c, f, in, 3, out, 1)) return fmi2Error;
-    memcpy(c->s.x, c->x_trial, sizeof(double) * CM_NX);
+    double *out[5] = {c->jacobian, c->residual, c->rows, c->values, c->target};
+    if (n == 0) return fmi2OK;
+    if (cm_call(c, cm_velocity_terms, in, 3, out, 5)) return fmi2Error;
+    if (!file) {  /* the current rates: jacobian u + base */
+        for (int q = 0; q < CM_NQ; ++q) {
+            double sum = c->residual[q];
+            for (int i = 0; i < n; ++i) sum += c->jacobian[i * CM_NQ + q] * c->s.x[CM_NTH + i];
+            c->target[q] = sum;
+        }
+    }
+    for (int q = 0; q < CM_NQ; ++q) c->residual[q] -= c->target[q];  /* base - target */
+    if (least_squares(c, n, CM_NCV, c->residual) != fmi2OK) return fmi2Error;
+    memcpy(c->s.x + CM_NTH, c->solution, sizeof(double) * (size_t)n);
     return fmi2OK;
 }
 
@@ -79,7 +165,7 @@ fmi2Status cm_project(Instance *c, double t) {
     cm_data_update(c);
     if (cm_call(c, cm_tree_pose, in, 3, out, 1)) return fmi2Error;
     if (closest(c, t, c->q_ref) != fmi2OK) return fmi2Error;
-    if (velocity(c, t, cm_project_velocity) != fmi2OK) return fmi2Error;
+    if (velocity(c, t, 0) != fmi2OK) return fmi2Error;
     c->projections += 1;
     c->dx_valid = c->y_valid = 0;
     c->s.project = 0;
@@ -107,7 +193,7 @@ fmi2Status cm_start_state(Instance *c) {
         if (cm_call(c, cm_file_pose, in, 1, out, 1)) return fmi2Error;
     }
     if (closest(c, t, c->q_ref) != fmi2OK) return fmi2Error;
-    if (velocity(c, t, cm_file_velocity) != fmi2OK) return fmi2Error;
+    if (velocity(c, t, 1) != fmi2OK) return fmi2Error;
     return CM_LOOPS ? closed(c, t) : fmi2OK;
 }
 
