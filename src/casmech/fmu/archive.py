@@ -214,20 +214,35 @@ def summary(view: Exported, system: FmuSystem) -> str:
     return text + (f" ({', '.join(kinds)})" if kinds else "") + loops
 
 
+# the functions a step calls; the others run at the start and at projections only
+HOT = ("cm_ode", "cm_outputs")
+# the others' units are built without optimization (the position problem's Jacobian grows as
+# the square of the joint coordinates: 280 000 instructions for 32 spherical links)
+UNOPTIMIZED = ("/* called at the start and at projections only: built without optimization */\n"
+               "#if defined(__clang__)\n#pragma clang optimize off\n"
+               "#elif defined(__GNUC__)\n#pragma GCC optimize (\"O0\")\n#endif\n")
+
+
 def write_functions(functions: dict[str, ca.Function], directory: Path, parts: int
                     ) -> list[str]:
-    """CasADi's C of the functions (dense outputs) in `parts` translation units of about
-    equal size (backends.generate.partition: compiled in parallel) behind one header; the
+    """CasADi's C of the functions (dense outputs): those a step calls (HOT) in up to `parts`
+    translation units of about equal size (backends.generate.partition: compiled in
+    parallel), the others in one unit built without optimization, behind one header; the
     units' file names."""
-    groups = generate.partition({name: [_dense(f)] for name, f in functions.items()}, parts)
+    hot = {name: [_dense(f)] for name, f in functions.items() if name in HOT}
+    cold = [_dense(f) for name, f in functions.items() if name not in HOT]
+    groups = [*generate.partition(hot, parts), cold]
     names = []
     for k, group in enumerate(groups):
-        generator = ca.CodeGenerator(f"{FUNCTIONS}_{k}.c", {"with_header": True,
-                                                             "with_export": False})
+        unit = f"{FUNCTIONS}_{k}"
+        generator = ca.CodeGenerator(f"{unit}.c", {"with_header": True, "with_export": False})
         for function in group:
             generator.add(function)
         generator.generate(str(directory) + "/")
-        names += [f"{FUNCTIONS}_{k}.c", f"{FUNCTIONS}_{k}.h"]
+        if group is cold:
+            source = directory / f"{unit}.c"
+            source.write_text(UNOPTIMIZED + source.read_text())
+        names += [f"{unit}.c", f"{unit}.h"]
     (directory / f"{FUNCTIONS}.h").write_text(
         "/* casmech FMU: CasADi's C of casmech.fmu.system's functions */\n"
         "#ifndef CASMECH_FMU_FUNCTIONS_H\n#define CASMECH_FMU_FUNCTIONS_H\n"
