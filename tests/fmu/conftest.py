@@ -25,9 +25,10 @@ def private_cache(tmp_path_factory, monkeypatch):
 
 @pytest.fixture(scope="session")
 def toolchain() -> codegen.Toolchain:
-    """-O1 as `casmech export` builds by default; without a compiler the tests skip."""
+    """-O1 as `casmech export` builds by default, with -Wall -Werror: the FMU's C, generated
+    and written, compiles cleanly; without a compiler the tests skip."""
     pytest.importorskip("fmpy")
-    chain = codegen.Toolchain(flags=("-O1",))
+    chain = codegen.Toolchain(flags=("-O1", "-Wall", "-Werror"))
     if not codegen.available(chain):
         pytest.skip(f"no C compiler '{chain.compiler}'")
     return chain

@@ -41,7 +41,7 @@ def test_every_gallery_model(file, toolchain, tmp_path):
     from casmech.backends.build import Toolchain
 
     model = casmech.load(file)
-    quick = Toolchain(toolchain.compiler, ("-O0",), toolchain.jobs)
+    quick = Toolchain(toolchain.compiler, ("-O0", "-Wall", "-Werror"), toolchain.jobs)
     if file.stem in REFUSED:
         with pytest.raises(UsageError, match="floating body"):
             export(model, tmp_path / "model.fmu", Options(toolchain=quick))
