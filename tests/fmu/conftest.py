@@ -88,3 +88,18 @@ def assert_matches(got: dict[str, float], expected: dict[str, float]) -> None:
     # 1e-6 relative: accelerations and reactions carry the integrators' errors times the
     # ODE's stiffness; measured at most 3e-7 (a four-bar's acceleration)
     np.testing.assert_allclose(error, 0.0, rtol=0, atol=1e-6, err_msg=f"worst: {worst}")
+
+
+def slave(path: Path, folder: Path):
+    """(an instantiated fmpy FMU2Slave of the FMU unpacked into `folder`, its value
+    references by name)."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Slave
+
+    description = read_model_description(str(path))
+    refs = {v.name: v.valueReference for v in description.modelVariables}
+    instance = FMU2Slave(guid=description.guid,
+                         unzipDirectory=extract(str(path), unzipdir=str(folder)),
+                         modelIdentifier=description.coSimulation.modelIdentifier)
+    instance.instantiate()
+    return instance, refs

@@ -15,6 +15,9 @@ from tests.fmu.conftest import (
     reference,
     simulate,
 )
+from tests.fmu.conftest import (
+    slave as instance,
+)
 
 PENDULUM = """
 casmech: 1
@@ -60,19 +63,12 @@ def test_the_motor_is_an_input_starting_at_its_law(fmu):
     assert [(v.name, float(v.start)) for v in inputs] == [("hinge.torque", 0.5)]
 
 
-def ramp(fmu, derivative: bool) -> dict[str, float]:
+def ramp(fmu, derivative: bool, tmp_path) -> dict[str, float]:
     """Co-Simulation through fmpy's FMU2Slave, the input 0.5 + 2 t set at every communication
     point, with its derivative (fmi2SetRealInputDerivatives: the FMU interpolates it linearly
     within the step) or without (held over the step). fmpy's simulate_fmu cannot give
     derivatives of fewer than 9 inputs (0.3.32: a fixed array of 9)."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    description = read_model_description(str(fmu))
-    refs = {v.name: v.valueReference for v in description.modelVariables}
-    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
-                      modelIdentifier=description.coSimulation.modelIdentifier)
-    slave.instantiate()
+    slave, refs = instance(fmu, tmp_path)
     slave.setupExperiment(tolerance=1e-10, startTime=0.0)
     slave.enterInitializationMode()
     slave.exitInitializationMode()
@@ -90,10 +86,10 @@ def ramp(fmu, derivative: bool) -> dict[str, float]:
     return values
 
 
-def test_a_ramp_given_with_its_derivative_drives_it_as_the_law_does(fmu):
-    got = ramp(fmu, derivative=True)
+def test_a_ramp_given_with_its_derivative_drives_it_as_the_law_does(fmu, tmp_path):
+    got = ramp(fmu, True, tmp_path / "with")
     assert_matches(got, reference(pendulum()))
-    held = ramp(fmu, derivative=False)  # piecewise constant: off by O(STEP)
+    held = ramp(fmu, False, tmp_path / "without")  # piecewise constant: off by O(STEP)
     assert abs(held["bar.x"] - got["bar.x"]) > 1e-5
 
 

@@ -11,6 +11,7 @@ import pytest
 
 import casmech
 from tests.fmu.conftest import MODELS, assert_matches, build, reference, simulate
+from tests.fmu.conftest import slave as instance
 
 KINDS = ("ModelExchange", "CoSimulation")
 CHANGED = {"L1": 1.3, "m2": 2.0, "theta2": 0.3}  # two fixed (the start pose), one tunable
@@ -85,16 +86,10 @@ def test_parameters_set_through_fmpy_change_the_physics_as_set_does(fmu, kind):
     assert abs(default["rod2.x"] - got["rod2.x"]) > 1e-2  # the change mattered
 
 
-def test_a_fixed_parameter_is_refused_after_initialization_a_tunable_one_is_not(fmu):
-    from fmpy import extract, read_model_description
+def test_a_fixed_parameter_is_refused_after_initialization_a_tunable_one_is_not(fmu, tmp_path):
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
 
-    description = read_model_description(str(fmu))
-    refs = {v.name: v.valueReference for v in description.modelVariables}
-    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
-                      modelIdentifier=description.coSimulation.modelIdentifier)
-    slave.instantiate()
+    slave, refs = instance(fmu, tmp_path)
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
     slave.exitInitializationMode()
@@ -157,17 +152,10 @@ def test_co_simulation_controls_its_error(fmu, expected):
     assert errors[0] > 10 * errors[1] > 100 * errors[2]
 
 
-def test_outputs_are_known_in_initialization_mode(fmu):
+def test_outputs_are_known_in_initialization_mode(fmu, tmp_path):
     """A master may read outputs before initialization ends: the start pose at the
     parameters set so far (rod 1's centre at -L1/2 sin(theta1), 0, -L1/2 cos(theta1))."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    description = read_model_description(str(fmu))
-    refs = {v.name: v.valueReference for v in description.modelVariables}
-    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
-                      modelIdentifier=description.coSimulation.modelIdentifier)
-    slave.instantiate()
+    slave, refs = instance(fmu, tmp_path)
     slave.setupExperiment(startTime=0.0)
     slave.enterInitializationMode()
     names = ["rod1.x", "rod1.z", "rod2.x"]
@@ -185,18 +173,11 @@ def test_outputs_are_known_in_initialization_mode(fmu):
     np.testing.assert_allclose(after, during, rtol=0, atol=1e-15)  # nothing moved at t0
 
 
-def test_a_tunable_parameter_changes_the_physics_from_then_on(fmu):
+def test_a_tunable_parameter_changes_the_physics_from_then_on(fmu, tmp_path):
     """m2 doubled between steps at t = 0.5: the energy (no damping) is constant before and
     after, and jumps by rod 2's own energy there (it is linear in m2: its inertia is m2 times
     a length squared), computed from the FMU's outputs."""
-    from fmpy import extract, read_model_description
-    from fmpy.fmi2 import FMU2Slave
-
-    description = read_model_description(str(fmu))
-    refs = {v.name: v.valueReference for v in description.modelVariables}
-    slave = FMU2Slave(guid=description.guid, unzipDirectory=extract(str(fmu)),
-                      modelIdentifier=description.coSimulation.modelIdentifier)
-    slave.instantiate()
+    slave, refs = instance(fmu, tmp_path)
     slave.setupExperiment(tolerance=1e-10, startTime=0.0)
     slave.enterInitializationMode()
     slave.exitInitializationMode()
