@@ -111,11 +111,11 @@ def independent(model: ResolvedModel) -> list[str]:
     return names
 
 
-def traceable(model: ResolvedModel, names: Sequence[str]) -> list[str]:
-    """The names the traced load accepts (a count-setting parameter is refused alone)."""
+def traceable(model: ResolvedModel, names: Sequence[str]) -> tuple[list[str], ResolvedModel]:
+    """(the names the traced load accepts, the model loaded with them symbolic): a
+    count-setting parameter is refused alone."""
     try:
-        traced_model(model, list(names))
-        return list(names)
+        return list(names), traced_model(model, list(names))
     except UsageError:
         accepted = []
         for name in names:
@@ -124,7 +124,7 @@ def traceable(model: ResolvedModel, names: Sequence[str]) -> list[str]:
                 accepted.append(name)
             except UsageError:
                 continue
-        return accepted
+        return accepted, traced_model(model, accepted)
 
 
 def with_controls(model: ResolvedModel) -> ResolvedModel:
@@ -190,8 +190,8 @@ def exported(model: ResolvedModel, input_names: Sequence[str] | None = None) -> 
     """The model's FMU view (module docstring)."""
     inputs = chosen_inputs(model, input_names)
     free = independent(model)
-    names = traceable(model, free)
-    again = with_controls(traced_model(model, names))
+    names, again = traceable(model, free)
+    again = with_controls(again)
     split = parametric.split(lower(again))
     theta = ca.vertcat(ca.SX(0, 1), *(again.symbols[n] for n in names))
     d_of_theta = ca.Function("d", [split.symbols], [_initial(split.ir)])(split.expressions)
