@@ -9,7 +9,6 @@ from pathlib import Path
 from casmech import api
 from casmech.backends import build
 from casmech.cli.common import add_overrides, overrides
-from casmech.cli.compile import toolchain
 
 
 def add_arguments(parser) -> None:
@@ -40,8 +39,10 @@ def run(args) -> int:
 
     model = api.load(args.model, overrides(args.set))
     start = time.perf_counter()
+    chain = build.Toolchain() if args.flags is None else build.Toolchain(
+        flags=tuple(args.flags.split()))
     options = Options(outputs=_listed(args.outputs), inputs=_listed(args.inputs),
-                      toolchain=toolchain(args.flags, None))
+                      toolchain=chain)
     written = export(model, args.out, options)
     print(f"{args.model}: {written.path} ({written.summary}; built in "
           f"{time.perf_counter() - start:.3g} s)")
