@@ -26,6 +26,7 @@ LAYERS = (
     ("backends",),  # compiled libraries: generate, build, cache, load
     ("runtime",),  # analyses over the functions
     ("optimal",),  # sensitivities, estimation, optimal control
+    ("fmu",),  # FMI export: the model's ODE, outputs and start as C in an FMU
     ("io",),  # results files, plots, animations
     ("study",),  # parameter studies
     ("api",),  # the Python API

@@ -18,6 +18,7 @@ COMMANDS = {
                  "optimal control (ocp: block) or parameter estimation (estimate: block)"),
     "compile": ("compile",
                 "generate C for the model's functions and build the shared library into DIR"),
+    "export": ("export", "write an FMI 2.0 FMU (Model Exchange and Co-Simulation) of the model"),
     "cache": ("cache", "show or clear the compiled-model cache"),
     "plot": ("plot", "plot results columns or presets against time (matplotlib)"),
     "inspect": ("inspect", "print coordinates, constraint rows by joint with YAML lines, DOF, "
