@@ -94,7 +94,7 @@ def test_every_finding_of_several_events_at_once():
 
 def test_the_body_columns_are_the_results_contracts():
     """schema.events keeps its own copy (schema does not import the runtime)."""
-    from casmech.runtime.results import BODY_COLUMNS
+    from casmech.core.columns import BODY_COLUMNS
     from casmech.schema.events import BODY_COLUMNS as READABLE
 
     assert READABLE == BODY_COLUMNS

@@ -31,6 +31,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.columns import BODY_COLUMNS
 from casmech.core.states import split
 from casmech.equations import contact, coordinates
 from casmech.equations.assemble import Coordinates
@@ -39,7 +40,7 @@ from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.model.ir import ForceIR
 from casmech.runtime import interrupts
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.results import BODY_COLUMNS, Result
+from casmech.runtime.results import Result
 
 DIRECTIONS = {"rising": (1,), "falling": (-1,), "both": (1, -1)}
 SIGNS = {1: "rising", -1: "falling"}
