@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from casmech.errors import Source
-from casmech.schema.resolved import Analysis, ScalarFunction
+from casmech.schema.resolved import Analysis, Output, ScalarFunction
 
 GROUND_INDEX = -1
 
@@ -100,6 +100,7 @@ class ModelIR:
     parameters: Mapping[str, float] = field(default_factory=dict)
     motors: tuple[ForceIR, ...] = ()  # effort motors of joints (equations/motors.py), by joint name
     limits: tuple[ForceIR, ...] = ()  # joint stops (equations/limits.py), by joint name
+    outputs: tuple[Output, ...] = ()  # the model's `outputs:` (equations/readings.py)
 
     @property
     def n_bodies(self) -> int:

@@ -143,6 +143,7 @@ def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
     kinetic, potential = system["energy"](t, q, q_dot, theta)
     violation = ca.mmax(ca.fabs(system["phi"](t, q, theta)))
     elements = system["element_outputs"](t, q, q_dot, theta)  # contacts and stops
-    values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements)
+    derived = system["readings"](t, q, q_dot, q_ddot, force, torque, theta)  # joints, outputs
+    values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements, derived)
     return column_names(nominal)[1:], ca.Function("columns", [t, dae.x, dae.z, theta], [values],
                                                   ["t", "x", "z", "theta"], ["columns"])

@@ -28,6 +28,7 @@ import numpy as np
 
 from casmech.core import euler, traced
 from casmech.core.values import constant
+from casmech.equations import readings
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.errors import ModelError, UsageError
@@ -165,6 +166,7 @@ def parametric_system(model: ResolvedModel, names: Iterable[str] = ()) -> Parame
     theta = ca.vertcat(*(symbols[n] for n in names)) if names else ca.SX(0, 1)
     bundle = build_functions(split.ir, split.symbols)
     over_d = {name: bundle[name] for name in BUNDLE} | _start(split.ir, split.symbols)
+    over_d["readings"] = readings.columns_function(split.ir, split.symbols)
     functions = {name: _bound(f, theta, split.expressions) for name, f in over_d.items()}
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
     return ParametricSystem(functions, build_functions(lower(model)), names, values,

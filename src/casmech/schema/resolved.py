@@ -135,6 +135,16 @@ class Event:
 
 
 @dataclass(frozen=True)
+class Output:
+    """One entry of `outputs:` (schema/outputs.py): `value` reads t, parameters, earlier
+    outputs, the state and reactions (its `variables` name them)."""
+
+    name: str
+    value: ScalarFunction
+    source: Source | None = None
+
+
+@dataclass(frozen=True)
 class Analysis:
     type: str = "dynamics"
     t_end: float = 1.0
@@ -212,6 +222,7 @@ class ResolvedModel:
     # symbol; every number computed from them is a traced number (load_model_text's
     # `symbolic`)
     symbols: Mapping[str, Any] = field(default_factory=dict)
+    outputs: tuple[Output, ...] = ()  # `outputs:` (results columns after the joint states)
 
     def __repr__(self) -> str:
         """One line: name, file, counts, parameters and analysis, not the whole model."""

@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from casmech.core import traced
 from casmech.errors import Diagnostic, failed
-from casmech.schema import events, files, limits, motors, resolved, spec
+from casmech.schema import events, files, limits, motors, outputs, resolved, spec
 from casmech.schema.bodies import body
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
@@ -152,7 +152,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
                               forces)
-    watched = events.events(check, given.events, joints, forces)
+    written = outputs.outputs(check, given.outputs, joints, forces)
+    watched = events.events(check, given.events, joints, forces, written)
     if settings is not None and watched:
         settings = replace(settings, events=watched)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None
@@ -173,6 +174,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
         settings,
         estimate,
         ocp,
+        outputs=written or (),
     )
 
 
