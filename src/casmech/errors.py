@@ -69,9 +69,12 @@ CODES: dict[str, str] = {
     "E409": "non-positive or inconsistent analysis setting",
     "E410": "invalid geometry",
     "E411": "a magnitude outside the plausible range",
+    "E412": "an initial value that a driver or the joints' initial values already give",
     # E5xx: structure of the assembled mechanism (found by the compiler)
     "E500": "redundant constraints",
     "E501": "mechanism is not fully driven",
+    "E502": "joints' initial values overdetermine the mechanism",
+    "E503": "joints' initial values cannot be met",
 }
 
 

@@ -92,6 +92,10 @@ class JointType:
     # state attributes beyond its coordinates' (casmech.core.states.JOINT_STATES: a universal
     # joint's two angles, a spherical joint's relative rotation and angular velocity)
     states: tuple[str, ...] = ()
+    # `initial:` keys beyond its coordinates' (angle, angle_dot, displacement,
+    # displacement_dot): a universal joint's two angles and rates, a spherical joint's
+    # `orientation` and `angular_velocity` (model/initial.py poses the bodies from them)
+    initial: tuple[str, ...] = ()
 
     @property
     def class_name(self) -> str:
@@ -145,12 +149,14 @@ BUILT_IN = (
               motion=Motion(1, 1, lambda th: about(2, th[0]), no_translation,
                             lambda r, d: np.array([angle_about(r, 2)]), drivers={"angle": 0})),
     JointType("spherical", ("at",), SPHERICAL, states=JOINT_STATES["spherical"],
+              initial=("orientation", "angular_velocity"),
               motion=Motion(4, 3, lambda th: unit(th[0:4]), no_translation,
                             lambda r, d: from_matrix(r), quaternions=(0,))),
     JointType("universal", ("at", "axis_i", "axis_j"),
               SPHERICAL + (("dp1", {"a_i": "axis_i@i", "a_j": "axis_j@j"},
                             "axis_i . axis_j = 0 (cross)"),),
               check=check_universal, states=JOINT_STATES["universal"],
+              initial=JOINT_STATES["universal"],
               motion=Motion(2, 2, lambda th: product(about(0, th[0]), about(1, th[1])),
                             no_translation, universal_angles, frame="cross")),
     JointType("cylindrical", ("at", "axis"), PARALLEL + ON_AXIS,
@@ -206,6 +212,16 @@ def attributes(joint_type: str) -> list[str]:
         return []
     return [name for name, coordinate in JOINT_COORDINATES.items()
             if coordinate in entry.coordinates] + list(entry.states)
+
+
+def initial_keys(joint_type: str) -> tuple[str, ...]:
+    """The keys of a joint type's `initial:` (its coordinates' values and rates, then its
+    entry's `initial`); none for a type that cannot be posed by its joint values."""
+    entry = REGISTRY.get(joint_type)
+    if entry is None or entry.basic:
+        return ()
+    return tuple(name for name, coordinate in JOINT_COORDINATES.items()
+                 if coordinate in entry.coordinates) + entry.initial
 
 
 def coordinate_types() -> tuple[str, ...]:
