@@ -48,6 +48,7 @@ CODES: dict[str, str] = {
     "E202": "time 't' used where no function of time is allowed",
     "E203": "unknown function or wrong number of arguments",
     "E204": "expression cannot be evaluated",
+    "E205": "a value of the wrong dimension (units)",
     # E3xx: names and references
     "E300": "unknown reference",
     "E301": "duplicate name",
