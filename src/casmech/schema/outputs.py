@@ -53,7 +53,7 @@ def _unknown(check: Checker, path: Path, given: spec.Output, names, earlier) -> 
     """Report (E201) every dotted name `value` reads that is not readable."""
     unknown: set[str] = set()
     for name, offset, _ in events.parsed_names(given.value):
-        if name in names or name in earlier or name in unknown:
+        if name in names or name in earlier or name in unknown or name == "t":
             continue
         if "." in name:
             message, hint = events.misnamed(check, name, names, reactions=True)
