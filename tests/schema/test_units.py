@@ -9,12 +9,12 @@ import math
 
 import numpy as np
 import pytest
+from tests.conftest import MODELS, Table
 
 import casmech
 from casmech.core.expressions import ExpressionSyntaxError, parse
 from casmech.errors import ModelError
 from casmech.optimal.sensitivity import sensitivity
-from tests.conftest import MODELS, Table
 
 
 @pytest.mark.parametrize(("text", "si"), [
