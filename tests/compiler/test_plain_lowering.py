@@ -21,7 +21,11 @@ from casmech.model.lower import lower
 from casmech.schema import load_model
 
 ROOT = Path(__file__).resolve().parents[2]
-MODELS = sorted(p for p in (ROOT / "models").rglob("*.yaml") if p.parent.name != "components")
+# models written with what the reference's source could not read (units, `initial:`,
+# `outputs:`): no fingerprint of theirs can exist
+NEWER = frozenset({"four_bar_released.yaml"})
+MODELS = sorted(p for p in (ROOT / "models").rglob("*.yaml")
+                if p.parent.name != "components" and p.name not in NEWER)
 REFERENCE = ROOT / "tests" / "reference" / "plain_lowering.json"
 SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend on the checkout
 # fields added to the IR after the reference was made, skipped while they hold their default

@@ -78,10 +78,29 @@ def test_optimal_controls_columns_hold_the_joint_states_and_outputs():
     assert functions.n_bodies == 1
 
 
+def test_an_outputs_unit_is_the_dimension_of_what_it_reads():
+    """A plain number has no stated dimension (it is SI of any), so a product with one has
+    none either; sums, states, reactions and outputs read have theirs."""
+    model = casmech.loads(PENDULUM % "")
+    assert {o.name: o.unit for o in model.outputs} == {
+        "tip_z": None, "twice_tip": None, "pull": "N", "spin_energy": None}
+    more = PENDULUM.replace("outputs:\n", "outputs:\n  - {name: lever, value: pivot.fx * bar.z}\n"
+                            "  - {name: drop, value: bar.z - 1}\n"
+                            "  - {name: rate, value: 30 deg/s}\n", 1) % ""
+    assert [o.unit for o in casmech.loads(more).outputs[:3]] == ["N m", "m", "rad/s"]
+    with pytest.raises(ModelError) as caught:
+        casmech.loads(PENDULUM.replace("value: 2 * bar.z}", "value: bar.z + bar.vz}") % "")
+    [found] = caught.value.diagnostics
+    assert (found.code, found.path) == ("E205", "outputs[0].value")
+    assert found.message == "'+' of different dimensions: length (m) and velocity (m/s)"
+
+
 def test_plot_labels_the_new_columns():
     names = ["t", "bar.wx", "ball.wx", "ball.fx", "pivot.angle", "slide.displacement_dot",
              "tip_z"]
     joints = frozenset(plot._joints(names))
+    assert plot.panel_key("tip_z", None, joints, {"tip_z": "m"}) == ("tip_z", "m",
+                                                                     "output tip_z")
     assert plot.panel_key("ball.wx", None, joints)[1:] == (
         "rad/s", "relative angular velocities of spherical joints (joint frame)")
     assert plot.panel_key("bar.wx", None, joints)[2] == "angular velocity (global)"

@@ -254,6 +254,9 @@ def _save(args, out: Path, functions, result, run, error: str | None = None,
     ir = functions.ir
     metadata["reaction_frames"] = reaction_frames.describe(
         ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
+    if ir.outputs:  # the `outputs:` block: each value and its unit (casmech plot reads it)
+        metadata["outputs"] = {o.name: {"value": o.value.text, "unit": o.unit}
+                               for o in ir.outputs}
     paths = [FORMATS[name][1](out / FORMATS[name][0], names, values, metadata)
              for name in args.format]
     files = {} if result is None else result.files

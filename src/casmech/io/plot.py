@@ -90,11 +90,15 @@ REACTIONS = {f"{kind}{axis}" for kind in "ft" for axis in "xyz"}  # a joint's re
 
 
 def panel_key(column: str, frames: Mapping[str, str] | None = None,
-              joints: frozenset[str] = frozenset()) -> tuple[str, str, str]:
+              joints: frozenset[str] = frozenset(),
+              outputs: Mapping[str, str | None] | None = None) -> tuple[str, str, str]:
     """The column's quantity (a joint state's, of a joint among `joints`, by its attribute:
-    a spherical joint's e0 and wx are relative, not a body's); a joint's reaction in another
-    frame than the global axes (the run's metadata `reaction_frames`: joint -> frame) gets its
-    own panel, titled by its frame."""
+    a spherical joint's e0 and wx are relative, not a body's; an output's, `outputs`: name
+    -> its unit, each its own panel); a joint's reaction in another frame than the global axes
+    (the run's metadata `reaction_frames`: joint -> frame) gets its own panel, titled by its
+    frame."""
+    if outputs and column in outputs:
+        return column, outputs[column] or "?", f"output {column}"
     joint, _, suffix = column.rpartition(".")
     is_state = joint in joints and suffix in JOINT_QUANTITIES
     name, unit, heading = joint_quantity(column) if is_state else quantity(column)
@@ -105,20 +109,23 @@ def panel_key(column: str, frames: Mapping[str, str] | None = None,
 
 
 def panels(columns: Sequence[str], frames: Mapping[str, str] | None = None,
-           joints: frozenset[str] = frozenset()) -> dict[tuple[str, str, str], list[str]]:
+           joints: frozenset[str] = frozenset(), outputs: Mapping[str, str | None] | None = None
+           ) -> dict[tuple[str, str, str], list[str]]:
     """Columns grouped by quantity (and reaction frame), in order of first appearance."""
     grouped: dict[tuple[str, str, str], list[str]] = {}
     for column in columns:
-        grouped.setdefault(panel_key(column, frames, joints), []).append(column)
+        grouped.setdefault(panel_key(column, frames, joints, outputs), []).append(column)
     return grouped
 
 
 def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title: str = "",
-           frames: Mapping[str, str] | None = None):
+           frames: Mapping[str, str] | None = None,
+           outputs: Mapping[str, str | None] | None = None):
     """A matplotlib Figure of the selected columns against t (one panel per quantity; reaction
-    columns by the frame `frames` names for their joint, global when not named)."""
+    columns by the frame `frames` names for their joint, global when not named; the model's
+    outputs with the units `outputs` gives them)."""
     Figure = matplotlib_figure()  # noqa: N806 - a class
-    grouped = panels(select(names, specs), frames, frozenset(_joints(names)))
+    grouped = panels(select(names, specs), frames, frozenset(_joints(names)), outputs)
     values = np.atleast_2d(values)
     t = values[:, list(names).index("t")]
     heights = [_panel_height(len(columns)) for columns in grouped.values()]

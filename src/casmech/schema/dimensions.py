@@ -76,6 +76,27 @@ LIMITS: dict[str, dict[str, Dimension]] = {
 }
 
 
+# a readable name's attribute (after its last dot: body and contact columns, joint states,
+# reactions) -> its dimension, for the units of outputs (schema/outputs.py)
+ANGULAR_ACCELERATION = dimension(time=-2)
+READABLE: dict[str, Dimension] = {
+    **dict.fromkeys(("x", "y", "z", "displacement", "gap"), LENGTH),
+    **dict.fromkeys(("vx", "vy", "vz", "displacement_dot"), VELOCITY),
+    **dict.fromkeys(("ax", "ay", "az"), dimension(length=1, time=-2)),
+    **dict.fromkeys(("wx", "wy", "wz", "angle_dot", "angle_i_dot", "angle_j_dot"), RATE),
+    **dict.fromkeys(("alphax", "alphay", "alphaz"), ANGULAR_ACCELERATION),
+    **dict.fromkeys(("e0", "e1", "e2", "e3", "angle", "angle_i", "angle_j"), NUMBER),
+    **dict.fromkeys(("fx", "fy", "fz", "normal_force", "friction_force", "limit_force"), FORCE),
+    **dict.fromkeys(("tx", "ty", "tz", "limit_torque"), TORQUE),
+}
+
+
+def readable(name: str) -> Dimension | None:
+    """The dimension of a readable state name (`bar.vx`), by its attribute; None where the
+    attribute does not tell it (a stop's gap: rad or m)."""
+    return READABLE.get(name.rpartition(".")[2]) if "." in name else None
+
+
 def _type(data, path: tuple) -> str | None:
     """The `type` of the element a path is in (forces and joints), from the data."""
     try:

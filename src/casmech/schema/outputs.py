@@ -8,16 +8,21 @@ stop columns (`floor.gap`, `pivot.limit_torque`) and the joints' reactions (`piv
 results column named as the output, after the joint states (runtime/results.py). Its name is a
 plain name (no dot), unique among outputs and parameters and none of t, pi, e, energy,
 constraint_violation or a function's name (E301, E302, E303); an unknown name in `value` is
-E201 at its place, with a did-you-mean hint.
+E201 at its place, with a did-you-mean hint. Its unit is the dimension of `value`
+(core/dimensions.py) with the dimensions of what it reads (the states', reactions', time's,
+parameters' written with units): a sum of different dimensions is E205; a value of no stated
+dimension has no unit.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
+from casmech.core import dimensions as core_dimensions
 from casmech.core.columns import JOINT_COLUMNS
+from casmech.core.units import NAMES, TIME, describe
 from casmech.errors import did_you_mean
-from casmech.schema import contact, events, resolved, spec
+from casmech.schema import contact, dimensions, events, resolved, spec
 from casmech.schema.checker import RESERVED, Checker
 from casmech.schema.loader import Path, format_path
 
@@ -31,6 +36,11 @@ def readable(check: Checker, joints=(), forces=()) -> dict[str, float]:
     names = events.state_names(check) | dict.fromkeys(contact.output_names(joints, forces), 0.0)
     return names | {f"{joint}.{column}": 0.0 for joint in check.joint_types
                     for column in JOINT_COLUMNS}
+
+
+def si_unit(dimension) -> str:
+    """The SI unit of a dimension ('m/s', 'N m'; '1' for a number)."""
+    return NAMES[dimension][1] if dimension in NAMES else describe(dimension)
 
 
 def _named(check: Checker, path: Path, name: str, first: dict[str, Path]) -> bool:
@@ -49,10 +59,14 @@ def _named(check: Checker, path: Path, name: str, first: dict[str, Path]) -> boo
     return True
 
 
-def _unknown(check: Checker, path: Path, given: spec.Output, names, earlier) -> set[str]:
-    """Report (E201) every dotted name `value` reads that is not readable."""
+def _unknown(check: Checker, path: Path, given: spec.Output, names, earlier,
+             broken: set[str]) -> set[str]:
+    """Report (E201) every name `value` reads that is not readable; those names, and the
+    earlier outputs it reads that failed (reported where they are)."""
     unknown: set[str] = set()
     for name, offset, _ in events.parsed_names(given.value):
+        if name in broken:
+            unknown.add(name)
         if name in names or name in earlier or name in unknown or name == "t":
             continue
         if "." in name:
@@ -73,22 +87,36 @@ def outputs(check: Checker, given: tuple[spec.Output, ...], joints=(), forces=()
     names = readable(check, joints, forces)
     first: dict[str, Path] = {}
     earlier: dict[str, float] = {}
+    units_of: dict[str, object] = {}  # output -> its dimension (None: not stated)
+    broken: set[str] = set()  # outputs that failed (not reported again where read)
     found = []
     for index, item in enumerate(given):
         name_path: Path = ("outputs", index, "name")
         named = _named(check, name_path, item.name, first)
         first.setdefault(item.name, name_path)
         path: Path = ("outputs", index, "value")
-        unknown = _unknown(check, path, item, names, earlier)
+        unknown = _unknown(check, path, item, names, earlier, broken)
         used = {n: names.get(n, earlier.get(n, 0.0)) for n in events.read_names(item.value)
                 if n in names or n in earlier}
         value = check.function(path, item.value, {"t": 0.0, **used,
                                                   **dict.fromkeys(unknown, 0.0)})
         if value is None or unknown or not named:
             found.append(None)
+            broken.add(item.name)
             continue
         value = replace(value, variables=tuple(n for n in ("t", *used)
                                                if n in value.expr.symbols))
-        found.append(resolved.Output(item.name, value, check.doc.locate(("outputs", index))))
+        dims = {**check.dimensions, **{n: dimensions.readable(n) for n in used}, **units_of,
+                "t": TIME}
+        try:
+            dimension = core_dimensions.dimension(value.expr, dims)
+        except core_dimensions.DimensionError as error:
+            check.error(error.code, path, error.message, source=check.inside(path, error.offset))
+            found.append(None)
+            broken.add(item.name)
+            continue
+        found.append(resolved.Output(item.name, value, check.doc.locate(("outputs", index)),
+                                     None if dimension is None else si_unit(dimension)))
         earlier[item.name] = 0.0
+        units_of[item.name] = dimension
     return None if any(item is None for item in found) else tuple(found)

@@ -145,6 +145,7 @@ class Output:
     name: str
     value: ScalarFunction
     source: Source | None = None
+    unit: str | None = None  # SI unit of its dimension ("m/s"), None when not stated
 
 
 @dataclass(frozen=True)
