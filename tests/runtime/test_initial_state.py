@@ -328,3 +328,63 @@ def test_a_fixed_joint_has_no_initial_key():
         casmech.loads(text)
     assert [(d.code, d.path) for d in caught.value.diagnostics] == [
         ("E101", "joints[1].initial.angle")]
+
+
+PLACED = """\
+casmech: 1
+name: placed
+gravity: [%s]
+components:
+  rig:
+    bodies:
+      - {name: arm, mass: 1.0, inertia: [0.02, 0.03, 0.04], position: [0.5, 0, 0]}
+      - {name: rod, mass: 0.5, inertia: [0.01, 0.01, 0.002], position: [1, 0, -0.4]}
+      - {name: tip, mass: 0.3, inertia: [0.004, 0.004, 0.001], position: [1, 0, -1.1]}
+    joints:
+      - {name: hinge, type: revolute, body_i: ground, body_j: arm, at: [0, 0, 0],
+         axis: [0, 0, 1], initial: {angle: 0.3, angle_dot: 1.2}}
+      - {name: ball, type: spherical, body_i: arm, body_j: rod, at: [1, 0, 0],
+         initial: {orientation: {axis_angle: {axis: [1, 2, 0], angle: 0.5}},
+                   angular_velocity: [0.4, -0.3, 0.9]}}
+      - {name: cross, type: universal, body_i: rod, body_j: tip, at: [1, 0, -0.8],
+         axis_i: [1, 0, 0], axis_j: [0, 1, 0], initial: {angle_i: -0.2, angle_j_dot: 0.7}}
+instances:
+  - {name: r, component: rig, position: %s, orientation: {axis_angle: {axis: %s, angle: %r}}}
+"""
+
+
+def test_a_placed_component_starts_from_its_joint_values_as_placed():
+    """A rotated and translated instance of a component whose joints carry `initial:` moves
+    as the component does under the rotated gravity (a rigid motion of the same run): the
+    spherical joint's relative rotation and angular velocity, written in the component's
+    axes, are turned with it."""
+    axis = np.array([1.0, 2.0, 3.0]) / np.sqrt(14.0)
+    angle, offset, g = 0.7, np.array([0.3, -1.2, 2.0]), np.array([0.0, 0.0, -9.81])
+    p = np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis])
+    turn = rotation(p[None, :])[0]
+    tables = []
+    for gravity, position, turned in ((g, offset, angle), (turn.T @ g, np.zeros(3), 0.0)):
+        text = PLACED % (", ".join(repr(float(x)) for x in gravity),
+                         [float(x) for x in position], [float(x) for x in axis], turned)
+        functions = casmech.compile(casmech.loads(text))
+        result = casmech.analyze(functions, "dynamics", t_end=0.5, output_step=0.05,
+                                 rtol=1e-11, atol=1e-12)
+        tables.append(Table(*casmech.results_table(functions, result)))
+    placed, local = tables
+    for body in ("r.arm", "r.rod", "r.tip"):
+        for keys, tolerance in ((("x", "y", "z"), 1e-8), (("vx", "vy", "vz"), 1e-7),
+                                (("wx", "wy", "wz"), 1e-7)):  # rtol 1e-11 runs, rounded apart
+            local_vectors = np.column_stack([local[f"{body}.{k}"] for k in keys])
+            expected = local_vectors @ turn.T + (offset if keys[0] == "x" else 0)
+            np.testing.assert_allclose(np.column_stack([placed[f"{body}.{k}"] for k in keys]),
+                                       expected, rtol=0, atol=tolerance)
+    for column in ("r.hinge.angle", "r.ball.e0", "r.cross.angle_i", "r.cross.angle_j_dot"):
+        # relative states: the same in both (rounded apart as the bodies)
+        np.testing.assert_allclose(placed[column], local[column], rtol=0, atol=1e-7)
+    for keys in (("e1", "e2", "e3"), ("wx", "wy", "wz")):  # in the joint frame: the placed
+        # model's global axes, turned with the instance
+        local_vectors = np.column_stack([local[f"r.ball.{k}"] for k in keys])
+        np.testing.assert_allclose(np.column_stack([placed[f"r.ball.{k}"] for k in keys]),
+                                   local_vectors @ turn.T, rtol=0, atol=1e-7)
+    np.testing.assert_allclose([local[f"r.ball.w{k}"][0] for k in "xyz"], [0.4, -0.3, 0.9],
+                               rtol=0, atol=1e-12)  # the values given, in the unturned model
