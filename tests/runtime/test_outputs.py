@@ -136,3 +136,20 @@ def test_an_event_cannot_read_an_output_that_reads_reactions():
     assert (found.code, found.path) == ("E201", "events[0].when")
     assert "reads reactions (pivot.fx)" in found.message
     assert (found.source.line, found.source.col) == (15, 24)  # `pull` in `when`
+
+
+def test_a_sweep_keeps_an_output():
+    """A study's kept values read outputs as any column (study/kept.py on the run's table)."""
+    from casmech.study import kept
+
+    functions = casmech.compile(casmech.loads(PENDULUM % ""))
+    result = casmech.analyze(functions)
+    names, values = casmech.results_table(functions, result)
+    wanted = [kept.parse("min(tip_z)"), kept.parse("twice_tip@0.5")]
+    for item in wanted:
+        kept.check(item, names, 1.0)
+    found = kept.values(wanted, names, values)
+    table = Table(names, values)
+    assert found["min(tip_z)"] == pytest.approx(table["tip_z"].min(), abs=0)
+    np.testing.assert_allclose(found["twice_tip@0.5"], 4 * table["bar.z"][50], rtol=0,
+                               atol=1e-15)  # the row at t = 0.5 exactly
