@@ -21,9 +21,9 @@ STRUCTURAL = {"chain_repeat.yaml"}  # its parameters are repeat bounds (integers
 def _moved(path, model, signature: str, rng) -> dict[str, str]:
     """The parameters the file gives as numbers (with a unit or not), each moved by up to 5 %
     (those written as expressions follow; integers, e.g. repeat bounds, kept), one after the
-    other, keeping each
-    move that leaves the structure as it is (a moved position can take a joint point off an
-    axis, a zero of the body-frame geometry: another structure, another build)."""
+    other, keeping each move that leaves the structure as it is (a moved position can take a
+    joint point off an axis, a zero of the body-frame geometry: another structure, another
+    build)."""
     written = load_document(model.text, model.file).data.get("parameters") or {}
     moved: dict[str, str] = {}
     for name, value in written.items():
