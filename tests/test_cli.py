@@ -25,10 +25,19 @@ def casmech(*args, cwd=None):
                           cwd=cwd, timeout=300)
 
 
-def contract_columns(bodies, joints):
-    """The column order written in the results contract of docs/format.md."""
+# each joint type's state columns, in the order docs/format.md's results contract lists them
+STATES = {"revolute": ["angle", "angle_dot"], "translational": ["displacement", "displacement_dot"],
+          "universal": ["angle_i", "angle_i_dot", "angle_j", "angle_j_dot"],
+          "spherical": ["e0", "e1", "e2", "e3", "wx", "wy", "wz"]}
+
+
+def contract_columns(bodies, joints, types=()):
+    """The column order written in the results contract of docs/format.md (`types`: each
+    joint's type, for its joint-state columns after the contract's first ones)."""
     return (["t"] + [f"{b}.{c}" for b in bodies for c in BODY]
-            + [f"{j}.{c}" for j in joints for c in JOINT] + ["energy", "constraint_violation"])
+            + [f"{j}.{c}" for j in joints for c in JOINT] + ["energy", "constraint_violation"]
+            + [f"{j}.{c}" for j, kind in zip(joints, types, strict=False)
+               for c in STATES.get(kind, [])])
 
 
 def test_run_writes_results_per_contract(tmp_path):
@@ -36,7 +45,8 @@ def test_run_writes_results_per_contract(tmp_path):
     assert done.returncode == 0, done.stderr
     names, values = read_csv(tmp_path / "results.csv")
     assert names == contract_columns(["crank", "rod", "slider"],
-                                     ["crank_pivot", "crank_pin", "wrist_pin", "slide"])
+                                     ["crank_pivot", "crank_pin", "wrist_pin", "slide"],
+                                     ["revolute", "spherical", "universal", "translational"])
     # default output_step 0.01 from the model; --t-end overrides t_end
     np.testing.assert_allclose(values[:, 0], np.linspace(0, 0.5, 51), rtol=0, atol=1e-12)
     assert np.all(np.isfinite(values))

@@ -57,4 +57,8 @@ def test_queries_follow_the_registry():
     assert set(MOTIONS) == {e.name for e in BUILT_IN if e.motion} | {"free"}
     assert joint_types.attributes("cylindrical") == ["angle", "angle_dot", "displacement",
                                                       "displacement_dot"]
-    assert joint_types.attributes("spherical") == []
+    assert joint_types.attributes("spherical") == ["e0", "e1", "e2", "e3", "wx", "wy", "wz"]
+    assert joint_types.attributes("fixed") == []
+    assert joint_types.initial_keys("universal") == ("angle_i", "angle_i_dot", "angle_j",
+                                                     "angle_j_dot")
+    assert joint_types.initial_keys("dp1") == ()

@@ -48,6 +48,7 @@ CODES: dict[str, str] = {
     "E202": "time 't' used where no function of time is allowed",
     "E203": "unknown function or wrong number of arguments",
     "E204": "expression cannot be evaluated",
+    "E205": "a value of the wrong dimension (units)",
     # E3xx: names and references
     "E300": "unknown reference",
     "E301": "duplicate name",
@@ -69,10 +70,13 @@ CODES: dict[str, str] = {
     "E409": "non-positive or inconsistent analysis setting",
     "E410": "invalid geometry",
     "E411": "a magnitude outside the plausible range",
+    "E412": "an initial value that a driver or the joints' initial values already give",
     # E5xx: structure of the assembled mechanism (found by the compiler)
     "E500": "redundant constraints",
     "E501": "mechanism is not fully driven",
     "E502": "the constraints cannot be met (assembly does not converge)",
+    "E503": "joints' initial values cannot be met",
+    "E504": "joints' initial values overdetermine the mechanism",
 }
 
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.expressions import Number, parse
 from casmech.equations.functions import build_functions
 from casmech.model import parametric
 from casmech.model.lower import lower
@@ -18,13 +19,16 @@ STRUCTURAL = {"chain_repeat.yaml"}  # its parameters are repeat bounds (integers
 
 
 def _moved(path, model, signature: str, rng) -> dict[str, str]:
-    """The parameters the file gives as numbers, each moved by up to 5 % (those written as
-    expressions follow; integers, e.g. repeat bounds, kept), one after the other, keeping each
-    move that leaves the structure as it is (a moved position can take a joint point off an
-    axis, a zero of the body-frame geometry: another structure, another build)."""
+    """The parameters the file gives as numbers (with a unit or not), each moved by up to 5 %
+    (those written as expressions follow; integers, e.g. repeat bounds, kept), one after the
+    other, keeping each move that leaves the structure as it is (a moved position can take a
+    joint point off an axis, a zero of the body-frame geometry: another structure, another
+    build)."""
     written = load_document(model.text, model.file).data.get("parameters") or {}
     moved: dict[str, str] = {}
     for name, value in written.items():
+        if isinstance(value, str) and isinstance(parse(value).root, Number):  # `500 mm`
+            value = float(parse(value).evaluate({}))  # moved in SI
         if isinstance(value, float) or (isinstance(value, int) and abs(value) <= 1):
             trial = moved | {name: repr(value * (1 + 0.05 * rng.uniform(-1, 1)))}
             if parametric.data(lower(casmech.load(path, trial)))[1] == signature:

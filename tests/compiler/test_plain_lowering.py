@@ -1,7 +1,8 @@
 """The plain lowering (no symbolic parameters) is bit for bit what it was before the lowering
-learned traced numbers: every number of the ModelIR of every model in models/ (all of them,
-zeros and round-off included, as float64 bytes) and its structure (names, indices, kinds,
-expression texts, settings) hash to the fingerprints in
+learned traced numbers (and before numbers took units, `initial:` and `outputs:` came: the
+fields and geometry they added are skipped while unused, ADDED): every number of the ModelIR
+of every model in models/ (all of them, zeros and round-off included, as float64 bytes) and
+its structure (names, indices, kinds, expression texts, settings) hash to the fingerprints in
 tests/reference/plain_lowering.json, which tests/reference/README.md says how they were made
 (this file's `fingerprint`, run on the source of commit 1365157, before traced numbers).
 
@@ -20,9 +21,22 @@ from casmech.model.lower import lower
 from casmech.schema import load_model
 
 ROOT = Path(__file__).resolve().parents[2]
-MODELS = sorted(p for p in (ROOT / "models").rglob("*.yaml") if p.parent.name != "components")
+# models written with what the reference's source could not read (units, `initial:`,
+# `outputs:`): no fingerprint of theirs can exist
+NEWER = frozenset({"four_bar_released.yaml"})
+MODELS = sorted(p for p in (ROOT / "models").rglob("*.yaml")
+                if p.parent.name != "components" and p.name not in NEWER)
 REFERENCE = ROOT / "tests" / "reference" / "plain_lowering.json"
 SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend on the checkout
+# fields added to the IR after the reference was made, skipped while they hold their default
+# (a model without `outputs:` or `initial:`), and the joint geometry entries added for the
+# spherical joint's state (q@i, q@j: equations/joint_states.py)
+ADDED = {"outputs": (), "reference_pose": None, "initial": {}, "initial_sources": {}}
+ADDED_GEOMETRY = frozenset({"q@i", "q@j"})
+
+
+def _added(name: str, value) -> bool:
+    return name in ADDED and (value is None if ADDED[name] is None else value == ADDED[name])
 
 
 def _walk(value, numbers: list, tokens: list) -> None:
@@ -39,12 +53,13 @@ def _walk(value, numbers: list, tokens: list) -> None:
     elif is_dataclass(value):
         tokens.append(type(value).__name__)
         for item in fields(value):
-            if item.name not in SKIPPED:
+            if item.name not in SKIPPED and not _added(item.name, getattr(value, item.name)):
                 tokens.append(item.name)
                 _walk(getattr(value, item.name), numbers, tokens)
     elif isinstance(value, dict) or hasattr(value, "items"):
-        tokens.append(f"{{{len(value)}")
-        for key, item in value.items():
+        kept = {key: item for key, item in value.items() if key not in ADDED_GEOMETRY}
+        tokens.append(f"{{{len(kept)}")
+        for key, item in kept.items():
             tokens.append(str(key))
             _walk(item, numbers, tokens)
     elif isinstance(value, (tuple, list)):

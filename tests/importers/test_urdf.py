@@ -151,8 +151,13 @@ def test_pendulum_translation(tmp_path):
     assert (hinge.type, hinge.body_i, hinge.body_j) == ("revolute", "ground", "rod")
     assert imported.warnings == []
     (comments,) = [item.comments for item in imported.joints]
-    assert "URDF limit (line 9): lower -1 rad, upper 1 rad, effort 5 N m, velocity 3 rad/s; " \
-        "not enforced" in comments[1]
+    assert comments[1].startswith("URDF limit (line 9): lower -1 rad, upper 1 rad, effort 5 N m, "
+                                  "velocity 3 rad/s; lower and upper as the stop `limit:`")
+    assert comments[1].endswith("effort 5 N m, velocity 3 rad/s not enforced")
+    # the stop of MuJoCo's default softness (tau 0.02 s, critical damping) for the rod's
+    # moment of inertia about the hinge: 0.17 + 2 * 0.5^2 kg m^2
+    assert hinge.limit == {"lower": -1.0, "upper": 1.0, "stiffness": 0.67 / 0.02**2,
+                           "damping": 2 * 0.67 / 0.02}
     (shape,) = rod.geometry
     assert shape["type"] == "cylinder" and shape["axis"] == "z" and shape["length"] == 1
     np.testing.assert_allclose(shape["offset"], 0, rtol=0, atol=0)  # the visual is at the CM

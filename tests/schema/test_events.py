@@ -51,8 +51,7 @@ def test_a_model_without_events_has_none():
     ("pivot.fx", "reaction column 'pivot.fx' cannot be read by an event", 22,
      "events read body columns and joint coordinates (angle, angle_dot)"),
     ("ball.angle", "spherical joint 'ball' has no 'angle'", 22,
-     "spherical joints have no coordinates (revolute, cylindrical and translational joints "
-     "have)"),
+     "spherical joints have e0, e1, e2, e3, wx, wy, wz"),
     ("bar.x + hh", "unknown symbol 'hh'", 30, "did you mean 'h'?"),
 ])
 def test_unknown_names_are_located_with_a_hint(when, message, col, hint):

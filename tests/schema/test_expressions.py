@@ -149,7 +149,8 @@ def test_unknown_backend():
         ("", 0, None),
         ("   ", 0, None),
         ("1.5.3", 3, None),
-        ("2x", 1, None),
+        ("2x", 1, "a name right after a number is its unit (deg, mm, kN, rpm, ...: "
+                  "docs/format.md#units); to multiply, write '*' between them"),
     ],
 )
 def test_syntax_error_offsets(text, offset, hint):

@@ -25,9 +25,9 @@ def add_arguments(parser) -> None:
                         help="image to write: .png, .pdf or .svg")
 
 
-def reaction_frames(results: Path) -> dict[str, str]:
-    """joint -> the frame of its reaction columns, from the run's metadata (metadata.json
-    beside a CSV, the file's own for HDF5); empty (global) when the metadata says nothing."""
+def _metadata(results: Path) -> dict:
+    """The run's metadata (metadata.json beside a CSV, the file's own for HDF5); empty when
+    there is none."""
     try:
         if results.suffix.lower() == ".csv":
             metadata = json.loads((results.parent / "metadata.json").read_text())
@@ -35,7 +35,22 @@ def reaction_frames(results: Path) -> dict[str, str]:
             metadata = read_hdf5_metadata(results)
     except (OSError, ValueError, KeyError):
         return {}
-    described = metadata.get("reaction_frames") if isinstance(metadata, dict) else None
+    return metadata if isinstance(metadata, dict) else {}
+
+
+def output_units(results: Path) -> dict[str, str | None]:
+    """output -> its unit, from the run's metadata (`outputs`); empty when it says nothing."""
+    described = _metadata(results).get("outputs")
+    if not isinstance(described, dict):
+        return {}
+    return {name: entry.get("unit") if isinstance(entry.get("unit"), str) else None
+            for name, entry in described.items() if isinstance(entry, dict)}
+
+
+def reaction_frames(results: Path) -> dict[str, str]:
+    """joint -> the frame of its reaction columns, from the run's metadata (metadata.json
+    beside a CSV, the file's own for HDF5); empty (global) when the metadata says nothing."""
+    described = _metadata(results).get("reaction_frames")
     if not isinstance(described, dict):
         return {}
     return {joint: entry["frame"] for joint, entry in described.items()
@@ -72,6 +87,7 @@ def run(args) -> int:
                          "casmech run")
     title = f"{args.results.name}: {', '.join(args.columns)}"
     frames = reaction_frames(args.results)
-    path = plot.save(plot.figure(names, values, args.columns, title, frames), args.output)
+    path = plot.save(plot.figure(names, values, args.columns, title, frames,
+                                 output_units(args.results)), args.output)
     print(f"plotted {', '.join(args.columns)} -> {path}")
     return 0

@@ -307,6 +307,9 @@ def _save(args, out: Path, functions, result, run, writer, error: str | None = N
     ir = functions.ir
     metadata["reaction_frames"] = reaction_frames.describe(
         ir, reaction_frames.chosen(ir, args.reactions_frame), functions.body_names)
+    if ir.outputs:  # the `outputs:` block: each value and its unit (casmech plot reads it)
+        metadata["outputs"] = {o.name: {"value": o.value.text, "unit": o.unit}
+                               for o in ir.outputs}
     paths = [out / FORMATS[name][0] for name in args.format]
     files = {} if result is None else result.files
     paths += [writing(out / name, writer.written, write, out / name)

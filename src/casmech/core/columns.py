@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from casmech.core.states import JOINT_QUANTITIES
+
 # the body columns of the results contract (docs/format.md), in their order
 BODY_COLUMNS = ("x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
                 "ax", "ay", "az", "alphax", "alphay", "alphaz")
@@ -32,7 +34,21 @@ QUANTITIES: dict[str, tuple[str, str, str]] = {
     "limit_gap": ("stop gap", "m or rad", "joint stop gap (negative: past the bound)"),
     "constraint_violation": ("constraint violation", "-", "constraint violation max |Φ|"),
     "t": ("time", "s", "time"),
+    # joint states (casmech.core.states; a joint's columns map their suffix by JOINT_QUANTITIES)
+    "angle": ("joint angle", "rad", "joint angles (0 at the file's pose)"),
+    "angle_dot": ("joint angular rate", "rad/s", "joint angular rates"),
+    "displacement": ("joint displacement", "m", "joint displacements (0 at the file's pose)"),
+    "displacement_dot": ("joint velocity", "m/s", "joint sliding velocities"),
+    "relative_e": ("relative Euler parameter", "-",
+                   "relative rotations of spherical joints (Euler parameters, joint frame)"),
+    "relative_w": ("relative angular velocity", "rad/s",
+                   "relative angular velocities of spherical joints (joint frame)"),
 }
+
+
+def joint_quantity(column: str) -> tuple[str, str, str]:
+    """(quantity, SI unit, panel title) of a joint state column `<joint>.<attribute>`."""
+    return QUANTITIES[JOINT_QUANTITIES[column.rsplit(".", 1)[-1]]]
 
 
 def quantity(column: str) -> tuple[str, str, str]:

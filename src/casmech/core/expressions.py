@@ -5,7 +5,8 @@
     product := unary (('*' | '/') unary)*
     unary   := ('+' | '-') unary | power
     power   := atom ('**' unary)?          # right-associative, binds tighter than unary minus
-    atom    := NUMBER | NAME | NAME '(' expr (',' expr)* ')' | '(' expr ')'
+    atom    := NUMBER UNIT? | NAME | NAME '(' expr (',' expr)* ')' | '(' expr ')'
+    UNIT    := a unit of core/units.py right after its number (`30 deg`, `2 kN*m`)
 
 Names are parameters or variables (`t`, `length`, ...) and may be dotted (`pivot.angle`,
 `bar.vx`: states of the mechanism, resolved in semantic); `pi` and `e` are builtin constants;
@@ -30,7 +31,7 @@ from typing import Any
 import casadi
 import numpy as np
 
-from casmech.core import traced
+from casmech.core import traced, units
 from casmech.errors import did_you_mean
 
 # limits that keep the recursive parser and evaluator far from Python's recursion limit
@@ -146,9 +147,11 @@ def _number(value: float, backend: int) -> Any:
 
 @dataclass(frozen=True)
 class Number:
-    value: float
+    value: float  # SI (a unit's factor applied)
     offset: int
     length: int
+    dimension: tuple | None = None  # core.units.Dimension of its unit; None: no unit
+
 
     def evaluate(self, env, backend):
         return _number(self.value, backend)
@@ -391,6 +394,8 @@ class _Parser:
         token = self.token
         if token.kind == "number":
             self.advance()
+            if self.token.kind == "name":  # its unit (core/units.py)
+                return self.quantity(token)
             return Number(float(token.text), token.offset, len(token.text))
         if token.kind == "name":
             self.advance()
@@ -406,6 +411,17 @@ class _Parser:
             self.depth -= 1
             return node
         raise self.unexpected("expected a number, a name or '('")
+
+    def quantity(self, number: Token) -> Number:
+        """A number with its unit (the tokens from here): its SI value and dimension."""
+        try:
+            factor, dimension, self.pos = units.read(self.tokens, self.pos)
+        except units.UnitError as error:
+            raise ExpressionSyntaxError(error.message, error.offset, error.length,
+                                        error.hint) from None
+        end = self.tokens[self.pos - 1]
+        return Number(float(number.text) * factor, number.offset,
+                      end.offset + len(end.text) - number.offset, dimension)
 
     def call(self, name: Token) -> Call:
         self.enter(name)

@@ -34,7 +34,7 @@ import numpy as np
 
 from casmech.core.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
 from casmech.core.registry import Registry
-from casmech.core.states import JOINT_COORDINATES
+from casmech.core.states import JOINT_COORDINATES, JOINT_STATES
 from casmech.elements.motions import FREE, Motion, no_translation, slide, universal_angles
 
 Template = tuple[str, dict[str, str], str]  # (kind, {vector key: quantity@body}, label)
@@ -89,6 +89,13 @@ class JointType:
     arm: tuple[str, str] | None = None  # D rows: |second - first|^2 at t = 0 (or `length`^2)
     check: Callable[[Mapping[str, np.ndarray]], list[Problem]] | None = None
     title: str = ""  # name of the YAML class (default: CamelCase of name)
+    # state attributes beyond its coordinates' (casmech.core.states.JOINT_STATES: a universal
+    # joint's two angles, a spherical joint's relative rotation and angular velocity)
+    states: tuple[str, ...] = ()
+    # `initial:` keys beyond its coordinates' (angle, angle_dot, displacement,
+    # displacement_dot): a universal joint's two angles and rates, a spherical joint's
+    # `orientation` and `angular_velocity` (model/initial.py poses the bodies from them)
+    initial: tuple[str, ...] = ()
 
     @property
     def class_name(self) -> str:
@@ -141,13 +148,15 @@ BUILT_IN = (
               limit="angle",
               motion=Motion(1, 1, lambda th: about(2, th[0]), no_translation,
                             lambda r, d: np.array([angle_about(r, 2)]), drivers={"angle": 0})),
-    JointType("spherical", ("at",), SPHERICAL,
+    JointType("spherical", ("at",), SPHERICAL, states=JOINT_STATES["spherical"],
+              initial=("orientation", "angular_velocity"),
               motion=Motion(4, 3, lambda th: unit(th[0:4]), no_translation,
                             lambda r, d: from_matrix(r), quaternions=(0,))),
     JointType("universal", ("at", "axis_i", "axis_j"),
               SPHERICAL + (("dp1", {"a_i": "axis_i@i", "a_j": "axis_j@j"},
                             "axis_i . axis_j = 0 (cross)"),),
-              check=check_universal,
+              check=check_universal, states=JOINT_STATES["universal"],
+              initial=JOINT_STATES["universal"],
               motion=Motion(2, 2, lambda th: product(about(0, th[0]), about(1, th[1])),
                             no_translation, universal_angles, frame="cross")),
     JointType("cylindrical", ("at", "axis"), PARALLEL + ON_AXIS,
@@ -196,11 +205,23 @@ def having(coordinate: str) -> tuple[str, ...]:
 
 
 def attributes(joint_type: str) -> list[str]:
-    """The state attributes a joint of this type has (`angle`, `angle_dot`, ...;
-    casmech.core.states)."""
+    """The state attributes a joint of this type has (`angle`, `angle_dot`, ..., then its
+    entry's `states`; casmech.core.states)."""
     entry = REGISTRY.get(joint_type)
+    if entry is None:
+        return []
     return [name for name, coordinate in JOINT_COORDINATES.items()
-            if entry is not None and coordinate in entry.coordinates]
+            if coordinate in entry.coordinates] + list(entry.states)
+
+
+def initial_keys(joint_type: str) -> tuple[str, ...]:
+    """The keys of a joint type's `initial:` (its coordinates' values and rates, then its
+    entry's `initial`); none for a type that cannot be posed by its joint values."""
+    entry = REGISTRY.get(joint_type)
+    if entry is None or entry.basic:
+        return ()
+    return tuple(name for name, coordinate in JOINT_COORDINATES.items()
+                 if coordinate in entry.coordinates) + entry.initial
 
 
 def coordinate_types() -> tuple[str, ...]:

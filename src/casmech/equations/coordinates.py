@@ -12,6 +12,9 @@ The names are casmech.core.states'; here is how each is computed from the coordi
   at the pose in the file.
 - `<body>.x .y .z .vx .vy .vz .wx .wy .wz`: what the results columns of that name hold (CM
   position and velocity, angular velocity, all global).
+- a universal joint's two angles and a spherical joint's relative rotation and angular
+  velocity (casmech.core.states.JOINT_STATES): equations/joint_states.py's formulas, in
+  JOINT_VALUES too.
 
 Semantic checks use the names (`schema/force_laws.py`); lowering binds the ones an expression
 uses (model/bindings.py), and `eom` evaluates them (`values`) beside `t`.
@@ -24,7 +27,7 @@ from typing import Any
 
 from casmech.core.values import constant
 from casmech.elements.forces.springs import joint_angle
-from casmech.equations import body
+from casmech.equations import body, joint_states
 
 
 def displacement(geometry, x):
@@ -49,6 +52,7 @@ JOINT_VALUES: dict[str, Callable] = {
     "angle_dot": _rate(_angle),
     "displacement": displacement,
     "displacement_dot": _rate(displacement),
+    **joint_states.VALUES,
 }
 
 

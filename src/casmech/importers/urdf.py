@@ -15,7 +15,10 @@ Translated:
   (axis = the plane's normal), floating -> none (a free body); placed at the initial pose;
   a chain through massless links -> the joint it amounts to (importers/joint_chains.py);
 - `dynamics damping` -> an rsda (revolute) or a tsda along the axis (prismatic) with that damping;
-- `limit` is written as a comment on the joint (casmech has no joint limits).
+- `limit` lower and upper of a revolute or prismatic joint -> the joint's `limit:` stop
+  (importers/urdf_limits.py: bounds from the imported pose, MuJoCo's default softness);
+  effort and velocity limits, and the limits of joints merged through massless links, are
+  comments.
 Not translated (a warning naming the line): `mimic`, `friction`, `calibration`,
 `safety_controller`, `transmission`, `gazebo` and other extensions; `collision` elements are
 skipped (casmech has no contact). URDF has no gravity: the model gets [0, 0, -9.81].
@@ -32,7 +35,7 @@ import numpy as np
 
 from casmech.core.quaternions import from_matrix
 from casmech.errors import UsageError, did_you_mean
-from casmech.importers import inertia_check
+from casmech.importers import inertia_check, urdf_limits
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item, identifier
 from casmech.importers.joint_chains import BodyFrame, Elementary, basic_rows, compose, name_of
@@ -80,6 +83,7 @@ class Translator:
         self.names = Names()
         self.body_names = {tree.root: "ground"}  # head link -> casmech body
         self.frames: dict[str, BodyFrame] = {}  # casmech body -> its frame at the pose
+        self.positions: dict[str, float] = {}  # URDF joint -> its initial value
 
     def warn_unknown(self, element, path: str, kind: str) -> None:
         for child in element.children:
@@ -172,7 +176,7 @@ class Translator:
         data = {"name": name, "type": MOVING[joint.type], "body_i": body_i, "body_j": body_j,
                 "at": tidy(frame.origin), "axis": tidy(axis)}
         comments = [f"{joint.type} joint {joint.name} (line {joint.element.line})"]
-        comments += self.limit(joint, path)
+        comments += self.limit(joint, path, data, joint.child)
         self.model.joints.append(Item(data, comments))
         self.damper(joint, path, data)
 
@@ -215,17 +219,35 @@ class Translator:
                     "body_j": body_j, **{key: v for key, v in row.items() if key.endswith("_j")}}
             self.model.joints.append(Item(data, comments if k == 0 else []))
 
-    def limit(self, joint: Joint, path: str) -> list[str]:
+    def limit(self, joint: Joint, path: str, data: dict | None = None,
+              head: str | None = None) -> list[str]:
+        """The comment of a joint's <limit>; with the joint's `data` (a single joint), its
+        lower and upper bounds become the joint's `limit:` stop (importers/urdf_limits.py)."""
         element = joint.element.find("limit")
         if element is None or joint.type not in ("revolute", "prismatic", "continuous"):
             return []
         units = dict(zip(("lower", "upper", "effort", "velocity"), (
             ("m", "m", "N", "m/s") if joint.type == "prismatic" else
             ("rad", "rad", "N m", "rad/s")), strict=True))
-        text = ", ".join(f"{key} {self.reader.number(element, f'{path}.limit', key):g} {unit}"
-                         for key, unit in units.items() if key in element.attrib)
-        return [f"URDF limit (line {element.line}): {text}; not enforced: casmech has no "
-                "joint limits"]
+        value = {key: self.reader.number(element, f"{path}.limit", key)
+                 for key in units if key in element.attrib}
+        text = ", ".join(f"{key} {value[key]:g} {units[key]}" for key in units if key in value)
+        why = urdf_limits.unbounded(joint, value, self.positions.get(joint.name, 0.0))
+        if data is None or why:
+            return [f"URDF limit (line {element.line}): {text}; not enforced"
+                    + (f" ({why})" if why else "")]
+        at, axis = np.asarray(data["at"], float), np.asarray(data["axis"], float)
+        inertia = urdf_limits.moved_inertia(self.plan, self.state, head, at,
+                                            axis / np.linalg.norm(axis),
+                                            joint.type == "prismatic")
+        data["limit"] = urdf_limits.stop(joint, value["lower"], value["upper"],
+                                         self.positions.get(joint.name, 0.0), inertia)
+        rest = ", ".join(f"{key} {value[key]:g} {units[key]}" for key in ("effort", "velocity")
+                         if key in value)
+        return [f"URDF limit (line {element.line}): {text}; lower and upper as the stop "
+                f"`limit:` (MuJoCo's default softness: time constant "
+                f"{urdf_limits.TIME_CONSTANT:g} s, critically damped)"
+                + (f"; {rest} not enforced" if rest else "")]
 
     def damper(self, joint: Joint, path: str, data: dict) -> None:
         element = joint.element.find("dynamics")
@@ -303,6 +325,7 @@ def import_urdf(path: Path, positions: dict[str, float] | None = None,
     repair = inertia_check.Repair(bound_inertia, balance_inertia)
     translator = Translator(reader, tree, pose(tree, positions, velocities), layout, meshes,
                             repair)
+    translator.positions = positions
     if floating_base:
         translator.body(layout.groups[tree.root])
         translator.model.trailer.append(f"root link {tree.root}: a free body (--floating-base)")

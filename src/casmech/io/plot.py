@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.core.columns import JOINT_COLUMNS, QUANTITIES, quantity  # noqa: F401
+from casmech.core.columns import JOINT_COLUMNS, QUANTITIES, joint_quantity, quantity  # noqa: F401
+from casmech.core.states import JOINT_QUANTITIES
 from casmech.errors import UsageError
 
 LOG_SCALE = {"constraint violation"}  # quantities drawn on a logarithmic axis
@@ -88,32 +89,43 @@ def _did_you_mean(names: Sequence[str], spec: str) -> str:
 REACTIONS = {f"{kind}{axis}" for kind in "ft" for axis in "xyz"}  # a joint's reaction columns
 
 
-def panel_key(column: str, frames: Mapping[str, str] | None = None) -> tuple[str, str, str]:
-    """The column's quantity; a joint's reaction in another frame than the global axes (the
-    run's metadata `reaction_frames`: joint -> frame) gets its own panel, titled by its frame."""
-    name, unit, heading = quantity(column)
+def panel_key(column: str, frames: Mapping[str, str] | None = None,
+              joints: frozenset[str] = frozenset(),
+              outputs: Mapping[str, str | None] | None = None) -> tuple[str, str, str]:
+    """The column's quantity (a joint state's, of a joint among `joints`, by its attribute:
+    a spherical joint's e0 and wx are relative, not a body's; an output's, `outputs`: name
+    -> its unit, each its own panel); a joint's reaction in another frame than the global axes
+    (the run's metadata `reaction_frames`: joint -> frame) gets its own panel, titled by its
+    frame."""
+    if outputs and column in outputs:
+        return column, outputs[column] or "?", f"output {column}"
     joint, _, suffix = column.rpartition(".")
+    is_state = joint in joints and suffix in JOINT_QUANTITIES
+    name, unit, heading = joint_quantity(column) if is_state else quantity(column)
     frame = (frames or {}).get(joint, "global")
     if suffix in REACTIONS and frame != "global":
         heading = heading.replace("(global)", f"({frame} frame of each joint)")
     return name, unit, heading
 
 
-def panels(columns: Sequence[str], frames: Mapping[str, str] | None = None
+def panels(columns: Sequence[str], frames: Mapping[str, str] | None = None,
+           joints: frozenset[str] = frozenset(), outputs: Mapping[str, str | None] | None = None
            ) -> dict[tuple[str, str, str], list[str]]:
     """Columns grouped by quantity (and reaction frame), in order of first appearance."""
     grouped: dict[tuple[str, str, str], list[str]] = {}
     for column in columns:
-        grouped.setdefault(panel_key(column, frames), []).append(column)
+        grouped.setdefault(panel_key(column, frames, joints, outputs), []).append(column)
     return grouped
 
 
 def figure(names: Sequence[str], values: np.ndarray, specs: Sequence[str], title: str = "",
-           frames: Mapping[str, str] | None = None):
+           frames: Mapping[str, str] | None = None,
+           outputs: Mapping[str, str | None] | None = None):
     """A matplotlib Figure of the selected columns against t (one panel per quantity; reaction
-    columns by the frame `frames` names for their joint, global when not named)."""
+    columns by the frame `frames` names for their joint, global when not named; the model's
+    outputs with the units `outputs` gives them)."""
     Figure = matplotlib_figure()  # noqa: N806 - a class
-    grouped = panels(select(names, specs), frames)
+    grouped = panels(select(names, specs), frames, frozenset(_joints(names)), outputs)
     values = np.atleast_2d(values)
     t = values[:, list(names).index("t")]
     heights = [_panel_height(len(columns)) for columns in grouped.values()]

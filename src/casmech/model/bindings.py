@@ -10,9 +10,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
-from casmech.core.states import BODY_STATES, JOINT_COORDINATES, split
+from casmech.core.states import BODY_STATES, split
 from casmech.elements.joint_types import COORDINATES, REGISTRY, attributes
-from casmech.model.ir import ForceIR
+from casmech.model.ir import ForceIR, JointIR
 from casmech.schema.resolved import ScalarFunction
 
 
@@ -30,7 +30,7 @@ class BoundFunction(ScalarFunction):
 
 def _binding(name: str, bodies: Mapping[str, int], joints: Mapping[str, Any]):
     owner, attribute = split(name)
-    if owner in joints and attribute in JOINT_COORDINATES:
+    if owner in joints and attribute in attributes(joints[owner].type):
         return "joint", attribute, joints[owner]
     if owner in bodies and attribute in BODY_STATES:
         return "body", attribute, bodies[owner]
@@ -81,6 +81,23 @@ def motors(joint, frame, poses) -> list[ForceIR]:
         out.append(ForceIR(joint.name, kind, poses.index[joint.body_i], poses.index[joint.body_j],
                            points, {}, function, axes=local, source=joint.source))
     return out
+
+
+# a joint state's geometry beyond coordinates': ForceIR axis key -> JointIR.geometry key
+EXTRA_GEOMETRY = {"axis_i_i": "axis_i@i", "axis_j_i": "axis_j@i", "axis_i_j": "axis_i@j",
+                  "axis_j_j": "axis_j@j", "q_i": "q@i", "q_j": "q@j"}
+
+
+def coordinate_geometry(joint: JointIR) -> ForceIR:
+    """The geometry equations/coordinates.py and joint_states.py read a joint's states from
+    (the joint frame's u, v, w on body_i, u on body_j, the joint point on both; a universal
+    joint's axes and a spherical joint's frames as joint_states.py names them), from its
+    JointIR frames."""
+    g = joint.geometry
+    axes = {f"{key}_i": g[f"{key}@i"] for key in "uvw"} | {"u_j": g["u@j"]}
+    axes |= {key: g[name] for key, name in EXTRA_GEOMETRY.items() if name in g}
+    return ForceIR(joint.name, joint.type, joint.body_i, joint.body_j,
+                   {"s_i": g["P@i"], "s_j": g["P@j"]}, {}, axes=axes, source=joint.source)
 
 
 def stop(joint, geometry: ForceIR) -> ForceIR:

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from casmech.errors import Source
-from casmech.schema.resolved import Analysis, ScalarFunction
+from casmech.schema.resolved import Analysis, Output, ScalarFunction
 
 GROUND_INDEX = -1
 
@@ -69,6 +70,10 @@ class JointIR:
     cut: bool = False  # `cut: true`: never a tree joint of the joint formulation
     reaction_frame: str = "global"  # the frame of its reaction columns (runtime.reaction_frames)
     reaction_point: np.ndarray | None = None  # the torque's point instead of point_i, body_i frame
+    # `initial:` (schema/initial.py; runtime/initial_holds.py holds them while loops close):
+    # key -> value, and where each key was written
+    initial: Mapping[str, Any] = field(default_factory=dict)
+    initial_sources: Mapping[str, Source] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,10 @@ class ModelIR:
     parameters: Mapping[str, float] = field(default_factory=dict)
     motors: tuple[ForceIR, ...] = ()  # effort motors of joints (equations/motors.py), by joint name
     limits: tuple[ForceIR, ...] = ()  # joint stops (equations/limits.py), by joint name
+    outputs: tuple[Output, ...] = ()  # the model's `outputs:` (equations/readings.py)
+    # the file's pose q (r then p of every body) when the joints' `initial:` values moved the
+    # bodies away from it (model/initial.py; assembly's continuation starts there), else None
+    reference_pose: np.ndarray | None = None
 
     @property
     def n_bodies(self) -> int:

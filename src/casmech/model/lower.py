@@ -17,7 +17,7 @@ import numpy as np
 from casmech.core import euler, traced
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.elements.joint_types import COORDINATES, REGISTRY
-from casmech.model import bindings
+from casmech.model import bindings, initial
 from casmech.model.ir import GROUND_INDEX, BodyIR, ForceIR, JointIR, ModelIR, PrimitiveIR, RowInfo
 from casmech.schema.resolved import GROUND, Force, Joint, ResolvedModel
 
@@ -45,6 +45,8 @@ class Poses:
         self.pose = {b.name: (b.position, traced.numeric(euler.rotation, b.euler_parameters))
                      for b in model.bodies}
         self.pose[GROUND] = (np.zeros(3), np.eye(3))
+        self.quaternion = {b.name: traced.asarray(b.euler_parameters) for b in model.bodies}
+        self.quaternion[GROUND] = np.array([1.0, 0.0, 0.0, 0.0])
 
     def local(self, body: str, quantity: str, value: np.ndarray) -> np.ndarray:
         r0, a0 = self.pose[body]
@@ -120,9 +122,12 @@ def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[Primit
     rows = range(first_row, first_row + len(prims))
     drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
                                          ("displacement", joint.driver_displacement)) if fun}
+    where = {key.removeprefix("initial."): source for key, source in joint.sources.items()
+             if key.startswith("initial.")}
     return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
                           _geometry(joint, frame, poses), drivers, joint.cut,
-                          joint.reaction_frame, _reaction_point(joint, poses))
+                          joint.reaction_frame, _reaction_point(joint, poses),
+                          dict(joint.initial), where)
 
 
 FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")
@@ -136,10 +141,18 @@ def _reaction_point(joint: Joint, poses: Poses) -> np.ndarray | None:
 
 
 def _geometry(joint: Joint, frame, poses: Poses) -> dict[str, np.ndarray]:
-    """The joint frame's quantities in both bodies' frames, "<name>@i" and "<name>@j"."""
-    return {f"{name}@{side}": poses.local(body, name, frame[name])
-            for name in FRAME_QUANTITIES if name in frame
-            for side, body in (("i", joint.body_i), ("j", joint.body_j))}
+    """The joint frame's quantities in both bodies' frames, "<name>@i" and "<name>@j"; for a
+    type whose states include a relative rotation (`e0`), "q@i" and "q@j": the Euler
+    parameters from each body's frame to the joint frame, conj(p) of its pose in the file
+    (equations/joint_states.py)."""
+    found = {f"{name}@{side}": poses.local(body, name, frame[name])
+             for name in FRAME_QUANTITIES if name in frame
+             for side, body in (("i", joint.body_i), ("j", joint.body_j))}
+    if "e0" in REGISTRY[joint.type].states:
+        for side, body in (("i", joint.body_i), ("j", joint.body_j)):
+            p = poses.quaternion[body]
+            found[f"q@{side}"] = traced.array([p[0], -p[1], -p[2], -p[3]])
+    return found
 
 
 def joint_coordinates(joint: Joint, poses: Poses) -> ForceIR:
@@ -174,7 +187,10 @@ def lower(model: ResolvedModel) -> ModelIR:
                traced.asarray(b.velocity), traced.asarray(b.angular_velocity), b.source)
         for b in model.bodies
     )
-    geometry = {j.name: joint_coordinates(j, poses) for j in model.joints
+    posed = initial.posed_bodies(model, bodies, {j.name: joint_frame(j) for j in model.joints})
+    reference = None if posed is bodies else traced.array(
+        [x for b in bodies for x in b.r0] + [x for b in bodies for x in b.p0])
+    geometry = {j.name: bindings.coordinate_geometry(j) for j in joints
                 if bindings.has_coordinates(j.type)}  # for force laws reading the state
     forces = tuple(bindings.bind(lower_force(f, model, poses), poses.index, geometry)
                    for f in model.forces)
@@ -182,6 +198,7 @@ def lower(model: ResolvedModel) -> ModelIR:
                    for m in bindings.motors(j, joint_frame(j), poses))
     stops = tuple(bindings.stop(j, geometry[j.name]) for j in model.joints
                   if j.limit)
-    return ModelIR(model.name, model.file, model.text, bodies, tuple(primitives), tuple(joints),
+    return ModelIR(model.name, model.file, model.text, posed, tuple(primitives), tuple(joints),
                    forces, traced.asarray(model.gravity), model.analysis, dict(model.parameters),
-                   motors=effort, limits=stops)
+                   motors=effort, limits=stops, outputs=tuple(model.outputs),
+                   reference_pose=reference)

@@ -40,8 +40,10 @@ from casmech.model.ir import ModelIR, RowInfo
 from casmech.schema.resolved import Analysis
 from casmech.schema.tables import TableExpr
 
-# ModelIR fields that are not part of what the system functions compute from
-STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters"})
+# ModelIR fields that are not part of what the system functions compute from (the file's pose
+# before the joints' initial values moved it: only assembly's start, on the numeric IR)
+STRUCTURE_FIELDS = frozenset({"name", "file", "text", "analysis", "parameters",
+                              "reference_pose"})
 # entries below this fraction of their array's largest are round-off of the lowering's rotations
 # (a joint point on an axis, in a body frame: 0 or 1e-17 depending on the values): structural 0
 ROUNDOFF = 1e-13

@@ -90,18 +90,40 @@ def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
                q_nom, q_dot_nom)
 
 
+def _held_constraints(dae: DAE):
+    """(phi, phi_q) of (t, q, theta) over the DAE's rows and the rows holding the joints'
+    `initial:` values (runtime/initial_holds.py; optimal/system.py's held_positions), and
+    all their rows."""
+    system, rows = dae.system, list(dae.rows)
+    if "held_positions" not in system.functions:
+        return system["phi"], system["phi_q"], rows
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", dae.n)
+    th = ca.MX.sym("theta", dae.theta.numel())
+    held = system["held_positions"](q, th)
+    phi = ca.vertcat(system["phi"](t, q, th)[rows], held)
+    phi_q = ca.vertcat(system["phi_q"](t, q, th)[rows, :], ca.jacobian(held, q))
+    return (ca.Function("phi", [t, q, th], [phi]), ca.Function("phi_q", [t, q, th], [phi_q]),
+            list(range(phi.numel())))
+
+
 def initial_state_function(dae: DAE) -> ca.Function:
     """x0(theta): consistent positions and velocities (differentiable in theta). Positions:
-    numerics.kkt.closest_point (the runtime's assembly) to the file's pose at theta, over the
-    DAE's rows, from the nominal assembled pose; its derivative is the implicit one."""
+    numerics.kkt.closest_point (the runtime's assembly) to the file's pose at theta (where
+    the joints' `initial:` values placed the bodies, with those values held), over the DAE's
+    rows, from the nominal assembled pose; its derivative is the implicit one. Velocities:
+    the least-squares step onto the velocity constraints (and the held rates)."""
     system, rows, t0 = dae.system, list(dae.rows), dae.t0
     th = ca.MX.sym("theta", dae.theta.numel())
-    closest = kkt.closest_point(system["phi"], system["phi_q"], rows)
+    phi, phi_q, held_rows = _held_constraints(dae)
+    closest = kkt.closest_point(phi, phi_q, held_rows)
     q0 = closest(dae.q_assembled, t0, system["initial_guess"](th), th)[0]
     guess = system["file_velocities"](q0, th)
     jac = system["phi_q"](t0, q0, th)[rows, :]
-    rhs = system["nu"](t0, q0, th)[rows] - jac @ guess
-    q_dot0 = guess + jac.T @ ca.solve(jac @ jac.T, rhs)
+    nu = system["nu"](t0, q0, th)[rows]
+    if "held_rates" in system.functions:
+        held_jac, targets = system["held_rates"](q0, th)
+        jac, nu = ca.vertcat(jac, held_jac), ca.vertcat(nu, targets)
+    q_dot0 = guess + jac.T @ ca.solve(jac @ jac.T, nu - jac @ guess)
     return ca.Function("x0", [th], [ca.vertcat(q0, q_dot0)], ["theta"], ["x0"])
 
 
@@ -143,6 +165,7 @@ def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
     kinetic, potential = system["energy"](t, q, q_dot, theta)
     violation = ca.mmax(ca.fabs(system["phi"](t, q, theta)))
     elements = system["element_outputs"](t, q, q_dot, theta)  # contacts and stops
-    values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements)
+    derived = system["readings"](t, q, q_dot, q_ddot, force, torque, theta)  # joints, outputs
+    values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements, derived)
     return column_names(nominal)[1:], ca.Function("columns", [t, dae.x, dae.z, theta], [values],
                                                   ["t", "x", "z", "theta"], ["columns"])

@@ -28,6 +28,7 @@ import numpy as np
 
 from casmech.core import euler, traced
 from casmech.core.values import constant
+from casmech.equations import initial_rows, readings
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.errors import ModelError, UsageError
@@ -142,7 +143,23 @@ def _start(ir: ModelIR, d) -> dict[str, ca.Function]:
                                          {"q_dot": ca.vertcat(*velocities) if bodies
                                           else empty}),
             "initial_guess": _function("initial_guess", {"d": d},
-                                       {"q": ca.vertcat(*pose) if bodies else empty})}
+                                       {"q": ca.vertcat(*pose) if bodies else empty}),
+            **_held(ir, d)}
+
+
+def _held(ir: ModelIR, d) -> dict[str, ca.Function]:
+    """held_positions(q, d): the rows of the joints' `initial:` values assembly holds, and
+    held_rates(q, d): the rates' rows (their Jacobian in q_dot) and targets
+    (equations/initial_rows.py); none without such values."""
+    if not any(joint.initial for joint in ir.joints):
+        return {}
+    x = Coordinates.create(ir.n_bodies)
+    positions, rates = initial_rows.positions(ir, x), initial_rows.rates(ir, x)
+    jacobian = x.ground_fixed(ca.jacobian(rates.values, x.q_dot))
+    return {"held_positions": _function("held_positions", {"q": x.q, "d": d},
+                                        {"rows": x.ground_fixed(positions.values)}),
+            "held_rates": _function("held_rates", {"q": x.q, "d": d},
+                                    {"jacobian": jacobian, "targets": rates.targets})}
 
 
 def _bound(function: ca.Function, theta, d) -> ca.Function:
@@ -165,6 +182,7 @@ def parametric_system(model: ResolvedModel, names: Iterable[str] = ()) -> Parame
     theta = ca.vertcat(*(symbols[n] for n in names)) if names else ca.SX(0, 1)
     bundle = build_functions(split.ir, split.symbols)
     over_d = {name: bundle[name] for name in BUNDLE} | _start(split.ir, split.symbols)
+    over_d["readings"] = readings.columns_function(split.ir, split.symbols)
     functions = {name: _bound(f, theta, split.expressions) for name, f in over_d.items()}
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
     return ParametricSystem(functions, build_functions(lower(model)), names, values,

@@ -33,7 +33,7 @@ from casmech.errors import AnalysisError, FailureContext
 from casmech.formulations import augmented
 from casmech.formulations.table import FORMULATIONS
 from casmech.numerics import kkt, numeric_qr
-from casmech.runtime import interrupts
+from casmech.runtime import initial_holds, interrupts
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.memo import kept
 from casmech.runtime.nonfinite import NonFinite
@@ -162,8 +162,12 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
 
 
 def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
-    """The point of Phi(t, .) = 0 closest to q (default: the file's pose); q itself when it
-    meets the constraints (module docstring)."""
+    """The point of Phi(t, .) = 0 closest to q (default: the file's pose, where the joints'
+    `initial:` values placed the bodies, holding those values: _held_positions); q itself
+    when it meets the constraints (module docstring)."""
+    held = initial_holds.holds(functions) if q is None else None
+    if held is not None:
+        return _held_positions(held, t, initial_guess(functions))
     reference = initial_guess(functions) if q is None else np.array(q, float)
     if _worst(functions.vector("phi", t, reference)) <= POSITION_TOLERANCE:
         return reference
@@ -171,9 +175,27 @@ def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np
                          reference)
 
 
-def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
-    """Driver continuation, then Newton with least-squares steps, from q."""
-    span = driver_span(functions, t)
+def _held_positions(held: initial_holds.Holds, t: float, posed: np.ndarray) -> np.ndarray:
+    """With the joints' initial values held (runtime/initial_holds.py): `posed` when it meets
+    them and the constraints (a tree), else continuation from the file's pose to the values
+    and the drivers together, then the closest point to `posed`. E504 for a value the others
+    fix already, E503 when the loops do not close with them."""
+    bundle = held.positions
+    held.check_independent(bundle, t, held.reference, "coordinate")
+    if _worst(bundle.vector("phi", t, posed)) <= POSITION_TOLERANCE:
+        return posed
+    try:
+        q = least_squares_positions(bundle, t, held.reference, held.span)
+    except AnalysisError as error:
+        raise held.unmet(error) from None
+    return closest_point(bundle, t, q, posed)
+
+
+def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray,
+                            span: float = 0.0) -> np.ndarray:
+    """Driver continuation (and, `span` > 0, of held initial values that far), then Newton
+    with least-squares steps, from q."""
+    span = max(driver_span(functions, t), span)
     if not span <= MAX_DRIVER_STEP * MAX_CONTINUATION:  # (NaN included)
         raise AnalysisError(FailureContext(
             t, f"a driver's value is {span:.3g} (rad or m) away from the pose in the file, "
@@ -212,9 +234,14 @@ def _worst(phi: np.ndarray) -> float:
 
 
 def initial_state(functions: SystemFunctions, t0: float = 0.0):
-    """Assembled positions and the file's velocities projected onto the constraints."""
+    """Assembled positions and the file's velocities projected onto the constraints (with
+    the joints' `initial:` rates held: E504 for a rate the others fix already)."""
     q = assemble_positions(functions, t0)
-    return q, solve_velocities(functions, t0, q, file_velocities(functions, q))
+    held = initial_holds.holds(functions)
+    if held is None:
+        return q, solve_velocities(functions, t0, q, file_velocities(functions, q))
+    held.check_independent(held.velocities, t0, q, "rate")
+    return q, solve_velocities(held.velocities, t0, q, file_velocities(functions, q))
 
 
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,

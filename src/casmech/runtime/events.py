@@ -30,14 +30,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from casmech.core import euler
-from casmech.core.columns import BODY_COLUMNS
-from casmech.core.states import split
-from casmech.equations import contact, coordinates
+from casmech.equations import readings
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.model.ir import ForceIR
 from casmech.runtime import interrupts
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
@@ -80,45 +76,12 @@ class Stopped(Exception):
 
 
 # ------------------------------------------------------------------ the model's `events:`
-def _body_columns(x: Coordinates, k: int) -> dict[str, Any]:
-    """Body k's results columns (runtime.results.row's meanings) as expressions of x."""
-    p, p_dot = x.p(k), x.p(k, x.q_dot)
-    omega = 2 * euler.e_matrix(p) @ p_dot
-    alpha = ca.jtimes(omega, ca.vertcat(x.q, x.q_dot), ca.vertcat(x.q_dot, x.q_ddot))
-    vectors = [x.r(k), p, x.r(k, x.q_dot), omega, x.r(k, x.q_ddot), alpha]
-    values = ca.vertsplit(ca.vertcat(*vectors))
-    return dict(zip(BODY_COLUMNS, values, strict=True))
-
-
-def _joint_geometry(joint) -> ForceIR:
-    """A joint's coordinate geometry (equations.coordinates) from its JointIR frames."""
-    g = joint.geometry
-    axes = {f"{key}_i": g[f"{key}@i"] for key in "uvw"} | {"u_j": g["u@j"]}
-    return ForceIR(joint.name, joint.type, joint.body_i, joint.body_j,
-                   {"s_i": g["P@i"], "s_j": g["P@j"]}, {}, axes=axes)
-
-
 def state_values(functions: SystemFunctions, x: Coordinates, names) -> dict[str, Any]:
-    """The state names an event reads (schema.events.state_names, and the contacts' and
-    stops' columns) as expressions of x."""
-    bodies = {name: k for k, name in enumerate(functions.body_names)}
-    joints = {joint.name: joint for joint in functions.ir.joints}
-    elements = {name: k for k, name in enumerate(contact.output_names(functions.ir))}
-    values, columns, outputs = {}, {}, None
-    for name in names:
-        owner, attribute = split(name)
-        if name in elements:
-            if outputs is None:
-                outputs = contact.element_outputs(functions.ir, x)
-            values[name] = outputs[elements[name]]
-        elif owner in bodies:
-            if owner not in columns:
-                columns[owner] = _body_columns(x, bodies[owner])
-            values[name] = columns[owner][attribute]
-        else:
-            value = coordinates.JOINT_VALUES[attribute]
-            values[name] = value(_joint_geometry(joints[owner]), x)
-    return values
+    """The state names an event reads (schema.events.state_names, the contacts' and stops'
+    columns and the outputs that read no reactions) as expressions of x
+    (equations.readings)."""
+    found = readings.Readings(functions.ir, x)
+    return {name: found[name] for name in names}
 
 
 def event_function(functions: SystemFunctions, when) -> ca.Function:

@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
-from casmech.equations import contact
+from casmech.equations import contact, readings
 from casmech.equations.functions import SystemFunctions, all_sx
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
@@ -166,10 +166,20 @@ class Result:
 
 
 def column_names(functions: SystemFunctions) -> list[str]:
+    """The results contract's columns, then the joint states and the outputs
+    (equations/readings.py)."""
     names = ["t"]
     names += [f"{b}.{c}" for b in functions.body_names for c in BODY_COLUMNS]
     names += [f"{j.name}.{c}" for j in functions.joints for c in JOINT_COLUMNS]
-    return names + ["energy", "constraint_violation", *contact.output_names(functions.ir)]
+    return names + ["energy", "constraint_violation", *contact.output_names(functions.ir),
+                    *readings.names(functions.ir)]
+
+
+def readings_function(functions: SystemFunctions) -> ca.Function:
+    """equations.readings.columns_function of the bundle's IR, built once per bundle."""
+    if "readings" not in functions.derived:
+        functions.derived["readings"] = readings.columns_function(functions.ir)
+    return functions.derived["readings"]
 
 
 def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
@@ -186,8 +196,9 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
     kinetic, potential = functions.evaluate("energy", t, q, q_dot)
     violation = np.max(np.abs(functions.vector("phi", t, q)), initial=0.0)
     elements = functions.vector("element_outputs", t, q, q_dot)  # contacts and stops
+    derived = np.array(readings_function(functions)(t, q, q_dot, q_ddot, force, torque)).ravel()
     return np.concatenate([[t], *per_body, *per_joint, [(kinetic + potential).item(), violation],
-                           elements])
+                           elements, derived])
 
 
 def row_function(functions: SystemFunctions) -> ca.Function:
@@ -209,7 +220,8 @@ def row_function(functions: SystemFunctions) -> ca.Function:
         parts += [q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4], q_dot[3 * k:3 * k + 3],
                   omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
     parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
-    parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot)]
+    parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot),
+              readings_function(functions)(t, q, q_dot, q_ddot, force, torque)]
     return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],
                        [ca.densify(ca.vertcat(*parts))])
 

@@ -14,12 +14,14 @@ from typing import Any
 
 import numpy as np
 
-from casmech.core import traced
+from casmech.core import dimensions, traced, units
+from casmech.core.dimensions import DimensionError
 from casmech.core.expressions import CONSTANTS, FUNCTIONS, Expr, ExpressionError, from_number
 from casmech.core.expressions import parse as parse_expression
 from casmech.elements import force_types
 from casmech.errors import Diagnostic, Source, did_you_mean, failed
 from casmech.schema import limits, resolved, spec
+from casmech.schema.dimensions import expected
 from casmech.schema.loader import Document, Path, format_path
 from casmech.schema.resolved import GROUND, ScalarFunction
 from casmech.schema.scale import Scale
@@ -43,6 +45,17 @@ class _Given:
 
     def names(self):
         return ()
+
+
+def _dimension(value: Any, names: Mapping[str, Any]):
+    """The dimension of a parameter's value as written (None: no unit stated), with the
+    earlier parameters' `names`."""
+    if not isinstance(value, str):
+        return None
+    try:
+        return dimensions.dimension(parse_expression(value), names)
+    except (ExpressionError, DimensionError):
+        return None
 
 
 def _is_number(text: str) -> bool:
@@ -74,6 +87,7 @@ class Checker:
         self.joint_types: dict[str, str] = {}
         self.joint_bodies: dict[str, tuple[str, str]] = {}
         self.scale = Scale()  # the bodies' scale so far: the floors of directions
+        self.dimensions: dict[str, Any] = {}  # parameter -> its core.units dimension or None
 
     # -- reporting
     def error(self, code: str, path: Path | str, message: str, **extra: Any) -> None:
@@ -104,7 +118,25 @@ class Checker:
         for name, offset in unknown.items():
             if name not in self.broken:  # a failed parameter was reported where it is defined
                 self.unknown_symbol(path, name, self.inside(path, offset), variables)
-        return None if unknown else expr
+        return None if unknown or not self.dimension_fits(path, expr) else expr
+
+    def dimension_fits(self, path: Path | str, expr: Expr) -> bool:
+        """Whether the expression's units agree (core/dimensions.py) and its dimension is the
+        field's (schema/dimensions.py); E205 where not."""
+        try:
+            found = dimensions.dimension(expr, self.dimensions)
+        except DimensionError as error:
+            self.error(error.code, path, error.message, source=self.inside(path, error.offset),
+                       hint=error.hint)
+            return False
+        wanted = expected(self.doc.data, path)
+        if found is None or wanted is None or found == wanted:
+            return True
+        self.error("E205", path, f"expected a {units.describe(wanted)}, got a "
+                   f"{units.describe(found)}", expected=units.describe(wanted),
+                   got=expr.text, hint="write the value in units of its dimension, or as a "
+                                       "plain number in SI units")
+        return False
 
     def unknown_symbol(self, path, name: str, source, variables) -> None:
         if name == "t":
@@ -218,7 +250,10 @@ class Checker:
                 self.broken.add(name)
                 continue
             where = f"--set {name}" if name in self.overrides else path
-            result = self.number(where, self.overrides.get(name, self.given.get(name, value)))
+            written = self.overrides.get(name, self.given.get(name, value))
+            result = self.number(where, written)
+            self.dimensions[name] = _dimension(written, self.dimensions) if result is not None \
+                else None
             if result is not None and name in self.symbols:
                 result = traced.seed(traced.value(result), self.symbols[name])
             del self.declared[name]

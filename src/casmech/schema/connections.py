@@ -10,7 +10,7 @@ import numpy as np
 from casmech.core import traced
 from casmech.elements.joint_types import COORDINATES, REGISTRY, having
 from casmech.errors import failed
-from casmech.schema import contact, resolved
+from casmech.schema import contact, initial, resolved
 from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
@@ -42,6 +42,8 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
                                                 given.reactions.point)
     if getattr(given, "limit", None) is not None:
         extra["limit"] = contact.limit(check, (*path, "limit"), given.limit)
+    if getattr(given, "initial", None) is not None:
+        extra["initial"] = initial.initial(check, path, given)
     if entry.check is not None and not failed(vectors.values()):
         for code, key, message, details in entry.check(vectors):
             check.error(code, (*path, key), message, **details)
@@ -67,7 +69,7 @@ def joint_sources(check: Checker, path: Path, given) -> dict[str, Any]:
     driver = getattr(given, "driver", None)
     for key in driver.model_fields_set if driver is not None else ():
         sources[f"driver.{key}"] = check.doc.locate_key((*path, "driver", key))
-    return sources
+    return sources | initial.sources(check, path, given)
 
 
 def joint_vector(check: Checker, path: Path, key: str, values) -> np.ndarray | None:

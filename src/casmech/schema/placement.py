@@ -10,6 +10,8 @@ on `ground` the a/s vectors of basic constraints are component-frame vectors and
     direction               velocity, angular_velocity, axis,        R x
                             axis_i, axis_j, c, global value
     orientation             euler_parameters, bushing orientation   q_R * p
+    relative rotation       a spherical joint's initial orientation q_R * p * conj(q_R)
+                            (and its initial angular_velocity: R x)
 """
 
 from __future__ import annotations
@@ -147,11 +149,27 @@ def _vectors(frame: Frame, item, vectors: Mapping[str, np.ndarray]) -> dict[str,
     return placed
 
 
+def _initial(frame: Frame, initial):
+    """A spherical joint's initial rotation and angular velocity, given in the component's
+    axes (its joint frame), in the parent's: R q R^T and R w; other values are relative."""
+    if not frame.rotated or not initial:
+        return initial
+    placed = dict(initial)
+    if "orientation" in placed:
+        back = np.array([frame.euler_parameters[0], *(-np.asarray(frame.euler_parameters[1:]))])
+        placed["orientation"] = quaternion_product(frame.orientation(placed["orientation"]),
+                                                   back)
+    if "angular_velocity" in placed:
+        placed["angular_velocity"] = frame.direction(placed["angular_velocity"])
+    return placed
+
+
 def joint(frame: Frame, names: Names, given: resolved.Joint) -> resolved.Joint:
     point = given.reaction_point
     return replace(given, name=names(given.name), body_i=names(given.body_i),
                    body_j=names(given.body_j), vectors=_vectors(frame, given, given.vectors),
-                   reaction_point=None if point is None else frame.point(point))
+                   reaction_point=None if point is None else frame.point(point),
+                   initial=_initial(frame, given.initial))
 
 
 def force(frame: Frame, names: Names, given: resolved.Force) -> resolved.Force:

@@ -82,6 +82,9 @@ class Joint:
     reaction_point: np.ndarray | None = None  # `reactions: {point: ...}`, global at t = 0
     # `limit:` (schema/contact.py): lower, upper (+-inf when absent), stiffness, damping
     limit: Mapping[str, float] | None = None
+    # `initial:` (schema/initial.py): key -> number, or Euler parameters (orientation), or a
+    # vector (angular_velocity); its keys' sources are in `sources` as "initial.<key>"
+    initial: Mapping[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -132,6 +135,17 @@ class Event:
     direction: str = "both"  # rising | falling | both
     action: str = "log"  # stop | log
     source: Source | None = None
+
+
+@dataclass(frozen=True)
+class Output:
+    """One entry of `outputs:` (schema/outputs.py): `value` reads t, parameters, earlier
+    outputs, the state and reactions (its `variables` name them)."""
+
+    name: str
+    value: ScalarFunction
+    source: Source | None = None
+    unit: str | None = None  # SI unit of its dimension ("m/s"), None when not stated
 
 
 @dataclass(frozen=True)
@@ -212,6 +226,7 @@ class ResolvedModel:
     # symbol; every number computed from them is a traced number (load_model_text's
     # `symbolic`)
     symbols: Mapping[str, Any] = field(default_factory=dict)
+    outputs: tuple[Output, ...] = ()  # `outputs:` (results columns after the joint states)
 
     def __repr__(self) -> str:
         """One line: name, file, counts, parameters and analysis, not the whole model."""

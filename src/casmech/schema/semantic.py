@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from casmech.core import traced
 from casmech.errors import Diagnostic, failed
-from casmech.schema import events, files, limits, motors, resolved, spec
+from casmech.schema import events, files, initial, limits, motors, outputs, resolved, spec
 from casmech.schema.bodies import body, floors
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
@@ -153,9 +153,12 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
+    initial.driven(check, joints)
+    initial.velocities(check, given.bodies, joints)
     settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
                               forces)
-    watched = events.events(check, given.events, joints, forces)
+    written = outputs.outputs(check, given.outputs, joints, forces)
+    watched = events.events(check, given.events, joints, forces, written)
     if settings is not None and watched:
         settings = replace(settings, events=watched)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None
@@ -176,6 +179,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
         settings,
         estimate,
         ocp,
+        outputs=written or (),
     )
 
 

@@ -24,7 +24,7 @@ from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vec
 from casmech.elements import force_types
 from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
-from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Study
+from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Output, Study
 from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
@@ -85,6 +85,7 @@ class ModelSpec(Spec):
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
     events: tuple[Event, ...] = ()
+    outputs: tuple[Output, ...] = ()
     estimate: Estimate | None = None
     ocp: OptimalControl | None = None
     study: Study | None = None

@@ -52,6 +52,15 @@ class Event(Spec):
     action: Literal["stop", "log"] = "log"
 
 
+class Output(Spec):
+    """A named value written as a results column at every row (docs/format.md#outputs,
+    casmech.schema.outputs): an expression of t, parameters, earlier outputs, the state and
+    the reactions."""
+
+    name: Name
+    value: Scalar
+
+
 # ------------------------------------------------------- estimation and optimal control (issue 7)
 Pair = Annotated[tuple[Scalar, ...], Field(min_length=2, max_length=2)]
 

@@ -60,6 +60,9 @@ def _walk(loc: tuple[str | int, ...]) -> tuple[Path, type[BaseModel], Any]:
     model: type[BaseModel] = ModelSpec
     for step in loc:
         inner = _strip(annotation)
+        if get_origin(inner) in (Union, UnionType):  # an optional mapping: its model
+            present = [m for m in get_args(inner) if m is not type(None)]
+            inner = _strip(present[0]) if len(present) == 1 else inner
         if isinstance(inner, type) and issubclass(inner, BaseModel):
             model = inner
         annotation, in_path = _step(annotation, step)

@@ -15,8 +15,8 @@ from pydantic import (
     create_model,
 )
 
-from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
-from casmech.elements.joint_types import REGISTRY, JointType
+from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
 
 # ------------------------------------------------------------------------------------ joints
@@ -100,14 +100,32 @@ class Basic(JointBase):
     f: TimeFunction = "0"
 
 
+# `initial:` keys that are not scalars (a spherical joint's relative rotation and rate)
+INITIAL_FORMS: dict[str, Any] = {"orientation": Orientation, "angular_velocity": Vector}
+
+
+def initial_class(entry: JointType) -> type[Spec] | None:
+    """The class of a joint type's `initial:` (schema/initial.py), or None when it has none."""
+    keys = initial_keys(entry.name)
+    if not keys:
+        return None
+    fields = {key: (INITIAL_FORMS.get(key, Scalar) | None, None) for key in keys}
+    return create_model(f"{entry.class_name}Initial", __base__=Spec, __module__=__name__,
+                        **fields)
+
+
 def joint_class(entry: JointType) -> type[Spec]:
     """The YAML class of a joint type, from its registry entry: `type`, its vector keys, its
-    optional scalars, and `limit` when the type has a stop."""
+    optional scalars, `limit` when the type has a stop and `initial` when it has initial
+    values."""
     fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
     fields |= {key: (Vector, ...) for key in entry.vectors}
     fields |= {key: (Scalar | None, None) for key in entry.options}
     if entry.limit is not None:
         fields["limit"] = (Limit | None, None)
+    initial = initial_class(entry)
+    if initial is not None:
+        fields["initial"] = (initial | None, None)
     return create_model(entry.class_name, __base__=Basic if entry.basic else Composite,
                         __module__=__name__, **fields)
 
