@@ -127,8 +127,10 @@ def workspace(tmp_path) -> Path:
     package = tmp_path / "ws" / "src" / "mypkg"
     (package / "urdf").mkdir(parents=True)
     (package / "meshes").mkdir()
+    triangle = ("solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0.1 0 0\n"
+                "vertex 0 0.1 0\nendloop\nendfacet\nendsolid s\n")  # check reads meshes
     for name in ("base.stl", "arm.stl"):
-        (package / "meshes" / name).write_text("solid s\nendsolid s\n")
+        (package / "meshes" / name).write_text(triangle)
     urdf = package / "urdf" / "r.urdf"
     urdf.write_text(ROBOT)
     return urdf

@@ -63,7 +63,7 @@ def test_a_body_far_lighter_than_the_heaviest_is_located():
     assert [f[:2] for f in findings(heavy)] == [("E411", "bodies[1].mass")]
 
 
-@pytest.mark.parametrize("inertia", ["1e-300", "1e-13"])
+@pytest.mark.parametrize("inertia", ["1e-300", "1e-16"])
 def test_an_inertia_below_the_models_scale_is_located(inertia):
     text = MODEL.replace("inertia: [1, 1, 1]", f"inertia: [{inertia}, {inertia}, {inertia}]")
     [(code, path, message)] = findings(text)
@@ -72,13 +72,13 @@ def test_an_inertia_below_the_models_scale_is_located(inertia):
 
 def test_the_inertia_scale_is_the_heaviest_mass_times_the_length_scale_squared():
     text = with_light("1e-6", "1e-9")
-    model = load_model_text(text)  # 1e-9 >= 1e-12 * 1 kg * (2 m)^2
+    model = load_model_text(text)  # 1e-9 >= 1e-15 * 1 kg * (2 m)^2
     assert len(model.bodies) == 2
     check = scale.Scale()
     for body in model.bodies:
         check.add(body.name, body.mass, body.inertia, body.position)
     assert (check.heaviest, check.mass, check.length) == ("bar", 1.0, 2.0)
-    assert findings(with_light("1e-6", "3e-12"))[0][:2] == ("E411", "bodies[1].inertia")
+    assert findings(with_light("1e-6", "3e-15"))[0][:2] == ("E411", "bodies[1].inertia")
 
 
 @pytest.mark.parametrize("old, new, path", [

@@ -11,9 +11,12 @@ directions from below, relative to the model itself, because what breaks is a ra
   multipliers' absolute tolerance, in newtons) a lighter mechanism's iteration matrix is
   singular to round-off, and 2e-320 kg (subnormal) overflows 1/m outright. A "massless" link
   is modelled with a millionth of its neighbours' mass, far above both floors.
-- Inertias. Each principal moment must be at least MASS_RATIO of the model's inertia scale
+- Inertias. Each principal moment must be at least INERTIA_RATIO of the model's inertia scale
   (heaviest mass x length scale squared), for the same reason in the rotation blocks; a point
-  mass is a body with a small but representable inertia.
+  mass is a body with a small but representable inertia. The floor is lower than the masses':
+  a small part far from the origin has a moment far below its mass times the model's length
+  squared (gymnasium's pusher: a fingertip at 8e-14 of its inertia scale, which runs), while a
+  body failed only from 1e-20 of its neighbours' scale.
 - Directions. An axis written (or computed from coordinates of size L) is normalised; its
   components carry round-off of eps L, so one shorter than DIRECTION_RATIO L points somewhere
   round-off chose to within more than 1e-10 rad. A basic constraint's vectors (a_i, a_j, c)
@@ -36,7 +39,8 @@ import numpy as np
 from casmech.core import traced
 from casmech.schema import limits
 
-MASS_RATIO = 1e-12  # least mass / heaviest mass, and least moment / (heaviest mass L^2)
+MASS_RATIO = 1e-12  # least mass / heaviest mass
+INERTIA_RATIO = 1e-15  # least principal moment / (heaviest mass L^2)
 MIN_MASS = 1e-15  # [kg] least mass of the heaviest body
 DIRECTION_RATIO = 1e-6  # least length of a normalised direction / the length scale
 MIN_ROW_VECTOR = 1e-3  # least length of a basic constraint's a_i, a_j, c
@@ -93,10 +97,10 @@ def mass_problem(scale: Scale, mass: float) -> tuple[str, str, str] | None:
 def inertia_problem(scale: Scale, moments: np.ndarray) -> tuple[str, str, str] | None:
     """(problem, expected, hint) of a body's smallest principal moment below the floor."""
     moments = traced.value(moments)
-    floor = MASS_RATIO * scale.mass * scale.length ** 2
+    floor = INERTIA_RATIO * scale.mass * scale.length ** 2
     if moments[0] >= floor:
         return None
-    return (f"principal moment {moments[0]:.3g} kg m^2 is below {MASS_RATIO:g} of the model's "
+    return (f"principal moment {moments[0]:.3g} kg m^2 is below {INERTIA_RATIO:g} of the model's "
             f"inertia scale ({scale.mass:.3g} kg x ({scale.length:.3g} m)^2)",
             f"principal moments of at least {floor:.3g} kg m^2",
             "a point mass needs a small inertia, not a vanishing one: "
