@@ -3,10 +3,10 @@
 `direct(args)` completes the arguments of `casmech run MODEL ...` (MODEL required, default
 format and mode). `replayed(args)` turns `casmech run --replay DIR/metadata.json [--out OUT]`
 into the arguments of the run that metadata.json records (io/metadata.py): the same model
-file, overrides, analysis settings, formats, reaction frames, allowed folders and compile
-mode (the mode that ran, for a complete run). Every file the run read (`files`: model,
-components, tables, meshes, data) must still have its recorded sha256; a changed or missing file
-is a usage error naming it. OUT defaults to `DIR_replay/` beside DIR.
+file, overrides, analysis settings, formats, reaction frames, allowed folders, compile
+mode (the mode that ran, for a complete run) and `--option`s. Every file the run read
+(`files`: model, components, tables, meshes, data) must still have its recorded sha256; a
+changed or missing file is a usage error naming it. OUT defaults to `DIR_replay/` beside DIR.
 """
 
 from __future__ import annotations
@@ -48,7 +48,8 @@ def replayed(args: argparse.Namespace) -> argparse.Namespace:
         "model": Path(record["model"]["absolute_path"]),
         "set": [f"{name}={value}" for name, value in record["overrides"].items()],
         "out": args.out or folder.with_name(folder.name + "_replay"),
-        **{name: settings[key] for name, key in SETTINGS.items()},
+        **{name: settings.get(key) for name, key in SETTINGS.items()},
+        "option": list(options.get("option", [])),
         "format": list(options.get("format", ["csv"])),
         "reactions_frame": options.get("reactions_frame"),
         "mode": record["mode"] if complete else options.get("mode", "auto"),
@@ -60,6 +61,7 @@ def _alone(args: argparse.Namespace) -> None:
     """--replay takes everything from the record: only --out and --allow-dir may be given."""
     given = [f"--{name.replace('_', '-')}" for name in RECORDED if getattr(args, name) is not None]
     given += ["--set"] if args.set else []
+    given += ["--option"] if args.option else []
     given += [f"the model file {args.model}"] if args.model is not None else []
     if given:
         raise UsageError(f"--replay runs what {args.replay} records; it takes no "

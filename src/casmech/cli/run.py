@@ -7,12 +7,15 @@ may write further files (modal: modes.csv, linear_model.npz; dynamics of a model
 `events:`: events.csv, one line printed per event). A progress bar
 is drawn on stderr when it is a terminal and the run lasts more than a second.
 
+--option KEY=VALUE (repeatable) sets an option of the analysis type (casmech.core.options;
+docs/analyses.md#options): `--option max_step=1e-3`, `--option assembly.tolerance=1e-10`.
+
 SIGINT (Ctrl-C) or SIGTERM stops the analysis promptly (casmech.runtime.interrupts): the rows
-computed
-so far are written with `status: interrupted` and the signal in the metadata, and the exit
-code is 128 + the signal's number (130, 143). When the analysis starts, the results files of an
-earlier run in DIR are removed and metadata.json says `status: running`, so that a run killed
-outright (SIGKILL) never leaves an older results file looking current.
+computed so far are written with `status: interrupted` and the signal in the metadata, and the
+exit code is 128 + the signal's number (130, 143); a run whose rows were all computed when the
+signal came is complete. When the analysis starts, the results files of an earlier run in DIR
+are removed and metadata.json says `status: running`, so that a run killed outright (SIGKILL)
+never leaves an older results file looking current.
 
 --replay DIR/metadata.json runs a recorded run again (cli/replay.py): the same model file
 (every file it read checked against its recorded sha256), overrides, settings and options.
@@ -28,12 +31,12 @@ from pathlib import Path
 import numpy as np
 
 from casmech import api
-from casmech.cli.common import add_overrides, add_span, overrides
+from casmech.cli.common import add_options, add_overrides, add_span, options, overrides
 from casmech.errors import AnalysisError, Interrupted
 from casmech.io import events as events_output
 from casmech.io.csv import write_csv
 from casmech.io.hdf5 import h5py, write_hdf5
-from casmech.io.metadata import resolved_settings, run_metadata, write_json
+from casmech.io.metadata import analysis_record, run_metadata, write_json
 from casmech.io.progress import progress_bar
 from casmech.runtime import events, interrupts, reaction_frames, singular_poses
 from casmech.runtime.results import column_names, events_table
@@ -80,6 +83,7 @@ def add_arguments(parser) -> None:
                         help="CVODES's method for joint coordinates on a tree (default: the "
                              "model's, else auto: bdf when the ODE is stiff at t0)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
+    add_options(parser)
     parser.add_argument("--reactions-frame", choices=list(reaction_frames.FRAMES),
                         help="the frame of every joint's reaction columns, replacing the "
                              "joints' `reactions: {frame: ...}` (default: theirs, else global)")
@@ -113,27 +117,27 @@ def _run(args) -> int:
     functions = api.compile(model, args.mode)
     timings["compile"] = time.perf_counter() - clock
     interrupts.check()  # a signal during a C compiler's run ends it as a failure
-    settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
-                                 output_step=args.output_step, rtol=args.rtol, atol=args.atol,
-                                 formulation=args.formulation,
-                                 stabilization=args.stabilization, method=args.method)
-    options = {"mode": args.mode, "format": list(args.format),
-               "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
+    asked = options(args.option)
+    checked = api.analysis_settings(  # a usage error before an earlier run's files go
+        functions, args.analysis, args.t_end, args.output_step, args.rtol, args.atol,
+        args.formulation, args.stabilization, args.method, asked)
+    settings = analysis_record(checked)
+    recorded = {"mode": args.mode, "format": list(args.format),
+                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     if args.reactions_frame:  # recorded when given, for --replay
-        options["reactions_frame"] = args.reactions_frame
-    run = (model, given, settings, timings, options)
-    api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
-                          args.atol, args.formulation, args.stabilization,
-                          args.method)  # a usage error before an earlier run's files go
+        recorded["reactions_frame"] = args.reactions_frame
+    if args.option:
+        recorded["option"] = list(args.option)
+    run = (model, given, settings, timings, recorded)
     _start(args, out, run)
     clock = time.perf_counter()
     try:
         with progress_bar(settings["t_end"]) as callback:
             result = api.analyze(functions, args.analysis, args.t_end, args.output_step,
-                                     rtol=args.rtol, atol=args.atol,
-                                     formulation=args.formulation,
-                                     progress=interrupts.watch(callback),
-                                     stabilization=args.stabilization, method=args.method)
+                                 rtol=args.rtol, atol=args.atol, formulation=args.formulation,
+                                 progress=callback or _rows_as_they_come,
+                                 stabilization=args.stabilization,
+                                 method=args.method, options=asked)
     except AnalysisError as error:
         timings["analysis"] = time.perf_counter() - clock
         with interrupts.saving():
@@ -153,6 +157,11 @@ def _run(args) -> int:
     for pose in result.metadata.get("singular_poses") or ():
         print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
     return 0
+
+
+def _rows_as_they_come(t: float) -> None:
+    """The progress callback when no bar is drawn: with a callback, dynamics integrates the
+    grid in chunks, so an interrupt keeps the rows before it (runtime.dynamics)."""
 
 
 def _start(args, out: Path, run) -> None:

@@ -4,9 +4,10 @@ The assembled pose is the point of Phi(t, q) = 0 closest to the file's pose (Euc
 the root of numerics.kkt.closest_point's KKT system, reached in two stages. First the
 least-squares Newton of `newton` gets onto the right branch: drivers of composite joints are
 reached by continuation, their values scaled from 0 (the pose in the file) to 1 in steps of at
-most MAX_DRIVER_STEP radians/metres, so Newton never jumps to the mirrored root of a rotation
-driver. Its end point depends on Newton's path where the mechanism has degrees of freedom
-(within O(distance^2) of the closest point); the rootfinder then converges to the closest point
+most max_driver_step radians/metres (core.options.Assembly, the settings of every function
+here), so Newton never jumps to the mirrored root of a rotation driver. Its end point depends
+on Newton's path where the mechanism has degrees of freedom (within O(distance^2) of the
+closest point); the rootfinder then converges to the closest point
 in a few iterations. casmech.optimal differentiates the same rootfinder.
 
 Accelerations and multipliers are numerics.kkt.saddle's, the projection back onto the
@@ -15,7 +16,8 @@ use. The least-squares steps (Newton, velocities) run on the bundle's sparse mat
 (CasADi DM) by numerics.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
-step rejects) stays dense.
+step rejects) stays dense. The Functions built here are kept in the run's workspace
+(runtime.workspace; by default the bundle's).
 """
 
 from __future__ import annotations
@@ -26,20 +28,18 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.options import Assembly, Fallback
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.formulations import augmented
 from casmech.formulations.table import FORMULATIONS
 from casmech.numerics import kkt, numeric_qr
-from casmech.runtime import interrupts
+from casmech.runtime import cancel
 from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.memo import kept
+from casmech.runtime.workspace import Workspace, of
 
-POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
-MAX_ITERATIONS = 50
-MAX_DRIVER_STEP = 0.5
-KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
+DEFAULT, FALLBACK = Assembly(), Fallback()  # the defaults (core.options)
 
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
@@ -60,18 +60,21 @@ def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
 
 
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
-           tolerance: float = POSITION_TOLERANCE) -> np.ndarray:
-    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed)."""
+           tolerance: float | None = None, settings: Assembly = DEFAULT) -> np.ndarray:
+    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed), to
+    `tolerance` (default settings.tolerance)."""
+    tolerance = settings.tolerance if tolerance is None else tolerance
     q = np.array(q, float)
-    for _ in range(MAX_ITERATIONS):
+    for _ in range(settings.max_iterations):
+        cancel.poll()
         phi, phi_q = _evaluate(functions, t, q, scale)
         if np.max(np.abs(phi), initial=0.0) <= tolerance:
             return q
-        q += numeric_qr.lstsq(phi_q, -phi)
+        q += numeric_qr.lstsq(phi_q, -phi, limits=settings.linear_algebra)
     phi, phi_q = _evaluate(functions, t, q, scale)
     if np.max(np.abs(phi), initial=0.0) <= 1e3 * tolerance:
         return q
-    cause = (f"positions did not converge in {MAX_ITERATIONS} Newton iterations "
+    cause = (f"positions did not converge in {settings.max_iterations} Newton iterations "
              f"(max |Phi| = {np.max(np.abs(phi)):.3e}); the joints with the largest residuals:")
     raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
 
@@ -90,41 +93,46 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
     return max(values, default=0.0)
 
 
-def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
+def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None,
+                       settings: Assembly = DEFAULT,
+                       workspace: Workspace | None = None) -> np.ndarray:
     """The point of Phi(t, .) = 0 closest to q (default: the file's pose); q itself when it
     meets the constraints (module docstring)."""
     reference = initial_guess(functions) if q is None else np.array(q, float)
-    if _worst(functions.vector("phi", t, reference)) <= POSITION_TOLERANCE:
+    if _worst(functions.vector("phi", t, reference)) <= settings.tolerance:
         return reference
-    return closest_point(functions, t, least_squares_positions(functions, t, reference),
-                         reference)
+    return closest_point(functions, t, least_squares_positions(functions, t, reference,
+                                                               settings),
+                         reference, settings, workspace)
 
 
-def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray) -> np.ndarray:
+def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray,
+                            settings: Assembly = DEFAULT) -> np.ndarray:
     """Driver continuation, then Newton with least-squares steps, from q."""
-    steps = max(1, math.ceil(driver_span(functions, t) / MAX_DRIVER_STEP))
+    steps = max(1, math.ceil(driver_span(functions, t) / settings.max_driver_step))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
-        q = newton(functions, t, q, scale=k / steps,
-                   tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
+        q = newton(functions, t, q, scale=k / steps, settings=settings,
+                   tolerance=settings.continuation_tolerance if k < steps else None)
     return q
 
 
 def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
-                  reference: np.ndarray) -> np.ndarray:
+                  reference: np.ndarray, settings: Assembly = DEFAULT,
+                  workspace: Workspace | None = None) -> np.ndarray:
     """numerics.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
     itself where those rows fix every coordinate (no degree of freedom: an isolated root, the
     closest point of its neighbourhood) or where the rootfinder does not reach
-    |Phi| <= POSITION_TOLERANCE (a Jacobian losing rank at q makes the KKT matrix nearly
+    |Phi| <= settings.tolerance (a Jacobian losing rank at q makes the KKT matrix nearly
     singular)."""
-    rows = structure(functions, t, q).independent
+    rows = structure(functions, t, q, settings.linear_algebra).independent
     if len(rows) == functions.n_coordinates:
         return q
-    solve = kept(functions.derived.setdefault("closest_point", {}), rows,
-                 lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
-                 KEPT_SOLVERS)
+    solve = of(functions, workspace).kept(
+        "closest_point", rows, lambda: kkt.closest_point(functions["phi"], functions["phi_q"],
+                                                         rows))
     polished = np.array(solve(q, t, reference)[0]).ravel()
     worst = _worst(functions.vector("phi", t, polished))
-    return polished if worst <= POSITION_TOLERANCE else q
+    return polished if worst <= settings.tolerance else q
 
 
 def _worst(phi: np.ndarray) -> float:
@@ -133,14 +141,15 @@ def _worst(phi: np.ndarray) -> float:
     return worst if np.isfinite(worst) else math.inf
 
 
-def initial_state(functions: SystemFunctions, t0: float = 0.0):
+def initial_state(functions: SystemFunctions, t0: float = 0.0, settings: Assembly = DEFAULT,
+                  workspace: Workspace | None = None):
     """Assembled positions and the file's velocities projected onto the constraints."""
-    q = assemble_positions(functions, t0)
-    return q, solve_velocities(functions, t0, q, file_velocities(functions, q))
+    q = assemble_positions(functions, t0, settings=settings, workspace=workspace)
+    return q, solve_velocities(functions, t0, q, file_velocities(functions, q), settings)
 
 
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
-                     q_dot_guess: np.ndarray) -> np.ndarray:
+                     q_dot_guess: np.ndarray, settings: Assembly = DEFAULT) -> np.ndarray:
     """Phi_q q_dot = nu, closest (least squares) to the guess (the guess itself when it is
     zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
     if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
@@ -148,11 +157,11 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()
-    return q_dot_guess + numeric_qr.lstsq(phi_q, residual)
+    return q_dot_guess + numeric_qr.lstsq(phi_q, residual, limits=settings.linear_algebra)
 
 
 def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
-                                  q_dot: np.ndarray) -> np.ndarray:
+                                  q_dot: np.ndarray, settings: Assembly = DEFAULT) -> np.ndarray:
     """Phi_q q_ddot = gamma, for a fully driven (0-DOF) mechanism."""
     phi_q = functions.matrix("phi_q", t, q)
     gamma = functions.vector("gamma", t, q, q_dot)
@@ -160,8 +169,8 @@ def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.nd
     if rank < functions.n_coordinates:
         cause = ("singular configuration: the constraint Jacobian lost rank "
                  f"({rank} < {functions.n_coordinates}); the joints involved:")
-        raise AnalysisError(FailureContext(t, cause, dependent_joints(functions, phi_q),
-                                           "weight in the dependency"))
+        raise AnalysisError(FailureContext(t, cause, dependent_joints(
+            functions, phi_q, limits=settings.linear_algebra), "weight in the dependency"))
     return q_ddot
 
 
@@ -175,7 +184,9 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
 
 
 def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
-                                q_dot: np.ndarray, rows=None) -> tuple[np.ndarray, np.ndarray]:
+                                q_dot: np.ndarray, rows=None, settings: Assembly = DEFAULT,
+                                workspace: Workspace | None = None
+                                ) -> tuple[np.ndarray, np.ndarray]:
     """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now, by
     numerics.kkt.saddle over the rows independent at q (checks.structure; the normalization
     rows and every joint row of a mechanism without redundant joints). lam covers every row:
@@ -183,8 +194,9 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     squares of the whole singular system gives). `rows` restricts the constraints to an
     independent subset instead (lam then has their length)."""
     if rows is None:
-        independent = list(structure(functions, t, q).independent)
-        q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent)
+        independent = list(structure(functions, t, q, settings.linear_algebra).independent)
+        q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent,
+                                                  settings, workspace)
         if len(independent) == functions.n_rows:
             return q_ddot, lam
         phi_q = functions["phi_q"](t, q)
@@ -194,8 +206,8 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     rows = list(rows)
     phi_q = functions["phi_q"](t, q)[rows, :]
     mass = functions["mass_matrix"](q)
-    saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
-                  lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
+    saddle = of(functions, workspace).kept(  # the rows fix the patterns
+        "saddle", tuple(rows), lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()))
     return saddle_solution(saddle, mass, phi_q, functions["generalized_forces"](t, q, q_dot),
                            functions.vector("gamma", t, q, q_dot)[rows], np.zeros(len(rows)))
 
@@ -209,31 +221,36 @@ def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma:
         if np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam)):
             return v_dot, lam
     except RuntimeError as error:
-        interrupts.check(error)
+        cancel.check(error)
     lhs = np.block([[np.array(mass), np.array(jac).T], [np.array(jac), -np.diag(w)]])
     z = np.linalg.lstsq(lhs, np.concatenate([np.ravel(np.array(forces)), gamma]), rcond=None)[0]
     return z[:mass.size1()], z[mass.size1():]
 
 
 def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,
-            penalty: float, accept: float = POSITION_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+            penalty: float, accept: float | None = None, settings: Assembly = DEFAULT,
+            fallback: Fallback = FALLBACK, workspace: Workspace | None = None
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Back onto Phi = 0, then onto the velocity constraints: formulations.augmented.projection
-    (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty) called
-    until |Phi| <= POSITION_TOLERANCE. Near a singular configuration the damping keeps a step
-    from jumping along the nearly lost direction (a Euclidean least-squares step there moved
-    A02 onto the wrong branch), at the price of slow progress along it: a residual below
-    `accept` after MAX_ITERATIONS steps is taken as converged."""
+    (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty,
+    fallback.projection_iterations per call) called until |Phi| <= settings.tolerance. Near a
+    singular configuration the damping keeps a step from jumping along the nearly lost
+    direction (a Euclidean least-squares step there moved A02 onto the wrong branch), at the
+    price of slow progress along it: a residual below `accept` (default the tolerance) after
+    settings.max_iterations steps is taken as converged."""
+    accept = settings.tolerance if accept is None else accept
     name = next(key for key, value in FORMULATIONS.items() if value == form)
-    step = kept(functions.derived.setdefault("projection", {}), name,
-                lambda: augmented.projection(functions.functions, name), len(FORMULATIONS))
-    for _ in range(math.ceil(MAX_ITERATIONS / augmented.PROJECTION_ITERATIONS)):
+    per_call = fallback.projection_iterations
+    step = of(functions, workspace).kept("projection", (name, per_call), lambda: (
+        augmented.projection(functions.functions, name, fallback)))
+    for _ in range(math.ceil(settings.max_iterations / per_call)):
         q, v = (np.array(out).ravel() for out in step(t, q, v, penalty))
         phi = functions.vector("phi", t, q)
-        if _worst(phi) <= POSITION_TOLERANCE:
+        if _worst(phi) <= settings.tolerance:
             return q, v
     if _worst(phi) > accept:
         cause = (f"the projection onto the constraints did not converge in "
-                 f"{MAX_ITERATIONS} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); the "
-                 "joints with the largest residuals:")
+                 f"{settings.max_iterations} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); "
+                 "the joints with the largest residuals:")
         raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
     return q, v
