@@ -159,9 +159,9 @@ AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 
 
 def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
-    options = model.analysis.options
-    if model.analysis.type != "dynamics" or options.get("formulation", "auto") not in (
-            "auto", "joint") or options.get("stabilization", "ggl") != "ggl":
+    options = model.analysis.options  # core.options.DynamicsOptions of a dynamics analysis
+    if model.analysis.type != "dynamics" or options.formulation not in (
+            "auto", "joint") or options.stabilization != "ggl":
         return False
     return spanning_tree(ir).is_tree
 

@@ -49,6 +49,9 @@ def replayed(args: argparse.Namespace) -> argparse.Namespace:
         "set": [f"{name}={value}" for name, value in record["overrides"].items()],
         "out": args.out or folder.with_name(folder.name + "_replay"),
         **{name: settings.get(key) for name, key in SETTINGS.items()},
+        # formulation auto ran with the default stabilization: asking for it explicitly would
+        # mean the r-p DAE (runtime.analyses.analysis_settings)
+        **({"stabilization": None} if settings.get("formulation") == "auto" else {}),
         "option": list(options.get("option", [])),
         "format": list(options.get("format", ["csv"])),
         "reactions_frame": options.get("reactions_frame"),

@@ -334,33 +334,3 @@ def values(options: Any) -> dict[str, Any]:
         out[name] = values(value) if dataclasses.is_dataclass(value) else (
             list(value) if isinstance(value, tuple) else value)
     return out
-
-
-def changed(options: Any, base: Any | None = None) -> dict[str, Any]:
-    """The dotted keys whose values differ from `base` (default: the class's defaults)."""
-    base = type(options)() if base is None else base
-    out = {}
-    for path, _ in leaves(type(options)):
-        mine, theirs = options, base
-        for step in path:
-            mine, theirs = getattr(mine, step), getattr(theirs, step)
-        if mine != theirs:
-            out[".".join(path)] = mine
-    return out
-
-
-def rows(kind: type) -> list[tuple[str, str, str, str]]:
-    """(key, default, range or choices with the unit, meaning) of every key: the tables of
-    docs/analyses.md."""
-    defaults = kind()
-    out = []
-    for path, _ in leaves(kind):
-        node, value = kind, defaults
-        for step in path[:-1]:
-            node, value = fields(node)[step][1], getattr(value, step)
-        found = meaning(node, path[-1])
-        default = getattr(value, path[-1])
-        shown = "none" if default is None else _shown(default).strip("'")
-        span = found.range_text() + (f" [{found.unit}]" if found.unit else "")
-        out.append((".".join(path), shown, span.strip(), found.doc))
-    return out
