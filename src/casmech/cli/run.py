@@ -24,6 +24,7 @@ never leaves an older results file looking current.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from pathlib import Path
@@ -156,6 +157,9 @@ def _run(args) -> int:
               f"{result.metadata['formulation_fallback']}", file=sys.stderr)
     for pose in result.metadata.get("singular_poses") or ():
         print(f"warning: {singular_poses.describe(pose)}", file=sys.stderr)
+    if interrupts.pending() is not None:  # it came after the last row: nothing was cut short
+        name = signal.Signals(interrupts.pending()).name
+        print(f"casmech: {name} came after the last row; the run is complete", file=sys.stderr)
     return 0
 
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 from casmech.core.option_values import nested, option
 
-FORMULATIONS = ("auto", "joint", "rp", "romega")
+FORMULATIONS = ("rp", "romega", "joint", "auto")
 STABILIZATIONS = ("ggl", "projection")
 METHODS = ("auto", "adams", "bdf")
 
@@ -280,14 +280,14 @@ class AssemblyOptions:
     solver: AssemblySolver = nested(AssemblySolver, "the assembly")
 
 
-# analysis type -> its options
+# analysis type -> its options (in the order docs/format.md lists the types)
 OPTIONS: dict[str, type] = {
-    "dynamics": DynamicsOptions,
     "kinematics": KinematicsOptions,
+    "dynamics": DynamicsOptions,
     "inverse_dynamics": InverseDynamicsOptions,
     "statics": StaticsOptions,
-    "modal": ModalOptions,
     "assembly": AssemblyOptions,
+    "modal": ModalOptions,
 }
 AnalysisOptions = (DynamicsOptions | KinematicsOptions | StaticsOptions | ModalOptions
                    | AssemblyOptions)
