@@ -26,7 +26,7 @@ The C holds each kernel once; only index tables grow with the model. Default fla
   - otherwise compiled from AUTO_BODIES bodies on, interpreted below: interpreted is ready
     sooner up to 128 bodies, compiled from 256 for r-p dynamics (docs/decisions/mode-auto.md);
   - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
-    joint, no DAE stabilization): its ODE stays interpreted from COMPILED_ODE_BODIES bodies on
+    joint, no DAE stabilization): its ODE stays interpreted from solver.compile.ode_bodies bodies on
     (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
     runs interpreted at every size (a formulation given on the command line is not seen here).
     Later runs of an unchanged model load the cached library.

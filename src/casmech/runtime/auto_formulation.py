@@ -11,7 +11,7 @@
 - Loops with a floating body in the tree (held only by basic or composite constraints, all
   cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
   Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle:
-  above COMPILED_ODE_BODIES, or a parametric library built without the joint functions):
+  above solver.compile.ode_bodies, or a parametric library built without the joint functions):
   `rp`, compiled. (Measurements: docs/decisions/formulation-auto.md.) A compiled parametric
   bundle's joint system is compiled in its library (codegen.parametric), so its loops run joint
   coordinates.

@@ -26,7 +26,8 @@ from casmech.errors import Interrupted
 
 
 class CancelToken:
-    """Whether, and by which signal, a run was asked to stop."""
+    """Whether, and by which signal, a run was asked to stop (once cancelled, it stays so:
+    a token per run)."""
 
     def __init__(self) -> None:
         self.signum: int | None = None

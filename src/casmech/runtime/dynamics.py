@@ -43,7 +43,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
-from casmech.core.options import DynamicsSolver
+from casmech.core.options import DynamicsOptions, DynamicsSolver
 from casmech.equations.checks import dependent_joints, structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
@@ -64,7 +64,7 @@ from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
-DEFAULT = DynamicsSolver()
+DEFAULT, STABILIZATION = DynamicsSolver(), DynamicsOptions().stabilization  # core.options
 
 
 def drift_tolerance(atol: float, settings: DynamicsSolver = DEFAULT) -> float:
@@ -175,7 +175,8 @@ class _Stepper:
     solution). The index-1 DAE (projection) and a run with a progress callback start at
     settings.chunk intervals."""
 
-    def __init__(self, model: _Model, rtol: float, atol: float, stabilization: str = "ggl"):
+    def __init__(self, model: _Model, rtol: float, atol: float,
+                 stabilization: str = STABILIZATION):
         self.model, self.stabilization, self.settings = model, stabilization, model.settings
         self.chunks = Chunks(self.settings.chunk, grow=True)  # kept over a restart on the ODE
         self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
@@ -378,7 +379,7 @@ class _Restart(Exception):
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
-                 progress=None, stabilization: str = "ggl", extra_events=(),
+                 progress=None, stabilization: str = STABILIZATION, extra_events=(),
                  settings: DynamicsSolver = DEFAULT,
                  workspace: Workspace | None = None) -> Result:
     """By the stabilized index-2 DAE (ggl) or the index-1 DAE with projections; a chunk of

@@ -23,7 +23,7 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from casmech.core.options import Assembly, DynamicsSolver, JointCompile
+from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.equations.functions import SystemFunctions
@@ -39,7 +39,7 @@ from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
-DEFAULT = DynamicsSolver()
+DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
@@ -332,7 +332,7 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "auto", extra_events=(),
+                       method: str = METHOD, extra_events=(),
                        settings: DynamicsSolver = DEFAULT,
                        workspace: Workspace | None = None) -> Result:
     """The model's `events:` and `extra_events` (runtime.events.Event) are located and
