@@ -97,6 +97,27 @@ def test_a_token_cancelled_by_the_caller_stops_the_run():
     assert 50 <= len(caught.value.partial) <= 101
 
 
+@pytest.mark.parametrize("path, analysis, options", [
+    ("double_pendulum.yaml", "dynamics", {"formulation": "joint"}),
+    ("double_pendulum.yaml", "dynamics", {"formulation": "rp"}),
+    ("double_pendulum.yaml", "dynamics", {"formulation": "romega", "stabilization": "projection"}),
+    ("double_pendulum.yaml", "dynamics", {"formulation": "rp", "fallback.always": True}),
+    ("four_bar.yaml", "kinematics", None),
+    ("four_bar.yaml", "inverse_dynamics", None),
+    ("bushing_mount.yaml", "statics", None),
+    ("bushing_mount.yaml", "modal", None),
+], ids=lambda value: value if isinstance(value, str) else None)
+def test_every_analysis_polls_the_token(path, analysis, options):
+    """A token cancelled before the run: every analysis and formulation stops at its first
+    poll (none runs to its end unasked)."""
+    functions = casmech.compile(casmech.load(MODELS / path))
+    token = CancelToken()
+    token.cancel(signal.SIGTERM)
+    with pytest.raises(Interrupted) as caught:
+        casmech.analyze(functions, analysis, t_end=1.0, options=options, token=token)
+    assert caught.value.signum == signal.SIGTERM
+
+
 def test_ctrl_c_in_the_api_keeps_the_rows():
     """Without trap() (a Python caller), Ctrl-C during casmech.analyze raises Interrupted, a
     KeyboardInterrupt, with the rows; Python's handler is back afterwards."""

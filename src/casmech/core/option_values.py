@@ -29,8 +29,7 @@ SOLVER = "solver"  # the nested options a YAML `analysis:` block writes under `s
 
 @dataclass(frozen=True)
 class Meaning:
-    """What an option field is: its meaning, unit, range and choices. `top`: written at the
-    top of the YAML `analysis:` block (formulation, at, ...), not under `solver:`."""
+    """What an option field is: its meaning, unit, range and choices."""
 
     doc: str
     unit: str = ""
@@ -38,7 +37,6 @@ class Meaning:
     high: float | None = None
     open_low: bool = False  # low itself is outside the range
     choices: tuple[str, ...] | None = None
-    top: bool = False
 
     def range_text(self) -> str:
         """'0 < x <= 1', 'x >= 1', '' (no range), or the choices."""
@@ -54,10 +52,10 @@ class Meaning:
 
 def option(default: Any, doc: str, *, unit: str = "", low: float | None = None,
            high: float | None = None, open_low: bool = False,
-           choices: tuple[str, ...] | None = None, top: bool = False) -> Any:
+           choices: tuple[str, ...] | None = None) -> Any:
     """A field holding one value: its default (written here only) and its meaning."""
     return dataclasses.field(default=default, metadata={"meaning": Meaning(
-        doc, unit, low, high, open_low, choices, top)})
+        doc, unit, low, high, open_low, choices)})
 
 
 def nested(kind: type, doc: str) -> Any:

@@ -1,7 +1,7 @@
 """The options of each analysis type: one frozen dataclass per type, every default written here
 once, every field documented (docs/analyses.md#options lists them; a test keeps it current).
 
-In YAML, the fields marked `top` are keys of the `analysis:` block (formulation,
+In YAML, the fields beside `solver` are keys of the `analysis:` block (formulation,
 stabilization, method, at, inputs: docs/format.md); the others are under `analysis: {solver:
 ...}`, named as SUNDIALS and Adams users know them where there is such a name (max_steps,
 max_step, initial_step). The command line sets any of them by `casmech run --option
@@ -28,20 +28,20 @@ def _formulation():
     return option("auto", "the equations of motion: auto (joint coordinates, rp after a loop run "
                   "that failed or passed a singular pose, or with a floating body in a loop), "
                   "joint, rp (r-p DAE), romega (Newton-Euler DAE); docs/formulations.md",
-                  choices=FORMULATIONS, top=True)
+                  choices=FORMULATIONS)
 
 
 def _stabilization():
     return option("ggl", "how the r-p and r-omega DAEs keep the constraints: ggl (the "
                   "stabilized index-2 DAE) or projection (the index-1 DAE projected back when it "
                   "drifts); asking for it with formulation auto runs rp",
-                  choices=STABILIZATIONS, top=True)
+                  choices=STABILIZATIONS)
 
 
 def _method():
     return option("auto", "CVODES's method for joint coordinates on a tree: adams, bdf, or auto "
                   "(bdf when the ODE is stiff at t0: solver.stiff_threshold)",
-                  choices=METHODS, top=True)
+                  choices=METHODS)
 
 
 @dataclass(frozen=True)
@@ -250,11 +250,9 @@ class ModalOptions:
     """analysis type modal (runtime.modal)."""
 
     at: float | None = option(None, "linearize at this time of a dynamics run (0 <= at <= "
-                              "t_end); none: at the static equilibrium", unit="s", low=0,
-                              top=True)
+                              "t_end); none: at the static equilibrium", unit="s", low=0)
     inputs: tuple[str, ...] | None = option(None, "the effort-motor joints and force elements "
-                                            "whose force is an input; none: every effort motor",
-                                            top=True)
+                                            "whose force is an input; none: every effort motor")
     formulation: str = _formulation()
     stabilization: str = _stabilization()
     method: str = _method()

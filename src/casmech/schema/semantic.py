@@ -81,7 +81,7 @@ def analysis_options(check: Checker, given: spec.Analysis):
     for problem in problems:
         where = ("analysis", *problem.path)
         hint = problem.hint
-        if problem.code == "E101" and problem.path[-1] in (*TOP_KEYS, "at", "inputs", "type"):
+        if problem.code == "E101" and problem.path[-1] in spec.Analysis.model_fields:
             hint = f"{problem.path[-1]} is a key of analysis: itself, beside type"
         check.error(problem.code, where, f"{problem.message} for analysis type {given.type}",
                     source=check.doc.locate_key(where), expected=problem.expected,
