@@ -51,6 +51,7 @@ from casmech.backends.build import LIBRARY, Toolchain, available, build_librarie
 from casmech.backends.library import compile_functions
 from casmech.backends.load import load as load_build
 from casmech.backends.load import mode_of
+from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.equations.mapped.bundle import mapped_functions
@@ -154,14 +155,19 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     return load_build(directory, ir)
 
 
+DYNAMICS = DynamicsOptions()  # the defaults (core.options)
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
 def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
-    options = model.analysis.options  # core.options.DynamicsOptions of a dynamics analysis
-    if model.analysis.type != "dynamics" or options.formulation not in (
-            "auto", "joint") or options.stabilization != "ggl":
+    options, written = model.analysis.options, dict(model.analysis.written)
+    if model.analysis.type != "dynamics":
+        return False
+    # (a block of another type's options run as dynamics: the keys its file wrote)
+    formulation, stabilization = (getattr(options, key, written.get(key, getattr(DYNAMICS, key)))
+                                  for key in ("formulation", "stabilization"))
+    if formulation not in ("auto", "joint") or stabilization != DYNAMICS.stabilization:
         return False
     return spanning_tree(ir).is_tree
 
