@@ -118,12 +118,6 @@ def keys(kind: type) -> list[str]:
     return [".".join(path) for path, _ in leaves(kind)]
 
 
-def _accepted(kind: type) -> list[str]:
-    """The keys `lookup` takes: every key, and each `solver.` key without it."""
-    full = keys(kind)
-    return full + [key.removeprefix(SOLVER + ".") for key in full if key.startswith(SOLVER + ".")]
-
-
 def lookup(kind: type, key: str) -> tuple[str, ...] | None:
     """The path of a key (a nested mapping's key, a field, or a key inside `solver:` given
     without it), or None."""
@@ -260,7 +254,7 @@ def _reach(kind: type, path: tuple[str, ...]) -> tuple[Any, int]:
 def unknown(kind: type, key: str, path: tuple[str, ...] | None = None) -> Problem:
     """The problem of a key no field has: what its parent (the deepest options object the
     key reaches, under `solver` too for a key given without it) holds, and a did-you-mean
-    among those names or else among every key taken."""
+    among those names, or else the whole key whose last name is close."""
     path = given = tuple(key.split(".")) if path is None else path
     node, depth = _reach(kind, path)
     if path[0] != SOLVER and SOLVER in fields(kind):
