@@ -276,3 +276,61 @@ def test_event_iterations_bound_the_location():
     errors = [abs(casmech.analyze(functions, options=options).events[0].t - exact)
               for options in ({"event_iterations": 2}, None)]
     assert errors[1] < 1e-8 < errors[0]  # measured errors 1e-12 and 1e-4
+
+
+# ------------------------------------------------------------------ what stayed a constant
+# The module-level numbers left in runtime/, formulations/, numerics/ and equations/ and why
+# they are no options: sizes that bound memory or batch work, roundoff floors, mathematical
+# facts, the structure of built (and compiled) code, the command line's signal count.
+CONSTANTS = {
+    "runtime/buffers.py BLOCK": "columns per mapped call (batch work)",
+    "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",
+    "runtime/events.py ULPS": "the narrowest bracket, a roundoff floor",
+    "runtime/interrupts.py ABANDON": "the third signal ends casmech run (the CLI's contract)",
+    "runtime/kinematics.py BLOCK_SECONDS": "a mapped block's wall time (the rows are the same)",
+    "runtime/projected_rk4.py ORDER": "the classical Runge-Kutta method's order",
+    "runtime/singular_poses.py MAX_ENTRIES": "dense Jacobians held at once (memory)",
+    "runtime/solver_messages.py MAX_LINES": "solver lines kept in metadata (size)",
+    "formulations/joint_system.py ROW_NORM_FLOOR": "a roundoff floor compiled into libraries",
+    "formulations/prescribed.py ITERATIONS": "chord steps compiled into the library's step",
+    "formulations/prescribed.py CHUNK": "the inner map of the step (batch work)",
+    "formulations/residuals.py UNROLLED_BODIES": "which residual code is built (roundoff)",
+    "formulations/residuals.py UNROLLED_INSTRUCTIONS": "which residual code is built",
+    "numerics/element_sums.py DROPPED": "an index that is no output",
+    "equations/mapped/forces.py ROW": "a row's coordinates (structure)",
+    "equations/mapped/kernels.py BAKE_LIMIT": "which kernels are built (structure)",
+    "equations/mapped/kernels.py MAX_DIRECTIONS": "forward directions built (structure)",
+    "equations/mapped/rows.py ROW": "a row's coordinates (structure)",
+    "equations/mapped/rows.py V_ROW": "a row's velocities (structure)",
+}
+
+
+def module_numbers() -> set[str]:
+    """'path NAME' of every module-level UPPER_CASE name bound to a number in the packages
+    whose solver settings are options."""
+    import ast
+
+    source = MODELS.parent / "src" / "casmech"
+    found = set()
+    for package in ("runtime", "formulations", "numerics", "equations"):
+        for path in sorted((source / package).rglob("*.py")):
+            for node in ast.parse(path.read_text()).body:
+                if not isinstance(node, ast.Assign | ast.AnnAssign):
+                    continue
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                values = node.value.elts if isinstance(node.value, ast.Tuple) else [node.value]
+                names = [n for t in targets for n in (t.elts if isinstance(t, ast.Tuple)
+                                                      else [t])]
+                for name, value in zip(names, values * len(names), strict=False):
+                    value = value.operand if isinstance(value, ast.UnaryOp) else value
+                    if (isinstance(name, ast.Name) and name.id.lstrip("_").isupper()
+                            and isinstance(value, ast.Constant)
+                            and type(value.value) in (int, float)):
+                        found.add(f"{path.relative_to(source).as_posix()} {name.id}")
+    return found
+
+
+def test_the_numbers_left_as_constants_are_listed_with_a_reason():
+    """A solver setting added as a module constant fails here: make it a field of its
+    analysis's options (casmech.core.options) or list it with the reason it is none."""
+    assert module_numbers() == set(CONSTANTS)

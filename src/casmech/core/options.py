@@ -81,6 +81,12 @@ class Assembly:
     continuation_tolerance: float = option(1e-8, "max |Phi| at which an intermediate "
                                            "continuation step is taken as converged",
                                            low=0, high=1, open_low=True)
+    root_tolerance: float = option(1e-14, "max |KKT residual| of the closest-point "
+                                   "rootfinder's Newton (numerics.kkt)", low=0, high=1e-3,
+                                   open_low=True)
+    root_iterations: int = option(20, "the closest-point rootfinder's Newton iterations from "
+                                  "the least-squares start (2-4 are typical)", low=1,
+                                  high=1000)
     linear_algebra: LinearAlgebra = nested(LinearAlgebra, "dense or sparse linear algebra")
 
 

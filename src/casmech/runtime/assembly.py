@@ -127,9 +127,9 @@ def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
     rows = structure(functions, t, q, settings.linear_algebra).independent
     if len(rows) == functions.n_coordinates:
         return q
-    solve = of(functions, workspace).kept(
-        "closest_point", rows, lambda: kkt.closest_point(functions["phi"], functions["phi_q"],
-                                                         rows))
+    key = (rows, settings.root_tolerance, settings.root_iterations)
+    solve = of(functions, workspace).kept("closest_point", key, lambda: kkt.closest_point(
+        functions["phi"], functions["phi_q"], rows, settings=settings))
     polished = np.array(solve(q, t, reference)[0]).ravel()
     worst = _worst(functions.vector("phi", t, polished))
     return polished if worst <= settings.tolerance else q
