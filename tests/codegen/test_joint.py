@@ -7,8 +7,9 @@ import pytest
 
 import casmech
 from casmech.backends import codegen
-from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
+from casmech.core.options import DynamicsSolver, JointCompile
 from casmech.runtime.joint_dynamics import joint_system
+from casmech.runtime.workspace import Workspace
 from tests.conftest import Table
 
 RNG = np.random.default_rng(11)
@@ -25,7 +26,7 @@ def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, ca
     bundle = codegen.compiled(model, toolchain, root=cache_root)
     assert bundle.data is not None and codegen.mode_of(bundle) == "compiled"
     fast, slow = joint_system(bundle), joint_system(interpreted)
-    assert fast.dynamics is bundle.derived[LIBRARY_FUNCTIONS]["joint_ode"]
+    assert fast.dynamics is bundle.joint_functions["joint_ode"]
     # the same equations, the model's constants computed from d: roundoff
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
 
@@ -60,21 +61,17 @@ def test_compiled_run_is_the_interpreted_run(interpreted, compiled):
                                    err_msg=name)
 
 
-def test_large_trees_keep_their_results_rows_interpreted(compiled, monkeypatch):
-    """Above COMPILED_MOTION_BODIES only the ODE is compiled; above COMPILED_ODE_BODIES
-    nothing of the tree (their C builds grow with the tree)."""
-    from casmech.runtime import joint_dynamics
-
-    kept = compiled.derived.pop("joint_system", None)
-    try:
-        monkeypatch.setattr(joint_dynamics, "COMPILED_MOTION_BODIES", 0)
-        system = joint_system(compiled)
-        assert system.dynamics.class_name() == "External" and system.motion.is_a("SXFunction")
-        compiled.derived.pop("joint_system")
-        monkeypatch.setattr(joint_dynamics, "COMPILED_ODE_BODIES", 0)
-        system = joint_system(compiled)
-        assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
-    finally:
-        compiled.derived.pop("joint_system", None)
-        if kept is not None:
-            compiled.derived["joint_system"] = kept
+def test_large_trees_keep_their_results_rows_interpreted(compiled):
+    """Above solver.compile.motion_bodies only the ODE is compiled; above ode_bodies nothing
+    of the tree (their C builds grow with the tree); each in its own workspace entry."""
+    workspace = Workspace(compiled)
+    system = joint_system(compiled, DynamicsSolver(compile=JointCompile(motion_bodies=0)),
+                          workspace)
+    assert system.dynamics.class_name() == "External" and system.motion.is_a("SXFunction")
+    system = joint_system(compiled, DynamicsSolver(compile=JointCompile(ode_bodies=0)),
+                          workspace)
+    assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
+    assert len(workspace.store("joint_system")) == 2
+    default = joint_system(compiled, workspace=workspace)
+    assert default.dynamics.class_name() == "External" and default.motion.class_name() == \
+        "External"

@@ -12,6 +12,7 @@ import pytest
 import casmech
 from casmech.backends import cache, codegen
 from casmech.cli import main
+from casmech.core.options import DynamicsOptions
 from casmech.errors import AnalysisError, UsageError
 
 from .conftest import MODEL
@@ -138,7 +139,7 @@ def test_auto_mode_rule(model, compiled, cache_root, tmp_path, monkeypatch):
     # another analysis, it compiles from AUTO_BODIES bodies on, as loops do
     assert model.analysis.type == "dynamics"
     assert codegen.auto_mode(model, root=empty) == "interpreted"
-    for analysis in (replace(model.analysis, options={"formulation": "rp"}),
+    for analysis in (replace(model.analysis, options=DynamicsOptions(formulation="rp")),
                      replace(model.analysis, type="kinematics")):
         assert codegen.auto_mode(replace(model, analysis=analysis), root=empty) == "compiled"
     four_bar = casmech.load(MODELS / "four_bar.yaml")

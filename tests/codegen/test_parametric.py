@@ -9,7 +9,6 @@ import casmech
 from casmech.backends import cache, codegen, parametric
 from casmech.backends.load import externals
 from casmech.cli import main
-from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
 from casmech.runtime.joint_dynamics import joint_system
 
 # a spring-mass on a slide (period 2 pi sqrt(m / k)) and, independent of it, a pendulum of
@@ -158,7 +157,7 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
         given = {name: str(value) for name, value in values.items()}
         functions = codegen.compiled(casmech.load(path, given), toolchain, root=cache_root)
         system = joint_system(functions)
-        assert system.dynamics is functions.derived[LIBRARY_FUNCTIONS][system.dynamics.name()]
+        assert system.dynamics is functions.joint_functions[system.dynamics.name()]
     assert len(builds) == 1 and len(loads) == 1
 
 

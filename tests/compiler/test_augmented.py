@@ -35,7 +35,7 @@ def test_accelerations_solve_the_saddle_point_system(chain, name):
                   for out in solve(t, q, v, dynamics.penalty(functions, form, q)))
     # v_dot: measured 8e-17 and 3e-16 of the largest entry, since every iteration solves for a
     # correction from the residual (the iterates themselves, solved directly, were 4e-8 off:
-    # the condition of M + a P^T P is ~ the penalty ratio 1e8, augmented.PENALTY)
+    # the condition of M + a P^T P is ~ the penalty ratio 1e8, Fallback.penalty)
     want = exact[:len(v)]
     np.testing.assert_allclose(v_dot, want, rtol=0, atol=1e-13 * np.max(np.abs(want)))
     # lam: measured 1e-8 of the largest entry, a (P v_dot - gamma) with a ~ 1e8 times mass
@@ -58,7 +58,7 @@ def test_projection_is_assembly_project(chain, name):
     q_new, v_new = (np.array(out.full()).ravel() for out in project(t, q_off, v_off, a))
     q_ref, v_ref = assembly.project(functions, form, t, q_off, v_off, a)
     # measured 2.6e-14 (q) and 5.5e-14 / 2.4e-13 (v, rp / romega): the same point, where
-    # assembly.project stops at |Phi| <= 1e-12 (POSITION_TOLERANCE)
+    # assembly.project stops at |Phi| <= 1e-12 (the assembly tolerance)
     np.testing.assert_allclose(q_new, q_ref, rtol=0, atol=1e-12)
     np.testing.assert_allclose(v_new, v_ref, rtol=0, atol=1e-12)
     assert np.max(np.abs(functions.vector("phi", t, q_new))) <= 1e-12

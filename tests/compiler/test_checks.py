@@ -7,14 +7,17 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import LinearAlgebra
 from casmech.equations import checks
 from casmech.numerics import numeric_qr
 from casmech.runtime import assembly
 from tests.conftest import MODELS
 from tests.runtime.a02_model import a02_model
 
+LIMITS = LinearAlgebra()  # the defaults (casmech.core.options)
 
-def dense_independent_rows(matrix, tolerance=checks.RANK_TOLERANCE):
+
+def dense_independent_rows(matrix, tolerance=LIMITS.rank_tolerance):
     """Greedy in row order by two-pass Gram-Schmidt over dense rows (the former checks code)."""
     scale = max(np.linalg.norm(matrix, 2), 1.0) if matrix.size else 1.0
     basis, keep = [], []
@@ -41,7 +44,7 @@ def assert_same_as_dense(functions, q):
     order = structure_order(functions)
     keep = dict(zip(order, dense_independent_rows(phi_q[order]), strict=True))
     assert report.independent == tuple(k for k in range(functions.n_rows) if keep[k])
-    assert report.rank == np.linalg.matrix_rank(phi_q, tol=checks.RANK_TOLERANCE
+    assert report.rank == np.linalg.matrix_rank(phi_q, tol=LIMITS.rank_tolerance
                                                 * max(np.linalg.norm(phi_q, 2), 1.0))
     return report
 
@@ -83,12 +86,12 @@ def test_a02_flat_pose_equals_dense(n):
 
 
 @pytest.mark.parametrize("seed", range(8))
-@pytest.mark.parametrize("dense_qr", [0, numeric_qr.DENSE_QR_ENTRIES], ids=["sparse", "dense"])
-def test_random_sparse_rows_with_planted_dependencies(seed, dense_qr, monkeypatch):
+@pytest.mark.parametrize("dense_qr", [0, LIMITS.dense_qr_entries], ids=["sparse", "dense"])
+def test_random_sparse_rows_with_planted_dependencies(seed, dense_qr):
     """Rows that are combinations of earlier rows (or zero, or a copy) are found, in a sparse
     matrix as wide as the r-p Jacobians (more coordinates than rows) and a square one, by
     numeric_qr's own factorization and by LAPACK's (its dense path)."""
-    monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", dense_qr)
+    limits = LinearAlgebra(dense_qr_entries=dense_qr)
     rng = np.random.default_rng(seed)
     rows, columns = (30, 45) if seed % 2 else (40, 40)
     matrix = rng.standard_normal((rows, columns)) * (rng.random((rows, columns)) < 0.15)
@@ -96,7 +99,7 @@ def test_random_sparse_rows_with_planted_dependencies(seed, dense_qr, monkeypatc
         earlier = rng.choice(k, size=2, replace=False)
         matrix[k] = rng.standard_normal(2) @ matrix[earlier]
     matrix[4] = 0.0
-    keep = checks.independent_rows(ca.DM(matrix))
+    keep = checks.independent_rows(ca.DM(matrix), limits)
     assert keep == dense_independent_rows(matrix)
     assert sum(keep) == np.linalg.matrix_rank(matrix)
 
@@ -112,7 +115,7 @@ def test_norm2_equals_the_dense_spectral_norm(shape):
     rng = np.random.default_rng(5)
     matrix = rng.standard_normal(shape) * (rng.random(shape) < 0.02)
     matrix[:5, :5] += 10.0  # a well separated largest singular value (~50 against ~2)
-    assert (matrix.size > numeric_qr.DENSE_NORM_ENTRIES) == (shape == (200, 300))
+    assert (matrix.size > LIMITS.dense_norm_entries) == (shape == (200, 300))
     # power iteration stops at 1e-10 relative change; the SVD is exact to roundoff
     np.testing.assert_allclose(numeric_qr.norm2(ca.DM(matrix)), np.linalg.norm(matrix, 2),
                                rtol=1e-8, atol=0)
@@ -129,15 +132,15 @@ joints:
 """
 
 
-def test_dependent_joints_sparse_equals_dense_on_a_single_dependency(monkeypatch):
+def test_dependent_joints_sparse_equals_dense_on_a_single_dependency():
     """A block on a rail, tethered at zero distance: the tether's row of Phi_q vanishes (the
     only dependency), so both paths give it all the weight (the sparse one forced by a zero
-    DENSE_LIMIT)."""
+    dense_svd_entries)."""
     functions = casmech.compile(casmech.loads(SLIDER_AT_ORIGIN))
     phi_q = functions["phi_q"](0.0, assembly.initial_guess(functions))
     dense = checks.dependent_joints(functions, np.array(phi_q))
-    monkeypatch.setattr(checks, "DENSE_LIMIT", 0)
-    sparse = checks.dependent_joints(functions, phi_q)
+    sparse = checks.dependent_joints(functions, phi_q,
+                                     limits=LinearAlgebra(dense_svd_entries=0))
     assert dense[0][0] == sparse[0][0] == "tether"
     # a unit weight and zeros, up to the SVD's roundoff
     np.testing.assert_allclose([w for _, _, w in sparse], [w for _, _, w in dense], rtol=0,

@@ -5,6 +5,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from casmech.core.options import LinearAlgebra
 from casmech.numerics import numeric_qr
 from casmech.numerics.sparse_qr import sparse_qr
 
@@ -53,8 +54,8 @@ def test_numeric_solves_equal_lstsq(m, n, order):
 
 
 @pytest.mark.parametrize("m, n", [(10, 16), (16, 10), (12, 12)])
-@pytest.mark.parametrize("dense_qr", [0, numeric_qr.DENSE_QR_ENTRIES])
-def test_numeric_lstsq_of_rank_deficient_matrices(m, n, dense_qr, monkeypatch):
+@pytest.mark.parametrize("dense_qr", [0, LinearAlgebra().dense_qr_entries])
+def test_numeric_lstsq_of_rank_deficient_matrices(m, n, dense_qr):
     """Rows that are combinations of others (and, for a tall matrix, a repeated column): the
     least-squares solution of least norm, as the SVD gives it, for an inconsistent b (the
     dense QR path sees the rank loss and leaves these to the sparse one)."""
@@ -64,9 +65,9 @@ def test_numeric_lstsq_of_rank_deficient_matrices(m, n, dense_qr, monkeypatch):
     if m > n:
         a[:, 4] = a[:, 2]
     b = rng.standard_normal(m)
-    monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)  # the sparse path at this size
-    monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", dense_qr)
-    np.testing.assert_allclose(numeric_qr.lstsq(ca.sparsify(ca.DM(a)), b),
+    # the sparse path at this size, or LAPACK's QR (which sees the rank loss)
+    limits = LinearAlgebra(dense_entries=0, dense_qr_entries=dense_qr)
+    np.testing.assert_allclose(numeric_qr.lstsq(ca.sparsify(ca.DM(a)), b, limits=limits),
                                np.linalg.lstsq(a, b, rcond=None)[0], rtol=0, atol=1e-12)
 
 

@@ -6,11 +6,14 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import Assembly, LinearAlgebra
 from casmech.equations.checks import structure
 from casmech.errors import AnalysisError
-from casmech.numerics import kkt, numeric_qr
+from casmech.numerics import kkt
 from casmech.runtime import assembly
 from tests.conftest import MODELS, Table
+
+DEFAULT = Assembly()  # the assembly's settings (casmech.core.options)
 
 M, L, G, I_CM = 2.0, 1.2, 9.81, 0.3  # mass, CM distance from the pivot, gravity, inertia about x
 
@@ -119,19 +122,19 @@ def test_progress_is_called_with_every_row_time():
 
 
 @pytest.fixture(params=["sparse", "dense_qr"])
-def sparse(monkeypatch, request):
-    monkeypatch.setattr(numeric_qr, "DENSE_ENTRIES", 0)
-    if request.param == "sparse":
-        monkeypatch.setattr(numeric_qr, "DENSE_QR_ENTRIES", 0)
+def sparse(request) -> Assembly:
+    """Assembly settings whose linear algebra takes the sparse path, or LAPACK's QR."""
+    dense_qr = 0 if request.param == "sparse" else LinearAlgebra().dense_qr_entries
+    return Assembly(linear_algebra=LinearAlgebra(dense_entries=0, dense_qr_entries=dense_qr))
 
 
 DENSE_CASES = [*sorted(MODELS.glob("*.yaml")),
                MODELS / "validation" / "iftomm_a02_four_bar_N2.yaml"]
 
 
-def dense_newton(functions, q, scale=None, tolerance=assembly.POSITION_TOLERANCE):
+def dense_newton(functions, q, scale=None, tolerance=DEFAULT.tolerance):
     q = np.array(q, float)
-    for _ in range(assembly.MAX_ITERATIONS):
+    for _ in range(DEFAULT.max_iterations):
         if scale is None:
             phi, phi_q = functions.vector("phi", 0.0, q), functions.matrix("phi_q", 0.0, q)
         else:
@@ -143,7 +146,7 @@ def dense_newton(functions, q, scale=None, tolerance=assembly.POSITION_TOLERANCE
 
 
 def dense_initial_state(functions, q):
-    steps = max(1, int(np.ceil(assembly.driver_span(functions, 0.0) / assembly.MAX_DRIVER_STEP)))
+    steps = max(1, int(np.ceil(assembly.driver_span(functions, 0.0) / DEFAULT.max_driver_step)))
     for k in range(1, steps + 1):
         q = dense_newton(functions, q, k / steps, 1e-8 if k < steps else 1e-12)
     q = dense_newton(functions, q)
@@ -165,8 +168,9 @@ def test_least_squares_stage_equals_the_dense_code(path, sparse):
     if path.stem != "bricard":
         starts.append(guess + 1e-3 * np.random.default_rng(0).standard_normal(guess.size))
     for start in starts:
-        q = assembly.least_squares_positions(functions, 0.0, start)
-        q_dot = assembly.solve_velocities(functions, 0.0, q, assembly.file_velocities(functions, q))
+        q = assembly.least_squares_positions(functions, 0.0, start, sparse)
+        q_dot = assembly.solve_velocities(functions, 0.0, q, assembly.file_velocities(functions, q),
+                                          sparse)
         dense_q, dense_q_dot = dense_initial_state(functions, start)
         # the same Newton steps up to roundoff, both stopped at |Phi| <= 1e-12: measured <= 4e-18
         np.testing.assert_allclose(q, dense_q, rtol=0, atol=1e-13)
@@ -195,7 +199,7 @@ def test_assembled_pose_is_the_closest_point_with_degrees_of_freedom(model):
     functions, reference = off_the_constraints(MODELS / f"{model}.yaml")
     q = assembly.assemble_positions(functions, 0.0, reference)
     newton_q = assembly.least_squares_positions(functions, 0.0, reference)
-    assert np.max(np.abs(functions.vector("phi", 0.0, q))) <= assembly.POSITION_TOLERANCE
+    assert np.max(np.abs(functions.vector("phi", 0.0, q))) <= DEFAULT.tolerance
     # the rootfinder stops at |KKT residual| <= 1e-14 (measured <= 1e-13 after the lstsq split)
     np.testing.assert_allclose(normal_part(functions, q, q - reference), 0, rtol=0, atol=1e-10)
     # Newton's point is off by O(1e-2 ^ 2) (measured 4e-6..2e-4): the polish did the work
@@ -238,7 +242,7 @@ def test_a_pose_on_the_constraints_is_kept():
     """The closest point of a pose that meets Phi = 0 is itself: returned as it is."""
     functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"))
     guess = assembly.initial_guess(functions)
-    assert np.max(np.abs(functions.vector("phi", 0.0, guess))) <= assembly.POSITION_TOLERANCE
+    assert np.max(np.abs(functions.vector("phi", 0.0, guess))) <= DEFAULT.tolerance
     np.testing.assert_array_equal(assembly.assemble_positions(functions), guess)
 
 
@@ -276,9 +280,9 @@ def test_projection_equals_the_dense_solve():
     projected_q, projected_v = assembly.project(functions, form, 0.0, q, v, penalty)
     mass = functions.matrix("mass_matrix", q)
     dense_q = q.copy()
-    for _ in range(assembly.MAX_ITERATIONS):
+    for _ in range(DEFAULT.max_iterations):
         phi = functions.vector("phi", 0.0, dense_q)
-        if np.max(np.abs(phi)) <= assembly.POSITION_TOLERANCE:
+        if np.max(np.abs(phi)) <= DEFAULT.tolerance:
             break
         jac = functions.matrix("phi_q", 0.0, dense_q)
         dense_q = dense_q - np.linalg.solve(mass / penalty + jac.T @ jac, jac.T @ phi)

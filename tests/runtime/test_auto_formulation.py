@@ -133,8 +133,7 @@ def test_an_explicit_stabilization_means_rp():
     from casmech.api import analysis_settings
 
     functions = casmech.compile(casmech.load(FOUR_BAR))
-    formulation = lambda f, **given: analysis_settings(f, **given).options.get(  # noqa: E731
-        "formulation", "auto")
+    formulation = lambda f, **given: analysis_settings(f, **given).options.formulation  # noqa: E731
     assert formulation(functions) == "auto"
     assert formulation(functions, stabilization="ggl") == "rp"
     assert formulation(functions, stabilization="projection") == "rp"

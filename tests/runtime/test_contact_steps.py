@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import DynamicsSolver
 from casmech.model.lower import lower
 from casmech.runtime import contact_steps
 
@@ -49,4 +50,21 @@ def test_max_step():
     plain = lower(casmech.loads(SHOT.format(step=0.5).split("forces:")[0]
                                 + "analysis: {type: dynamics}\n"))
     assert contact_steps.max_step(plain, 0.5, 2.0) is None
-    assert contact_steps.options(plain, 0.5, 2.0) == {}
+    assert contact_steps.options(plain, 0.5, 2.0) == {"max_num_steps": 50000}
+
+
+def test_max_step_asked_for_and_the_least_closing_speed():
+    """solver.max_step caps the step with or without contact (the smaller cap wins);
+    solver.min_closing_speed bounds the speed a sphere pair's cap assumes from below."""
+    shot = lower(casmech.loads(SHOT.format(step=0.5)))
+    plain = lower(casmech.loads(SHOT.format(step=0.5).split("forces:")[0]
+                                + "analysis: {type: dynamics}\n"))
+    assert contact_steps.max_step(plain, 0.5, 2.0, DynamicsSolver(max_step=1e-3)) == 1e-3
+    assert contact_steps.max_step(shot, 0.5, 2.0, DynamicsSolver(max_step=1e-3)) == 1e-3
+    assert contact_steps.max_step(shot, 0.5, 2.0, DynamicsSolver(max_step=0.1)) == \
+        pytest.approx(0.01, rel=1e-15)
+    # the pair's 0.02 m over max(10 m/s, 2 x 1 m/s): 2 ms
+    slow = DynamicsSolver(min_closing_speed=10.0)
+    assert contact_steps.max_step(shot, 0.5, 2.0, slow) == pytest.approx(0.002, rel=1e-15)
+    asked = contact_steps.options(plain, 0.5, 2.0, DynamicsSolver(max_steps=7, initial_step=1e-6))
+    assert asked == {"max_num_steps": 7, "step0": 1e-6}

@@ -7,11 +7,14 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import DynamicsSolver
 from casmech.io.csv import read_csv
-from casmech.runtime.dynamics import DRIFT_TOLERANCE, drift_tolerance
+from casmech.runtime.dynamics import drift_tolerance
 from tests.conftest import MODELS, Table
 from tests.models import closed_forms as cf
 from tests.runtime.reference_data import VALIDATION_MODELS as VALIDATION
+
+DRIFT_TOLERANCE = DynamicsSolver().drift_tolerance  # the default (casmech.core.options)
 
 G = np.array([0.0, 0.0, -9.81])
 W = 3.0  # spin about the body z axis, a principal axis [rad/s]

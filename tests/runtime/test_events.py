@@ -14,7 +14,7 @@ from scipy.special import ellipk, ellipkinc
 import casmech
 from casmech.backends import codegen
 from casmech.errors import AnalysisError, UsageError
-from casmech.runtime import dynamics, events
+from casmech.runtime import events
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.results import Result
@@ -316,10 +316,9 @@ def test_the_runge_kutta_fallback_locates_events_too(formulation):
     """Where IDAS fails the r-p run goes on by projected Runge-Kutta steps (runtime.dynamics);
     trial points then integrate by those steps."""
     functions = model(PENDULUM, '  - {name: bottom, when: "bar.x", direction: falling}\n')
-    form = dynamics._Model(functions, formulation)
-    stepper = dynamics._Stepper(form, 1e-10, 1e-12)
-    stepper.on_ode = True  # as after a failure of the DAE
-    result = dynamics._run(form, stepper, 0.0, 1.0, 0.05, 1e-12, None)
+    result = casmech.analyze(functions, "dynamics", t_end=1.0, output_step=0.05, rtol=1e-10,
+                             atol=1e-12, formulation=formulation,  # as after a DAE failure:
+                             options={"fallback.always": True})
     assert result.metadata["integrator"] == "projected_rk4"
     [event] = result.events
     assert abs(event.t - QUARTER) < TIME

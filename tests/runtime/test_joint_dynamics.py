@@ -235,26 +235,28 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
     """A later run over the same grid with the same options reuses the kept CVODES instance:
     it must give the first run's rows bit for bit, also after runs with other options and
     grids in between; the kept instances stay bounded."""
-    from casmech.runtime.joint_dynamics import KEPT_INTEGRATORS
+    from casmech.runtime.workspace import KINDS, Workspace
 
     functions = casmech.compile(casmech.load(ZOO))
+    workspace = Workspace(functions)
 
     def run(rtol, t_end=0.3):
         return casmech.analyze(functions, "dynamics", formulation="joint", t_end=t_end,
-                               rtol=rtol, atol=rtol * 1e-2, method="adams")
+                               rtol=rtol, atol=rtol * 1e-2, method="adams",
+                               workspace=workspace)
 
     first = run(1e-8)
-    for k in range(KEPT_INTEGRATORS + 2):
+    for k in range(KINDS["cvodes"] + 2):
         run(1e-6, t_end=0.1 + 0.01 * k)
     again, other = run(1e-8), run(1e-6)
     np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
     assert np.max(np.abs(other.q - first.q)) > 0  # the options are part of what is kept
-    assert len(functions.derived["cvodes"]) <= KEPT_INTEGRATORS
+    assert len(workspace.store("cvodes")) == KINDS["cvodes"]
 
 
 def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
-    """The tree's ODE above QUICK_BUILD_INSTRUCTIONS compiles at -O0, below at the default
-    flags; $CASMECH_CFLAGS always wins."""
+    """The tree's ODE above compile.quick_build_instructions compiles at -O0, below at the
+    default flags; $CASMECH_CFLAGS always wins."""
     from casmech.backends import build
     from casmech.runtime import joint_dynamics
 
@@ -262,13 +264,10 @@ def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
         casmech.compile(casmech.load(MODELS / "double_pendulum.yaml")))
     monkeypatch.delenv(build.FLAGS_ENVIRONMENT, raising=False)
     size = system.dynamics.n_instructions()
-    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
-    assert joint_dynamics._toolchain(system).flags == ("-O0",)
-    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size)
-    assert joint_dynamics._toolchain(system).flags == build.DEFAULT_FLAGS
-    monkeypatch.setattr(joint_dynamics, "QUICK_BUILD_INSTRUCTIONS", size - 1)
+    assert joint_dynamics._toolchain(system, size - 1).flags == ("-O0",)
+    assert joint_dynamics._toolchain(system, size).flags == build.DEFAULT_FLAGS
     monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
-    assert joint_dynamics._toolchain(system).flags == ("-O2", "-march=native")
+    assert joint_dynamics._toolchain(system, size - 1).flags == ("-O2", "-march=native")
 
 
 def test_a_second_run_from_the_same_start_reuses_its_initial_state(monkeypatch):
@@ -282,7 +281,7 @@ def test_a_second_run_from_the_same_start_reuses_its_initial_state(monkeypatch):
     assembled = []
     original = assembly.initial_state
     monkeypatch.setattr(assembly, "initial_state",
-                        lambda f, t0: assembled.append(t0) or original(f, t0))
+                        lambda f, t0, *args: assembled.append(t0) or original(f, t0, *args))
     again = casmech.analyze(functions, formulation="joint", t_end=0.1)
     assert assembled == []
     for name in ("q", "q_dot", "q_ddot", "lam"):

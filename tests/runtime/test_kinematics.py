@@ -9,10 +9,13 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import Assembly
 from casmech.errors import AnalysisError
-from casmech.runtime import assembly, kinematics
+from casmech.runtime import assembly
 from casmech.runtime.kinematics import output_times, state_at
 from tests.conftest import MODELS, count_calls
+
+TOLERANCE = Assembly().tolerance  # the assembly's (casmech.core.options)
 
 PRESCRIBED = sorted(path.stem for path in MODELS.glob("*.yaml")
                     if re.search(r"^\s+type:\s*(kinematics|inverse_dynamics)\s*$",
@@ -38,7 +41,7 @@ analysis: {type: inverse_dynamics, t_end: 2, output_step: 0.01}
 """
 
 
-def per_row(functions, t_end, step, tolerance=assembly.POSITION_TOLERANCE):
+def per_row(functions, t_end, step, tolerance=TOLERANCE):
     """The per-row loop kinematics ran before the mapped step: (rows, error or None)."""
     q = assembly.assemble_positions(functions)
     q_dot, q_ddot = np.zeros_like(q), np.zeros_like(q)
@@ -120,13 +123,13 @@ def test_function_calls_do_not_grow_with_rows(monkeypatch, mode):
     assert counts[101] == counts[1001] > 0
 
 
-def test_long_grids_in_blocks_give_the_same_rows(monkeypatch):
-    """A grid longer than MAX_SPAN is called in blocks, each starting from the row before it:
-    the same rows, bit for bit, as one call over the grid."""
+def test_long_grids_in_blocks_give_the_same_rows():
+    """A grid longer than solver.max_block is called in blocks, each starting from the row
+    before it: the same rows, bit for bit, as one call over the grid."""
     functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"), "interpreted")
     whole = casmech.analyze(functions, "kinematics", t_end=3.0, output_step=0.01)
-    monkeypatch.setattr(kinematics, "MAX_SPAN", 64)
-    blocks = casmech.analyze(functions, "kinematics", t_end=3.0, output_step=0.01)
+    blocks = casmech.analyze(functions, "kinematics", t_end=3.0, output_step=0.01,
+                             options={"max_block": 64})
     assert len(whole) == len(blocks) == 301 and whole.metadata["per_row_rows"] == 0
     for name in ("times", "q", "q_dot", "q_ddot", "lam"):
         np.testing.assert_array_equal(getattr(blocks, name), getattr(whole, name), err_msg=name)

@@ -40,23 +40,17 @@ def test_fourth_order(chain, name):
     assert 12 < ratio < 20  # measured 16.7 in both formulations
 
 
-def run_on_rk4(model_text, monkeypatch, **kwargs):
-    """A whole dynamics run on the fallback, as after a DAE failure at t0."""
-    init = dynamics._Stepper.__init__
-
-    def on_ode_from_t0(self, *args, **kwargs):
-        init(self, *args, **kwargs)
-        self.on_ode = True
-
-    monkeypatch.setattr(dynamics._Stepper, "__init__", on_ode_from_t0)
+def run_on_rk4(model_text, options=None, **kwargs):
+    """A whole dynamics run on the fallback (solver.fallback.always), as after a DAE failure
+    at t0."""
     functions = casmech.compile(casmech.loads(model_text))
     result = casmech.analyze(functions, "dynamics", formulation=kwargs.pop("formulation", "rp"),
-                             **kwargs)
+                             options={"fallback.always": True, **(options or {})}, **kwargs)
     return result, Table(*casmech.results_table(functions, result))
 
 
 @pytest.mark.parametrize("model", ["flyball_governor.yaml", "bricard.yaml"])
-def test_fallback_agrees_with_the_dae_on_regular_models(model, monkeypatch):
+def test_fallback_agrees_with_the_dae_on_regular_models(model):
     """Off singular poses the fallback is another integrator of the same motion: on a spindle
     driven through angle = omega t with rsda dampers, and on Bricard's linkage (a redundant
     row), run as if the DAE had failed at t0, it agrees with IDAS's index-2 DAE at rtol 1e-10."""
@@ -64,7 +58,7 @@ def test_fallback_agrees_with_the_dae_on_regular_models(model, monkeypatch):
     functions = casmech.compile(casmech.loads(text))
     dae = Table(*casmech.results_table(functions, casmech.analyze(
         functions, "dynamics", t_end=2, rtol=1e-10, atol=1e-12, formulation="rp")))
-    result, rk4 = run_on_rk4(text, monkeypatch, t_end=2, rtol=1e-10, atol=1e-12)
+    result, rk4 = run_on_rk4(text, t_end=2, rtol=1e-10, atol=1e-12)
     assert result.metadata["integrator"] == "projected_rk4"
     assert result.metadata["rk4_stalled_at"] == []  # no singular pose: every estimate converged
     # measured (flyball, bricard): positions 6.6e-11, 4.3e-9 m; velocities 1.4e-9, 9.0e-9;
@@ -78,7 +72,7 @@ def test_fallback_agrees_with_the_dae_on_regular_models(model, monkeypatch):
                                        err_msg=column)
 
 
-def test_error_control_against_idas(monkeypatch):
+def test_error_control_against_idas():
     """Over the chain's first second the positions agree with IDAS (index-2 DAE, rtol 1e-12)
     within what the tolerance allows, tightening rtol 100x cuts the error more than 10x (issue
     3's property), and the constraints hold at every output."""
@@ -88,7 +82,7 @@ def test_error_control_against_idas(monkeypatch):
     columns = [c for c in reference.names if c.split(".")[-1] in ("x", "y", "z")]
     errors = {}
     for rtol in (1e-6, 1e-8):
-        result, table = run_on_rk4(CHAIN, monkeypatch, t_end=1, rtol=rtol, atol=1e-2 * rtol)
+        result, table = run_on_rk4(CHAIN, t_end=1, rtol=rtol, atol=1e-2 * rtol)
         assert result.metadata["rk4_steps"] > 0
         errors[rtol] = max(np.max(np.abs(table[c] - reference[c])) for c in columns)
         assert table["constraint_violation"].max() <= 1e-12  # projected every step
@@ -97,12 +91,11 @@ def test_error_control_against_idas(monkeypatch):
     assert errors[1e-8] * 10 <= errors[1e-6]
 
 
-def test_failure_names_the_interval_and_keeps_the_rows(monkeypatch):
+def test_failure_names_the_interval_and_keeps_the_rows():
     """When no step count meets the tolerance the run stops with exit code 3 naming the output
     interval, and the rows before it are kept."""
-    monkeypatch.setattr(projected_rk4, "MAX_STEPS", 8)
     with pytest.raises(AnalysisError) as failure:
-        run_on_rk4(CHAIN, monkeypatch, t_end=1, rtol=1e-10, atol=1e-12)
+        run_on_rk4(CHAIN, {"fallback.max_steps": 8}, t_end=1, rtol=1e-10, atol=1e-12)
     message = str(failure.value)
     print(f"\n{message}")
     assert "Runge-Kutta steps failed between t = " in message

@@ -8,10 +8,13 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import DynamicsSolver
 from casmech.errors import UsageError
-from casmech.runtime.dynamics import DRIFT_TOLERANCE, initial_step
+from casmech.runtime.dynamics import initial_step
 from tests.conftest import MODELS, Table
 from tests.runtime.reference_data import VALIDATION_MODELS as VALIDATION
+
+DRIFT_TOLERANCE = DynamicsSolver().drift_tolerance  # the default (casmech.core.options)
 
 # Three 1 m, 1 kg bars in a spherical chain, released level (the benchmarks' chain, N = 3).
 CHAIN = """

@@ -26,7 +26,7 @@ The C holds each kernel once; only index tables grow with the model. Default fla
   - otherwise compiled from AUTO_BODIES bodies on, interpreted below: interpreted is ready
     sooner up to 128 bodies, compiled from 256 for r-p dynamics (docs/decisions/mode-auto.md);
   - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
-    joint, no DAE stabilization): its ODE stays interpreted from COMPILED_ODE_BODIES bodies on
+    joint, no DAE stabilization): its ODE stays interpreted from solver.compile.ode_bodies bodies on
     (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
     runs interpreted at every size (a formulation given on the command line is not seen here).
     Later runs of an unchanged model load the cached library.
@@ -51,6 +51,7 @@ from casmech.backends.build import LIBRARY, Toolchain, available, build_librarie
 from casmech.backends.library import compile_functions
 from casmech.backends.load import load as load_build
 from casmech.backends.load import mode_of
+from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.equations.mapped.bundle import mapped_functions
@@ -154,14 +155,19 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     return load_build(directory, ir)
 
 
+DYNAMICS = DynamicsOptions()  # the defaults (core.options)
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
 def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
-    options = model.analysis.options
-    if model.analysis.type != "dynamics" or options.get("formulation", "auto") not in (
-            "auto", "joint") or options.get("stabilization", "ggl") != "ggl":
+    options, written = model.analysis.options, dict(model.analysis.written)
+    if model.analysis.type != "dynamics":
+        return False
+    # (a block of another type's options run as dynamics: the keys its file wrote)
+    formulation, stabilization = (getattr(options, key, written.get(key, getattr(DYNAMICS, key)))
+                                  for key in ("formulation", "stabilization"))
+    if formulation not in ("auto", "joint") or stabilization != DYNAMICS.stabilization:
         return False
     return spanning_tree(ir).is_tree
 

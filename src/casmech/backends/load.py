@@ -37,15 +37,14 @@ def externals(directory: Path) -> dict[str, ca.Function]:
 
 
 def load(directory: Path, ir: ModelIR) -> SystemFunctions:
-    return SystemFunctions(externals(directory), **metadata(ir))
+    return SystemFunctions(externals(directory), **metadata(ir), mode="compiled")
 
 
 def mode_of(functions: SystemFunctions) -> str:
-    """'compiled' when the bundle's functions are loaded from a library, else 'interpreted'
-    (found once per bundle)."""
-    if "mode" not in functions.derived:
-        kinds = {f.class_name() for f in functions.functions.values()}
-        bound = functions.data is not None  # externals with the model data bound (parametric)
-        functions.derived["mode"] = ("compiled" if kinds == {"External"} or bound
-                                     else "interpreted")
-    return functions.derived["mode"]
+    """'compiled' when the bundle's functions are loaded from a library, else 'interpreted':
+    the bundle's own `mode` when its builder set it, else told from its functions."""
+    if functions.mode is not None:
+        return functions.mode
+    kinds = {f.class_name() for f in functions.functions.values()}
+    bound = functions.data is not None  # externals with the model data bound (parametric)
+    return "compiled" if kinds == {"External"} or bound else "interpreted"

@@ -17,7 +17,7 @@ Loading binds the values of this run: every function but the DAE residuals becom
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
 integrator's p. The joint functions are bound to joint_data(d) and kept apart from the system
-functions, in SystemFunctions.derived[LIBRARY_FUNCTIONS] (runtime.joint_dynamics takes them).
+functions, in SystemFunctions.joint_functions (runtime.joint_dynamics takes them).
 """
 
 from __future__ import annotations
@@ -37,7 +37,6 @@ from casmech.core.version import VERSION
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.formulations import dae as dae_residuals
 from casmech.formulations import prescribed, residuals
-from casmech.formulations.joint_system import LIBRARY_FUNCTIONS
 from casmech.formulations.joint_system import build as build_joint_system
 from casmech.formulations.table import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
@@ -153,11 +152,12 @@ def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
     joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
     functions = {name: f if name.startswith("dae_") else bind(f, values)
                  for name, f in loaded.items()}
-    bundle_ = SystemFunctions(functions, **metadata(ir), data=values)
+    bound = None
     if joint:
         joint_data = np.array(joint.pop(JOINT_DATA)(values).full()).ravel()
         dynamics = "joint_dae" if "joint_dae" in joint else "joint_ode"
-        bundle_.derived[LIBRARY_FUNCTIONS] = {  # the Jacobian under casadi's name for it
+        bound = {  # the Jacobian under casadi's name for it
             name: bind(f, joint_data, f"jac_{dynamics}" if name == JOINT_JACOBIAN else None)
             for name, f in joint.items()}
-    return bundle_
+    return SystemFunctions(functions, **metadata(ir), data=values, mode="compiled",
+                           joint_functions=bound)

@@ -23,7 +23,13 @@ for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 from casmech.cli.commands import COMMANDS  # noqa: E402
 from casmech.core.version import VERSION  # noqa: E402
-from casmech.errors import CasmechError, ModelError, Source, UsageError  # noqa: E402
+from casmech.errors import (  # noqa: E402
+    CasmechError,
+    Interrupted,
+    ModelError,
+    Source,
+    UsageError,
+)
 
 DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
 
@@ -50,6 +56,9 @@ def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The command line; `argv` None: this process's own (then a command a signal stopped
+    ends at once, its files written: see _end)."""
+    own = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     parser, module = _parser(argv)
     args = parser.parse_args(argv)
@@ -58,6 +67,9 @@ def main(argv: list[str] | None = None) -> int:
     except ModelError as error:
         print(error.format(), file=sys.stderr)
         return error.exit_code
+    except Interrupted as error:
+        print(f"casmech: {error}", file=sys.stderr)
+        return _end(error.exit_code) if own else error.exit_code
     except CasmechError as error:
         print(f"casmech: {error}", file=sys.stderr)
         return error.exit_code
@@ -67,3 +79,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C in a command that keeps nothing (run: errors.Interrupted)
         print("casmech: interrupted", file=sys.stderr)
         return 130
+
+
+def _end(code: int) -> int:
+    """End the process now with `code`: a command a signal stopped has written its files
+    (closed, or replaced whole), and the interpreter's teardown of the modules it loaded
+    (CasADi, SciPy: a few tenths of a second) would only delay the stop the user asked for."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)

@@ -47,3 +47,25 @@ def overrides(pairs: list[str]) -> dict[str, str]:
             raise UsageError(f"--set expects NAME=VALUE, got '{pair}'")
         result[name.strip()] = value.strip()
     return result
+
+
+def add_options(parser: argparse.ArgumentParser) -> None:
+    """--option KEY=VALUE: an option of the analysis type (docs/analyses.md#options)."""
+    parser.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                        help="an option of the analysis, e.g. max_step=1e-3 or "
+                             "assembly.tolerance=1e-10; a key under solver: may leave out "
+                             "'solver.' (repeatable; docs/analyses.md#options)")
+
+
+def options(pairs: list[str]) -> dict[str, str]:
+    """--option KEY=VALUE pairs as a mapping of texts (checked against the analysis type's
+    options by casmech.analyze; a usage error here for anything not KEY=VALUE)."""
+    result = {}
+    for pair in pairs:
+        key, sep, value = pair.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise UsageError(f"--option expects KEY=VALUE (e.g. max_step=1e-3), got '{pair}'")
+        if key.strip() in result:
+            raise UsageError(f"--option {key.strip()} is given twice")
+        result[key.strip()] = value.strip()
+    return result

@@ -3,8 +3,8 @@
 `direct(args)` completes the arguments of `casmech run MODEL ...` (MODEL required, default
 format and mode). `replayed(args)` turns `casmech run --replay DIR/metadata.json [--out OUT]`
 into the arguments of the run that metadata.json records (io/metadata.py): the same model
-file, overrides, analysis settings, formats, reaction frames and compile mode (the mode that
-ran, for a complete run). OUT defaults to `DIR_replay/` beside DIR.
+file, overrides, analysis settings, formats, reaction frames, compile mode (the mode that
+ran, for a complete run) and `--option`s. OUT defaults to `DIR_replay/` beside DIR.
 
 A metadata file is untrusted input (docs/security.md). Before anything it names is read:
   - it is validated by a schema (commands.replay_record: located errors, never a traceback);
@@ -62,6 +62,10 @@ def replayed(args: argparse.Namespace) -> argparse.Namespace:
         "set": [f"{name}={value}" for name, value in record.overrides.items()],
         "out": args.out or folder.with_name(folder.name + "_replay"),
         **{name: getattr(settings, key) for name, key in SETTINGS.items()},
+        # formulation auto ran with the default stabilization: asking for it explicitly would
+        # mean the r-p DAE (runtime.analyses.analysis_settings)
+        **({"stabilization": None} if settings.formulation == "auto" else {}),
+        "option": list(options.option),
         "format": list(options.format),
         "reactions_frame": options.reactions_frame,
         "mode": record.mode if complete else (options.mode or "auto"),
@@ -86,6 +90,7 @@ def _alone(args: argparse.Namespace) -> None:
     """--replay takes everything from the record: only --out and --allow-dir may be given."""
     given = [f"--{name.replace('_', '-')}" for name in RECORDED if getattr(args, name) is not None]
     given += ["--set"] if args.set else []
+    given += ["--option"] if args.option else []
     given += [f"the model file {args.model}"] if args.model is not None else []
     if given:
         raise UsageError(f"--replay runs what {args.replay} records; it takes no "

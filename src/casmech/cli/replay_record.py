@@ -62,6 +62,7 @@ class Options(_Open):
     format: list[Literal["csv", "hdf5"]] = ["csv"]
     reactions_frame: Any = None  # a frame's name, or joint -> frame
     mode: Literal["interpreted", "compiled", "auto"] | None = None
+    option: list[StrictStr] = []  # the --option KEY=VALUE texts
 
     @field_validator("reactions_frame")
     @classmethod

@@ -21,6 +21,9 @@ DIR are removed and metadata.json says `status: running`, so that a run killed o
   ends the run with exit 4 naming the path and the cause, the rows written before kept and
   metadata.json (where it can still be written) saying `status: failed`.
 
+--option KEY=VALUE (repeatable) sets an option of the analysis type (casmech.core.options;
+docs/analyses.md#options): `--option max_step=1e-3`, `--option assembly.tolerance=1e-10`.
+
 --replay DIR/metadata.json runs a recorded run again (cli/replay.py): the same model file
 (every file it read checked against its recorded sha256), overrides, settings and options.
 """
@@ -29,17 +32,18 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import signal
 import sys
 import time
 from pathlib import Path
 
 from casmech import api
-from casmech.cli.common import add_overrides, add_span, overrides
+from casmech.cli.common import add_options, add_overrides, add_span, options, overrides
 from casmech.errors import AnalysisError, CasmechError, Interrupted
 from casmech.io import events as events_output
 from casmech.io.csv import CsvRows
 from casmech.io.hdf5 import Hdf5Rows, h5py
-from casmech.io.metadata import resolved_settings, rewrite_json, run_metadata, write_json
+from casmech.io.metadata import analysis_record, rewrite_json, run_metadata, write_json
 from casmech.io.progress import progress_bar
 from casmech.io.streaming import ResultsWriter, WriteError, writing
 from casmech.runtime import events, interrupts, reaction_frames, singular_poses
@@ -86,6 +90,7 @@ def add_arguments(parser) -> None:
                         help="CVODES's method for joint coordinates on a tree (default: the "
                              "model's, else auto: bdf when the ODE is stiff at t0)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
+    add_options(parser)
     parser.add_argument("--reactions-frame", choices=list(reaction_frames.FRAMES),
                         help="the frame of every joint's reaction columns, replacing the "
                              "joints' `reactions: {frame: ...}` (default: theirs, else global)")
@@ -129,18 +134,18 @@ def _run(args) -> int:
     functions = api.compile(model, args.mode)
     timings["compile"] = time.perf_counter() - clock
     interrupts.check()  # a signal during a C compiler's run ends it as a failure
-    settings = resolved_settings(functions.ir.analysis, type=args.analysis, t_end=args.t_end,
-                                 output_step=args.output_step, rtol=args.rtol, atol=args.atol,
-                                 formulation=args.formulation,
-                                 stabilization=args.stabilization, method=args.method)
-    options = {"mode": args.mode, "format": list(args.format),
-               "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
+    asked = options(args.option)
+    checked = api.analysis_settings(  # a usage error before an earlier run's files go
+        functions, args.analysis, args.t_end, args.output_step, args.rtol, args.atol,
+        args.formulation, args.stabilization, args.method, asked)
+    settings = analysis_record(checked)
+    recorded = {"mode": args.mode, "format": list(args.format),
+                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     if args.reactions_frame:  # recorded when given, for --replay
-        options["reactions_frame"] = args.reactions_frame
-    run = (model, given, settings, timings, options)
-    api.analysis_settings(functions, args.analysis, args.t_end, args.output_step, args.rtol,
-                          args.atol, args.formulation, args.stabilization,
-                          args.method)  # a usage error before an earlier run's files go
+        recorded["reactions_frame"] = args.reactions_frame
+    if args.option:
+        recorded["option"] = list(args.option)
+    run = (model, given, settings, timings, recorded)
     writer = _start(args, out, functions, run)
     clock = time.perf_counter()
     try:
@@ -148,9 +153,10 @@ def _run(args) -> int:
             with progress_bar(settings["t_end"], quiet=args.quiet) as callback:
                 result = api.analyze(functions, args.analysis, args.t_end,
                                      args.output_step, rtol=args.rtol, atol=args.atol,
-                                         formulation=args.formulation,
-                                         progress=writer.watching(interrupts.watch(callback)),
-                                         stabilization=args.stabilization, method=args.method)
+                                     formulation=args.formulation,
+                                     progress=writer.watching(_rows(callback)),
+                                     stabilization=args.stabilization, method=args.method,
+                                     options=asked)
             timings["analysis"] = time.perf_counter() - clock
             with interrupts.saving():
                 writer.finish(result)  # the last rows (NonFinite: the rows before one)
@@ -171,11 +177,11 @@ def _run(args) -> int:
         with interrupts.saving():
             writer.discard()
             if "csv" in args.format:
-                model, given, settings, timings, options = run
+                model, given, settings, timings, recorded = run
                 with contextlib.suppress(OSError):
                     write_json(out / "metadata.json", run_metadata(
                         model, given, settings, timings, {}, 0, str(error), "failed",
-                        options=options))
+                        options=recorded))
         raise
     if not args.quiet:
         _report(args, result, timings, paths)
@@ -201,6 +207,9 @@ def _report(args, result, timings, paths) -> None:
               f"{meta['formulation_fallback']}", file=sys.stderr)
     for line in singular_pose_warnings(meta.get("singular_poses") or (), args.verbose):
         print(f"warning: {line}", file=sys.stderr)
+    if interrupts.pending() is not None:  # it came after the last row: nothing was cut short
+        name = signal.Signals(interrupts.pending()).name
+        print(f"casmech: {name} came after the last row; the run is complete", file=sys.stderr)
 
 
 def singular_pose_warnings(poses, every: bool = False) -> list[str]:
@@ -225,6 +234,17 @@ def singular_pose_warnings(poses, every: bool = False) -> list[str]:
                      f"{closest['smallest_singular_value']:.2e}; --verbose lists each): "
                      f"{joints}")
     return lines
+
+
+def _rows(callback):
+    """The analysis' row callback: the progress bar's, or one that does nothing (with a
+    callback, dynamics integrates the grid in chunks, so an interrupt keeps the rows before
+    it: runtime.driver)."""
+    def on_row(t: float) -> None:
+        if callback is not None:
+            callback(t)
+
+    return on_row
 
 
 def _start(args, out: Path, functions, run) -> ResultsWriter:

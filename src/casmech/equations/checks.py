@@ -7,12 +7,13 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import LinearAlgebra
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import BodyName
 from casmech.model.ir import RowInfo
 from casmech.numerics import numeric_qr
 
-RANK_TOLERANCE = 1e-9  # relative to the largest singular value of Phi_q
+LIMITS = LinearAlgebra()  # the defaults (core.options)
 
 
 @dataclass(frozen=True)
@@ -54,22 +55,23 @@ class Structure:
         return lines
 
 
-def independent_rows(matrix, tolerance: float = RANK_TOLERANCE) -> list[bool]:
-    """Greedy in row order: is row k farther than tolerance * max(|matrix|_2, 1) from the span
-    of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the work follows
-    the factors' fill, not rows x columns)."""
+def independent_rows(matrix, limits: LinearAlgebra = LIMITS) -> list[bool]:
+    """Greedy in row order: is row k farther than limits.rank_tolerance * max(|matrix|_2, 1)
+    from the span of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the
+    work follows the factors' fill, not rows x columns)."""
     matrix = ca.DM(matrix)
-    scale = max(numeric_qr.norm2(matrix), 1.0)
-    return numeric_qr.independent_rows(matrix, tolerance, scale)
+    scale = max(numeric_qr.norm2(matrix, limits=limits), 1.0)
+    return numeric_qr.independent_rows(matrix, limits.rank_tolerance, scale, limits)
 
 
-def structure(functions: SystemFunctions, t: float, q: np.ndarray) -> Structure:
+def structure(functions: SystemFunctions, t: float, q: np.ndarray,
+              limits: LinearAlgebra = LIMITS) -> Structure:
     """Rank and redundancy. The normalization rows are scanned first (they are never
     redundant), then the joint rows in file order, so a redundancy is blamed on the later joint."""
     phi_q = functions["phi_q"](t, q)
     n_joint_rows = functions.n_rows - functions.n_bodies
     order = _scan_order(functions)
-    keep = dict(zip(order, independent_rows(phi_q[order, :]), strict=True))
+    keep = dict(zip(order, independent_rows(phi_q[order, :], limits), strict=True))
     redundant = tuple(row for k, row in enumerate(functions.rows) if not keep[k])
     independent = tuple(k for k in range(functions.n_rows) if keep[k])
     return Structure(functions.n_coordinates, functions.n_rows, len(independent), redundant,
@@ -93,17 +95,15 @@ def worst_joints(functions: SystemFunctions, residual: np.ndarray, count: int = 
     return [(name, source, value) for name, (source, value) in ranked[:count]]
 
 
-DENSE_LIMIT = 250_000  # entries of Phi_q up to which dependent_joints uses a dense SVD
-
-
-def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3):
+def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3,
+                     limits: LinearAlgebra = LIMITS):
     """Joints whose rows became dependent: a unit combination u of Phi_q's rows with
-    Phi_q^T u ~ 0 weighs each row by its part in the dependency. Up to DENSE_LIMIT entries u
-    is the left singular vector of the smallest singular value; above, the row (in
-    structure's scan order) closest to the span of the rows before it, combined with them by
-    least squares (sparse: numeric_qr)."""
+    Phi_q^T u ~ 0 weighs each row by its part in the dependency. Up to
+    limits.dense_svd_entries entries u is the left singular vector of the smallest singular
+    value; above, the row (in structure's scan order) closest to the span of the rows before
+    it, combined with them by least squares (sparse: numeric_qr)."""
     rows, columns = phi_q.shape
-    if rows * columns <= DENSE_LIMIT:
+    if rows * columns <= limits.dense_svd_entries:
         u, s, _ = np.linalg.svd(np.array(ca.DM(phi_q)) if isinstance(phi_q, ca.DM) else phi_q)
         return worst_joints(functions, np.abs(u[:, s.size - 1]), count)
     order = _scan_order(functions)[:columns]

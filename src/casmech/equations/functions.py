@@ -28,20 +28,25 @@ class JointMeta:
     source: object = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SystemFunctions:
-    """casadi.Functions by name plus what analyses need to know about the model."""
+    """casadi.Functions by name plus what analyses need to know about the model. Immutable:
+    what analyses derive from it and reuse lives in a runtime.workspace.Workspace. Compared
+    and hashed by identity (a workspace is associated with one bundle)."""
 
     functions: Mapping[str, ca.Function]  # a dict, or an interpreted build's LazyFunctions
     body_names: tuple[str, ...]
     joints: tuple[JointMeta, ...]
     rows: tuple[RowInfo, ...]
     ir: ModelIR = field(repr=False)
-    # what analyses derive from the bundle once and reuse (e.g. the joint formulation's system)
-    derived: dict = field(default_factory=dict, repr=False, compare=False)
     # a compiled parametric bundle (codegen.parametric): the model data `ir` was lowered to,
     # bound in every function but the DAE residuals, which take it after their own p
-    data: np.ndarray | None = field(default=None, repr=False, compare=False)
+    data: np.ndarray | None = field(default=None, repr=False)
+    # "interpreted" or "compiled" when its builder knows (backends.load.mode_of tells otherwise)
+    mode: str | None = None
+    # a parametric library's joint-formulation functions bound to `data` (codegen.parametric;
+    # runtime.joint_dynamics takes them), by name
+    joint_functions: Mapping[str, ca.Function] | None = field(default=None, repr=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
@@ -185,9 +190,8 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
 
     joints = tuple(JointMeta(j.name, j.type, j.rows, body_name(j.body_i), body_name(j.body_j),
                              j.source) for j in ir.joints)
-    bundle = SystemFunctions(LazyFunctions(groups), names, joints, tuple(ir.row_info()), ir)
-    bundle.derived["mode"] = "interpreted"  # (codegen.mode_of without building every function)
-    return bundle
+    return SystemFunctions(LazyFunctions(groups), names, joints, tuple(ir.row_info()), ir,
+                           mode="interpreted")
 
 
 class _Shared:

@@ -150,7 +150,7 @@ def notes(model: ResolvedModel) -> tuple[str, ...]:
                      "dynamics (in joint coordinates)")
     if model.analysis.events:
         found.append("the model's events: are not in the FMU (it has no event indicators)")
-    formulation = model.analysis.options.get("formulation", "auto")
+    formulation = getattr(model.analysis.options, "formulation", "auto")
     if formulation in ("rp", "romega"):
         found.append(f"the model asks for formulation {formulation}; the FMU integrates the "
                      "joint-coordinate ODE (the same motion)")

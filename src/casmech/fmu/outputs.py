@@ -1,11 +1,11 @@
 """The FMU's outputs: the results columns of the results contract (docs/format.md), as one
 CasADi expression of the state.
 
-The row is runtime.results.row_function's (the joint states and `outputs:` last) over the bundle whose functions take the model data
-[d; u] last (equations.functions over fmu.model's IR), with each joint's reaction columns in
-the frame its `reactions:` names and its torque about its reaction point
-(runtime.reaction_frames, here in CasADi on the row's q). The column `t` is FMI's time and is
-not an output.
+The row is runtime.results.row_function's (the joint states and `outputs:` last) over the
+bundle whose functions take the model data [d; u] last (equations.functions over fmu.model's
+IR), with each joint's reaction columns in the frame its `reactions:` names and its torque
+about its reaction point (runtime.reaction_frames, here in CasADi on the row's q). The
+column `t` is FMI's time and is not an output.
 """
 
 from __future__ import annotations

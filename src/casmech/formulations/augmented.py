@@ -18,8 +18,9 @@ Each iterate is computed as a correction, v_dot_k = v_dot_k-1 + (M + a P^T P)^-1
 directly, v_dot was 4e-8 off the saddle-point solution on tests/runtime's chain; as
 corrections, 1e-16 (tests/compiler/test_augmented.py).
 
-The penalty a is an input: the runtime scales it to the model (PENALTY times mass over
-constraint-gradient size), so no user constant is involved. `projection` takes the same
+The penalty a is an input: the runtime scales it to the model (core.options.Fallback.penalty
+times mass over constraint-gradient size), so no user constant is involved; the iteration
+counts are the Fallback options' (fixed in the Function built). `projection` takes the same
 a-damped, mass-orthogonal steps back onto the position and velocity constraints: the one
 projection of casmech (runtime.projected_rk4 takes one after every Runge-Kutta step,
 runtime.assembly.project calls it until |Phi| is at its tolerance).
@@ -32,17 +33,18 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.core.options import Fallback
 from casmech.formulations.table import FORMULATIONS
 
-ROW_SCALING = True
-ITERATIONS = 6  # see PENALTY
+ROW_SCALING = True  # rows of P scaled to unit length (the penalty is then relative to them)
 LINEAR_SOLVER = "ldl"  # M + a P^T P is symmetric positive definite
-PENALTY = 1e8  # a relative to max(diag M) / max(diag P^T P); see runtime.dynamics
-PROJECTION_ITERATIONS = 2  # see projection
+DEFAULT = Fallback()  # the defaults (core.options)
 
 
-def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
-    """(t, q, v, penalty) -> (v_dot, lam), as an MX graph with sparse LDL solves."""
+def accelerations(functions: dict[str, ca.Function], name: str,
+                  settings: Fallback = DEFAULT) -> ca.Function:
+    """(t, q, v, penalty) -> (v_dot, lam), as an MX graph with sparse LDL solves
+    (settings.iterations iterations)."""
     form = FORMULATIONS[name]
     mass = functions[form.mass]
     t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
@@ -54,7 +56,7 @@ def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
         p, gamma = p * ca.repmat(scale, 1, p.size2()), gamma * scale
     lhs = m + penalty * p.T @ p
     lam, v_dot = ca.MX.zeros(p.size1()), ca.MX.zeros(v.size1())
-    for _ in range(ITERATIONS):
+    for _ in range(settings.iterations):
         residual = f - m @ v_dot - p.T @ lam - penalty * p.T @ (p @ v_dot - gamma)
         v_dot = v_dot + ca.solve(lhs, residual, LINEAR_SOLVER)
         lam = lam + penalty * (p @ v_dot - gamma)
@@ -64,13 +66,14 @@ def accelerations(functions: dict[str, ca.Function], name: str) -> ca.Function:
                        ["t", "q", "v", "penalty"], ["v_dot", "lam"])
 
 
-def projection(functions: dict[str, ca.Function], name: str) -> ca.Function:
+def projection(functions: dict[str, ca.Function], name: str,
+               settings: Fallback = DEFAULT) -> ca.Function:
     """(t, q, v, penalty) -> (q, v) moved back onto Phi = 0 and then onto P v = nu, by
     mass-orthogonal steps (M / a + P^T P) dx = -P^T r (positions in r-p coordinates,
-    velocities in the formulation's), as a sparse MX graph. A fixed
-    PROJECTION_ITERATIONS Gauss-Newton steps for the positions: a Runge-Kutta step's drift was
-    at most 4.7e-12 on A02 N = 2 (2.5 ms steps over its first second, a flat pose included)
-    and 4.7e-16 after the projection; the caller checks |Phi| at the outputs all the same.
+    velocities in the formulation's), as a sparse MX graph. A fixed number of Gauss-Newton
+    steps for the positions (settings.projection_iterations; two take a Runge-Kutta step's
+    drift on A02 N = 2, at most 4.7e-12 over its first second with 2.5 ms steps, to 4.7e-16);
+    the caller checks |Phi| at the outputs all the same.
     Near a singular configuration the a-damping keeps a step from jumping along the nearly
     lost direction, i.e. onto another branch."""
     form = FORMULATIONS[name]
@@ -78,7 +81,7 @@ def projection(functions: dict[str, ca.Function], name: str) -> ca.Function:
     t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
     v, penalty = ca.MX.sym("v", functions[form.mass].size1_out(0)), ca.MX.sym("penalty")
     q_new, m = q, mass(q) / penalty
-    for _ in range(PROJECTION_ITERATIONS):
+    for _ in range(settings.projection_iterations):
         p = jacobian(t, q_new)
         q_new = q_new - ca.solve(m + p.T @ p, p.T @ functions["phi"](t, q_new), LINEAR_SOLVER)
     p = functions[form.jacobian](t, q_new)

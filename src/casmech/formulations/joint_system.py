@@ -44,10 +44,6 @@ from casmech.formulations.tree import Tree
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.numerics import lazy_jacobian
 
-# SystemFunctions.derived's key of a parametric library's joint functions, bound to the
-# bundle's values (codegen.parametric writes them, runtime.joint_dynamics reads them)
-LIBRARY_FUNCTIONS = "joint_functions"
-
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
 ROW_NORM_FLOOR = 1e-9

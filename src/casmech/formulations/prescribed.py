@@ -14,8 +14,9 @@ positions: Phi_q q_dot = nu, Phi_q q_ddot = gamma, and the minimum-norm
 Phi_q^T lam = Q - M q_ddot. Least squares and
 minimum norm are what the per-row code computes with numpy.linalg.lstsq, so redundant rows
 (Bricard) give the same reactions. The checks tell the runtime whether the row converged
-(max |Phi| <= assembly.POSITION_TOLERANCE) and whether Phi_q may have lost rank (a small pivot
-ratio); such rows are left to the per-row code, which reports the failure with its joints.
+(max |Phi| within the assembly's tolerance, core.options.Assembly) and whether Phi_q may have
+lost rank (a small pivot ratio); such rows are left to the per-row code, which reports the
+failure with its joints.
 
 For a fully driven mechanism Phi_q alone fixes q_ddot, so the step solves with Phi_q's QR
 rather than numerics.kkt.saddle's [M Phi_q^T; Phi_q 0] (twice the unknowns): one

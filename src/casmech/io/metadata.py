@@ -21,22 +21,41 @@ from pathlib import Path
 import casadi
 import numpy as np
 
+from casmech.core.option_values import values
+from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.schema.resolved import Analysis, ResolvedModel
 
 SETTINGS = ("type", "t_end", "output_step", "rtol", "atol")
+DYNAMICS = ("formulation", "stabilization", "method")  # recorded for every type
 
 
 def resolved_settings(analysis: Analysis, **given) -> dict:
     """The analysis settings a run uses: the model's `analysis:` block with the caller's
-    overrides (None: not given), as casmech.analyze resolves them."""
+    overrides (None: not given), without the checks of casmech.analyze (analysis_record
+    describes a checked one)."""
     settings = replace(analysis, **{k: v for k, v in given.items()
                                     if k in SETTINGS and v is not None})
-    formulation = given.get("formulation") or settings.options.get("formulation", "auto")
-    stabilization = given.get("stabilization") or settings.options.get("stabilization", "ggl")
-    method = given.get("method") or settings.options.get("method", "auto")
-    return {**{name: getattr(settings, name) for name in SETTINGS}, "formulation": formulation,
-            "stabilization": stabilization, "method": method}
+    if settings.type != analysis.type:  # the options of that type the file wrote
+        from casmech.runtime.analyses import options_of
+
+        settings = replace(settings, options=options_of(settings.type, settings.written))
+    record = analysis_record(settings)
+    return {**record, **{k: given[k] for k in DYNAMICS if given.get(k)}}
+
+
+def analysis_record(analysis: Analysis) -> dict:
+    """metadata.json's `analysis`: type, t_end, output_step, rtol, atol; formulation,
+    stabilization and method (of a type without them: the file's, else their defaults);
+    modal's at and inputs; and `solver`, every solver option's value (core.options)."""
+    record = {name: getattr(analysis, name) for name in SETTINGS}
+    written, defaults = dict(analysis.written), DynamicsOptions()
+    for key in DYNAMICS:
+        record[key] = getattr(analysis.options, key, written.get(key, getattr(defaults, key)))
+    options = values(analysis.options)
+    record.update({key: options[key] for key in ("at", "inputs") if key in options})
+    record["solver"] = options["solver"]
+    return record
 
 
 def sha256(text: str) -> str:

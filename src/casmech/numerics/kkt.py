@@ -28,9 +28,10 @@ from __future__ import annotations
 
 import casadi as ca
 
-ROOT_TOLERANCE = 1e-14  # max |KKT residual| the rootfinder's Newton iterates to
-ROOT_ITERATIONS = 20  # Newton iterations from the least-squares start (2-4 are typical)
+from casmech.core.options import Assembly
+
 SADDLE_SOLVER = "csparse"  # sparse LU with partial pivoting (the matrix is indefinite)
+DEFAULT = Assembly()  # the rootfinder's tolerance and iterations (core.options)
 
 
 def _symbols(*functions: ca.Function):
@@ -39,11 +40,12 @@ def _symbols(*functions: ca.Function):
 
 
 def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
-                  name: str = "closest_point") -> ca.Function:
+                  name: str = "closest_point", settings: Assembly = DEFAULT) -> ca.Function:
     """(q_guess, t, q_ref[, theta]) -> (q, lam): the root of the KKT conditions (module
-    docstring) by CasADi's Newton rootfinder from (q_guess, lam = 0). phi and phi_q take
-    (t, q) or (t, q, theta); theta becomes the last input then. A root not reached within
-    ROOT_ITERATIONS is returned as the last iterate (no exception): callers check |Phi|."""
+    docstring) by CasADi's Newton rootfinder from (q_guess, lam = 0), to
+    settings.root_tolerance in at most settings.root_iterations. phi and phi_q take (t, q)
+    or (t, q, theta); theta becomes the last input then. A root not reached is returned as
+    the last iterate (no exception): callers check |Phi|."""
     rows = list(rows)
     n = phi_q.size2_out(0)
     n_theta = phi.size1_in(2) if phi.n_in() > 2 else None
@@ -56,7 +58,8 @@ def closest_point(phi: ca.Function, phi_q: ca.Function, rows,
     p = ca.vertcat(t, q_ref, *theta)
     kkt = ca.Function(f"{name}_kkt", [x, p], [residual])
     root = ca.rootfinder(f"{name}_root", "newton", kkt, {
-        "abstol": ROOT_TOLERANCE, "max_iter": ROOT_ITERATIONS, "error_on_fail": False})
+        "abstol": settings.root_tolerance, "max_iter": settings.root_iterations,
+        "error_on_fail": False})
     guess, t_in, ref_in = ca.MX.sym("q_guess", n), ca.MX.sym("t"), ca.MX.sym("q_ref", n)
     theta_in = [ca.MX.sym("theta", n_theta)] if n_theta is not None else []
     solution = root(ca.vertcat(guess, ca.MX.zeros(len(rows))),

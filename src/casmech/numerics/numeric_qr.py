@@ -17,6 +17,10 @@ checks.structure scans, R grows ~N and the Householder vectors ~N^2 with a small
 
 `order=False` keeps a's column order (k-th diagonal = distance of column k from the span of
 the columns before it, while those are independent); the default reorders for fill.
+
+Small matrices go to LAPACK instead, up to the sizes of a core.options.LinearAlgebra (where
+LAPACK beats the factorization here, one Python step per nonzero of R; the defaults are where
+the two cost the same on the benchmark chains: docs/decisions/sparse-rank-and-qr.md).
 """
 
 from __future__ import annotations
@@ -24,7 +28,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import LinearAlgebra
+
 EPS = np.finfo(float).eps
+LIMITS = LinearAlgebra()  # the defaults (core.options)
 
 
 class NumericQR:
@@ -128,14 +135,15 @@ def _house(x: np.ndarray, beta: np.ndarray, k: int) -> float:
     return s * scale
 
 
-def norm2(a: ca.DM, iterations: int = 200, tolerance: float = 1e-10) -> float:
+def norm2(a: ca.DM, iterations: int = 200, tolerance: float = 1e-10,
+          limits: LinearAlgebra = LIMITS) -> float:
     """The largest singular value of a sparse a: by a dense SVD when a is small, else by power
     iteration on a^T a from ones (from below; to `tolerance` relative for a well separated one)
     with NumPy products over a's nonzeros."""
     if a.nnz() == 0:
         return 0.0
     m, n = a.size1(), a.size2()
-    if m * n <= DENSE_NORM_ENTRIES:
+    if m * n <= limits.dense_norm_entries:
         return float(np.linalg.norm(np.array(a), 2))
     rows, cols = (np.asarray(index) for index in a.sparsity().get_triplet())
     values = np.array(a.nonzeros())
@@ -152,7 +160,8 @@ def norm2(a: ca.DM, iterations: int = 200, tolerance: float = 1e-10) -> float:
     return float(estimate)
 
 
-def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
+def independent_rows(a: ca.DM, tolerance: float, scale: float,
+                     limits: LinearAlgebra = LIMITS) -> list[bool]:
     """Greedy in row order: is row k of a farther than tolerance * scale from the span of the
     rows kept before it? QR of a^T in row order (no reordering): |R_kk| is that distance while
     every earlier row is independent; at the first row that is not, the row is dropped and the
@@ -164,7 +173,7 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
         candidates = kept[:a.size2()]  # a^T must not be wider than tall
         if not candidates:  # no coordinates: every row is zero
             break
-        diagonal = _distances(a[candidates, :].T)
+        diagonal = _distances(a[candidates, :].T, limits)
         small = [k for k in range(start, len(candidates)) if not diagonal[k] > tolerance * scale]
         if small:  # drop the first dependent row, factor the others again
             keep[kept.pop(small[0])] = False
@@ -176,38 +185,28 @@ def independent_rows(a: ca.DM, tolerance: float, scale: float) -> list[bool]:
     return keep
 
 
-def _distances(a: ca.DM) -> np.ndarray:
-    """|R_kk| of the QR of a in its own column order: by LAPACK up to DENSE_QR_ENTRIES."""
-    if a.numel() <= DENSE_QR_ENTRIES:
+def _distances(a: ca.DM, limits: LinearAlgebra) -> np.ndarray:
+    """|R_kk| of the QR of a in its own column order: by LAPACK up to dense_qr_entries."""
+    if a.numel() <= limits.dense_qr_entries:
         return np.abs(np.diag(np.linalg.qr(np.array(a), mode="r")))
     return NumericQR(a, order=False).diagonal()
 
 
-FULL_RANK = 1e-12  # min |R_kk| / max |R_kk| above which a factor is taken as full rank
-# Matrices with at most this many entries (m n) are solved dense by NumPy, where LAPACK beats
-# the factorization here (one Python step per nonzero of R); the limits are where the two
-# cost the same on the benchmark chains (docs/decisions/sparse-rank-and-qr.md).
-DENSE_ENTRIES = 20_000  # lstsq
-DENSE_NORM_ENTRIES = 20_000  # norm2: the SVD up to here, like the power iteration above
-# independent_rows' QR of Phi_q^T (R only) and lstsq's of a full-rank matrix: LAPACK's QR up
-# to here, faster than the sparse factorization here on every chain measured
-DENSE_QR_ENTRIES = 500_000
-
-
-def _dense_full_rank(a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+def _dense_full_rank(a: np.ndarray, b: np.ndarray, full_rank: float) -> np.ndarray | None:
     """lstsq's answer by LAPACK's QR where a has full rank (None otherwise): of a^T when a is
     wide (the minimum-norm solution), of a when tall (least squares)."""
     wide = a.shape[0] <= a.shape[1]
     q, r = np.linalg.qr(a.T if wide else a)
     diagonal = np.abs(np.diag(r))
-    if not diagonal.min() > FULL_RANK * diagonal.max():
+    if not diagonal.min() > full_rank * diagonal.max():
         return None
     return q @ np.linalg.solve(r.T, b) if wide else np.linalg.solve(r, q.T @ b)
 
 
-def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:
-    """numpy.linalg.lstsq(a, b)[0]: by NumPy's SVD up to DENSE_ENTRIES, its QR up to
-    DENSE_QR_ENTRIES where a has full rank; otherwise, for a sparse a: full row
+def lstsq(a: ca.DM, b, tolerance: float = 1e-9,
+          limits: LinearAlgebra = LIMITS) -> np.ndarray:
+    """numpy.linalg.lstsq(a, b)[0]: by NumPy's SVD up to dense_entries, its QR up to
+    dense_qr_entries where a has full rank (`limits`); otherwise, for a sparse a: full row
     rank: the minimum-norm solution (QR of a^T); full column rank: least squares (QR of a).
     Otherwise the rows D within tolerance * |a|_2 of the span of earlier rows I are taken as
     a_D = C a_I exactly (C by least squares); then a x = b in least squares is a_I x = y with
@@ -217,17 +216,17 @@ def lstsq(a: ca.DM, b, tolerance: float = 1e-9) -> np.ndarray:
     b = np.ravel(b).astype(float)
     if m == 0 or n == 0:
         return np.zeros(n)
-    if a.numel() <= DENSE_ENTRIES:
+    if a.numel() <= limits.dense_entries:
         return np.linalg.lstsq(np.array(a), b, rcond=None)[0]
-    if a.numel() <= DENSE_QR_ENTRIES:
-        x = _dense_full_rank(np.array(a), b)
+    if a.numel() <= limits.dense_qr_entries:
+        x = _dense_full_rank(np.array(a), b, limits.full_rank)
         if x is not None:
             return x
     qr = NumericQR(a.T) if m <= n else NumericQR(a)
     diagonal = qr.diagonal()
-    if diagonal.min() > FULL_RANK * diagonal.max():
+    if diagonal.min() > limits.full_rank * diagonal.max():
         return qr.solve_transposed(b) if m <= n else qr.solve(b)
-    keep = np.array(independent_rows(a, tolerance, max(norm2(a), 1.0)))
+    keep = np.array(independent_rows(a, tolerance, max(norm2(a, limits=limits), 1.0), limits))
     kept, dropped = np.flatnonzero(keep), np.flatnonzero(~keep)
     if kept.size == 0:
         return np.zeros(n)

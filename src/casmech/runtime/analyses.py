@@ -1,5 +1,10 @@
-"""Running an analysis of a system: the analyses by type, the settings a run uses (the
-model's `analysis:` block with the caller's overrides, checked), and the structure check.
+"""Running an analysis of a system: the analyses by type, the settings a run uses (the model's
+`analysis:` block with the caller's overrides and options, checked), and the structure check.
+
+A run gets its typed options (core.options, one dataclass per analysis type), a workspace
+(runtime.workspace: what earlier runs on the same bundle built; by default the bundle's own)
+and a cancellation token (runtime.cancel: by default the one a `trap()` of runtime.interrupts
+installed, else a new one that Ctrl-C cancels during the run).
 
 casmech.api re-exports `analyze`, `analysis_settings` and `check` as the public API.
 """
@@ -8,47 +13,54 @@ from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Callable, Sequence
-from dataclasses import replace
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import fields, replace
 
+from casmech.core import option_values
+from casmech.core.options import FORMULATIONS, METHODS, OPTIONS, STABILIZATIONS
 from casmech.equations.checks import Structure, structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted, UsageError
-from casmech.formulations import dae
-from casmech.formulations.table import FORMULATIONS
-from casmech.runtime import assembly, auto_formulation, solver_messages
+from casmech.runtime import assembly, auto_formulation, interrupts, solver_messages
+from casmech.runtime.cancel import CancelToken, current
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
-from casmech.runtime.joint_dynamics import METHODS, run_joint_dynamics, tree_of
+from casmech.runtime.joint_dynamics import run_joint_dynamics, tree_of
 from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.results import Result, column_names
+from casmech.runtime.workspace import Workspace, of
 from casmech.schema import limits
 from casmech.schema.resolved import Analysis
 
-# dynamics options a caller may override -> their choices
-DYNAMICS_OPTIONS = {"formulation": (*FORMULATIONS, "joint", "auto"),
-                    "stabilization": dae.STABILIZATIONS, "method": ("auto", *METHODS)}
+# dynamics options a caller may override by name (casmech run's flags) -> their choices
+DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS,
+                    "method": METHODS}
 
 
-def _dynamics(f: SystemFunctions, s: Analysis, progress, extra_events=()) -> Result:
+def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
+              extra_events=()) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
     r-omega DAE (runtime.dynamics); auto: runtime.auto_formulation, which also examines a
     mechanism with loops for singular poses."""
+    options = s.options
+    solver = options.solver
+
     def joint() -> Result:
         return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
-                                  progress=progress, method=s.options.get("method", "auto"),
-                                  extra_events=extra_events)
+                                  progress=progress, method=options.method,
+                                  extra_events=extra_events, settings=solver,
+                                  workspace=workspace)
 
     def other(formulation: str) -> Result:
         return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
                             formulation=formulation, progress=progress,
-                            stabilization=stabilization, extra_events=extra_events)
+                            stabilization=options.stabilization, extra_events=extra_events,
+                            settings=solver, workspace=workspace)
 
-    stabilization = s.options.get("stabilization", "ggl")
     rows = len(output_times(0.0, s.t_end, s.output_step))
-    return auto_formulation.run(f, tree_of(f), s.options.get("formulation", "auto"), rows,
-                                joint, other)
+    return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows, joint,
+                                other, solver, workspace)
 
 
 def _runtime(name: str):
@@ -56,17 +68,30 @@ def _runtime(name: str):
     return importlib.import_module(f"casmech.runtime.{name}")
 
 
-# analysis type -> run(functions, settings); settings is the model's `analysis:` block with the
-# caller's overrides applied.
-ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None], Result]] = {
-    "kinematics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
-                                                        progress=p),
-    "inverse_dynamics": lambda f, s, p: run_prescribed_motion(f, s.t_end, s.output_step, s.type,
-                                                              progress=p),
-    "assembly": lambda f, s, p: run_assembly(f, progress=p),
+def _prescribed(f: SystemFunctions, s: Analysis, progress, workspace: Workspace) -> Result:
+    return run_prescribed_motion(f, s.t_end, s.output_step, s.type, progress=progress,
+                                 settings=s.options.solver, workspace=workspace)
+
+
+def _modal(f: SystemFunctions, s: Analysis, progress, workspace: Workspace) -> Result:
+    def dynamics(functions, settings, on_row):
+        return _dynamics(functions, settings, on_row, workspace)
+
+    return _runtime("modal").run_modal(f, s, progress=progress, dynamics=dynamics,
+                                       workspace=workspace)
+
+
+# analysis type -> run(functions, settings, progress, workspace); settings is the model's
+# `analysis:` block with the caller's overrides applied, its options typed for the type.
+ANALYSES: dict[str, Callable[[SystemFunctions, Analysis, Callable | None, Workspace], Result]] = {
+    "kinematics": _prescribed,
+    "inverse_dynamics": _prescribed,
+    "assembly": lambda f, s, p, w: run_assembly(f, progress=p,
+                                                settings=s.options.solver.assembly, workspace=w),
     "dynamics": _dynamics,
-    "statics": lambda f, s, p: _runtime("statics").run_statics(f, progress=p),
-    "modal": lambda f, s, p: _runtime("modal").run_modal(f, s, progress=p, dynamics=_dynamics),
+    "statics": lambda f, s, p, w: _runtime("statics").run_statics(
+        f, progress=p, settings=s.options.solver, workspace=w),
+    "modal": _modal,
 }
 
 
@@ -75,24 +100,33 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             atol: float | None = None, formulation: str | None = None,
             progress: Callable[[float], None] | None = None,
             stabilization: str | None = None, method: str | None = None,
-            events: Sequence[Event] = ()) -> Result:
+            events: Sequence[Event] = (), options=None, workspace: Workspace | None = None,
+            token: CancelToken | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
     formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
     DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
-    `progress`, when given, is called with the time of every output row as it is computed.
-    The Result keeps `functions`: `result.to_dataframe()` is its results table as a DataFrame.
-    `events`: runtime.events.Event declared by code, watched by dynamics besides the model's
-    `events:` (Result.events, Result.events_dataframe())."""
+    `options`: the analysis type's options (a casmech.core.options dataclass, replacing the
+    file's, or a mapping of keys such as {"max_step": 1e-3, "solver.assembly.tolerance":
+    1e-10} over the file's; docs/analyses.md#options). `progress`, when given, is called with
+    the time of every output row as it is computed. `workspace`: where the run keeps what it
+    builds for later runs (runtime.workspace; default: the bundle's own). `token`: a
+    runtime.cancel.CancelToken whose cancel() stops the run with errors.Interrupted carrying
+    the rows computed so far (default: Ctrl-C does). The Result keeps `functions`:
+    `result.to_dataframe()` is its results table as a DataFrame. `events`: runtime.events.Event
+    declared by code, watched by dynamics besides the model's `events:` (Result.events,
+    Result.events_dataframe())."""
     settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
-                                 formulation, stabilization, method)
+                                 formulation, stabilization, method, options)
     if events and settings.type != "dynamics":
         raise UsageError(f"events are watched by dynamics, not by {settings.type}")
     run = ANALYSES[settings.type] if not events else (
-        lambda f, s, p: _dynamics(f, s, p, tuple(events)))
+        lambda f, s, p, w: _dynamics(f, s, p, w, tuple(events)))
+    workspace = of(functions, workspace)
     messages: list[str] = []  # the solvers' own stderr lines (runtime.solver_messages)
     try:
-        with solver_messages.collected(messages) as stream:
-            result = run(functions, settings, progress)
+        with interrupts.guard(token or current() or CancelToken()), \
+                solver_messages.collected(messages) as stream:
+            result = run(functions, settings, progress, workspace)
     except AnalysisError as error:  # the rows before a failure tabulate like a whole run's
         if error.partial is not None:
             error.partial.functions = functions
@@ -119,18 +153,59 @@ def _keep_messages(result: Result, messages: list[str], count: int) -> None:
         result.metadata.update(solver_messages=messages, solver_message_count=count)
 
 
+def options_of(kind: str, written) -> object:
+    """The options of analysis type `kind` from the option keys a model wrote (those the
+    type has; the file's block was checked against its own type)."""
+    cls = OPTIONS[kind]
+    mine = {key: value for key, value in written if option_values.lookup(cls, key) is not None}
+    options, _ = option_values.with_values(cls(), mine)
+    return options
+
+
+def typed_options(kind: str, base, options) -> object:
+    """`base` (options of type `kind`) with the caller's `options`: a dataclass of that type
+    (replacing them) or a mapping of keys over them (values of their types, or texts as the
+    command line gives them); a UsageError naming every problem."""
+    cls = OPTIONS[kind]
+    if options is None:
+        return base
+    if isinstance(options, cls):
+        return options
+    if option_values.is_options(type(options)):
+        raise UsageError(f"options of a {kind} analysis are a {cls.__name__} (or a mapping), "
+                         f"not a {type(options).__name__}")
+    if not isinstance(options, Mapping):
+        raise UsageError(f"options must be a {cls.__name__} or a mapping of option keys, not "
+                         f"{type(options).__name__}")
+    typed, problems = option_values.with_values(base, options, text=True)
+    if problems:
+        raise UsageError("\n".join(f"{kind} {problem.line()}" for problem in problems))
+    return typed
+
+
 def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
                       t_end: float | None = None, output_step: float | None = None,
                       rtol: float | None = None, atol: float | None = None,
                       formulation: str | None = None, stabilization: str | None = None,
-                      method: str | None = None) -> Analysis:
+                      method: str | None = None, options=None) -> Analysis:
     """The settings `analyze` runs with (its arguments over the model's `analysis:` block),
-    checked: a UsageError for an option that does not exist and for values outside
-    schema.limits (E409: rtol, atol, t_end, an output grid too large)."""
+    checked: a UsageError for an analysis type or option that does not exist, a value of
+    the wrong type or out of range, and for values outside schema.limits (E409: rtol, atol,
+    t_end, an output grid too large). A type other than the file's takes the option keys
+    the file wrote that it has; formulation, stabilization and method apply to the types
+    that have them (dynamics, modal)."""
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}
     settings = replace(settings, **{k: v for k, v in given.items() if v is not None})
+    if settings.type not in ANALYSES:
+        raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
+                         f"{', '.join(ANALYSES)}")
+    typed = settings.options
+    if not isinstance(typed, OPTIONS[settings.type]):
+        typed = options_of(settings.type, settings.written)
+    typed = typed_options(settings.type, typed, options)
+    names = {f.name for f in fields(typed)}
     asked = {"formulation": formulation, "stabilization": stabilization, "method": method}
     for name, value in asked.items():
         if value is None:
@@ -138,15 +213,14 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
         if value not in DYNAMICS_OPTIONS[name]:
             raise UsageError(f"{name} '{value}' is not one of "
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
-        settings = replace(settings, options={**settings.options, name: value})
-    if settings.options.get("formulation", "auto") == "auto" and (
-            stabilization is not None or settings.options.get("stabilization", "ggl") != "ggl"):
-        # a DAE stabilization asked for (by the caller, or the file's other than the default)
-        # means the r-p DAE: decided here only (runtime.auto_formulation never sees it)
-        settings = replace(settings, options={**settings.options, "formulation": "rp"})
-    if settings.type not in ANALYSES:
-        raise UsageError(f"analysis type '{settings.type}' is not available yet; available: "
-                         f"{', '.join(ANALYSES)}")
+        if name in names:
+            typed = replace(typed, **{name: value})
+    if "formulation" in names and typed.formulation == "auto" and (
+            stabilization is not None or typed.stabilization != "ggl"):
+        # a DAE stabilization asked for means the r-p DAE: decided here only
+        # (runtime.auto_formulation never sees it)
+        typed = replace(typed, formulation="rp")
+    settings = replace(settings, options=typed)
     numbers = {name: float(getattr(settings, name))
                for name in ("t_end", "output_step", "rtol", "atol")}
     problems = limits.analysis_problems(numbers, len(column_names(functions)), step_within=False)

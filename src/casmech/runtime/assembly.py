@@ -4,9 +4,10 @@ The assembled pose is the point of Phi(t, q) = 0 closest to the file's pose (Euc
 the root of numerics.kkt.closest_point's KKT system, reached in two stages. First the
 least-squares Newton of `newton` gets onto the right branch: drivers of composite joints are
 reached by continuation, their values scaled from 0 (the pose in the file) to 1 in steps of at
-most MAX_DRIVER_STEP radians/metres, so Newton never jumps to the mirrored root of a rotation
-driver. Its end point depends on Newton's path where the mechanism has degrees of freedom
-(within O(distance^2) of the closest point); the rootfinder then converges to the closest point
+most max_driver_step radians/metres (core.options.Assembly, the settings of every function
+here), so Newton never jumps to the mirrored root of a rotation driver. Its end point depends
+on Newton's path where the mechanism has degrees of freedom (within O(distance^2) of the
+closest point); the rootfinder then converges to the closest point
 in a few iterations. casmech.optimal differentiates the same rootfinder.
 
 Accelerations and multipliers are numerics.kkt.saddle's, the projection back onto the
@@ -15,7 +16,8 @@ use. The least-squares steps (Newton, velocities) run on the bundle's sparse mat
 (CasADi DM) by numerics.numeric_qr (numpy.linalg.lstsq's answer, dense below its size limits),
 so nothing is dense in the number of bodies; only the per-row kinematics code
 (solve_kinematic_accelerations, solve_multipliers: kinematics uses it for the rows its mapped
-step rejects) stays dense.
+step rejects) stays dense. The Functions built here are kept in the run's workspace
+(runtime.workspace; by default the bundle's).
 """
 
 from __future__ import annotations
@@ -27,22 +29,20 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.options import Assembly, Fallback
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.formulations import augmented
 from casmech.formulations.table import FORMULATIONS
 from casmech.numerics import kkt, numeric_qr
-from casmech.runtime import initial_holds, interrupts
+from casmech.runtime import cancel, initial_holds
 from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.memo import kept
 from casmech.runtime.nonfinite import NonFinite
+from casmech.runtime.workspace import Workspace, of
 
-POSITION_TOLERANCE = 1e-12  # max |Phi| at convergence
-MAX_ITERATIONS = 50
-MAX_DRIVER_STEP = 0.5
+DEFAULT, FALLBACK = Assembly(), Fallback()  # the defaults (core.options)
 MAX_CONTINUATION = 1000  # steps of driver continuation at most: a bounded time to fail
-KEPT_SOLVERS = 4  # closest_point and saddle Functions kept per system (one per set of rows)
 
 
 def initial_guess(functions: SystemFunctions) -> np.ndarray:
@@ -103,27 +103,30 @@ def unmet_rows(functions: SystemFunctions, start: np.ndarray, best: np.ndarray,
 
 
 def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | None = None,
-           tolerance: float = POSITION_TOLERANCE) -> np.ndarray:
-    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed). When it
-    does not converge, the error names the rows it left unmet (unmet_rows): the constraints
-    that cannot be met together (a length no pose reaches)."""
+           tolerance: float | None = None, settings: Assembly = DEFAULT) -> np.ndarray:
+    """Solve Phi(t, q) = 0 by Newton with least-squares steps (redundant rows allowed), to
+    `tolerance` (default settings.tolerance). When it does not converge, the error names the
+    rows it left unmet (unmet_rows): the constraints that cannot be met together (a length no
+    pose reaches)."""
+    tolerance = settings.tolerance if tolerance is None else tolerance
     q = np.array(q, float)
     start = best_phi = None
-    for _ in range(MAX_ITERATIONS):
+    for _ in range(settings.max_iterations):
+        cancel.poll()
         phi, phi_q = _evaluate(functions, t, q, scale)
         finite(t, "phi", phi, q)
         if _worst(phi) <= tolerance:
             return q
         start = phi if start is None else start
         best_phi = phi if best_phi is None or _worst(phi) < _worst(best_phi) else best_phi
-        q += numeric_qr.lstsq(phi_q, -phi)
+        q += numeric_qr.lstsq(phi_q, -phi, limits=settings.linear_algebra)
     phi, phi_q = _evaluate(functions, t, q, scale)
     if _worst(phi) <= 1e3 * tolerance:
         return q
     best_phi = phi if _worst(phi) < _worst(best_phi) else best_phi
     cause = (f"the constraints cannot be met: positions did not converge (max |Phi| = "
-             f"{_worst(best_phi):.3e} at best in {MAX_ITERATIONS} Newton iterations); the rows "
-             "left unmet:")
+             f"{_worst(best_phi):.3e} at best in {settings.max_iterations} Newton iterations); "
+             "the rows left unmet:")
     raise AnalysisError(UnmetRows(t, cause, worst_joints(functions, best_phi),
                                   rows=unmet_rows(functions, start, best_phi, tolerance)))
 
@@ -146,10 +149,9 @@ def _evaluate(functions, t, q, scale):
     return np.array(phi).ravel(), phi_q
 
 
-def _far_drivers(functions: SystemFunctions, t: float) -> list:
+def _far_drivers(functions: SystemFunctions, t: float, reach: float) -> list:
     """(joint, source, |f(t)|) of the drivers beyond the continuation's reach, farthest
     first."""
-    reach = MAX_DRIVER_STEP * MAX_CONTINUATION
     far = [(p.row.joint, p.row.source, abs(p.f.value(t=t))) for p in functions.ir.primitives
            if p.is_driver and p.f and not abs(p.f.value(t=t)) <= reach]
     return sorted(far, key=lambda item: -item[2] if math.isfinite(item[2]) else -math.inf)
@@ -161,70 +163,76 @@ def driver_span(functions: SystemFunctions, t: float) -> float:
     return max(values, default=0.0)
 
 
-def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None) -> np.ndarray:
+def assemble_positions(functions: SystemFunctions, t: float = 0.0, q=None,
+                       settings: Assembly = DEFAULT,
+                       workspace: Workspace | None = None) -> np.ndarray:
     """The point of Phi(t, .) = 0 closest to q (default: the file's pose, where the joints'
     `initial:` values placed the bodies, holding those values: _held_positions); q itself
     when it meets the constraints (module docstring)."""
-    held = initial_holds.holds(functions) if q is None else None
+    held = initial_holds.holds(functions, workspace) if q is None else None
     if held is not None:
-        return _held_positions(held, t, initial_guess(functions))
+        return _held_positions(held, t, initial_guess(functions), settings)
     reference = initial_guess(functions) if q is None else np.array(q, float)
-    if _worst(functions.vector("phi", t, reference)) <= POSITION_TOLERANCE:
+    if _worst(functions.vector("phi", t, reference)) <= settings.tolerance:
         return reference
-    return closest_point(functions, t, least_squares_positions(functions, t, reference),
-                         reference)
+    return closest_point(functions, t, least_squares_positions(functions, t, reference,
+                                                               settings),
+                         reference, settings, workspace)
 
 
-def _held_positions(held: initial_holds.Holds, t: float, posed: np.ndarray) -> np.ndarray:
+def _held_positions(held: initial_holds.Holds, t: float, posed: np.ndarray,
+                    settings: Assembly) -> np.ndarray:
     """With the joints' initial values held (runtime/initial_holds.py): `posed` when it meets
     them and the constraints (a tree), else continuation from the file's pose to the values
     and the drivers together, then the closest point to `posed`. E504 for a value the others
     fix already, E503 when the loops do not close with them."""
     bundle = held.positions
     held.check_independent(bundle, t, held.reference, "coordinate")
-    if _worst(bundle.vector("phi", t, posed)) <= POSITION_TOLERANCE:
+    if _worst(bundle.vector("phi", t, posed)) <= settings.tolerance:
         return posed
     try:
-        q = least_squares_positions(bundle, t, held.reference, held.span)
+        q = least_squares_positions(bundle, t, held.reference, settings, held.span)
     except AnalysisError as error:
         raise held.unmet(error) from None
-    return closest_point(bundle, t, q, posed)
+    return closest_point(bundle, t, q, posed, settings)
 
 
 def least_squares_positions(functions: SystemFunctions, t: float, q: np.ndarray,
-                            span: float = 0.0) -> np.ndarray:
+                            settings: Assembly = DEFAULT, span: float = 0.0) -> np.ndarray:
     """Driver continuation (and, `span` > 0, of held initial values that far), then Newton
     with least-squares steps, from q."""
     span = max(driver_span(functions, t), span)
-    if not span <= MAX_DRIVER_STEP * MAX_CONTINUATION:  # (NaN included)
+    farthest = settings.max_driver_step * MAX_CONTINUATION
+    if not span <= farthest:  # (NaN included)
         raise AnalysisError(FailureContext(
             t, f"a driver's value is {span:.3g} (rad or m) away from the pose in the file, "
-               f"farther than assembly follows drivers (at most "
-               f"{MAX_DRIVER_STEP * MAX_CONTINUATION:g}); write the pose nearer the drivers' "
-               "values at the start", _far_drivers(functions, t), "|f(t)|"))
-    steps = max(1, math.ceil(span / MAX_DRIVER_STEP))
+               f"farther than assembly follows drivers (at most {farthest:g}); write the pose "
+               "nearer the drivers' values at the start", _far_drivers(functions, t, farthest),
+               "|f(t)|"))
+    steps = max(1, math.ceil(span / settings.max_driver_step))
     for k in range(1, steps + 1):  # the last step is at scale 1: phi itself
-        q = newton(functions, t, q, scale=k / steps,
-                   tolerance=1e-8 if k < steps else POSITION_TOLERANCE)
+        q = newton(functions, t, q, scale=k / steps, settings=settings,
+                   tolerance=settings.continuation_tolerance if k < steps else None)
     return q
 
 
 def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
-                  reference: np.ndarray) -> np.ndarray:
+                  reference: np.ndarray, settings: Assembly = DEFAULT,
+                  workspace: Workspace | None = None) -> np.ndarray:
     """numerics.kkt.closest_point from q (on Phi = 0) over the rows independent at q; q
     itself where those rows fix every coordinate (no degree of freedom: an isolated root, the
     closest point of its neighbourhood) or where the rootfinder does not reach
-    |Phi| <= POSITION_TOLERANCE (a Jacobian losing rank at q makes the KKT matrix nearly
+    |Phi| <= settings.tolerance (a Jacobian losing rank at q makes the KKT matrix nearly
     singular)."""
-    rows = structure(functions, t, q).independent
+    rows = structure(functions, t, q, settings.linear_algebra).independent
     if len(rows) == functions.n_coordinates:
         return q
-    solve = kept(functions.derived.setdefault("closest_point", {}), rows,
-                 lambda: kkt.closest_point(functions["phi"], functions["phi_q"], rows),
-                 KEPT_SOLVERS)
+    key = (rows, settings.root_tolerance, settings.root_iterations)
+    solve = of(functions, workspace).kept("closest_point", key, lambda: kkt.closest_point(
+        functions["phi"], functions["phi_q"], rows, settings=settings))
     polished = np.array(solve(q, t, reference)[0]).ravel()
     worst = _worst(functions.vector("phi", t, polished))
-    return polished if worst <= POSITION_TOLERANCE else q
+    return polished if worst <= settings.tolerance else q
 
 
 def _worst(phi: np.ndarray) -> float:
@@ -233,19 +241,20 @@ def _worst(phi: np.ndarray) -> float:
     return worst if np.isfinite(worst) else math.inf
 
 
-def initial_state(functions: SystemFunctions, t0: float = 0.0):
+def initial_state(functions: SystemFunctions, t0: float = 0.0, settings: Assembly = DEFAULT,
+                  workspace: Workspace | None = None):
     """Assembled positions and the file's velocities projected onto the constraints (with
     the joints' `initial:` rates held: E504 for a rate the others fix already)."""
-    q = assemble_positions(functions, t0)
-    held = initial_holds.holds(functions)
+    q = assemble_positions(functions, t0, settings=settings, workspace=workspace)
+    held = initial_holds.holds(functions, workspace)
     if held is None:
-        return q, solve_velocities(functions, t0, q, file_velocities(functions, q))
+        return q, solve_velocities(functions, t0, q, file_velocities(functions, q), settings)
     held.check_independent(held.velocities, t0, q, "rate")
-    return q, solve_velocities(held.velocities, t0, q, file_velocities(functions, q))
+    return q, solve_velocities(held.velocities, t0, q, file_velocities(functions, q), settings)
 
 
 def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
-                     q_dot_guess: np.ndarray) -> np.ndarray:
+                     q_dot_guess: np.ndarray, settings: Assembly = DEFAULT) -> np.ndarray:
     """Phi_q q_dot = nu, closest (least squares) to the guess (the guess itself when it is
     zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
     if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
@@ -254,11 +263,11 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
     nu = functions.vector("nu", t, q)
     finite(t, "nu", nu, q)
     residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot_guess))).ravel()
-    return q_dot_guess + numeric_qr.lstsq(phi_q, residual)
+    return q_dot_guess + numeric_qr.lstsq(phi_q, residual, limits=settings.linear_algebra)
 
 
 def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
-                                  q_dot: np.ndarray) -> np.ndarray:
+                                  q_dot: np.ndarray, settings: Assembly = DEFAULT) -> np.ndarray:
     """Phi_q q_ddot = gamma, for a fully driven (0-DOF) mechanism."""
     phi_q = functions.matrix("phi_q", t, q)
     gamma = functions.vector("gamma", t, q, q_dot)
@@ -268,8 +277,8 @@ def solve_kinematic_accelerations(functions: SystemFunctions, t: float, q: np.nd
     if rank < functions.n_coordinates:
         cause = ("singular configuration: the constraint Jacobian lost rank "
                  f"({rank} < {functions.n_coordinates}); the joints involved:")
-        raise AnalysisError(FailureContext(t, cause, dependent_joints(functions, phi_q),
-                                           "weight in the dependency"))
+        raise AnalysisError(FailureContext(t, cause, dependent_joints(
+            functions, phi_q, limits=settings.linear_algebra), "weight in the dependency"))
     return q_ddot
 
 
@@ -285,7 +294,9 @@ def solve_multipliers(functions: SystemFunctions, t: float, q: np.ndarray, q_dot
 
 
 def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndarray,
-                                q_dot: np.ndarray, rows=None) -> tuple[np.ndarray, np.ndarray]:
+                                q_dot: np.ndarray, rows=None, settings: Assembly = DEFAULT,
+                                workspace: Workspace | None = None
+                                ) -> tuple[np.ndarray, np.ndarray]:
     """[M Phi_q^T; Phi_q 0] [q_ddot; lam] = [Q; gamma]: the motion the forces produce now, by
     numerics.kkt.saddle over the rows independent at q (checks.structure; the normalization
     rows and every joint row of a mechanism without redundant joints). lam covers every row:
@@ -293,8 +304,9 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     squares of the whole singular system gives). `rows` restricts the constraints to an
     independent subset instead (lam then has their length)."""
     if rows is None:
-        independent = list(structure(functions, t, q).independent)
-        q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent)
+        independent = list(structure(functions, t, q, settings.linear_algebra).independent)
+        q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent,
+                                                  settings, workspace)
         if len(independent) == functions.n_rows:
             return q_ddot, lam
         phi_q = functions["phi_q"](t, q)
@@ -304,8 +316,8 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     rows = list(rows)
     phi_q = functions["phi_q"](t, q)[rows, :]
     mass = functions["mass_matrix"](q)
-    saddle = kept(functions.derived.setdefault("saddle", {}), tuple(rows),  # fixes the patterns
-                  lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()), KEPT_SOLVERS)
+    saddle = of(functions, workspace).kept(  # the rows fix the patterns
+        "saddle", tuple(rows), lambda: kkt.saddle(mass.sparsity(), phi_q.sparsity()))
     forces = functions["generalized_forces"](t, q, q_dot)
     gamma = functions.vector("gamma", t, q, q_dot)
     if not (np.all(np.isfinite(np.array(forces))) and np.all(np.isfinite(gamma))):
@@ -322,31 +334,36 @@ def saddle_solution(saddle: ca.Function, mass: ca.DM, jac: ca.DM, forces, gamma:
         if np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam)):
             return v_dot, lam
     except RuntimeError as error:
-        interrupts.check(error)
+        cancel.check(error)
     lhs = np.block([[np.array(mass), np.array(jac).T], [np.array(jac), -np.diag(w)]])
     z = np.linalg.lstsq(lhs, np.concatenate([np.ravel(np.array(forces)), gamma]), rcond=None)[0]
     return z[:mass.size1()], z[mass.size1():]
 
 
 def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.ndarray,
-            penalty: float, accept: float = POSITION_TOLERANCE) -> tuple[np.ndarray, np.ndarray]:
+            penalty: float, accept: float | None = None, settings: Assembly = DEFAULT,
+            fallback: Fallback = FALLBACK, workspace: Workspace | None = None
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Back onto Phi = 0, then onto the velocity constraints: formulations.augmented.projection
-    (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty) called
-    until |Phi| <= POSITION_TOLERANCE. Near a singular configuration the damping keeps a step
-    from jumping along the nearly lost direction (a Euclidean least-squares step there moved
-    A02 onto the wrong branch), at the price of slow progress along it: a residual below
-    `accept` after MAX_ITERATIONS steps is taken as converged."""
+    (mass-orthogonal Gauss-Newton steps damped with the augmented-Lagrangian penalty,
+    fallback.projection_iterations per call) called until |Phi| <= settings.tolerance. Near a
+    singular configuration the damping keeps a step from jumping along the nearly lost
+    direction (a Euclidean least-squares step there moved A02 onto the wrong branch), at the
+    price of slow progress along it: a residual below `accept` (default the tolerance) after
+    settings.max_iterations steps is taken as converged."""
+    accept = settings.tolerance if accept is None else accept
     name = next(key for key, value in FORMULATIONS.items() if value == form)
-    step = kept(functions.derived.setdefault("projection", {}), name,
-                lambda: augmented.projection(functions.functions, name), len(FORMULATIONS))
-    for _ in range(math.ceil(MAX_ITERATIONS / augmented.PROJECTION_ITERATIONS)):
+    per_call = fallback.projection_iterations
+    step = of(functions, workspace).kept("projection", (name, per_call), lambda: (
+        augmented.projection(functions.functions, name, fallback)))
+    for _ in range(math.ceil(settings.max_iterations / per_call)):
         q, v = (np.array(out).ravel() for out in step(t, q, v, penalty))
         phi = functions.vector("phi", t, q)
-        if _worst(phi) <= POSITION_TOLERANCE:
+        if _worst(phi) <= settings.tolerance:
             return q, v
     if _worst(phi) > accept:
         cause = (f"the projection onto the constraints did not converge in "
-                 f"{MAX_ITERATIONS} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); the "
-                 "joints with the largest residuals:")
+                 f"{settings.max_iterations} iterations (max |Phi| = {np.max(np.abs(phi)):.3e}); "
+                 "the joints with the largest residuals:")
         raise AnalysisError(FailureContext(t, cause, worst_joints(functions, phi)))
     return q, v

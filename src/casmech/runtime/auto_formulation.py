@@ -11,7 +11,7 @@
 - Loops with a floating body in the tree (held only by basic or composite constraints, all
   cut): `rp`; the tree coordinates are then the body's own plus the recursion's overhead.
   Loops in a compiled bundle whose joint system stays interpreted (joint_dynamics.lags_bundle:
-  above COMPILED_ODE_BODIES, or a parametric library built without the joint functions):
+  above solver.compile.ode_bodies, or a parametric library built without the joint functions):
   `rp`, compiled. (Measurements: docs/decisions/formulation-auto.md.) A compiled parametric
   bundle's joint system is compiled in its library (codegen.parametric), so its loops run joint
   coordinates.
@@ -23,12 +23,16 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations.tree import Tree
 from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
 from casmech.runtime.singular_poses import describe, examinable, singular_poses
+from casmech.runtime.workspace import Workspace
+
+DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
 
 def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
@@ -41,15 +45,25 @@ def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
 
 
 def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
-        joint: Callable[[], Result], other: Callable[[str], Result]) -> Result:
+        joint: Callable[[], Result], other: Callable[[str], Result],
+        settings: DynamicsSolver = DEFAULT,
+        workspace: Workspace | None = None) -> Result:
     """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
     first = choice(tree, formulation, examinable(functions, rows),
-                   not tree.is_tree and lags_bundle(functions))
+                   not tree.is_tree and lags_bundle(functions, settings.compile))
+
+    def examined(result: Result) -> Result:
+        """`result` with the singular poses of a run with loops in its metadata."""
+        poses = singular_poses(functions, result, not tree.is_tree, settings, workspace)
+        if poses is not None:
+            result.metadata["singular_poses"] = poses
+        return result
+
     fallback = formulation == "auto" and first == "joint" and not tree.is_tree
     if first != "joint":
-        return _examined(functions, tree, other(first))
+        return examined(other(first))
     try:
         result = joint()
     except Interrupted:
@@ -59,18 +73,10 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
             raise
         why = f"the joint DAE failed ({str(error).splitlines()[0]})"
     else:
-        poses = _examined(functions, tree, result).metadata.get("singular_poses")
+        poses = examined(result).metadata.get("singular_poses")
         if not (fallback and poses):
             return result
         why = f"joint coordinates went {describe(poses[0])}"
-    result = _examined(functions, tree, other("rp"))
+    result = examined(other("rp"))
     result.metadata["formulation_fallback"] = why
-    return result
-
-
-def _examined(functions: SystemFunctions, tree: Tree, result: Result) -> Result:
-    """`result` with the singular poses of a run with loops in its metadata."""
-    poses = singular_poses(functions, result, loops=not tree.is_tree)
-    if poses is not None:
-        result.metadata["singular_poses"] = poses
     return result

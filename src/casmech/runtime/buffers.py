@@ -1,13 +1,18 @@
 """Calls of casadi Functions with NumPy arrays in and out, through Function.buffer: inputs are
 read from and outputs written into NumPy memory, without the element-by-element conversion of
 a returned DM (np.array(DM) costs more than evaluating a mapped prescribed step over 10^5 rows).
-Functions with a sparse input or output are called the ordinary way."""
+Functions with a sparse input or output are called the ordinary way. A buffered evaluation is
+a solver call a signal may stop at once (runtime.cancel.solving); the errors.Interrupted it
+then raises carries in `outputs` what the call had written (an integrator writes its outputs
+grid point by grid point; the rest NaN), so the rows computed before the signal are kept."""
 
 from __future__ import annotations
 
 import casadi as ca
 import numpy as np
 
+from casmech.errors import Interrupted
+from casmech.runtime import cancel
 from casmech.runtime.memo import kept
 
 
@@ -32,12 +37,21 @@ class BufferedCall:
         # casadi stores a dense matrix column by column: the C-ordered transpose
         inputs = [np.ascontiguousarray(np.asarray(a, float).reshape(shape).T)
                   for a, shape in zip(args, self.shapes_in, strict=True)]
-        outputs = [np.empty(shape[::-1]) for shape in self.shapes_out]
+        outputs = [np.full(shape[::-1], np.nan) for shape in self.shapes_out]
         for i, a in enumerate(inputs):
             self.buffer.set_arg(i, memoryview(a.reshape(-1)))
         for i, out in enumerate(outputs):
             self.buffer.set_res(i, memoryview(out.reshape(-1)))
-        self.evaluate()
+        with cancel.solving():  # a signal may stop an integrator here (runtime.cancel)
+            try:
+                self.evaluate()
+            except RuntimeError as error:
+                try:
+                    cancel.check(error)  # the signal that stopped it, not a failure
+                except Interrupted as interrupted:
+                    interrupted.outputs = tuple(out.T for out in outputs)
+                    raise
+                raise
         return tuple(out.T for out in outputs)
 
 
@@ -55,7 +69,13 @@ class NamedCall:
     def __call__(self, **inputs) -> dict[str, np.ndarray]:
         args = [self.zeros[name] if inputs.get(name) is None else inputs[name]
                 for name in self.zeros]
-        return dict(zip(self.function.name_out(), self.call(*args), strict=True))
+        try:
+            return dict(zip(self.function.name_out(), self.call(*args), strict=True))
+        except Interrupted as interrupted:  # its outputs by name too
+            if getattr(interrupted, "outputs", None) is not None:
+                interrupted.outputs = dict(zip(self.function.name_out(), interrupted.outputs,
+                                               strict=True))
+            raise
 
     def stats(self) -> dict:
         """The statistics of the last call (kept by the buffer's own memory), {} before one."""

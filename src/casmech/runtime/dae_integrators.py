@@ -1,5 +1,5 @@
-"""The IDAS integrators of the r-p / r-omega DAEs (formulations.dae), kept with the system
-(SystemFunctions.derived) for later runs.
+"""The IDAS integrators of the r-p / r-omega DAEs (formulations.dae), kept in the run's
+workspace (runtime.workspace) for later runs.
 
 Creating an integrator over an interpreted (SX) DAE makes CasADi differentiate the residual for
 IDAS's Jacobian and analyse its sparsity, a large part of a short run (a compiled DAE brings
@@ -20,22 +20,19 @@ import numpy as np
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
 from casmech.runtime.buffers import NamedCall
-from casmech.runtime.memo import kept
-
-KEPT_INTEGRATORS = 4  # per system (each holds IDAS's memory and its Newton matrix)
+from casmech.runtime.workspace import Workspace, of
 
 
-def problem(functions: SystemFunctions, name: str, kind: str) -> dict | ca.Function:
+def problem(functions: SystemFunctions, name: str, kind: str,
+            workspace: Workspace | None = None) -> dict | ca.Function:
     """The DAE of formulation `name` and stabilization `kind` as casadi.integrator takes it,
-    built once per system."""
-    store = functions.derived.setdefault("dae_problems", {})
-    if (name, kind) not in store:
-        store[name, kind] = dae.problem(dae.residual(functions.functions, name, kind))
-    return store[name, kind]
+    built once per workspace."""
+    return of(functions, workspace).kept("dae_problems", (name, kind), lambda: dae.problem(
+        dae.residual(functions.functions, name, kind)))
 
 
 def integrator(functions: SystemFunctions, name: str, kind: str, times, options: dict,
-               keep: bool = True) -> NamedCall:
+               keep: bool = True, workspace: Workspace | None = None) -> NamedCall:
     """IDAS on the DAE from tau = 0 over `times` (relative to the start) with `options`: the
     one kept for the same grid and options, else a new one (kept unless keep is False: a
     restart within a run, an event's trial points). Called by input names, its outputs
@@ -43,13 +40,14 @@ def integrator(functions: SystemFunctions, name: str, kind: str, times, options:
     grid = tuple(float(t) for t in times)
 
     def build() -> NamedCall:
-        return NamedCall(ca.integrator("dynamics", "idas", problem(functions, name, kind), 0.0,
-                                       list(grid), options))
+        return NamedCall(ca.integrator("dynamics", "idas", problem(functions, name, kind,
+                                                                   workspace),
+                                       0.0, list(grid), options))
 
     if not keep:
         return build()
-    store = functions.derived.setdefault("dae_integrators", {})
-    return kept(store, (name, kind, grid, _frozen(options)), build, KEPT_INTEGRATORS)
+    return of(functions, workspace).kept("dae_integrators",
+                                         (name, kind, grid, _frozen(options)), build)
 
 
 def _frozen(options: dict) -> tuple:

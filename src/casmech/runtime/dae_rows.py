@@ -1,7 +1,7 @@
 """The output rows of the r-p / r-omega DAE runs (runtime.dynamics) for a block of states, each
 by mapped casadi.Function calls: the drift check (index-1 DAE only) and the results' r-p
-rates and multipliers. The Functions and their maps are kept with the system
-(SystemFunctions.derived), so a later run builds none of them."""
+rates and multipliers. The Functions and their maps are kept in the run's workspace
+(runtime.workspace), so a later run builds none of them."""
 
 from __future__ import annotations
 
@@ -11,23 +11,21 @@ import numpy as np
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations.table import FORMULATIONS
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
-
-KEPT_FUNCTIONS = 8  # row Functions per system (one per formulation and mask)
-KEPT_MAPS = 16  # column calls per system (one per Function; each keeps its block maps)
+from casmech.runtime.workspace import Workspace, of
 
 
-def mapped(function: ca.Function, *columns, store: dict | None = None) -> list[np.ndarray]:
+def mapped(function: ca.Function, *columns, workspace: Workspace | None = None
+           ) -> list[np.ndarray]:
     """`function` evaluated at every column of its arguments (mapped calls in blocks:
     runtime.buffers.ColumnCall); every output as a 2-D array with one column per evaluation.
-    `store` keeps the ColumnCall per function (with the function, so that its id is not
-    reused while kept)."""
+    `workspace` keeps the ColumnCall per function (by the Function itself: casadi.Functions
+    hash by identity and the entry holds it)."""
     count = max(np.shape(c)[1] for c in columns)
-    if store is None:
+    if workspace is None:
         call = ColumnCall(function)
     else:
-        call = kept(store, id(function), lambda: (function, ColumnCall(function)), KEPT_MAPS)[1]
+        call = workspace.kept("dae_row_maps", function, lambda: ColumnCall(function))
     return [np.asarray(out).reshape(-1, count) for out in call(*columns)]
 
 
@@ -75,14 +73,14 @@ class Rows:
     `mask` drops, the drift tolerance and the output step."""
 
     def __init__(self, functions: SystemFunctions, name: str, sizes: tuple[int, int, int],
-                 mask: np.ndarray, tolerance: float, step: float):
+                 mask: np.ndarray, tolerance: float, step: float,
+                 workspace: Workspace | None = None):
         self.n_q, self.n_v = sizes[:2]
         self.tolerance, self.step = tolerance, step
-        store = functions.derived.setdefault("dae_rows", {})
-        self.maps = functions.derived.setdefault("dae_row_maps", {})
+        self.workspace = of(functions, workspace)
         key = (name, np.asarray(mask, bool).tobytes())
-        self.rates, self.drift = kept(store, key, lambda: _functions(functions, name, sizes,
-                                                                      mask), KEPT_FUNCTIONS)
+        self.rates, self.drift = self.workspace.kept("dae_rows", key, lambda: _functions(
+            functions, name, sizes, mask))
 
     def split(self, states: np.ndarray):
         n_q, n_v = self.n_q, self.n_v
@@ -92,7 +90,7 @@ class Rows:
         """The first column where |Phi| passed the tolerance, or the velocity-constraint
         residual passed what would move the positions by as much before the next output."""
         q, v, _ = self.split(states)
-        phi, velocity = mapped(self.drift, times[None, :], q, v, store=self.maps)
+        phi, velocity = mapped(self.drift, times[None, :], q, v, workspace=self.workspace)
         drifted = (phi[0] > self.tolerance) | (velocity[0] * self.step > self.tolerance)
         return int(np.argmax(drifted)) if drifted.any() else None
 
@@ -102,7 +100,7 @@ class Rows:
         normalization rows)."""
         q, v, v_dot = self.split(states)
         q_dot, q_ddot, lam = mapped(self.rates, times[None, :], q, v, v_dot, multipliers,
-                                    store=self.maps)
+                                    workspace=self.workspace)
         return q.T, q_dot.T, q_ddot.T, lam.T
 
     def record(self, result: Result, times: np.ndarray, states: np.ndarray,

@@ -14,15 +14,16 @@ IDAS restarts from there. No Baumgarte constants either way. A chunk of output i
 index-2 DAE fails on is done this way (run_dynamics).
 
 With ggl the whole output grid is one IDAS call, unless a progress callback wants rows as they
-come or the DAE failed (then chunks of CHUNK intervals); the output rows of a chunk (r-p rates,
-true or least-norm multipliers, the index-1 DAE's drift check) are each one mapped
-casadi.Function call, never Python per row.
+come or the DAE failed (then chunks of `chunk` intervals, core.options.DynamicsSolver, over
+runtime.driver); the output rows of a chunk (r-p rates, true or least-norm multipliers, the
+index-1 DAE's drift check) are each one mapped casadi.Function call, never Python per row.
 
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
 the same equations, so IDACalcIC is never needed. Those are options of the integrator, so
 integrators are kept per start (runtime.dae_integrators), and so are the mask and the
-consistent state (_Model): a run repeated from the same state creates and solves neither.
+consistent state (_Model), in the run's workspace (runtime.workspace): a run repeated from the
+same state creates and solves neither.
 
 Where the constraint Jacobian loses rank along the motion (the IFToMM A02 N-four-bar passing
 its flat poses) both DAEs are singular and IDAS fails; the run then starts over from t0 on the
@@ -42,43 +43,36 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.options import DynamicsOptions, DynamicsSolver
 from casmech.equations.checks import dependent_joints, structure
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.formulations import augmented, dae
+from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
+from casmech.formulations import dae
 from casmech.formulations.table import FORMULATIONS, Formulation
 from casmech.numerics import kkt
 from casmech.runtime import (
     assembly,
+    cancel,
     contact_steps,
     dae_integrators,
     events,
-    interrupts,
     projected_rk4,
 )
 from casmech.runtime.dae_rows import Rows, mapped, minimum_norm  # noqa: F401 (joint_dynamics)
+from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.kinematics import output_times
-from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace, of
 
-CHUNK = 256  # output intervals per IDAS call: after a failure, with projections, with progress
-MAX_STEPS = 50000  # IDAS steps per output interval before it gives up (IDA_TOO_MUCH_WORK)
-DRIFT_TOLERANCE = 1e-9  # max |Phi| before projecting (at least; see drift_tolerance)
-# Absolute tolerances of the algebraic unknowns in IDAS's Newton convergence test (they are out
-# of its error test; algebraic_tolerances): at least Z_TOL for GGL's v_dot and lam (with less,
-# at rtol 1e-12, atol 1e-14, Bricard failed at t = 0), and MU_TOL for its mu.
-Z_TOL = 1e-8
-MU_TOL = 1.0
-KEPT_STARTS = 8  # masks and consistent starts kept per system (_Model)
-GGL_FAILURES = 3  # chunks the index-2 DAE may fail on before the index-1 one does the rest
+DEFAULT, STABILIZATION = DynamicsSolver(), DynamicsOptions().stabilization  # core.options
 
 
-def drift_tolerance(atol: float) -> float:
-    """Constraint drift allowed before a projection: DRIFT_TOLERANCE, or 100 atol when the
-    integration itself is looser. Every projection restarts IDAS (a new integrator), so a
-    tighter multiple of atol projects far more often for no accuracy
+def drift_tolerance(atol: float, settings: DynamicsSolver = DEFAULT) -> float:
+    """Constraint drift allowed before a projection: settings.drift_tolerance, or 100 atol
+    when the integration itself is looser. Every projection restarts IDAS (a new integrator),
+    so a tighter multiple of atol projects far more often for no accuracy
     (docs/decisions/ggl-stabilization.md)."""
-    return max(DRIFT_TOLERANCE, 100 * atol)
+    return max(settings.drift_tolerance, 100 * atol)
 
 
 def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
@@ -91,9 +85,11 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
     return np.concatenate([q_dot[:3 * nb], *omega_bar])
 
 
-def penalty(functions: SystemFunctions, form: Formulation, q) -> float:
-    """The augmented-Lagrangian penalty scaled to the model: PENALTY max(diag M)."""
-    return augmented.PENALTY * np.max(np.diag(functions.matrix(form.mass, q)), initial=1.0)
+def penalty(functions: SystemFunctions, form: Formulation, q,
+            settings: DynamicsSolver = DEFAULT) -> float:
+    """The augmented-Lagrangian penalty scaled to the model: fallback.penalty max(diag M)."""
+    return settings.fallback.penalty * np.max(np.diag(functions.matrix(form.mass, q)),
+                                              initial=1.0)
 
 
 def _frozen(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -105,13 +101,14 @@ def _frozen(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
 
 class _Model:
     """The numeric side of one formulation: row scales, consistent (v_dot, lam), q_dot. The
-    mask and the consistent state at a start are kept with the system (KEPT_STARTS each), so
-    a run from the same state computes neither again."""
+    mask and the consistent state at a start are kept in the workspace, so a run from the
+    same state computes neither again."""
 
-    def __init__(self, functions: SystemFunctions, name: str):
+    def __init__(self, functions: SystemFunctions, name: str, settings: DynamicsSolver = DEFAULT,
+                 workspace: Workspace | None = None):
         self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
+        self.settings, self.workspace = settings, of(functions, workspace)
         self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
-        self.kept = functions.derived.setdefault("dae_starts", {})
 
     def start(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(s, s_phi, v_dot, lam / s) at (t, q, v): scales, then consistent."""
@@ -122,7 +119,7 @@ class _Model:
             s, s_phi = self.scales(t, q)
             return _frozen(s, s_phi, *self.consistent(t, q, v, mask, s))
 
-        return kept(self.kept, key, build, KEPT_STARTS)
+        return self.workspace.kept("dae_starts", key, build)
 
     def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
         """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
@@ -135,13 +132,15 @@ class _Model:
         """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
         redundant (the same joint rows in both formulations; r-p rows are ordered as Phi's,
         r-omega's are Phi's joint rows)."""
+        limits = self.settings.assembly.linear_algebra
+
         def build():
             keep = np.zeros(self.functions.n_rows)
-            keep[list(structure(self.functions, t, q).independent)] = 1.0
+            keep[list(structure(self.functions, t, q, limits).independent)] = 1.0
             return _frozen(1.0 - keep[:self.m])[0]
 
-        key = ("mask", self.name, float(t), np.asarray(q, float).tobytes())
-        return kept(self.kept, key, build, KEPT_STARTS)
+        key = ("mask", self.name, float(t), np.asarray(q, float).tobytes(), limits)
+        return self.workspace.kept("dae_starts", key, build)
 
     def consistent(self, t, q, v, mask, s) -> tuple[np.ndarray, np.ndarray]:
         """(v_dot, lam / s) solving the DAE's algebraic equations at (t, q, v) with row
@@ -151,8 +150,8 @@ class _Model:
         f, form = self.functions, self.form
         mass, jac = f[form.mass](q), ca.mtimes(ca.diag(ca.DM(s)), f[form.jacobian](t, q))
         gamma, forces = f.vector(form.gamma, t, q, v) * s, f[form.forces](t, q, v)
-        saddle = kept(f.derived.setdefault("dae_saddle", {}), self.name,
-                      lambda: kkt.saddle(mass.sparsity(), jac.sparsity()), len(FORMULATIONS))
+        saddle = self.workspace.kept("dae_saddle", self.name,
+                                     lambda: kkt.saddle(mass.sparsity(), jac.sparsity()))
         return assembly.saddle_solution(saddle, mass, jac, forces, gamma, mask)
 
     def accelerations(self, t, q, v, mask) -> tuple[np.ndarray, np.ndarray]:
@@ -169,38 +168,33 @@ class _Model:
 class _Stepper:
     """Integrates from a state over a chunk of the output grid: by the DAE until it first
     fails, by the augmented-Lagrangian ODE from there on (a model that has met a singular
-    configuration will meet it again; the DAE only fails there after thousands of steps).
-    With ggl, the first chunk is the whole grid; after a failure, chunks of CHUNK intervals,
-    and a chunk the index-2 DAE fails on is done by the index-1 DAE, the next one by the
-    index-2 one again (the two DAEs have the same solution). The index-1 DAE (projection)
-    and a run with a progress callback start at CHUNK intervals."""
+    configuration will meet it again; the DAE only fails there after thousands of steps), or
+    from t0 with fallback.always. With ggl, the first chunk is the whole grid; after a
+    failure, chunks of settings.chunk intervals, and a chunk the index-2 DAE fails on is done
+    by the index-1 DAE, the next one by the index-2 one again (the two DAEs have the same
+    solution). The index-1 DAE (projection) and a run with a progress callback start at
+    settings.chunk intervals."""
 
-    def __init__(self, model: _Model, rtol: float, atol: float, stabilization: str = "ggl"):
-        self.model, self.stabilization = model, stabilization
-        self.chunk, self.limit = CHUNK, None  # intervals in the next chunk, most in any
+    def __init__(self, model: _Model, rtol: float, atol: float,
+                 stabilization: str = STABILIZATION):
+        self.model, self.stabilization, self.settings = model, stabilization, model.settings
+        self.chunks = Chunks(self.settings.chunk, grow=True)  # kept over a restart on the ODE
         self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
-        self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
-                        "disable_internal_warnings": True}
+        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True}
         self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
-        self.on_ode, self.switched_at, self.dae_reason = False, None, ""
+        self.on_ode, self.switched_at, self.dae_reason = self.settings.fallback.always, None, ""
         self.idas_calls, self.idas_steps = 0, 0
         self.t_start = None  # the run's t0: integrators from there are kept (_dae)
 
-    def start(self, t0: float, intervals: int, progress: bool) -> None:
-        """The first chunk of a run from t0 over `intervals` output intervals: all of them for
-        the index-2 DAE unless it failed before or a progress callback wants rows as they
-        come."""
+    def start(self, t0: float, intervals: int, progress: bool) -> Chunks:
+        """The chunks of a run from t0 over `intervals` output intervals: the first all of
+        them for the index-2 DAE unless it failed before or a progress callback wants rows as
+        they come."""
         self.t_start = t0
         whole = (self.stabilization == "ggl" and not self.on_ode and not progress
-                 and self.limit is None)
-        self.chunk = max(intervals, 1) if whole else CHUNK
-
-    def adapt(self, used: int, restarted: bool) -> None:
-        """Next chunk: twice the intervals used before a restart (the rest of a chunk after
-        one is discarded), or twice the last chunk, up to the limit a failure set."""
-        self.chunk = 2 * used if restarted else 2 * self.chunk
-        if self.limit is not None:
-            self.chunk = min(self.chunk, self.limit)
+                 and self.chunks.limit is None)
+        self.chunks.size = max(intervals, 1) if whole else self.settings.chunk
+        return self.chunks
 
     def integrate(self, t0: float, times: np.ndarray, q, v, mask):
         """(states, lam, kind) at `times` or a first part of them: states rows [q, v, v_dot],
@@ -208,24 +202,24 @@ class _Stepper:
 
         By the DAE until it first fails (then _Restart: the run starts over on the
         augmented-Lagrangian ODE), else by that ODE."""
-        with interrupts.solver():
-            if self.on_ode:
-                return (*self._ode(t0, times, q, v), "ode")
-            if self.stabilization == "ggl" and len(self.ggl_failures) < GGL_FAILURES:
-                try:
-                    return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
-                except RuntimeError as error:
-                    interrupts.check(error)  # a signal is not a solver failure
-                    if len(times) > CHUNK:  # the whole grid: again in chunks, as after a failure
-                        self.limit = self.chunk = CHUNK
-                        return self.integrate(t0, times[:CHUNK], q, v, mask)
-                    self.ggl_failures.append(float(t0))
-                    self.limit = CHUNK
+        if self.on_ode:
+            return (*self._ode(t0, times, q, v), "ode")
+        chunk = self.settings.chunk
+        if self.stabilization == "ggl" and len(self.ggl_failures) < self.settings.ggl_failures:
             try:
-                return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
-            except RuntimeError as error:  # IDAS failed (its construction is not guarded)
-                interrupts.check(error)
-                raise _Restart(float(t0), solver_reason(error)) from None
+                return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
+            except RuntimeError as error:
+                cancel.check(error)  # a signal is not a solver failure
+                if len(times) > chunk:  # the whole grid: again in chunks, as after a failure
+                    self.chunks.cap(chunk)
+                    return self.integrate(t0, times[:chunk], q, v, mask)
+                self.ggl_failures.append(float(t0))
+                self.chunks.limit = chunk
+        try:
+            return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
+        except RuntimeError as error:  # IDAS failed (its construction is not guarded)
+            cancel.check(error)
+            raise _Restart(float(t0), solver_reason(error)) from None
 
     def probe(self, kind: str, t0: float, t: float, t1: float, q, v, mask):
         """(states, lam) at the one time t in (t0, t1) from (t0, q, v), by what made the block
@@ -246,25 +240,28 @@ class _Stepper:
         output interval the first step is sized by (default the first of `times`). Only an
         integrator from the run's start is kept (a repeated run starts there; a restart
         within the run from there on is not repeated but by the same run again)."""
-        model = self.model
+        model, settings = self.model, self.settings
         s, s_phi, v_dot, lam = model.start(t0, q, v, mask)
         x_dot = np.concatenate([model.q_dot(q, v), v_dot])
         n_z = model.n_v + dae.multipliers(model.functions.functions, model.name, kind)
         rtol, atol = self.options["reltol"], self.options["abstol"]
-        floor = Z_TOL if kind == "ggl" else atol
+        floor = settings.algebraic_tolerance if kind == "ggl" else atol
         options = {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
                    "abstolv": list(np.concatenate([
                        np.full(len(q) + len(v), atol),
-                       algebraic_tolerances(rtol, floor, v_dot, lam, n_z)]))}
+                       algebraic_tolerances(rtol, floor, v_dot, lam, n_z,
+                                            settings.mu_tolerance)]))}
         p = [[t0], mask, s]
         if kind == "ggl":
             n = 3 * model.functions.n_bodies  # the translations lead q and v in both forms
-            options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol,
-                                            first or times[0] - t0)
+            if settings.initial_step is None:
+                options["step0"] = initial_step(q[:n], v_dot[:n], rtol, atol,
+                                                first or times[0] - t0)
             p.append(s_phi)
         integrator = dae_integrators.integrator(model.functions, model.name, kind, times - t0,
                                                 self.options | options,
-                                                keep=first is None and t0 == self.t_start)
+                                                keep=first is None and t0 == self.t_start,
+                                                workspace=model.workspace)
         z0 = np.zeros(n_z)  # GGL's mu is 0 along the exact motion
         z0[:len(v_dot) + len(lam)] = np.concatenate([v_dot, lam])
         self.idas_calls += 1
@@ -272,6 +269,13 @@ class _Stepper:
             data = model.functions.data  # a compiled parametric DAE's model data
             out = integrator(x0=np.concatenate([q, v]), z0=z0,
                              p=np.concatenate(p if data is None else [*p, data]))
+        except Interrupted as interrupted:  # the grid points it had done are kept
+            done = getattr(interrupted, "outputs", None)
+            count = 0 if done is None else completed(done["xf"], done["zf"])
+            if count:
+                states, lam = self._dae_states({k: v[:, :count] for k, v in done.items()})
+                interrupted.done = (states, s[:, None] * lam, kind)
+            raise
         finally:
             self.idas_steps += int(integrator.stats().get("nsteps", 0))
         states, lam = self._dae_states(out)
@@ -292,8 +296,9 @@ class _Stepper:
         if self.fallback is None:
             functions = model.functions.functions  # evaluated only: compiled ones serve too
             self.fallback = projected_rk4.ProjectedRK4(
-                functions, model.name, self.options["reltol"], self.options["abstol"])
-        a = penalty(model.functions, model.form, q)
+                functions, model.name, self.options["reltol"], self.options["abstol"],
+                self.settings.fallback)
+        a = penalty(model.functions, model.form, q, self.settings)
         x, columns, start = np.concatenate([q, v]), [], t0
         for t in times:
             try:
@@ -302,8 +307,17 @@ class _Stepper:
                 if not columns:
                     raise self.failure(start, t, x[:model.n_q], str(error)) from None
                 break
+            except Interrupted as interrupted:  # the intervals done are kept
+                if columns:
+                    interrupted.done = (*self._ode_rows(times, columns, a), "ode")
+                raise
             columns.append(x)
             start = t
+        return self._ode_rows(times, columns, a)
+
+    def _ode_rows(self, times, columns: list, a: float):
+        """(states, lam) of the ODE's states at the first len(columns) times."""
+        model = self.model
         states = np.array(columns).T
         done = times[None, :states.shape[1]]
         q_block, v_block = states[:model.n_q], states[model.n_q:]
@@ -319,22 +333,25 @@ class _Stepper:
                  f"{t1:.6g} ({why}){dae}; the joints whose "
                  "rows are closest to dependent (a singular configuration?):")
         return AnalysisError(FailureContext(t0, cause, dependent_joints(
-            functions, functions.matrix("phi_q", t0, q)), "weight in the dependency"))
+            functions, functions.matrix("phi_q", t0, q),
+            limits=self.settings.assembly.linear_algebra), "weight in the dependency"))
 
 
-def algebraic_tolerances(rtol: float, floor: float, v_dot, lam, n_z: int) -> np.ndarray:
+def algebraic_tolerances(rtol: float, floor: float, v_dot, lam, n_z: int,
+                         mu_tolerance: float = DEFAULT.mu_tolerance) -> np.ndarray:
     """Absolute tolerances of [v_dot, lam, mu] in IDAS's Newton test: for v_dot and for lam
-    rtol times the largest of the group at the start, at least `floor`; MU_TOL for mu.
+    rtol times the largest of the group at the start, at least `floor`; mu_tolerance for mu.
 
     Per group, not per component: a component that is 0 along the motion (the out-of-plane
     accelerations and reactions of a planar mechanism) carries roundoff of the size of its
     group's largest, which an absolute tolerance of a smaller size never lets converge.
     Andrews' squeezer (accelerations up to 7e3, reactions 1e2) failed at t = 0 with
-    Z_TOL for every component, at every rtol from 1e-6 to 1e-10. mu is 0 along the motion and
-    acts only through q' = q_dot + Phi_q^T mu, so the positions' own convergence test covers
-    it; its own test, with Z_TOL, failed on the squeezer whatever its other tolerances."""
+    the algebraic tolerance 1e-8 for every component, at every rtol from 1e-6 to 1e-10. mu is
+    0 along the motion and acts only through q' = q_dot + Phi_q^T mu, so the positions' own
+    convergence test covers it; its own test, with 1e-8, failed on the squeezer whatever its
+    other tolerances."""
     n_v, m = len(v_dot), len(lam)
-    out = np.full(n_z, MU_TOL)
+    out = np.full(n_z, mu_tolerance)
     out[:n_v] = max(floor, rtol * np.max(np.abs(v_dot), initial=0.0))
     out[n_v:n_v + m] = max(floor, rtol * np.max(np.abs(lam), initial=0.0))
     return out
@@ -362,7 +379,9 @@ class _Restart(Exception):
 
 def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                  atol: float, t0: float = 0.0, formulation: str = "rp",
-                 progress=None, stabilization: str = "ggl", extra_events=()) -> Result:
+                 progress=None, stabilization: str = STABILIZATION, extra_events=(),
+                 settings: DynamicsSolver = DEFAULT,
+                 workspace: Workspace | None = None) -> Result:
     """By the stabilized index-2 DAE (ggl) or the index-1 DAE with projections; a chunk of
     output intervals the index-2 DAE fails on is done by the index-1 one (metadata
     ggl_failed_at, ggl_failures). If the index-1 DAE fails too (IFToMM A02 at its flat poses),
@@ -373,9 +392,9 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
 
     The model's `events:` and `extra_events` (runtime.events.Event, declared by code) are
     located and recorded in Result.events; without any, no event work is done."""
-    model = _Model(functions, formulation)
+    model = _Model(functions, formulation, settings, workspace)
     stepper = _Stepper(model, rtol, atol, stabilization)
-    stepper.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
+    stepper.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
     try:
         return _run(model, stepper, t0, t_end, step, atol, progress, extra_events)
     except _Restart as restart:
@@ -385,52 +404,73 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
 
 def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
          progress, extra_events=()) -> Result:
-    functions = model.functions
+    functions, settings = model.functions, model.settings
     result = Result("dynamics", on_row=progress)
-    watch = events.watch(functions, result, extra_events, stepper.options["reltol"])
-    q, q_dot = assembly.initial_state(functions, t0)
+    watch = events.watch(functions, result, extra_events, stepper.options["reltol"],
+                         settings.event_iterations, model.workspace)
+    q, q_dot = assembly.initial_state(functions, t0, settings.assembly, model.workspace)
     v = velocities(functions, model.name, q, q_dot)
     mask = model.mask(t0, q)
     rows = Rows(functions, model.name, (model.n_q, model.n_v, model.m), mask,
-                drift_tolerance(atol), step)
+                drift_tolerance(atol, settings), step, model.workspace)
     times = output_times(t0, t_end, step)
-    k, projections = 0, 0
-    stepper.start(t0, len(times) - 1, progress is not None or events.has_stop(watch))
+    chunks = stepper.start(t0, len(times) - 1,
+                           progress is not None or events.has_stop(watch))
+    counts = {"projections": 0}
+
+    def block(t: float, chunk: np.ndarray, state) -> Block:
+        """One solver call from (t, state) over `chunk`: the rows up to the first drifted
+        one, projected there (index-1 DAE), or all of them; those computed before a signal
+        stopped it, attached to the Interrupted (runtime.driver)."""
+        q, v = state
+        try:
+            states, lams, kind = stepper.integrate(t, chunk, q, v, mask)
+        except Interrupted as interrupted:
+            if getattr(interrupted, "done", None) is not None:
+                interrupted.block = made(t, chunk, (q, v), *interrupted.done)
+            raise
+        return made(t, chunk, (q, v), states, lams, kind)
+
+    def made(t: float, chunk: np.ndarray, start, states, lams, kind: str) -> Block:
+        """The Block of the states and multipliers at the leading times of `chunk`."""
+        q, v = start
+        used = states.shape[1]
+        drifted = rows.first_drifted(chunk[:used], states) if kind == "projection" else None
+        if drifted is not None:  # project there, record up to it, restart IDAS from it
+            used, t_drift = drifted + 1, chunk[drifted]
+            q_d, v_d, _ = rows.split(states[:, drifted])
+            q_d, v_d = assembly.project(functions, model.form, t_drift, q_d, v_d,
+                                        penalty(functions, model.form, q_d, settings),
+                                        accept=0.1 * rows.tolerance,
+                                        settings=settings.assembly,
+                                        fallback=settings.fallback, workspace=model.workspace)
+            v_dot, lam = model.accelerations(t_drift, q_d, v_d, mask)
+            states[:, drifted], lams[:, drifted] = np.concatenate([q_d, v_d, v_dot]), lam
+            counts["projections"] += 1
+        done, states, lams = chunk[:used], states[:, :used], lams[:, :used]
+
+        def state_at(j: int):
+            return rows.split(states[:, j])[:2]
+
+        def probe(t_start: float, start, t_trial: float, t_stop: float):
+            found, lam = stepper.probe(kind, t_start, t_trial, t_stop, *start, mask)
+            return rows.rows(np.array([t_trial]), found, lam), rows.split(found[:, 0])[:2]
+
+        return Block(done, rows.rows(done, states, lams), state_at(used - 1), (q, v),
+                     state_at, probe, restarted=drifted is not None)
+
     try:
         v_dot, lam = model.accelerations(times[0], q, v, mask)
         first = rows.rows(times[:1], np.concatenate([q, v, v_dot])[:, None], lam[:, None])
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)
-        while k < len(times) - 1:
-            chunk = times[k + 1:k + 1 + stepper.chunk]
-            states, lams, kind = stepper.integrate(times[k], chunk, q, v, mask)
-            used = states.shape[1]
-            drifted = rows.first_drifted(chunk[:used], states) if kind == "projection" else None
-            if drifted is not None:  # project there, record up to it, restart IDAS from it
-                used, t = drifted + 1, chunk[drifted]
-                q, v, _ = rows.split(states[:, drifted])
-                q, v = assembly.project(functions, model.form, t, q, v,
-                                        penalty(functions, model.form, q),
-                                        accept=0.1 * rows.tolerance)
-                v_dot, lam = model.accelerations(t, q, v, mask)
-                states[:, drifted], lams[:, drifted] = np.concatenate([q, v, v_dot]), lam
-                projections += 1
-            if watch is None:
-                rows.record(result, chunk[:used], states[:, :used], lams[:, :used])
-            else:
-                _watched(watch, rows, stepper, kind, mask, times[k], (q, v), chunk[:used],
-                         states[:, :used], lams[:, :used])
-            q, v, _ = rows.split(states[:, used - 1])
-            k += used
-            stepper.adapt(used, drifted is not None)
-    except events.Stopped:
-        pass
+        drive(result, times, (q, v), block, chunks, watch)
     except AnalysisError as error:
         error.partial = result
         raise
     result.metadata.update(rtol=stepper.options["reltol"], atol=atol,
-                           formulation=model.name, projections=projections,
+                           formulation=model.name, projections=counts["projections"],
                            integrator="projected_rk4" if stepper.on_ode else "idas",
                            stabilization=stepper.stabilization,
                            ggl_failed_at=stepper.ggl_failures[0] if stepper.ggl_failures else None,
@@ -442,15 +482,3 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
                            dae_failed_at=stepper.switched_at, dropped_rows=int(mask.sum()),
                            idas_calls=stepper.idas_calls, idas_steps=stepper.idas_steps)
     return result
-
-
-def _watched(watch: events.Watch, rows: Rows, stepper: _Stepper, kind: str, mask, t0: float,
-             start, times, states, lams) -> None:
-    """Records a block through the events' watch: an event's trial points integrate from the
-    row before them by what made the block."""
-    def probe(t_start: float, state, t: float, t_end: float):
-        found, lam = stepper.probe(kind, t_start, t, t_end, *state, mask)
-        return rows.rows(np.array([t]), found, lam), rows.split(found[:, 0])[:2]
-
-    watch.record(t0, start, times, lambda j: rows.split(states[:, j])[:2],
-                 rows.rows(times, states, lams), probe)

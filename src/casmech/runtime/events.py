@@ -30,20 +30,22 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import DynamicsSolver
 from casmech.equations import readings
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, solver_reason
-from casmech.runtime import interrupts
+from casmech.runtime import cancel
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace, of
 
 DIRECTIONS = {"rising": (1,), "falling": (-1,), "both": (1, -1)}
 SIGNS = {1: "rising", -1: "falling"}
 ACTIONS = ("stop", "log")
 STOPPED = "stopped by event"  # Result.status of a run a stop event ended
-MAX_ITERATIONS = 100  # Illinois steps per crossing (a few tens at most in practice)
-ULPS = 64  # the narrowest bracket location stops at, in units of eps * |t|
+ULPS = 64  # the narrowest bracket location stops at, in units of eps * |t| (a roundoff floor)
+ITERATIONS = DynamicsSolver().event_iterations  # Illinois steps per crossing, by default
 
 
 @dataclass(frozen=True)
@@ -94,24 +96,24 @@ def event_function(functions: SystemFunctions, when) -> ca.Function:
     return ca.Function("event", [x.t, x.q, x.q_dot, x.q_ddot, lam], [value])
 
 
-def model_events(functions: SystemFunctions) -> tuple[Event, ...]:
-    """The model's `events:` as Events (built once per bundle)."""
-    if "events" not in functions.derived:
-        functions.derived["events"] = tuple(
-            Event(e.name, event_function(functions, e.when), e.direction, e.action)
-            for e in functions.ir.analysis.events)
-    return functions.derived["events"]
+def model_events(functions: SystemFunctions,
+                 workspace: Workspace | None = None) -> tuple[Event, ...]:
+    """The model's `events:` as Events (built once per workspace)."""
+    return of(functions, workspace).one("events", lambda: tuple(
+        Event(e.name, event_function(functions, e.when), e.direction, e.action)
+        for e in functions.ir.analysis.events))
 
 
 # ----------------------------------------------------------------------------- location
 def illinois(g: Callable[[float], float], a: float, b: float, ga: float, gb: float,
-             xtol: float) -> float:
+             xtol: float, iterations: int = ITERATIONS) -> float:
     """A zero of g in [a, b] (ga, gb of opposite signs or one of them 0) by the Illinois
-    method, to a bracket `xtol` wide; the last trial point (whose value g computed)."""
+    method, to a bracket `xtol` wide or after `iterations` steps; the last trial point (whose
+    value g computed)."""
     if gb == 0:
         return b
     c, side = b, 0
-    for _ in range(MAX_ITERATIONS):
+    for _ in range(iterations):
         if b - a <= xtol:
             break
         c = (a * gb - b * ga) / (gb - ga)
@@ -152,8 +154,10 @@ Probe = Callable[[float, Any, float, float], tuple[Rows, Any]]
 class Watch:
     """Finds, locates and records the events of one run (see the module docstring)."""
 
-    def __init__(self, events: Sequence[Event], result: Result, rtol: float = 0.0):
+    def __init__(self, events: Sequence[Event], result: Result, rtol: float = 0.0,
+                 iterations: int = ITERATIONS):
         self.events, self.result, self.rtol = tuple(events), result, rtol
+        self.iterations = iterations
         self.values = stacked([e.function for e in events])
         self.values_at = ColumnCall(self.values)
         self.last: np.ndarray | None = None  # the events' values at the last row
@@ -222,7 +226,7 @@ class Watch:
             try:
                 return probe(a, state, t, b)[0]
             except RuntimeError as error:  # the integrator failed on the way to t
-                interrupts.check(error)
+                cancel.check(error)
                 cause = (f"locating event '{event.name}' between t = {a:.6g} and {b:.6g}: the "
                          f"integrator failed before t = {t:.10g} ({solver_reason(error)})")
                 raise AnalysisError(FailureContext(a, cause, [], "")) from None
@@ -232,7 +236,7 @@ class Watch:
             return float(self.evaluate([t], trials[t])[i, 0])
 
         xtol = max(ULPS * np.finfo(float).eps, self.rtol) * max(abs(a), abs(b), b - a)
-        t = illinois(value, a, b, ga, gb, xtol)
+        t = illinois(value, a, b, ga, gb, xtol, self.iterations)
         row = trials[t] if t in trials else row_at(t)
         return EventRecord(event.name, float(t), SIGNS[1 if gb > ga else -1], event.action), row
 
@@ -246,11 +250,12 @@ class Watch:
 
 
 def watch(functions: SystemFunctions, result: Result, extra: Sequence[Event] = (),
-          rtol: float = 0.0) -> Watch | None:
+          rtol: float = 0.0, iterations: int = ITERATIONS,
+          workspace: Workspace | None = None) -> Watch | None:
     """The Watch of a run over the model's events and `extra` ones, locating to the run's
     rtol; None without any (the run then does no event work at all)."""
-    events = (*model_events(functions), *extra)
-    return Watch(events, result, rtol) if events else None
+    events = (*model_events(functions, workspace), *extra)
+    return Watch(events, result, rtol, iterations) if events else None
 
 
 def has_stop(watcher: Watch | None) -> bool:

@@ -30,6 +30,7 @@ from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.model.ir import RowInfo
+from casmech.runtime.workspace import Workspace, of
 
 
 class _Overlay(Mapping):
@@ -102,8 +103,7 @@ def _velocities(functions: SystemFunctions, joint_rows: int) -> SystemFunctions:
 def _overlay(functions: SystemFunctions, replaced: dict, held: tuple[RowInfo, ...],
              joint_rows: int) -> SystemFunctions:
     rows = (*functions.rows[:joint_rows], *held, *functions.rows[joint_rows:])
-    return replace(functions, functions=_Overlay(functions.functions, replaced), rows=rows,
-                   derived={})
+    return replace(functions, functions=_Overlay(functions.functions, replaced), rows=rows)
 
 
 @dataclass
@@ -152,18 +152,20 @@ def _diagnostic(code: str, row: RowInfo, message: str, hint: str, joints) -> Dia
     return Diagnostic(code, f"joints[{index}].initial.{key}", message, row.source, hint=hint)
 
 
-def holds(functions: SystemFunctions) -> Holds | None:
-    """The Holds of a bundle whose joints have `initial:` values (built once), else None."""
+def holds(functions: SystemFunctions, workspace: Workspace | None = None) -> Holds | None:
+    """The Holds of a bundle whose joints have `initial:` values (built once per workspace),
+    else None."""
     ir = functions.ir
     if ir.reference_pose is None and not any(joint.initial for joint in ir.joints):
         return None
-    if "initial_holds" not in functions.derived:
+
+    def build() -> Holds:
         joint_rows = functions.n_joint_rows
         positions, count = _positions(functions, joint_rows)
         reference = (np.asarray(ir.reference_pose, float) if ir.reference_pose is not None
                      else np.concatenate([*(b.r0 for b in ir.bodies),
                                           *(b.p0 for b in ir.bodies)]))
-        functions.derived["initial_holds"] = Holds(
-            positions, _velocities(functions, joint_rows), reference,
-            initial_rows.span(ir), count)
-    return functions.derived["initial_holds"]
+        return Holds(positions, _velocities(functions, joint_rows), reference,
+                     initial_rows.span(ir), count)
+
+    return of(functions, workspace).one("initial_holds", build)

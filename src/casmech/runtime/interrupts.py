@@ -1,26 +1,20 @@
-"""Stopping an analysis on SIGINT or SIGTERM, promptly, keeping the rows computed so far.
+"""SIGINT and SIGTERM stop an analysis promptly, keeping the rows computed so far.
 
-`trap()` (used by `casmech run`) installs a handler for both signals. The first signal makes an
-`errors.Interrupted` pending, an AnalysisError, so the analyses attach the rows they have
-computed (`partial`) exactly as they do for a failure; the caller writes them and exits 128 +
-the signal's number. It is raised at a safe point:
-
-- inside an integrator (IDAS, CVODES): at once, which stops the solver; CasADi turns it into a
-  RuntimeError, and the code that catches CasADi's RuntimeError there calls `check()` first,
-  so an interrupt is never taken for a solver failure (and retried). Only code inside a
-  `solver()` block (the integrator calls of runtime.dynamics and runtime.joint_dynamics, which
-  catch that RuntimeError) is such a place, and only while CasADi's Function.call runs: a
-  raise elsewhere inside CasADi's Python wrappers would come out as a garbled
-  NotImplementedError;
-- otherwise at the next row (`watch` wraps the row callback of casmech.analyze) or at the next
-  `check()` of the caller (after loading, after compiling).
+`trap()` (used by `casmech run` and `casmech sweep`) installs a handler for both signals that
+cancels the run's runtime.cancel.CancelToken: the analysis raises errors.Interrupted (with the
+rows computed so far in `partial`) at its next poll, between solver calls and blocks of rows,
+or at once inside an integrator's evaluation (runtime.cancel.solving: the handler raises there,
+which stops IDAS or CVODES within one residual evaluation). The caller writes the rows and
+exits 128 + the signal's number. A run that had computed every row when the signal came is
+complete.
 
 A second signal says it is stopping; a third ends the process at once (exit 128 + signal, the
 rows not written; metadata.json still says "running"). While results are written (`saving()`)
-signals wait.
+a signal waits.
 
-Outside `trap()` (the Python API), Ctrl-C raises KeyboardInterrupt as usual; `check()` turns
-the RuntimeError CasADi makes of it back into an `Interrupted`, which is a KeyboardInterrupt.
+Outside `trap()` (the Python API), casmech.analyze handles Ctrl-C the same way for the
+duration of a run in the main thread (`guard`), so the Interrupted it raises, a
+KeyboardInterrupt, carries the rows.
 """
 
 from __future__ import annotations
@@ -28,105 +22,98 @@ from __future__ import annotations
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
+import threading
+from collections.abc import Iterator
 from contextlib import contextmanager
 
-from casmech.errors import Interrupted
+from casmech.runtime import cancel
+from casmech.runtime.cancel import CancelToken
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 ABANDON = 3  # the signal that ends the process without writing
 
-_pending: Interrupted | None = None
-_count = 0
-_saving = 0
-_solvers = 0  # solver() blocks entered and not left
-_casadi_call = None  # code object of casadi.Function.call
+
+class _Trap:
+    """The token signals cancel, how many came, whether results are being written, whether a
+    third signal ends the process (the command line's, not a Python caller's)."""
+
+    def __init__(self, token: CancelToken, abandon: bool = True):
+        self.token, self.count, self.saving, self.abandon = token, 0, 0, abandon
+
+    def handler(self, signum: int, frame) -> None:
+        self.count += 1
+        name = signal.Signals(signum).name
+        if self.abandon and self.count >= ABANDON:
+            print(f"casmech: {name} again: stopped without writing the rows", file=sys.stderr)
+            os._exit(128 + signum)
+        if self.token.cancelled and not self.saving and self.abandon:
+            print(f"casmech: stopping at the next row ({name} once more ends at once, without "
+                  "writing the rows)", file=sys.stderr)
+        running = cancel.current() or self.token  # a caller's own token, if it gave one
+        for token in {id(self.token): self.token, id(running): running}.values():
+            token.cancel(signum)
+        if not self.saving and cancel.armed():
+            running.check()  # inside a solver call: stops it
 
 
-def pending() -> Interrupted | None:
-    return _pending
+_traps: list[_Trap] = []  # trap() blocks entered and not left, innermost last
+
+
+def pending() -> int | None:
+    """The signal that came within the innermost trap(), if any."""
+    return _traps[-1].token.signum if _traps else None
 
 
 def check(error: BaseException | None = None) -> None:
-    """Raise the pending interrupt, if any; or an Interrupted for a RuntimeError CasADi made of
-    a KeyboardInterrupt (`error`)."""
-    if _pending is not None:
-        raise _pending
-    if error is not None and "KeyboardInterrupt" in str(error):
-        raise Interrupted(signal.SIGINT) from None
-
-
-def watch(callback: Callable[[float], None] | None) -> Callable[[float], None]:
-    """A row callback (casmech.analyze's `progress`) that raises a pending interrupt."""
-    def on_row(t: float) -> None:
-        check()
-        if callback is not None:
-            callback(t)
-
-    return on_row
-
-
-def _in_solver(frame) -> bool:
-    """Whether the signal came while CasADi's Function.call ran inside a solver() block."""
-    return _solvers > 0 and frame is not None and frame.f_code is _casadi_call
-
-
-def _handler(signum: int, frame) -> None:
-    global _pending, _count
-    _count += 1
-    name = signal.Signals(signum).name
-    if _count >= ABANDON:
-        print(f"casmech: {name} again: stopped without writing the rows", file=sys.stderr)
-        os._exit(128 + signum)
-    if _pending is None:
-        _pending = Interrupted(signum)
-    elif not _saving:
-        print(f"casmech: stopping at the next row ({name} once more ends at once, without "
-              "writing the rows)", file=sys.stderr)
-    if not _saving and _in_solver(frame):
-        raise _pending
-
-
-def _register() -> None:
-    global _casadi_call
-    import casadi
-
-    _casadi_call = casadi.Function.call.__code__
+    """Raise Interrupted if a signal came (the innermost trap's token, else the running
+    run's); or for a RuntimeError CasADi made of a KeyboardInterrupt (`error`)."""
+    if _traps:
+        _traps[-1].token.check(error)
+    else:
+        cancel.check(error)
 
 
 @contextmanager
-def trap() -> Iterator[None]:
-    """SIGINT and SIGTERM raise Interrupted within this block (restored after it)."""
-    global _pending, _count
-    _register()
-    previous = {number: signal.signal(number, _handler) for number in SIGNALS}
-    _pending, _count = None, 0
+def trap(token: CancelToken | None = None, signals=SIGNALS,
+         abandon: bool = True) -> Iterator[CancelToken]:
+    """`signals` cancel `token` (a new one by default) within this block, the run-in-progress
+    token of runtime.cancel; with `abandon`, the third ends the process. The previous
+    handlers are restored after the block."""
+    found = _Trap(token or CancelToken(), abandon)
+    previous = {number: signal.signal(number, found.handler) for number in signals}
+    _traps.append(found)
     try:
-        yield
+        with cancel.running(found.token):
+            yield found.token
     finally:
+        _traps.remove(found)
         for number, handler in previous.items():
             signal.signal(number, handler)
-        _pending, _count = None, 0
+
+
+@contextmanager
+def guard(token: CancelToken) -> Iterator[CancelToken]:
+    """Ctrl-C cancels `token` during this block when no trap() is active, this is the main
+    thread and SIGINT has Python's default handler (a program's own handler is left alone);
+    otherwise the token is only the running one."""
+    plain = (not _traps and threading.current_thread() is threading.main_thread()
+             and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+    if not plain:
+        with cancel.running(token):
+            yield token
+        return
+    with trap(token, (signal.SIGINT,), abandon=False):
+        yield token
 
 
 @contextmanager
 def saving() -> Iterator[None]:
     """Within this block a signal does not interrupt (the rows are being written)."""
-    global _saving
-    _saving += 1
+    found = _traps[-1] if _traps else None
+    if found is not None:
+        found.saving += 1
     try:
         yield
     finally:
-        _saving -= 1
-
-
-@contextmanager
-def solver() -> Iterator[None]:
-    """Within this block a signal stops CasADi's integrator at once: the code inside catches
-    the RuntimeError CasADi makes of it and calls check() before treating it as a failure."""
-    global _solvers
-    _solvers += 1
-    try:
-        yield
-    finally:
-        _solvers -= 1
+        if found is not None:
+            found.saving -= 1

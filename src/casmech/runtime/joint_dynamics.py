@@ -9,7 +9,10 @@ same state. Loop closures start from their consistent multipliers (the accelerat
 constraints solved for lam; the ABA's accelerations are affine in lam), with the rows that
 depend on the others at t0 masked out; the reactions are then reported as the minimum-norm
 ones, as the r-p DAE does. Each results row holds the r-p state the tree gives and every joint
-row's multiplier.
+row's multiplier. The grid is integrated in chunks of `joint_chunk` output intervals
+(core.options.DynamicsSolver) by runtime.driver, a chunk a solver fails on again in halves.
+The spanning tree, the joint system, the starts and the integrators are kept in the run's
+workspace (runtime.workspace).
 """
 
 from __future__ import annotations
@@ -22,50 +25,39 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, FailureContext, solver_reason
+from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
 from casmech.formulations.articulated import local_motion
-from casmech.formulations.joint_system import LIBRARY_FUNCTIONS, JointSystem, build, layout
+from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, TreeJoint, spanning_tree
-from casmech.runtime import assembly, contact_steps, events, interrupts
+from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
-from casmech.runtime.dynamics import Z_TOL, algebraic_tolerances, initial_step, minimum_norm
+from casmech.runtime.driver import Block, Chunks, completed, drive
+from casmech.runtime.dynamics import algebraic_tolerances, initial_step, minimum_norm
 from casmech.runtime.kinematics import output_times
-from casmech.runtime.memo import kept
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace, of
 
-MAX_STEPS = 50000  # steps per output interval before SUNDIALS gives up (as runtime.dynamics)
-CHUNK = 1000  # output intervals per integrator call (a restart between calls)
+DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
-# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds STIFF
-# (the measurements behind it: docs/decisions/method-auto.md).
-STIFF = 10.0
+# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds
+# stiff_threshold (the measurements behind it: docs/decisions/method-auto.md).
 
 # On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
-# with the tree: the ODE up to COMPILED_ODE_BODIES, the results rows (called once per output
-# block) up to COMPILED_MOTION_BODIES; larger trees stay interpreted. An ODE above
-# QUICK_BUILD_INSTRUCTIONS SX instructions is built at -O0 unless $CASMECH_CFLAGS says
+# with the tree: the ODE up to compile.ode_bodies, the results rows (called once per output
+# block) up to compile.motion_bodies; larger trees stay interpreted. An ODE above
+# compile.quick_build_instructions SX instructions is built at -O0 unless $CASMECH_CFLAGS says
 # otherwise (gcc -O1 time grows faster than the function; docs/decisions/joint-tree-compiled.md).
-COMPILED_ODE_BODIES = 128
-COMPILED_MOTION_BODIES = 32
-QUICK_BUILD_INSTRUCTIONS = 30000
-
-KEPT_INTEGRATORS = 8  # CVODES (by grid, options) and IDAS (also by start) instances kept
-KEPT_MAPS = 16  # results rows' column calls (one per motion function), kept per system
-KEPT_STARTS = 8  # initial states kept per bundle (by t0)
-
-STIFF_STATES = 200  # larger ODEs are not examined (a dense eigenvalue problem): Adams
 
 
-def tree_of(functions: SystemFunctions) -> Tree:
-    """The bundle's spanning tree (formulations.tree), found once per bundle."""
-    if "spanning_tree" not in functions.derived:
-        functions.derived["spanning_tree"] = spanning_tree(functions.ir)
-    return functions.derived["spanning_tree"]
+def tree_of(functions: SystemFunctions, workspace: Workspace | None = None) -> Tree:
+    """The bundle's spanning tree (formulations.tree), found once per workspace."""
+    return of(functions, workspace).one("spanning_tree", lambda: spanning_tree(functions.ir))
 
 
 def _compiled(functions: SystemFunctions) -> bool:
@@ -75,35 +67,41 @@ def _compiled(functions: SystemFunctions) -> bool:
     return codegen is not None and codegen.mode_of(functions) == "compiled"
 
 
-def lags_bundle(functions: SystemFunctions) -> bool:
+def lags_bundle(functions: SystemFunctions, settings: JointCompile = DEFAULT.compile) -> bool:
     """Whether the bundle is compiled and its joint system would not be: a parametric bundle
     (functions.data) whose library holds no joint functions (built for another analysis; it
-    would compile per value) or a bundle above COMPILED_ODE_BODIES."""
+    would compile per value) or a bundle above settings.ode_bodies."""
     return _compiled(functions) and (
-        functions.n_bodies > COMPILED_ODE_BODIES or (
-            functions.data is not None and LIBRARY_FUNCTIONS not in functions.derived))
+        functions.n_bodies > settings.ode_bodies or (
+            functions.data is not None and functions.joint_functions is None))
 
 
-def joint_system(functions: SystemFunctions) -> JointSystem:
-    """The bundle's joint system, built once per bundle: from a parametric library's joint
-    functions (library_system), else over the bundle's IR, and with a compiled bundle the
-    tree's ODE or the loops' DAE and the results rows compiled too (compiled_system,
-    lags_bundle)."""
-    if "joint_system" not in functions.derived:
-        if LIBRARY_FUNCTIONS in functions.derived:
-            system = library_system(functions)
-        else:
-            system = build(functions.ir, tree_of(functions))
-            if _compiled(functions) and not lags_bundle(functions):
-                system = compiled_system(system, functions.n_bodies <= COMPILED_MOTION_BODIES)
-        functions.derived["joint_system"] = system
-    return functions.derived["joint_system"]
+def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
+                 workspace: Workspace | None = None) -> JointSystem:
+    """The bundle's joint system, built once per workspace and compile settings: from a
+    parametric library's joint functions (library_system), else over the bundle's IR, and
+    with a compiled bundle the tree's ODE or the loops' DAE and the results rows compiled too
+    (compiled_system, lags_bundle)."""
+    workspace = of(functions, workspace)
+    compile_ = settings.compile
+
+    def make() -> JointSystem:
+        if functions.joint_functions is not None:
+            return library_system(functions, workspace)
+        system = build(functions.ir, tree_of(functions, workspace))
+        if _compiled(functions) and not lags_bundle(functions, compile_):
+            system = compiled_system(system, functions.n_bodies <= compile_.motion_bodies,
+                                     settings)
+        return system
+
+    return workspace.kept("joint_system", (compile_, settings.stiff_states), make)
 
 
-def library_system(functions: SystemFunctions) -> JointSystem:
+def library_system(functions: SystemFunctions,
+                   workspace: Workspace | None = None) -> JointSystem:
     """The joint system of a parametric library's functions, bound to this bundle's values
     (codegen.parametric), over the numeric IR's tree."""
-    library, tree = functions.derived[LIBRARY_FUNCTIONS], tree_of(functions)
+    library, tree = functions.joint_functions, tree_of(functions, workspace)
     dynamics = library["joint_dae" if tree.cut else "joint_ode"]
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
@@ -111,20 +109,22 @@ def library_system(functions: SystemFunctions) -> JointSystem:
                        given_jacobian=library.get("joint_jacobian"))
 
 
-def compiled_system(system: JointSystem, with_motion: bool = True) -> JointSystem:
+def compiled_system(system: JointSystem, with_motion: bool = True,
+                    settings: DynamicsSolver = DEFAULT) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache; with the tree's ODE its forward derivative where method auto may choose
-    BDF (its Jacobian by forward sweeps: casadi's externals find fwd1_<name> in their
-    library), with the DAE its Jacobian (JointSystem.problem)."""
+    BDF (up to settings.stiff_states; its Jacobian by forward sweeps: casadi's externals find
+    fwd1_<name> in their library), with the DAE its Jacobian (JointSystem.problem)."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
-    if not system.n_cut and system.layout.n_x <= STIFF_STATES:
+    if not system.n_cut and system.layout.n_x <= settings.stiff_states:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
-    built = codegen.compile_functions(functions, toolchain=_toolchain(system),
+    toolchain = _toolchain(system, settings.compile.quick_build_instructions)
+    built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
                    motion=built.get("joint_motion", system.motion))
@@ -148,12 +148,13 @@ def constant_inverse(kind: str) -> np.ndarray | None:
     return np.linalg.pinv(subspaces[0])
 
 
-def _toolchain(system: JointSystem):
-    """The default toolchain, at -O0 for a large tree (QUICK_BUILD_INSTRUCTIONS) when the
-    user chose no flags."""
+def _toolchain(system: JointSystem, quick_build_instructions: int):
+    """The default toolchain, at -O0 for an ODE of more than quick_build_instructions SX
+    instructions when the user chose no flags."""
+
     from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
 
-    quick = (system.dynamics.n_instructions() > QUICK_BUILD_INSTRUCTIONS
+    quick = (system.dynamics.n_instructions() > quick_build_instructions
              and os.environ.get(FLAGS_ENVIRONMENT) is None)
     return Toolchain(flags=("-O0",)) if quick else Toolchain()
 
@@ -186,11 +187,11 @@ def initial_state(system: JointSystem, q, q_dot) -> np.ndarray:
 class _Loops:
     """Consistent multipliers of the loop closures and the rows masked out at t0."""
 
-    def __init__(self, system: JointSystem, t0: float, x0):
+    def __init__(self, system: JointSystem, t0: float, x0, settings: Assembly = DEFAULT.assembly):
         self.system, m = system, system.n_cut
         self.n_z = 2 * m
         jacobian = np.array(system.velocity_jacobian(t0, x0).full()) if m else np.zeros((0, 0))
-        keep = independent_rows(jacobian) if m else []
+        keep = independent_rows(jacobian, settings.linear_algebra) if m else []
         self.mask = 1.0 - np.array(keep, float)
 
     def z(self, t: float, x) -> np.ndarray:
@@ -219,10 +220,10 @@ class _Integrator:
     """One SUNDIALS call over a chunk of the output grid: CVODES for a tree, IDAS for loops."""
 
     def __init__(self, system: JointSystem, loops: _Loops, rtol: float, atol: float,
-                 method: str, system_cache: dict):
-        self.system, self.loops, self.system_cache = system, loops, system_cache
-        self.options = {"reltol": rtol, "abstol": atol, "max_num_steps": MAX_STEPS,
-                        "disable_internal_warnings": True}
+                 method: str, workspace: Workspace, settings: DynamicsSolver = DEFAULT):
+        self.system, self.loops, self.workspace = system, loops, workspace
+        self.settings = settings
+        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True}
         if not system.n_cut:
             self.options |= METHODS[method]
         self.steps = 0
@@ -255,7 +256,8 @@ class _Integrator:
     def _cvodes(self, problem, t0: float, times) -> NamedCall:
         """CVODES over the grid, kept for a later run over the same grid with the same options
         (docs/decisions/joint-run-fixed-costs.md)."""
-        return self._kept("cvodes", (id(problem),), problem, t0, times, lambda: self.options)
+        return self._kept("cvodes", (problem is self.system.functional_problem,), problem, t0,
+                          times, lambda: self.options)
 
     def _idas(self, t0: float, times, x, z, first: float | None) -> NamedCall:
         """IDAS over the grid from (t0, x, z); its options depend on that state (_dae_options),
@@ -266,15 +268,14 @@ class _Integrator:
                           lambda: self.options | self._dae_options(t0, times, x, z, first))
 
     def _kept(self, plugin: str, key: tuple, problem, t0: float, times, options) -> NamedCall:
-        """casadi's `plugin` integrator of `problem` over the grid with options(), kept with
-        the system by `key`, the start and grid and self.options, and called through a buffer
-        (runtime.buffers.NamedCall). An entry keeps its problem alive, so a problem's id in a
-        key is not reused."""
-        key = (*key, float(t0), tuple(float(t) for t in times),
+        """casadi's `plugin` integrator of `problem` over the grid with options(), kept in the
+        workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
+        of several compile settings), the start and grid and self.options, and called through
+        a buffer (runtime.buffers.NamedCall)."""
+        key = (*key, self.system.dynamics, float(t0), tuple(float(t) for t in times),
                tuple(sorted(self.options.items())))
-        return kept(self.system_cache.setdefault(plugin, {}), key, lambda: (
-            problem, NamedCall(ca.integrator("joint", plugin, problem, t0, list(times),
-                                             options()))), KEPT_INTEGRATORS)[1]
+        return self.workspace.kept(plugin, key, lambda: NamedCall(
+            ca.integrator("joint", plugin, problem, t0, list(times), options())))
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
@@ -287,75 +288,113 @@ class _Integrator:
         q, _, q_ddot, _ = (np.array(v.full()).ravel()
                            for v in system.motion(t0, x, z, np.ones(nb)))
         n = 3 * nb
+        settings = self.settings
+        step0 = settings.initial_step or initial_step(
+            q[:n], q_ddot[:n], self.options["reltol"], self.options["abstol"],
+            first or times[0] - t0)
         return {"suppress_algebraic": True, "calc_ic": False, "init_xdot": list(x_dot),
-                "step0": initial_step(q[:n], q_ddot[:n], self.options["reltol"],
-                                      self.options["abstol"], first or times[0] - t0),
+                "step0": step0,
                 "abstolv": [self.options["abstol"]] * len(x) + list(algebraic_tolerances(
-                    self.options["reltol"], Z_TOL, np.zeros(0), z[:system.n_cut], len(z)))}
+                    self.options["reltol"], settings.algebraic_tolerance, np.zeros(0),
+                    z[:system.n_cut], len(z), settings.mu_tolerance))}
 
 
-def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True) -> str:
-    """method auto: "bdf" when the tree's ODE is stiff at t0 (see STIFF), else "adams".
+def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
+                  settings: DynamicsSolver = DEFAULT) -> str:
+    """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
+    "adams".
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
     solution follows, so it is not examined."""
-    if system.n_cut or not forces or not 0 < len(x0) <= STIFF_STATES:
+    if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
     jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
     if not np.all(np.isfinite(jacobian)):  # a law not differentiable at t0 (or worse: the
         return "adams"  # first row then says so); no stiffness to judge by
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
-    return "bdf" if radius * step > STIFF else "adams"
+    return "bdf" if radius * step > settings.stiff_threshold else "adams"
 
 
-def _start(functions: SystemFunctions, system: JointSystem, t0: float):
+def _start(functions: SystemFunctions, system: JointSystem, t0: float,
+           settings: Assembly, workspace: Workspace):
     """(x, z, loops, signs) of a run from t0: the file's state assembled (runtime.assembly),
     mapped to joint coordinates, the loops' consistent multipliers and the quaternion signs;
-    a function of the bundle and t0 alone, so kept with the bundle (arrays read-only)."""
+    a function of the bundle, its joint system, t0 and the assembly settings alone, so kept in
+    the workspace (arrays read-only)."""
     def build():
-        q0, q_dot0 = assembly.initial_state(functions, t0)
+        q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
-        loops = _Loops(system, t0, x)
+        loops = _Loops(system, t0, x, settings)
         z = loops.z(t0, x)
         signs = quaternion_signs(system, t0, x, z, q0, functions.n_bodies)
         for array in (x, z, signs, loops.mask):
             array.setflags(write=False)
         return x, z, loops, signs
 
-    return kept(functions.derived.setdefault("joint_starts", {}), float(t0), build,
-                KEPT_STARTS)
+    return workspace.kept("joint_starts", (float(t0), settings, system.dynamics), build)
 
 
 def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: float,
                        atol: float, t0: float = 0.0, progress=None,
-                       method: str = "auto", extra_events=()) -> Result:
+                       method: str = METHOD, extra_events=(),
+                       settings: DynamicsSolver = DEFAULT,
+                       workspace: Workspace | None = None) -> Result:
     """The model's `events:` and `extra_events` (runtime.events.Event) are located and
     recorded in Result.events; without any, no event work is done."""
-    system = joint_system(functions)
-    x, z, loops, signs = _start(functions, system, t0)
+    workspace = of(functions, workspace)
+    system = joint_system(functions, settings, workspace)
+    x, z, loops, signs = _start(functions, system, t0, settings.assembly, workspace)
     if method == "auto":
         method = choose_method(system, t0, x, step,
-                               bool(functions.ir.forces or functions.ir.motors))
-    recorder = _Recorder(functions, system, signs, loops.mask)
-    integrate = _Integrator(system, loops, rtol, atol, method, functions.derived)
-    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0)  # contact
+                               bool(functions.ir.forces or functions.ir.motors), settings)
+    recorder = _Recorder(functions, system, signs, loops.mask, workspace)
+    integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
+    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
-    recorder.watch = events.watch(functions, result, extra_events, rtol)
+    watch = events.watch(functions, result, extra_events, rtol, settings.event_iterations,
+                         workspace)
+
+    def block(t: float, chunk: np.ndarray, state) -> Block:
+        """One solver call from (t, x, z) over `chunk` (z None: the loops' consistent
+        multipliers at x, computed here; the next chunk's are never needed); the rows
+        computed before a signal stopped it, attached to the Interrupted (runtime.driver)."""
+        x, z = state
+        if z is None:
+            z = loops.z(t, x)
+        try:
+            states, algebraic = integrate(t, chunk, x, z)
+        except Interrupted as interrupted:  # the grid points done before the signal
+            done = getattr(interrupted, "outputs", None)
+            count = 0 if done is None else completed(done["xf"], done["zf"])
+            if count:
+                interrupted.block = made(t, chunk[:count], (x, z), done["xf"][:, :count],
+                                         done["zf"][:, :count] if system.n_cut
+                                         else np.zeros((0, count)))
+            raise
+        return made(t, chunk, (x, z), states, algebraic)
+
+    def made(t: float, times_done: np.ndarray, start, states, algebraic) -> Block:
+        def probe(t_start: float, at, t_trial: float, t_stop: float):
+            """To t_stop, t_trial from the interpolant (as runtime.dynamics' probe: with
+            loops, the index-2 DAE's first step is sized by the whole interval)."""
+            found, found_z = integrate(t_start, [t_trial, t_stop], *at, trial=True)
+            return (recorder.rows([t_trial], found[:, :1], found_z[:, :1]),
+                    (found[:, 0], found_z[:, 0]))
+
+        return Block(times_done, recorder.rows(times_done, states, algebraic),
+                     (states[:, -1], None), start,
+                     lambda j: (states[:, j], loops.z(times_done[j], states[:, j])), probe)
+
     try:
         first = recorder.rows(times[:1], x[:, None], z[:, None])
         result.extend(times[:1], *first)
-        if recorder.watch is not None:
-            recorder.watch.start(times[0], first)
-        k = 0
-        while k < len(times) - 1:
-            chunk = times[k + 1:k + 1 + CHUNK]
-            x, z = _advance(integrate, loops, recorder, result, times[k], chunk, x, z)
-            k += len(chunk)
-    except events.Stopped:
-        pass
+        if watch is not None:
+            watch.start(times[0], first)
+        drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch, halves=True,
+              fail=_failure)
     except AnalysisError as error:
         error.partial = result
         raise
@@ -369,28 +408,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     return result
 
 
-def _advance(integrate, loops, recorder, result, t0: float, times, x, z):
-    """Integrate over `times` from (t0, x, z) and record the rows; on a failure, the same in
-    halves, so the rows before it are kept and the error names the output interval. Returns
-    the state at the last time and None for its multipliers (z None: consistent ones from x,
-    computed here; the last chunk's are never needed)."""
-    with interrupts.solver():
-        if z is None:
-            z = loops.z(t0, x)
-        try:
-            states, algebraic = integrate(t0, times, x, z)
-        except RuntimeError as error:
-            interrupts.check(error)  # a signal is not a solver failure
-            if len(times) == 1:
-                raise _failure(t0, times[0], solver_reason(error)) from None
-            half = len(times) // 2
-            x, z = _advance(integrate, loops, recorder, result, t0, times[:half], x, z)
-            return _advance(integrate, loops, recorder, result, times[half - 1], times[half:], x, z)
-        recorder(result, times, states, algebraic, (t0, x, z), integrate, loops)
-        return states[:, -1], None
-
-
-def _failure(t0: float, t1: float, why: str) -> AnalysisError:
+def _failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
+    why = solver_reason(error)
     cause = (f"the integrator failed between t = {t0:.6g} and {t1:.6g} "
              f"({why.strip().splitlines()[-1]})")
     return AnalysisError(FailureContext(t0, cause, [], ""))
@@ -401,19 +420,18 @@ class _Recorder:
     minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
     a block by one mapped call."""
 
-    def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask):
+    def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
+                 workspace: Workspace):
         self.functions, self.system, self.signs = functions, system, signs
-        self.least_norm = kept(
-            functions.derived.setdefault("joint_least_norm", {}), mask.tobytes(),
-            lambda: ColumnCall(_least_norm(functions, system, mask)), KEPT_STARTS
-        ) if mask.any() else None
-        self.maps = functions.derived.setdefault("joint_motion_maps", {})
-        self.watch = None  # runtime.events.Watch of the run, when it has events
+        self.workspace = workspace
+        self.least_norm = workspace.kept(
+            "joint_least_norm", (mask.tobytes(), system.dynamics),
+            lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
 
     def _mapped(self) -> ColumnCall:
-        """The results rows' function over columns (kept with the functions)."""
-        return kept(self.maps, self.system.motion, lambda: ColumnCall(self.system.motion),
-                    KEPT_MAPS)
+        """The results rows' function over columns (kept in the workspace)."""
+        return self.workspace.kept("joint_motion_maps", self.system.motion,
+                                   lambda: ColumnCall(self.system.motion))
 
     def rows(self, times, states, algebraic):
         """(q, q_dot, q_ddot, lam), one row per time."""
@@ -423,27 +441,6 @@ class _Recorder:
         if self.least_norm is not None:
             (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T
-
-    def __call__(self, result: Result, times, states, algebraic, start, integrate,
-                 loops) -> None:
-        """Appends the rows of a block integrated from `start` = (t0, x, z); through the
-        events' watch when there is one (an event's trial points integrate from the row
-        before them)."""
-        if self.watch is None:
-            result.extend(times, *self.rows(times, states, algebraic))
-            return
-
-        def probe(t_start: float, state, t: float, t_end: float):
-            """To t_end, t from the interpolant (as runtime.dynamics' probe: with loops, the
-            index-2 DAE's first step is sized by the whole interval)."""
-            x, z = state
-            found, found_z = integrate(t_start, [t, t_end], x, z, trial=True)
-            return self.rows([t], found[:, :1], found_z[:, :1]), (found[:, 0], found_z[:, 0])
-
-        t0, x, z = start
-        self.watch.record(t0, (x, z), np.asarray(times, float), lambda j: (
-            states[:, j], loops.z(times[j], states[:, j])),
-            self.rows(times, states, algebraic), probe)
 
 
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:

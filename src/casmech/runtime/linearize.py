@@ -37,6 +37,7 @@ from casmech.equations.eom import FORCE_ELEMENTS, INPUT_KINDS
 from casmech.equations.functions import SystemFunctions, all_sx, build_functions
 from casmech.model.ir import ForceIR
 from casmech.numerics import kkt
+from casmech.runtime.workspace import Workspace, of
 
 
 def input_elements(functions: SystemFunctions, names: Sequence[str] | None) -> list[ForceIR]:
@@ -66,21 +67,21 @@ def input_forces(functions: SystemFunctions, names: Sequence[str] | None = None
     return labels, ca.Function("input_forces", [x.t, x.q, x.q_dot], [matrix])
 
 
-def sx_bundle(functions: SystemFunctions) -> SystemFunctions:
-    """The bundle as SX functions (a compiled bundle's model rebuilt once for AD)."""
+def sx_bundle(functions: SystemFunctions, workspace: Workspace | None = None
+              ) -> SystemFunctions:
+    """The bundle as SX functions (a compiled bundle's model rebuilt once per workspace for
+    AD)."""
     if all_sx(functions.functions):
         return functions
-    if "sx_bundle" not in functions.derived:
-        functions.derived["sx_bundle"] = build_functions(functions.ir)
-    return functions.derived["sx_bundle"]
+    return of(functions, workspace).one("sx_bundle", lambda: build_functions(functions.ir))
 
 
 def state_space(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.ndarray,
-                basis: np.ndarray, rows: Sequence[int], inputs: ca.Function
-                ) -> tuple[np.ndarray, np.ndarray]:
+                basis: np.ndarray, rows: Sequence[int], inputs: ca.Function,
+                workspace: Workspace | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(A, B) of x = [z; w] at (t, q, q_dot) (module docstring); `rows` the independent rows
     of Phi_q there, `inputs` the G of input_forces."""
-    bundle = sx_bundle(functions)
+    bundle = sx_bundle(functions, workspace)
     k, count = basis.shape[1], inputs.size2_out(0)
     z, w, u = ca.MX.sym("z", k), ca.MX.sym("w", k), ca.MX.sym("u", count)
     n_basis = ca.DM(basis)

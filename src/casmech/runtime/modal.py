@@ -34,11 +34,13 @@ from pathlib import Path
 import numpy as np
 
 from casmech.core.atomic import atomic
+from casmech.core.options import ModalOptions, ModalSolver
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.runtime import kinematics, statics
 from casmech.runtime import linearize as linear
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace
 from casmech.schema.resolved import Analysis
 
 MODE_COLUMNS = ("mode", "frequency_hz", "damping_ratio", "eigenvalue_real", "eigenvalue_imag",
@@ -47,7 +49,7 @@ MOTION = ("dx", "dy", "dz", "rx", "ry", "rz")
 # what a modal run writes beside results.csv (cli/run.py's ANALYSIS_FILES names them too,
 # to remove an earlier run's without importing this module)
 FILES = ("modes.csv", "linear_model.npz")
-REAL_CUT = 1e-9  # |Im s| <= REAL_CUT |s|: a real eigenvalue
+DEFAULT = ModalSolver()  # real_cut: |Im s| <= real_cut |s| is a real eigenvalue
 
 
 @dataclass
@@ -139,7 +141,8 @@ class LinearModel:
 
 
 def linearize(functions: SystemFunctions, system: statics.ReducedSystem,
-              inputs: Sequence[str] | None = None) -> LinearModel:
+              inputs: Sequence[str] | None = None, settings: ModalSolver = DEFAULT
+              ) -> LinearModel:
     """The linear model and modes at an equilibrium's reduced system; `inputs`: the elements
     whose force is an input (runtime.linearize; None: every effort motor)."""
     k = system.dof
@@ -152,27 +155,28 @@ def linearize(functions: SystemFunctions, system: statics.ReducedSystem,
     driven = np.linalg.solve(system.mass, system.basis.T @ generalized) if k else \
         np.zeros((0, len(names)))
     b = np.vstack([np.zeros((k, len(names))), driven])
-    return _model(functions, system.q, system.basis, a, b, names)
+    return _model(functions, system.q, system.basis, a, b, names, settings=settings)
 
 
 def linearize_at(functions: SystemFunctions, t: float, q: np.ndarray, q_dot: np.ndarray,
-                 inputs: Sequence[str] | None = None) -> LinearModel:
+                 inputs: Sequence[str] | None = None, settings: ModalSolver = DEFAULT,
+                 workspace: Workspace | None = None) -> LinearModel:
     """The linear model and modes at a state (t, q, q_dot) of a run (runtime.linearize)."""
     phi_q = functions.matrix("phi_q", t, q)
-    basis, rows = statics.basis_and_rows(phi_q)
+    basis, rows = statics.basis_and_rows(phi_q, settings.statics)
     names, forces = linear.input_forces(functions, inputs)
-    a, b = linear.state_space(functions, t, q, q_dot, basis, rows, forces)
-    return _model(functions, q, basis, a, b, names, t, q_dot)
+    a, b = linear.state_space(functions, t, q, q_dot, basis, rows, forces, workspace)
+    return _model(functions, q, basis, a, b, names, t, q_dot, settings)
 
 
 def _model(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.ndarray,
            b: np.ndarray, names: list[str], t: float | None = None,
-           q_dot: np.ndarray | None = None) -> LinearModel:
+           q_dot: np.ndarray | None = None, settings: ModalSolver = DEFAULT) -> LinearModel:
     """The LinearModel of A, B at q (outputs: the body motions of N z; D = 0)."""
     k = basis.shape[1]
     outputs = statics.motion_map(q) @ basis
     c = np.hstack([outputs, np.zeros_like(outputs)])
-    eigenvalues, shapes, vectors = _modes(functions, q, basis, a)
+    eigenvalues, shapes, vectors = _modes(functions, q, basis, a, settings)
     bodies = list(functions.body_names)
     return LinearModel(
         A=a, B=b, C=c, D=np.zeros((c.shape[0], len(names))),
@@ -183,20 +187,21 @@ def _model(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.n
         q_dot=np.zeros_like(q) if q_dot is None else q_dot)
 
 
-def _neutral(a: np.ndarray) -> tuple[np.ndarray, float]:
+def _neutral(a: np.ndarray, settings: ModalSolver) -> tuple[np.ndarray, float]:
     """(the DOF of zero stiffness as orthonormal columns in z, the threshold of |omega^2|
     below which a frequency counts as 0): the eigenvectors of S = -A[k:, :k] (M_r^-1 K_r at an
     equilibrium) whose eigenvalues are 0 within statics.neutral_threshold."""
     k = a.shape[0] // 2
     values, vectors = np.linalg.eig(-a[k:, :k])
-    threshold = statics.neutral_threshold(values.real)
+    threshold = statics.neutral_threshold(values.real, settings.statics)
     zero = np.abs(values) <= threshold
     if not zero.any():
         return np.zeros((k, 0)), threshold
     return np.linalg.qr(vectors[:, zero].real)[0], threshold
 
 
-def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.ndarray):
+def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.ndarray,
+           settings: ModalSolver):
     """(eigenvalues one per mode, sorted by |s|; mode shapes as body motions; the same modes
     in z, scaled alike: N z is the shape's motion of the coordinates). A DOF of zero
     stiffness is one mode at s = 0 shaped as its null vector of the stiffness block (A's
@@ -206,10 +211,10 @@ def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.n
     if not k:
         return (np.zeros(0, complex), np.zeros((0, functions.n_bodies, 6), complex),
                 np.zeros((0, 0), complex))
-    neutral, threshold = _neutral(a)
+    neutral, threshold = _neutral(a, settings)
     values, vectors = np.linalg.eig(a)
     size = np.abs(values)
-    real = np.abs(values.imag) <= REAL_CUT * np.maximum(size, 1e-300)
+    real = np.abs(values.imag) <= settings.real_cut * np.maximum(size, 1e-300)
     keep = (real | (values.imag > 0)) & (size > np.sqrt(threshold))
     values, vectors = np.where(real, values.real, values)[keep], vectors[:k, keep]
     values = np.concatenate([np.zeros(neutral.shape[1]), values]).astype(complex)
@@ -228,22 +233,27 @@ def _modes(functions: SystemFunctions, q: np.ndarray, basis: np.ndarray, a: np.n
 
 
 def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
-              progress=None, dynamics: Callable | None = None) -> Result:
+              progress=None, dynamics: Callable | None = None,
+              workspace: Workspace | None = None) -> Result:
     """The modal analysis: at the static equilibrium (the default: its row, the linear model,
     the modes; a zero-stiffness DOF is kept as a zero-frequency mode, no equilibrium is an
     AnalysisError), or with `at` at that time of a dynamics run (its rows up to `at`, the
-    linear model at the last). `settings`: the resolved `analysis:` block (options `at`,
-    `inputs`; default the model's); `dynamics(functions, settings, progress)`: the dynamics
-    run that reaches `at` (runtime.analyses)."""
+    linear model at the last). `settings`: the resolved `analysis:` block (its ModalOptions:
+    `at`, `inputs`, the solvers; default the model's); `dynamics(functions, settings,
+    progress)`: the dynamics run that reaches `at` (runtime.analyses)."""
     settings = functions.ir.analysis if settings is None else settings
-    at, inputs = settings.options.get("at"), settings.options.get("inputs")
+    if not isinstance(settings.options, ModalOptions):  # the model's block of another type
+        settings = replace(settings, options=ModalOptions())
+    at, inputs, solver = settings.options.at, settings.options.inputs, settings.options.solver
     if at is None:
-        equilibrium = statics.solve(functions, 0.0)
+        equilibrium = statics.solve(functions, 0.0, settings=solver.statics,
+                                    workspace=workspace)
         result = statics.equilibrium_result(functions, 0.0, equilibrium, "modal", progress)
-        model = linearize(functions, equilibrium.system, inputs)
+        model = linearize(functions, equilibrium.system, inputs, solver)
     else:
-        result = _run_to(functions, settings, float(at), progress, dynamics)
-        model = linearize_at(functions, result.times[-1], result.q[-1], result.q_dot[-1], inputs)
+        result = _run_to(functions, settings, float(at), progress, dynamics, workspace)
+        model = linearize_at(functions, result.times[-1], result.q[-1], result.q_dot[-1], inputs,
+                             solver, workspace)
     result.linear_model = model
     result.files = {FILES[0]: model.write_modes, FILES[1]: model.write_npz}
     result.metadata.update(linearized_at=model.linearized_at,
@@ -253,20 +263,22 @@ def run_modal(functions: SystemFunctions, settings: Analysis | None = None,
 
 
 def _run_to(functions: SystemFunctions, settings: Analysis, at: float, progress,
-            dynamics: Callable | None) -> Result:
-    """The dynamics run from 0 to `at` (`dynamics` with the settings' tolerances and
-    formulation; at = 0: the assembled initial state), its last row at `at`."""
+            dynamics: Callable | None, workspace: Workspace | None) -> Result:
+    """The dynamics run from 0 to `at` (`dynamics` with the settings' tolerances, formulation
+    and dynamics solver; at = 0: the assembled initial state), its last row at `at`."""
     if not 0.0 <= at <= settings.t_end:
         raise UsageError(f"modal at = {at:g}: must be a time of the run, within [0, t_end = "
                          f"{settings.t_end:g}]")
+    options = settings.options.dynamics()
     if at == 0.0:
-        result = kinematics.run_assembly(functions, 0.0, progress)
+        result = kinematics.run_assembly(functions, 0.0, progress, options.solver.assembly,
+                                         workspace)
     elif dynamics is None:
         raise UsageError("modal at a time after 0 needs the dynamics run (runtime.analyses)")
     else:
         result = dynamics(functions, replace(settings, type="dynamics", t_end=at,
-                                             output_step=min(settings.output_step, at)),
-                          progress)
+                                             output_step=min(settings.output_step, at),
+                                             options=options), progress)
     if not result.times or abs(result.times[-1] - at) > 1e-12 * max(at, 1.0):
         last = result.times[-1] if result.times else 0.0
         raise AnalysisError(FailureContext(last, f"the run ended ({result.status}) before the "

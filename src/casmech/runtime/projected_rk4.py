@@ -15,8 +15,9 @@ Error control: an output interval is integrated with n and with 2n steps; the fi
 kept when |fine - coarse| / 15 (its error for a 4th-order method) is within the tolerance,
 weighted as IDAS does (RMS of the error over rtol |x| + atol), for the positions and for the
 velocities (unless theirs stalls at a singular pose: ProjectedRK4.error). Otherwise, or for
-the next interval, n is scaled to put that estimate at SAFETY. Two resolutions on different
-branches disagree by metres, so a branch change in either is rejected as well.
+the next interval, n is scaled to put that estimate at core.options.Fallback.safety. Two
+resolutions on different branches disagree by metres, so a branch change in either is rejected
+as well. The run's cancellation token is polled at every step (runtime.cancel).
 """
 
 from __future__ import annotations
@@ -26,20 +27,21 @@ import math
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import Fallback
 from casmech.formulations import augmented
 from casmech.formulations.table import FORMULATIONS
+from casmech.runtime import cancel
 
-SAFETY = 0.5  # aim of the weighted error estimate (1 = the tolerance)
-MAX_STEPS = 50000  # fine steps per output interval before giving up
-ORDER = 4
+ORDER = 4  # of the classical Runge-Kutta method
+DEFAULT = Fallback()  # the defaults (core.options)
 
 
 def rk4_step(functions: dict[str, ca.Function], name: str,
-             solve: ca.Function) -> ca.Function:
+             solve: ca.Function, settings: Fallback = DEFAULT) -> ca.Function:
     """(t, x, h, penalty) -> x after one Runge-Kutta step of x' = [q_dot(q, v), v_dot(t, q, v)]
     (v_dot by `solve`, augmented.accelerations) and the projection of formulations.augmented."""
     form = FORMULATIONS[name]
-    project = augmented.projection(functions, name)
+    project = augmented.projection(functions, name, settings)
     n_q, n_v = solve.size1_in(1), solve.size1_in(2)
     t, x, h, penalty = (ca.MX.sym("t"), ca.MX.sym("x", n_q + n_v), ca.MX.sym("h"),
                         ca.MX.sym("penalty"))
@@ -60,16 +62,19 @@ def rk4_step(functions: dict[str, ca.Function], name: str,
 
 
 class StepFailure(Exception):
-    """No step count up to MAX_STEPS met the tolerance (the message says what happened)."""
+    """No step count up to the settings' max_steps met the tolerance (the message says what
+    happened)."""
 
 
 class ProjectedRK4:
     """Advances x = [q, v] from one output time to the next; `accelerations` is the
     (t, q, v, penalty) -> (v_dot, lam) its steps use, for the outputs' columns."""
 
-    def __init__(self, functions: dict[str, ca.Function], name: str, rtol: float, atol: float):
-        self.accelerations = augmented.accelerations(functions, name)
-        self.step = rk4_step(functions, name, self.accelerations)
+    def __init__(self, functions: dict[str, ca.Function], name: str, rtol: float, atol: float,
+                 settings: Fallback = DEFAULT):
+        self.settings = settings
+        self.accelerations = augmented.accelerations(functions, name, settings)
+        self.step = rk4_step(functions, name, self.accelerations, settings)
         self.n_q = functions["mass_matrix"].size1_in(0)
         self.rtol, self.atol = rtol, atol
         self.coarse = 1  # coarse steps for the next interval
@@ -79,7 +84,8 @@ class ProjectedRK4:
 
     def advance(self, t0: float, t1: float, x: np.ndarray, penalty: float) -> np.ndarray:
         n, last, last_n = self.coarse, None, None
-        while 2 * n <= MAX_STEPS:
+        safety, most = self.settings.safety, self.settings.max_steps
+        while 2 * n <= most:
             coarse = self._steps(t0, t1, x, penalty, n)
             fine = self._steps(t0, t1, x, penalty, 2 * n)
             positions, velocities = self.error(coarse, fine)
@@ -89,14 +95,14 @@ class ProjectedRK4:
                 if velocities > 1:
                     self.stalled.append(float(t0))
                 measured = max(positions, velocities if velocities <= 1 else 0.0)
-                self.coarse = max(1, math.ceil(n * (measured / SAFETY) ** (1 / ORDER)))
+                self.coarse = max(1, math.ceil(n * (measured / safety) ** (1 / ORDER)))
                 self.steps += 2 * n
                 return fine
             self.rejected += 1
             worst = max(positions, velocities)
-            growth = (worst / SAFETY) ** (1 / ORDER) if np.isfinite(worst) else math.inf
+            growth = (worst / safety) ** (1 / ORDER) if np.isfinite(worst) else math.inf
             n, last, last_n = math.ceil(n * min(max(2.0, growth), 64.0)), velocities, n
-        raise StepFailure(f"the error estimate stayed above the tolerance with {MAX_STEPS} "
+        raise StepFailure(f"the error estimate stayed above the tolerance with {most} "
                           "steps in the output interval")
 
     def error(self, coarse: np.ndarray, fine: np.ndarray) -> tuple[float, float]:
@@ -123,5 +129,6 @@ class ProjectedRK4:
     def _steps(self, t0: float, t1: float, x: np.ndarray, penalty: float, n: int) -> np.ndarray:
         h, state = (t1 - t0) / n, ca.DM(x)
         for k in range(n):
+            cancel.poll()
             state = self.step(t0 + k * h, state, h, penalty)
         return np.array(state.full()).ravel()

@@ -13,6 +13,7 @@ from casmech.equations.functions import SystemFunctions, all_sx
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.nonfinite import NonFinite, check_states
+from casmech.runtime.workspace import Workspace, of
 
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
@@ -175,11 +176,11 @@ def column_names(functions: SystemFunctions) -> list[str]:
                     *readings.names(functions.ir)]
 
 
-def readings_function(functions: SystemFunctions) -> ca.Function:
-    """equations.readings.columns_function of the bundle's IR, built once per bundle."""
-    if "readings" not in functions.derived:
-        functions.derived["readings"] = readings.columns_function(functions.ir)
-    return functions.derived["readings"]
+def readings_function(functions: SystemFunctions,
+                      workspace: Workspace | None = None) -> ca.Function:
+    """equations.readings.columns_function of the bundle's IR, built once per workspace."""
+    return of(functions, workspace).one("readings",
+                                        lambda: readings.columns_function(functions.ir))
 
 
 def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
@@ -227,9 +228,10 @@ def row_function(functions: SystemFunctions) -> ca.Function:
 
 
 def table(functions: SystemFunctions, result: Result,
-          reaction_frames: str | Mapping[str, str] | None = None
-          ) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_function (built once per bundle) mapped over the rows in blocks,
+          reaction_frames: str | Mapping[str, str] | None = None,
+          workspace: Workspace | None = None) -> tuple[list[str], np.ndarray]:
+    """Every row at once: row_function (built once per workspace, by default the bundle's)
+    mapped over the rows in blocks,
     writing into NumPy memory (runtime.buffers.ColumnCall); then each joint's reaction columns
     in its frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for
     every joint (a frame name) or the joints it names (a mapping)."""
@@ -238,9 +240,8 @@ def table(functions: SystemFunctions, result: Result,
     rows = len(result)
     if rows == 0:
         return names, np.zeros((0, len(names)))
-    if "results_row" not in functions.derived:
-        functions.derived["results_row"] = ColumnCall(row_function(functions))
-    rows_of = functions.derived["results_row"]
+    rows_of = of(functions, workspace).one("results_row",
+                                           lambda: ColumnCall(row_function(functions)))
     (values,) = rows_of(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
                         result.q_ddot.T, result.lam.T)
     values = values.T
@@ -251,13 +252,13 @@ def table(functions: SystemFunctions, result: Result,
     return names, values
 
 
-def events_table(functions: SystemFunctions, result: Result, reaction_frames=None
-                 ) -> tuple[list[str], list[list]]:
+def events_table(functions: SystemFunctions, result: Result, reaction_frames=None,
+                 workspace: Workspace | None = None) -> tuple[list[str], list[list]]:
     """(names, rows) of events.csv: t, name, then every results column at the event (the
     reaction columns in the frames `table` writes them in)."""
     names = ["t", "name", *column_names(functions)[1:]]
     if not result.events:
         return names, []
-    _, values = table(functions, result.event_states, reaction_frames)
+    _, values = table(functions, result.event_states, reaction_frames, workspace)
     return names, [[record.t, record.name, *row[1:].tolist()]
                    for record, row in zip(result.events, values, strict=True)]

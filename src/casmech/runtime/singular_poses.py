@@ -3,15 +3,17 @@
 At a singular pose the constraint Jacobian Phi_q loses rank: rows that were independent at t0
 become dependent (a four-bar's flat pose). After a run, the rows of Phi_q independent at the
 first output row (checks.structure), each scaled to unit length, are evaluated at every output
-row by one mapped call; where the determinant of their Gram matrix falls below NEAR times its
-value at t0 (one singular value of the unit rows shrinking ~1/sqrt(NEAR) times), the run passed
+row by one mapped call; where the determinant of their Gram matrix falls below
+singular_pose_ratio (core.options.DynamicsSolver) times its value at t0 (one singular value of
+the unit rows shrinking ~1/sqrt(that ratio) times), the run passed
 near a singular pose. Each such stretch of rows is reported once, at its smallest
 determinant: the time, the smallest singular value of the unit rows there, and the joints whose
 rows make up the dependency (its singular vector), each with its file:line:col.
 
 A tree has no loop to close (its joints' rows are independent at every pose) and is not
 examined; nor is a run above MAX_ENTRIES (output rows x rows of Phi x coordinates: the dense
-Jacobians held at once). NEAR's measurements: docs/decisions/singular-poses.md.
+Jacobians held at once: a memory bound). The ratio's measurements:
+docs/decisions/singular-poses.md.
 """
 
 from __future__ import annotations
@@ -19,30 +21,34 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import DynamicsSolver
 from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace, of
 
-NEAR = 1e-3  # Gram determinant of the unit rows against its value at t0
+DEFAULT = DynamicsSolver()  # the defaults (core.options)
 MAX_ENTRIES = 20_000_000  # output rows x rows of Phi x coordinates examined at most
 
 
-def _jacobians(functions: SystemFunctions) -> ColumnCall:
-    """Phi_q, dense, at output rows by mapped calls (kept with the bundle)."""
-    if "singular_pose_jacobian" not in functions.derived:
+def _jacobians(functions: SystemFunctions, workspace: Workspace | None) -> ColumnCall:
+    """Phi_q, dense, at output rows by mapped calls (kept in the workspace)."""
+    def build() -> ColumnCall:
         phi_q = functions["phi_q"]
         t, q = ca.MX.sym("t"), ca.MX.sym("q", phi_q.size1_in(1))
-        dense = ca.Function("phi_q_dense", [t, q], [ca.densify(phi_q(t, q))])
-        functions.derived["singular_pose_jacobian"] = ColumnCall(dense)
-    return functions.derived["singular_pose_jacobian"]
+        return ColumnCall(ca.Function("phi_q_dense", [t, q], [ca.densify(phi_q(t, q))]))
+
+    return of(functions, workspace).one("singular_pose_jacobian", build)
 
 
-def unit_gram_logdet(functions: SystemFunctions, times, q, rows) -> np.ndarray:
+def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
+                     workspace: Workspace | None = None) -> np.ndarray:
     """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q)."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
-    flat, = _jacobians(functions)(np.asarray(times, float)[None, :], np.asarray(q).T)
+    flat, = _jacobians(functions, workspace)(np.asarray(times, float)[None, :],
+                                             np.asarray(q).T)
     jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
     jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
     _, logdet = np.linalg.slogdet(np.einsum("kij,klj->kil", jacobian, jacobian))
@@ -55,18 +61,22 @@ def examinable(functions: SystemFunctions, rows: int) -> bool:
     return rows * m * columns <= MAX_ENTRIES
 
 
-def singular_poses(functions: SystemFunctions, result: Result, loops: bool) -> list[dict] | None:
+def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
+                   settings: DynamicsSolver = DEFAULT,
+                   workspace: Workspace | None = None) -> list[dict] | None:
     """The singular poses the run passed near (module docstring); None when not examined."""
     times, q = np.asarray(result.times), np.asarray(result.q)
     if not loops or len(times) < 2 or not examinable(functions, len(times)):
         return None
-    rows = _independent(functions, result, float(times[0]), q[0])
-    drop = unit_gram_logdet(functions, times, q, rows)
-    near = drop - drop[0] < np.log(NEAR)
+    limits = settings.assembly.linear_algebra
+    rows = _independent(functions, result, float(times[0]), q[0], limits)
+    drop = unit_gram_logdet(functions, times, q, rows, workspace)
+    near = drop - drop[0] < np.log(settings.singular_pose_ratio)
     return [_pose(functions, float(times[k]), q[k], rows) for k in _deepest(near, drop)]
 
 
-def _independent(functions: SystemFunctions, result: Result, t: float, q) -> list[int]:
+def _independent(functions: SystemFunctions, result: Result, t: float, q,
+                 limits) -> list[int]:
     """The rows of Phi independent at the first row: every row when the run dropped none (its
     own check at t0: runtime.dynamics for r-p / r-omega; for joint coordinates, the cut rows
     independent on the tree's motions, with which the tree joints' own rows are independent
@@ -74,7 +84,7 @@ def _independent(functions: SystemFunctions, result: Result, t: float, q) -> lis
     meta = result.metadata
     if meta.get("formulation") in ("rp", "romega", "joint") and meta.get("dropped_rows") == 0:
         return list(range(functions.n_rows))
-    return list(structure(functions, t, q).independent)
+    return list(structure(functions, t, q, limits).independent)
 
 
 def _deepest(near: np.ndarray, drop: np.ndarray) -> list[int]:

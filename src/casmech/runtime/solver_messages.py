@@ -11,7 +11,8 @@ import io
 import sys
 from contextlib import contextmanager
 
-PREFIXES = ("CasADi - ", "At t = ", "At t=")  # lines the solvers start
+# lines the solvers start (the first two: CasADi's word of a callback that raised, a signal)
+PREFIXES = ("rhs failed: ", "res failed: ", "CasADi - ", "At t = ", "At t=")
 MAX_LINES = 50
 
 

@@ -21,12 +21,12 @@ equilibrium it follows the flow downhill (to a stable equilibrium); mu starts at
 relaxation, at least halved by every step that lowers it; a step that makes it 100x worse is
 retried with 10 mu), so the last steps are Newton's, converging quadratically. Where the
 eigenvalues of M^-1 K have negative real parts (a pose above a stable one), or the step would
-turn a body by more than MAX_ROTATION, the step is taken mode by mode (_step: saddle-free, with
+turn a body by more than max_rotation, the step is taken mode by mode (_step: saddle-free, with
 mu raised until no body turns more: a trust region). An equilibrium found unstable (a pendulum
-started upright) is left along its most unstable mode, at most MAX_ESCAPES times. All matrices
+started upright) is left along its most unstable mode, at most max_escapes times. All matrices
 are dense: statics is for mechanisms of tens of bodies (docs/decisions/statics-solver.md).
 
-No equilibrium (a free body falling: the residual does not fall in MAX_ITERATIONS steps) or a
+No equilibrium (a free body falling: the residual does not fall in max_iterations steps) or a
 DOF of zero stiffness (neutral: every pose along it is an equilibrium) is an AnalysisError (exit
 3) naming the joints whose relative motion that DOF is (and free bodies), with YAML lines; the
 neutral case keeps the equilibrium row found.
@@ -34,29 +34,21 @@ neutral case keeps the equilibrium row found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 import scipy.linalg
 
 from casmech.core import euler
-from casmech.equations.checks import RANK_TOLERANCE
+from casmech.core.options import StaticsSolver
 from casmech.equations.functions import SystemFunctions, all_sx, build_functions
-from casmech.errors import AnalysisError, BodyName, FailureContext
-from casmech.runtime import assembly, interrupts
+from casmech.errors import AnalysisError, BodyName, FailureContext, Interrupted
+from casmech.runtime import assembly, cancel
 from casmech.runtime.results import Result
+from casmech.runtime.workspace import Workspace, of
 
-MAX_ITERATIONS = 200
-FORCE_TOLERANCE = 1e-10  # |R|_inf at convergence, relative to the largest applied load
-MAX_ROTATION = 0.5  # radians a body may turn in one step
-TRUST_BISECTIONS = 8  # halvings of log(mu) bracketing the step that turns a body MAX_ROTATION
-GROWTH = 0.5  # mu's factor after a step that lowered the residual (at most)
-MAX_ESCAPES = 3  # departures from unstable equilibria
-ESCAPE_ROTATION = 0.1  # radians (or 0.1 of the model's size) a departure moves along its mode
-# squared frequencies |omega^2| below max(ZERO_OMEGA2, NEUTRAL_RATIO * the largest) count as 0
-ZERO_OMEGA2 = 1e-12
-NEUTRAL_RATIO = 1e-10
+DEFAULT = StaticsSolver()  # the settings of every function here (core.options)
 
 
 @dataclass
@@ -72,6 +64,7 @@ class ReducedSystem:
     stiffness: np.ndarray  # -N^T dR/dq N
     damping: np.ndarray  # -N^T dQ/dq_dot N
     force: np.ndarray  # N^T Q
+    settings: StaticsSolver = field(default=DEFAULT, repr=False)
 
     @property
     def dof(self) -> int:
@@ -105,7 +98,7 @@ class ReducedSystem:
     def unstable(self) -> bool:
         """An eigenvalue of M^-1 K with real part below zero."""
         omega2 = self.omega2()
-        return bool(omega2.size and omega2[0] < -neutral_threshold(omega2))
+        return bool(omega2.size and omega2[0] < -neutral_threshold(omega2, self.settings))
 
     def merit(self) -> float:
         """|f| in the metric of M^-1 (an acceleration: units agree across coordinates)."""
@@ -127,11 +120,15 @@ class Equilibrium:
         return float(np.max(np.abs(self.system.residual), initial=0.0))
 
 
-def tangent_function(functions: SystemFunctions) -> ca.Function:
+def tangent_function(functions: SystemFunctions, workspace: Workspace | None = None
+                     ) -> ca.Function:
     """(t, q, lam) -> (R = Q - Phi_q^T lam, dR/dq, dQ/dq_dot, M) at q_dot = 0, built once per
-    bundle from its SX functions (a compiled bundle's model is rebuilt in SX for AD)."""
-    if "statics_tangent" in functions.derived:
-        return functions.derived["statics_tangent"]
+    workspace from the bundle's SX functions (a compiled bundle's model is rebuilt in SX for
+    AD)."""
+    return of(functions, workspace).one("statics_tangent", lambda: _tangent(functions))
+
+
+def _tangent(functions: SystemFunctions) -> ca.Function:
     bundle = functions
     if not all_sx(functions.functions):
         bundle = build_functions(functions.ir)
@@ -144,42 +141,42 @@ def tangent_function(functions: SystemFunctions) -> ca.Function:
     outputs = [residual, ca.jacobian(residual, q), ca.jacobian(applied, q_dot),
                bundle["mass_matrix"](q)]
     outputs = [ca.substitute(out, q_dot, zero) for out in outputs]
-    function = ca.Function("statics_tangent", [t, q, lam], outputs)
-    functions.derived["statics_tangent"] = function
-    return function
+    return ca.Function("statics_tangent", [t, q, lam], outputs)
 
 
-def _factor(phi_q: np.ndarray):
+def _factor(phi_q: np.ndarray, rank_tolerance: float):
     """Column-pivoted QR of Phi_q^T (Phi_q^T[:, pivots] = Q R) and its rank by `casmech
-    check`'s cut, |R_kk| > RANK_TOLERANCE max(|R_00|, 1): a redundant row stays redundant off
+    check`'s cut, |R_kk| > rank_tolerance max(|R_00|, 1): a redundant row stays redundant off
     the exact pose (the Bricard loop's R_kk is ~1e-13 at |Phi| ~ 1e-12)."""
     q_factor, r_factor, pivots = scipy.linalg.qr(phi_q.T, pivoting=True)
     diagonal = np.abs(np.diag(r_factor))
-    cut = RANK_TOLERANCE * max(diagonal[0] if diagonal.size else 0.0, 1.0)
+    cut = rank_tolerance * max(diagonal[0] if diagonal.size else 0.0, 1.0)
     return q_factor, r_factor, pivots, int(np.sum(diagonal > cut))
 
 
-def null_space(phi_q: np.ndarray) -> np.ndarray:
+def null_space(phi_q: np.ndarray, settings: StaticsSolver = DEFAULT) -> np.ndarray:
     """Orthonormal basis of {dq: Phi_q dq = 0} from the column-pivoted QR of Phi_q^T."""
     m, n = phi_q.shape
     if m == 0:
         return np.eye(n)
-    q_factor, _, _, rank = _factor(phi_q)
+    q_factor, _, _, rank = _factor(phi_q, settings.assembly.linear_algebra.rank_tolerance)
     return q_factor[:, rank:]
 
 
-def basis_and_rows(phi_q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def basis_and_rows(phi_q: np.ndarray, settings: StaticsSolver = DEFAULT
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """(null_space(phi_q), the indices of a maximal set of independent rows: the QR's pivots
     up to its rank, ascending), from one factorization."""
     m, n = phi_q.shape
     if m == 0:
         return np.eye(n), np.zeros(0, int)
-    q_factor, _, pivots, rank = _factor(phi_q)
+    q_factor, _, pivots, rank = _factor(phi_q, settings.assembly.linear_algebra.rank_tolerance)
     return q_factor[:, rank:], np.sort(pivots[:rank])
 
 
 def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
-                   minimum_norm: bool = False) -> ReducedSystem:
+                   minimum_norm: bool = False, settings: StaticsSolver = DEFAULT,
+                   workspace: Workspace | None = None) -> ReducedSystem:
     """The reduced quantities at q. lam solves Phi_q^T lam = Q in least squares: the basic
     solution of the QR (zero on redundant rows), or with `minimum_norm` the minimum-norm one
     (the reactions reported). Either gives the same residual Q - Phi_q^T lam."""
@@ -189,16 +186,19 @@ def reduced_system(functions: SystemFunctions, t: float, q: np.ndarray,
     if m == 0:
         basis, lam = np.eye(n), np.zeros(0)
     else:
-        q_factor, r_factor, pivots, rank = _factor(phi_q)
+        rank_tolerance = settings.assembly.linear_algebra.rank_tolerance
+        q_factor, r_factor, pivots, rank = _factor(phi_q, rank_tolerance)
         basis = q_factor[:, rank:]
         lam = np.zeros(m)
         lam[pivots[:rank]] = scipy.linalg.solve_triangular(
             r_factor[:rank, :rank], q_factor[:, :rank].T @ applied)
         if minimum_norm:
-            lam = np.linalg.lstsq(phi_q.T, applied, rcond=RANK_TOLERANCE)[0]
-    residual, r_q, q_v, mass = (np.array(v) for v in tangent_function(functions)(t, q, lam))
+            lam = np.linalg.lstsq(phi_q.T, applied, rcond=rank_tolerance)[0]
+    residual, r_q, q_v, mass = (np.array(v) for v in tangent_function(functions, workspace)(
+        t, q, lam))
     return ReducedSystem(q, lam, residual.ravel(), applied, basis, basis.T @ mass @ basis,
-                         -basis.T @ r_q @ basis, -basis.T @ q_v @ basis, basis.T @ applied)
+                         -basis.T @ r_q @ basis, -basis.T @ q_v @ basis, basis.T @ applied,
+                         settings)
 
 
 def motion_map(q: np.ndarray) -> np.ndarray:
@@ -284,12 +284,16 @@ def _joint_point(functions: SystemFunctions, q: np.ndarray, joint) -> np.ndarray
     return q[3 * k:3 * k + 3] + rotation @ np.asarray(joint.point_i, float)
 
 
-def neutral_threshold(omega2: np.ndarray) -> float:
-    return max(ZERO_OMEGA2, NEUTRAL_RATIO * float(np.max(np.abs(omega2), initial=0.0)))
+def neutral_threshold(omega2: np.ndarray, settings: StaticsSolver = DEFAULT) -> float:
+    """Squared frequencies |omega^2| below this count as 0: zero_omega2, or neutral_ratio
+    times the largest."""
+    return max(settings.zero_omega2,
+               settings.neutral_ratio * float(np.max(np.abs(omega2), initial=0.0)))
 
 
 def _converged(system: ReducedSystem, scale: float) -> bool:
-    return float(np.max(np.abs(system.residual), initial=0.0)) <= FORCE_TOLERANCE * scale
+    limit = system.settings.force_tolerance * scale
+    return float(np.max(np.abs(system.residual), initial=0.0)) <= limit
 
 
 def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
@@ -301,16 +305,17 @@ def _load_scale(functions: SystemFunctions, system: ReducedSystem) -> float:
 
 def _step(system: ReducedSystem, mu: float) -> np.ndarray:
     """dq of one pseudo-time step: (K + mu M) dz = f. Where M^-1 K has eigenvalues below zero,
-    or that step turns a body by more than MAX_ROTATION, mode by mode instead (the eigenpairs
+    or that step turns a body by more than max_rotation, mode by mode instead (the eigenpairs
     (omega_i^2, V_i) of (sym K, M)): amplitudes V_i^T f / (|omega_i^2| + mu) (saddle-free:
     downhill along an unstable mode, not towards the unstable pose), with mu raised, if need
-    be, until no body turns by more than MAX_ROTATION (a trust region: a larger mu shortens
+    be, until no body turns by more than max_rotation (a trust region: a larger mu shortens
     the soft modes' steps most, so a mode of almost zero stiffness and roundoff force, a rod's
     spin about its axis, cannot take the whole step)."""
+    settings = system.settings
     motions = motion_map(system.q) @ system.basis
     if not system.unstable():
         dz = np.linalg.solve(system.stiffness + mu * system.mass, system.force)
-        if largest_rotation(motions @ dz[:, None])[0] <= MAX_ROTATION:
+        if largest_rotation(motions @ dz[:, None])[0] <= settings.max_rotation:
             return system.basis @ dz
     omega2, vectors = system.modes()
     force, stiffness, turns = vectors.T @ system.force, np.abs(omega2), motions @ vectors
@@ -319,14 +324,14 @@ def _step(system: ReducedSystem, mu: float) -> np.ndarray:
         return force / (stiffness + shift)
 
     def too_far(shift: float) -> bool:
-        return largest_rotation(turns @ amplitudes(shift)[:, None])[0] > MAX_ROTATION
+        return largest_rotation(turns @ amplitudes(shift)[:, None])[0] > settings.max_rotation
 
     if too_far(mu):
-        low, high = mu, max(mu, ZERO_OMEGA2)
+        low, high = mu, max(mu, settings.zero_omega2)
         while too_far(high):
             low, high = high, 4.0 * high
-        for _ in range(TRUST_BISECTIONS):  # in log(mu): the factor high / low to ~1 %
-            middle = np.sqrt(max(low, ZERO_OMEGA2) * high)
+        for _ in range(settings.trust_bisections):  # in log(mu): high / low to ~1 % (8)
+            middle = np.sqrt(max(low, settings.zero_omega2) * high)
             low, high = (middle, high) if too_far(middle) else (low, middle)
         mu = high
     return system.basis @ (vectors @ amplitudes(mu))
@@ -340,31 +345,35 @@ def _escape(functions: SystemFunctions, system: ReducedSystem) -> np.ndarray:
     size = max(np.max(np.linalg.norm(motion[:, 3:], axis=1), initial=0.0),
                np.max(np.linalg.norm(motion[:, :3], axis=1), initial=0.0)
                / model_size(functions, system.q))
-    return system.q + dq * (ESCAPE_ROTATION / size)
+    return system.q + dq * (system.settings.escape_rotation / size)
 
 
 def _initial_mu(system: ReducedSystem) -> float:
     """A first pseudo time step of 1 / (the largest |omega^2|): overdamped for every mode."""
-    return max(float(np.max(np.abs(system.omega2()), initial=0.0)), ZERO_OMEGA2)
+    return max(float(np.max(np.abs(system.omega2()), initial=0.0)), system.settings.zero_omega2)
 
 
-def _try(functions: SystemFunctions, t: float, system: ReducedSystem, mu: float):
+def _try(functions: SystemFunctions, t: float, system: ReducedSystem, mu: float,
+         workspace: Workspace | None = None):
     """The next iterate projected onto Phi = 0, or None when the projection fails."""
+    settings = system.settings
     try:
-        q = assembly.newton(functions, t, system.q + _step(system, mu))
-        return reduced_system(functions, t, q)
+        q = assembly.newton(functions, t, system.q + _step(system, mu),
+                            settings=settings.assembly)
+        return reduced_system(functions, t, q, settings=settings, workspace=workspace)
+    except Interrupted:
+        raise
     except (AnalysisError, np.linalg.LinAlgError):
         return None
 
 
-POLISH_STEPS = 3
-
-
-def _polish(functions: SystemFunctions, t: float, system: ReducedSystem) -> ReducedSystem:
-    """Up to POLISH_STEPS Newton steps past the tolerance, each kept while it lowers the
+def _polish(functions: SystemFunctions, t: float, system: ReducedSystem,
+            workspace: Workspace | None = None) -> ReducedSystem:
+    """Up to polish_steps Newton steps past the tolerance, each kept while it lowers the
     residual (the tolerance is met at 1e-10 of the loads; roundoff allows ~1e-15)."""
-    for _ in range(POLISH_STEPS):
-        trial = _try(functions, t, system, neutral_threshold(system.omega2()))
+    for _ in range(system.settings.polish_steps):
+        trial = _try(functions, t, system, neutral_threshold(system.omega2(), system.settings),
+                     workspace)
         if trial is None or not (np.max(np.abs(trial.residual), initial=0.0)
                                  < np.max(np.abs(system.residual), initial=0.0)):
             break
@@ -372,40 +381,45 @@ def _polish(functions: SystemFunctions, t: float, system: ReducedSystem) -> Redu
     return system
 
 
-def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = None
-          ) -> Equilibrium:
+def solve(functions: SystemFunctions, t: float = 0.0, q: np.ndarray | None = None,
+          settings: StaticsSolver = DEFAULT, workspace: Workspace | None = None) -> Equilibrium:
     """The equilibrium from the assembled pose (or from q), by pseudo-transient continuation.
     Raises AnalysisError when the residual does not converge (naming the DOF it drives)."""
-    q = assembly.assemble_positions(functions, t, q)
-    system = reduced_system(functions, t, q)
+    workspace = of(functions, workspace)
+    q = assembly.assemble_positions(functions, t, q, settings.assembly, workspace)
+    system = reduced_system(functions, t, q, settings=settings, workspace=workspace)
     scale = _load_scale(functions, system)
     mu, merit, escapes = _initial_mu(system), system.merit(), 0
-    for iteration in range(MAX_ITERATIONS):
-        interrupts.check()  # a pending SIGINT/SIGTERM (casmech run) stops here
+    for iteration in range(settings.max_iterations):
+        cancel.poll()  # a cancelled run (SIGINT/SIGTERM under casmech run) stops here
         if _converged(system, scale):
-            if escapes >= MAX_ESCAPES or not system.unstable():
-                system = reduced_system(functions, t, _polish(functions, t, system).q,
-                                        minimum_norm=True)
+            if escapes >= settings.max_escapes or not system.unstable():
+                polished = _polish(functions, t, system, workspace).q
+                system = reduced_system(functions, t, polished, minimum_norm=True,
+                                        settings=settings, workspace=workspace)
                 return Equilibrium(system.q, system.lam, system, iteration, escapes)
             escapes += 1
-            system = reduced_system(functions, t,
-                                    assembly.newton(functions, t, _escape(functions, system)))
+            escaped = assembly.newton(functions, t, _escape(functions, system),
+                                      settings=settings.assembly)
+            system = reduced_system(functions, t, escaped, settings=settings,
+                                    workspace=workspace)
             mu, merit = _initial_mu(system), system.merit()
             continue
-        trial = _try(functions, t, system, mu)
+        trial = _try(functions, t, system, mu, workspace)
         trial_merit = np.inf if trial is None else trial.merit()
-        if not np.isfinite(trial_merit) or trial_merit > 100.0 * max(merit, ZERO_OMEGA2):
+        if not np.isfinite(trial_merit) or trial_merit > 100.0 * max(merit,
+                                                                     settings.zero_omega2):
             mu *= 10.0  # a step that made things far worse is not taken
             continue
         # switched evolution relaxation, accelerated: a step that lowered the residual doubles
         # the pseudo time step at least
         ratio = trial_merit / merit if merit > 0 else 1.0
-        mu = max(mu * (min(ratio, GROWTH) if ratio < 1.0 else 1.0),
-                 neutral_threshold(trial.omega2()))
+        mu = max(mu * (min(ratio, settings.growth) if ratio < 1.0 else 1.0),
+                 neutral_threshold(trial.omega2(), settings))
         system, merit = trial, trial_merit
     direction = system.basis @ np.linalg.solve(system.mass, system.force) if system.dof else \
         np.zeros(functions.n_coordinates)
-    cause = (f"no static equilibrium found in {MAX_ITERATIONS} iterations (unbalanced "
+    cause = (f"no static equilibrium found in {settings.max_iterations} iterations (unbalanced "
              f"generalized force {np.linalg.norm(system.force):.3e}); the free motion it "
              "drives (a body falling, a DOF with nothing to hold it):")
     raise AnalysisError(FailureContext(t, cause, moving_parts(functions, system.q, direction),
@@ -416,7 +430,7 @@ def neutral_directions(system: ReducedSystem) -> np.ndarray:
     """Columns dq of the DOF with zero stiffness at an equilibrium (n x count): the
     eigenvectors of M^-1 K whose eigenvalues are 0 within neutral_threshold."""
     values, vectors = system.spectrum()
-    zero = np.abs(values) <= neutral_threshold(values.real)
+    zero = np.abs(values) <= neutral_threshold(values.real, system.settings)
     if not zero.any():
         return np.zeros((system.q.size, 0))
     return system.basis @ np.linalg.qr(vectors[:, zero].real)[0]
@@ -448,10 +462,11 @@ def equilibrium_result(functions: SystemFunctions, t: float, equilibrium: Equili
     return result
 
 
-def run_statics(functions: SystemFunctions, t: float = 0.0, progress=None) -> Result:
+def run_statics(functions: SystemFunctions, t: float = 0.0, progress=None,
+                settings: StaticsSolver = DEFAULT, workspace: Workspace | None = None) -> Result:
     """The statics analysis: one results row; AnalysisError (exit 3) when there is no unique
     equilibrium (a neutral DOF keeps the row found in the error's partial result)."""
-    equilibrium = solve(functions, t)
+    equilibrium = solve(functions, t, settings=settings, workspace=workspace)
     result = equilibrium_result(functions, t, equilibrium, "statics", progress)
     directions = neutral_directions(equilibrium.system)
     if directions.shape[1]:

@@ -58,7 +58,7 @@ class _Locator:
 
 def sample_times(analysis) -> np.ndarray:
     """Where the drivers are evaluated: 0 to the end of the run (modal: to `at`)."""
-    end = analysis.options.get("at") if analysis.type == "modal" else (
+    end = getattr(analysis.options, "at", None) if analysis.type == "modal" else (
         analysis.t_end if analysis.type in SPANNED else None)
     if not end:
         return np.zeros(1)

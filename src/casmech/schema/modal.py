@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from casmech.core.options import ModalOptions
 from casmech.elements.force_types import input_types
 from casmech.elements.joint_types import listed
 from casmech.schema import limits, resolved, spec
@@ -15,9 +16,11 @@ from casmech.schema.loader import Path
 
 def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Analysis | None,
                    joints, forces) -> resolved.Analysis | None:
-    """`settings` with options `at` (seconds or None) and `inputs` (names or None), checked:
-    E409 for an `at` outside [0, t_end] or in (0, limits.MIN_TIME), E300 for an input that is
-    no effort-motor joint or force element."""
+    """`settings` with `at` (seconds or None) and `inputs` (names or None) in its options
+    (modal) and in the keys written (for a modal run of a model of another type), checked:
+    E409 for an `at` outside [0, t_end] or in (0, limits.MIN_TIME),
+    E300 for an input that is no effort-motor joint or
+    force element."""
     path: Path = ("analysis",)
     at = None
     if given.at is not None:
@@ -42,4 +45,9 @@ def modal_settings(check: Checker, given: spec.Analysis, settings: resolved.Anal
     if settings is None or (given.at is not None and at is None) or not inputs_ok:
         return None
     inputs = None if given.inputs is None else tuple(dict.fromkeys(given.inputs))
-    return replace(settings, options={**settings.options, "at": at, "inputs": inputs})
+    written = (*settings.written, *((key, value) for key, value in (("at", at), ("inputs", inputs))
+                                    if value is not None))
+    options = settings.options
+    if isinstance(options, ModalOptions):
+        options = replace(options, at=at, inputs=inputs)
+    return replace(settings, options=options, written=written)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from casmech.core.expressions import Expr
+from casmech.core.options import AnalysisOptions, DynamicsOptions
 from casmech.errors import Source
 
 GROUND = "ground"
@@ -150,14 +151,20 @@ class Output:
 
 @dataclass(frozen=True)
 class Analysis:
+    """The `analysis:` block: what to run over which grid, and the options of its type (a
+    core.options dataclass: formulation, ..., and the `solver:` block). `written`: the option
+    keys the file wrote (dotted, with their values), from which a run of another type takes
+    those its options have (casmech.analyze's analysis argument)."""
+
     type: str = "dynamics"
     t_end: float = 1.0
     output_step: float = 0.01
     rtol: float = 1e-8
     atol: float = 1e-10
-    options: Mapping[str, Any] = field(default_factory=dict)  # further keys (formulation, ...)
+    options: AnalysisOptions = field(default_factory=DynamicsOptions)
     source: Source | None = None
     events: tuple[Event, ...] = ()  # the model's `events:` (dynamics runs watch them)
+    written: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,8 @@ from collections.abc import Mapping
 from dataclasses import replace
 
 from casmech.core import traced
+from casmech.core.option_values import SOLVER, flat, lookup, with_values
+from casmech.core.options import OPTIONS
 from casmech.errors import Diagnostic, failed
 from casmech.schema import events, files, initial, limits, motors, outputs, resolved, spec
 from casmech.schema.bodies import body, floors
@@ -46,18 +48,46 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
                     hint=ANALYSIS_HINTS.get(key))
-    options = {"formulation": given.formulation, "stabilization": given.stabilization,
-               "method": given.method}
     if given.method == "adams" and given.formulation in ("rp", "romega"):
         check.error("E409", (*path, "method"), "method adams integrates joint coordinates of a "
                     "tree; the rp and romega DAEs are integrated by IDAS's BDF method",
                     got="adams", hint="write formulation: joint (or auto), or remove method")
+    options, written = analysis_options(check, given)
     source = check.doc.source_map.values.get(path)
     return (
         None
-        if problems
-        else resolved.Analysis(given.type, **values, options=options, source=source)
+        if problems or options is None
+        else resolved.Analysis(given.type, **values, options=options, source=source,
+                               written=written)
     )
+
+
+TOP_KEYS = ("formulation", "stabilization", "method")  # option keys beside `type` (at, inputs:
+#                                                         schema.modal)
+
+
+def analysis_options(check: Checker, given: spec.Analysis):
+    """(the options of the analysis type, the option keys written) from the block's top keys
+    and its `solver:` block, checked against the type's options (core.options): E101 for an
+    unknown key (did you mean), E102 for a wrong type, E409 out of range; (None, ()) after an
+    error."""
+    kind = OPTIONS[given.type]
+    written = {key: getattr(given, key) for key in TOP_KEYS if key in given.model_fields_set}
+    for path, value in flat(given.solver or {}):
+        written[".".join((SOLVER, *path))] = value
+    mine = {key: value for key, value in written.items()
+            if not key.startswith(SOLVER + ".") and lookup(kind, key) is not None}
+    mine |= {key: value for key, value in written.items() if key.startswith(SOLVER + ".")}
+    options, problems = with_values(kind(), mine)
+    for problem in problems:
+        where = ("analysis", *problem.path)
+        hint = problem.hint
+        if problem.code == "E101" and problem.path[-1] in spec.Analysis.model_fields:
+            hint = f"{problem.path[-1]} is a key of analysis: itself, beside type"
+        check.error(problem.code, where, f"{problem.message} for analysis type {given.type}",
+                    source=check.doc.locate_key(where), expected=problem.expected,
+                    got=problem.got, hint=hint)
+    return (None, ()) if problems else (options, tuple(written.items()))
 
 
 def _pairs(check: Checker, path: Path, given) -> dict[str, tuple[float, float]] | None:

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
     Field,
@@ -13,31 +13,34 @@ from pydantic import (
     StrictStr,
 )
 
+from casmech.core import options
 from casmech.core.spec_base import Name, Scalar, Spec
+
+_DYNAMICS = options.DynamicsOptions()  # the defaults (written once, in casmech.core.options)
 
 
 # ---------------------------------------------------------------------------------- analysis
 class Analysis(Spec):
-    type: Literal["kinematics", "dynamics", "inverse_dynamics", "statics", "assembly",
-                  "modal"] = "dynamics"
+    type: Literal[tuple(options.OPTIONS)] = "dynamics"  # type: ignore[valid-type]
     t_end: Scalar = 1.0
     output_step: Scalar = 0.01
     rtol: Scalar = 1e-8
     atol: Scalar = 1e-10
-    # dynamics: r-p or r-omega DAE, joint coordinates (casmech.formulations.tree), or auto (the
-    # fastest the model allows)
-    formulation: Literal["rp", "romega", "joint", "auto"] = "auto"
-    # dynamics: keep the constraints by the stabilized index-2 DAE (ggl) or by projecting the
-    # index-1 DAE's state back when it drifts (projection); see casmech.formulations.dae
-    stabilization: Literal["ggl", "projection"] = "ggl"
-    # dynamics in joint coordinates of a tree: CVODES's Adams (non-stiff) or BDF (stiff) method,
-    # or auto (by the stiffness of the ODE at t0; see casmech.runtime.joint_dynamics)
-    method: Literal["auto", "adams", "bdf"] = "auto"
+    # dynamics (and modal at a time): the options of casmech.core.options.DynamicsOptions:
+    # formulation (rp or romega DAE, joint coordinates, or auto), stabilization of the DAEs,
+    # CVODES's method in joint coordinates of a tree
+    formulation: Literal[options.FORMULATIONS] = _DYNAMICS.formulation  # type: ignore[valid-type]
+    stabilization: Literal[options.STABILIZATIONS] = (  # type: ignore[valid-type]
+        _DYNAMICS.stabilization)
+    method: Literal[options.METHODS] = _DYNAMICS.method  # type: ignore[valid-type]
     # modal: linearize at this time of a dynamics run (0 <= at <= t_end) instead of at the static
     # equilibrium; inputs: the effort-motor joints and force elements whose force is an input
     # (default: every effort motor). runtime/modal.py
     at: Scalar | None = None
     inputs: tuple[Name, ...] | None = None
+    # the solvers' settings of the analysis type (casmech.core.options: its `solver` fields;
+    # checked by schema.semantic against the type, docs/analyses.md#options)
+    solver: dict[StrictStr, Any] | None = None
 
 
 # ----------------------------------------------------------------------------------- events

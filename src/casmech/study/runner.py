@@ -90,8 +90,8 @@ class Runner:
         functions = result = None
         try:
             functions = self.build(values)
-            result = analyze(functions, progress=interrupts.watch(None),
-                                     **self.settings)
+            # a progress callback: rows as they come, in chunks an interrupt keeps
+            result = analyze(functions, progress=lambda t: None, **self.settings)
         except Interrupted:
             raise
         except AnalysisError as error:

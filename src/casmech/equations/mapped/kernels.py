@@ -131,20 +131,12 @@ class Group:
         return out
 
 
-_KEYS: dict[int, tuple] = {}  # id(ir) -> (ir, row keys): keys are computed once per model
-
-
 def row_keys(ir: ModelIR) -> list:
     """Every row's kernel key; vectors baked while the model has at most BAKE_LIMIT distinct
     (kind, vectors), i.e. kernels."""
-    cached = _KEYS.get(id(ir))
-    if cached is not None and cached[0] is ir:
-        return cached[1]
     keys = [kernels_of.key_of(prim, True) for prim in ir.primitives]
     if len(set(keys)) > BAKE_LIMIT:
         keys = [kernels_of.key_of(prim, False) for prim in ir.primitives]
-    _KEYS.clear()
-    _KEYS[id(ir)] = (ir, keys)
     return keys
 
 

@@ -1,0 +1,113 @@
+"""A Workspace: what analyses derive from one bundle of system functions and reuse in later
+runs (integrators, the spanning tree and joint system, consistent starts, mapped row
+functions), so that a run repeated on the same bundle builds none of it again.
+
+The bundle (equations.functions.SystemFunctions) is immutable; the workspace is owned by the
+caller of the analyses: `casmech.analyze(functions, workspace=...)`, or by default the one
+`default(functions)` keeps for the bundle while it lives (a weak association: the workspace
+goes with the bundle). Each kind of entry is bounded (KINDS: the entries kept, the oldest
+dropped first) and keyed by what it depends on besides the bundle (a start, an output grid,
+the option values it was built with), so runs with other options never reuse a stale entry.
+Entries never hold the bundle itself.
+"""
+
+from __future__ import annotations
+
+import weakref
+from collections.abc import Callable, Hashable
+from typing import TypeVar
+
+from casmech.errors import UsageError
+from casmech.runtime.memo import kept
+
+T = TypeVar("T")
+
+# kind of entry -> the most entries kept (what each is: the module that builds it)
+KINDS: dict[str, int] = {
+    "spanning_tree": 1,  # formulations.tree.spanning_tree (runtime.joint_dynamics)
+    "joint_system": 4,  # the joint formulation's functions, by the compile options
+    "joint_starts": 8,  # joint coordinates' initial states, by t0 and assembly options
+    "cvodes": 8,  # CVODES instances, by grid and integrator options
+    "idas": 8,  # joint coordinates' IDAS instances, also by start
+    "joint_least_norm": 8,  # least-norm multipliers of masked loop rows, by mask
+    "joint_motion_maps": 16,  # results rows' column calls, by motion function
+    "dae_problems": 4,  # r-p / r-omega DAEs as casadi.integrator takes them
+    "dae_integrators": 4,  # their IDAS instances (each holds its memory and Newton matrix)
+    "dae_starts": 16,  # masks and consistent starts (runtime.dynamics)
+    "dae_saddle": 2,  # the consistent start's saddle solve, per formulation
+    "dae_rows": 8,  # results rows and drift checks, per formulation and mask
+    "dae_row_maps": 16,  # their column calls
+    "closest_point": 4,  # assembly's closest-point rootfinder, by independent rows
+    "saddle": 4,  # accelerations' saddle solve, by rows
+    "projection": 4,  # the projection onto the constraints, by formulation and options
+    "prescribed_grids": 16,  # kinematics' mapped grids, by padded block length
+    "results_row": 1,  # the results table's row function (runtime.results)
+    "singular_pose_jacobian": 1,  # dense Phi_q at output rows (runtime.singular_poses)
+    "statics_tangent": 1,  # statics' residual, tangent and mass (runtime.statics)
+    "sx_bundle": 1,  # an SX rebuild of a compiled bundle (runtime.linearize)
+    "events": 1,  # the model's `events:` as Functions (runtime.events)
+    "readings": 1,  # the joint states and `outputs:` columns (runtime.results)
+    "initial_holds": 1,  # the bundles holding the joints' `initial:` values (runtime.initial_holds)
+}
+
+
+class Workspace:
+    """The entries analyses keep for one bundle (module docstring). `functions`: the bundle it
+    serves; analyses refuse it for another."""
+
+    def __init__(self, functions=None):
+        self._bundle = None if functions is None else weakref.ref(functions)
+        self._stores: dict[str, dict] = {}
+
+    def serve(self, functions) -> Workspace:
+        """This workspace, bound to `functions` on first use; a UsageError if it serves
+        another bundle."""
+        if self._bundle is None:
+            self._bundle = weakref.ref(functions)
+        elif self._bundle() is not functions:
+            raise UsageError("this workspace holds the run data of another bundle of system "
+                             "functions; make one per bundle (casmech.runtime.workspace."
+                             "Workspace(functions))")
+        return self
+
+    def kept(self, kind: str, key: Hashable, build: Callable[[], T]) -> T:
+        """The entry of `kind` under `key`, built by build() when missing (at KINDS[kind]
+        entries, the oldest goes first)."""
+        return kept(self.store(kind), key, build, KINDS[kind])
+
+    def one(self, kind: str, build: Callable[[], T]) -> T:
+        """The one entry of `kind`, built by build() when missing."""
+        return self.kept(kind, None, build)
+
+    def store(self, kind: str) -> dict:
+        """The entries of `kind` (for code that keeps them itself, bounded by KINDS)."""
+        if kind not in KINDS:
+            raise KeyError(f"no workspace entry kind {kind!r}")
+        return self._stores.setdefault(kind, {})
+
+    def drop(self, kind: str | None = None) -> None:
+        """Forget the entries of `kind`, or all of them."""
+        if kind is None:
+            self._stores.clear()
+        else:
+            self._stores.pop(kind, None)
+
+    def __len__(self) -> int:
+        return sum(len(store) for store in self._stores.values())
+
+
+_defaults: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def default(functions) -> Workspace:
+    """The workspace analyses use for `functions` when their caller gives none: one per
+    bundle, for as long as the bundle lives."""
+    found = _defaults.get(functions)
+    if found is None:
+        found = _defaults[functions] = Workspace(functions)
+    return found
+
+
+def of(functions, workspace: Workspace | None) -> Workspace:
+    """`workspace` (checked to serve `functions`), or the bundle's default one."""
+    return default(functions) if workspace is None else workspace.serve(functions)
