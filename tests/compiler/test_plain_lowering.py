@@ -19,6 +19,7 @@ import pytest
 
 from casmech.model.lower import lower
 from casmech.schema import load_model
+from casmech.schema.resolved import Analysis
 
 ROOT = Path(__file__).resolve().parents[2]
 # models written with what the reference's source could not read (units, `initial:`,
@@ -33,6 +34,9 @@ SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend 
 # spherical joint's state (q@i, q@j: equations/joint_states.py)
 ADDED = {"outputs": (), "reference_pose": None, "initial": {}, "initial_sources": {}}
 ADDED_GEOMETRY = frozenset({"q@i", "q@j"})
+# the analysis options as the reference's IR held them, with their defaults
+OLD_OPTIONS = {"formulation": "auto", "stabilization": "ggl", "method": "auto", "at": None,
+               "inputs": None}
 
 
 def _added(name: str, value) -> bool:
@@ -50,6 +54,16 @@ def _walk(value, numbers: list, tokens: list) -> None:
         numbers.extend(np.asarray(value, float).ravel().tolist())
     elif hasattr(value, "text") and hasattr(value, "root"):  # an expression: its text
         tokens.append(f"expr {value.text}")
+    elif isinstance(value, Analysis):  # its options as the reference held them (a mapping
+        tokens.append(type(value).__name__)  # of these keys; typed options came after it)
+        for item in fields(value):
+            if item.name == "options":
+                tokens.append(item.name)
+                _walk({key: getattr(value.options, key, default)
+                       for key, default in OLD_OPTIONS.items()}, numbers, tokens)
+            elif item.name not in (*SKIPPED, "written"):
+                tokens.append(item.name)
+                _walk(getattr(value, item.name), numbers, tokens)
     elif is_dataclass(value):
         tokens.append(type(value).__name__)
         for item in fields(value):
