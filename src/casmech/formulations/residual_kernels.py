@@ -22,15 +22,14 @@ from functools import lru_cache
 
 import casadi as ca
 
-from casmech.equations import assemble, romega
 from casmech.equations import body as body_terms
-from casmech.equations.mapped import bodies
-from casmech.equations.mapped import rows as row_kernels
-from casmech.formulations import dae
+from casmech.equations import body_kernels
+from casmech.equations import derivatives, evaluation
+from casmech.equations import row_kernels
+from casmech.formulations import dae_terms as terms
 
 ROW = row_kernels.ROW  # x = [r_i, p_i, r_j, p_j]
-V_WIDTH = {"rp": 14, "romega": 12}  # a joint's velocity entries: q_dot, or [r_dot, omega_bar]
-BODY_V = {"rp": 7, "romega": 6}
+BODY_V = {"rp": 7, "romega": 6}  # a body's velocity entries: q_dot, or [r_dot, omega_bar]
 
 
 def _function(name: str, y, d, out: list) -> ca.Function:
@@ -44,25 +43,26 @@ def joint_data_sizes(keys) -> list[int]:
 
 
 def n_scales(kind: str) -> int:
-    """Row constants per row in d: w and s, and s_phi for ggl (formulations.dae.parameters)."""
+    """Row constants per row in d: w and s, and s_phi for ggl (formulations.terms.parameters)."""
     return 3 if kind == "ggl" else 2
 
 
 @lru_cache(maxsize=512)
 def joint(keys: tuple, form: str, kind: str) -> ca.Function:
-    """The r rows of one joint between bodies i and j (x = [q_i, q_j], v their velocities),
+    """The r rows of one joint over its bodies (x = [q_i, q_j (, ...)], v their velocities),
     every row of P scaled by its constant s (and of Phi, Phi_q by s_phi: formulations.dae).
 
-    y = [x (14), v, lam (r), mu (r)] (ggl) or [x, v, v_dot, lam (r)] (projection);
-    out = [Phi_q_s^T mu (14), P_s^T lam, (1 - w) phi_s - w mu (r), (1 - w) (P_s v -
+    y = [x, v, lam (r), mu (r)] (ggl) or [x, v, v_dot, lam (r)] (projection);
+    out = [Phi_q_s^T mu (x), P_s^T lam, (1 - w) phi_s - w mu (r), (1 - w) (P_s v -
     nu_s) - w lam (r)] (ggl) or [P_s^T lam, P_s v_dot - gamma_s - w lam (r)] (projection);
     d = [w, s (, s_phi) (r each), f, f', f'' of each row (3 r), each row's vectors unless
-    baked]. In r-p, P is Phi_q: Phi_q_s = P_s (s) and phi_s = s_phi phi, as formulations.dae."""
-    r, n_v, n_c = len(keys), V_WIDTH[form], n_scales(kind)
+    baked]. In r-p, P is Phi_q: Phi_q_s = P_s (s) and phi_s = s_phi phi, as formulations.terms."""
+    r, n_v, n_c = len(keys), BODY_V[form] * keys[0].bodies, n_scales(kind)
+    width = keys[0].width
     sizes = joint_data_sizes(keys)
     d = ca.SX.sym("d", (n_c + 3) * r + sum(sizes))
-    y = ca.SX.sym("y", ROW + n_v + (2 * r if kind == "ggl" else n_v + r))
-    x, v = y[:ROW], y[ROW:ROW + n_v]
+    y = ca.SX.sym("y", width + n_v + (2 * r if kind == "ggl" else n_v + r))
+    x, v = y[:width], y[width:width + n_v]
     w, scale = d[:r], d[r:2 * r]
     lam = y[-2 * r:-r] if kind == "ggl" else y[-r:]
     rows, start = [], (n_c + 3) * r
@@ -77,17 +77,17 @@ def joint(keys: tuple, form: str, kind: str) -> ca.Function:
         rows.append((phi, jac, nu, raw, gamma))
     phi, jac, nu, raw, gamma = (ca.vertcat(*column) if column[0] is not None else None
                                 for column in zip(*rows, strict=True))
-    p_s = dae.scaled(raw, scale)
+    p_s = terms.scaled(raw, scale)
     if kind == "ggl":
         scale_phi, mu = d[2 * r:3 * r], y[-r:]
-        phi_q_s = p_s if form == "rp" else dae.scaled(jac, scale_phi)
-        out = [dae.constraint_forces(phi_q_s, mu), dae.constraint_forces(p_s, lam),
-               dae.position_rows(phi * scale_phi, w, mu),
-               dae.velocity_rows(p_s, v, nu * scale, w, lam)]
+        phi_q_s = p_s if form == "rp" else terms.scaled(jac, scale_phi)
+        out = [terms.constraint_forces(phi_q_s, mu), terms.constraint_forces(p_s, lam),
+               terms.position_rows(phi * scale_phi, w, mu),
+               terms.velocity_rows(p_s, v, nu * scale, w, lam)]
     else:
-        v_dot = y[ROW + n_v:ROW + 2 * n_v]
-        out = [dae.constraint_forces(p_s, lam),
-               dae.acceleration_rows(p_s, v_dot, gamma * scale, w, lam)]
+        v_dot = y[width + n_v:width + 2 * n_v]
+        out = [terms.constraint_forces(p_s, lam),
+               terms.acceleration_rows(p_s, v_dot, gamma * scale, w, lam)]
     digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
     return _function(f"element_{form}_{kind}_joint_{digest}", y, d, out)
 
@@ -105,54 +105,59 @@ def body_constants(form: str, kind: str) -> int:
     return 1 if kind == "ggl" else 0
 
 
-def _mass_and_forces(form: str, gravity, p, rate, mass, inertia) -> tuple:
-    """M and F of one body over its velocity (rate: p_dot in rp, omega_bar in romega): blkdiag(m
-    I, 4 G^T J G) and [m g; 8 G_dot^T J G_dot p] (rp), blkdiag(m I, J) and [m g; -omega~ J
-    omega] (romega)."""
+def _mass_and_forces(form: str, pattern: tuple[bool, ...], p, rate, mass, j_flat, gravity
+                     ) -> tuple:
+    """M and F of one body over its velocity (rate: p_dot in rp, omega_bar in romega), from
+    the per-body kernels of equations.body_kernels: blkdiag(m I, 4 G^T J G) and [m g; 8 G_dot^T
+    J G_dot p] (rp), blkdiag(m I, J) and [m g; -omega~ J omega] (romega)."""
+    per_body = body_kernels.kernels_for(pattern)
     if form == "rp":
-        block = body_terms.mass_block(p, inertia)
-        torque = body_terms.quadratic_velocity(p, rate, inertia)
+        block = per_body["mass"](p, j_flat)
+        torque = per_body["quadratic"](p, rate, j_flat)
     else:
-        block, torque = inertia, romega.body_torque(p, ca.SX(4, 1), rate, inertia)
-    return ca.diagcat(mass * ca.SX.eye(3), block), ca.vertcat(mass * ca.DM(gravity), torque)
+        block = body_kernels.inertia_matrix(j_flat)
+        torque = per_body["gyroscopic"](p, rate, j_flat)
+    return ca.diagcat(mass * ca.SX.eye(3), block), ca.vertcat(mass * gravity, torque)
 
 
 @lru_cache(maxsize=64)
-def body(pattern: tuple[bool, ...], gravity: tuple[float, ...], form: str, kind: str
+def body(pattern: tuple[bool, ...], gravity: tuple[float, ...] | None, form: str, kind: str
          ) -> ca.Function:
     """One body, with its normalization row where the DAE has one (rp: a row of P; romega
     ggl: a row of Phi only).
 
     y = [q (7), v, v_dot, lam_n (rp), mu_n (ggl)]; out = [q_dot + Phi_q_s^T mu_n (7), v_dot,
-    M v_dot + P_s^T lam_n - F, then the normalization row's alg entries] (formulations.dae's terms);
+    M v_dot + P_s^T lam_n - F, then the normalization row's alg entries] (formulations.dae_terms);
     F: gravity and quadratic velocity (rp) or the gyroscopic torque (romega). d = [the row's
-    constants (body_constants), m, J_bar]."""
+    constants (body_constants), m, J_bar (, g when gravity is model data: None)]."""
     n_v, n_c = BODY_V[form], body_constants(form, kind)
+    n_j = sum(pattern)
     y = ca.SX.sym("y", 7 + 2 * n_v + (1 if form == "rp" else 0) + (1 if kind == "ggl" else 0))
-    d = ca.SX.sym("d", n_c + 1 + sum(pattern))
-    inertia = ca.reshape(ca.densify(ca.SX(bodies.inertia_sparsity(pattern), d[n_c + 1:])), 3, 3)
+    d = ca.SX.sym("d", n_c + 1 + n_j + (3 if gravity is None else 0))
+    j_flat = ca.SX(evaluation.sparse_column(pattern), d[n_c + 1:n_c + 1 + n_j])
+    g = d[n_c + 1 + n_j:] if gravity is None else ca.DM(gravity)
     q, v, v_dot = y[:7], y[7:7 + n_v], y[7 + n_v:7 + 2 * n_v]
     p = q[3:]
-    matrix, forces = _mass_and_forces(form, gravity, p, v[3:], d[n_c], inertia)
+    matrix, forces = _mass_and_forces(form, pattern, p, v[3:], d[n_c], j_flat, g)
     ode = q_dot(form, q, v)
     # the normalization row, over q (zero on r)
     phi = body_terms.normalization(p)
-    norm = assemble.derivatives(phi, p, ca.SX.sym("t"), ode[3:])
+    norm = derivatives.of_phi(phi, p, ca.SX.sym("t"), ode[3:])
     jac = ca.horzcat(ca.SX(1, 3), norm["phi_q"])
     p_s, lam, rows = ca.SX(0, n_v), ca.SX(0, 1), []  # romega: not a row of P
     if form == "rp":
         w, scale, lam = d[0], d[1], y[7 + 2 * n_v]
         p_s = jac * scale
         if kind == "ggl":
-            rows = [dae.position_rows(phi * d[2], w, y[-1]),
-                    dae.velocity_rows(p_s, v, norm["nu"] * scale, w, lam)]
-            ode = dae.ggl_q_dot(ode, p_s, y[-1])
+            rows = [terms.position_rows(phi * d[2], w, y[-1]),
+                    terms.velocity_rows(p_s, v, norm["nu"] * scale, w, lam)]
+            ode = terms.ggl_q_dot(ode, p_s, y[-1])
         else:
-            rows = [dae.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w, lam)]
+            rows = [terms.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w, lam)]
     elif kind == "ggl":  # a row of Phi only: w = 0
-        rows = [dae.position_rows(phi * d[0], 0, y[-1])]
-        ode = dae.ggl_q_dot(ode, jac * d[0], y[-1])
-    alg = dae.dynamics(matrix, v_dot, p_s, lam, forces)
+        rows = [terms.position_rows(phi * d[0], 0, y[-1])]
+        ode = terms.ggl_q_dot(ode, jac * d[0], y[-1])
+    alg = terms.dynamics(matrix, v_dot, p_s, lam, forces)
     digest = "".join("1" if on else "0" for on in pattern)
     return _function(f"element_{form}_{kind}_body_{digest}", y, d, [ode, v_dot, alg, *rows])
 
