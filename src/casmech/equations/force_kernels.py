@@ -115,13 +115,12 @@ def kernelised(force: ForceIR) -> bool:
 
 
 def numbers(force: ForceIR) -> bool:
-    """Whether an element's data and law constants are numbers (a kernel's data and key)."""
-    try:
-        np.asarray(data_of(force), float)
-        _actuator_key(force.actuator)
-    except (TypeError, ValueError, RuntimeError, NotImplementedError):
-        return False
-    return True
+    """Whether an element's data and law constants are numbers (a kernel's data and key), not
+    symbols of the model data."""
+    values = [*force.params.values(), *force.points.values(), *force.axes.values()]
+    for law in ([force.actuator] if force.actuator is not None else []) + list(force.value or ()):
+        values += list(law.constants.values())
+    return not any(isinstance(v, (ca.SX, ca.MX)) for v in values)
 
 
 def on_ground(force: ForceIR) -> bool:
@@ -152,15 +151,15 @@ def unrolled(ir: ModelIR, force: ForceIR, data: ca.SX | None = None) -> ca.Funct
     return ca.Function(unrolled_name(force), [x.t, x.q, x.q_dot, *extra], outputs)
 
 
-def instances(ir: ModelIR) -> tuple[dict, list]:
-    """(kernel key -> its elements, the elements without a kernel), in the file's order;
-    elements on ground only are left out."""
+def instances(ir: ModelIR, kernels: bool = True) -> tuple[dict, list]:
+    """(kernel key -> its elements, the elements without a kernel (every element when not
+    `kernels`)), in the file's order; elements on ground only are left out."""
     groups: dict = {}
     plain = []
     for force in elements(ir):
         if on_ground(force):
             continue
-        if kernelised(force):
+        if kernels and kernelised(force):
             groups.setdefault(key_of(force), []).append(force)
         else:
             plain.append(force)

@@ -1,10 +1,11 @@
-"""The force elements' quantities of a model over their kernels (equations.force_kernels),
-evaluated by an Evaluation: the generalized applied force and its potential, the effort
-motors' and stops' share of the joint reactions, the contacts' and stops' results columns, each
-defined here once.
+"""The force elements' quantities of a model (equations.force_kernels), evaluated by an
+Evaluation: the generalized applied force and its potential, the effort motors' and stops' share
+of the joint reactions, the contacts' and stops' results columns, each defined here once.
 
-The generalized forces of each kernel's elements are summed into Q by a constant sparse
-matrix; an element without a kernel is its own function over the model's coordinates.
+Inline, every element is its law over the model's coordinates, in one graph with the rows (a
+body's frame computed once for all); mapped, the generalized forces of each kernel's elements
+are summed into Q by a constant sparse matrix, and an element without a kernel is its own
+function over the model's coordinates.
 """
 
 from __future__ import annotations
@@ -47,7 +48,7 @@ def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
     """(sum of the force elements' generalized forces [n], their potential energy)."""
     layout = Layout(ir.n_bodies)
     padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
-    groups, plain = force_kernels.instances(ir)
+    groups, plain = force_kernels.instances(ir, kernels=not ev.inline)
     total, potential = ev.sym(layout.n, 1), ev.sym(0)
     for force in plain:
         term, energy = over_coordinates(ir, ev, force_kernels.unrolled_name(force),

@@ -175,6 +175,15 @@ class _Row:
         return ca.horzcat(*parts)
 
 
+@lru_cache(maxsize=512)
+def phi(key: RowKey, symbolic_ground: bool = False) -> ca.Function:
+    """(x, c, f) -> phi of one row at the instant; with symbolic_ground, ground's pose is read
+    from x like a body's (the inline evaluation's reactions differentiate with respect to it)."""
+    row = _Row(key, symbolic_ground)
+    return ca.Function(f"phi_{_name(key)}", [row.x, row.c, row.f], row.at_instant(row.phi()),
+                       ["x", "c", "f"], ["phi"])
+
+
 @lru_cache(maxsize=256)
 def constraint(key: RowKey) -> ca.Function:
     """(x, c, f) -> (phi, jac [1 x width], nu) of one row at the instant."""

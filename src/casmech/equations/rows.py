@@ -14,59 +14,20 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.equations import evaluation
+from casmech.equations import evaluation, inline
 from casmech.equations import row_kernels as kernels
-from casmech.equations.derivatives import GROUND_POSE
 from casmech.equations.evaluation import Evaluation
-from casmech.model.ir import GROUND_INDEX, ModelIR
+from casmech.equations.layout import Layout, ordered, scatter
+from casmech.model.ir import ModelIR
 from casmech.numerics import element_sums
+
+__all__ = ["BAKE_LIMIT", "Group", "Layout", "by_joint_keys", "constraints", "groups",
+           "joint_f", "joint_rows", "joint_vectors", "ordered", "pattern", "reactions",
+           "romega_gamma", "row_keys", "scatter", "stacked", "variations"]
 
 # Most distinct row geometries baked into kernels (exact sparsity); a model with more passes
 # the vectors as data (code independent of the geometry; see equations.row_kernels).
 BAKE_LIMIT = 24
-
-
-class Layout:
-    """Indices of the bodies' coordinates in q = [r (3 nb); p (4 nb)] and in the r-omega
-    velocity v = [r_dot (3 nb); omega_bar (3 nb)]; ground maps past the end (padding)."""
-
-    def __init__(self, nb: int):
-        self.nb, self.n, self.n_v = nb, 7 * nb, 6 * nb
-
-    def q(self, k: int) -> list[int]:
-        if k == GROUND_INDEX:
-            return list(range(self.n, self.n + 7))
-        return [3 * k + i for i in range(3)] + [3 * self.nb + 4 * k + i for i in range(4)]
-
-    def v(self, k: int) -> list[int]:
-        if k == GROUND_INDEX:
-            return list(range(self.n_v, self.n_v + 6))
-        return [3 * k + i for i in range(3)] + [3 * self.nb + 3 * k + i for i in range(3)]
-
-    def pad_q(self, q):
-        return ca.vertcat(q, ca.DM(GROUND_POSE))
-
-    def pad(self, vector, extra: int):
-        return ca.vertcat(vector, ca.DM.zeros(extra))
-
-
-def scatter(n_rows: int, n_cols: int, triplets: list, values, sym=ca.MX):
-    """The sparse (n_rows x n_cols) matrix whose (row, col) entry is values[position], from
-    (row, col, position) triplets."""
-    if not triplets:
-        return sym(n_rows, n_cols)
-    rows, cols, positions = zip(*triplets, strict=True)
-    sparsity, mapping = ca.Sparsity.triplet(n_rows, n_cols, list(rows), list(cols), True)
-    take = [0] * sparsity.nnz()
-    for k, nonzero in enumerate(mapping):
-        take[nonzero] = positions[k]
-    return sym(sparsity, values[take])
-
-
-def ordered(parts: list, order: list[int], sym=ca.MX):
-    """Stack per-group row vectors and put them back in row order."""
-    inverse = [int(k) for k in np.argsort(order)]
-    return ca.vertcat(*parts)[inverse] if parts else sym(0, 1)
 
 
 class Group:
@@ -159,6 +120,8 @@ def constraints(ir: ModelIR, ev: Evaluation, t, q, q_dot=None, scale=None) -> di
     """phi, phi_q, nu and (given q_dot) gamma; with `scale`: phi and phi_q with the drivers
     scaled (phi_scaled)."""
     layout = Layout(ir.n_bodies)
+    if ev.inline:
+        return inline.constraints(ir, ev, groups(ir, layout, ev), t, q, q_dot, scale)
     padded = layout.pad_q(q)
     padded_dot = None if q_dot is None else layout.pad(q_dot, 7)
     parts: dict = {"phi": [], "nu": [], "gamma": []}
@@ -195,10 +158,16 @@ def constraints(ir: ModelIR, ev: Evaluation, t, q, q_dot=None, scale=None) -> di
     return out
 
 
-def variations(ir: ModelIR, ev: Evaluation, t, q, joint_rows_only: bool = False):
+def variations(ir: ModelIR, ev: Evaluation, t, q, joint_rows_only: bool = False,
+               derived: dict | None = None):
     """[Phi_r, Pi_bar] (rows of phi x 6 nb), the r-omega Jacobian; the normalization rows
-    (zero in value) unless joint_rows_only."""
+    (zero in value) unless joint_rows_only. Inline: from phi_q (`derived`: constraints' output
+    when already built)."""
     layout = Layout(ir.n_bodies)
+    if ev.inline:
+        phi_q = (derived or constraints(ir, ev, t, q))["phi_q"]
+        return inline.variations(ir, phi_q[:len(ir.primitives), :] if joint_rows_only
+                                 else phi_q, q)
     padded = layout.pad_q(q)
     blocks, triplets, offset = [], [], 0
     for group in groups(ir, layout, ev):
@@ -216,9 +185,17 @@ def variations(ir: ModelIR, ev: Evaluation, t, q, joint_rows_only: bool = False)
     return scatter(m if joint_rows_only else m + nb, layout.n_v, triplets, values, ev.sym)
 
 
-def romega_gamma(ir: ModelIR, ev: Evaluation, t, q, v):
-    """gamma_hat of the joint rows (row_kernels.romega_gamma)."""
+def romega_gamma(ir: ModelIR, ev: Evaluation, t, q, v, q_dot=None, derived: dict | None = None):
+    """gamma_hat of the joint rows (row_kernels.romega_gamma); inline: of the whole model, at
+    q_dot = q_dot(q, v) (`derived`: as variations')."""
     layout = Layout(ir.n_bodies)
+    if ev.inline:
+        m = len(ir.primitives)
+        if not m:
+            return ev.sym(0, 1)
+        derived = derived or constraints(ir, ev, t, q)
+        jacobian = variations(ir, ev, t, q, True, derived)
+        return inline.romega_gamma(jacobian, derived["nu"][:m], t, q, v, q_dot)
     padded, padded_v = layout.pad_q(q), layout.pad(v, 6)
     parts, order = [], []
     for group in groups(ir, layout, ev):
@@ -273,8 +250,11 @@ def joint_vectors(ir: ModelIR, keys: tuple, members: list[list[int]], pattern_of
 
 def reactions(ir: ModelIR, ev: Evaluation, t, q, lam) -> tuple:
     """(force, torque) of every joint's rows on its body_j (3 x joints): one kernel call per
-    joint (row_kernels.joint_reaction), each column added into its joint's."""
+    joint (row_kernels.joint_reaction), each column added into its joint's; inline: by AD of
+    the expanded rows."""
     layout = Layout(ir.n_bodies)
+    if ev.inline:
+        return inline.reactions(ir, ev, groups(ir, layout, ev), t, q, lam)
     padded = layout.pad_q(q)
     joint_of = {row: j for j, joint in enumerate(ir.joints) for row in joint.rows}
     forces, torques, columns = [], [], []

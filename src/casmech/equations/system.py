@@ -62,10 +62,15 @@ class System:
         x = self.x
         return rows.constraints(self.ir, self.ev, x.t, x.q, scale=x.s)
 
+    @property
+    def _derived(self) -> dict | None:
+        """The constraints the inline evaluation's variations differentiate (None: mapped)."""
+        return self.constraints if self.ev.inline else None
+
     @cached_property
     def variations(self):
         """[Phi_r, Pi_bar] of every row (rows of phi x 6 nb)."""
-        return rows.variations(self.ir, self.ev, self.x.t, self.x.q)
+        return rows.variations(self.ir, self.ev, self.x.t, self.x.q, derived=self._derived)
 
     @cached_property
     def applied(self) -> tuple:
@@ -117,16 +122,19 @@ class System:
         return ca.densify(ca.vertcat(applied[:3 * nb], torques))
 
     def romega_jacobian(self):
-        return rows.variations(self.ir, self.ev, self.x.t, self.x.q, joint_rows_only=True)
+        return rows.variations(self.ir, self.ev, self.x.t, self.x.q, True, self._derived)
 
     def romega_nu(self):
         joint_rows = len(self.ir.primitives)
         if not joint_rows:
             return self.ev.sym(0, 1)
-        return rows.constraints(self.ir, self.ev, self.x.t, self.x.q)["nu"][:joint_rows]
+        derived = self._derived or rows.constraints(self.ir, self.ev, self.x.t, self.x.q)
+        return derived["nu"][:joint_rows]
 
     def romega_gamma(self):
-        return rows.romega_gamma(self.ir, self.ev, self.x.t, self.x.q, self.x.v)
+        x = self.x
+        return rows.romega_gamma(self.ir, self.ev, x.t, x.q, x.v, self.romega_q_dot,
+                                 self._derived)
 
     def romega_q_ddot(self):
         return bodies.romega_q_ddot(self.ir, self.ev, self.x.q, self.x.v, self.x.v_dot)

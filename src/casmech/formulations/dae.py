@@ -30,19 +30,22 @@ scaled by s_phi; in r-p P is Phi_q, and s_phi = s; mu is 0 along the exact motio
 masked rows become lam_k = 0 and mu_k = 0. IDAS integrates it with the algebraic unknowns out
 of its error test.
 
-Both are built once, as sums of elements (one per joint, body and force element:
-formulations.residuals over the kernels of formulations.residual_kernels): inline, one SX
-graph, for an interpreted bundle (its functions' source, the IR); mapped for code generation.
-Over a symbolic IR (model.parametric, every function with the trailing input d) either
-residual takes d after its own parameters: p = [t0, w, s (, s_phi), d].
+The residual is written once (formulations.dae_terms.residual) and evaluated by the builder's
+switch: inline over the whole model's functions (here: over a bundle, one SX graph over an
+interpreted one), or mapped as a sum of per-element kernels over the same terms
+(formulations.residuals: what a library compiles for larger models).
+Over a parametric bundle (every function with the trailing input d, the model data:
+model.parametric) either residual takes d after its own parameters: p = [t0, w, s (, s_phi), d].
 """
 
 from __future__ import annotations
 
 import casadi as ca
 
-from casmech.formulations import residuals
+from casmech.equations.functions import symbol_type
+from casmech.formulations import dae_terms as terms
 from casmech.formulations.table import FORMULATIONS
+from casmech.model.parametric import data_size, with_data
 
 
 def sizes(functions: dict[str, ca.Function], name: str) -> tuple[int, int, int]:
@@ -59,16 +62,11 @@ def residual(functions: dict[str, ca.Function], name: str,
              stabilization: str = "projection") -> ca.Function:
     """dae_<name> (projection: the index-1 DAE) or dae_ggl_<name> (the stabilized index-2
     one): (t, x, z, p) -> (ode, alg); the bundle's own when it has one (a compiled bundle
-    carries them, with their Jacobians), else built inline from the IR of an interpreted
-    bundle (equations.functions.LazyFunctions.source)."""
+    carries them, with their Jacobians), else over the bundle's functions."""
     key = f"dae_{name}" if stabilization == "projection" else f"dae_ggl_{name}"
     if key in functions:
         return functions[key]
-    source = getattr(functions, "source", None)
-    if source is None:
-        raise ValueError(f"{key}: the bundle has no DAE residual and no model to build it from")
-    ir, data = source
-    return residuals.residual(ir, name, stabilization, data)
+    return _over(functions, name, stabilization, key)
 
 
 def parameters(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
@@ -77,16 +75,58 @@ def parameters(functions: dict[str, ca.Function], name: str, stabilization: str)
     return 1 + 2 * m + (functions["phi"].size1_out(0) if stabilization == "ggl" else 0)
 
 
-def residuals_of(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """Every residual by name, both stabilizations of both formulations, of a bundle."""
-    built = (residual(functions, name, kind) for name in FORMULATIONS for kind in STABILIZATIONS)
-    return {function.name(): function for function in built}
-
-
 def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
     """Algebraic unknowns after v_dot: lam, and mu (one per row of Phi) for ggl."""
     m = sizes(functions, name)[2]
     return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
+
+
+def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """Every residual by name, both stabilizations of both formulations, over a bundle."""
+    built = (residual(functions, name, kind) for name in FORMULATIONS for kind in STABILIZATIONS)
+    return {function.name(): function for function in built}
+
+
+def _column(p, start: int, stop: int):
+    """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
+    return ca.reshape(p[start:stop], stop - start, 1)
+
+
+def _over(functions: dict[str, ca.Function], name: str, kind: str, key: str) -> ca.Function:
+    """The residual over a bundle's functions (module docstring): SX over an SX bundle, with
+    its common subexpressions merged (and so its Jacobian by AD:
+    docs/decisions/codegen-small-dae-unrolled.md); MX over compiled ones."""
+    form = FORMULATIONS[name]
+    n_q, n_v, m = sizes(functions, name)
+    n_phi = functions["phi"].size1_out(0)
+    ggl = kind == "ggl"
+    sym = symbol_type(functions)
+    n_p = parameters(functions, name, kind)
+    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v),
+                    sym.sym("z", n_v + m + (n_phi if ggl else 0)),
+                    sym.sym("p", n_p + data_size(functions)))
+    functions = with_data(functions, p[n_p:])
+    t, q, v = p[0] + tau, x[:n_q], x[n_q:]
+    w, s = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m)
+    v_dot, lam = z[:n_v], z[n_v:n_v + m]
+    jacobian = terms.scaled(functions[form.jacobian](t, q), s)
+    if ggl:
+        s_phi, mu = _column(p, 1 + 2 * m, n_p), z[n_v + m:]
+        # r-p: P is Phi_q (one evaluation; s_phi = s)
+        phi_q = jacobian if form.jacobian == "phi_q" else \
+            terms.scaled(functions["phi_q"](t, q), s_phi)
+        rows = terms.Rows(jacobian, lam, w, nu_s=functions[form.nu](t, q) * s,
+                          phi_s=functions["phi"](t, q) * s_phi, phi_q_s=phi_q,
+                          w_phi=ca.vertcat(w, sym(n_phi - m, 1)),  # r-omega: + normalization
+                          mu=mu)
+    else:
+        rows = terms.Rows(jacobian, lam, w, gamma_s=functions[form.gamma](t, q, v) * s)
+    q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
+    ode_q, ode_v, alg_v, alg_rows = terms.residual(terms.Parts(
+        v, q_dot, v_dot, functions[form.mass](q), functions[form.forces](t, q, v), rows), kind)
+    return ca.Function(key, [tau, x, z, p], [ca.vertcat(ode_q, ode_v), ca.vertcat(alg_v, alg_rows)],
+                       ["t", "x", "z", "p"], ["ode", "alg"],
+                       {"cse": True} if sym is ca.SX else {})
 
 
 def problem(function: ca.Function) -> dict | ca.Function:

@@ -81,13 +81,13 @@ def joint(keys: tuple, form: str, kind: str) -> ca.Function:
     if kind == "ggl":
         scale_phi, mu = d[2 * r:3 * r], y[-r:]
         phi_q_s = p_s if form == "rp" else terms.scaled(jac, scale_phi)
-        out = [terms.constraint_forces(phi_q_s, mu), terms.constraint_forces(p_s, lam),
-               terms.position_rows(phi * scale_phi, w, mu),
-               terms.velocity_rows(p_s, v, nu * scale, w, lam)]
+        parts = terms.Parts(v=v, rows=terms.Rows(p_s, lam, w, nu_s=nu * scale,
+                                                 phi_s=phi * scale_phi, phi_q_s=phi_q_s,
+                                                 w_phi=w, mu=mu))
     else:
         v_dot = y[width + n_v:width + 2 * n_v]
-        out = [terms.constraint_forces(p_s, lam),
-               terms.acceleration_rows(p_s, v_dot, gamma * scale, w, lam)]
+        parts = terms.Parts(v_dot=v_dot, rows=terms.Rows(p_s, lam, w, gamma_s=gamma * scale))
+    out = [part for part in terms.residual(parts, kind) if part is not None]
     digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
     return _function(f"element_{form}_{kind}_joint_{digest}", y, d, out)
 
@@ -144,22 +144,22 @@ def body(pattern: tuple[bool, ...], gravity: tuple[float, ...] | None, form: str
     phi = body_terms.normalization(p)
     norm = derivatives.of_phi(phi, p, ca.SX.sym("t"), ode[3:])
     jac = ca.horzcat(ca.SX(1, 3), norm["phi_q"])
-    p_s, lam, rows = ca.SX(0, n_v), ca.SX(0, 1), []  # romega: not a row of P
+    rows = None  # romega projection: not a row of P or of Phi
     if form == "rp":
         w, scale, lam = d[0], d[1], y[7 + 2 * n_v]
         p_s = jac * scale
-        if kind == "ggl":
-            rows = [terms.position_rows(phi * d[2], w, y[-1]),
-                    terms.velocity_rows(p_s, v, norm["nu"] * scale, w, lam)]
-            ode = terms.ggl_q_dot(ode, p_s, y[-1])
-        else:
-            rows = [terms.acceleration_rows(p_s, v_dot, norm["gamma"] * scale, w, lam)]
+        rows = terms.Rows(p_s, lam, w, gamma_s=norm["gamma"] * scale, nu_s=norm["nu"] * scale,
+                          phi_s=phi * d[2] if kind == "ggl" else None, phi_q_s=p_s, w_phi=w,
+                          mu=y[-1] if kind == "ggl" else None)
     elif kind == "ggl":  # a row of Phi only: w = 0
-        rows = [terms.position_rows(phi * d[0], 0, y[-1])]
-        ode = terms.ggl_q_dot(ode, jac * d[0], y[-1])
-    alg = terms.dynamics(matrix, v_dot, p_s, lam, forces)
+        empty = ca.SX(0, 1)
+        rows = terms.Rows(ca.SX(0, n_v), empty, empty, nu_s=empty, phi_s=phi * d[0],
+                          phi_q_s=jac * d[0], w_phi=0, mu=y[-1])
+    parts = terms.Parts(v=v, q_dot=ode, v_dot=v_dot, mass=matrix, forces=forces, rows=rows)
+    out = terms.residual(parts, kind)
     digest = "".join("1" if on else "0" for on in pattern)
-    return _function(f"element_{form}_{kind}_body_{digest}", y, d, [ode, v_dot, alg, *rows])
+    return _function(f"element_{form}_{kind}_body_{digest}", y, d,
+                     [part for part in out if part is not None])
 
 
 def generalized_to(form: str, x, generalized):
@@ -186,5 +186,6 @@ def force(kernel: ca.Function, form: str) -> ca.Function:
                          for s in range(2)])
     generalized = kernel(x, x_dot, d[0], ca.SX(data.sparsity(), d[1:1 + data.nnz()]),
                          ca.SX(value.sparsity(), d[1 + data.nnz():]))[0]
+    parts = terms.Parts(forces=generalized_to(form, x, generalized))
     return _function(f"element_{form}_{kernel.name()}", y, d,
-                     [-generalized_to(form, x, generalized)])
+                     [terms.residual(parts, "projection")[2]])

@@ -1,15 +1,13 @@
-"""The DAE residuals of formulations.dae (both formulations, both stabilizations) as sums of
-elements (numerics.element_sums): one per joint, one per body, one per force element
-(formulations.residual_groups), whose kernels are formulations.residual_kernels. One
-construction, evaluated by the builder's switch (equations.evaluation):
+"""The DAE residuals a library compiles, by the builder's switch (equations.evaluation):
 
-- inline (`residual`): one SX graph, its common subexpressions merged; what an interpreted
-  bundle integrates, and what a small model's library compiles (with its Jacobian by AD of the
-  whole graph: from_residual), where that code is smaller and faster per call
+- inline: formulations.dae's residual over the interpreted bundle, one SX graph (its Jacobian by
+  AD of the whole graph: from_residual), where that code is smaller and faster per call
   (WHERE_INLINE["dae_library"], UNROLLED_INSTRUCTIONS);
-- mapped (`oracle`): each element's kernel mapped over its instances, the Jacobian assembled
-  from the kernels' own SX Jacobians: code that does not grow with the model (only index tables
-  do; docs/decisions/codegen-element-residuals.md).
+- mapped (`oracle`): the same residual (formulations.dae_terms) as a sum of elements
+  (numerics.element_sums): one per joint, one per body, one per force element
+  (formulations.residual_groups), whose kernels are formulations.residual_kernels, mapped over
+  their instances, the Jacobian assembled from the kernels' own SX Jacobians: code that does not
+  grow with the model (only index tables do; docs/decisions/codegen-element-residuals.md).
 
 Each compiled residual is the DAE casadi's IDAS interface integrates together with `daeF` and
 `jacF`, the residual and its Jacobian blocks, which that interface takes from the DAE's library
@@ -21,6 +19,8 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.equations.evaluation import Evaluation, is_inline
+from casmech.equations.functions import build_functions
+from casmech.formulations import dae
 from casmech.formulations.residual_groups import (
     Indices,
     body_group,
@@ -51,23 +51,6 @@ def element_sum(ir: ModelIR, ix: Indices, t, constants: list, ev: Evaluation) ->
     return ElementSum(ix.n_x + ix.n_z, ix.n_u, tuple(groups), ix.padding)
 
 
-def residual(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None) -> ca.Function:
-    """dae_[ggl_]<form> inline: (t, x, z, p) -> (ode, alg), one SX graph; `data`: the symbols
-    of a symbolic IR (model.parametric.split), appended to p."""
-    if form not in FORMULATIONS:
-        raise ValueError(f"unknown formulation {form}")
-    ev = Evaluation.of(True, data)
-    ix = Indices(ir, form, kind)
-    tau, x, z, p = (ca.SX.sym("t"), ca.SX.sym("x", ix.n_x), ca.SX.sym("z", ix.n_z),
-                    ca.SX.sym("p", ix.n_p))
-    elements = element_sum(ir, ix, p[0] + tau, ix.constants(p), ev)
-    value = elements.value(ca.vertcat(x, z), inline=True)
-    parameters = p if data is None else ca.vertcat(p, data)
-    return ca.Function(name(form, kind), [tau, x, z, parameters],
-                       [value[:ix.n_x], value[ix.n_x:]], ["t", "x", "z", "p"], ["ode", "alg"],
-                       {"cse": True})
-
-
 INTEGRATOR_IN = ["t", "x", "z", "p", "u"]  # casadi's DAE inputs (ca.dyn_in())
 
 
@@ -75,11 +58,11 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF:
     inline where the switch says so and the code is small (UNROLLED_INSTRUCTIONS), else
     mapped (oracle)."""
-    inline = is_inline("dae_library", ir.n_bodies)
+    sx = build_functions(ir).functions if is_inline("dae_library", ir.n_bodies) else None
     out = {}
     for form in FORMULATIONS:
         for kind in KINDS:
-            chosen = from_residual(residual(ir, form, kind)) if inline else None
+            chosen = from_residual(dae.residual(sx, form, kind)) if sx is not None else None
             if chosen is not None and sum(chosen[f].n_instructions() for f in (
                     "daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
                 chosen = None
