@@ -2,10 +2,11 @@
 model's parameters.
 
 The bundle is the builder's (equations.functions) over model.parametric's symbolic IR (every
-function with the trailing input `d`, the model data), evaluated inline: SX generated as C with the derivatives
-codegen.generate adds (and, for kinematics and inverse dynamics, formulations.prescribed's step over
-it, with `d` its third input); each DAE residual is formulations.dae's over that bundle,
-(t, x, z, [p; d]), with its daeF and jacF (formulations.residuals.from_residual). The cache key is
+function with the trailing input `d`, the model data), evaluated inline: SX generated as C with
+the derivatives codegen.generate adds (and, for kinematics and inverse dynamics,
+formulations.prescribed's step over it, with `d` its third input); each DAE residual is
+formulations.dae's over that bundle, (t, x, z, [p; d]), with its daeF and jacF
+(formulations.residuals.from_residual). The cache key is
 the model's structure (model.parametric's signature) with its text, component files and
 tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions

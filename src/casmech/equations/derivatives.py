@@ -44,6 +44,11 @@ def reaction(phi, lam, r_j, p_j, about) -> tuple:
     From the lecture: force -Phi_r_j^T lam, body-frame torque about the CM -Pi_bar_j^T lam,
     moved to the point P: T_P = A_j n_bar + (r_j - r_P) x F.
     """
-    force = -ca.jacobian(phi, r_j).T @ lam
-    n_bar = -0.5 * euler.g_matrix(p_j) @ ca.jacobian(phi, p_j).T @ lam
+    return reaction_of_blocks(ca.jacobian(phi, r_j), ca.jacobian(phi, p_j), lam, r_j, p_j, about)
+
+
+def reaction_of_blocks(phi_r, phi_p, lam, r_j, p_j, about) -> tuple:
+    """reaction's (force, torque) from the rows' Jacobian blocks Phi_r_j, Phi_p_j."""
+    force = -phi_r.T @ lam
+    n_bar = -0.5 * euler.g_matrix(p_j) @ phi_p.T @ lam
     return force, euler.rotation(p_j) @ n_bar + ca.cross(r_j - about, force)

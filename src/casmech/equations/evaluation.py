@@ -32,11 +32,15 @@ from casmech.numerics import instances
 # also mapped when their unrolled SX exceeds formulations.residuals.UNROLLED_INSTRUCTIONS.)
 WHERE_INLINE = {
     "interpreted": math.inf,  # CasADi's virtual machine runs SX fastest: always inline
-    "library": 0,  # the compiled bundle: kernels mapped (docs/decisions/codegen-element-residuals.md)
+    "library": 0,  # the compiled bundle (docs/decisions/codegen-element-residuals.md)
     "prescribed_step": 32,  # the compiled kinematics step (docs/decisions/prescribed-step.md)
     "dae_library": 4,  # the compiled DAE residuals (docs/decisions/codegen-small-dae-unrolled.md)
     "parametric": 32,  # a library over the model data (backends.parametric.MAX_BODIES)
 }
+# Inline functions of at most this many bodies merge their common subexpressions (a frame or a
+# kernel's term shared by several rows): fewer instructions per call, for a merge that costs
+# about what building the graph does (docs/decisions/one-builder.md).
+MERGED_BODIES = 64
 
 
 def is_inline(use: str, n_bodies: int) -> bool:
@@ -51,14 +55,25 @@ class Evaluation:
 
     inline: bool
     data: ca.SX | None = None
+    merged: bool = False  # inline functions with common subexpressions merged (cse)
     # the model data as the functions' input: data itself (inline), an MX symbol (mapped)
     input: object = field(default=None, compare=False)
     _converted: dict = field(default_factory=dict, compare=False, repr=False)
+    _kept: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def kept(self, owner, name: str, make):
+        """make(), once per owner (an IR) and name for this evaluation (what several
+        functions read: a model's row groups)."""
+        key = (id(owner), name)
+        if key not in self._kept or self._kept[key][0] is not owner:
+            self._kept[key] = (owner, make())
+        return self._kept[key][1]
 
     @staticmethod
-    def of(inline: bool, data: ca.SX | None = None) -> Evaluation:
+    def of(inline: bool, data: ca.SX | None = None, n_bodies: int = 0) -> Evaluation:
+        """The evaluation of a model of n_bodies (inline: merged up to MERGED_BODIES)."""
         symbol = None if data is None else data if inline else ca.MX.sym("d", data.numel())
-        return Evaluation(inline, data, symbol)
+        return Evaluation(inline, data, inline and n_bodies <= MERGED_BODIES, symbol)
 
     @property
     def sym(self):
@@ -97,12 +112,15 @@ class Evaluation:
         of = ca.Function("inlined", [*symbols, *extra], outputs)
         return of.call([*args, *([self.input] if extra else [])], True, False)
 
-    def function(self, name: str, inputs: dict, outputs: dict) -> ca.Function:
+    def function(self, name: str, inputs: dict, outputs: dict, merged: bool = False
+                 ) -> ca.Function:
         """A named Function of the bundle: the model data last (when symbolic); inline with its
-        common subexpressions merged, mapped with one derivative direction per kernel call."""
+        common subexpressions merged (when `merged` or the evaluation is), mapped with one
+        derivative direction per kernel call."""
         if self.symbolic:
             inputs = inputs | {"d": self.input}
-        options = {"cse": True} if self.inline else {"max_num_dir": instances.MAX_DIRECTIONS}
+        options = {"cse": self.merged or merged} if self.inline else \
+            {"max_num_dir": instances.MAX_DIRECTIONS}
         return ca.Function(name, list(inputs.values()), list(outputs.values()), list(inputs),
                            list(outputs), options)
 

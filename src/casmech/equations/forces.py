@@ -50,6 +50,10 @@ def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
     padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
     groups, plain = force_kernels.instances(ir, kernels=not ev.inline)
     total, potential = ev.sym(layout.n, 1), ev.sym(0)
+    if ev.inline and plain:  # one graph: every element's law over the same frames
+        total, potential = over_coordinates(ir, ev, "applied", lambda x: _sum(plain, x), t, q,
+                                            q_dot)
+        plain = []
     for force in plain:
         term, energy = over_coordinates(ir, ev, force_kernels.unrolled_name(force),
                                         force_kernels.law(force), t, q, padded_dot[:layout.n])
@@ -58,6 +62,15 @@ def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
         term, energy = _group(key, members, layout, ev, (t, padded, padded_dot))
         total, potential = total + term, potential + energy
     return total, potential
+
+
+def _sum(elements: list[ForceIR], x) -> list:
+    """[the elements' generalized forces, their potential] by their laws over x."""
+    total, potential = 0, 0
+    for force in elements:
+        generalized, energy = force_kernels.law(force)(x)
+        total, potential = total + generalized, potential + energy
+    return [total, potential]
 
 
 def _group(key: force_kernels.ForceKey, members: list[ForceIR], layout: Layout,
@@ -86,21 +99,40 @@ def motor_reactions(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
     """(force, torque) (3 x joints) the effort motors and stops add to their joints'
     reactions, per element a function over the model's coordinates (a few per model)."""
     n_joints = len(ir.joints)
-    force, torque = ev.sym(3, n_joints), ev.sym(3, n_joints)
     column = {joint.name: k for k, joint in enumerate(ir.joints)}
-    for motor in (*ir.motors, *ir.limits):
-        k = column[motor.name]
-        joint = ir.joints[k]
+    elements = (*ir.motors, *ir.limits)
+    if ev.inline and elements:  # one graph over the same frames
+        return tuple(over_coordinates(ir, ev, "motor_reactions",
+                                      lambda x: _reactions(ir, elements, column, x), t, q, q_dot))
+    force, torque = ev.sym(3, n_joints), ev.sym(3, n_joints)
+    for motor in elements:
         stop = motor.type in limits.COORDINATE
-        reaction = limits.reaction if stop else motors.reaction
         name = ("stop_" if stop else "motor_") + "".join(
             c if c.isalnum() else "_" for c in motor.name)
         f_motor, t_motor = over_coordinates(
-            ir, ev, name, lambda x, motor=motor, joint=joint, r=reaction:
-            r(motor, x, x.point(joint.body_i, joint.point_i)), t, q, q_dot)
-        select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [k]), 1.0)
+            ir, ev, name, lambda x, motor=motor: _reactions(ir, (motor,), column, x, 1), t, q,
+            q_dot)
+        select = ca.DM(ca.Sparsity.triplet(1, n_joints, [0], [column[motor.name]]), 1.0)
         force, torque = force + f_motor @ select, torque + t_motor @ select
     return force, torque
+
+
+def _reactions(ir: ModelIR, elements, column: dict, x, n_columns: int | None = None) -> list:
+    """[force, torque] (3 x joints, or 3 x 1 for n_columns=1) of effort motors and stops on
+    their joints' body_j, the torque about body_i's joint point, by their laws over x."""
+    n_columns = len(ir.joints) if n_columns is None else n_columns
+    force, torque = ca.SX(3, n_columns), ca.SX(3, n_columns)
+    for motor in elements:
+        joint = ir.joints[column[motor.name]]
+        reaction = limits.reaction if motor.type in limits.COORDINATE else motors.reaction
+        f_motor, t_motor = reaction(motor, x, x.point(joint.body_i, joint.point_i))
+        if n_columns == 1:
+            force, torque = force + f_motor, torque + t_motor
+        else:
+            k = column[motor.name]
+            force[:, k] += f_motor
+            torque[:, k] += t_motor
+    return [force, torque]
 
 
 def element_outputs(ir: ModelIR, ev: Evaluation, t, q, q_dot):

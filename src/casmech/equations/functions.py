@@ -86,8 +86,7 @@ class LazyFunctions(MutableMapping):
     """An interpreted bundle's functions by name, each group built on first use: a
     joint-coordinate run reads 7 of the 19 (phi, phi_q, nu for the assembly; the results
     row's; docs/decisions/traced-steps.md). `groups`: (the names a group makes, or None when
-    only building it tells them, and its maker () -> Functions), in the bundle's order.
-    `source`: (the IR, its data symbols or None) the functions are built from."""
+    only building it tells them, and its maker () -> Functions), in the bundle's order."""
 
     def __init__(self, groups: list[tuple[tuple[str, ...] | None, Callable[[], list]]]):
         self._groups = list(groups)
@@ -95,7 +94,6 @@ class LazyFunctions(MutableMapping):
         self._group_of = {name: k for k, (names, _) in enumerate(groups) for name in names or ()}
         self.given: dict[str, ca.Function] = {}  # set by callers (the rest: SX, built here)
         self._done: set[int] = set()  # groups built
-        self.source: tuple | None = None
 
     def _build(self, k: int) -> None:
         if k in self._done:
@@ -178,12 +176,10 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
     """The interpreted bundle: every function inline (SX), built when first used
     (LazyFunctions). `data`: for a symbolic IR (model.parametric.split), its symbols, every
     function's trailing input "d"."""
-    shared = System(ir, Evaluation.of(True, data))
+    shared = System(ir, Evaluation.of(True, data, ir.n_bodies))
     groups = [((name,), lambda name=name: [system.function(shared, name)])
               for name in system.DEFINITIONS]
-    functions = LazyFunctions(groups)
-    functions.source = (ir, data)  # what formulations.dae builds the DAE residuals from
-    bundle = _bundle(ir, functions)
+    bundle = _bundle(ir, LazyFunctions(groups))
     bundle.derived["mode"] = "interpreted"  # (codegen.mode_of without building every function)
     return bundle
 

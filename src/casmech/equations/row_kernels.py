@@ -35,6 +35,7 @@ from casmech.equations import body, derivatives, evaluation
 from casmech.model.ir import GROUND_INDEX, PrimitiveIR
 
 BODY = 7  # [r, p] of one body in x
+FRAME = 12  # [r, A (column-major)] of one body's frame
 V_BODY = 6  # [r_dot, omega_bar] of one body in v
 ROW = 2 * BODY  # x of a row over two bodies: [r_i, p_i, r_j, p_j]
 V_ROW = 2 * V_BODY
@@ -144,6 +145,18 @@ class _Row:
     def frames(self) -> list[Frame]:
         return [Frame(r, euler.rotation(p)) for r, p in self.halves]
 
+    def given_frames(self, frames, symbolic_ground: bool) -> list[Frame]:
+        """The frames of an input [r, A] per body (ground's constant unless symbolic)."""
+        ground = "" if symbolic_ground else self.key.ground or ""
+        out = []
+        for s in range(self.key.bodies):
+            if SIDES[s] in ground:
+                out.append(Frame(ca.SX(ca.DM(derivatives.GROUND_POSE[:3])), ca.SX.eye(3)))
+            else:
+                block = frames[FRAME * s:FRAME * s + FRAME]
+                out.append(Frame(block[:3], ca.reshape(block[3:], 3, 3)))
+        return out
+
     def f_of_tau(self):
         if self.key.f_class == ZERO:
             return 0.0
@@ -151,11 +164,12 @@ class _Row:
             return self.f[0]
         return self.f[0] + self.f[1] * self.tau + self.f[2] * self.tau**2 / 2
 
-    def phi(self):
+    def phi(self, frames: list[Frame] | None = None):
         keys = PRIMITIVES[self.key.kind].keys
         dense = ca.densify(self.c) if self.key.values is None else ca.SX(ca.DM(self.key.values))
         vectors = {k: dense[3 * n:3 * n + 3] for n, k in enumerate(keys)}
-        return PRIMITIVES[self.key.kind].phi(*self.frames(), vectors, self.f_of_tau())
+        return PRIMITIVES[self.key.kind].phi(*(frames or self.frames()), vectors,
+                                             self.f_of_tau())
 
     def at_instant(self, *expressions):
         return [ca.substitute(e, self.tau, 0) for e in expressions]
@@ -176,12 +190,16 @@ class _Row:
 
 
 @lru_cache(maxsize=512)
-def phi(key: RowKey, symbolic_ground: bool = False) -> ca.Function:
-    """(x, c, f) -> phi of one row at the instant; with symbolic_ground, ground's pose is read
-    from x like a body's (the inline evaluation's reactions differentiate with respect to it)."""
-    row = _Row(key, symbolic_ground)
-    return ca.Function(f"phi_{_name(key)}", [row.x, row.c, row.f], row.at_instant(row.phi()),
-                       ["x", "c", "f"], ["phi"])
+def phi_of_frames(key: RowKey, symbolic_ground: bool = False) -> ca.Function:
+    """(frames, c, f) -> phi of one row at the instant over its bodies' frames [r, A] (FRAME
+    per body, A column by column: computed once per body by the inline evaluation); with
+    symbolic_ground, ground's frame is read like a body's (the inline evaluation's reactions
+    differentiate with respect to its pose)."""
+    row = _Row(key)
+    frames = ca.SX.sym("frames", FRAME * key.bodies)
+    value = row.phi(row.given_frames(frames, symbolic_ground))
+    return ca.Function(f"phi_{_name(key)}", [frames, row.c, row.f], row.at_instant(value),
+                       ["frames", "c", "f"], ["phi"])
 
 
 @lru_cache(maxsize=256)

@@ -97,10 +97,13 @@ def row_keys(ir: ModelIR) -> list:
 
 
 def groups(ir: ModelIR, layout: Layout, ev: Evaluation) -> list[Group]:
-    by_key: dict = {}
-    for row, (prim, key) in enumerate(zip(ir.primitives, row_keys(ir), strict=True)):
-        by_key.setdefault(key, []).append((row, prim))
-    return [Group(key, members, layout, ev) for key, members in by_key.items()]
+    """The rows by kernel key (built once per model and evaluation)."""
+    def make() -> list[Group]:
+        by_key: dict = {}
+        for row, (prim, key) in enumerate(zip(ir.primitives, row_keys(ir), strict=True)):
+            by_key.setdefault(key, []).append((row, prim))
+        return [Group(key, members, layout, ev) for key, members in by_key.items()]
+    return ev.kept(ir, "row groups", make)
 
 
 def pattern(function: ca.Function, output: int) -> list[int]:
@@ -116,12 +119,15 @@ def _normalization_p(q, nb: int):
     return ca.reshape(q[3 * nb:], 4, nb)
 
 
-def constraints(ir: ModelIR, ev: Evaluation, t, q, q_dot=None, scale=None) -> dict:
+def constraints(ir: ModelIR, ev: Evaluation, t, q, q_dot=None, scale=None,
+                grounded=None) -> dict:
     """phi, phi_q, nu and (given q_dot) gamma; with `scale`: phi and phi_q with the drivers
-    scaled (phi_scaled)."""
+    scaled (phi_scaled). Inline, `grounded`: (phi with ground's pose the symbols, those
+    symbols) when already built (inline.grounded)."""
     layout = Layout(ir.n_bodies)
     if ev.inline:
-        return inline.constraints(ir, ev, groups(ir, layout, ev), t, q, q_dot, scale)
+        return inline.constraints(ir, ev, groups(ir, layout, ev), t, q, q_dot, scale,
+                                  grounded)
     padded = layout.pad_q(q)
     padded_dot = None if q_dot is None else layout.pad(q_dot, 7)
     parts: dict = {"phi": [], "nu": [], "gamma": []}
@@ -248,13 +254,13 @@ def joint_vectors(ir: ModelIR, keys: tuple, members: list[list[int]], pattern_of
     return out
 
 
-def reactions(ir: ModelIR, ev: Evaluation, t, q, lam) -> tuple:
+def reactions(ir: ModelIR, ev: Evaluation, t, q, lam, grounded=None) -> tuple:
     """(force, torque) of every joint's rows on its body_j (3 x joints): one kernel call per
     joint (row_kernels.joint_reaction), each column added into its joint's; inline: by AD of
     the expanded rows."""
     layout = Layout(ir.n_bodies)
     if ev.inline:
-        return inline.reactions(ir, ev, groups(ir, layout, ev), t, q, lam)
+        return inline.reactions(ir, ev, groups(ir, layout, ev), t, q, lam, grounded)
     padded = layout.pad_q(q)
     joint_of = {row: j for j, joint in enumerate(ir.joints) for row in joint.rows}
     forces, torques, columns = [], [], []

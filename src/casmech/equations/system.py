@@ -15,8 +15,9 @@ from functools import cached_property
 
 import casadi as ca
 
-from casmech.equations import bodies, forces, rows
+from casmech.equations import bodies, forces, inline, rows
 from casmech.equations.evaluation import Evaluation
+from casmech.equations.layout import Layout
 from casmech.model.ir import ModelIR
 
 
@@ -51,10 +52,19 @@ class System:
         self.x = symbols or Symbols.create(ir, ev.sym)
 
     @cached_property
+    def grounded(self) -> tuple | None:
+        """Inline: the rows with ground's pose symbolic (inline.grounded), which the
+        constraints and the reactions share; None when mapped."""
+        if not self.ev.inline:
+            return None
+        return inline.grounded(self.ir, self.ev, rows.groups(self.ir, Layout(self.ir.n_bodies),
+                                                             self.ev), self.x.t, self.x.q)
+
+    @cached_property
     def constraints(self) -> dict:
         """phi, phi_q, nu, gamma."""
         x = self.x
-        return rows.constraints(self.ir, self.ev, x.t, x.q, x.q_dot)
+        return rows.constraints(self.ir, self.ev, x.t, x.q, x.q_dot, grounded=self.grounded)
 
     @cached_property
     def scaled(self) -> dict:
@@ -96,7 +106,7 @@ class System:
         """(force, torque) each joint exerts on its body_j (3 x joints): its rows' (global,
         torque about body_i's joint point), its effort motor's and its stop's."""
         x = self.x
-        force, torque = rows.reactions(self.ir, self.ev, x.t, x.q, x.lam)
+        force, torque = rows.reactions(self.ir, self.ev, x.t, x.q, x.lam, self.grounded)
         motor_force, motor_torque = forces.motor_reactions(self.ir, self.ev, x.t, x.q, x.q_dot)
         return force + motor_force, torque + motor_torque
 
@@ -183,7 +193,12 @@ DEFINITIONS: dict[str, Callable[[System], tuple[dict, dict]]] = {
 }
 
 
+# Functions merged inline at any size: their kernels repeat a per-body term (q_dot's p_dot in
+# q_ddot's), which the merge removes in time linear in the bodies.
+MERGED = frozenset({"romega_to_rp"})
+
+
 def function(system: System, name: str) -> ca.Function:
     """The bundle's function `name` over a System."""
     inputs, outputs = DEFINITIONS[name](system)
-    return system.ev.function(name, inputs, outputs)
+    return system.ev.function(name, inputs, outputs, name in MERGED)

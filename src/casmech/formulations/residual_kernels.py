@@ -23,9 +23,7 @@ from functools import lru_cache
 import casadi as ca
 
 from casmech.equations import body as body_terms
-from casmech.equations import body_kernels
-from casmech.equations import derivatives, evaluation
-from casmech.equations import row_kernels
+from casmech.equations import body_kernels, derivatives, evaluation, row_kernels
 from casmech.formulations import dae_terms as terms
 
 ROW = row_kernels.ROW  # x = [r_i, p_i, r_j, p_j]

@@ -82,7 +82,7 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     n_data = 0 if data is None else data.numel()
     tau, x, z = ca.MX.sym("t"), ca.MX.sym("x", ix.n_x), ca.MX.sym("z", ix.n_z)
     p, u = ca.MX.sym("p", ix.n_p + n_data), ca.MX.sym("u", 0)
-    ev = Evaluation(False, data, p[ix.n_p:]) if n_data else Evaluation.of(False)
+    ev = Evaluation(False, data, input=p[ix.n_p:]) if n_data else Evaluation.of(False)
     elements = element_sum(ir, ix, p[0] + tau, ix.constants(p), ev)
     unknowns = ca.vertcat(x, z)
     residual = elements.value(unknowns)

@@ -42,7 +42,7 @@ def _columns(kernel: ca.Function, k: int, arg, count: int) -> list:
     arg = ca.SX(arg) if not isinstance(arg, ca.SX) else arg
     if arg.size2() == width:
         return [arg] * count
-    return [arg[:, i * width:(i + 1) * width] for i in range(count)]
+    return ca.horzsplit(arg, width)
 
 
 def inline(kernel: ca.Function, count: int, args) -> list[ca.SX]:
