@@ -2,9 +2,8 @@
 for one joint, one body, one force element, both formulations (rp, romega) and both
 stabilizations (ggl: the index-2 GGL DAE; projection: the index-1 DAE). Each is an SX
 Function (y, d) -> out of the element's unknowns y and data d (not differentiated), built
-from the row and force kernels of equations.mapped.rows and equations.mapped.forces and from the
-terms of
-formulations.dae (the rows), equations.body and equations.romega (the bodies), element by element:
+from the row, body and force kernels of equations.row_kernels, body_kernels and force_kernels,
+with the residual's terms written once in formulations.dae_terms, element by element:
 
     ode:  q_dot(q, v) + Phi_q^T mu (ggl),  v_dot
     alg:  M v_dot + P^T lam - F,  then per row either (1 - w) phi - w mu and

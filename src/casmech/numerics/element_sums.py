@@ -61,15 +61,13 @@ class ElementSum:
         return ca.reshape(padded[[int(i) for i in group.inputs.ravel()]],
                           group.inputs.shape[1], group.count)
 
-    def value(self, u, inline: bool = False):
-        """r(u), dense: MX, each group's kernel mapped; inline: SX, each instance's kernel
-        expanded (numerics.instances)."""
+    def value(self, u) -> ca.MX:
+        """r(u), dense."""
         padded = self._padded(u)
         parts, rows, positions, offset = [], [], [], 0
         for group in self.groups:
-            out = instances.over(group.kernel, group.count,
-                                 [self._gathered(padded, group), group.data], inline,
-                                 instances.plain_map)[0]
+            out = instances.plain_map(group.kernel, group.count)(self._gathered(padded, group),
+                                                                 group.data)
             keep = group.outputs.ravel() != DROPPED  # row-major: instance k, output o
             rows.append(group.outputs.ravel()[keep])
             positions.append(offset + np.flatnonzero(keep))
@@ -141,10 +139,9 @@ def assemble(blocks: list[tuple], parts: list, dense: bool = False) -> list[ca.M
     target[target < 0] = total  # entries no block takes go to a last, discarded slot
     values = add_into(total + 1, [(ca.densify(ca.vec(part)), target[sizes[g]:sizes[g + 1]])
                                   for g, part in enumerate(parts)])
-    sym = type(values)
     out, start = [], 0
     for sparsity in sparsities:
-        out.append(sym(sparsity, values[start:start + sparsity.nnz()]))
+        out.append(ca.MX(sparsity, values[start:start + sparsity.nnz()]))
         start += sparsity.nnz()
     return out
 
@@ -156,26 +153,12 @@ def summed(n_rows: int, n_cols: int, rows, cols, parts: list) -> ca.MX:
     return assemble([(n_rows, n_cols, rows, cols, positions)], parts)[0]
 
 
-def add_into(size: int, terms: list[tuple]):
+def add_into(size: int, terms: list[tuple]) -> ca.MX:
     """The vector of `size` zeros with every (values, targets) term added in place:
     out[targets[k]] += values[k] (duplicates add up). CasADi has this operation (AddNonzeros:
-    one C loop, no copy) as the adjoint of a gather, which is how it is obtained here (SX
-    values: the sums themselves)."""
-    sym = ca.SX if terms and all(isinstance(v, (ca.SX, ca.DM)) for v, _ in terms) else ca.MX
+    one C loop, no copy) as the adjoint of a gather, which is how it is obtained here."""
     if not terms:
         return ca.MX.zeros(size)
-    if sym is ca.SX:
-        return _sums(size, terms)
-    out = sym.sym("out", size)
+    out = ca.MX.sym("out", size)
     gathered = [out[[int(k) for k in targets]] for _, targets in terms]
     return ca.reverse(gathered, [out], [[values for values, _ in terms]])[0][0]
-
-
-def _sums(size: int, terms: list[tuple]) -> ca.SX:
-    """add_into for SX values: each entry the sum of the values added to it, in order."""
-    added: list[list] = [[] for _ in range(size)]
-    for values, targets in terms:
-        values = ca.SX(values)
-        for k, target in enumerate(targets):
-            added[int(target)].append(values[k])
-    return ca.vertcat(*[sum(items[1:], items[0]) if items else ca.SX(1, 1) for items in added])
