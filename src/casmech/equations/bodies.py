@@ -61,11 +61,12 @@ def _sparse_constant(ev: Evaluation, matrix):
 
 
 def romega_mass(ir: ModelIR, ev: Evaluation):
-    """blkdiag(m_k I_3 ..., J_bar_k ...) (6 nb x 6 nb, v layout): a constant (its zero entries
-    left out of the pattern)."""
+    """blkdiag(m_k I_3 ..., J_bar_k ...) (6 nb x 6 nb, v layout): a constant; mapped without its
+    zero entries, inline with every entry of each J_bar (the pattern the integrators have
+    always seen)."""
     blocks = [b.mass * ca.DM.eye(3) for b in ir.bodies] + [constant(b.inertia) for b in ir.bodies]
     matrix = ca.diagcat(*blocks) if blocks else ca.DM(0, 0)
-    return _sparse_constant(ev, matrix)
+    return ca.SX(matrix) if ev.inline else _sparse_constant(ev, matrix)
 
 
 def quadratic_velocity(ir: ModelIR, ev: Evaluation, q, q_dot):

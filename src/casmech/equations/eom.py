@@ -33,9 +33,7 @@ def quadratic_velocity(ir: ModelIR, x: Coordinates):
 
 def applied_forces(ir: ModelIR, x: Coordinates):
     """(generalized applied forces incl. gravity, the force elements' potential energy)."""
-    system = system_over(ir, x)
-    elements, potential = system.applied
-    return bodies.gravity(ir, system.ev) + elements, potential
+    return system_over(ir, x).applied
 
 
 def energy(ir: ModelIR, x: Coordinates, spring_potential):

@@ -44,16 +44,20 @@ def over_coordinates(ir: ModelIR, ev: Evaluation, name: str, build, t, q, q_dot)
     return function.call([t, q, q_dot, *([ev.input] if extra else [])])
 
 
-def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
-    """(sum of the force elements' generalized forces [n], their potential energy)."""
+def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot, start=None) -> tuple:
+    """(`start` (gravity) + the sum of the force elements' generalized forces [n], their
+    potential energy): inline the elements are added to `start` one by one, mapped their sum
+    is added to it."""
     layout = Layout(ir.n_bodies)
     padded, padded_dot = layout.pad_q(q), layout.pad(q_dot, 7)
     groups, plain = force_kernels.instances(ir, kernels=not ev.inline)
+    if ev.inline:  # one graph: every element's law over the same frames
+        start = 0 if start is None else start
+        if not plain:
+            return start + ca.SX(layout.n, 1), ca.SX(0)
+        return tuple(over_coordinates(ir, ev, "applied", lambda x: _sum(plain, x, start), t, q,
+                                      q_dot))
     total, potential = ev.sym(layout.n, 1), ev.sym(0)
-    if ev.inline and plain:  # one graph: every element's law over the same frames
-        total, potential = over_coordinates(ir, ev, "applied", lambda x: _sum(plain, x), t, q,
-                                            q_dot)
-        plain = []
     for force in plain:
         term, energy = over_coordinates(ir, ev, force_kernels.unrolled_name(force),
                                         force_kernels.law(force), t, q, padded_dot[:layout.n])
@@ -61,12 +65,12 @@ def applied(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
     for key, members in groups.items():
         term, energy = _group(key, members, layout, ev, (t, padded, padded_dot))
         total, potential = total + term, potential + energy
-    return total, potential
+    return (total if start is None else start + total), potential
 
 
-def _sum(elements: list[ForceIR], x) -> list:
-    """[the elements' generalized forces, their potential] by their laws over x."""
-    total, potential = 0, 0
+def _sum(elements: list[ForceIR], x, start) -> list:
+    """[start + the elements' generalized forces, their potential] by their laws over x."""
+    total, potential = start, 0
     for force in elements:
         generalized, energy = force_kernels.law(force)(x)
         total, potential = total + generalized, potential + energy

@@ -5,7 +5,9 @@ CasADi (equations.derivatives). The mapped evaluation differentiates inside each
 instead: the same derivatives of the same phi (the chain rule commutes with the gather), where
 AD of the whole graph shares each body's rotation derivatives between its rows. Per-body steps
 (a frame, G^T, a joint's reaction from its Jacobian blocks) are traced once and evaluated on
-each body's SX (core.traced): no Python-level SX operation per body.
+each body's SX (core.traced): no Python-level SX operation per body. The Jacobians keep the
+entries AD gives (some are the constant 0), so that the integrators see the patterns, and give
+the results, they always have.
 """
 
 from __future__ import annotations
@@ -89,7 +91,6 @@ def constraints(ir: ModelIR, ev: Evaluation, groups: list, t, q, q_dot=None,
     if q_dot is None:
         del out["gamma"]
     out["phi"] = value
-    out["phi_q"] = ca.sparsify(out["phi_q"])
     return out
 
 
@@ -101,7 +102,7 @@ def variations(ir: ModelIR, phi_q, q):
         return phi_q
     pi_bar = [0.5 * phi_q[:, 3 * nb + 4 * k:3 * nb + 4 * k + 4]
               @ G_TRANSPOSE(q[3 * nb + 4 * k:3 * nb + 4 * k + 4])[0] for k in range(nb)]
-    return ca.sparsify(ca.horzcat(phi_q[:, :3 * nb], *pi_bar))
+    return ca.horzcat(phi_q[:, :3 * nb], *pi_bar)
 
 
 def romega_gamma(jacobian, nu, t, q, v, q_dot):

@@ -84,9 +84,10 @@ class System:
 
     @cached_property
     def applied(self) -> tuple:
-        """(the force elements' generalized forces, their potential)."""
+        """(gravity and the force elements' generalized forces, their potential)."""
         x = self.x
-        return forces.applied(self.ir, self.ev, x.t, x.q, x.q_dot)
+        return forces.applied(self.ir, self.ev, x.t, x.q, x.q_dot,
+                              bodies.gravity(self.ir, self.ev))
 
     def mass_matrix(self):
         return bodies.mass_matrix(self.ir, self.ev, self.x.q)
@@ -94,7 +95,7 @@ class System:
     def generalized_forces(self):
         """Gravity, the force elements and the quadratic-velocity force (r-p)."""
         x = self.x
-        return ca.densify(bodies.gravity(self.ir, self.ev) + self.applied[0]
+        return ca.densify(self.applied[0]
                           + bodies.quadratic_velocity(self.ir, self.ev, x.q, x.q_dot))
 
     def energy(self) -> tuple:
@@ -126,8 +127,8 @@ class System:
     def romega_forces(self):
         """[F; n_bar - omega_bar~ J_bar omega_bar], F the r-p applied forces at q_dot(q, v)."""
         x, nb = self.x, self.ir.n_bodies
-        applied = bodies.gravity(self.ir, self.ev) + forces.applied(
-            self.ir, self.ev, x.t, x.q, self.romega_q_dot)[0]
+        applied = forces.applied(self.ir, self.ev, x.t, x.q, self.romega_q_dot,
+                                 bodies.gravity(self.ir, self.ev))[0]
         torques = bodies.romega_torques(self.ir, self.ev, x.q, x.v, applied)
         return ca.densify(ca.vertcat(applied[:3 * nb], torques))
 
