@@ -1,8 +1,9 @@
 """Compile time of casmech's code generation: YAML text -> loaded compiled model, by stage, for
 chains of N spherical-jointed bars (systems.chain), over optimisation levels and parallel
-translation units, for the bundle built from mapped kernels (equations.mapped.bundle: what casmech
-compiles) and the unrolled SX bundle (equations.functions: what it compiled before); plus the
-simulation time of each library (and of the interpreted SX bundle).
+translation units, for the bundle built from mapped kernels
+(equations.functions.mapped_functions: what casmech compiles) and the inline SX bundle
+(equations.functions.build_functions: what it compiled before); plus the simulation time of each
+library (and of the interpreted SX bundle).
 
     python benchmarks/codegen_times.py --bodies 32 128 1000 --repeats 3 --simulate 1
     python benchmarks/codegen_times.py --bodies 32 --forms mapped unrolled interpreted \
@@ -34,17 +35,16 @@ HERE = Path(__file__).resolve().parent
 
 def bundle(form: str, ir) -> tuple[dict, dict]:
     """What code generation compiles: (the system functions, {DAE name: its dae/daeF/jacF}).
-    compiled: what casmech builds (equations.mapped.bundle's kernels mapped over instances, the
-    DAEs as
+    compiled: what casmech builds (equations.functions.mapped_functions: kernels mapped over
+    instances, the DAEs as
     sums of elements, formulations.residuals); unrolled: the SX bundle of equations.functions and
     formulations.dae's SX residuals with their SX Jacobians."""
     from casmech.backends import codegen
-    from casmech.equations.functions import build_functions
-    from casmech.equations.mapped import bundle as mapped
+    from casmech.equations.functions import build_functions, mapped_functions
     from casmech.formulations import dae, residuals
 
     if form == "compiled":
-        return mapped.mapped_functions(ir), codegen.dae_oracles(ir)
+        return mapped_functions(ir), codegen.dae_oracles(ir)
     functions = build_functions(ir).functions
     return functions, {name: residuals.from_residual(f)
                        for name, f in dae.residuals(functions).items()}
@@ -100,8 +100,8 @@ def worker(bodies: str, flags: str, jobs: int, simulate: float, form: str = "com
 
     import casmech
     from casmech.backends import build, codegen, generate, load, manifest
-    from casmech.equations.mapped import kernels
     from casmech.model.lower import lower
+    from casmech.numerics import instances as kernels
 
     if directions:
         kernels.MAX_DIRECTIONS = directions
@@ -316,8 +316,7 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
 
     import casmech
     from casmech.backends import build
-    from casmech.equations.functions import build_functions
-    from casmech.equations.mapped import bundle as mapped
+    from casmech.equations.functions import build_functions, mapped_functions
     from casmech.formulations import dae, residuals
     from casmech.model.lower import lower
 
@@ -340,7 +339,7 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
         else:
             if form == "mapped":  # what casmech compiled before: MX over kernels, and IDAS's
                 # jacF built as an MX graph around the library's jac_dae_ggl_rp
-                bundle = mapped.mapped_functions(ir)
+                bundle = mapped_functions(ir)
                 residual = dae.residual(bundle, "rp", "ggl")
                 chosen = {n: bundle[n] for n in ROW_FUNCTIONS}
                 chosen |= {"dae_ggl_rp": residual, "jac_dae_ggl_rp": residual.jacobian()}
@@ -349,7 +348,7 @@ def per_call_worker(system: str, form: str, flags: str) -> dict:
                 chosen = {n: functions[n] for n in ROW_FUNCTIONS}
                 chosen |= residuals.from_residual(dae.residual(functions, "rp", "ggl"))
             else:  # elements: what casmech compiles (mapped bundle, formulations.residuals)
-                chosen = {n: mapped.mapped_functions(ir)[n] for n in ROW_FUNCTIONS}
+                chosen = {n: mapped_functions(ir)[n] for n in ROW_FUNCTIONS}
                 chosen |= residuals.oracle(ir, "rp", "ggl")
             loaded, out["gcc_s"], out["c_mb"] = _library(chosen, directory / "lib", flags)
             library = str(directory / "lib" / build.LIBRARY)
@@ -486,7 +485,7 @@ def main() -> None:
                         help="also time dynamics over this many seconds (0: no)")
     parser.add_argument("--timeout", type=float, default=1800.0)
     parser.add_argument("--directions", type=int, nargs="+", default=[0],
-                        help="kernel derivative directions per call (equations.mapped.kernels."
+                        help="kernel derivative directions per call (numerics.instances."
                              "MAX_DIRECTIONS; 0: its value)")
     parser.add_argument("--per-call", nargs="+", metavar="SYSTEM",
                         help="instead: per-call costs of IDAS's daeF/jacF and the row functions "

@@ -296,14 +296,15 @@ CONSTANTS = {
     "formulations/joint_system.py ROW_NORM_FLOOR": "a roundoff floor compiled into libraries",
     "formulations/prescribed.py ITERATIONS": "chord steps compiled into the library's step",
     "formulations/prescribed.py CHUNK": "the inner map of the step (batch work)",
-    "formulations/residuals.py UNROLLED_BODIES": "which residual code is built (roundoff)",
     "formulations/residuals.py UNROLLED_INSTRUCTIONS": "which residual code is built",
     "numerics/element_sums.py DROPPED": "an index that is no output",
-    "equations/mapped/forces.py ROW": "a row's coordinates (structure)",
-    "equations/mapped/kernels.py BAKE_LIMIT": "which kernels are built (structure)",
-    "equations/mapped/kernels.py MAX_DIRECTIONS": "forward directions built (structure)",
-    "equations/mapped/rows.py ROW": "a row's coordinates (structure)",
-    "equations/mapped/rows.py V_ROW": "a row's velocities (structure)",
+    "equations/evaluation.py MERGED_BODIES": "which code is built (common subexpressions)",
+    "equations/force_kernels.py ROW": "an element's coordinates (structure)",
+    "equations/row_kernels.py BODY": "a body's coordinates (structure)",
+    "equations/row_kernels.py FRAME": "a body's frame (structure)",
+    "equations/row_kernels.py V_BODY": "a body's velocities (structure)",
+    "equations/rows.py BAKE_LIMIT": "which kernels are built (structure)",
+    "numerics/instances.py MAX_DIRECTIONS": "forward directions built (structure)",
 }
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from casmech.backends import codegen, generate, manifest
-from casmech.equations.mapped import bundle as mapped
+from casmech.equations.functions import mapped_functions
 from casmech.formulations import dae
 from casmech.model.lower import lower
 
@@ -20,7 +20,7 @@ RESIDUALS = ["dae_ggl_rp", "dae_rp", "dae_ggl_romega", "dae_romega"]
 @pytest.fixture(scope="module", params=["parametric", "mapped"])
 def compiled(request, model, toolchain, cache_root):
     """Both libraries of the session's model: the parametric one (codegen.parametric: it has
-    parameters), the mapped one (equations.mapped.bundle, the values built in)."""
+    parameters), the mapped one (equations.functions.mapped_functions, the values built in)."""
     return codegen.compiled(model, toolchain, root=cache_root,
                             parametric_library=request.param == "parametric")
 
@@ -91,12 +91,12 @@ def test_jacobians_through_the_library_equal_ad(compiled, interpreted):
 
 def test_manifest_describes_every_function(build_dir, interpreted, model):
     """Names, sizes, sparsity and library in manifest.json rebuild the functions' own patterns
-    (those code generation compiled: equations.mapped.bundle, and the DAE residuals of
+    (those code generation compiled: equations.functions.mapped_functions, and the DAE residuals of
     formulations.residuals, each in a library of its own)."""
     info = manifest.read(build_dir)
     entries = {e["name"]: e for e in info["functions"]}
     ir = lower(model)
-    built = {**mapped.mapped_functions(ir),
+    built = {**mapped_functions(ir),
              **{name: oracle[name] for name, oracle in codegen.dae_oracles(ir).items()}}
     assert set(entries) == set(built) == {*interpreted.functions, *RESIDUALS}
     for name, function in built.items():

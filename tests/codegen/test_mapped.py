@@ -1,7 +1,9 @@
-"""The bundle code generation compiles (equations.mapped.bundle: every function from mapped kernels)
-equals the unrolled SX bundle (equations.functions, an independent construction of the same
-equations): values on random inputs, names, sparsity; and the code (with the DAE residuals of
-formulations.residuals, tested in test_residuals.py) does not grow with the number of bodies."""
+"""The builder's two evaluations (equations.evaluation): the mapped bundle code generation compiles
+(kernels mapped over their instances, each kernel's own derivatives) equals the inline bundle
+(the kernels expanded into one SX graph, differentiated as a whole): values on random inputs,
+names, sparsity, also over the model data d (model.parametric) at random d; and the mapped code
+(with the DAE residuals of formulations.residuals, tested in test_residuals.py) does not grow
+with the number of bodies."""
 
 from pathlib import Path
 
@@ -11,16 +13,17 @@ import pytest
 
 import casmech
 from casmech.backends import codegen, generate
-from casmech.equations.mapped import bundle as mapped
-from casmech.equations.mapped import forces, kernels
+from casmech.equations import force_kernels, rows
+from casmech.equations.functions import build_functions, mapped_functions
+from casmech.model import parametric
 from casmech.model.lower import lower
 
 from .conftest import MODEL
 
 ROOT = Path(__file__).resolve().parents[2]
 # Functions whose mapped pattern leaves out entries that are the constant 0 in the kernels
-# (the unrolled functions list them): a subset, equal in value (see
-# equations.mapped.kernels._pattern).
+# (the inline functions list them: their AD of the whole graph, and a constant J_bar's zeros):
+# a subset, equal in value (equations.rows.pattern).
 SUBSET = {"variations", "romega_jacobian", "romega_mass"}
 
 
@@ -99,10 +102,15 @@ def _compare_bundles(got: dict, want: dict, seed: int = 3) -> None:
                 _close(a, b, f"{name}.{reference.name_out(k)}")
 
 
+def _inline(ir) -> dict:
+    functions = build_functions(ir).functions
+    return {name: functions[name] for name in functions}
+
+
 @pytest.mark.parametrize("name", list(MODELS))
-def test_mapped_functions_equal_unrolled(name):
-    model = MODELS[name]()
-    _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
+def test_mapped_functions_equal_inline(name):
+    ir = lower(MODELS[name]())
+    _compare_bundles(mapped_functions(ir), _inline(ir))
 
 
 # every model of models/ (no C compiler: about a second each)
@@ -110,18 +118,35 @@ EVERY_MODEL = sorted(path.name for path in (ROOT / "models").glob("*.yaml"))
 
 
 @pytest.mark.parametrize("file", EVERY_MODEL)
-def test_every_model_mapped_equals_unrolled(file):
-    model = casmech.load(ROOT / "models" / file)
-    _compare_bundles(mapped.mapped_functions(lower(model)), casmech.compile(model).functions)
+def test_every_model_mapped_equals_inline(file):
+    ir = lower(casmech.load(ROOT / "models" / file))
+    _compare_bundles(mapped_functions(ir), _inline(ir))
+
+
+@pytest.mark.parametrize("file", EVERY_MODEL)
+def test_every_model_over_its_data_mapped_equals_inline(file):
+    """Both evaluations over the model data d (every number of the lowering an input) agree at
+    random d too, and at the model's own d they are the numeric bundle."""
+    ir = lower(casmech.load(ROOT / "models" / file))
+    split = parametric.split(ir)
+    inline = build_functions(split.ir, split.symbols).functions
+    _compare_bundles(mapped_functions(split.ir, split.symbols),
+                     {name: inline[name] for name in inline}, seed=11)
+    numeric, rng = _inline(ir), np.random.default_rng(5)
+    for name, function in numeric.items():
+        args = _random(function, rng)
+        for a, b in zip(inline[name].call([*args, ca.DM(split.values)]), function.call(args),
+                        strict=True):
+            _close(a, b, f"{name} at the model's data")
 
 
 def test_vectors_as_data_keep_values(monkeypatch):
     """Past BAKE_LIMIT geometries the rows' vectors are kernel inputs: the same values."""
-    monkeypatch.setattr(kernels, "BAKE_LIMIT", 0)
+    monkeypatch.setattr(rows, "BAKE_LIMIT", 0)
     model = MODELS["slider_crank"]()
     ir = lower(model)
-    assert all(key.values is None for key in kernels.row_keys(ir))
-    got, want = mapped.mapped_functions(ir), casmech.compile(model).functions
+    assert all(key.values is None for key in rows.row_keys(ir))
+    got, want = mapped_functions(ir), _inline(ir)
     rng = np.random.default_rng(9)
     for name, reference in want.items():
         inputs = _random(reference, rng)
@@ -131,11 +156,11 @@ def test_vectors_as_data_keep_values(monkeypatch):
 
 def test_force_elements_without_a_kernel(monkeypatch):
     """Elements without a kernel (laws reading other joints' state, new element types) are
-    built per instance from equations.eom: the same functions."""
-    monkeypatch.setattr(forces, "kernelised", lambda force: False)
+    built per instance from their laws: the same functions."""
+    monkeypatch.setattr(force_kernels, "kernelised", lambda force: False)
     model = MODELS["codegen_test"]()
-    got = mapped.mapped_functions(lower(model))
-    want = casmech.compile(model).functions
+    got = mapped_functions(lower(model))
+    want = _inline(lower(model))
     _compare_bundles({k: got[k] for k in ("generalized_forces", "energy", "romega_forces")},
                      {k: want[k] for k in ("generalized_forces", "energy", "romega_forces")})
 
@@ -145,7 +170,7 @@ def _code(bodies: int) -> list[str]:
     the data: constant tables and the numbers in the code (sizes, offsets)."""
     ir = lower(casmech.loads(chain_text(bodies)))
     generator = ca.CodeGenerator("k.c", {"verbose": False})
-    for group in generate.units(mapped.mapped_functions(ir)).values():
+    for group in generate.units(mapped_functions(ir)).values():
         for function in group:
             generator.add(function)
     for oracle in codegen.dae_oracles(ir).values():  # the DAE residuals (formulations.residuals)

@@ -1,6 +1,6 @@
-"""The DAE residuals as sums of elements (formulations.residuals) equal formulations.dae's
-residuals over
-the unrolled SX bundle (an independent construction of the same equations): the residual, and
+"""The DAE residual's two evaluations: as a sum of elements (formulations.residuals: one kernel per
+joint, body and force element, mapped) it equals formulations.dae's residual over the inline
+bundle (the whole model's matrices, differentiated as one graph): the residual, and
 IDAS's Jacobian blocks d(ode, alg)/d(x, z) (jacF) against CasADi's SX Jacobian, in value and
 sparsity, and the Jacobian patterns of every block (t and p too) the library declares, for
 both formulations and stabilizations, with rows masked at random (w in {0, 1}) and random row
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.equations.mapped import kernels
+from casmech.equations import evaluation, force_kernels, rows
 from casmech.formulations import dae, residuals
 from casmech.formulations.table import FORMULATIONS
 from casmech.model.lower import lower
@@ -104,24 +104,24 @@ def test_every_model_element_residuals_equal_compiler_dae(file):
     geometries) may keep structural entries that are 0 in value (test_vectors_as_data)."""
     model = casmech.load(ROOT / "models" / file)
     ir, unrolled = lower(model), casmech.compile(model).functions
-    baked = all(key.values is not None for key in kernels.row_keys(ir))
+    baked = all(key.values is not None for key in rows.row_keys(ir))
     for form, kind in CASES:
         check(ir, unrolled, form, kind, same_pattern=baked)
 
 
 def test_vectors_as_data(monkeypatch):
     """Past BAKE_LIMIT geometries the joints' vectors are kernel data: the same values."""
-    monkeypatch.setattr(kernels, "BAKE_LIMIT", 0)
+    monkeypatch.setattr(rows, "BAKE_LIMIT", 0)
     model = MODELS["slider_crank"]()
     ir = lower(model)
-    assert all(key.values is None for key in kernels.row_keys(ir))
+    assert all(key.values is None for key in rows.row_keys(ir))
     for form, kind in CASES:
         check(ir, casmech.compile(model).functions, form, kind, same_pattern=False)
 
 
 def test_force_elements_without_a_kernel(monkeypatch):
     """Force elements without a kernel get one each, over the coordinates they read."""
-    monkeypatch.setattr(residuals.forces, "kernelised", lambda force: False)
+    monkeypatch.setattr(force_kernels, "kernelised", lambda force: False)
     model = MODELS["motors"]()
     for form, kind in CASES:
         check(lower(model), casmech.compile(model).functions, form, kind)
@@ -133,17 +133,20 @@ def test_elements_per_joint_and_body():
     ir = lower(MODELS["chain4"]())
     ix = residuals.Indices(ir, "rp", "ggl")
     t, p = ca.MX.sym("t"), ca.MX.sym("p", ix.n_p)
-    groups = residuals.element_sum(ir, ix, t, ix.constants(p)).groups
+    groups = residuals.element_sum(ir, ix, t, ix.constants(p),
+                                   evaluation.Evaluation.of(False)).groups
     assert [g.count for g in groups] == [1, 3, 4]
 
 
 def test_small_models_compile_the_unrolled_dae():
-    """oracles: a model of at most UNROLLED_BODIES bodies whose unrolled residual and Jacobian
-    stay within UNROLLED_INSTRUCTIONS gets formulations.dae's SX residual itself (an SXFunction,
-    with AD's jacF); a larger one the element sum (an MX graph over the kernels)."""
+    """oracles: a model the switch evaluates inline (WHERE_INLINE["dae_library"]) whose inline
+    residual and Jacobian stay within UNROLLED_INSTRUCTIONS gets formulations.dae's SX residual
+    itself (an SXFunction, with AD's jacF); a larger one the element sum (an MX graph over the
+    kernels)."""
     from .test_mapped import chain_text
 
-    for bodies, unrolled in ((2, True), (residuals.UNROLLED_BODIES + 1, False)):
+    limit = evaluation.WHERE_INLINE["dae_library"]
+    for bodies, unrolled in ((2, True), (limit + 1, False)):
         ir = lower(casmech.loads(chain_text(bodies)))
         for name, functions in residuals.oracles(ir).items():
             assert functions["daeF"].is_a("SXFunction") == unrolled, (bodies, name)

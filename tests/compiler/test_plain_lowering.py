@@ -32,7 +32,8 @@ SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend 
 # fields added to the IR after the reference was made, skipped while they hold their default
 # (a model without `outputs:` or `initial:`), and the joint geometry entries added for the
 # spherical joint's state (q@i, q@j: equations/joint_states.py)
-ADDED = {"outputs": (), "reference_pose": None, "initial": {}, "initial_sources": {}}
+ADDED = {"outputs": (), "reference_pose": None, "initial": {}, "initial_sources": {},
+         "others": ()}
 ADDED_GEOMETRY = frozenset({"q@i", "q@j"})
 # the analysis options as the reference's IR held them, with their defaults
 OLD_OPTIONS = {"formulation": "auto", "stabilization": "ggl", "method": "auto", "at": None,

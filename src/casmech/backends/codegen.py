@@ -8,16 +8,17 @@
     compile_functions({"f": f}, ...)      # any named casadi Functions (codegen.library)
 
 What is compiled (write_build):
-  - the bundle, equations.mapped.bundle: every system function from SX kernels (one per kind of
-    constraint row, joint, body quantity, force element) mapped over their instances, with the
-    derivatives casmech.optimal differentiates through (codegen.generate);
+  - the bundle, equations.functions.mapped_functions: every system function of the builder
+    (equations.system) with its SX kernels (one per kind of constraint row, joint, body
+    quantity, force element) mapped over their instances, with the derivatives casmech.optimal
+    differentiates through (codegen.generate);
   - for a model whose analysis is kinematics or inverse dynamics, the prescribed-motion step
     over the bundle (formulations.prescribed.step), which runtime.kinematics maps over the output
     grid;
-  - each DAE residual dae_[ggl_]<rp|romega> as a sum of elements (formulations.residuals: one
-    kernel per joint, body and force element, the Jacobian from the kernels' own SX
-    Jacobians; for a small model formulations.dae's unrolled SX: residuals.oracles), in a library
-    of its own with the daeF and jacF casadi's IDAS interface loads from it.
+  - each DAE residual dae_[ggl_]<rp|romega> (formulations.residuals.oracles: a sum of elements,
+    one kernel per joint, body and force element, the Jacobian from the kernels' own SX
+    Jacobians; for a small model the inline SX), in a library of its own with the daeF and jacF
+    casadi's IDAS interface loads from it.
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). The measurements behind this: docs/decisions/codegen-element-residuals.md.
 
@@ -53,8 +54,8 @@ from casmech.backends.load import load as load_build
 from casmech.backends.load import mode_of
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
-from casmech.equations.functions import SystemFunctions, build_functions
-from casmech.equations.mapped.bundle import mapped_functions
+from casmech.equations.evaluation import is_inline
+from casmech.equations.functions import SystemFunctions, build_functions, mapped_functions
 from casmech.errors import UsageError
 from casmech.formulations import prescribed, residuals
 from casmech.formulations.tree import spanning_tree
@@ -75,17 +76,13 @@ def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")
 
 
-# Up to this many bodies prescribed_step is one SX graph (docs/decisions/prescribed-step.md).
-INLINED_STEP_BODIES = 32
-
-
 def bundle(ir: ModelIR) -> dict[str, ca.Function]:
-    """The functions of the bundle's library (module docstring). prescribed_step is built over
-    the SX system functions (one inlined graph) for small models, over the mapped kernels for
-    larger ones."""
+    """The functions of the bundle's library (module docstring): the builder's, mapped;
+    prescribed_step over its functions evaluated inline (one SX graph) or mapped, as the
+    switch says (equations.evaluation.WHERE_INLINE)."""
     functions = mapped_functions(ir)
     if ir.analysis.type in PRESCRIBED_ANALYSES:
-        over = build_functions(ir).functions if len(ir.bodies) <= INLINED_STEP_BODIES \
+        over = build_functions(ir).functions if is_inline("prescribed_step", ir.n_bodies) \
             else functions
         functions["prescribed_step"] = prescribed.step(over)
     return functions

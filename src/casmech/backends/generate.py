@@ -1,9 +1,9 @@
-"""SystemFunctions -> C. The bundle (equations.mapped.bundle: kernels mapped over bodies, rows and
-force
-elements) goes into a few translation units of balanced size (built in parallel) behind one
-header; each DAE residual (formulations.residuals) into a unit and a library of its own, since
-casadi's IDAS interface looks its residual and Jacobian up in the DAE's library under the fixed
-names daeF and jacF. Neither grows with the model but for its index tables.
+"""SystemFunctions -> C. The bundle (equations.functions.mapped_functions: kernels mapped over
+bodies, rows and force elements) goes into a few translation units of balanced size (built in
+parallel) behind one header; each DAE residual (formulations.residuals) into a unit and a
+library of its own, since casadi's IDAS interface looks its residual and Jacobian up in the
+DAE's library under the fixed names daeF and jacF. Neither grows with the model but for its
+index tables.
 
 Each bundle unit holds a function and, for the functions an MX graph over the library
 differentiates (casmech.optimal's constraints, or a C or casadi user's), its Jacobian under the

@@ -1,11 +1,12 @@
 """Compiled libraries that take the model data as an input: one build serves every value of the
 model's parameters.
 
-The bundle is equations.functions over model.parametric's symbolic IR (every function with the
-trailing input `d`, the model data), unrolled SX generated as C with the derivatives
-codegen.generate adds (and, for kinematics and inverse dynamics, formulations.prescribed's step over
-it, with `d` its third input); each DAE residual is formulations.dae's over that bundle,
-(t, x, z, [p; d]), with its daeF and jacF (formulations.residuals.from_residual). The cache key is
+The bundle is the builder's (equations.functions) over model.parametric's symbolic IR (every
+function with the trailing input `d`, the model data), evaluated inline: SX generated as C with
+the derivatives codegen.generate adds (and, for kinematics and inverse dynamics,
+formulations.prescribed's step over it, with `d` its third input); each DAE residual is
+formulations.dae's over that bundle, (t, x, z, [p; d]), with its daeF and jacF
+(formulations.residuals.from_residual). The cache key is
 the model's structure (model.parametric's signature) with its text, component files and
 tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions
@@ -34,6 +35,7 @@ from casmech.backends import cache, generate, manifest
 from casmech.backends.build import LIBRARY, Toolchain
 from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
+from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.formulations import dae as dae_residuals
 from casmech.formulations import prescribed, residuals
@@ -45,7 +47,7 @@ from casmech.model.ir import ModelIR
 from casmech.numerics import lazy_jacobian
 from casmech.schema.resolved import ResolvedModel
 
-MAX_BODIES = 32  # above: the mapped library (equations.mapped.bundle), values in its key
+MAX_BODIES = WHERE_INLINE["parametric"]  # above: the mapped library, the values in its key
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
 JOINT_ANALYSES = ("dynamics",)  # the joint formulation's functions too
 JOINT_DATA = "joint_data"
@@ -54,7 +56,8 @@ JOINT_JACOBIAN = "joint_jacobian"  # the ODE's or DAE's Jacobian by the states, 
 
 def applies(model: ResolvedModel) -> bool:
     """Whether `compiled` builds the parametric library: a model with parameters, up to
-    MAX_BODIES bodies (unrolled C grows with the model; equations.mapped.bundle's does not)."""
+    MAX_BODIES bodies (its functions are inline: C that grows with the model; the mapped
+    library's does not)."""
     return bool(model.parameters) and len(model.bodies) <= MAX_BODIES
 
 

@@ -7,7 +7,7 @@ schema's Checker), its lowering to the ForceIR fields (`lower`, called by model/
 its poses helper), its generalized force and potential energy (`law`, equations/eom.py), whether
 it is an input of a linearization (`inputs`; schema/modal.py, runtime/linearize.py), which keys
 read the state, its extra results columns (`outputs`; contacts), whether it limits the
-integrator's step (runtime/contact_steps.py) and its mapped kernel (equations/mapped/forces.py). The
+integrator's step (runtime/contact_steps.py) and its mapped kernel (equations/force_kernels.py). The
 code of the built-in types is in casmech.elements.forces. Adding a force element is
 `register(ForceType(...))` (docs/architecture.md, "Adding a force element";
 tests/compiler/test_force_registry.py registers one).
@@ -45,8 +45,8 @@ from casmech.elements.forces import bushing, contact, contact_spec, loads, sprin
 
 @dataclass(frozen=True)
 class Kernel:
-    """An element's law as one SX kernel mapped over its instances (equations/mapped/forces.py): the
-    numbers of an instance (`data(force)`), the entries of its value input (a force or torque
+    """An element's law as one SX kernel mapped over its instances (equations/force_kernels.py):
+    the numbers of an instance (`data(force)`), the entries of its value input (a force or torque
     vector: 3), and `build(type, frame, motion, data, value, actuator, frame_name)` ->
     (generalized force over the pair's 14 coordinates (or body i's 7), potential), with
     `frame(0)`, `frame(1)` the two bodies' frames and motion = (x, x_dot, t)."""

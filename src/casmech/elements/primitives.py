@@ -1,9 +1,11 @@
 """The basic constraints of the r-p formulation. Each writes ONLY phi; CasADi derives the rest.
 
-A primitive sees two `Frame`s (position r and rotation A of body i and j; ground has constant
-ones) and the primitive's vectors (body-frame `_bar` vectors, global `c`), and the value of its
-driving function f (already evaluated, symbolic in t). The table `PRIMITIVES` maps a kind to
-(function, vector keys it needs).
+A primitive sees one `Frame` per body its row names (position r and rotation A; ground has
+constant ones), in the row's order (body_i, body_j, then any others), the primitive's vectors
+(body-frame `_bar` vectors, global `c`) and the value of its driving function f (already
+evaluated, symbolic in t). The table `PRIMITIVES` maps a kind to a `Primitive` (its phi
+function and the vector keys it needs); `register` adds a kind (a row over two bodies, or over
+three to couple them), `unregister` removes it.
 """
 
 from __future__ import annotations
@@ -12,8 +14,6 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import casadi as ca
-
-from casmech.core.traced_steps import traced
 
 
 @dataclass(frozen=True)
@@ -63,23 +63,44 @@ def angle(fi: Frame, fj: Frame, v: Mapping, f):
     return (fi.A @ v["v_i"]).T @ u_j * ca.cos(f) - (fi.A @ v["u_i"]).T @ u_j * ca.sin(f)
 
 
-PhiFunction = Callable[[Frame, Frame, Mapping, object], object]
+PhiFunction = Callable[..., object]  # (*frames, vectors, f) -> phi
 
-PRIMITIVES: dict[str, tuple[PhiFunction, tuple[str, ...]]] = {
-    "dp1": (dp1, ("a_i", "a_j")),
-    "dp2": (dp2, ("a_i", "s_i", "s_j")),
-    "d": (distance, ("s_i", "s_j")),
-    "cd": (cd, ("c", "s_i", "s_j")),
-    "angle": (angle, ("u_i", "v_i", "u_j")),
+
+class Primitive(tuple):
+    """(phi, vector keys): `phi(*frames, vectors, f)`, one frame per body of the row; every
+    vector is a 3-vector (body frame, or global for `c`)."""
+
+    def __new__(cls, phi: PhiFunction, keys: tuple[str, ...]):
+        return super().__new__(cls, (phi, tuple(keys)))
+
+    @property
+    def phi(self) -> PhiFunction:
+        return self[0]
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return self[1]
+
+
+BUILT_IN = {
+    "dp1": Primitive(dp1, ("a_i", "a_j")),
+    "dp2": Primitive(dp2, ("a_i", "s_i", "s_j")),
+    "d": Primitive(distance, ("s_i", "s_j")),
+    "cd": Primitive(cd, ("c", "s_i", "s_j")),
+    "angle": Primitive(angle, ("u_i", "v_i", "u_j")),
 }
+PRIMITIVES: dict[str, Primitive] = dict(BUILT_IN)
 
 
-def _row(r_i, a_i, r_j, a_j, f, *vectors, kind: str):
-    """(phi,) of one primitive of `kind` from the two frames, f(t) and its vectors (in the
-    order of its PRIMITIVES keys)."""
-    phi_fun, keys = PRIMITIVES[kind]
-    return (phi_fun(Frame(r_i, a_i), Frame(r_j, a_j), dict(zip(keys, vectors, strict=True)),
-                    f),)
+def register(kind: str, phi: PhiFunction, keys: tuple[str, ...]) -> None:
+    """Add (or replace) a kind of constraint row: every builder reads PRIMITIVES."""
+    PRIMITIVES[kind] = Primitive(phi, keys)
 
 
-ROW = traced(_row)  # a primitive's row, traced once per kind and argument structure
+def unregister(kind: str) -> None:
+    del PRIMITIVES[kind]
+
+
+def phi(kind: str, frames, vectors: Mapping, f):
+    """phi of one row of `kind` over its bodies' frames."""
+    return PRIMITIVES[kind].phi(*frames, vectors, f)

@@ -1,8 +1,7 @@
 """The terms of ONE rigid body in Euler parameters p (Haug 1989, ch. 11), written once.
 
-equations.eom, equations.romega and equations.assemble call them per body (the unrolled system);
-equations.mapped.bodies and formulations.residual_kernels wrap them in SX kernels mapped over the
-bodies.
+equations.body_kernels and equations.row_kernels wrap them in the builder's kernels
+(formulations.residual_kernels: the DAE's); the joint formulation calls them too.
 Arguments are CasADi expressions (SX, or DM constants): r, r_dot the CM's position and velocity,
 p, p_dot, p_ddot the Euler parameters and their rates, omega_bar the body-frame angular
 velocity, inertia J_bar (3 x 3, body frame), mass m, gravity g.
@@ -13,7 +12,6 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.core import euler
-from casmech.core.traced_steps import traced
 
 
 def normalization(p):
@@ -45,13 +43,6 @@ def global_rates(p, *p_rates) -> list:
     return [2 * e @ rate for rate in p_rates]
 
 
-def _rates(p, p_dot, p_ddot):
-    return global_rates(p, p_dot, p_ddot)
-
-
-RATES = traced(_rates)  # global_rates(p, p_dot, p_ddot) traced (the unrolled results row)
-
-
 def kinetic_energy(mass, inertia, r_dot, p, p_dot):
     """1/2 m r_dot.r_dot + 1/2 omega_bar^T J_bar omega_bar."""
     w_bar = angular_velocity(p, p_dot)
@@ -77,6 +68,16 @@ def moment(p, q_p):
 def gyroscopic(omega_bar, inertia):
     """omega_bar~ J_bar omega_bar."""
     return ca.cross(omega_bar, inertia @ omega_bar)
+
+
+def romega_torque(p, q_p, w, inertia):
+    """n_bar - omega_bar~ J_bar omega_bar of one body, n_bar = 1/2 G Q_p (the r-omega form)."""
+    return moment(p, q_p) - gyroscopic(w, inertia)
+
+
+def q_ddot(q_dot, q, v, v_dot):
+    """The time derivative of q_dot(q, v) (one body's p_dot(p, omega_bar), or a system's)."""
+    return ca.jacobian(q_dot, q) @ q_dot + ca.jacobian(q_dot, v) @ v_dot
 
 
 def pi_bar(phi_p, p):

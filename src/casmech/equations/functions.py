@@ -1,20 +1,22 @@
 """The named casadi.Function bundle that every analysis consumes.
 
 Interpreted (SX) and compiled bundles are interchangeable: analyses only call
-`bundle[name](...)` and read the metadata below.
+`bundle[name](...)` and read the metadata below. Both are equations.system's functions: the
+interpreted bundle evaluates its kernels inline (build_functions), the one code generation
+compiles maps them (mapped_functions).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
-from casmech.equations import body, contact, eom, romega
-from casmech.equations.assemble import build_constraints
+from casmech.equations import system
+from casmech.equations.evaluation import Evaluation
+from casmech.equations.system import System
 from casmech.model.ir import GROUND_INDEX, ModelIR, RowInfo
 
 
@@ -83,11 +85,6 @@ class SystemFunctions:
 
 def _as_list(outputs) -> list:
     return list(outputs) if isinstance(outputs, (tuple, list)) else [outputs]
-
-
-def _function(name, inputs: dict, outputs: dict) -> ca.Function:
-    return ca.Function(name, list(inputs.values()), list(outputs.values()),
-                       list(inputs), list(outputs))
 
 
 class LazyFunctions(MutableMapping):
@@ -169,20 +166,7 @@ def symbol_type(functions: Mapping):
     return ca.SX if all_sx(functions) else ca.MX
 
 
-def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
-    """The bundle of a numeric IR; of a symbolic one (model.parametric.split) with `data`,
-    its symbols, as every function's trailing input "d". Each function is built when first
-    used (LazyFunctions)."""
-    extra = {} if data is None else {"d": data}
-    shared = _Shared(ir)
-
-    def group(names: tuple[str, ...] | None, definitions: Callable[[], list]):
-        return names, lambda: [_function(name, inputs | extra, outputs)
-                               for name, inputs, outputs in definitions()]
-
-    groups = [group((name,), lambda name=name, define=define: [(name, *define(shared))])
-              for name, define in DEFINITIONS.items()]
-    groups.append(group(None, lambda: romega.definitions(ir, shared.cs)))
+def _bundle(ir: ModelIR, functions, mode: str | None = None) -> SystemFunctions:
     names = tuple(b.name for b in ir.bodies)
 
     def body_name(k: int) -> str:
@@ -190,80 +174,21 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
 
     joints = tuple(JointMeta(j.name, j.type, j.rows, body_name(j.body_i), body_name(j.body_j),
                              j.source) for j in ir.joints)
-    return SystemFunctions(LazyFunctions(groups), names, joints, tuple(ir.row_info()), ir,
-                           mode="interpreted")
+    return SystemFunctions(functions, names, joints, tuple(ir.row_info()), ir, mode=mode)
 
 
-class _Shared:
-    """What the bundle's functions share, built once when first needed."""
-
-    def __init__(self, ir: ModelIR):
-        self.ir = ir
-
-    @cached_property
-    def cs(self):
-        """The constraint system (equations.assemble)."""
-        return build_constraints(self.ir)
-
-    @property
-    def x(self):
-        return self.cs.x
-
-    @cached_property
-    def applied(self) -> tuple:
-        """(generalized applied forces, spring potential)."""
-        return eom.applied_forces(self.ir, self.x)
+def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
+    """The interpreted bundle: every function inline (SX), built when first used
+    (LazyFunctions). `data`: for a symbolic IR (model.parametric.split), its symbols, every
+    function's trailing input "d"."""
+    shared = System(ir, Evaluation.of(True, data, ir.n_bodies))
+    groups = [((name,), lambda name=name: [system.function(shared, name)])
+              for name in system.DEFINITIONS]
+    return _bundle(ir, LazyFunctions(groups), "interpreted")
 
 
-def _tq(s: _Shared) -> dict:
-    return {"t": s.x.t, "q": s.x.q}
-
-
-def _tqv(s: _Shared) -> dict:
-    return {"t": s.x.t, "q": s.x.q, "q_dot": s.x.q_dot}
-
-
-def _generalized_forces(s: _Shared) -> tuple:
-    forces = s.applied[0] + eom.quadratic_velocity(s.ir, s.x)
-    return _tqv(s), {"generalized_forces": s.x.ground_fixed(forces)}
-
-
-def _energy(s: _Shared) -> tuple:
-    kinetic, potential = eom.energy(s.ir, s.x, s.applied[1])
-    fixed = s.x.ground_fixed
-    return _tqv(s), {"kinetic": fixed(kinetic), "potential": fixed(potential)}
-
-
-def _reactions(s: _Shared) -> tuple:
-    lam = ca.SX.sym("lam", s.cs.phi.numel())
-    force, torque = eom.reactions(s.ir, s.x, s.cs.phi_with_ground, lam)
-    fixed = s.x.ground_fixed
-    return _tqv(s) | {"lam": lam}, {"force": fixed(force), "torque": fixed(torque)}
-
-
-def _body_rates(s: _Shared) -> tuple:
-    x = s.x
-    rates = [body.RATES(x.p(k), x.p(k, x.q_dot), x.p(k, x.q_ddot))
-             for k in range(s.ir.n_bodies)]
-    stack = (lambda vs: ca.horzcat(*vs)) if s.ir.n_bodies else (lambda vs: ca.SX(3, 0))
-    return ({"q": x.q, "q_dot": x.q_dot, "q_ddot": x.q_ddot},
-            {"omega": stack([w for w, _ in rates]), "alpha": stack([a for _, a in rates])})
-
-
-# name -> its (inputs, outputs) over the shared pieces (romega's functions follow them)
-DEFINITIONS: dict[str, Callable[[_Shared], tuple[dict, dict]]] = {
-    "phi": lambda s: (_tq(s), {"phi": s.cs.phi}),
-    "phi_q": lambda s: (_tq(s), {"phi_q": s.cs.phi_q}),
-    "nu": lambda s: (_tq(s), {"nu": s.cs.nu}),
-    "gamma": lambda s: (_tqv(s), {"gamma": s.cs.gamma}),
-    "variations": lambda s: (_tq(s), {"phi_r": s.cs.phi_r, "pi_bar": s.cs.pi_bar}),
-    "phi_scaled": lambda s: (_tq(s) | {"s": s.cs.scale},
-                             {"phi": s.cs.phi_scaled, "phi_q": s.cs.phi_q_scaled}),
-    "mass_matrix": lambda s: ({"q": s.x.q}, {"mass_matrix": eom.mass_matrix(s.ir, s.x)}),
-    "generalized_forces": _generalized_forces,
-    "energy": _energy,
-    "reactions": _reactions,
-    "body_rates": _body_rates,
-    "element_outputs": lambda s: (_tqv(s), {
-        "values": s.x.ground_fixed(contact.element_outputs(s.ir, s.x))}),
-}
+def mapped_functions(ir: ModelIR, data: ca.SX | None = None) -> dict[str, ca.Function]:
+    """name -> MX Function of every system function, its kernels mapped over their instances:
+    the bundle code generation compiles. `data`: as build_functions'."""
+    shared = System(ir, Evaluation.of(False, data))
+    return {name: system.function(shared, name) for name in system.DEFINITIONS}

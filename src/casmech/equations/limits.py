@@ -10,7 +10,7 @@ joint, the slide of a translational or cylindrical one, 0 at the file's pose. Ou
 
 applied as the generalized force s_q^T f (virtual work, as equations/motors.py applies a motor),
 with potential 1/2 k d^2 (d the overshoot). Its force and torque on body_j enter the joint's
-reaction columns (equations/eom.reactions, like a motor's), and the results hold
+reaction columns (equations/forces.py motor_reactions, like a motor's), and the results hold
 `<joint>.limit_torque` (revolute) or `<joint>.limit_force` (sliding) = f and
 `<joint>.limit_gap` = the distance to the nearer bound (negative past it).
 """
@@ -83,6 +83,7 @@ def output_names(limit: ForceIR) -> list[str]:
 
 
 def reaction(limit: ForceIR, x, at):
-    """(force, torque about `at`) the stop exerts on body j, global (equations/eom.reactions)."""
+    """(force, torque about `at`) the stop exerts on body j, global
+    (equations.forces.motor_reactions)."""
     s, f, _ = law(limit, x)
     return motors.coordinate_reaction(s, f, x, limit.body_j, at)

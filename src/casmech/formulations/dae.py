@@ -30,6 +30,10 @@ scaled by s_phi; in r-p P is Phi_q, and s_phi = s; mu is 0 along the exact motio
 masked rows become lam_k = 0 and mu_k = 0. IDAS integrates it with the algebraic unknowns out
 of its error test.
 
+The residual is written once (formulations.dae_terms.residual) and evaluated by the builder's
+switch: inline over the whole model's functions (here: over a bundle, one SX graph over an
+interpreted one), or mapped as a sum of per-element kernels over the same terms
+(formulations.residuals: what a library compiles for larger models).
 Over a parametric bundle (every function with the trailing input d, the model data:
 model.parametric) either residual takes d after its own parameters: p = [t0, w, s (, s_phi), d].
 """
@@ -39,6 +43,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.equations.functions import symbol_type
+from casmech.formulations import dae_terms as terms
 from casmech.formulations.table import FORMULATIONS
 from casmech.model.parametric import data_size, with_data
 
@@ -57,12 +62,11 @@ def residual(functions: dict[str, ca.Function], name: str,
              stabilization: str = "projection") -> ca.Function:
     """dae_<name> (projection: the index-1 DAE) or dae_ggl_<name> (the stabilized index-2
     one): (t, x, z, p) -> (ode, alg); the bundle's own when it has one (a compiled bundle
-    carries them, with their Jacobians)."""
+    carries them, with their Jacobians), else over the bundle's functions."""
     key = f"dae_{name}" if stabilization == "projection" else f"dae_ggl_{name}"
     if key in functions:
         return functions[key]
-    build = _index1 if stabilization == "projection" else _ggl
-    return build(functions, name, key)
+    return _over(functions, name, stabilization, key)
 
 
 def parameters(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
@@ -71,72 +75,10 @@ def parameters(functions: dict[str, ca.Function], name: str, stabilization: str)
     return 1 + 2 * m + (functions["phi"].size1_out(0) if stabilization == "ggl" else 0)
 
 
-def _index1(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
-    form = FORMULATIONS[name]
-    n_q, n_v, m = sizes(functions, name)
-    sym = symbol_type(functions)
-    n_p = parameters(functions, name, "projection")
-    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m),
-                    sym.sym("p", n_p + data_size(functions)))
-    functions = with_data(functions, p[n_p:])
-    t, q, v, v_dot, lam = p[0] + tau, x[:n_q], x[n_q:], z[:n_v], z[n_v:]
-    w, s = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m)
-    jacobian = scaled(functions[form.jacobian](t, q), s)
-    alg = ca.vertcat(
-        dynamics(functions[form.mass](q), v_dot, jacobian, lam, functions[form.forces](t, q, v)),
-        acceleration_rows(jacobian, v_dot, functions[form.gamma](t, q, v) * s, w, lam))
-    q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
-    return ca.Function(key, [tau, x, z, p], [ca.vertcat(q_dot, v_dot), alg],
-                       ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
-
-
-def _options(sym) -> dict:
-    """An SX residual with its common subexpressions merged, and so its Jacobian by AD
-    (docs/decisions/codegen-small-dae-unrolled.md)."""
-    return {"cse": True} if sym is ca.SX else {}
-
-
-def _column(p, start: int, stop: int):
-    """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
-    return ca.reshape(p[start:stop], stop - start, 1)
-
-
-def scaled(matrix, s):
-    """diag(s) matrix."""
-    return matrix * ca.repmat(s, 1, matrix.size2())
-
-
-# The residual's terms, written once for the whole system (here) and for one element
-# (formulations.residual_kernels). P_s, phi_s, ...: the rows already scaled by their s (or s_phi).
-
-def constraint_forces(p_s, lam):
-    """P_s^T lam."""
-    return p_s.T @ lam
-
-
-def dynamics(mass, v_dot, p_s, lam, forces):
-    """M v_dot + P_s^T lam - F."""
-    return mass @ v_dot + constraint_forces(p_s, lam) - forces
-
-
-def acceleration_rows(p_s, v_dot, gamma_s, w, lam):
-    """P_s v_dot - gamma_s - w lam (projection)."""
-    return p_s @ v_dot - gamma_s - w * lam
-
-
-def position_rows(phi_s, w_phi, mu):
-    """(1 - w) phi_s - w mu (ggl)."""
-    return (1 - w_phi) * phi_s - w_phi * mu
-
-
-def velocity_rows(p_s, v, nu_s, w, lam):
-    """(1 - w) (P_s v - nu_s) - w lam (ggl)."""
-    return (1 - w) * (p_s @ v - nu_s) - w * lam
-
-
-def ggl_q_dot(q_dot, phi_q_s, mu):
-    """q_dot + Phi_q_s^T mu (ggl)."""
-    return q_dot + constraint_forces(phi_q_s, mu)
+def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
+    """Algebraic unknowns after v_dot: lam, and mu (one per row of Phi) for ggl."""
+    m = sizes(functions, name)[2]
+    return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
 
 
 def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
@@ -145,36 +87,46 @@ def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
     return {function.name(): function for function in built}
 
 
-def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str) -> int:
-    """Algebraic unknowns after v_dot: lam, and mu (one per row of Phi) for ggl."""
-    m = sizes(functions, name)[2]
-    return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
+def _column(p, start: int, stop: int):
+    """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
+    return ca.reshape(p[start:stop], stop - start, 1)
 
 
-def _ggl(functions: dict[str, ca.Function], name: str, key: str) -> ca.Function:
+def _over(functions: dict[str, ca.Function], name: str, kind: str, key: str) -> ca.Function:
+    """The residual over a bundle's functions (module docstring): SX over an SX bundle, with
+    its common subexpressions merged (and so its Jacobian by AD:
+    docs/decisions/codegen-small-dae-unrolled.md); MX over compiled ones."""
     form = FORMULATIONS[name]
     n_q, n_v, m = sizes(functions, name)
     n_phi = functions["phi"].size1_out(0)
+    ggl = kind == "ggl"
     sym = symbol_type(functions)
-    n_p = parameters(functions, name, "ggl")
-    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v), sym.sym("z", n_v + m + n_phi),
+    n_p = parameters(functions, name, kind)
+    tau, x, z, p = (sym.sym("t"), sym.sym("x", n_q + n_v),
+                    sym.sym("z", n_v + m + (n_phi if ggl else 0)),
                     sym.sym("p", n_p + data_size(functions)))
     functions = with_data(functions, p[n_p:])
     t, q, v = p[0] + tau, x[:n_q], x[n_q:]
-    w, s, s_phi = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m), _column(p, 1 + 2 * m, n_p)
-    v_dot, lam, mu = z[:n_v], z[n_v:n_v + m], z[n_v + m:]
-    jacobian = scaled(functions[form.jacobian](t, q), s)
-    nu = functions[form.nu](t, q) * s
-    # r-p: P is Phi_q (one evaluation; s_phi = s)
-    phi_q = jacobian if form.jacobian == "phi_q" else scaled(functions["phi_q"](t, q), s_phi)
-    phi = functions["phi"](t, q) * s_phi
-    w_phi = ca.vertcat(w, sym(n_phi - m, 1))  # r-omega: + normalization rows (structural 0)
-    alg = ca.vertcat(
-        dynamics(functions[form.mass](q), v_dot, jacobian, lam, functions[form.forces](t, q, v)),
-        position_rows(phi, w_phi, mu), velocity_rows(jacobian, v, nu, w, lam))
+    w, s = _column(p, 1, 1 + m), _column(p, 1 + m, 1 + 2 * m)
+    v_dot, lam = z[:n_v], z[n_v:n_v + m]
+    jacobian = terms.scaled(functions[form.jacobian](t, q), s)
+    if ggl:
+        s_phi, mu = _column(p, 1 + 2 * m, n_p), z[n_v + m:]
+        # r-p: P is Phi_q (one evaluation; s_phi = s)
+        phi_q = jacobian if form.jacobian == "phi_q" else \
+            terms.scaled(functions["phi_q"](t, q), s_phi)
+        rows = terms.Rows(jacobian, lam, w, nu_s=functions[form.nu](t, q) * s,
+                          phi_s=functions["phi"](t, q) * s_phi, phi_q_s=phi_q,
+                          w_phi=ca.vertcat(w, sym(n_phi - m, 1)),  # r-omega: + normalization
+                          mu=mu)
+    else:
+        rows = terms.Rows(jacobian, lam, w, gamma_s=functions[form.gamma](t, q, v) * s)
     q_dot = v if form.q_dot is None else functions[form.q_dot](q, v)
-    return ca.Function(key, [tau, x, z, p], [ca.vertcat(ggl_q_dot(q_dot, phi_q, mu), v_dot), alg],
-                       ["t", "x", "z", "p"], ["ode", "alg"], _options(sym))
+    ode_q, ode_v, alg_v, alg_rows = terms.residual(terms.Parts(
+        v, q_dot, v_dot, functions[form.mass](q), functions[form.forces](t, q, v), rows), kind)
+    return ca.Function(key, [tau, x, z, p], [ca.vertcat(ode_q, ode_v), ca.vertcat(alg_v, alg_rows)],
+                       ["t", "x", "z", "p"], ["ode", "alg"],
+                       {"cse": True} if sym is ca.SX else {})
 
 
 def problem(function: ca.Function) -> dict | ca.Function:

@@ -38,6 +38,12 @@ class PrimitiveIR:
     offset: float = 0.0  # constant added to f (e.g. a distance's length squared)
     is_driver: bool = False  # a composite joint's driver: scaled by assembly's continuation
     row: RowInfo = field(default_factory=lambda: RowInfo("", ""))
+    others: tuple[int, ...] = ()  # bodies the row reads after body_i and body_j (a coupler)
+
+    @property
+    def bodies(self) -> tuple[int, ...]:
+        """Every body the row reads, in the order its primitive takes their frames."""
+        return (self.body_i, self.body_j, *self.others)
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,8 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
+from casmech.numerics import instances
+
 DROPPED = -1  # an output index that is not added anywhere (e.g. ground's rows)
 
 
@@ -64,7 +66,8 @@ class ElementSum:
         padded = self._padded(u)
         parts, rows, positions, offset = [], [], [], 0
         for group in self.groups:
-            out = _map(group.kernel, group.count)(self._gathered(padded, group), group.data)
+            out = instances.plain_map(group.kernel, group.count)(self._gathered(padded, group),
+                                                                 group.data)
             keep = group.outputs.ravel() != DROPPED  # row-major: instance k, output o
             rows.append(group.outputs.ravel()[keep])
             positions.append(offset + np.flatnonzero(keep))
@@ -88,8 +91,8 @@ class ElementSum:
             keep = (rows != DROPPED) & (cols < self.n_u)
             position = offset + np.arange(group.count)[:, None] * nnz + np.arange(nnz)[None, :]
             triplets.append((rows[keep], cols[keep], position[keep]))
-            parts.append(ca.vec(_map(local, group.count)(self._gathered(padded, group),
-                                                           group.data)))
+            parts.append(ca.vec(instances.plain_map(local, group.count)(
+                self._gathered(padded, group), group.data)))
             offset += nnz * group.count
         rows, cols, positions = (np.concatenate([[], *items]).astype(int)
                                  for items in zip(*triplets, strict=True)) \
@@ -103,11 +106,6 @@ class ElementSum:
                 blocks.append((r1 - r0, c1 - c0, rows[inside] - r0, cols[inside] - c0,
                                positions[inside]))
         return assemble(blocks, parts)
-
-
-def _map(kernel: ca.Function, count: int) -> ca.Function:
-    """The kernel over `count` instances (columns), serially (a loop in C)."""
-    return kernel.map(count, "serial")
 
 
 @lru_cache(maxsize=512)

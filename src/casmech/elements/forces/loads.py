@@ -101,7 +101,7 @@ def with_inputs(force, u):
 
 # ------------------------------------------------------------------------------- kernels
 def force_data(force) -> np.ndarray:
-    """The point of application (equations/mapped/forces.py)."""
+    """The point of application (equations/force_kernels.py)."""
     return np.asarray(force.points.get("s", [0.0, 0.0, 0.0]), float)
 
 

@@ -183,7 +183,7 @@ def with_inputs(force, u):
 
 # -------------------------------------------------------------------------------- kernel
 def kernel_data(force) -> np.ndarray:
-    """[its vectors, stiffness, damping, rest] (equations/mapped/forces.py)."""
+    """[its vectors, stiffness, damping, rest] (equations/force_kernels.py)."""
     kind = SPRINGS[force.type]
     return np.concatenate([*kind.vector_values(force), kind.parameters(force)])
 
