@@ -14,8 +14,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
-from casmech.backends import COMPILE_MODES, compile  # noqa: A004, F401
+from casmech.backends import COMPILE_MODES  # noqa: F401
+from casmech.backends.rebind import CompiledModel, compiled_model
 from casmech.equations.functions import SystemFunctions
+from casmech.formulations import joint_space as joint_spaces
+from casmech.model.lower import lower
 from casmech.runtime.analyses import (  # noqa: F401
     ANALYSES,
     DYNAMICS_OPTIONS,
@@ -33,6 +36,15 @@ def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> Resolv
     return load_model(path, overrides=overrides)
 
 
+def compile(model: ResolvedModel, mode: str = "interpreted") -> CompiledModel:  # noqa: A001
+    """The model's named CasADi functions (a SystemFunctions) in `mode`: "interpreted" (SX
+    functions), "compiled" (C generated, built and loaded through the cache; a model with
+    parameters and up to 32 bodies gets a library that takes its numbers as an input) or
+    "auto" (backends.compile). `.set(name=value)` gives them at other parameter values,
+    without a build where the library takes the numbers (backends.rebind)."""
+    return compiled_model(model, mode)
+
+
 def loads(text: str, file: str = "<string>",
           overrides: Mapping[str, str] | None = None) -> ResolvedModel:
     return load_model_text(text, file=file, overrides=overrides)
@@ -44,3 +56,12 @@ def results_table(functions: SystemFunctions, result: Result,
     are in the frame its `reactions: {frame: ...}` names (default global); `reaction_frames`
     replaces it for every joint (global, body_i, body_j, joint) or the joints a mapping names."""
     return table(functions, result, reaction_frames)
+
+
+def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpace:
+    """The joint-space dynamics of a model whose joints form a tree (a casmech.load or
+    casmech.compile result: the latter's parameter values, after `set` too): mass matrix, bias
+    forces, forward and inverse dynamics and their derivatives as CasADi Functions and NumPy
+    calls (formulations.joint_space; docs/api.md#joint-space-dynamics)."""
+    ir = model.ir if isinstance(model, SystemFunctions) else lower(model)
+    return joint_spaces.joint_space(ir)

@@ -51,6 +51,10 @@ PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescr
 JOINT_ANALYSES = ("dynamics",)  # the joint formulation's functions too
 JOINT_DATA = "joint_data"
 JOINT_JACOBIAN = "joint_jacobian"  # the ODE's or DAE's Jacobian by the states, not by d
+# SystemFunctions.derived's key of the library folder a bundle is bound to, and of the
+# structure's signature (backends.rebind binds the same library to other values)
+LIBRARY_FOLDER = "parametric_library"
+SIGNATURE = "parametric_signature"
 
 
 def applies(model: ResolvedModel) -> bool:
@@ -147,13 +151,17 @@ def _externals(directory: str, built: int) -> dict[str, ca.Function]:
     return externals(Path(directory))
 
 
-def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
+def load(directory: Path, ir: ModelIR, values: np.ndarray,
+         signature: str | None = None) -> SystemFunctions:
+    """The library's functions bound to the model data `values` (of `ir`, whose structure's
+    `signature` the library was built for)."""
     built = (directory / manifest.MANIFEST).stat().st_mtime_ns
     loaded = dict(_externals(str(directory.resolve()), built))
     joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
     functions = {name: f if name.startswith("dae_") else bind(f, values)
                  for name, f in loaded.items()}
     bundle_ = SystemFunctions(functions, **metadata(ir), data=values)
+    bundle_.derived.update({LIBRARY_FOLDER: directory, SIGNATURE: signature})
     if joint:
         joint_data = np.array(joint.pop(JOINT_DATA)(values).full()).ravel()
         dynamics = "joint_dae" if "joint_dae" in joint else "joint_ode"
