@@ -1,7 +1,7 @@
 """The FMU's outputs: the results columns of the results contract (docs/format.md), as one
 CasADi expression of the state.
 
-The row is runtime.results.row_function's over the bundle whose functions take the model data
+The row is runtime.results.row_function's (the joint states and `outputs:` last) over the bundle whose functions take the model data
 [d; u] last (equations.functions over fmu.model's IR), with each joint's reaction columns in
 the frame its `reactions:` names and its torque about its reaction point
 (runtime.reaction_frames, here in CasADi on the row's q). The column `t` is FMI's time and is
@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import casadi as ca
 
 from casmech.core import euler
+from casmech.equations import readings
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.model.ir import GROUND_INDEX, JointIR
@@ -67,8 +68,9 @@ def _written(joint: JointIR, q, n_bodies: int, force, torque) -> ca.SX:
     return ca.vertcat(rotation.T @ force, rotation.T @ torque)
 
 
-def row(bundle: SystemFunctions, t, q, q_dot, q_ddot, lam, data) -> ca.SX:
-    """The results row but t (a column) at the state, `data` the bundle's trailing input."""
+def row(bundle: SystemFunctions, t, q, q_dot, q_ddot, lam, data, symbols: ca.SX) -> ca.SX:
+    """The results row but t (a column) at the state; `data` the bundle's trailing input,
+    `symbols` the symbols the bundle was built over ([d; u], fmu.model.Exported.data)."""
     functions, ir, nb = bundle.functions, bundle.ir, bundle.n_bodies
     omega, alpha = functions["body_rates"](q, q_dot, q_ddot, data)
     force, torque = functions["reactions"](t, q, q_dot, lam, data)
@@ -81,7 +83,8 @@ def row(bundle: SystemFunctions, t, q, q_dot, q_ddot, lam, data) -> ca.SX:
                   q_dot[3 * k:3 * k + 3], omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
     parts += [_written(joint, q, nb, force[:, j], torque[:, j])
               for j, joint in enumerate(ir.joints)]
-    parts += [kinetic + potential, violation, functions["element_outputs"](t, q, q_dot, data)]
+    parts += [kinetic + potential, violation, functions["element_outputs"](t, q, q_dot, data),
+              readings.columns_function(ir, symbols)(t, q, q_dot, q_ddot, force, torque, data)]
     values = ca.densify(ca.vertcat(*parts))
     assert values.numel() == len(names(bundle)), "the row and the contract's columns differ"
     return values

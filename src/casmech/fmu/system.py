@@ -231,11 +231,15 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
     """The FMU's functions (module docstring); `columns` the outputs (fmu.outputs.chosen)."""
     b = _Builder(exported, begin)
     t, x, jd = b.t, b.x, b.jd
+    states = state_names(b.system, tuple(bd.name for bd in exported.ir.bodies))
+    every = outputs.names(b.bundle)
+    # a joint state column that is a state of the FMU is read as the state, not output twice
+    columns = [k for k in columns if every[k] not in states]
     theta = exported.theta
     if b.n_x != len(begin.x0):
         raise AssertionError("the symbolic tree and the numeric start differ in their states")
     # the reaction frames' vectors are the IR's own numbers: entries of d, read from jd
-    row = b.from_data(outputs.row(b.bundle, t, *b.motion(), b.data))
+    row = b.from_data(outputs.row(b.bundle, t, *b.motion(), b.data, exported.data))
     data = b.system.data(ca.vertcat(exported.split.expressions, ca.DM(begin.inputs)))
     q_ref, position = b.position_terms()
     phi, rate = b.closure(x)
@@ -253,9 +257,7 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
                   {"position": worst[0], "velocity": worst[1]}),
         _function("cm_calculated", {"theta": theta}, {"values": exported.calculated}),
     ]
-    every = outputs.names(b.bundle)
-    return FmuSystem({f.name(): f for f in functions},
-                     state_names(b.system, tuple(bd.name for bd in exported.ir.bodies)),
+    return FmuSystem({f.name(): f for f in functions}, states,
                      tuple(every[k] for k in columns), b.n_jd, exported.n_data,
                      bool(b.system.n_cut), b.n_theta, position["values"].numel(),
                      len(b.keep))
