@@ -145,7 +145,8 @@ def test_set_on_a_library_with_its_values_builds_another_and_warns(model_file, t
 
 def test_repr_is_one_line(model_file):
     text = repr(casmech.compile(casmech.load(model_file)).set(m=3))
-    assert text.startswith("CompiledModel('two_oscillators': 2 bodies, 2 joints; interpreted")
+    assert text.startswith(
+        "CompiledModel('two_oscillators': 2 bodies, 2 joints, 2 DOF; interpreted")
     assert "m=3" in text and "\n" not in text
 
 

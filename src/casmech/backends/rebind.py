@@ -29,11 +29,14 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
 
+import numpy as np
+
 from casmech import backends
 from casmech.backends.load import mode_of
 from casmech.backends.manifest import MANIFEST
 from casmech.backends.parametric import LIBRARY_FOLDER, MAX_BODIES, SIGNATURE
 from casmech.backends.parametric import load as bind_library
+from casmech.equations import checks
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.model import parametric
@@ -41,6 +44,8 @@ from casmech.model.lower import lower
 from casmech.schema import load_model_text
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
+
+DOF = "dof"  # the key of the degrees of freedom in a bundle's `derived`
 
 
 @dataclass(frozen=True, repr=False)
@@ -55,6 +60,16 @@ class CompiledModel(SystemFunctions):
     def parameters(self) -> Mapping[str, float]:
         """The model's parameter values (read-only)."""
         return MappingProxyType(dict(self.model.parameters) if self.model else {})
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom: coordinates less the rank of phi_q at the file's pose (as
+        `casmech check` counts them; computed once)."""
+        if DOF not in self.derived:
+            bodies = self.ir.bodies
+            q = np.concatenate([b.r0 for b in bodies] + [b.p0 for b in bodies] + [np.zeros(0)])
+            self.derived[DOF] = checks.structure(self, 0.0, q).dof
+        return self.derived[DOF]
 
     @property
     def library(self) -> Path | None:
@@ -97,8 +112,10 @@ class CompiledModel(SystemFunctions):
         shown += f", ... ({more} more)" if more > 0 else ""
         how = mode_of(self) + (", parametric library" if self.library else "")
         name = self.model.name if self.model else self.ir.name
-        return (f"CompiledModel('{name}': {self.n_bodies} bodies, {len(self.joints)} joints; "
-                f"{how}; parameters: {shown or 'none'})")
+        bodies = f"{self.n_bodies} {'body' if self.n_bodies == 1 else 'bodies'}"
+        joints = f"{len(self.joints)} joint{'' if len(self.joints) == 1 else 's'}"
+        return (f"CompiledModel('{name}': {bodies}, {joints}, {self.dof} DOF; {how}; "
+                f"parameters: {shown or 'none'})")
 
 
 def wrap(functions: SystemFunctions, model: ResolvedModel, mode: str) -> CompiledModel:
