@@ -30,6 +30,8 @@ from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
 from casmech.schema.resolved import ResolvedModel
 
+JOINT_SPACE = "joint_space"  # a bundle's `derived` key of its JointSpace
+
 
 def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:
     """Read, validate and evaluate a model file (raises ModelError with every finding)."""
@@ -62,6 +64,10 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     """The joint-space dynamics of a model whose joints form a tree (a casmech.load or
     casmech.compile result: the latter's parameter values, after `set` too): mass matrix, bias
     forces, forward and inverse dynamics and their derivatives as CasADi Functions and NumPy
-    calls (formulations.joint_space; docs/api.md#joint-space-dynamics)."""
-    ir = model.ir if isinstance(model, SystemFunctions) else lower(model)
-    return joint_spaces.joint_space(ir)
+    calls (formulations.joint_space; docs/api.md#joint-space-dynamics). A compiled model keeps
+    its joint space (built once per set of values)."""
+    if not isinstance(model, SystemFunctions):
+        return joint_spaces.joint_space(lower(model))
+    if JOINT_SPACE not in model.derived:
+        model.derived[JOINT_SPACE] = joint_spaces.joint_space(model.ir)
+    return model.derived[JOINT_SPACE]

@@ -129,6 +129,7 @@ def test_a_compiled_model_after_set_gives_the_new_values():
                                    atol=0)
         np.testing.assert_allclose(space.bias_forces(q, [0.0]),
                                    [-m * 9.81 * length * np.cos(0.3)], rtol=1e-12, atol=0)
+    assert casmech.joint_space(functions) is casmech.joint_space(functions)  # built once
 
 
 def test_a_closed_loop_is_a_usage_error():
