@@ -2,7 +2,8 @@
 example-robot-data's URDFs (both skipped without the packages): M(q) (crba), the bias forces
 (nonLinearEffects plus the URDF's joint damping, which casmech's imported model applies),
 forward and inverse dynamics (aba, rnea) and their derivatives (computeABADerivatives,
-computeRNEADerivatives), at random states inside the joint limits."""
+computeRNEADerivatives), at random states inside the joint limits; every tree joint type,
+drivers and a free body against the r-p formulation of the same model."""
 
 from __future__ import annotations
 
@@ -135,3 +136,44 @@ def test_a_compiled_model_after_set_gives_the_new_values():
 def test_a_closed_loop_is_a_usage_error():
     with pytest.raises(UsageError, match="needs a tree of joints"):
         casmech.joint_space(casmech.load(Path(__file__).parents[2] / "models/four_bar.yaml"))
+
+
+def test_forward_dynamics_of_every_joint_type_matches_the_rp_formulation():
+    """tests/runtime/joint_zoo.yaml: revolute, translational and cylindrical joints driven by
+    functions of t, universal, planar, fixed, spherical joints and a free block on a bushing.
+    The joint space's accelerations a(t, q, v, 0), carried to the bodies through its
+    forward kinematics, equal the r-p formulation's (casmech.compile's mass_matrix,
+    generalized_forces, phi_q, gamma: the saddle system M q'' + phi_q^T lam = Q,
+    phi_q q'' = gamma), a second formulation of the same model."""
+    model = casmech.load(Path(__file__).parents[1] / "runtime" / "joint_zoo.yaml")
+    space, functions = casmech.joint_space(model), casmech.compile(model)
+    assert {name.split(".")[0] for name in space.coordinates} == {
+        "r1", "cy3", "u4", "pl5", "s7", "cyc2", "block"}  # p2, rc1 driven, f6 fixed
+    t, q_, v_, qdot_, a_ = (ca.SX.sym(n, k) for n, k in (
+        ("t", 1), ("q", space.nq), ("v", space.nv), ("qdot", space.nq), ("a", space.nv)))
+    bodies, rates = space["forward_kinematics"](t, q_, v_)
+    # the bodies' accelerations, d/dt of their rates along (qdot, a)
+    chain = ca.Function("chain", [t, q_, v_, qdot_, a_], [
+        bodies, ca.jacobian(bodies, q_), ca.jacobian(bodies, t), rates,
+        ca.jacobian(rates, t) + ca.jacobian(rates, q_) @ qdot_ + ca.jacobian(rates, v_) @ a_])
+    rng = np.random.default_rng(1)
+    for t0 in (0.0, 0.4):
+        q = space.neutral + rng.uniform(-0.3, 0.3, space.nq)
+        for k, name in enumerate(space.coordinates):
+            if name.endswith(".e0"):  # the spherical joint's and the free block's quaternions
+                q[k:k + 4] /= np.linalg.norm(q[k:k + 4])
+        v = rng.uniform(-1, 1, space.nv)
+        a = space.forward_dynamics(q, v, np.zeros(space.nv), t0)
+        q_b, by_q, by_t, q_dot_b, _ = (np.array(x) for x in chain(
+            t0, q, v, np.zeros(space.nq), a))
+        qdot = np.linalg.lstsq(by_q, q_dot_b - by_t, rcond=None)[0]  # q's rates (exact)
+        joint_space = np.array(chain(t0, q, v, qdot, a)[4]).ravel()
+        q_b, q_dot_b = q_b.ravel(), q_dot_b.ravel()
+        mass, phi_q = functions.matrix("mass_matrix", q_b), functions.matrix("phi_q", t0, q_b)
+        rows = phi_q.shape[0]
+        saddle = np.block([[mass, phi_q.T], [phi_q, np.zeros((rows, rows))]])
+        rhs = np.concatenate([functions.vector("generalized_forces", t0, q_b, q_dot_b),
+                              functions.vector("gamma", t0, q_b, q_dot_b)])
+        rp = np.linalg.solve(saddle, rhs)[:mass.shape[0]]
+        # two formulations in double precision, accelerations up to ~1e2: atol 1e-9
+        np.testing.assert_allclose(joint_space, rp, rtol=1e-10, atol=1e-9)
