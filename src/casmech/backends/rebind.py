@@ -1,14 +1,9 @@
-"""What casmech.compile returns: a model's system functions at its parameter values, with
-`set` to move them to other values.
+"""A model's system functions moved to other parameter values: what
+casmech.api.CompiledModel.set does, imported only when it is called.
 
-    pendulum = casmech.compile(casmech.load("models/estimate_pendulum.yaml"), "compiled")
-    heavier = pendulum.set(m=2)              # a new CompiledModel; `pendulum` is unchanged
-    casmech.analyze(heavier)
-
-`set(name=value, ...)` (or a mapping, for names such as `front_left.m1`) loads the model's text
-again with the values as `--set` overrides on top of those it was loaded with (numbers, or
-texts with units: "30 deg"), so a value is checked as the file's would be (a located
-ModelError), and then:
+`moved(functions, model, values)` loads the model's text again with the values as `--set`
+overrides on top of those it was loaded with (numbers, or texts with units: "30 deg"), so a
+value is checked as the file's would be (a located ModelError), and then:
 
 - a bundle bound to a parametric library (backends.parametric: the model data d as an input,
   the build keyed on the structure) is bound to the new d, the numeric lowering at the new
@@ -25,18 +20,13 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
 from pathlib import Path
-from types import MappingProxyType
-
-import numpy as np
 
 from casmech import backends
 from casmech.backends.load import mode_of
 from casmech.backends.manifest import MANIFEST
 from casmech.backends.parametric import LIBRARY_FOLDER, MAX_BODIES, SIGNATURE
 from casmech.backends.parametric import load as bind_library
-from casmech.equations import checks
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.model import parametric
@@ -45,90 +35,33 @@ from casmech.schema import load_model_text
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
 
-DOF = "dof"  # the key of the degrees of freedom in a bundle's `derived`
+
+def moved(functions: SystemFunctions, model: ResolvedModel,
+          values: Mapping[str, float | str]) -> tuple[SystemFunctions, ResolvedModel]:
+    """(the bundle, the model) at `values` over `model`'s, from `functions` compiled from
+    `model` (module docstring)."""
+    texts = {str(name): override_text(name, value) for name, value in values.items()}
+    new_model = reload(model, texts)
+    folder, signature = functions.derived.get(LIBRARY_FOLDER), functions.derived.get(SIGNATURE)
+    if folder is not None and (Path(folder) / MANIFEST).is_file():
+        ir = lower(new_model)
+        data, new_signature = parametric.data(ir)
+        if new_signature != signature:
+            raise structure_error(model, texts, signature)
+        return bind_library(Path(folder), ir, data, signature), new_model
+    if folder is None and mode_of(functions) == "compiled":
+        warnings.warn(f"{new_model.name}: its compiled library holds its values (more than "
+                      f"{MAX_BODIES} bodies, or no parameters), so set builds another one; "
+                      "compile with mode='interpreted' to change values without a build",
+                      stacklevel=3)
+        return backends.compile(new_model, "compiled"), new_model
+    # interpreted; or a parametric library gone from the cache since (built again)
+    return backends.compile(new_model, "compiled" if folder else "interpreted"), new_model
 
 
-@dataclass(frozen=True, repr=False)
-class CompiledModel(SystemFunctions):
-    """The system functions of `model` (a SystemFunctions: casmech.analyze takes it), compiled
-    in `mode`, and `set` (module docstring)."""
-
-    model: ResolvedModel | None = field(default=None, compare=False)
-    mode: str = "interpreted"  # the mode asked of casmech.compile
-
-    @property
-    def parameters(self) -> Mapping[str, float]:
-        """The model's parameter values (read-only)."""
-        return MappingProxyType(dict(self.model.parameters) if self.model else {})
-
-    @property
-    def dof(self) -> int:
-        """Degrees of freedom: coordinates less the rank of phi_q at the file's pose (as
-        `casmech check` counts them; computed once)."""
-        if DOF not in self.derived:
-            bodies = self.ir.bodies
-            q = np.concatenate([b.r0 for b in bodies] + [b.p0 for b in bodies] + [np.zeros(0)])
-            self.derived[DOF] = checks.structure(self, 0.0, q).dof
-        return self.derived[DOF]
-
-    @property
-    def library(self) -> Path | None:
-        """The folder of the parametric library the functions are bound to (None: none)."""
-        return self.derived.get(LIBRARY_FOLDER)
-
-    def set(self, values: Mapping[str, float | str] | None = None, /,
-            **named: float | str) -> CompiledModel:
-        """The model at other parameter values, as a new CompiledModel (module docstring):
-        `values` and `named` map parameter names to numbers or texts ("30 deg")."""
-        given = {**dict(values or {}), **named}
-        if not given:
-            return self
-        if self.model is None:
-            raise UsageError("set needs the model these functions were compiled from: use "
-                             "casmech.compile(model)")
-        texts = {str(name): override_text(name, value) for name, value in given.items()}
-        model = reload(self.model, texts)
-        folder, signature = self.derived.get(LIBRARY_FOLDER), self.derived.get(SIGNATURE)
-        if folder is not None and (Path(folder) / MANIFEST).is_file():
-            ir = lower(model)
-            data, new_signature = parametric.data(ir)
-            if new_signature != signature:
-                raise structure_error(self.model, texts, signature)
-            return wrap(bind_library(Path(folder), ir, data, signature), model, self.mode)
-        if folder is None and mode_of(self) == "compiled":
-            warnings.warn(f"{model.name}: its compiled library holds its values (more than "
-                          f"{MAX_BODIES} bodies, or no parameters), so set builds another one; "
-                          "compile with mode='interpreted' to change values without a build",
-                          stacklevel=2)
-            return wrap(backends.compile(model, "compiled"), model, self.mode)
-        # interpreted; or a parametric library gone from the cache since (built again)
-        return wrap(backends.compile(model, "compiled" if folder else "interpreted"), model,
-                    self.mode)
-
-    def __repr__(self) -> str:
-        shown = ", ".join(f"{name}={value:.6g}" for name, value in
-                          list(self.parameters.items())[:6])
-        more = len(self.parameters) - 6
-        shown += f", ... ({more} more)" if more > 0 else ""
-        how = mode_of(self) + (", parametric library" if self.library else "")
-        name = self.model.name if self.model else self.ir.name
-        bodies = f"{self.n_bodies} {'body' if self.n_bodies == 1 else 'bodies'}"
-        joints = f"{len(self.joints)} joint{'' if len(self.joints) == 1 else 's'}"
-        return (f"CompiledModel('{name}': {bodies}, {joints}, {self.dof} DOF; {how}; "
-                f"parameters: {shown or 'none'})")
-
-
-def wrap(functions: SystemFunctions, model: ResolvedModel, mode: str) -> CompiledModel:
-    """The bundle as a CompiledModel (its functions and what analyses derived, shared)."""
-    if isinstance(functions, CompiledModel):
-        return functions
-    return CompiledModel(**{f.name: getattr(functions, f.name) for f in fields(SystemFunctions)},
-                         model=model, mode=mode)
-
-
-def compiled_model(model: ResolvedModel, mode: str = "interpreted") -> CompiledModel:
-    """backends.compile(model, mode) as a CompiledModel."""
-    return wrap(backends.compile(model, mode), model, mode)
+def library(functions: SystemFunctions) -> Path | None:
+    """The folder of the parametric library a bundle is bound to (None: none)."""
+    return functions.derived.get(LIBRARY_FOLDER)
 
 
 def override_text(name: str, value) -> str:
