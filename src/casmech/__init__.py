@@ -9,8 +9,8 @@ from casmech.core.version import VERSION as __version__  # noqa: E402, F401
 # public name -> module defining it; imported on first use (PEP 562), so `import casmech` and
 # the command line pay only for what a command uses (docs/decisions/lazy-imports.md)
 _LAZY = {
-    **dict.fromkeys(("analyze", "check", "compile", "load", "loads", "results_table"),
-                    "casmech.api"),
+    **dict.fromkeys(("analyze", "check", "compile", "joint_space", "load", "loads",
+                     "results_table"), "casmech.api"),
     **dict.fromkeys(("AnalysisError", "CasmechError", "ModelError", "UsageError"),
                     "casmech.errors"),
     "load_results": "casmech.io.frames",

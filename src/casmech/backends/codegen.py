@@ -111,16 +111,18 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
 
 
 def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
-           mapped: bool = False) -> tuple[str, Callable[[Path], None], np.ndarray | None]:
-    """(cache key, build(directory), model data): the parametric library (codegen.parametric)
-    where it applies and `mapped` is not asked for, with the values its load binds, else the
-    mapped one with the values baked in (and in its key), and None."""
+           mapped: bool = False
+           ) -> tuple[str, Callable[[Path], None], tuple[np.ndarray, str] | None]:
+    """(cache key, build(directory), (model data, signature)): the parametric library
+    (codegen.parametric) where it applies and `mapped` is not asked for, with the values its
+    load binds and the structure's signature, else the mapped one with the values baked in (and
+    in its key), and None."""
     if not mapped and parametric.applies(model):
         values, signature = data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
-            ir, directory, toolchain, info, dae, build_libraries), values
+            ir, directory, toolchain, info, dae, build_libraries), (values, signature)
     model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
     info = {"model": model.name, "model_hash": model_hash, "key": entry}
@@ -144,11 +146,11 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     bundle, formulations.dae.problem hands them to casadi as they are). `parametric_library` False:
     the mapped library even where the parametric one applies."""
     ir = lower(model)
-    entry, build, values = _entry(model, ir, toolchain or Toolchain(), dae,
-                                  not parametric_library)
+    entry, build, bound = _entry(model, ir, toolchain or Toolchain(), dae,
+                                 not parametric_library)
     directory, _ = cache.lookup(entry, build, root)
-    if values is not None:
-        return parametric.load(directory, ir, values)
+    if bound is not None:
+        return parametric.load(directory, ir, *bound)
     return load_build(directory, ir)
 
 

@@ -36,7 +36,7 @@ from casmech.backends.build import LIBRARY, Toolchain
 from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
-from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.equations.functions import Library, SystemFunctions, build_functions
 from casmech.formulations import dae as dae_residuals
 from casmech.formulations import prescribed, residuals
 from casmech.formulations.joint_system import build as build_joint_system
@@ -149,7 +149,10 @@ def _externals(directory: str, built: int) -> dict[str, ca.Function]:
     return externals(Path(directory))
 
 
-def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
+def load(directory: Path, ir: ModelIR, values: np.ndarray,
+         signature: str | None = None) -> SystemFunctions:
+    """The library's functions bound to the model data `values` (of `ir`, whose structure's
+    `signature` the library was built for)."""
     built = (directory / manifest.MANIFEST).stat().st_mtime_ns
     loaded = dict(_externals(str(directory.resolve()), built))
     joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
@@ -163,4 +166,4 @@ def load(directory: Path, ir: ModelIR, values: np.ndarray) -> SystemFunctions:
             name: bind(f, joint_data, f"jac_{dynamics}" if name == JOINT_JACOBIAN else None)
             for name, f in joint.items()}
     return SystemFunctions(functions, **metadata(ir), data=values, mode="compiled",
-                           joint_functions=bound)
+                           joint_functions=bound, parametric=Library(directory, signature))

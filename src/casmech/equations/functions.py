@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -28,6 +29,15 @@ class JointMeta:
     body_i: str
     body_j: str
     source: object = None
+
+
+@dataclass(frozen=True)
+class Library:
+    """The parametric library a compiled bundle is bound to: its folder and the structure's
+    signature it was built for (backends.rebind binds it to other values)."""
+
+    folder: Path
+    signature: str | None
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +59,8 @@ class SystemFunctions:
     # a parametric library's joint-formulation functions bound to `data` (codegen.parametric;
     # runtime.joint_dynamics takes them), by name
     joint_functions: Mapping[str, ca.Function] | None = field(default=None, repr=False)
+    # the parametric library the functions are bound to (codegen.parametric), None: none
+    parametric: Library | None = field(default=None, repr=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]

@@ -33,6 +33,7 @@ from casmech.optimal.dae import (
     initial_state_function,
 )
 from casmech.optimal.system import parametric_system
+from casmech.runtime import labelled
 from casmech.schema.resolved import ResolvedModel
 
 MODES = ("forward", "adjoint")
@@ -47,6 +48,12 @@ class Sensitivity:
     values: np.ndarray  # (times, outputs)
     jacobian: np.ndarray  # (times, outputs, parameters)
     mode: str
+
+    def to_dataframe(self):
+        """The values and derivatives as a pandas DataFrame: a row per (t, output), columns
+        `value` and `d/d<parameter>` (runtime.labelled)."""
+        return labelled.sensitivity_frame(self.parameters, self.outputs, self.times,
+                                          self.values, self.jacobian, self.mode)
 
 
 def idas(dae: DAE, grid: Sequence[float], rtol: float, atol: float, t0: float | None = None,

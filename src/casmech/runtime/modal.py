@@ -37,7 +37,7 @@ from casmech.core.atomic import atomic
 from casmech.core.options import ModalOptions, ModalSolver
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, UsageError
-from casmech.runtime import kinematics, statics
+from casmech.runtime import kinematics, labelled, statics
 from casmech.runtime import linearize as linear
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace
@@ -107,6 +107,19 @@ class LinearModel:
         size = np.abs(self.eigenvalues)
         ratio = np.divide(-self.eigenvalues.real, size, out=np.zeros(size.shape), where=size > 0)
         return ratio + 0.0  # no -0.0
+
+    def to_dataframes(self) -> dict:
+        """{"A": ..., "B": ..., "C": ..., "D": ...} as pandas DataFrames labelled by the state,
+        input and output names (runtime.labelled)."""
+        return labelled.matrix_frames(self)
+
+    def modes_dataframe(self):
+        """The modes (modes.csv's table) as a DataFrame indexed by mode number."""
+        return labelled.modes_frame(self)
+
+    def mode_shapes_dataframe(self):
+        """The mode shapes as a DataFrame: a row per mode, a column per `<body>.<motion>`."""
+        return labelled.mode_shapes_frame(self, MOTION)
 
     def modes_table(self) -> tuple[list[str], np.ndarray]:
         values = np.column_stack([np.arange(1, len(self.eigenvalues) + 1), self.frequency_hz,

@@ -46,6 +46,8 @@ KINDS: dict[str, int] = {
     "statics_tangent": 1,  # statics' residual, tangent and mass (runtime.statics)
     "sx_bundle": 1,  # an SX rebuild of a compiled bundle (runtime.linearize)
     "events": 1,  # the model's `events:` as Functions (runtime.events)
+    "dof": 1,  # degrees of freedom at the file's pose (casmech.api.CompiledModel.dof)
+    "joint_space": 1,  # the joint-space dynamics (casmech.api.joint_space)
     "readings": 1,  # the joint states and `outputs:` columns (runtime.results)
     "initial_holds": 1,  # the bundles holding the joints' `initial:` values (runtime.initial_holds)
 }

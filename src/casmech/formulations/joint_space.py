@@ -1,0 +1,210 @@
+"""Joint-space dynamics of a tree: the mass matrix, the bias forces, forward and inverse
+dynamics and their derivatives, as CasADi Functions of the tree's joint coordinates and as
+NumPy calls, under the names a Pinocchio user knows (docs/api.md#joint-space-dynamics).
+
+Coordinates: the spanning tree's (formulations/tree.py) free coordinates q (nq) and velocities
+v (nv), per tree joint in tree order, as formulations/joint_system.py's layout orders the
+state x = [q; v] of the joint ODE (an angle per revolute joint, 0 at the file's pose; the
+Euler parameters of a spherical joint with its relative angular velocity in the child's joint
+frame as velocities, so nq > nv there; coordinates a driver prescribes are functions of t and
+not in q). Then
+
+    M(t, q) a + b(t, q, v) = tau
+
+- M: the mass matrix, the Hessian of the kinetic energy in v (what the composite-rigid-body
+  algorithm computes);
+- b: the bias forces, C(q, v) v minus the generalized force of every applied force of the
+  model (gravity, springs, dampers, force elements, effort motors, stops); for a model whose
+  only applied force is gravity this is Pinocchio's nonlinear effects C v + g;
+- forward dynamics a(t, q, v, tau): the articulated-body algorithm of
+  formulations/articulated.py with tau as the joints' generalized forces along their free
+  velocities (O(n));
+- inverse dynamics tau(t, q, v, a) = M a + b;
+- the derivatives of both by CasADi's AD, with respect to the coordinates q (Pinocchio's are
+  with respect to the tangent space; they agree where nq = nv).
+
+Mechanisms with loops have no joint space of their own (their cut joints' constraints bind
+the coordinates): build refuses them, naming the cut joints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.core import spatial
+from casmech.elements.joint_types import MOTIONS
+from casmech.errors import UsageError
+from casmech.formulations import articulated
+from casmech.formulations.joint_system import layout
+from casmech.formulations.tree import Tree, spanning_tree
+from casmech.model.ir import GROUND_INDEX, ModelIR
+
+# motion type -> (names of its coordinates, names of its velocities): `<joint>.<name>`
+NAMES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "revolute": (("angle",), ("angle_dot",)),
+    "spherical": (("e0", "e1", "e2", "e3"), ("wx", "wy", "wz")),
+    "universal": (("angle_i", "angle_j"), ("angle_i_dot", "angle_j_dot")),
+    "cylindrical": (("angle", "displacement"), ("angle_dot", "displacement_dot")),
+    "translational": (("displacement",), ("displacement_dot",)),
+    "planar": (("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")),
+    "free": (("e0", "e1", "e2", "e3", "x", "y", "z"), ("wx", "wy", "wz", "vx", "vy", "vz")),
+}
+
+# function name -> (input names, output names); Pinocchio's name in docs/api.md
+SIGNATURES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "mass_matrix": (("t", "q"), ("M",)),
+    "bias_forces": (("t", "q", "v"), ("b",)),
+    "forward_dynamics": (("t", "q", "v", "tau"), ("a",)),
+    "inverse_dynamics": (("t", "q", "v", "a"), ("tau",)),
+    "forward_dynamics_derivatives": (("t", "q", "v", "tau"), ("da_dq", "da_dv", "da_dtau")),
+    "inverse_dynamics_derivatives": (("t", "q", "v", "a"), ("dtau_dq", "dtau_dv", "dtau_da")),
+    "forward_kinematics": (("t", "q", "v"), ("q_bodies", "q_dot_bodies")),
+}
+
+
+def labels(tree: Tree, body_names: tuple[str, ...]) -> tuple[list[str], list[str]]:
+    """(coordinate names, velocity names) of the free coordinates, `<joint>.<name>` (a
+    floating body's: `<body>.<name>`; a joint type NAMES lacks: `<joint>.q0`, `.v0`...)."""
+    lay = layout(tree)
+    coordinates, velocities = [], []
+    for joint, free_q, free_v in zip(tree.joints, lay.free_theta, lay.free_u, strict=True):
+        motion = MOTIONS[joint.type]
+        q_names, v_names = NAMES.get(joint.type, (
+            tuple(f"q{k}" for k in range(motion.n_q)), tuple(f"v{k}" for k in range(motion.n_v))))
+        owner = joint.name or body_names[joint.child]
+        coordinates += [f"{owner}.{q_names[k]}" for k in free_q]
+        velocities += [f"{owner}.{v_names[k]}" for k in free_v]
+    return coordinates, velocities
+
+
+def _function(name: str, inputs: list, outputs: list) -> ca.Function:
+    input_names, output_names = SIGNATURES[name]
+    return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
+
+
+def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
+    """The SIGNATURES' functions of a tree (module docstring), SX."""
+    lay = layout(tree)
+    nq, nv = lay.n_theta, lay.n_x - lay.n_theta
+    t, q, v = ca.SX.sym("t"), ca.SX.sym("q", nq), ca.SX.sym("v", nv)
+    tau, acceleration = ca.SX.sym("tau", nv), ca.SX.sym("a", nv)
+    x = ca.vertcat(q, v)
+    reference = {j.child: j.child_frame for j in tree.joints}
+    joints = [articulated.Joint(j, t, {c: x[k] for c, k in zip(fq, kq, strict=True)},
+                                {c: x[k] for c, k in zip(fv, kv, strict=True)},
+                                reference.get(j.parent))
+              for j, kq, kv, fq, fv in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
+                                           lay.free_u, strict=True)]
+    kin = articulated.kinematics(joints, ir.n_bodies)
+    torques = [tau[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
+    dynamics = articulated.articulated_body(
+        ir, joints, kin, articulated.applied_wrenches(ir, t, kin), torques)
+    forward = ca.vertcat(*dynamics.u_dot) if nv else ca.SX(0, 1)
+    kinetic = sum((0.5 * velocity.T @ spatial.inertia(b.mass, np.asarray(b.inertia)) @ velocity
+                   for b, velocity in zip(ir.bodies, kin.velocity, strict=True)), ca.SX(0))
+    mass = ca.hessian(kinetic, v)[0] if nv else ca.SX(0, 0)
+    bias = -mass @ ca.substitute(forward, tau, ca.DM.zeros(nv))
+    inverse = mass @ acceleration + bias
+    bodies = articulated.state(kin, ir.n_bodies)
+    return {
+        "mass_matrix": _function("mass_matrix", [t, q], [mass]),
+        "bias_forces": _function("bias_forces", [t, q, v], [bias]),
+        "forward_dynamics": _function("forward_dynamics", [t, q, v, tau], [forward]),
+        "inverse_dynamics": _function("inverse_dynamics", [t, q, v, acceleration], [inverse]),
+        "forward_dynamics_derivatives": _function(
+            "forward_dynamics_derivatives", [t, q, v, tau],
+            [ca.jacobian(forward, wrt) for wrt in (q, v, tau)]),
+        "inverse_dynamics_derivatives": _function(
+            "inverse_dynamics_derivatives", [t, q, v, acceleration],
+            [ca.jacobian(inverse, wrt) for wrt in (q, v, acceleration)]),
+        "forward_kinematics": _function("forward_kinematics", [t, q, v], list(bodies)),
+    }
+
+
+@dataclass(frozen=True)
+class JointSpace:
+    """A tree's joint-space dynamics (module docstring): CasADi Functions by name
+    (`functions`, SIGNATURES) and NumPy calls, Pinocchio's argument order with t last."""
+
+    functions: Mapping[str, ca.Function]
+    coordinates: tuple[str, ...]  # names of q
+    velocities: tuple[str, ...]  # names of v and of tau, a
+    joints: tuple[str, ...]  # the tree joints, in tree order ('' for a floating body's)
+    neutral: np.ndarray  # q at the file's pose: zeros, unit quaternions [1, 0, 0, 0]
+
+    @property
+    def nq(self) -> int:
+        return len(self.coordinates)
+
+    @property
+    def nv(self) -> int:
+        return len(self.velocities)
+
+    def __getitem__(self, name: str) -> ca.Function:
+        return self.functions[name]
+
+    def _call(self, name: str, *args) -> list[np.ndarray]:
+        outputs = self.functions[name](*(np.asarray(a, float) for a in args))
+        outputs = outputs if isinstance(outputs, tuple) else (outputs,)
+        return [np.array(out.full()) for out in outputs]
+
+    def mass_matrix(self, q, t: float = 0.0) -> np.ndarray:
+        """M(q) (nv x nv); Pinocchio's crba."""
+        return self._call("mass_matrix", t, q)[0]
+
+    def bias_forces(self, q, v, t: float = 0.0) -> np.ndarray:
+        """b(t, q, v) (nv); Pinocchio's nonLinearEffects where gravity is the only force."""
+        return self._call("bias_forces", t, q, v)[0].ravel()
+
+    def forward_dynamics(self, q, v, tau, t: float = 0.0) -> np.ndarray:
+        """The accelerations a (nv) under joint forces tau; Pinocchio's aba."""
+        return self._call("forward_dynamics", t, q, v, tau)[0].ravel()
+
+    def inverse_dynamics(self, q, v, a, t: float = 0.0) -> np.ndarray:
+        """The joint forces tau (nv) that give accelerations a; Pinocchio's rnea."""
+        return self._call("inverse_dynamics", t, q, v, a)[0].ravel()
+
+    def forward_dynamics_derivatives(self, q, v, tau, t: float = 0.0) -> tuple:
+        """(da/dq, da/dv, da/dtau = M^-1); Pinocchio's computeABADerivatives."""
+        return tuple(self._call("forward_dynamics_derivatives", t, q, v, tau))
+
+    def inverse_dynamics_derivatives(self, q, v, a, t: float = 0.0) -> tuple:
+        """(dtau/dq, dtau/dv, dtau/da = M); Pinocchio's computeRNEADerivatives."""
+        return tuple(self._call("inverse_dynamics_derivatives", t, q, v, a))
+
+    def forward_kinematics(self, q, v=None, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The bodies' r-p coordinates and their rates (casmech's q and q_dot: positions
+        r_1..r_nb, then Euler parameters p_1..p_nb) at the joint state."""
+        v = np.zeros(self.nv) if v is None else v
+        q_bodies, q_dot_bodies = self._call("forward_kinematics", t, q, v)
+        return q_bodies.ravel(), q_dot_bodies.ravel()
+
+    def __repr__(self) -> str:
+        return (f"JointSpace(nq={self.nq}, nv={self.nv}, joints={list(self.joints)}, "
+                f"functions={list(self.functions)})")
+
+
+def joint_space(ir: ModelIR) -> JointSpace:
+    """The joint space of a lowered model whose joints form a tree (module docstring)."""
+    tree = spanning_tree(ir)
+    if tree.cut:
+        names = ", ".join(f"'{j.name}'" + (f" ({j.source})" if j.source else "")
+                          for j in tree.cut)
+        raise UsageError(f"{ir.name}: a joint space needs a tree of joints; these joints close "
+                         f"loops or have no joint coordinates: {names}; its equations are "
+                         "casmech.compile's r-p functions (mass_matrix, phi_q, ...)")
+    coordinates, velocities = labels(tree, tuple(b.name for b in ir.bodies))
+    lay = layout(tree)
+    neutral = np.zeros(lay.n_theta)
+    for joint, slots, free in zip(tree.joints, lay.theta, lay.free_theta, strict=True):
+        for start in MOTIONS[joint.type].quaternions:
+            if start in free:  # a quaternion's coordinates are free together
+                neutral[slots[free.index(start)]] = 1.0
+    names = tuple(j.name or ("ground" if j.child == GROUND_INDEX else ir.bodies[j.child].name)
+                  for j in tree.joints)
+    return JointSpace(functions(ir, tree), tuple(coordinates), tuple(velocities), names,
+                      neutral)
