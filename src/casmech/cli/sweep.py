@@ -59,10 +59,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--resume", action="store_true",
                         help="continue the study whose results DIR/sweep.csv holds (a sweep "
                              "that was stopped or killed): run only the missing runs")
-    parser.add_argument("--mode", choices=("auto", "interpreted", "compiled"), default="auto",
+    parser.add_argument("--mode", choices=("auto", "interpreted", "compiled", "batched"),
+                        default="auto",
                         help="compiled: the model's parametric library, built once, bound to "
-                             "each run's values; interpreted: CasADi functions built per run; "
-                             "auto (default): compiled from 200 runs or when cached")
+                             "each run's values; batched: that library mapped over many runs "
+                             "per call (a tree's dynamics; docs/sweeps.md); interpreted: CasADi "
+                             "functions built per run; auto (default): compiled from 200 runs "
+                             "or when cached, batched where it can be from 200 runs")
     add_span(parser)
     add_overrides(parser)
 
@@ -105,12 +108,17 @@ def run(args) -> int:
     out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
     total = prepared.study.size()
     earlier = study.resumed(out, prepared) if args.resume else []
-    where = args.scheduler or ("this process" if args.workers == 0 else
-                               f"{args.workers or study.execute.default_workers()} local workers")
+    batched = bool(prepared.job.batched)
+    here = args.workers == 0 or (batched and args.workers is None)
+    where = args.scheduler or (
+        f"this process ({study.execute.default_workers()} threads)" if here and batched else
+        "this process" if here else
+        f"{args.workers or study.execute.default_workers()} local workers")
+    mode = "batched" if batched else prepared.job.mode
     again = f", {len(earlier)} finished earlier" if args.resume else ""
-    print(f"sweep: {total} runs on {where}, {prepared.job.mode}{again}", file=sys.stderr)
+    print(f"sweep: {total} runs on {where}, {mode}{again}", file=sys.stderr)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
-               "mode": prepared.job.mode,
+               "mode": mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     study.start(out, prepared, options)
     (rows, finished), seconds = study.timed(
