@@ -147,6 +147,16 @@ class Batch:
         self.moving = bool(nominal["nu"].sparsity_out(0).nnz())  # drivers: velocities solved
         self._start = self._start_function()
         self._rows = {}  # rows per run -> the mapped rows' function
+        self._maps = {}  # (what, runs, ...) -> its mapped function, called through buffers
+
+    def _mapped(self, key: tuple, make):
+        """A mapped function, made once per key and called with NumPy arrays in and out."""
+        from casmech.runtime.buffers import BufferedCall, NamedCall
+
+        if key not in self._maps:
+            function = make()
+            self._maps[key] = (NamedCall if key[0] == "integrator" else BufferedCall)(function)
+        return self._maps[key]
 
     # ------------------------------------------------------------------ per-run start
     def _start_function(self) -> ca.Function:
@@ -169,8 +179,8 @@ class Batch:
         from casmech.runtime.joint_dynamics import joint_state
 
         n = theta.shape[1]
-        d, data, q, q_dot, worst, rotations, gaps, twists = (
-            np.array(v.full()) for v in self._start.map(n)(theta))
+        d, data, q, q_dot, worst, rotations, gaps, twists = self._mapped(
+            ("start", n), lambda: self._start.map(n))(theta)
         ordinary = ~(worst.ravel() <= POSITION_TOLERANCE)  # assembly would move the pose
         if self.moving:
             ordinary |= True  # the velocities are solved for: made run by run
@@ -231,10 +241,15 @@ class Batch:
         blocks, state, k = [x0[:, :, None]], x0, 0
         while k < len(self.times) - 1:
             grid = self.times[k + 1:k + 1 + self.chunk]
-            integrator = ca.integrator("batch", "cvodes", problem, float(self.times[k]),
-                                       list(grid), self.options)
-            mapped = integrator.map(n, "thread", threads) if threads > 1 else integrator.map(n)
-            out = np.array(mapped(x0=state, p=data)["xf"].full()).reshape(n_x, n, len(grid))
+
+            def make(k=k, grid=grid):
+                integrator = ca.integrator("batch", "cvodes", problem, float(self.times[k]),
+                                           list(grid), self.options)
+                return integrator.map(n, "thread", threads) if threads > 1 else \
+                    integrator.map(n)
+
+            out = self._mapped(("integrator", k, n, threads), make)(x0=state, p=data)["xf"]
+            out = out.reshape(n_x, n, len(grid))
             blocks.append(out)
             state, k = out[:, :, -1], k + len(grid)
         return np.concatenate(blocks, axis=2)
@@ -255,10 +270,11 @@ class Batch:
                     chosen = np.zeros(0, int)
             if len(chosen):
                 rows = len(self.times)
-                function = self._rows_function(rows)
-                values = np.array(function.map(len(chosen), "thread", max(threads, 1))(
-                    np.tile(self.times, len(chosen)), states.reshape(states.shape[0], -1),
-                    q0[:, chosen], data[:, chosen], d[:, chosen]).full())
+                n = len(chosen)
+                (values,) = self._mapped(("rows", n, threads), lambda: self._rows_function(
+                    rows).map(n, "thread", max(threads, 1)))(
+                    np.tile(self.times, n), states.reshape(states.shape[0], -1), q0[:, chosen],
+                    data[:, chosen], d[:, chosen])
                 share = (time.perf_counter() - clock) / len(points)
                 for j, i in enumerate(chosen):
                     table = np.vstack([self.times, values[:, j * rows:(j + 1) * rows]]).T
