@@ -4,7 +4,9 @@ The study is the model's `study:` block, or the command line's (--grid, --sample
 and --uniform, --seed, --keep; a grid or sampling given here replaces the block's design).
 Runs go through Dask: a local cluster of --workers processes (default: the machine's cores;
 on loopback, TLS with temporary credentials, no dashboard unless --dashboard), an existing
-cluster at --scheduler ADDRESS, or this process with --workers 0. A run that fails is a row
+cluster at --scheduler ADDRESS, or this process with --workers 0; a batched study (--mode
+batched, or auto from 200 runs where it can be: many runs per mapped call) runs in this
+process on every core unless --workers or --scheduler is given. A run that fails is a row
 with status failed and its reason; the study goes on. Each finished run is appended to
 DIR/sweep.csv as it arrives, so a killed sweep keeps them and --resume runs only the others.
 Ctrl-C (or SIGTERM) stops it: the finished runs are written and the exit code is 130. Writes
