@@ -131,3 +131,38 @@ def test_corners_of_the_design():
     points = [{"a": 1.0, "b": 5.0}, {"a": 3.0, "b": 5.0}, {"a": 2.0, "b": 4.0}]
     assert batch.corners(points, ["a", "b"]) == [{"a": 1.0, "b": 4.0}, {"a": 1.0, "b": 5.0},
                                                  {"a": 3.0, "b": 4.0}, {"a": 3.0, "b": 5.0}]
+
+
+def test_the_command_line_batches_a_large_study(tmp_path):
+    """`casmech sweep` of 200 lengths: auto batches it in this process, sweep.csv holds the
+    exact periods."""
+    import subprocess
+    import sys
+
+    import pandas as pd
+
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, "-m", "casmech.cli", "sweep", str(PENDULUM),
+                           "--grid", "L=0.5:2:200", "--out", str(out)], capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "200 runs on this process" in done.stderr and "batched" in done.stderr
+    table = pd.read_csv(out / "sweep.csv")
+    assert list(table["run"]) == list(range(200)) and set(table["status"]) == {"complete"}
+    # as in test_batched_periods_match_the_closed_form
+    np.testing.assert_allclose(4 * table["crossing(bob.y)"], exact_period(table["L"].to_numpy()),
+                               rtol=0, atol=2e-6)
+
+
+@pytest.mark.slow
+def test_batched_tasks_on_a_cluster_give_the_same_rows():
+    """Dask distributes batched tasks (each worker builds the batch once): the rows equal the
+    study made in this process bit for bit, but the wall times."""
+    pytest.importorskip("distributed")
+    import pandas as pd
+
+    grid = {"L": "0.5:2:24", "theta0": [0.5, 1.5]}
+    here = casmech.sweep(PENDULUM, grid=grid, mode="batched", workers=0)
+    cluster = casmech.sweep(PENDULUM, grid=grid, mode="batched", workers=2)
+    pd.testing.assert_frame_equal(cluster.drop(columns="wall_s"), here.drop(columns="wall_s"),
+                                  check_exact=True)
