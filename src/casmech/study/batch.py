@@ -10,8 +10,9 @@ the design's corners (so the values there are checked by the schema as a run's a
 
 Per run, instead of loading the model at its values: theta -> the model data d(theta) (the
 lowering traced once, model.parametric), the file's pose and velocities from d, the pose
-checked against the constraints as assembly checks it (a run whose pose or velocities
-assembly would move is made the ordinary way), mapped to joint coordinates; then CVODES on
+checked against the constraints as assembly checks it (a run whose pose assembly would move
+is made the ordinary way), the velocities projected onto them as assembly projects them,
+mapped to joint coordinates; then CVODES on
 the library's joint_ode over the output grid (chunks of runtime.joint_dynamics.CHUNK
 intervals, as a run restarts), and the results columns the kept outputs read (the row of
 fmu.outputs over d) from the library's joint_motion, for every run of the chunk in one call.
@@ -174,28 +175,55 @@ class Batch:
                                                      gaps, twists])
 
     def start(self, theta: np.ndarray):
-        """Per run (columns): d, joint data, q0, x0 and which runs need the ordinary path."""
+        """Per run (columns): d, joint data, q0, x0 and which runs need the ordinary path
+        (a pose assembly would move). Velocities are the file's projected onto the
+        constraints as runtime.assembly.solve_velocities projects them."""
         from casmech.runtime.assembly import POSITION_TOLERANCE
-        from casmech.runtime.joint_dynamics import joint_state
 
         n = theta.shape[1]
         d, data, q, q_dot, worst, rotations, gaps, twists = self._mapped(
             ("start", n), lambda: self._start.map(n))(theta)
         ordinary = ~(worst.ravel() <= POSITION_TOLERANCE)  # assembly would move the pose
-        if self.moving:
-            ordinary |= True  # the velocities are solved for: made run by run
-        ordinary |= np.any(q_dot != 0, axis=0)  # projected by least squares in a run
+        solved = np.flatnonzero(~ordinary & (self.moving | np.any(q_dot != 0, axis=0)))
+        if len(solved):  # least squares per run, then their relative states again
+            q_dot = q_dot.copy()
+            for i in solved:
+                q_dot[:, i] = self._projected(theta[:, i], q[:, i], q_dot[:, i])
+            relative = self.library["joint_relative_states"]
+            again = self._mapped(("relative", len(solved)), lambda: relative.map(len(solved)))(
+                q[:, solved], q_dot[:, solved], data[:, solved])
+            nj = len(self.tree.joints)
+            for array, found, width in zip((rotations, gaps, twists), again, (3, 1, 1),
+                                           strict=True):
+                for j, i in enumerate(solved):
+                    array[:, width * nj * i:width * nj * (i + 1)] = \
+                        found[:, width * nj * j:width * nj * (j + 1)]
+        return d, data, q, self._joint_states(~ordinary, rotations, gaps, twists), ordinary
+
+    def _projected(self, theta, q, q_dot) -> np.ndarray:
+        """Phi_q q_dot = nu, closest (least squares) to the file's q_dot."""
+        from casmech.numerics import numeric_qr
+
+        phi_q = self.system["phi_q"](0.0, q, theta)
+        nu = np.array(self.system["nu"](0.0, q, theta).full()).ravel()
+        residual = nu - np.array(ca.mtimes(phi_q, ca.DM(q_dot))).ravel()
+        return q_dot + numeric_qr.lstsq(phi_q, residual)
+
+    def _joint_states(self, chosen, rotations, gaps, twists) -> np.ndarray:
+        """x0 of the chosen runs from their joints' relative states (joint_dynamics')."""
+        from casmech.runtime.joint_dynamics import joint_state
+
         lay, joints = self.layout, self.tree.joints
-        x0 = np.zeros((lay.n_x, n))
         nj = len(joints)
-        for i in np.flatnonzero(~ordinary):
+        x0 = np.zeros((lay.n_x, len(chosen)))
+        for i in np.flatnonzero(chosen):
             for k, joint in enumerate(joints):
-                theta_k, u_k = joint_state(joint, rotations[:, 3 * (nj * i + k):3 * (nj * i + k)
-                                                            + 3], gaps[:, nj * i + k],
-                                           twists[:, nj * i + k])
+                column = nj * i + k
+                theta_k, u_k = joint_state(joint, rotations[:, 3 * column:3 * column + 3],
+                                           gaps[:, column], twists[:, column])
                 x0[list(lay.theta[k]), i] = theta_k[list(lay.free_theta[k])]
                 x0[list(lay.u[k]), i] = u_k[list(lay.free_u[k])]
-        return d, data, q, x0, ordinary
+        return x0
 
     # ------------------------------------------------------------------ the mapped runs
     def _rows_function(self, rows: int) -> ca.Function:
