@@ -65,7 +65,7 @@ from casmech.model.parametric import data
 from casmech.schema.resolved import ResolvedModel
 
 __all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled", "export",
-           "is_cached", "mode_of", "write_build"]
+           "is_cached", "mode_of", "parametric_functions", "write_build"]
 
 
 def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
@@ -152,6 +152,21 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     if bound is not None:
         return parametric.load(directory, ir, *bound)
     return load_build(directory, ir)
+
+
+def parametric_functions(model: ResolvedModel, toolchain: Toolchain | None = None,
+                         root: Path | None = None, dae: bool = True
+                         ) -> tuple[dict[str, ca.Function], np.ndarray]:
+    """(the functions of the model's parametric library as built, each with the model data d
+    its last input; the model's d), the library built as `compiled` builds it when the cache
+    holds none: what runs many parameter sets through one call (casmech.study.batch) binds
+    itself. A usage error when no parametric library applies (codegen.parametric.applies)."""
+    if not parametric.applies(model):
+        raise UsageError(f"model '{model.name}' has no parametric library (it needs parameters "
+                         f"and at most {parametric.MAX_BODIES} bodies)")
+    entry, build, values = _entry(model, lower(model), toolchain or Toolchain(), dae)
+    directory, _ = cache.lookup(entry, build, root)
+    return parametric.library_functions(directory), values
 
 
 DYNAMICS = DynamicsOptions()  # the defaults (core.options)

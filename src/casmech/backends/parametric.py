@@ -149,12 +149,18 @@ def _externals(directory: str, built: int) -> dict[str, ca.Function]:
     return externals(Path(directory))
 
 
+def library_functions(directory: Path) -> dict[str, ca.Function]:
+    """The library's functions as built, each with the model data d its last input (the
+    process's copy: callers must not change the dict)."""
+    built = (directory / manifest.MANIFEST).stat().st_mtime_ns
+    return _externals(str(directory.resolve()), built)
+
+
 def load(directory: Path, ir: ModelIR, values: np.ndarray,
          signature: str | None = None) -> SystemFunctions:
     """The library's functions bound to the model data `values` (of `ir`, whose structure's
     `signature` the library was built for)."""
-    built = (directory / manifest.MANIFEST).stat().st_mtime_ns
-    loaded = dict(_externals(str(directory.resolve()), built))
+    loaded = dict(library_functions(directory))
     joint = {name: loaded.pop(name) for name in list(loaded) if name.startswith("joint_")}
     functions = {name: f if name.startswith("dae_") else bind(f, values)
                  for name, f in loaded.items()}

@@ -4,7 +4,9 @@ The study is the model's `study:` block, or the command line's (--grid, --sample
 and --uniform, --seed, --keep; a grid or sampling given here replaces the block's design).
 Runs go through Dask: a local cluster of --workers processes (default: the machine's cores;
 on loopback, TLS with temporary credentials, no dashboard unless --dashboard), an existing
-cluster at --scheduler ADDRESS, or this process with --workers 0. A run that fails is a row
+cluster at --scheduler ADDRESS, or this process with --workers 0; a batched study (--mode
+batched, or auto from 200 runs where it can be: many runs per mapped call) runs in this
+process on every core unless --workers or --scheduler is given. A run that fails is a row
 with status failed and its reason; the study goes on. Each finished run is appended to
 DIR/sweep.csv as it arrives, so a killed sweep keeps them and --resume runs only the others.
 Ctrl-C (or SIGTERM) stops it: the finished runs are written and the exit code is 130. Writes
@@ -59,10 +61,13 @@ def add_arguments(parser) -> None:
     parser.add_argument("--resume", action="store_true",
                         help="continue the study whose results DIR/sweep.csv holds (a sweep "
                              "that was stopped or killed): run only the missing runs")
-    parser.add_argument("--mode", choices=("auto", "interpreted", "compiled"), default="auto",
+    parser.add_argument("--mode", choices=("auto", "interpreted", "compiled", "batched"),
+                        default="auto",
                         help="compiled: the model's parametric library, built once, bound to "
-                             "each run's values; interpreted: CasADi functions built per run; "
-                             "auto (default): compiled from 200 runs or when cached")
+                             "each run's values; batched: that library mapped over many runs "
+                             "per call (a tree's dynamics; docs/sweeps.md); interpreted: CasADi "
+                             "functions built per run; auto (default): compiled from 200 runs "
+                             "or when cached, batched where it can be from 200 runs")
     add_span(parser)
     add_overrides(parser)
 
@@ -105,12 +110,17 @@ def run(args) -> int:
     out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
     total = prepared.study.size()
     earlier = study.resumed(out, prepared) if args.resume else []
-    where = args.scheduler or ("this process" if args.workers == 0 else
-                               f"{args.workers or study.execute.default_workers()} local workers")
+    batched = bool(prepared.job.batched)
+    here = args.workers == 0 or (batched and args.workers is None)
+    where = args.scheduler or (
+        f"this process ({study.execute.default_workers()} threads)" if here and batched else
+        "this process" if here else
+        f"{args.workers or study.execute.default_workers()} local workers")
+    mode = "batched" if batched else prepared.job.mode
     again = f", {len(earlier)} finished earlier" if args.resume else ""
-    print(f"sweep: {total} runs on {where}, {prepared.job.mode}{again}", file=sys.stderr)
+    print(f"sweep: {total} runs on {where}, {mode}{again}", file=sys.stderr)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
-               "mode": prepared.job.mode,
+               "mode": mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     study.start(out, prepared, options)
     (rows, finished), seconds = study.timed(

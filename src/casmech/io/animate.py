@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 
 import casadi as ca
@@ -215,8 +216,11 @@ SHAPES = {
 
 
 # ---------------------------------------------------------------------------------- poses
-_P = ca.SX.sym("p", 4)
-_ROTATION = ca.Function("A", [_P], [ca.vec(euler.rotation(_P))], ["p"], ["A"])
+@cache
+def rotation_function() -> ca.Function:
+    """p -> vec(A(p)), built on first use (nothing is built at import)."""
+    p = ca.SX.sym("p", 4)
+    return ca.Function("A", [p], [ca.vec(euler.rotation(p))], ["p"], ["A"])
 
 
 def rotations(p: np.ndarray) -> np.ndarray:
@@ -224,7 +228,7 @@ def rotations(p: np.ndarray) -> np.ndarray:
     flat = np.asarray(p, float).reshape(-1, 4)
     if not len(flat):
         return np.zeros((*p.shape[:-1], 3, 3))
-    columns = np.asarray(_ROTATION.map(len(flat))(flat.T))  # (9, n), column-major A
+    columns = np.asarray(rotation_function().map(len(flat))(flat.T))  # (9, n), column-major A
     return columns.T.reshape(-1, 3, 3).transpose(0, 2, 1).reshape(*p.shape[:-1], 3, 3)
 
 

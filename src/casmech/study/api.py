@@ -25,8 +25,10 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
     replace the block's where given. workers: processes of a local Dask cluster (default: the
     machine's cores; 0: run in this process, without Dask); scheduler: the address of an
     existing Dask cluster. mode: "interpreted", "compiled" (the model's parametric library,
-    built once) or "auto" (compiled for a study of 200 runs or more, or when the library is
-    cached). settings: casmech.analyze's (t_end, output_step, rtol, ...).
+    built once), "batched" (that library mapped over many runs per call: a tree's dynamics,
+    docs/sweeps.md; without workers or scheduler it runs in this process on every core) or
+    "auto" (compiled for a study of 200 runs or more, or when the library is cached; batched
+    from 200 runs where it can be). settings: casmech.analyze's (t_end, output_step, rtol, ...).
     With `out`, writes sweep.csv (each run appended as it finishes, in run order at the end;
     sweep.parquet with pyarrow), metadata.json and with `full` runs.h5 there, as
     `casmech sweep` does; `resume` runs only the runs out/sweep.csv does not hold yet.
@@ -38,7 +40,7 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
                              mode=mode)
     full_path = Path(out) / "runs.h5" if out is not None and full else None
     options = {"workers": workers, "scheduler": scheduler, "full": bool(full),
-               "mode": prepared.job.mode}
+               "mode": "batched" if prepared.job.batched else prepared.job.mode}
     earlier = []
     if out is not None:
         earlier = study.resumed(Path(out), prepared) if resume else []

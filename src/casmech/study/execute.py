@@ -9,8 +9,10 @@ HTTP routes (no dashboard, no metrics) unless `dashboard` asks for the dashboard
 A remote scheduler is reached with the security of Dask's configuration (its TLS files) and a
 short connection timeout: an address of the wrong form or where no scheduler answers is a
 usage error. Consecutive runs go in one task of
-runner.run_batch (batch_size); each worker process prepares the job's runner once
-(runner.runner_for).
+batch.run_points (batch_size); each worker process prepares the job's runner once
+(runner.runner_for), and a batched job's batch once (batch.batch_for), whose task is one
+mapped call on the worker's thread. A batched job without a Dask cluster asked for (workers
+None or 0, no scheduler) runs in this process, its mapped calls on the machine's cores.
 Outcomes are handed to `done(index, outcome)` as they finish, in any order. SIGINT (Ctrl-C)
 or SIGTERM stops the study: in this process through casmech.runtime.interrupts (the run in progress
 stops at its next row and is not recorded); on Dask as a KeyboardInterrupt of the waiting
@@ -29,7 +31,8 @@ from contextlib import contextmanager
 
 from casmech.errors import UsageError
 from casmech.runtime import interrupts
-from casmech.study.runner import Job, Outcome, run_batch, unexpected
+from casmech.study.batch import RUNS_PER_CALL, run_points
+from casmech.study.runner import Job, Outcome, unexpected
 
 Done = Callable[[int, Outcome], None]
 TASKS_PER_WORKER = 8  # batch_size: this many tasks per worker or more (when there are points)
@@ -54,7 +57,7 @@ def distributed():
 def execute(job: Job, points: Sequence[dict], done: Done, workers: int | None = None,
             scheduler: str | None = None, dashboard: bool = False) -> bool:
     """Run every point; True when all ran, False when interrupted."""
-    if scheduler is None and workers == 0:
+    if scheduler is None and (workers == 0 or (workers is None and job.batched)):
         return _serial(job, points, done)
     return _dask(job, points, done, workers, scheduler, dashboard)
 
@@ -117,11 +120,13 @@ def _serial(job: Job, points: Sequence[dict], done: Done) -> bool:
 def _serial_runs(job: Job, points: Sequence[dict], done: Done) -> bool:
     """SIGINT/SIGTERM (interrupts.trap) stop a run inside its integrator or at its next row,
     or after the run in progress when it came outside the analysis."""
+    size, threads = (RUNS_PER_CALL, default_workers()) if job.batched else (1, 1)
     try:
-        for index, values in enumerate(points):
+        for start in range(0, len(points), size):
             interrupts.check()
-            (outcome,) = run_batch(job, [values])
-            done(index, outcome)
+            outcomes = run_points(job, points[start:start + size], threads)
+            for index, outcome in enumerate(outcomes, start):
+                done(index, outcome)
     except KeyboardInterrupt:  # errors.Interrupted is one
         return False
     return True
@@ -176,21 +181,22 @@ def client(workers: int | None, scheduler: str | None, dashboard: bool = False):
         yield connected
 
 
-def batch_size(points: int, workers: int) -> int:
+def batch_size(points: int, workers: int, most: int = MAX_BATCH) -> int:
     """Runs per task: TASKS_PER_WORKER tasks per worker or more (so that the workers stay
-    evenly loaded to the end), at most MAX_BATCH runs each (so that progress and Ctrl-C stay
-    prompt)."""
-    return max(1, min(MAX_BATCH, points // (max(workers, 1) * TASKS_PER_WORKER)))
+    evenly loaded to the end), at most `most` runs each (so that progress and Ctrl-C stay
+    prompt): MAX_BATCH run by run, batch.RUNS_PER_CALL for a batched job."""
+    return max(1, min(most, points // (max(workers, 1) * TASKS_PER_WORKER)))
 
 
 def _dask(job: Job, points: Sequence[dict], done: Done, workers: int | None,
           scheduler: str | None, dashboard: bool = False) -> bool:
     module = distributed()
     with client(workers, scheduler, dashboard) as connected, _signals(_terminate_interrupts):
-        size = batch_size(len(points), len(connected.scheduler_info()["workers"]))
+        size = batch_size(len(points), len(connected.scheduler_info()["workers"]),
+                          RUNS_PER_CALL if job.batched else MAX_BATCH)
         starts = range(0, len(points), size)
         batches = [list(points[k:k + size]) for k in starts]
-        futures = connected.map(run_batch, [job] * len(batches), batches, pure=False)
+        futures = connected.map(run_points, [job] * len(batches), batches, pure=False)
         first = {future.key: k for k, future in zip(starts, futures, strict=True)}
         try:
             for future in module.as_completed(futures):

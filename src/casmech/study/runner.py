@@ -40,6 +40,7 @@ class Job:
     full: bool = False  # return each run's whole results table
     base: tuple[tuple[str, str], ...] = ()  # --set overrides of every run (a run's values win)
     mode: str = "interpreted"  # casmech.compile's mode for every run
+    batched: tuple[str, ...] = ()  # the study's parameters when its runs go in batches
 
 
 @dataclass

@@ -49,7 +49,8 @@ def _merged(written: Mapping, given: Mapping) -> tuple[dict, set[str]]:
     return {**form, **given}, set(given)
 
 
-COMPILE_RUNS = 200  # mode auto compiles a study of at least this many runs (see study_mode)
+COMPILE_RUNS = 200  # mode auto compiles (and batches) a study of at least this many runs
+MODES = ("auto", "interpreted", "compiled", "batched")
 
 
 def study_mode(model, runs: int, mode: str) -> str:
@@ -60,13 +61,15 @@ def study_mode(model, runs: int, mode: str) -> str:
     from casmech.backends import codegen, parametric
     from casmech.errors import UsageError
 
+    if mode not in MODES:
+        raise UsageError(f"mode '{mode}' is not one of {', '.join(MODES)}")
     applies = parametric.applies(model)
-    if mode == "compiled" and not applies:
-        raise UsageError("--mode compiled: this model has no parametric library (it needs "
+    if mode in ("compiled", "batched") and not applies:
+        raise UsageError(f"--mode {mode}: this model has no parametric library (it needs "
                          f"parameters and at most {parametric.MAX_BODIES} bodies), so every "
                          "run would build its own (hint: --mode interpreted)")
     if mode != "auto":
-        return mode
+        return "compiled" if mode == "batched" else mode
     if not (codegen.available() and applies):
         return "interpreted"
     return "compiled" if runs >= COMPILE_RUNS or codegen.is_cached(model) else "interpreted"
@@ -101,20 +104,52 @@ def prepare(source, given: Mapping | None = None, settings: Mapping | None = Non
     settings = {k: v for k, v in (settings or {}).items() if k in SETTINGS and v is not None}
     try:
         study = block.build(form, model.parameters, others)
-        mode = study_mode(model, len(study.points()), mode)
+        runs = len(study.points())
+        wanted, mode = mode, study_mode(model, runs, mode)
+        if wanted == "batched":  # why it cannot be, before a library is built for it
+            _batched(model, analysis_settings(backends.compile(model, "interpreted"),
+                                              **settings), study, full, wanted, True)
         functions = backends.compile(model, mode)
         checked = analysis_settings(functions, **settings)
         block.check_keep(study, column_names(functions), float(checked.t_end),
                          [event.name for event in checked.events])
     except block.StudyProblems as problems:
         raise _reported(problems, from_caller if written else None, document) from None
+    batched = study.parameters if wanted == "batched" else _batched(
+        model, checked, study, full, wanted, mode == "compiled" and runs >= COMPILE_RUNS)
     resolved = resolved_settings(functions.ir.analysis, type=checked.type, **{
         k: v for k, v in settings.items() if k != "analysis"})
     file = Path(model.file)  # absolute: workers may run elsewhere ("<string>" stays)
     job = Job(str(file.resolve() if file.exists() else file), model.text,
               tuple(sorted(settings.items())), study.keep, full, tuple(sorted(overrides.items())),
-              mode)
+              mode, batched)
     return Prepared(model, study, job, resolved, overrides)
+
+
+def _batched(model, checked, study: Study, full: bool, wanted: str, large: bool
+             ) -> tuple[str, ...]:
+    """The parameters of a study whose runs go in batches (study.batch), else (): asked for
+    (a usage error saying why it cannot be), or auto for a large compiled study."""
+    from casmech.errors import UsageError
+    from casmech.study import batch
+
+    if wanted != "batched" and not (wanted == "auto" and large):
+        return ()
+    why = batch.obstacle(model, checked, study, full)
+    if why is None:
+        return study.parameters
+    if wanted == "batched":
+        raise UsageError(f"--mode batched: this study cannot run in batches ({why}); "
+                         "hint: --mode compiled runs it run by run on the same library")
+    return ()
+
+
+def runner_text(job: Job) -> str:
+    """How the runs were made, for metadata.json."""
+    if job.batched:
+        return "batched: the parametric library mapped over parameter sets (study.batch)"
+    return {"compiled": "compiled: the parametric library bound per run",
+            "interpreted": "interpreted, one build per run"}[job.mode]
 
 
 def _reported(problems: block.StudyProblems, from_caller: set[str] | None, document):
@@ -229,7 +264,7 @@ def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping
                             options=dict(options))
     metadata["study"] = {**prepared.study.describe(), "finished_runs": len(table),
                          "statuses": {str(k): int(v) for k, v in counts.items()},
-                         "parquet": parquet, "runner": "interpreted, one build per run"}
+                         "parquet": parquet, "runner": runner_text(prepared.job)}
     paths.append(write_json(out / "metadata.json", metadata))
     return paths
 

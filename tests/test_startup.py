@@ -1,0 +1,118 @@
+"""Start-up: importing casmech does no work and pulls in no library a command may not need
+(issue 36; benchmarks/cli_startup.py and benchmarks/process_race.py time the processes).
+
+Each check runs in a fresh interpreter and reads what it imported (sys.modules), what casadi
+Functions it built and what files casmech's own code opened, so a regression fails without a
+timing."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from tests.conftest import MODELS
+
+# libraries no command needs at `import casmech` / `import casmech.cli`
+HEAVY = ("numpy", "casadi", "pydantic", "yaml", "scipy", "matplotlib", "pandas", "dask",
+         "distributed", "h5py", "meshio", "tqdm", "filelock", "platformdirs")
+# casmech's own modules that only some commands use
+COMPILER = ("casmech.backends.codegen", "casmech.backends.build", "casmech.backends.generate",
+            "casmech.backends.library", "casmech.backends.cache")
+
+
+def modules_after(code: str) -> set[str]:
+    """The modules a fresh interpreter holds after running `code`."""
+    probe = f"{code}\nimport json, sys\nprint(json.dumps(sorted(sys.modules)))"
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    return set(json.loads(done.stdout.splitlines()[-1]))
+
+
+def loaded(modules: set[str], packages) -> list[str]:
+    return sorted(m for m in modules for p in packages if m == p or m.startswith(p + "."))
+
+
+@pytest.mark.parametrize("code", ["import casmech", "import casmech.cli",
+                                  "import casmech; casmech.__version__; dir(casmech)"])
+def test_importing_the_package_loads_no_library(code):
+    modules = modules_after(code)
+    assert "casmech" in modules  # the probe sees the import
+    assert loaded(modules, [*HEAVY, *COMPILER, "casmech.api", "casmech.schema",
+                            "casmech.runtime", "casmech.study", "casmech.io"]) == []
+
+
+def test_a_public_name_imports_its_own_module_only():
+    """casmech.sweep names the study's API: no Dask, no compiler, no plotting until a study
+    runs."""
+    modules = modules_after("import casmech; casmech.sweep")
+    assert "casmech.study.api" in modules
+    assert loaded(modules, ["dask", "distributed", "matplotlib", "pandas", "scipy",
+                            *COMPILER]) == []
+
+
+AUDIT = """
+import importlib, json, pkgutil, sys
+import casadi
+from pathlib import Path
+import casmech
+
+ROOT = str(Path(casmech.__file__).parent)
+built, opened = [], []
+original = casadi.Function.__init__
+
+
+def where():
+    frame = sys._getframe(2)
+    return f"{frame.f_code.co_filename}:{frame.f_lineno}"
+
+
+def counting(self, *args, **kwargs):
+    built.append(where())
+    original(self, *args, **kwargs)
+
+
+def hook(event, args):
+    # a file opened by casmech's own code (not by the import system reading its modules)
+    if event == "open" and sys._getframe(1).f_code.co_filename.startswith(ROOT):
+        opened.append(f"{args[0]} at {where()}")
+
+
+casadi.Function.__init__ = counting
+sys.addaudithook(hook)
+names = sorted(m.name for m in pkgutil.walk_packages(casmech.__path__, "casmech.")
+               if not m.name.endswith(".__main__"))
+for name in names:
+    importlib.import_module(name)
+probe = casadi.SX.sym("x")
+casadi.Function("probe", [probe], [probe])  # the counter counts
+print(json.dumps({"modules": len(names), "built": built, "opened": opened}))
+"""
+
+
+def test_no_module_builds_a_function_or_reads_a_file_at_import():
+    """Work happens when a command asks for it: importing every module of casmech builds no
+    casadi Function (the probe's own is the one counted) and opens no file."""
+    done = subprocess.run([sys.executable, "-c", AUDIT], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    report = json.loads(done.stdout.splitlines()[-1])
+    assert report["modules"] > 100  # walked the whole package
+    assert len(report["built"]) == 1 and report["built"][0].startswith("<string>")
+    assert report["opened"] == []
+
+
+def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
+    """`casmech run` of a dynamics model (the joint formulation's tree) loads neither Dask nor
+    pandas, plotting, SciPy's optimizers, the importers or the optimal-control layer."""
+    code = ("import sys; from casmech import cli; "
+            f"code = cli.main(['run', {str(MODELS / 'double_pendulum.yaml')!r}, '--t-end', "
+            f"'0.05', '--out', {str(tmp_path / 'out')!r}, '--mode', 'interpreted', '--quiet'])"
+            "\nassert code == 0, code")
+    modules = modules_after(code)
+    assert (tmp_path / "out" / "results.csv").is_file()
+    assert loaded(modules, ["dask", "distributed", "pandas", "matplotlib", "scipy.optimize",
+                            "h5py", "meshio", "casmech.study", "casmech.optimal",
+                            "casmech.importers", "casmech.fmu", "casmech.io.plot",
+                            "casmech.io.animate", *COMPILER]) == []
