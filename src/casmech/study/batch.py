@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import CasmechError
-from casmech.runtime import interrupts
+from casmech.runtime import cancel, interrupts
 from casmech.study import kept as kept_outputs
 from casmech.study.runner import Job, Outcome, run_batch, runner_for
 
@@ -290,7 +290,7 @@ class Batch:
         outcomes: list[Outcome | None] = [None] * len(points)
         chosen = np.flatnonzero(~ordinary)
         if len(chosen):
-            with interrupts.solver():
+            with cancel.solving():
                 try:
                     states = self._integrate(x0[:, chosen], data[:, chosen], threads)
                 except RuntimeError as error:  # a run failed: every run the ordinary way
