@@ -26,6 +26,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.optimal import joint_ocp
 from casmech.optimal.compiled import Residuals, residuals
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import (
@@ -36,12 +37,17 @@ from casmech.optimal.dae import (
     initial_state_function,
 )
 from casmech.optimal.guess import Guess, inverse_dynamics_controls, target_pose
+from casmech.optimal.joint_model import JointModel, joint_model
 from casmech.optimal.sensitivity import idas
 from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 DEGREE = 3
 TRANSCRIPTIONS = ("collocation", "shooting")
+# auto: joint coordinates (optimal/joint_model.py) where they take the model, else bodies
+FORMULATIONS = ("auto", "joints", "bodies")
+PATH_GRIDS = ("nodes", "fine")
+JOINT_MODELS_KEPT = 8
 INITIAL_GUESSES = ("simulation", "interpolation")
 # MUMPS pivoting: with its default pivot tolerance (1e-6) the KKT matrices of the 3D arm
 # (ocp_arm3d.yaml; absolute coordinates, a light payload) were reported with the wrong inertia
@@ -68,6 +74,12 @@ class OCP:
     elements: int = 1  # collocation elements per control interval
     mode: str = "interpreted"  # collocation on interpreted | compiled | auto functions
     stabilized: bool = False  # collocation: position and velocity constraints at its points
+    formulation: str = "auto"  # auto | joints | bodies (FORMULATIONS)
+    degree: int = 3  # joints: collocation polynomial degree
+    scheme: str = "radau"  # joints: collocation points, radau | legendre
+    piecewise: str = "constant"  # joints: controls constant | linear over each interval
+    steps: int = 4  # joints: RK4 steps per interval of multiple shooting
+    path_grid: str = "nodes"  # joints: path bounds at the nodes | also inside (fine)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -87,6 +99,8 @@ class Solution:
     objective: float
     status: str
     iterations: int
+    formulation: str = "bodies"  # joints: x holds joint coordinates and velocities
+    solver_time: float = float("nan")  # IPOPT's own time [s]
 
     @property
     def step(self) -> float:
@@ -195,7 +209,7 @@ def _interpolated(setup: _Setup, problem: OCP) -> _Start:
 
 
 def _start(setup: _Setup, problem: OCP, solution: Solution | None) -> _Start:
-    if solution is not None:
+    if solution is not None and solution.formulation == "bodies":
         return _Start(solution.x, solution.u, solution.step)
     if problem.initial_guess not in INITIAL_GUESSES:
         raise UsageError(f"initial guess '{problem.initial_guess}' is not one of "
@@ -346,6 +360,16 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     if transcription not in TRANSCRIPTIONS:
         raise UsageError(f"transcription '{transcription}' is not one of "
                          f"{', '.join(TRANSCRIPTIONS)}")
+    settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
+                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
+    joints = joints_of(model, problem)
+    if joints is not None:
+        found = joint_ocp.solve(joints, problem, transcription,
+                                {**settings, "expand": True, **(options or {})},
+                                start if start is not None and start.formulation == "joints"
+                                else None, default_guess(problem))
+        return Solution(transcription, found.times, found.x, found.u, found.objective,
+                        found.status, found.iterations, "joints", found.solver_time)
     setup = _setup(model, problem)
     initial = _start(setup, problem, start)
     opti = ca.Opti()
@@ -357,8 +381,6 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     _path(opti, setup, problem, step, x, u, z)
     opti.minimize(_objective_and_terminal(opti, setup, problem, step, x[:, -1], u[:, -1], z[-1],
                                           u))
-    settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
-                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
     if transcription == "shooting" or setup.functions.mode == "compiled":
         # IDAS and the compiled externals give first derivatives only
         settings["ipopt.hessian_approximation"] = "limited-memory"
@@ -376,12 +398,59 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     return Solution(transcription, times, np.atleast_2d(result.value(x)).T,
                     np.atleast_2d(result.value(u)).T.reshape(problem.intervals, -1),
                     float(result.value(opti.f)), str(stats.get("return_status")),
-                    int(stats.get("iter_count", -1)))
+                    int(stats.get("iter_count", -1)),
+                    solver_time=float(stats.get("t_proc_total", np.nan)))
+
+
+_JOINT_MODELS: dict = {}
+
+
+def joints_of(model: ResolvedModel, problem: OCP) -> JointModel | None:
+    """The joint-coordinate functions the problem is solved on, or None for body coordinates
+    (FORMULATIONS; auto takes bodies for the settings only they have: `stabilized`, a
+    compiled `mode`), kept per model and controls."""
+    if problem.formulation not in FORMULATIONS:
+        raise UsageError(f"formulation '{problem.formulation}' is not one of "
+                         f"{', '.join(FORMULATIONS)}")
+    if problem.path_grid not in PATH_GRIDS:
+        raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
+    if problem.formulation == "bodies" or (problem.formulation == "auto" and (
+            problem.stabilized or problem.mode != "interpreted")):
+        return None
+    if problem.horizon <= 0 or problem.intervals < 1:
+        raise UsageError("the horizon must be positive and intervals at least 1")
+    key = (model.file, model.text, tuple(sorted(model.overrides.items())),
+           tuple(problem.controls))
+    if key not in _JOINT_MODELS:
+        if len(_JOINT_MODELS) >= JOINT_MODELS_KEPT:
+            _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
+        _JOINT_MODELS[key] = joint_model(model, list(problem.controls))
+    found = _JOINT_MODELS[key]
+    if found is None and problem.formulation == "joints":
+        raise UsageError("formulation 'joints' does not take this model: its loops hold a "
+                         "floating body, or a control acts on a joint of a component "
+                         "instance; use formulation 'bodies' (or auto)")
+    return found
 
 
 def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray:
-    """States at the interval boundaries from IDAS driven by the solution's controls."""
+    """States at the interval boundaries from IDAS driven by the solution's controls (body
+    coordinates, from the initial state); joint coordinates: each node's successor
+    integrated from that node (joint_ocp.replay_nodes, DOP853)."""
+    if solution.formulation == "joints":
+        return joint_ocp.replay_nodes(joints_of(model, problem), joint_ocp.shape_of(problem),
+                                      solution.times, solution.x, solution.u)
     return replay_states(_setup(model, problem), problem, solution.u, solution.step)
+
+
+def replay_error(model: ResolvedModel, problem: OCP, solution: Solution) -> float:
+    """The largest difference of the replay's positions (joint coordinates, or body
+    coordinates) from the solution's at the nodes."""
+    replayed = replay(model, problem, solution)
+    n = replayed.shape[1] // 2
+    if solution.formulation == "joints":
+        n = joints_of(model, problem).joints.layout.n_theta
+    return float(np.max(np.abs(replayed[:, :n] - solution.x[:, :n])))
 
 
 def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
@@ -389,6 +458,9 @@ def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
     """Results columns of the solution's states at its interval boundaries. Accelerations and
     reactions depend on the control, which jumps there: boundary k > 0 reports the end of
     interval k - 1 (the value path bounds constrain), boundary 0 the start of interval 0."""
+    if solution.formulation == "joints":
+        return joint_ocp.columns_at(joints_of(model, problem), joint_ocp.shape_of(problem),
+                                    solution.times, solution.x, solution.u, names)
     setup = _setup(model, problem)
     index = [setup.names.index(n) for n in names]
     rows = []
@@ -404,11 +476,15 @@ def from_block(block) -> tuple[OCP, str]:
     return OCP(controls, block.horizon, block.intervals, block.effort, dict(block.terminal),
                dict(block.terminal_cost), dict(block.path), free_time=block.free_time,
                time_weight=block.time_weight, initial_guess=block.initial_guess,
-               elements=block.elements, stabilized=block.stabilized), block.transcription
+               elements=block.elements, stabilized=block.stabilized,
+               formulation=block.formulation, degree=block.degree, scheme=block.scheme,
+               piecewise=block.piecewise, steps=block.steps,
+               path_grid=block.path_grid), block.transcription
 
 
 def results_table(model: ResolvedModel, problem: OCP, solution: Solution):
     """(names, values): t and every results column at the interval boundaries."""
-    setup = _setup(model, problem)
-    return ["t", *setup.names], np.column_stack(
-        [solution.times, columns_at(model, problem, solution, setup.names)])
+    names = (joints_of(model, problem).names if solution.formulation == "joints"
+             else _setup(model, problem).names)
+    return ["t", *names], np.column_stack(
+        [solution.times, columns_at(model, problem, solution, names)])

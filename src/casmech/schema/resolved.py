@@ -198,6 +198,12 @@ class OptimalControl:
     initial_guess: str = "simulation"  # simulation | interpolation
     elements: int = 1  # collocation elements per control interval
     stabilized: bool = False  # collocation with position/velocity constraints at its points
+    formulation: str = "auto"  # auto | joints | bodies
+    degree: int = 3  # joints: collocation degree
+    scheme: str = "radau"  # joints: radau | legendre
+    piecewise: str = "constant"  # joints: controls constant | linear
+    steps: int = 4  # joints: RK4 steps per shooting interval
+    path_grid: str = "nodes"  # joints: nodes | fine
 
 
 @dataclass(frozen=True)

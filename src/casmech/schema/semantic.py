@@ -136,7 +136,9 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                                    effort, costs, terminal, bounds,
                                    check.doc.source_map.values.get(path),
                                    free.get("free_time"), time_weight, given.initial_guess,
-                                   max(given.elements, 1), given.stabilized)
+                                   max(given.elements, 1), given.stabilized,
+                                   given.formulation, given.degree, given.scheme,
+                                   given.piecewise, given.steps, given.path_grid)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

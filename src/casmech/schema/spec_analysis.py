@@ -106,6 +106,13 @@ class OptimalControl(Spec):
     initial_guess: Literal["simulation", "interpolation"] = "simulation"  # casmech.optimal.guess
     elements: StrictInt = 1  # collocation elements per control interval
     stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
+    # joint coordinates (default where the joint formulation takes the mechanism) or bodies
+    formulation: Literal["auto", "joints", "bodies"] = "auto"
+    degree: StrictInt = Field(default=3, ge=1, le=9)  # joints: collocation polynomial degree
+    scheme: Literal["radau", "legendre"] = "radau"  # joints: collocation points
+    piecewise: Literal["constant", "linear"] = "constant"  # joints: the controls' shape
+    steps: StrictInt = Field(default=4, ge=1, le=100)  # joints: RK4 steps per shooting interval
+    path_grid: Literal["nodes", "fine"] = "nodes"  # joints: path bounds also inside intervals
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
