@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.errors import UsageError
 from casmech.optimal.controls import Control
 from casmech.optimal.ocp import OCP, columns_at, from_block, joints_of, replay, solve
 
@@ -126,3 +127,16 @@ def test_every_gallery_ocp_is_physical(path):
     # joint coordinates: the tree's joints hold by construction, loop rows at every node to
     # IPOPT's tolerance; body coordinates stabilized: Phi = 0 at the points
     assert violation.max() <= 1e-8
+
+
+def test_loops_stay_on_body_coordinates():
+    """A mechanism with loops: auto solves it on body coordinates; joints is refused with
+    what to use instead."""
+    text = (MODELS / "four_bar.yaml").read_text().replace(
+        "    driver:\n      angle: omega * t\n", "")
+    model = casmech.loads(text)
+    problem = OCP([Control("crank_pivot", "torque", -50, 50)], horizon=1.0, intervals=4,
+                  terminal={"crank_pivot.angle": 0.2, "crank_pivot.angle_dot": 0.0})
+    assert joints_of(model, problem) is None
+    with pytest.raises(UsageError, match="formulation 'bodies'"):
+        joints_of(model, OCP(**{**problem.__dict__, "formulation": "joints"}))

@@ -407,8 +407,9 @@ _JOINT_MODELS: dict = {}
 
 def joints_of(model: ResolvedModel, problem: OCP) -> JointModel | None:
     """The joint-coordinate functions the problem is solved on, or None for body coordinates
-    (FORMULATIONS; auto takes bodies for the settings only they have: `stabilized`, a
-    compiled `mode`), kept per model and controls."""
+    (FORMULATIONS; auto takes joint coordinates for a tree, bodies for loops and for the
+    settings only bodies have: `stabilized`, a compiled `mode`), kept per model and
+    controls."""
     if problem.formulation not in FORMULATIONS:
         raise UsageError(f"formulation '{problem.formulation}' is not one of "
                          f"{', '.join(FORMULATIONS)}")
@@ -426,6 +427,12 @@ def joints_of(model: ResolvedModel, problem: OCP) -> JointModel | None:
             _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
         _JOINT_MODELS[key] = joint_model(model, list(problem.controls))
     found = _JOINT_MODELS[key]
+    if found is not None and found.joints.n_cut:
+        if problem.formulation == "auto":
+            return None
+        raise UsageError("formulation 'joints' does not take mechanisms with loops in "
+                         "optimal control yet (docs/optimal.md); use formulation 'bodies' "
+                         "with stabilized: true (or auto)")
     if found is None and problem.formulation == "joints":
         raise UsageError("formulation 'joints' does not take this model: its loops hold a "
                          "floating body, or a control acts on a joint of a component "
