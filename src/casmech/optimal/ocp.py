@@ -1,4 +1,6 @@
-"""Optimal control on the model's index-1 DAE: direct collocation or multiple shooting.
+"""Optimal control: in joint coordinates for a tree (`formulation` auto or joints:
+optimal/joint_ocp.py), else on the model's index-1 DAE in body coordinates (this module):
+direct collocation or multiple shooting.
 
     problem = OCP(controls=[Control("pivot", "torque", -6, 6)], horizon=3.0, intervals=30,
                   terminal={"bar.z": 0.5, "bar.wx": 0.0})
