@@ -11,7 +11,15 @@ import pytest
 import casmech
 from casmech.errors import UsageError
 from casmech.optimal.controls import Control
-from casmech.optimal.ocp import OCP, columns_at, from_block, joints_of, replay, solve
+from casmech.optimal.ocp import (
+    OCP,
+    columns_at,
+    fine_columns,
+    from_block,
+    joints_of,
+    replay,
+    solve,
+)
 
 ROOT = Path(__file__).parents[2]
 MODELS = ROOT / "models"
@@ -129,14 +137,57 @@ def test_every_gallery_ocp_is_physical(path):
     assert violation.max() <= 1e-8
 
 
-def test_loops_stay_on_body_coordinates():
-    """A mechanism with loops: auto solves it on body coordinates; joints is refused with
-    what to use instead."""
+def _four_bar():
+    """The gallery four-bar with its crank free (no driver) and a torque on it, moved rest to
+    rest by 0.5 rad in 1 s (away from its singular poses)."""
     text = (MODELS / "four_bar.yaml").read_text().replace(
         "    driver:\n      angle: omega * t\n", "")
-    model = casmech.loads(text)
-    problem = OCP([Control("crank_pivot", "torque", -50, 50)], horizon=1.0, intervals=4,
-                  terminal={"crank_pivot.angle": 0.2, "crank_pivot.angle_dot": 0.0})
+    problem = OCP([Control("crank_pivot", "torque", -50, 50)], horizon=1.0, intervals=5,
+                  terminal={"crank_pivot.angle": 0.5, "crank_pivot.angle_dot": 0.0},
+                  guess=[0.5])
+    return casmech.loads(text), problem
+
+
+def test_loops_stay_on_body_coordinates_by_default():
+    model, problem = _four_bar()
     assert joints_of(model, problem) is None
-    with pytest.raises(UsageError, match="formulation 'bodies'"):
-        joints_of(model, OCP(**{**problem.__dict__, "formulation": "joints"}))
+    assert joints_of(model, OCP(**{**problem.__dict__, "formulation": "joints"})) is not None
+
+
+@pytest.mark.slow
+def test_loops_in_joint_coordinates_reach_the_body_coordinates_optimum():
+    """formulation: joints on a four-bar (a spherical and a universal joint: one loop, the
+    tree's quaternion among the coordinates): the closure rows hold at every node, the
+    replay from each node meets the next, and the optimum is the stabilized body-coordinate
+    transcription's."""
+    model, problem = _four_bar()
+    joints = solve(model, OCP(**{**problem.__dict__, "formulation": "joints"}), "collocation")
+    bodies = solve(model, OCP(**{**problem.__dict__, "formulation": "bodies",
+                                 "stabilized": True}), "collocation")
+    assert joints.formulation == "joints" and bodies.formulation == "bodies"
+    # two transcriptions of one continuous problem (N = 5, Radau 3): measured 4e-7 relative
+    np.testing.assert_allclose(joints.objective, bodies.objective, rtol=1e-5, atol=0)
+    problem = OCP(**{**problem.__dict__, "formulation": "joints"})
+    misses = _replayed_misses(model, problem, joints)
+    assert misses.max() <= 1e-5  # measured 7e-7 (rad, rad/s)
+    violation = columns_at(model, problem, joints, ["constraint_violation"])[:, 0]
+    assert violation.max() <= 1e-10  # the loop's rows, imposed at every node
+
+
+def test_a_reaction_bound_holds_on_the_fine_grid():
+    """A bound on the pivot's force below what the free swing needs: with path_grid: fine it
+    holds at every collocation point, not only at the nodes, where a bound at the nodes
+    alone lets the force exceed it."""
+    model = casmech.load(MODELS / "ocp_pendulum_swing_up.yaml")
+    free = OCP([Control("pivot", "torque", -6.0, 6.0)], horizon=1.0, intervals=10,
+               terminal={"bar.e0": np.cos(0.6), "bar.wx": 0.0})
+    _, force = fine_columns(model, free, solve(model, free, "collocation"), ["pivot.fz"])
+    limit = 0.97 * force.max()
+    nodes = OCP(**{**free.__dict__, "path": {"pivot.fz": (-100.0, limit)}})
+    fine = OCP(**{**nodes.__dict__, "path_grid": "fine"})
+    _, between = fine_columns(model, nodes, solve(model, nodes, "collocation"), ["pivot.fz"])
+    times, bounded = fine_columns(model, fine, solve(model, fine, "collocation"), ["pivot.fz"])
+    assert len(times) == 10 * 3 + 1  # nodes and Radau points (the last point is the node)
+    assert between.max() > limit + 1e-3  # the nodes' bound leaves the points between
+    assert bounded.max() <= limit + 1e-6  # the issue's bound (IPOPT's tolerance, newtons)
+    assert bounded.max() >= limit - 1e-3  # the bound is active

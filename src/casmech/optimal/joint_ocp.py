@@ -31,10 +31,49 @@ from scipy.integrate import solve_ivp
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
-from casmech.optimal.joint_model import JointModel
+from casmech.optimal.joint_model import JointModel, joint_model
 from casmech.optimal.shooting import MultipleShooting
+from casmech.schema.resolved import ResolvedModel
 
 REPLAY_RTOL, REPLAY_ATOL = 1e-12, 1e-12  # DOP853's tolerances in replay_nodes
+# auto: joint coordinates (optimal/joint_model.py) for a tree they take, else bodies
+FORMULATIONS = ("auto", "joints", "bodies")
+PATH_GRIDS = ("nodes", "fine")
+JOINT_MODELS_KEPT = 8
+
+
+_JOINT_MODELS: dict = {}
+
+
+def joints_of(model: ResolvedModel, problem) -> JointModel | None:
+    """The joint-coordinate functions the problem is solved on, or None for body coordinates
+    (FORMULATIONS; auto takes joint coordinates for a tree, bodies for loops and for the
+    settings only bodies have: `stabilized`, a compiled `mode`), kept per model and
+    controls."""
+    if problem.formulation not in FORMULATIONS:
+        raise UsageError(f"formulation '{problem.formulation}' is not one of "
+                         f"{', '.join(FORMULATIONS)}")
+    if problem.path_grid not in PATH_GRIDS:
+        raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
+    if problem.formulation == "bodies" or (problem.formulation == "auto" and (
+            problem.stabilized or problem.mode != "interpreted")):
+        return None
+    if problem.horizon <= 0 or problem.intervals < 1:
+        raise UsageError("the horizon must be positive and intervals at least 1")
+    key = (model.file, model.text, tuple(sorted(model.overrides.items())),
+           tuple(problem.controls))
+    if key not in _JOINT_MODELS:
+        if len(_JOINT_MODELS) >= JOINT_MODELS_KEPT:
+            _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
+        _JOINT_MODELS[key] = joint_model(model, list(problem.controls))
+    found = _JOINT_MODELS[key]
+    if found is not None and found.joints.n_cut and problem.formulation == "auto":
+        return None  # loops: joint coordinates when asked (docs/optimal.md)
+    if found is None and problem.formulation == "joints":
+        raise UsageError("formulation 'joints' does not take this model: its loops hold a "
+                         "floating body, or a control acts on a joint of a component "
+                         "instance; use formulation 'bodies' (or auto)")
+    return found
 
 
 @dataclass(frozen=True)
@@ -46,6 +85,9 @@ class JointResult:
     status: str
     iterations: int
     solver_time: float  # IPOPT's own time (t_proc_total of its statistics) [s]
+    # (times, states, controls) at the nodes and every point inside the intervals the method
+    # has (collocation points, RK4 step ends), in time order
+    fine: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
 def method(problem, transcription: str):
@@ -180,7 +222,7 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     t_sym, x_sym = closure.mx_in()
     jacobian = ca.Function("closure_jacobian", [t_sym, x_sym], [
         ca.jacobian(closure(t_sym, x_sym), x_sym)]) if rows else None
-    samples = []
+    samples, fine = [], [(model.t0, x[:, 0], shape.at(u, 0, 0.0))]
     for k in range(n):
         t_k = model.t0 + k * h
         control = partial(shape.at, u, k)
@@ -194,9 +236,9 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
             opti.subject_to(closure(t_next, x[:, k + 1]) == 0)
         else:
             opti.subject_to(x[:, k + 1] == end)
-        if problem.path_grid == "fine":
-            samples += [(t, xp, control(s)) for t, s, xp in points[:-1]]
-        samples.append((t_next, x[:, k + 1], control(1.0)))
+        inner = [(t, xp, control(s)) for t, s, xp in points[:-1]]
+        fine += inner + [(t_next, x[:, k + 1], control(1.0))]
+        samples += (inner if problem.path_grid == "fine" else []) + [fine[-1]]
     _bounds(opti, problem, u)
     _path(opti, model, problem, samples)
     horizon = h * n
@@ -212,10 +254,20 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
                                            f"solved: {error}"[:600], [])) from None
     stats = result.stats()
     times = model.t0 + float(result.value(h)) * np.arange(n + 1)
+    fine_values = tuple(np.array([np.atleast_1d(result.value(v)) for v in part])
+                        for part in zip(*fine, strict=True))
     return JointResult(times, np.atleast_2d(result.value(x)).T.reshape(n + 1, -1),
                        np.atleast_2d(result.value(u)).T.reshape(shape.values(n), -1),
                        float(result.value(opti.f)), str(stats.get("return_status")),
-                       int(stats.get("iter_count", -1)), float(stats.get("t_proc_total", 0.0)))
+                       int(stats.get("iter_count", -1)),
+                       float(stats.get("t_proc_total", np.nan)), fine_values)
+
+
+def fine_columns(model: JointModel, fine, names) -> np.ndarray:
+    """Results columns at the points of JointResult.fine."""
+    index = [model.column(name) for name in names]
+    return np.array([np.array(model.columns(t, x, c).full()).ravel()[index]
+                     for t, x, c in zip(*fine, strict=True)])
 
 
 def columns_at(model: JointModel, shape: ControlShape, times, x, u, names) -> np.ndarray:

@@ -39,17 +39,14 @@ from casmech.optimal.dae import (
     initial_state_function,
 )
 from casmech.optimal.guess import Guess, inverse_dynamics_controls, target_pose
-from casmech.optimal.joint_model import JointModel, joint_model
+from casmech.optimal.joint_ocp import FORMULATIONS, joints_of  # noqa: F401 (the API)
 from casmech.optimal.sensitivity import idas
 from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 DEGREE = 3
 TRANSCRIPTIONS = ("collocation", "shooting")
-# auto: joint coordinates (optimal/joint_model.py) where they take the model, else bodies
-FORMULATIONS = ("auto", "joints", "bodies")
-PATH_GRIDS = ("nodes", "fine")
-JOINT_MODELS_KEPT = 8
+
 INITIAL_GUESSES = ("simulation", "interpolation")
 # MUMPS pivoting: with its default pivot tolerance (1e-6) the KKT matrices of the 3D arm
 # (ocp_arm3d.yaml; absolute coordinates, a light payload) were reported with the wrong inertia
@@ -103,6 +100,7 @@ class Solution:
     iterations: int
     formulation: str = "bodies"  # joints: x holds joint coordinates and velocities
     solver_time: float = float("nan")  # IPOPT's own time [s]
+    fine: tuple | None = None  # joints: (times, states, controls) inside the intervals too
 
     @property
     def step(self) -> float:
@@ -371,7 +369,8 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
                                 start if start is not None and start.formulation == "joints"
                                 else None, default_guess(problem))
         return Solution(transcription, found.times, found.x, found.u, found.objective,
-                        found.status, found.iterations, "joints", found.solver_time)
+                        found.status, found.iterations, "joints", found.solver_time,
+                        found.fine)
     setup = _setup(model, problem)
     initial = _start(setup, problem, start)
     opti = ca.Opti()
@@ -402,44 +401,6 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
                     float(result.value(opti.f)), str(stats.get("return_status")),
                     int(stats.get("iter_count", -1)),
                     solver_time=float(stats.get("t_proc_total", np.nan)))
-
-
-_JOINT_MODELS: dict = {}
-
-
-def joints_of(model: ResolvedModel, problem: OCP) -> JointModel | None:
-    """The joint-coordinate functions the problem is solved on, or None for body coordinates
-    (FORMULATIONS; auto takes joint coordinates for a tree, bodies for loops and for the
-    settings only bodies have: `stabilized`, a compiled `mode`), kept per model and
-    controls."""
-    if problem.formulation not in FORMULATIONS:
-        raise UsageError(f"formulation '{problem.formulation}' is not one of "
-                         f"{', '.join(FORMULATIONS)}")
-    if problem.path_grid not in PATH_GRIDS:
-        raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
-    if problem.formulation == "bodies" or (problem.formulation == "auto" and (
-            problem.stabilized or problem.mode != "interpreted")):
-        return None
-    if problem.horizon <= 0 or problem.intervals < 1:
-        raise UsageError("the horizon must be positive and intervals at least 1")
-    key = (model.file, model.text, tuple(sorted(model.overrides.items())),
-           tuple(problem.controls))
-    if key not in _JOINT_MODELS:
-        if len(_JOINT_MODELS) >= JOINT_MODELS_KEPT:
-            _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
-        _JOINT_MODELS[key] = joint_model(model, list(problem.controls))
-    found = _JOINT_MODELS[key]
-    if found is not None and found.joints.n_cut:
-        if problem.formulation == "auto":
-            return None
-        raise UsageError("formulation 'joints' does not take mechanisms with loops in "
-                         "optimal control yet (docs/optimal.md); use formulation 'bodies' "
-                         "with stabilized: true (or auto)")
-    if found is None and problem.formulation == "joints":
-        raise UsageError("formulation 'joints' does not take this model: its loops hold a "
-                         "floating body, or a control acts on a joint of a component "
-                         "instance; use formulation 'bodies' (or auto)")
-    return found
 
 
 def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray:
@@ -489,6 +450,16 @@ def from_block(block) -> tuple[OCP, str]:
                formulation=block.formulation, degree=block.degree, scheme=block.scheme,
                piecewise=block.piecewise, steps=block.steps,
                path_grid=block.path_grid), block.transcription
+
+
+def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,
+                 names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(times, columns) at the nodes and at every point inside the intervals of a joint
+    solution (collocation points, RK4 step ends)."""
+    if solution.fine is None:
+        raise UsageError("only a solution in joint coordinates has points inside its intervals")
+    return solution.fine[0], joint_ocp.fine_columns(joints_of(model, problem), solution.fine,
+                                                    names)
 
 
 def results_table(model: ResolvedModel, problem: OCP, solution: Solution):
