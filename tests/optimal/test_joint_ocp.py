@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.errors import UsageError
 from casmech.optimal.controls import Control
 from casmech.optimal.ocp import (
     OCP,
