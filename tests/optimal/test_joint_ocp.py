@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.errors import UsageError
 from casmech.optimal.controls import Control
 from casmech.optimal.ocp import (
     OCP,
@@ -190,3 +191,25 @@ def test_a_reaction_bound_holds_on_the_fine_grid():
     assert between.max() > limit + 1e-3  # the nodes' bound leaves the points between
     assert bounded.max() <= limit + 1e-6  # the issue's bound (IPOPT's tolerance, newtons)
     assert bounded.max() >= limit - 1e-3  # the bound is active
+
+
+@pytest.mark.parametrize("formulation", ["joints", "bodies"])
+def test_a_control_weight_and_a_terminal_bound_keep_the_closed_form(formulation):
+    """The disk's rest-to-rest rotation with the torque's effort weighted by W and the final
+    angle only bounded below by PHI: turning farther costs more, so the optimum stops at PHI
+    with the same torque, and costs W times the unweighted closed form."""
+    j, phi, horizon, weight = 0.5, 1.0, 2.0, 3.0
+    problem = OCP([Control("spin", "torque")], horizon=horizon, intervals=8,
+                  terminal={"spin.angle_dot": 0.0}, terminal_bounds={"spin.angle": (phi, 3.0)},
+                  weights={"spin.torque": weight}, formulation=formulation)
+    model = casmech.loads(DISK)
+    solution = solve(model, problem, "collocation")
+    # piecewise-constant torques: the discrete optimum of the same functional, which the
+    # continuous one bounds from below; the final angle on its bound (IPOPT's tolerance)
+    end = columns_at(model, problem, solution, ["spin.angle"])[-1, 0]
+    np.testing.assert_allclose(end, phi, rtol=0, atol=1e-7)
+    closed = weight * 12 * j ** 2 * phi ** 2 / horizon ** 3
+    assert closed <= solution.objective <= closed * 1.02  # N = 8 steps of a linear torque
+    with pytest.raises(UsageError, match="not a control"):
+        solve(model, OCP(**{**problem.__dict__, "weights": {"spin.force": 1.0}}),
+              "collocation")

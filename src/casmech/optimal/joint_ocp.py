@@ -90,6 +90,18 @@ class JointResult:
     fine: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
 
+def control_weights(problem) -> np.ndarray:
+    """Each control's weight in the effort integral (`weights` by control name, default 1)."""
+    names = [control.name for control in problem.controls]
+    for name, weight in problem.weights.items():
+        if name not in names:
+            raise UsageError(f"weight of '{name}': not a control; the controls are "
+                             f"{', '.join(names)} (<joint>.torque or <joint>.force)")
+        if not weight >= 0:
+            raise UsageError(f"weight of '{name}' is {weight}; weights are at least 0")
+    return np.array([float(problem.weights.get(name, 1.0)) for name in names])
+
+
 def method(problem, transcription: str):
     """The transcription method of the problem's settings."""
     if transcription == "collocation":
@@ -190,13 +202,15 @@ def _path(opti, model: JointModel, problem, samples):
 
 def _terminal(opti, model: JointModel, problem, t_end, x_end, c_end):
     cost = 0
-    if not (problem.terminal or problem.terminal_cost):
+    if not (problem.terminal or problem.terminal_cost or problem.terminal_bounds):
         return cost
     values = model.columns(t_end, x_end, c_end)
     for name, target in problem.terminal.items():
         opti.subject_to(values[model.column(name)] == target)
     for name, (weight, target) in problem.terminal_cost.items():
         cost += weight * (values[model.column(name)] - target) ** 2
+    for name, (low, high) in problem.terminal_bounds.items():
+        opti.subject_to(opti.bounded(low, values[model.column(name)], high))
     return cost
 
 
@@ -204,7 +218,8 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
           start=None, push=None) -> JointResult:
     """The problem transcribed (module docstring) and solved; `start`: a previous result (its
     x and u) as the initial guess; `push`: the constant controls of the simulated guess."""
-    for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
+    for name in [*problem.terminal, *problem.terminal_cost, *problem.path,
+                 *problem.terminal_bounds]:
         model.column(name)
     how, shape = method(problem, transcription), shape_of(problem)
     n, n_u = problem.intervals, model.n_u
@@ -242,7 +257,8 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     _bounds(opti, problem, u)
     _path(opti, model, problem, samples)
     horizon = h * n
-    cost = problem.effort * shape.effort(u, h) + problem.time_weight * horizon
+    scales = ca.DM(np.sqrt(control_weights(problem)))
+    cost = problem.effort * shape.effort(scales * u, h) + problem.time_weight * horizon
     cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n], shape.at(u, n - 1, 1.0))
     opti.minimize(cost)
     opti.solver("ipopt", dict(settings))

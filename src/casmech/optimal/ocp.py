@@ -39,7 +39,11 @@ from casmech.optimal.dae import (
     initial_state_function,
 )
 from casmech.optimal.guess import Guess, inverse_dynamics_controls, target_pose
-from casmech.optimal.joint_ocp import FORMULATIONS, joints_of  # noqa: F401 (the API)
+from casmech.optimal.joint_ocp import (  # noqa: F401 (FORMULATIONS: the API)
+    FORMULATIONS,
+    control_weights,
+    joints_of,
+)
 from casmech.optimal.sensitivity import idas
 from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
@@ -79,6 +83,8 @@ class OCP:
     piecewise: str = "constant"  # joints: controls constant | linear over each interval
     steps: int = 4  # joints: RK4 steps per interval of multiple shooting
     path_grid: str = "nodes"  # joints: path bounds at the nodes | also inside (fine)
+    weights: Mapping[str, float] = field(default_factory=dict)  # control name -> effort weight
+    terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -138,7 +144,8 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
     controls = control_forces(model, problem.controls)
     dae = build_dae(parametric_system(model), controls)
     names, columns = columns_function(dae)
-    for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
+    for name in [*problem.terminal, *problem.terminal_cost, *problem.path,
+                 *problem.terminal_bounds]:
         if name not in names:
             raise UsageError(f"unknown column '{name}' in the optimal control problem; "
                              "columns are results columns (<body>.x, <joint>.fx, energy, ...)")
@@ -162,12 +169,16 @@ def _column(setup: _Setup, name: str, t, x, u, z=None):
 def _objective_and_terminal(opti, setup: _Setup, problem: OCP, step, x_end, u_last, z_end,
                             u_all):
     horizon = step * problem.intervals
-    cost = problem.effort * step * ca.sumsqr(u_all) + problem.time_weight * horizon
+    scales = ca.DM(np.sqrt(control_weights(problem)))
+    cost = problem.effort * step * ca.sumsqr(scales * u_all) + problem.time_weight * horizon
     t_end = setup.dae.t0 + horizon
     for name, (weight, target) in problem.terminal_cost.items():
         cost += weight * (_column(setup, name, t_end, x_end, u_last, z_end) - target) ** 2
     for name, target in problem.terminal.items():
         opti.subject_to(_column(setup, name, t_end, x_end, u_last, z_end) == target)
+    for name, (low, high) in problem.terminal_bounds.items():
+        opti.subject_to(opti.bounded(low, _column(setup, name, t_end, x_end, u_last, z_end),
+                                     high))
     return cost
 
 
@@ -449,7 +460,8 @@ def from_block(block) -> tuple[OCP, str]:
                elements=block.elements, stabilized=block.stabilized,
                formulation=block.formulation, degree=block.degree, scheme=block.scheme,
                piecewise=block.piecewise, steps=block.steps,
-               path_grid=block.path_grid), block.transcription
+               path_grid=block.path_grid, weights=dict(block.weights),
+               terminal_bounds=dict(block.terminal_bounds)), block.transcription
 
 
 def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,

@@ -204,6 +204,8 @@ class OptimalControl:
     piecewise: str = "constant"  # joints: controls constant | linear
     steps: int = 4  # joints: RK4 steps per shooting interval
     path_grid: str = "nodes"  # joints: nodes | fine
+    weights: Mapping[str, float] = field(default_factory=dict)  # control name -> weight
+    terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

@@ -120,6 +120,9 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
     terminal = {name: check.setting((*path, "terminal", name), value)
                 for name, value in given.terminal.items()}
     bounds = _pairs(check, (*path, "path"), given.path)
+    terminal_bounds = _pairs(check, (*path, "terminal_bounds"), given.terminal_bounds)
+    weights = {name: check.setting((*objective, "weights", name), value)
+               for name, value in given.objective.weights.items()}
     time_weight = check.setting((*objective, "time"), given.objective.time)
     free = _pairs(check, path, {"free_time": given.free_time}) if given.free_time else {}
     if free and not (limits.MIN_TIME <= free["free_time"][0]
@@ -128,7 +131,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                     f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
                     got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
-    values = [horizon, effort, bounds, time_weight, free, *controls, *terminal.values(),
+    values = [horizon, effort, bounds, terminal_bounds, time_weight, free, *controls,
+              *terminal.values(), *weights.values(),
               *(x for pair in costs.values() for x in pair)]
     if failed(values) or problems:
         return None
@@ -138,7 +142,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                                    free.get("free_time"), time_weight, given.initial_guess,
                                    max(given.elements, 1), given.stabilized,
                                    given.formulation, given.degree, given.scheme,
-                                   given.piecewise, given.steps, given.path_grid)
+                                   given.piecewise, given.steps, given.path_grid, weights,
+                                   terminal_bounds)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

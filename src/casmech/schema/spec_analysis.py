@@ -90,6 +90,7 @@ class Objective(Spec):
     effort: Scalar = 1  # weight of the integral of u^T u
     time: Scalar = 0  # weight of the final time (with free_time)
     terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
+    weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # control -> effort weight
 
 
 class OptimalControl(Spec):
@@ -113,6 +114,7 @@ class OptimalControl(Spec):
     piecewise: Literal["constant", "linear"] = "constant"  # joints: the controls' shape
     steps: StrictInt = Field(default=4, ge=1, le=100)  # joints: RK4 steps per shooting interval
     path_grid: Literal["nodes", "fine"] = "nodes"  # joints: path bounds also inside intervals
+    terminal_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
