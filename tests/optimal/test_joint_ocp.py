@@ -213,3 +213,23 @@ def test_a_control_weight_and_a_terminal_bound_keep_the_closed_form(formulation)
     with pytest.raises(UsageError, match="not a control"):
         solve(model, OCP(**{**problem.__dict__, "weights": {"spin.force": 1.0}}),
               "collocation")
+
+
+def test_a_decision_parameter_takes_its_closed_form_optimum():
+    """The disk's inertia J among the unknowns, J in [0.2, 1]: the cost 12 J^2 PHI^2 / T^3
+    falls with J, so the optimum is J = 0.2 with that J's closed-form torque."""
+    phi, horizon = 1.0, 2.0
+    problem = OCP([Control("spin", "torque")], horizon=horizon, intervals=8,
+                  terminal={"spin.angle": phi, "spin.angle_dot": 0.0}, piecewise="linear",
+                  parameters={"J": (0.2, 1.0)})
+    solution = solve(casmech.loads(DISK), problem, "collocation")
+    assert solution.formulation == "joints"
+    # IPOPT's bound tolerance (tol 1e-10; its bound relaxation is 1e-8 relative)
+    np.testing.assert_allclose(solution.design, [0.2], rtol=0, atol=1e-7)
+    torque = 6 * 0.2 * phi / horizon ** 2 * (1 - 2 * solution.times / horizon)
+    np.testing.assert_allclose(solution.u[:, 0], torque, rtol=0, atol=1e-6)  # N m, as above
+    np.testing.assert_allclose(solution.objective, 12 * 0.2 ** 2 * phi ** 2 / horizon ** 3,
+                               rtol=1e-6, atol=0)
+    with pytest.raises(UsageError, match="neither a parameter"):
+        solve(casmech.loads(DISK), OCP(**{**problem.__dict__, "parameters": {"K": (0, 1)}}),
+              "collocation")

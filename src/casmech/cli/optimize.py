@@ -64,6 +64,8 @@ def _optimal_control(model, args, out: Path) -> None:
           f"iterations, {time.perf_counter() - start:.3g} s")
     replayer = ("DOP853 from every node" if joints else "IDAS from the initial state")
     print(f"replay ({replayer}): max position error {error:.3g}")
+    for name, value in zip(problem.parameters, solution.design, strict=True):
+        print(f"decision parameter {name} = {value:.10g}")
     print(f"-> {results}, {controls}")
 
 

@@ -7,6 +7,7 @@ parameters as theta) gives every function with the controls as an input. So a co
 exactly as an effort motor does, and the reaction columns include it as they include a motor's.
 
     x = [theta; u]          the tree's free joint coordinates and velocities
+    c = [controls; design]  the controls and the decision parameters (optimal/ocp.py)
     rhs(t, x, c) -> x'      a tree: its ODE; loops: the ODE with the closure multipliers lam
                             solved from the acceleration-level rows (index 1; mu = 0)
     closure(t, x) -> rows   loops: the cut joints' rows Phi_c and d/dt Phi_c (unit rows,
@@ -87,9 +88,10 @@ def _bind(function: ca.Function, data) -> ca.Function:
 class JointModel:
     """The functions of the joint-coordinate transcription (module docstring)."""
 
-    system: ParametricSystem  # body coordinates, theta = the controls' parameters
+    system: ParametricSystem  # body coordinates, theta = the controls' parameters, the design
     joints: JointSystem  # over the model data
     t0: float
+    n_design: int = 0  # decision parameters of the model, last in theta
 
     @property
     def n_x(self) -> int:
@@ -97,11 +99,21 @@ class JointModel:
 
     @property
     def n_u(self) -> int:
+        """How many controls (theta = [controls; design])."""
+        return len(self.system.names) - self.n_design
+
+    @property
+    def n_c(self) -> int:
         return len(self.system.names)
+
+    @property
+    def design_values(self) -> np.ndarray:
+        """The decision parameters' values in the file."""
+        return np.asarray(self.system.values[self.n_u:], float)
 
     @cached_property
     def symbols(self):
-        return ca.SX.sym("t"), ca.SX.sym("x", self.n_x), ca.SX.sym("c", self.n_u)
+        return ca.SX.sym("t"), ca.SX.sym("x", self.n_x), ca.SX.sym("c", self.n_c)
 
     def _data(self, c):
         """The joint functions' trailing input at controls c."""
@@ -110,7 +122,7 @@ class JointModel:
 
     @cached_property
     def _numeric_data(self):
-        return self._data(ca.DM.zeros(self.n_u))
+        return self._data(ca.DM(self.system.values))
 
     @cached_property
     def start(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -207,9 +219,11 @@ def handles(model: ResolvedModel, controls: list[Control]) -> bool:
     return motored_text(model, list(controls)) is not None
 
 
-def joint_model(model: ResolvedModel, controls: list[Control]) -> JointModel | None:
-    """The joint-coordinate functions of the model with these controls, or None when the
-    joint formulation does not take it (module docstring)."""
+def joint_model(model: ResolvedModel, controls: list[Control], design=()) -> JointModel | None:
+    """The joint-coordinate functions of the model with these controls and the model's
+    parameters `design` as inputs after them (c = [controls; design]), or None when the joint
+    formulation does not take it (module docstring). The initial state is the one at the
+    file's values: a tree's joint coordinates at the file's pose, whatever the geometry."""
     control_forces(model, controls)  # the controls' joints and kinds, checked
     given = motored_text(model, list(controls))
     if given is None:
@@ -220,9 +234,9 @@ def joint_model(model: ResolvedModel, controls: list[Control]) -> JointModel | N
     except ModelError as error:
         raise UsageError(f"a control cannot act on this joint: "
                          f"{error.diagnostics[0].format()}") from None
-    system = parametric_system(motored, names)
+    system = parametric_system(motored, [*names, *design])
     tree = spanning_tree(system.split.ir)
     if tree.floating_loops:
         return None
     joints = build(system.split.ir, tree, data=system.split.symbols)
-    return JointModel(system, joints, 0.0)
+    return JointModel(system, joints, 0.0, len(tuple(design)))

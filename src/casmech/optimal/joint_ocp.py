@@ -21,7 +21,7 @@ optimal controls: an integrator independent of the transcription.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import partial
 
 import casadi as ca
@@ -55,20 +55,29 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
                          f"{', '.join(FORMULATIONS)}")
     if problem.path_grid not in PATH_GRIDS:
         raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
+    if problem.parameters and problem.formulation == "bodies":
+        raise UsageError("decision parameters (ocp.parameters) are solved in joint "
+                         "coordinates only; use formulation auto or joints")
     if problem.formulation == "bodies" or (problem.formulation == "auto" and (
-            problem.stabilized or problem.mode != "interpreted")):
+            problem.stabilized or problem.mode != "interpreted") and not problem.parameters):
         return None
     if problem.horizon <= 0 or problem.intervals < 1:
         raise UsageError("the horizon must be positive and intervals at least 1")
+    design = tuple(problem.parameters)
     key = (model.file, model.text, tuple(sorted(model.overrides.items())),
-           tuple(problem.controls))
+           tuple(problem.controls), design)
     if key not in _JOINT_MODELS:
         if len(_JOINT_MODELS) >= JOINT_MODELS_KEPT:
             _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
-        _JOINT_MODELS[key] = joint_model(model, list(problem.controls))
+        _JOINT_MODELS[key] = joint_model(model, list(problem.controls), design)
     found = _JOINT_MODELS[key]
-    if found is not None and found.joints.n_cut and problem.formulation == "auto":
+    if found is not None and found.joints.n_cut and problem.formulation == "auto" \
+            and not design:
         return None  # loops: joint coordinates when asked (docs/optimal.md)
+    if found is None and design:
+        raise UsageError("decision parameters need the joint formulation, which does not "
+                         "take this model (a control on a component instance's joint, or "
+                         "loops holding a floating body)")
     if found is None and problem.formulation == "joints":
         raise UsageError("formulation 'joints' does not take this model: its loops hold a "
                          "floating body, or a control acts on a joint of a component "
@@ -88,6 +97,7 @@ class JointResult:
     # (times, states, controls) at the nodes and every point inside the intervals the method
     # has (collocation points, RK4 step ends), in time order
     fine: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
+    design: np.ndarray = field(default_factory=lambda: np.zeros(0))  # decision parameters
 
 
 def control_weights(problem) -> np.ndarray:
@@ -133,20 +143,23 @@ def _ivp(model: JointModel, control: Callable[[float], np.ndarray], t0: float, t
                      atol=atol, t_eval=times, dense_output=times is None)
 
 
-def control_function(shape: ControlShape, times: np.ndarray, u: np.ndarray, k: int):
-    """The control at time t of interval k (u: values x n_u)."""
-    h = times[1] - times[0]
-    return lambda t: np.asarray(shape.at(u.T, k, (t - times[k]) / h), float).ravel()
+def control_function(shape: ControlShape, times: np.ndarray, u: np.ndarray, k: int,
+                     design=()):
+    """c = [controls; design] at time t of interval k (u: values x n_u)."""
+    h, design = times[1] - times[0], np.asarray(design, float)
+    return lambda t: np.concatenate([np.asarray(shape.at(u.T, k, (t - times[k]) / h),
+                                                float).ravel(), design])
 
 
-def replay_nodes(model: JointModel, shape: ControlShape, times, x, u) -> np.ndarray:
+def replay_nodes(model: JointModel, shape: ControlShape, times, x, u,
+                 design=()) -> np.ndarray:
     """The state each node's successor takes when the ODE is integrated (DOP853, tight
     tolerances) from that node with the optimal controls: row k + 1 from node k; row 0 is
     node 0."""
     rows = [np.asarray(x[0], float)]
     for k in range(len(times) - 1):
-        solution = _ivp(model, control_function(shape, times, u, k), times[k], times[k + 1],
-                        x[k], times=[times[k + 1]])
+        solution = _ivp(model, control_function(shape, times, u, k, design), times[k],
+                        times[k + 1], x[k], times=[times[k + 1]])
         rows.append(solution.y[:, -1] if solution.success else np.full(len(x[0]), np.nan))
     return np.array(rows)
 
@@ -161,7 +174,8 @@ def _guess(model: JointModel, problem, shape: ControlShape, start, push: np.ndar
         return x, u, lambda k, s: (1 - s) * x[k] + s * x[k + 1]
     u = np.tile(push, (shape.values(n), 1))
     x0 = model.start[0]
-    simulated = _ivp(model, lambda t: push, times[0], times[-1], x0, rtol=1e-8, atol=1e-10)
+    c = np.concatenate([push, model.design_values])
+    simulated = _ivp(model, lambda t: c, times[0], times[-1], x0, rtol=1e-8, atol=1e-10)
     if not simulated.success:
         return np.tile(x0, (n + 1, 1)), u, lambda k, s: x0
     dense = simulated.sol
@@ -214,6 +228,11 @@ def _terminal(opti, model: JointModel, problem, t_end, x_end, c_end):
     return cost
 
 
+def _with_design(shape: ControlShape, u, k: int, design, s):
+    """c = [controls at fraction s of interval k; design]."""
+    return ca.vertcat(shape.at(u, k, s), design)
+
+
 def solve(model: JointModel, problem, transcription: str, settings: Mapping,
           start=None, push=None) -> JointResult:
     """The problem transcribed (module docstring) and solved; `start`: a previous result (its
@@ -229,6 +248,10 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     h = _step(opti, problem)
     u = opti.variable(n_u, shape.values(n))
     opti.set_initial(u, u_guess.T)
+    design = opti.variable(model.n_design)
+    opti.set_initial(design, model.design_values)
+    for k, (low, high) in enumerate(problem.parameters.values()):
+        opti.subject_to(opti.bounded(low, design[k], high))
     x = opti.variable(model.n_x, n + 1)
     opti.set_initial(x, x_nodes.T)
     opti.subject_to(x[:, 0] == model.start[0])
@@ -237,10 +260,10 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     t_sym, x_sym = closure.mx_in()
     jacobian = ca.Function("closure_jacobian", [t_sym, x_sym], [
         ca.jacobian(closure(t_sym, x_sym), x_sym)]) if rows else None
-    samples, fine = [], [(model.t0, x[:, 0], shape.at(u, 0, 0.0))]
+    samples, fine = [], [(model.t0, x[:, 0], _with_design(shape, u, 0, design, 0.0))]
     for k in range(n):
         t_k = model.t0 + k * h
-        control = partial(shape.at, u, k)
+        control = partial(_with_design, shape, u, k, design)
         end, points = how.interval(opti, model.rhs, t_k, h, x[:, k], control,
                                    partial(guess, k))
         t_next = model.t0 + (k + 1) * h
@@ -259,7 +282,8 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     horizon = h * n
     scales = ca.DM(np.sqrt(control_weights(problem)))
     cost = problem.effort * shape.effort(scales * u, h) + problem.time_weight * horizon
-    cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n], shape.at(u, n - 1, 1.0))
+    cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n],
+                      _with_design(shape, u, n - 1, design, 1.0))
     opti.minimize(cost)
     opti.solver("ipopt", dict(settings))
     try:
@@ -276,7 +300,8 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
                        np.atleast_2d(result.value(u)).T.reshape(shape.values(n), -1),
                        float(result.value(opti.f)), str(stats.get("return_status")),
                        int(stats.get("iter_count", -1)),
-                       float(stats.get("t_proc_total", np.nan)), fine_values)
+                       float(stats.get("t_proc_total", np.nan)), fine_values,
+                       np.atleast_1d(result.value(design)) if model.n_design else np.zeros(0))
 
 
 def fine_columns(model: JointModel, fine, names) -> np.ndarray:
@@ -286,13 +311,14 @@ def fine_columns(model: JointModel, fine, names) -> np.ndarray:
                      for t, x, c in zip(*fine, strict=True)])
 
 
-def columns_at(model: JointModel, shape: ControlShape, times, x, u, names) -> np.ndarray:
+def columns_at(model: JointModel, shape: ControlShape, times, x, u, names,
+               design=()) -> np.ndarray:
     """Results columns at the nodes: node k > 0 with the control at the end of interval
     k - 1 (what path bounds constrain), node 0 with the first interval's."""
     index = [model.column(name) for name in names]
     rows = []
     for k, (t, state) in enumerate(zip(times, x, strict=True)):
-        c = np.asarray(shape.at(u.T, 0, 0.0) if k == 0 else shape.at(u.T, k - 1, 1.0),
-                       float).ravel()
+        c = np.concatenate([np.asarray(shape.at(u.T, 0, 0.0) if k == 0 else
+                                       shape.at(u.T, k - 1, 1.0), float).ravel(), design])
         rows.append(np.array(model.columns(t, state, c).full()).ravel()[index])
     return np.array(rows)

@@ -85,6 +85,8 @@ class OCP:
     path_grid: str = "nodes"  # joints: path bounds at the nodes | also inside (fine)
     weights: Mapping[str, float] = field(default_factory=dict)  # control name -> effort weight
     terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    # decision parameters: model parameters -> (low, high), optimised with the controls
+    parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -107,6 +109,7 @@ class Solution:
     formulation: str = "bodies"  # joints: x holds joint coordinates and velocities
     solver_time: float = float("nan")  # IPOPT's own time [s]
     fine: tuple | None = None  # joints: (times, states, controls) inside the intervals too
+    design: np.ndarray = field(default_factory=lambda: np.zeros(0))  # decision parameters
 
     @property
     def step(self) -> float:
@@ -381,7 +384,7 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
                                 else None, default_guess(problem))
         return Solution(transcription, found.times, found.x, found.u, found.objective,
                         found.status, found.iterations, "joints", found.solver_time,
-                        found.fine)
+                        found.fine, found.design)
     setup = _setup(model, problem)
     initial = _start(setup, problem, start)
     opti = ca.Opti()
@@ -420,7 +423,7 @@ def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray
     integrated from that node (joint_ocp.replay_nodes, DOP853)."""
     if solution.formulation == "joints":
         return joint_ocp.replay_nodes(joints_of(model, problem), joint_ocp.shape_of(problem),
-                                      solution.times, solution.x, solution.u)
+                                      solution.times, solution.x, solution.u, solution.design)
     return replay_states(_setup(model, problem), problem, solution.u, solution.step)
 
 
@@ -441,7 +444,8 @@ def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
     interval k - 1 (the value path bounds constrain), boundary 0 the start of interval 0."""
     if solution.formulation == "joints":
         return joint_ocp.columns_at(joints_of(model, problem), joint_ocp.shape_of(problem),
-                                    solution.times, solution.x, solution.u, names)
+                                    solution.times, solution.x, solution.u, names,
+                                    solution.design)
     setup = _setup(model, problem)
     index = [setup.names.index(n) for n in names]
     rows = []
@@ -461,7 +465,8 @@ def from_block(block) -> tuple[OCP, str]:
                formulation=block.formulation, degree=block.degree, scheme=block.scheme,
                piecewise=block.piecewise, steps=block.steps,
                path_grid=block.path_grid, weights=dict(block.weights),
-               terminal_bounds=dict(block.terminal_bounds)), block.transcription
+               terminal_bounds=dict(block.terminal_bounds),
+               parameters=dict(block.parameters)), block.transcription
 
 
 def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,

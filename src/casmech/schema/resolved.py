@@ -206,6 +206,7 @@ class OptimalControl:
     path_grid: str = "nodes"  # joints: nodes | fine
     weights: Mapping[str, float] = field(default_factory=dict)  # control name -> weight
     terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # decision
 
 
 @dataclass(frozen=True)

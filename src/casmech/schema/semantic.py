@@ -121,6 +121,7 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                 for name, value in given.terminal.items()}
     bounds = _pairs(check, (*path, "path"), given.path)
     terminal_bounds = _pairs(check, (*path, "terminal_bounds"), given.terminal_bounds)
+    design = _pairs(check, (*path, "parameters"), given.parameters)
     weights = {name: check.setting((*objective, "weights", name), value)
                for name, value in given.objective.weights.items()}
     time_weight = check.setting((*objective, "time"), given.objective.time)
@@ -131,7 +132,7 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                     f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
                     got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
-    values = [horizon, effort, bounds, terminal_bounds, time_weight, free, *controls,
+    values = [horizon, effort, bounds, terminal_bounds, design, time_weight, free, *controls,
               *terminal.values(), *weights.values(),
               *(x for pair in costs.values() for x in pair)]
     if failed(values) or problems:
@@ -143,7 +144,7 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                                    max(given.elements, 1), given.stabilized,
                                    given.formulation, given.degree, given.scheme,
                                    given.piecewise, given.steps, given.path_grid, weights,
-                                   terminal_bounds)
+                                   terminal_bounds, design)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

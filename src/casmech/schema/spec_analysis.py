@@ -115,6 +115,7 @@ class OptimalControl(Spec):
     steps: StrictInt = Field(default=4, ge=1, le=100)  # joints: RK4 steps per shooting interval
     path_grid: Literal["nodes", "fine"] = "nodes"  # joints: path bounds also inside intervals
     terminal_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
+    parameters: dict[StrictStr, Pair] = Field(default_factory=dict)  # decision: [lo, hi]
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
