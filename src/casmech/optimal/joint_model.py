@@ -32,7 +32,7 @@ import yaml
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.errors import ModelError, UsageError
-from casmech.formulations.joint_system import JointSystem, build
+from casmech.formulations.joint_system import JointSystem, build, forced_ode
 from casmech.formulations.tree import spanning_tree
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import body_columns
@@ -161,9 +161,45 @@ class JointModel:
         return ca.vertcat(lam, ca.SX.zeros(m, 1))
 
     @cached_property
-    def rhs(self) -> ca.Function:
+    def efforts(self) -> np.ndarray | None:
+        """B with the controls' generalized forces along the tree's free velocities tau =
+        B c (a tree), when that map is constant: read off the motors' ODE and the forced
+        ODE (formulations.joint_system.forced_ode) at sample states, kept only where they
+        agree there; else None."""
+        if self.joints.n_cut or not self.n_u:
+            return None
+        forced = forced_ode(self.system.split.ir, self.joints.tree, self.system.split.symbols)
         t, x, c = self.symbols
-        if not self.joints.n_cut:
+        n_theta = self.joints.layout.n_theta
+        tau = ca.SX.sym("tau", self.n_x - n_theta)
+        motors = ca.jacobian(self.joints.dynamics(t, x, self._data(c)),
+                             c[list(range(self.n_u))])
+        torques = ca.jacobian(forced(t, x, tau, self._numeric_data), tau)
+        slopes = ca.Function("slopes", [x, c, tau], [motors[n_theta:, :], torques[n_theta:, :]])
+        samples = np.sin(1.3 * np.arange(1, 3 * self.n_x + 1)).reshape(3, self.n_x) * 1.5
+        maps = []
+        for sample in samples:
+            motor, torque = (np.array(v.full()) for v in slopes(sample, self.system.values,
+                                                                np.zeros(tau.numel())))
+            maps.append(np.linalg.solve(torque, motor))
+            if not np.allclose(torque @ maps[-1], motor, rtol=1e-10, atol=1e-10):
+                return None
+        if max(np.max(np.abs(b - maps[0])) for b in maps) > 1e-10:
+            return None
+        return np.round(maps[0], 12)
+
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """x' at (t, x, c); a tree with constant efforts: the forced ODE (tau = B c, the
+        motors' values 0 in the data), which is the motors' ODE without their r-p path."""
+        t, x, c = self.symbols
+        if self.efforts is not None:
+            design = c[list(range(self.n_u, self.n_c))] if self.n_design else ca.SX(0, 1)
+            zero = ca.vertcat(ca.DM.zeros(self.n_u), design)
+            forced = forced_ode(self.system.split.ir, self.joints.tree,
+                                self.system.split.symbols)
+            ode = forced(t, x, ca.DM(self.efforts) @ c[list(range(self.n_u))], self._data(zero))
+        elif not self.joints.n_cut:
             ode = self.joints.dynamics(t, x, self._data(c))
         else:
             mask = 1.0 - self.start[2]
