@@ -26,7 +26,6 @@ from functools import partial
 
 import casadi as ca
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
@@ -134,6 +133,8 @@ def shape_of(problem) -> ControlShape:
 
 def _ivp(model: JointModel, control: Callable[[float], np.ndarray], t0: float, t1: float,
          x0, times=None, rtol=REPLAY_RTOL, atol=REPLAY_ATOL):
+    from scipy.integrate import solve_ivp  # (casmech optimize --help imports no scipy)
+
     f = model.rhs
 
     def rhs(t, x):
