@@ -233,3 +233,15 @@ def test_a_decision_parameter_takes_its_closed_form_optimum():
     with pytest.raises(UsageError, match="neither a parameter"):
         solve(casmech.loads(DISK), OCP(**{**problem.__dict__, "parameters": {"K": (0, 1)}}),
               "collocation")
+
+
+def test_body_coordinate_settings_choose_bodies():
+    """stabilized or the interpolated guess (settings of the body transcription): auto takes
+    body coordinates, joints says which setting it does not take."""
+    model = casmech.load(MODELS / "ocp_pendulum_swing_up.yaml")
+    problem, _ = from_block(model.ocp)
+    assert joints_of(model, problem) is not None
+    for setting in ({"stabilized": True}, {"initial_guess": "interpolation"}):
+        assert joints_of(model, OCP(**{**problem.__dict__, **setting})) is None
+        with pytest.raises(UsageError, match="does not take"):
+            joints_of(model, OCP(**{**problem.__dict__, **setting, "formulation": "joints"}))

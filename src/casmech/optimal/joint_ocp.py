@@ -57,8 +57,14 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
     if problem.parameters and problem.formulation == "bodies":
         raise UsageError("decision parameters (ocp.parameters) are solved in joint "
                          "coordinates only; use formulation auto or joints")
-    if problem.formulation == "bodies" or (problem.formulation == "auto" and (
-            problem.stabilized or problem.mode != "interpreted") and not problem.parameters):
+    bodies_only = [name for name, used in (
+        ("stabilized", problem.stabilized), ("a compiled mode", problem.mode != "interpreted"),
+        ("initial_guess: interpolation", problem.initial_guess == "interpolation")) if used]
+    if problem.formulation == "joints" and bodies_only:
+        raise UsageError(f"formulation 'joints' does not take {', '.join(bodies_only)} "
+                         "(settings of the body-coordinate transcription)")
+    if problem.formulation == "bodies" or (problem.formulation == "auto" and bodies_only
+                                           and not problem.parameters):
         return None
     if problem.horizon <= 0 or problem.intervals < 1:
         raise UsageError("the horizon must be positive and intervals at least 1")
