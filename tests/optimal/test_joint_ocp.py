@@ -245,3 +245,27 @@ def test_body_coordinate_settings_choose_bodies():
         assert joints_of(model, OCP(**{**problem.__dict__, **setting})) is None
         with pytest.raises(UsageError, match="does not take"):
             joints_of(model, OCP(**{**problem.__dict__, **setting, "formulation": "joints"}))
+
+
+def test_a_partly_free_initial_state_takes_its_closed_form_optimum():
+    """The disk starts at rest anywhere in [-0.2, 0.2] rad (initial_free with an equality and
+    a bound on results columns) and must reach PHI at rest: the optimum starts at 0.2 and
+    turns by PHI - 0.2 with that rotation's closed-form torque and cost."""
+    j, phi, horizon = 0.5, 1.0, 2.0
+    problem = OCP([Control("spin", "torque")], horizon=horizon, intervals=8,
+                  terminal={"spin.angle": phi, "spin.angle_dot": 0.0}, piecewise="linear",
+                  initial_free=True, initial={"spin.angle_dot": 0.0},
+                  initial_bounds={"spin.angle": (-0.2, 0.2)})
+    model = casmech.loads(DISK)
+    solution = solve(model, problem, "shooting")
+    start = columns_at(model, problem, solution, ["spin.angle", "spin.angle_dot"])[0]
+    np.testing.assert_allclose(start, [0.2, 0.0], rtol=0, atol=1e-7)  # IPOPT's tolerance
+    turn = phi - 0.2
+    torque = 6 * j * turn / horizon ** 2 * (1 - 2 * solution.times / horizon)
+    np.testing.assert_allclose(solution.u[:, 0], torque, rtol=0, atol=1e-6)  # as above
+    np.testing.assert_allclose(solution.objective, 12 * j ** 2 * turn ** 2 / horizon ** 3,
+                               rtol=1e-6, atol=0)
+    with pytest.raises(UsageError, match="initial_free"):
+        solve(model, OCP(**{**problem.__dict__, "initial_free": False}), "collocation")
+    with pytest.raises(UsageError, match="joint coordinates only"):
+        solve(model, OCP(**{**problem.__dict__, "formulation": "bodies"}), "collocation")

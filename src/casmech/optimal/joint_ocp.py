@@ -54,17 +54,19 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
                          f"{', '.join(FORMULATIONS)}")
     if problem.path_grid not in PATH_GRIDS:
         raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
-    if problem.parameters and problem.formulation == "bodies":
-        raise UsageError("decision parameters (ocp.parameters) are solved in joint "
-                         "coordinates only; use formulation auto or joints")
+    joints_only = [name for name, used in (
+        ("decision parameters", bool(problem.parameters)),
+        ("a free initial state", problem.initial_free)) if used]
+    if joints_only and problem.formulation == "bodies":
+        raise UsageError(f"{' and '.join(joints_only)} are solved in joint coordinates "
+                         "only; use formulation auto or joints")
     bodies_only = [name for name, used in (
         ("stabilized", problem.stabilized), ("a compiled mode", problem.mode != "interpreted"),
         ("initial_guess: interpolation", problem.initial_guess == "interpolation")) if used]
-    if problem.formulation == "joints" and bodies_only:
+    if (problem.formulation == "joints" or joints_only) and bodies_only:
         raise UsageError(f"formulation 'joints' does not take {', '.join(bodies_only)} "
                          "(settings of the body-coordinate transcription)")
-    if problem.formulation == "bodies" or (problem.formulation == "auto" and bodies_only
-                                           and not problem.parameters):
+    if problem.formulation == "bodies" or (problem.formulation == "auto" and bodies_only):
         return None
     if problem.horizon <= 0 or problem.intervals < 1:
         raise UsageError("the horizon must be positive and intervals at least 1")
@@ -77,10 +79,10 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
         _JOINT_MODELS[key] = joint_model(model, list(problem.controls), design)
     found = _JOINT_MODELS[key]
     if found is not None and found.joints.n_cut and problem.formulation == "auto" \
-            and not design:
+            and not joints_only:
         return None  # loops: joint coordinates when asked (docs/optimal.md)
-    if found is None and design:
-        raise UsageError("decision parameters need the joint formulation, which does not "
+    if found is None and joints_only:
+        raise UsageError(f"{' and '.join(joints_only)} need the joint formulation, which does not "
                          "take this model (a control on a component instance's joint, or "
                          "loops holding a floating body)")
     if found is None and problem.formulation == "joints":
@@ -235,6 +237,26 @@ def _terminal(opti, model: JointModel, problem, t_end, x_end, c_end):
     return cost
 
 
+def _start_state(opti, model: JointModel, problem, x0, c0) -> None:
+    """x(t0): the model's assembled state, or with `initial_free` a variable on the closure
+    rows meeting the `initial` equalities and `initial_bounds` on results columns."""
+    if not problem.initial_free:
+        if problem.initial or problem.initial_bounds:
+            raise UsageError("initial conditions (initial:, initial_bounds:) need "
+                             "initial_free: true")
+        opti.subject_to(x0 == model.start[0])
+        return
+    if model.closure.size1_out(0):
+        opti.subject_to(model.closure(model.t0, x0) == 0)
+    if not (problem.initial or problem.initial_bounds):
+        return
+    values = model.columns(model.t0, x0, c0)
+    for name, target in problem.initial.items():
+        opti.subject_to(values[model.column(name)] == target)
+    for name, (low, high) in problem.initial_bounds.items():
+        opti.subject_to(opti.bounded(low, values[model.column(name)], high))
+
+
 def _with_design(shape: ControlShape, u, k: int, design, s):
     """c = [controls at fraction s of interval k; design]."""
     return ca.vertcat(shape.at(u, k, s), design)
@@ -245,7 +267,7 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     """The problem transcribed (module docstring) and solved; `start`: a previous result (its
     x and u) as the initial guess; `push`: the constant controls of the simulated guess."""
     for name in [*problem.terminal, *problem.terminal_cost, *problem.path,
-                 *problem.terminal_bounds]:
+                 *problem.terminal_bounds, *problem.initial, *problem.initial_bounds]:
         model.column(name)
     how, shape = method(problem, transcription), shape_of(problem)
     n, n_u = problem.intervals, model.n_u
@@ -261,7 +283,7 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
         opti.subject_to(opti.bounded(low, design[k], high))
     x = opti.variable(model.n_x, n + 1)
     opti.set_initial(x, x_nodes.T)
-    opti.subject_to(x[:, 0] == model.start[0])
+    _start_state(opti, model, problem, x[:, 0], _with_design(shape, u, 0, design, 0.0))
     closure = model.closure
     rows = closure.size1_out(0)
     t_sym, x_sym = closure.mx_in()

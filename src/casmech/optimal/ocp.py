@@ -87,6 +87,9 @@ class OCP:
     terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     # decision parameters: model parameters -> (low, high), optimised with the controls
     parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    initial_free: bool = False  # joints: the initial state a variable (on the constraints)
+    initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
+    initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -466,7 +469,9 @@ def from_block(block) -> tuple[OCP, str]:
                piecewise=block.piecewise, steps=block.steps,
                path_grid=block.path_grid, weights=dict(block.weights),
                terminal_bounds=dict(block.terminal_bounds),
-               parameters=dict(block.parameters)), block.transcription
+               parameters=dict(block.parameters), initial_free=block.initial_free,
+               initial=dict(block.initial), initial_bounds=dict(block.initial_bounds)), \
+        block.transcription
 
 
 def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,

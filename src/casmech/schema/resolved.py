@@ -207,6 +207,9 @@ class OptimalControl:
     weights: Mapping[str, float] = field(default_factory=dict)  # control name -> weight
     terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # decision
+    initial_free: bool = False  # joints: the initial state is an unknown
+    initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
+    initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

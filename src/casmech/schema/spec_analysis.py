@@ -116,6 +116,9 @@ class OptimalControl(Spec):
     path_grid: Literal["nodes", "fine"] = "nodes"  # joints: path bounds also inside intervals
     terminal_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
     parameters: dict[StrictStr, Pair] = Field(default_factory=dict)  # decision: [lo, hi]
+    initial_free: StrictBool = False  # joints: the initial state is an unknown
+    initial: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at t0
+    initial_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
