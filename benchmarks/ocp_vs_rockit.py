@@ -15,8 +15,9 @@ from statistics import median
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-import casmech  # noqa: E402
 import rockit_ocp  # noqa: E402
+
+import casmech  # noqa: E402
 from casmech.optimal.ocp import OCP, from_block, solve  # noqa: E402
 
 MODELS = Path(__file__).parents[1] / "models"
