@@ -96,7 +96,7 @@ def test_compiled_and_interpreted_collocation_reach_the_same_optimum():
         pytest.skip("no C compiler")
     model = casmech.load(MODEL.with_name("ocp_cart_pole_swing_up.yaml"))
     problem, _ = from_block(model.ocp)
-    problem = OCP(**{**problem.__dict__, "intervals": 8})
+    problem = OCP(**{**problem.__dict__, "intervals": 8, "formulation": "bodies"})
     # the same IPOPT algorithm on both (limited-memory Hessian: all the externals provide),
     # from the same start (the exact-Hessian KKT point, objective 122.9: from there both
     # descend to 86.95; from the forward-simulation guess the two runs part ways)
@@ -145,11 +145,13 @@ instances:
 
 def test_a_composed_model_solves_as_the_same_model_written_flat():
     """Optimal control re-reads no parameter expression, so a composed model (an instance of
-    a component) runs, and reaches the optimum of the same pendulum written out flat."""
+    a component) runs, and reaches the optimum of the same pendulum written out flat (on
+    body coordinates: a control on a component's joint is not one the joint formulation
+    takes, optimal/joint_model.py)."""
     def problem(arm: str) -> OCP:  # the flat model's names: arm_bar, arm_pivot
         return OCP([Control(f"arm{arm}pivot", "torque", -6.0, 6.0)], horizon=1.0, intervals=6,
                    terminal={f"arm{arm}bar.e0": np.cos(ANGLE / 2), f"arm{arm}bar.wx": 0.0},
-                   rtol=1e-9, atol=1e-11)
+                   rtol=1e-9, atol=1e-11, formulation="bodies")
 
     flat = solve(casmech.loads(FLAT_PENDULUM), problem("_"), "collocation")
     composed = solve(casmech.loads(COMPOSED_PENDULUM), problem("."), "collocation")

@@ -23,6 +23,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--transcription", choices=ocp.TRANSCRIPTIONS,
                         help="ocp: override the block's transcription")
     parser.add_argument("--intervals", type=int, help="ocp: override the number of intervals")
+    parser.add_argument("--formulation", choices=ocp.FORMULATIONS,
+                        help="ocp: override the block's formulation (joint coordinates where "
+                             "they take the mechanism, or body coordinates)")
     parser.add_argument("--data", type=Path, help="estimate: measurements CSV (default: the "
                                                   "block's data, relative to the model)")
     parser.add_argument("--mode", choices=api.COMPILE_MODES, default="interpreted",
@@ -40,25 +43,29 @@ def _optimal_control(model, args, out: Path) -> None:
         if problems:
             raise UsageError(f"--intervals {args.intervals}: {next(iter(problems.values()))}")
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
-    problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode})
+    problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode,
+                         "formulation": args.formulation or problem.formulation})
     transcription = args.transcription or transcription
     start = time.perf_counter()
     guess = None
-    if transcription == "shooting":  # IDAS fails on the wild states of a poor first guess
+    joints = ocp.joints_of(model, problem) is not None
+    if transcription == "shooting" and not joints:  # IDAS fails on a poor first guess
         guess = ocp.solve(model, problem, "collocation", verbose=args.verbose)
         print(f"initial guess: the collocation solution (objective {guess.objective:.10g})")
     solution = ocp.solve(model, problem, transcription, verbose=args.verbose, start=guess)
-    replayed = ocp.replay(model, problem, solution)
-    n = replayed.shape[1] // 2
-    error = float(np.max(np.abs(replayed[:, :n] - solution.x[:, :n])))
+    error = ocp.replay_error(model, problem, solution)
     names, values = ocp.results_table(model, problem, solution)
     results = write_csv(out / "results.csv", names, values)
     controls = write_csv(out / "controls.csv", ["t", *(c.name for c in problem.controls)],
-                         np.column_stack([solution.times[:-1], solution.u]))
-    print(f"ocp ({transcription}, {problem.intervals} intervals): objective "
+                         np.column_stack([solution.times[:len(solution.u)], solution.u]))
+    coordinates = "joint coordinates" if joints else "body coordinates"
+    print(f"ocp ({transcription}, {coordinates}, {problem.intervals} intervals): objective "
           f"{solution.objective:.10g}, IPOPT {solution.status} in {solution.iterations} "
           f"iterations, {time.perf_counter() - start:.3g} s")
-    print(f"replay through IDAS: max position error {error:.3g}")
+    replayer = ("DOP853 from every node" if joints else "IDAS from the initial state")
+    print(f"replay ({replayer}): max position error {error:.3g}")
+    for name, value in zip(problem.parameters, solution.design, strict=True):
+        print(f"decision parameter {name} = {value:.10g}")
     print(f"-> {results}, {controls}")
 
 

@@ -270,11 +270,19 @@ class _Builder:
                                           self.kin.rotation[k].T @ generalized[0:3])
         return wrenches
 
-    def dynamics(self, lam):
+    def dynamics(self, lam, tau=None):
+        """The articulated-body accelerations under the applied forces, the cut rows'
+        multipliers lam and generalized forces tau along the free velocities (x's u part,
+        in its order; none: zero)."""
         applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
         cut = self.cut_wrenches(lam)
         external = [a + c for a, c in zip(applied, cut, strict=True)]
-        torques = [ca.SX.zeros(len(j.free), 1) for j in self.joints]
+        if tau is None:
+            torques = [ca.SX.zeros(len(j.free), 1) for j in self.joints]
+        else:
+            start = self.layout.n_theta
+            torques = [tau[[k - start for k in slots]] if slots else ca.SX(0, 1)
+                       for slots in self.layout.u]
         return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
 
     def multipliers(self, dynamics, lam_cut) -> ca.SX:
@@ -325,6 +333,22 @@ def _body_rates(sign, p, rotation, velocity, acceleration):
     p_dot = body.p_dot(p, omega)
     p_ddot = 0.5 * (euler.g_matrix(p_dot).T @ omega + euler.g_matrix(p).T @ alpha)
     return p, p_dot, r_ddot, p_ddot
+
+
+def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Function:
+    """A tree's ODE with generalized forces along its free velocities as an input:
+    (t, x, tau[, d]) -> ode, tau in the order of x's velocities (optimal control's joint
+    efforts, optimal/joint_model.py)."""
+    if tree.cut:
+        raise ValueError("forced_ode takes a tree (no cut joints)")
+    constants = Constants(data)
+    b = _Builder(ir, tree, constants)
+    tau = ca.SX.sym("tau", b.layout.n_x - b.layout.n_theta)
+    dyn = b.dynamics(ca.SX(0, 1), tau)
+    inputs = {"t": b.t, "x": b.x, "tau": tau} | ({} if data is None else
+                                                 {DATA: constants.inputs})
+    return ca.Function("joint_forced_ode", list(inputs.values()),
+                       [ca.vertcat(b.theta_dot, *dyn.u_dot)], list(inputs), ["ode"])
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:

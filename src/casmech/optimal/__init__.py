@@ -6,5 +6,11 @@
     sensitivity.py  IDAS simulation and forward/adjoint sensitivities of columns and integrals
     estimate.py     weighted least squares against measurements (IPOPT)
     controls.py     joint torques/forces as generalized forces
-    ocp.py          optimal control: direct collocation or multiple shooting (Opti + IPOPT)
+    ocp.py          optimal control: the problem, body-coordinate transcriptions (Opti + IPOPT)
+                    and the choice of formulation
+    joint_model.py  the model in joint coordinates, the controls as effort motors
+    joint_ocp.py    optimal control in joint coordinates (nodes, closure, path, replay)
+    collocation.py  direct collocation (Radau, Legendre; any degree)
+    shooting.py     multiple shooting with RK4 steps
+    control_shapes.py  piecewise-constant or piecewise-linear controls
 """

@@ -149,13 +149,14 @@ def consistent_algebraic(dae: DAE, x0: np.ndarray, theta: np.ndarray, u=None) ->
     return algebraic_function(dae)(dae.t0, x0, p).full().ravel()
 
 
-def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
-    """Results columns (docs/format.md order, without t) of (t, x, z, theta)."""
-    system, nominal = dae.system, dae.system.nominal
-    t, theta = dae.t, dae.theta
-    q, q_dot, q_ddot, lam_rows = dae.split(dae.x, dae.z)
-    lam = dae.full_multipliers(lam_rows)
-    nb = nominal.n_bodies
+def body_columns(system: ParametricSystem) -> ca.Function:
+    """Results columns (docs/format.md order, without t) of (t, q, q_dot, q_ddot, lam, theta),
+    lam over every row of phi."""
+    nominal = system.nominal
+    n, nb = nominal.n_coordinates, nominal.n_bodies
+    t, theta = ca.SX.sym("t"), ca.SX.sym("theta", len(system.names))
+    q, q_dot, q_ddot = (ca.SX.sym(name, n) for name in ("q", "q_dot", "q_ddot"))
+    lam = ca.SX.sym("lam", nominal.n_rows)
     omega, alpha = nominal["body_rates"](q, q_dot, q_ddot)
     per_body = [ca.vertcat(q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4],
                            q_dot[3 * k:3 * k + 3], omega[:, k], q_ddot[3 * k:3 * k + 3],
@@ -167,5 +168,15 @@ def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
     elements = system["element_outputs"](t, q, q_dot, theta)  # contacts and stops
     derived = system["readings"](t, q, q_dot, q_ddot, force, torque, theta)  # joints, outputs
     values = ca.vertcat(*per_body, *per_joint, kinetic + potential, violation, elements, derived)
-    return column_names(nominal)[1:], ca.Function("columns", [t, dae.x, dae.z, theta], [values],
-                                                  ["t", "x", "z", "theta"], ["columns"])
+    return ca.Function("body_columns", [t, q, q_dot, q_ddot, lam, theta], [values],
+                       ["t", "q", "q_dot", "q_ddot", "lam", "theta"], ["columns"])
+
+
+def columns_function(dae: DAE) -> tuple[list[str], ca.Function]:
+    """Results columns (docs/format.md order, without t) of (t, x, z, theta)."""
+    q, q_dot, q_ddot, lam_rows = dae.split(dae.x, dae.z)
+    values = body_columns(dae.system)(dae.t, q, q_dot, q_ddot,
+                                      dae.full_multipliers(lam_rows), dae.theta)
+    return column_names(dae.system.nominal)[1:], ca.Function(
+        "columns", [dae.t, dae.x, dae.z, dae.theta], [values], ["t", "x", "z", "theta"],
+        ["columns"])

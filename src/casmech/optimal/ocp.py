@@ -1,4 +1,6 @@
-"""Optimal control on the model's index-1 DAE: direct collocation or multiple shooting.
+"""Optimal control: in joint coordinates for a tree (`formulation` auto or joints:
+optimal/joint_ocp.py), else on the model's index-1 DAE in body coordinates (this module):
+direct collocation or multiple shooting.
 
     problem = OCP(controls=[Control("pivot", "torque", -6, 6)], horizon=3.0, intervals=30,
                   terminal={"bar.z": 0.5, "bar.wx": 0.0})
@@ -26,6 +28,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.optimal import joint_ocp
 from casmech.optimal.compiled import Residuals, residuals
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import (
@@ -36,12 +39,18 @@ from casmech.optimal.dae import (
     initial_state_function,
 )
 from casmech.optimal.guess import Guess, inverse_dynamics_controls, target_pose
+from casmech.optimal.joint_ocp import (  # noqa: F401 (FORMULATIONS: the API)
+    FORMULATIONS,
+    control_weights,
+    joints_of,
+)
 from casmech.optimal.sensitivity import idas
 from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 DEGREE = 3
 TRANSCRIPTIONS = ("collocation", "shooting")
+
 INITIAL_GUESSES = ("simulation", "interpolation")
 # MUMPS pivoting: with its default pivot tolerance (1e-6) the KKT matrices of the 3D arm
 # (ocp_arm3d.yaml; absolute coordinates, a light payload) were reported with the wrong inertia
@@ -68,6 +77,19 @@ class OCP:
     elements: int = 1  # collocation elements per control interval
     mode: str = "interpreted"  # collocation on interpreted | compiled | auto functions
     stabilized: bool = False  # collocation: position and velocity constraints at its points
+    formulation: str = "auto"  # auto | joints | bodies (FORMULATIONS)
+    degree: int = 3  # joints: collocation polynomial degree
+    scheme: str = "radau"  # joints: collocation points, radau | legendre
+    piecewise: str = "constant"  # joints: controls constant | linear over each interval
+    steps: int = 4  # joints: RK4 steps per interval of multiple shooting
+    path_grid: str = "nodes"  # joints: path bounds at the nodes | also inside (fine)
+    weights: Mapping[str, float] = field(default_factory=dict)  # control name -> effort weight
+    terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    # decision parameters: model parameters -> (low, high), optimised with the controls
+    parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    initial_free: bool = False  # joints: the initial state a variable (on the constraints)
+    initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
+    initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -87,6 +109,10 @@ class Solution:
     objective: float
     status: str
     iterations: int
+    formulation: str = "bodies"  # joints: x holds joint coordinates and velocities
+    solver_time: float = float("nan")  # IPOPT's own time [s]
+    fine: tuple | None = None  # joints: (times, states, controls) inside the intervals too
+    design: np.ndarray = field(default_factory=lambda: np.zeros(0))  # decision parameters
 
     @property
     def step(self) -> float:
@@ -124,7 +150,8 @@ def _setup(model: ResolvedModel, problem: OCP) -> _Setup:
     controls = control_forces(model, problem.controls)
     dae = build_dae(parametric_system(model), controls)
     names, columns = columns_function(dae)
-    for name in [*problem.terminal, *problem.terminal_cost, *problem.path]:
+    for name in [*problem.terminal, *problem.terminal_cost, *problem.path,
+                 *problem.terminal_bounds]:
         if name not in names:
             raise UsageError(f"unknown column '{name}' in the optimal control problem; "
                              "columns are results columns (<body>.x, <joint>.fx, energy, ...)")
@@ -148,12 +175,16 @@ def _column(setup: _Setup, name: str, t, x, u, z=None):
 def _objective_and_terminal(opti, setup: _Setup, problem: OCP, step, x_end, u_last, z_end,
                             u_all):
     horizon = step * problem.intervals
-    cost = problem.effort * step * ca.sumsqr(u_all) + problem.time_weight * horizon
+    scales = ca.DM(np.sqrt(control_weights(problem)))
+    cost = problem.effort * step * ca.sumsqr(scales * u_all) + problem.time_weight * horizon
     t_end = setup.dae.t0 + horizon
     for name, (weight, target) in problem.terminal_cost.items():
         cost += weight * (_column(setup, name, t_end, x_end, u_last, z_end) - target) ** 2
     for name, target in problem.terminal.items():
         opti.subject_to(_column(setup, name, t_end, x_end, u_last, z_end) == target)
+    for name, (low, high) in problem.terminal_bounds.items():
+        opti.subject_to(opti.bounded(low, _column(setup, name, t_end, x_end, u_last, z_end),
+                                     high))
     return cost
 
 
@@ -195,7 +226,7 @@ def _interpolated(setup: _Setup, problem: OCP) -> _Start:
 
 
 def _start(setup: _Setup, problem: OCP, solution: Solution | None) -> _Start:
-    if solution is not None:
+    if solution is not None and solution.formulation == "bodies":
         return _Start(solution.x, solution.u, solution.step)
     if problem.initial_guess not in INITIAL_GUESSES:
         raise UsageError(f"initial guess '{problem.initial_guess}' is not one of "
@@ -346,6 +377,17 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     if transcription not in TRANSCRIPTIONS:
         raise UsageError(f"transcription '{transcription}' is not one of "
                          f"{', '.join(TRANSCRIPTIONS)}")
+    settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
+                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
+    joints = joints_of(model, problem)
+    if joints is not None:
+        found = joint_ocp.solve(joints, problem, transcription,
+                                {**settings, "expand": True, **(options or {})},
+                                start if start is not None and start.formulation == "joints"
+                                else None, default_guess(problem))
+        return Solution(transcription, found.times, found.x, found.u, found.objective,
+                        found.status, found.iterations, "joints", found.solver_time,
+                        found.fine, found.design)
     setup = _setup(model, problem)
     initial = _start(setup, problem, start)
     opti = ca.Opti()
@@ -357,8 +399,6 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     _path(opti, setup, problem, step, x, u, z)
     opti.minimize(_objective_and_terminal(opti, setup, problem, step, x[:, -1], u[:, -1], z[-1],
                                           u))
-    settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
-                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
     if transcription == "shooting" or setup.functions.mode == "compiled":
         # IDAS and the compiled externals give first derivatives only
         settings["ipopt.hessian_approximation"] = "limited-memory"
@@ -376,12 +416,28 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
     return Solution(transcription, times, np.atleast_2d(result.value(x)).T,
                     np.atleast_2d(result.value(u)).T.reshape(problem.intervals, -1),
                     float(result.value(opti.f)), str(stats.get("return_status")),
-                    int(stats.get("iter_count", -1)))
+                    int(stats.get("iter_count", -1)),
+                    solver_time=float(stats.get("t_proc_total", np.nan)))
 
 
 def replay(model: ResolvedModel, problem: OCP, solution: Solution) -> np.ndarray:
-    """States at the interval boundaries from IDAS driven by the solution's controls."""
+    """States at the interval boundaries from IDAS driven by the solution's controls (body
+    coordinates, from the initial state); joint coordinates: each node's successor
+    integrated from that node (joint_ocp.replay_nodes, DOP853)."""
+    if solution.formulation == "joints":
+        return joint_ocp.replay_nodes(joints_of(model, problem), joint_ocp.shape_of(problem),
+                                      solution.times, solution.x, solution.u, solution.design)
     return replay_states(_setup(model, problem), problem, solution.u, solution.step)
+
+
+def replay_error(model: ResolvedModel, problem: OCP, solution: Solution) -> float:
+    """The largest difference of the replay's positions (joint coordinates, or body
+    coordinates) from the solution's at the nodes."""
+    replayed = replay(model, problem, solution)
+    n = replayed.shape[1] // 2
+    if solution.formulation == "joints":
+        n = joints_of(model, problem).joints.layout.n_theta
+    return float(np.max(np.abs(replayed[:, :n] - solution.x[:, :n])))
 
 
 def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
@@ -389,6 +445,10 @@ def columns_at(model: ResolvedModel, problem: OCP, solution: Solution,
     """Results columns of the solution's states at its interval boundaries. Accelerations and
     reactions depend on the control, which jumps there: boundary k > 0 reports the end of
     interval k - 1 (the value path bounds constrain), boundary 0 the start of interval 0."""
+    if solution.formulation == "joints":
+        return joint_ocp.columns_at(joints_of(model, problem), joint_ocp.shape_of(problem),
+                                    solution.times, solution.x, solution.u, names,
+                                    solution.design)
     setup = _setup(model, problem)
     index = [setup.names.index(n) for n in names]
     rows = []
@@ -404,11 +464,29 @@ def from_block(block) -> tuple[OCP, str]:
     return OCP(controls, block.horizon, block.intervals, block.effort, dict(block.terminal),
                dict(block.terminal_cost), dict(block.path), free_time=block.free_time,
                time_weight=block.time_weight, initial_guess=block.initial_guess,
-               elements=block.elements, stabilized=block.stabilized), block.transcription
+               elements=block.elements, stabilized=block.stabilized,
+               formulation=block.formulation, degree=block.degree, scheme=block.scheme,
+               piecewise=block.piecewise, steps=block.steps,
+               path_grid=block.path_grid, weights=dict(block.weights),
+               terminal_bounds=dict(block.terminal_bounds),
+               parameters=dict(block.parameters), initial_free=block.initial_free,
+               initial=dict(block.initial), initial_bounds=dict(block.initial_bounds)), \
+        block.transcription
+
+
+def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,
+                 names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """(times, columns) at the nodes and at every point inside the intervals of a joint
+    solution (collocation points, RK4 step ends)."""
+    if solution.fine is None:
+        raise UsageError("only a solution in joint coordinates has points inside its intervals")
+    return solution.fine[0], joint_ocp.fine_columns(joints_of(model, problem), solution.fine,
+                                                    names)
 
 
 def results_table(model: ResolvedModel, problem: OCP, solution: Solution):
     """(names, values): t and every results column at the interval boundaries."""
-    setup = _setup(model, problem)
-    return ["t", *setup.names], np.column_stack(
-        [solution.times, columns_at(model, problem, solution, setup.names)])
+    names = (joints_of(model, problem).names if solution.formulation == "joints"
+             else _setup(model, problem).names)
+    return ["t", *names], np.column_stack(
+        [solution.times, columns_at(model, problem, solution, names)])

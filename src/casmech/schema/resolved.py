@@ -205,6 +205,18 @@ class OptimalControl:
     initial_guess: str = "simulation"  # simulation | interpolation
     elements: int = 1  # collocation elements per control interval
     stabilized: bool = False  # collocation with position/velocity constraints at its points
+    formulation: str = "auto"  # auto | joints | bodies
+    degree: int = 3  # joints: collocation degree
+    scheme: str = "radau"  # joints: radau | legendre
+    piecewise: str = "constant"  # joints: controls constant | linear
+    steps: int = 4  # joints: RK4 steps per shooting interval
+    path_grid: str = "nodes"  # joints: nodes | fine
+    weights: Mapping[str, float] = field(default_factory=dict)  # control name -> weight
+    terminal_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    parameters: Mapping[str, tuple[float, float]] = field(default_factory=dict)  # decision
+    initial_free: bool = False  # joints: the initial state is an unknown
+    initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
+    initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

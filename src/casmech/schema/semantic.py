@@ -150,6 +150,13 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
     terminal = {name: check.setting((*path, "terminal", name), value)
                 for name, value in given.terminal.items()}
     bounds = _pairs(check, (*path, "path"), given.path)
+    terminal_bounds = _pairs(check, (*path, "terminal_bounds"), given.terminal_bounds)
+    design = _pairs(check, (*path, "parameters"), given.parameters)
+    initial_bounds = _pairs(check, (*path, "initial_bounds"), given.initial_bounds)
+    initial = {name: check.setting((*path, "initial", name), value)
+               for name, value in given.initial.items()}
+    weights = {name: check.setting((*objective, "weights", name), value)
+               for name, value in given.objective.weights.items()}
     time_weight = check.setting((*objective, "time"), given.objective.time)
     free = _pairs(check, path, {"free_time": given.free_time}) if given.free_time else {}
     if free and not (limits.MIN_TIME <= free["free_time"][0]
@@ -158,7 +165,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                     f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
                     got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
-    values = [horizon, effort, bounds, time_weight, free, *controls, *terminal.values(),
+    values = [horizon, effort, bounds, terminal_bounds, design, initial_bounds, time_weight,
+              free, *controls, *terminal.values(), *weights.values(), *initial.values(),
               *(x for pair in costs.values() for x in pair)]
     if failed(values) or problems:
         return None
@@ -166,7 +174,11 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                                    effort, costs, terminal, bounds,
                                    check.doc.source_map.values.get(path),
                                    free.get("free_time"), time_weight, given.initial_guess,
-                                   max(given.elements, 1), given.stabilized)
+                                   max(given.elements, 1), given.stabilized,
+                                   given.formulation, given.degree, given.scheme,
+                                   given.piecewise, given.steps, given.path_grid, weights,
+                                   terminal_bounds, design, given.initial_free, initial,
+                                   initial_bounds)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

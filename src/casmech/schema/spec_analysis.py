@@ -93,6 +93,7 @@ class Objective(Spec):
     effort: Scalar = 1  # weight of the integral of u^T u
     time: Scalar = 0  # weight of the final time (with free_time)
     terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
+    weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # control -> effort weight
 
 
 class OptimalControl(Spec):
@@ -109,6 +110,18 @@ class OptimalControl(Spec):
     initial_guess: Literal["simulation", "interpolation"] = "simulation"  # casmech.optimal.guess
     elements: StrictInt = 1  # collocation elements per control interval
     stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
+    # joint coordinates (default where the joint formulation takes the mechanism) or bodies
+    formulation: Literal["auto", "joints", "bodies"] = "auto"
+    degree: StrictInt = Field(default=3, ge=1, le=9)  # joints: collocation polynomial degree
+    scheme: Literal["radau", "legendre"] = "radau"  # joints: collocation points
+    piecewise: Literal["constant", "linear"] = "constant"  # joints: the controls' shape
+    steps: StrictInt = Field(default=4, ge=1, le=100)  # joints: RK4 steps per shooting interval
+    path_grid: Literal["nodes", "fine"] = "nodes"  # joints: path bounds also inside intervals
+    terminal_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
+    parameters: dict[StrictStr, Pair] = Field(default_factory=dict)  # decision: [lo, hi]
+    initial_free: StrictBool = False  # joints: the initial state is an unknown
+    initial: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at t0
+    initial_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)

@@ -1,0 +1,278 @@
+"""The model in joint coordinates for optimal control (formulations/joint_system.py).
+
+The controls become effort motors: the model is read again with one parameter per control
+(`ocp_u0`, ...) as the value of a `motor:` in torque or force mode on its joint (added to a
+motor the joint has in that mode), and the parametric build (optimal/system.py, with those
+parameters as theta) gives every function with the controls as an input. So a control acts
+exactly as an effort motor does, and the reaction columns include it as they include a motor's.
+
+    x = [theta; u]          the tree's free joint coordinates and velocities
+    c = [controls; design]  the controls and the decision parameters (optimal/ocp.py)
+    rhs(t, x, c) -> x'      a tree: its ODE; loops: the ODE with the closure multipliers lam
+                            solved from the acceleration-level rows (index 1; mu = 0)
+    closure(t, x) -> rows   loops: the cut joints' rows Phi_c and d/dt Phi_c (unit rows,
+                            those independent at t0), and |p|^2 - 1 of every quaternion among
+                            the coordinates: constraints the transcription imposes at its nodes
+    columns(t, x, c)        every results column (docs/format.md order, without t)
+
+A mechanism the joint formulation does not take for optimal control (loops with a floating
+body, runtime/auto_formulation.py's rule; a control on a joint of a component instance) has
+`available` False, and the problem stays on body coordinates (optimal/ocp.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import casadi as ca
+import numpy as np
+import yaml
+
+from casmech.elements.joint_types import MOTIONS
+from casmech.equations.checks import independent_rows
+from casmech.errors import ModelError, UsageError
+from casmech.formulations.joint_system import JointSystem, build, forced_ode
+from casmech.formulations.tree import spanning_tree
+from casmech.optimal.controls import Control, control_forces
+from casmech.optimal.dae import body_columns
+from casmech.optimal.system import ParametricSystem, parametric_system
+from casmech.runtime import assembly
+from casmech.runtime.joint_dynamics import joint_state
+from casmech.runtime.results import column_names
+from casmech.schema import load_model_text
+from casmech.schema.resolved import ResolvedModel
+
+PREFIX = "ocp_u"  # the controls' parameter names: PREFIX0, PREFIX1, ... (unused ones)
+
+
+def motored_text(model: ResolvedModel, controls: list[Control]):
+    """(the model's text with a motor per control, the controls' parameter names), or None
+    when a controlled joint is not written in the file's own `joints:` list (a component's
+    joint) or the text is not plain YAML."""
+    try:
+        document = yaml.safe_load(model.text)
+    except yaml.YAMLError:
+        return None
+    if not isinstance(document, dict):
+        return None
+    joints = {j.get("name"): j for j in document.get("joints") or [] if isinstance(j, dict)}
+    if any(c.joint not in joints for c in controls):
+        return None
+    parameters = dict(document.get("parameters") or {})
+    names, k = [], 0
+    for control in controls:
+        while f"{PREFIX}{k}" in parameters:
+            k += 1
+        name = f"{PREFIX}{k}"
+        parameters[name] = 0.0
+        names.append(name)
+        joint = joints[control.joint]
+        motor = dict(joint.get("motor") or {})
+        given = motor.get(control.kind)
+        motor[control.kind] = name if given is None else f"({given}) + {name}"
+        joint["motor"] = motor
+    document["parameters"] = parameters
+    return yaml.safe_dump(document, sort_keys=False), names
+
+
+def _bind(function: ca.Function, data) -> ca.Function:
+    """`function` with its trailing input (the model data) fixed to `data`."""
+    inputs = [ca.SX.sym(function.name_in(k), function.sparsity_in(k))
+              for k in range(function.n_in() - 1)]
+    return ca.Function(function.name(), inputs, function.call([*inputs, data]),
+                       function.name_in()[:-1], function.name_out())
+
+
+@dataclass
+class JointModel:
+    """The functions of the joint-coordinate transcription (module docstring)."""
+
+    system: ParametricSystem  # body coordinates, theta = the controls' parameters, the design
+    joints: JointSystem  # over the model data
+    t0: float
+    n_design: int = 0  # decision parameters of the model, last in theta
+
+    @property
+    def n_x(self) -> int:
+        return self.joints.layout.n_x
+
+    @property
+    def n_u(self) -> int:
+        """How many controls (theta = [controls; design])."""
+        return len(self.system.names) - self.n_design
+
+    @property
+    def n_c(self) -> int:
+        return len(self.system.names)
+
+    @property
+    def design_values(self) -> np.ndarray:
+        """The decision parameters' values in the file."""
+        return np.asarray(self.system.values[self.n_u:], float)
+
+    @cached_property
+    def symbols(self):
+        return ca.SX.sym("t"), ca.SX.sym("x", self.n_x), ca.SX.sym("c", self.n_c)
+
+    def _data(self, c):
+        """The joint functions' trailing input at controls c."""
+        d = self.system.data(c)
+        return self.joints.data(d) if self.joints.data is not None else d
+
+    @cached_property
+    def _numeric_data(self):
+        return self._data(ca.DM(self.system.values))
+
+    @cached_property
+    def start(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x0, the quaternion signs of the results rows, the rows kept: 1 where a cut row
+        is independent at t0) from the assembled r-p state (runtime.assembly)."""
+        nominal, joints = self.system.nominal, self.joints
+        q0, q_dot0 = assembly.initial_state(nominal, self.t0)
+        relative = _bind(joints.relative_states, self._numeric_data)
+        rotations, gaps, twists = (np.array(v.full()) for v in relative(q0, q_dot0))
+        lay, x0 = joints.layout, np.zeros(joints.layout.n_x)
+        for k, joint in enumerate(joints.tree.joints):
+            theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
+            x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
+            x0[list(lay.u[k])] = u[list(lay.free_u[k])]
+        keep = np.ones(0)
+        if joints.n_cut:
+            jacobian = _bind(joints.velocity_jacobian, self._numeric_data)(self.t0, x0)
+            keep = np.array(independent_rows(np.array(jacobian.full())), float)
+        nb = nominal.n_bodies
+        motion = _bind(joints.motion, self._numeric_data)
+        q = np.array(motion(self.t0, x0, np.zeros(2 * joints.n_cut), np.ones(nb))[0].full())
+        tree_p, file_p = q.ravel()[3 * nb:].reshape(nb, 4), q0[3 * nb:].reshape(nb, 4)
+        signs = np.where(np.sum(tree_p * file_p, axis=1) < 0, -1.0, 1.0)
+        return x0, signs, keep
+
+    def _algebraic(self, t, x, c):
+        """z = [lam; mu = 0] of the loops (unit rows): the acceleration rows kept, solved."""
+        m = self.joints.n_cut
+        if not m:
+            return ca.SX(0, 1)
+        matrix, base = self.joints.acceleration_system(t, x, self._data(c))
+        kept = list(np.flatnonzero(self.start[2]))
+        lam = ca.SX.zeros(m, 1)
+        if kept:
+            lam[kept] = -ca.solve(matrix[kept, kept], base[kept])
+        return ca.vertcat(lam, ca.SX.zeros(m, 1))
+
+    @cached_property
+    def efforts(self) -> np.ndarray | None:
+        """B with the controls' generalized forces along the tree's free velocities tau =
+        B c (a tree), when that map is constant: read off the motors' ODE and the forced
+        ODE (formulations.joint_system.forced_ode) at sample states, kept only where they
+        agree there; else None."""
+        if self.joints.n_cut or not self.n_u:
+            return None
+        forced = forced_ode(self.system.split.ir, self.joints.tree, self.system.split.symbols)
+        t, x, c = self.symbols
+        n_theta = self.joints.layout.n_theta
+        tau = ca.SX.sym("tau", self.n_x - n_theta)
+        motors = ca.jacobian(self.joints.dynamics(t, x, self._data(c)),
+                             c[list(range(self.n_u))])
+        torques = ca.jacobian(forced(t, x, tau, self._numeric_data), tau)
+        slopes = ca.Function("slopes", [x, c, tau], [motors[n_theta:, :], torques[n_theta:, :]])
+        samples = np.sin(1.3 * np.arange(1, 3 * self.n_x + 1)).reshape(3, self.n_x) * 1.5
+        maps = []
+        for sample in samples:
+            motor, torque = (np.array(v.full()) for v in slopes(sample, self.system.values,
+                                                                np.zeros(tau.numel())))
+            maps.append(np.linalg.solve(torque, motor))
+            if not np.allclose(torque @ maps[-1], motor, rtol=1e-10, atol=1e-10):
+                return None
+        if max(np.max(np.abs(b - maps[0])) for b in maps) > 1e-10:
+            return None
+        return np.round(maps[0], 12)
+
+    @cached_property
+    def rhs(self) -> ca.Function:
+        """x' at (t, x, c); a tree with constant efforts: the forced ODE (tau = B c, the
+        motors' values 0 in the data), which is the motors' ODE without their r-p path."""
+        t, x, c = self.symbols
+        if self.efforts is not None:
+            design = c[list(range(self.n_u, self.n_c))] if self.n_design else ca.SX(0, 1)
+            zero = ca.vertcat(ca.DM.zeros(self.n_u), design)
+            forced = forced_ode(self.system.split.ir, self.joints.tree,
+                                self.system.split.symbols)
+            ode = forced(t, x, ca.DM(self.efforts) @ c[list(range(self.n_u))], self._data(zero))
+        elif not self.joints.n_cut:
+            ode = self.joints.dynamics(t, x, self._data(c))
+        else:
+            mask = 1.0 - self.start[2]
+            ode = self.joints.dynamics(t, x, self._algebraic(t, x, c), mask, self._data(c))[0]
+        return ca.Function("rhs", [t, x, c], [ode], ["t", "x", "c"], ["ode"])
+
+    @cached_property
+    def closure(self) -> ca.Function:
+        """Position- and velocity-level rows of the loops and the quaternions' norms."""
+        t, x, _ = self.symbols
+        rows = []
+        m = self.joints.n_cut
+        if m:
+            kept = list(np.flatnonzero(self.start[2]))
+            alg = self.joints.dynamics(t, x, ca.SX.zeros(2 * m), ca.DM.zeros(m),
+                                       self._numeric_data)[1]
+            rows += [alg[kept], alg[[m + k for k in kept]]]
+        lay = self.joints.layout
+        for k, joint in enumerate(self.joints.tree.joints):
+            for start in MOTIONS[joint.type].quaternions:
+                slots = [lay.theta[k][lay.free_theta[k].index(s)]
+                         for s in range(start, start + 4) if s in lay.free_theta[k]]
+                if len(slots) == 4:
+                    rows.append(ca.sumsqr(x[slots]) - 1)
+        residual = ca.vertcat(*rows) if rows else ca.SX(0, 1)
+        return ca.Function("closure", [t, x], [residual], ["t", "x"], ["rows"])
+
+    @cached_property
+    def names(self) -> list[str]:
+        return column_names(self.system.nominal)[1:]
+
+    @cached_property
+    def columns(self) -> ca.Function:
+        """Every results column at (t, x, c): the r-p state of the tree and every joint's
+        multipliers (formulations/joint_system.py's motion), through optimal/dae.py's
+        columns of (t, q, q_dot, q_ddot, lam, theta)."""
+        t, x, c = self.symbols
+        signs = ca.DM(self.start[1])
+        q, q_dot, q_ddot, lam = self.joints.motion(t, x, self._algebraic(t, x, c), signs,
+                                                   self._data(c))
+        values = body_columns(self.system)(t, q, q_dot, q_ddot, lam, c)
+        return ca.Function("columns", [t, x, c], [values], ["t", "x", "c"], ["columns"])
+
+    def column(self, name: str) -> int:
+        if name not in self.names:
+            raise UsageError(f"unknown column '{name}' in the optimal control problem; "
+                             "columns are results columns (<body>.x, <joint>.fx, energy, ...)")
+        return self.names.index(name)
+
+
+def handles(model: ResolvedModel, controls: list[Control]) -> bool:
+    """Whether joint_model can take the model with these controls (module docstring)."""
+    return motored_text(model, list(controls)) is not None
+
+
+def joint_model(model: ResolvedModel, controls: list[Control], design=()) -> JointModel | None:
+    """The joint-coordinate functions of the model with these controls and the model's
+    parameters `design` as inputs after them (c = [controls; design]), or None when the joint
+    formulation does not take it (module docstring). The initial state is the one at the
+    file's values: a tree's joint coordinates at the file's pose, whatever the geometry."""
+    control_forces(model, controls)  # the controls' joints and kinds, checked
+    given = motored_text(model, list(controls))
+    if given is None:
+        return None
+    text, names = given
+    try:
+        motored = load_model_text(text, model.file, model.overrides)
+    except ModelError as error:
+        raise UsageError(f"a control cannot act on this joint: "
+                         f"{error.diagnostics[0].format()}") from None
+    system = parametric_system(motored, [*names, *design])
+    tree = spanning_tree(system.split.ir)
+    if tree.floating_loops:
+        return None
+    joints = build(system.split.ir, tree, data=system.split.symbols)
+    return JointModel(system, joints, 0.0, len(tuple(design)))
