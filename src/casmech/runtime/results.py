@@ -39,6 +39,9 @@ class Result:
         # holding each one's row (None: the run watched no events)
         self.events: list = []
         self.event_states: Result | None = None
+        # results columns a run computed beyond the bundle's (a stuck joint's friction:
+        # runtime.friction): name -> a value per row
+        self.fixed_columns: dict[str, np.ndarray] = {}
         self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
@@ -249,6 +252,9 @@ def table(functions: SystemFunctions, result: Result,
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
                                                   values[:, block])
+    for name, column in getattr(result, "fixed_columns", {}).items():
+        if len(column) == rows and name in names:
+            values[:, names.index(name)] = column
     return names, values
 
 

@@ -1,0 +1,238 @@
+"""Dynamics of a model with joint friction: sliding and stuck modes switched at located events
+(docs/decisions/joint-friction.md).
+
+A run is a sequence of segments, each an ordinary dynamics run (any formulation) of the model
+with every friction joint in one mode, from the state the previous segment ended in:
+
+- sliding (+1 or -1): the friction law with that sign fixed (equations/friction.py), smooth
+  over the segment; an event stops it where the joint's rate reaches 0;
+- stuck (0): the law off and a driver row holding the joint's coordinate at its value, the
+  row's multiplier the holding force; an event stops it where |holding force| reaches the
+  static limit.
+
+At a stop the joints whose event fired are decided again: a joint whose rate reached 0 sticks
+if the force holding it is within the static limit, else slides on in the direction that
+force would have prevented; a stuck joint past its limit slips that way. Segments start from
+the ending state (the bodies' initial poses and velocities of a lowered model), so each is a
+bundle of its own; the rows keep the run's output grid (a segment starting between grid
+points runs to the next one first) with each switch's row added, and the switches are
+`Result.metadata["friction_switches"]`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import casadi as ca
+import numpy as np
+
+from casmech.core import euler
+from casmech.core.expressions import parse
+from casmech.elements.joint_types import COORDINATES
+from casmech.equations import friction
+from casmech.equations.functions import build_functions
+from casmech.equations.symbols import Coordinates
+from casmech.runtime import assembly, events
+from casmech.runtime.kinematics import output_times
+from casmech.runtime.results import Result, table
+from casmech.schema.resolved import ScalarFunction
+
+SWITCHES = 100_000  # mode switches a run may make (a Zeno cascade ends the run there)
+STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
+
+
+def elements(ir) -> list:
+    """The friction elements of a model (ir.limits holds them after the stops)."""
+    return [e for e in ir.limits if e.type in friction.COORDINATE]
+
+
+def _coordinates(ir) -> ca.Function:
+    """(q, q_dot) -> (s, s_dot) of every friction joint."""
+    x = Coordinates.create(ir.n_bodies)
+    s = [friction.coordinate(e, x) for e in elements(ir)]
+    values = x.ground_fixed(ca.vertcat(*s, *(x.rate(v) for v in s)))
+    return ca.Function("friction_coordinates", [x.q, x.q_dot], [values])
+
+
+def segment_model(ir, q, q_dot, modes: dict, values: dict):
+    """(the model of a segment, the row index of each stuck joint): the bodies start at
+    (q, q_dot), each friction joint in its mode (+1, -1 sliding, 0 stuck at `values`)."""
+    n = ir.n_bodies
+    bodies = []
+    for k, body in enumerate(ir.bodies):
+        p, p_dot = q[3 * n + 4 * k:3 * n + 4 * k + 4], q_dot[3 * n + 4 * k:3 * n + 4 * k + 4]
+        omega = 2 * np.asarray(euler.e_matrix(ca.DM(p)) @ ca.DM(p_dot)).ravel()
+        bodies.append(replace(body, r0=q[3 * k:3 * k + 3].copy(), p0=p.copy(),
+                              r_dot0=q_dot[3 * k:3 * k + 3].copy(), omega0=omega))
+    limits = tuple(replace(e, params=dict(e.params) | {
+        "direction": float(modes[e.name]), "stuck": float(modes[e.name] == 0)})
+        if e.type in friction.COORDINATE else e for e in ir.limits)
+    kinds = {e.name: friction.COORDINATE[e.type] for e in elements(ir)}
+    primitives, joints, rows = [], [], {}
+    for joint in ir.joints:
+        own = [ir.primitives[r] for r in joint.rows]
+        drivers = dict(joint.drivers)
+        if modes.get(joint.name, 1) == 0:
+            key = kinds[joint.name]
+            kind, template, label = COORDINATES[key].driver
+            held = ScalarFunction("s0", parse("s0"), {"s0": float(values[joint.name])}, ("t",))
+            info = replace(own[0].row, kind=kind, label=f"friction '{joint.name}': stuck")
+            own.append(replace(own[0], kind=kind, vectors={k: joint.geometry[v] for k, v in
+                                                             template.items()},
+                               f=held, offset=0.0, is_driver=True, row=info, others=()))
+            drivers[key] = held
+            rows[joint.name] = len(primitives) + len(own) - 1
+        joints.append(replace(joint, rows=range(len(primitives), len(primitives) + len(own)),
+                              drivers=drivers, initial={}, initial_sources={}))
+        primitives += own
+    return replace(ir, bodies=tuple(bodies), primitives=tuple(primitives), joints=tuple(joints),
+                   limits=limits, reference_pose=None), rows
+
+
+def _events(ir, modes: dict, rows: dict, n_rows: int) -> list:
+    """The stop events of a segment: a sliding joint's rate reaching 0, a stuck one's holding
+    force reaching the static limit."""
+    x = Coordinates.create(ir.n_bodies)
+    lam = ca.SX.sym("lam", n_rows)
+    found = []
+    for e in elements(ir):
+        mode = modes[e.name]
+        if mode == 0:
+            value = ca.fabs(lam[rows[e.name]]) - e.params["static"]
+            direction = "rising"
+        else:
+            value = x.rate(friction.coordinate(e, x))
+            direction = "falling" if mode > 0 else "rising"
+        function = ca.Function("friction", [x.t, x.q, x.q_dot, x.q_ddot, lam],
+                               [x.ground_fixed(ca.SX(value))])
+        found.append(events.Event(f"{e.name}.friction", function, direction, "stop"))
+    return found
+
+
+class _Run:
+    """One friction run: its segments joined into one Result over the base bundle."""
+
+    def __init__(self, functions, settings, progress, segment):
+        self.functions, self.ir, self.segment = functions, functions.ir, segment
+        self.settings = settings
+        self.result = Result("dynamics", on_row=progress)
+        self.result.event_states = Result("events")
+        self.names = [e.name for e in elements(self.ir)]
+        self.coordinates = _coordinates(self.ir)
+        self.switches: list[dict] = []
+        self.fixed = {f"{n}.{c}": [] for n in self.names for c in friction.COLUMNS}
+        self.segments = 0
+
+    def values(self, q, q_dot) -> tuple[dict, dict]:
+        out = np.array(self.coordinates(q, q_dot)).ravel()
+        k = len(self.names)
+        return dict(zip(self.names, out[:k], strict=True)), dict(zip(self.names, out[k:],
+                                                                      strict=True))
+
+    def attempt(self, t0, t1, step, q, q_dot, modes, extra):
+        """A segment from t0 to t1: (its Result, its bundle, the stuck joints' rows)."""
+        s, _ = self.values(q, q_dot)
+        ir, rows = segment_model(self.ir, q, q_dot, modes, s)
+        functions = build_functions(ir)
+        found = self.segment(functions, (t0, t1, step), (*extra, *_events(ir, modes, rows,
+                                                                          functions.n_rows)))
+        self.segments += 1
+        return found, functions, rows
+
+    def hold(self, result, rows, name, k=0) -> float:
+        """The friction force holding a stuck joint in row k (the driver row's multiplier
+        acting along the coordinate)."""
+        return -float(result.lam[k, rows[name]])
+
+    def start_modes(self, t, q, q_dot, modes, deciding, step, extra):
+        """Modes of the joints `deciding` at (t, q, q_dot): stuck where the holding force is
+        within the static limit, else sliding against it."""
+        trial = dict(modes) | dict.fromkeys(deciding, 0)
+        found, _, rows = self.attempt(t, t + step, step, q, q_dot, trial, extra)
+        limits = {e.name: e.params["static"] for e in elements(self.ir)}
+        for name in deciding:
+            force = self.hold(found, rows, name)
+            if abs(force) > limits[name]:
+                trial[name] = -int(np.sign(force))
+        return trial
+
+    def run(self, t_end, step, extra) -> Result:
+        t = 0.0
+        q, q_dot = assembly.initial_state(self.functions, t, self.settings.options.solver.assembly)
+        _, rates = self.values(q, q_dot)
+        modes = {n: int(np.sign(r)) if abs(r) > STILL else 0 for n, r in rates.items()}
+        still = [n for n, m in modes.items() if m == 0]
+        if still:
+            modes = self.start_modes(t, q, q_dot, modes, still, step, extra)
+        grid = output_times(0.0, t_end, step)
+        first = True
+        while t < t_end - 1e-12 * max(1.0, t_end):
+            later = grid[grid > t + 1e-9 * step]
+            t1 = t_end if np.isclose(t, grid, rtol=0, atol=1e-9 * step).any() else later[0]
+            found, functions, rows = self.attempt(t, t1, step if t1 == t_end else t1 - t,
+                                                  q, q_dot, modes, extra)
+            fired = [r.name.removesuffix(".friction") for r in found.events
+                     if r.name.endswith(".friction") and r.action == "stop"
+                     and r.t == found.times[-1]]
+            self.keep(found, functions, rows, modes, first, fired)
+            first = False
+            t, q, q_dot = found.times[-1], found.q[-1], found.q_dot[-1]
+            if found.status == events.STOPPED and not fired:
+                self.result.status = events.STOPPED  # a model's own stop event
+                break
+            if fired:
+                if len(self.switches) >= SWITCHES:
+                    break
+                modes = self.switch(t, q, q_dot, modes, fired, found, rows, step, extra)
+        return self.finish()
+
+    def switch(self, t, q, q_dot, modes, fired, found, rows, step, extra):
+        stuck = [n for n in fired if modes[n] == 0]
+        sliding = [n for n in fired if modes[n] != 0]
+        new = dict(modes)
+        for name in stuck:  # past the static limit: slip against the holding force
+            new[name] = -int(np.sign(self.hold(found, rows, name, -1)))
+        if sliding:
+            new = self.start_modes(t, q, q_dot, new, sliding, step, extra)
+        for name in fired:
+            self.switches.append({"t": float(t), "joint": name, "mode": new[name]})
+        return new
+
+    def keep(self, found, functions, rows, modes, first, fired):
+        """Append a segment's rows (without its first, the previous one's last) in the base
+        bundle's multipliers, with the friction columns it computed."""
+        start = 0 if first else 1
+        extra = sorted(rows.values())
+        kept = [k for k in range(found.lam.shape[1]) if k not in extra]
+        lam = found.lam[start:, kept]
+        self.result.extend(found.times[start:], found.q[start:], found.q_dot[start:],
+                           found.q_ddot[start:], lam)
+        names, values = table(functions, found)
+        for name in self.names:
+            for column in friction.COLUMNS:
+                key = f"{name}.{column}"
+                value = values[start:, names.index(key)].copy()
+                if column == "friction" and modes[name] == 0:
+                    value = -found.lam[start:, rows[name]]
+                self.fixed[key].append(value)
+        for record, k in zip(found.events, range(len(found.events)), strict=True):
+            if record.name.removesuffix(".friction") in self.names:
+                continue
+            state = found.event_states
+            self.result.events.append(record)
+            self.result.event_states.extend([record.t], state.q[k:k + 1], state.q_dot[k:k + 1],
+                                            state.q_ddot[k:k + 1], state.lam[k:k + 1, kept])
+        self.result.metadata.update(found.metadata)
+
+    def finish(self) -> Result:
+        self.result.fixed_columns = {k: np.concatenate(v) for k, v in self.fixed.items()}
+        self.result.metadata.update(friction_switches=self.switches,
+                                    friction_segments=self.segments)
+        return self.result
+
+
+def run(functions, settings, progress, segment, extra=()) -> Result:
+    """A dynamics run of a model with joint friction; `segment(functions, (t0, t_end, step),
+    events)` runs one segment (runtime.analyses)."""
+    return _Run(functions, settings, progress, segment).run(settings.t_end, settings.output_step,
+                                                            tuple(extra))
