@@ -1,0 +1,133 @@
+"""Joint friction with exact sticking (equations/friction.py, runtime/friction.py), against
+closed forms written here: the spring-inertia oscillator with Coulomb friction and a block on
+an incline."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.api import results_table
+from casmech.errors import ModelError
+
+OSCILLATOR = """casmech: 1
+name: friction_oscillator
+parameters: {{k: 10.0, J: 0.5, Tc: 1.5}}
+gravity: [0, 0, 0]
+bodies:
+  - {{name: disk, mass: 1.0, inertia: [J, J, J], position: [0, 0, 0]}}
+joints:
+  - name: pivot
+    type: revolute
+    body_i: ground
+    body_j: disk
+    at: [0, 0, 0]
+    axis: [0, 0, 1]
+    initial: {{angle: 1.0, angle_dot: 0}}
+    friction: {{coulomb: Tc}}
+forces:
+  - {{name: spring, type: rsda, joint: pivot, stiffness: k}}
+analysis: {{type: dynamics, t_end: 3.0, output_step: 0.01, rtol: 1.0e-10, atol: 1.0e-12,
+           formulation: {formulation}}}
+"""
+
+INCLINE = """casmech: 1
+name: incline
+parameters: {{theta: {theta}, mu: {mu}, m: 2.0, g: 9.81}}
+gravity: [0, 0, -g]
+bodies:
+  - {{name: block, mass: m, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: slide
+    type: translational
+    body_i: ground
+    body_j: block
+    at: [0, 0, 0]
+    axis: [cos(theta), 0, -sin(theta)]
+    friction: {{coulomb: mu * m * g * cos(theta)}}
+analysis: {{type: dynamics, t_end: 2.0, output_step: 0.01, rtol: 1.0e-10, atol: 1.0e-12}}
+"""
+
+
+def run(text: str):
+    functions = casmech.compile(casmech.loads(text))
+    result = casmech.analyze(functions)
+    names, values = results_table(functions, result)
+    return result, dict(zip(names, values.T, strict=True))
+
+
+@pytest.mark.parametrize("formulation", ["joint", "rp"])
+def test_coulomb_oscillator_loses_2tc_over_k_per_half_cycle_and_sticks(formulation):
+    k, inertia, tc, a0 = 10.0, 0.5, 1.5, 1.0
+    result, columns = run(OSCILLATOR.format(formulation=formulation))
+    omega = math.sqrt(k / inertia)
+    switches = result.metadata["friction_switches"]
+    # closed form: each half cycle is a free oscillation about +-Tc/k, half a period long,
+    # and its amplitude about 0 falls by 2 Tc / k: 1, -0.7, 0.4, then -0.1 where it sticks
+    # (|k angle| = 1 <= Ts = Tc)
+    turns = [(-1) ** n * (a0 - 2 * n * tc / k) for n in range(1, 4)]
+    assert [s["mode"] for s in switches] == [1, -1, 0]
+    times = np.array([s["t"] for s in switches])
+    # the switch times are the located zero crossings of the rate: to the run's rtol
+    np.testing.assert_allclose(times, np.arange(1, 4) * math.pi / omega, rtol=1e-8, atol=0)
+    t = np.array(result.times)
+    angle = columns["pivot.angle"]
+    at_switch = np.array([angle[np.argmin(np.abs(t - s))] for s in times])
+    # amplitudes to 1e-8 (the brief's bound; the integration error at rtol 1e-10 is below it)
+    np.testing.assert_allclose(at_switch, turns, rtol=0, atol=1e-8)
+    stuck = t > times[-1]  # the switch row itself ends the sliding segment
+    assert abs(angle[-1]) < tc / k
+    # no creep: the stuck coordinate is held by a row, to roundoff
+    assert np.max(np.abs(angle[stuck] - angle[stuck][0])) < 1e-12
+    assert np.all(columns["pivot.friction_mode"][stuck] == 0)
+    # the holding torque balances the spring exactly: -(-k angle)
+    np.testing.assert_allclose(columns["pivot.friction"][stuck], k * angle[stuck], rtol=1e-9,
+                               atol=1e-12)  # the multiplier to the solver's precision
+    sliding = ~stuck
+    np.testing.assert_allclose(np.abs(columns["pivot.friction"][sliding]), tc, rtol=1e-12,
+                               atol=0)  # the law's constant, exactly
+
+
+def test_block_on_incline_within_the_friction_cone_does_not_move():
+    theta, mu, m, g = 0.3, 0.5, 2.0, 9.81
+    assert math.tan(theta) < mu
+    result, columns = run(INCLINE.format(theta=theta, mu=mu))
+    s = columns["slide.displacement"]
+    assert np.max(np.abs(s)) < 1e-9
+    assert np.all(columns["slide.friction_mode"] == 0)
+    # the friction holds the block: m g sin(theta) up the slope (the axis points down it)
+    np.testing.assert_allclose(columns["slide.friction"], -m * g * math.sin(theta), rtol=1e-9,
+                               atol=0)  # a multiplier, solved to roundoff
+    assert result.metadata["friction_switches"] == []
+
+
+def test_block_on_steep_incline_slides_with_coulomb_deceleration():
+    theta, mu, m, g = 0.6, 0.5, 2.0, 9.81
+    assert math.tan(theta) > mu
+    result, columns = run(INCLINE.format(theta=theta, mu=mu))
+    t = np.array(result.times)
+    a = g * (math.sin(theta) - mu * math.cos(theta))
+    # closed form s = a t^2 / 2 from rest; the integrator's error at rtol 1e-10 is far below
+    np.testing.assert_allclose(columns["slide.displacement"], 0.5 * a * t ** 2, rtol=1e-8,
+                               atol=1e-10)
+    np.testing.assert_allclose(columns["slide.friction"], -mu * m * g * math.cos(theta),
+                               rtol=1e-12, atol=0)  # the law's constant
+
+
+@pytest.mark.parametrize(("joint", "friction", "expected"), [
+    ("revolute", "{coulomb: 2, static: 1}", ("E103", "joints[0].friction.static")),
+    ("translational", "{coulomb: -1}", ("E103", "joints[0].friction.coulomb")),
+    ("cylindrical", "{viscous: -2}", ("E103", "joints[0].friction.viscous")),
+    ("revolute", "{coulomb: 1, slip: 2}", ("E101", "joints[0].friction.slip")),
+])
+def test_bad_friction_is_located(joint, friction, expected):
+    text = INCLINE.format(theta=0.3, mu=0.5).replace("translational", joint).replace(
+        "friction: {coulomb: mu * m * g * cos(theta)}", f"friction: {friction}")
+    with pytest.raises(ModelError) as raised:
+        casmech.loads(text)
+    found = [(d.code, d.path) for d in raised.value.diagnostics]
+    assert found == [expected]
+    assert raised.value.diagnostics[0].source.line == 14  # the friction's line
