@@ -1,6 +1,7 @@
 """The results columns of a model's force elements with outputs (contacts:
 casmech.elements.forces.contact)
-and of its joint stops (equations/limits.py) and frictions (equations/friction.py), in the order of schema/contact.output_names."""
+and of its joint stops (equations/limits.py) and frictions (equations/friction.py), in the
+order of schema/contact.output_names."""
 
 from __future__ import annotations
 
