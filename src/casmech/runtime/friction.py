@@ -204,9 +204,6 @@ class _Run:
         start = 0 if first else 1
         extra = sorted(rows.values())
         kept = [k for k in range(found.lam.shape[1]) if k not in extra]
-        lam = found.lam[start:, kept]
-        self.result.extend(found.times[start:], found.q[start:], found.q_dot[start:],
-                           found.q_ddot[start:], lam)
         names, values = table(functions, found)
         for name in self.names:
             for column in friction.COLUMNS:
@@ -215,6 +212,9 @@ class _Run:
                 if column == "friction" and modes[name] == 0:
                     value = -found.lam[start:, rows[name]]
                 self.fixed[key].append(value)
+        self.result.fixed_columns = {k: np.concatenate(v) for k, v in self.fixed.items()}
+        self.result.extend(found.times[start:], found.q[start:], found.q_dot[start:],
+                           found.q_ddot[start:], found.lam[start:, kept])
         for record, k in zip(found.events, range(len(found.events)), strict=True):
             if record.name.removesuffix(".friction") in self.names:
                 continue
@@ -225,7 +225,6 @@ class _Run:
         self.result.metadata.update(found.metadata)
 
     def finish(self) -> Result:
-        self.result.fixed_columns = {k: np.concatenate(v) for k, v in self.fixed.items()}
         self.result.metadata.update(friction_switches=self.switches,
                                     friction_segments=self.segments)
         return self.result

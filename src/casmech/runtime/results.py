@@ -252,10 +252,17 @@ def table(functions: SystemFunctions, result: Result,
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
                                                   values[:, block])
+    return names, with_fixed(result, names, values)
+
+
+def with_fixed(result: Result | None, names: list[str], values: np.ndarray,
+               first: int = 0) -> np.ndarray:
+    """`values` (rows first .. of `result`) with the columns the run computed itself
+    (Result.fixed_columns) where it holds those rows."""
     for name, column in getattr(result, "fixed_columns", {}).items():
-        if len(column) == rows and name in names:
-            values[:, names.index(name)] = column
-    return names, values
+        if name in names and len(column) >= first + len(values):
+            values[:, names.index(name)] = column[first:first + len(values)]
+    return values
 
 
 def events_table(functions: SystemFunctions, result: Result, reaction_frames=None,
