@@ -38,6 +38,7 @@ from casmech.runtime.results import Result, table
 from casmech.schema.resolved import ScalarFunction
 
 SWITCHES = 100_000  # mode switches a run may make (a Zeno cascade ends the run there)
+COUNTERS = ("steps", "idas_steps", "idas_calls", "event_probes", "projections")  # summed
 STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
 
 
@@ -222,7 +223,9 @@ class _Run:
             self.result.events.append(record)
             self.result.event_states.extend([record.t], state.q[k:k + 1], state.q_dot[k:k + 1],
                                             state.q_ddot[k:k + 1], state.lam[k:k + 1, kept])
-        self.result.metadata.update(found.metadata)
+        counted = {k: self.result.metadata.get(k, 0) + v for k, v in found.metadata.items()
+                   if k in COUNTERS and isinstance(v, int)}
+        self.result.metadata.update(found.metadata | counted)
 
     def finish(self) -> Result:
         self.result.metadata.update(friction_switches=self.switches,
