@@ -131,3 +131,26 @@ def test_bad_friction_is_located(joint, friction, expected):
     found = [(d.code, d.path) for d in raised.value.diagnostics]
     assert found == [expected]
     assert raised.value.diagnostics[0].source.line == 14  # the friction's line
+
+
+def test_run_writes_the_holding_force_and_the_switches(tmp_path, monkeypatch):
+    """`casmech run`: the streamed results.csv holds the stuck joint's holding force (not the
+    bundle's law at rest, 0), metadata.json the switches."""
+    import json
+
+    import pandas as pd
+
+    from casmech.cli import main
+
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    model = tmp_path / "oscillator.yaml"
+    model.write_text(OSCILLATOR.format(formulation="auto"))
+    assert main(["run", str(model), "--out", str(tmp_path / "out")]) == 0
+    table = pd.read_csv(tmp_path / "out" / "results.csv")
+    stuck = table[table["pivot.friction_mode"] == 0]
+    assert len(stuck) > 50
+    # held against the spring: friction = k angle (k = 10), as the closed form's stuck state
+    np.testing.assert_allclose(stuck["pivot.friction"], 10.0 * stuck["pivot.angle"], rtol=1e-9,
+                               atol=1e-12)  # the multiplier to the solver's precision
+    metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
+    assert [s["mode"] for s in metadata["result"]["friction_switches"]] == [1, -1, 0]
