@@ -39,6 +39,7 @@ from casmech.schema.resolved import ScalarFunction
 
 SWITCHES = 100_000  # mode switches a run may make (a Zeno cascade ends the run there)
 COUNTERS = ("steps", "idas_steps", "idas_calls", "event_probes", "projections")  # summed
+SLACK = 1e-9  # a holding force this far (relative) past the static limit still holds
 STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
 
 
@@ -145,61 +146,54 @@ class _Run:
         acting along the coordinate)."""
         return -float(result.lam[k, rows[name]])
 
-    def start_modes(self, t, q, q_dot, modes, deciding, step, extra):
-        """Modes of the joints `deciding` at (t, q, q_dot): stuck where the holding force is
-        within the static limit, else sliding against it."""
-        trial = dict(modes) | dict.fromkeys(deciding, 0)
-        found, _, rows = self.attempt(t, t + step, step, q, q_dot, trial, extra)
+    def settle(self, span, q, q_dot, modes, extra):
+        """The segment over span = (t0, t1, step) from (q, q_dot) in `modes`, with its stuck
+        joints released one by one: while one's holding force at the start exceeds its static
+        limit, the one furthest past it slides against that force and the segment is run
+        again. (modes, Result, bundle, the stuck joints' rows)."""
         limits = {e.name: e.params["static"] for e in elements(self.ir)}
-        for name in deciding:
-            force = self.hold(found, rows, name)
-            if abs(force) > limits[name]:
-                trial[name] = -int(np.sign(force))
-        return trial
+        while True:
+            found, functions, rows = self.attempt(*span, q, q_dot, modes, extra)
+            excess = {name: abs(self.hold(found, rows, name)) - limits[name] for name in rows}
+            name = max(excess, key=excess.get, default=None)
+            if name is None or excess[name] <= SLACK * max(limits[name], 1.0):
+                return modes, found, functions, rows
+            modes = modes | {name: -int(np.sign(self.hold(found, rows, name)))}
 
     def run(self, t_end, step, extra) -> Result:
         t = 0.0
         q, q_dot = assembly.initial_state(self.functions, t, self.settings.options.solver.assembly)
         _, rates = self.values(q, q_dot)
         modes = {n: int(np.sign(r)) if abs(r) > STILL else 0 for n, r in rates.items()}
-        still = [n for n, m in modes.items() if m == 0]
-        if still:
-            modes = self.start_modes(t, q, q_dot, modes, still, step, extra)
         grid = output_times(0.0, t_end, step)
-        first = True
+        first, fired = True, []
         while t < t_end - 1e-12 * max(1.0, t_end):
             later = grid[grid > t + 1e-9 * step]
             t1 = t_end if np.isclose(t, grid, rtol=0, atol=1e-9 * step).any() else later[0]
-            found, functions, rows = self.attempt(t, t1, step if t1 == t_end else t1 - t,
-                                                  q, q_dot, modes, extra)
+            span = (t, t1, step if t1 == t_end else t1 - t)
+            modes, found, functions, rows = self.settle(span, q, q_dot, modes, extra)
+            self.switches += [{"t": float(t), "joint": name, "mode": modes[name]}
+                              for name in fired]
+            if first:
+                self.result.metadata["friction_start_modes"] = dict(modes)
             fired = [r.name.removesuffix(".friction") for r in found.events
                      if r.name.endswith(".friction") and r.action == "stop"
                      and r.t == found.times[-1]]
-            self.keep(found, functions, rows, modes, first, fired)
+            self.keep(found, functions, rows, modes, first)
             first = False
             t, q, q_dot = found.times[-1], found.q[-1], found.q_dot[-1]
             if found.status == events.STOPPED and not fired:
                 self.result.status = events.STOPPED  # a model's own stop event
                 break
-            if fired:
-                if len(self.switches) >= SWITCHES:
-                    break
-                modes = self.switch(t, q, q_dot, modes, fired, found, rows, step, extra)
+            if len(self.switches) >= SWITCHES:
+                break
+            for name in fired:  # a stuck joint slips against its holding force; a sliding
+                # one whose rate reached 0 is tried stuck (settle releases it if it cannot be)
+                modes = modes | {name: -int(np.sign(self.hold(found, rows, name, -1)))
+                                 if modes[name] == 0 else 0}
         return self.finish()
 
-    def switch(self, t, q, q_dot, modes, fired, found, rows, step, extra):
-        stuck = [n for n in fired if modes[n] == 0]
-        sliding = [n for n in fired if modes[n] != 0]
-        new = dict(modes)
-        for name in stuck:  # past the static limit: slip against the holding force
-            new[name] = -int(np.sign(self.hold(found, rows, name, -1)))
-        if sliding:
-            new = self.start_modes(t, q, q_dot, new, sliding, step, extra)
-        for name in fired:
-            self.switches.append({"t": float(t), "joint": name, "mode": new[name]})
-        return new
-
-    def keep(self, found, functions, rows, modes, first, fired):
+    def keep(self, found, functions, rows, modes, first):
         """Append a segment's rows (without its first, the previous one's last) in the base
         bundle's multipliers, with the friction columns it computed."""
         start = 0 if first else 1
