@@ -154,3 +154,53 @@ def test_run_writes_the_holding_force_and_the_switches(tmp_path, monkeypatch):
                                atol=1e-12)  # the multiplier to the solver's precision
     metadata = json.loads((tmp_path / "out" / "metadata.json").read_text())
     assert [s["mode"] for s in metadata["result"]["friction_switches"]] == [1, -1, 0]
+
+
+def double_pendulum(t_end: float) -> str:
+    """models/double_pendulum.yaml with friction in both joints (the elbow stuck at first,
+    needing a holding torque only once the pivot slides)."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "models" / "double_pendulum.yaml").read_text()
+    text = text.replace("    axis: [0, 1, 0]\n  - name: elbow", "    axis: [0, 1, 0]\n"
+                        "    friction: {coulomb: 2.0, viscous: 0.1, static: 2.5}\n"
+                        "  - name: elbow")
+    text = text.replace("    at: [-L1 * sin(theta1), 0, -L1 * cos(theta1)]\n    axis: [0, 1, 0]\n",
+                        "    at: [-L1 * sin(theta1), 0, -L1 * cos(theta1)]\n    axis: [0, 1, 0]\n"
+                        "    friction: {coulomb: 0.2, static: 0.3}\n")
+    assert text.count("friction:") == 2
+    return text.replace("t_end: 2\n", f"t_end: {t_end}\n").replace(
+        "rtol: 1.0e-8", "rtol: 1.0e-10").replace("atol: 1.0e-10", "atol: 1.0e-12")
+
+
+def test_double_pendulum_with_friction_dissipates_and_holds_within_the_static_limit():
+    result, columns = run(double_pendulum(1.0))
+    switches = result.metadata["friction_switches"]
+    assert result.metadata["friction_start_modes"]["elbow"] != 0  # released at the start
+    assert len(switches) >= 3
+    energy = columns["energy"]
+    # friction never adds energy (a rise up to the integration error at rtol 1e-10)
+    assert np.max(np.diff(energy)) < 1e-9 * np.max(np.abs(energy))
+    assert energy[-1] < energy[0] - 1.0  # and it removes some
+    for name, (tc, c, ts) in {"pivot": (2.0, 0.1, 2.5), "elbow": (0.2, 0.0, 0.3)}.items():
+        mode, force = columns[f"{name}.friction_mode"], columns[f"{name}.friction"]
+        rate = columns[f"{name}.angle_dot"]
+        stuck, sliding = mode == 0, mode != 0
+        assert np.all(np.abs(force[stuck]) <= ts * (1 + 1e-9))
+        # sliding: the law with the segment's sign, which is the rate's wherever it moves
+        np.testing.assert_allclose(force[sliding], -mode[sliding] * tc - c * rate[sliding],
+                                   rtol=1e-12, atol=1e-12)  # the law itself
+        moving = sliding & (np.abs(rate) > 1e-6)
+        assert np.all(np.sign(rate[moving]) == mode[moving])
+
+
+@pytest.mark.slow
+def test_double_pendulum_with_friction_switches_alike_in_both_formulations():
+    joint, _ = run(double_pendulum(1.0).replace("atol: 1.0e-12", "atol: 1.0e-12\n  "
+                                                 "formulation: joint"))
+    rp, _ = run(double_pendulum(1.0).replace("atol: 1.0e-12", "atol: 1.0e-12\n  "
+                                              "formulation: rp"))
+    a, b = joint.metadata["friction_switches"], rp.metadata["friction_switches"]
+    assert [(s["joint"], s["mode"]) for s in a] == [(s["joint"], s["mode"]) for s in b]
+    # two formulations of the same motion: switch times to the runs' tolerance
+    np.testing.assert_allclose([s["t"] for s in a], [s["t"] for s in b], rtol=1e-8, atol=0)
