@@ -131,15 +131,18 @@ class _Run:
         return dict(zip(self.names, out[:k], strict=True)), dict(zip(self.names, out[k:],
                                                                       strict=True))
 
-    def attempt(self, t0, t1, step, q, q_dot, modes, extra):
-        """A segment from t0 to t1: (its Result, its bundle, the stuck joints' rows)."""
+    def build(self, q, q_dot, modes):
+        """The bundle of a segment from (q, q_dot) in `modes`, its events, the stuck rows."""
         s, _ = self.values(q, q_dot)
         ir, rows = segment_model(self.ir, q, q_dot, modes, s)
         functions = build_functions(ir)
-        found = self.segment(functions, (t0, t1, step), (*extra, *_events(ir, modes, rows,
-                                                                          functions.n_rows)))
+        return functions, _events(ir, modes, rows, functions.n_rows), rows
+
+    def attempt(self, span, built, extra):
+        """A segment over span = (t0, t1, step) on a bundle of `build`: its Result."""
+        functions, stops, _ = built
         self.segments += 1
-        return found, functions, rows
+        return self.segment(functions, span, (*extra, *stops))
 
     def hold(self, result, rows, name, k=0) -> float:
         """The friction force holding a stuck joint in row k (the driver row's multiplier
@@ -149,16 +152,23 @@ class _Run:
     def settle(self, span, q, q_dot, modes, extra):
         """The segment over span = (t0, t1, step) from (q, q_dot) in `modes`, with its stuck
         joints released one by one: while one's holding force at the start exceeds its static
-        limit, the one furthest past it slides against that force and the segment is run
-        again. (modes, Result, bundle, the stuck joints' rows)."""
+        limit, the one furthest past it slides against that force (each start checked on a
+        step of 1e-6 of the span before the segment runs). (modes, Result, bundle, the stuck
+        joints' rows)."""
         limits = {e.name: e.params["static"] for e in elements(self.ir)}
+        t0, t1, _ = span
         while True:
-            found, functions, rows = self.attempt(*span, q, q_dot, modes, extra)
-            excess = {name: abs(self.hold(found, rows, name)) - limits[name] for name in rows}
-            name = max(excess, key=excess.get, default=None)
-            if name is None or excess[name] <= SLACK * max(limits[name], 1.0):
-                return modes, found, functions, rows
-            modes = modes | {name: -int(np.sign(self.hold(found, rows, name)))}
+            built = self.build(q, q_dot, modes)
+            rows = built[2]
+            if rows:
+                tiny = 1e-6 * (t1 - t0)
+                start = self.attempt((t0, t0 + tiny, tiny), built, extra)
+                excess = {n: abs(self.hold(start, rows, n)) - limits[n] for n in rows}
+                name = max(excess, key=excess.get)
+                if excess[name] > SLACK * max(limits[name], 1.0):
+                    modes = modes | {name: -int(np.sign(self.hold(start, rows, name)))}
+                    continue
+            return modes, self.attempt(span, built, extra), built[0], rows
 
     def run(self, t_end, step, extra) -> Result:
         t = 0.0
