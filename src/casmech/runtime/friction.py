@@ -10,11 +10,12 @@ with every friction joint in one mode, from the state the previous segment ended
   row's multiplier the holding force; an event stops it where |holding force| reaches the
   static limit.
 
-At a stop the joints whose event fired are decided again: a joint whose rate reached 0 sticks
-if the force holding it is within the static limit, else slides on in the direction that
-force would have prevented; a stuck joint past its limit slips that way. Segments start from
-the ending state (the bodies' initial poses and velocities of a lowered model), so each is a
-bundle of its own; the rows keep the run's output grid (a segment starting between grid
+At a stop a joint whose rate reached 0 is tried stuck and a stuck one past its limit slips
+against its holding force; before a segment runs, its start is checked on a short step, and
+while a stuck joint's holding force there exceeds its static limit, the one furthest past it
+slides against that force (one by one: releasing one changes what the others need).
+Segments start from the ending state (the bodies' initial poses and velocities of a lowered
+model), so each is a bundle of its own; the rows keep the run's output grid (a segment starting between grid
 points runs to the next one first) with each switch's row added, and the switches are
 `Result.metadata["friction_switches"]`.
 """
