@@ -15,9 +15,9 @@ against its holding force; before a segment runs, its start is checked on a shor
 while a stuck joint's holding force there exceeds its static limit, the one furthest past it
 slides against that force (one by one: releasing one changes what the others need).
 Segments start from the ending state (the bodies' initial poses and velocities of a lowered
-model), so each is a bundle of its own; the rows keep the run's output grid (a segment starting between grid
-points runs to the next one first) with each switch's row added, and the switches are
-`Result.metadata["friction_switches"]`.
+model), so each is a bundle of its own; the rows keep the run's output grid (a segment
+starting between grid points runs to the next one first) with each switch's row added, and
+the switches are `Result.metadata["friction_switches"]`.
 """
 
 from __future__ import annotations
