@@ -204,3 +204,27 @@ def test_double_pendulum_with_friction_switches_alike_in_both_formulations():
     assert [(s["joint"], s["mode"]) for s in a] == [(s["joint"], s["mode"]) for s in b]
     # two formulations of the same motion: switch times to the runs' tolerance
     np.testing.assert_allclose([s["t"] for s in a], [s["t"] for s in b], rtol=1e-8, atol=0)
+
+
+def test_a_driven_joint_never_sticks_and_its_actuation_overcomes_the_friction():
+    """On a driven coordinate the driver holds the joint: the friction is the sliding law by
+    the prescribed rate, and the driver's torque (in the reaction) supplies exactly it."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "models" / "me751_pendulum.yaml").read_text()
+    with_friction = text.replace("      angle: pi/4 * cos(2*t)\n",
+                                 "      angle: pi/4 * cos(2*t)\n    friction: {coulomb: 3.0}\n")
+    tables = []
+    for model in (text, with_friction):
+        functions = casmech.compile(casmech.loads(model))
+        result = casmech.analyze(functions, analysis="dynamics", t_end=1.0)
+        names, values = results_table(functions, result)
+        tables.append(dict(zip(names, values.T, strict=True)))
+    plain, rough = tables
+    rate = rough["pivot.angle_dot"]
+    moving = np.abs(rate) > 1e-9
+    np.testing.assert_allclose(rough["pivot.friction"][moving], -3.0 * np.sign(rate[moving]),
+                               rtol=0, atol=1e-12)  # the law's constant
+    # the pivot's axis is x: its torque about x carries the actuation
+    np.testing.assert_allclose(rough["pivot.tx"] - plain["pivot.tx"], -rough["pivot.friction"],
+                               rtol=0, atol=1e-9)  # two inverse solves of the same motion

@@ -45,8 +45,12 @@ STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried st
 
 
 def elements(ir) -> list:
-    """The friction elements of a model (ir.limits holds them after the stops)."""
-    return [e for e in ir.limits if e.type in friction.COORDINATE]
+    """The friction elements whose modes a run switches (ir.limits holds them after the
+    stops): those of joints whose coordinate is free; on a driven coordinate the friction is
+    the sliding law by the prescribed rate's sign, never stuck (the driver holds it)."""
+    driven = {(j.name, key) for j in ir.joints for key in j.drivers}
+    return [e for e in ir.limits if e.type in friction.COORDINATE
+            and (e.name, friction.COORDINATE[e.type]) not in driven]
 
 
 def _coordinates(ir) -> ca.Function:
@@ -69,7 +73,7 @@ def segment_model(ir, q, q_dot, modes: dict, values: dict):
                               r_dot0=q_dot[3 * k:3 * k + 3].copy(), omega0=omega))
     limits = tuple(replace(e, params=dict(e.params) | {
         "direction": float(modes[e.name]), "stuck": float(modes[e.name] == 0)})
-        if e.type in friction.COORDINATE else e for e in ir.limits)
+        if e.name in modes and e.type in friction.COORDINATE else e for e in ir.limits)
     kinds = {e.name: friction.COORDINATE[e.type] for e in elements(ir)}
     primitives, joints, rows = [], [], {}
     for joint in ir.joints:
