@@ -228,3 +228,23 @@ def test_a_driven_joint_never_sticks_and_its_actuation_overcomes_the_friction():
     # the pivot's axis is x: its torque about x carries the actuation
     np.testing.assert_allclose(rough["pivot.tx"] - plain["pivot.tx"], -rough["pivot.friction"],
                                rtol=0, atol=1e-9)  # two inverse solves of the same motion
+
+
+def test_a_cancelled_run_keeps_the_rows_of_its_finished_segments():
+    from casmech.errors import Interrupted
+    from casmech.runtime.cancel import CancelToken
+
+    functions = casmech.compile(casmech.loads(OSCILLATOR.format(formulation="joint")))
+    token = CancelToken()
+
+    def progress(t):
+        if t > 1.0:  # after the first switch (t = pi / sqrt(20) = 0.70)
+            token.cancel()
+
+    with pytest.raises(Interrupted) as raised:
+        casmech.analyze(functions, progress=progress, token=token)
+    partial = raised.value.partial
+    assert 0.7 < partial.times[-1] <= 3.0
+    assert partial.lam.shape[1] == functions.n_rows  # the base bundle's multipliers
+    names, values = results_table(functions, partial)
+    assert np.isfinite(values).all()

@@ -33,6 +33,7 @@ from casmech.elements.joint_types import COORDINATES
 from casmech.equations import friction
 from casmech.equations.functions import build_functions
 from casmech.equations.symbols import Coordinates
+from casmech.errors import AnalysisError
 from casmech.runtime import assembly, events
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result, table
@@ -186,7 +187,11 @@ class _Run:
             later = grid[grid > t + 1e-9 * step]
             t1 = t_end if np.isclose(t, grid, rtol=0, atol=1e-9 * step).any() else later[0]
             span = (t, t1, step if t1 == t_end else t1 - t)
-            modes, found, functions, rows = self.settle(span, q, q_dot, modes, extra)
+            try:
+                modes, found, functions, rows = self.settle(span, q, q_dot, modes, extra)
+            except AnalysisError as error:  # a failure or an interrupt: the rows before it
+                error.partial = self.finish()  # (of the segments done) in the base bundle's
+                raise
             self.switches += [{"t": float(t), "joint": name, "mode": modes[name]}
                               for name in fired]
             if first:
