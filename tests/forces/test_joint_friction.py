@@ -91,10 +91,11 @@ def test_coulomb_oscillator_loses_2tc_over_k_per_half_cycle_and_sticks(formulati
                                atol=0)  # the law's constant, exactly
 
 
-def test_block_on_incline_within_the_friction_cone_does_not_move():
+@pytest.mark.parametrize("joint", ["translational", "cylindrical"])
+def test_block_on_incline_within_the_friction_cone_does_not_move(joint):
     theta, mu, m, g = 0.3, 0.5, 2.0, 9.81
     assert math.tan(theta) < mu
-    result, columns = run(INCLINE.format(theta=theta, mu=mu))
+    result, columns = run(INCLINE.format(theta=theta, mu=mu).replace("translational", joint))
     s = columns["slide.displacement"]
     assert np.max(np.abs(s)) < 1e-9
     assert np.all(columns["slide.friction_mode"] == 0)
@@ -104,10 +105,11 @@ def test_block_on_incline_within_the_friction_cone_does_not_move():
     assert result.metadata["friction_switches"] == []
 
 
-def test_block_on_steep_incline_slides_with_coulomb_deceleration():
+@pytest.mark.parametrize("joint", ["translational", "cylindrical"])
+def test_block_on_steep_incline_slides_with_coulomb_deceleration(joint):
     theta, mu, m, g = 0.6, 0.5, 2.0, 9.81
     assert math.tan(theta) > mu
-    result, columns = run(INCLINE.format(theta=theta, mu=mu))
+    result, columns = run(INCLINE.format(theta=theta, mu=mu).replace("translational", joint))
     t = np.array(result.times)
     a = g * (math.sin(theta) - mu * math.cos(theta))
     # closed form s = a t^2 / 2 from rest; the integrator's error at rtol 1e-10 is far below
