@@ -250,3 +250,19 @@ def test_a_cancelled_run_keeps_the_rows_of_its_finished_segments():
     assert partial.lam.shape[1] == functions.n_rows  # the base bundle's multipliers
     names, values = results_table(functions, partial)
     assert np.isfinite(values).all()
+
+
+def test_purely_viscous_friction_is_a_damper_without_modes():
+    """viscous only: the same motion as an rsda damper of the same c, and no switching."""
+    text = OSCILLATOR.format(formulation="joint").replace("friction: {coulomb: Tc}",
+                                                          "friction: {viscous: 0.8}")
+    damper = OSCILLATOR.format(formulation="joint").replace(
+        "    friction: {coulomb: Tc}\n", "").replace("stiffness: k}", "stiffness: k, damping: 0.8}")
+    result, columns = run(text)
+    _, reference = run(damper)
+    assert "friction_switches" not in result.metadata
+    # the same ODE written two ways, integrated at rtol 1e-10
+    np.testing.assert_allclose(columns["pivot.angle"], reference["pivot.angle"], rtol=0,
+                               atol=1e-8)
+    np.testing.assert_allclose(columns["pivot.friction"], -0.8 * columns["pivot.angle_dot"],
+                               rtol=1e-12, atol=1e-14)  # the law itself

@@ -47,11 +47,18 @@ STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried st
 
 def elements(ir) -> list:
     """The friction elements whose modes a run switches (ir.limits holds them after the
-    stops): those of joints whose coordinate is free; on a driven coordinate the friction is
-    the sliding law by the prescribed rate's sign, never stuck (the driver holds it)."""
+    stops): those of joints whose coordinate is free and with a Coulomb or static part; on a
+    driven coordinate the friction is the sliding law by the prescribed rate's sign, never
+    stuck (the driver holds it)."""
     driven = {(j.name, key) for j in ir.joints for key in j.drivers}
     return [e for e in ir.limits if e.type in friction.COORDINATE
-            and (e.name, friction.COORDINATE[e.type]) not in driven]
+            and (e.name, friction.COORDINATE[e.type]) not in driven and not _smooth(e)]
+
+
+def _smooth(element) -> bool:
+    """A purely viscous friction (no Coulomb or static part): smooth, no modes."""
+    p = element.params
+    return all(isinstance(p[k], (int, float)) and p[k] == 0 for k in ("coulomb", "static"))
 
 
 def _coordinates(ir) -> ca.Function:
