@@ -61,6 +61,10 @@ MODELS = {
     # effort motors (in the forces and the joints' reactions, laws reading the joint rate too),
     # laws reading joint and body state
     "motors": lambda: casmech.loads(MOTORS),
+    # joint friction (a law by the rate's sign, its columns) beside motors and a driver
+    "friction": lambda: casmech.loads(MOTORS.replace(
+        "axis: [1, 0, 0], motor:", "axis: [1, 0, 0], friction: {coulomb: 0.5, viscous: 0.1},"
+        " motor:").replace("axis: [0, 0, 1],", "axis: [0, 0, 1], friction: {coulomb: 0.2},")),
 }  # and every model of models/ (EVERY_MODEL: rsda, point forces, user forces, contacts ...)
 
 

@@ -130,8 +130,9 @@ def on_ground(force: ForceIR) -> bool:
 
 
 def unrolled_name(force: ForceIR) -> str:
-    """The C name of an element's own function (a stop: its joint's name)."""
-    prefix = "stop_" if force.type in limits.COORDINATE else "force_"
+    """The C name of an element's own function (a stop, a friction: its joint's name)."""
+    prefix = ("stop_" if force.type in limits.COORDINATE else
+              "friction_" if force.type.startswith("friction_") else "force_")
     return prefix + "".join(c if c.isalnum() else "_" for c in force.name)
 
 

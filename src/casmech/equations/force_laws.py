@@ -10,7 +10,7 @@ from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
-from casmech.equations import coordinates, limits, motors
+from casmech.equations import coordinates, friction, limits, motors
 
 
 class _Elements(Mapping):
@@ -52,6 +52,8 @@ class _Inputs(Mapping):
 JOINT_ELEMENTS: dict[str, Callable] = {
     "limit_angle": limits.generalized_force,  # stops (ir.limits)
     "limit_displacement": limits.generalized_force,
+    "friction_angle": friction.generalized_force,  # joint friction (ir.limits)
+    "friction_displacement": friction.generalized_force,
     **motors.FORCE_ELEMENTS,  # effort motors of joints (ir.motors)
 }
 FORCE_ELEMENTS: Mapping[str, Callable] = _Elements()

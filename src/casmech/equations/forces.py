@@ -13,7 +13,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.equations import contact, force_kernels, limits, motors
+from casmech.equations import contact, force_kernels, friction, limits, motors
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.rows import Layout
 from casmech.equations.symbols import Coordinates
@@ -104,7 +104,7 @@ def motor_reactions(ir: ModelIR, ev: Evaluation, t, q, q_dot) -> tuple:
     reactions, per element a function over the model's coordinates (a few per model)."""
     n_joints = len(ir.joints)
     column = {joint.name: k for k, joint in enumerate(ir.joints)}
-    elements = (*ir.motors, *ir.limits)
+    elements = (*ir.motors, *(e for e in ir.limits if e.type not in friction.COORDINATE))
     if ev.inline and elements:  # one graph over the same frames
         return tuple(over_coordinates(ir, ev, "motor_reactions",
                                       lambda x: _reactions(ir, elements, column, x), t, q, q_dot))

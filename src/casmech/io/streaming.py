@@ -99,7 +99,7 @@ class ResultsWriter:
         pending); at a row that is not finite, the rows before it, then NonFinite (with
         `strict`; else stop there quietly)."""
         from casmech.runtime.nonfinite import NonFinite
-        from casmech.runtime.results import Result, table
+        from casmech.runtime.results import Result, table, with_fixed
 
         self.flushed = time.monotonic()
         if self.stopped or not self.pending:
@@ -110,6 +110,7 @@ class ResultsWriter:
             else []
         states = [state[:count] for state in states]
         names, values = table(self.functions, Result.of_rows(*states), self.frames)
+        values = with_fixed(self.result, names, values, self.written)
         finite = np.isfinite(values).all(axis=1)
         good = len(values) if finite.all() else int(np.argmin(finite))
         for file in self.files:

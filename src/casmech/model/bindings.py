@@ -105,3 +105,15 @@ def stop(joint, geometry: ForceIR) -> ForceIR:
     names); `geometry` is lower.joint_coordinates."""
     kind = COORDINATES[REGISTRY[joint.type].limit].limit[0]
     return replace(geometry, type=kind, params=dict(joint.limit))
+
+
+# the coordinate a joint's friction acts along -> its ForceIR type (equations/friction.py)
+FRICTION_KINDS = {"angle": "friction_angle", "displacement": "friction_displacement"}
+
+
+def friction(joint, geometry: ForceIR) -> ForceIR:
+    """The friction of a resolved joint with a `friction:` (along the coordinate its type's
+    stop acts on): sliding by the rate's sign (`direction` 0) until the runtime sets a mode."""
+    kind = FRICTION_KINDS[REGISTRY[joint.type].limit]
+    return replace(geometry, type=kind,
+                   params=dict(joint.friction) | {"direction": 0.0, "stuck": 0.0})

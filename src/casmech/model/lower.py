@@ -198,6 +198,7 @@ def lower(model: ResolvedModel) -> ModelIR:
                    for m in bindings.motors(j, joint_frame(j), poses))
     stops = tuple(bindings.stop(j, geometry[j.name]) for j in model.joints
                   if j.limit)
+    stops += tuple(bindings.friction(j, geometry[j.name]) for j in model.joints if j.friction)
     return ModelIR(model.name, model.file, model.text, posed, tuple(primitives), tuple(joints),
                    forces, traced.asarray(model.gravity), model.analysis, dict(model.parameters),
                    motors=effort, limits=stops, outputs=tuple(model.outputs),

@@ -21,7 +21,7 @@ from casmech.core.options import FORMULATIONS, METHODS, OPTIONS, STABILIZATIONS
 from casmech.equations.checks import Structure, structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted, UsageError
-from casmech.runtime import assembly, auto_formulation, interrupts, solver_messages
+from casmech.runtime import assembly, auto_formulation, friction, interrupts, solver_messages
 from casmech.runtime.cancel import CancelToken, current
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
@@ -40,25 +40,38 @@ DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
               extra_events=()) -> Result:
+    """A model with joint friction: segments in its modes (runtime.friction); else one run."""
+    if friction.elements(f.ir):
+        def segment(functions, span, events):
+            return _run_dynamics(functions, s, None, None, events, span)
+
+        return friction.run(f, s, progress, segment, extra_events)
+    return _run_dynamics(f, s, progress, workspace, extra_events)
+
+
+def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace | None,
+                  extra_events=(), span=None) -> Result:
     """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
     r-omega DAE (runtime.dynamics); auto: runtime.auto_formulation, which also examines a
-    mechanism with loops for singular poses."""
+    mechanism with loops for singular poses. `span`: (t0, t_end, output step), by default
+    the analysis's from 0."""
     options = s.options
     solver = options.solver
+    t0, t_end, step = span or (0.0, s.t_end, s.output_step)
 
     def joint() -> Result:
-        return run_joint_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+        return run_joint_dynamics(f, t_end, step, s.rtol, s.atol, t0=t0,
                                   progress=progress, method=options.method,
                                   extra_events=extra_events, settings=solver,
                                   workspace=workspace)
 
     def other(formulation: str) -> Result:
-        return run_dynamics(f, s.t_end, s.output_step, s.rtol, s.atol,
+        return run_dynamics(f, t_end, step, s.rtol, s.atol, t0=t0,
                             formulation=formulation, progress=progress,
                             stabilization=options.stabilization, extra_events=extra_events,
                             settings=solver, workspace=workspace)
 
-    rows = len(output_times(0.0, s.t_end, s.output_step))
+    rows = len(output_times(t0, t_end, step))
     return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows, joint,
                                 other, solver, workspace)
 

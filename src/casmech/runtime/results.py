@@ -39,6 +39,9 @@ class Result:
         # holding each one's row (None: the run watched no events)
         self.events: list = []
         self.event_states: Result | None = None
+        # results columns a run computed beyond the bundle's (a stuck joint's friction:
+        # runtime.friction): name -> a value per row
+        self.fixed_columns: dict[str, np.ndarray] = {}
         self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
@@ -249,7 +252,17 @@ def table(functions: SystemFunctions, result: Result,
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,
                                                   values[:, block])
-    return names, values
+    return names, with_fixed(result, names, values)
+
+
+def with_fixed(result: Result | None, names: list[str], values: np.ndarray,
+               first: int = 0) -> np.ndarray:
+    """`values` (rows first .. of `result`) with the columns the run computed itself
+    (Result.fixed_columns) where it holds those rows."""
+    for name, column in getattr(result, "fixed_columns", {}).items():
+        if name in names and len(column) >= first + len(values):
+            values[:, names.index(name)] = column[first:first + len(values)]
+    return values
 
 
 def events_table(functions: SystemFunctions, result: Result, reaction_frames=None,

@@ -19,9 +19,14 @@ def output_names(joints, forces) -> list[str]:
     file order), then the joint stops' (resolved joints and forces;
     equations.contact.output_names keeps the same order)."""
     names = [f"{f.name}.{o}" for f in forces if f is not None for o in outputs_of(f.type)]
+    names += [f"{j.name}.{column}" for j in joints
+              if j is not None and j.limit is not None
+              for column in (limit_column(j.type), "limit_gap")]
     return names + [f"{j.name}.{column}" for j in joints
-                    if j is not None and j.limit is not None
-                    for column in (limit_column(j.type), "limit_gap")]
+                    if j is not None and j.friction is not None for column in FRICTION_COLUMNS]
+
+
+FRICTION_COLUMNS = ("friction", "friction_mode")  # equations/friction.py's outputs
 
 
 def limit_column(joint_type: str) -> str:
@@ -54,3 +59,26 @@ def limit(check: Checker, path: Path, given) -> dict[str, float] | None:
     return {"lower": traced.scalar(lower), "upper": traced.scalar(upper), "stiffness": k,
             "damping": c}
 
+
+
+# ---------------------------------------------------------------------------- joint friction
+def friction(check: Checker, path: Path, given) -> dict[str, float] | None:
+    """A joint's `friction:` as coulomb, viscous, static (default: coulomb), each >= 0, the
+    static limit at least the sliding one."""
+    values = {key: positive(check, (*path, key), check.number((*path, key), getattr(given, key)),
+                            f"friction {key}", True)
+              for key in ("coulomb", "viscous")}
+    if given.static is None:
+        values["static"] = values["coulomb"]
+    else:
+        values["static"] = positive(check, (*path, "static"),
+                                    check.number((*path, "static"), given.static),
+                                    "friction static", True)
+    if failed(values.values()):
+        return None
+    if values["static"] < values["coulomb"]:
+        check.error("E103", (*path, "static"), "the static friction limit must be at least "
+                    "the sliding (coulomb) one", expected=f">= {values['coulomb']:g}",
+                    got=f"{values['static']:g}", hint="leave `static` out to use `coulomb`")
+        return None
+    return {key: traced.scalar(value) for key, value in values.items()}

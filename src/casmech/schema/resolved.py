@@ -83,6 +83,8 @@ class Joint:
     reaction_point: np.ndarray | None = None  # `reactions: {point: ...}`, global at t = 0
     # `limit:` (schema/contact.py): lower, upper (+-inf when absent), stiffness, damping
     limit: Mapping[str, float] | None = None
+    # `friction:` (schema/contact.py): coulomb, viscous, static (default coulomb)
+    friction: Mapping[str, float] | None = None
     # `initial:` (schema/initial.py): key -> number, or Euler parameters (orientation), or a
     # vector (angular_velocity); its keys' sources are in `sources` as "initial.<key>"
     initial: Mapping[str, Any] = field(default_factory=dict)

@@ -96,6 +96,15 @@ class Limit(Spec):
     damping: Scalar = 0
 
 
+class JointFriction(Spec):
+    """Joint friction (equations/friction.py): Coulomb and viscous along the joint coordinate,
+    exact sticking up to the static limit (runtime/friction.py)."""
+
+    coulomb: Scalar = 0
+    viscous: Scalar = 0
+    static: Scalar | None = None
+
+
 class Basic(JointBase):
     f: TimeFunction = "0"
 
@@ -116,13 +125,14 @@ def initial_class(entry: JointType) -> type[Spec] | None:
 
 def joint_class(entry: JointType) -> type[Spec]:
     """The YAML class of a joint type, from its registry entry: `type`, its vector keys, its
-    optional scalars, `limit` when the type has a stop and `initial` when it has initial
-    values."""
+    optional scalars, `limit` and `friction` when the type has a stop and `initial` when it
+    has initial values."""
     fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
     fields |= {key: (Vector, ...) for key in entry.vectors}
     fields |= {key: (Scalar | None, None) for key in entry.options}
     if entry.limit is not None:
         fields["limit"] = (Limit | None, None)
+        fields["friction"] = (JointFriction | None, None)
     initial = initial_class(entry)
     if initial is not None:
         fields["initial"] = (initial | None, None)
