@@ -56,6 +56,8 @@ TYPED: dict[tuple[str, str, tuple[str, ...]], Dimension] = {
         "at": LENGTH, "stiffness": STIFFNESS, "damping": DAMPING,
         "rotational_stiffness": TORQUE, "rotational_damping": ROTATIONAL_DAMPING,
         "preload_force": FORCE, "preload_torque": TORQUE}.items()},
+    ("joints", "gear", ("ratio",)): NUMBER, ("joints", "rack_pinion", ("radius",)): LENGTH,
+    ("joints", "screw", ("lead",)): LENGTH,
     **{("joints", kind, ("f",)): value for kind, value in {
         "dp1": NUMBER, "dp2": LENGTH, "d": dimension(length=2), "cd": LENGTH}.items()},
 }
