@@ -37,7 +37,8 @@ def _coordinate(check: Checker, path: Path, written: str, use: str | None) -> tu
             choices = " or ".join(f"'{name}.{c}'" for c in owned)
             check.error("E103", path, f"joint '{name}' ({check.joint_types[name]}) has "
                         f"{'no' if not owned else 'more than one'} coordinate to couple",
-                        expected="a revolute, translational or cylindrical joint",
+                        expected="a joint of one coordinate, or '<joint>.angle' or "
+                                 "'<joint>.displacement'",
                         hint=f"write {choices}" if owned else None)
             return None
         coordinate = owned[0]
