@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.equations.functions import build_functions, mapped_functions
 from casmech.equations import readings
+from casmech.equations.functions import build_functions, mapped_functions
 from casmech.equations.readings import columns_function
 from casmech.formulations import dae, residuals
 from casmech.model import parametric
