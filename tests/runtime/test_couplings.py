@@ -207,3 +207,13 @@ def test_a_nut_falls_along_a_lead_screw_at_the_closed_form(formulation):
     np.testing.assert_allclose(table["thread.displacement"], -a * t ** 2 / 2, rtol=1e-7,
                                atol=1e-10)
     assert table["constraint_violation"].max() <= 1e-8
+
+
+def test_a_coupler_offset_shifts_the_relation():
+    """`offset: o`: c . s = o, so the wheel stands at (o - c1 angle_1) / c2 in assembly with
+    the pinion held at its file pose by a driver."""
+    table = run(gear_pair("{name: mesh, type: coupler, joints: [p2, p1], coefficients: "
+                          "[2.0, 1.0], offset: 0.3}", driver=", driver: {angle: '0'}"),
+                "assembly")
+    # assembly to its position tolerance
+    np.testing.assert_allclose(table["p2.angle"][0], 0.15, rtol=0, atol=1e-10)

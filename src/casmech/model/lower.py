@@ -166,6 +166,7 @@ def lower_coupling(joint: Joint, poses: Poses,
     index = [poses.index[b] for b in bodies]
     label = f"{joint.type} '{joint.name}': {couples.label}"
     prim = PrimitiveIR(kind, index[0], index[1], vectors, None,
+                       traced.scalar(joint.options.get("offset", 0.0)),
                        row=RowInfo(joint.name, kind, label, joint.source), others=tuple(index[2:]))
     point = poses.local(output.body_i, "P", output_frame["P"])
     return [prim], JointIR(joint.name, joint.type, index[0], index[1],

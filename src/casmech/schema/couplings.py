@@ -1,5 +1,6 @@
 """Couplings of joint coordinates (gear, rack_pinion, coupler; joint_types.Couples): the joints
-they name, the coordinate each gives and the coefficients of the row sum_k c_k s_k = 0.
+they name, the coordinate each gives and the coefficients of the row sum_k c_k s_k = 0 (a
+coupler's: = its `offset`, default 0).
 
 A coupler's `joints:` entry is a joint's name (its one coordinate: revolute angle,
 translational displacement) or `<joint>.angle` / `<joint>.displacement` (a cylindrical joint's
@@ -93,7 +94,8 @@ def coupling(check: Checker, index: int, given) -> resolved.Joint | None:
             return None
     coordinates = [_coordinate(check, where, name, use) for where, name, use in written]
     coefficients = _coefficients(check, path, given, couples)
-    if failed([*coordinates, coefficients]):
+    offset = check.number((*path, "offset"), given.offset) if not couples.joints else 0.0
+    if failed([*coordinates, coefficients, offset]):
         return None
     for k, pair in enumerate(coordinates):
         if pair in coordinates[:k]:
@@ -103,7 +105,7 @@ def coupling(check: Checker, index: int, given) -> resolved.Joint | None:
     body_i, body_j = check.joint_bodies[coordinates[couples.output][0]]
     check.joint_bodies[given.name] = (body_i, body_j)
     sources = {key: check.doc.locate_key((*path, key)) for key in given.model_fields_set}
-    extra = {}
+    extra = {"options": {"offset": offset}} if not couples.joints else {}
     if given.reactions is not None:
         extra["reaction_frame"] = given.reactions.frame
         if given.reactions.point is not None:

@@ -130,7 +130,8 @@ def coupling_class(entry: JointType) -> type[Spec]:
     if couples.joints:
         fields |= {key: (Name, ...) for key in couples.joints}
     else:
-        fields |= {"joints": (tuple[Name, ...], ...), "coefficients": (tuple[Scalar, ...], ...)}
+        fields |= {"joints": (tuple[Name, ...], ...), "coefficients": (tuple[Scalar, ...], ...),
+                   "offset": (Scalar, 0)}
     fields |= {key: (Scalar, ...) for key in couples.scalars}
     return create_model(entry.class_name, __base__=CouplingBase, __module__=__name__, **fields)
 
