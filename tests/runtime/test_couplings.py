@@ -10,7 +10,8 @@ import pytest
 
 import casmech
 from casmech.cli import main
-from casmech.errors import AnalysisError
+from casmech.errors import AnalysisError, UsageError
+from casmech.optimal.sensitivity import sensitivity
 from tests.conftest import Table
 
 G = 9.81
@@ -217,3 +218,24 @@ def test_a_coupler_offset_shifts_the_relation():
                 "assembly")
     # assembly to its position tolerance
     np.testing.assert_allclose(table["p2.angle"][0], 0.15, rtol=0, atol=1e-10)
+
+
+def test_the_sensitivity_to_the_ratio_is_the_closed_forms_derivative():
+    """p2.angle(t) = r T / (J1 + r^2 J2) t^2 / 2, so d/dr = T (J1 - r^2 J2) / (J1 + r^2 J2)^2
+    t^2 / 2 (forward and adjoint sensitivities through the coupling's row)."""
+    text = gear_pair("{name: mesh, type: gear, joint_i: p1, joint_j: p2, ratio: r}").replace(
+        "name: gear_pair\n", f"name: gear_pair\nparameters: {{r: {R_GEAR}}}\n")
+    model = casmech.loads(text)
+    want = TORQUE * (J1 - R_GEAR ** 2 * J2) / (J1 + R_GEAR ** 2 * J2) ** 2 * 0.5 ** 2 / 2
+    for mode in ("forward", "adjoint"):
+        found = sensitivity(model, ["r"], ["p2.angle"], [0.5], mode=mode)
+        # IDAS with its sensitivities at rtol 1e-10
+        np.testing.assert_allclose(found.jacobian[0, 0, 0], want, rtol=1e-7, atol=0,
+                                   err_msg=mode)
+
+
+def test_the_fmu_refuses_couplings_by_name(tmp_path):
+    from casmech.fmu.start import start
+
+    with pytest.raises(UsageError, match="couplings of joint coordinates \\('mesh'\\)"):
+        start(casmech.loads(gear_pair()), ())

@@ -79,3 +79,11 @@ def test_a_coupling_may_name_joints_written_after_it():
     gear = model.joints[0]
     assert gear.couples == (("p1", "angle"), ("c2", "angle"))
     assert (gear.body_i, gear.body_j) == ("d1", "d2")  # the output joint's bodies
+
+
+def test_a_screw_takes_no_initial_values():
+    """A screw is posed in the file (docs/format.md, couplings): `initial:` is an unknown key."""
+    line = ("  - {name: g, type: screw, body_i: d1, body_j: d2, at: [0, 0, 0], axis: [0, 0, 1], "
+            "lead: 0.01, initial: {displacement: 0.1}}")
+    with pytest.raises(ModelError, match=r"error\[E101\] joints\[3\]\.initial: unknown key"):
+        casmech.loads(BASE + line + "\n")

@@ -116,6 +116,9 @@ class JointType:
     # joint-frame quantities from its scalar `options` (used as written by its rows: a screw's
     # coefficients from its lead)
     constants: Callable[[Mapping[str, object]], Mapping[str, np.ndarray]] | None = None
+    # whether `initial:` may pose it (a screw is posed in the file: assembly from its pose
+    # could settle half a turn off along a thread of many turns)
+    posable: bool = True
 
     @property
     def class_name(self) -> str:
@@ -207,7 +210,7 @@ BUILT_IN = (
                             drivers={"displacement": 0})),
     JointType("screw", ("at", "axis"), PARALLEL + ON_AXIS + (SCREW_ROW,),
               coordinates=("angle", "displacement"), limit="displacement", options=("lead",),
-              constants=screw_constants),
+              constants=screw_constants, posable=False),
     JointType("fixed", ("at",), SPHERICAL + PARALLEL + NO_SPIN,
               motion=Motion(0, 0, lambda th: IDENTITY, no_translation,
                             lambda r, d: np.zeros(0))),
@@ -265,7 +268,7 @@ def initial_keys(joint_type: str) -> tuple[str, ...]:
     """The keys of a joint type's `initial:` (its coordinates' values and rates, then its
     entry's `initial`); none for a type that cannot be posed by its joint values."""
     entry = REGISTRY.get(joint_type)
-    if entry is None or entry.basic:
+    if entry is None or entry.basic or not entry.posable:
         return ()
     return tuple(name for name, coordinate in JOINT_COORDINATES.items()
                  if coordinate in entry.coordinates) + entry.initial
