@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from casmech.core import traced
-from casmech.elements.joint_types import COORDINATES, REGISTRY, having
+from casmech.elements.joint_types import COORDINATES, REGISTRY, having, listed
 from casmech.errors import failed
 from casmech.schema import contact, couplings, initial, resolved
 from casmech.schema.checker import ZERO, Checker
@@ -113,7 +113,7 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
     for key in keys:
         where = (*path, "driver", key)
         if given.type not in having(key):
-            allowed = " and ".join(having(key))
+            allowed = listed(having(key))
             check.error(
                 "E408",
                 where,
