@@ -239,3 +239,33 @@ def test_the_fmu_refuses_couplings_by_name(tmp_path):
 
     with pytest.raises(UsageError, match="couplings of joint coordinates \\('mesh'\\)"):
         start(casmech.loads(gear_pair()), ())
+
+
+def test_a_gear_inside_a_component_couples_its_instances_joints():
+    """Two instances of a gearbox component, ratios 2.5 and 2 (its default): each accelerates
+    at its own T / (J1 + r^2 J2) (the coupling's joint names are the instance's)."""
+    text = f"""
+casmech: 1
+name: two_gearboxes
+components:
+  box:
+    parameters: {{r: 2.0}}
+    bodies:
+      - {{name: d1, mass: 2.0, inertia: [0.3, 0.3, {J1}], position: [0, 0, 0]}}
+      - {{name: d2, mass: 3.0, inertia: [0.4, 0.4, {J2}], position: [1, 0, 0]}}
+    joints:
+      - {{name: p1, type: revolute, body_i: ground, body_j: d1, at: [0, 0, 0], axis: [0, 0, 1]}}
+      - {{name: p2, type: revolute, body_i: ground, body_j: d2, at: [1, 0, 0], axis: [0, 0, 1]}}
+      - {{name: mesh, type: gear, joint_i: p1, joint_j: p2, ratio: -r}}
+    forces:
+      - {{name: drive, type: torque, body: d1, value: [0, 0, {TORQUE}]}}
+instances:
+  - {{name: a, component: box, parameters: {{r: 2.5}}}}
+  - {{name: b, component: box, position: [0, 3, 0]}}
+analysis: {{type: dynamics, t_end: 0.2, output_step: 0.1}}
+"""
+    table = run(text)
+    for instance, ratio in (("a", 2.5), ("b", 2.0)):
+        alpha = TORQUE / (J1 + ratio ** 2 * J2)
+        _close(table[f"{instance}.d1.alphaz"][0], alpha, instance)
+        _close(table[f"{instance}.mesh.torque"][0], -J2 * ratio * alpha, instance)
