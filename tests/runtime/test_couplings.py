@@ -269,3 +269,12 @@ analysis: {{type: dynamics, t_end: 0.2, output_step: 0.1}}
         alpha = TORQUE / (J1 + ratio ** 2 * J2)
         _close(table[f"{instance}.d1.alphaz"][0], alpha, instance)
         _close(table[f"{instance}.mesh.torque"][0], -J2 * ratio * alpha, instance)
+
+
+def test_an_output_reads_the_gears_torque():
+    """`outputs:` may read a coupling's column (N m for a gear's torque): twice the torque."""
+    text = gear_pair().replace("analysis:", "outputs:\n  - {name: twice, value: "
+                                            "'2 * mesh.torque'}\nanalysis:")
+    table = run(text)
+    # the same number doubled: round-off
+    np.testing.assert_allclose(table["twice"], 2 * table["mesh.torque"], rtol=1e-15, atol=0)

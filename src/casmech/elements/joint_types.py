@@ -233,7 +233,7 @@ BUILT_IN = (
     _coupling("rack_pinion", ("joint_i", "joint_j"), ("angle", "displacement"), ("radius",),
               lambda s: (-s["radius"], 1.0), 1, "force", "displacement_j = radius angle_i"),
     _coupling("coupler", (), (), (), lambda s: tuple(s["coefficients"]), 0, "force",
-              "sum of coefficients times coordinates = 0"),
+              "sum of coefficients times coordinates = offset"),
     # basic constraints: the file's vectors are used as written (body frames; c global)
     _basic("dp1", ("a_i", "a_j"), "a_i . a_j = f(t)", None),
     _basic("dp2", ("a_i", "s_i", "s_j"), "a_i . d_ij = f(t)", "s_i"),

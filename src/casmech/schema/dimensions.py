@@ -89,7 +89,7 @@ READABLE: dict[str, Dimension] = {
     **dict.fromkeys(("alphax", "alphay", "alphaz"), ANGULAR_ACCELERATION),
     **dict.fromkeys(("e0", "e1", "e2", "e3", "angle", "angle_i", "angle_j"), NUMBER),
     **dict.fromkeys(("fx", "fy", "fz", "normal_force", "friction_force", "limit_force"), FORCE),
-    **dict.fromkeys(("tx", "ty", "tz", "limit_torque"), TORQUE),
+    **dict.fromkeys(("tx", "ty", "tz", "limit_torque", "torque"), TORQUE),
 }
 
 
