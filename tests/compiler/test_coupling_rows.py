@@ -18,6 +18,7 @@ from casmech.model.lower import lower
 from tests.compiler.helpers import random_unit_p
 
 C = (0.7, -1.3, 2.1)
+IRRATIONAL = -1 / 2 ** 0.5  # no fraction of small denominator: g's row is linear
 TEXT = f"""
 casmech: 1
 name: coupled
@@ -31,7 +32,8 @@ joints:
   - {{name: cb, type: cylindrical, body_i: a, body_j: b, at: [1, 0, 0], axis: [1, 0, 0]}}
   - {{name: tc, type: translational, body_i: c, body_j: e, at: [0, 1.5, 0], axis: [0, 1, 1]}}
   - {{name: k, type: coupler, joints: [cb.displacement, ra, tc], coefficients: {list(C)}}}
-  - {{name: g, type: coupler, joints: [cb.angle, ra], coefficients: [1.0, -0.5]}}
+  - {{name: g, type: coupler, joints: [cb.angle, ra], coefficients: [1.0, {IRRATIONAL}]}}
+  - {{name: h, type: gear, joint_i: ra, joint_j: cb, ratio: -1.5}}
 """
 
 
@@ -73,20 +75,27 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
         q[3 * nb:] = np.concatenate([p + 0.05 * rng.normal(size=4) for p in
                                      np.tile([1.0, 0, 0, 0], (nb, 1))])
         q[3 * nb:] = np.concatenate([p / np.linalg.norm(p) for p in q[3 * nb:].reshape(nb, 4)])
-        s = dict(zip(names, _dense(states(t, q, q_dot, np.zeros(7 * nb), np.zeros((3, 5)),
-                                          np.zeros((3, 5)))).ravel(), strict=True))
+        s = dict(zip(names, _dense(states(t, q, q_dot, np.zeros(7 * nb), np.zeros((3, 6)),
+                                          np.zeros((3, 6)))).ravel(), strict=True))
         phi = _dense(functions["phi"](t, q, *extra)).ravel()[rows]
         # coupler k has one angle (ra): C_ra rho sin(angle + (C_cb d_cb + C_tc d_tc) / C_ra),
         # rho the length of body a's x axis in the xy plane (1 where ra's rows hold: its
-        # cosine and sine are dot products of the joint frames); g is linear in its angles
+        # cosine and sine are dot products of the joint frames); g is linear in its angles;
+        # the gear h (coefficients 1.5, 1: integers 3, 2) is (1.5 / 3) Im(z_ra^3 z_cb^2), z
+        # the (cosine, sine) dot products of each joint's frames (ra: x, y on ground, x on a;
+        # cb: y, z on a, y on b)
         shift = (C[0] * s["cb.displacement"] + C[2] * s["tc.displacement"]) / C[1]
-        rho = np.hypot(*_rotation(q[3 * nb:3 * nb + 4])[:2, 0])
-        want = [C[1] * rho * np.sin(s["ra.angle"] + shift), s["cb.angle"] - 0.5 * s["ra.angle"]]
+        a, b = (_rotation(q[3 * nb + 4 * k:3 * nb + 4 * k + 4]) for k in (0, 1))
+        rho = np.hypot(*a[:2, 0])
+        z_ra = complex(a[0, 0], a[1, 0])
+        z_cb = complex(a[:, 1] @ b[:, 1], a[:, 2] @ b[:, 1])
+        want = [C[1] * rho * np.sin(s["ra.angle"] + shift),
+                s["cb.angle"] + IRRATIONAL * s["ra.angle"], 0.5 * (z_ra ** 3 * z_cb ** 2).imag]
         # the same row from the coordinates of the results: round-off
         np.testing.assert_allclose(phi, want, rtol=1e-12, atol=1e-12, err_msg=which)
         # velocity level: phi_q q_dot is the rows' rate from the coordinates' rates
         rate = _dense(functions["phi_q"](t, q, *extra) @ q_dot).ravel()[rows]
-        want_rate = s["cb.angle_dot"] - 0.5 * s["ra.angle_dot"]
+        want_rate = s["cb.angle_dot"] + IRRATIONAL * s["ra.angle_dot"]
         # the same rate, by the chain rule of the coordinates' AD: round-off
         np.testing.assert_allclose(rate[1], want_rate, rtol=1e-10, atol=1e-10, err_msg=which)
 

@@ -278,3 +278,33 @@ def test_an_output_reads_the_gears_torque():
     table = run(text)
     # the same number doubled: round-off
     np.testing.assert_allclose(table["twice"], 2 * table["mesh.torque"], rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize("formulation", ["rp", "romega"])
+def test_a_gear_of_whole_ratio_holds_through_many_turns(formulation):
+    """Ratio -5/2 (integers 5 and 2 in its row): 5 s of the same torque turn disk 2 three times
+    and disk 1 more than once, and both angles stay on alpha t^2 / 2 (the joint angles are in
+    (-pi, pi]: compared modulo 2 pi)."""
+    table = run(gear_pair().replace("t_end: 0.6", "t_end: 5"), formulation=formulation)
+    alpha = TORQUE / (J1 + R_GEAR ** 2 * J2)
+    t = table["t"]
+    assert R_GEAR * alpha * t[-1] ** 2 / 2 < -6 * math.pi  # three turns of disk 2
+    for joint, rate in (("p1", alpha), ("p2", R_GEAR * alpha)):
+        gap = np.angle(np.exp(1j * (table[f"{joint}.angle"] - rate * t ** 2 / 2)))
+        # integrated at rtol 1e-11 over 5 s: to the integrator's tolerance
+        np.testing.assert_allclose(gap, 0.0, rtol=0, atol=1e-6, err_msg=joint)
+    _close(table["mesh.torque"][0], J2 * R_GEAR * alpha, "gear torque")
+    # the multipliers along the run: to the DAE's tolerance
+    np.testing.assert_allclose(table["mesh.torque"], J2 * R_GEAR * alpha, rtol=1e-7, atol=0)
+    assert table["constraint_violation"].max() <= 1e-8
+
+
+def test_a_gear_of_a_ratio_no_fraction_gives_is_linear_in_its_angles():
+    """Ratio -sqrt(2): no fraction of denominator up to 1000, so its row is the linear sum of
+    the angles, which holds inside half a turn: the closed form there."""
+    ratio = -math.sqrt(2)
+    table = run(gear_pair(f"{{name: mesh, type: gear, joint_i: p1, joint_j: p2, "
+                          f"ratio: {ratio!r}}}"))
+    alpha = TORQUE / (J1 + ratio ** 2 * J2)
+    _close(table["d1.alphaz"][0], alpha, "alpha_1")
+    _close(table["mesh.torque"][0], J2 * ratio * alpha, "gear torque")

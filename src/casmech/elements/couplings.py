@@ -19,12 +19,24 @@ PrimitiveIR.others) of that joint's body i and body j. Its vectors are, for coor
 A row with exactly one angle (rack and pinion, screw, a coupler of one rotation with slides) is
 written c_a sin(theta + D / c_a), D = sum of the displacements' c_k s_k: equal to the linear
 row to first order about its solution (the same Jacobian there, so the same multiplier), and
-continuous through any number of turns, since it reads theta by its cosine and sine only. A row
-of two or more angles is the linear sum of the angles above: each in (-pi, pi], so such a
-coupling holds while its angles stay inside one turn of the file's pose (docs/format.md).
+continuous through any number of turns, since it reads theta by its cosine and sine only.
+
+A row of angles only whose coefficients are in the ratios of integers m_k (a gear of ratio
+-z_1/z_2: its tooth counts; `integers`) is written (c_0 / m_0) sin(sum_k m_k theta_k - f m_0 /
+c_0): the imaginary part of the product of (cos theta_k + i sin theta_k)^m_k, again the linear
+row to first order, and continuous through any number of turns (an angle that comes back to
+itself after a turn changes sum m_k theta_k by a multiple of 2 pi). Its other roots, where the
+sine vanishes again, lie pi / |m_k| away in each angle; assembly's continuation and the
+integrators stay on the file's. Any other row (angles with slides, or ratios that are no
+fractions of numerator and denominator up to MAX_DENOMINATOR) is the linear sum of the angles
+above: each in (-pi, pi], so it holds while its angles stay inside half a turn of the file's
+pose (docs/format.md).
 """
 
 from __future__ import annotations
+
+import math
+from fractions import Fraction
 
 import casadi as ca
 
@@ -34,6 +46,8 @@ from casmech.elements.forces.terms import relative_angle
 ANGLE, DISPLACEMENT = "a", "d"
 LETTER = {"angle": ANGLE, "displacement": DISPLACEMENT}
 MAX_COORDINATES = 3
+MAX_DENOMINATOR = 1000  # largest denominator of a ratio of coefficients taken as a fraction
+FRACTION = 1e-12  # relative distance within which a ratio of coefficients is that fraction
 # vector keys of coordinate k by its letter
 VECTOR_KEYS = {ANGLE: ("u_i", "v_i", "u_j"), DISPLACEMENT: ("w_i", "s_i", "s_j")}
 
@@ -61,12 +75,61 @@ def keys(pattern: str) -> tuple[str, ...]:
                  for key in VECTOR_KEYS[letter]) + ("c",)
 
 
-def kind(pattern: str, slots: tuple[int, ...]) -> str:
-    """The row kind of a coupling (module docstring), registered in primitives on first use."""
+def integers(coefficients) -> tuple[int, ...] | None:
+    """Coprime integers in the ratios of the coefficients (the first one positive), or None
+    when a ratio is no fraction of denominator up to MAX_DENOMINATOR (or is symbolic)."""
+    try:
+        values = [float(c) for c in coefficients]
+    except TypeError:  # traced numbers of symbolic parameters: no fixed ratio
+        return None
+    ratios = [Fraction(v / values[0]).limit_denominator(MAX_DENOMINATOR) for v in values]
+    if any(abs(float(r) - v / values[0]) > FRACTION * max(1.0, abs(v / values[0]))
+           for r, v in zip(ratios, values, strict=True)):
+        return None
+    common = math.lcm(*(r.denominator for r in ratios))
+    whole = [int(r * common) for r in ratios]
+    divisor = math.gcd(*whole)
+    return tuple(w // divisor for w in whole)
+
+
+def kind(pattern: str, slots: tuple[int, ...], whole: tuple[int, ...] | None = None) -> str:
+    """The row kind of a coupling (module docstring), registered in primitives on first use;
+    `whole`: the integers of a row of angles only (its sine form), else None."""
     name = f"coupling_{pattern}_{''.join(str(s) for s in slots)}"
+    if whole is not None:
+        name += "_" + "_".join(f"n{-m}" if m < 0 else str(m) for m in whole)
     if name not in primitives.PRIMITIVES:
-        primitives.register(name, coupling_phi(pattern, slots), keys(pattern))
+        phi = coupling_phi(pattern, slots) if whole is None else whole_phi(slots, whole)
+        primitives.register(name, phi, keys(pattern))
     return name
+
+
+def _power(z, n: int):
+    """(re, im) of z^n for an integer n (z = (re, im) on the unit circle: z^-1 = conj z)."""
+    re, im = z if n >= 0 else (z[0], -z[1])
+    result, n = (1, 0), abs(n)
+    while n:
+        if n & 1:
+            result = (result[0] * re - result[1] * im, result[0] * im + result[1] * re)
+        re, im, n = re * re - im * im, 2 * re * im, n >> 1
+    return result
+
+
+def whole_phi(slots: tuple[int, ...], whole: tuple[int, ...]):
+    """phi of a row of angles in integer ratios (module docstring)."""
+    def phi(*arguments):
+        *frames, v, f = arguments
+        product = (1, 0)
+        for k, m in enumerate(whole):
+            fi, fj = frames[slots[2 * k]], frames[slots[2 * k + 1]]
+            z = _power(angle_cos_sin(fi, fj, *(v[f"{key}{k}"] for key in VECTOR_KEYS[ANGLE])),
+                       m)
+            product = (product[0] * z[0] - product[1] * z[1],
+                       product[0] * z[1] + product[1] * z[0])
+        scale = v["c"][0] / whole[0]
+        shift = f / scale
+        return scale * (product[1] * ca.cos(shift) - product[0] * ca.sin(shift))
+    return phi
 
 
 def coupling_phi(pattern: str, slots: tuple[int, ...]):

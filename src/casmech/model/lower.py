@@ -162,7 +162,8 @@ def lower_coupling(joint: Joint, poses: Poses,
             vectors[f"{key}{k}"] = poses.local(sides[side], quantity, frame[quantity])
     vectors["c"] = traced.array(list(joint.coefficients)
                                 + [0.0] * (3 - len(joint.coefficients)))
-    kind = couplings.kind(pattern, tuple(slots))
+    whole = couplings.integers(joint.coefficients) if set(pattern) == {couplings.ANGLE} else None
+    kind = couplings.kind(pattern, tuple(slots), whole)
     index = [poses.index[b] for b in bodies]
     label = f"{joint.type} '{joint.name}': {couples.label}"
     prim = PrimitiveIR(kind, index[0], index[1], vectors, None,
