@@ -81,7 +81,7 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
         # coupler k has one angle (ra): C_ra rho sin(angle + (C_cb d_cb + C_tc d_tc) / C_ra),
         # rho the length of body a's x axis in the xy plane (1 where ra's rows hold: its
         # cosine and sine are dot products of the joint frames); g is linear in its angles;
-        # the gear h (coefficients 1.5, 1: integers 3, 2) is (1.5 / 3) Im(z_ra^3 z_cb^2), z
+        # the gear h (coefficients 1.5, 1: integers 3, 2) is (1.5 / 3) arg(z_ra^3 z_cb^2), z
         # the (cosine, sine) dot products of each joint's frames (ra: x, y on ground, x on a;
         # cb: y, z on a, y on b)
         shift = (C[0] * s["cb.displacement"] + C[2] * s["tc.displacement"]) / C[1]
@@ -90,7 +90,7 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
         z_ra = complex(a[0, 0], a[1, 0])
         z_cb = complex(a[:, 1] @ b[:, 1], a[:, 2] @ b[:, 1])
         want = [C[1] * rho * np.sin(s["ra.angle"] + shift),
-                s["cb.angle"] + IRRATIONAL * s["ra.angle"], 0.5 * (z_ra ** 3 * z_cb ** 2).imag]
+                s["cb.angle"] + IRRATIONAL * s["ra.angle"], 0.5 * np.angle(z_ra ** 3 * z_cb ** 2)]
         # the same row from the coordinates of the results: round-off
         np.testing.assert_allclose(phi, want, rtol=1e-12, atol=1e-12, err_msg=which)
         # velocity level: phi_q q_dot is the rows' rate from the coordinates' rates

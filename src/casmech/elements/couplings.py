@@ -22,12 +22,13 @@ row to first order about its solution (the same Jacobian there, so the same mult
 continuous through any number of turns, since it reads theta by its cosine and sine only.
 
 A row of angles only whose coefficients are in the ratios of integers m_k (a gear of ratio
--z_1/z_2: its tooth counts; `integers`) is written (c_0 / m_0) sin(sum_k m_k theta_k - f m_0 /
-c_0): the imaginary part of the product of (cos theta_k + i sin theta_k)^m_k, again the linear
-row to first order, and continuous through any number of turns (an angle that comes back to
-itself after a turn changes sum m_k theta_k by a multiple of 2 pi). Its other roots, where the
-sine vanishes again, lie pi / |m_k| away in each angle; assembly's continuation and the
-integrators stay on the file's. Any other row (angles with slides, or ratios that are no
+-z_1/z_2: its tooth counts; `integers`) is written (c_0 / m_0) arg(P e^(-i f m_0 / c_0)), P the
+product of (cos theta_k + i sin theta_k)^m_k: the linear row itself (with its Jacobian) while
+sum_k m_k theta_k - f m_0 / c_0 stays within half a turn of a multiple of 2 pi, and continuous
+through any number of turns of the angles (an angle that comes back to itself after a turn
+changes sum m_k theta_k by a multiple of 2 pi). It jumps only where the row is violated by
+pi / |m_k| in an angle; assembly's continuation, the integrators and the optimizers stay far
+closer. Any other row (angles with slides, or ratios that are no
 fractions of numerator and denominator up to MAX_DENOMINATOR) is the linear sum of the angles
 above: each in (-pi, pi], so it holds while its angles stay inside half a turn of the file's
 pose (docs/format.md).
@@ -128,7 +129,9 @@ def whole_phi(slots: tuple[int, ...], whole: tuple[int, ...]):
                        product[0] * z[1] + product[1] * z[0])
         scale = v["c"][0] / whole[0]
         shift = f / scale
-        return scale * (product[1] * ca.cos(shift) - product[0] * ca.sin(shift))
+        re = product[0] * ca.cos(shift) + product[1] * ca.sin(shift)
+        im = product[1] * ca.cos(shift) - product[0] * ca.sin(shift)
+        return scale * ca.atan2(im, re)
     return phi
 
 
