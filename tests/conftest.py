@@ -87,3 +87,17 @@ def private_caches(session_cache, monkeypatch) -> Path:
 @pytest.fixture(scope="session")
 def models_dir():
     return MODELS
+
+
+@pytest.fixture(autouse=True, scope="session")
+def mujoco_warnings_kept():
+    """MuJoCo writes its warnings to MUJOCO_LOG.TXT in the working directory; in the tests
+    they go to this list instead, so the suite writes nothing outside temporary folders."""
+    try:
+        import mujoco
+    except ImportError:
+        yield []
+        return
+    seen: list[str] = []
+    mujoco.set_mju_user_warning(seen.append)
+    yield seen

@@ -30,6 +30,9 @@ def test_rows_are_primitives_on_quantities_the_entry_has(entry):
                 assert not side and name in entry.vectors
             elif side:  # a quantity in body i's or j's frame
                 assert side in ("i", "j") and name in quantities(entry)
+            elif entry.constants is not None and name in entry.constants(
+                    dict.fromkeys(entry.options, 1.0)):  # from its scalars (a screw's lead)
+                assert name not in quantities(entry)
             else:  # used as written: CD's global unit vector c
                 assert kind == "cd" and name in ("ex", "ey", "ez")
 
@@ -51,9 +54,21 @@ def test_a_tree_motion_drives_exactly_the_entry_coordinates(entry):
     assert all(0 <= k < entry.motion.n_q for k in entry.motion.drivers.values())
 
 
+@pytest.mark.parametrize("entry", [e for e in BUILT_IN if e.couples], ids=lambda e: e.name)
+def test_a_coupling_names_coordinates_and_its_output(entry):
+    """A coupling has no rows, vectors or coordinates of its own; it reads known coordinates
+    and its output is one of its joints; its coefficients are one per joint."""
+    couples = entry.couples
+    assert not entry.rows and not entry.vectors and not entry.coordinates
+    assert set(couples.uses) <= set(COORDINATES) and len(couples.uses) == len(couples.joints)
+    values = dict.fromkeys(couples.scalars, 2.0) | {"coefficients": [1.0, 3.0]}
+    assert len(couples.coefficients(values)) == (len(couples.joints) or 2)
+    assert 0 <= couples.output < (len(couples.joints) or 2)
+
+
 def test_queries_follow_the_registry():
-    assert joint_types.having("angle") == ("revolute", "cylindrical")
-    assert joint_types.having("displacement") == ("translational", "cylindrical")
+    assert joint_types.having("angle") == ("revolute", "cylindrical", "screw")
+    assert joint_types.having("displacement") == ("translational", "cylindrical", "screw")
     assert set(MOTIONS) == {e.name for e in BUILT_IN if e.motion} | {"free"}
     assert joint_types.attributes("cylindrical") == ["angle", "angle_dot", "displacement",
                                                       "displacement_dot"]

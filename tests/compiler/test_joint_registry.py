@@ -124,7 +124,7 @@ def test_the_schema_checks_come_from_the_entry(point_on_line):
     with pytest.raises(ModelError) as angle:
         casmech.loads(toy_model(", driver: {angle: t}"))
     assert [d.code for d in angle.value.diagnostics] == ["E408"]
-    assert "allowed on revolute and cylindrical joints" in angle.value.diagnostics[0].hint
+    assert "allowed on revolute, cylindrical and screw joints" in angle.value.diagnostics[0].hint
     with pytest.raises(ModelError) as motor:
         casmech.loads(toy_model(", motor: {torque: 1}"))
     assert "point_on_line joint's motor takes displacement | velocity | force" in \

@@ -52,6 +52,17 @@ def slide_j(direction) -> Motion:
     return lambda poses, s: [poses[0], (poses[1][0] + s * np.asarray(direction), poses[1][1])]
 
 
+LEAD = 0.45  # screw: advance per turn
+
+
+def screw_j(axis, point, lead) -> Motion:
+    """Body j turned by s about `axis` through `point` and slid by lead s / (2 pi) along it."""
+    def motion(poses, s):
+        r, p = rotate_pose(*poses[1], axis, s, point)
+        return [poses[0], (r + lead * s / (2 * np.pi) * np.asarray(axis), p)]
+    return motion
+
+
 def rigid(motion_of_one: Callable[[Pose, float], Pose]) -> Motion:
     """The same rigid motion applied to both bodies (every joint allows it)."""
     return lambda poses, s: [motion_of_one(pose, s) for pose in poses]
@@ -68,6 +79,7 @@ class Case:
     vectors: dict
     removed: int  # rows the joint removes (independent constraint equations)
     free: list[Motion] = field(default_factory=list)  # relative motions the joint allows
+    options: dict = field(default_factory=dict)  # its scalar options (a screw's lead)
 
 
 CASES: dict[str, Case] = {
@@ -83,6 +95,8 @@ CASES: dict[str, Case] = {
     # Q circles about the axis through P; j turns about any axis through Q.
     "revolute_spherical": Case({"at": P, "at_j": Q, "axis": W}, 2,
                                [turn_j(W, P)] + [turn_j(e, Q) for e in (EX, EY, EZ)]),
+    # the cylindrical joint's motions tied: one turn advances LEAD
+    "screw": Case({"at": P, "axis": W}, 5, [screw_j(W, P, LEAD)], {"lead": LEAD}),
     "planar": Case({"at": P, "axis": W}, 3,
                    [slide_j(perpendicular(W)), slide_j(np.cross(W, perpendicular(W))),
                     turn_j(W, P), turn_j(W, P + 0.5 * perpendicular(W))]),
@@ -90,7 +104,8 @@ CASES: dict[str, Case] = {
 
 
 def test_every_joint_type_has_a_case():
-    assert set(CASES) == {e.name for e in joint_types.BUILT_IN if not e.basic}
+    assert set(CASES) == {e.name for e in joint_types.BUILT_IN
+                          if not e.basic and e.couples is None}  # couplings: no two bodies
 
 
 class Mechanism:
@@ -98,7 +113,9 @@ class Mechanism:
 
     def __init__(self, rng, joint_type: str, **extra):
         self.bodies = two_free_bodies(rng)
-        j = joint("j", joint_type, "b1", "b2", **CASES[joint_type].vectors, **extra)
+        case = CASES[joint_type]
+        options = {"options": case.options} if case.options else {}
+        j = joint("j", joint_type, "b1", "b2", **case.vectors, **options, **extra)
         self.functions = compile_model(model(self.bodies, [j]))
         self.poses = [(b.position, b.euler_parameters) for b in self.bodies]
         self.q0 = coordinates(self.bodies)

@@ -275,4 +275,4 @@ def test_motor_on_a_spherical_joint_is_refused():
     found = diagnostics(text)
     assert [d.code for d in found] == ["E408"]
     # the hint names the joint types with a coordinate (casmech.elements.joint_types)
-    assert found[0].hint == "motors act on revolute, cylindrical and translational joints"
+    assert found[0].hint == "motors act on revolute, cylindrical, translational and screw joints"

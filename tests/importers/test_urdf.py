@@ -215,8 +215,9 @@ def test_untranslated_elements_are_warnings_with_lines(tmp_path):
     warnings = [w.format() for w in imported.warnings]
     file = tmp_path / "robot.urdf"
     assert [w.split("\n")[0] for w in warnings] == [
-        f"{file}:10:5: warning[E101] joint[hinge]: <mimic> not translated",
         f"{file}:9:5: warning[E101] joint[hinge].dynamics: friction not translated",
+        f"{file}:10:5: warning[E101] joint[hinge].mimic: mimic not translated: the URDF has "
+        "no joint 'other'",
         f"{file}:27:1: warning[E101] robot: <transmission> not translated",
         f"{file}:28:1: warning[E101] robot: <gazebo> not translated"]
 

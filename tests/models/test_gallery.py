@@ -286,3 +286,32 @@ def test_bricard_has_one_dof_with_a_redundant_row_and_keeps_its_loop_closed():
     energy = cf.mechanical_energy(model, table)
     # measured drift 7e-8 J over 0.5 s on |E| = 29.4 J (rtol 1e-8)
     np.testing.assert_allclose(energy, energy[0], rtol=0, atol=1e-6)
+
+
+# -------------------------------------------------------------------------------- couplings
+def test_gear_pair_swings_at_the_closed_form_frequency():
+    """The pendulum on the pinion swings with the wheel's inertia reduced through the gear:
+    omega^2 = m g l / (J1 + m l^2 + (r1 / r2)^2 J2) about the hanging equilibrium."""
+    model = casmech.load(MODELS / "gear_pair.yaml")
+    p = model.parameters
+    j1 = p["m1"] * p["r1"] ** 2 / 2
+    j2 = p["m2"] * p["r2"] ** 2 / 2
+    omega = np.sqrt(p["m"] * 9.81 * p["l"]
+                    / (j1 + p["m"] * p["l"] ** 2 + (p["r1"] / p["r2"]) ** 2 * j2))
+    functions = casmech.compile(model)
+    linear = casmech.analyze(functions, "modal").linear_model
+    # eigenvalues of the reduced linear model at the equilibrium: round-off
+    np.testing.assert_allclose(linear.frequency_hz, [omega / (2 * np.pi)], rtol=1e-9, atol=0)
+
+
+def test_lead_screw_nut_falls_at_the_closed_form_acceleration():
+    """a = g m / (m + J (2 pi / lead)^2) all the way down (about 40 turns)."""
+    model, _, table = run("lead_screw")
+    p = model.parameters
+    inertia = p["m"] * (p["r_in"] ** 2 + p["r_out"] ** 2) / 2
+    a = 9.81 * p["m"] / (p["m"] + inertia * (2 * np.pi / p["lead"]) ** 2)
+    # the consistent initial acceleration solves a linear system: round-off
+    np.testing.assert_allclose(table["nut.az"][0], -a, rtol=1e-9, atol=0)
+    t = table["t"]
+    np.testing.assert_allclose(table["thread.displacement"], -a * t ** 2 / 2, rtol=1e-6,
+                               atol=1e-9)  # positions to the integrator's tolerance

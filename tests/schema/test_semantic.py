@@ -346,7 +346,7 @@ def test_driver_keys_by_joint_type():
         ("E408", "joints[0].driver.displacement"),
         ("E408", "joints[1].driver.angle"),
     ]
-    assert found[1].hint == "allowed on revolute and cylindrical joints"
+    assert found[1].hint == "allowed on revolute, cylindrical and screw joints"
 
 
 def test_joint_geometry_checks():

@@ -35,6 +35,7 @@ import numpy as np
 from casmech.core.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
 from casmech.core.registry import Registry
 from casmech.core.states import JOINT_COORDINATES, JOINT_STATES
+from casmech.elements import couplings
 from casmech.elements.motions import FREE, Motion, no_translation, slide, universal_angles
 
 Template = tuple[str, dict[str, str], str]  # (kind, {vector key: quantity@body}, label)
@@ -70,6 +71,21 @@ FRAME = MappingProxyType({"at": "P", "at_i": "Pi", "at_j": "Pj", "axis": "w",
 
 
 @dataclass(frozen=True)
+class Couples:
+    """A coupling between joint coordinates (elements/couplings.py): a type whose one row is
+    sum_k c_k s_k = 0 over the coordinates s_k of the joints it names, over their bodies."""
+
+    joints: tuple[str, ...]  # YAML keys naming one joint each; (): a `joints:` list of 2 or 3
+    uses: tuple[str, ...]  # the coordinate each keyed joint gives (a `joints:` list: any one)
+    scalars: tuple[str, ...]  # its scalar keys (a `joints:` list: `coefficients:` beside it)
+    coefficients: Callable[[Mapping[str, object]], tuple]  # its scalars -> c_k per coordinate
+    output: int  # the coupled joint whose body_j the row's reaction columns are on
+    column: str  # the results column `<name>.<column>`: -lambda, the row's generalized force
+    # on the output coordinate divided by its coefficient (docs/format.md)
+    label: str = ""
+
+
+@dataclass(frozen=True)
 class JointType:
     """One joint type (module docstring)."""
 
@@ -96,6 +112,13 @@ class JointType:
     # displacement_dot): a universal joint's two angles and rates, a spherical joint's
     # `orientation` and `angular_velocity` (model/initial.py poses the bodies from them)
     initial: tuple[str, ...] = ()
+    couples: Couples | None = None  # a coupling of other joints' coordinates (no bodies of its own)
+    # joint-frame quantities from its scalar `options` (used as written by its rows: a screw's
+    # coefficients from its lead)
+    constants: Callable[[Mapping[str, object]], Mapping[str, np.ndarray]] | None = None
+    # whether `initial:` may pose it (a screw is posed in the file: assembly from its pose
+    # could settle half a turn off along a thread of many turns)
+    posable: bool = True
 
     @property
     def class_name(self) -> str:
@@ -138,6 +161,23 @@ def check_revolute_spherical(vectors) -> list[Problem]:
     return []
 
 
+SCREW_ROW = (couplings.kind("ad", (0, 1, 0, 1)),
+             {"u_i0": "u@i", "v_i0": "v@i", "u_j0": "u@j", "w_i1": "w@i", "s_i1": "P@i",
+              "s_j1": "P@j", "c": "screw"}, "angle = 2 pi displacement / lead")
+
+
+def screw_constants(options) -> dict[str, np.ndarray]:
+    """The screw row's coefficients: angle - 2 pi displacement / lead = 0."""
+    return {"screw": np.array([1.0, -2 * np.pi / options["lead"], 0.0], dtype=object)}
+
+
+def _coupling(name: str, joints: tuple[str, ...], uses: tuple[str, ...],
+              scalars: tuple[str, ...], coefficients, output: int, column: str,
+              label: str) -> JointType:
+    return JointType(name, (), (), reaction_point=None,
+                     couples=Couples(joints, uses, scalars, coefficients, output, column, label))
+
+
 def _basic(name: str, vectors: tuple[str, ...], label: str, point: str | None) -> JointType:
     return JointType(name, vectors, ((name, {key: key for key in vectors}, label),),
                      reaction_point=point, basic=True, title=name.upper())
@@ -168,6 +208,9 @@ BUILT_IN = (
               coordinates=("displacement",), limit="displacement",
               motion=Motion(1, 1, lambda th: IDENTITY, slide, lambda r, d: np.array([d[2]]),
                             drivers={"displacement": 0})),
+    JointType("screw", ("at", "axis"), PARALLEL + ON_AXIS + (SCREW_ROW,),
+              coordinates=("angle", "displacement"), limit="displacement", options=("lead",),
+              constants=screw_constants, posable=False),
     JointType("fixed", ("at",), SPHERICAL + PARALLEL + NO_SPIN,
               motion=Motion(0, 0, lambda th: IDENTITY, no_translation,
                             lambda r, d: np.zeros(0))),
@@ -184,6 +227,13 @@ BUILT_IN = (
               motion=Motion(3, 3, lambda th: about(2, th[2]),
                             lambda th: ca.vertcat(th[0], th[1], 0),
                             lambda r, d: np.array([d[0], d[1], angle_about(r, 2)]))),
+    # couplings of joint coordinates (elements/couplings.py)
+    _coupling("gear", ("joint_i", "joint_j"), ("angle", "angle"), ("ratio",),
+              lambda s: (-s["ratio"], 1.0), 1, "torque", "angle_j = ratio angle_i"),
+    _coupling("rack_pinion", ("joint_i", "joint_j"), ("angle", "displacement"), ("radius",),
+              lambda s: (-s["radius"], 1.0), 1, "force", "displacement_j = radius angle_i"),
+    _coupling("coupler", (), (), (), lambda s: tuple(s["coefficients"]), 0, "force",
+              "sum of coefficients times coordinates = offset"),
     # basic constraints: the file's vectors are used as written (body frames; c global)
     _basic("dp1", ("a_i", "a_j"), "a_i . a_j = f(t)", None),
     _basic("dp2", ("a_i", "s_i", "s_j"), "a_i . d_ij = f(t)", "s_i"),
@@ -218,7 +268,7 @@ def initial_keys(joint_type: str) -> tuple[str, ...]:
     """The keys of a joint type's `initial:` (its coordinates' values and rates, then its
     entry's `initial`); none for a type that cannot be posed by its joint values."""
     entry = REGISTRY.get(joint_type)
-    if entry is None or entry.basic:
+    if entry is None or entry.basic or not entry.posable:
         return ()
     return tuple(name for name, coordinate in JOINT_COORDINATES.items()
                  if coordinate in entry.coordinates) + entry.initial

@@ -26,16 +26,17 @@ from collections.abc import Callable
 from typing import Any
 
 from casmech.core.values import constant
+from casmech.elements.couplings import displacement_value
 from casmech.elements.forces.springs import joint_angle
 from casmech.equations import body, joint_states
 
 
 def displacement(geometry, x):
-    """Slide of body_j's joint point along the axis on body_i, from body_i's joint point."""
-    axis = x.frame(geometry.body_i).A @ constant(geometry.axes["w_i"])
-    gap = x.point(geometry.body_j, geometry.points["s_j"]) - x.point(
-        geometry.body_i, geometry.points["s_i"])
-    return axis.T @ gap
+    """Slide of body_j's joint point along the axis on body_i, from body_i's joint point
+    (elements/couplings.py writes it over the two frames)."""
+    return displacement_value(x.frame(geometry.body_i), x.frame(geometry.body_j),
+                              constant(geometry.axes["w_i"]), constant(geometry.points["s_i"]),
+                              constant(geometry.points["s_j"]))
 
 
 def _angle(geometry, x):

@@ -11,6 +11,10 @@ computes (`force`, `torque`: 3 x joints, global, the torque about the joint poin
 - the contact and stop columns (equations/contact.py);
 - `<joint>.fx` .. `.tz`: the reaction columns as the joint's `reactions:` writes them (its
   frame, its point; runtime/reaction_frames.py does the same on numbers);
+- `<coupling>.torque` / `.force` (gear; rack_pinion, coupler: joint_types.Couples.column):
+  the generalized force the coupling's row applies along its output joint's coordinate
+  (the reaction torque or force on that joint's body_j about or along its axis) divided by
+  the coordinate's coefficient: -lambda of the row;
 - an output's name: its value.
 
 `names(ir)` are the columns after the contract's (each joint's states in file order, then the
@@ -26,7 +30,7 @@ from casmech.core import euler
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
 from casmech.core.states import split
 from casmech.core.values import constant
-from casmech.elements.joint_types import attributes
+from casmech.elements.joint_types import REGISTRY, attributes
 from casmech.equations import contact, coordinates
 from casmech.equations.assemble import Coordinates
 from casmech.model.bindings import coordinate_geometry
@@ -38,9 +42,25 @@ def joint_state_names(ir: ModelIR) -> list[str]:
     return [f"{joint.name}.{a}" for joint in ir.joints for a in attributes(joint.type)]
 
 
+def coupling_names(ir: ModelIR) -> list[str]:
+    """`<coupling>.<column>` of every coupling (gear: torque; rack_pinion, coupler: force)."""
+    return [f"{joint.name}.{REGISTRY[joint.type].couples.column}" for joint in ir.joints
+            if joint.couples]
+
+
 def names(ir: ModelIR) -> list[str]:
-    """The results columns after the contract's: the joint states, then the outputs."""
-    return joint_state_names(ir) + [output.name for output in ir.outputs]
+    """The results columns after the contract's: the joint states, the couplings' columns,
+    then the outputs."""
+    return joint_state_names(ir) + coupling_names(ir) + [output.name for output in ir.outputs]
+
+
+def coupling_column(x: Coordinates, joint, force, torque):
+    """A coupling's column (module docstring) from its reaction on the output joint's body_j."""
+    couples = REGISTRY[joint.type].couples
+    axis = x.frame(joint.body_i).A @ constant(joint.geometry["w@i"])
+    coordinate = joint.couples[couples.output][1]
+    along = torque if coordinate == "angle" else force
+    return (axis.T @ along) / constant(joint.coefficients[couples.output])
 
 
 def body_columns(x: Coordinates, k: int) -> dict:
@@ -112,6 +132,9 @@ class Readings:
         if attribute in JOINT_COLUMNS:
             return self._group(("reactions", owner), lambda: reaction_columns(
                 self.ir, self.x, self.force, self.torque, index))[attribute]
+        if self.ir.joints[index].couples:
+            return coupling_column(self.x, self.ir.joints[index], self.force[:, index],
+                                   self.torque[:, index])
         geometry = coordinate_geometry(self.ir.joints[index])
         return coordinates.JOINT_VALUES[attribute](geometry, self.x)
 

@@ -48,6 +48,11 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
         raise UsageError(f"{model.file}: a loop closes through a floating body; its joint "
                          "coordinates are not an ODE the FMU can integrate (casmech run "
                          "integrates it in the r-p DAE)")
+    if tree.couplings:
+        names = ", ".join(f"'{joint.name}'" for joint in tree.couplings)
+        raise UsageError(f"{model.file}: the FMU integrates joint coordinates, which do not "
+                         f"take couplings of joint coordinates ({names}); casmech run "
+                         "integrates them in the r-p DAE")
     system = build(ir, tree)
     q0, q_dot0 = assembly.initial_state(functions, t0)
     x0 = joint_dynamics.initial_state(system, q0, q_dot0)

@@ -58,6 +58,13 @@ class Tree:
         its joint coordinates are its r-p ones plus the recursion's overhead (auto runs rp)."""
         return not self.is_tree and any(joint.joint is None for joint in self.joints)
 
+    @property
+    def couplings(self) -> tuple[JointIR, ...]:
+        """Couplings of joint coordinates (gear, rack_pinion, coupler): rows over the bodies of
+        several joints, which the joint formulation's cut rows (two bodies each) do not take
+        (auto runs rp)."""
+        return tuple(joint for joint in self.cut if joint.couples)
+
 
 def spanning_tree(ir: ModelIR) -> Tree:
     """The tree of the module docstring."""

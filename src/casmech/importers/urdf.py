@@ -19,7 +19,8 @@ Translated:
   (importers/urdf_limits.py: bounds from the imported pose, MuJoCo's default softness);
   effort and velocity limits, and the limits of joints merged through massless links, are
   comments.
-Not translated (a warning naming the line): `mimic`, `friction`, `calibration`,
+- `mimic` -> a coupler of the two joints (importers/urdf_mimic.py).
+Not translated (a warning naming the line): `friction`, `calibration`,
 `safety_controller`, `transmission`, `gazebo` and other extensions; `collision` elements are
 skipped (casmech has no contact). URDF has no gravity: the model gets [0, 0, -9.81].
 
@@ -35,7 +36,7 @@ import numpy as np
 
 from casmech.core.quaternions import from_matrix
 from casmech.errors import UsageError, did_you_mean
-from casmech.importers import inertia_check, urdf_limits
+from casmech.importers import inertia_check, urdf_limits, urdf_mimic
 from casmech.importers.adm_frames import tidy
 from casmech.importers.emit import Imported, Item, identifier
 from casmech.importers.joint_chains import BodyFrame, Elementary, basic_rows, compose, name_of
@@ -49,9 +50,8 @@ GRAVITY = [0.0, 0.0, -9.81]
 DAMPER_LENGTH = 1.0  # [m] distance between the two points of a prismatic joint's damper
 SKIPPED = {"collision"}  # link children skipped without a warning (said in the header)
 KNOWN = {"robot": {"link", "joint", "material"}, "link": {"inertial", "visual", "collision"},
-         "joint": {"parent", "child", "origin", "axis", "limit", "dynamics"}}
-HINTS = {"mimic": "a mimic joint can be written by hand as a basic constraint (docs/import.md)",
-         "transmission": "actuation: add motors or forces by hand (docs/motors.md)"}
+         "joint": {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic"}}
+HINTS = {"transmission": "actuation: add motors or forces by hand (docs/motors.md)"}
 ELEMENTARY = {"revolute": "hinge", "continuous": "hinge", "prismatic": "slide"}
 
 
@@ -84,6 +84,7 @@ class Translator:
         self.body_names = {tree.root: "ground"}  # head link -> casmech body
         self.frames: dict[str, BodyFrame] = {}  # casmech body -> its frame at the pose
         self.positions: dict[str, float] = {}  # URDF joint -> its initial value
+        self.single_names: dict[str, str] = {}  # URDF joint -> casmech joint (single joints)
 
     def warn_unknown(self, element, path: str, kind: str) -> None:
         for child in element.children:
@@ -178,7 +179,19 @@ class Translator:
         comments = [f"{joint.type} joint {joint.name} (line {joint.element.line})"]
         comments += self.limit(joint, path, data, joint.child)
         self.model.joints.append(Item(data, comments))
+        self.single_names[joint.name] = name
         self.damper(joint, path, data)
+
+    def mimics(self) -> None:
+        """Every <mimic> as a coupler, after the joints (importers/urdf_mimic.py)."""
+        known = [joint.name for joint in self.tree.joints]
+        for joint in self.tree.joints:
+            element = joint.element.find("mimic")
+            if element is not None:
+                item = urdf_mimic.coupler(self.reader, self.names, self.single_names,
+                                          self.positions, joint, element, known)
+                if item is not None:
+                    self.model.joints.append(item)
 
     def composite(self, chain: list[Joint], body_i: str, body_j: str) -> None:
         """Joints through massless links, composed into the one joint they amount to."""
@@ -333,6 +346,7 @@ def import_urdf(path: Path, positions: dict[str, float] | None = None,
         translator.body(layout.groups[head])
     for head in layout.heads:
         translator.joint(head)
+    translator.mimics()
     translator.warn_unknown(reader.root, "robot", "robot")
     return _finish(translator, path, positions, velocities, floating_base)
 

@@ -80,6 +80,10 @@ class JointIR:
     # key -> value, and where each key was written
     initial: Mapping[str, Any] = field(default_factory=dict)
     initial_sources: Mapping[str, Source] = field(default_factory=dict)
+    # a coupling (joint_types.Couples): (joint, coordinate) of each coupled coordinate and
+    # its coefficient; body_i, body_j, point_i and geometry are then the output joint's
+    couples: tuple[tuple[str, str], ...] = ()
+    coefficients: tuple[Any, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from casmech.core import euler, traced
+from casmech.elements import couplings
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.elements.joint_types import COORDINATES, REGISTRY
 from casmech.model import bindings, initial
@@ -71,6 +72,9 @@ def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
         w = traced.asarray(v["axis"]) / np.linalg.norm(v["axis"])
         frame["u"], frame["v"] = perpendicular_pair(w)
         frame["w"] = w
+    constants = REGISTRY[joint.type].constants
+    if constants is not None and joint.options:
+        frame |= constants(joint.options)
     return frame
 
 
@@ -130,6 +134,49 @@ def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[Primit
                           dict(joint.initial), where)
 
 
+# a coupled coordinate's vectors (elements/couplings.py): key -> (joint-frame quantity, side)
+COUPLED = {couplings.ANGLE: (("u", "i"), ("v", "i"), ("u", "j")),
+           couplings.DISPLACEMENT: (("w", "i"), ("P", "i"), ("P", "j"))}
+
+
+def lower_coupling(joint: Joint, poses: Poses,
+                   first_row: int) -> tuple[list[PrimitiveIR], JointIR]:
+    """A coupling's one row over the bodies of the joints it couples (the output joint's
+    body_i and body_j first), and its JointIR with the output joint's frames."""
+    couples = REGISTRY[joint.type].couples
+    coupled = [poses.joint(name) for name, _ in joint.couples]
+    output, output_frame = coupled[couples.output]
+    bodies = [output.body_i, output.body_j]
+    vectors, pattern, slots = {}, "", []
+    for k, ((other, frame), (_, coordinate)) in enumerate(zip(coupled, joint.couples,
+                                                               strict=True)):
+        letter = couplings.LETTER[coordinate]
+        pattern += letter
+        sides = {"i": other.body_i, "j": other.body_j}
+        for side in "ij":
+            if sides[side] not in bodies:
+                bodies.append(sides[side])
+            slots.append(bodies.index(sides[side]))
+        for key, (quantity, side) in zip(couplings.VECTOR_KEYS[letter], COUPLED[letter],
+                                         strict=True):
+            vectors[f"{key}{k}"] = poses.local(sides[side], quantity, frame[quantity])
+    vectors["c"] = traced.array(list(joint.coefficients)
+                                + [0.0] * (3 - len(joint.coefficients)))
+    whole = couplings.integers(joint.coefficients) if set(pattern) == {couplings.ANGLE} else None
+    kind = couplings.kind(pattern, tuple(slots), whole)
+    index = [poses.index[b] for b in bodies]
+    label = f"{joint.type} '{joint.name}': {couples.label}"
+    prim = PrimitiveIR(kind, index[0], index[1], vectors, None,
+                       traced.scalar(joint.options.get("offset", 0.0)),
+                       row=RowInfo(joint.name, kind, label, joint.source), others=tuple(index[2:]))
+    point = poses.local(output.body_i, "P", output_frame["P"])
+    return [prim], JointIR(joint.name, joint.type, index[0], index[1],
+                           range(first_row, first_row + 1), point, joint.source,
+                           _geometry(output, output_frame, poses), {}, True,
+                           joint.reaction_frame, _reaction_point(joint, poses),
+                           couples=tuple(joint.couples), coefficients=tuple(joint.coefficients))
+
+
 FRAME_QUANTITIES = ("P", "u", "v", "w", "axis_i", "axis_j")
 
 
@@ -178,7 +225,8 @@ def lower(model: ResolvedModel) -> ModelIR:
     primitives: list[PrimitiveIR] = []
     joints: list[JointIR] = []
     for joint in model.joints:
-        prims, joint_ir = lower_joint(joint, poses, len(primitives))
+        lowering = lower_coupling if REGISTRY[joint.type].couples else lower_joint
+        prims, joint_ir = lowering(joint, poses, len(primitives))
         primitives += prims
         joints.append(joint_ir)
     bodies = tuple(

@@ -28,6 +28,8 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.formulations.tree import spanning_tree
+from casmech.model.lower import lower
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
 from casmech.optimal.joint_model import JointModel, joint_model
@@ -62,7 +64,9 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
                          "only; use formulation auto or joints")
     bodies_only = [name for name, used in (
         ("stabilized", problem.stabilized), ("a compiled mode", problem.mode != "interpreted"),
-        ("initial_guess: interpolation", problem.initial_guess == "interpolation")) if used]
+        ("initial_guess: interpolation", problem.initial_guess == "interpolation"),
+        ("couplings of joint coordinates (gears, racks, couplers, screws)",
+         bool(spanning_tree(lower(model)).couplings))) if used]
     if (problem.formulation == "joints" or joints_only) and bodies_only:
         raise UsageError(f"formulation 'joints' does not take {', '.join(bodies_only)} "
                          "(settings of the body-coordinate transcription)")

@@ -15,6 +15,8 @@
   `rp`, compiled. (Measurements: docs/decisions/formulation-auto.md.) A compiled parametric
   bundle's joint system is compiled in its library (codegen.parametric), so its loops run joint
   coordinates.
+- Couplings of joint coordinates (gear, rack_pinion, coupler: rows over the bodies of
+  several joints): `rp`; `formulation: joint` asked for is an error naming them.
 - A DAE stabilization asked for makes the formulation `rp` before this module is reached
   (api.analysis_settings, the one place that rule lives).
 """
@@ -25,7 +27,7 @@ from collections.abc import Callable
 
 from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, Interrupted
+from casmech.errors import AnalysisError, FailureContext, Interrupted
 from casmech.formulations.tree import Tree
 from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
@@ -38,8 +40,15 @@ DEFAULT = DynamicsSolver()  # the defaults (core.options)
 def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
     """The formulation to run first: "joint" or the one asked for (rp, romega); examinable:
     whether the run's rows can be examined for singular poses; lags: lags_bundle."""
+    if tree.couplings and formulation == "joint":
+        raise AnalysisError(FailureContext(
+            None, "the joint formulation does not take couplings of joint coordinates; "
+            "write formulation: rp, romega or auto (auto runs rp)",
+            [(j.name, j.source, 0.0) for j in tree.couplings], "coupling"))
     if formulation != "auto":
         return formulation
+    if tree.couplings:
+        return "rp"
     return "joint" if tree.is_tree or (examinable and not tree.floating_loops and not lags) \
         else "rp"
 

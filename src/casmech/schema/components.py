@@ -62,7 +62,8 @@ class ComposedChecker(BaseChecker):
             self.bodies.update({b.name: b for b in members.bodies})
             for item in members.joints:
                 self.joint_types[item.name] = item.type
-                self.joint_bodies[item.name] = (item.body_i, item.body_j)
+                if hasattr(item, "body_i"):
+                    self.joint_bodies[item.name] = (item.body_i, item.body_j)
 
     def reference(self, path: Path, name: str, known, what: str) -> bool:
         prefixes = owners_of(name)  # by set lookups: a model may have thousands of instances

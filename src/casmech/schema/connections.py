@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 
 from casmech.core import traced
-from casmech.elements.joint_types import COORDINATES, REGISTRY, having
+from casmech.elements.joint_types import COORDINATES, REGISTRY, having, listed
 from casmech.errors import failed
-from casmech.schema import contact, initial, resolved
+from casmech.schema import contact, couplings, initial, resolved
 from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
 from casmech.schema.resolved import ScalarFunction
@@ -21,6 +21,8 @@ DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.elem
 
 
 def joint(check: Checker, index: int, given) -> resolved.Joint | None:
+    if REGISTRY[given.type].couples is not None:
+        return couplings.coupling(check, index, given)
     path = ("joints", index)
     bodies_ok = check.two_bodies(path, given.body_i, given.body_j)
     check.joint_types[given.name] = given.type
@@ -33,6 +35,10 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
         if "length" in entry.options else {}
     )
     extra.update(drivers(check, path, given))
+    options = {key: option(check, (*path, key), getattr(given, key), given.type)
+               for key in entry.options if key != "length"}
+    if options:
+        extra["options"] = None if failed(options.values()) else options
     if getattr(given, "cut", False):
         extra["cut"] = True
     if given.reactions is not None:
@@ -65,6 +71,20 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     )
 
 
+def option(check: Checker, path: Path, value, joint_type: str):
+    """A joint type's scalar option other than `length` (a screw's lead): required, nonzero."""
+    if value is None:
+        check.error("E100", path, f"a {joint_type} joint needs `{path[-1]}`",
+                    hint=f"write `{path[-1]}: ...` (docs/format.md)")
+        return None
+    number = check.number(path, value)
+    if number is not None and abs(traced.value(number)) <= ZERO:
+        check.error("E404", path, f"a {joint_type}'s {path[-1]} must not be zero",
+                    got=f"{traced.value(number):g}")
+        return None
+    return number
+
+
 def joint_sources(check: Checker, path: Path, given) -> dict[str, Any]:
     """Where each key of the joint (and of its driver, as `driver.angle`) was written."""
     sources = {key: check.doc.locate_key((*path, key)) for key in given.model_fields_set}
@@ -95,7 +115,7 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
     for key in keys:
         where = (*path, "driver", key)
         if given.type not in having(key):
-            allowed = " and ".join(having(key))
+            allowed = listed(having(key))
             check.error(
                 "E408",
                 where,

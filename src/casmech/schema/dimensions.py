@@ -56,6 +56,8 @@ TYPED: dict[tuple[str, str, tuple[str, ...]], Dimension] = {
         "at": LENGTH, "stiffness": STIFFNESS, "damping": DAMPING,
         "rotational_stiffness": TORQUE, "rotational_damping": ROTATIONAL_DAMPING,
         "preload_force": FORCE, "preload_torque": TORQUE}.items()},
+    ("joints", "gear", ("ratio",)): NUMBER, ("joints", "rack_pinion", ("radius",)): LENGTH,
+    ("joints", "screw", ("lead",)): LENGTH,
     **{("joints", kind, ("f",)): value for kind, value in {
         "dp1": NUMBER, "dp2": LENGTH, "d": dimension(length=2), "cd": LENGTH}.items()},
 }
@@ -87,7 +89,7 @@ READABLE: dict[str, Dimension] = {
     **dict.fromkeys(("alphax", "alphay", "alphaz"), ANGULAR_ACCELERATION),
     **dict.fromkeys(("e0", "e1", "e2", "e3", "angle", "angle_i", "angle_j"), NUMBER),
     **dict.fromkeys(("fx", "fy", "fz", "normal_force", "friction_force", "limit_force"), FORCE),
-    **dict.fromkeys(("tx", "ty", "tz", "limit_torque"), TORQUE),
+    **dict.fromkeys(("tx", "ty", "tz", "limit_torque", "torque"), TORQUE),
 }
 
 

@@ -21,6 +21,7 @@ from dataclasses import replace
 from casmech.core import dimensions as core_dimensions
 from casmech.core.columns import JOINT_COLUMNS
 from casmech.core.units import NAMES, TIME, describe
+from casmech.elements.joint_types import REGISTRY
 from casmech.errors import did_you_mean
 from casmech.schema import contact, dimensions, events, resolved, spec
 from casmech.schema.checker import RESERVED, Checker
@@ -34,8 +35,11 @@ def readable(check: Checker, joints=(), forces=()) -> dict[str, float]:
     """Every state name an output may read, with its value at t = 0 as the file writes it
     (joint states, reactions and contact columns: 0), for the finite check of `value`."""
     names = events.state_names(check) | dict.fromkeys(contact.output_names(joints, forces), 0.0)
-    return names | {f"{joint}.{column}": 0.0 for joint in check.joint_types
-                    for column in JOINT_COLUMNS}
+    couplings = {f"{joint}.{REGISTRY[kind].couples.column}": 0.0
+                 for joint, kind in check.joint_types.items()
+                 if kind in REGISTRY and REGISTRY[kind].couples}  # gear.torque, coupler.force
+    return names | couplings | {f"{joint}.{column}": 0.0 for joint in check.joint_types
+                                for column in JOINT_COLUMNS}
 
 
 def si_unit(dimension) -> str:

@@ -169,7 +169,8 @@ def joint(frame: Frame, names: Names, given: resolved.Joint) -> resolved.Joint:
     return replace(given, name=names(given.name), body_i=names(given.body_i),
                    body_j=names(given.body_j), vectors=_vectors(frame, given, given.vectors),
                    reaction_point=None if point is None else frame.point(point),
-                   initial=_initial(frame, given.initial))
+                   initial=_initial(frame, given.initial),
+                   couples=tuple((names(name), use) for name, use in given.couples))
 
 
 def force(frame: Frame, names: Names, given: resolved.Force) -> resolved.Force:

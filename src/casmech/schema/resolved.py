@@ -88,6 +88,12 @@ class Joint:
     # `initial:` (schema/initial.py): key -> number, or Euler parameters (orientation), or a
     # vector (angular_velocity); its keys' sources are in `sources` as "initial.<key>"
     initial: Mapping[str, Any] = field(default_factory=dict)
+    # the type's scalar `options` beside `length` (a screw's lead)
+    options: Mapping[str, Any] = field(default_factory=dict)
+    # a coupling (joint_types.Couples): (joint, coordinate) of each coupled coordinate and its
+    # coefficient; body_i and body_j are then the output joint's
+    couples: tuple[tuple[str, str], ...] = ()
+    coefficients: tuple[Any, ...] = ()
 
 
 @dataclass(frozen=True)

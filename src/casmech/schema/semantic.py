@@ -192,6 +192,10 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
         bodies.append(body(check, index, item))
         check.bodies.setdefault(item.name, bodies[-1])
     floors(check, bodies)
+    for item in given.joints:  # couplings may name joints written after them
+        if hasattr(item, "body_i"):
+            check.joint_types.setdefault(item.name, item.type)
+            check.joint_bodies.setdefault(item.name, (item.body_i, item.body_j))
     joints = [motors.joint(check, index, item, joint)  # tables and motors around joint
               for index, item in enumerate(given.joints)]
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]

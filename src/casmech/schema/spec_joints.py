@@ -123,10 +123,34 @@ def initial_class(entry: JointType) -> type[Spec] | None:
                         **fields)
 
 
+class CouplingBase(Spec):
+    """A coupling of other joints' coordinates (joint_types.Couples): no bodies of its own."""
+
+    name: Name
+    repeat: Repeats | None = None
+    reactions: Reactions | None = None
+
+
+def coupling_class(entry: JointType) -> type[Spec]:
+    """The YAML class of a coupling: the keys naming its joints (or `joints:` and
+    `coefficients:` lists) and its scalars."""
+    couples = entry.couples
+    fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
+    if couples.joints:
+        fields |= {key: (Name, ...) for key in couples.joints}
+    else:
+        fields |= {"joints": (tuple[Name, ...], ...), "coefficients": (tuple[Scalar, ...], ...),
+                   "offset": (Scalar, 0)}
+    fields |= {key: (Scalar, ...) for key in couples.scalars}
+    return create_model(entry.class_name, __base__=CouplingBase, __module__=__name__, **fields)
+
+
 def joint_class(entry: JointType) -> type[Spec]:
     """The YAML class of a joint type, from its registry entry: `type`, its vector keys, its
     optional scalars, `limit` and `friction` when the type has a stop and `initial` when it
-    has initial values."""
+    has initial values (a coupling: coupling_class)."""
+    if entry.couples is not None:
+        return coupling_class(entry)
     fields: dict[str, Any] = {"type": (Literal[entry.name], ...)}
     fields |= {key: (Vector, ...) for key in entry.vectors}
     fields |= {key: (Scalar | None, None) for key in entry.options}
