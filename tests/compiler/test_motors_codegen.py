@@ -19,6 +19,7 @@ MODEL = MOTORS.replace("name: motors\n", "name: motors_codegen\n").replace(
     "driver: {angle: {table: theta.csv, column: theta, periodic: true}}")
 
 
+@pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs a C compiler")
 def test_compiled_motors_and_tables_equal_interpreted(tmp_path, monkeypatch):
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))

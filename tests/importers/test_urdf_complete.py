@@ -38,7 +38,8 @@ def robots_folder() -> Path:
 
 def expected_dof(path: Path) -> int:
     """Degrees of freedom counted from the URDF by ElementTree alone: each moving joint's,
-    less those of joints below which no link has mass (the importer locks them)."""
+    less those of joints below which no link has mass (the importer locks them), less one per
+    <mimic> joint coupled to another moving joint (the importer's coupler)."""
     root = ET.parse(path).getroot()
     mass = {}
     for link in root.findall("link"):
@@ -52,8 +53,11 @@ def expected_dof(path: Path) -> int:
         return mass[link] + sum(below(j.find("child").get("link"))
                                 for j in children.get(link, []))
 
-    return sum(DOF[j.get("type")] for j in root.findall("joint")
-               if below(j.find("child").get("link")) > 0)
+    moving = {j.get("name"): j for j in root.findall("joint")
+              if below(j.find("child").get("link")) > 0 and DOF[j.get("type")]}
+    coupled = [j for j in moving.values()
+               if j.find("mimic") is not None and j.find("mimic").get("joint") in moving]
+    return sum(DOF[j.get("type")] for j in moving.values()) - len(coupled)
 
 
 def import_and_check(path: Path, folder: Path, out: Path, capsys) -> tuple[int, int]:

@@ -4,6 +4,7 @@ stabilised Radau collocation from the interpolated rest-to-rest guess, replayed 
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import casmech
 from casmech.optimal.ocp import OCP, columns_at, from_block, replay, solve
@@ -18,8 +19,7 @@ def _problem(model) -> OCP:
     # a coarser control grid than the example's 12 x 3, 6 collocation elements per interval
     return OCP(**{**problem.__dict__, "intervals": 6, "elements": 6, "rtol": 1e-9,
                   "atol": 1e-11})
-
-
+@pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 def test_arm_reaches_the_target_at_rest_and_replays():
     model = casmech.load(MODEL)
     problem = _problem(model)

@@ -86,8 +86,7 @@ def test_bound_on_a_reaction_force_is_active_and_respected():
     assert force.max() <= limit + 1e-6  # IPOPT's constraint tolerance, in newtons
     assert force.max() >= limit - 1e-3  # the bound is active
     assert tight.objective > loose.objective
-
-
+@pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 def test_compiled_and_interpreted_collocation_reach_the_same_optimum():
     """The cart-pole swing-up on the C functions of casmech.compile(model, "compiled")
     and on the interpreted SX graphs: two NLPs, one optimum."""

@@ -28,8 +28,7 @@ def test_loops_run_in_joint_coordinates_and_agree_with_rp():
     assert "formulation_fallback" not in auto.metadata
     # positions of 1 m links at rtol 1e-10: both within ~1e-9 of the exact motion
     np.testing.assert_allclose(auto.q, rp.q, rtol=0, atol=1e-7)
-
-
+@pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 def test_a_singular_pose_sends_the_run_to_rp_and_it_matches_the_exact_motion():
     """IFToMM A02 passes flat poses from t = 0.71 s on: the joint DAE goes through them
     drifting off the exact motion without failing, the singular-pose check sees them, and
@@ -91,8 +90,7 @@ def test_choice_table():
     assert auto_formulation.choice(tree, "auto", False, False) == "rp"  # unexamined
     assert auto_formulation.choice(tree, "auto", True, True) == "rp"  # not compiled
     assert auto_formulation.choice(tree, "romega", True, False) == "romega"
-
-
+@pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 def test_compiled_loops_equal_interpreted(tmp_path, monkeypatch):
     """The loops' DAE and its Jacobian compiled (a compiled bundle) give the interpreted
     run's rows (the same arithmetic; roundoff at most)."""

@@ -53,6 +53,11 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
         raise UsageError(f"{model.file}: the FMU integrates joint coordinates, which do not "
                          f"take couplings of joint coordinates ({names}); casmech run "
                          "integrates them in the r-p DAE")
+    held = [joint.name for joint in ir.joints if joint.initial]
+    if held:
+        raise UsageError(f"{model.file}: joints' initial: values ({', '.join(held)}) are not "
+                         "in the FMU, which starts from the bodies' poses in the file; write "
+                         "the pose there (casmech run holds the values)")
     system = build(ir, tree)
     q0, q_dot0 = assembly.initial_state(functions, t0)
     x0 = joint_dynamics.initial_state(system, q0, q_dot0)

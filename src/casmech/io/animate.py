@@ -153,7 +153,8 @@ def meshio_module():
 
 def collada_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
     """A Collada (.dae) file read by pycollada: the triangles of every geometry its scene
-    places, with the scene's node transforms and its `<unit meter>` applied, then scaled. Its
+    places, with the scene's node transforms and its `<unit meter>` applied (_unbound_primitives
+    where pycollada binds none), then scaled. Its
     `up_axis` is not applied: the coordinates are taken as written, like the other formats."""
     try:
         import collada
@@ -167,24 +168,73 @@ def collada_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
                                                           collada.common.DaeBrokenRefError])
             unit = float(getattr(document.assetInfo, "unitmeter", None) or 1.0)
             points, triangles, count = [], [], 0
-            for geometry in document.scene.objects("geometry") if document.scene else ():
-                for primitive in geometry.primitives():
-                    if isinstance(primitive, collada.triangleset.BoundTriangleSet):
-                        found = primitive
-                    elif isinstance(primitive, collada.polylist.BoundPolylist):  # polygons too
-                        found = primitive.triangleset()
-                    else:
-                        continue  # lines
-                    if found.vertex is None or not len(found.vertex_index):
-                        continue
-                    points.append(np.asarray(found.vertex, float))
-                    triangles.append(np.asarray(found.vertex_index, int).reshape(-1, 3) + count)
-                    count += len(found.vertex)
+            placed = list(document.scene.objects("geometry")) if document.scene else []
+            primitives = ([p for g in placed for p in g.primitives()] if placed else
+                          _unbound_primitives(document))
+            for primitive in primitives:
+                if isinstance(primitive, (collada.triangleset.BoundTriangleSet,
+                                          collada.triangleset.TriangleSet)):
+                    found = primitive
+                elif isinstance(primitive, (collada.polylist.BoundPolylist,
+                                            collada.polylist.Polylist)):  # polygons too
+                    found = primitive.triangleset()
+                else:
+                    continue  # lines
+                if found.vertex is None or not len(found.vertex_index):
+                    continue
+                points.append(np.asarray(found.vertex, float))
+                triangles.append(np.asarray(found.vertex_index, int).reshape(-1, 3) + count)
+                count += len(found.vertex)
         except collada.common.DaeError as error:
             raise ValueError(f"pycollada cannot read it: {error}") from None
     if not triangles:
         raise ValueError("no triangles in the Collada scene")
     return np.vstack(points) * unit * scale, np.vstack(triangles)
+
+
+def _unbound_primitives(document) -> list:
+    """The primitives a Collada scene places when pycollada bound none of its geometries (a
+    broken material reference drops them): each node's `<instance_geometry>` read from its
+    XML, the geometry's primitives bound to the product of the node transforms above it."""
+    geometries = {geometry.id: geometry for geometry in document.geometries}
+    found = []
+
+    def walk(node, matrix):
+        for child in node.xmlnode:
+            if child.tag.endswith("instance_geometry"):
+                geometry = geometries.get((child.get("url") or "").lstrip("#"))
+                if geometry is not None:
+                    found.extend(geometry.bind(matrix, {}).primitives())
+        for child in node.children:
+            if hasattr(child, "matrix") and hasattr(child, "xmlnode"):
+                walk(child, matrix @ child.matrix)
+
+    for node in document.scene.nodes if document.scene else ():
+        walk(node, np.asarray(node.matrix, float))
+    return found
+
+
+def obj_geometry(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """An OBJ file's vertices and faces alone (`v` and `f` lines; a face's polygon split into
+    a fan of triangles, negative indices counted from the end), scaled: for the files whose
+    texture coordinates or normals meshio cannot pair with the vertices."""
+    points, triangles = [], []
+    with path.open(encoding="utf-8", errors="replace") as lines:
+        for line in lines:
+            kind, _, rest = line.strip().partition(" ")
+            if kind == "v":
+                points.append([float(value) for value in rest.split()[:3]])
+            elif kind == "f":
+                corners = [int(item.split("/")[0]) for item in rest.split()]
+                corners = [c - 1 if c > 0 else len(points) + c for c in corners]
+                triangles += [[corners[0], corners[k], corners[k + 1]]
+                              for k in range(1, len(corners) - 1)]
+    if not triangles:
+        raise ValueError("no faces in the OBJ file")
+    faces = np.array(triangles, int)
+    if faces.min() < 0 or faces.max() >= len(points):
+        raise ValueError("a face names a vertex the OBJ file does not have")
+    return np.array(points, float) * scale, faces
 
 
 def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
@@ -199,6 +249,10 @@ def mesh_file(path: Path, scale: float) -> tuple[np.ndarray, np.ndarray]:
             mesh = meshio.read(path)
         except meshio.ReadError as error:
             raise ValueError(str(error) or "meshio cannot read it") from None
+        except ValueError:  # an OBJ whose texture or normal lists meshio cannot pair
+            if path.suffix.lower() != ".obj":
+                raise
+            return obj_geometry(path, scale)
     triangles = [block.data for block in mesh.cells if block.type == "triangle"]
     triangles += [block.data[:, corners] for block in mesh.cells if block.type == "quad"
                   for corners in ([0, 1, 2], [0, 2, 3])]
