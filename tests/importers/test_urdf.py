@@ -116,6 +116,15 @@ def test_entities_are_refused_before_expansion(tmp_path):
     assert "DOCTYPE or entity declaration" in message
 
 
+def test_elements_nested_too_deep_are_refused_before_recursion(tmp_path):
+    """A URDF whose elements nest past xml_read.MAX_NESTING is a located E105 (the readers walk
+    the tree recursively), as MJCF's is (the shared reader)."""
+    deep = "<a>" * 300 + "</a>" * 300
+    message = error_of(tmp_path, GOOD.replace("</robot>", deep + "</robot>"))
+    assert "error[E105]" in message and "more than 200 levels" in message
+    assert "URDF trees" in message
+
+
 def test_not_a_robot_and_too_large(tmp_path, monkeypatch):
     message = error_of(tmp_path, "<xacro:robot xmlns:xacro='x'/>")
     assert ":1:1: error[E102]" in message and "xacro" in message
