@@ -8,6 +8,7 @@ import pytest
 
 from casmech import cli
 from tests.conftest import MODELS
+from tests.texts import pendulum
 
 LOCATED = re.compile(r"^(?P<file>[^\s:][^:]*):(?P<line>\d+):(?P<col>\d+): "
                      r"error\[(?P<code>E\d{3})\] (?P<path>\S+):", re.M)
@@ -104,23 +105,6 @@ def test_check_fails_on_a_mesh_it_cannot_read(tmp_path, capsys, mesh, content, w
         assert cli.main(["check", str(tmp_path / "model.yaml")]) == 0
 
 
-PENDULUM = """\
-casmech: 1
-name: pend
-bodies:
-  - {name: bar, mass: 1, inertia: [1, 1, 1], position: [0, 0, -1]}
-joints:
-  - name: pivot
-    type: revolute
-    body_i: ground
-    body_j: bar
-    at: [0, 0, 0]
-    axis: [1, 0, 0]
-    driver: {angle: DRIVER}
-analysis: {type: kinematics, t_end: 1, output_step: 0.1}
-"""
-
-
 @pytest.mark.parametrize("driver, code, words", [
     ("1e300*t", "E411", "the driver's rate reaches 1e+300 rad/s at t = 0 s"),
     ("'if(t < 0.5, t, 1e20*t)'", "E411", "the driver's value reaches 5e+19 rad at t = 0.5 s"),
@@ -129,20 +113,19 @@ analysis: {type: kinematics, t_end: 1, output_step: 0.1}
 def test_check_fails_on_a_driver_beyond_plausible_over_the_run(tmp_path, capsys, driver, code,
                                                                words):
     """Each passes the check of its value at t = 0; over the run's grid it does not."""
-    (tmp_path / "m.yaml").write_text(PENDULUM.replace("DRIVER", driver))
+    (tmp_path / "m.yaml").write_text(pendulum(driver, "kinematics"))
     assert cli.main(["check", str(tmp_path / "m.yaml")]) == 1
     err = capsys.readouterr().err
     [found] = [m.groupdict() for m in LOCATED.finditer(err)]
     assert (found["code"], found["line"], found["path"]) == (code, "12",
                                                              "joints[0].driver.angle"), err
     assert words in err
-    (tmp_path / "m.yaml").write_text(PENDULUM.replace("DRIVER", "2*pi*t"))
+    (tmp_path / "m.yaml").write_text(pendulum("2*pi*t", "kinematics"))
     assert cli.main(["check", str(tmp_path / "m.yaml")]) == 0
 
 
 def test_check_fails_on_a_tsda_whose_points_coincide(tmp_path, capsys):
-    text = PENDULUM.replace("    driver: {angle: DRIVER}\n", "").replace(
-        "type: kinematics", "type: dynamics") + (
+    text = pendulum(analysis="dynamics") + (
         "forces:\n  - {name: spring, type: tsda, body_i: ground, at_i: [0, 0, -1], "
         "body_j: bar, at_j: [0, 0, -1], stiffness: 10, free_length: 0}\n")
     (tmp_path / "m.yaml").write_text(text)

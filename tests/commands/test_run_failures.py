@@ -21,25 +21,11 @@ from casmech.errors import AnalysisError
 from casmech.io.csv import read_csv
 from casmech.io.hdf5 import read_hdf5, read_hdf5_metadata
 from tests.conftest import MODELS, ROOT
+from tests.texts import pendulum
 
 ENV = {**os.environ, "OPENBLAS_NUM_THREADS": "1",
        "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), os.environ.get("PYTHONPATH", "")])}
 
-DRIVEN = """\
-casmech: 1
-name: pend
-bodies:
-  - {name: bar, mass: 1, inertia: [1, 1, 1], position: [0, 0, -1]}
-joints:
-  - name: pivot
-    type: revolute
-    body_i: ground
-    body_j: bar
-    at: [0, 0, 0]
-    axis: [1, 0, 0]
-    driver: {angle: 1e300*t}
-analysis: {type: ANALYSIS, t_end: 1, output_step: 0.1}
-"""
 # a slider driven along x through the point the spring is anchored at: at t = 0.5 the spring's
 # points coincide and the direction of its force (free length 0) is 0/0
 PASSING = """\
@@ -73,7 +59,7 @@ def write(tmp_path, text: str, analysis: str):
 def test_a_driver_whose_rate_overflows_stops_at_the_first_row(tmp_path, capsys, analysis):
     """angle 1e300 t: the rate 1e300 rad/s is finite, its square in the accelerations is not
     (before: NaN in 13 columns, exit 0, or a LinAlgError traceback)."""
-    path = write(tmp_path, DRIVEN, analysis)
+    path = write(tmp_path, pendulum("1e300*t", "ANALYSIS"), analysis)
     assert cli.main(["run", str(path), "--out", str(tmp_path / "out")]) == 3
     err = capsys.readouterr().err
     assert "analysis failed at t = 0: the results are not finite from this row on (bar.ax = " \
@@ -247,7 +233,7 @@ def test_rows_are_on_disk_while_the_run_goes(tmp_path):
 def test_a_model_error_found_by_the_analysis_leaves_no_results_file(tmp_path, capsys):
     """kinematics of a pendulum without a driver: E501 from the analysis, exit 1; the results
     file opened for the rows is removed, metadata.json says failed (not running)."""
-    text = DRIVEN.replace("    driver: {angle: 1e300*t}\n", "")
+    text = pendulum(analysis="ANALYSIS")
     path = write(tmp_path, text, "kinematics")
     assert cli.main(["run", str(path), "--out", str(tmp_path / "out")]) == 1
     assert "error[E501]" in capsys.readouterr().err

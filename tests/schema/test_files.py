@@ -4,32 +4,19 @@ files only, read with a bound; table errors never quote a file's contents."""
 import os
 
 import pytest
+from tests.texts import pendulum
 
 from casmech.errors import ModelError
 from casmech.schema import files, load_model
 from casmech.schema.tables import MAX_ROWS
 
-PENDULUM = """\
-casmech: 1
-name: pend
-bodies:
-  - {name: bar, mass: 1, inertia: [1, 1, 1], position: [0, 0, -1]}
-joints:
-  - name: pivot
-    type: revolute
-    body_i: ground
-    body_j: bar
-    at: [0, 0, 0]
-    axis: [1, 0, 0]
-    driver: {angle: {table: TABLE, column: angle}}
-"""
 ROWS = "t, angle\n0, 0\n1, 0.1\n2, 0.2\n3, 0.1\n"
 
 
 def model(folder, table: str):
     folder.mkdir(exist_ok=True)
     path = folder / "m.yaml"
-    path.write_text(PENDULUM.replace("TABLE", table))
+    path.write_text(pendulum(f"{{table: {table}, column: angle}}"))
     return path
 
 
