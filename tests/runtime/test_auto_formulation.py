@@ -86,10 +86,27 @@ def test_a_failed_joint_run_is_redone_in_rp_and_an_interrupt_is_not():
 def test_choice_table():
     """What runs first, by the facts choice() is given."""
     tree = tree_of(casmech.compile(casmech.load(FOUR_BAR)))
-    assert auto_formulation.choice(tree, "auto", True, False) == "joint"
-    assert auto_formulation.choice(tree, "auto", False, False) == "rp"  # unexamined
-    assert auto_formulation.choice(tree, "auto", True, True) == "rp"  # not compiled
-    assert auto_formulation.choice(tree, "romega", True, False) == "romega"
+
+    def fact(value):
+        return lambda: value
+
+    assert auto_formulation.choice(tree, "auto", fact(True), fact(False)) == "joint"
+    assert auto_formulation.choice(tree, "auto", fact(False), fact(False)) == "rp"  # unexamined
+    assert auto_formulation.choice(tree, "auto", fact(True), fact(True)) == "rp"  # not compiled
+    assert auto_formulation.choice(tree, "romega", fact(True), fact(False)) == "romega"
+
+
+def test_a_tree_is_not_examined_for_its_choice():
+    """A tree runs in joint coordinates whatever its rows: choice() asks neither fact."""
+    tree = tree_of(casmech.compile(casmech.load(MODELS / "double_pendulum.yaml")))
+    assert tree.is_tree
+
+    def never():
+        raise AssertionError("asked")
+
+    assert auto_formulation.choice(tree, "auto", never, never) == "joint"
+
+
 @pytest.mark.slow  # long validation: `python -m pytest -m slow` runs it
 def test_compiled_loops_equal_interpreted(tmp_path, monkeypatch):
     """The loops' DAE and its Jacobian compiled (a compiled bundle) give the interpreted

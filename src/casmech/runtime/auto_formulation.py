@@ -37,9 +37,11 @@ from casmech.runtime.workspace import Workspace
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
 
-def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
-    """The formulation to run first: "joint" or the one asked for (rp, romega); examinable:
-    whether the run's rows can be examined for singular poses; lags: lags_bundle."""
+def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
+           lags: Callable[[], bool]) -> str:
+    """The formulation to run first: "joint" or the one asked for (rp, romega); examinable():
+    whether the run's rows can be examined for singular poses; lags(): lags_bundle. Both are
+    asked only for loops in auto (a tree's choice needs neither)."""
     if tree.couplings and formulation == "joint":
         raise AnalysisError(FailureContext(
             None, "the joint formulation does not take couplings of joint coordinates; "
@@ -49,7 +51,7 @@ def choice(tree: Tree, formulation: str, examinable: bool, lags: bool) -> str:
         return formulation
     if tree.couplings:
         return "rp"
-    return "joint" if tree.is_tree or (examinable and not tree.floating_loops and not lags) \
+    return "joint" if tree.is_tree or (not tree.floating_loops and examinable() and not lags()) \
         else "rp"
 
 
@@ -60,8 +62,8 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
     """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
-    first = choice(tree, formulation, examinable(functions, rows),
-                   not tree.is_tree and lags_bundle(functions, settings.compile))
+    first = choice(tree, formulation, lambda: examinable(functions, rows),
+                   lambda: lags_bundle(functions, settings.compile))
 
     def examined(result: Result) -> Result:
         """`result` with the singular poses of a run with loops in its metadata."""
