@@ -48,7 +48,7 @@ from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
 from casmech.formulations import dae
 from casmech.formulations.builtin import velocities
-from casmech.formulations.dae_options import (  # noqa: F401 (runtime.joint_dynamics)
+from casmech.formulations.dae_options import (
     algebraic_tolerances,
     initial_step,
 )

@@ -27,6 +27,7 @@ import numpy as np
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
+from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's names for them)
     Loops,
     constant_inverse,
@@ -39,7 +40,7 @@ from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.dynamics import algebraic_tolerances, initial_step, minimum_norm
+from casmech.runtime.dynamics import minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
