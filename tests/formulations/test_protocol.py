@@ -138,6 +138,14 @@ def test_registry_gives_the_option_its_choices(baumgarte, pendulums):
     assert result.metadata["formulation"] == "baumgarte"
 
 
+def test_the_registry_takes_formulations_only():
+    with pytest.raises(UsageError, match="'auto' names the choice"):
+        FORMULATIONS.register(Baumgarte("auto"))
+    with pytest.raises(UsageError, match="not a str"):
+        FORMULATIONS.register("baumgarte")
+    assert list(FORMULATIONS) == ["rp", "romega", "joint"]
+
+
 def test_unregistered_is_gone(pendulums):
     FORMULATIONS.register(Baumgarte("baumgarte"))
     FORMULATIONS.unregister("baumgarte")
