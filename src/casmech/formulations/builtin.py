@@ -11,7 +11,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
-from casmech.core.options import DynamicsSolver
+from casmech.core.options import DynamicsSolver, LinearAlgebra
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
@@ -39,6 +39,25 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
     omega_bar = [2 * euler.numeric(euler.g_matrix, q[3 * nb + 4 * k:3 * nb + 4 * k + 4])
                  @ q_dot[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]
     return np.concatenate([q_dot[:3 * nb], *omega_bar])
+
+
+def row_scales(functions: SystemFunctions, name: str, t, q) -> tuple[np.ndarray, np.ndarray]:
+    """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
+    Phi_q at (t, q)."""
+    form = TABLE[name]
+    jacobian = functions.matrix(form.jacobian, t, q)
+    phi_q = jacobian if form.jacobian == "phi_q" else functions.matrix("phi_q", t, q)
+    return 1 / np.linalg.norm(jacobian, axis=1), 1 / np.linalg.norm(phi_q, axis=1)
+
+
+def masked_rows(functions: SystemFunctions, name: str, t, q,
+                limits: LinearAlgebra = DEFAULT.assembly.linear_algebra) -> np.ndarray:
+    """1 for every row of P dropped from the DAE, else 0: the rows equations.checks.structure
+    finds redundant at (t, q) (the same joint rows in both formulations; r-p rows are ordered
+    as Phi's, r-omega's are Phi's joint rows)."""
+    keep = np.zeros(functions.n_rows)
+    keep[list(structure(functions, t, q, limits).independent)] = 1.0
+    return 1.0 - keep[:dae.sizes(functions.functions, name)[2]]
 
 
 @dataclass(frozen=True)
@@ -76,11 +95,9 @@ class BodyCoordinates(Formulation):
         form = TABLE[self.name]
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         v = velocities(functions, self.name, q, q_dot)
-        keep = np.zeros(functions.n_rows)
-        keep[list(structure(functions, t0, q).independent)] = 1.0
-        mask = 1.0 - keep[:m]
+        mask = masked_rows(functions, self.name, t0, q)
+        s, s_phi = row_scales(functions, self.name, t0, q)
         jacobian = functions.matrix(form.jacobian, t0, q)
-        s = 1 / np.linalg.norm(jacobian, axis=1)
         mass, scaled = functions[form.mass](q), ca.DM(s[:, None] * jacobian)
         forces = functions[form.forces](t0, q, v)
         gamma = functions.vector(form.gamma, t0, q, v) * s
@@ -88,7 +105,7 @@ class BodyCoordinates(Formulation):
         v_dot, lam = (np.array(out).ravel() for out in solve(mass, scaled, forces, gamma, mask))
         p = [[t0], mask, s]
         if system.n_z > n_v + m:  # ggl: mu, and the scales of Phi's rows
-            p.append(1 / np.linalg.norm(functions.matrix("phi_q", t0, q), axis=1))
+            p.append(s_phi)
         if functions.data is not None:
             p.append(np.asarray(functions.data, float).ravel())
         z = np.zeros(system.n_z)

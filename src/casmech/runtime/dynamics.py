@@ -43,11 +43,11 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.options import DynamicsOptions, DynamicsSolver
-from casmech.equations.checks import dependent_joints, structure
+from casmech.equations.checks import dependent_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
 from casmech.formulations import dae
-from casmech.formulations.builtin import velocities
+from casmech.formulations.builtin import masked_rows, row_scales, velocities
 from casmech.formulations.dae_options import (
     algebraic_tolerances,
     initial_step,
@@ -116,22 +116,15 @@ class _Model:
         return self.workspace.kept("dae_starts", key, build)
 
     def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
-        """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
-        Phi_q at (t, q)."""
-        jacobian = self.functions.matrix(self.form.jacobian, t, q)
-        phi_q = jacobian if self.form.jacobian == "phi_q" else self.functions.matrix("phi_q", t, q)
-        return 1 / np.linalg.norm(jacobian, axis=1), 1 / np.linalg.norm(phi_q, axis=1)
+        """(s, s_phi): the DAEs' row scales (formulations.builtin.row_scales)."""
+        return row_scales(self.functions, self.name, t, q)
 
     def mask(self, t, q) -> np.ndarray:
-        """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
-        redundant (the same joint rows in both formulations; r-p rows are ordered as Phi's,
-        r-omega's are Phi's joint rows)."""
+        """1 for every row dropped from the DAE, else 0 (formulations.builtin.masked_rows)."""
         limits = self.settings.assembly.linear_algebra
 
         def build():
-            keep = np.zeros(self.functions.n_rows)
-            keep[list(structure(self.functions, t, q, limits).independent)] = 1.0
-            return _frozen(1.0 - keep[:self.m])[0]
+            return _frozen(masked_rows(self.functions, self.name, t, q, limits))[0]
 
         key = ("mask", self.name, float(t), np.asarray(q, float).tobytes(), limits)
         return self.workspace.kept("dae_starts", key, build)
