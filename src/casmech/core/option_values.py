@@ -17,7 +17,7 @@ import difflib
 import math
 import types
 import typing
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -36,7 +36,7 @@ class Meaning:
     low: float | None = None
     high: float | None = None
     open_low: bool = False  # low itself is outside the range
-    choices: tuple[str, ...] | None = None
+    choices: Sequence[str] | None = None  # a tuple, or a live core.registry.Names
 
     def range_text(self) -> str:
         """'0 < x <= 1', 'x >= 1', '' (no range), or the choices."""
@@ -52,7 +52,7 @@ class Meaning:
 
 def option(default: Any, doc: str, *, unit: str = "", low: float | None = None,
            high: float | None = None, open_low: bool = False,
-           choices: tuple[str, ...] | None = None) -> Any:
+           choices: Sequence[str] | None = None) -> Any:
     """A field holding one value: its default (written here only) and its meaning."""
     return dataclasses.field(default=default, metadata={"meaning": Meaning(
         doc, unit, low, high, open_low, choices)})

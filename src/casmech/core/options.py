@@ -18,8 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from casmech.core.option_values import nested, option
+from casmech.core.registry import Names
 
-FORMULATIONS = ("rp", "romega", "joint", "auto")
+# the registered formulations and auto: formulations.registry keeps it current
+FORMULATIONS = Names(("rp", "romega", "joint", "auto"))
 STABILIZATIONS = ("ggl", "projection")
 METHODS = ("auto", "adams", "bdf")
 

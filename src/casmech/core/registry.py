@@ -5,7 +5,7 @@ change)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 
@@ -32,3 +32,33 @@ class Registry(dict):
     def _changed(self) -> None:
         for listener in self.listeners:
             listener()
+
+
+class Names(Sequence):
+    """A sequence of names that a registry of a higher layer keeps current (the choices of an
+    option whose values are registered there: core.options.FORMULATIONS), with listeners as
+    a Registry has (the YAML schema follows it)."""
+
+    def __init__(self, names: Iterable[str]):
+        self._names = tuple(names)
+        self.listeners: list[Callable[[], None]] = []
+
+    def set(self, names: Iterable[str]) -> None:
+        names = tuple(names)
+        if names != self._names:
+            self._names = names
+            for listener in self.listeners:
+                listener()
+
+    def on_change(self, listener: Callable[[], None]) -> None:
+        """Call `listener()` after every change of the names."""
+        self.listeners.append(listener)
+
+    def __getitem__(self, index):
+        return self._names[index]
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def __repr__(self) -> str:
+        return f"Names({self._names!r})"

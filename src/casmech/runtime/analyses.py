@@ -21,11 +21,17 @@ from casmech.core.options import FORMULATIONS, METHODS, OPTIONS, STABILIZATIONS
 from casmech.equations.checks import Structure, structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted, UsageError
-from casmech.runtime import assembly, auto_formulation, friction, interrupts, solver_messages
+from casmech.runtime import (
+    assembly,
+    auto_formulation,
+    formulation_run,
+    friction,
+    interrupts,
+    solver_messages,
+)
 from casmech.runtime.cancel import CancelToken, current
-from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.events import Event
-from casmech.runtime.joint_dynamics import run_joint_dynamics, tree_of
+from casmech.runtime.joint_dynamics import tree_of
 from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.results import Result, column_names
@@ -34,6 +40,7 @@ from casmech.schema import limits
 from casmech.schema.resolved import Analysis
 
 # dynamics options a caller may override by name (casmech run's flags) -> their choices
+# (formulations: the registered ones and auto, kept current by formulations.registry)
 DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS,
                     "method": METHODS}
 
@@ -51,29 +58,21 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
 
 def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace | None,
                   extra_events=(), span=None) -> Result:
-    """By the formulation asked for: joint coordinates (runtime.joint_dynamics) or the r-p /
-    r-omega DAE (runtime.dynamics); auto: runtime.auto_formulation, which also examines a
-    mechanism with loops for singular poses. `span`: (t0, t_end, output step), by default
-    the analysis's from 0."""
+    """By the formulation asked for, taken from the registry (formulations.registry; its run:
+    runtime.formulation_run); auto: runtime.auto_formulation, which also examines a mechanism
+    with loops for singular poses. `span`: (t0, t_end, output step), by default the
+    analysis's from 0."""
     options = s.options
-    solver = options.solver
     t0, t_end, step = span or (0.0, s.t_end, s.output_step)
+    asked = formulation_run.Run(t0, t_end, step, s.rtol, s.atol, options, progress,
+                                tuple(extra_events), workspace)
 
-    def joint() -> Result:
-        return run_joint_dynamics(f, t_end, step, s.rtol, s.atol, t0=t0,
-                                  progress=progress, method=options.method,
-                                  extra_events=extra_events, settings=solver,
-                                  workspace=workspace)
-
-    def other(formulation: str) -> Result:
-        return run_dynamics(f, t_end, step, s.rtol, s.atol, t0=t0,
-                            formulation=formulation, progress=progress,
-                            stabilization=options.stabilization, extra_events=extra_events,
-                            settings=solver, workspace=workspace)
+    def run(name: str) -> Result:
+        return formulation_run.run(f, name, asked)
 
     rows = len(output_times(t0, t_end, step))
-    return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows, joint,
-                                other, solver, workspace)
+    return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows,
+                                lambda: run("joint"), run, options.solver, workspace)
 
 
 def _runtime(name: str):
@@ -116,7 +115,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             events: Sequence[Event] = (), options=None, workspace: Workspace | None = None,
             token: CancelToken | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
-    formulation "auto", "joint", "rp" or "romega", stabilization "ggl" or "projection" of the
+    formulation "auto", "joint", "rp", "romega" or another registered one
+    (formulations.registry), stabilization "ggl" or "projection" of the
     DAEs, method "auto", "adams" or "bdf" of joint coordinates on a tree; docs/formulations.md).
     `options`: the analysis type's options (a casmech.core.options dataclass, replacing the
     file's, or a mapping of keys such as {"max_step": 1e-3, "solver.assembly.tolerance":

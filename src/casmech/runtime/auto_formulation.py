@@ -28,6 +28,7 @@ from collections.abc import Callable
 from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted
+from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import Tree
 from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
@@ -39,13 +40,16 @@ DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
 def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
            lags: Callable[[], bool]) -> str:
-    """The formulation to run first: "joint" or the one asked for (rp, romega); examinable():
-    whether the run's rows can be examined for singular poses; lags(): lags_bundle. Both are
-    asked only for loops in auto (a tree's choice needs neither)."""
-    if tree.couplings and formulation == "joint":
+    """The formulation to run first: "joint" or the one asked for (rp, romega, another
+    registered one); examinable(): whether the run's rows can be examined for singular poses;
+    lags(): lags_bundle. Both are asked only for loops in auto (a tree's choice needs
+    neither)."""
+    if tree.couplings and formulation != "auto" and \
+            not FORMULATIONS[formulation].takes_couplings:
+        taking = [name for name, entry in FORMULATIONS.items() if entry.takes_couplings]
         raise AnalysisError(FailureContext(
-            None, "the joint formulation does not take couplings of joint coordinates; "
-            "write formulation: rp, romega or auto (auto runs rp)",
+            None, f"the {formulation} formulation does not take couplings of joint "
+            f"coordinates; write formulation: {', '.join(taking)} or auto (auto runs rp)",
             [(j.name, j.source, 0.0) for j in tree.couplings], "coupling"))
     if formulation != "auto":
         return formulation

@@ -42,12 +42,16 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.core import euler
 from casmech.core.options import DynamicsOptions, DynamicsSolver
-from casmech.equations.checks import dependent_joints, structure
+from casmech.equations.checks import dependent_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
 from casmech.formulations import dae
+from casmech.formulations.builtin import masked_rows, row_scales, velocities
+from casmech.formulations.dae_options import (
+    algebraic_tolerances,
+    initial_step,
+)
 from casmech.formulations.table import FORMULATIONS, Formulation
 from casmech.numerics import kkt
 from casmech.runtime import (
@@ -73,16 +77,6 @@ def drift_tolerance(atol: float, settings: DynamicsSolver = DEFAULT) -> float:
     so a tighter multiple of atol projects far more often for no accuracy
     (docs/decisions/ggl-stabilization.md)."""
     return max(settings.drift_tolerance, 100 * atol)
-
-
-def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
-    """The formulation's v from r-p velocities: omega_bar = 2 G(p) p_dot for r-omega."""
-    if name == "rp":
-        return np.array(q_dot, float)
-    nb = functions.n_bodies
-    omega_bar = [2 * euler.numeric(euler.g_matrix, q[3 * nb + 4 * k:3 * nb + 4 * k + 4])
-                 @ q_dot[3 * nb + 4 * k:3 * nb + 4 * k + 4] for k in range(nb)]
-    return np.concatenate([q_dot[:3 * nb], *omega_bar])
 
 
 def penalty(functions: SystemFunctions, form: Formulation, q,
@@ -122,22 +116,15 @@ class _Model:
         return self.workspace.kept("dae_starts", key, build)
 
     def scales(self, t, q) -> tuple[np.ndarray, np.ndarray]:
-        """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
-        Phi_q at (t, q)."""
-        jacobian = self.functions.matrix(self.form.jacobian, t, q)
-        phi_q = jacobian if self.form.jacobian == "phi_q" else self.functions.matrix("phi_q", t, q)
-        return 1 / np.linalg.norm(jacobian, axis=1), 1 / np.linalg.norm(phi_q, axis=1)
+        """(s, s_phi): the DAEs' row scales (formulations.builtin.row_scales)."""
+        return row_scales(self.functions, self.name, t, q)
 
     def mask(self, t, q) -> np.ndarray:
-        """1 for every row dropped from the DAE, else 0: the rows checks.structure finds
-        redundant (the same joint rows in both formulations; r-p rows are ordered as Phi's,
-        r-omega's are Phi's joint rows)."""
+        """1 for every row dropped from the DAE, else 0 (formulations.builtin.masked_rows)."""
         limits = self.settings.assembly.linear_algebra
 
         def build():
-            keep = np.zeros(self.functions.n_rows)
-            keep[list(structure(self.functions, t, q, limits).independent)] = 1.0
-            return _frozen(1.0 - keep[:self.m])[0]
+            return _frozen(masked_rows(self.functions, self.name, t, q, limits))[0]
 
         key = ("mask", self.name, float(t), np.asarray(q, float).tobytes(), limits)
         return self.workspace.kept("dae_starts", key, build)
@@ -335,38 +322,6 @@ class _Stepper:
         return AnalysisError(FailureContext(t0, cause, dependent_joints(
             functions, functions.matrix("phi_q", t0, q),
             limits=self.settings.assembly.linear_algebra), "weight in the dependency"))
-
-
-def algebraic_tolerances(rtol: float, floor: float, v_dot, lam, n_z: int,
-                         mu_tolerance: float = DEFAULT.mu_tolerance) -> np.ndarray:
-    """Absolute tolerances of [v_dot, lam, mu] in IDAS's Newton test: for v_dot and for lam
-    rtol times the largest of the group at the start, at least `floor`; mu_tolerance for mu.
-
-    Per group, not per component: a component that is 0 along the motion (the out-of-plane
-    accelerations and reactions of a planar mechanism) carries roundoff of the size of its
-    group's largest, which an absolute tolerance of a smaller size never lets converge.
-    Andrews' squeezer (accelerations up to 7e3, reactions 1e2) failed at t = 0 with
-    the algebraic tolerance 1e-8 for every component, at every rtol from 1e-6 to 1e-10. mu is
-    0 along the motion and acts only through q' = q_dot + Phi_q^T mu, so the positions' own
-    convergence test covers it; its own test, with 1e-8, failed on the squeezer whatever its
-    other tolerances."""
-    n_v, m = len(v_dot), len(lam)
-    out = np.full(n_z, mu_tolerance)
-    out[:n_v] = max(floor, rtol * np.max(np.abs(v_dot), initial=0.0))
-    out[n_v:n_v + m] = max(floor, rtol * np.max(np.abs(lam), initial=0.0))
-    return out
-
-
-def initial_step(r, r_ddot, rtol: float, atol: float, interval: float) -> float:
-    """IDAS's first step for the index-2 DAE: where an order-1 step's error h^2/2 r_ddot on the
-    translations r is a quarter of the tolerance (weighted RMS, IDAS's weights), at most IDAS's
-    own 0.001 of the first output interval. IDAS's default from |x_dot| alone gave 3e-17 s on
-    benchmarks/chain8, where the iteration matrix of an index-2 DAE (condition ~ 1/h^2) is
-    singular in double precision and every Newton iteration failed."""
-    weights = rtol * np.abs(r) + atol
-    norm = np.sqrt(np.mean((r_ddot / weights) ** 2)) if len(r) else 0.0
-    largest = 1e-3 * interval
-    return float(min(largest, 0.5 * np.sqrt(2 / norm))) if norm > 0 else largest
 
 
 class _Restart(Exception):

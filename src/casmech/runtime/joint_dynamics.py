@@ -20,23 +20,27 @@ from __future__ import annotations
 import os
 import sys
 from dataclasses import replace
-from functools import cache
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
-from casmech.elements.joint_types import MOTIONS
-from casmech.equations.checks import independent_rows
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
-from casmech.formulations.articulated import local_motion
+from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's names for them)
+    Loops,
+    constant_inverse,
+    initial_state,
+    joint_state,
+    quaternion_signs,
+)
 from casmech.formulations.joint_system import JointSystem, build, layout
-from casmech.formulations.tree import Tree, TreeJoint, spanning_tree
+from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events
-from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
+from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.dynamics import algebraic_tolerances, initial_step, minimum_norm
+from casmech.runtime.dynamics import minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -130,24 +134,6 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
                    motion=built.get("joint_motion", system.motion))
 
 
-@cache
-def constant_inverse(kind: str) -> np.ndarray | None:
-    """The pseudo-inverse of a joint type's motion subspace S_J where S_J is the same at every
-    theta (revolute, spherical, ...: u = S_J^+ twist with no per-state work), else None.
-    Whether it is constant is seen at sample coordinates (its SX does not simplify
-    sin^2 + cos^2: a revolute's S_J is a constant written with theta in it)."""
-    motion = MOTIONS[kind]
-    # four scattered coordinates (not numpy.random, which a run would have to import)
-    samples = np.sin(1.7 * np.arange(1, 4 * motion.n_q + 1)).reshape(4, motion.n_q) * 1.5
-    for start in motion.quaternions:
-        samples[:, start:start + 4] /= np.linalg.norm(samples[:, start:start + 4], axis=1)[:, None]
-    zero = np.zeros(motion.n_v)
-    subspaces = [np.array(local_motion(kind)(theta, zero)[2].full()) for theta in samples]
-    if max(np.max(np.abs(s - subspaces[0])) for s in subspaces) > 1e-14:
-        return None
-    return np.linalg.pinv(subspaces[0])
-
-
 def _toolchain(system: JointSystem, quick_build_instructions: int):
     """The default toolchain, at -O0 for an ODE of more than quick_build_instructions SX
     instructions when the user chose no flags."""
@@ -159,67 +145,10 @@ def _toolchain(system: JointSystem, quick_build_instructions: int):
     return Toolchain(flags=("-O0",)) if quick else Toolchain()
 
 
-def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.ndarray]:
-    """(theta, u) of a tree joint from its relative rotation, gap and twist (relative_states)."""
-    theta = MOTIONS[joint.type].coordinates(rotation, gap)
-    n_v = MOTIONS[joint.type].n_v
-    if not n_v:
-        return theta, np.zeros(0)
-    inverse = constant_inverse(joint.type)
-    if inverse is not None:
-        return theta, inverse @ twist
-    subspace = np.array(local_motion(joint.type)(theta, np.zeros(n_v))[2].full())
-    return theta, np.linalg.lstsq(subspace, twist, rcond=None)[0]
-
-
-def initial_state(system: JointSystem, q, q_dot) -> np.ndarray:
-    """x0 = [theta; u] of the free coordinates and velocities at the r-p state."""
-    lay, joints = system.layout, system.tree.joints
-    rotations, gaps, twists = BufferedCall(system.relative_states)(q, q_dot)
-    x0 = np.zeros(lay.n_x)
-    for k, joint in enumerate(joints):
-        theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
-        x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
-        x0[list(lay.u[k])] = u[list(lay.free_u[k])]
-    return x0
-
-
-class _Loops:
-    """Consistent multipliers of the loop closures and the rows masked out at t0."""
-
-    def __init__(self, system: JointSystem, t0: float, x0, settings: Assembly = DEFAULT.assembly):
-        self.system, m = system, system.n_cut
-        self.n_z = 2 * m
-        jacobian = np.array(system.velocity_jacobian(t0, x0).full()) if m else np.zeros((0, 0))
-        keep = independent_rows(jacobian, settings.linear_algebra) if m else []
-        self.mask = 1.0 - np.array(keep, float)
-
-    def z(self, t: float, x) -> np.ndarray:
-        """[lam; mu = 0] with lam making the constraint accelerations vanish."""
-        m = self.system.n_cut
-        if not m:
-            return np.zeros(0)
-        matrix, base = (np.array(v.full()) for v in self.system.acceleration_system(t, x))
-        keep = np.flatnonzero(self.mask == 0)
-        z = np.zeros(2 * m)
-        if len(keep):
-            z[keep] = np.linalg.lstsq(matrix[np.ix_(keep, keep)], -base[keep, 0],
-                                      rcond=None)[0]
-        return z
-
-
-def quaternion_signs(system: JointSystem, t0: float, x0, z0, q0, n_bodies: int):
-    """+1 or -1 per body, so the tree's Euler parameters continue the r-p state's."""
-    q = np.array(system.motion(t0, x0, z0, np.ones(n_bodies))[0].full()).ravel()
-    p_tree = q[3 * n_bodies:].reshape(n_bodies, 4)
-    p_rp = q0[3 * n_bodies:].reshape(n_bodies, 4)
-    return np.where(np.sum(p_tree * p_rp, axis=1) < 0, -1.0, 1.0)
-
-
 class _Integrator:
     """One SUNDIALS call over a chunk of the output grid: CVODES for a tree, IDAS for loops."""
 
-    def __init__(self, system: JointSystem, loops: _Loops, rtol: float, atol: float,
+    def __init__(self, system: JointSystem, loops: Loops, rtol: float, atol: float,
                  method: str, workspace: Workspace, settings: DynamicsSolver = DEFAULT):
         self.system, self.loops, self.workspace = system, loops, workspace
         self.settings = settings
@@ -326,7 +255,7 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
-        loops = _Loops(system, t0, x, settings)
+        loops = Loops(system, t0, x, settings)
         z = loops.z(t0, x)
         signs = quaternion_signs(system, t0, x, z, q0, functions.n_bodies)
         for array in (x, z, signs, loops.mask):

@@ -31,6 +31,7 @@ KINDS: dict[str, int] = {
     "idas": 8,  # joint coordinates' IDAS instances, also by start
     "joint_least_norm": 8,  # least-norm multipliers of masked loop rows, by mask
     "joint_motion_maps": 16,  # results rows' column calls, by motion function
+    "formulation_systems": 4,  # a formulation's System (runtime.formulation_run.generic)
     "dae_problems": 4,  # r-p / r-omega DAEs as casadi.integrator takes them
     "dae_integrators": 4,  # their IDAS instances (each holds its memory and Newton matrix)
     "dae_starts": 16,  # masks and consistent starts (runtime.dynamics)

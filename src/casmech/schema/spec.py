@@ -14,12 +14,12 @@ own (`spec.Body`, `from casmech.schema.spec import Revolute`).
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Union
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import ConfigDict, Discriminator, Field, StrictStr, Tag
 from pydantic.fields import FieldInfo
 
-from casmech.core import spec_base
+from casmech.core import options, spec_base
 from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
 from casmech.elements import force_types
 from casmech.elements.joint_types import on_change
@@ -130,6 +130,19 @@ def _forces_changed() -> None:
 
 
 force_types.on_change(_forces_changed)
+
+
+def _formulations_changed() -> None:
+    """A formulation was (un)registered (formulations.registry): the analysis block's
+    `formulation` takes the registered ones and auto."""
+    field = Analysis.model_fields["formulation"]
+    Analysis.model_fields["formulation"] = FieldInfo.from_annotated_attribute(
+        Literal[tuple(options.FORMULATIONS)], field.default)
+    for cls in (Analysis, Component, ModelSpec):
+        cls.model_rebuild(force=True)
+
+
+options.FORMULATIONS.on_change(_formulations_changed)
 
 
 def __getattr__(name: str) -> Any:

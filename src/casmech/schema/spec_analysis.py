@@ -29,7 +29,9 @@ class Analysis(Spec):
     # dynamics (and modal at a time): the options of casmech.core.options.DynamicsOptions:
     # formulation (rp or romega DAE, joint coordinates, or auto), stabilization of the DAEs,
     # CVODES's method in joint coordinates of a tree
-    formulation: Literal[options.FORMULATIONS] = _DYNAMICS.formulation  # type: ignore[valid-type]
+    # (the registered formulations and auto: schema/spec.py rebuilds this on a change)
+    formulation: Literal[tuple(options.FORMULATIONS)] = (  # type: ignore[valid-type]
+        _DYNAMICS.formulation)
     stabilization: Literal[options.STABILIZATIONS] = (  # type: ignore[valid-type]
         _DYNAMICS.stabilization)
     method: Literal[options.METHODS] = _DYNAMICS.method  # type: ignore[valid-type]

@@ -1,0 +1,113 @@
+"""The Formulation protocol: what every formulation of forward dynamics gives the runtime, and
+the registry FORMULATIONS of them (the `formulation:` option's values, with "auto").
+
+A formulation is one small frozen class (docs/architecture.md, "Adding a formulation"):
+
+- `name`, and `takes_couplings` (whether rows over several joints' coordinates, gears and
+  couplers, fit its states);
+- `states(functions, stabilization)`: the names of the states it integrates, differential
+  and algebraic;
+- `system(functions, stabilization)`: a System, its equations as CasADi Functions: `residual`
+  (t, x, z, p) -> (ode, alg), an ODE x' = ode for CVODES when z is empty, else a semi-explicit
+  DAE x' = ode, 0 = alg for IDAS; `rows` (t, x, z, p) -> (q, q_dot, q_ddot, lam), its state
+  as the results row reads it (body coordinates: r-p positions, their rates, every row's
+  multiplier); and where p carries the start time (`time_offset`: the residual's t is then
+  relative to it);
+- `start(functions, system, t0, q, q_dot)`: a Start, the consistent (x, z, p) at the
+  assembled body coordinates (q, q_dot);
+- `integrator_options(...)`: what SUNDIALS needs at a start besides the tolerances (an
+  index-2 DAE's first step and algebraic tolerances; none by default).
+
+runtime.analyses runs a registered formulation by name: the built-in classes through the
+runtime's own drivers for them (runtime.formulation_run), any other through the generic one,
+which integrates `system` from `start` over the one driver (runtime.driver). The built-in ones
+(formulations.builtin: rp, romega, joint) implement all of the protocol, so the generic driver
+runs them too. The registry is formulations.registry.FORMULATIONS.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from casmech.core.options import DynamicsSolver
+from casmech.equations.functions import SystemFunctions
+
+DEFAULT = DynamicsSolver()  # the defaults (core.options)
+
+
+@dataclass(frozen=True)
+class States:
+    """The names of a formulation's states: x (differential) and z (algebraic)."""
+
+    differential: tuple[str, ...]
+    algebraic: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True, eq=False)
+class System:
+    """A formulation's equations for one model (module docstring). `time_offset`: the index
+    of p that holds the start time, the residual's and rows' t being relative to it (None:
+    t is absolute)."""
+
+    residual: ca.Function
+    rows: ca.Function
+    time_offset: int | None = None
+
+    @property
+    def n_z(self) -> int:
+        return self.residual.size1_in(2)
+
+    @property
+    def integrator(self) -> str:
+        """The SUNDIALS integrator it takes: IDAS for a DAE, CVODES for an ODE."""
+        return "idas" if self.n_z else "cvodes"
+
+
+@dataclass(frozen=True)
+class Start:
+    """A consistent start: states x, algebraic states z and parameters p."""
+
+    x: np.ndarray
+    z: np.ndarray
+    p: np.ndarray
+
+
+@dataclass(frozen=True)
+class Formulation(ABC):
+    """The protocol (module docstring): a frozen dataclass per formulation implements states,
+    system and start."""
+
+    name: str
+    takes_couplings: bool = True
+
+    @abstractmethod
+    def states(self, functions: SystemFunctions, stabilization: str = "ggl") -> States:
+        """The names of the states it integrates (with the analysis's stabilization)."""
+
+    @abstractmethod
+    def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
+        """Its equations for the model of `functions`; `stabilization`: the analysis's
+        (core.options), which a formulation without constraint rows in its state ignores."""
+
+    @abstractmethod
+    def start(self, functions: SystemFunctions, system: System, t0: float, q: np.ndarray,
+              q_dot: np.ndarray) -> Start:
+        """The consistent start at t0 from the assembled r-p state (q, q_dot)."""
+
+    def integrator_options(self, functions: SystemFunctions, system: System, t: float,
+                           x: np.ndarray, z: np.ndarray, p: np.ndarray, rtol: float,
+                           atol: float, interval: float,
+                           settings: DynamicsSolver = DEFAULT) -> dict:
+        """SUNDIALS options a start (t, x, z, p) of the system needs besides the tolerances
+        (an index-2 DAE: its first step, sized by the output `interval`, and the absolute
+        tolerances of its algebraic states); none by default."""
+        return {}
+
+
+def indexed(prefix: str, count: int) -> tuple[str, ...]:
+    """prefix[0], prefix[1], ...: state names of a vector."""
+    return tuple(f"{prefix}[{k}]" for k in range(count))
