@@ -97,11 +97,12 @@ def same(kind: str, text: str) -> str:
 
 @pytest.mark.parametrize("formulation", ["rp", "joint"])
 def test_a_registered_kind_runs_like_the_translational_joint(lateral, formulation):
-    """Motor law, stop, `initial:` and a force law read the toy's coordinate as the
+    """Motor law, stop, friction, `initial:` and a force law read the toy's coordinate as the
     translational joint's along the same line: the same motion, coordinate, stop force and
     reaction."""
     extra = (", motor: {lateral_force: '-20*lateral - 0.3*lateral_dot + 2*sin(3*t)'}, "
              "limit: {lower: -0.04, upper: 0.06, stiffness: 2e4, damping: 5}, "
+             "friction: {coulomb: 0.8, viscous: 0.5}, "
              "initial: {lateral: 0.01, lateral_dot: 0.4}")
     force = "-1.5*slide.lateral_dot"
     tables = {kind: run(model(kind, same(kind, extra), same(kind, force)), formulation)
@@ -115,11 +116,13 @@ def test_a_registered_kind_runs_like_the_translational_joint(lateral, formulatio
     for toy_column, rail_column in (("lateral", "displacement"),
                                     ("lateral_dot", "displacement_dot"),
                                     ("limit_lateral_force", "limit_force"),
-                                    ("limit_gap", "limit_gap")):
+                                    ("limit_gap", "limit_gap"), ("friction", "friction"),
+                                    ("friction_mode", "friction_mode")):
         # the same state's coordinate; a stop force of stiffness 2e4 amplifies 1e-9 (1e-4 N)
         np.testing.assert_allclose(toy[f"slide.{toy_column}"], rail[f"slide.{rail_column}"],
                                    rtol=0, atol=1e-4, err_msg=toy_column)
     assert np.max(np.abs(toy["slide.limit_lateral_force"])) > 1.0  # the stop was hit
+    assert np.max(np.abs(toy["slide.friction"])) >= 0.8  # and the friction slid
     for axis in ("fx", "fy", "fz", "tx", "ty", "tz"):
         # the whole constraint wrench on bob at the joint point (motor and stop included), of
         # different rows; algebraic, with the stop's stiffness: tolerance 1e-3 N (N m)
