@@ -67,7 +67,7 @@ class Quantity:
     name: str  # "angle" | "length" (schema/check_only.py bounds a driver by it)
     value: Dimension
     rate: Dimension
-    effort: Dimension  # an effort motor's law, a stop's stiffness per unit of the value
+    effort: Dimension  # what acts along it: an effort motor's law, a stop's or friction's force
     stiffness: Dimension  # a stop's stiffness
     damping: Dimension  # a stop's damping
     units: tuple[str, str, str]  # SI units of the value, rate and acceleration

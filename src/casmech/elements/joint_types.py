@@ -3,8 +3,8 @@
 An entry says everything casmech knows about a type: its YAML keys (schema/spec.py builds the
 type's pydantic class from them), further checks of its vectors (schema/connections.py), its
 constraint rows as primitives and its reaction point (model/lower.py), its free motions,
-i.e. the joint coordinates a driver, motor, rsda, stop, control or force law acts along (schema
-and equations/coordinates.py, motors.py, limits.py, optimal/controls.py; `COORDINATES`), and
+i.e. the coordinate kinds a driver, motor, rsda, stop, control or force law acts along (each
+kind's entry of elements/coordinate_kinds.py, `COORDINATES`, says how), and
 its tree motion in the joint formulation (`MOTIONS`; formulations/tree.py, articulated.py).
 Adding a joint type is `register(JointType(...))` (docs/architecture.md, "Adding a joint type";
 tests/compiler/test_joint_registry.py registers one).
