@@ -26,8 +26,8 @@ from casmech.schema.loader import format_path, load_document
 SAMPLES = 1001  # most times a driver is evaluated at (the output grid when it has fewer)
 SPANNED = ("kinematics", "inverse_dynamics", "dynamics")  # analyses over [0, t_end]
 POINTS_APART = 1e-12  # [m] least distance of a tsda's points at t = 0
-# what a driver measures (a coordinate kind's quantity; "f": a basic constraint's f(t)) ->
-# (largest value, rate, acceleration)
+# what a driver measures (a coordinate kind's quantity; "f": a basic constraint's f(t), and a
+# quantity not listed) -> (largest value, rate, acceleration)
 LARGEST = {"angle": (limits.ANY, limits.SPEED, limits.ANY),
            "length": (limits.LENGTH, limits.SPEED, limits.ANY),
            "f": (limits.ANY, limits.ANY, limits.ANY)}
@@ -40,7 +40,7 @@ def driver_bounds(key: str) -> tuple[tuple[float, ...], tuple[str, ...]]:
     if key == "f":
         return LARGEST["f"], UNITLESS
     quantity = COORDINATES[key].quantity
-    return LARGEST[quantity.name], quantity.units
+    return LARGEST.get(quantity.name, LARGEST["f"]), quantity.units
 WHAT = ("value", "rate", "acceleration")
 
 
