@@ -36,15 +36,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from casmech.elements.coordinate_kinds import ANGLE, BY_MODE
+from casmech.elements.coordinate_kinds import ANGLE, BY_MODE, View
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.errors import UsageError
 from casmech.io.animate import GROUND_INDEX, MARKER, Part, Scene, sphere
 from casmech.schema.resolved import ResolvedModel
 
 CONTACTS = ("sphere_plane", "sphere_sphere", "points_plane", "capsule_plane")
-UNITS = {"force": "N", "torque": "N m", "motor_torque": "N m", "motor_force": "N",
-         "normal": "N", "friction": "N"}  # vector kind -> unit of its length
+# vector kind (an effort motor's: its ForceIR type) -> unit of its length
+UNITS = View(lambda: {"force": "N", "torque": "N m", "normal": "N", "friction": "N"}
+             | {kind.effort: kind.quantity.effort_unit for kind in COORDINATES.values()})
 LEVEL = 0.999  # |n . up| above which a contact plane on ground is the ground
 
 

@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import Any
 
 from casmech.core.states import JOINT_COORDINATES
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.elements.joint_tree import GROUND, Link, spanning_tree
 from casmech.errors import failed
 from casmech.schema import bodies
@@ -92,5 +93,6 @@ def velocities(check: Checker, given_bodies, joints) -> None:
                 check.error("E412", where, f"body '{body.name}' is moved by its joints' "
                             f"`initial:` values ({part} has some): its {key} follows from "
                             "their rates", source=check.doc.locate_key(where),
-                            hint="give the joints' rates in `initial:` (angle_dot, "
-                                 "displacement_dot, ...) and remove the body's " + key)
+                            hint="give the joints' rates in `initial:` ("
+                                 + ", ".join(kind.rate for kind in COORDINATES.values())
+                                 + ", ...) and remove the body's " + key)
