@@ -120,10 +120,13 @@ def body(name: str, position, p, mass: float = 1.0, inertia=None) -> Body:
 
 
 def joint(name: str, type_: str, body_i: str, body_j: str, **kwargs) -> Joint:
-    """A joint; vector keys (at, axis, a_i, s_j, c, ...) go to `vectors`, the rest to Joint."""
-    fields = {"length", "f", "driver_angle", "driver_displacement", "options"}
-    vectors = {k: np.asarray(v, float) for k, v in kwargs.items() if k not in fields}
-    return Joint(name, type_, body_i, body_j, vectors,
+    """A joint; vector keys (at, axis, a_i, s_j, c, ...) go to `vectors`, `driver_<kind>` to
+    its drivers (a coordinate kind's f(t)), the rest to Joint."""
+    fields = {"length", "f", "options"}
+    drivers = {k.removeprefix("driver_"): v for k, v in kwargs.items() if k.startswith("driver_")}
+    vectors = {k: np.asarray(v, float) for k, v in kwargs.items()
+               if k not in fields and not k.startswith("driver_")}
+    return Joint(name, type_, body_i, body_j, vectors, drivers=drivers,
                  **{k: v for k, v in kwargs.items() if k in fields})
 
 

@@ -130,7 +130,7 @@ def test_the_schema_checks_come_from_the_entry(point_on_line):
     assert "point_on_line joint's motor takes displacement | velocity | force" in \
         motor.value.diagnostics[0].hint
     driven = casmech.loads(toy_model(", driver: {displacement: 0.1 * t}"))
-    assert driven.joints[0].driver_displacement is not None
+    assert driven.joints[0].drivers["displacement"] is not None
 
 
 def test_unregistered_the_type_is_unknown_again(point_on_line):

@@ -191,18 +191,19 @@ def test_joint_vectors(everything):
 def test_functions_of_time(everything):
     joints = {joint.name: joint for joint in everything.joints}
     pin, cyl, slide = joints["pin"], joints["cyl"], joints["slide"]
-    assert (pin.f, pin.driver_displacement) == (None, None)
+    assert (pin.f, pin.drivers.get("displacement")) == (None, None)
     # evaluation of cos/sin at one point: a few ulps
-    np.testing.assert_allclose(pin.driver_angle.value(t=0.3), math.pi / 4 * math.cos(0.6),
+    np.testing.assert_allclose(pin.drivers["angle"].value(t=0.3), math.pi / 4 * math.cos(0.6),
                                rtol=1e-15, atol=0)  # fmt: skip
-    assert (cyl.driver_angle.value(t=2.0), cyl.driver_displacement.value(t=2.0)) == (2.0, 0.2)
-    assert slide.driver_displacement.value(t=3.0) == 6.0
+    assert (cyl.drivers["angle"].value(t=2.0), cyl.drivers["displacement"].value(t=2.0)) == \
+        (2.0, 0.2)
+    assert slide.drivers["displacement"].value(t=3.0) == 6.0
     assert joints["c1"].f.is_zero and not joints["c2"].f.is_zero
     t = casadi.SX.sym("t")
     f = casadi.Function("f", [t], [joints["c4"].f.casadi(t=t)])
     np.testing.assert_allclose(float(f(0.5)), 2 * math.sin(0.5), rtol=1e-15, atol=0)
     assert joints["c4"].f.variables == ("t",)
-    assert (pin.driver_angle.source.line, pin.driver_angle.source.col) == (20, 22)
+    assert (pin.drivers["angle"].source.line, pin.drivers["angle"].source.col) == (20, 22)
 
 
 def test_forces(everything):

@@ -29,16 +29,12 @@ QUANTITIES: dict[str, tuple[str, str, str]] = {
     "normal_force": ("contact normal force", "N", "contact normal force"),
     "friction_force": ("contact friction force", "N", "contact friction force (magnitude)"),
     "gap": ("contact gap", "m", "contact gap (negative: overlap)"),
-    "limit_torque": ("stop torque", "N m", "joint stop torque along the joint axis"),
-    "limit_force": ("stop force", "N", "joint stop force along the joint axis"),
     "limit_gap": ("stop gap", "m or rad", "joint stop gap (negative: past the bound)"),
     "constraint_violation": ("constraint violation", "-", "constraint violation max |Φ|"),
     "t": ("time", "s", "time"),
-    # joint states (casmech.core.states; a joint's columns map their suffix by JOINT_QUANTITIES)
-    "angle": ("joint angle", "rad", "joint angles (0 at the file's pose)"),
-    "angle_dot": ("joint angular rate", "rad/s", "joint angular rates"),
-    "displacement": ("joint displacement", "m", "joint displacements (0 at the file's pose)"),
-    "displacement_dot": ("joint velocity", "m/s", "joint sliding velocities"),
+    # joint states (casmech.core.states; a joint's columns map their suffix by JOINT_QUANTITIES;
+    # a coordinate kind's value and rate, and its stop's `limit_<effort>`, are added by
+    # casmech.elements.coordinate_kinds)
     "relative_e": ("relative Euler parameter", "-",
                    "relative rotations of spherical joints (Euler parameters, joint frame)"),
     "relative_w": ("relative angular velocity", "rad/s",

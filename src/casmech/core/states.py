@@ -20,13 +20,9 @@ names.
 from __future__ import annotations
 
 BODY_STATES: tuple[str, ...] = tuple(f"{kind}{axis}" for kind in ("", "v", "w") for axis in "xyz")
-# attribute -> the joint coordinate it reads (its value, or its rate for `_dot`)
-JOINT_COORDINATES: dict[str, str] = {
-    "angle": "angle",
-    "angle_dot": "angle",
-    "displacement": "displacement",
-    "displacement_dot": "displacement",
-}
+# attribute -> the joint coordinate kind it reads (its value, or its rate for `_dot`): written
+# by casmech.elements.coordinate_kinds for every registered kind
+JOINT_COORDINATES: dict[str, str] = {}
 
 # joint type -> the state attributes beyond JOINT_COORDINATES' (equations/joint_states.py)
 JOINT_STATES: dict[str, tuple[str, ...]] = {
@@ -34,9 +30,9 @@ JOINT_STATES: dict[str, tuple[str, ...]] = {
     "spherical": ("e0", "e1", "e2", "e3", "wx", "wy", "wz"),
 }
 # every joint state attribute -> its results column's quantity key (core.columns.QUANTITIES)
+# (a coordinate kind's attributes are added by casmech.elements.coordinate_kinds)
 JOINT_QUANTITIES: dict[str, str] = {
-    "angle": "angle", "angle_dot": "angle_dot", "displacement": "displacement",
-    "displacement_dot": "displacement_dot", "angle_i": "angle", "angle_j": "angle",
+    "angle_i": "angle", "angle_j": "angle",
     "angle_i_dot": "angle_dot", "angle_j_dot": "angle_dot",
     **{f"e{k}": "relative_e" for k in range(4)},
     **{f"w{axis}": "relative_w" for axis in "xyz"},

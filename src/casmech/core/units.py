@@ -30,6 +30,9 @@ NUMBER = dimension()
 MASS, LENGTH, TIME = dimension(mass=1), dimension(length=1), dimension(time=1)
 FORCE = dimension(1, 1, -2)
 TORQUE = dimension(1, 2, -2)  # also energy, and a rotational stiffness (N m/rad)
+VELOCITY, RATE = dimension(length=1, time=-1), dimension(time=-1)
+STIFFNESS, DAMPING = dimension(mass=1, time=-2), dimension(mass=1, time=-1)
+ROTATIONAL_DAMPING = dimension(mass=1, length=2, time=-1)
 
 # name -> (factor to SI, dimension)
 UNITS: dict[str, tuple[float, Dimension]] = {

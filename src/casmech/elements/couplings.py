@@ -1,20 +1,18 @@
 """Couplings between joint coordinates: the constraint row sum_k c_k s_k = 0 over two or three
 joint coordinates s_k (gear, rack and pinion, coupler, screw; joint_types.py's entries).
 
-A joint coordinate is written here once over the frames of its joint's two bodies (the
-expressions equations/coordinates.py reads too):
-
-- angle: the rotation of body j about the axis carried by body i, atan2(v_i . u_j, u_i . u_j)
-  (u_i, v_i on body i, u_j on body j: the joint frame's u, v at the file's pose), in (-pi, pi];
-- displacement: the slide of body j's joint point along the axis carried by body i,
-  w_i . (P_j - P_i).
+A joint coordinate is the measure of its kind over the frames of its joint's two bodies
+(elements/coordinate_kinds.py: the expressions equations/coordinates.py reads too).
 
 The row's kind names its coordinates and which of its bodies each reads: `coupling_<pattern>_
-<slots>`, the pattern one letter per coordinate (`a` angle, `d` displacement) and the slots two
-digits per coordinate, the positions among the row's bodies (body_i, body_j, then
-PrimitiveIR.others) of that joint's body i and body j. Its vectors are, for coordinate k, `u_ik`,
-`v_ik`, `u_jk` (an angle) or `w_ik`, `s_ik`, `s_jk` (a displacement), and `c`, the coefficients
-(3 entries, unused ones 0).
+<slots>`, the pattern one letter per coordinate (its kind's `letter`: `a` angle, `d`
+displacement) and the slots two digits per coordinate, the positions among the row's bodies
+(body_i, body_j, then PrimitiveIR.others) of that joint's body i and body j. Its vectors are,
+for coordinate k, its kind's vector keys with k appended (`u_ik`, `v_ik`, `u_jk` of an angle,
+`w_ik`, `s_ik`, `s_jk` of a displacement), and `c`, the coefficients (3 entries, unused ones 0).
+
+An angle here is any kind with `cos_sin` (it comes back to itself after a turn); any other
+kind (a displacement) enters the rows linearly.
 
 A row with exactly one angle (rack and pinion, screw, a coupler of one rotation with slides) is
 written c_a sin(theta + D / c_a), D = sum of the displacements' c_k s_k: equal to the linear
@@ -42,38 +40,28 @@ from fractions import Fraction
 import casadi as ca
 
 from casmech.elements import primitives
-from casmech.elements.forces.terms import relative_angle
+from casmech.elements.coordinate_kinds import BY_LETTER, REGISTRY, View
 
-ANGLE, DISPLACEMENT = "a", "d"
-LETTER = {"angle": ANGLE, "displacement": DISPLACEMENT}
 MAX_COORDINATES = 3
 MAX_DENOMINATOR = 1000  # largest denominator of a ratio of coefficients taken as a fraction
 FRACTION = 1e-12  # relative distance within which a ratio of coefficients is that fraction
-# vector keys of coordinate k by its letter
-VECTOR_KEYS = {ANGLE: ("u_i", "v_i", "u_j"), DISPLACEMENT: ("w_i", "s_i", "s_j")}
+LETTER = View(lambda: {name: kind.letter for name, kind in REGISTRY.items()})  # kind -> letter
 
 
-def angle_value(fi, fj, u_i, v_i, u_j):
-    """The angle of a joint over its bodies' frames (module docstring)."""
-    return relative_angle(fi.A, fj.A, u_i, v_i, u_j)
+def periodic(pattern: str) -> tuple[bool, ...]:
+    """Whether each coordinate of a pattern is an angle (its kind has `cos_sin`)."""
+    return tuple(BY_LETTER[letter].cos_sin is not None for letter in pattern)
 
 
-def angle_cos_sin(fi, fj, u_i, v_i, u_j):
-    """(cos, sin) of a joint's angle, without atan2."""
-    u_j = fj.A @ u_j
-    return (fi.A @ u_i).T @ u_j, (fi.A @ v_i).T @ u_j
-
-
-def displacement_value(fi, fj, w_i, s_i, s_j):
-    """The displacement of a joint over its bodies' frames (module docstring)."""
-    gap = fj.r + fj.A @ s_j - fi.r - fi.A @ s_i
-    return (fi.A @ w_i).T @ gap
+def vector_keys(letter: str) -> tuple[str, ...]:
+    """The vector keys of one coordinate of this letter (its kind's measure's)."""
+    return tuple(BY_LETTER[letter].vectors)
 
 
 def keys(pattern: str) -> tuple[str, ...]:
     """The vector keys of a coupling row of this pattern."""
     return tuple(f"{key}{k}" for k, letter in enumerate(pattern)
-                 for key in VECTOR_KEYS[letter]) + ("c",)
+                 for key in vector_keys(letter)) + ("c",)
 
 
 def integers(coefficients) -> tuple[int, ...] | None:
@@ -100,7 +88,8 @@ def kind(pattern: str, slots: tuple[int, ...], whole: tuple[int, ...] | None = N
     if whole is not None:
         name += "_" + "_".join(f"n{-m}" if m < 0 else str(m) for m in whole)
     if name not in primitives.PRIMITIVES:
-        phi = coupling_phi(pattern, slots) if whole is None else whole_phi(slots, whole)
+        phi = coupling_phi(pattern, slots) if whole is None else whole_phi(pattern, slots,
+                                                                            whole)
         primitives.register(name, phi, keys(pattern))
     return name
 
@@ -116,15 +105,15 @@ def _power(z, n: int):
     return result
 
 
-def whole_phi(slots: tuple[int, ...], whole: tuple[int, ...]):
+def whole_phi(pattern: str, slots: tuple[int, ...], whole: tuple[int, ...]):
     """phi of a row of angles in integer ratios (module docstring)."""
     def phi(*arguments):
         *frames, v, f = arguments
         product = (1, 0)
-        for k, m in enumerate(whole):
+        for k, (letter, m) in enumerate(zip(pattern, whole, strict=True)):
             fi, fj = frames[slots[2 * k]], frames[slots[2 * k + 1]]
-            z = _power(angle_cos_sin(fi, fj, *(v[f"{key}{k}"] for key in VECTOR_KEYS[ANGLE])),
-                       m)
+            kind = BY_LETTER[letter]
+            z = _power(kind.cos_sin(fi, fj, *(v[f"{key}{k}"] for key in kind.vectors)), m)
             product = (product[0] * z[0] - product[1] * z[1],
                        product[0] * z[1] + product[1] * z[0])
         scale = v["c"][0] / whole[0]
@@ -143,18 +132,19 @@ def coupling_phi(pattern: str, slots: tuple[int, ...]):
         angles, displacement = [], 0
         for k, letter in enumerate(pattern):
             fi, fj = frames[slots[2 * k]], frames[slots[2 * k + 1]]
-            vectors = [v[f"{key}{k}"] for key in VECTOR_KEYS[letter]]
-            if letter == ANGLE:
-                angles.append((k, fi, fj, vectors))
+            kind = BY_LETTER[letter]
+            vectors = [v[f"{key}{k}"] for key in kind.vectors]
+            if kind.cos_sin is not None:
+                angles.append((k, kind, fi, fj, vectors))
             else:
-                displacement = displacement + c[k] * displacement_value(fi, fj, *vectors)
+                displacement = displacement + c[k] * kind.measure(fi, fj, *vectors)
         if len(angles) == 1:
-            k, fi, fj, vectors = angles[0]
-            cosine, sine = angle_cos_sin(fi, fj, *vectors)
+            k, kind, fi, fj, vectors = angles[0]
+            cosine, sine = kind.cos_sin(fi, fj, *vectors)
             shift = (displacement - f) / c[k]
             return c[k] * (sine * ca.cos(shift) + cosine * ca.sin(shift))
         total = displacement
-        for k, fi, fj, vectors in angles:
-            total = total + c[k] * angle_value(fi, fj, *vectors)
+        for k, kind, fi, fj, vectors in angles:
+            total = total + c[k] * kind.measure(fi, fj, *vectors)
         return total - f
     return phi

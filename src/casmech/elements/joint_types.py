@@ -3,8 +3,8 @@
 An entry says everything casmech knows about a type: its YAML keys (schema/spec.py builds the
 type's pydantic class from them), further checks of its vectors (schema/connections.py), its
 constraint rows as primitives and its reaction point (model/lower.py), its free motions,
-i.e. the joint coordinates a driver, motor, rsda, stop, control or force law acts along (schema
-and equations/coordinates.py, motors.py, limits.py, optimal/controls.py; `COORDINATES`), and
+i.e. the coordinate kinds a driver, motor, rsda, stop, control or force law acts along (each
+kind's entry of elements/coordinate_kinds.py, `COORDINATES`, says how), and
 its tree motion in the joint formulation (`MOTIONS`; formulations/tree.py, articulated.py).
 Adding a joint type is `register(JointType(...))` (docs/architecture.md, "Adding a joint type";
 tests/compiler/test_joint_registry.py registers one).
@@ -34,8 +34,8 @@ import numpy as np
 
 from casmech.core.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
 from casmech.core.registry import Registry
-from casmech.core.states import JOINT_COORDINATES, JOINT_STATES
-from casmech.elements import couplings
+from casmech.core.states import JOINT_STATES
+from casmech.elements import coordinate_kinds, couplings
 from casmech.elements.motions import FREE, Motion, no_translation, slide, universal_angles
 
 Template = tuple[str, dict[str, str], str]  # (kind, {vector key: quantity@body}, label)
@@ -44,26 +44,9 @@ ZERO = 1e-12  # a vector shorter than this is zero-length (schema.checker.ZERO)
 PERPENDICULAR = 1e-6  # |cos| above which two axes are not perpendicular
 
 
-@dataclass(frozen=True)
-class Coordinate:
-    """A free motion of a joint (its coordinate, 0 at the file's pose) and what acts along it."""
-
-    driver: Template  # the row `driver: {<name>: f(t)}` adds
-    motor: tuple[str, str, str]  # motor modes: position, speed, effort (schema/motors.py)
-    limit: tuple[str, str]  # a stop's (ForceIR type, results column of its force or torque)
-
-
-# the rotation about the joint axis (body j's u from body i's u towards v) and the slide of
-# body j's joint point along the axis on body i: casmech.core.states names their attributes
-COORDINATES: dict[str, Coordinate] = {
-    "angle": Coordinate(("angle", {"u_i": "u@i", "v_i": "v@i", "u_j": "u@j"},
-                         "rotation angle = f(t)"),
-                        ("angle", "speed", "torque"), ("limit_angle", "limit_torque")),
-    "displacement": Coordinate(("dp2", {"a_i": "w@i", "s_i": "P@i", "s_j": "P@j"},
-                                "slide = f(t)"),
-                               ("displacement", "velocity", "force"),
-                               ("limit_displacement", "limit_force")),
-}
+# the coordinate kinds (elements/coordinate_kinds.py: a kind's driver row, motor modes, stop,
+# state names and measure): what a type's `coordinates` name
+COORDINATES = coordinate_kinds.REGISTRY
 # YAML vector key -> joint-frame quantity; a new point key may name a new quantity (a point),
 # a direction must map to axis_i / axis_j (model/lower.DIRECTIONS)
 FRAME = MappingProxyType({"at": "P", "at_i": "Pi", "at_j": "Pj", "axis": "w",
@@ -96,7 +79,7 @@ class JointType:
     rows: tuple[Template, ...]  # its constraint rows
     reaction_point: str | None = "P"  # quantity on body i the reaction torque is taken about
     # (a key of `vectors` for basic constraints; None: body i's origin)
-    coordinates: tuple[str, ...] = ()  # keys of COORDINATES: what rotates, what slides
+    coordinates: tuple[str, ...] = ()  # coordinate kinds (COORDINATES): what rotates, slides
     limit: str | None = None  # the coordinate a `limit:` stops (None: no `limit:` key)
     motion: Motion | None = None  # tree joint of the joint formulation (None: always cut)
     basic: bool = False  # a basic constraint: `f:` and body-frame vectors, no driver/motor
@@ -108,9 +91,9 @@ class JointType:
     # state attributes beyond its coordinates' (casmech.core.states.JOINT_STATES: a universal
     # joint's two angles, a spherical joint's relative rotation and angular velocity)
     states: tuple[str, ...] = ()
-    # `initial:` keys beyond its coordinates' (angle, angle_dot, displacement,
-    # displacement_dot): a universal joint's two angles and rates, a spherical joint's
-    # `orientation` and `angular_velocity` (model/initial.py poses the bodies from them)
+    # `initial:` keys beyond its coordinates' values and rates: a universal joint's two
+    # angles and rates, a spherical joint's `orientation` and `angular_velocity`
+    # (model/initial.py poses the bodies from them)
     initial: tuple[str, ...] = ()
     couples: Couples | None = None  # a coupling of other joints' coordinates (no bodies of its own)
     # joint-frame quantities from its scalar `options` (used as written by its rows: a screw's
@@ -161,9 +144,11 @@ def check_revolute_spherical(vectors) -> list[Problem]:
     return []
 
 
-SCREW_ROW = (couplings.kind("ad", (0, 1, 0, 1)),
-             {"u_i0": "u@i", "v_i0": "v@i", "u_j0": "u@j", "w_i1": "w@i", "s_i1": "P@i",
-              "s_j1": "P@j", "c": "screw"}, "angle = 2 pi displacement / lead")
+SCREW = ("angle", "displacement")  # the screw row's coordinates, over the joint's own bodies
+SCREW_ROW = (couplings.kind("".join(COORDINATES[c].letter for c in SCREW), (0, 1, 0, 1)),
+             {f"{key}{k}": where for k, c in enumerate(SCREW)
+              for key, where in COORDINATES[c].vectors.items()} | {"c": "screw"},
+             "angle = 2 pi displacement / lead")
 
 
 def screw_constants(options) -> dict[str, np.ndarray]:
@@ -260,8 +245,7 @@ def attributes(joint_type: str) -> list[str]:
     entry = REGISTRY.get(joint_type)
     if entry is None:
         return []
-    return [name for name, coordinate in JOINT_COORDINATES.items()
-            if coordinate in entry.coordinates] + list(entry.states)
+    return list(_coordinate_attributes(entry)) + list(entry.states)
 
 
 def initial_keys(joint_type: str) -> tuple[str, ...]:
@@ -270,8 +254,13 @@ def initial_keys(joint_type: str) -> tuple[str, ...]:
     entry = REGISTRY.get(joint_type)
     if entry is None or entry.basic or not entry.posable:
         return ()
-    return tuple(name for name, coordinate in JOINT_COORDINATES.items()
-                 if coordinate in entry.coordinates) + entry.initial
+    return _coordinate_attributes(entry) + entry.initial
+
+
+def _coordinate_attributes(entry: JointType) -> tuple[str, ...]:
+    """The values and rates of an entry's coordinates, in the kinds' registry order."""
+    return tuple(attribute for name, kind in COORDINATES.items() if name in entry.coordinates
+                 for attribute in kind.attributes)
 
 
 def coordinate_types() -> tuple[str, ...]:

@@ -2,14 +2,12 @@
 
 The names are casmech.core.states'; here is how each is computed from the coordinates `x`:
 
-- `<joint>.angle`, `<joint>.angle_dot` (joint types whose casmech.elements.joint_types entry has the
-  coordinate "angle": revolute, cylindrical): rotation of body_j about the joint axis, measured
-  from the pose written in the file like a driver angle; the formula is the rsda's
-  (`forces.springs.joint_angle`, atan2 of the joint frames, so in (-pi, pi]); the rate is its time
-  derivative by AD.
-- `<joint>.displacement`, `<joint>.displacement_dot` ("displacement": translational,
-  cylindrical): slide of body_j's copy of the joint point along the axis carried by body_i, 0
-  at the pose in the file.
+- `<joint>.<kind>`, `<joint>.<kind>_dot` for each coordinate kind its joint type has
+  (casmech.elements.coordinate_kinds: `angle`, the rotation of body_j about the joint axis
+  from the pose written in the file, like a driver angle, atan2 of the joint frames, so in
+  (-pi, pi]; `displacement`, the slide of body_j's copy of the joint point along the axis
+  carried by body_i, 0 at the pose in the file): the kind's measure over the joint's two
+  frames; the rate is its time derivative by AD.
 - `<body>.x .y .z .vx .vy .vz .wx .wy .wz`: what the results columns of that name hold (CM
   position and velocity, angular velocity, all global).
 - a universal joint's two angles and a spherical joint's relative rotation and angular
@@ -22,39 +20,43 @@ uses (model/bindings.py), and `eom` evaluates them (`values`) beside `t`.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
 from casmech.core.values import constant
-from casmech.elements.couplings import displacement_value
-from casmech.elements.forces.springs import joint_angle
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.equations import body, joint_states
 
 
-def displacement(geometry, x):
-    """Slide of body_j's joint point along the axis on body_i, from body_i's joint point
-    (elements/couplings.py writes it over the two frames)."""
-    return displacement_value(x.frame(geometry.body_i), x.frame(geometry.body_j),
-                              constant(geometry.axes["w_i"]), constant(geometry.points["s_i"]),
-                              constant(geometry.points["s_j"]))
+def coordinate(kind: str, geometry, x):
+    """The value of a joint's coordinate of this kind: its measure over the joint's frames and
+    the geometry's vectors (lower.joint_coordinates: axes u_i, v_i, w_i, u_j, points s_i, s_j)."""
+    vectors = {**geometry.axes, **geometry.points}
+    return KINDS[kind].value(x.frame(geometry.body_i), x.frame(geometry.body_j),
+                             {key: constant(vectors[key]) for key in KINDS[kind].vectors})
 
 
-def _angle(geometry, x):
-    return joint_angle(geometry, x)
+class _JointValues(Mapping):
+    """attribute of states.JOINT_COORDINATES (a registered kind's value or rate) or of
+    joint_states.VALUES -> value(joint geometry, x)."""
+
+    def __getitem__(self, attribute: str) -> Callable:
+        for name, kind in KINDS.items():
+            if attribute == kind.name:
+                return lambda geometry, x: coordinate(name, geometry, x)
+            if attribute == kind.rate:
+                return lambda geometry, x: x.rate(coordinate(name, geometry, x))
+        return joint_states.VALUES[attribute]
+
+    def __iter__(self) -> Iterator[str]:
+        yield from (attribute for kind in KINDS.values() for attribute in kind.attributes)
+        yield from joint_states.VALUES
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
 
 
-def _rate(coordinate: Callable) -> Callable:
-    return lambda geometry, x: x.rate(coordinate(geometry, x))
-
-
-# attribute of states.JOINT_COORDINATES -> value(joint geometry, x)
-JOINT_VALUES: dict[str, Callable] = {
-    "angle": _angle,
-    "angle_dot": _rate(_angle),
-    "displacement": displacement,
-    "displacement_dot": _rate(displacement),
-    **joint_states.VALUES,
-}
+JOINT_VALUES: Mapping[str, Callable] = _JointValues()
 
 
 def _omega(x, k):

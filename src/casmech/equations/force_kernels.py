@@ -22,7 +22,7 @@ import numpy as np
 from casmech.core import euler
 from casmech.elements.force_types import REGISTRY, entry_of
 from casmech.elements.primitives import Frame
-from casmech.equations import evaluation, limits
+from casmech.equations import evaluation, friction, limits
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.force_laws import FORCE_ELEMENTS, elements
 from casmech.equations.symbols import Coordinates
@@ -132,7 +132,7 @@ def on_ground(force: ForceIR) -> bool:
 def unrolled_name(force: ForceIR) -> str:
     """The C name of an element's own function (a stop, a friction: its joint's name)."""
     prefix = ("stop_" if force.type in limits.COORDINATE else
-              "friction_" if force.type.startswith("friction_") else "force_")
+              "friction_" if force.type in friction.COORDINATE else "force_")
     return prefix + "".join(c if c.isalnum() else "_" for c in force.name)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 
+from casmech.elements.coordinate_kinds import BY_TYPE, View
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.equations import coordinates, friction, limits, motors
 
@@ -49,13 +50,13 @@ class _Inputs(Mapping):
         return sum(1 for _ in self)
 
 
-JOINT_ELEMENTS: dict[str, Callable] = {
-    "limit_angle": limits.generalized_force,  # stops (ir.limits)
-    "limit_displacement": limits.generalized_force,
-    "friction_angle": friction.generalized_force,  # joint friction (ir.limits)
-    "friction_displacement": friction.generalized_force,
-    **motors.FORCE_ELEMENTS,  # effort motors of joints (ir.motors)
-}
+# a coordinate kind's element role -> its law: effort motors (ir.motors), stops and joint
+# friction (ir.limits)
+ROLE_LAWS = {"effort": motors.generalized_force, "limit": limits.generalized_force,
+             "friction": friction.generalized_force}
+# ForceIR type of a coordinate kind's element (casmech.elements.coordinate_kinds) -> its law
+JOINT_ELEMENTS: Mapping[str, Callable] = View(
+    lambda: {kind_type: ROLE_LAWS[role] for kind_type, (_, role) in BY_TYPE.items()})
 FORCE_ELEMENTS: Mapping[str, Callable] = _Elements()
 INPUT_KINDS: Mapping[str, tuple] = _Inputs()
 

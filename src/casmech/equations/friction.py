@@ -19,16 +19,16 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.elements.coordinate_kinds import of_type
 from casmech.equations import coordinates
-from casmech.model.bindings import FRICTION_KINDS
 from casmech.model.ir import ForceIR
 
-COORDINATE = {kind: name for name, kind in FRICTION_KINDS.items()}
+COORDINATE = of_type("friction")  # ForceIR type (each kind's `friction`) -> the kind
 COLUMNS = ("friction", "friction_mode")
 
 
 def coordinate(element: ForceIR, x):
-    return coordinates.JOINT_VALUES[COORDINATE[element.type]](element, x)
+    return coordinates.coordinate(COORDINATE[element.type], element, x)
 
 
 def law(element: ForceIR, x) -> tuple:

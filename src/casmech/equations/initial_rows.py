@@ -1,7 +1,8 @@
 """The joints' `initial:` values as rows that assembly holds (runtime/initial_holds.py).
 
 A position row per given coordinate, its value at q less the target (scaled by `scale`,
-assembly's continuation from the file's pose, where every coordinate is 0): an angle's
+assembly's continuation from the file's pose, where every coordinate is 0): an angle's (a
+coordinate kind with `cos_sin`, casmech.elements.coordinate_kinds, or a universal joint's)
 difference wrapped to (-pi, pi] (atan2 of its sine and cosine), a displacement's as it is, a
 spherical joint's rotation as the vector part of conj(target^scale) (x) the relative rotation
 (3 rows, 0 where they agree). A rate row per given rate: the rate (linear in q_dot) whose
@@ -18,16 +19,31 @@ import casadi as ca
 
 from casmech.core.quaternions import conjugate, product
 from casmech.core.values import constant
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.equations import coordinates, joint_states
 from casmech.equations.assemble import Coordinates
 from casmech.model.bindings import coordinate_geometry
 from casmech.model.ir import ModelIR, RowInfo
 
-# position key -> rows of a value; angles wrap
-WRAPPED = frozenset({"angle", "angle_i", "angle_j"})
-SCALARS = ("angle", "displacement", "angle_i", "angle_j")
-RATES = {"angle_dot": "angle_dot", "displacement_dot": "displacement_dot",
-         "angle_i_dot": "angle_i_dot", "angle_j_dot": "angle_j_dot"}
+# the scalar position keys beyond the coordinate kinds' (a universal joint's angles, which wrap)
+UNIVERSAL = ("angle_i", "angle_j")
+
+
+def scalars() -> tuple[str, ...]:
+    """The scalar position keys: each coordinate kind's, then a universal joint's."""
+    return (*KINDS, *UNIVERSAL)
+
+
+def wrapped() -> frozenset[str]:
+    """The position keys whose difference wraps to (-pi, pi]: the kinds that come back to
+    themselves after a turn (`cos_sin`), and a universal joint's angles."""
+    return frozenset({name for name, kind in KINDS.items() if kind.cos_sin is not None}
+                     | set(UNIVERSAL))
+
+
+def rate_keys() -> tuple[str, ...]:
+    """The rate keys (`initial:` and state attribute alike)."""
+    return (*(kind.rate for kind in KINDS.values()), *(f"{key}_dot" for key in UNIVERSAL))
 
 
 @dataclass(frozen=True)
@@ -63,11 +79,12 @@ def positions(ir: ModelIR, x: Coordinates, scale=1.0) -> Held:
             continue
         geometry = coordinate_geometry(joint)
         source = joint.initial_sources
-        for key in SCALARS:
+        wrap = wrapped()
+        for key in scalars():
             if key in joint.initial:
                 target = scale * constant(joint.initial[key])
                 error = coordinates.JOINT_VALUES[key](geometry, x) - target
-                values.append(ca.atan2(ca.sin(error), ca.cos(error)) if key in WRAPPED
+                values.append(ca.atan2(ca.sin(error), ca.cos(error)) if key in wrap
                               else error)
                 rows.append(RowInfo(joint.name, "initial", _label(joint, key,
                                                                   joint.initial[key]),
@@ -87,9 +104,9 @@ def rates(ir: ModelIR, x: Coordinates) -> Held:
     values, targets, rows = [], [], []
     for joint in ir.joints:
         geometry = coordinate_geometry(joint) if joint.initial else None
-        for key, state in RATES.items():
+        for key in rate_keys():
             if key in joint.initial:
-                values.append(coordinates.JOINT_VALUES[state](geometry, x))
+                values.append(coordinates.JOINT_VALUES[key](geometry, x))
                 targets.append(constant(joint.initial[key]))
                 rows.append(RowInfo(joint.name, "initial", _label(joint, key,
                                                                   joint.initial[key]),
@@ -112,7 +129,7 @@ def span(ir: ModelIR) -> float:
     continuation goes (numeric IR)."""
     largest = 0.0
     for joint in ir.joints:
-        for key in SCALARS:
+        for key in scalars():
             if key in joint.initial:
                 largest = max(largest, abs(float(joint.initial[key])))
         if "orientation" in joint.initial:

@@ -11,7 +11,8 @@ joint, the slide of a translational or cylindrical one, 0 at the file's pose. Ou
 applied as the generalized force s_q^T f (virtual work, as equations/motors.py applies a motor),
 with potential 1/2 k d^2 (d the overshoot). Its force and torque on body_j enter the joint's
 reaction columns (equations/forces.py motor_reactions, like a motor's), and the results hold
-`<joint>.limit_torque` (revolute) or `<joint>.limit_force` (sliding) = f and
+`<joint>.limit_<effort>` (the kind's effort mode: limit_torque of an angle, limit_force of a
+displacement) = f and
 `<joint>.limit_gap` = the distance to the nearer bound (negative past it).
 """
 
@@ -21,13 +22,13 @@ import math
 
 import casadi as ca
 
-from casmech.elements.joint_types import COORDINATES
+from casmech.elements.coordinate_kinds import REGISTRY, View, of_type
 from casmech.equations import coordinates, motors
 from casmech.model.ir import ForceIR
 
-# ForceIR type of a stop -> (the coordinate it stops, results column of f)
-COORDINATE = {c.limit[0]: name for name, c in COORDINATES.items()}
-COLUMN = {c.limit[0]: c.limit[1] for c in COORDINATES.values()}
+# ForceIR type of a stop (each kind's `limit`) -> the coordinate it stops; -> results column of f
+COORDINATE = of_type("limit")
+COLUMN = View(lambda: {kind.limit: kind.column for kind in REGISTRY.values()})
 
 
 def bounded(bound) -> bool:
@@ -37,7 +38,7 @@ def bounded(bound) -> bool:
 
 
 def coordinate(limit: ForceIR, x):
-    return coordinates.JOINT_VALUES[COORDINATE[limit.type]](limit, x)
+    return coordinates.coordinate(COORDINATE[limit.type], limit, x)
 
 
 def law(limit: ForceIR, x) -> tuple:

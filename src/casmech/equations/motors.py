@@ -1,12 +1,12 @@
 """Effort motors (torque/force mode): a generalized force pair on a joint's two bodies.
 
 Position and speed motors are drivers (rows of phi, schema/motors.py); an effort motor removes
-no DOF. It is lowered like an rsda (revolute/cylindrical rotation) or a force along the axis of a
-translational/cylindrical joint, and applies +value along the joint's coordinate:
+no DOF. It applies +value along the coordinate of the kind it belongs to (its ForceIR type is
+the kind's `effort`, casmech.elements.coordinate_kinds; equations/coordinates.py measures it):
 
-- torque: angle = atan2(v_i . u_j, u_i . u_j) (the rotation of body j about the axis, from the
-  file's pose, in (-pi, pi] like rsda and the angle driver), generalized force angle_q^T T;
-- force: displacement = w_i . d_ij (the slide of body j's joint point along the axis fixed in
+- torque: along the angle (the rotation of body j about the axis, from the file's pose, in
+  (-pi, pi] like rsda and the angle driver), generalized force angle_q^T T;
+- force: along the displacement (the slide of body j's joint point along the axis fixed in
   body i), generalized force displacement_q^T F.
 
 Virtual work gives both: T delta(angle) = (angle_q^T T) delta q. Their force and torque on body j
@@ -21,24 +21,19 @@ from dataclasses import replace
 import casadi as ca
 
 from casmech.core import euler
+from casmech.elements.coordinate_kinds import BY_TYPE, REGISTRY, View
 from casmech.elements.forces.terms import Input
-from casmech.equations.coordinates import JOINT_VALUES
+from casmech.equations.coordinates import coordinate
 from casmech.model.ir import ForceIR
-
-VARIABLES = {"motor_torque": ("angle", "angle_dot"),
-             "motor_force": ("displacement", "displacement_dot")}
-
-
-# ForceIR type -> the joint coordinate it acts along (equations/coordinates.py)
-COORDINATE = {"motor_torque": JOINT_VALUES["angle"], "motor_force": JOINT_VALUES["displacement"]}
 
 
 def coordinate_and_value(motor: ForceIR, x):
     """(the joint coordinate, the motor's torque or force) as expressions of t, q, q_dot."""
-    value = COORDINATE[motor.type](motor, x)
+    kind = BY_TYPE[motor.type][0]
+    value = coordinate(kind.name, motor, x)
     rate = x.rate(value)
-    names = VARIABLES[motor.type]
-    return value, motor.actuator.casadi(t=x.t, **{names[0]: value, names[1]: rate})
+    return value, motor.actuator.casadi(t=x.t, **dict(zip(kind.attributes, (value, rate),
+                                                           strict=True)))
 
 
 def generalized_force(motor: ForceIR, x):
@@ -64,7 +59,9 @@ def coordinate_reaction(coordinate, value, x, b: int, at):
     return force, torque
 
 
-FORCE_ELEMENTS = {"motor_torque": generalized_force, "motor_force": generalized_force}
+# effort motor ForceIR type (each kind's `effort`) -> its law
+FORCE_ELEMENTS = View(lambda: dict.fromkeys((k.effort for k in REGISTRY.values()),
+                                            generalized_force))
 
 
 def _input_law(motor: ForceIR, u) -> ForceIR:
@@ -72,4 +69,4 @@ def _input_law(motor: ForceIR, u) -> ForceIR:
 
 
 # linearization inputs (equations/eom.INPUT_KINDS): suffixes, the motor with its law the input
-INPUTS = {"motor_torque": (("torque",), _input_law), "motor_force": (("force",), _input_law)}
+INPUTS = View(lambda: {k.effort: ((k.motor[2],), _input_law) for k in REGISTRY.values()})

@@ -30,6 +30,8 @@ from casmech.core import euler
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
 from casmech.core.states import split
 from casmech.core.values import constant
+from casmech.elements.coordinate_kinds import ANGLE
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 from casmech.elements.joint_types import REGISTRY, attributes
 from casmech.equations import contact, coordinates
 from casmech.equations.assemble import Coordinates
@@ -59,7 +61,7 @@ def coupling_column(x: Coordinates, joint, force, torque):
     couples = REGISTRY[joint.type].couples
     axis = x.frame(joint.body_i).A @ constant(joint.geometry["w@i"])
     coordinate = joint.couples[couples.output][1]
-    along = torque if coordinate == "angle" else force
+    along = torque if COORDINATE_KINDS[coordinate].quantity is ANGLE else force
     return (axis.T @ along) / constant(joint.coefficients[couples.output])
 
 

@@ -24,6 +24,7 @@ import casadi as ca
 
 from casmech.backends import generate
 from casmech.backends.build import SUFFIX, Toolchain, build_libraries
+from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.equations.functions import build_functions
 from casmech.errors import UsageError
 from casmech.fmu import description, outputs
@@ -111,7 +112,7 @@ def variables(view: Exported, system: FmuSystem, begin: Start) -> list[descripti
     out += [Var(i.name, "input", "continuous", None, value,
                 ("ocp control" if i.control else "effort motor") + f" {i.kind} on joint "
                 f"'{i.joint}' (replaces its law; start: the law at the initial state)",
-                "N m" if i.kind == "torque" else "N")
+                BY_MODE[i.kind][0].quantity.effort_unit)
             for i, value in zip(view.inputs, begin.inputs, strict=True)]
     out += [Var(name, "output", "continuous", "calculated", None, quantity_title(name),
                 description.column_unit(name)) for name in system.output_names]

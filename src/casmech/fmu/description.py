@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 from casmech.core.columns import quantity
 from casmech.core.version import VERSION
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 
 # results-contract units (casmech.core.columns) -> FMI unit names and SI base exponents
 UNITS = {
@@ -52,9 +53,11 @@ def state_unit(name: str) -> str | None:
     coordinate = name.rsplit(".", 1)[-1]
     rate = coordinate.endswith("_dot")
     base = coordinate.removesuffix("_dot")
+    if base in COORDINATE_KINDS:
+        return COORDINATE_KINDS[base].quantity.units[1 if rate else 0]
     if base.startswith("angle"):
         return "rad/s" if rate else "rad"
-    if base in ("displacement", "x", "y", "z"):
+    if base in ("x", "y", "z"):
         return "m/s" if rate else "m"
     if base in ("wx", "wy", "wz"):
         return "rad/s"

@@ -31,6 +31,8 @@ import casadi as ca
 
 from casmech.core import traced
 from casmech.core.expressions import ExpressionError, parse
+from casmech.elements.coordinate_kinds import BY_TYPE, View
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 from casmech.equations.motors import INPUTS
 from casmech.errors import UsageError
 from casmech.model import parametric
@@ -41,8 +43,9 @@ from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel, ScalarFunction
 
 KINDS = ("tunable", "fixed", "calculated", "structural")
-CONTROL_VARIABLES = {"torque": ("t", "angle", "angle_dot"),
-                     "force": ("t", "displacement", "displacement_dot")}
+# effort motor mode -> the variables its law reads (t, its coordinate kind's value and rate)
+CONTROL_VARIABLES = View(lambda: {kind.motor[2]: ("t", *kind.attributes)
+                                  for kind in COORDINATE_KINDS.values()})
 
 
 @dataclass(frozen=True)
@@ -174,7 +177,7 @@ def _with_inputs(ir: ModelIR, inputs: Sequence[Input], u: ca.SX) -> ModelIR:
     index = {(i.joint, i.kind): k for k, i in enumerate(inputs)}
     motors = []
     for motor in ir.motors:
-        kind = "torque" if motor.type == "motor_torque" else "force"
+        kind = BY_TYPE[motor.type][0].motor[2]  # its effort mode
         k = index.get((motor.name, kind))
         motors.append(motor if k is None else INPUTS[motor.type][1](motor, u[k:k + 1]))
     return replace(ir, motors=tuple(motors))

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.equations.assemble import Coordinates
 from casmech.equations.checks import independent_rows
 from casmech.equations.functions import build_functions
@@ -74,7 +75,7 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
 
 def _law(ir, entry: Input, t0: float, q0, q_dot0) -> float:
     """The motor law of an input at the start state (an `ocp:` control without a motor: 0)."""
-    kind = "motor_torque" if entry.kind == "torque" else "motor_force"
+    kind = BY_MODE[entry.kind][0].effort  # the effort motor's ForceIR type
     motor = next((m for m in ir.motors if m.name == entry.joint and m.type == kind), None)
     if motor is None:
         return 0.0

@@ -36,16 +36,24 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from casmech.elements.coordinate_kinds import ANGLE, BY_MODE, View
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.errors import UsageError
 from casmech.io.animate import GROUND_INDEX, MARKER, Part, Scene, sphere
 from casmech.schema.resolved import ResolvedModel
 
 CONTACTS = ("sphere_plane", "sphere_sphere", "points_plane", "capsule_plane")
-UNITS = {"force": "N", "torque": "N m", "motor_torque": "N m", "motor_force": "N",
-         "normal": "N", "friction": "N"}  # vector kind -> unit of its length
+# vector kind (an effort motor's: its ForceIR type) -> unit of its length
+UNITS = View(lambda: {"force": "N", "torque": "N m", "normal": "N", "friction": "N"}
+             | {kind.effort: kind.quantity.effort_unit for kind in COORDINATES.values()})
 LEVEL = 0.999  # |n . up| above which a contact plane on ground is the ground
-MOTORS = {"angle": ("motor_torque", 1), "torque": ("motor_torque", 1),
-          "displacement": ("motor_force", 0), "force": ("motor_force", 0)}  # -> kind, torque?
+
+
+def _motor(drive: str) -> tuple[str, bool]:
+    """A driven coordinate kind or an effort motor mode -> (arrow kind: its effort motor's
+    ForceIR type, whether it acts about the axis: a torque)."""
+    kind = COORDINATES[drive] if drive in COORDINATES else BY_MODE[drive][0]
+    return kind.effort, kind.quantity is ANGLE
 
 
 @dataclass(frozen=True)
@@ -175,7 +183,7 @@ def joint_arrows(ir, scene: Scene, a, names, values, rows, metadata) -> list[Arr
         axis = _turn(a, joint.body_i, joint.geometry["w@i"])
         for drive in sorted({*joint.drivers, *([motorised[joint.name]]
                                                if joint.name in motorised else [])}):
-            kind, about = MOTORS[drive]
+            kind, about = _motor(drive)
             vector = torque if about else force
             along = np.einsum("fi,fi->f", vector, axis)[:, None] * axis
             arrows.append(Arrow(kind, joint.name, origin, along, carrier))

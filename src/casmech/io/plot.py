@@ -16,6 +16,7 @@ import numpy as np
 
 from casmech.core.columns import JOINT_COLUMNS, QUANTITIES, joint_quantity, quantity  # noqa: F401
 from casmech.core.states import JOINT_QUANTITIES
+from casmech.elements import coordinate_kinds  # noqa: F401 - fills JOINT_QUANTITIES, QUANTITIES
 from casmech.errors import UsageError
 
 LOG_SCALE = {"constraint violation"}  # quantities drawn on a logarithmic axis

@@ -11,7 +11,9 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 from casmech.core.states import BODY_STATES, split
-from casmech.elements.joint_types import COORDINATES, REGISTRY, attributes
+from casmech.elements.coordinate_kinds import BY_MODE
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
+from casmech.elements.joint_types import REGISTRY, attributes
 from casmech.model.ir import ForceIR, JointIR
 from casmech.schema.resolved import ScalarFunction
 
@@ -61,25 +63,24 @@ def bind(force, bodies: Mapping[str, int], joints: Mapping[str, Any]):
     return replace(force, actuator=bind_function(force.actuator, bodies, joints), value=value)
 
 
-# effort motor mode -> (ForceIR type, its axes: name -> (joint-frame quantity, body side))
-MOTOR_KINDS = {
-    "torque": ("motor_torque", {"u_i": ("u", "i"), "v_i": ("v", "i"), "u_j": ("u", "j")}),
-    "force": ("motor_force", {"w_i": ("w", "i")}),
-}
-
-
 def motors(joint, frame, poses) -> list[ForceIR]:
-    """The effort motors of one resolved joint (`frame`: its global joint frame at t = 0)."""
+    """The effort motors of one resolved joint (`frame`: its global joint frame at t = 0): of
+    each effort mode's coordinate kind, its ForceIR type, the directions its measure reads and
+    the joint point on both bodies."""
     out = []
+    body = {"i": joint.body_i, "j": joint.body_j}
+    points = {"s_i": poses.local(joint.body_i, "P", frame["P"]),
+              "s_j": poses.local(joint.body_j, "P", frame["P"])}
     for key, function in joint.motor.items():
-        kind, axes = MOTOR_KINDS[key]
-        body = {"i": joint.body_i, "j": joint.body_j}
-        local = {name: poses.local(body[side], quantity, frame[quantity])
-                 for name, (quantity, side) in axes.items()}
-        points = {"s_i": poses.local(joint.body_i, "P", frame["P"]),
-                  "s_j": poses.local(joint.body_j, "P", frame["P"])}
-        out.append(ForceIR(joint.name, kind, poses.index[joint.body_i], poses.index[joint.body_j],
-                           points, {}, function, axes=local, source=joint.source))
+        kind = BY_MODE[key][0]
+        local = {}
+        for name, where in kind.vectors.items():
+            quantity, side = where.split("@")
+            if quantity != "P":
+                local[name] = poses.local(body[side], quantity, frame[quantity])
+        out.append(ForceIR(joint.name, kind.effort, poses.index[joint.body_i],
+                           poses.index[joint.body_j], points, {}, function, axes=local,
+                           source=joint.source))
     return out
 
 
@@ -96,6 +97,8 @@ def coordinate_geometry(joint: JointIR) -> ForceIR:
     g = joint.geometry
     axes = {f"{key}_i": g[f"{key}@i"] for key in "uvw"} | {"u_j": g["u@j"]}
     axes |= {key: g[name] for key, name in EXTRA_GEOMETRY.items() if name in g}
+    axes |= {key: g[name] for kind in KINDS.values() for key, name in kind.vectors.items()
+             if key not in axes and not name.startswith("P@") and name in g}
     return ForceIR(joint.name, joint.type, joint.body_i, joint.body_j,
                    {"s_i": g["P@i"], "s_j": g["P@j"]}, {}, axes=axes, source=joint.source)
 
@@ -103,17 +106,13 @@ def coordinate_geometry(joint: JointIR) -> ForceIR:
 def stop(joint, geometry: ForceIR) -> ForceIR:
     """The stop of a resolved joint with a `limit:` (on the coordinate its joint type's entry
     names); `geometry` is lower.joint_coordinates."""
-    kind = COORDINATES[REGISTRY[joint.type].limit].limit[0]
+    kind = KINDS[REGISTRY[joint.type].limit].limit
     return replace(geometry, type=kind, params=dict(joint.limit))
-
-
-# the coordinate a joint's friction acts along -> its ForceIR type (equations/friction.py)
-FRICTION_KINDS = {"angle": "friction_angle", "displacement": "friction_displacement"}
 
 
 def friction(joint, geometry: ForceIR) -> ForceIR:
     """The friction of a resolved joint with a `friction:` (along the coordinate its type's
     stop acts on): sliding by the rate's sign (`direction` 0) until the runtime sets a mode."""
-    kind = FRICTION_KINDS[REGISTRY[joint.type].limit]
+    kind = KINDS[REGISTRY[joint.type].limit].friction
     return replace(geometry, type=kind,
                    params=dict(joint.friction) | {"direction": 0.0, "stuck": 0.0})

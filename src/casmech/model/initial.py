@@ -5,8 +5,9 @@ The file's pose is the reference: every joint coordinate is 0 there. Along the s
 D_child = D_parent o M (M^-1 when the tree joint is traversed from its body_j), M being the
 tree joint's motion by its initial values in the reference (global) frame:
 
-- angle a, displacement s (a type's coordinates: rotation about its axis w through its point
-  P, slide along w): x -> R_w(a) (x - P) + P + s w;
+- a type's coordinates (casmech.elements.coordinate_kinds, each kind's `pose`): angle a,
+  displacement s (rotation about its axis w through its point P, slide along w):
+  x -> R_w(a) (x - P) + P + s w;
 - universal angle_i, angle_j: R = R_axis_i(angle_i) R_axis_j(angle_j) about P (the cross
   frame's Rx Ry, formulations/tree.py);
 - spherical orientation R0, angular_velocity w0: R = R(phi) R0 about P, phi = 0 with rate w0
@@ -78,17 +79,28 @@ def _about(point, rotation, shift=0.0):
 
 
 def _coordinates_motion(motions: _Motions, joint, frame, inputs: _Inputs):
+    """The motion by a joint's coordinates: each kind's `pose` by its value, composed."""
     entry, given = REGISTRY[joint.type], joint.initial
-    point, axis = inputs.add(frame["P"]), inputs.add(frame["w"])
-    rotation, shift = ca.DM([1, 0, 0, 0]), ca.DM.zeros(3)
-    if "angle" in entry.coordinates:
-        angle = motions.coordinate(given.get("angle", 0.0), given.get("angle_dot", 0.0))
-        rotation = _rotation(axis, angle)
-    if "displacement" in entry.coordinates:
-        slide = motions.coordinate(given.get("displacement", 0.0),
-                                   given.get("displacement_dot", 0.0))
-        shift = slide * axis
-    return _about(point, rotation, shift)
+    point = inputs.add(frame["P"])
+    added: dict = {}
+
+    def quantity(name: str):
+        if name not in added:
+            added[name] = inputs.add(frame[name])
+        return added[name]
+
+    rotation, shift = None, None
+    for name, kind in COORDINATES.items():
+        if name not in entry.coordinates:
+            continue
+        value = motions.coordinate(given.get(kind.name, 0.0), given.get(kind.rate, 0.0))
+        turn, slide = kind.pose(quantity, value)
+        if turn is not None:
+            rotation = turn if rotation is None else product(rotation, turn)
+        if slide is not None:
+            shift = slide if shift is None else shift + slide
+    return _about(point, ca.DM([1, 0, 0, 0]) if rotation is None else rotation,
+                  ca.DM.zeros(3) if shift is None else shift)
 
 
 def _universal_motion(motions: _Motions, joint, frame, inputs: _Inputs):

@@ -106,9 +106,7 @@ def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[Primit
     bi, bj = poses.index[joint.body_i], poses.index[joint.body_j]
     entry = REGISTRY[joint.type]
     templates = [(t, joint.f, False) for t in entry.rows]
-    for key, fun in (("angle", joint.driver_angle), ("displacement", joint.driver_displacement)):
-        if fun is not None:
-            templates.append((COORDINATES[key].driver, fun, True))
+    templates += [(COORDINATES[key].driver, fun, True) for key, fun in joint.drivers.items()]
     offset = _offset(joint, frame)
     prims = []
     for (kind, template, label), fun, is_driver in templates:
@@ -124,19 +122,13 @@ def lower_joint(joint: Joint, poses: Poses, first_row: int) -> tuple[list[Primit
     else:
         point = poses.local(joint.body_i, point_name, frame[point_name])
     rows = range(first_row, first_row + len(prims))
-    drivers = {key: fun for key, fun in (("angle", joint.driver_angle),
-                                         ("displacement", joint.driver_displacement)) if fun}
+    drivers = dict(joint.drivers)
     where = {key.removeprefix("initial."): source for key, source in joint.sources.items()
              if key.startswith("initial.")}
     return prims, JointIR(joint.name, joint.type, bi, bj, rows, point, joint.source,
                           _geometry(joint, frame, poses), drivers, joint.cut,
                           joint.reaction_frame, _reaction_point(joint, poses),
                           dict(joint.initial), where)
-
-
-# a coupled coordinate's vectors (elements/couplings.py): key -> (joint-frame quantity, side)
-COUPLED = {couplings.ANGLE: (("u", "i"), ("v", "i"), ("u", "j")),
-           couplings.DISPLACEMENT: (("w", "i"), ("P", "i"), ("P", "j"))}
 
 
 def lower_coupling(joint: Joint, poses: Poses,
@@ -157,12 +149,12 @@ def lower_coupling(joint: Joint, poses: Poses,
             if sides[side] not in bodies:
                 bodies.append(sides[side])
             slots.append(bodies.index(sides[side]))
-        for key, (quantity, side) in zip(couplings.VECTOR_KEYS[letter], COUPLED[letter],
-                                         strict=True):
+        for key, where in COORDINATES[coordinate].vectors.items():
+            quantity, side = where.split("@")
             vectors[f"{key}{k}"] = poses.local(sides[side], quantity, frame[quantity])
     vectors["c"] = traced.array(list(joint.coefficients)
                                 + [0.0] * (3 - len(joint.coefficients)))
-    whole = couplings.integers(joint.coefficients) if set(pattern) == {couplings.ANGLE} else None
+    whole = couplings.integers(joint.coefficients) if all(couplings.periodic(pattern)) else None
     kind = couplings.kind(pattern, tuple(slots), whole)
     index = [poses.index[b] for b in bodies]
     label = f"{joint.type} '{joint.name}': {couples.label}"
@@ -204,10 +196,17 @@ def _geometry(joint: Joint, frame, poses: Poses) -> dict[str, np.ndarray]:
 
 def joint_coordinates(joint: Joint, poses: Poses) -> ForceIR:
     """Geometry of a joint's coordinates (equations/coordinates.py), 0 at the file's pose: the
-    joint frame's u, v, w on body_i, u on body_j (as an rsda's), the joint point on both."""
+    joint frame's u, v, w on body_i, u on body_j (as an rsda's), the joint point on both, and
+    the further directions the registered coordinate kinds' measures read."""
     frame = joint_frame(joint)
     axes = {f"{key}_i": poses.local(joint.body_i, key, frame[key]) for key in "uvw"}
     axes["u_j"] = poses.local(joint.body_j, "u", frame["u"])
+    sides = {"i": joint.body_i, "j": joint.body_j}
+    for kind in COORDINATES.values():  # what further kinds' measures read
+        for key, where in kind.vectors.items():
+            quantity, side = where.split("@")
+            if key not in axes and quantity != "P" and quantity in frame:
+                axes[key] = poses.local(sides[side], quantity, frame[quantity])
     points = {f"s_{side}": poses.local(body, "P", frame["P"])
               for side, body in (("i", joint.body_i), ("j", joint.body_j))}
     return ForceIR(joint.name, joint.type, poses.index[joint.body_i], poses.index[joint.body_j],

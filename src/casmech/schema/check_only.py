@@ -18,6 +18,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.errors import Diagnostic
 from casmech.schema import limits
 from casmech.schema.loader import format_path, load_document
@@ -25,12 +26,21 @@ from casmech.schema.loader import format_path, load_document
 SAMPLES = 1001  # most times a driver is evaluated at (the output grid when it has fewer)
 SPANNED = ("kinematics", "inverse_dynamics", "dynamics")  # analyses over [0, t_end]
 POINTS_APART = 1e-12  # [m] least distance of a tsda's points at t = 0
-# (driver key, its quantity) -> (largest value, rate, acceleration), and their units
-BOUNDS = {
-    "angle": ((limits.ANY, limits.SPEED, limits.ANY), ("rad", "rad/s", "rad/s^2")),
-    "displacement": ((limits.LENGTH, limits.SPEED, limits.ANY), ("m", "m/s", "m/s^2")),
-    "f": ((limits.ANY, limits.ANY, limits.ANY), ("", "/s", "/s^2")),
-}
+# what a driver measures (a coordinate kind's quantity; "f": a basic constraint's f(t), and a
+# quantity not listed) -> (largest value, rate, acceleration)
+LARGEST = {"angle": (limits.ANY, limits.SPEED, limits.ANY),
+           "length": (limits.LENGTH, limits.SPEED, limits.ANY),
+           "f": (limits.ANY, limits.ANY, limits.ANY)}
+UNITLESS = ("", "/s", "/s^2")  # units of a basic constraint's f(t) and its rates
+
+
+def driver_bounds(key: str) -> tuple[tuple[float, ...], tuple[str, ...]]:
+    """(largest value, rate, acceleration) of a driver (`f`: a basic constraint's), and their
+    units."""
+    if key == "f":
+        return LARGEST["f"], UNITLESS
+    quantity = COORDINATES[key].quantity
+    return LARGEST.get(quantity.name, LARGEST["f"]), quantity.units
 WHAT = ("value", "rate", "acceleration")
 
 
@@ -72,8 +82,7 @@ def sample_times(analysis) -> np.ndarray:
 
 def _drivers(model, locate) -> list[Diagnostic]:
     drivers = [(index, joint, key, function) for index, joint in enumerate(model.joints)
-               for key, function in (("angle", joint.driver_angle),
-                                     ("displacement", joint.driver_displacement), ("f", joint.f))
+               for key, function in (*joint.drivers.items(), ("f", joint.f))
                if function is not None]
     if not drivers:
         return []
@@ -108,8 +117,8 @@ def _evaluate(functions, times: np.ndarray) -> np.ndarray:
 
 def _beyond(rows: np.ndarray, times: np.ndarray, key: str):
     """(code, message, expected) of the first sample where a driver (`rows`: its value, rate
-    and acceleration at `times`) is not finite or beyond BOUNDS; None when none is."""
-    (bounds, units) = BOUNDS[key]
+    and acceleration at `times`) is not finite or beyond its `bounds`; None when none is."""
+    (bounds, units) = driver_bounds(key)
     with np.errstate(invalid="ignore"):
         bad = ~np.isfinite(rows) | (np.abs(rows) > np.array(bounds)[:, None])
     if not bad.any():

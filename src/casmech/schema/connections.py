@@ -13,11 +13,9 @@ from casmech.errors import failed
 from casmech.schema import contact, couplings, initial, resolved
 from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
-from casmech.schema.resolved import ScalarFunction
 
 UNIT_KEYS = frozenset({"axis", "axis_i", "axis_j"})  # normalised
 NONZERO_KEYS = frozenset({"axis", "axis_i", "axis_j", "a_i", "a_j", "c"})  # E404 when zero
-DRIVERS = tuple(COORDINATES)  # driver keys: the joint coordinates (casmech.elements.joint_types)
 
 
 def joint(check: Checker, index: int, given) -> resolved.Joint | None:
@@ -100,22 +98,26 @@ def joint_vector(check: Checker, path: Path, key: str, values) -> np.ndarray | N
     return check.numbers(path, values)
 
 
-def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | None]:
-    """`driver_angle`/`driver_displacement` functions of t (None: reported as wrong)."""
+def drivers(check: Checker, path: Path, given) -> dict[str, Any]:
+    """{"drivers": {coordinate kind: function of t}} ({} without `driver:`; the value None:
+    reported as wrong). The keys are the registered coordinate kinds."""
     driver = getattr(given, "driver", None)
-    keys = [key for key in DRIVERS if driver is not None and getattr(driver, key) is not None]
-    found = {}
-    if driver is not None and not keys:
+    if driver is None:
+        return {}
+    kinds = tuple(COORDINATES)
+    keys = [key for key in kinds if getattr(driver, key, None) is not None]
+    if not keys:
         ways = " or ".join(f"`driver: {{{key}: ...}}` ({', '.join(having(key))})"
-                           for key in DRIVERS)
+                           for key in kinds if having(key))
         check.error("E100", (*path, "driver"), "a driver needs a motion",
-                    expected=" or ".join(DRIVERS),
+                    expected=" or ".join(kinds),
                     hint=f"write {ways}; leave `driver:` out for a joint that moves freely")
-        found["driver"] = None
+        return {"drivers": None}
+    found = {}
     for key in keys:
         where = (*path, "driver", key)
         if given.type not in having(key):
-            allowed = listed(having(key))
+            allowed = listed(having(key)) if having(key) else "no"
             check.error(
                 "E408",
                 where,
@@ -123,10 +125,10 @@ def drivers(check: Checker, path: Path, given) -> dict[str, ScalarFunction | Non
                 source=check.doc.locate_key(where),
                 hint=f"allowed on {allowed} joints",
             )
-            found[f"driver_{key}"] = None
+            found[key] = None
         else:
-            found[f"driver_{key}"] = check.function(where, getattr(driver, key), {"t": 0.0})
-    return found
+            found[key] = check.function(where, getattr(driver, key), {"t": 0.0})
+    return {"drivers": None if failed(found.values()) else found}
 
 
 def distance_length(check: Checker, path: Path, given, vectors) -> float | None:

@@ -13,13 +13,11 @@ from __future__ import annotations
 
 from casmech.core import traced
 from casmech.elements.couplings import MAX_COORDINATES
-from casmech.elements.joint_types import REGISTRY, Couples, having, listed
+from casmech.elements.joint_types import COORDINATES, REGISTRY, Couples, having, listed
 from casmech.errors import failed
 from casmech.schema import resolved
 from casmech.schema.checker import ZERO, Checker
 from casmech.schema.loader import Path
-
-COORDINATES = ("angle", "displacement")
 
 
 def _coordinate(check: Checker, path: Path, written: str, use: str | None) -> tuple | None:
@@ -27,7 +25,7 @@ def _coordinate(check: Checker, path: Path, written: str, use: str | None) -> tu
     name, coordinate = written, use
     if use is None and written not in check.joint_types:
         head, _, tail = written.rpartition(".")
-        if tail in COORDINATES and head in check.joint_types:
+        if tail in COORDINATES and head in check.joint_types:  # a coordinate kind
             name, coordinate = head, tail
     if not check.reference(path, name, check.joint_types, "joint"):
         return None
@@ -38,8 +36,8 @@ def _coordinate(check: Checker, path: Path, written: str, use: str | None) -> tu
             choices = " or ".join(f"'{name}.{c}'" for c in owned)
             check.error("E103", path, f"joint '{name}' ({check.joint_types[name]}) has "
                         f"{'no' if not owned else 'more than one'} coordinate to couple",
-                        expected="a joint of one coordinate, or '<joint>.angle' or "
-                                 "'<joint>.displacement'",
+                        expected="a joint of one coordinate, or " + " or ".join(
+                            f"'<joint>.{kind}'" for kind in COORDINATES),
                         hint=f"write {choices}" if owned else None)
             return None
         coordinate = owned[0]

@@ -10,12 +10,24 @@ tolerances, weights, expressions of the state, a contact's normal law, parameter
 
 from __future__ import annotations
 
-from casmech.core.units import FORCE, LENGTH, MASS, NUMBER, TIME, TORQUE, Dimension, dimension
+from casmech.core import states
+from casmech.core.units import (
+    DAMPING,
+    FORCE,
+    LENGTH,
+    MASS,
+    NUMBER,
+    RATE,
+    ROTATIONAL_DAMPING,
+    STIFFNESS,
+    TIME,
+    TORQUE,
+    VELOCITY,
+    Dimension,
+    dimension,
+)
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY
-
-VELOCITY, RATE = dimension(length=1, time=-1), dimension(time=-1)
-STIFFNESS, DAMPING = dimension(mass=1, time=-2), dimension(mass=1, time=-1)
-ROTATIONAL_DAMPING = dimension(mass=1, length=2, time=-1)
 
 # (section, keys without indices) -> dimension
 FIELDS: dict[tuple[str, tuple[str, ...]], Dimension] = {
@@ -28,12 +40,6 @@ FIELDS: dict[tuple[str, tuple[str, ...]], Dimension] = {
     **{("joints", key): value for key, value in {
         ("at",): LENGTH, ("at_i",): LENGTH, ("at_j",): LENGTH, ("s_i",): LENGTH,
         ("s_j",): LENGTH, ("length",): LENGTH, ("reactions", "point"): LENGTH,
-        ("driver", "angle"): NUMBER, ("driver", "displacement"): LENGTH,
-        ("motor", "angle"): NUMBER, ("motor", "speed"): RATE, ("motor", "torque"): TORQUE,
-        ("motor", "displacement"): LENGTH, ("motor", "velocity"): VELOCITY,
-        ("motor", "force"): FORCE,
-        ("initial", "angle"): NUMBER, ("initial", "angle_dot"): RATE,
-        ("initial", "displacement"): LENGTH, ("initial", "displacement_dot"): VELOCITY,
         ("initial", "angle_i"): NUMBER, ("initial", "angle_i_dot"): RATE,
         ("initial", "angle_j"): NUMBER, ("initial", "angle_j_dot"): RATE,
         ("initial", "angular_velocity"): RATE}.items()},
@@ -69,34 +75,47 @@ CONTACT: dict[tuple[str, ...], Dimension] = {
     ("friction", "static"): NUMBER, ("friction", "dynamic"): NUMBER,
     ("friction", "stiction_velocity"): VELOCITY, ("friction", "transition_velocity"): VELOCITY,
 }
-# a joint stop's keys by the coordinate it stops (casmech.elements.joint_types `limit`)
-LIMITS: dict[str, dict[str, Dimension]] = {
-    "angle": {"lower": NUMBER, "upper": NUMBER, "stiffness": TORQUE,
-              "damping": ROTATIONAL_DAMPING},
-    "displacement": {"lower": LENGTH, "upper": LENGTH, "stiffness": STIFFNESS,
-                     "damping": DAMPING},
-}
+
+
+def coordinate_fields(kind) -> dict[tuple[str, ...], Dimension]:
+    """A coordinate kind's keys in a joint (casmech.elements.coordinate_kinds): its driver,
+    motor modes, `initial:` value and rate, and its stop's keys."""
+    q = kind.quantity
+    return {("driver", kind.name): q.value, ("initial", kind.name): q.value,
+            ("initial", kind.rate): q.rate,
+            **{("motor", mode): dim for mode, dim in zip(kind.motor, (q.value, q.rate, q.effort),
+                                                         strict=True)},
+            **{("limit", key): dim for key, dim in (("lower", q.value), ("upper", q.value),
+                                                     ("stiffness", q.stiffness),
+                                                     ("damping", q.damping))}}
 
 
 # a readable name's attribute (after its last dot: body and contact columns, joint states,
 # reactions) -> its dimension, for the units of outputs (schema/outputs.py)
 ANGULAR_ACCELERATION = dimension(time=-2)
 READABLE: dict[str, Dimension] = {
-    **dict.fromkeys(("x", "y", "z", "displacement", "gap"), LENGTH),
-    **dict.fromkeys(("vx", "vy", "vz", "displacement_dot"), VELOCITY),
+    **dict.fromkeys(("x", "y", "z", "gap"), LENGTH),
+    **dict.fromkeys(("vx", "vy", "vz"), VELOCITY),
     **dict.fromkeys(("ax", "ay", "az"), dimension(length=1, time=-2)),
-    **dict.fromkeys(("wx", "wy", "wz", "angle_dot", "angle_i_dot", "angle_j_dot"), RATE),
+    **dict.fromkeys(("wx", "wy", "wz", "angle_i_dot", "angle_j_dot"), RATE),
     **dict.fromkeys(("alphax", "alphay", "alphaz"), ANGULAR_ACCELERATION),
-    **dict.fromkeys(("e0", "e1", "e2", "e3", "angle", "angle_i", "angle_j"), NUMBER),
-    **dict.fromkeys(("fx", "fy", "fz", "normal_force", "friction_force", "limit_force"), FORCE),
-    **dict.fromkeys(("tx", "ty", "tz", "limit_torque", "torque"), TORQUE),
+    **dict.fromkeys(("e0", "e1", "e2", "e3", "angle_i", "angle_j"), NUMBER),
+    **dict.fromkeys(("fx", "fy", "fz", "normal_force", "friction_force"), FORCE),
+    **dict.fromkeys(("tx", "ty", "tz", "torque"), TORQUE),
 }
 
 
 def readable(name: str) -> Dimension | None:
     """The dimension of a readable state name (`bar.vx`), by its attribute; None where the
     attribute does not tell it (a stop's gap: rad or m)."""
-    return READABLE.get(name.rpartition(".")[2]) if "." in name else None
+    if "." not in name:
+        return None
+    attribute = name.rpartition(".")[2]
+    kind = KINDS.get(states.JOINT_COORDINATES.get(attribute, ""))
+    if kind is not None:
+        return kind.quantity.value if attribute == kind.name else kind.quantity.rate
+    stopped = [kind.quantity.effort for kind in KINDS.values() if kind.column == attribute]
+    return stopped[0] if stopped else READABLE.get(attribute)
 
 
 def _type(data, path: tuple) -> str | None:
@@ -121,7 +140,12 @@ def expected(data, path) -> Dimension | None:
         return TYPED[(section, kind, keys)]
     entry = REGISTRY.get(kind) if section == "joints" and kind else None
     if entry is not None and entry.limit and keys[:1] == ("limit",) and len(keys) == 2:
-        return LIMITS[entry.limit].get(keys[1])
+        return coordinate_fields(KINDS[entry.limit]).get(keys)
+    if section == "joints" and len(keys) == 2 and keys[0] in ("driver", "motor", "initial"):
+        found = [fields[keys] for fields in map(coordinate_fields, KINDS.values())
+                 if keys in fields]
+        if found:
+            return found[0]
     if section == "forces" and keys in CONTACT:
         return CONTACT[keys]
     return FIELDS.get((section, keys))

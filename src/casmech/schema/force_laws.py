@@ -22,14 +22,17 @@ import numpy as np
 from casmech.core import traced
 from casmech.core.states import BODY_STATES, JOINT_COORDINATES, split
 from casmech.elements.force_types import REGISTRY, state_reading
+from casmech.elements.joint_types import COORDINATES, coordinate_types, listed
 from casmech.elements.joint_types import attributes as joint_attributes
-from casmech.elements.joint_types import coordinate_types, listed
 from casmech.errors import did_you_mean, failed
 from casmech.schema import bodies, resolved
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
 
-STATE_NAMES = ("<joint>.angle", "<joint>.displacement", "<body>.vx", "...")
+
+def state_names() -> tuple[str, ...]:
+    """Examples of the state names for a hint: each coordinate kind's, a body's."""
+    return (*(f"<joint>.{kind}" for kind in COORDINATES), "<body>.vx", "...")
 BODY_INITIAL = {"": "position", "v": "velocity", "w": "angular_velocity"}
 
 
@@ -94,7 +97,7 @@ class StateChecker(Checker):
             return (f"the state '{name}' is not allowed here",
                     f"states are read in: {state_reading()}")
         return (f"unknown symbol '{name}'",
-                f"dotted names are states ({', '.join(STATE_NAMES)}), read in: {state_reading()}")
+                f"dotted names are states ({', '.join(state_names())}), read in: {state_reading()}")
 
     def misnamed_state(self, name: str) -> tuple[str, str | None]:
         owner, attribute = split(name)

@@ -19,15 +19,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from casmech.core.states import JOINT_COORDINATES
+from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.elements.joint_tree import GROUND, Link, spanning_tree
 from casmech.errors import failed
 from casmech.schema import bodies
 from casmech.schema.checker import Checker
 from casmech.schema.loader import Path
-
-# the driver (resolved.Joint field) that gives each key's coordinate
-DRIVEN_BY = {"angle": "driver_angle", "angle_dot": "driver_angle",
-             "displacement": "driver_displacement", "displacement_dot": "driver_displacement"}
 
 
 def initial(check: Checker, path: Path, given) -> dict[str, Any] | None:
@@ -66,10 +64,10 @@ def driven(check: Checker, joints) -> None:
         if joint is None:
             continue
         for key in joint.initial:
-            driver = DRIVEN_BY.get(key)
-            if driver is not None and getattr(joint, driver) is not None:
+            driver = JOINT_COORDINATES.get(key)  # the kind whose driver gives key at t = 0
+            if driver is not None and driver in joint.drivers:
                 where = ("joints", index, "initial", key)
-                check.error("E412", where, f"the {driver.removeprefix('driver_')} of "
+                check.error("E412", where, f"the {driver} of "
                             f"'{joint.name}' is driven: its driver gives its {key} at t = 0",
                             source=check.doc.locate_key(where),
                             hint=f"remove initial.{key}, or the driver (or motor)")
@@ -95,5 +93,6 @@ def velocities(check: Checker, given_bodies, joints) -> None:
                 check.error("E412", where, f"body '{body.name}' is moved by its joints' "
                             f"`initial:` values ({part} has some): its {key} follows from "
                             "their rates", source=check.doc.locate_key(where),
-                            hint="give the joints' rates in `initial:` (angle_dot, "
-                                 "displacement_dot, ...) and remove the body's " + key)
+                            hint="give the joints' rates in `initial:` ("
+                                 + ", ".join(kind.rate for kind in COORDINATES.values())
+                                 + ", ...) and remove the body's " + key)

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from casmech.elements.coordinate_kinds import View
 from casmech.elements.joint_types import COORDINATES, REGISTRY, coordinate_types, listed
 from casmech.errors import did_you_mean, failed
 from casmech.schema import files, spec
@@ -29,9 +30,11 @@ from casmech.schema.resolved import ScalarFunction
 from casmech.schema.tables import TableError, is_table, table_function
 from casmech.schema.tables import integral as table_integral
 
-# position and speed mode -> the driver it becomes; effort mode -> the variables its law reads
-DRIVEN = {mode: name for name, c in COORDINATES.items() for mode in c.motor[:2]}
-EFFORT_VARIABLES = {c.motor[2]: (name, f"{name}_dot") for name, c in COORDINATES.items()}
+# position and speed mode -> the driver it becomes; speed modes; effort mode -> the variables
+# its law reads (casmech.elements.coordinate_kinds: each kind's `motor`)
+DRIVEN = View(lambda: {mode: name for name, c in COORDINATES.items() for mode in c.motor[:2]})
+SPEEDS = View(lambda: {c.motor[1]: name for name, c in COORDINATES.items()})
+EFFORT_VARIABLES = View(lambda: {c.motor[2]: c.attributes for c in COORDINATES.values()})
 NO_CLOSED_FORM_HINT = ("write the motion itself as `{position}:` (position mode); a speed needs "
                        "polynomials, sin/cos/exp of a*t + b, step() or a table")
 
@@ -70,8 +73,8 @@ def _strip_tables(given) -> tuple[Any, dict[tuple, spec.Table]]:
         found[("f",)], update["f"] = given.f, "0"
     driver = getattr(given, "driver", None)
     if driver is not None:
-        tables = {k: getattr(driver, k) for k in ("angle", "displacement")
-                  if isinstance(getattr(driver, k), spec.Table)}
+        tables = {k: getattr(driver, k, None) for k in COORDINATES
+                  if isinstance(getattr(driver, k, None), spec.Table)}
         found.update({("driver", k): v for k, v in tables.items()})
         if tables:
             update["driver"] = driver.model_copy(update=dict.fromkeys(tables, "0"))
@@ -91,7 +94,7 @@ def _allowed(joint_type: str) -> str:
 
 def _check_keys(check: Checker, path: tuple, given, motor: spec.Motor) -> list[str]:
     """The motor's keys if they fit the joint type, else report (E101, E408) and []."""
-    keys = [k for k in spec.Motor.model_fields if getattr(motor, k) is not None]
+    keys = [k for k in type(motor).model_fields if getattr(motor, k) is not None]
     allowed = [k for motion in motions(given.type) for k in motion]
     hint = f"a {given.type} joint's motor takes {_allowed(given.type)}" if allowed else \
         f"motors act on {listed(coordinate_types())} joints"
@@ -137,7 +140,7 @@ def _speed(check: Checker, where: tuple, value: Any, position: str):
 
 def _mode(check: Checker, path: tuple, key: str, value: Any):
     where = (*path, key)
-    if key in ("speed", "velocity"):
+    if key in SPEEDS:
         return _speed(check, where, value, DRIVEN[key])
     if key in EFFORT_VARIABLES:
         at = dict.fromkeys(("t", *EFFORT_VARIABLES[key]), 0.0)
@@ -154,7 +157,7 @@ def motor(check: Checker, path: tuple, given) -> dict[str, Any] | None:
     keys = _check_keys(check, where, given, given_motor)
     driver = getattr(given, "driver", None)
     for key in keys:
-        if key in DRIVEN and driver is not None and getattr(driver, DRIVEN[key]) is not None:
+        if key in DRIVEN and driver is not None and getattr(driver, DRIVEN[key], None) is not None:
             check.error("E408", (*where, key), f"the {DRIVEN[key]} of '{given.name}' is given by "
                         "both driver and motor", hint="keep one of them")
             return None
@@ -173,11 +176,14 @@ def joint(check: Checker, index: int, given, resolve):
     if resolved is None or modes is None or failed(functions.values()):
         return None
     fields: dict[str, Any] = {}
+    drivers = dict(resolved.drivers)
     for keys, function in functions.items():
-        fields["f" if keys == ("f",) else f"driver_{keys[1]}"] = function
-    for key, function in modes.items():
-        if key in DRIVEN:
-            fields[f"driver_{DRIVEN[key]}"] = function
+        if keys == ("f",):
+            fields["f"] = function
+        else:
+            drivers[keys[1]] = function
+    drivers |= {DRIVEN[key]: function for key, function in modes.items() if key in DRIVEN}
+    fields["drivers"] = {name: drivers[name] for name in COORDINATES if name in drivers}
     if any(key in DRIVEN for key in modes) and "driver" not in resolved.sources:
         sources = {**resolved.sources, "driver": check.doc.locate_key((*path, "motor"))}
         fields["sources"] = sources

@@ -71,12 +71,13 @@ class Joint:
     vectors: Mapping[str, np.ndarray] = field(default_factory=dict)
     length: float | None = None  # distance joint (resolved default: |at_j - at_i| at t = 0)
     f: ScalarFunction | None = None  # basic constraints: f(t) (variables ("t",))
-    driver_angle: ScalarFunction | None = None  # variables ("t",)
-    driver_displacement: ScalarFunction | None = None  # variables ("t",)
+    # `driver:`: coordinate kind (casmech.elements.coordinate_kinds) -> f(t), variables ("t",)
+    drivers: Mapping[str, ScalarFunction] = field(default_factory=dict)
     source: Source | None = None
     sources: Mapping[str, Source] = field(default_factory=dict)  # per-key locations
-    # effort motors (schema/motors.py): torque -> f(t, angle, angle_dot),
-    # force -> f(t, displacement, displacement_dot); position/speed motors are drivers above
+    # effort motors (schema/motors.py): effort mode -> f(t, coordinate, its rate) (torque ->
+    # f(t, angle, angle_dot), force -> f(t, displacement, displacement_dot)); position and
+    # speed motors are drivers above
     motor: Mapping[str, Any] = field(default_factory=dict)
     cut: bool = False  # joint formulation: a loop-closure constraint, never a tree joint
     reaction_frame: str = "global"  # `reactions: {frame: ...}` (runtime.reaction_frames)

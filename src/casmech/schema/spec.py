@@ -21,7 +21,7 @@ from pydantic.fields import FieldInfo
 
 from casmech.core import options, spec_base
 from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
-from casmech.elements import force_types
+from casmech.elements import coordinate_kinds, force_types
 from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
 from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Output, Study
@@ -117,6 +117,16 @@ def _joints_changed() -> None:
 
 
 on_change(_joints_changed)
+
+
+def _kinds_changed() -> None:
+    """A coordinate kind was (un)registered: its driver, motor and initial keys in every joint
+    class."""
+    spec_joints.kinds_changed()
+    _joints_changed()
+
+
+coordinate_kinds.on_change(_kinds_changed)
 
 
 def _forces_changed() -> None:

@@ -14,8 +14,10 @@ from pydantic import (
     Tag,
     create_model,
 )
+from pydantic.fields import FieldInfo
 
 from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
 
@@ -39,27 +41,33 @@ TimeFunction = Annotated[  # an expression of t, or a data table
 ]
 
 
-class Driver(Spec):
-    """Which keys a joint type allows is checked in semantic (E408)."""
+DRIVER_DOC = "Which keys a joint type allows is checked in semantic (E408)."
+MOTOR_DOC = """One mode per motion (casmech.schema.motors checks the keys against the joint type:
+revolute angle | speed | torque, translational displacement | velocity | force, cylindrical
+one of each). Unknown keys are reported there too, with the keys the joint type allows."""
 
-    angle: TimeFunction | None = None
-    displacement: TimeFunction | None = None
+
+def driver_class() -> type[Spec]:
+    """`driver:`: one key per registered coordinate kind (casmech.elements.coordinate_kinds)."""
+    fields: dict[str, Any] = {name: (TimeFunction | None, None) for name in KINDS}
+    return create_model("Driver", __base__=Spec, __module__=__name__, __doc__=DRIVER_DOC,
+                        **fields)
 
 
-class Motor(Spec):
-    """One mode per motion (casmech.schema.motors checks the keys against the joint type:
-    revolute angle | speed | torque, translational displacement | velocity | force, cylindrical
-    one of each). Unknown keys are reported there too, with the keys the joint type allows."""
-
+class MotorBase(Spec):
     model_config = ConfigDict(extra="allow", frozen=True,
                               json_schema_extra={"additionalProperties": False})
 
-    angle: TimeFunction | None = None
-    speed: TimeFunction | None = None
-    torque: TimeFunction | None = None
-    displacement: TimeFunction | None = None
-    velocity: TimeFunction | None = None
-    force: TimeFunction | None = None
+
+def motor_class() -> type[Spec]:
+    """`motor:`: the registered coordinate kinds' motor modes, kind by kind."""
+    fields: dict[str, Any] = {mode: (TimeFunction | None, None) for kind in KINDS.values()
+                              for mode in kind.motor}
+    return create_model("Motor", __base__=MotorBase, __module__=__name__, __doc__=MOTOR_DOC,
+                        **fields)
+
+
+Driver, Motor = driver_class(), motor_class()
 
 
 class Reactions(Spec):
@@ -80,10 +88,21 @@ class JointBase(Spec):
 
 
 class Composite(JointBase):
-    driver: Driver | None = None
+    driver: Driver | None = None  # rebuilt when a coordinate kind is (un)registered
     motor: Motor | None = None
     # joint formulation: keep this joint as a loop-closure constraint, never a tree joint
     cut: StrictBool = False
+
+
+def kinds_changed() -> None:
+    """A coordinate kind was (un)registered: new Driver and Motor classes in Composite, and
+    every joint class built again by the next `rebuild`."""
+    global Driver, Motor
+    Driver, Motor = driver_class(), motor_class()
+    for key, cls in (("driver", Driver), ("motor", Motor)):
+        Composite.model_fields[key] = FieldInfo.from_annotated_attribute(cls | None, None)
+    Composite.model_rebuild(force=True)
+    _BUILT_FROM.clear()
 
 
 class Limit(Spec):

@@ -17,7 +17,8 @@ from pydantic import StrictBool
 from casmech.core import traced
 from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
 from casmech.core.values import constant
-from casmech.elements.forces.terms import Input, SpringKind, distance, relative_angle, spring
+from casmech.elements.coordinate_kinds import REGISTRY as KINDS
+from casmech.elements.forces.terms import Input, SpringKind, distance, spring
 from casmech.elements.joint_types import having, listed
 from casmech.errors import failed
 
@@ -49,10 +50,10 @@ class RSDA(Spec):
     repeat: Repeats | None = None
 
 
+ANGLE = KINDS["angle"]  # an rsda acts along a joint's angle
 SPRINGS = {
     "tsda": SpringKind(distance, ("s_i", "s_j"), "free_length", ("length", "length_dot")),
-    "rsda": SpringKind(lambda fi, fj, *axes: relative_angle(fi.A, fj.A, *axes),
-                       ("u_i", "v_i", "u_j"), "free_angle", ("angle", "angle_dot")),
+    "rsda": SpringKind(ANGLE.measure, tuple(ANGLE.vectors), "free_angle", ANGLE.attributes),
 }
 
 
