@@ -76,6 +76,8 @@ LIMITS: dict[str, dict[str, Dimension]] = {
     "displacement": {"lower": LENGTH, "upper": LENGTH, "stiffness": STIFFNESS,
                      "damping": DAMPING},
 }
+# a joint friction's load keys (the others are in the units of the coordinate's force)
+FRICTION: dict[str, Dimension] = {"mu": NUMBER, "mu_static": NUMBER, "radius": LENGTH}
 
 
 # a readable name's attribute (after its last dot: body and contact columns, joint states,
@@ -122,6 +124,8 @@ def expected(data, path) -> Dimension | None:
     entry = REGISTRY.get(kind) if section == "joints" and kind else None
     if entry is not None and entry.limit and keys[:1] == ("limit",) and len(keys) == 2:
         return LIMITS[entry.limit].get(keys[1])
+    if entry is not None and entry.limit and keys[:1] == ("friction",) and len(keys) == 2:
+        return FRICTION.get(keys[1])
     if section == "forces" and keys in CONTACT:
         return CONTACT[keys]
     return FIELDS.get((section, keys))
