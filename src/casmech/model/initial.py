@@ -6,7 +6,7 @@ D_child = D_parent o M (M^-1 when the tree joint is traversed from its body_j), 
 tree joint's motion by its initial values in the reference (global) frame:
 
 - angle a, displacement s (a type's coordinates: rotation about its axis w through its point
-  P, slide along w): x -> R_w(a) (x - P) + P + s w;
+  P, slide along w): x -> R_w(a) (x - P) + P + s w (a screw: s = lead a / (2 pi));
 - universal angle_i, angle_j: R = R_axis_i(angle_i) R_axis_j(angle_j) about P (the cross
   frame's Rx Ry, formulations/tree.py);
 - spherical orientation R0, angular_velocity w0: R = R(phi) R0 about P, phi = 0 with rate w0
@@ -84,7 +84,9 @@ def _coordinates_motion(motions: _Motions, joint, frame, inputs: _Inputs):
     if "angle" in entry.coordinates:
         angle = motions.coordinate(given.get("angle", 0.0), given.get("angle_dot", 0.0))
         rotation = _rotation(axis, angle)
-    if "displacement" in entry.coordinates:
+    if "displacement" in entry.follows:  # a screw's slide: its angle times lead / (2 pi)
+        shift = angle * inputs.add(entry.follows["displacement"][1](joint.options)) * axis
+    elif "displacement" in entry.coordinates:
         slide = motions.coordinate(given.get("displacement", 0.0),
                                    given.get("displacement_dot", 0.0))
         shift = slide * axis
