@@ -252,3 +252,55 @@ def test_two_joints_with_a_load_part_are_an_analysis_error_naming_them():
     with pytest.raises(AnalysisError) as raised:
         casmech.analyze(functions)
     assert "slide" in str(raised.value) and "second" in str(raised.value)
+
+
+def rough_pendulum(formulation: str, friction: str, initial: str = "") -> str:
+    """A bar on a horizontal pivot released level: its bearing's radial load changes with its
+    swing and with the friction torque itself (the load's response n1 is not 0)."""
+    return f"""casmech: 1
+name: rough_pendulum
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: bar, mass: 1.0, inertia: [0.02, 0.02, 0.02], position: [0.5, 0, 0]}}
+joints:
+  - {{name: pivot, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 1, 0],
+     friction: {friction}{initial}}}
+analysis: {{type: dynamics, t_end: 3.0, output_step: 0.01, rtol: 1.0e-10, atol: 1.0e-12,
+           formulation: {formulation}}}
+"""
+
+
+def test_a_pendulums_bearing_friction_is_radius_mu_times_its_reported_radial_force():
+    """At every sliding row the friction torque is -sign (Tc + R mu |F_radial|) with F the
+    reaction columns (the multipliers the run solved): the implicit law holds exactly in the
+    joint formulation, to IDAS's algebraic tolerance in rp; the two switch alike."""
+    tc, mu, radius = 0.01, 0.3, 0.05
+    friction = f"{{coulomb: {tc}, mu: {mu}, radius: {radius}}}"
+    runs = {}
+    for formulation, rtol in (("joint", 1e-12), ("rp", 1e-7)):
+        result, columns = run(rough_pendulum(formulation, friction))
+        mode = columns["pivot.friction_mode"]
+        radial = np.hypot(columns["pivot.fx"], columns["pivot.fz"])  # the axis is y
+        sliding = mode != 0
+        assert sliding.sum() > 250
+        # joint: one solve of the same equations (roundoff); rp: the DAE's lam is solved to
+        # IDAS's tolerance, the law's load from (q, q_dot)
+        np.testing.assert_allclose(columns["pivot.friction"][sliding],
+                                   -mode[sliding] * (tc + mu * radius * radial[sliding]),
+                                   rtol=rtol, atol=0)
+        runs[formulation] = result.metadata["friction_switches"]
+        assert len(runs[formulation]) == 3
+    # two formulations of the same motion: switch times to the runs' tolerance
+    np.testing.assert_allclose([s["t"] for s in runs["rp"]], [s["t"] for s in runs["joint"]],
+                               rtol=1e-8, atol=0)
+
+
+def test_a_friction_that_would_lock_its_joint_by_itself_is_an_analysis_error():
+    """mu R m e / J_o >= 1 (here 0.6 * 1 * 0.5 / 0.27 = 1.11): Painleve's paradox."""
+    text = rough_pendulum("joint", "{mu: 0.6, radius: 1.0}", ", initial: {angle_dot: 2}")
+    functions = casmech.compile(casmech.loads(text))
+    with pytest.raises(AnalysisError) as raised:
+        casmech.analyze(functions)
+    message = str(raised.value)
+    assert "Painleve" in message and "'pivot'" in message
+    assert "1.11" in message  # the measure named beside the joint
