@@ -7,9 +7,10 @@ docs/forces.md#joint-friction): the joint's reaction normal to its motion,
 F the force the joint's rows exert on body_j, w its axis. Stuck, F is the rows' (the holding
 row's multiplier is along w or about it, so L is the other rows'), a function of the
 multipliers (`normal`). Sliding, the friction force f = a - d mu L (a = -d Tc - c s_dot, d the
-mode) changes the motion and so L: with z0 = (q_ddot, lam) of the model without the load part
-and z1 the response to a unit generalized force along the coordinate (both from one solve of
-the r-p system [M Phi_q^T; Phi_q 0] z = [Q; gamma]), F = F0 - d g F1 with g = mu L, and
+mode) changes the motion and so L: with lam0 the multipliers of the model without the load
+part and lam1 their response to a unit generalized force along the coordinate (both from one
+solve of the Newton-Euler form's Schur complement: `sliding`), F = F0 - d g F1 with g = mu L,
+and
 
     g^2 = mu^2 |n0 - d g n1|^2   (n = the normal part of F, times radius along an angle),
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.core import euler
 from casmech.core.values import constant
 from casmech.equations import friction
 from casmech.equations.symbols import Coordinates
@@ -51,22 +53,39 @@ def normal(functions, element) -> ca.Function:
     return ca.Function("friction_load", [x.t, x.q, x.q_dot, lam], [value])
 
 
+def _velocities(x: Coordinates, n_bodies: int):
+    """v = [r_dot; omega_bar] of (q, q_dot): omega_bar_k = 2 G(p_k) p_dot_k."""
+    omega = [2 * euler.g_matrix(x.p(k)) @ x.p(k, x.q_dot) for k in range(n_bodies)]
+    return ca.vertcat(x.q_dot[:3 * n_bodies], *omega)
+
+
 def sliding(functions, element, direction: float) -> ca.Function:
     """(t, q, q_dot) -> (g = mu L, mu |n1|) while `element` slides in `direction`, in the
-    model of `functions` (the friction's load part absent from it; module docstring)."""
-    x = Coordinates.create(functions.ir.n_bodies)
+    model of `functions` (the friction's load part absent from it; module docstring). The
+    multipliers are the Newton-Euler form's: (P M^-1 P^T) lam = P M^-1 F - gamma with
+    M = blkdiag(m I, J_bar) (constant), over the joint rows only, the smallest system whose
+    multipliers are the joints' reactions."""
+    nb = functions.ir.n_bodies
+    x = Coordinates.create(nb)
     t, q, q_dot = x.t, x.q, x.q_dot
-    mass = functions["mass_matrix"](q)
-    jacobian = functions["phi_q"](t, q)
-    n, m = mass.shape[0], jacobian.shape[0]
-    unit = x.ground_fixed(ca.jacobian(friction.coordinate(element, x), q)).T
-    system = ca.blockcat([[mass, jacobian.T], [jacobian, ca.SX(m, m)]])
-    rhs = ca.horzcat(ca.vertcat(functions["generalized_forces"](t, q, q_dot),
-                                functions["gamma"](t, q, q_dot)), ca.vertcat(unit, ca.SX(m, 1)))
-    z = ca.solve(system, rhs)
+    v = _velocities(x, nb)
+    inverse = ca.inv(ca.DM(functions["romega_mass"](ca.DM.zeros(7 * nb))))
+    jacobian = functions["romega_jacobian"](t, q)
+    m = jacobian.shape[0]
+    # a unit generalized force along the coordinate, in v: (dq_dot/dv)^T s_q^T
+    v_sym = ca.SX.sym("v", 6 * nb)
+    q_dot_of_v = functions["romega_q_dot"](q, v_sym)
+    unit = ca.substitute(ca.jacobian(q_dot_of_v, v_sym), v_sym, v).T @ x.ground_fixed(
+        ca.jacobian(friction.coordinate(element, x), q)).T
+    schur = jacobian @ inverse @ jacobian.T
+    rhs = ca.horzcat(jacobian @ inverse @ functions["romega_forces"](t, q, v)
+                     - functions["romega_gamma"](t, q, v), jacobian @ inverse @ unit)
+    z = ca.solve(schur, rhs)
+    rows = functions.n_rows - m  # the bodies' normalization rows, after the joint rows: 0
+    lam0, lam1 = ca.vertcat(z[:, 0], ca.SX(rows, 1)), ca.vertcat(z[:, 1], ca.SX(rows, 1))
     column = _column(functions, element)
-    base = functions["reactions"](t, q, q_dot, z[n:, 0])[0][:, column]
-    moved = functions["reactions"](t, q, q_dot, z[n:, 0] + z[n:, 1])[0][:, column]
+    base = functions["reactions"](t, q, q_dot, lam0)[0][:, column]
+    moved = functions["reactions"](t, q, q_dot, lam0 + lam1)[0][:, column]
     n0, n1 = _normal(element, x, base), _normal(element, x, moved - base)
     mu, d = element.params["mu"], direction
     a = 1 - mu ** 2 * ca.dot(n1, n1)
