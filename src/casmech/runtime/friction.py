@@ -136,16 +136,6 @@ def _events(functions, switched: list, modes: dict, rows: dict) -> list:
     return found
 
 
-LOCK = ".friction_lock"  # the stop event where a sliding load part would lock its joint
-
-
-def _locked(element, t, ratio) -> AnalysisError:
-    return AnalysisError(FailureContext(
-        t, "the sliding friction of a joint would lock it on its own (mu times the change of "
-        "its load per unit friction force >= 1: Painleve's paradox); give it a smaller mu",
-        [(element.name, element.source, ratio)], "mu |dL/df|"))
-
-
 class _Run:
     """One friction run: its segments joined into one Result over the base bundle."""
 
@@ -179,18 +169,14 @@ class _Run:
             load = friction_load.sliding(functions, e, float(modes[e.name]))
             ratio = float(load(t, q, q_dot)[1])
             if not ratio < 1:
-                raise _locked(e, t, ratio)
+                raise AnalysisError(FailureContext(
+                    t, "the sliding friction of a joint would lock it on its own (mu times "
+                    "the change of its load per unit friction force >= 1: Painleve's paradox)"
+                    "; give it a smaller mu", [(e.name, e.source, ratio)], "mu |dL/df|"))
             ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {"load": load})
                                           if f is e else f for f in ir.limits))
             functions = build_functions(ir)
-            x = Coordinates.create(ir.n_bodies)
-            lam = ca.SX.sym("lam", functions.n_rows)
-            lock = ca.Function("friction_lock", [x.t, x.q, x.q_dot, x.q_ddot, lam],
-                               [load(x.t, x.q, x.q_dot)[1] - 1])
-            locks = [events.Event(f"{e.name}{LOCK}", lock, "rising", "stop")]
-        else:
-            locks = []
-        return functions, _events(functions, elements(self.ir), modes, rows) + locks, rows
+        return functions, _events(functions, elements(self.ir), modes, rows), rows
 
     def attempt(self, span, built, extra):
         """A segment over span = (t0, t1, step) on a bundle of `build`: its Result."""
@@ -264,12 +250,6 @@ class _Run:
             self.keep(found, functions, rows, modes, first)
             first = False
             t, q, q_dot = found.times[-1], found.q[-1], found.q_dot[-1]
-            locked = [e for e in elements(self.ir) for r in found.events
-                      if r.name == f"{e.name}{LOCK}" and r.t == t]
-            if locked:
-                error = _locked(locked[0], t, 1.0)
-                error.partial = self.finish()
-                raise error
             if found.status == events.STOPPED and not fired:
                 self.result.status = events.STOPPED  # a model's own stop event
                 break
@@ -299,7 +279,7 @@ class _Run:
         self.result.extend(found.times[start:], found.q[start:], found.q_dot[start:],
                            found.q_ddot[start:], found.lam[start:, kept])
         for record, k in zip(found.events, range(len(found.events)), strict=True):
-            if record.name.removesuffix(".friction") in self.names or record.name.endswith(LOCK):
+            if record.name.removesuffix(".friction") in self.names:
                 continue
             state = found.event_states
             self.result.events.append(record)
