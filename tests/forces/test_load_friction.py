@@ -240,7 +240,7 @@ def test_a_screw_refuses_a_load_part_at_its_key():
         ("E103", "joints[0].friction.mu")]
 
 
-def test_two_joints_with_a_load_part_are_an_analysis_error_naming_them():
+def test_a_second_joint_with_a_load_part_is_located():
     text = INCLINE.format(theta=0.3, joint="translational", formulation="rp",
                           friction="{mu: 0.5}")
     text = text.replace("  - {name: block,", "  - {name: other, mass: 1, inertia: [1, 1, 1], "
@@ -248,10 +248,12 @@ def test_two_joints_with_a_load_part_are_an_analysis_error_naming_them():
     text = text.replace("analysis:", "  - {name: second, type: translational, body_i: ground, "
                         "body_j: other, at: [0, 1, 0], axis: [1, 0, 0], friction: {mu: 0.1}}\n"
                         "analysis:")
-    functions = casmech.compile(casmech.loads(text))
-    with pytest.raises(AnalysisError) as raised:
-        casmech.analyze(functions)
-    assert "slide" in str(raised.value) and "second" in str(raised.value)
+    with pytest.raises(ModelError) as raised:
+        casmech.loads(text)
+    found = raised.value.diagnostics
+    assert [(d.code, d.path) for d in found] == [("E103", "joints[1].friction.mu")]
+    assert "'slide' has one already" in str(raised.value)
+    assert found[0].source.line == 16  # the second joint's line
 
 
 def rough_pendulum(formulation: str, friction: str, initial: str = "") -> str:

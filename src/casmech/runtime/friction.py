@@ -165,7 +165,7 @@ class _Run:
         functions = build_functions(ir)
         sliding = [e for e in elements(ir) if loaded(e) and modes[e.name] != 0]
         if sliding:
-            (e,) = sliding  # one joint with a load part per model (run())
+            (e,) = sliding  # one joint with a load part per model (schema/contact.py)
             load = friction_load.sliding(functions, e, float(modes[e.name]))
             ratio = float(load(t, q, q_dot)[1])
             if not ratio < 1:
@@ -219,12 +219,6 @@ class _Run:
             return modes, self.attempt(span, built, extra), built[0], rows
 
     def run(self, t_end, step, extra) -> Result:
-        heavy = [e for e in elements(self.ir) if loaded(e)]
-        if len(heavy) > 1:
-            raise AnalysisError(FailureContext(
-                None, "friction with a load part (mu) on more than one joint; give `mu` on "
-                "one joint, the others' friction as `coulomb` and `static`",
-                [(e.name, e.source, e.params["mu_static"]) for e in heavy], "mu_static"))
         t = 0.0
         q, q_dot = assembly.initial_state(self.functions, t, self.settings.options.solver.assembly)
         _, rates = self.values(q, q_dot)
