@@ -81,9 +81,11 @@ def test_a_coupling_may_name_joints_written_after_it():
     assert (gear.body_i, gear.body_j) == ("d1", "d2")  # the output joint's bodies
 
 
-def test_a_screw_takes_no_initial_values():
-    """A screw is posed in the file (docs/format.md, couplings): `initial:` is an unknown key."""
+def test_a_screws_initial_takes_its_angle_only():
+    """A screw's displacement follows its angle by the lead (docs/format.md, couplings):
+    `initial.displacement` is an unknown key, and the hint names the keys it takes."""
     line = ("  - {name: g, type: screw, body_i: d1, body_j: d2, at: [0, 0, 0], axis: [0, 0, 1], "
             "lead: 0.01, initial: {displacement: 0.1}}")
-    with pytest.raises(ModelError, match=r"error\[E101\] joints\[3\]\.initial: unknown key"):
+    with pytest.raises(ModelError, match=r"error\[E101\] joints\[3\]\.initial\.displacement: "
+                       r"unknown key 'displacement'\n  hint: allowed keys: angle, angle_dot"):
         casmech.loads(BASE + line + "\n")

@@ -3,10 +3,12 @@
 The rule of the joint formulation (formulations/tree.py): breadth first from ground, visiting
 each body's joints in file order; the first joint that reaches a body is its tree joint (the
 body is its child) if its type has a tree motion (casmech.elements.joint_types) and the file
-does not say `cut: true`. A body no tree joint reaches from ground is a root (it floats), in
-file order of the bodies, and the search goes on from it. The schema (a body's velocity that
-its joints' `initial:` rates give, schema/initial.py) and the lowering (the bodies posed from
-those values, model/initial.py) read it here.
+does not say `cut: true`. Posing also takes a joint whose coordinates follow one another
+(a screw: joint_types.JointType.follows), which the joint formulation cuts. A body no tree
+joint reaches from ground is a root (it floats), in file order of the bodies, and the search
+goes on from it. The schema (a body's velocity that its joints' `initial:` rates give,
+schema/initial.py) and the lowering (the bodies posed from those values, model/initial.py)
+read it here.
 """
 
 from __future__ import annotations
@@ -57,7 +59,8 @@ class Tree:
 
 def _can_be_tree(link: Link) -> bool:
     entry = REGISTRY.get(link.type)
-    return entry is not None and entry.motion is not None and not link.cut \
+    return entry is not None and (entry.motion is not None or bool(entry.follows)) \
+        and not link.cut \
         and link.body_i != link.body_j
 
 

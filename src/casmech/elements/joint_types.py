@@ -28,6 +28,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -99,9 +100,15 @@ class JointType:
     # joint-frame quantities from its scalar `options` (used as written by its rows: a screw's
     # coefficients from its lead)
     constants: Callable[[Mapping[str, object]], Mapping[str, np.ndarray]] | None = None
-    # whether `initial:` may pose it (a screw is posed in the file: assembly from its pose
-    # could settle half a turn off along a thread of many turns)
+    # whether `initial:` may pose it
     posable: bool = True
+    # coordinates that follow from another by the type's options: coordinate -> (the one it
+    # follows, options -> the ratio). `initial:` gives only the other; posing (model/initial.py)
+    # moves the joint's body along both, so the joint is a posing tree's edge
+    # (elements/joint_tree.py) though the joint formulation's tree cuts it (a screw's
+    # displacement: lead / (2 pi) times its angle)
+    follows: Mapping[str, tuple[str, Callable[[Mapping[str, Any]], Any]]] = field(
+        default_factory=dict)
 
     @property
     def class_name(self) -> str:
@@ -195,7 +202,8 @@ BUILT_IN = (
                             drivers={"displacement": 0})),
     JointType("screw", ("at", "axis"), PARALLEL + ON_AXIS + (SCREW_ROW,),
               coordinates=("angle", "displacement"), limit="displacement", options=("lead",),
-              constants=screw_constants, posable=False),
+              constants=screw_constants,
+              follows={"displacement": ("angle", lambda options: options["lead"] / (2 * np.pi))}),
     JointType("fixed", ("at",), SPHERICAL + PARALLEL + NO_SPIN,
               motion=Motion(0, 0, lambda th: IDENTITY, no_translation,
                             lambda r, d: np.zeros(0))),
@@ -258,8 +266,10 @@ def initial_keys(joint_type: str) -> tuple[str, ...]:
 
 
 def _coordinate_attributes(entry: JointType) -> tuple[str, ...]:
-    """The values and rates of an entry's coordinates, in the kinds' registry order."""
-    return tuple(attribute for name, kind in COORDINATES.items() if name in entry.coordinates
+    """The values and rates of an entry's coordinates, in the kinds' registry order (a
+    coordinate that follows another, a screw's displacement, has none of its own)."""
+    return tuple(attribute for name, kind in COORDINATES.items()
+                 if name in entry.coordinates and name not in entry.follows
                  for attribute in kind.attributes)
 
 

@@ -1,12 +1,15 @@
 """Joint friction: Coulomb and viscous along a joint's coordinate (docs/forces.md#joint-friction).
 
 The coordinate s is the one a stop acts on (equations/limits.py): the angle of a revolute
-joint, the slide of a translational or cylindrical one. Its params are `coulomb` Tc, `viscous`
-c, `static` Ts, and the mode the runtime sets (runtime/friction.py): `direction` d (+1 or -1
-while sliding that way; 0: by the rate's sign) and `stuck` (1: the joint is held by a row the
-runtime adds, and this law is 0). Sliding,
+joint, the slide of a translational, cylindrical or screw one. Its params are `coulomb` Tc,
+`viscous` c, `static` Ts, `mu`, `mu_static`, `radius` (the load part: equations/friction_load.py),
+and the mode the runtime sets (runtime/friction.py): `direction` d (+1 or -1 while sliding
+that way; 0: by the rate's sign), `stuck` (1: the joint is held by a row the runtime adds,
+and this law is 0) and, while a joint with `mu` slides, `load`: the Function (t, q, q_dot) ->
+(mu L, ...) of friction_load.sliding. Sliding,
 
-    f = -sign (Tc + c |s_dot|) = -sign Tc - c s_dot,   sign = d, or sign(s_dot) when d = 0,
+    f = -sign (Tc + mu L + c |s_dot|) = -sign (Tc + mu L) - c s_dot,
+    sign = d, or sign(s_dot) when d = 0,
 
 applied as the generalized force s_q^T f (virtual work). With d fixed over a sliding interval
 the law is smooth there; the runtime locates where s_dot reaches 0 and decides stick or slip.
@@ -39,7 +42,9 @@ def law(element: ForceIR, x) -> tuple:
     d = p["direction"]
     sign = d + (1 - d * d) * ca.sign(s_dot)  # d when it is +-1, sign(s_dot) when it is 0
     mode = (1 - p["stuck"]) * sign
-    return s, mode * -p["coulomb"] - (1 - p["stuck"]) * p["viscous"] * s_dot, mode
+    load = p.get("load")
+    loaded = 0 if load is None else load(x.t, x.q, x.q_dot)[0]
+    return s, mode * -(p["coulomb"] + loaded) - (1 - p["stuck"]) * p["viscous"] * s_dot, mode
 
 
 def generalized_force(element: ForceIR, x):

@@ -7,7 +7,8 @@ tree joint's motion by its initial values in the reference (global) frame:
 
 - a type's coordinates (casmech.elements.coordinate_kinds, each kind's `pose`): angle a,
   displacement s (rotation about its axis w through its point P, slide along w):
-  x -> R_w(a) (x - P) + P + s w;
+  x -> R_w(a) (x - P) + P + s w (a coordinate that follows another, a screw's slide, is the
+  other's value times its ratio: s = lead a / (2 pi));
 - universal angle_i, angle_j: R = R_axis_i(angle_i) R_axis_j(angle_j) about P (the cross
   frame's Rx Ry, formulations/tree.py);
 - spherical orientation R0, angular_velocity w0: R = R(phi) R0 about P, phi = 0 with rate w0
@@ -89,11 +90,16 @@ def _coordinates_motion(motions: _Motions, joint, frame, inputs: _Inputs):
             added[name] = inputs.add(frame[name])
         return added[name]
 
-    rotation, shift = None, None
+    rotation, shift, values = None, None, {}
     for name, kind in COORDINATES.items():
         if name not in entry.coordinates:
             continue
-        value = motions.coordinate(given.get(kind.name, 0.0), given.get(kind.rate, 0.0))
+        if name in entry.follows:  # its value is another coordinate's times a ratio
+            base, ratio = entry.follows[name]
+            value = values[base] * inputs.add(ratio(joint.options))
+        else:
+            value = motions.coordinate(given.get(kind.name, 0.0), given.get(kind.rate, 0.0))
+        values[name] = value
         turn, slide = kind.pose(quantity, value)
         if turn is not None:
             rotation = turn if rotation is None else product(rotation, turn)

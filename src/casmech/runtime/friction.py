@@ -30,10 +30,10 @@ import numpy as np
 from casmech.core import euler
 from casmech.core.expressions import parse
 from casmech.elements.joint_types import COORDINATES
-from casmech.equations import friction
+from casmech.equations import friction, friction_load
 from casmech.equations.functions import build_functions
 from casmech.equations.symbols import Coordinates
-from casmech.errors import AnalysisError
+from casmech.errors import AnalysisError, FailureContext
 from casmech.runtime import assembly, events
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result, table
@@ -58,7 +58,14 @@ def elements(ir) -> list:
 def _smooth(element) -> bool:
     """A purely viscous friction (no Coulomb or static part): smooth, no modes."""
     p = element.params
-    return all(isinstance(p[k], (int, float)) and p[k] == 0 for k in ("coulomb", "static"))
+    return all(isinstance(p[k], (int, float)) and p[k] == 0
+               for k in ("coulomb", "static", "mu", "mu_static"))
+
+
+def loaded(element) -> bool:
+    """Whether a friction element has a load part (its limits depend on the multipliers)."""
+    return not (isinstance(element.params["mu_static"], (int, float))
+                and element.params["mu_static"] == 0)
 
 
 def _coordinates(ir) -> ca.Function:
@@ -104,16 +111,21 @@ def segment_model(ir, q, q_dot, modes: dict, values: dict):
                    limits=limits, reference_pose=None), rows
 
 
-def _events(ir, modes: dict, rows: dict, n_rows: int) -> list:
+def _events(functions, switched: list, modes: dict, rows: dict) -> list:
     """The stop events of a segment: a sliding joint's rate reaching 0, a stuck one's holding
-    force reaching the static limit."""
-    x = Coordinates.create(ir.n_bodies)
-    lam = ca.SX.sym("lam", n_rows)
+    force reaching the static limit (with a load part: Ts + mu_static L, L of the multipliers).
+    `switched`: the base model's elements (a stuck joint's coordinate is driven in the
+    segment's)."""
+    x = Coordinates.create(functions.ir.n_bodies)
+    lam = ca.SX.sym("lam", functions.n_rows)
     found = []
-    for e in elements(ir):
+    for e in switched:
         mode = modes[e.name]
         if mode == 0:
             value = ca.fabs(lam[rows[e.name]]) - e.params["static"]
+            if loaded(e):
+                value -= e.params["mu_static"] * friction_load.normal(functions, e)(
+                    x.t, x.q, x.q_dot, lam)
             direction = "rising"
         else:
             value = x.rate(friction.coordinate(e, x))
@@ -144,18 +156,41 @@ class _Run:
         return dict(zip(self.names, out[:k], strict=True)), dict(zip(self.names, out[k:],
                                                                       strict=True))
 
-    def build(self, q, q_dot, modes):
-        """The bundle of a segment from (q, q_dot) in `modes`, its events, the stuck rows."""
+    def build(self, t, q, q_dot, modes):
+        """The bundle of a segment from (q, q_dot) at t in `modes`, its events, the stuck
+        rows. A sliding joint with a load part gets its law's load (friction_load.sliding) from
+        the segment's model without it."""
         s, _ = self.values(q, q_dot)
         ir, rows = segment_model(self.ir, q, q_dot, modes, s)
         functions = build_functions(ir)
-        return functions, _events(ir, modes, rows, functions.n_rows), rows
+        sliding = [e for e in elements(ir) if loaded(e) and modes[e.name] != 0]
+        if sliding:
+            (e,) = sliding  # one joint with a load part per model (schema/contact.py)
+            load = friction_load.sliding(functions, e, float(modes[e.name]))
+            ratio = float(load(t, q, q_dot)[1])
+            if not ratio < 1:
+                raise AnalysisError(FailureContext(
+                    t, "the sliding friction of a joint would lock it on its own (mu times "
+                    "the change of its load per unit friction force >= 1: Painleve's paradox)"
+                    "; give it a smaller mu", [(e.name, e.source, ratio)], "mu |dL/df|"))
+            ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {"load": load})
+                                          if f is e else f for f in ir.limits))
+            functions = build_functions(ir)
+        return functions, _events(functions, elements(self.ir), modes, rows), rows
 
     def attempt(self, span, built, extra):
         """A segment over span = (t0, t1, step) on a bundle of `build`: its Result."""
         functions, stops, _ = built
         self.segments += 1
         return self.segment(functions, span, (*extra, *stops))
+
+    def limits(self, functions, result, k=0) -> dict:
+        """The static limit of each friction joint in row k of a segment's Result: Ts, plus
+        mu_static L with a load part."""
+        state = (result.times[k], result.q[k], result.q_dot[k], result.lam[k])
+        return {e.name: e.params["static"] + (e.params["mu_static"] * float(
+            friction_load.normal(functions, e)(*state)) if loaded(e) else 0.0)
+            for e in elements(self.ir)}
 
     def hold(self, result, rows, name, k=0) -> float:
         """The friction force holding a stuck joint in row k (the driver row's multiplier
@@ -168,14 +203,14 @@ class _Run:
         limit, the one furthest past it slides against that force (each start checked on a
         step of 1e-6 of the span before the segment runs). (modes, Result, bundle, the stuck
         joints' rows)."""
-        limits = {e.name: e.params["static"] for e in elements(self.ir)}
         t0, t1, _ = span
         while True:
-            built = self.build(q, q_dot, modes)
+            built = self.build(t0, q, q_dot, modes)
             rows = built[2]
             if rows:
                 tiny = 1e-6 * (t1 - t0)
                 start = self.attempt((t0, t0 + tiny, tiny), built, extra)
+                limits = self.limits(built[0], start)
                 excess = {n: abs(self.hold(start, rows, n)) - limits[n] for n in rows}
                 name = max(excess, key=excess.get)
                 if excess[name] > SLACK * max(limits[name], 1.0):

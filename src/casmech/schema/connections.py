@@ -47,7 +47,8 @@ def joint(check: Checker, index: int, given) -> resolved.Joint | None:
     if getattr(given, "limit", None) is not None:
         extra["limit"] = contact.limit(check, (*path, "limit"), given.limit)
     if getattr(given, "friction", None) is not None:
-        extra["friction"] = contact.friction(check, (*path, "friction"), given.friction)
+        extra["friction"] = contact.friction(check, (*path, "friction"), given.friction,
+                                              entry)
     if getattr(given, "initial", None) is not None:
         extra["initial"] = initial.initial(check, path, given)
     if entry.check is not None and not failed(vectors.values()):

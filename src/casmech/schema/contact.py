@@ -62,23 +62,77 @@ def limit(check: Checker, path: Path, given) -> dict[str, float] | None:
 
 
 # ---------------------------------------------------------------------------- joint friction
-def friction(check: Checker, path: Path, given) -> dict[str, float] | None:
-    """A joint's `friction:` as coulomb, viscous, static (default: coulomb), each >= 0, the
-    static limit at least the sliding one."""
+def friction(check: Checker, path: Path, given, entry=None) -> dict[str, float] | None:
+    """A joint's `friction:` as coulomb, viscous, static (default: coulomb), mu, mu_static
+    (default: mu) and radius (an angle's load arm; 0 when the coordinate is a displacement),
+    each >= 0, the static limits at least the sliding ones."""
     values = {key: positive(check, (*path, key), check.number((*path, key), getattr(given, key)),
                             f"friction {key}", True)
-              for key in ("coulomb", "viscous")}
-    if given.static is None:
-        values["static"] = values["coulomb"]
-    else:
-        values["static"] = positive(check, (*path, "static"),
-                                    check.number((*path, "static"), given.static),
-                                    "friction static", True)
+              for key in ("coulomb", "viscous", "mu")}
+    for key, default in (("static", "coulomb"), ("mu_static", "mu")):
+        if getattr(given, key) is None:
+            values[key] = values[default]
+        else:
+            values[key] = positive(check, (*path, key),
+                                   check.number((*path, key), getattr(given, key)),
+                                   f"friction {key}", True)
     if failed(values.values()):
         return None
-    if values["static"] < values["coulomb"]:
-        check.error("E103", (*path, "static"), "the static friction limit must be at least "
-                    "the sliding (coulomb) one", expected=f">= {values['coulomb']:g}",
-                    got=f"{values['static']:g}", hint="leave `static` out to use `coulomb`")
+    for key, sliding in (("static", "coulomb"), ("mu_static", "mu")):
+        if values[key] < values[sliding]:
+            what = "limit" if key == "static" else "coefficient"
+            check.error("E103", (*path, key), f"the static friction {what} must be at least "
+                        f"the sliding ({sliding}) one",
+                        expected=f">= {values[sliding]:g}", got=f"{values[key]:g}",
+                        hint=f"leave `{key}` out to use `{sliding}`")
+            return None
+    values["radius"] = _radius(check, path, given, entry, values)
+    if failed([values["radius"]]):
         return None
     return {key: traced.scalar(value) for key, value in values.items()}
+
+
+def _radius(check: Checker, path: Path, given, entry, values):
+    """The load's arm: required (> 0) with a load part on an angle, refused on a displacement
+    (whose load is the force itself); 0 when not used."""
+    loaded = traced.value(values["mu_static"]) > 0
+    angle = entry is None or entry.limit == "angle"
+    if loaded and entry is not None and entry.name == "screw":  # its load: the thread's
+        check.error("E103", (*path, "mu" if given.mu else "mu_static"), "a screw's friction "
+                    "takes no load part: its thread's load is not modelled",
+                    got=f"mu_static {traced.value(values['mu_static']):g}",
+                    hint="give its friction as `coulomb` and `static` (N along the axis)")
+        return None
+    if given.radius is None:
+        if loaded and angle:
+            check.error("E100", path, "a revolute joint's friction with `mu` needs `radius`",
+                        expected="radius: the arm (m) of the friction force, the friction "
+                        "torque being radius * mu * |radial force|",
+                        hint="add `radius:`, e.g. the bearing's radius")
+            return None
+        return 0.0
+    if not angle:
+        check.error("E103", (*path, "radius"), "`radius` applies to a revolute joint's "
+                    "friction: along a displacement the load is the force itself",
+                    got=f"radius on a {entry.name} joint", hint="remove `radius`")
+        return None
+    radius = positive(check, (*path, "radius"), check.number((*path, "radius"), given.radius),
+                      "friction radius")
+    return radius
+
+
+def one_load_part(check: Checker, joints) -> None:
+    """E103 at a second joint's `mu` (or `mu_static`): one joint of a model may have a
+    friction with a load part (equations/friction_load.py solves one in closed form)."""
+    first = None
+    for index, joint in enumerate(joints):
+        if joint is None or not joint.friction or not traced.value(joint.friction["mu_static"]):
+            continue
+        if first is None:
+            first = joint.name
+            continue
+        key = "mu" if traced.value(joint.friction["mu"]) else "mu_static"
+        check.error("E103", ("joints", index, "friction", key), "a second joint with a "
+                    "friction load part", got=f"'{first}' has one already",
+                    hint="give `mu` on one joint only; the others' friction as `coulomb` and "
+                    "`static`")

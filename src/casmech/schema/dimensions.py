@@ -90,6 +90,10 @@ def coordinate_fields(kind) -> dict[tuple[str, ...], Dimension]:
                                                      ("damping", q.damping))}}
 
 
+# a joint friction's load keys (the others are in the units of the coordinate's force)
+FRICTION: dict[str, Dimension] = {"mu": NUMBER, "mu_static": NUMBER, "radius": LENGTH}
+
+
 # a readable name's attribute (after its last dot: body and contact columns, joint states,
 # reactions) -> its dimension, for the units of outputs (schema/outputs.py)
 ANGULAR_ACCELERATION = dimension(time=-2)
@@ -141,6 +145,8 @@ def expected(data, path) -> Dimension | None:
     entry = REGISTRY.get(kind) if section == "joints" and kind else None
     if entry is not None and entry.limit and keys[:1] == ("limit",) and len(keys) == 2:
         return coordinate_fields(KINDS[entry.limit]).get(keys)
+    if entry is not None and entry.limit and keys[:1] == ("friction",) and len(keys) == 2:
+        return FRICTION.get(keys[1])
     if section == "joints" and len(keys) == 2 and keys[0] in ("driver", "motor", "initial"):
         found = [fields[keys] for fields in map(coordinate_fields, KINDS.values())
                  if keys in fields]

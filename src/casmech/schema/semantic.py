@@ -14,7 +14,7 @@ from casmech.core import traced
 from casmech.core.option_values import SOLVER, flat, lookup, with_values
 from casmech.core.options import OPTIONS
 from casmech.errors import Diagnostic, failed
-from casmech.schema import events, files, initial, limits, motors, outputs, resolved, spec
+from casmech.schema import contact, events, files, initial, limits, motors, outputs, resolved, spec
 from casmech.schema.bodies import body, floors
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
@@ -201,6 +201,7 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     initial.driven(check, joints)
     initial.velocities(check, given.bodies, joints)
+    contact.one_load_part(check, joints)
     settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
                               forces)
     written = outputs.outputs(check, given.outputs, joints, forces)

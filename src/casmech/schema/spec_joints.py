@@ -117,11 +117,15 @@ class Limit(Spec):
 
 class JointFriction(Spec):
     """Joint friction (equations/friction.py): Coulomb and viscous along the joint coordinate,
-    exact sticking up to the static limit (runtime/friction.py)."""
+    with a part proportional to the joint's load (mu, mu_static; radius for an angle), exact
+    sticking up to the static limit (runtime/friction.py)."""
 
     coulomb: Scalar = 0
     viscous: Scalar = 0
     static: Scalar | None = None
+    mu: Scalar = 0
+    mu_static: Scalar | None = None
+    radius: Scalar | None = None
 
 
 class Basic(JointBase):
