@@ -159,10 +159,10 @@ class FaultToken(CancelToken):
 
 class Law(ca.Callback):
     """u = controller(t, state) as a casadi.Callback of (t, q, q_dot); derivatives by CasADi's
-    finite differences of it (enable_fd). A fault is kept in `fault` and the value is NaN, on
-    which the solver fails (an exception raised here would be printed by CasADi); later
-    evaluations at or after the fault's time are NaN at once, those before it call the
-    controller again, so a solver's retry of an earlier interval keeps its rows."""
+    finite differences of it (enable_fd). A fault is kept in `fault`, the run's token
+    (`token`) cancelled and KeyboardInterrupt raised, which CasADi turns into the RuntimeError
+    the runtime takes for a cancellation (runtime.cancel.check: no traceback printed, the rows
+    so far kept); every later evaluation raises the same at once."""
 
     def __init__(self, controller: Callable, controls: Sequence[str], ir: ModelIR,
                  body_names: Sequence[str]):
@@ -195,15 +195,15 @@ class Law(ca.Callback):
 
     def eval(self, arg):
         t = float(arg[0])
-        if self.fault is not None and t >= self.fault.t:
-            return [ca.DM.nan(len(self.controls))]
+        if self.fault is not None:
+            raise KeyboardInterrupt
         q, q_dot = (np.array(a.full()).ravel() for a in arg[1:])
         try:
             values = self.efforts(t, q, q_dot)
-        except ControllerFault as fault:  # NaN: the solver fails (raising would print)
+        except ControllerFault as fault:
             self.fault = fault
             self.token.cancel()  # the run stops at its next poll, its rows kept
-            return [ca.DM.nan(len(self.controls))]
+            raise KeyboardInterrupt from None
         return [ca.DM(values)]
 
     def efforts(self, t: float, q: np.ndarray, q_dot: np.ndarray) -> np.ndarray:
@@ -382,7 +382,7 @@ def run(functions: SystemFunctions, controller: Callable, controls, progress: Ca
     law.token.parent = token
     try:
         result = analyze(bundle, rows, law.token)
-    except (AnalysisError, RuntimeError) as error:
+    except (AnalysisError, RuntimeError, KeyboardInterrupt) as error:
         if law.fault is None:
             raise
         partial = getattr(error, "partial", None) or rows.result
