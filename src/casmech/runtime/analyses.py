@@ -166,7 +166,8 @@ def _controlled(functions: SystemFunctions, controller, controls, arguments: dic
     """A dynamics run with a Python controller (runtime.controller)."""
     if controller is None:
         raise UsageError("controls names the motors a controller drives: pass controller= too")
-    settings = analysis_settings(functions, arguments["analysis"])
+    given = ("analysis", "t_end", "output_step", "rtol", "atol", "formulation")
+    settings = analysis_settings(functions, *(arguments[name] for name in given))
     if settings.type != "dynamics":
         raise UsageError(f"a controller drives a dynamics run, not {settings.type}")
     if friction.elements(functions.ir):
@@ -176,10 +177,14 @@ def _controlled(functions: SystemFunctions, controller, controls, arguments: dic
         raise UsageError("a controlled run builds its own functions: give no workspace")
     from casmech.runtime import controller as controllers
 
-    return controllers.run(
-        functions, controller, controls, arguments.pop("progress"),
-        arguments.pop("token") or current(),
-        lambda bundle, rows, token: analyze(bundle, progress=rows, token=token, **arguments))
+    progress, token = arguments.pop("progress"), arguments.pop("token") or current()
+
+    def run(bundle, rows, run_token, t_end):
+        return analyze(bundle, progress=rows, token=run_token,
+                       **(arguments | ({"t_end": t_end} if t_end is not None else {})))
+
+    return controllers.run(functions, controller, controls, progress, token,
+                           output_times(0.0, settings.t_end, settings.output_step), run)
 
 
 def mode_of(functions: SystemFunctions) -> str:

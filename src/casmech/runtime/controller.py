@@ -374,22 +374,45 @@ class _Rows:
 
 
 def run(functions: SystemFunctions, controller: Callable, controls, progress: Callable | None,
-        token: CancelToken | None, analyze: Callable):
-    """analyze(bundle, progress, token) on the controlled bundle (`controlled`); a controller fault
-    raised as an AnalysisError at its time, the rows before it kept (status "failed")."""
+        token: CancelToken | None, times: np.ndarray, analyze: Callable):
+    """analyze(bundle, progress, token, t_end) on the controlled bundle (`controlled`) over the
+    output `times`; a controller fault raised as an AnalysisError at its time with the rows
+    before it (status "failed"): those the run kept, completed where the solver call that
+    met the fault held more output times before it by a run to the last of them."""
     bundle, law = controlled(functions, controller, controls)
     rows = _Rows(progress)
     law.token.parent = token
     try:
-        result = analyze(bundle, rows, law.token)
+        result = analyze(bundle, rows, law.token, None)
     except (AnalysisError, RuntimeError, KeyboardInterrupt) as error:
         if law.fault is None:
             raise
         partial = getattr(error, "partial", None) or rows.result
+        partial = _before(functions, controller, controls, token, times, law.fault.t,
+                          partial, analyze) or partial
         if partial is not None:
-            partial.functions, partial.status = bundle, "failed"
+            partial.status = "failed"
         # (a finite difference of the first evaluation may look before the start)
         at = max(law.fault.t, 0.0)
         raise AnalysisError(FailureContext(at, law.fault.message), partial) from None
     result.metadata.update(controller=list(law.controls), controller_calls=law.calls)
+    return result
+
+
+def _before(functions, controller, controls, token, times, t_fault: float, partial,
+            analyze: Callable):
+    """The rows at the output times before `t_fault` by a run to the last of them, when
+    `partial` lacks some (None: it has them all, or that run failed too)."""
+    kept = len(partial) if partial is not None else 0
+    wanted = int(np.searchsorted(times, t_fault))  # times[:wanted] < t_fault
+    if wanted <= max(kept, 1):
+        return None
+    bundle, law = controlled(functions, controller, controls)
+    law.token.parent = token
+    try:
+        result = analyze(bundle, None, law.token, float(times[wanted - 1]))
+    except (AnalysisError, RuntimeError, KeyboardInterrupt):
+        if law.fault is None:
+            raise
+        return None
     return result
