@@ -197,3 +197,20 @@ def test_a_model_without_an_effort_motor():
     with pytest.raises(UsageError, match=r"declare one on the controlled joint, e.g. "
                                          r"`motor: \{torque: 0\}`"):
         casmech.analyze(model, controller=pd)
+
+
+def test_repeated_runs_and_an_earlier_result_keep_their_controller():
+    """A second run with the same controller reuses the built functions and gives the same
+    rows; a run with another controller leaves the first result's table (its reaction
+    columns read the efforts) to the first controller."""
+    free = compiled(PENDULUM, "0")
+    times = []
+    first = casmech.analyze(free, formulation="joint", controller=pd, progress=times.append)
+    assert times == first.times
+    again = casmech.analyze(free, formulation="joint", controller=pd)
+    np.testing.assert_array_equal(again.q, first.q)  # the same functions, the same steps
+    casmech.analyze(free, formulation="joint", controller=lambda t, s: {"pivot": 5.0})
+    written = casmech.analyze(compiled(PENDULUM, PD), formulation="joint").to_dataframe()
+    # the PD's reaction torque, to the integrator's tolerance
+    np.testing.assert_allclose(first.to_dataframe()["pivot.ty"], written["pivot.ty"],
+                               rtol=0, atol=1e-7)

@@ -36,6 +36,8 @@ from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.formulations.joint_system import build as build_joint_system
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
+from casmech.runtime import workspace
+from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.cancel import CancelToken
 
 # ForceIR type of an effort motor -> the suffix of its input's name
@@ -79,9 +81,9 @@ class ControllerState(Mapping):
     `t`, and `q`, `q_dot` (the r-p coordinates: 3 positions per body, then 4 Euler parameters
     per body). Read-only."""
 
-    def __init__(self, t: float, names: Sequence[str], values: np.ndarray, q, q_dot):
+    def __init__(self, t: float, index: Mapping[str, int], values: np.ndarray, q, q_dot):
         self.t, self.q, self.q_dot = t, q, q_dot
-        self._index = {name: k for k, name in enumerate(names)}
+        self._index = index  # column name -> its place in `values`
         self._values = values
 
     def __getitem__(self, name: str) -> float:
@@ -169,7 +171,9 @@ class Law(ca.Callback):
         ca.Callback.__init__(self)
         self.controller, self.controls = controller, list(controls)
         self.n_q = 7 * ir.n_bodies
-        self.names, self.state = state_function(ir, body_names)
+        names, function = state_function(ir, body_names)
+        self.index = {name: k for k, name in enumerate(names)}
+        self.state = BufferedCall(function)
         self.fault: ControllerFault | None = None
         self.calls = 0
         self.token = FaultToken(None)  # cancelled at a fault (run passes it to the run)
@@ -197,7 +201,7 @@ class Law(ca.Callback):
         t = float(arg[0])
         if self.fault is not None:
             raise KeyboardInterrupt
-        q, q_dot = (np.array(a.full()).ravel() for a in arg[1:])
+        q, q_dot = (np.array(a.nonzeros()) for a in arg[1:])  # dense columns
         try:
             values = self.efforts(t, q, q_dot)
         except ControllerFault as fault:
@@ -209,8 +213,8 @@ class Law(ca.Callback):
     def efforts(self, t: float, q: np.ndarray, q_dot: np.ndarray) -> np.ndarray:
         """The controller's efforts at (t, q, q_dot) in `controls` order, checked."""
         self.calls += 1
-        state = ControllerState(t, self.names, np.array(self.state(t, q, q_dot).full()).ravel(),
-                                q, q_dot)
+        (values,) = self.state(t, q, q_dot)
+        state = ControllerState(t, self.index, values.ravel(), q, q_dot)
         name = getattr(self.controller, "__qualname__", type(self.controller).__name__)
         try:
             returned = self.controller(t, state)
@@ -218,8 +222,8 @@ class Law(ca.Callback):
             raise ControllerFault(t, f"the controller {name} raised {type(error).__name__}: "
                                      f"{error}") from None
         values = self._values(returned, name, t)
-        bad = [c for c, v in zip(self.controls, values, strict=True) if not np.isfinite(v)]
-        if bad:
+        if not np.isfinite(values).all():
+            bad = [c for c, v in zip(self.controls, values, strict=True) if not np.isfinite(v)]
             raise ControllerFault(t, f"the controller {name} returned a value that is not "
                                      f"finite for {', '.join(bad)}")
         return values
@@ -307,12 +311,23 @@ class _BoundFunctions(Mapping):
 def controlled(functions: SystemFunctions, controller: Callable,
                controls: Sequence[str] | str | None = None) -> tuple[SystemFunctions, Law]:
     """The bundle (interpreted) whose controlled motors take the controller's efforts, and the
-    Law it calls (its `fault` says what went wrong with the controller)."""
+    Law it calls (its `fault` says what went wrong with the controller), kept in the
+    functions' workspace for later runs with the same controls and controller (the Law holds
+    the controller, so its id stays its own while kept), its fault and token reset."""
     if not callable(controller):
         raise UsageError(f"controller must be callable as controller(t, state), not "
                          f"{type(controller).__name__}")
+    names = chosen(functions.ir, controls)
+    bundle, law = workspace.default(functions).kept(
+        "controlled", (tuple(names), id(controller)),
+        lambda: _controlled(functions, controller, names))
+    law.fault, law.calls, law.token = None, 0, FaultToken(None)
+    return bundle, law
+
+
+def _controlled(functions: SystemFunctions, controller: Callable,
+                names: list[str]) -> tuple[SystemFunctions, Law]:
     ir = functions.ir
-    names = chosen(ir, controls)
     law = Law(controller, names, ir, functions.body_names)
     u = ca.SX.sym("u", len(names))
     controlled_ir = with_inputs(ir, names, u)
@@ -385,16 +400,16 @@ def run(functions: SystemFunctions, controller: Callable, controls, progress: Ca
     try:
         result = analyze(bundle, rows, law.token, None)
     except (AnalysisError, RuntimeError, KeyboardInterrupt) as error:
-        if law.fault is None:
+        fault = law.fault  # (the run of _before resets the law)
+        if fault is None:
             raise
         partial = getattr(error, "partial", None) or rows.result
-        partial = _before(functions, controller, controls, token, times, law.fault.t,
+        partial = _before(functions, controller, controls, token, times, fault.t,
                           partial, analyze) or partial
         if partial is not None:
             partial.status = "failed"
         # (a finite difference of the first evaluation may look before the start)
-        at = max(law.fault.t, 0.0)
-        raise AnalysisError(FailureContext(at, law.fault.message), partial) from None
+        raise AnalysisError(FailureContext(max(fault.t, 0.0), fault.message), partial) from None
     result.metadata.update(controller=list(law.controls), controller_calls=law.calls)
     return result
 
