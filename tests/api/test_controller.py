@@ -49,7 +49,7 @@ def pd(t, state):
     return {"pivot": -20.0 * state["pivot.angle"] - 2.0 * state["pivot.angle_dot"]}
 
 
-@pytest.mark.parametrize("formulation", ["joint", "rp"])
+@pytest.mark.parametrize("formulation", ["joint", "rp", "romega"])
 def test_pd_callback_matches_the_expression(formulation):
     """The PD law as a callback and as the motor's expression: the same motion and the same
     reaction torque (the motor's torque enters pivot.ty), to the integrator's tolerance."""

@@ -291,21 +291,22 @@ class _BoundFunctions(Mapping):
         self._bound: dict[str, ca.Function] = {}
 
     @property
-    def _functions(self) -> Mapping:
+    def source(self) -> Mapping:
+        """The functions as built, with their trailing data input."""
         if self._made is None:
             self._made = self._source()
         return self._made
 
     def __getitem__(self, name: str) -> ca.Function:
         if name not in self._bound:
-            self._bound[name] = self._bind(self._functions[name])
+            self._bound[name] = self._bind(self.source[name])
         return self._bound[name]
 
     def __iter__(self):
-        return iter(self._functions)
+        return iter(self.source)
 
     def __len__(self) -> int:
-        return len(self._functions)
+        return len(self.source)
 
 
 def controlled(functions: SystemFunctions, controller: Callable,
@@ -333,10 +334,14 @@ def _controlled(functions: SystemFunctions, controller: Callable,
     controlled_ir = with_inputs(ir, names, u)
 
     def rp_law(given: dict):
-        missing = [n for n in ("t", "q", "q_dot") if n not in given]
-        if missing:  # every function that reads a force law takes the state
-            raise AssertionError(f"a function reads the controls without {missing}")
-        return law(given["t"], given["q"], given["q_dot"])
+        """u at a function's (t, q, q_dot), or (t, q, v): the r-omega velocities."""
+        q_dot = given.get("q_dot")
+        if q_dot is None and "v" in given:  # (q_dot(q, v) reads no effort)
+            q_dot = system_functions.source["romega_q_dot"](given["q"], given["v"],
+                                                            ca.DM.zeros(len(names)))
+        if q_dot is None or "t" not in given or "q" not in given:
+            raise AssertionError("a function reads the controls without the state")
+        return law(given["t"], given["q"], q_dot)
 
     system_functions = _BoundFunctions(
         lambda: build_functions(controlled_ir, u).functions,
