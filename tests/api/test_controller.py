@@ -214,3 +214,15 @@ def test_repeated_runs_and_an_earlier_result_keep_their_controller():
     # the PD's reaction torque, to the integrator's tolerance
     np.testing.assert_allclose(first.to_dataframe()["pivot.ty"], written["pivot.ty"],
                                rtol=0, atol=1e-7)
+
+
+@pytest.mark.slow
+def test_a_compiled_model():
+    """A compiled (parametric library) bundle: the controlled run is built over its IR at its
+    values, after `set` too."""
+    free = casmech.compile(casmech.loads(PENDULUM.replace("LAW", "0")), "compiled")
+    heavier = free.set(kp=30.0)  # kp is read by no law here: the run is the callback's
+    written = casmech.analyze(compiled(PENDULUM, PD), formulation="joint").to_dataframe()
+    called = casmech.analyze(heavier, formulation="joint", controller=pd).to_dataframe()
+    # two rtol 1e-10 integrations of one ODE
+    np.testing.assert_allclose(called["pivot.angle"], written["pivot.angle"], rtol=0, atol=1e-7)
