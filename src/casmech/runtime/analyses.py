@@ -113,7 +113,8 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             progress: Callable[[float], None] | None = None,
             stabilization: str | None = None, method: str | None = None,
             events: Sequence[Event] = (), options=None, workspace: Workspace | None = None,
-            token: CancelToken | None = None) -> Result:
+            token: CancelToken | None = None, controller: Callable | None = None,
+            controls: Sequence[str] | str | None = None) -> Result:
     """Run an analysis; the model's `analysis:` block gives what is not passed (for dynamics:
     formulation "auto", "joint", "rp", "romega" or another registered one
     (formulations.registry), stabilization "ggl" or "projection" of the
@@ -127,7 +128,14 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     the rows computed so far (default: Ctrl-C does). The Result keeps `functions`:
     `result.to_dataframe()` is its results table as a DataFrame. `events`: runtime.events.Event
     declared by code, watched by dynamics besides the model's `events:` (Result.events,
-    Result.events_dataframe())."""
+    Result.events_dataframe()). `controller(t, state) -> efforts`: the torques and forces of
+    the effort motors `controls` names (default: all of them) during a dynamics run
+    (runtime.controller; docs/api.md#controllers)."""
+    if controller is not None or controls is not None:
+        return _controlled(functions, controller, controls, dict(
+            analysis=analysis, t_end=t_end, output_step=output_step, rtol=rtol, atol=atol,
+            formulation=formulation, progress=progress, stabilization=stabilization,
+            method=method, events=events, options=options, workspace=workspace, token=token))
     settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
                                  formulation, stabilization, method, options)
     if events and settings.type != "dynamics":
@@ -152,6 +160,31 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     result.metadata.update(analysis=settings.type, mode=mode_of(functions))
     result.functions = functions
     return result
+
+
+def _controlled(functions: SystemFunctions, controller, controls, arguments: dict) -> Result:
+    """A dynamics run with a Python controller (runtime.controller)."""
+    if controller is None:
+        raise UsageError("controls names the motors a controller drives: pass controller= too")
+    given = ("analysis", "t_end", "output_step", "rtol", "atol", "formulation")
+    settings = analysis_settings(functions, *(arguments[name] for name in given))
+    if settings.type != "dynamics":
+        raise UsageError(f"a controller drives a dynamics run, not {settings.type}")
+    if friction.elements(functions.ir):
+        raise UsageError("a controller does not run with joint friction (its runs are "
+                         "segments of rebuilt functions)")
+    if arguments["workspace"] is not None:
+        raise UsageError("a controlled run builds its own functions: give no workspace")
+    from casmech.runtime import controller as controllers
+
+    progress, token = arguments.pop("progress"), arguments.pop("token") or current()
+
+    def run(bundle, rows, run_token, t_end):
+        return analyze(bundle, progress=rows, token=run_token,
+                       **(arguments | ({"t_end": t_end} if t_end is not None else {})))
+
+    return controllers.run(functions, controller, controls, progress, token,
+                           output_times(0.0, settings.t_end, settings.output_step), run)
 
 
 def mode_of(functions: SystemFunctions) -> str:

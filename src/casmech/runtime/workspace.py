@@ -46,6 +46,7 @@ KINDS: dict[str, int] = {
     "singular_pose_jacobian": 1,  # dense Phi_q at output rows (runtime.singular_poses)
     "statics_tangent": 1,  # statics' residual, tangent and mass (runtime.statics)
     "sx_bundle": 1,  # an SX rebuild of a compiled bundle (runtime.linearize)
+    "controlled": 2,  # bundles driven by a Python controller, by controls and controller
     "events": 1,  # the model's `events:` as Functions (runtime.events)
     "dof": 1,  # degrees of freedom at the file's pose (casmech.api.CompiledModel.dof)
     "joint_space": 1,  # the joint-space dynamics (casmech.api.joint_space)
