@@ -65,11 +65,11 @@ def body_states(model: ResolvedModel, columns, times) -> np.ndarray:
     states = []
     for row in rows.reshape(len(times), len(bodies), 13):
         r, p, v, w = row[:, :3], row[:, 3:7], row[:, 7:10], row[:, 10:13]
-        p = p / np.linalg.norm(p, axis=1, keepdims=True)
         e0, e = p[:, :1], p[:, 1:]
-        # p_dot = E(p)^T omega / 2, E = [-e, e~ + e0 I]
-        p_dot = 0.5 * np.column_stack([-np.sum(e * w, axis=1),
-                                       e0 * w - np.cross(e, w)])
+        # omega = 2 E(p) p_dot, E = [-e, e~ + e0 I], E E^T = |p|^2 I: the p_dot across p
+        # (a body-coordinate optimum's drift of |p| is along p, which omega does not hold)
+        p_dot = 0.5 * np.column_stack([-np.sum(e * w, axis=1), e0 * w - np.cross(e, w)]
+                                      ) / np.sum(p * p, axis=1, keepdims=True)
         states.append(np.concatenate([r.ravel(), p.ravel(), v.ravel(), p_dot.ravel()]))
     return np.array(states)
 
