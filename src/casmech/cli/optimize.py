@@ -16,6 +16,7 @@ from casmech.errors import UsageError
 from casmech.io.csv import read_measurements, write_csv
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
+from casmech.optimal.estimate_kinematics import estimate_kinematics
 from casmech.schema import limits
 
 
@@ -90,8 +91,9 @@ def _estimate(model, args, out: Path) -> None:
     block = model.estimate
     data = args.data or Path(model.file).parent / block.data
     times, measured = read_measurements(data, block.outputs)
-    fit = estimation.estimate(model, block.parameters, times, measured, block.weights,
-                              block.bounds, verbose=args.verbose)
+    how = (estimate_kinematics if block.analysis == "kinematics" else estimation.estimate)
+    fit = how(model, block.parameters, times, measured, block.weights, block.bounds,
+              verbose=args.verbose)
     rows = np.column_stack([fit.initial, fit.values])
     path = write_csv(out / "estimate.csv", ["initial", "estimate"], rows)
     width = max(len(p) for p in fit.parameters)

@@ -185,6 +185,7 @@ class Estimation:
     weights: Mapping[str, float]
     bounds: Mapping[str, tuple[float, float]]
     source: Source | None = None
+    analysis: str = "dynamics"  # dynamics | kinematics (optimal/estimate_kinematics.py)
 
 
 @dataclass(frozen=True)

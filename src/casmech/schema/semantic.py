@@ -131,7 +131,7 @@ def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimati
     if not all(names) or failed([*weights.values(), bounds]):
         return None
     return resolved.Estimation(tuple(given.parameters), given.data, given.outputs, weights, bounds,
-                               check.doc.source_map.values.get(path))
+                               check.doc.source_map.values.get(path), given.analysis)
 
 
 def _control(check: Checker, path: Path, given: spec.Control) -> resolved.ControlInput | None:

@@ -76,6 +76,8 @@ class Estimate(Spec):
     outputs: tuple[StrictStr, ...] | None = None  # default: every column of data but t
     weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> weight (1)
     bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # parameter -> [low, high]
+    # dynamics: simulated columns; kinematics: a fully driven mechanism's poses (no DOF)
+    analysis: Literal["dynamics", "kinematics"] = "dynamics"
 
 
 class Control(Spec):
