@@ -19,12 +19,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from casmech.core.expressions import ExpressionError
 from casmech.core.expressions import parse as parse_expression
 from casmech.errors import UsageError
 from casmech.optimal.joint_model import JointModel
 from casmech.schema.resolved import ScalarFunction
+
+ANGLES = ("angle", "angle_i", "angle_j")  # joint state columns that are angles
 
 
 @dataclass(frozen=True)
@@ -39,13 +42,43 @@ def used(problem) -> bool:
 
 
 def _environment(model: JointModel, problem, t, x, c) -> dict:
-    """Every name an expression may read: t, the results columns, the decision parameters."""
+    """Every name an expression may read: t, the results columns (angles continued, below),
+    the decision parameters."""
     values = model.columns(t, x, c)
     environment = {name: values[k] for k, name in enumerate(model.names)}
     environment["t"] = t
     for k, name in enumerate(problem.parameters):
         environment[name] = c[model.n_u + k]
+    for name, (slot, sign, offset) in _angles(model).items():
+        wrapped = environment[name]
+        turns = ca.floor((sign * x[slot] + offset - wrapped) / (2 * np.pi) + 0.5)
+        environment[name] = wrapped + 2 * np.pi * turns
     return environment
+
+
+def _angles(model: JointModel, step: float = 1e-3) -> dict:
+    """Angle columns (in (-pi, pi] in the results table) that follow one periodic joint
+    coordinate x_i as sign * x_i + offset modulo 2 pi: column -> (i, sign, offset). In the
+    cost terms such a column is that continuous value (a swing-up's end angle is pi + 2 pi k
+    as the coordinate says, without the table's jump)."""
+    x0 = np.asarray(model.start[0], float)
+    c0 = np.concatenate([np.zeros(model.n_u), model.design_values])
+
+    def columns(x):
+        return np.array(model.columns(model.t0, x, c0).full()).ravel()
+
+    base, found = columns(x0), {}
+    angles = [k for k, name in enumerate(model.names) if name.rpartition(".")[2] in ANGLES]
+    for slot in model.periodic():
+        for direction in (step, -step):  # one of them does not cross the table's jump
+            moved = x0.copy()
+            moved[slot] += direction
+            rate = (columns(moved) - base) / direction
+            for k in angles:
+                if abs(abs(rate[k]) - 1) < 1e-6 and model.names[k] not in found:
+                    sign = float(np.sign(rate[k]))
+                    found[model.names[k]] = (slot, sign, base[k] - sign * x0[slot])
+    return found
 
 
 def parsed(problem, parameters: Mapping[str, float]) -> dict:

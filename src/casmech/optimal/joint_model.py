@@ -168,9 +168,11 @@ class JointModel:
                     continue
                 turned = base.copy()
                 turned[c] += 2 * np.pi
-                same = all(np.allclose(np.array(ca.DM(f(base))), np.array(ca.DM(f(turned))),
-                                       rtol=0, atol=1e-9)
-                           for f in (motion.rotation, motion.translation))
+                (p, p_turned), (r, r_turned) = ((np.array(ca.DM(f(v))) for v in (base, turned))
+                                                for f in (motion.rotation, motion.translation))
+                same = np.allclose(r, r_turned, rtol=0, atol=1e-9) and (  # p: -p, the same
+                    np.allclose(p, p_turned, rtol=0, atol=1e-9)
+                    or np.allclose(p, -p_turned, rtol=0, atol=1e-9))
                 found += [slot] if same else []
         return found
 
