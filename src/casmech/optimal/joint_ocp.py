@@ -13,6 +13,8 @@ optimal/control_shapes.py, solved by IPOPT (casadi.Opti).
     path       bounds on results columns at every node after the first (the control of the
                interval ending there) and, with `path_grid: fine`, at every point inside the
                intervals the method has (collocation points; RK4 step ends)
+    costs      the integral and tracking terms (optimal/costs.py) as a last state of the ODE,
+               from 0 in every interval, its ends summed; the final term at the last node
 
 The replay (replay_nodes) integrates the ODE with scipy's DOP853 from every node with the
 optimal controls: an integrator independent of the transcription.

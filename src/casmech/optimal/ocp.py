@@ -9,7 +9,8 @@ direct collocation or multiple shooting.
 
 Controls are piecewise constant on `intervals` equal intervals; the objective is
 effort * integral(u^T u) dt (exact for piecewise-constant u, so both transcriptions minimise the
-same functional) plus terminal weights on results columns; `terminal` targets are equality
+same functional) plus terminal weights on results columns (in joint coordinates also integral,
+tracking and final terms: optimal/costs.py); `terminal` targets are equality
 constraints on results columns at the final time. The initial state is the model's assembled,
 consistent state; the initial guess is a forward simulation with small constant controls.
 Collocation: Radau IIA (degree 3) on x = [q, q_dot] with z = [q_ddot, lam] at the collocation
