@@ -181,6 +181,7 @@ def test_tracking_a_reachable_table_takes_its_controls(tmp_path):
     ("{track: {block.y: {table: ../outside.csv}}}", "E305", "outside"),
     ("{track: {block.y: {table: missing.csv}}}", "E300", "missing.csv"),
     ("{track: {block.q: {table: missing.csv}}}", "E201", "block.q"),
+    ("{integral: {block.y: -1}}", "E409", "at least 0"),
 ])
 def test_bad_cost_terms_are_located_errors(tmp_path, objective, code, where):
     ocp = f"""  horizon: 1

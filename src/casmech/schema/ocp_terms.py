@@ -51,6 +51,17 @@ def _function(check: Checker, path: Path, text: str, names: dict[str, float]):
     return None if unknown else check.function(path, text, names)
 
 
+def _weight(check: Checker, path: Path, given) -> float | None:
+    """A term's weight: a number at least 0 (E409: a negative weight makes the cost unbounded
+    below)."""
+    value = check.setting(path, given)
+    if value is not None and not value >= 0:
+        check.error("E409", path, "a cost weight must be at least 0", got=f"{value:g}",
+                    hint="a term to maximise goes in `final:` with a minus sign")
+        return None
+    return value
+
+
 def costs(check: Checker, given: spec.Objective, joints=(), forces=(), written=()):
     """(integral, final, track) of the objective, or None for a part that failed."""
     path: Path = ("ocp", "objective")
@@ -59,7 +70,7 @@ def costs(check: Checker, given: spec.Objective, joints=(), forces=(), written=(
     for text, weight in given.integral.items():
         where = (*path, "integral", text)
         function = _function(check, where, text, names)
-        value = check.setting(where, weight)
+        value = _weight(check, where, weight)
         integral[text] = None if failed([function, value]) else (function, float(value))
     final = None if given.final is None else _function(check, (*path, "final"), given.final,
                                                        names)
@@ -73,7 +84,7 @@ def costs(check: Checker, given: spec.Objective, joints=(), forces=(), written=(
         reference = table(check, where, spec.Table(table=item.table,
                                                     column=item.column or column,
                                                     interpolation=item.interpolation))
-        weight = check.setting((*where, "weight"), item.weight)
+        weight = _weight(check, (*where, "weight"), item.weight)
         track[column] = (None if not known or failed([reference, weight])
                          else (reference, float(weight)))
     broken = failed([*integral.values(), *track.values()]) or (
