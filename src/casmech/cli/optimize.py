@@ -9,11 +9,14 @@ from pathlib import Path
 import numpy as np
 
 from casmech import api
-from casmech.cli.common import add_overrides, overrides
+from casmech.cli.common import add_overrides, options, overrides
+from casmech.core.ipopt_options import IpoptOptions
+from casmech.core.option_values import with_values
 from casmech.errors import UsageError
 from casmech.io.csv import read_measurements, write_csv
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
+from casmech.optimal.estimate_kinematics import estimate_kinematics
 from casmech.schema import limits
 
 
@@ -33,7 +36,21 @@ def add_arguments(parser) -> None:
                              "default), on the compiled C functions (limited-memory Hessian) "
                              "or auto (as casmech run decides)")
     parser.add_argument("--verbose", action="store_true", help="print IPOPT's iterations")
+    parser.add_argument("--option", action="append", default=[], metavar="KEY=VALUE",
+                        help="ocp: an IPOPT option, e.g. max_iter=50 or tol=1e-8, over the "
+                             "block's solver: (repeatable; docs/optimal.md)")
     add_overrides(parser)
+
+
+def _ipopt(texts: dict[str, str]) -> dict:
+    """The IPOPT options of --option KEY=VALUE texts (the allow-list of
+    casmech.core.ipopt_options)."""
+    if not texts:
+        return {}
+    converted, problems = with_values(IpoptOptions(), texts, text=True)
+    if problems:
+        raise UsageError("; ".join(problem.line() for problem in problems))
+    return {key: getattr(converted, key) for key in texts}
 
 
 def _optimal_control(model, args, out: Path) -> None:
@@ -44,7 +61,8 @@ def _optimal_control(model, args, out: Path) -> None:
             raise UsageError(f"--intervals {args.intervals}: {next(iter(problems.values()))}")
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
     problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode,
-                         "formulation": args.formulation or problem.formulation})
+                         "formulation": args.formulation or problem.formulation,
+                         "solver": {**problem.solver, **_ipopt(options(args.option))}})
     transcription = args.transcription or transcription
     start = time.perf_counter()
     guess = None
@@ -73,8 +91,9 @@ def _estimate(model, args, out: Path) -> None:
     block = model.estimate
     data = args.data or Path(model.file).parent / block.data
     times, measured = read_measurements(data, block.outputs)
-    fit = estimation.estimate(model, block.parameters, times, measured, block.weights,
-                              block.bounds, verbose=args.verbose)
+    how = (estimate_kinematics if block.analysis == "kinematics" else estimation.estimate)
+    fit = how(model, block.parameters, times, measured, block.weights, block.bounds,
+              verbose=args.verbose)
     rows = np.column_stack([fit.initial, fit.values])
     path = write_csv(out / "estimate.csv", ["initial", "estimate"], rows)
     width = max(len(p) for p in fit.parameters)

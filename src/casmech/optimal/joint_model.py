@@ -130,13 +130,7 @@ class JointModel:
         is independent at t0) from the assembled r-p state (runtime.assembly)."""
         nominal, joints = self.system.nominal, self.joints
         q0, q_dot0 = assembly.initial_state(nominal, self.t0)
-        relative = _bind(joints.relative_states, self._numeric_data)
-        rotations, gaps, twists = (np.array(v.full()) for v in relative(q0, q_dot0))
-        lay, x0 = joints.layout, np.zeros(joints.layout.n_x)
-        for k, joint in enumerate(joints.tree.joints):
-            theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
-            x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
-            x0[list(lay.u[k])] = u[list(lay.free_u[k])]
+        x0 = self.state_of(q0, q_dot0)
         keep = np.ones(0)
         if joints.n_cut:
             jacobian = _bind(joints.velocity_jacobian, self._numeric_data)(self.t0, x0)
@@ -147,6 +141,40 @@ class JointModel:
         tree_p, file_p = q.ravel()[3 * nb:].reshape(nb, 4), q0[3 * nb:].reshape(nb, 4)
         signs = np.where(np.sum(tree_p * file_p, axis=1) < 0, -1.0, 1.0)
         return x0, signs, keep
+
+    def state_of(self, q, q_dot) -> np.ndarray:
+        """x = [theta; u] of the free joint coordinates at the r-p state (q, q_dot)."""
+        joints = self.joints
+        relative = _bind(joints.relative_states, self._numeric_data)
+        rotations, gaps, twists = (np.array(v.full()) for v in relative(q, q_dot))
+        lay, x = joints.layout, np.zeros(joints.layout.n_x)
+        for k, joint in enumerate(joints.tree.joints):
+            theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
+            x[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
+            x[list(lay.u[k])] = u[list(lay.free_u[k])]
+        return x
+
+    def periodic(self) -> list[int]:
+        """The indices into x of the free coordinates that are angles: adding 2 pi to one
+        leaves its joint's pose unchanged (a revolute joint's angle, not a quaternion's
+        component or a displacement)."""
+        lay, found = self.joints.layout, []
+        for k, joint in enumerate(self.joints.tree.joints):
+            motion = MOTIONS[joint.type]
+            inside = {start + i for start in motion.quaternions for i in range(4)}
+            base = np.full(motion.n_q, 0.3)
+            for slot, c in zip(lay.theta[k], lay.free_theta[k], strict=True):
+                if c in inside:
+                    continue
+                turned = base.copy()
+                turned[c] += 2 * np.pi
+                (p, p_turned), (r, r_turned) = ((np.array(ca.DM(f(v))) for v in (base, turned))
+                                                for f in (motion.rotation, motion.translation))
+                same = np.allclose(r, r_turned, rtol=0, atol=1e-9) and (  # p: -p, the same
+                    np.allclose(p, p_turned, rtol=0, atol=1e-9)
+                    or np.allclose(p, -p_turned, rtol=0, atol=1e-9))
+                found += [slot] if same else []
+        return found
 
     def _algebraic(self, t, x, c):
         """z = [lam; mu = 0] of the loops (unit rows): the acceleration rows kept, solved."""

@@ -13,6 +13,8 @@ optimal/control_shapes.py, solved by IPOPT (casadi.Opti).
     path       bounds on results columns at every node after the first (the control of the
                interval ending there) and, with `path_grid: fine`, at every point inside the
                intervals the method has (collocation points; RK4 step ends)
+    costs      the integral and tracking terms (optimal/costs.py) as a last state of the ODE,
+               from 0 in every interval, its ends summed; the final term at the last node
 
 The replay (replay_nodes) integrates the ODE with scipy's DOP853 from every node with the
 optimal controls: an integrator independent of the transcription.
@@ -30,6 +32,7 @@ import numpy as np
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.formulations.tree import spanning_tree
 from casmech.model.lower import lower
+from casmech.optimal import costs
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
 from casmech.optimal.joint_model import JointModel, joint_model
@@ -58,7 +61,8 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
         raise UsageError(f"path_grid '{problem.path_grid}' is not one of {', '.join(PATH_GRIDS)}")
     joints_only = [name for name, used in (
         ("decision parameters", bool(problem.parameters)),
-        ("a free initial state", problem.initial_free)) if used]
+        ("a free initial state", problem.initial_free),
+        ("integral, tracking and final cost terms", costs.used(problem))) if used]
     if joints_only and problem.formulation == "bodies":
         raise UsageError(f"{' and '.join(joints_only)} are solved in joint coordinates "
                          "only; use formulation auto or joints")
@@ -261,6 +265,14 @@ def _start_state(opti, model: JointModel, problem, x0, c0) -> None:
         opti.subject_to(opti.bounded(low, values[model.column(name)], high))
 
 
+def _begin(terms, x_k, guess, k: int):
+    """(the interval's first state, its guess at fraction s): with a running cost, the
+    state has the cost's integral from 0 last."""
+    if terms.integrand is None:
+        return x_k, partial(guess, k)
+    return ca.vertcat(x_k, 0), lambda s: np.append(guess(k, s), 0.0)
+
+
 def _with_design(shape: ControlShape, u, k: int, design, s):
     """c = [controls at fraction s of interval k; design]."""
     return ca.vertcat(shape.at(u, k, s), design)
@@ -294,11 +306,19 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     jacobian = ca.Function("closure_jacobian", [t_sym, x_sym], [
         ca.jacobian(closure(t_sym, x_sym), x_sym)]) if rows else None
     samples, fine = [], [(model.t0, x[:, 0], _with_design(shape, u, 0, design, 0.0))]
+    terms = costs.terms(model, problem)
+    rhs, running = model.rhs, 0
+    if terms.integrand is not None:  # the running cost: a last state from 0 per interval
+        rhs = costs.with_quadrature(model.rhs, terms.integrand, model.n_x)
     for k in range(n):
         t_k = model.t0 + k * h
         control = partial(_with_design, shape, u, k, design)
-        end, points = how.interval(opti, model.rhs, t_k, h, x[:, k], control,
-                                   partial(guess, k))
+        begin, guess_k = _begin(terms, x[:, k], guess, k)
+        end, points = how.interval(opti, rhs, t_k, h, begin, control, guess_k)
+        if terms.integrand is not None:
+            running += end[model.n_x]
+            end = end[:model.n_x]
+            points = [(t, s, xp[:model.n_x]) for t, s, xp in points]
         t_next = model.t0 + (k + 1) * h
         if rows:
             nu = opti.variable(rows)
@@ -315,8 +335,10 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     horizon = h * n
     scales = ca.DM(np.sqrt(control_weights(problem)))
     cost = problem.effort * shape.effort(scales * u, h) + problem.time_weight * horizon
-    cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n],
-                      _with_design(shape, u, n - 1, design, 1.0))
+    c_end = _with_design(shape, u, n - 1, design, 1.0)
+    cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n], c_end) + running
+    if terms.final is not None:
+        cost += terms.final(model.t0 + horizon, x[:, n], c_end)
     opti.minimize(cost)
     opti.solver("ipopt", dict(settings))
     try:

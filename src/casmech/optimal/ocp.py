@@ -9,7 +9,8 @@ direct collocation or multiple shooting.
 
 Controls are piecewise constant on `intervals` equal intervals; the objective is
 effort * integral(u^T u) dt (exact for piecewise-constant u, so both transcriptions minimise the
-same functional) plus terminal weights on results columns; `terminal` targets are equality
+same functional) plus terminal weights on results columns (in joint coordinates also integral,
+tracking and final terms: optimal/costs.py); `terminal` targets are equality
 constraints on results columns at the final time. The initial state is the model's assembled,
 consistent state; the initial guess is a forward simulation with small constant controls.
 Collocation: Radau IIA (degree 3) on x = [q, q_dot] with z = [q_ddot, lam] at the collocation
@@ -22,13 +23,15 @@ path instead of the forward simulation.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.ipopt_options import settings as ipopt_settings
 from casmech.errors import AnalysisError, FailureContext, UsageError
-from casmech.optimal import joint_ocp
+from casmech.optimal import costs, joint_ocp, warm_start
+from casmech.optimal.collocation import DirectCollocation
 from casmech.optimal.compiled import Residuals, residuals
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import (
@@ -90,6 +93,14 @@ class OCP:
     initial_free: bool = False  # joints: the initial state a variable (on the constraints)
     initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
     initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    # joints: Lagrange terms, expression -> weight (or its resolved (function, weight)):
+    # weight * integral expression^2 dt; a Mayer term (expression at the end); tracking,
+    # column -> (function of t, weight): weight * integral (column - function)^2 dt
+    integral: Mapping[str, object] = field(default_factory=dict)
+    final: object = None
+    track: Mapping[str, tuple] = field(default_factory=dict)
+    solver: Mapping[str, object] = field(default_factory=dict)  # IPOPT options (no prefix)
+    guess_file: tuple[str, str] | None = None  # a previous result (optimal/warm_start.py)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -278,7 +289,7 @@ def _element(opti, setup: _Setup, problem: OCP, steps, u, begin, where):
     opti.set_initial(zc, np.hstack([setup.algebraic(t, x_guess[:, j], start.u[k]).full()
                                     for j, t in enumerate(times)]))
     points = ca.horzcat(begin, xc)
-    coefficients = _lagrange(tau)
+    coefficients = DirectCollocation(DEGREE, "radau").coefficients[0]  # slopes at tau
     for j in range(1, DEGREE + 1):
         slope = points @ ca.DM(coefficients[:, j])
         t = dae.t0 + (k + (e + tau[j]) / elements) * step
@@ -303,19 +314,6 @@ def _stabilization(opti, setup: _Setup, t, x):
     opti.subject_to(phi == 0)
     opti.subject_to(phi_q @ x[setup.dae.n:] == nu)
     return ca.vertcat(phi_q.T @ mu, phi_q.T @ eta)
-
-
-def _lagrange(tau: np.ndarray) -> np.ndarray:
-    """C[r, j]: derivative of the r-th Lagrange basis polynomial at tau_j (times the step)."""
-    size = tau.size
-    matrix = np.zeros((size, size))
-    for r in range(size):
-        basis = np.poly1d([1.0])
-        for s in range(size):
-            if s != r:
-                basis *= np.poly1d([1.0, -tau[s]]) / (tau[r] - tau[s])
-        matrix[r] = np.polyder(basis)(tau)
-    return matrix
 
 
 def _scaled_integrator(dae: DAE, k: int, problem: OCP, name: str) -> ca.Function:
@@ -378,8 +376,12 @@ def solve(model: ResolvedModel, problem: OCP, transcription: str = "collocation"
         raise UsageError(f"transcription '{transcription}' is not one of "
                          f"{', '.join(TRANSCRIPTIONS)}")
     settings = {"ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
-                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS}
+                "ipopt.sb": "yes", "ipopt.max_iter": max_iter, "ipopt.tol": 1e-10, **MUMPS,
+                **ipopt_settings(problem.solver.items())}
+    problem = replace(problem, **costs.parsed(problem, model.parameters))
     joints = joints_of(model, problem)
+    if start is None and problem.guess_file is not None:
+        start = warm_start.solution(model, problem, joints)
     if joints is not None:
         found = joint_ocp.solve(joints, problem, transcription,
                                 {**settings, "expand": True, **(options or {})},
@@ -470,8 +472,9 @@ def from_block(block) -> tuple[OCP, str]:
                path_grid=block.path_grid, weights=dict(block.weights),
                terminal_bounds=dict(block.terminal_bounds),
                parameters=dict(block.parameters), initial_free=block.initial_free,
-               initial=dict(block.initial), initial_bounds=dict(block.initial_bounds)), \
-        block.transcription
+               initial=dict(block.initial), initial_bounds=dict(block.initial_bounds),
+               integral=dict(block.integral), final=block.final, track=dict(block.track),
+               solver=dict(block.solver), guess_file=block.guess_file), block.transcription
 
 
 def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,

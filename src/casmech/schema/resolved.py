@@ -186,6 +186,7 @@ class Estimation:
     weights: Mapping[str, float]
     bounds: Mapping[str, tuple[float, float]]
     source: Source | None = None
+    analysis: str = "dynamics"  # dynamics | kinematics (optimal/estimate_kinematics.py)
 
 
 @dataclass(frozen=True)
@@ -226,6 +227,12 @@ class OptimalControl:
     initial_free: bool = False  # joints: the initial state is an unknown
     initial: Mapping[str, float] = field(default_factory=dict)  # column -> value at t0
     initial_bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    # Lagrange terms: expression text -> (its function of t and the columns, weight)
+    integral: Mapping[str, tuple[ScalarFunction, float]] = field(default_factory=dict)
+    final: ScalarFunction | None = None  # Mayer term at the final time
+    track: Mapping[str, tuple[ScalarFunction, float]] = field(default_factory=dict)  # table(t)
+    solver: tuple[tuple[str, Any], ...] = ()  # IPOPT options written (core.ipopt_options)
+    guess_file: tuple[str, str] | None = None  # a previous result's results.csv, controls.csv
 
 
 @dataclass(frozen=True)

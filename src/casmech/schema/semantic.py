@@ -14,7 +14,18 @@ from casmech.core import traced
 from casmech.core.option_values import SOLVER, flat, lookup, with_values
 from casmech.core.options import OPTIONS
 from casmech.errors import Diagnostic, failed
-from casmech.schema import contact, events, files, initial, limits, motors, outputs, resolved, spec
+from casmech.schema import (
+    contact,
+    events,
+    files,
+    initial,
+    limits,
+    motors,
+    ocp_terms,
+    outputs,
+    resolved,
+    spec,
+)
 from casmech.schema.bodies import body, floors
 from casmech.schema.checker import Checker
 from casmech.schema.connections import joint
@@ -121,7 +132,7 @@ def estimation(check: Checker, given: spec.Estimate | None) -> resolved.Estimati
     if not all(names) or failed([*weights.values(), bounds]):
         return None
     return resolved.Estimation(tuple(given.parameters), given.data, given.outputs, weights, bounds,
-                               check.doc.source_map.values.get(path))
+                               check.doc.source_map.values.get(path), given.analysis)
 
 
 def _control(check: Checker, path: Path, given: spec.Control) -> resolved.ControlInput | None:
@@ -133,7 +144,8 @@ def _control(check: Checker, path: Path, given: spec.Control) -> resolved.Contro
     return resolved.ControlInput(given.joint, given.type, *bounds["bounds"])
 
 
-def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.OptimalControl | None:
+def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), forces=(),
+                    written=()) -> resolved.OptimalControl | None:
     path: Path = ("ocp",)
     horizon = check.setting((*path, "horizon"), given.horizon)
     problems = limits.ocp_problems(horizon, given.intervals, given.elements)
@@ -165,20 +177,27 @@ def optimal_control(check: Checker, given: spec.OptimalControl) -> resolved.Opti
                     f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
                     got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
+    terms = ocp_terms.costs(check, given.objective, joints, forces, written)
+    ipopt = ocp_terms.solver(check, given.solver)
+    guess_file = ocp_terms.guess_file(check, given.initial_guess)
     values = [horizon, effort, bounds, terminal_bounds, design, initial_bounds, time_weight,
-              free, *controls, *terminal.values(), *weights.values(), *initial.values(),
+              free, terms, ipopt, guess_file, *controls, *terminal.values(), *weights.values(),
+              *initial.values(),
               *(x for pair in costs.values() for x in pair)]
     if failed(values) or problems:
         return None
+    integral, final, track = terms
     return resolved.OptimalControl(horizon, given.intervals, given.transcription, tuple(controls),
                                    effort, costs, terminal, bounds,
                                    check.doc.source_map.values.get(path),
-                                   free.get("free_time"), time_weight, given.initial_guess,
+                                   free.get("free_time"), time_weight,
+                                   "simulation" if guess_file else given.initial_guess,
                                    max(given.elements, 1), given.stabilized,
                                    given.formulation, given.degree, given.scheme,
                                    given.piecewise, given.steps, given.path_grid, weights,
                                    terminal_bounds, design, given.initial_free, initial,
-                                   initial_bounds)
+                                   initial_bounds, integral, final, track, ipopt,
+                                   guess_file or None)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:
@@ -209,7 +228,8 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     if settings is not None and watched:
         settings = replace(settings, events=watched)
     estimate = estimation(check, given.estimate) if given.estimate is not None else None
-    ocp = optimal_control(check, given.ocp) if given.ocp is not None else None
+    ocp = (optimal_control(check, given.ocp, joints, forces, written)
+           if given.ocp is not None else None)
     if check.found:
         return None
     parameters = dict(check.parameters)

@@ -78,6 +78,8 @@ class Estimate(Spec):
     outputs: tuple[StrictStr, ...] | None = None  # default: every column of data but t
     weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> weight (1)
     bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # parameter -> [low, high]
+    # dynamics: simulated columns; kinematics: a fully driven mechanism's poses (no DOF)
+    analysis: Literal["dynamics", "kinematics"] = "dynamics"
 
 
 class Control(Spec):
@@ -91,11 +93,31 @@ class TerminalCost(Spec):
     target: Scalar = 0
 
 
+class Track(Spec):
+    """A results column to follow: weight * integral (column - table(t))^2 dt."""
+
+    table: StrictStr  # CSV with a `t` column, path relative to the model file's folder
+    column: StrictStr | None = None  # the table's column (default: the tracked column's name)
+    interpolation: Literal["linear", "cubic"] = "cubic"
+    weight: Scalar = 1
+
+
 class Objective(Spec):
     effort: Scalar = 1  # weight of the integral of u^T u
     time: Scalar = 0  # weight of the final time (with free_time)
     terminal: dict[StrictStr, TerminalCost] = Field(default_factory=dict)  # column -> cost
     weights: dict[StrictStr, Scalar] = Field(default_factory=dict)  # control -> effort weight
+    # Lagrange terms: expression of the state -> weight; weight * integral expression^2 dt
+    integral: dict[StrictStr, Scalar] = Field(default_factory=dict)
+    final: StrictStr | None = None  # Mayer term: an expression at the final time, as written
+    track: dict[StrictStr, Track] = Field(default_factory=dict)  # column -> table to follow
+
+
+class GuessFile(Spec):
+    """A previous `casmech optimize` result as the initial guess."""
+
+    file: StrictStr  # its results.csv, relative to the model file's folder
+    controls: StrictStr | None = None  # its controls.csv (default: beside `file`)
 
 
 class OptimalControl(Spec):
@@ -109,7 +131,8 @@ class OptimalControl(Spec):
     terminal: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at the end
     path: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [low, high] at nodes
     free_time: Pair | None = None  # [low, high] of a free final time; horizon is its guess
-    initial_guess: Literal["simulation", "interpolation"] = "simulation"  # casmech.optimal.guess
+    # casmech.optimal.guess, or a previous result (casmech.optimal.warm_start)
+    initial_guess: Literal["simulation", "interpolation"] | GuessFile = "simulation"
     elements: StrictInt = 1  # collocation elements per control interval
     stabilized: StrictBool = False  # collocation: Phi = 0 and Phi_q q_dot = nu at its points
     # joint coordinates (default where the joint formulation takes the mechanism) or bodies
@@ -124,6 +147,8 @@ class OptimalControl(Spec):
     initial_free: StrictBool = False  # joints: the initial state is an unknown
     initial: dict[StrictStr, Scalar] = Field(default_factory=dict)  # column -> value at t0
     initial_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
+    # IPOPT's options (casmech.core.ipopt_options, checked by schema.ocp_terms)
+    solver: dict[StrictStr, Any] | None = None
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
