@@ -51,7 +51,7 @@ def _close(got, want, what: str) -> None:
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12, err_msg=what)
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega", "auto"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_gear_pair_accelerates_at_the_closed_form(formulation):
     """alpha_1 = T / (J1 + r^2 J2), alpha_2 = r alpha_1, the gear's torque on disk 2 J2
     alpha_2; the angles follow alpha t^2 / 2 while they stay inside a turn."""
@@ -70,10 +70,40 @@ def test_gear_pair_accelerates_at_the_closed_form(formulation):
     assert table["constraint_violation"].max() <= 1e-9
 
 
-def test_the_joint_formulation_refuses_a_coupling_by_name():
+def test_auto_runs_joint_coordinates_with_the_coupling_a_closure_row():
+    """A coupled tree runs in joint coordinates under auto: the gear's row is the loop DAE's
+    closure row (its joint among the cut ones), the tree's joints hold both disks."""
     functions = casmech.compile(casmech.loads(gear_pair()))
-    with pytest.raises(AnalysisError, match="joint 'mesh'"):
-        casmech.analyze(functions, "dynamics", formulation="joint")
+    result = casmech.analyze(functions, "dynamics")
+    assert result.metadata["formulation"] == "joint"
+    assert result.metadata["tree"] == ["p1", "p2"] and result.metadata["cut_joints"] == ["mesh"]
+
+
+def test_a_formulation_that_takes_no_couplings_refuses_them_by_name():
+    from casmech.formulations.registry import FORMULATIONS
+    from tests.formulations.test_protocol import Baumgarte
+
+    FORMULATIONS.register(Baumgarte("tree_only", takes_couplings=False))
+    try:
+        functions = casmech.compile(casmech.loads(gear_pair()))
+        with pytest.raises(AnalysisError, match="joint 'mesh'") as error:
+            casmech.analyze(functions, "dynamics", formulation="tree_only")
+        assert "formulation: rp, romega, joint or auto" in str(error.value)
+    finally:
+        FORMULATIONS.unregister("tree_only")
+
+
+def test_a_gear_on_a_cut_joint_in_joint_coordinates():
+    """p2 `cut: true`: disk 2 floats in the tree (a free joint), held by p2's rows and the
+    gear's row, both closure rows over its pose: the same closed form."""
+    text = gear_pair().replace("axis: [0, 0, 1]}\n  - {name: mesh",
+                               "axis: [0, 0, 1], cut: true}\n  - {name: mesh")
+    assert "cut: true" in text
+    table = run(text, formulation="joint")
+    alpha = TORQUE / (J1 + R_GEAR ** 2 * J2)
+    _close(table["d1.alphaz"][0], alpha, "alpha_1")
+    _close(table["d2.alphaz"][0], R_GEAR * alpha, "alpha_2")
+    _close(table["mesh.torque"][0], J2 * R_GEAR * alpha, "gear torque")
 
 
 def test_a_coupler_is_the_gear_it_writes():
@@ -159,7 +189,7 @@ analysis: {{type: dynamics, t_end: 1, output_step: 0.25, rtol: 1e-11, atol: 1e-1
 """
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint"])
 def test_pinion_and_rack_accelerate_at_the_closed_form_through_many_turns(formulation):
     """alpha = T / (J + m R^2), the rack's acceleration R alpha along its axis (-x) and the
     force on it m R alpha; after 1 s the pinion has turned 13 times, and the rack is where
@@ -192,7 +222,7 @@ analysis: {{type: dynamics, t_end: 2, output_step: 0.5, rtol: 1e-11, atol: 1e-12
 """
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega", "auto"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_a_nut_falls_along_a_lead_screw_at_the_closed_form(formulation):
     """a = g m / (m + J (2 pi / L)^2) downwards, spinning at 2 pi a / L; the screw holds
     m (g - a) along the axis and J 2 pi a / L about it (the reaction columns)."""
@@ -280,7 +310,7 @@ def test_an_output_reads_the_gears_torque():
     np.testing.assert_allclose(table["twice"], 2 * table["mesh.torque"], rtol=1e-15, atol=0)
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint"])
 def test_a_gear_of_whole_ratio_holds_through_many_turns(formulation):
     """Ratio -5/2 (integers 5 and 2 in its row): 5 s of the same torque turn disk 2 three times
     and disk 1 more than once, and both angles stay on alpha t^2 / 2 (the joint angles are in

@@ -49,12 +49,10 @@ def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
         taking = [name for name, entry in FORMULATIONS.items() if entry.takes_couplings]
         raise AnalysisError(FailureContext(
             None, f"the {formulation} formulation does not take couplings of joint "
-            f"coordinates; write formulation: {', '.join(taking)} or auto (auto runs rp)",
+            f"coordinates; write formulation: {', '.join(taking)} or auto",
             [(j.name, j.source, 0.0) for j in tree.couplings], "coupling"))
     if formulation != "auto":
         return formulation
-    if tree.couplings:
-        return "rp"
     return "joint" if tree.is_tree or (not tree.floating_loops and examinable() and not lags()) \
         else "rp"
 
