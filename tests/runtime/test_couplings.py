@@ -12,7 +12,7 @@ import casmech
 from casmech.cli import main
 from casmech.errors import AnalysisError, UsageError
 from casmech.optimal.sensitivity import sensitivity
-from tests.conftest import Table
+from tests.conftest import MODELS, Table
 
 G = 9.81
 J1, J2, R_GEAR, TORQUE = 0.5, 0.7, -2.5, 3.0
@@ -338,3 +338,58 @@ def test_a_gear_of_a_ratio_no_fraction_gives_is_linear_in_its_angles():
     alpha = TORQUE / (J1 + ratio ** 2 * J2)
     _close(table["d1.alphaz"][0], alpha, "alpha_1")
     _close(table["mesh.torque"][0], J2 * ratio * alpha, "gear torque")
+
+
+def geared_four_bar() -> str:
+    """models/four_bar_released.yaml with a flywheel on a ground pivot geared to the rocker
+    (ratio -2) and a slider tied to the rocker and the flywheel by a coupler of three
+    coordinates (slide + 0.1 rocker + 0.02 flywheel = 0): a loop with couplings of a tree
+    joint and a slider's, 1 DOF."""
+    text = (MODELS / "four_bar_released.yaml").read_text()
+    bodies = """
+  - {name: flywheel, mass: 2.0, inertia: [0.02, 0.02, 0.04], position: [3, 0, 0]}
+  - {name: block, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [3, 1, 0]}
+joints:"""
+    joints = """
+  - {name: fly_pivot, type: revolute, body_i: ground, body_j: flywheel, at: [3, 0, 0],
+     axis: [0, 0, 1]}
+  - {name: slide, type: translational, body_i: ground, body_j: block, at: [3, 1, 0],
+     axis: [1, 0, 0]}
+  - {name: mesh, type: gear, joint_i: rocker_pivot, joint_j: fly_pivot, ratio: -2}
+  - {name: tie, type: coupler, joints: [slide, rocker_pivot, fly_pivot],
+     coefficients: [1, 0.1, 0.02]}
+
+outputs:"""
+    return text.replace("\njoints:", bodies, 1).replace("\n\noutputs:", joints, 1)
+
+
+def test_joint_and_rp_agree_on_a_geared_loop():
+    """The geared four-bar in joint coordinates (the loop's cut joint and both couplings as
+    closure rows) and in rp: the same motion and the couplings' reactions, and the couplings
+    hold in the joint run's joint values."""
+    functions = casmech.compile(casmech.loads(geared_four_bar()))
+    tables, metadata = {}, {}
+    for formulation in ("joint", "rp"):
+        result = casmech.analyze(functions, "dynamics", formulation=formulation, t_end=1.0,
+                                 output_step=0.05, rtol=1e-10, atol=1e-12)
+        metadata[formulation] = result.metadata
+        tables[formulation] = Table(*casmech.results_table(functions, result))
+    joint, rp = tables["joint"], tables["rp"]
+    assert metadata["joint"]["formulation"] == "joint" and metadata["rp"]["formulation"] == "rp"
+    assert set(metadata["joint"]["cut_joints"]) == {"rocker_pin", "mesh", "tie"}
+    assert np.ptp(joint["rocker_pivot.angle"]) > 0.2  # the mechanism moves
+    for column in ("rocker_pivot.angle", "fly_pivot.angle", "slide.displacement",
+                   "crank_pivot.angle", "block.x", "coupler.y"):
+        # two formulations integrated at rtol 1e-10 over 1 s
+        np.testing.assert_allclose(joint[column], rp[column], rtol=0, atol=1e-7, err_msg=column)
+    for column in ("mesh.torque", "tie.force", "rocker_pivot.fx"):
+        scale = np.max(np.abs(rp[column]))
+        assert scale > 1e-3, column  # the couplings carry load
+        # multipliers of two DAEs at rtol 1e-10: their algebraic tolerance
+        np.testing.assert_allclose(joint[column], rp[column], rtol=0, atol=1e-6 * scale,
+                                   err_msg=column)
+    # the couplings in the joint run's own joint values (assembly and DAE tolerance)
+    np.testing.assert_allclose(joint["fly_pivot.angle"], -2 * joint["rocker_pivot.angle"],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(joint["slide.displacement"], -0.1 * joint["rocker_pivot.angle"]
+                               - 0.02 * joint["fly_pivot.angle"], rtol=0, atol=1e-9)
