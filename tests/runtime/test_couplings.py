@@ -393,3 +393,23 @@ def test_joint_and_rp_agree_on_a_geared_loop():
                                rtol=0, atol=1e-9)
     np.testing.assert_allclose(joint["slide.displacement"], -0.1 * joint["rocker_pivot.angle"]
                                - 0.02 * joint["fly_pivot.angle"], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("formulation", ["rp", "joint"])
+def test_a_redundant_gear_shares_the_torque_as_the_minimum_norm_multipliers(formulation):
+    """Two equal gears between the same joints: one row is masked at t0 and the reactions are
+    the minimum-norm ones, half the closed-form torque J2 r alpha on each, in both
+    formulations."""
+    twice = gear_pair().replace(
+        "  - {name: mesh,", f"  - {{name: again, type: gear, joint_i: p1, joint_j: p2, "
+        f"ratio: {R_GEAR}}}\n  - {{name: mesh,")
+    functions = casmech.compile(casmech.loads(twice))
+    result = casmech.analyze(functions, "dynamics", formulation=formulation)
+    assert result.metadata["formulation"] == formulation
+    table = Table(*casmech.results_table(functions, result))
+    alpha = TORQUE / (J1 + R_GEAR ** 2 * J2)
+    _close(table["d1.alphaz"][0], alpha, "alpha_1")
+    for name in ("mesh", "again"):
+        # along the run: the DAE's algebraic tolerance
+        np.testing.assert_allclose(table[f"{name}.torque"], J2 * R_GEAR * alpha / 2,
+                                   rtol=1e-8, atol=0, err_msg=name)
