@@ -189,7 +189,7 @@ analysis: {{type: dynamics, t_end: 1, output_step: 0.25, rtol: 1e-11, atol: 1e-1
 """
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega", "joint"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_pinion_and_rack_accelerate_at_the_closed_form_through_many_turns(formulation):
     """alpha = T / (J + m R^2), the rack's acceleration R alpha along its axis (-x) and the
     force on it m R alpha; after 1 s the pinion has turned 13 times, and the rack is where
