@@ -79,6 +79,15 @@ def test_auto_runs_joint_coordinates_with_the_coupling_a_closure_row():
     assert result.metadata["tree"] == ["p1", "p2"] and result.metadata["cut_joints"] == ["mesh"]
 
 
+def test_auto_keeps_rp_for_a_screws_floating_nut():
+    """A screw has no tree motion: its nut floats in the tree (a free joint held by the
+    screw's five closure rows), where auto runs rp; `formulation: joint` runs it as asked."""
+    functions = casmech.compile(casmech.loads(SCREW))
+    assert casmech.analyze(functions, "dynamics").metadata["formulation"] == "rp"
+    joint = casmech.analyze(functions, "dynamics", formulation="joint").metadata
+    assert joint["tree"] == ["free 'nut'"] and joint["cut_joints"] == ["thread"]
+
+
 def test_a_formulation_that_takes_no_couplings_refuses_them_by_name():
     from casmech.formulations.registry import FORMULATIONS
     from tests.formulations.test_protocol import Baumgarte
