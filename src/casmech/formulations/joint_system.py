@@ -3,9 +3,11 @@ closures, and the results row's state.
 
 State x = [theta; u]: the coordinates and velocities of the tree joints that no driver
 prescribes (formulations/articulated.py). A tree is the ODE x' = (theta_dot, ABA). Cut joints keep
-their constraint rows Phi_c(t, q(theta)) (formulations/tree.py). Their multipliers act on the two
-bodies as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the DAE is the stabilized
-index-2 form of Gear, Gupta and Leimkuhler (as formulations/dae.py's for r-p):
+their constraint rows Phi_c(t, q(theta)) (formulations/tree.py; a coupling of joint coordinates
+is always cut, its row over the bodies of the joints it couples: rows_of). Their multipliers act
+on every body the rows read as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the
+DAE is the stabilized index-2 form of Gear, Gupta and Leimkuhler (as formulations/dae.py's for
+r-p):
 
     theta' = theta_dot(theta, u) + Phi_c_theta^T S mu,   u' = ABA(t, theta, u; lam)
     0 = S Phi_c(t, theta),   0 = S d/dt Phi_c (t, theta, u),   z = [lam, mu]
