@@ -75,3 +75,23 @@ def test_large_trees_keep_their_results_rows_interpreted(compiled):
     default = joint_system(compiled, workspace=workspace)
     assert default.dynamics.class_name() == "External" and default.motion.class_name() == \
         "External"
+
+
+def test_a_coupled_mechanism_runs_its_compiled_joint_dae(toolchain, cache_root):
+    """The pinion and rack (no parameters: a mapped library) in joint coordinates, the rack's
+    coupling a closure row of the compiled joint DAE: the closed-form accelerations and rack
+    force, T / (J + m R^2) (tests/runtime/test_couplings.py)."""
+    from tests.runtime.test_couplings import J_PINION, M_RACK, R_PINION, RACK, TORQUE
+
+    bundle = codegen.compiled(casmech.loads(RACK), toolchain, root=cache_root)
+    assert codegen.mode_of(bundle) == "compiled"
+    system = joint_system(bundle)
+    assert system.n_cut == 1 and system.dynamics.class_name() == "External"
+    result = casmech.analyze(bundle, "dynamics", formulation="joint")
+    assert result.metadata["formulation"] == "joint"
+    table = Table(*casmech.results_table(bundle, result))
+    alpha = TORQUE / (J_PINION + M_RACK * R_PINION ** 2)
+    # the consistent start solves a linear system: round-off
+    np.testing.assert_allclose(table["pinion.alphaz"][0], alpha, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(table["teeth.force"][0], M_RACK * R_PINION * alpha, rtol=1e-9,
+                               atol=0)

@@ -119,6 +119,7 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
 @pytest.mark.parametrize("case, sets", [
     ("double_pendulum", [{"m1": 2.0, "L2": 1.3}, {"m2": 0.4, "L1": 0.7}]),  # a tree: CVODES
     ("four_bar", [{"b": 2.2}, {"b": 1.9, "m": 1.5}]),  # a loop: the joint DAE on IDAS
+    ("gear_pair", [{"m": 0.7}, {"l": 0.25}]),  # a coupling: its row in the joint DAE
 ])
 def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain, cache_root,
                                                              builds, monkeypatch, case, sets):
@@ -138,7 +139,8 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
         metadata = json.loads((out / "metadata.json").read_text())
         assert metadata["mode"] == "compiled"
         assert metadata["result"]["formulation"] == "joint"
-        assert metadata["result"]["integrator"] == ("idas" if case == "four_bar" else "cvodes")
+        assert metadata["result"]["integrator"] == ("cvodes" if case == "double_pendulum"
+                                                    else "idas")
         assert len(builds) == 1  # the first run only
         rp = run(path, tmp_path / f"rp{number}", "compiled", values, "rp")
         for name in joint.dtype.names:

@@ -91,6 +91,10 @@ PARAMETRIC_CASES = {
                         [{"m1": "2.0", "L2": "1.3"}, {"m2": "0.4", "L1": "0.7"}]),
     # a loop: the coupler's length moves the closure and the universal joint's frames
     "four_bar": (free_four_bar(), [{"b": "2.2"}, {"b": "1.9", "m": "1.5"}]),
+    # a coupling: the gear's row a closure row over both pinions, the pivot's place and the
+    # bob's mass and arm as data
+    "gear_pair": ((MODELS / "gear_pair.yaml").read_text(),
+                  [{"m": "0.7", "l": "0.25"}, {"r1": "0.06", "r2": "0.18"}]),
 }
 
 
@@ -185,13 +189,15 @@ def test_traced_steps_equal_the_steps_run_directly(case):
                                            err_msg=name)
 
 
-@pytest.mark.parametrize("path", [ZOO, MODELS / "four_bar.yaml"], ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [ZOO, MODELS / "four_bar.yaml", MODELS / "gear_pair.yaml"],
+                         ids=lambda p: p.stem)
 def test_each_joints_rows_equal_the_rp_bundles(path):
     """rows_of (one Function per row structure, the vectors and driver values as inputs) gives
-    each joint's rows of phi and their r-omega Jacobians [Phi_r, Pi_bar] at both bodies as the
-    r-p bundle's phi and variations (built over the whole system), at random poses and times:
-    every joint type of the zoo, drivers, ground on either side."""
-    from casmech.formulations.joint_system import rows_of
+    each joint's rows of phi and their r-omega Jacobians [Phi_r, Pi_bar] at every body they
+    read as the r-p bundle's phi and variations (built over the whole system), at random poses
+    and times: every joint type of the zoo, drivers, ground on either side, a gear's row over
+    the bodies of two joints."""
+    from casmech.formulations.joint_system import joint_bodies, rows_of
 
     functions = casmech.compile(casmech.load(path))
     ir, nb = functions.ir, functions.n_bodies
@@ -205,18 +211,21 @@ def test_each_joints_rows_equal_the_rp_bundles(path):
         phi_r, pi_bar = functions.evaluate("variations", t, q)
 
         for joint in ir.joints:
-            rows = list(joint.rows)
+            rows, bodies = list(joint.rows), joint_bodies(ir, joint)
             got = [np.array(ca.evalf(v)) for v in rows_of(
-                ir, joint, t, *_pose(q, p, joint.body_i), *_pose(q, p, joint.body_j))]
-            assert np.max(np.abs(got[1])) + np.max(np.abs(got[2])) > 0.1  # not all zero
+                ir, joint, t, *(v for k in bodies for v in _pose(q, p, k)))]
+            assert len(got) == 1 + len(bodies)
+            assert max(np.max(np.abs(block)) for block in got[1:]) > 0.1  # not all zero
             # the same primitives' arithmetic, differentiated per joint instead of over the
             # whole system: roundoff of O(1) entries
             np.testing.assert_allclose(got[0].ravel(), phi[rows], rtol=0, atol=1e-13)
-            for k, block in zip((joint.body_i, joint.body_j), got[1:], strict=True):
+            for k, block in zip(bodies, got[1:], strict=True):
                 if k < 0:
                     continue
                 want = np.hstack([phi_r[rows, 3 * k:3 * k + 3], pi_bar[rows, 3 * k:3 * k + 3]])
                 np.testing.assert_allclose(block, want, rtol=0, atol=1e-13, err_msg=joint.name)
+            if joint.couples:
+                assert len(bodies) == 3  # ground and both gears
 
 
 def _pose(q, p, k: int) -> tuple:

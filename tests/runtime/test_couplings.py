@@ -12,7 +12,7 @@ import casmech
 from casmech.cli import main
 from casmech.errors import AnalysisError, UsageError
 from casmech.optimal.sensitivity import sensitivity
-from tests.conftest import Table
+from tests.conftest import MODELS, Table
 
 G = 9.81
 J1, J2, R_GEAR, TORQUE = 0.5, 0.7, -2.5, 3.0
@@ -51,7 +51,7 @@ def _close(got, want, what: str) -> None:
     np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-12, err_msg=what)
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega", "auto"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_gear_pair_accelerates_at_the_closed_form(formulation):
     """alpha_1 = T / (J1 + r^2 J2), alpha_2 = r alpha_1, the gear's torque on disk 2 J2
     alpha_2; the angles follow alpha t^2 / 2 while they stay inside a turn."""
@@ -70,10 +70,49 @@ def test_gear_pair_accelerates_at_the_closed_form(formulation):
     assert table["constraint_violation"].max() <= 1e-9
 
 
-def test_the_joint_formulation_refuses_a_coupling_by_name():
+def test_auto_runs_joint_coordinates_with_the_coupling_a_closure_row():
+    """A coupled tree runs in joint coordinates under auto: the gear's row is the loop DAE's
+    closure row (its joint among the cut ones), the tree's joints hold both disks."""
     functions = casmech.compile(casmech.loads(gear_pair()))
-    with pytest.raises(AnalysisError, match="joint 'mesh'"):
-        casmech.analyze(functions, "dynamics", formulation="joint")
+    result = casmech.analyze(functions, "dynamics")
+    assert result.metadata["formulation"] == "joint"
+    assert result.metadata["tree"] == ["p1", "p2"] and result.metadata["cut_joints"] == ["mesh"]
+
+
+def test_auto_keeps_rp_for_a_screws_floating_nut():
+    """A screw has no tree motion: its nut floats in the tree (a free joint held by the
+    screw's five closure rows), where auto runs rp; `formulation: joint` runs it as asked."""
+    functions = casmech.compile(casmech.loads(SCREW))
+    assert casmech.analyze(functions, "dynamics").metadata["formulation"] == "rp"
+    joint = casmech.analyze(functions, "dynamics", formulation="joint").metadata
+    assert joint["tree"] == ["free 'nut'"] and joint["cut_joints"] == ["thread"]
+
+
+def test_a_formulation_that_takes_no_couplings_refuses_them_by_name():
+    from casmech.formulations.registry import FORMULATIONS
+    from tests.formulations.test_protocol import Baumgarte
+
+    FORMULATIONS.register(Baumgarte("tree_only", takes_couplings=False))
+    try:
+        functions = casmech.compile(casmech.loads(gear_pair()))
+        with pytest.raises(AnalysisError, match="joint 'mesh'") as error:
+            casmech.analyze(functions, "dynamics", formulation="tree_only")
+        assert "formulation: rp, romega, joint or auto" in str(error.value)
+    finally:
+        FORMULATIONS.unregister("tree_only")
+
+
+def test_a_gear_on_a_cut_joint_in_joint_coordinates():
+    """p2 `cut: true`: disk 2 floats in the tree (a free joint), held by p2's rows and the
+    gear's row, both closure rows over its pose: the same closed form."""
+    text = gear_pair().replace("axis: [0, 0, 1]}\n  - {name: mesh",
+                               "axis: [0, 0, 1], cut: true}\n  - {name: mesh")
+    assert "cut: true" in text
+    table = run(text, formulation="joint")
+    alpha = TORQUE / (J1 + R_GEAR ** 2 * J2)
+    _close(table["d1.alphaz"][0], alpha, "alpha_1")
+    _close(table["d2.alphaz"][0], R_GEAR * alpha, "alpha_2")
+    _close(table["mesh.torque"][0], J2 * R_GEAR * alpha, "gear torque")
 
 
 def test_a_coupler_is_the_gear_it_writes():
@@ -159,7 +198,7 @@ analysis: {{type: dynamics, t_end: 1, output_step: 0.25, rtol: 1e-11, atol: 1e-1
 """
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_pinion_and_rack_accelerate_at_the_closed_form_through_many_turns(formulation):
     """alpha = T / (J + m R^2), the rack's acceleration R alpha along its axis (-x) and the
     force on it m R alpha; after 1 s the pinion has turned 13 times, and the rack is where
@@ -192,7 +231,7 @@ analysis: {{type: dynamics, t_end: 2, output_step: 0.5, rtol: 1e-11, atol: 1e-12
 """
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega", "auto"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint", "auto"])
 def test_a_nut_falls_along_a_lead_screw_at_the_closed_form(formulation):
     """a = g m / (m + J (2 pi / L)^2) downwards, spinning at 2 pi a / L; the screw holds
     m (g - a) along the axis and J 2 pi a / L about it (the reaction columns)."""
@@ -280,7 +319,7 @@ def test_an_output_reads_the_gears_torque():
     np.testing.assert_allclose(table["twice"], 2 * table["mesh.torque"], rtol=1e-15, atol=0)
 
 
-@pytest.mark.parametrize("formulation", ["rp", "romega"])
+@pytest.mark.parametrize("formulation", ["rp", "romega", "joint"])
 def test_a_gear_of_whole_ratio_holds_through_many_turns(formulation):
     """Ratio -5/2 (integers 5 and 2 in its row): 5 s of the same torque turn disk 2 three times
     and disk 1 more than once, and both angles stay on alpha t^2 / 2 (the joint angles are in
@@ -308,3 +347,78 @@ def test_a_gear_of_a_ratio_no_fraction_gives_is_linear_in_its_angles():
     alpha = TORQUE / (J1 + ratio ** 2 * J2)
     _close(table["d1.alphaz"][0], alpha, "alpha_1")
     _close(table["mesh.torque"][0], J2 * ratio * alpha, "gear torque")
+
+
+def geared_four_bar() -> str:
+    """models/four_bar_released.yaml with a flywheel on a ground pivot geared to the rocker
+    (ratio -2) and a slider tied to the rocker and the flywheel by a coupler of three
+    coordinates (slide + 0.1 rocker + 0.02 flywheel = 0): a loop with couplings of a tree
+    joint and a slider's, 1 DOF."""
+    text = (MODELS / "four_bar_released.yaml").read_text()
+    bodies = """
+  - {name: flywheel, mass: 2.0, inertia: [0.02, 0.02, 0.04], position: [3, 0, 0]}
+  - {name: block, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [3, 1, 0]}
+joints:"""
+    joints = """
+  - {name: fly_pivot, type: revolute, body_i: ground, body_j: flywheel, at: [3, 0, 0],
+     axis: [0, 0, 1]}
+  - {name: slide, type: translational, body_i: ground, body_j: block, at: [3, 1, 0],
+     axis: [1, 0, 0]}
+  - {name: mesh, type: gear, joint_i: rocker_pivot, joint_j: fly_pivot, ratio: -2}
+  - {name: tie, type: coupler, joints: [slide, rocker_pivot, fly_pivot],
+     coefficients: [1, 0.1, 0.02]}
+
+outputs:"""
+    return text.replace("\njoints:", bodies, 1).replace("\n\noutputs:", joints, 1)
+
+
+def test_joint_and_rp_agree_on_a_geared_loop():
+    """The geared four-bar in joint coordinates (the loop's cut joint and both couplings as
+    closure rows) and in rp: the same motion and the couplings' reactions, and the couplings
+    hold in the joint run's joint values."""
+    functions = casmech.compile(casmech.loads(geared_four_bar()))
+    tables, metadata = {}, {}
+    for formulation in ("joint", "rp"):
+        result = casmech.analyze(functions, "dynamics", formulation=formulation, t_end=1.0,
+                                 output_step=0.05, rtol=1e-10, atol=1e-12)
+        metadata[formulation] = result.metadata
+        tables[formulation] = Table(*casmech.results_table(functions, result))
+    joint, rp = tables["joint"], tables["rp"]
+    assert metadata["joint"]["formulation"] == "joint" and metadata["rp"]["formulation"] == "rp"
+    assert set(metadata["joint"]["cut_joints"]) == {"rocker_pin", "mesh", "tie"}
+    assert np.ptp(joint["rocker_pivot.angle"]) > 0.2  # the mechanism moves
+    for column in ("rocker_pivot.angle", "fly_pivot.angle", "slide.displacement",
+                   "crank_pivot.angle", "block.x", "coupler.y"):
+        # two formulations integrated at rtol 1e-10 over 1 s
+        np.testing.assert_allclose(joint[column], rp[column], rtol=0, atol=1e-7, err_msg=column)
+    for column in ("mesh.torque", "tie.force", "rocker_pivot.fx"):
+        scale = np.max(np.abs(rp[column]))
+        assert scale > 1e-3, column  # the couplings carry load
+        # multipliers of two DAEs at rtol 1e-10: their algebraic tolerance
+        np.testing.assert_allclose(joint[column], rp[column], rtol=0, atol=1e-6 * scale,
+                                   err_msg=column)
+    # the couplings in the joint run's own joint values (assembly and DAE tolerance)
+    np.testing.assert_allclose(joint["fly_pivot.angle"], -2 * joint["rocker_pivot.angle"],
+                               rtol=0, atol=1e-9)
+    np.testing.assert_allclose(joint["slide.displacement"], -0.1 * joint["rocker_pivot.angle"]
+                               - 0.02 * joint["fly_pivot.angle"], rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("formulation", ["rp", "joint"])
+def test_a_redundant_gear_shares_the_torque_as_the_minimum_norm_multipliers(formulation):
+    """Two equal gears between the same joints: one row is masked at t0 and the reactions are
+    the minimum-norm ones, half the closed-form torque J2 r alpha on each, in both
+    formulations."""
+    twice = gear_pair().replace(
+        "  - {name: mesh,", f"  - {{name: again, type: gear, joint_i: p1, joint_j: p2, "
+        f"ratio: {R_GEAR}}}\n  - {{name: mesh,")
+    functions = casmech.compile(casmech.loads(twice))
+    result = casmech.analyze(functions, "dynamics", formulation=formulation)
+    assert result.metadata["formulation"] == formulation
+    table = Table(*casmech.results_table(functions, result))
+    alpha = TORQUE / (J1 + R_GEAR ** 2 * J2)
+    _close(table["d1.alphaz"][0], alpha, "alpha_1")
+    for name in ("mesh", "again"):
+        # along the run: the DAE's algebraic tolerance
+        np.testing.assert_allclose(table[f"{name}.torque"], J2 * R_GEAR * alpha / 2,
+                                   rtol=1e-8, atol=0, err_msg=name)

@@ -78,9 +78,9 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
     derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
     with its Jacobian by the states as a function of its own); none for loops through a
-    floating body or couplings of joint coordinates."""
+    floating body."""
     tree = spanning_tree(split.ir)
-    if tree.floating_loops or tree.couplings:  # auto runs rp (runtime.auto_formulation)
+    if tree.floating_loops:  # auto runs rp (runtime.auto_formulation)
         return {}
     system = build_joint_system(split.ir, tree, split.symbols)
     dynamics = {system.dynamics.name(): [system.dynamics]}

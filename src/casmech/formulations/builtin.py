@@ -198,4 +198,4 @@ class JointCoordinates(Formulation):
 
 
 BUILT_IN = (BodyCoordinates("rp"), BodyCoordinates("romega"),
-            JointCoordinates("joint", takes_couplings=False))
+            JointCoordinates("joint"))

@@ -3,9 +3,11 @@ closures, and the results row's state.
 
 State x = [theta; u]: the coordinates and velocities of the tree joints that no driver
 prescribes (formulations/articulated.py). A tree is the ODE x' = (theta_dot, ABA). Cut joints keep
-their constraint rows Phi_c(t, q(theta)) (formulations/tree.py). Their multipliers act on the two
-bodies as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the DAE is the stabilized
-index-2 form of Gear, Gupta and Leimkuhler (as formulations/dae.py's for r-p):
+their constraint rows Phi_c(t, q(theta)) (formulations/tree.py; a coupling of joint coordinates
+is always cut, its row over the bodies of the joints it couples: rows_of). Their multipliers act
+on every body the rows read as the r-omega constraint wrenches -[Phi_r, Pi_bar]^T lam, and the
+DAE is the stabilized index-2 form of Gear, Gupta and Leimkuhler (as formulations/dae.py's for
+r-p):
 
     theta' = theta_dot(theta, u) + Phi_c_theta^T S mu,   u' = ABA(t, theta, u; lam)
     0 = S Phi_c(t, theta),   0 = S d/dt Phi_c (t, theta, u),   z = [lam, mu]
@@ -158,14 +160,24 @@ def _relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, 
     return rotation, c_p.T @ gap, ca.vertcat(omega, rotation.T @ gap_dot)
 
 
-def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, data=None) -> list:
-    """(phi, B_i, B_j): a joint's constraint rows at the bodies' poses (SX; ground's ignored)
-    and their r-omega Jacobians at each body, [Phi_r, Pi_bar] (global translation, body-frame
-    rotation; zero for ground); through one Function per structure of the joint's rows (their
-    kinds, which side is ground, the vectors' shapes) that takes the rows' vectors and driver
-    values as inputs (_rows_template); `data` the model data of a parametric IR, whose
-    vectors are SX of it."""
+def joint_bodies(ir: ModelIR, joint: JointIR) -> tuple[int, ...]:
+    """The bodies a joint's rows read, body_i and body_j first, then a coupling's others
+    (PrimitiveIR.others: the bodies of the joints it couples), ground included."""
     prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    return tuple(dict.fromkeys((joint.body_i, joint.body_j,
+                                *(b for prim in prims for b in prim.bodies))))
+
+
+def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=None) -> list:
+    """(phi, B_1, ..., B_n): a joint's constraint rows at the poses of the bodies it reads
+    (joint_bodies: (r_i, p_i), (r_j, p_j), then `others` as r, p pairs; SX; ground's ignored)
+    and their r-omega Jacobians at each of those bodies, [Phi_r, Pi_bar] (global translation,
+    body-frame rotation; zero for ground); through one Function per structure of the joint's
+    rows (their kinds, which bodies each reads, which are ground, the vectors' shapes) that
+    takes the rows' vectors and driver values as inputs (_rows_template); `data` the model
+    data of a parametric IR, whose vectors are SX of it."""
+    prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    bodies = joint_bodies(ir, joint)
     vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
     shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
     if data is not None:
@@ -173,19 +185,22 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, data=None) -> li
     else:
         stacked = ca.SX(np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]))
     drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
-    grounds = (joint.body_i == GROUND_INDEX, joint.body_j == GROUND_INDEX)
-    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes)
+    grounds = tuple(b == GROUND_INDEX for b in bodies)
+    reads = tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims)
+    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes, reads)
+    poses = (r_i, p_i, r_j, p_j, *others)
     return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
-                          for v in (r_i, p_i, r_j, p_j, stacked, drivers)])
+                          for v in (*poses, stacked, drivers)])
 
 
 @cache
-def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, bool],
-                   shapes: tuple[tuple[int, ...], ...]) -> ca.Function:
-    """(r_i, p_i, r_j, p_j, the rows' vectors stacked, their driver values) -> (phi, B_i, B_j)
-    of rows of these kinds (rows_of), built from the rows' primitives so that the cost stays
-    per joint."""
-    sides = [(ca.SX.sym(f"r_{s}", 3), ca.SX.sym(f"p_{s}", 4)) for s in "ij"]
+def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
+                   shapes: tuple[tuple[int, ...], ...],
+                   reads: tuple[tuple[int, ...], ...]) -> ca.Function:
+    """(r_1, p_1, ..., r_n, p_n, the rows' vectors stacked, their driver values) -> (phi,
+    B_1, ..., B_n) of rows of these kinds (rows_of), each row reading the bodies at its
+    `reads` positions, built from the rows' primitives so that the cost stays per joint."""
+    sides = [(ca.SX.sym(f"r_{k}", 3), ca.SX.sym(f"p_{k}", 4)) for k in range(len(grounds))]
     frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if ground else Frame(r, euler.rotation(p))
               for ground, (r, p) in zip(grounds, sides, strict=True)]
     sizes = [int(np.prod(shape)) for shape in shapes]
@@ -195,9 +210,10 @@ def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, bool],
                for part, shape, size in zip(parts, shapes, sizes, strict=True)]
     drivers = ca.SX.sym("f", len(kinds))
     rows, given = [], iter(vectors)
-    for k, kind in enumerate(kinds):
+    for k, (kind, read) in enumerate(zip(kinds, reads, strict=True)):
         function, keys = PRIMITIVES[kind]
-        rows.append(function(*frames, {key: next(given) for key in keys}, drivers[k]))
+        rows.append(function(*(frames[b] for b in read), {key: next(given) for key in keys},
+                             drivers[k]))
     phi = ca.vertcat(*rows)
     blocks = [ca.horzcat(ca.jacobian(phi, r), body.pi_bar(ca.jacobian(phi, p), p))
               for r, p in sides]
@@ -236,8 +252,9 @@ class _Builder:
                 return ca.DM.zeros(3), ca.DM([1, 0, 0, 0])
             return self.kin.r[body], self.kin.p[body]
         if joint.name not in self.joint_rows:
-            self.joint_rows[joint.name] = rows_of(self.ir, joint, self.t, *pose(joint.body_i),
-                                                  *pose(joint.body_j), self.constants.data)
+            poses = [v for k in joint_bodies(self.ir, joint) for v in pose(k)]
+            self.joint_rows[joint.name] = rows_of(self.ir, joint, self.t, *poses,
+                                                  data=self.constants.data)
         return self.joint_rows[joint.name]
 
     def loop_closure(self):
@@ -262,7 +279,7 @@ class _Builder:
             _, *blocks = self.rows(joint)
             lam_j = lam[start:start + len(joint.rows)]
             start += len(joint.rows)
-            for k, block in zip((joint.body_i, joint.body_j), blocks, strict=True):
+            for k, block in zip(joint_bodies(self.ir, joint), blocks, strict=True):
                 if k == GROUND_INDEX:
                     continue
                 generalized = -block.T @ lam_j  # global force, body-frame torque

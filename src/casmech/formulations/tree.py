@@ -60,9 +60,9 @@ class Tree:
 
     @property
     def couplings(self) -> tuple[JointIR, ...]:
-        """Couplings of joint coordinates (gear, rack_pinion, coupler): rows over the bodies of
-        several joints, which the joint formulation's cut rows (two bodies each) do not take
-        (auto runs rp)."""
+        """Couplings of joint coordinates (gear, rack_pinion, coupler): always cut, their rows
+        closure rows over the bodies of several joints (joint_system.rows_of); a formulation
+        whose takes_couplings is False refuses them (runtime.auto_formulation)."""
         return tuple(joint for joint in self.cut if joint.couples)
 
 

@@ -16,7 +16,11 @@
   bundle's joint system is compiled in its library (codegen.parametric), so its loops run joint
   coordinates.
 - Couplings of joint coordinates (gear, rack_pinion, coupler: rows over the bodies of
-  several joints): `rp`; `formulation: joint` asked for is an error naming them.
+  several joints) are loop-closure rows of the joint DAE (formulations/joint_system.py), so a
+  coupled mechanism is a mechanism with loops above: joint coordinates unless a body floats
+  in the tree (a screw's nut). The joint DAE ran the coupled models measured faster than rp
+  (docs/formulations.md, "Couplings"). A registered formulation whose takes_couplings is
+  False asked for is an error naming them.
 - A DAE stabilization asked for makes the formulation `rp` before this module is reached
   (api.analysis_settings, the one place that rule lives).
 """
@@ -49,12 +53,10 @@ def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
         taking = [name for name, entry in FORMULATIONS.items() if entry.takes_couplings]
         raise AnalysisError(FailureContext(
             None, f"the {formulation} formulation does not take couplings of joint "
-            f"coordinates; write formulation: {', '.join(taking)} or auto (auto runs rp)",
+            f"coordinates; write formulation: {', '.join(taking)} or auto",
             [(j.name, j.source, 0.0) for j in tree.couplings], "coupling"))
     if formulation != "auto":
         return formulation
-    if tree.couplings:
-        return "rp"
     return "joint" if tree.is_tree or (not tree.floating_loops and examinable() and not lags()) \
         else "rp"
 
