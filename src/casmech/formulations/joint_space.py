@@ -38,7 +38,7 @@ import numpy as np
 from casmech.core import spatial
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
-from casmech.formulations import articulated
+from casmech.formulations import articulated, rnea
 from casmech.formulations.joint_system import layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
@@ -86,6 +86,25 @@ def _function(name: str, inputs: list, outputs: list) -> ca.Function:
     return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
 
 
+def forward_derivatives(inverse, forward, mass, q, v, acceleration) -> list:
+    """(da/dq, da/dv, da/dtau) of the forward dynamics a = forward(t, q, v, tau) from the
+    inverse dynamics tau = inverse(t, q, v, acceleration) (Carpentier and Mansard 2018):
+    differentiating inverse(t, q, v, a(q, v, tau)) = tau gives da/dx = -M^-1 dinverse/dx at
+    acceleration = forward (x = q, v) and da/dtau = M^-1, with M = dinverse/dacceleration
+    factored once by Cholesky. CasADi differentiates the inverse dynamics."""
+    nv = acceleration.numel()
+    if not nv:
+        return [ca.SX(0, q.numel()), ca.SX(0, nv), ca.SX(0, 0)]
+    by_q, by_v = ca.substitute([ca.jacobian(inverse, q), ca.jacobian(inverse, v)],
+                               [acceleration], [forward])
+    upper = ca.chol(mass)  # M = R^T R
+
+    def solve(rhs):
+        return ca.solve(upper, ca.solve(upper.T, rhs))
+
+    return [-solve(by_q), -solve(by_v), solve(ca.SX.eye(nv))]
+
+
 def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
     """The SIGNATURES' functions of a tree (module docstring), SX."""
     lay = layout(tree)
@@ -100,15 +119,15 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
               for j, kq, kv, fq, fv in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                            lay.free_u, strict=True)]
     kin = articulated.kinematics(joints, ir.n_bodies)
+    external = articulated.applied_wrenches(ir, t, kin)
     torques = [tau[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
-    dynamics = articulated.articulated_body(
-        ir, joints, kin, articulated.applied_wrenches(ir, t, kin), torques)
+    dynamics = articulated.articulated_body(ir, joints, kin, external, torques)
     forward = ca.vertcat(*dynamics.u_dot) if nv else ca.SX(0, 1)
-    kinetic = sum((0.5 * velocity.T @ spatial.inertia(b.mass, np.asarray(b.inertia)) @ velocity
-                   for b, velocity in zip(ir.bodies, kin.velocity, strict=True)), ca.SX(0))
-    mass = ca.hessian(kinetic, v)[0] if nv else ca.SX(0, 0)
-    bias = -mass @ ca.substitute(forward, tau, ca.DM.zeros(nv))
-    inverse = mass @ acceleration + bias
+    u_dot = [acceleration[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
+    inverse = ca.vertcat(*rnea.inverse_dynamics(ir, joints, kin, external, u_dot)) if nv \
+        else ca.SX(0, 1)
+    mass = ca.jacobian(inverse, acceleration)
+    bias = ca.substitute(inverse, acceleration, ca.DM.zeros(nv))
     bodies = articulated.state(kin, ir.n_bodies)
     return {
         "mass_matrix": _function("mass_matrix", [t, q], [mass]),
@@ -117,7 +136,7 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
         "inverse_dynamics": _function("inverse_dynamics", [t, q, v, acceleration], [inverse]),
         "forward_dynamics_derivatives": _function(
             "forward_dynamics_derivatives", [t, q, v, tau],
-            [ca.jacobian(forward, wrt) for wrt in (q, v, tau)]),
+            forward_derivatives(inverse, forward, mass, q, v, acceleration)),
         "inverse_dynamics_derivatives": _function(
             "inverse_dynamics_derivatives", [t, q, v, acceleration],
             [ca.jacobian(inverse, wrt) for wrt in (q, v, acceleration)]),

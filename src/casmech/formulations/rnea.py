@@ -1,0 +1,67 @@
+"""Inverse dynamics of a tree by the recursive Newton-Euler algorithm (Featherstone, Rigid Body
+Dynamics Algorithms, 2008, table 5.1), in SX and O(N) in the number of bodies: the joint
+forces tau that give the free accelerations u_dot at a state, with every applied force of the
+model, the drivers' prescribed motions and the velocity-product terms of formulations/
+articulated.py (same frames, same per-body quantities).
+
+Pass 1, root to leaves: a body's spatial acceleration from its parent's, its joint's rate term
+c_J plus the velocity product (articulated._velocity_terms) and S u_dot. Pass 2, leaves to
+root: the wrench its joint transmits, I a + v x* I v - external + its children's, and tau as
+its projection S^T f on the joint's free velocities.
+
+Its derivatives come from CasADi's AD of this graph (formulations/joint_space.py).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from casmech.core import spatial
+from casmech.core.traced_steps import traced
+from casmech.formulations import articulated
+from casmech.formulations.articulated import Joint, Kinematics
+from casmech.model.ir import GROUND_INDEX, ModelIR
+
+
+def inverse_dynamics(ir: ModelIR, joints: list[Joint], kin: Kinematics, external: list,
+                     u_dot: list) -> list:
+    """The generalized forces per tree joint (along its free velocities; an empty column for a
+    joint without any) that give the free accelerations `u_dot` (per joint, same layout) under
+    the applied body wrenches `external` (CM frame, articulated.applied_wrenches)."""
+    nb, constants, frames = ir.n_bodies, kin.constants, kin.frames
+    acceleration, wrench = [None] * nb, [None] * nb
+    for j, accel in zip(joints, u_dot, strict=True):  # pass 1, root to leaves
+        k, parent = j.joint.child, j.joint.parent
+        inertia = articulated.reference_inertia(ir.bodies[k].mass, ir.bodies[k].inertia,
+                                                frames[k], constants)
+        c, bias = articulated._velocity_terms(
+            kin.frame_velocity[k], j.c_joint, j.relative, inertia,
+            *articulated.to_center(frames[k], constants), external[k])
+        a_parent = ca.DM.zeros(6) if parent == GROUND_INDEX else acceleration[parent]
+        free = (j.s_free, accel) if j.free else ()
+        acceleration[k], wrench[k] = _forward(a_parent, c, j.e, j.r, inertia, bias, *free)
+    torques = [None] * len(joints)
+    for index in reversed(range(len(joints))):  # pass 2, leaves to root
+        j = joints[index]
+        k, parent = j.joint.child, j.joint.parent
+        torques[index] = j.s_free.T @ wrench[k] if j.free else ca.SX(0, 1)
+        if parent != GROUND_INDEX:
+            wrench[parent] = wrench[parent] + _back(j.e, j.r, wrench[k])[0]
+    return torques
+
+
+@traced
+def _forward(a_parent, c, e, r, inertia, bias, *free):
+    """Pass 1 of a body: its spatial acceleration and its own share I a + bias of the wrench
+    its joint transmits; `free` = (S, u_dot) when the joint has free velocities."""
+    a = spatial.motion(e, r, a_parent) + c
+    if free:
+        s_free, u_dot = free
+        a = a + s_free @ u_dot
+    return a, inertia @ a + bias
+
+
+@traced
+def _back(e, r, f):
+    """spatial.force_back as a traced step."""
+    return (spatial.force_back(e, r, f),)
