@@ -35,7 +35,6 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.core import spatial
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
 from casmech.formulations import articulated, rnea
