@@ -63,8 +63,29 @@ def load(name: str, workdir: Path):
     out.write_text(to_yaml(model))
     space = casmech.joint_space(casmech.load(out))
     pin_model = pin.buildModelFromUrdf(str(path))
-    assert (space.nq, space.nv) == (pin_model.nq, pin_model.nv), name
+    assert space.nq == space.nv == pin_model.nv == pin_model.njoints - 1, name
     return space, pin_model
+
+
+def pinocchio_state(model, space, rng):
+    """Random (q, v, tau) of casmech and the same state in Pinocchio's coordinates: joints in
+    Pinocchio's depth-first order, a continuous joint's angle as (cos, sin); one velocity per
+    joint on these robots."""
+    order = [space.joints.index(model.names[k]) for k in range(1, model.njoints)]
+    ours = np.argsort(order)
+    angles, q_pin = [], []
+    for joint in list(model.joints)[1:]:
+        if joint.nq == 1:
+            low, high = (limit[joint.idx_q] for limit in (model.lowerPositionLimit,
+                                                          model.upperPositionLimit))
+            angles.append(low + (high - low) * rng.uniform(0.1, 0.9))
+            q_pin.append([angles[-1]])
+        else:
+            angles.append(rng.uniform(-np.pi, np.pi))
+            q_pin.append([np.cos(angles[-1]), np.sin(angles[-1])])
+    v, tau = rng.uniform(-2, 2, (2, model.nv))
+    return ((np.array(angles)[ours], v[ours], tau[ours]),
+            (np.concatenate(q_pin), v, tau), np.array(order))
 
 
 def aba_ad(space) -> ca.Function:
@@ -113,10 +134,8 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
 
     space, model = load(name, workdir)
     data = model.createData()
-    rng = np.random.default_rng(36)
-    low, high = model.lowerPositionLimit, model.upperPositionLimit
-    q = low + (high - low) * rng.uniform(0.1, 0.9, model.nq)
-    v, tau = rng.uniform(-2, 2, (2, model.nv))
+    (q, v, tau), (q_pin, v_pin, tau_pin), order = pinocchio_state(
+        model, space, np.random.default_rng(36))
     t = np.zeros(1)
     folder = workdir / name
     folder.mkdir()
@@ -134,8 +153,8 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
         build[key] = time.perf_counter() - start
     # the compiled derivatives reproduce Pinocchio's (a check of what is timed)
     damping = np.diag(model.damping)
-    pin.computeABADerivatives(model, data, q, v, tau - damping @ v)
-    da_dq = np.array(functions["jacobian"](t, q, v, tau)[0])
+    pin.computeABADerivatives(model, data, q_pin, v_pin, tau_pin - damping @ v_pin)
+    da_dq = np.array(functions["jacobian"](t, q, v, tau)[0])[np.ix_(order, order)]
     np.testing.assert_allclose(da_dq, data.ddq_dq, rtol=1e-8, atol=1e-8)
     candidates, keep = {}, []
     for key, f in functions.items():
@@ -143,9 +162,9 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
         trigger, alive = buffered(f, [t, q, v, tau])
         keep.append(alive)
         candidates[(key, "buffer")] = trigger
-    candidates[("rhs", "pinocchio")] = lambda: pin.aba(model, data, q, v, tau)
+    candidates[("rhs", "pinocchio")] = lambda: pin.aba(model, data, q_pin, v_pin, tau_pin)
     candidates[("jacobian", "pinocchio")] = lambda: pin.computeABADerivatives(
-        model, data, q, v, tau)
+        model, data, q_pin, v_pin, tau_pin)
     samples = {key: [] for key in candidates}
     for _ in range(repeats):
         for key, call in candidates.items():  # interleaved with Pinocchio

@@ -11,17 +11,18 @@ not in q). Then
 
     M(t, q) a + b(t, q, v) = tau
 
-- M: the mass matrix, the Hessian of the kinetic energy in v (what the composite-rigid-body
-  algorithm computes);
-- b: the bias forces, C(q, v) v minus the generalized force of every applied force of the
-  model (gravity, springs, dampers, force elements, effort motors, stops); for a model whose
-  only applied force is gravity this is Pinocchio's nonlinear effects C v + g;
+- inverse dynamics tau(t, q, v, a): the recursive Newton-Euler algorithm of
+  formulations/rnea.py (O(n));
+- M: the mass matrix, d tau / d a (what the composite-rigid-body algorithm computes);
+- b: the bias forces, tau at a = 0: C(q, v) v minus the generalized force of every applied
+  force of the model (gravity, springs, dampers, force elements, effort motors, stops); for a
+  model whose only applied force is gravity this is Pinocchio's nonlinear effects C v + g;
 - forward dynamics a(t, q, v, tau): the articulated-body algorithm of
   formulations/articulated.py with tau as the joints' generalized forces along their free
   velocities (O(n));
-- inverse dynamics tau(t, q, v, a) = M a + b;
-- the derivatives of both by CasADi's AD, with respect to the coordinates q (Pinocchio's are
-  with respect to the tangent space; they agree where nq = nv).
+- the inverse dynamics' derivatives by CasADi's AD of the Newton-Euler graph; the forward
+  dynamics' from them (forward_derivatives), with respect to the coordinates q (Pinocchio's
+  are with respect to the tangent space; they agree where nq = nv).
 
 Mechanisms with loops have no joint space of their own (their cut joints' constraints bind
 the coordinates): build refuses them, naming the cut joints.

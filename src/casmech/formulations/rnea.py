@@ -5,7 +5,7 @@ model, the drivers' prescribed motions and the velocity-product terms of formula
 articulated.py (same frames, same per-body quantities).
 
 Pass 1, root to leaves: a body's spatial acceleration from its parent's, its joint's rate term
-c_J plus the velocity product (articulated._velocity_terms) and S u_dot. Pass 2, leaves to
+c_J plus the velocity product v x (S u) and S u_dot. Pass 2, leaves to
 root: the wrench its joint transmits, I a + v x* I v - external + its children's, and tau as
 its projection S^T f on the joint's free velocities.
 
@@ -34,12 +34,11 @@ def inverse_dynamics(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
         k, parent = j.joint.child, j.joint.parent
         inertia = articulated.reference_inertia(ir.bodies[k].mass, ir.bodies[k].inertia,
                                                 frames[k], constants)
-        c, bias = articulated._velocity_terms(
-            kin.frame_velocity[k], j.c_joint, j.relative, inertia,
-            *articulated.to_center(frames[k], constants), external[k])
         a_parent = ca.DM.zeros(6) if parent == GROUND_INDEX else acceleration[parent]
         free = (j.s_free, accel) if j.free else ()
-        acceleration[k], wrench[k] = _forward(a_parent, c, j.e, j.r, inertia, bias, *free)
+        acceleration[k], wrench[k] = _forward(
+            a_parent, kin.frame_velocity[k], j.c_joint, j.relative, j.e, j.r, inertia,
+            *articulated.to_center(frames[k], constants), external[k], *free)
     torques = [None] * len(joints)
     for index in reversed(range(len(joints))):  # pass 2, leaves to root
         j = joints[index]
@@ -51,14 +50,16 @@ def inverse_dynamics(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
 
 
 @traced
-def _forward(a_parent, c, e, r, inertia, bias, *free):
-    """Pass 1 of a body: its spatial acceleration and its own share I a + bias of the wrench
-    its joint transmits; `free` = (S, u_dot) when the joint has free velocities."""
-    a = spatial.motion(e, r, a_parent) + c
+def _forward(a_parent, v, c_joint, relative, e, r, inertia, e_c, r_c, external, *free):
+    """Pass 1 of a body (reference frame): its spatial acceleration, the parent's moved plus
+    c_J + v x (S u) (+ S u_dot), and its own share I a + v x* I v - external of the wrench its
+    joint transmits; `free` = (S, u_dot) when the joint has free velocities."""
+    a = spatial.motion(e, r, a_parent) + c_joint + spatial.cross_motion(v, relative)
     if free:
         s_free, u_dot = free
         a = a + s_free @ u_dot
-    return a, inertia @ a + bias
+    return a, inertia @ a + spatial.cross_force(v, inertia @ v) - spatial.force_back(
+        e_c, r_c, external)
 
 
 @traced
