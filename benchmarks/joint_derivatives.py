@@ -129,7 +129,7 @@ def per_call(call, calls: int) -> float:
 
 
 def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int,
-            options: dict) -> list[dict]:
+            cse: bool, skip_aba_ad: bool = False) -> list[dict]:
     import pinocchio as pin
 
     space, model = load(name, workdir)
@@ -144,9 +144,12 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
         "jacobian": space["forward_dynamics_derivatives"],
         "jacobian, aba AD": aba_ad(space),
     }
-    if options:
-        functions = {k: ca.Function(f.name(), *_io(f), options) for k, f in functions.items()}
-    build = {}
+    if skip_aba_ad:
+        del functions["jacobian, aba AD"]
+    if cse:  # the same graphs with CasADi's common-subexpression elimination
+        functions |= {f"{k}, cse": ca.Function(f"{f.name()}_cse", *_io(f), {"cse": True})
+                      for k, f in list(functions.items())}
+    build, instructions = {}, {k: f.n_instructions() for k, f in functions.items()}
     for key, f in functions.items():
         start = time.perf_counter()
         functions[key] = compiled(f, folder, flags)
@@ -174,9 +177,9 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
     for key, how in candidates:
         if how == "pinocchio":
             continue
-        peer = median[("rhs" if key == "rhs" else "jacobian", "pinocchio")]
+        peer = median[("rhs" if key.startswith("rhs") else "jacobian", "pinocchio")]
         rows.append({"robot": name, "nv": model.nv, "what": key, "call": how,
-                     "n_instructions": functions_n(space, key),
+                     "n_instructions": instructions[key],
                      "us": 1e6 * median[(key, how)], "pinocchio_us": 1e6 * peer,
                      "ratio": median[(key, how)] / peer, "build_s": build[key]})
     return rows
@@ -188,21 +191,17 @@ def _io(f: ca.Function):
     return args, f.call(args), f.name_in(), f.name_out()
 
 
-def functions_n(space, key: str) -> int:
-    return {"rhs": space["forward_dynamics"], "jacobian": space["forward_dynamics_derivatives"],
-            "jacobian, aba AD": aba_ad(space)}[key].n_instructions()
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robots", nargs="+", default=list(ROBOTS), choices=list(ROBOTS))
     parser.add_argument("--flags", nargs="+", default=["-O3"], help="gcc flags")
     parser.add_argument("--repeats", type=int, default=31)
     parser.add_argument("--calls", type=int, default=200, help="calls per timed batch")
-    parser.add_argument("--cse", action="store_true", help="CasADi's cse option on every "
-                        "Function before generating it")
+    parser.add_argument("--cse", action="store_true", help="also time every Function built "
+                        "with CasADi's cse option")
+    parser.add_argument("--no-aba-ad", action="store_true", help="leave out the ABA's AD "
+                        "(its gcc build takes minutes on the Panda)")
     args = parser.parse_args()
-    options = {"cse": True} if args.cse else {}
     print(f"gcc {' '.join(args.flags)}, {args.repeats} batches of {args.calls} calls, "
           f"casadi {ca.__version__}, load {os.getloadavg()[0]:.1f}")
     print("| robot | nv | what | call | SX instructions | casmech us | Pinocchio us | ratio |")
@@ -211,7 +210,7 @@ def main() -> None:
         os.environ["CASMECH_CACHE_DIR"] = tmp
         for name in args.robots:
             for row in measure(name, Path(tmp), args.flags, args.repeats, args.calls,
-                               options):
+                               args.cse, args.no_aba_ad):
                 print(f"| {row['robot']} | {row['nv']} | {row['what']} | {row['call']} | "
                       f"{row['n_instructions']} | {row['us']:.2f} | {row['pinocchio_us']:.2f}"
                       f" | {row['ratio']:.2f} |", flush=True)
