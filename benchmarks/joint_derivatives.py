@@ -45,9 +45,11 @@ def robots_folder() -> Path:
     return Path(distribution.locate_file("cmeel.prefix/share/example-robot-data"))
 
 
-def load(name: str, workdir: Path):
+def load(name: str, workdir: Path, stops: bool = True):
     """(casmech JointSpace, pinocchio Model) of one robot; the Panda's finger coupler left out
-    (Pinocchio's URDF parser ignores <mimic>)."""
+    (Pinocchio's URDF parser ignores <mimic>); stops=False: without the stops casmech's
+    importer makes of the URDF's limits (Pinocchio's aba has none; inside the limits they
+    exert no force, so the values are the same)."""
     import pinocchio as pin
 
     import casmech
@@ -60,6 +62,8 @@ def load(name: str, workdir: Path):
     out = workdir / f"{name}.yaml"
     model = import_urdf(path, output=out)
     model.joints = [j for j in model.joints if j.data["type"] != "coupler"]
+    for joint in model.joints if not stops else ():
+        joint.data.pop("limit", None)
     out.write_text(to_yaml(model))
     space = casmech.joint_space(casmech.load(out))
     pin_model = pin.buildModelFromUrdf(str(path))
@@ -129,10 +133,10 @@ def per_call(call, calls: int) -> float:
 
 
 def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int,
-            cse: bool, skip_aba_ad: bool = False) -> list[dict]:
+            cse: bool, skip_aba_ad: bool = False, stops: bool = True) -> list[dict]:
     import pinocchio as pin
 
-    space, model = load(name, workdir)
+    space, model = load(name, workdir, stops)
     data = model.createData()
     (q, v, tau), (q_pin, v_pin, tau_pin), order = pinocchio_state(
         model, space, np.random.default_rng(36))
@@ -201,8 +205,12 @@ def main() -> None:
                         "with CasADi's cse option")
     parser.add_argument("--no-aba-ad", action="store_true", help="leave out the ABA's AD "
                         "(its gcc build takes minutes on the Panda)")
+    parser.add_argument("--no-stops", action="store_true", help="the robots without the "
+                        "stops casmech's importer makes of the URDF's joint limits")
     args = parser.parse_args()
-    print(f"gcc {' '.join(args.flags)}, {args.repeats} batches of {args.calls} calls, "
+    stops = "without" if args.no_stops else "with"
+    print(f"{stops} stops, gcc {' '.join(args.flags)}, {args.repeats} batches of "
+          f"{args.calls} calls, "
           f"casadi {ca.__version__}, load {os.getloadavg()[0]:.1f}")
     print("| robot | nv | what | call | SX instructions | casmech us | Pinocchio us | ratio |")
     print("|---|---|---|---|---|---|---|---|")
@@ -210,7 +218,7 @@ def main() -> None:
         os.environ["CASMECH_CACHE_DIR"] = tmp
         for name in args.robots:
             for row in measure(name, Path(tmp), args.flags, args.repeats, args.calls,
-                               args.cse, args.no_aba_ad):
+                               args.cse, args.no_aba_ad, not args.no_stops):
                 print(f"| {row['robot']} | {row['nv']} | {row['what']} | {row['call']} | "
                       f"{row['n_instructions']} | {row['us']:.2f} | {row['pinocchio_us']:.2f}"
                       f" | {row['ratio']:.2f} |", flush=True)
