@@ -19,6 +19,7 @@ import pytest
 
 import casmech
 from casmech.errors import UsageError
+from casmech.formulations.joint_space import forward_derivatives
 from casmech.importers.emit import to_yaml
 from casmech.importers.urdf import import_urdf
 
@@ -225,7 +226,8 @@ def joint_mass_matrix(space, functions, q, t: float = 0.0) -> np.ndarray:
 
 def check_newton_euler_and_derivatives(space, functions, q, v, a, t: float = 0.0):
     """RNEA(q, v, a) = M (a - ABA(q, v, 0)), M from the r-p formulation; the derivatives of
-    the forward dynamics equal CasADi's AD of the articulated-body algorithm."""
+    the forward dynamics (in t too, and from a given acceleration) equal CasADi's AD of the
+    articulated-body algorithm."""
     zero = np.zeros(space.nv)
     mass = joint_mass_matrix(space, functions, q, t)
     tau = space.inverse_dynamics(q, v, a, t)
@@ -238,8 +240,24 @@ def check_newton_euler_and_derivatives(space, functions, q, v, a, t: float = 0.0
     acceleration = aba(t_, q_, v_, tau_)
     by_ad = ca.Function("aba_ad", [t_, q_, v_, tau_],
                         [ca.jacobian(acceleration, w) for w in (q_, v_, tau_)])
-    for ours, reference in zip(space.forward_dynamics_derivatives(q, v, tau, t),
-                               by_ad(t, q, v, tau), strict=True):
+    # the same identity at a known acceleration (a symbol), and in t (drivers): what an ODE
+    # Jacobian given its right-hand side's value would use
+    known, a_ = ca.SX.sym("known", space.nv), ca.SX.sym("a", space.nv)
+    inverse = space["inverse_dynamics"](t_, q_, v_, a_)
+    at_known = ca.Function("at_known", [t_, q_, v_, known],
+                           forward_derivatives(inverse, a_, known, [t_, q_, v_]))
+    by_t = ca.Function("by_t", [t_, q_, v_, tau_], [ca.jacobian(acceleration, t_)])
+    reference = np.array(by_t(t, q, v, tau))
+    at_a = at_known(t, q, v, space.forward_dynamics(q, v, tau, t))
+    # as below
+    np.testing.assert_allclose(np.array(at_a[0]), reference, rtol=1e-9,
+                               atol=1e-9 * max(1.0, np.max(np.abs(reference))))
+    ours_all = space.forward_dynamics_derivatives(q, v, tau, t)
+    for ours, known_a in zip(ours_all, at_a[1:], strict=True):
+        # the same graph at an acceleration computed apart: round-off of a
+        np.testing.assert_allclose(np.array(known_a), ours, rtol=1e-10,
+                                   atol=1e-10 * max(1.0, np.max(np.abs(ours))))
+    for ours, reference in zip(ours_all, by_ad(t, q, v, tau), strict=True):
         reference = np.array(reference)
         # an identity solved by Cholesky against AD of a recursion; entries up to ~1e3 (the
         # Panda's fingers' M^-1): 1e-9 of the scale

@@ -21,8 +21,10 @@ not in q). Then
   formulations/articulated.py with tau as the joints' generalized forces along their free
   velocities (O(n));
 - the inverse dynamics' derivatives by CasADi's AD of the Newton-Euler graph; the forward
-  dynamics' from them (forward_derivatives), with respect to the coordinates q (Pinocchio's
-  are with respect to the tangent space; they agree where nq = nv).
+  dynamics' from them (forward_derivatives, which also serves any other Jacobian of the
+  accelerations, e.g. the joint ODE's in t and x at a known a), with respect to the
+  coordinates q (Pinocchio's are with respect to the tangent space; they agree where
+  nq = nv).
 
 Mechanisms with loops have no joint space of their own (their cut joints' constraints bind
 the coordinates): build refuses them, naming the cut joints.
@@ -86,23 +88,24 @@ def _function(name: str, inputs: list, outputs: list) -> ca.Function:
     return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
 
 
-def forward_derivatives(inverse, forward, mass, q, v, acceleration) -> list:
-    """(da/dq, da/dv, da/dtau) of the forward dynamics a = forward(t, q, v, tau) from the
-    inverse dynamics tau = inverse(t, q, v, acceleration) (Carpentier and Mansard 2018):
-    differentiating inverse(t, q, v, a(q, v, tau)) = tau gives da/dx = -M^-1 dinverse/dx at
-    acceleration = forward (x = q, v) and da/dtau = M^-1, with M = dinverse/dacceleration
-    factored once by Cholesky. CasADi differentiates the inverse dynamics."""
+def forward_derivatives(inverse, acceleration, at, wrt: list) -> list:
+    """The derivatives of the forward dynamics a(x) by every symbol x of `wrt` (the inverse
+    dynamics' other inputs: q, v, t...), then by tau, from the inverse dynamics
+    tau = inverse(x, acceleration) (Carpentier and Mansard 2018): differentiating
+    inverse(x, a(x, tau)) = tau gives da/dx = -M^-1 dinverse/dx at acceleration = `at` (the
+    forward dynamics' a, an expression or the symbol of a known value) and da/dtau = M^-1,
+    with M = dinverse/dacceleration factored once by Cholesky. CasADi differentiates the
+    inverse dynamics."""
     nv = acceleration.numel()
     if not nv:
-        return [ca.SX(0, q.numel()), ca.SX(0, nv), ca.SX(0, 0)]
-    by_q, by_v = ca.substitute([ca.jacobian(inverse, q), ca.jacobian(inverse, v)],
-                               [acceleration], [forward])
-    upper = ca.chol(mass)  # M = R^T R
+        return [ca.SX(0, x.numel()) for x in wrt] + [ca.SX(0, 0)]
+    upper = ca.chol(ca.jacobian(inverse, acceleration))  # M = R^T R
 
     def solve(rhs):
         return ca.solve(upper, ca.solve(upper.T, rhs))
 
-    return [-solve(by_q), -solve(by_v), solve(ca.SX.eye(nv))]
+    by = ca.substitute([ca.jacobian(inverse, x) for x in wrt], [acceleration], [at])
+    return [-solve(b) for b in by] + [solve(ca.SX.eye(nv))]
 
 
 def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
@@ -136,7 +139,7 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
         "inverse_dynamics": _function("inverse_dynamics", [t, q, v, acceleration], [inverse]),
         "forward_dynamics_derivatives": _function(
             "forward_dynamics_derivatives", [t, q, v, tau],
-            forward_derivatives(inverse, forward, mass, q, v, acceleration)),
+            forward_derivatives(inverse, acceleration, forward, [q, v])),
         "inverse_dynamics_derivatives": _function(
             "inverse_dynamics_derivatives", [t, q, v, acceleration],
             [ca.jacobian(inverse, wrt) for wrt in (q, v, acceleration)]),
