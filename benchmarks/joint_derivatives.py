@@ -47,9 +47,9 @@ def robots_folder() -> Path:
 
 def load(name: str, workdir: Path, stops: bool = True):
     """(casmech JointSpace, pinocchio Model) of one robot; the Panda's finger coupler left out
-    (Pinocchio's URDF parser ignores <mimic>); stops=False: without the stops casmech's
-    importer makes of the URDF's limits (Pinocchio's aba has none; inside the limits they
-    exert no force, so the values are the same)."""
+    (Pinocchio's URDF parser ignores <mimic>); stops=False: without the stops and the damping
+    elements casmech's importer makes of the URDF's limits and <dynamics damping> (Pinocchio's
+    aba applies neither)."""
     import pinocchio as pin
 
     import casmech
@@ -64,6 +64,8 @@ def load(name: str, workdir: Path, stops: bool = True):
     model.joints = [j for j in model.joints if j.data["type"] != "coupler"]
     for joint in model.joints if not stops else ():
         joint.data.pop("limit", None)
+    if not stops:
+        model.forces = []  # the joints' <dynamics damping> as rsda / tsda elements
     out.write_text(to_yaml(model))
     space = casmech.joint_space(casmech.load(out))
     pin_model = pin.buildModelFromUrdf(str(path))
@@ -166,6 +168,7 @@ def measure(name: str, workdir: Path, flags: list[str], repeats: int, calls: int
         build[key] = time.perf_counter() - start
     # the compiled derivatives reproduce Pinocchio's (a check of what is timed)
     damping = np.diag(model.damping)
+    damping = damping if stops else 0 * damping
     pin.computeABADerivatives(model, data, q_pin, v_pin, tau_pin - damping @ v_pin)
     da_dq = np.array(functions["jacobian"](t, q, v, tau)[0])[np.ix_(order, order)]
     np.testing.assert_allclose(da_dq, data.ddq_dq, rtol=1e-8, atol=1e-8)
@@ -212,12 +215,13 @@ def main() -> None:
     parser.add_argument("--no-aba-ad", action="store_true", help="leave out the ABA's AD "
                         "(its gcc build takes minutes on the Panda)")
     parser.add_argument("--no-stops", action="store_true", help="the robots without the "
-                        "stops casmech's importer makes of the URDF's joint limits")
+                        "stops and damping elements casmech's importer makes of the URDF's "
+                        "joint limits and damping")
     parser.add_argument("--builds", type=Path, help="keep the compiled libraries here and "
                         "load them from here when present (same commit and options only)")
     args = parser.parse_args()
     stops = "without" if args.no_stops else "with"
-    print(f"{stops} stops, gcc {' '.join(args.flags)}, {args.repeats} batches of "
+    print(f"{stops} stops and damping, gcc {' '.join(args.flags)}, {args.repeats} batches of "
           f"{args.calls} calls, "
           f"casadi {ca.__version__}, load {os.getloadavg()[0]:.1f}")
     print("| robot | nv | what | call | SX instructions | casmech us | Pinocchio us | ratio |")
