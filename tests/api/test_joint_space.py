@@ -19,7 +19,7 @@ import pytest
 
 import casmech
 from casmech.errors import UsageError
-from casmech.formulations.joint_space import forward_derivatives
+from casmech.formulations.rnea import forward_derivatives
 from casmech.importers.emit import to_yaml
 from casmech.importers.urdf import import_urdf
 

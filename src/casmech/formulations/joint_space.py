@@ -21,7 +21,7 @@ not in q). Then
   formulations/articulated.py with tau as the joints' generalized forces along their free
   velocities (O(n));
 - the inverse dynamics' derivatives by CasADi's AD of the Newton-Euler graph; the forward
-  dynamics' from them (forward_derivatives, which also serves any other Jacobian of the
+  dynamics' from them (rnea.forward_derivatives, which also serves any other Jacobian of the
   accelerations, e.g. the joint ODE's in t and x at a known a), with respect to the
   coordinates q (Pinocchio's are with respect to the tangent space; they agree where
   nq = nv).
@@ -88,26 +88,6 @@ def _function(name: str, inputs: list, outputs: list) -> ca.Function:
     return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
 
 
-def forward_derivatives(inverse, acceleration, at, wrt: list) -> list:
-    """The derivatives of the forward dynamics a(x) by every symbol x of `wrt` (the inverse
-    dynamics' other inputs: q, v, t...), then by tau, from the inverse dynamics
-    tau = inverse(x, acceleration) (Carpentier and Mansard 2018): differentiating
-    inverse(x, a(x, tau)) = tau gives da/dx = -M^-1 dinverse/dx at acceleration = `at` (the
-    forward dynamics' a, an expression or the symbol of a known value) and da/dtau = M^-1,
-    with M = dinverse/dacceleration factored once by Cholesky. CasADi differentiates the
-    inverse dynamics."""
-    nv = acceleration.numel()
-    if not nv:
-        return [ca.SX(0, x.numel()) for x in wrt] + [ca.SX(0, 0)]
-    upper = ca.chol(ca.jacobian(inverse, acceleration))  # M = R^T R
-
-    def solve(rhs):
-        return ca.solve(upper, ca.solve(upper.T, rhs))
-
-    by = ca.substitute([ca.jacobian(inverse, x) for x in wrt], [acceleration], [at])
-    return [-solve(b) for b in by] + [solve(ca.SX.eye(nv))]
-
-
 def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
     """The SIGNATURES' functions of a tree (module docstring), SX."""
     lay = layout(tree)
@@ -139,7 +119,7 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
         "inverse_dynamics": _function("inverse_dynamics", [t, q, v, acceleration], [inverse]),
         "forward_dynamics_derivatives": _function(
             "forward_dynamics_derivatives", [t, q, v, tau],
-            forward_derivatives(inverse, acceleration, forward, [q, v])),
+            rnea.forward_derivatives(inverse, acceleration, forward, [q, v])),
         "inverse_dynamics_derivatives": _function(
             "inverse_dynamics_derivatives", [t, q, v, acceleration],
             [ca.jacobian(inverse, wrt) for wrt in (q, v, acceleration)]),

@@ -9,7 +9,8 @@ c_J plus the velocity product v x (S u) and S u_dot. Pass 2, leaves to
 root: the wrench its joint transmits, I a + v x* I v - external + its children's, and tau as
 its projection S^T f on the joint's free velocities.
 
-Its derivatives come from CasADi's AD of this graph (formulations/joint_space.py).
+Its derivatives come from CasADi's AD of this graph; forward_derivatives turns them into the
+forward dynamics' (formulations/joint_space.py).
 """
 
 from __future__ import annotations
@@ -47,6 +48,26 @@ def inverse_dynamics(ir: ModelIR, joints: list[Joint], kin: Kinematics, external
         if parent != GROUND_INDEX:
             wrench[parent] = wrench[parent] + _back(j.e, j.r, wrench[k])[0]
     return torques
+
+
+def forward_derivatives(inverse, acceleration, at, wrt: list) -> list:
+    """The derivatives of the forward dynamics a(x) by every symbol x of `wrt` (the inverse
+    dynamics' other inputs: q, v, t...), then by tau, from the inverse dynamics
+    tau = inverse(x, acceleration) (Carpentier and Mansard 2018): differentiating
+    inverse(x, a(x, tau)) = tau gives da/dx = -M^-1 dinverse/dx at acceleration = `at` (the
+    forward dynamics' a, an expression or the symbol of a known value) and da/dtau = M^-1,
+    with M = dinverse/dacceleration factored once by Cholesky. CasADi differentiates the
+    inverse dynamics."""
+    nv = acceleration.numel()
+    if not nv:
+        return [ca.SX(0, x.numel()) for x in wrt] + [ca.SX(0, 0)]
+    upper = ca.chol(ca.jacobian(inverse, acceleration))  # M = R^T R
+
+    def solve(rhs):
+        return ca.solve(upper, ca.solve(upper.T, rhs))
+
+    by = ca.substitute([ca.jacobian(inverse, x) for x in wrt], [acceleration], [at])
+    return [-solve(b) for b in by] + [solve(ca.SX.eye(nv))]
 
 
 @traced
