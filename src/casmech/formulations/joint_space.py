@@ -11,17 +11,20 @@ not in q). Then
 
     M(t, q) a + b(t, q, v) = tau
 
-- M: the mass matrix, the Hessian of the kinetic energy in v (what the composite-rigid-body
-  algorithm computes);
-- b: the bias forces, C(q, v) v minus the generalized force of every applied force of the
-  model (gravity, springs, dampers, force elements, effort motors, stops); for a model whose
-  only applied force is gravity this is Pinocchio's nonlinear effects C v + g;
+- inverse dynamics tau(t, q, v, a): the recursive Newton-Euler algorithm of
+  formulations/rnea.py (O(n));
+- M: the mass matrix, d tau / d a (what the composite-rigid-body algorithm computes);
+- b: the bias forces, tau at a = 0: C(q, v) v minus the generalized force of every applied
+  force of the model (gravity, springs, dampers, force elements, effort motors, stops); for a
+  model whose only applied force is gravity this is Pinocchio's nonlinear effects C v + g;
 - forward dynamics a(t, q, v, tau): the articulated-body algorithm of
   formulations/articulated.py with tau as the joints' generalized forces along their free
   velocities (O(n));
-- inverse dynamics tau(t, q, v, a) = M a + b;
-- the derivatives of both by CasADi's AD, with respect to the coordinates q (Pinocchio's are
-  with respect to the tangent space; they agree where nq = nv).
+- the inverse dynamics' derivatives by CasADi's AD of the Newton-Euler graph; the forward
+  dynamics' from them (rnea.forward_derivatives, which also serves any other Jacobian of the
+  accelerations, e.g. the joint ODE's in t and x at a known a), with respect to the
+  coordinates q (Pinocchio's are with respect to the tangent space; they agree where
+  nq = nv).
 
 Mechanisms with loops have no joint space of their own (their cut joints' constraints bind
 the coordinates): build refuses them, naming the cut joints.
@@ -35,10 +38,9 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from casmech.core import spatial
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
-from casmech.formulations import articulated
+from casmech.formulations import articulated, rnea
 from casmech.formulations.joint_system import layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
@@ -100,15 +102,15 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
               for j, kq, kv, fq, fv in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                            lay.free_u, strict=True)]
     kin = articulated.kinematics(joints, ir.n_bodies)
+    external = articulated.applied_wrenches(ir, t, kin)
     torques = [tau[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
-    dynamics = articulated.articulated_body(
-        ir, joints, kin, articulated.applied_wrenches(ir, t, kin), torques)
+    dynamics = articulated.articulated_body(ir, joints, kin, external, torques)
     forward = ca.vertcat(*dynamics.u_dot) if nv else ca.SX(0, 1)
-    kinetic = sum((0.5 * velocity.T @ spatial.inertia(b.mass, np.asarray(b.inertia)) @ velocity
-                   for b, velocity in zip(ir.bodies, kin.velocity, strict=True)), ca.SX(0))
-    mass = ca.hessian(kinetic, v)[0] if nv else ca.SX(0, 0)
-    bias = -mass @ ca.substitute(forward, tau, ca.DM.zeros(nv))
-    inverse = mass @ acceleration + bias
+    u_dot = [acceleration[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
+    inverse = ca.vertcat(*rnea.inverse_dynamics(ir, joints, kin, external, u_dot)) if nv \
+        else ca.SX(0, 1)
+    mass = ca.jacobian(inverse, acceleration)
+    bias = ca.substitute(inverse, acceleration, ca.DM.zeros(nv))
     bodies = articulated.state(kin, ir.n_bodies)
     return {
         "mass_matrix": _function("mass_matrix", [t, q], [mass]),
@@ -117,7 +119,7 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
         "inverse_dynamics": _function("inverse_dynamics", [t, q, v, acceleration], [inverse]),
         "forward_dynamics_derivatives": _function(
             "forward_dynamics_derivatives", [t, q, v, tau],
-            [ca.jacobian(forward, wrt) for wrt in (q, v, tau)]),
+            rnea.forward_derivatives(inverse, acceleration, forward, [q, v])),
         "inverse_dynamics_derivatives": _function(
             "inverse_dynamics_derivatives", [t, q, v, acceleration],
             [ca.jacobian(inverse, wrt) for wrt in (q, v, acceleration)]),
