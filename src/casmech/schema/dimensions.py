@@ -4,7 +4,7 @@
 `expected(data, path)` reads the field from its path (`("bodies", 0, "mass")`,
 `("forces", 2, "stiffness")`: indices dropped) and, where the dimension depends on the
 element, the element's `type` in the document's data (a spring's stiffness N/m, a rotational
-spring's N m/rad; a joint stop's by the coordinate it stops). Fields not listed (directions,
+spring's N m/rad; a joint stop's and a joint friction's by the coordinate they act on). Fields not listed (directions,
 tolerances, weights, expressions of the state, a contact's normal law, parameters) take any.
 """
 
@@ -76,6 +76,13 @@ LIMITS: dict[str, dict[str, Dimension]] = {
     "displacement": {"lower": LENGTH, "upper": LENGTH, "stiffness": STIFFNESS,
                      "damping": DAMPING},
 }
+# a joint friction's keys by the coordinate it acts on (the stop's: equations/friction.py)
+FRICTION: dict[str, dict[str, Dimension]] = {
+    "angle": {"coulomb": TORQUE, "static": TORQUE, "viscous": ROTATIONAL_DAMPING},
+    "displacement": {"coulomb": FORCE, "static": FORCE, "viscous": DAMPING},
+}
+# a joint's keys whose dimension is by the coordinate its stop (`limit`) acts on
+BY_COORDINATE = {"limit": LIMITS, "friction": FRICTION}
 
 
 # a readable name's attribute (after its last dot: body and contact columns, joint states,
@@ -120,8 +127,8 @@ def expected(data, path) -> Dimension | None:
     if (section, kind, keys) in TYPED:
         return TYPED[(section, kind, keys)]
     entry = REGISTRY.get(kind) if section == "joints" and kind else None
-    if entry is not None and entry.limit and keys[:1] == ("limit",) and len(keys) == 2:
-        return LIMITS[entry.limit].get(keys[1])
+    if entry is not None and entry.limit and len(keys) == 2 and keys[0] in BY_COORDINATE:
+        return BY_COORDINATE[keys[0]][entry.limit].get(keys[1])
     if section == "forces" and keys in CONTACT:
         return CONTACT[keys]
     return FIELDS.get((section, keys))
