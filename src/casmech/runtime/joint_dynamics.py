@@ -33,7 +33,7 @@ from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_re
 from casmech.formulations.articulated import local_motion
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, TreeJoint, spanning_tree
-from casmech.runtime import assembly, contact_steps, events
+from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import BufferedCall, ColumnCall, NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.dynamics import algebraic_tolerances, initial_step, minimum_norm
@@ -223,7 +223,8 @@ class _Integrator:
                  method: str, workspace: Workspace, settings: DynamicsSolver = DEFAULT):
         self.system, self.loops, self.workspace = system, loops, workspace
         self.settings = settings
-        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True}
+        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True,
+                        **nonfinite.SOLVER_OPTIONS}
         if not system.n_cut:
             self.options |= METHODS[method]
         self.steps = 0
@@ -409,6 +410,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
 
 
 def _failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
+    if nonfinite.rates_failed(error):
+        return nonfinite.RatesNotFinite(t0, t1)
     why = solver_reason(error)
     cause = (f"the integrator failed between t = {t0:.6g} and {t1:.6g} "
              f"({why.strip().splitlines()[-1]})")
