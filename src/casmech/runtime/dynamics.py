@@ -414,16 +414,6 @@ def run_dynamics(functions: SystemFunctions, t_end: float, step: float, rtol: fl
         return _run(model, stepper, t0, t_end, step, atol, progress, extra_events)
 
 
-def _failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
-    """The failure of the one output interval (t0, t1) a solver call failed on (the driver
-    narrowed it: runtime.driver): equations of motion that are not finite, or what the
-    solver said."""
-    if nonfinite.rates_failed(error):
-        return nonfinite.RatesNotFinite(t0, t1)
-    return AnalysisError(FailureContext(t0, f"the integrator failed between t = {t0:.6g} and "
-                                            f"{t1:.6g} ({solver_reason(error)})"))
-
-
 def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float, atol: float,
          progress, extra_events=()) -> Result:
     functions, settings = model.functions, model.settings
@@ -487,7 +477,8 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)
-        drive(result, times, (q, v), block, chunks, watch, halves=True, fail=_failure)
+        drive(result, times, (q, v), block, chunks, watch, halves=True,
+              fail=nonfinite.interval_failure)
     except AnalysisError as error:
         error.partial = result
         raise

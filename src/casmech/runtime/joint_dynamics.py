@@ -29,7 +29,7 @@ from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, Join
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
+from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations.articulated import local_motion
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, TreeJoint, spanning_tree
@@ -395,7 +395,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         if watch is not None:
             watch.start(times[0], first)
         drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch, halves=True,
-              fail=_failure)
+              fail=nonfinite.interval_failure)
     except AnalysisError as error:
         error.partial = result
         raise
@@ -407,15 +407,6 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
     return result
-
-
-def _failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
-    if nonfinite.rates_failed(error):
-        return nonfinite.RatesNotFinite(t0, t1)
-    why = solver_reason(error)
-    cause = (f"the integrator failed between t = {t0:.6g} and {t1:.6g} "
-             f"({why.strip().splitlines()[-1]})")
-    return AnalysisError(FailureContext(t0, cause, [], ""))
 
 
 class _Recorder:

@@ -33,7 +33,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.columns import JOINT_COLUMNS
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 
 # the integrators' options that make a non-finite right-hand side a failure at once
 SOLVER_OPTIONS = {"regularity_check": True}
@@ -181,6 +181,17 @@ def _element_values(functions, t, q, q_dot):
 def rates_failed(error: BaseException) -> bool:
     """Whether a solver's RuntimeError is a right-hand side that was not finite."""
     return any(flag in str(error) for flag in FAILED_RATES)
+
+
+def interval_failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
+    """The failure of the one output interval (t0, t1) a solver call failed on (the driver
+    narrowed it: runtime.driver): equations of motion that are not finite, or what the solver
+    said."""
+    if rates_failed(error):
+        return RatesNotFinite(t0, t1)
+    why = solver_reason(error).strip().splitlines()[-1]
+    return AnalysisError(FailureContext(t0, f"the integrator failed between t = {t0:.6g} and "
+                                            f"{t1:.6g} ({why})"))
 
 
 class RatesNotFinite(NonFinite):

@@ -99,8 +99,8 @@ class ProjectedRK4:
             fine = self._steps(t0, t1, x, penalty, 2 * n)
             if not (np.all(np.isfinite(coarse)) and np.all(np.isfinite(fine))):
                 if refined:
-                    raise StatesNotFinite(f"the states were not finite with {n} and {2 * n} steps "
-                                    "in the output interval")
+                    raise StatesNotFinite(f"the states were not finite with {n} and {2 * n} "
+                                          "steps in the output interval")
                 self.rejected += 1
                 n, refined = NONFINITE_REFINEMENT * n, True
                 continue

@@ -4,8 +4,9 @@
 `expected(data, path)` reads the field from its path (`("bodies", 0, "mass")`,
 `("forces", 2, "stiffness")`: indices dropped) and, where the dimension depends on the
 element, the element's `type` in the document's data (a spring's stiffness N/m, a rotational
-spring's N m/rad; a joint stop's and a joint friction's by the coordinate they act on). Fields not listed (directions,
-tolerances, weights, expressions of the state, a contact's normal law, parameters) take any.
+spring's N m/rad; a joint stop's and a joint friction's by the coordinate they act on). Fields
+not listed (directions, tolerances, weights, expressions of the state, a contact's normal law,
+parameters) take any.
 """
 
 from __future__ import annotations
