@@ -198,3 +198,23 @@ def test_joint_friction_of_the_wrong_dimension_is_located(text, friction, path, 
     row = text.splitlines()[line - 1]
     # at the value
     assert (found.source.line, found.source.col) == (line, row.index(f"{key}: ") + len(key) + 3)
+
+
+def test_an_instance_position_and_a_free_final_time_take_their_dimensions():
+    from tests.optimal.test_blocks import BASE
+    from tests.schema.test_components import rig
+
+    placed = rig((0, 0, -9.81))
+    ocp = BASE + ("\nocp:\n  horizon: 2\n  free_time: %s\n  objective: {effort: 0.1, time: 1}\n"
+                  "  controls: [{joint: pivot}]\n")
+    in_mm = casmech.loads(placed.replace("position: [0, 0, 0]", "position: [500 mm, 0, 0]"))
+    in_m = casmech.loads(placed.replace("position: [0, 0, 0]", "position: [0.5, 0, 0]"))
+    # a unit conversion: the same SI numbers to the last bit of its factor
+    np.testing.assert_allclose(in_mm.bodies[0].position, in_m.bodies[0].position, rtol=1e-15,
+                               atol=0)
+    assert casmech.loads(ocp % "[500 ms, 3 s]").ocp.free_time == (0.5, 3.0)
+    for text, path in ((placed.replace("position: [0, 0, 0]", "position: [2 kg, 0, 0]"),
+                        "instances[0].position[0]"), (ocp % "[0.5 kg, 3]", "ocp.free_time[0]")):
+        with pytest.raises(ModelError) as caught:
+            casmech.loads(text)
+        assert [(d.code, d.path) for d in caught.value.diagnostics] == [("E205", path)]

@@ -41,7 +41,8 @@ FIELDS: dict[tuple[str, tuple[str, ...]], Dimension] = {
     ("gravity", ()): dimension(length=1, time=-2),
     **{("analysis", (key,)): TIME for key in ("t_end", "output_step", "at")},
     ("analysis", ("rtol",)): NUMBER,
-    ("ocp", ("horizon",)): TIME,
+    ("ocp", ("horizon",)): TIME, ("ocp", ("free_time",)): TIME,
+    ("instances", ("position",)): LENGTH,
 }
 # (section, element type, keys) -> dimension, before FIELDS
 TYPED: dict[tuple[str, str, tuple[str, ...]], Dimension] = {
