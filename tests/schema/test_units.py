@@ -145,3 +145,76 @@ def test_symbolic_parameters_written_with_units_differentiate_in_si():
         runs.append(table["bar.x"][-1])
     np.testing.assert_allclose(found.jacobian[0, 0, 0], (runs[0] - runs[1]) / 2e-6, rtol=1e-5,
                                atol=0)  # central difference error O(h^2) + integration 1e-10
+
+
+SLIDER = """\
+casmech: 1
+name: slider
+bodies:
+  - {name: block, mass: 2, inertia: [1, 1, 1], position: [0, 0, 0]}
+joints:
+  - {name: slide, type: translational, body_i: ground, body_j: block, at: [0, 0, 0],
+     axis: [1, 0, 0], friction: %s}
+analysis: {type: dynamics, t_end: 0.2}
+"""
+
+
+@pytest.mark.parametrize(("text", "friction", "si"), [
+    (BAR % ("m", ", friction: %s", "0"), "{coulomb: 2 N*m, static: 3 N*m, "
+     "viscous: 0.5 N*m*s/rad}", (2.0, 3.0, 0.5)),
+    (BAR % ("m", ", friction: %s", "0"), "{coulomb: 2000 N*mm, viscous: 0.5 N*m*s}",
+     (2.0, None, 0.5)),
+    (SLIDER, "{coulomb: 2 kN, static: 3 kN, viscous: 0.5 N*s/m}", (2000.0, 3000.0, 0.5)),
+])
+def test_joint_friction_takes_the_units_of_its_coordinate(text, friction, si):
+    written = casmech.loads(text % friction).joints[0].friction
+    coulomb, static, viscous = si
+    # the SI value of a unit conversion, to the last bit of its factor
+    np.testing.assert_allclose([written["coulomb"], written["static"], written["viscous"]],
+                               [coulomb, coulomb if static is None else static, viscous],
+                               rtol=1e-15, atol=0)
+
+
+@pytest.mark.parametrize(("text", "friction", "path", "expected"), [
+    (BAR % ("m", ", friction: %s", "0"), "{coulomb: 2 kN}", "joints[0].friction.coulomb",
+     "torque or energy (N m)"),
+    (BAR % ("m", ", friction: %s", "0"), "{coulomb: 1 N*m, static: 2 N}",
+     "joints[0].friction.static", "torque or energy (N m)"),
+    (BAR % ("m", ", friction: %s", "0"), "{viscous: 2 N*s/m}", "joints[0].friction.viscous",
+     None),
+    (SLIDER, "{coulomb: 2 N*m}", "joints[0].friction.coulomb", "force (N)"),
+    (SLIDER, "{viscous: 2 N*m*s}", "joints[0].friction.viscous", None),
+])
+def test_joint_friction_of_the_wrong_dimension_is_located(text, friction, path, expected):
+    text = text % friction
+    with pytest.raises(ModelError) as caught:
+        casmech.loads(text, "m.yaml")
+    [found] = caught.value.diagnostics
+    assert (found.code, found.path) == ("E205", path)
+    if expected is not None:
+        assert found.expected == expected
+    key = path.rpartition(".")[2]
+    line = next(n for n, row in enumerate(text.splitlines(), 1) if "friction:" in row)
+    row = text.splitlines()[line - 1]
+    # at the value
+    assert (found.source.line, found.source.col) == (line, row.index(f"{key}: ") + len(key) + 3)
+
+
+def test_an_instance_position_and_a_free_final_time_take_their_dimensions():
+    from tests.optimal.test_blocks import BASE
+    from tests.schema.test_components import rig
+
+    placed = rig((0, 0, -9.81))
+    ocp = BASE + ("\nocp:\n  horizon: 2\n  free_time: %s\n  objective: {effort: 0.1, time: 1}\n"
+                  "  controls: [{joint: pivot}]\n")
+    in_mm = casmech.loads(placed.replace("position: [0, 0, 0]", "position: [500 mm, 0, 0]"))
+    in_m = casmech.loads(placed.replace("position: [0, 0, 0]", "position: [0.5, 0, 0]"))
+    # a unit conversion: the same SI numbers to the last bit of its factor
+    np.testing.assert_allclose(in_mm.bodies[0].position, in_m.bodies[0].position, rtol=1e-15,
+                               atol=0)
+    assert casmech.loads(ocp % "[500 ms, 3 s]").ocp.free_time == (0.5, 3.0)
+    for text, path in ((placed.replace("position: [0, 0, 0]", "position: [2 kg, 0, 0]"),
+                        "instances[0].position[0]"), (ocp % "[0.5 kg, 3]", "ocp.free_time[0]")):
+        with pytest.raises(ModelError) as caught:
+            casmech.loads(text)
+        assert [(d.code, d.path) for d in caught.value.diagnostics] == [("E205", path)]

@@ -60,6 +60,7 @@ from casmech.runtime import (
     contact_steps,
     dae_integrators,
     events,
+    nonfinite,
     projected_rk4,
 )
 from casmech.runtime.dae_rows import Rows, mapped, minimum_norm  # noqa: F401 (joint_dynamics)
@@ -167,7 +168,8 @@ class _Stepper:
         self.model, self.stabilization, self.settings = model, stabilization, model.settings
         self.chunks = Chunks(self.settings.chunk, grow=True)  # kept over a restart on the ODE
         self.ggl_failures: list[float] = []  # chunk starts the index-2 DAE failed at
-        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True}
+        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True,
+                        **nonfinite.SOLVER_OPTIONS}
         self.fallback = None  # projected_rk4.ProjectedRK4, built when first needed
         self.on_ode, self.switched_at, self.dae_reason = self.settings.fallback.always, None, ""
         self.idas_calls, self.idas_steps = 0, 0
@@ -188,7 +190,9 @@ class _Stepper:
         lam the true multipliers, kind "ggl", "projection" or "ode" (which made them).
 
         By the DAE until it first fails (then _Restart: the run starts over on the
-        augmented-Lagrangian ODE), else by that ODE."""
+        augmented-Lagrangian ODE), else by that ODE. Equations of motion that are not finite
+        fail at once (the RuntimeError, which the driver narrows to one output interval:
+        runtime.nonfinite), on no other DAE or integrator."""
         if self.on_ode:
             return (*self._ode(t0, times, q, v), "ode")
         chunk = self.settings.chunk
@@ -197,6 +201,8 @@ class _Stepper:
                 return (*self._dae(t0, times, q, v, mask, "ggl"), "ggl")
             except RuntimeError as error:
                 cancel.check(error)  # a signal is not a solver failure
+                if nonfinite.rates_failed(error):
+                    raise
                 if len(times) > chunk:  # the whole grid: again in chunks, as after a failure
                     self.chunks.cap(chunk)
                     return self.integrate(t0, times[:chunk], q, v, mask)
@@ -206,6 +212,8 @@ class _Stepper:
             return (*self._dae(t0, times, q, v, mask, "projection"), "projection")
         except RuntimeError as error:  # IDAS failed (its construction is not guarded)
             cancel.check(error)
+            if nonfinite.rates_failed(error):
+                raise
             raise _Restart(float(t0), solver_reason(error)) from None
 
     def probe(self, kind: str, t0: float, t: float, t1: float, q, v, mask):
@@ -290,6 +298,10 @@ class _Stepper:
         for t in times:
             try:
                 x = self.fallback.advance(start, t, x, a)
+            except projected_rk4.StatesNotFinite:
+                if not columns:
+                    raise nonfinite.RatesNotFinite(start, t) from None
+                break
             except projected_rk4.StepFailure as error:
                 if not columns:
                     raise self.failure(start, t, x[:model.n_q], str(error)) from None
@@ -420,7 +432,8 @@ def _run(model: _Model, stepper: _Stepper, t0: float, t_end: float, step: float,
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)
-        drive(result, times, (q, v), block, chunks, watch)
+        drive(result, times, (q, v), block, chunks, watch, halves=True,
+              fail=nonfinite.interval_failure)
     except AnalysisError as error:
         error.partial = result
         raise

@@ -26,7 +26,7 @@ import numpy as np
 
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
+from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's names for them)
     Loops,
@@ -37,7 +37,7 @@ from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's name
 )
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import assembly, contact_steps, events
+from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.dynamics import minimum_norm
@@ -152,7 +152,8 @@ class _Integrator:
                  method: str, workspace: Workspace, settings: DynamicsSolver = DEFAULT):
         self.system, self.loops, self.workspace = system, loops, workspace
         self.settings = settings
-        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True}
+        self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True,
+                        **nonfinite.SOLVER_OPTIONS}
         if not system.n_cut:
             self.options |= METHODS[method]
         self.steps = 0
@@ -323,7 +324,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         if watch is not None:
             watch.start(times[0], first)
         drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch, halves=True,
-              fail=_failure)
+              fail=nonfinite.interval_failure)
     except AnalysisError as error:
         error.partial = result
         raise
@@ -335,13 +336,6 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
     return result
-
-
-def _failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
-    why = solver_reason(error)
-    cause = (f"the integrator failed between t = {t0:.6g} and {t1:.6g} "
-             f"({why.strip().splitlines()[-1]})")
-    return AnalysisError(FailureContext(t0, cause, [], ""))
 
 
 class _Recorder:

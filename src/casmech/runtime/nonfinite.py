@@ -17,6 +17,12 @@ model's functions) names the results column and blames the elements:
 
 The elements are evaluated at the offending row's state when it is finite, else at the last
 finite row's.
+
+A law that turns non-finite inside a solver call (a force law's `sqrt` of a negative, a `1/0`)
+stops the integrator at once (SOLVER_OPTIONS: CasADi's regularity check, an unrecoverable
+right-hand side failure instead of ever shorter steps), and the driver narrows the failure to
+one output interval (runtime.driver): RatesNotFinite names that interval and blames the
+elements at the states extrapolated over it from the last row (its q, q_dot, q_ddot).
 """
 
 from __future__ import annotations
@@ -27,8 +33,14 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.columns import JOINT_COLUMNS
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError, FailureContext, solver_reason
 
+# the integrators' options that make a non-finite right-hand side a failure at once
+SOLVER_OPTIONS = {"regularity_check": True}
+# the flags SUNDIALS returns when the right-hand side (residual) failed unrecoverably
+FAILED_RATES = ('"CV_RHSFUNC_FAIL"', '"IDA_RES_FAIL"')
+# fractions of the failed output interval the elements are evaluated at (RatesNotFinite)
+PROBES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 OVERFLOWING = 1e150  # a rate beyond this overflows when squared (double precision: 1.8e308)
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
@@ -164,3 +176,57 @@ def _element_values(functions, t, q, q_dot):
                                 x.ground_fixed(ca.SX(potential))])
         out = function(t, q, q_dot)
         yield element, np.array(out[0]).ravel(), float(out[1])
+
+
+def rates_failed(error: BaseException) -> bool:
+    """Whether a solver's RuntimeError is a right-hand side that was not finite."""
+    return any(flag in str(error) for flag in FAILED_RATES)
+
+
+def interval_failure(t0: float, t1: float, error: RuntimeError) -> AnalysisError:
+    """The failure of the one output interval (t0, t1) a solver call failed on (the driver
+    narrowed it: runtime.driver): equations of motion that are not finite, or what the solver
+    said."""
+    if rates_failed(error):
+        return RatesNotFinite(t0, t1)
+    why = solver_reason(error).strip().splitlines()[-1]
+    return AnalysisError(FailureContext(t0, f"the integrator failed between t = {t0:.6g} and "
+                                            f"{t1:.6g} ({why})"))
+
+
+class RatesNotFinite(NonFinite):
+    """The equations of motion not finite between the output times t0 (the last row kept) and
+    t1, found by the integrator (module docstring); `explain` blames the elements at the
+    states extrapolated over the interval."""
+
+    def __init__(self, t0: float, t1: float, partial=None):
+        super().__init__(t0, "rates", [float("nan")], None, partial)
+        self.t0, self.t1 = t0, t1
+        self._name([])
+
+    def _name(self, elements: list) -> None:
+        tail = ("; the elements not finite there (along the motion extrapolated from the last "
+                "row):" if elements else "; every element is finite along the motion "
+                "extrapolated from the last row: a law is undefined at the states the integrator "
+                "tried")
+        cause = (f"the equations of motion are not finite between t = {self.t0:.6g} and "
+                 f"{self.t1:.6g} (a force law or a constraint evaluated where it is undefined); "
+                 f"the rows before are kept{tail}")
+        self.context = NotFinite(self.t0, cause, elements=elements)
+        self.args = (self.context.format(),)
+
+    def explain(self, functions, column: str | None = None) -> None:
+        if self.explained:
+            return
+        self.explained = True
+        elements = []
+        if self.partial is not None and len(self.partial):
+            t, q, q_dot = self.partial.times[-1], self.partial.q[-1], self.partial.q_dot[-1]
+            q_ddot = self.partial.q_ddot[-1]
+            for fraction in PROBES:
+                h = fraction * (self.t1 - t)
+                elements = blame(functions, t + h, q + h * q_dot + h * h / 2 * q_ddot,
+                                 q_dot + h * q_ddot)
+                if elements:
+                    break
+        self._name(elements)

@@ -18,6 +18,10 @@ velocities (unless theirs stalls at a singular pose: ProjectedRK4.error). Otherw
 the next interval, n is scaled to put that estimate at core.options.Fallback.safety. Two
 resolutions on different branches disagree by metres, so a branch change in either is rejected
 as well. The run's cancellation token is polled at every step (runtime.cancel).
+
+A try whose states are not finite is refined once, by NONFINITE_REFINEMENT (a step too long
+for the dynamics may overflow); a second one in a row is a law that is not finite along the
+motion (a force law's sqrt of a negative): StatesNotFinite, at once, never up to max_steps.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from casmech.formulations.table import FORMULATIONS
 from casmech.runtime import cancel
 
 ORDER = 4  # of the classical Runge-Kutta method
+NONFINITE_REFINEMENT = 4  # the step count's factor after a try that is not finite
 DEFAULT = Fallback()  # the defaults (core.options)
 
 
@@ -66,6 +71,10 @@ class StepFailure(Exception):
     happened)."""
 
 
+class StatesNotFinite(StepFailure):
+    """Two tries in a row whose states were not finite (module docstring)."""
+
+
 class ProjectedRK4:
     """Advances x = [q, v] from one output time to the next; `accelerations` is the
     (t, q, v, penalty) -> (v_dot, lam) its steps use, for the outputs' columns."""
@@ -83,11 +92,19 @@ class ProjectedRK4:
         self.stalled: list[float] = []  # interval starts kept with stalled velocities (error)
 
     def advance(self, t0: float, t1: float, x: np.ndarray, penalty: float) -> np.ndarray:
-        n, last, last_n = self.coarse, None, None
+        n, last, last_n, refined = self.coarse, None, None, False
         safety, most = self.settings.safety, self.settings.max_steps
         while 2 * n <= most:
             coarse = self._steps(t0, t1, x, penalty, n)
             fine = self._steps(t0, t1, x, penalty, 2 * n)
+            if not (np.all(np.isfinite(coarse)) and np.all(np.isfinite(fine))):
+                if refined:
+                    raise StatesNotFinite(f"the states were not finite with {n} and {2 * n} "
+                                          "steps in the output interval")
+                self.rejected += 1
+                n, refined = NONFINITE_REFINEMENT * n, True
+                continue
+            refined = False
             positions, velocities = self.error(coarse, fine)
             # below 2nd order between the two tries: not the 4th-order discretization error
             stalled = last is not None and velocities > last / (n / last_n) ** 2

@@ -4,8 +4,9 @@
 `expected(data, path)` reads the field from its path (`("bodies", 0, "mass")`,
 `("forces", 2, "stiffness")`: indices dropped) and, where the dimension depends on the
 element, the element's `type` in the document's data (a spring's stiffness N/m, a rotational
-spring's N m/rad; a joint stop's by the coordinate it stops). Fields not listed (directions,
-tolerances, weights, expressions of the state, a contact's normal law, parameters) take any.
+spring's N m/rad; a joint stop's and a joint friction's by the coordinate they act on). Fields
+not listed (directions, tolerances, weights, expressions of the state, a contact's normal law,
+parameters) take any.
 """
 
 from __future__ import annotations
@@ -46,7 +47,8 @@ FIELDS: dict[tuple[str, tuple[str, ...]], Dimension] = {
     ("gravity", ()): dimension(length=1, time=-2),
     **{("analysis", (key,)): TIME for key in ("t_end", "output_step", "at")},
     ("analysis", ("rtol",)): NUMBER,
-    ("ocp", ("horizon",)): TIME,
+    ("ocp", ("horizon",)): TIME, ("ocp", ("free_time",)): TIME,
+    ("instances", ("position",)): LENGTH,
 }
 # (section, element type, keys) -> dimension, before FIELDS
 TYPED: dict[tuple[str, str, tuple[str, ...]], Dimension] = {
@@ -79,7 +81,8 @@ CONTACT: dict[tuple[str, ...], Dimension] = {
 
 def coordinate_fields(kind) -> dict[tuple[str, ...], Dimension]:
     """A coordinate kind's keys in a joint (casmech.elements.coordinate_kinds): its driver,
-    motor modes, `initial:` value and rate, and its stop's keys."""
+    motor modes, `initial:` value and rate, its stop's keys and its friction's (the efforts
+    and the damping of its coordinate)."""
     q = kind.quantity
     return {("driver", kind.name): q.value, ("initial", kind.name): q.value,
             ("initial", kind.rate): q.rate,
@@ -87,7 +90,10 @@ def coordinate_fields(kind) -> dict[tuple[str, ...], Dimension]:
                                                          strict=True)},
             **{("limit", key): dim for key, dim in (("lower", q.value), ("upper", q.value),
                                                      ("stiffness", q.stiffness),
-                                                     ("damping", q.damping))}}
+                                                     ("damping", q.damping))},
+            **{("friction", key): dim for key, dim in (("coulomb", q.effort),
+                                                        ("static", q.effort),
+                                                        ("viscous", q.damping))}}
 
 
 # a joint friction's load keys (the others are in the units of the coordinate's force)
@@ -143,10 +149,9 @@ def expected(data, path) -> Dimension | None:
     if (section, kind, keys) in TYPED:
         return TYPED[(section, kind, keys)]
     entry = REGISTRY.get(kind) if section == "joints" and kind else None
-    if entry is not None and entry.limit and keys[:1] == ("limit",) and len(keys) == 2:
-        return coordinate_fields(KINDS[entry.limit]).get(keys)
-    if entry is not None and entry.limit and keys[:1] == ("friction",) and len(keys) == 2:
-        return FRICTION.get(keys[1])
+    if entry is not None and entry.limit and len(keys) == 2 and keys[0] in ("limit", "friction"):
+        found = coordinate_fields(KINDS[entry.limit]).get(keys)
+        return found if found is not None or keys[0] == "limit" else FRICTION.get(keys[1])
     if section == "joints" and len(keys) == 2 and keys[0] in ("driver", "motor", "initial"):
         found = [fields[keys] for fields in map(coordinate_fields, KINDS.values())
                  if keys in fields]

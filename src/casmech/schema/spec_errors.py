@@ -13,6 +13,7 @@ from typing import Annotated, Any, Union, get_args, get_origin
 from pydantic import BaseModel, Tag, ValidationError
 from pydantic_core import ErrorDetails
 
+from casmech.elements.joint_types import REGISTRY, initial_keys, listed
 from casmech.errors import Diagnostic, did_you_mean
 from casmech.schema.loader import Document, Path, format_path
 from casmech.schema.spec import GEOMETRY_KINDS, ModelSpec
@@ -127,9 +128,25 @@ def _missing(e: _Error) -> Diagnostic:
     )
 
 
+def _initial_hint(kind: str) -> str:
+    """Why a joint type has no `initial:` key, and the types that take one."""
+    takers = [name for name in REGISTRY if initial_keys(name)]
+    return (f"a {kind} joint takes no initial values; `initial:` is taken by {listed(takers)} "
+            "joints (docs/format.md#initial-state): write it on one of those, or place the "
+            "bodies in the file")
+
+
+# (section, key) of an element's key its type does not take -> the hint, by the element's type
+KEY_HINTS = {("joints", "initial"): _initial_hint}
+
+
 def _extra(e: _Error) -> Diagnostic:
     allowed = [info.alias or name for name, info in e.model.model_fields.items()]  # as written
     hint = did_you_mean(e.path[-1], allowed) or f"allowed keys: {', '.join(allowed)}"
+    kinds = get_args(e.model.model_fields["type"].annotation) if "type" in allowed else ()
+    explain = KEY_HINTS.get((e.path[0], e.path[-1])) if len(e.path) == 3 else None
+    if explain is not None and kinds:
+        hint = explain(kinds[0])
     source = e.document.locate_key(e.path)
     return e.diagnostic("E101", f"unknown key '{e.path[-1]}'", source=source, hint=hint)
 
