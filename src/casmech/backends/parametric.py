@@ -40,7 +40,7 @@ from casmech.equations.functions import Library, SystemFunctions, build_function
 from casmech.formulations import dae as dae_residuals
 from casmech.formulations import prescribed, residuals
 from casmech.formulations.joint_system import build as build_joint_system
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.model import parametric
 from casmech.model.ir import ModelIR
@@ -102,7 +102,7 @@ def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca
         functions["prescribed_step"] = prescribed.step(functions)
     oracles = {}
     if dae:
-        for form in FORMULATIONS:
+        for form in BODY_FORMS:
             for kind in dae_residuals.STABILIZATIONS:
                 residual = dae_residuals.residual(functions, form, kind)
                 oracles[residual.name()] = residuals.from_residual(residual)

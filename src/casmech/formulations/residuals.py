@@ -27,7 +27,7 @@ from casmech.formulations.residual_groups import (
     force_groups,
     joint_groups,
 )
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.model.ir import ModelIR
 from casmech.numerics.element_sums import ElementSum
 
@@ -60,7 +60,7 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     mapped (oracle)."""
     sx = build_functions(ir).functions if is_inline("dae_library", ir.n_bodies) else None
     out = {}
-    for form in FORMULATIONS:
+    for form in BODY_FORMS:
         for kind in KINDS:
             chosen = from_residual(dae.residual(sx, form, kind)) if sx is not None else None
             if chosen is not None and sum(chosen[f].n_instructions() for f in (
@@ -76,7 +76,7 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     quad, zero), with `daeF` (its residual) and `jacF` (the Jacobian blocks d(ode, alg)/d(x,
     z)), the names casadi's IDAS interface looks up in the DAE's library. `data`: the symbols
     of a symbolic IR, whose values follow p's own."""
-    if form not in FORMULATIONS:
+    if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
     ix = Indices(ir, form, kind)
     n_data = 0 if data is None else data.numel()
