@@ -71,8 +71,15 @@ class BodyCoordinates(Formulation):
         return States(indexed("q", n_q) + indexed("v", n_v),
                       indexed("v_dot", n_v) + indexed("lam", m) + indexed("mu", mu))
 
+    def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
+        """formulations.dae's dae_[ggl_]<name>: the bundle's own when it carries it."""
+        return dae.residual(functions.functions, self.name, stabilization)
+
+    def library_stabilizations(self) -> tuple[str, ...]:
+        return dae.STABILIZATIONS
+
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
-        residual = dae.residual(functions.functions, self.name, stabilization)
+        residual = self.residual(functions, stabilization)
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         form = BODY_FORMS[self.name]
         tau, x = ca.MX.sym("t"), ca.MX.sym("x", n_q + n_v)
