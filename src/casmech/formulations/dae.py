@@ -81,12 +81,6 @@ def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str
     return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
 
 
-def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """Every residual by name, both stabilizations of both formulations, over a bundle."""
-    built = (residual(functions, name, kind) for name in BODY_FORMS for kind in STABILIZATIONS)
-    return {function.name(): function for function in built}
-
-
 def _column(p, start: int, stop: int):
     """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
     return ca.reshape(p[start:stop], stop - start, 1)
