@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.backends import parametric
+from casmech.backends import cache, parametric
+from casmech.backends.build import Toolchain
 from casmech.equations.functions import build_functions
 from casmech.formulations import residuals
 from casmech.formulations.registry import FORMULATIONS
@@ -95,3 +96,24 @@ def test_a_registered_formulation_is_compiled_with_its_jacobian(ir, compiled_bau
     # fourth-order central differences at h = 1e-4: truncation ~h^4 = 1e-16 times the
     # residual's fifth derivative, rounding ~1e-16 * |ode| / h = 1e-11
     np.testing.assert_allclose(jac, np.array(columns).T, rtol=1e-7, atol=1e-8)
+
+
+def test_registering_a_compiled_formulation_changes_the_cache_keys(ir):
+    """A library cached before the registration lacks the residual: the keys of libraries
+    with DAE residuals change, those without keep theirs."""
+    model = casmech.load(MODELS / "double_pendulum.yaml")
+    toolchain, signature = Toolchain(), "structure"
+
+    def keys():
+        return ([cache.key("model", "gcc", ("-O1",), dae) for dae in (True, False)]
+                + [parametric.key(model, signature, toolchain, dae) for dae in (True, False)])
+
+    before = keys()
+    FORMULATIONS.register(CompiledBaumgarte("baumgarte"))
+    try:
+        during = keys()
+    finally:
+        FORMULATIONS.unregister("baumgarte")
+    assert during[0] != before[0] and during[2] != before[2]
+    assert during[1] == before[1] and during[3] == before[3]
+    assert keys() == before

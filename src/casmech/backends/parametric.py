@@ -63,13 +63,13 @@ def applies(model: ResolvedModel) -> bool:
 
 def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -> str:
     """The cache key: the model's content without its parameter values, its structure, the
-    versions and the toolchain."""
+    versions, the toolchain and (`dae`) the residuals the registered formulations compile."""
     content = json.dumps({"format": manifest.FORMAT, "kind": "parametric",
                           "model": cache.model_digest(model, values=False),
                           "structure": signature, "casmech": VERSION,
                           "sources": cache.source_digest(), "casadi": ca.__version__,
                           "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
-                          "dae": dae})
+                          "dae": residuals.library_key() if dae else False})
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 

@@ -78,6 +78,15 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     return out
 
 
+def library_key() -> list:
+    """What a library's cache key records of the residuals it compiles: each registered
+    formulation that has some (its name, class and `library_stabilizations`), so registering
+    one builds a library that holds it."""
+    return [[f.name, f"{type(f).__module__}.{type(f).__qualname__}",
+             list(f.library_stabilizations())]
+            for f in FORMULATIONS.values() if f.library_stabilizations()]
+
+
 def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
            ) -> dict[str, ca.Function]:
     """dae_[ggl_]<form> mapped, the DAE as IDAS integrates it, (t, x, z, p, u) -> (ode, alg,
