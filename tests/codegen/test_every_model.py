@@ -13,7 +13,7 @@ from casmech.backends import codegen, parametric
 from casmech.backends.load import externals
 from casmech.equations.functions import build_functions, mapped_functions
 from casmech.formulations import dae
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.model import parametric as model_data
 from casmech.model.lower import lower
 from tests.conftest import MODELS
@@ -77,7 +77,7 @@ def _compare_over_data(name: str, model, toolchain, cache_root, rng) -> None:
             for k, (g, w) in enumerate(zip(got, want, strict=True)):
                 _close(np.array(ca.DM(g).full()), w,
                        f"{name} {label} over d: {function_name}.{function.name_out(k)}")
-    for form in FORMULATIONS:
+    for form in BODY_FORMS:
         for kind in dae.STABILIZATIONS:
             want = dae.residual(inline, form, kind)
             if want.name() not in library:
@@ -93,7 +93,7 @@ def _compare_residuals(name: str, library: bool, bound, plain, rng) -> None:
     """Each DAE residual of the library (data appended to p in the parametric one) against
     formulations.dae's over the interpreted bundle: the ode and alg outputs."""
     data = np.zeros(0) if bound.data is None else np.asarray(bound.data, float)
-    for form in FORMULATIONS:
+    for form in BODY_FORMS:
         for kind in dae.STABILIZATIONS:
             want = dae.residual(plain.functions, form, kind)
             residual_name = want.name()

@@ -16,12 +16,12 @@ import pytest
 import casmech
 from casmech.equations import evaluation, force_kernels, rows
 from casmech.formulations import dae, residuals
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.model.lower import lower
 
 from .test_mapped import EVERY_MODEL, MODELS, ROOT
 
-CASES = list(itertools.product(FORMULATIONS, residuals.KINDS))
+CASES = list(itertools.product(BODY_FORMS, residuals.KINDS))
 
 
 def _inputs(reference: ca.Function, m: int, rng) -> list[ca.DM]:

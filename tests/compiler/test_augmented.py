@@ -6,7 +6,7 @@ import pytest
 
 import casmech
 from casmech.formulations import augmented
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.runtime import assembly, dynamics
 from tests.runtime.test_stabilization import CHAIN
 
@@ -22,7 +22,7 @@ def chain():
 def test_accelerations_solve_the_saddle_point_system(chain, name):
     """Where P has full row rank, the iterates converge to the [M P^T; P 0] solution."""
     functions, q, q_dot = chain
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     v = dynamics.velocities(functions, name, q, q_dot)
     t = 0.3
     mass, jac = functions.matrix(form.mass, q), functions.matrix(form.jacobian, t, q)
@@ -49,7 +49,7 @@ def test_projection_is_assembly_project(chain, name):
     lands where assembly.project's calls of it until |Phi| <= 1e-12 do, with the constraints
     held."""
     functions, q, q_dot = chain
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     rng = np.random.default_rng(3)
     v = dynamics.velocities(functions, name, q, q_dot)
     q_off, v_off = q + 1e-6 * rng.standard_normal(len(q)), v + 1e-6 * rng.standard_normal(len(v))

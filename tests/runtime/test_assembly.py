@@ -270,13 +270,13 @@ def test_dynamic_accelerations_equal_the_dense_least_squares(model):
 def test_projection_equals_the_dense_solve():
     """project's damped Gauss-Newton steps (formulations.augmented.projection's sparse LDL) against
     dense NumPy iterations, from a drifted state."""
-    from casmech.formulations.table import FORMULATIONS
+    from casmech.formulations.table import BODY_FORMS
 
     functions = casmech.compile(casmech.load(MODELS / "flyball_governor.yaml"))
     q, v = assembly.initial_state(functions)
     rng = np.random.default_rng(2)
     q, v = q + 1e-4 * rng.standard_normal(q.size), v + 1e-3 * rng.standard_normal(v.size)
-    form, penalty = FORMULATIONS["rp"], 1e6
+    form, penalty = BODY_FORMS["rp"], 1e6
     projected_q, projected_v = assembly.project(functions, form, 0.0, q, v, penalty)
     mass = functions.matrix("mass_matrix", q)
     dense_q = q.copy()

@@ -40,6 +40,7 @@ from casmech.backends.build import LIBRARY
 from casmech.backends.manifest import FORMAT, MANIFEST
 from casmech.core.version import VERSION
 from casmech.errors import UsageError
+from casmech.formulations import residuals
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.tables import TableExpr
 
@@ -110,9 +111,12 @@ def model_digest(model: ResolvedModel, values: bool = True) -> str:
 
 
 def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:
+    """The mapped library's cache key; `dae`: with the residuals the registered formulations
+    compile (formulations.residuals.library_key)."""
     content = json.dumps({"format": FORMAT, "model": model_hash, "casmech": VERSION,
                           "sources": source_digest(), "casadi": ca.__version__,
-                          "compiler": compiler, "flags": list(flags), "dae": dae})
+                          "compiler": compiler, "flags": list(flags),
+                          "dae": residuals.library_key() if dae else False})
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 

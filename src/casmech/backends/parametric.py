@@ -5,8 +5,9 @@ The bundle is the builder's (equations.functions) over model.parametric's symbol
 function with the trailing input `d`, the model data), evaluated inline: SX generated as C with
 the derivatives codegen.generate adds (and, for kinematics and inverse dynamics,
 formulations.prescribed's step over it, with `d` its third input); each DAE residual is
-formulations.dae's over that bundle, (t, x, z, [p; d]), with its daeF and jacF
-(formulations.residuals.from_residual). The cache key is
+a registered formulation's (formulations.protocol: its `residual` for each of its
+`library_stabilizations`; rp's and romega's are formulations.dae's) over that bundle,
+(t, x, z, [p; d]), with its daeF and jacF (formulations.residuals.from_residual). The cache key is
 the model's structure (model.parametric's signature) with its text, component files and
 tables, never the values.
 For a dynamics analysis the library also holds the joint formulation's functions
@@ -37,10 +38,9 @@ from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
-from casmech.formulations import dae as dae_residuals
 from casmech.formulations import prescribed, residuals
 from casmech.formulations.joint_system import build as build_joint_system
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
 from casmech.model import parametric
 from casmech.model.ir import ModelIR
@@ -63,13 +63,13 @@ def applies(model: ResolvedModel) -> bool:
 
 def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -> str:
     """The cache key: the model's content without its parameter values, its structure, the
-    versions and the toolchain."""
+    versions, the toolchain and (`dae`) the residuals the registered formulations compile."""
     content = json.dumps({"format": manifest.FORMAT, "kind": "parametric",
                           "model": cache.model_digest(model, values=False),
                           "structure": signature, "casmech": VERSION,
                           "sources": cache.source_digest(), "casadi": ca.__version__,
                           "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
-                          "dae": dae})
+                          "dae": residuals.library_key() if dae else False})
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 
@@ -97,14 +97,15 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
 def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
     """(the system functions with input d, the DAE residuals over them by name)."""
     split = parametric.split(ir)
-    functions = build_functions(split.ir, split.symbols).functions
+    built = build_functions(split.ir, split.symbols)
+    functions = built.functions
     if ir.analysis.type in PRESCRIBED_ANALYSES:  # as codegen.bundle, d its third input
         functions["prescribed_step"] = prescribed.step(functions)
     oracles = {}
-    if dae:
-        for form in FORMULATIONS:
-            for kind in dae_residuals.STABILIZATIONS:
-                residual = dae_residuals.residual(functions, form, kind)
+    if dae:  # each registered formulation's residuals (formulations.protocol)
+        for formulation in FORMULATIONS.values():
+            for kind in formulation.library_stabilizations():
+                residual = formulation.residual(built, kind)
                 oracles[residual.name()] = residuals.from_residual(residual)
     return functions, oracles
 

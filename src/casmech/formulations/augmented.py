@@ -34,7 +34,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.core.options import Fallback
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 
 ROW_SCALING = True  # rows of P scaled to unit length (the penalty is then relative to them)
 LINEAR_SOLVER = "ldl"  # M + a P^T P is symmetric positive definite
@@ -45,7 +45,7 @@ def accelerations(functions: dict[str, ca.Function], name: str,
                   settings: Fallback = DEFAULT) -> ca.Function:
     """(t, q, v, penalty) -> (v_dot, lam), as an MX graph with sparse LDL solves
     (settings.iterations iterations)."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     mass = functions[form.mass]
     t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
     v, penalty = ca.MX.sym("v", mass.size1_out(0)), ca.MX.sym("penalty")
@@ -76,7 +76,7 @@ def projection(functions: dict[str, ca.Function], name: str,
     the caller checks |Phi| at the outputs all the same.
     Near a singular configuration the a-damping keeps a step from jumping along the nearly
     lost direction, i.e. onto another branch."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     mass, jacobian = functions["mass_matrix"], functions["phi_q"]
     t, q = ca.MX.sym("t"), ca.MX.sym("q", mass.size1_in(0))
     v, penalty = ca.MX.sym("v", functions[form.mass].size1_out(0)), ca.MX.sym("penalty")

@@ -26,7 +26,7 @@ from casmech.formulations.protocol import (
     System,
     indexed,
 )
-from casmech.formulations.table import FORMULATIONS as TABLE
+from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.numerics import kkt
 
@@ -44,7 +44,7 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
 def row_scales(functions: SystemFunctions, name: str, t, q) -> tuple[np.ndarray, np.ndarray]:
     """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
     Phi_q at (t, q)."""
-    form = TABLE[name]
+    form = BODY_FORMS[name]
     jacobian = functions.matrix(form.jacobian, t, q)
     phi_q = jacobian if form.jacobian == "phi_q" else functions.matrix("phi_q", t, q)
     return 1 / np.linalg.norm(jacobian, axis=1), 1 / np.linalg.norm(phi_q, axis=1)
@@ -71,10 +71,17 @@ class BodyCoordinates(Formulation):
         return States(indexed("q", n_q) + indexed("v", n_v),
                       indexed("v_dot", n_v) + indexed("lam", m) + indexed("mu", mu))
 
+    def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
+        """formulations.dae's dae_[ggl_]<name>: the bundle's own when it carries it."""
+        return dae.residual(functions.functions, self.name, stabilization)
+
+    def library_stabilizations(self) -> tuple[str, ...]:
+        return dae.STABILIZATIONS
+
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
-        residual = dae.residual(functions.functions, self.name, stabilization)
+        residual = self.residual(functions, stabilization)
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
-        form = TABLE[self.name]
+        form = BODY_FORMS[self.name]
         tau, x = ca.MX.sym("t"), ca.MX.sym("x", n_q + n_v)
         z, p = ca.MX.sym("z", residual.size1_in(2)), ca.MX.sym("p", residual.size1_in(3))
         q, v, v_dot = x[:n_q], x[n_q:], z[:n_v]
@@ -92,7 +99,7 @@ class BodyCoordinates(Formulation):
               q_dot: np.ndarray) -> Start:
         """[q, v] with the consistent (v_dot, lam / s) of the masked, scaled rows (the rows
         equations.checks.structure finds redundant at t0 masked; s the inverse row norms)."""
-        form = TABLE[self.name]
+        form = BODY_FORMS[self.name]
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         v = velocities(functions, self.name, q, q_dot)
         mask = masked_rows(functions, self.name, t0, q)

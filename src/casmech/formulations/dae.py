@@ -44,13 +44,13 @@ import casadi as ca
 
 from casmech.equations.functions import symbol_type
 from casmech.formulations import dae_terms as terms
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.model.parametric import data_size, with_data
 
 
 def sizes(functions: dict[str, ca.Function], name: str) -> tuple[int, int, int]:
     """(n_q, n_v, rows of P) of a formulation."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     jacobian = functions[form.jacobian]
     return jacobian.size1_in(1), jacobian.size2_out(0), jacobian.size1_out(0)
 
@@ -81,12 +81,6 @@ def multipliers(functions: dict[str, ca.Function], name: str, stabilization: str
     return m if stabilization == "projection" else m + functions["phi"].size1_out(0)
 
 
-def residuals(functions: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """Every residual by name, both stabilizations of both formulations, over a bundle."""
-    built = (residual(functions, name, kind) for name in FORMULATIONS for kind in STABILIZATIONS)
-    return {function.name(): function for function in built}
-
-
 def _column(p, start: int, stop: int):
     """p[start:stop] as a column, also when empty (a slice of a 1 x 1 p is 1 x 0)."""
     return ca.reshape(p[start:stop], stop - start, 1)
@@ -96,7 +90,7 @@ def _over(functions: dict[str, ca.Function], name: str, kind: str, key: str) -> 
     """The residual over a bundle's functions (module docstring): SX over an SX bundle, with
     its common subexpressions merged (and so its Jacobian by AD:
     docs/decisions/codegen-small-dae-unrolled.md); MX over compiled ones."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     n_q, n_v, m = sizes(functions, name)
     n_phi = functions["phi"].size1_out(0)
     ggl = kind == "ggl"

@@ -17,6 +17,10 @@ A formulation is one small frozen class (docs/architecture.md, "Adding a formula
   assembled body coordinates (q, q_dot);
 - `integrator_options(...)`: what SUNDIALS needs at a start besides the tolerances (an
   index-2 DAE's first step and algebraic tolerances; none by default).
+- `residual(functions, stabilization)` and `library_stabilizations()`: the residual a compiled
+  C library generates for it (backends: formulations.residuals.oracles and
+  backends.parametric.bundle loop over the registry), for which stabilizations (none by
+  default).
 
 runtime.analyses runs a registered formulation by name: the built-in classes through the
 runtime's own drivers for them (runtime.formulation_run), any other through the generic one,
@@ -92,6 +96,21 @@ class Formulation(ABC):
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
         """Its equations for the model of `functions`; `stabilization`: the analysis's
         (core.options), which a formulation without constraint rows in its state ignores."""
+
+    def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
+        """Its system's residual alone, (t, x, z, p) -> (ode, alg): what a compiled C library
+        generates for it (`library_stabilizations`); by default system(...).residual. Over
+        a parametric library's bundle (its functions take the model data d last:
+        model.parametric.data_size) it takes d as the last entries of p
+        (model.parametric.with_data calls the functions with them)."""
+        return self.system(functions, stabilization).residual
+
+    def library_stabilizations(self) -> tuple[str, ...]:
+        """The stabilizations whose `residual` a compiled C library generates for it, with
+        its Jacobian blocks for IDAS, under the residual's own name, where its `system` finds
+        it in a compiled bundle; none by default (the library then holds the model's
+        functions only, over which `system` builds its equations when a run loads it)."""
+        return ()
 
     @abstractmethod
     def start(self, functions: SystemFunctions, system: System, t0: float, q: np.ndarray,

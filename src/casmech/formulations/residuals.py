@@ -1,6 +1,7 @@
 """The DAE residuals a library compiles, by the builder's switch (equations.evaluation):
 
-- inline: formulations.dae's residual over the interpreted bundle, one SX graph (its Jacobian by
+- inline: the registered formulation's residual (formulations.protocol: for rp and romega
+  formulations.dae's) over the interpreted bundle, one SX graph (its Jacobian by
   AD of the whole graph: from_residual), where that code is smaller and faster per call
   (WHERE_INLINE["dae_library"], UNROLLED_INSTRUCTIONS);
 - mapped (`oracle`): the same residual (formulations.dae_terms) as a sum of elements
@@ -20,14 +21,14 @@ import casadi as ca
 
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import build_functions
-from casmech.formulations import dae
+from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.residual_groups import (
     Indices,
     body_group,
     force_groups,
     joint_groups,
 )
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.model.ir import ModelIR
 from casmech.numerics.element_sums import ElementSum
 
@@ -55,19 +56,35 @@ INTEGRATOR_IN = ["t", "x", "z", "p", "u"]  # casadi's DAE inputs (ca.dyn_in())
 
 
 def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
-    """Every DAE residual (both formulations, both stabilizations) with its daeF and jacF:
-    inline where the switch says so and the code is small (UNROLLED_INSTRUCTIONS), else
-    mapped (oracle)."""
-    sx = build_functions(ir).functions if is_inline("dae_library", ir.n_bodies) else None
+    """Every DAE residual a library compiles (formulations.registry: each registered
+    formulation's `residual` for its `library_stabilizations`; rp and romega, both
+    stabilizations, built in) with its daeF and jacF: inline where the switch says so and
+    the code is small (UNROLLED_INSTRUCTIONS), else mapped (oracle) where the formulation
+    has element kernels (the body forms: formulations.residual_groups), else inline."""
+    sx = build_functions(ir) if is_inline("dae_library", ir.n_bodies) else None
     out = {}
-    for form in FORMULATIONS:
-        for kind in KINDS:
-            chosen = from_residual(dae.residual(sx, form, kind)) if sx is not None else None
+    for formulation in FORMULATIONS.values():
+        for kind in formulation.library_stabilizations():
+            if formulation.name not in BODY_FORMS:  # no kernels: inline whatever its size
+                inline = from_residual(formulation.residual(sx or build_functions(ir), kind))
+                out[next(iter(inline))] = inline
+                continue
+            chosen = (from_residual(formulation.residual(sx, kind)) if sx is not None
+                      else None)
             if chosen is not None and sum(chosen[f].n_instructions() for f in (
                     "daeF", "jacF")) > UNROLLED_INSTRUCTIONS:
                 chosen = None
-            out[name(form, kind)] = chosen or oracle(ir, form, kind)
+            out[name(formulation.name, kind)] = chosen or oracle(ir, formulation.name, kind)
     return out
+
+
+def library_key() -> list:
+    """What a library's cache key records of the residuals it compiles: each registered
+    formulation that has some (its name, class and `library_stabilizations`), so registering
+    one builds a library that holds it."""
+    return [[f.name, f"{type(f).__module__}.{type(f).__qualname__}",
+             list(f.library_stabilizations())]
+            for f in FORMULATIONS.values() if f.library_stabilizations()]
 
 
 def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
@@ -76,7 +93,7 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     quad, zero), with `daeF` (its residual) and `jacF` (the Jacobian blocks d(ode, alg)/d(x,
     z)), the names casadi's IDAS interface looks up in the DAE's library. `data`: the symbols
     of a symbolic IR, whose values follow p's own."""
-    if form not in FORMULATIONS:
+    if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
     ix = Indices(ir, form, kind)
     n_data = 0 if data is None else data.numel()

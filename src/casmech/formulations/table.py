@@ -1,4 +1,5 @@
-"""The two forms of the equations of motion, as a table of system-function names.
+"""The two body-coordinate forms of the equations of motion, as a table of system-function
+names (BODY_FORMS; the registered formulations are formulations.registry.FORMULATIONS).
 
 Either form reads M v_dot + P^T lam = F, P v_dot = gamma, with velocity constraint P v = nu:
 r-p (Euler parameters, v = q_dot, every row of Phi including normalization) and r-omega
@@ -11,7 +12,7 @@ from dataclasses import dataclass
 
 
 @dataclass(frozen=True)
-class Formulation:
+class BodyForm:
     """Which system functions play M, F, P, gamma and nu; q_dot(q, v) (None: v is q_dot)."""
 
     mass: str
@@ -22,8 +23,8 @@ class Formulation:
     q_dot: str | None
 
 
-FORMULATIONS = {
-    "rp": Formulation("mass_matrix", "generalized_forces", "phi_q", "gamma", "nu", None),
-    "romega": Formulation("romega_mass", "romega_forces", "romega_jacobian", "romega_gamma",
-                          "romega_nu", "romega_q_dot"),
+BODY_FORMS = {
+    "rp": BodyForm("mass_matrix", "generalized_forces", "phi_q", "gamma", "nu", None),
+    "romega": BodyForm("romega_mass", "romega_forces", "romega_jacobian", "romega_gamma",
+                       "romega_nu", "romega_q_dot"),
 }

@@ -4,11 +4,15 @@
     ode: [q_dot; q_ddot]
     alg: [M q_ddot + Phi_q^T lam - Q - B^T u;  Phi_q q_ddot - gamma]
 
-over the independent constraint rows at the assembled pose (redundant rows dropped). The initial
-state is a function of theta: positions are casmech's assembly, the point of Phi = 0 closest to
-the file's pose (itself a function of theta), by the rootfinder of numerics.kkt.closest_point
-that the runtime's assembly ends with, so its derivative is the implicit one; velocities are
-the file's velocities corrected by the least-squares step onto Phi_q q_dot = nu."""
+over the independent constraint rows at the assembled pose (redundant rows dropped): the rp
+formulation's index-1 residual (formulations.protocol, stabilization "projection") over the
+system's bundle with d = d(theta), its rows unscaled (s = 1) and the redundant ones masked
+(w = 1) with their multipliers 0 and their equations left out, plus the controls' forces.
+The initial state is a function of theta: positions are casmech's assembly, the point of Phi =
+0 closest to the file's pose (itself a function of theta), by the rootfinder of
+numerics.kkt.closest_point that the runtime's assembly ends with, so its derivative is the
+implicit one; velocities are the file's velocities corrected by the least-squares step onto
+Phi_q q_dot = nu."""
 
 from __future__ import annotations
 
@@ -18,10 +22,13 @@ import casadi as ca
 import numpy as np
 
 from casmech.equations.checks import structure
+from casmech.formulations.registry import FORMULATIONS
 from casmech.numerics import kkt
 from casmech.optimal.system import ParametricSystem
 from casmech.runtime.assembly import initial_state
 from casmech.runtime.results import column_names
+
+FORMULATION = "rp"  # the registered formulation whose residual the DAE is (body coordinates)
 
 
 @dataclass(frozen=True)
@@ -79,15 +86,25 @@ def build_dae(system: ParametricSystem, controls: ca.Function | None = None,
     theta = ca.SX.sym("theta", len(system.names))
     n_u = controls.size1_in(1) if controls is not None else 0
     u = ca.SX.sym("u", n_u)
-    q, q_dot, q_ddot, lam = x[:n], x[n:], z[:n], z[n:]
-    phi_q = system["phi_q"](t, q, theta)[list(rows), :]
-    forces = system["generalized_forces"](t, q, q_dot, theta)
+    ode, alg = _residual(system, list(rows), t, x, z, theta)
     if controls is not None:
-        forces += controls(q, u)
-    alg = ca.vertcat(system["mass_matrix"](q, theta) @ q_ddot + phi_q.T @ lam - forces,
-                     phi_q @ q_ddot - system["gamma"](t, q, q_dot, theta)[list(rows)])
-    return DAE(system, tuple(rows), t, x, z, theta, u, ca.vertcat(q_dot, q_ddot), alg, t0,
-               q_nom, q_dot_nom)
+        alg[:n] -= controls(x[:n], u)
+    return DAE(system, tuple(rows), t, x, z, theta, u, ode, alg, t0, q_nom, q_dot_nom)
+
+
+def _residual(system: ParametricSystem, rows: list[int], t, x, z, theta) -> tuple:
+    """(ode, alg) of the module docstring's DAE without controls: the rp formulation's
+    residual at p = [t0 = 0, w, s = 1, d(theta)], w 1 on the rows not in `rows`, whose
+    multipliers are 0 and whose equations are dropped."""
+    n, m = system.n_coordinates, system.nominal.n_rows
+    residual = FORMULATIONS[FORMULATION].residual(system.over_data, "projection")
+    mask = np.ones(m)
+    mask[rows] = 0.0
+    lam = ca.SX.zeros(m, 1)
+    lam[rows] = z[n:]
+    p = ca.vertcat(0.0, mask, np.ones(m), system.data(theta))
+    ode, alg = residual(t, x, ca.vertcat(z[:n], lam), p)
+    return ode, ca.vertcat(alg[:n], alg[n:][rows])
 
 
 def _held_constraints(dae: DAE):

@@ -57,6 +57,9 @@ class ParametricSystem:
     values: np.ndarray  # theta in the file (initial-velocity offsets: 0)
     data: ca.Function  # theta -> d, the model data (model.parametric) as a function
     split: parametric.Split  # the lowering with theta traced, split into structure and d
+    # equations.functions' bundle over d (its functions' trailing input), which `functions`
+    # call with d = d(theta): what a formulation's residual is built over
+    over_data: SystemFunctions | None = None
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
@@ -186,4 +189,4 @@ def parametric_system(model: ResolvedModel, names: Iterable[str] = ()) -> Parame
     functions = {name: _bound(f, theta, split.expressions) for name, f in over_d.items()}
     values = np.array([model.parameters.get(n, 0.0) for n in names], float)
     return ParametricSystem(functions, build_functions(lower(model)), names, values,
-                            split.data_function(theta), split)
+                            split.data_function(theta), split, bundle)

@@ -34,7 +34,7 @@ from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
 from casmech.formulations import augmented
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import cancel, initial_holds
 from casmech.runtime.dae_rows import minimum_norm
@@ -352,7 +352,7 @@ def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.nda
     price of slow progress along it: a residual below `accept` (default the tolerance) after
     settings.max_iterations steps is taken as converged."""
     accept = settings.tolerance if accept is None else accept
-    name = next(key for key, value in FORMULATIONS.items() if value == form)
+    name = next(key for key, value in BODY_FORMS.items() if value == form)
     per_call = fallback.projection_iterations
     step = of(functions, workspace).kept("projection", (name, per_call), lambda: (
         augmented.projection(functions.functions, name, fallback)))

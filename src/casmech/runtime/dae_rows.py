@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -45,7 +45,7 @@ def minimum_norm(jacobian, lam, keep: list[int]):
 def _functions(f: SystemFunctions, name: str, sizes: tuple[int, int, int],
                mask: np.ndarray) -> tuple[ca.Function, ca.Function]:
     """(result_rows, drift) of formulation `name` with the rows `mask` drops."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     n_q, n_v, m = sizes
     t, q, v = ca.MX.sym("t"), ca.MX.sym("q", n_q), ca.MX.sym("v", n_v)
     v_dot, multipliers = ca.MX.sym("v_dot", n_v), ca.MX.sym("lam", m)

@@ -52,7 +52,7 @@ from casmech.formulations.dae_options import (
     algebraic_tolerances,
     initial_step,
 )
-from casmech.formulations.table import FORMULATIONS, Formulation
+from casmech.formulations.table import BODY_FORMS, BodyForm
 from casmech.numerics import kkt
 from casmech.runtime import (
     assembly,
@@ -80,7 +80,7 @@ def drift_tolerance(atol: float, settings: DynamicsSolver = DEFAULT) -> float:
     return max(settings.drift_tolerance, 100 * atol)
 
 
-def penalty(functions: SystemFunctions, form: Formulation, q,
+def penalty(functions: SystemFunctions, form: BodyForm, q,
             settings: DynamicsSolver = DEFAULT) -> float:
     """The augmented-Lagrangian penalty scaled to the model: fallback.penalty max(diag M)."""
     return settings.fallback.penalty * np.max(np.diag(functions.matrix(form.mass, q)),
@@ -101,7 +101,7 @@ class _Model:
 
     def __init__(self, functions: SystemFunctions, name: str, settings: DynamicsSolver = DEFAULT,
                  workspace: Workspace | None = None):
-        self.functions, self.name, self.form = functions, name, FORMULATIONS[name]
+        self.functions, self.name, self.form = functions, name, BODY_FORMS[name]
         self.settings, self.workspace = settings, of(functions, workspace)
         self.n_q, self.n_v, self.m = dae.sizes(functions.functions, name)
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from casmech.core.options import Fallback
 from casmech.formulations import augmented
-from casmech.formulations.table import FORMULATIONS
+from casmech.formulations.table import BODY_FORMS
 from casmech.runtime import cancel
 
 ORDER = 4  # of the classical Runge-Kutta method
@@ -45,7 +45,7 @@ def rk4_step(functions: dict[str, ca.Function], name: str,
              solve: ca.Function, settings: Fallback = DEFAULT) -> ca.Function:
     """(t, x, h, penalty) -> x after one Runge-Kutta step of x' = [q_dot(q, v), v_dot(t, q, v)]
     (v_dot by `solve`, augmented.accelerations) and the projection of formulations.augmented."""
-    form = FORMULATIONS[name]
+    form = BODY_FORMS[name]
     project = augmented.projection(functions, name, settings)
     n_q, n_v = solve.size1_in(1), solve.size1_in(2)
     t, x, h, penalty = (ca.MX.sym("t"), ca.MX.sym("x", n_q + n_v), ca.MX.sym("h"),
