@@ -1,5 +1,6 @@
-"""`initial:` on a joint type without a tree motion (basic constraints, distance, a screw,
-couplings): an unknown key, located at the key, with a hint naming the types that take it."""
+"""`initial:` on a joint type that takes none (basic constraints, distance, couplings: no tree
+motion, and not posable as a screw is by its angle): an unknown key, located at the key, with
+a hint naming the types that take it."""
 
 import pytest
 
@@ -27,7 +28,6 @@ JOINTS = {
     "revolute_spherical": "type: revolute_spherical\nbody_i: a\nbody_j: b\nat: [1, 0, 0]\n"
                           "axis: [0, 0, 1]\nat_j: [2, 0, 0]",
     "dp1": "type: dp1\nbody_i: a\nbody_j: b\na_i: [1, 0, 0]\na_j: [0, 1, 0]",
-    "screw": "type: screw\nbody_i: a\nbody_j: b\nat: [0, 0, 0]\naxis: [0, 0, 1]\nlead: 0.01",
     "gear": "type: gear\njoint_i: p1\njoint_j: p2\nratio: 2",
 }
 

@@ -253,7 +253,7 @@ def attributes(joint_type: str) -> list[str]:
     entry = REGISTRY.get(joint_type)
     if entry is None:
         return []
-    return list(_coordinate_attributes(entry)) + list(entry.states)
+    return list(_coordinate_attributes(entry, ())) + list(entry.states)
 
 
 def initial_keys(joint_type: str) -> tuple[str, ...]:
@@ -262,14 +262,14 @@ def initial_keys(joint_type: str) -> tuple[str, ...]:
     entry = REGISTRY.get(joint_type)
     if entry is None or entry.basic or not entry.posable:
         return ()
-    return _coordinate_attributes(entry) + entry.initial
+    return _coordinate_attributes(entry, entry.follows) + entry.initial
 
 
-def _coordinate_attributes(entry: JointType) -> tuple[str, ...]:
-    """The values and rates of an entry's coordinates, in the kinds' registry order (a
-    coordinate that follows another, a screw's displacement, has none of its own)."""
+def _coordinate_attributes(entry: JointType, leaving=()) -> tuple[str, ...]:
+    """The values and rates of an entry's coordinates but those in `leaving`, in the kinds'
+    registry order (`initial:` leaves a coordinate that follows another: a screw's slide)."""
     return tuple(attribute for name, kind in COORDINATES.items()
-                 if name in entry.coordinates and name not in entry.follows
+                 if name in entry.coordinates and name not in leaving
                  for attribute in kind.attributes)
 
 
