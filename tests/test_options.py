@@ -293,6 +293,11 @@ CONSTANTS = {
     "runtime/interrupts.py ABANDON": "the third signal ends casmech run (the CLI's contract)",
     "runtime/kinematics.py BLOCK_SECONDS": "a mapped block's wall time (the rows are the same)",
     "runtime/nonfinite.py OVERFLOWING": "a magnitude that overflows in the next product",
+    "runtime/nonfinite.py PROBES": "where a failed interval's elements are evaluated (a "
+                                   "diagnosis, not a solver setting)",
+    "runtime/projected_rk4.py NONFINITE_REFINEMENT": "the one refinement before a non-finite "
+                                                     "try is an error (a bound on the time to "
+                                                     "fail)",
     "runtime/projected_rk4.py ORDER": "the classical Runge-Kutta method's order",
     "runtime/singular_poses.py MAX_ENTRIES": "dense Jacobians held at once (memory)",
     "runtime/solver_messages.py MAX_LINES": "solver lines kept in metadata (size)",
