@@ -13,7 +13,7 @@ pytestmark = pytest.mark.slow
 T_END = 0.5
 MODEL_FILES = sorted(MODELS.glob("*.yaml"))
 # refused, with the reason: a payload held by basic constraints only and a nut held by a screw
-# (a body floating in the tree, its rows cut), a gear (couplings are not joint-coordinate rows)
+# (a body floating in the tree, its rows cut), a gear (the FMU's equations take no coupling)
 REFUSED = {"ocp_arm3d": "floating body", "lead_screw": "floating body",
            "gear_pair": "couplings of joint coordinates",
            "four_bar_released": "initial: values"}

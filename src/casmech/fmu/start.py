@@ -51,9 +51,9 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
                          "integrates it in the r-p DAE)")
     if tree.couplings:
         names = ", ".join(f"'{joint.name}'" for joint in tree.couplings)
-        raise UsageError(f"{model.file}: the FMU integrates joint coordinates, which do not "
-                         f"take couplings of joint coordinates ({names}); casmech run "
-                         "integrates them in the r-p DAE")
+        raise UsageError(f"{model.file}: the FMU's equations (a tree's joint coordinates) do "
+                         f"not take couplings of joint coordinates ({names}); casmech run "
+                         "integrates them (formulation auto)")
     held = [joint.name for joint in ir.joints if joint.initial]
     if held:
         raise UsageError(f"{model.file}: joints' initial: values ({', '.join(held)}) are not "
