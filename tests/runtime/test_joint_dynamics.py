@@ -8,8 +8,8 @@ import casmech
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import AnalysisError, ModelError
 from casmech.formulations.articulated import local_motion
+from casmech.formulations.joint_start import constant_inverse
 from casmech.formulations.tree import spanning_tree
-from casmech.runtime.joint_dynamics import constant_inverse
 from tests.conftest import MODELS, ROOT, Table, count_calls
 from tests.runtime.test_dynamics import FREE_BODY, G, W
 

@@ -10,7 +10,7 @@ import pytest
 import casmech
 from casmech.core.options import DynamicsSolver
 from casmech.errors import UsageError
-from casmech.runtime.dynamics import initial_step
+from casmech.formulations.dae_options import initial_step
 from tests.conftest import MODELS, Table
 from tests.runtime.reference_data import VALIDATION_MODELS as VALIDATION
 

@@ -22,10 +22,11 @@ from casmech.equations.functions import build_functions
 from casmech.equations.motors import coordinate_and_value
 from casmech.errors import UsageError
 from casmech.fmu.model import Input
+from casmech.formulations.joint_start import initial_state, quaternion_signs
 from casmech.formulations.joint_system import build
 from casmech.formulations.tree import spanning_tree
 from casmech.model.lower import lower
-from casmech.runtime import assembly, joint_dynamics
+from casmech.runtime import assembly
 from casmech.schema.resolved import ResolvedModel
 
 
@@ -33,7 +34,7 @@ from casmech.schema.resolved import ResolvedModel
 class Start:
     t0: float
     x0: np.ndarray
-    signs: np.ndarray  # +1/-1 per body (joint_dynamics.quaternion_signs)
+    signs: np.ndarray  # +1/-1 per body (formulations.joint_start.quaternion_signs)
     mask: np.ndarray  # 1 for the cut rows masked out (dependent at t0), else 0
     inputs: np.ndarray  # each input's start: its motor law at the start state (controls: 0)
     q0: np.ndarray
@@ -61,14 +62,14 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
                          "the pose there (casmech run holds the values)")
     system = build(ir, tree)
     q0, q_dot0 = assembly.initial_state(functions, t0)
-    x0 = joint_dynamics.initial_state(system, q0, q_dot0)
+    x0 = initial_state(system, q0, q_dot0)
     m = system.n_cut
     if m:
         jacobian = np.array(system.velocity_jacobian(t0, x0).full())
         mask = 1.0 - np.array(independent_rows(jacobian), float)
     else:
         mask = np.zeros(0)
-    signs = joint_dynamics.quaternion_signs(system, t0, x0, np.zeros(2 * m), q0, ir.n_bodies)
+    signs = quaternion_signs(system, t0, x0, np.zeros(2 * m), q0, ir.n_bodies)
     values = [_law(ir, i, t0, q0, q_dot0) for i in inputs]
     return Start(t0, x0, signs, mask, np.array(values, float), q0, q_dot0)
 

@@ -32,13 +32,13 @@ import yaml
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.errors import ModelError, UsageError
+from casmech.formulations.joint_start import joint_state
 from casmech.formulations.joint_system import JointSystem, build, forced_ode
 from casmech.formulations.tree import spanning_tree
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import body_columns
 from casmech.optimal.system import ParametricSystem, parametric_system
 from casmech.runtime import assembly
-from casmech.runtime.joint_dynamics import joint_state
 from casmech.runtime.results import column_names
 from casmech.schema import load_model_text
 from casmech.schema.resolved import ResolvedModel

@@ -28,13 +28,7 @@ from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, Join
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
-from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's names for them)
-    Loops,
-    constant_inverse,
-    initial_state,
-    joint_state,
-    quaternion_signs,
-)
+from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events, nonfinite

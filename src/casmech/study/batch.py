@@ -211,7 +211,7 @@ class Batch:
 
     def _joint_states(self, chosen, rotations, gaps, twists) -> np.ndarray:
         """x0 of the chosen runs from their joints' relative states (joint_dynamics')."""
-        from casmech.runtime.joint_dynamics import joint_state
+        from casmech.formulations.joint_start import joint_state
 
         lay, joints = self.layout, self.tree.joints
         nj = len(joints)
