@@ -63,7 +63,7 @@ from casmech.runtime import (
     nonfinite,
     projected_rk4,
 )
-from casmech.runtime.dae_rows import Rows, mapped, minimum_norm  # noqa: F401 (joint_dynamics)
+from casmech.runtime.dae_rows import Rows, mapped
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result

@@ -33,8 +33,8 @@ from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
+from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.dynamics import minimum_norm
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
