@@ -18,9 +18,8 @@
 - Couplings of joint coordinates (gear, rack_pinion, coupler: rows over the bodies of
   several joints) are loop-closure rows of the joint DAE (formulations/joint_system.py), so a
   coupled mechanism is a mechanism with loops above: joint coordinates unless a body floats
-  in the tree (a screw's nut). The joint DAE ran the coupled models measured faster than rp
-  (docs/formulations.md, "Couplings"). A registered formulation whose takes_couplings is
-  False asked for is an error naming them.
+  in the tree (a screw's nut); why: docs/decisions/formulation-auto.md. A registered
+  formulation whose takes_couplings is False asked for is an error naming them.
 - A DAE stabilization asked for makes the formulation `rp` before this module is reached
   (api.analysis_settings, the one place that rule lives).
 """
