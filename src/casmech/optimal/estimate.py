@@ -69,17 +69,26 @@ def estimate(model: ResolvedModel, parameters: Sequence[str], times: Sequence[fl
     options = {"ipopt.hessian_approximation": "limited-memory", "ipopt.max_iter": max_iter,
                "ipopt.tol": 1e-8, "ipopt.print_level": 5 if verbose else 0,
                "print_time": verbose, "ipopt.sb": "yes"}
-    solver = ca.nlpsol("estimate", "ipopt", nlp, options)
-    n_r = np.full(n_y, np.inf)
+    x, cost, iterations, status = solve(ca.nlpsol("estimate", "ipopt", nlp, options), low, high,
+                                        np.zeros(n_y), float(times[-1]))
+    values = x[:len(names)] * scale
+    at = response(values).full().reshape(measured.shape) - measured
+    return Estimate(names, values, start, cost, at, iterations, status)
+
+
+def solve(solver: ca.Function, low: np.ndarray, high: np.ndarray, free: np.ndarray,
+          t_end: float) -> tuple[np.ndarray, float, int, str]:
+    """Run an estimator's NLP over x = [the scaled parameters (start 1, within low, high); the
+    unbounded auxiliaries (start `free`)] with equality constraints g = 0: (x, cost, IPOPT's
+    iterations, its return status); a solver failure is an AnalysisError at `t_end`."""
+    unbounded = np.full(free.size, np.inf)
     try:
-        solution = solver(x0=np.concatenate([np.ones(len(names)), np.zeros(n_y)]),
-                          lbx=np.concatenate([low, -n_r]), ubx=np.concatenate([high, n_r]),
-                          lbg=0, ubg=0)
+        solution = solver(x0=np.concatenate([np.ones(low.size), free]),
+                          lbx=np.concatenate([low, -unbounded]),
+                          ubx=np.concatenate([high, unbounded]), lbg=0, ubg=0)
     except RuntimeError as error:
-        raise AnalysisError(FailureContext(float(times[-1]), f"estimation failed: {error}"[:600],
+        raise AnalysisError(FailureContext(t_end, f"estimation failed: {error}"[:600],
                                            [])) from None
     stats = solver.stats()
-    values = np.array(solution["x"].full()).ravel()[:len(names)] * scale
-    at = response(values).full().reshape(measured.shape) - measured
-    return Estimate(names, values, start, float(solution["f"]), at,
-                    int(stats.get("iter_count", -1)), str(stats.get("return_status")))
+    return (np.array(solution["x"].full()).ravel(), float(solution["f"]),
+            int(stats.get("iter_count", -1)), str(stats.get("return_status")))

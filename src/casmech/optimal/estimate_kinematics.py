@@ -22,9 +22,9 @@ from collections.abc import Mapping, Sequence
 import casadi as ca
 import numpy as np
 
-from casmech.errors import AnalysisError, FailureContext, UsageError
+from casmech.errors import UsageError
 from casmech.optimal.dae import body_columns
-from casmech.optimal.estimate import Estimate
+from casmech.optimal.estimate import Estimate, solve
 from casmech.optimal.sensitivity import check_times
 from casmech.optimal.system import parametric_system
 from casmech.runtime import assembly
@@ -111,19 +111,9 @@ def estimate_kinematics(model: ResolvedModel, parameters: Sequence[str],
     options = {"ipopt.max_iter": max_iter, "ipopt.tol": 1e-12,
                "ipopt.print_level": 5 if verbose else 0, "print_time": verbose,
                "ipopt.sb": "yes", "show_eval_warnings": False}  # (NaN trials: no pose)
-    solver = ca.nlpsol("estimate_kinematics", "ipopt", nlp, options)
-    free_q = np.full(n * times.size, np.inf)
-    try:
-        solution = solver(x0=np.concatenate([np.ones(len(names)), poses.ravel()]),
-                          lbx=np.concatenate([low, -free_q]), ubx=np.concatenate([high, free_q]),
-                          lbg=0, ubg=0)
-    except RuntimeError as error:
-        raise AnalysisError(FailureContext(float(times[-1]), f"estimation failed: {error}"[:600],
-                                           [])) from None
-    stats = solver.stats()
-    x = np.array(solution["x"].full()).ravel()
+    x, cost, iterations, status = solve(ca.nlpsol("estimate_kinematics", "ipopt", nlp, options),
+                                        low, high, poses.ravel(), float(times[-1]))
     values = x[:len(names)] * scale
     at = ca.Function("r", [scaled, q], [r])(x[:len(names)], x[len(names):].reshape(
         times.size, n).T).full().reshape(measured.shape)
-    return Estimate(names, values, start, float(solution["f"]), at,
-                    int(stats.get("iter_count", -1)), str(stats.get("return_status")))
+    return Estimate(names, values, start, cost, at, iterations, status)
