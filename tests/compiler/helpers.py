@@ -15,6 +15,7 @@ import numpy as np
 
 from casmech.core.expressions import parse
 from casmech.equations.functions import SystemFunctions, build_functions
+from casmech.formulations import dae, residuals
 from casmech.model.lower import lower
 from casmech.schema.resolved import Analysis, Body, Force, Joint, ResolvedModel, ScalarFunction
 
@@ -173,3 +174,17 @@ def two_free_bodies(rng: np.random.Generator) -> tuple[Body, Body]:
                  mass=1.7, inertia=inertia()),
             body("b2", [1.4, 0.6, 0.5] + 0.1 * rng.normal(size=3), random_unit_p(rng),
                  mass=0.8, inertia=inertia()))
+
+
+def assert_mapped_residual_is_inline(ir, form: str, kind: str) -> None:
+    """The mapped DAE residual (summed by element kernels) equals the inline one (one graph
+    over the whole model's matrices) at random arguments."""
+    inline = dae.residual(build_functions(ir).functions, form, kind)
+    mapped = residuals.oracle(ir, form, kind)[residuals.name(form, kind)]
+    rng = np.random.default_rng(3)
+    for _ in range(2):
+        args = [rng.uniform(-1, 1, inline.sparsity_in(k).shape) for k in range(4)]
+        for k, (got, want) in enumerate(zip(mapped(*args, []), inline(*args), strict=False)):
+            # the same equations, summed by element or as one graph: round-off
+            np.testing.assert_allclose(dense(got), dense(want), rtol=1e-12, atol=1e-11,
+                                       err_msg=f"{form} {kind} output {k}")

@@ -15,11 +15,15 @@ import casmech
 from casmech.elements import primitives
 from casmech.equations import rows
 from casmech.equations.functions import build_functions, mapped_functions
-from casmech.formulations import dae, residuals
 from casmech.model import parametric
 from casmech.model.ir import GROUND_INDEX, PrimitiveIR, RowInfo
 from casmech.model.lower import lower
-from tests.compiler.helpers import random_unit_p, scalar
+from tests.compiler.helpers import (
+    assert_mapped_residual_is_inline,
+    dense,
+    random_unit_p,
+    scalar,
+)
 
 KIND = "midpoint_distance"
 TEXT = """
@@ -112,13 +116,9 @@ def hand_written(nb: int, joint_rows: int):
                               "jacobian": jacobian, "romega_gamma": gamma_hat}
 
 
-def _dense(value) -> np.ndarray:
-    return np.array(ca.DM(value).full())
-
-
 def _close(got, want, what: str) -> None:
     # the same constraint, built by the kernels and by hand: round-off of O(1) numbers
-    np.testing.assert_allclose(_dense(got), _dense(want), rtol=1e-12, atol=1e-12, err_msg=what)
+    np.testing.assert_allclose(dense(got), dense(want), rtol=1e-12, atol=1e-12, err_msg=what)
 
 
 def _state(nb: int, rng):
@@ -174,12 +174,4 @@ def test_three_body_rows_in_the_dae_residual_as_elements(form, kind):
     """The mapped DAE residual (a kernel for the coupler rows over their three bodies) equals
     the inline one over the whole model's matrices."""
     ir = coupled_ir()
-    inline = dae.residual(build_functions(ir).functions, form, kind)
-    mapped = residuals.oracle(ir, form, kind)[residuals.name(form, kind)]
-    rng = np.random.default_rng(3)
-    for _ in range(2):
-        args = [rng.uniform(-1, 1, inline.sparsity_in(k).shape) for k in range(4)]
-        for k, (got, want) in enumerate(zip(mapped(*args, []), inline(*args), strict=False)):
-            # the same equations, summed by element or as one graph: round-off
-            np.testing.assert_allclose(_dense(got), _dense(want), rtol=1e-12, atol=1e-11,
-                                       err_msg=f"{form} {kind} output {k}")
+    assert_mapped_residual_is_inline(ir, form, kind)

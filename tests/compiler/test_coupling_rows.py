@@ -4,7 +4,6 @@ both evaluations (inline, mapped; numeric and over the model data d) against the
 written here from the joints' coordinates as equations/coordinates.py reads them (the results'
 joint state columns), and in the DAE residual's element sums against the inline residual."""
 
-import casadi as ca
 import numpy as np
 import pytest
 
@@ -12,10 +11,9 @@ import casmech
 from casmech.equations import readings
 from casmech.equations.functions import build_functions, mapped_functions
 from casmech.equations.readings import columns_function
-from casmech.formulations import dae, residuals
 from casmech.model import parametric
 from casmech.model.lower import lower
-from tests.compiler.helpers import random_unit_p
+from tests.compiler.helpers import assert_mapped_residual_is_inline, dense, random_unit_p
 
 C = (0.7, -1.3, 2.1)
 IRRATIONAL = -1 / 2 ** 0.5  # no fraction of small denominator: g's row is linear
@@ -35,10 +33,6 @@ joints:
   - {{name: g, type: coupler, joints: [cb.angle, ra], coefficients: [1.0, {IRRATIONAL}]}}
   - {{name: h, type: gear, joint_i: ra, joint_j: cb, ratio: -1.5}}
 """
-
-
-def _dense(value) -> np.ndarray:
-    return np.array(ca.DM(value).full())
 
 
 def _rotation(p) -> np.ndarray:
@@ -75,9 +69,9 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
         q[3 * nb:] = np.concatenate([p + 0.05 * rng.normal(size=4) for p in
                                      np.tile([1.0, 0, 0, 0], (nb, 1))])
         q[3 * nb:] = np.concatenate([p / np.linalg.norm(p) for p in q[3 * nb:].reshape(nb, 4)])
-        s = dict(zip(names, _dense(states(t, q, q_dot, np.zeros(7 * nb), np.zeros((3, 6)),
+        s = dict(zip(names, dense(states(t, q, q_dot, np.zeros(7 * nb), np.zeros((3, 6)),
                                           np.zeros((3, 6)))).ravel(), strict=True))
-        phi = _dense(functions["phi"](t, q, *extra)).ravel()[rows]
+        phi = dense(functions["phi"](t, q, *extra)).ravel()[rows]
         # coupler k has one angle (ra): C_ra rho sin(angle + (C_cb d_cb + C_tc d_tc) / C_ra),
         # rho the length of body a's x axis in the xy plane (1 where ra's rows hold: its
         # cosine and sine are dot products of the joint frames); g is linear in its angles;
@@ -94,7 +88,7 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
         # the same row from the coordinates of the results: round-off
         np.testing.assert_allclose(phi, want, rtol=1e-12, atol=1e-12, err_msg=which)
         # velocity level: phi_q q_dot is the rows' rate from the coordinates' rates
-        rate = _dense(functions["phi_q"](t, q, *extra) @ q_dot).ravel()[rows]
+        rate = dense(functions["phi_q"](t, q, *extra) @ q_dot).ravel()[rows]
         want_rate = s["cb.angle_dot"] + IRRATIONAL * s["ra.angle_dot"]
         # the same rate, by the chain rule of the coordinates' AD: round-off
         np.testing.assert_allclose(rate[1], want_rate, rtol=1e-10, atol=1e-10, err_msg=which)
@@ -105,12 +99,4 @@ def test_coupling_rows_are_the_sums_of_the_joint_coordinates(which):
 def test_coupling_rows_in_the_dae_residual_as_elements(form, kind):
     """The mapped DAE residual (a kernel per coupling over its bodies) equals the inline one."""
     ir = lower(casmech.loads(TEXT))
-    inline = dae.residual(build_functions(ir).functions, form, kind)
-    mapped = residuals.oracle(ir, form, kind)[residuals.name(form, kind)]
-    rng = np.random.default_rng(3)
-    for _ in range(2):
-        args = [rng.uniform(-1, 1, inline.sparsity_in(k).shape) for k in range(4)]
-        for k, (got, want) in enumerate(zip(mapped(*args, []), inline(*args), strict=False)):
-            # the same equations, summed by element or as one graph: round-off
-            np.testing.assert_allclose(_dense(got), _dense(want), rtol=1e-12, atol=1e-11,
-                                       err_msg=f"{form} {kind} output {k}")
+    assert_mapped_residual_is_inline(ir, form, kind)
