@@ -7,6 +7,7 @@ either); no module imports a private name (`_name`) of another module, by `from 
 or as an attribute of an imported module."""
 
 import ast
+from functools import cache
 from pathlib import Path
 
 import pytest
@@ -44,9 +45,10 @@ def module_name(path: Path) -> str:
 MODULES = {module_name(path): path for path in SRC.rglob("*.py")}
 
 
+@cache
 def imports(path: Path) -> list[tuple[str, str | None, int]]:
     """(module imported, name imported from it or None, line) for every casmech import of a
-    file: a name that is itself a module counts as that module."""
+    file: a name that is itself a module counts as that module (parsed once per file)."""
     package = module_name(path).split(".")
     if path.name != "__init__.py":
         package = package[:-1]
@@ -133,14 +135,10 @@ def private_uses(path: Path) -> list[str]:
     """`from casmech.x import _name` and `module._name` of an imported casmech module."""
     tree = ast.parse(path.read_text(), str(path))
     bound = {}  # local name -> casmech module it names
-    found = []
+    found = [f"{line}: {target}.{name}" for target, name, line in imports(path)
+             if name is not None and name.startswith("_") and not name.startswith("__")]
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom | ast.Import):
-            for target, name, line in imports(path):
-                if line != node.lineno:
-                    continue
-                if name is not None and name.startswith("_") and not name.startswith("__"):
-                    found.append(f"{line}: {target}.{name}")
             for alias in node.names:
                 full = (f"{node.module}.{alias.name}" if isinstance(node, ast.ImportFrom)
                         and node.module else alias.name)
