@@ -10,7 +10,7 @@ import pytest
 import casmech
 from casmech.elements.joint_types import MOTIONS, REGISTRY, attributes
 from casmech.equations import readings
-from casmech.fmu import outputs
+from casmech.fmu import description, outputs
 from casmech.fmu.model import exported
 from casmech.fmu.start import start
 from casmech.fmu.system import build_system
@@ -142,6 +142,8 @@ def test_fmu_and_joint_space_take_the_names(kind, tmp_path, monkeypatch):
     every = outputs.names(functions)
     system = build_system(view, begin, list(range(len(every))))
     assert system.state_names == names
+    if kind == "spherical":  # the FMU's unit of the child-frame angular velocities
+        assert [description.state_unit(n) for n in names[4:]] == ["rad/s"] * 3
     call = system.functions
     jd = call["cm_data"](ca.DM(0, 1))
     ir = functions.ir
