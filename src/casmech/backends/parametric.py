@@ -10,11 +10,11 @@ a registered formulation's (formulations.protocol: its `residual` for each of it
 (t, x, z, [p; d]), with its daeF and jacF (formulations.residuals.from_residual). The cache key is
 the model's structure (model.parametric's signature) with its text, component files and
 tables, never the values.
-For a dynamics analysis the library also holds the joint formulation's functions
-(formulations.joint_system over the same symbolic IR, their trailing input the model data with the
-tree's constants): the tree's ODE with its forward derivative or the loops' DAE and its
-Jacobian by the states (joint_jacobian: never by d), the results rows, the loops' start
-functions and joint_data, which computes that input from d.
+For a dynamics analysis the library also holds the joint formulation's functions (the
+registered joint formulation's `equations` over the same symbolic IR, their trailing input the
+model data with the tree's constants): the tree's ODE with its forward derivative or the
+loops' DAE and its Jacobian by the states (joint_jacobian: never by d), the results rows, the
+loops' start functions and joint_data, which computes that input from d.
 Loading binds the values of this run: every function but the DAE residuals becomes an MX
 wrapper calling its external with `d` given; the DAE residuals stay the externals (so IDAS takes
 their daeF and jacF) and SystemFunctions.data carries `d`, which runtime.dynamics appends to the
@@ -39,7 +39,6 @@ from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
 from casmech.formulations import prescribed, residuals
-from casmech.formulations.joint_system import build as build_joint_system
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
 from casmech.model import parametric
@@ -79,10 +78,9 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
     with its Jacobian by the states as a function of its own); none for loops through a
     floating body."""
-    tree = spanning_tree(split.ir)
-    if tree.floating_loops:  # auto runs rp (runtime.auto_formulation)
+    if spanning_tree(split.ir).floating_loops:  # auto runs rp (runtime.auto_formulation)
         return {}
-    system = build_joint_system(split.ir, tree, split.symbols)
+    system = FORMULATIONS["joint"].equations(split.ir, split.symbols)
     dynamics = {system.dynamics.name(): [system.dynamics]}
     if system.n_cut:  # the DAE's Jacobian by the states, never by d
         dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]

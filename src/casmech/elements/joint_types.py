@@ -115,6 +115,12 @@ class JointType:
         return self.title or "".join(part.title() for part in self.name.split("_"))
 
 
+# a spherical joint's tree velocities: body_j's angular velocity relative to body_i in
+# body_j's joint frame (formulations.articulated), which the results columns `wx`, `wy`, `wz`
+# give in body_i's
+SPHERICAL_VELOCITIES = ("wx_j", "wy_j", "wz_j")
+
+
 def _cd(axis: str) -> Template:
     return ("cd", {"c": f"e{axis}", "s_i": "P@i", "s_j": "P@j"}, f"joint point, global {axis}")
 
@@ -183,14 +189,17 @@ BUILT_IN = (
     JointType("spherical", ("at",), SPHERICAL, states=JOINT_STATES["spherical"],
               initial=("orientation", "angular_velocity"),
               motion=Motion(4, 3, lambda th: unit(th[0:4]), no_translation,
-                            lambda r, d: from_matrix(r), quaternions=(0,))),
+                            lambda r, d: from_matrix(r), quaternions=(0,),
+                            names=(JOINT_STATES["spherical"][:4], SPHERICAL_VELOCITIES))),
     JointType("universal", ("at", "axis_i", "axis_j"),
               SPHERICAL + (("dp1", {"a_i": "axis_i@i", "a_j": "axis_j@j"},
                             "axis_i . axis_j = 0 (cross)"),),
               check=check_universal, states=JOINT_STATES["universal"],
               initial=JOINT_STATES["universal"],
               motion=Motion(2, 2, lambda th: product(about(0, th[0]), about(1, th[1])),
-                            no_translation, universal_angles, frame="cross")),
+                            no_translation, universal_angles, frame="cross",
+                            names=(JOINT_STATES["universal"][0::2],
+                                   JOINT_STATES["universal"][1::2]))),
     JointType("cylindrical", ("at", "axis"), PARALLEL + ON_AXIS,
               coordinates=("angle", "displacement"), limit="displacement",
               motion=Motion(2, 2, lambda th: about(2, th[0]), slide,
@@ -219,7 +228,8 @@ BUILT_IN = (
                            "normal_i . d_ij = 0"),),
               motion=Motion(3, 3, lambda th: about(2, th[2]),
                             lambda th: ca.vertcat(th[0], th[1], 0),
-                            lambda r, d: np.array([d[0], d[1], angle_about(r, 2)]))),
+                            lambda r, d: np.array([d[0], d[1], angle_about(r, 2)]),
+                            names=(("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")))),
     # couplings of joint coordinates (elements/couplings.py)
     _coupling("gear", ("joint_i", "joint_j"), ("angle", "angle"), ("ratio",),
               lambda s: (-s["ratio"], 1.0), 1, "torque", "angle_j = ratio angle_i"),
@@ -254,6 +264,22 @@ def attributes(joint_type: str) -> list[str]:
     if entry is None:
         return []
     return list(_coordinate_attributes(entry, ())) + list(entry.states)
+
+
+def state_names(joint_type: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(names of the coordinates theta, of the velocities u) of a tree joint of this type
+    ("free": a floating body's) in the joint formulation: its Motion's `names`, else each
+    coordinate kind's value and rate at the index its `drivers` give (`q<k>`, `u<k>` where
+    neither names one). Where a name is one of the joint's state attributes, the entry is
+    that results column's value (tests/formulations/test_state_names.py)."""
+    motion = MOTIONS[joint_type]
+    if motion.names is not None:
+        return motion.names
+    q_names = [f"q{k}" for k in range(motion.n_q)]
+    v_names = [f"u{k}" for k in range(motion.n_v)]
+    for kind, index in motion.drivers.items():
+        q_names[index], v_names[index] = COORDINATES[kind].attributes
+    return tuple(q_names), tuple(v_names)
 
 
 def initial_keys(joint_type: str) -> tuple[str, ...]:

@@ -41,6 +41,11 @@ class Motion:
     quaternions: tuple[int, ...] = ()  # starts of quaternion blocks in theta
     drivers: Mapping[str, int] = field(default_factory=dict)  # driver -> coordinate index
     frame: str = "axes"
+    # (names of theta's entries, of u's): the joint's state attributes where an entry is one
+    # (results columns `<joint>.<name>`, docs/format.md "Joint states"), other names where
+    # it is not; None: from `drivers`, each coordinate kind's value and rate
+    # (elements.joint_types.state_names reads both)
+    names: tuple[tuple[str, ...], tuple[str, ...]] | None = None
 
     def angular_velocity(self, theta, u):
         """The relative angular velocity in F_c: u[0:3] for a quaternion joint (by the
@@ -76,5 +81,8 @@ def universal_angles(r: np.ndarray, d: np.ndarray) -> np.ndarray:
 
 
 # a body that no tree joint reaches floats: quaternion, then its origin (F_p: ground's)
+# (its states are not results columns: the body's own columns are global, its velocities
+# here are in the body's frame)
 FREE = Motion(7, 6, lambda th: unit(th[0:4]), lambda th: th[4:7],
-              lambda r, d: np.concatenate([from_matrix(r), d]), quaternions=(0,))
+              lambda r, d: np.concatenate([from_matrix(r), d]), quaternions=(0,),
+              names=(("e0", "e1", "e2", "e3", "x", "y", "z"), ("wx", "wy", "wz", "vx", "vy", "vz")))

@@ -59,7 +59,7 @@ def state_unit(name: str) -> str | None:
         return "rad/s" if rate else "rad"
     if base in ("x", "y", "z"):
         return "m/s" if rate else "m"
-    if base in ("wx", "wy", "wz"):
+    if base.removesuffix("_j") in ("wx", "wy", "wz"):  # a spherical joint's: in body_j's frame
         return "rad/s"
     if base in ("vx", "vy", "vz"):
         return "m/s"

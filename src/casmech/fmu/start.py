@@ -1,11 +1,12 @@
 """The start of an FMU's run at the model's own values, as `casmech run` computes it.
 
-The state x0 = [theta; u] of the joint formulation (runtime.joint_dynamics: the file's pose
-assembled and its velocities projected, mapped to joint coordinates), the signs that align the
-tree's Euler parameters with the r-p state, and which loop-closure rows depend on the others
-there (masked out of the FMU's equations, as the joint DAE masks them). The FMU starts from x0
-and solves the same closest-point problem in joint coordinates for other parameter values
-(fmu.system), so at the model's values it starts exactly where `casmech run` does.
+The state x0 = [theta; u] of the joint formulation (the file's pose assembled and its
+velocities projected, mapped to joint coordinates by the registered joint formulation's Start),
+the signs that align the tree's Euler parameters with the r-p state, and which loop-closure
+rows depend on the others there (masked out of the FMU's equations, as the joint DAE masks
+them). The FMU starts from x0 and solves the same closest-point problem in joint coordinates
+for other parameter values (fmu.system), so at the model's values it starts exactly where
+`casmech run` does.
 """
 
 from __future__ import annotations
@@ -17,13 +18,11 @@ import numpy as np
 
 from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.equations.assemble import Coordinates
-from casmech.equations.checks import independent_rows
 from casmech.equations.functions import build_functions
 from casmech.equations.motors import coordinate_and_value
 from casmech.errors import UsageError
 from casmech.fmu.model import Input
-from casmech.formulations.joint_start import initial_state, quaternion_signs
-from casmech.formulations.joint_system import build
+from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.lower import lower
 from casmech.runtime import assembly
@@ -34,7 +33,7 @@ from casmech.schema.resolved import ResolvedModel
 class Start:
     t0: float
     x0: np.ndarray
-    signs: np.ndarray  # +1/-1 per body (formulations.joint_start.quaternion_signs)
+    signs: np.ndarray  # +1/-1 per body (the Start's p after the mask)
     mask: np.ndarray  # 1 for the cut rows masked out (dependent at t0), else 0
     inputs: np.ndarray  # each input's start: its motor law at the start state (controls: 0)
     q0: np.ndarray
@@ -60,18 +59,13 @@ def start(model: ResolvedModel, inputs: tuple[Input, ...], t0: float = 0.0) -> S
         raise UsageError(f"{model.file}: joints' initial: values ({', '.join(held)}) are not "
                          "in the FMU, which starts from the bodies' poses in the file; write "
                          "the pose there (casmech run holds the values)")
-    system = build(ir, tree)
+    formulation = FORMULATIONS["joint"]
+    system = formulation.system(functions)
     q0, q_dot0 = assembly.initial_state(functions, t0)
-    x0 = initial_state(system, q0, q_dot0)
-    m = system.n_cut
-    if m:
-        jacobian = np.array(system.velocity_jacobian(t0, x0).full())
-        mask = 1.0 - np.array(independent_rows(jacobian), float)
-    else:
-        mask = np.zeros(0)
-    signs = quaternion_signs(system, t0, x0, np.zeros(2 * m), q0, ir.n_bodies)
+    begin = formulation.start(functions, system, t0, q0, q_dot0)  # p = [mask; signs]
+    m = system.n_z // 2  # z = [lam; mu] of the cut rows
     values = [_law(ir, i, t0, q0, q_dot0) for i in inputs]
-    return Start(t0, x0, signs, mask, np.array(values, float), q0, q_dot0)
+    return Start(t0, begin.x, begin.p[m:], begin.p[:m], np.array(values, float), q0, q_dot0)
 
 
 def _law(ir, entry: Input, t0: float, q0, q_dot0) -> float:

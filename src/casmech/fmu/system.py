@@ -1,6 +1,9 @@
 """The CasADi Functions an FMU's C calls, over the state x = [theta; u] of the joint
-formulation and jd, the joint functions' data (formulations.joint_system over fmu.model's IR:
-[d; inputs; the tree's constants]).
+formulation and jd, the joint functions' data (the registered joint formulation's equations
+over fmu.model's IR, FORMULATIONS["joint"].equations: [d; inputs; the tree's constants]). The
+states are named
+as the formulation's `states` name them (`<joint>.angle`, ...: the joint's results columns
+where they are its states).
 
     data(theta) -> jd                  the model data at the parameters (inputs at their start)
     ode(t, x, jd) -> x_dot             the ODE (below)
@@ -47,8 +50,7 @@ from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.fmu import outputs
 from casmech.fmu.model import Exported
 from casmech.fmu.start import Start
-from casmech.formulations.joint_system import JointSystem, build
-from casmech.formulations.tree import spanning_tree
+from casmech.formulations.registry import FORMULATIONS
 
 
 @dataclass(frozen=True)
@@ -69,44 +71,15 @@ def _function(name: str, inputs: dict, results: dict) -> ca.Function:
                        list(results))
 
 
-def state_names(system: JointSystem, names: tuple[str, ...]) -> tuple[str, ...]:
-    """`<joint>.<coordinate>` and `<joint>.<coordinate>_dot` (a floating body:
-    `<body>.free.<coordinate>`) of every state, in x's order."""
-    coordinates, velocities = [], []
-    for joint, free_theta, free_u in zip(system.tree.joints, system.layout.free_theta,
-                                         system.layout.free_u, strict=True):
-        owner = joint.name or f"{names[joint.child]}.free"
-        q_names, v_names = COORDINATE_NAMES.get(joint.type, ((), ()))
-        motion = MOTIONS[joint.type]
-        q_names = q_names or tuple(f"q{k}" for k in range(motion.n_q))
-        v_names = v_names or tuple(f"u{k}" for k in range(motion.n_v))
-        coordinates += [f"{owner}.{q_names[c]}" for c in free_theta]
-        velocities += [f"{owner}.{v_names[c]}" for c in free_u]
-    return (*coordinates, *velocities)
-
-
-_QUATERNION = ("e0", "e1", "e2", "e3")
-_SPIN = ("wx", "wy", "wz")
-# joint type -> (coordinate names, velocity names); others: q0.., u0..
-COORDINATE_NAMES = {
-    "revolute": (("angle",), ("angle_dot",)),
-    "translational": (("displacement",), ("displacement_dot",)),
-    "cylindrical": (("angle", "displacement"), ("angle_dot", "displacement_dot")),
-    "universal": (("angle_1", "angle_2"), ("angle_1_dot", "angle_2_dot")),
-    "planar": (("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")),
-    "spherical": (_QUATERNION, _SPIN),
-    "free": ((*_QUATERNION, "x", "y", "z"), (*_SPIN, "vx", "vy", "vz")),
-}
-
-
 class _Builder:
     """The symbols and shared expressions of the functions (module docstring)."""
 
     def __init__(self, exported: Exported, begin: Start):
         self.exported, self.begin = exported, begin
         ir = exported.ir
-        self.tree = spanning_tree(ir)
-        self.system = build(ir, self.tree, exported.data)
+        self.formulation = FORMULATIONS["joint"]
+        self.system = self.formulation.equations(ir, exported.data)
+        self.tree = self.system.tree
         self.bundle: SystemFunctions = build_functions(ir, exported.data)
         lay = self.system.layout
         self.n_theta, self.n_x = lay.n_theta, lay.n_x
@@ -231,7 +204,9 @@ def build_system(exported: Exported, begin: Start, columns: list[int]) -> FmuSys
     """The FMU's functions (module docstring); `columns` the outputs (fmu.outputs.chosen)."""
     b = _Builder(exported, begin)
     t, x, jd = b.t, b.x, b.jd
-    states = state_names(b.system, tuple(bd.name for bd in exported.ir.bodies))
+    # x's names, the joint's results columns where they are its states (a column of the
+    # same name is then read as the state)
+    states = b.formulation.states(b.bundle).differential
     every = outputs.names(b.bundle)
     # a joint state column that is a state of the FMU is read as the state, not output twice
     columns = [k for k in columns if every[k] not in states]

@@ -17,7 +17,7 @@ from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
-from casmech.formulations.joint_system import JointSystem, build, layout
+from casmech.formulations.joint_system import JointSystem, build, labels
 from casmech.formulations.protocol import (
     DEFAULT,
     Formulation,
@@ -28,6 +28,7 @@ from casmech.formulations.protocol import (
 )
 from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
+from casmech.model.ir import ModelIR
 from casmech.numerics import kkt
 
 
@@ -151,14 +152,19 @@ class JointCoordinates(Formulation):
     absolute."""
 
     def states(self, functions: SystemFunctions, stabilization: str = "ggl") -> States:
+        """x's entries by name (formulations.joint_system.labels: `<joint>.angle`, ...)."""
         tree = spanning_tree(functions.ir)
-        lay = layout(tree)
+        coordinates, velocities = labels(tree, functions.body_names)
         cut = sum(len(joint.rows) for joint in tree.cut)
-        return States(indexed("theta", lay.n_theta) + indexed("u", lay.n_x - lay.n_theta),
-                      indexed("lam", cut) + indexed("mu", cut))
+        return States(coordinates + velocities, indexed("lam", cut) + indexed("mu", cut))
+
+    def equations(self, ir: ModelIR, data: ca.SX | None = None) -> JointSystem:
+        """formulations.joint_system's JointSystem of the model's spanning tree: the ODE or
+        DAE, the results row's motion, the loops' start terms, the relative states."""
+        return build(ir, spanning_tree(ir), data)
 
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
-        joint = build(functions.ir, spanning_tree(functions.ir))
+        joint = self.equations(functions.ir)
         m, nb = joint.n_cut, functions.n_bodies
         t, x = ca.MX.sym("t"), ca.MX.sym("x", joint.layout.n_x)
         z, p = ca.MX.sym("z", 2 * m), ca.MX.sym("p", m + nb)

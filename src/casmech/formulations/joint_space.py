@@ -41,20 +41,9 @@ import numpy as np
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
 from casmech.formulations import articulated, rnea
-from casmech.formulations.joint_system import layout
+from casmech.formulations.joint_system import labels, layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
-
-# motion type -> (names of its coordinates, names of its velocities): `<joint>.<name>`
-NAMES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "revolute": (("angle",), ("angle_dot",)),
-    "spherical": (("e0", "e1", "e2", "e3"), ("wx", "wy", "wz")),
-    "universal": (("angle_i", "angle_j"), ("angle_i_dot", "angle_j_dot")),
-    "cylindrical": (("angle", "displacement"), ("angle_dot", "displacement_dot")),
-    "translational": (("displacement",), ("displacement_dot",)),
-    "planar": (("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")),
-    "free": (("e0", "e1", "e2", "e3", "x", "y", "z"), ("wx", "wy", "wz", "vx", "vy", "vz")),
-}
 
 # function name -> (input names, output names); Pinocchio's name in docs/api.md
 SIGNATURES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
@@ -66,21 +55,6 @@ SIGNATURES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "inverse_dynamics_derivatives": (("t", "q", "v", "a"), ("dtau_dq", "dtau_dv", "dtau_da")),
     "forward_kinematics": (("t", "q", "v"), ("q_bodies", "q_dot_bodies")),
 }
-
-
-def labels(tree: Tree, body_names: tuple[str, ...]) -> tuple[list[str], list[str]]:
-    """(coordinate names, velocity names) of the free coordinates, `<joint>.<name>` (a
-    floating body's: `<body>.<name>`; a joint type NAMES lacks: `<joint>.q0`, `.v0`...)."""
-    lay = layout(tree)
-    coordinates, velocities = [], []
-    for joint, free_q, free_v in zip(tree.joints, lay.free_theta, lay.free_u, strict=True):
-        motion = MOTIONS[joint.type]
-        q_names, v_names = NAMES.get(joint.type, (
-            tuple(f"q{k}" for k in range(motion.n_q)), tuple(f"v{k}" for k in range(motion.n_v))))
-        owner = joint.name or body_names[joint.child]
-        coordinates += [f"{owner}.{q_names[k]}" for k in free_q]
-        velocities += [f"{owner}.{v_names[k]}" for k in free_v]
-    return coordinates, velocities
 
 
 def _function(name: str, inputs: list, outputs: list) -> ca.Function:
@@ -199,7 +173,7 @@ def joint_space(ir: ModelIR) -> JointSpace:
         raise UsageError(f"{ir.name}: a joint space needs a tree of joints; these joints close "
                          f"loops or have no joint coordinates: {names}; its equations are "
                          "casmech.compile's r-p functions (mass_matrix, phi_q, ...)")
-    coordinates, velocities = labels(tree, tuple(b.name for b in ir.bodies))
+    coordinates, velocities = labels(tree, tuple(b.name for b in ir.bodies))  # x's names
     lay = layout(tree)
     neutral = np.zeros(lay.n_theta)
     for joint, slots, free in zip(tree.joints, lay.theta, lay.free_theta, strict=True):
@@ -208,5 +182,4 @@ def joint_space(ir: ModelIR) -> JointSpace:
                 neutral[slots[free.index(start)]] = 1.0
     names = tuple(j.name or ("ground" if j.child == GROUND_INDEX else ir.bodies[j.child].name)
                   for j in tree.joints)
-    return JointSpace(functions(ir, tree), tuple(coordinates), tuple(velocities), names,
-                      neutral)
+    return JointSpace(functions(ir, tree), coordinates, velocities, names, neutral)

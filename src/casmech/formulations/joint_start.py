@@ -13,8 +13,8 @@ from casmech.core.options import Assembly
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.formulations.articulated import local_motion
-from casmech.formulations.joint_system import JointSystem
-from casmech.formulations.tree import TreeJoint
+from casmech.formulations.joint_system import JointSystem, layout
+from casmech.formulations.tree import Tree, TreeJoint
 
 ASSEMBLY = Assembly()  # the defaults (core.options)
 
@@ -53,10 +53,16 @@ def joint_state(joint: TreeJoint, rotation, gap, twist) -> tuple[np.ndarray, np.
 
 def initial_state(system: JointSystem, q, q_dot) -> np.ndarray:
     """x0 = [theta; u] of the free coordinates and velocities at the r-p state."""
-    lay, joints = system.layout, system.tree.joints
-    rotations, gaps, twists = (np.array(v.full()) for v in system.relative_states(q, q_dot))
+    relative = (np.array(v.full()) for v in system.relative_states(q, q_dot))
+    return from_relative(system.tree, *relative)
+
+
+def from_relative(tree: Tree, rotations, gaps, twists) -> np.ndarray:
+    """x0 = [theta; u] of the free coordinates and velocities from every tree joint's relative
+    states (JointSystem.relative_states: rotations 3 x 3n, gaps 3 x n, twists 6 x n)."""
+    lay = layout(tree)
     x0 = np.zeros(lay.n_x)
-    for k, joint in enumerate(joints):
+    for k, joint in enumerate(tree.joints):
         theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
         x0[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
         x0[list(lay.u[k])] = u[list(lay.free_u[k])]

@@ -35,7 +35,7 @@ import numpy as np
 
 from casmech.core import euler
 from casmech.core.traced_steps import traced
-from casmech.elements.joint_types import MOTIONS
+from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
 from casmech.equations.assemble import driver_value
@@ -76,6 +76,20 @@ def layout(tree: Tree) -> Layout:
     k = len(tree.joints)
     return Layout(tuple(slots[:k]), tuple(slots[k:]), tuple(free_theta), tuple(free_u),
                   sum(map(len, free_theta)), n)
+
+
+def labels(tree: Tree, body_names: tuple[str, ...]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(names of the free coordinates, of the free velocities), in x's order:
+    `<joint>.<name>`, the names of elements.joint_types.state_names (a joint's results
+    columns where they are its states), a floating body's `<body>.free.<name>`."""
+    lay = layout(tree)
+    coordinates, velocities = [], []
+    for joint, free_q, free_v in zip(tree.joints, lay.free_theta, lay.free_u, strict=True):
+        q_names, v_names = state_names(joint.type)
+        owner = joint.name or f"{body_names[joint.child]}.free"
+        coordinates += [f"{owner}.{q_names[k]}" for k in free_q]
+        velocities += [f"{owner}.{v_names[k]}" for k in free_v]
+    return tuple(coordinates), tuple(velocities)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,10 @@ A formulation is one small frozen class (docs/architecture.md, "Adding a formula
   assembled body coordinates (q, q_dot);
 - `integrator_options(...)`: what SUNDIALS needs at a start besides the tolerances (an
   index-2 DAE's first step and algebraic tolerances; none by default).
+- `equations(ir, data)`: its own equations for a lowered model, numeric or over the model
+  data's symbols, where it has such an object (joint: the JointSystem its `system` wraps):
+  what the consumers that build on a formulation's own terms take (the FMU, the Python
+  controller, the parametric library); None by default;
 - `residual(functions, stabilization)` and `library_stabilizations()`: the residual a compiled
   C library generates for it (backends: formulations.residuals.oracles and
   backends.parametric.bundle loop over the registry), for which stabilizations (none by
@@ -39,6 +43,7 @@ import numpy as np
 
 from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
+from casmech.model.ir import ModelIR
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
@@ -96,6 +101,15 @@ class Formulation(ABC):
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
         """Its equations for the model of `functions`; `stabilization`: the analysis's
         (core.options), which a formulation without constraint rows in its state ignores."""
+
+    def equations(self, ir: ModelIR, data: ca.SX | None = None):
+        """Its own equations for the lowered model `ir`, the object its `system` is built
+        from, over a numeric IR or a symbolic one (`data`: model.parametric.split's symbols,
+        every function's trailing input "d"): what a consumer that needs more of a
+        formulation than System takes (the FMU's C functions, the Python controller's bound
+        functions, a parametric library's joint functions: docs/architecture.md "Adding a
+        formulation"). None by default: the formulation's equations are its System alone."""
+        return None
 
     def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
         """Its system's residual alone, (t, x, z, p) -> (ode, alg): what a compiled C library

@@ -33,8 +33,7 @@ from casmech.elements.forces.terms import Input
 from casmech.equations import readings
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.errors import AnalysisError, FailureContext, UsageError
-from casmech.formulations.joint_system import build as build_joint_system
-from casmech.formulations.tree import spanning_tree
+from casmech.formulations.registry import FORMULATIONS
 from casmech.model.ir import ModelIR
 from casmech.runtime import workspace
 from casmech.runtime.buffers import BufferedCall
@@ -350,7 +349,7 @@ def _controlled(functions: SystemFunctions, controller: Callable,
 
     def joint_system():
         if "system" not in joint_state:
-            joint_state["system"] = build_joint_system(controlled_ir, spanning_tree(ir), u)
+            joint_state["system"] = FORMULATIONS["joint"].equations(controlled_ir, u)
         return joint_state["system"]
 
     def joint_sources() -> dict[str, ca.Function]:

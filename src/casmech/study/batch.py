@@ -117,7 +117,7 @@ class Batch:
     def __init__(self, job: Job, parameters: tuple[str, ...]):
         from casmech import backends
         from casmech.backends import codegen
-        from casmech.formulations.joint_system import layout
+        from casmech.formulations.registry import FORMULATIONS
         from casmech.formulations.tree import spanning_tree
         from casmech.optimal.system import parametric_system
         from casmech.runtime.analyses import analysis_settings
@@ -133,7 +133,7 @@ class Batch:
         self.system = parametric_system(model, parameters)
         self.library, _ = codegen.parametric_functions(model)
         self.tree = spanning_tree(nominal.ir)
-        self.layout = layout(self.tree)
+        self.n_x = len(FORMULATIONS["joint"].states(nominal).differential)
         self.n_bodies = nominal.n_bodies
         self.times = np.asarray(output_times(0.0, settings.t_end, settings.output_step), float)
         solver = settings.options.solver
@@ -210,19 +210,15 @@ class Batch:
         return q_dot + numeric_qr.lstsq(phi_q, residual)
 
     def _joint_states(self, chosen, rotations, gaps, twists) -> np.ndarray:
-        """x0 of the chosen runs from their joints' relative states (joint_dynamics')."""
-        from casmech.formulations.joint_start import joint_state
+        """x0 of the chosen runs from their joints' relative states (the joint formulation's
+        start, formulations.joint_start.from_relative, per run)."""
+        from casmech.formulations.joint_start import from_relative
 
-        lay, joints = self.layout, self.tree.joints
-        nj = len(joints)
-        x0 = np.zeros((lay.n_x, len(chosen)))
+        nj = len(self.tree.joints)
+        x0 = np.zeros((self.n_x, len(chosen)))
         for i in np.flatnonzero(chosen):
-            for k, joint in enumerate(joints):
-                column = nj * i + k
-                theta_k, u_k = joint_state(joint, rotations[:, 3 * column:3 * column + 3],
-                                           gaps[:, column], twists[:, column])
-                x0[list(lay.theta[k]), i] = theta_k[list(lay.free_theta[k])]
-                x0[list(lay.u[k]), i] = u_k[list(lay.free_u[k])]
+            x0[:, i] = from_relative(self.tree, rotations[:, 3 * nj * i:3 * nj * (i + 1)],
+                                     gaps[:, nj * i:nj * (i + 1)], twists[:, nj * i:nj * (i + 1)])
         return x0
 
     # ------------------------------------------------------------------ the mapped runs
@@ -245,7 +241,7 @@ class Batch:
         picked = ca.vertcat(*(row[k - 1] for k in self.columns)) if self.columns else ca.SX(0, 1)
         kept = ca.Function("kept_row", [t, q, q_dot, q_ddot, lam, split.symbols], [picked])
         motion = lib["joint_motion"]
-        times, states = ca.MX.sym("t", 1, rows), ca.MX.sym("x", self.layout.n_x, rows)
+        times, states = ca.MX.sym("t", 1, rows), ca.MX.sym("x", self.n_x, rows)
         q0, data = ca.MX.sym("q0", 7 * nb), ca.MX.sym("data", motion.size1_in(4))
         d = ca.MX.sym("d", split.symbols.numel())
         z = ca.MX(0, 1)
