@@ -75,10 +75,11 @@ def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -
 
 def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     """The joint formulation's functions by name, each with what is generated with it (as
-    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
-    derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
-    with its Jacobian by the states as a function of its own); none for loops through a
-    floating body."""
+    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its
+    Jacobian by the states from the RNEA identity (JointSystem.identity_jacobian), or beyond
+    its size its forward derivative, whose Jacobian a symbolic AD would make huge on a long
+    chain; the loops' DAE with its Jacobian by the states as a function of its own); none for
+    loops through a floating body."""
     tree = spanning_tree(split.ir)
     if tree.floating_loops:  # auto runs rp (runtime.auto_formulation)
         return {}
@@ -86,7 +87,9 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     dynamics = {system.dynamics.name(): [system.dynamics]}
     if system.n_cut:  # the DAE's Jacobian by the states, never by d
         dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]
-    else:  # a tree's: by forward sweeps (JointSystem.problem), the derivative casadi looks up
+    elif system.identity_jacobian is not None:  # a tree's by the RNEA identity, never by d
+        dynamics[JOINT_JACOBIAN] = [system.identity_jacobian()]
+    else:  # by forward sweeps (JointSystem.problem), the derivative casadi looks up
         dynamics["joint_ode"].append(system.dynamics.forward(1))
     return {**dynamics, "joint_motion": [system.motion],
             "joint_acceleration_system": [system.acceleration_system],

@@ -350,7 +350,8 @@ def _controlled(functions: SystemFunctions, controller: Callable,
 
     def joint_system():
         if "system" not in joint_state:
-            joint_state["system"] = build_joint_system(controlled_ir, spanning_tree(ir), u)
+            joint_state["system"] = build_joint_system(controlled_ir, spanning_tree(ir), u,
+                                                       identity_states=0)
         return joint_state["system"]
 
     def joint_sources() -> dict[str, ca.Function]:

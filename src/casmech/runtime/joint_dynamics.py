@@ -46,6 +46,7 @@ from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
+JACOBIAN = "joint_jacobian"  # a library's tree-ODE or DAE Jacobian (JointSystem.given_jacobian)
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
@@ -92,7 +93,8 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     def make() -> JointSystem:
         if functions.joint_functions is not None:
             return library_system(functions, workspace)
-        system = build(functions.ir, tree_of(functions, workspace))
+        system = build(functions.ir, tree_of(functions, workspace),
+                       identity_states=settings.stiff_states)
         if _compiled(functions) and not lags_bundle(functions, compile_):
             system = compiled_system(system, functions.n_bodies <= compile_.motion_bodies,
                                      settings)
@@ -110,28 +112,34 @@ def library_system(functions: SystemFunctions,
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
                        library["joint_velocity_jacobian"], library["joint_relative_states"],
-                       given_jacobian=library.get("joint_jacobian"))
+                       given_jacobian=library.get(JACOBIAN))
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True,
                     settings: DynamicsSolver = DEFAULT) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
-    codegen's cache; with the tree's ODE its forward derivative where method auto may choose
-    BDF (up to settings.stiff_states; its Jacobian by forward sweeps: casadi's externals find
-    fwd1_<name> in their library), with the DAE its Jacobian (JointSystem.problem)."""
+    codegen's cache; with the tree's ODE, where method auto may choose BDF (up to
+    settings.stiff_states), its Jacobian by the RNEA identity (JointSystem.identity_jacobian)
+    or, without one, its forward derivative (the Jacobian by forward sweeps: casadi's
+    externals find fwd1_<name> in their library); with the DAE its Jacobian
+    (JointSystem.problem)."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
-    if not system.n_cut and system.layout.n_x <= settings.stiff_states:
+    stiff = not system.n_cut and system.layout.n_x <= settings.stiff_states
+    if stiff and system.identity_jacobian is not None:
+        functions[JACOBIAN] = system.identity_jacobian()
+    elif stiff:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion))
+                   motion=built.get("joint_motion", system.motion),
+                   given_jacobian=built.get(JACOBIAN, system.given_jacobian))
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
