@@ -37,6 +37,7 @@ from casmech.formulations.joint_start import (  # noqa: F401 (the runtime's name
 )
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, spanning_tree
+from casmech.numerics import lazy_jacobian
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
@@ -248,7 +249,10 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
-    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    # one evaluation: by forward sweeps, built in a fraction of the RNEA identity's build time
+    # (which a run on functional iteration never needs), unless a library gives one
+    probe = system.given_jacobian or lazy_jacobian.jacobian(system.dynamics)
+    jacobian = np.array(probe(t0, x0, rate)[1].full())
     if not np.all(np.isfinite(jacobian)):  # a law not differentiable at t0 (or worse: the
         return "adams"  # first row then says so); no stiffness to judge by
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
