@@ -39,6 +39,7 @@ from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
 from casmech.formulations import prescribed, residuals
+from casmech.formulations.joint_system import IDENTITY_STATES
 from casmech.formulations.joint_system import build as build_joint_system
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
@@ -83,7 +84,7 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     tree = spanning_tree(split.ir)
     if tree.floating_loops:  # auto runs rp (runtime.auto_formulation)
         return {}
-    system = build_joint_system(split.ir, tree, split.symbols)
+    system = build_joint_system(split.ir, tree, split.symbols, IDENTITY_STATES)
     dynamics = {system.dynamics.name(): [system.dynamics]}
     if system.n_cut:  # the DAE's Jacobian by the states, never by d
         dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]

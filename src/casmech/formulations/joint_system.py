@@ -413,12 +413,16 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
-          identity_states: int = IDENTITY_STATES) -> JointSystem:
+          identity_states: int | None = None) -> JointSystem:
     """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
     of a parametric one, every function with the trailing input "d" (module docstring); a
-    tree's of up to identity_states states with its ODE's Jacobian by the RNEA identity
+    tree's of up to identity_states states (None: IDENTITY_STATES for a numeric IR, 0 for a
+    parametric one) with its ODE's Jacobian by the RNEA identity
     (JointSystem.identity_jacobian: a numeric build's built when first asked for, a
-    parametric one's at once, since it may hoist constants into the data input)."""
+    parametric one's at once, since it hoists constants into the data input, which other
+    builds' functions paired with this one's data function then do not take)."""
+    if identity_states is None:
+        identity_states = IDENTITY_STATES if data is None else 0
     constants = Constants(data)
     b = _Builder(ir, tree, constants)
     t, x, z, w = b.t, b.x, b.z, b.w

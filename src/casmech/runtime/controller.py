@@ -350,8 +350,7 @@ def _controlled(functions: SystemFunctions, controller: Callable,
 
     def joint_system():
         if "system" not in joint_state:
-            joint_state["system"] = build_joint_system(controlled_ir, spanning_tree(ir), u,
-                                                       identity_states=0)
+            joint_state["system"] = build_joint_system(controlled_ir, spanning_tree(ir), u)
         return joint_state["system"]
 
     def joint_sources() -> dict[str, ca.Function]:
