@@ -27,6 +27,7 @@ parameter value.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, cached_property
 
@@ -39,7 +40,7 @@ from casmech.elements.joint_types import MOTIONS
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
 from casmech.equations.assemble import driver_value
-from casmech.formulations import articulated
+from casmech.formulations import articulated, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
@@ -49,6 +50,9 @@ from casmech.numerics import lazy_jacobian
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
 ROW_NORM_FLOOR = 1e-9
+# the largest tree ODE (states) whose Jacobian build's RNEA identity gives: its symbolic
+# derivative grows with the square of the tree, past which forward sweeps build faster
+IDENTITY_STATES = 200
 
 
 @dataclass(frozen=True)
@@ -94,6 +98,10 @@ class JointSystem:
     data: ca.Function | None = None
     # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
     given_jacobian: ca.Function | None = None
+    # a tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian), built on
+    # the first call; (t, x, ode) -> (d ode/dt, d ode/dx), with a trailing input d and no
+    # derivative by it over a parametric IR
+    identity_jacobian: Callable[[], ca.Function] | None = None
 
     @property
     def n_cut(self) -> int:
@@ -101,21 +109,32 @@ class JointSystem:
 
     @cached_property
     def problem(self) -> dict:
-        """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
-        sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
-        (IDAS evaluates it at every linear-solver setup, where the forward sweeps cost far
-        more per evaluation: docs/decisions/loop-dae-stabilization.md); a compiled
-        library's when given."""
-        if self.given_jacobian is not None:
-            return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
+        """casadi.integrator's problem (MX). Its Jacobian: a compiled library's when given; a
+        tree's by the RNEA identity when the build made one (numeric IR, up to
+        build's identity_states), else by lazy_jacobian's forward sweeps (cheap to build for
+        a large ODE); the loops' DAE's symbolic, built once (IDAS evaluates it at every
+        linear-solver setup, where the forward sweeps cost far more per evaluation:
+        docs/decisions/loop-dae-stabilization.md)."""
+        if self.given_jacobian is not None or self._identity is not None:
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
             return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
     def jacobian(self) -> ca.Function:
-        """The given Jacobian, else lazy_jacobian.jacobian of `dynamics`, built once."""
-        return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
+        """The given Jacobian, else the RNEA identity's (a numeric build's), else
+        lazy_jacobian.jacobian of `dynamics`, built once."""
+        if self.given_jacobian is not None:
+            return self.given_jacobian
+        if self._identity is not None:
+            return self._identity()
+        return lazy_jacobian.jacobian(self.dynamics)
+
+    @property
+    def _identity(self) -> Callable[[], ca.Function] | None:
+        """identity_jacobian where it has jacobian()'s signature (no trailing input d)."""
+        return self.identity_jacobian if self.data is None else None
 
     @cached_property
     def functional_problem(self) -> dict:
@@ -302,6 +321,31 @@ class _Builder:
                        for slots in self.layout.u]
         return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
 
+    def ode_jacobian(self, data: ca.SX | None) -> ca.Function:
+        """A tree's ODE's Jacobian by (t, x) from its inverse dynamics (Carpentier and Mansard
+        2018, rnea.forward_derivatives): d u'/d(t, x) = -M^-1 dRNEA/d(t, x) at u' = the ODE
+        value, an input, so no articulated-body sweep is re-run; theta' by CasADi's AD.
+        (t, x, ode[, d]) -> (d ode/dt, d ode/dx): jacobian()'s signature, or with the model
+        data d of a parametric IR trailing, never differentiated."""
+        lay = self.layout
+        n_u = lay.n_x - lay.n_theta
+        ode, u_dot = ca.SX.sym("ode", lay.n_x), ca.SX.sym("u_dot", n_u)
+        accelerations = [u_dot[[k - lay.n_theta for k in slots]] if slots else ca.SX(0, 1)
+                         for slots in lay.u]
+        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
+        tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(self.ir, self.joints, self.kin,
+                                                             applied, accelerations))
+        by_t, by_x, _ = rnea.forward_derivatives(tau, u_dot, ode[lay.n_theta:],
+                                                 [self.t, self.x])
+        outputs = [ca.vertcat(ca.jacobian(self.theta_dot, self.t), by_t),
+                   ca.vertcat(ca.jacobian(self.theta_dot, self.x), by_x)]
+        names = ["jac_ode_t", "jac_ode_x"]
+        if data is None:
+            return ca.Function("jac_joint_ode", [self.t, self.x, ode], outputs,
+                               ["t", "x", "ode"], names)
+        return ca.Function("joint_jacobian", [self.t, self.x, ode, self.constants.inputs],
+                           outputs, ["t", "x", "out_ode", DATA], names)
+
     def multipliers(self, dynamics, lam_cut) -> ca.SX:
         """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
         from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
@@ -368,9 +412,17 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
                        [ca.vertcat(b.theta_dot, *dyn.u_dot)], list(inputs), ["ode"])
 
 
-def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
+def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
+          identity_states: int | None = None) -> JointSystem:
     """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
-    of a parametric one, every function with the trailing input "d" (module docstring)."""
+    of a parametric one, every function with the trailing input "d" (module docstring); a
+    tree's of up to identity_states states (None: IDENTITY_STATES for a numeric IR, 0 for a
+    parametric one) with its ODE's Jacobian by the RNEA identity
+    (JointSystem.identity_jacobian: a numeric build's built when first asked for, a
+    parametric one's at once, since it hoists constants into the data input, which other
+    builds' functions paired with this one's data function then do not take)."""
+    if identity_states is None:
+        identity_states = IDENTITY_STATES if data is None else 0
     constants = Constants(data)
     b = _Builder(ir, tree, constants)
     t, x, z, w = b.t, b.x, b.z, b.w
@@ -401,6 +453,11 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
     poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
     relative = dict(zip(("rotations", "gaps", "twists"),
                         _relative(tree.joints, *poses.values(), constants), strict=True))
+    identity = None
+    if not b.cut_rows and b.layout.n_x <= identity_states:
+        identity = cache(lambda: b.ode_jacobian(data))
+        if data is not None:  # before the data input is fixed: it holds the constants hoisted
+            identity = _built(identity())
     extra = {} if data is None else {DATA: constants.inputs}
 
     def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
@@ -414,4 +471,10 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
         function("joint_acceleration_system", {"t": t, "x": x}, acceleration),
         function("joint_velocity_jacobian", {"t": t, "x": x}, {"jacobian": velocity}),
         function("joint_relative_states", poses, relative),
-        None if data is None else constants.function())
+        None if data is None else constants.function(),
+        identity_jacobian=identity)
+
+
+def _built(function: ca.Function) -> Callable[[], ca.Function]:
+    """A function already built, in JointSystem.identity_jacobian's form."""
+    return lambda: function
