@@ -39,7 +39,6 @@ from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
 from casmech.formulations import prescribed, residuals
-from casmech.formulations.joint_system import IDENTITY_STATES
 from casmech.formulations.joint_system import build as build_joint_system
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
@@ -76,24 +75,19 @@ def key(model: ResolvedModel, signature: str, toolchain: Toolchain, dae: bool) -
 
 def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
     """The joint formulation's functions by name, each with what is generated with it (as
-    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its
-    forward derivative, whose Jacobian a symbolic AD would make huge on a long chain, and up
-    to IDENTITY_STATES its Jacobian by the states from the RNEA identity
-    (JointSystem.identity_jacobian); the loops' DAE with its Jacobian by the states as a
-    function of its own); none for loops through a floating body."""
+    runtime.joint_dynamics.compiled_system for a numeric bundle: a tree's ODE with its forward
+    derivative, whose Jacobian a symbolic AD would make huge on a long chain; the loops' DAE
+    with its Jacobian by the states as a function of its own); none for loops through a
+    floating body."""
     tree = spanning_tree(split.ir)
     if tree.floating_loops:  # auto runs rp (runtime.auto_formulation)
         return {}
-    system = build_joint_system(split.ir, tree, split.symbols, IDENTITY_STATES)
+    system = build_joint_system(split.ir, tree, split.symbols)
     dynamics = {system.dynamics.name(): [system.dynamics]}
     if system.n_cut:  # the DAE's Jacobian by the states, never by d
         dynamics[JOINT_JACOBIAN] = [lazy_jacobian.data_jacobian(system.dynamics, JOINT_JACOBIAN)]
-    else:  # a tree's: its forward derivative, which casadi looks up to differentiate the
-        # ODE over d as well (study.batch's integrators), and the runtime's Jacobian by the
-        # RNEA identity (never by d)
+    else:  # a tree's: by forward sweeps (JointSystem.problem), the derivative casadi looks up
         dynamics["joint_ode"].append(system.dynamics.forward(1))
-        if system.identity_jacobian is not None:
-            dynamics[JOINT_JACOBIAN] = [system.identity_jacobian()]
     return {**dynamics, "joint_motion": [system.motion],
             "joint_acceleration_system": [system.acceleration_system],
             "joint_velocity_jacobian": [system.velocity_jacobian],

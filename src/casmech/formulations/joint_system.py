@@ -98,9 +98,8 @@ class JointSystem:
     data: ca.Function | None = None
     # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
     given_jacobian: ca.Function | None = None
-    # a tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian), built on
-    # the first call; (t, x, ode) -> (d ode/dt, d ode/dx), with a trailing input d and no
-    # derivative by it over a parametric IR
+    # a numeric tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian),
+    # built on the first call; jacobian()'s signature (t, x, ode) -> (d ode/dt, d ode/dx)
     identity_jacobian: Callable[[], ca.Function] | None = None
 
     @property
@@ -110,12 +109,12 @@ class JointSystem:
     @cached_property
     def problem(self) -> dict:
         """casadi.integrator's problem (MX). Its Jacobian: a compiled library's when given; a
-        tree's by the RNEA identity when the build made one (numeric IR, up to
-        build's identity_states), else by lazy_jacobian's forward sweeps (cheap to build for
+        tree's by the RNEA identity when the build made one (numeric IR, up to build's
+        identity_states), else by lazy_jacobian's forward sweeps (cheap to build for
         a large ODE); the loops' DAE's symbolic, built once (IDAS evaluates it at every
         linear-solver setup, where the forward sweeps cost far more per evaluation:
         docs/decisions/loop-dae-stabilization.md)."""
-        if self.given_jacobian is not None or self._identity is not None:
+        if self.given_jacobian is not None or self.identity_jacobian is not None:
             return lazy_jacobian.problem(self.dynamics, jacobian=self.jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
             return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
@@ -127,14 +126,9 @@ class JointSystem:
         lazy_jacobian.jacobian of `dynamics`, built once."""
         if self.given_jacobian is not None:
             return self.given_jacobian
-        if self._identity is not None:
-            return self._identity()
+        if self.identity_jacobian is not None:
+            return self.identity_jacobian()
         return lazy_jacobian.jacobian(self.dynamics)
-
-    @property
-    def _identity(self) -> Callable[[], ca.Function] | None:
-        """identity_jacobian where it has jacobian()'s signature (no trailing input d)."""
-        return self.identity_jacobian if self.data is None else None
 
     @cached_property
     def functional_problem(self) -> dict:
@@ -321,12 +315,11 @@ class _Builder:
                        for slots in self.layout.u]
         return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
 
-    def ode_jacobian(self, data: ca.SX | None) -> ca.Function:
+    def ode_jacobian(self) -> ca.Function:
         """A tree's ODE's Jacobian by (t, x) from its inverse dynamics (Carpentier and Mansard
         2018, rnea.forward_derivatives): d u'/d(t, x) = -M^-1 dRNEA/d(t, x) at u' = the ODE
         value, an input, so no articulated-body sweep is re-run; theta' by CasADi's AD.
-        (t, x, ode[, d]) -> (d ode/dt, d ode/dx): jacobian()'s signature, or with the model
-        data d of a parametric IR trailing, never differentiated."""
+        (t, x, ode) -> (d ode/dt, d ode/dx): jacobian()'s signature (a numeric IR's)."""
         lay = self.layout
         n_u = lay.n_x - lay.n_theta
         ode, u_dot = ca.SX.sym("ode", lay.n_x), ca.SX.sym("u_dot", n_u)
@@ -339,12 +332,8 @@ class _Builder:
                                                  [self.t, self.x])
         outputs = [ca.vertcat(ca.jacobian(self.theta_dot, self.t), by_t),
                    ca.vertcat(ca.jacobian(self.theta_dot, self.x), by_x)]
-        names = ["jac_ode_t", "jac_ode_x"]
-        if data is None:
-            return ca.Function("jac_joint_ode", [self.t, self.x, ode], outputs,
-                               ["t", "x", "ode"], names)
-        return ca.Function("joint_jacobian", [self.t, self.x, ode, self.constants.inputs],
-                           outputs, ["t", "x", "out_ode", DATA], names)
+        return ca.Function("jac_joint_ode", [self.t, self.x, ode], outputs, ["t", "x", "ode"],
+                           ["jac_ode_t", "jac_ode_x"])
 
     def multipliers(self, dynamics, lam_cut) -> ca.SX:
         """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
@@ -413,16 +402,13 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
-          identity_states: int | None = None) -> JointSystem:
+          identity_states: int = IDENTITY_STATES) -> JointSystem:
     """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
     of a parametric one, every function with the trailing input "d" (module docstring); a
-    tree's of up to identity_states states (None: IDENTITY_STATES for a numeric IR, 0 for a
-    parametric one) with its ODE's Jacobian by the RNEA identity
-    (JointSystem.identity_jacobian: a numeric build's built when first asked for, a
-    parametric one's at once, since it hoists constants into the data input, which other
-    builds' functions paired with this one's data function then do not take)."""
-    if identity_states is None:
-        identity_states = IDENTITY_STATES if data is None else 0
+    numeric tree's of up to identity_states states with its ODE's Jacobian by the RNEA
+    identity (JointSystem.identity_jacobian, built when first asked for). A build over
+    symbols makes none: its constants are hoisted into the data input as they are met, and the
+    data function is fixed with the build (docs/decisions/joint-derivatives.md)."""
     constants = Constants(data)
     b = _Builder(ir, tree, constants)
     t, x, z, w = b.t, b.x, b.z, b.w
@@ -454,10 +440,8 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
     relative = dict(zip(("rotations", "gaps", "twists"),
                         _relative(tree.joints, *poses.values(), constants), strict=True))
     identity = None
-    if not b.cut_rows and b.layout.n_x <= identity_states:
-        identity = cache(lambda: b.ode_jacobian(data))
-        if data is not None:  # before the data input is fixed: it holds the constants hoisted
-            identity = _built(identity())
+    if data is None and not b.cut_rows and b.layout.n_x <= identity_states:
+        identity = cache(b.ode_jacobian)
     extra = {} if data is None else {DATA: constants.inputs}
 
     def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
@@ -473,8 +457,3 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
         function("joint_relative_states", poses, relative),
         None if data is None else constants.function(),
         identity_jacobian=identity)
-
-
-def _built(function: ca.Function) -> Callable[[], ca.Function]:
-    """A function already built, in JointSystem.identity_jacobian's form."""
-    return lambda: function

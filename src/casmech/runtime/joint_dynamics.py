@@ -41,7 +41,6 @@ from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
-JACOBIAN = "joint_jacobian"  # a library's tree-ODE or DAE Jacobian (JointSystem.given_jacobian)
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
@@ -107,34 +106,30 @@ def library_system(functions: SystemFunctions,
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
                        library["joint_velocity_jacobian"], library["joint_relative_states"],
-                       given_jacobian=library.get(JACOBIAN))
+                       given_jacobian=library.get("joint_jacobian"))
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True,
                     settings: DynamicsSolver = DEFAULT) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
-    codegen's cache; with the tree's ODE, where method auto may choose BDF (up to
-    settings.stiff_states), its Jacobian by the RNEA identity (JointSystem.identity_jacobian)
-    or, without one, its forward derivative (the Jacobian by forward sweeps: casadi's
-    externals find fwd1_<name> in their library); with the DAE its Jacobian
-    (JointSystem.problem)."""
+    codegen's cache; with the tree's ODE its forward derivative where method auto may choose
+    BDF (up to settings.stiff_states; its Jacobian by forward sweeps of the compiled ODE:
+    casadi's externals find fwd1_<name> in their library, and the interpreted RNEA identity
+    is dropped: the identity's C would lengthen the cold build, joint-derivatives.md), with
+    the DAE its Jacobian (JointSystem.problem)."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
-    stiff = not system.n_cut and system.layout.n_x <= settings.stiff_states
-    if stiff and system.identity_jacobian is not None:
-        functions[JACOBIAN] = system.identity_jacobian()
-    elif stiff:
+    if not system.n_cut and system.layout.n_x <= settings.stiff_states:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion),
-                   given_jacobian=built.get(JACOBIAN, system.given_jacobian))
+                   motion=built.get("joint_motion", system.motion), identity_jacobian=None)
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
