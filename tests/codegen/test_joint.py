@@ -2,6 +2,7 @@
 (runtime.joint_dynamics.compiled_system for the mapped library; for a parametric library
 (codegen.parametric) compiled in it over the model data) and equal to the interpreted ones."""
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -29,6 +30,24 @@ def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, ca
     assert fast.dynamics is bundle.joint_functions["joint_ode"]
     # the same equations, the model's constants computed from d: roundoff
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    # a tree's Jacobian: forward sweeps of the library's ODE (no identity in the library)
+    assert "joint_jacobian" not in bundle.joint_functions and fast.identity_jacobian is None
+
+
+def _assert_jacobian_is_the_odes(fast, slow) -> None:
+    """fast's ODE Jacobian (JointSystem.jacobian) equals CasADi's AD of slow's ODE (the
+    articulated-body recursion) at random (t, x)."""
+    t_sym, x_sym = ca.SX.sym("t"), ca.SX.sym("x", slow.layout.n_x)
+    ode = slow.dynamics(t_sym, x_sym)
+    reference = ca.Function("reference", [t_sym, x_sym],
+                            [ca.jacobian(ode, t_sym), ca.jacobian(ode, x_sym)])
+    for _ in range(3):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        for a, b in zip(fast.jacobian(t, x, fast.dynamics(t, x)), reference(t, x), strict=True):
+            b = np.array(b)
+            # two derivatives of the same dynamics (the compiled ODE's forward sweeps, AD of
+            # the interpreted one): roundoff, relative to the largest entry
+            np.testing.assert_allclose(np.array(a), b, rtol=0, atol=1e-9 * np.max(np.abs(b)))
 
 
 def _assert_same_tree_functions(fast, slow, nb: int) -> None:
@@ -47,6 +66,10 @@ def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):
     assert fast.dynamics.class_name() == "External" and slow.dynamics.is_a("SXFunction")
     # the same SX compiled to C: equal to roundoff
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    # forward sweeps of the compiled ODE (its fwd1_ in the library), not the interpreted
+    # identity the numeric build offers
+    assert fast.identity_jacobian is None and slow.identity_jacobian is not None
+    _assert_jacobian_is_the_odes(fast, slow)
 
 
 def test_compiled_run_is_the_interpreted_run(interpreted, compiled):

@@ -18,7 +18,9 @@ file, so that p_k (x) q_k is the joint frame carried by body k.
   wx, wy, wz = R_F^T (omega_j - omega_i), the relative angular velocity in body_i's joint frame
   R_F = A(p_i (x) q_i).
 
-Every rate is the time derivative by AD (x.rate), as coordinates.py's.
+Every rate is the time derivative by AD (x.rate), as coordinates.py's. A spherical joint's
+seven states are one traced step (core.traced_steps) evaluated once per joint and state x
+(`spherical_states`; GROUPS names it for readers that keep a joint's values together).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import casadi as ca
 
 from casmech.core import euler
 from casmech.core.quaternions import conjugate, product
+from casmech.core.traced_steps import traced
 from casmech.core.values import constant
 from casmech.equations import body
 
@@ -53,22 +56,36 @@ def angle_j(geometry, x):
     return ca.atan2(x_i.T @ z_j, x_i.T @ x_j)
 
 
-def _joint_frame(geometry, x, side: str):
-    """Euler parameters of the joint frame carried by body_i or body_j."""
-    k = geometry.body_i if side == "i" else geometry.body_j
-    return product(x.p(k), constant(geometry.axes[f"q_{side}"]))
+def _spherical(p_i, p_j, p_i_dot, p_j_dot, q_i, q_j):
+    """(e, w): body_j's joint frame relative to body_i's as Euler parameters (4 x 1) and
+    body_j's angular velocity relative to body_i's in body_i's joint frame (3 x 1)."""
+    frame_i, frame_j = product(p_i, q_i), product(p_j, q_j)
+    omega_i, omega_j = (body.global_rates(p, p_dot)[0]
+                        for p, p_dot in ((p_i, p_i_dot), (p_j, p_j_dot)))
+    return (product(conjugate(frame_i), frame_j),
+            euler.rotation(frame_i).T @ (omega_j - omega_i))
+
+
+SPHERICAL = traced(_spherical)  # per joint
+SPHERICAL_STATES = ("e0", "e1", "e2", "e3", "wx", "wy", "wz")
+
+
+def spherical_states(geometry, x) -> dict:
+    """A spherical joint's e0 .. e3, wx, wy, wz at x."""
+    i, j = geometry.body_i, geometry.body_j
+    e, w = SPHERICAL(x.p(i), x.p(j), x.p(i, x.q_dot), x.p(j, x.q_dot),
+                     constant(geometry.axes["q_i"]), constant(geometry.axes["q_j"]))
+    return dict(zip(SPHERICAL_STATES, ca.vertsplit(ca.vertcat(e, w)), strict=True))
 
 
 def relative_rotation(geometry, x):
     """Euler parameters of body_j's joint frame relative to body_i's (4 x 1)."""
-    return product(conjugate(_joint_frame(geometry, x, "i")), _joint_frame(geometry, x, "j"))
+    return ca.vertcat(*(spherical_states(geometry, x)[name] for name in SPHERICAL_STATES[:4]))
 
 
 def relative_angular_velocity(geometry, x):
     """Body_j's angular velocity relative to body_i's, in body_i's joint frame (3 x 1)."""
-    i, j = geometry.body_i, geometry.body_j
-    omega = [body.global_rates(x.p(k), x.p(k, x.q_dot))[0] for k in (i, j)]
-    return euler.rotation(_joint_frame(geometry, x, "i")).T @ (omega[1] - omega[0])
+    return ca.vertcat(*(spherical_states(geometry, x)[name] for name in SPHERICAL_STATES[4:]))
 
 
 def _rate(coordinate):
@@ -81,7 +98,8 @@ VALUES = {
     "angle_i_dot": _rate(angle_i),
     "angle_j": angle_j,
     "angle_j_dot": _rate(angle_j),
-    **{f"e{n}": (lambda geometry, x, n=n: relative_rotation(geometry, x)[n]) for n in range(4)},
-    **{f"w{axis}": (lambda geometry, x, n=n: relative_angular_velocity(geometry, x)[n])
-       for n, axis in enumerate("xyz")},
+    **{name: (lambda geometry, x, name=name: spherical_states(geometry, x)[name])
+       for name in SPHERICAL_STATES},
 }
+# attribute -> the function (geometry, x) -> {attribute: value} that gives it with others
+GROUPS = dict.fromkeys(SPHERICAL_STATES, spherical_states)

@@ -33,7 +33,7 @@ from casmech.core.values import constant
 from casmech.elements.coordinate_kinds import ANGLE
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 from casmech.elements.joint_types import REGISTRY, attributes
-from casmech.equations import contact, coordinates
+from casmech.equations import contact, coordinates, joint_states
 from casmech.equations.assemble import Coordinates
 from casmech.model.bindings import coordinate_geometry
 from casmech.model.ir import ModelIR
@@ -138,6 +138,10 @@ class Readings:
             return coupling_column(self.x, self.ir.joints[index], self.force[:, index],
                                    self.torque[:, index])
         geometry = coordinate_geometry(self.ir.joints[index])
+        group = joint_states.GROUPS.get(attribute)
+        if group is not None:  # the joint's states evaluated together, once
+            return self._group((group.__name__, owner),
+                               lambda: group(geometry, self.x))[attribute]
         return coordinates.JOINT_VALUES[attribute](geometry, self.x)
 
 

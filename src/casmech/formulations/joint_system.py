@@ -27,6 +27,7 @@ parameter value.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, cached_property
 
@@ -39,7 +40,7 @@ from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
 from casmech.equations.assemble import driver_value
-from casmech.formulations import articulated
+from casmech.formulations import articulated, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
@@ -49,6 +50,9 @@ from casmech.numerics import lazy_jacobian
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
 ROW_NORM_FLOOR = 1e-9
+# the largest tree ODE (states) whose Jacobian build's RNEA identity gives: its symbolic
+# derivative grows with the square of the tree, past which forward sweeps build faster
+IDENTITY_STATES = 200
 
 
 @dataclass(frozen=True)
@@ -108,6 +112,9 @@ class JointSystem:
     data: ca.Function | None = None
     # dynamics' Jacobian (jacobian()'s signature) given by a compiled library, else built
     given_jacobian: ca.Function | None = None
+    # a numeric tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian),
+    # built on the first call; jacobian()'s signature (t, x, ode) -> (d ode/dt, d ode/dx)
+    identity_jacobian: Callable[[], ca.Function] | None = None
 
     @property
     def n_cut(self) -> int:
@@ -115,21 +122,27 @@ class JointSystem:
 
     @cached_property
     def problem(self) -> dict:
-        """casadi.integrator's problem (MX). Its Jacobian: a tree's by lazy_jacobian's forward
-        sweeps (cheap to build for a large ODE); the loops' DAE's symbolic, built once
-        (IDAS evaluates it at every linear-solver setup, where the forward sweeps cost far
-        more per evaluation: docs/decisions/loop-dae-stabilization.md); a compiled
-        library's when given."""
-        if self.given_jacobian is not None:
-            return lazy_jacobian.problem(self.dynamics, jacobian=self.given_jacobian)
+        """casadi.integrator's problem (MX). Its Jacobian: a compiled library's when given; a
+        tree's by the RNEA identity when the build made one (numeric IR, up to build's
+        identity_states), else by lazy_jacobian's forward sweeps (cheap to build for
+        a large ODE); the loops' DAE's symbolic, built once (IDAS evaluates it at every
+        linear-solver setup, where the forward sweeps cost far more per evaluation:
+        docs/decisions/loop-dae-stabilization.md)."""
+        if self.given_jacobian is not None or self.identity_jacobian is not None:
+            return lazy_jacobian.problem(self.dynamics, jacobian=self.jacobian)
         if self.n_cut:  # compiled: the library holds it (runtime.joint_dynamics)
             return lazy_jacobian.problem(self.dynamics, jacobian=self.dynamics.jacobian())
         return lazy_jacobian.problem(self.dynamics)
 
     @cached_property
     def jacobian(self) -> ca.Function:
-        """The given Jacobian, else lazy_jacobian.jacobian of `dynamics`, built once."""
-        return self.given_jacobian or lazy_jacobian.jacobian(self.dynamics)
+        """The given Jacobian, else the RNEA identity's (a numeric build's), else
+        lazy_jacobian.jacobian of `dynamics`, built once."""
+        if self.given_jacobian is not None:
+            return self.given_jacobian
+        if self.identity_jacobian is not None:
+            return self.identity_jacobian()
+        return lazy_jacobian.jacobian(self.dynamics)
 
     @cached_property
     def functional_problem(self) -> dict:
@@ -316,6 +329,26 @@ class _Builder:
                        for slots in self.layout.u]
         return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
 
+    def ode_jacobian(self) -> ca.Function:
+        """A tree's ODE's Jacobian by (t, x) from its inverse dynamics (Carpentier and Mansard
+        2018, rnea.forward_derivatives): d u'/d(t, x) = -M^-1 dRNEA/d(t, x) at u' = the ODE
+        value, an input, so no articulated-body sweep is re-run; theta' by CasADi's AD.
+        (t, x, ode) -> (d ode/dt, d ode/dx): jacobian()'s signature (a numeric IR's)."""
+        lay = self.layout
+        n_u = lay.n_x - lay.n_theta
+        ode, u_dot = ca.SX.sym("ode", lay.n_x), ca.SX.sym("u_dot", n_u)
+        accelerations = [u_dot[[k - lay.n_theta for k in slots]] if slots else ca.SX(0, 1)
+                         for slots in lay.u]
+        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
+        tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(self.ir, self.joints, self.kin,
+                                                             applied, accelerations))
+        by_t, by_x, _ = rnea.forward_derivatives(tau, u_dot, ode[lay.n_theta:],
+                                                 [self.t, self.x])
+        outputs = [ca.vertcat(ca.jacobian(self.theta_dot, self.t), by_t),
+                   ca.vertcat(ca.jacobian(self.theta_dot, self.x), by_x)]
+        return ca.Function("jac_joint_ode", [self.t, self.x, ode], outputs, ["t", "x", "ode"],
+                           ["jac_ode_t", "jac_ode_x"])
+
     def multipliers(self, dynamics, lam_cut) -> ca.SX:
         """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
         from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
@@ -382,9 +415,14 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
                        [ca.vertcat(b.theta_dot, *dyn.u_dot)], list(inputs), ["ode"])
 
 
-def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
+def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
+          identity_states: int = IDENTITY_STATES) -> JointSystem:
     """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
-    of a parametric one, every function with the trailing input "d" (module docstring)."""
+    of a parametric one, every function with the trailing input "d" (module docstring); a
+    numeric tree's of up to identity_states states with its ODE's Jacobian by the RNEA
+    identity (JointSystem.identity_jacobian, built when first asked for). A build over
+    symbols makes none: its constants are hoisted into the data input as they are met, and the
+    data function is fixed with the build (docs/decisions/joint-derivatives.md)."""
     constants = Constants(data)
     b = _Builder(ir, tree, constants)
     t, x, z, w = b.t, b.x, b.z, b.w
@@ -415,6 +453,9 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
     poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
     relative = dict(zip(("rotations", "gaps", "twists"),
                         _relative(tree.joints, *poses.values(), constants), strict=True))
+    identity = None
+    if data is None and not b.cut_rows and b.layout.n_x <= identity_states:
+        identity = cache(b.ode_jacobian)
     extra = {} if data is None else {DATA: constants.inputs}
 
     def function(name: str, inputs: dict, outputs: dict) -> ca.Function:
@@ -428,4 +469,5 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> JointSystem:
         function("joint_acceleration_system", {"t": t, "x": x}, acceleration),
         function("joint_velocity_jacobian", {"t": t, "x": x}, {"jacobian": velocity}),
         function("joint_relative_states", poses, relative),
-        None if data is None else constants.function())
+        None if data is None else constants.function(),
+        identity_jacobian=identity)

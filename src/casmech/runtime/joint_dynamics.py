@@ -31,6 +31,7 @@ from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, layout
 from casmech.formulations.tree import Tree, spanning_tree
+from casmech.numerics import lazy_jacobian
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
@@ -86,7 +87,8 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     def make() -> JointSystem:
         if functions.joint_functions is not None:
             return library_system(functions, workspace)
-        system = build(functions.ir, tree_of(functions, workspace))
+        system = build(functions.ir, tree_of(functions, workspace),
+                       identity_states=settings.stiff_states)
         if _compiled(functions) and not lags_bundle(functions, compile_):
             system = compiled_system(system, functions.n_bodies <= compile_.motion_bodies,
                                      settings)
@@ -111,8 +113,10 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
                     settings: DynamicsSolver = DEFAULT) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache; with the tree's ODE its forward derivative where method auto may choose
-    BDF (up to settings.stiff_states; its Jacobian by forward sweeps: casadi's externals find
-    fwd1_<name> in their library), with the DAE its Jacobian (JointSystem.problem)."""
+    BDF (up to settings.stiff_states; its Jacobian by forward sweeps of the compiled ODE:
+    casadi's externals find fwd1_<name> in their library, and the interpreted RNEA identity
+    is dropped: the identity's C would lengthen the cold build, joint-derivatives.md), with
+    the DAE its Jacobian (JointSystem.problem)."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
@@ -125,7 +129,7 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion))
+                   motion=built.get("joint_motion", system.motion), identity_jacobian=None)
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
@@ -234,7 +238,10 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     rate = system.dynamics(t0, x0)
-    jacobian = np.array(system.jacobian(t0, x0, rate)[1].full())
+    # one evaluation: by forward sweeps, built in a fraction of the RNEA identity's build time
+    # (which a run on functional iteration never needs), unless a library gives one
+    probe = system.given_jacobian or lazy_jacobian.jacobian(system.dynamics)
+    jacobian = np.array(probe(t0, x0, rate)[1].full())
     if not np.all(np.isfinite(jacobian)):  # a law not differentiable at t0 (or worse: the
         return "adams"  # first row then says so); no stiffness to judge by
     radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
