@@ -9,17 +9,22 @@ Each point k of such an element is a unit `<contact>[k]` in one mode:
 - sliding, its mode the unit slip direction u0 at the start (a 3-tuple): -mu_d F_n v_t / |v_t|
   (elements/forces/contact.exact_friction; along u0 where v_t = 0); an event where v_t . u0
   reaches 0;
-- "stuck": the law off and two rows a . d_ij = 0 (dp2) holding the point: a_1, a_2 tangent to
-  the normal on body_i, s_i and s_j the point where it stuck on both bodies, so the material
-  points cannot move apart along the plane at all; the rows' multipliers give the holding
-  force, and an event stops the segment where its magnitude reaches mu_s F_n.
+- "stuck": the law off, the point held by its Group's rows, and an event where its share of
+  the holding force reaches mu_s F_n.
 
-At a stop, a stuck point slips against its holding force; a sliding one is tried stuck when its
-slip speed is at or below SLIP_STOP (else it slides on along its slip); a free one that touched
-slides along its slip, or is tried stuck when it has none. The stuck points of one body are
-redundant rows in general (a box's four corners: eight rows, three in-plane freedoms): the r-p
-formulation masks the dependent ones and reports the least-norm multipliers
-(runtime/dae_rows.minimum_norm), on which the per-point slip test runs.
+The stuck points of one body pair on one plane (a box's corners, the feet of a stool, across
+elements) form a Group held by three rows (two for a single point): two dp2 rows a . d_ij = 0
+holding the material points at the points' centroid together along the plane (a_1, a_2 tangent
+to the normal on body_i) and a dp1 row holding the turn about the normal. Three rows for the
+three in-plane freedoms: per-point rows would be six or more, dependent while the body lies
+flat and nearly dependent (not masked) once it pitches on the compliant normal. The rows'
+multipliers give a force and a torque, shared by the points in proportion to their normal
+forces (Contacts.holding), the share each point's slip test reads.
+
+At a stop, a stuck point's Group slides (every point against its share: the body it held
+moves); a sliding point is tried stuck when its slip speed is at or below SLIP_STOP (else it
+slides on along its slip); a free one that touched slides along its slip, or is tried stuck
+when it has none.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""Dynamics of a model with joint friction: sliding and stuck modes switched at located events
-(docs/decisions/joint-friction.md).
+"""Dynamics of a model with joint friction (or exact contact friction): sliding and stuck modes
+switched at located events (docs/decisions/joint-friction.md, contact-friction.md).
 
 A run is a sequence of segments, each an ordinary dynamics run (any formulation) of the model
 with every friction joint in one mode, from the state the previous segment ended in:
@@ -18,6 +18,9 @@ Segments start from the ending state (the bodies' initial poses and velocities o
 model), so each is a bundle of its own; the rows keep the run's output grid (a segment
 starting between grid points runs to the next one first) with each switch's row added, and
 the switches are `Result.metadata["friction_switches"]`.
+
+The points of contacts with exact friction are switched by the same loop, as units of their
+own (runtime/contact_friction.py: their modes, rows, events and holding forces).
 """
 
 from __future__ import annotations
