@@ -180,3 +180,48 @@ def test_box_pushed_by_a_force_ramp_sticks_until_mu_s_n_then_slides():
     after = t > t_slip + 0.05
     v = (rate * (t[after] ** 2 - t_slip ** 2) / 2 - mu_d * M * G * (t[after] - t_slip)) / M
     np.testing.assert_allclose(columns["block.vx"][after], v, rtol=1e-7, atol=1e-12)
+
+
+def test_box_twisted_by_a_torque_ramp_slips_at_mu_s_m_g_rho_then_spins():
+    mu_s, mu_d, rate = 0.5, 0.3, 4.0  # the torque about the normal grows by `rate` N m/s
+    rho = math.hypot(0.1, 0.08)  # each corner's distance from the centre
+    twist = f"  - {{name: twist, type: torque, body: block, value: [0, 0, {rate} * t]}}\n"
+    result, columns = run(box(0.0, mu_s, mu_d, t_end=1.0, extra=twist))
+    # four corners at rho, each carrying m g / 4: held while T <= mu_s m g rho (Coulomb's
+    # limit of the body, which the load-shared holding torque reaches at every corner at once)
+    t_slip = mu_s * M * G * rho / rate
+    switches = result.metadata["friction_switches"]
+    assert [s["mode"] for s in switches] == ["sliding"] * 4
+    # the located event, to the rtol
+    np.testing.assert_allclose([s["t"] for s in switches], t_slip, rtol=1e-7, atol=0)
+    t = np.asarray(result.times)
+    assert np.max(np.abs(columns["block.wz"][t < t_slip])) < 1e-9
+    # then J w' = rate t - mu_d m g rho (each corner slides along its circle)
+    after = t > t_slip + 0.05
+    w = (rate * (t[after] ** 2 - t_slip ** 2) / 2 - mu_d * M * G * rho * (t[after] - t_slip)) \
+        / 0.014
+    # to 1e-6: the block's small pitch and roll on the compliant normal while it spins
+    np.testing.assert_allclose(columns["block.wz"][after], w, rtol=1e-6, atol=1e-12)
+
+
+def test_box_launched_on_the_floor_slides_to_rest_and_sticks():
+    mu_s, mu_d, v0 = 0.5, 0.3, 1.2
+    text = box(0.0, mu_s, mu_d, t_end=1.0).replace("position: [0, 0, 0.05 - d0]}",
+                                                   f"position: [0, 0, 0.05 - d0], "
+                                                   f"velocity: [{v0}, 0, 0]}}")
+    result, columns = run(text)
+    t_stop = v0 / (mu_d * G)  # closed form: the friction's impulse mu_d m g t equals m v0
+    switches = result.metadata["friction_switches"]
+    assert set(result.metadata["friction_start_modes"].values()) == {"sliding"}
+    assert {s["mode"] for s in switches} == {"stuck"}
+    # the located stops (slip speed along its direction reaching 0), to the rtol
+    np.testing.assert_allclose([s["t"] for s in switches], t_stop, rtol=1e-7, atol=0)
+    t = np.asarray(result.times)
+    d0 = M * G / (4 * K)
+    x = material_point(columns, [0.0, 0.0, -0.05 + d0 / 2])[:, 0]  # the held centroid
+    # it stops after v0^2 / (2 mu_d g), then stays (no creep with no load along the floor).
+    # 5e-5: the launch shakes the block on its compliant normal (pitch and bounce, damped in
+    # some 0.05 s), so sum N and the deceleration vary about m g and mu_d g early on; their
+    # impulse is exact (the stop time above, to 1e-7), the distance they give not quite
+    np.testing.assert_allclose(x[t > t_stop], v0 ** 2 / (2 * mu_d * G), rtol=5e-5, atol=0)
+    assert np.ptp(x[t > t_stop]) < 1e-9

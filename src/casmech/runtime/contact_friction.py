@@ -235,6 +235,15 @@ class Contacts:
                              self.release(rows[name], holds))
         return out
 
+    def renewed(self, modes: dict, t, q, q_dot) -> dict:
+        """The sliding points' modes with their slip directions as at (t, q, q_dot) where
+        they slip faster than SLIP_STOP (a segment's start: each point's event then watches
+        its slip along its present direction)."""
+        found = self.points(t, q, q_dot)
+        return {n: tuple(float(v) for v in found[SLIP, k] / np.linalg.norm(found[SLIP, k]))
+                for k, n in enumerate(self.names) if isinstance(modes[n], tuple)
+                and np.linalg.norm(found[SLIP, k]) > SLIP_STOP}
+
     @staticmethod
     def release(group, holds: dict) -> dict:
         """The modes of a Group's points when one of them slips: all slide (the rigid body
@@ -243,14 +252,17 @@ class Contacts:
 
     def stopped(self, name: str, mode, functions, rows: dict, result) -> dict:
         """The modes after a point's event stopped a segment (in its last row): a stuck
-        point's Group slides, a sliding point that stopped is tried stuck, one still slipping
-        (or a free one that touched) slides on along its slip."""
+        point's Group slides, a sliding point that stopped is tried stuck with every other
+        touching point as still, one still slipping (or a free one that touched) slides on
+        along its slip."""
         if mode == STUCK:
             return self.release(rows[name], self.holds(functions, rows, result, -1))
-        column = self.points(result.times[-1], result.q[-1], result.q_dot[-1])[
-            :, self.names.index(name)]
+        found = self.points(result.times[-1], result.q[-1], result.q_dot[-1])
+        column = found[:, self.names.index(name)]
         if mode != FREE and np.linalg.norm(column[SLIP]) <= SLIP_STOP:
-            return {name: STUCK}
+            # with every touching point as still (those of the same body stop together)
+            return {n: STUCK for k, n in enumerate(self.names) if n == name or (
+                found[GAP, k] < 0 and np.linalg.norm(found[SLIP, k]) <= SLIP_STOP)}
         return {name: self._touched(column)}
 
     def friction_force(self, functions, rows: dict, result, start: int) -> dict:

@@ -246,7 +246,7 @@ class _Run:
         modes = {n: int(np.sign(r)) if abs(r) > STILL else 0 for n, r in rates.items()}
         modes |= self.contacts.start(t, q, q_dot)
         grid = output_times(0.0, t_end, step)
-        first, fired = True, []
+        first, fired, last = True, [], modes
         while t < t_end - 1e-12 * max(1.0, t_end):
             later = grid[grid > t + 1e-9 * step]
             t1 = t_end if np.isclose(t, grid, rtol=0, atol=1e-9 * step).any() else later[0]
@@ -256,7 +256,11 @@ class _Run:
             except AnalysisError as error:  # a failure or an interrupt: the rows before it
                 error.partial = self.finish()  # (of the segments done) in the base bundle's
                 raise
-            self.switches += [self.switch(t, name, modes) for name in fired]
+            joints = [n for n in fired if n not in self.contacts.names]
+            points = [n for n in self.contacts.names if self.label(n, modes[n]) !=
+                      self.label(n, last[n])]  # a point's every change, a renewed slip none
+            self.switches += [self.switch(t, name, modes) for name in joints + points]
+            last = modes
             if first:
                 self.result.metadata["friction_start_modes"] = {
                     n: self.label(n, m) for n, m in modes.items()}
@@ -271,6 +275,7 @@ class _Run:
                 break
             if len(self.switches) >= SWITCHES:
                 break
+            modes = modes | self.contacts.renewed(modes, t, q, q_dot)
             for name in fired:  # a stuck joint slips against its holding force; a sliding
                 # one whose rate reached 0 is tried stuck (settle releases it if it cannot be)
                 modes = modes | self.stopped(name, modes[name], found, built)

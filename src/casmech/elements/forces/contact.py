@@ -139,16 +139,20 @@ def tangential(force, x, point: Point) -> tuple:
 def exact_friction(force, k: int, f_n, v_t):
     """The exact law's friction at point k (`friction: {model: exact}`, the mode the runtime
     sets in params["modes"][k]: runtime/contact_friction.py): 0 while stuck (rows hold the
-    point); else -mu_d F_n v_t / |v_t|, along the slip direction u0 of a sliding mode (a
-    3-tuple) where v_t = 0 (a point just released); free or without a mode, 0 at v_t = 0."""
+    point); else -mu_d F_n v_t / |v_t|, and along the slip direction u0 of a sliding mode (a
+    3-tuple) where v_t . u0 <= 0 (a point just released, or one whose slip has reversed past
+    the event that ends its segment); free or without a mode, 0 at v_t = 0."""
     modes = force.params.get("modes")
     mode = None if modes is None else modes[k]
     if mode == "stuck":
         return ca.SX.zeros(3, 1)
     squared = v_t.T @ v_t
-    moving = squared > 0
-    speed = ca.sqrt(ca.if_else(moving, squared, 1))  # both branches stay finite, and so
-    u0 = ca.SX(ca.DM(mode)) if isinstance(mode, tuple) else ca.SX.zeros(3, 1)  # their AD
+    if isinstance(mode, tuple):  # along u0 wherever the slip is not ahead of it: smooth
+        u0 = ca.SX(ca.DM(mode))  # through the reversal of a straight slip, which the
+        moving = (v_t.T @ u0 > 0) * (squared > 0)  # runtime's event locates
+    else:
+        u0, moving = ca.SX.zeros(3, 1), squared > 0
+    speed = ca.sqrt(ca.if_else(moving, squared, 1))  # both branches and their AD finite
     return -force.params["mu_d"] * f_n * ca.if_else(moving, v_t / speed, u0)
 
 
