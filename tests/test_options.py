@@ -293,6 +293,12 @@ CONSTANTS = {
     "runtime/contact_friction.py STILL": "a slip at rest in the start state, a roundoff floor",
     "runtime/contact_friction.py SLIP_STOP": "a slip speed that stopped: tried stuck (settle "
                                              "releases it if it cannot be)",
+    "runtime/contact_friction.py TOUCH": "a gap touching at a segment's start, a roundoff "
+                                         "floor",
+    "runtime/contact_friction.py OPENING": "a stuck point's load at which its contact opened, "
+                                           "a roundoff floor",
+    "runtime/contact_friction.py CLOSING": "a column of the points' state (structure)",
+    "runtime/contact_friction.py ROWS": "the rows of the points' state (structure)",
     "runtime/contact_friction.py UNLOADED": "a roundoff floor of a point's share of a load",
     "runtime/contact_friction.py GAP": "a column of the points' state (structure)",
     "runtime/contact_friction.py NORMAL_FORCE": "a column of the points' state (structure)",

@@ -225,3 +225,54 @@ def test_box_launched_on_the_floor_slides_to_rest_and_sticks():
     # impulse is exact (the stop time above, to 1e-7), the distance they give not quite
     np.testing.assert_allclose(x[t > t_stop], v0 ** 2 / (2 * mu_d * G), rtol=5e-5, atol=0)
     assert np.ptp(x[t > t_stop]) < 1e-9
+
+
+def test_box_dropped_on_incline_inside_the_cone_lands_slides_and_sticks():
+    theta = 0.3
+    # released 10 mm above the floor (apart: every point free), it lands with the slope's
+    # share of its fall as slip, which the impact's friction stops
+    text = box(theta, 0.5, 0.4, t_end=1.0).replace(
+        "position: [0, 0, 0.05 - d0]}", "position: [0, 0, 0.06]}").replace("-d0]", "0.01]")
+    result, columns = run(text)
+    assert set(result.metadata["friction_start_modes"].values()) == {"free"}
+    switches = result.metadata["friction_switches"]
+    # the four corners touch at once: where the free fall along the normal covers 10 mm
+    touch = [s["t"] for s in switches[:4]]
+    np.testing.assert_allclose(touch, math.sqrt(2 * 0.01 / (G * math.cos(theta))), rtol=1e-7,
+                               atol=0)  # the located touch, to the rtol
+    assert {s["mode"] for s in switches[:4]} == {"sliding"}
+    final = {s["contact"]: s["mode"] for s in switches}
+    assert final == dict.fromkeys([f"pad[{k}]" for k in range(4)], "stuck")
+    t = np.asarray(result.times)
+    # no creep once the landing's rocking has died out (while it rocks, the bottom's centre
+    # moves by the pitch times its height below the held mid-overlap point: 1e-7 m)
+    assert switches[-1]["t"] < 0.1
+    held = material_point(columns, [0.0, 0.0, -0.05])[t > 0.5]
+    assert np.max(np.abs(held[:, :2] - held[0, :2])) < 1e-9
+    assert np.max(np.abs(columns["block.y"])) < 1e-12
+
+
+def test_box_pushed_high_tips_over_its_front_edge_which_stays_stuck():
+    rate, height = 20.0, 0.3  # a push growing by `rate` N/s, at `height` above the floor
+    d0 = M * G / (4 * K)
+    push = (f"  - {{name: push, type: force, body: block, at: [0, 0, {height}], "
+            f"value: [{rate} * t, 0, 0]}}\n")
+    result, columns = run(box(0.0, 0.9, 0.8, t_end=0.5, extra=push))
+    # the back corners (x = -0.1) lift when the push's moment about the front edge reaches
+    # the weight's, F (height + d0 / 2) = m g 0.1: rigid statics, 1e-3 for the compliant
+    # normal (the front edge sinks as it takes the load)
+    t_tip = M * G * 0.1 / (height + d0 / 2) / rate
+    switches = result.metadata["friction_switches"]
+    assert sorted((s["contact"], s["mode"]) for s in switches) == [("pad[0]", "free"),
+                                                                   ("pad[2]", "free")]
+    np.testing.assert_allclose([s["t"] for s in switches], t_tip, rtol=1e-3, atol=0)
+    # it tips over the front edge, which stays where it stuck (mu_s = 0.9: no slip)
+    t = np.asarray(result.times)
+    assert columns["block.wy"][-1] > 1.0
+    # (the point held is the mid-overlap point where the edge was re-held as the back
+    # lifted, deeper than d0 / 2 by the load the edge took: this one moves by the pitch
+    # times that depth difference, under d0 (25 um) times the 0.15 rad the block turns)
+    edge = material_point(columns, [0.1, 0.0, -0.05 + d0 / 2])
+    pitch = 2 * np.arcsin(np.abs(columns["block.e2"]))
+    assert np.all(np.abs(edge[:, 0] - 0.1) <= d0 * pitch + 1e-12)
+    assert pitch[t < t_tip * (1 - 1e-3)].max() < 1e-3  # upright until it tips

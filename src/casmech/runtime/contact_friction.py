@@ -4,13 +4,13 @@ the units runtime/friction.py's run switches besides the joints
 
 Each point k of such an element is a unit `<contact>[k]` in one mode:
 
-- "free" (apart at the segment's start): the sliding law, 0 while apart; an event where its
-  gap reaches 0;
+- "free" (apart at the segment's start): no friction; an event where its gap reaches 0;
 - sliding, its mode the unit slip direction u0 at the start (a 3-tuple): -mu_d F_n v_t / |v_t|
   (elements/forces/contact.exact_friction; along u0 where v_t = 0); an event where v_t . u0
   reaches 0;
 - "stuck": the law off, the point held by its Group's rows, and an event where its share of
-  the holding force reaches mu_s F_n.
+  the holding force reaches mu_s F_n or its gap reaches 0 (the contact opens: it is free, the
+  rest of its Group holds on).
 
 The stuck points of one body pair on one plane (a box's corners, the feet of a stool, across
 elements) form a Group held by three rows (two for a single point): two dp2 rows a . d_ij = 0
@@ -43,10 +43,13 @@ from casmech.runtime import events
 
 STILL = 1e-9  # slip speed (m/s) at or below which a point starting a run is tried stuck
 UNLOADED = 1e-12  # N added to each point's normal force where a Group shares its holding force
+TOUCH = 1e-12  # gap (m) at or below which a free point is touching at a segment's start
+OPENING = 1e-6  # a stuck point's load, relative to its Group's mean, at which it has opened
 SLIP_STOP = 1e-6  # slip speed (m/s) at or below which a sliding point that stopped is stuck
 FREE, STUCK = "free", "stuck"
-# the columns of one point in Contacts.state: gap, F_n, v_t (3), P (3), normal (3)
-GAP, NORMAL_FORCE, SLIP, AT, NORMAL = 0, 1, slice(2, 5), slice(5, 8), slice(8, 11)
+# the columns of one point in Contacts.state: gap, F_n, v_t (3), P (3), normal (3), gap rate
+GAP, NORMAL_FORCE, SLIP, AT, NORMAL, CLOSING = 0, 1, slice(2, 5), slice(5, 8), slice(8, 11), 11
+ROWS = 12
 
 
 def elements(ir) -> list:
@@ -80,15 +83,17 @@ class Contacts:
             for k, point in enumerate(entry_of(force.type).points(force, x)):
                 f_n, _, v_t = contact.tangential(force, x, point)
                 self.units.append((f"{force.name}[{k}]", force, k))
-                values.append(ca.vertcat(point.gap, f_n, v_t, point.at, point.normal))
+                values.append(ca.vertcat(point.gap, f_n, v_t, point.at, point.normal,
+                                         x.rate(point.gap)))
         self.names = [name for name, _, _ in self.units]
         self.x = x
         self.state = ca.Function("contact_points", [x.t, x.q, x.q_dot], [x.ground_fixed(
-            ca.horzcat(*values) if values else ca.SX(11, 0))])
+            ca.horzcat(*values) if values else ca.SX(ROWS, 0))])
 
     def points(self, t, q, q_dot) -> np.ndarray:
-        """11 x points: each point's gap, F_n, v_t, P, normal (the columns above)."""
-        return np.array(self.state(t, q, q_dot)).reshape(11, -1)
+        """ROWS x points: each point's gap, F_n, v_t, P, normal, gap rate (the columns
+        above)."""
+        return np.array(self.state(t, q, q_dot)).reshape(ROWS, -1)
 
     def start(self, t, q, q_dot) -> dict:
         """The modes of a run's start: apart: free; touching and still: stuck; else sliding
@@ -164,8 +169,9 @@ class Contacts:
         found = []
         for k, (name, force, _) in enumerate(self.units):
             mode = modes[name]
-            if mode == STUCK:
-                value = ca.norm_2(forces[name]) - force.params["mu_s"] * state[NORMAL_FORCE, k]
+            if mode == STUCK:  # slips, or its contact opens
+                value = ca.fmax(ca.norm_2(forces[name]) - force.params["mu_s"] *
+                                state[NORMAL_FORCE, k], state[GAP, k])
                 direction = "rising"
             elif mode == FREE:
                 value, direction = state[GAP, k], "falling"
@@ -236,13 +242,17 @@ class Contacts:
         return out
 
     def renewed(self, modes: dict, t, q, q_dot) -> dict:
-        """The sliding points' modes with their slip directions as at (t, q, q_dot) where
-        they slip faster than SLIP_STOP (a segment's start: each point's event then watches
-        its slip along its present direction)."""
+        """At a segment's start (t, q, q_dot): the sliding points' slip directions as they
+        are where they slip faster than SLIP_STOP (each point's event then watches its slip
+        along its present direction), and the free points touching (gap <= TOUCH and
+        closing: those touching with the one whose event fired) as touched."""
         found = self.points(t, q, q_dot)
-        return {n: tuple(float(v) for v in found[SLIP, k] / np.linalg.norm(found[SLIP, k]))
-                for k, n in enumerate(self.names) if isinstance(modes[n], tuple)
-                and np.linalg.norm(found[SLIP, k]) > SLIP_STOP}
+        renewed = {n: tuple(float(v) for v in found[SLIP, k] / np.linalg.norm(found[SLIP, k]))
+                   for k, n in enumerate(self.names) if isinstance(modes[n], tuple)
+                   and np.linalg.norm(found[SLIP, k]) > SLIP_STOP}
+        return renewed | {n: self._touched(found[:, k]) for k, n in enumerate(self.names)
+                          if modes[n] == FREE and found[GAP, k] <= TOUCH
+                          and found[CLOSING, k] < 0}
 
     @staticmethod
     def release(group, holds: dict) -> dict:
@@ -252,13 +262,25 @@ class Contacts:
 
     def stopped(self, name: str, mode, functions, rows: dict, result) -> dict:
         """The modes after a point's event stopped a segment (in its last row): a stuck
-        point's Group slides, a sliding point that stopped is tried stuck with every other
-        touching point as still, one still slipping (or a free one that touched) slides on
-        along its slip."""
-        if mode == STUCK:
-            return self.release(rows[name], self.holds(functions, rows, result, -1))
+        point whose contact opened is free, one that slips slides with its Group; a sliding
+        point that stopped is tried stuck with every other touching point as still, one still
+        slipping (or a free one that touched) slides on along its slip."""
         found = self.points(result.times[-1], result.q[-1], result.q_dot[-1])
-        column = found[:, self.names.index(name)]
+        k = self.names.index(name)
+        column = found[:, k]
+        if mode == STUCK:
+            holds = self.holds(functions, rows, result, -1)
+            excess = np.linalg.norm(holds[name]) - self.units[k][1].params["mu_s"] * max(
+                column[NORMAL_FORCE], 0.0)
+            group = rows[name]
+            loads = [max(found[NORMAL_FORCE, m], 0.0) for m in group.members]
+            floor = OPENING * max(sum(loads) / len(loads), UNLOADED)
+            if column[GAP] > excess or loads[group.names.index(name)] <= floor:
+                # its contact opened (or carries no load), with any other of its Group's
+                # unloaded with it: the others hold on
+                return {n: FREE for n, load in zip(group.names, loads, strict=True)
+                        if n == name or load <= floor}
+            return self.release(rows[name], holds)
         if mode != FREE and np.linalg.norm(column[SLIP]) <= SLIP_STOP:
             # with every touching point as still (those of the same body stop together)
             return {n: STUCK for k, n in enumerate(self.names) if n == name or (

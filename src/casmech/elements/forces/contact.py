@@ -141,10 +141,12 @@ def exact_friction(force, k: int, f_n, v_t):
     sets in params["modes"][k]: runtime/contact_friction.py): 0 while stuck (rows hold the
     point); else -mu_d F_n v_t / |v_t|, and along the slip direction u0 of a sliding mode (a
     3-tuple) where v_t . u0 <= 0 (a point just released, or one whose slip has reversed past
-    the event that ends its segment); free or without a mode, 0 at v_t = 0."""
+    the event that ends its segment); 0 while free (apart at the segment's start: the
+    overshoot past the touch the runtime locates stays smooth); without a mode (the other
+    analyses) the sliding law, 0 at v_t = 0."""
     modes = force.params.get("modes")
     mode = None if modes is None else modes[k]
-    if mode == "stuck":
+    if mode in ("stuck", "free"):  # free: apart, until the event where it touches
         return ca.SX.zeros(3, 1)
     squared = v_t.T @ v_t
     if isinstance(mode, tuple):  # along u0 wherever the slip is not ahead of it: smooth
