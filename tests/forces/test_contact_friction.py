@@ -157,6 +157,11 @@ def test_box_on_incline_outside_the_cone_slides_at_g_sin_minus_mu_cos(formulatio
     assert result.metadata["friction_switches"][0]["t"] < 1e-3
     # straight down the slope: no sideways slip or yaw
     assert np.max(np.abs(columns["block.y"])) < 1e-12
+    # the energy the friction takes once settled: its work mu_d m g cos(theta) per metre
+    # (the normal law's damping does none on a steady slide); 1e-7 relative to that work
+    e, x = columns["energy"][settled], columns["block.x"][settled]
+    np.testing.assert_allclose(e[0] - e, mu_d * M * G * math.cos(theta) * (x - x[0]),
+                               rtol=1e-7, atol=1e-9)
 
 
 def test_box_pushed_by_a_force_ramp_sticks_until_mu_s_n_then_slides():
@@ -225,6 +230,9 @@ def test_box_launched_on_the_floor_slides_to_rest_and_sticks():
     # impulse is exact (the stop time above, to 1e-7), the distance they give not quite
     np.testing.assert_allclose(x[t > t_stop], v0 ** 2 / (2 * mu_d * G), rtol=5e-5, atol=0)
     assert np.ptp(x[t > t_stop]) < 1e-9
+    # the friction never adds energy (a rise at most the integration error at rtol 1e-10)
+    energy = columns["energy"]
+    assert np.max(np.diff(energy)) < 1e-9 * np.max(np.abs(energy))
 
 
 def test_box_dropped_on_incline_inside_the_cone_lands_slides_and_sticks():
