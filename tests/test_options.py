@@ -290,6 +290,18 @@ CONSTANTS = {
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",
     "runtime/friction.py SWITCHES": "friction switches before a Zeno cascade ends a run",
+    "runtime/contact_friction.py STILL": "a slip at rest in the start state, a roundoff floor",
+    "runtime/contact_friction.py SLIP_STOP": "a slip speed that stopped: tried stuck (settle "
+                                             "releases it if it cannot be)",
+    "runtime/contact_friction.py TOUCH": "a gap touching at a segment's start, a roundoff "
+                                         "floor",
+    "runtime/contact_friction.py OPENING": "a stuck point's load at which its contact opened, "
+                                           "a roundoff floor",
+    "runtime/contact_friction.py CLOSING": "a column of the points' state (structure)",
+    "runtime/contact_friction.py ROWS": "the rows of the points' state (structure)",
+    "runtime/contact_friction.py UNLOADED": "a roundoff floor of a point's share of a load",
+    "runtime/contact_friction.py GAP": "a column of the points' state (structure)",
+    "runtime/contact_friction.py NORMAL_FORCE": "a column of the points' state (structure)",
     "runtime/interrupts.py ABANDON": "the third signal ends casmech run (the CLI's contract)",
     "runtime/kinematics.py BLOCK_SECONDS": "a mapped block's wall time (the rows are the same)",
     "runtime/nonfinite.py OVERFLOWING": "a magnitude that overflows in the next product",

@@ -112,6 +112,12 @@ def located(text: str, line: int, col: int) -> str:
     ("  - {name: s, type: sphere_plane, body_j: ball, normal: {stiffness: 1},\n"
      "     friction: {static: -0.5}}\n",
      ("E103", "forces[0].friction.static", "-0.5")),
+    ("  - {name: s, type: sphere_plane, body_j: ball, normal: {stiffness: 1},\n"
+     "     friction: {static: 0.5, model: coulomb}}\n",
+     ("E103", "forces[0].friction.model", "coulomb")),
+    ("  - {name: s, type: sphere_plane, body_j: ball, normal: {stiffness: 1},\n"
+     "     friction: {static: 0.5, model: exact, stiction_velocity: 1e-3}}\n",
+     ("E103", "forces[0].friction.stiction_velocity", "1e-3")),
     ("  - {name: s, type: sphere_plane, body_i: ball, body_j: ball, normal: {stiffness: 1}}\n",
      ("E304", "forces[0].body_j", "ball")),
     ("  - {name: s, type: capsule_plane, body_j: ball, normal: {stiffness: 1},\n"

@@ -74,13 +74,14 @@ class ForceType:
     thickness: Callable[[Mapping], float] | None = None  # params -> depth of its overlap window
     one_body: bool = False  # acts on body_i only (none on ground)
     kernel: Kernel | None = None
+    points: Callable | None = None  # a contact's (ForceIR, x) -> its contact.Point list
 
 
 def _contact(name: str, spec: type, shape_spec: Callable, shape: Callable, **extra) -> ForceType:
     return ForceType(name, spec, partial(contact_spec.resolve, shape=shape_spec), contact.lower,
                      partial(contact.generalized_force, shape=shape),
                      outputs=contact.OUTPUTS, output_values=partial(contact.outputs, shape=shape),
-                     contact=True, **extra)
+                     contact=True, points=shape, **extra)
 
 
 BUILT_IN = (

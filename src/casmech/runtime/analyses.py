@@ -47,8 +47,9 @@ DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
               extra_events=()) -> Result:
-    """A model with joint friction: segments in its modes (runtime.friction); else one run."""
-    if friction.elements(f.ir):
+    """A model with joint friction or exact contact friction: segments in its modes
+    (runtime.friction); else one run."""
+    if friction.switched(f.ir):
         def segment(functions, span, events):
             return _run_dynamics(functions, s, None, None, events, span)
 
@@ -170,9 +171,9 @@ def _controlled(functions: SystemFunctions, controller, controls, arguments: dic
     settings = analysis_settings(functions, *(arguments[name] for name in given))
     if settings.type != "dynamics":
         raise UsageError(f"a controller drives a dynamics run, not {settings.type}")
-    if friction.elements(functions.ir):
-        raise UsageError("a controller does not run with joint friction (its runs are "
-                         "segments of rebuilt functions)")
+    if friction.switched(functions.ir):
+        raise UsageError("a controller does not run with joint friction or exact contact "
+                         "friction (its runs are segments of rebuilt functions)")
     if arguments["workspace"] is not None:
         raise UsageError("a controlled run builds its own functions: give no workspace")
     from casmech.runtime import controller as controllers

@@ -1,5 +1,5 @@
-"""Dynamics of a model with joint friction: sliding and stuck modes switched at located events
-(docs/decisions/joint-friction.md).
+"""Dynamics of a model with joint friction (or exact contact friction): sliding and stuck modes
+switched at located events (docs/decisions/joint-friction.md, contact-friction.md).
 
 A run is a sequence of segments, each an ordinary dynamics run (any formulation) of the model
 with every friction joint in one mode, from the state the previous segment ended in:
@@ -18,6 +18,9 @@ Segments start from the ending state (the bodies' initial poses and velocities o
 model), so each is a bundle of its own; the rows keep the run's output grid (a segment
 starting between grid points runs to the next one first) with each switch's row added, and
 the switches are `Result.metadata["friction_switches"]`.
+
+The points of contacts with exact friction are switched by the same loop, as units of their
+own (runtime/contact_friction.py: their modes, rows, events and holding forces).
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from casmech.equations import friction, friction_load
 from casmech.equations.functions import build_functions
 from casmech.equations.symbols import Coordinates
 from casmech.errors import AnalysisError, FailureContext
-from casmech.runtime import assembly, events
+from casmech.runtime import assembly, contact_friction, events
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result, table
 from casmech.schema.resolved import ScalarFunction
@@ -53,6 +56,12 @@ def elements(ir) -> list:
     driven = {(j.name, key) for j in ir.joints for key in j.drivers}
     return [e for e in ir.limits if e.type in friction.COORDINATE
             and (e.name, friction.COORDINATE[e.type]) not in driven and not _smooth(e)]
+
+
+def switched(ir) -> bool:
+    """Whether a dynamics run of the model switches modes: joint friction with a Coulomb or
+    static part, or contacts with exact friction (runtime/contact_friction.py)."""
+    return bool(elements(ir) or contact_friction.elements(ir))
 
 
 def _smooth(element) -> bool:
@@ -145,9 +154,11 @@ class _Run:
         self.result = Result("dynamics", on_row=progress)
         self.result.event_states = Result("events")
         self.names = [e.name for e in elements(self.ir)]
+        self.contacts = contact_friction.Contacts(self.ir)
         self.coordinates = _coordinates(self.ir)
         self.switches: list[dict] = []
         self.fixed = {f"{n}.{c}": [] for n in self.names for c in friction.COLUMNS}
+        self.fixed |= {f"{f.name}.friction_force": [] for f in self.contacts.forces}
         self.segments = 0
 
     def values(self, q, q_dot) -> tuple[dict, dict]:
@@ -158,10 +169,11 @@ class _Run:
 
     def build(self, t, q, q_dot, modes):
         """The bundle of a segment from (q, q_dot) at t in `modes`, its events, the stuck
-        rows. A sliding joint with a load part gets its law's load (friction_load.sliding) from
-        the segment's model without it."""
+        joints' rows, the stuck contact points' row pairs. A sliding joint with a load part
+        gets its law's load (friction_load.sliding) from the segment's model without it."""
         s, _ = self.values(q, q_dot)
         ir, rows = segment_model(self.ir, q, q_dot, modes, s)
+        ir, held = self.contacts.segment(ir, t, q, q_dot, modes)
         functions = build_functions(ir)
         sliding = [e for e in elements(ir) if loaded(e) and modes[e.name] != 0]
         if sliding:
@@ -176,11 +188,12 @@ class _Run:
             ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {"load": load})
                                           if f is e else f for f in ir.limits))
             functions = build_functions(ir)
-        return functions, _events(functions, elements(self.ir), modes, rows), rows
+        stops = _events(functions, elements(self.ir), modes, rows)
+        return functions, stops + self.contacts.events(functions, modes, held), rows, held
 
     def attempt(self, span, built, extra):
         """A segment over span = (t0, t1, step) on a bundle of `build`: its Result."""
-        functions, stops, _ = built
+        functions, stops = built[:2]
         self.segments += 1
         return self.segment(functions, span, (*extra, *stops))
 
@@ -197,51 +210,64 @@ class _Run:
         acting along the coordinate)."""
         return -float(result.lam[k, rows[name]])
 
+    def excess(self, built, start) -> dict:
+        """{stuck joint or contact point: (|holding force| - its static limit, the limit, the
+        modes it and what is held with it slip in)} at the first row of a segment's start check."""
+        functions, _, rows, held = built
+        limits = self.limits(functions, start)
+        found = {n: (abs(self.hold(start, rows, n)) - limits[n], limits[n],
+                     {n: -int(np.sign(self.hold(start, rows, n)))}) for n in rows}
+        return found | self.contacts.excess(functions, held, start)
+
     def settle(self, span, q, q_dot, modes, extra):
         """The segment over span = (t0, t1, step) from (q, q_dot) in `modes`, with its stuck
-        joints released one by one: while one's holding force at the start exceeds its static
-        limit, the one furthest past it slides against that force (each start checked on a
-        step of 1e-6 of the span before the segment runs). (modes, Result, bundle, the stuck
-        joints' rows)."""
+        joints and contact points released one by one: while one's holding force at the start
+        exceeds its static limit, the one furthest past it slides against that force (each
+        start checked on a step of 1e-6 of the span before the segment runs). (modes, Result,
+        bundle: Functions, events, the stuck joints' rows, the stuck points' rows)."""
         t0, t1, _ = span
         while True:
             built = self.build(t0, q, q_dot, modes)
-            rows = built[2]
-            if rows:
+            if built[2] or built[3]:
                 tiny = 1e-6 * (t1 - t0)
                 start = self.attempt((t0, t0 + tiny, tiny), built, extra)
-                limits = self.limits(built[0], start)
-                excess = {n: abs(self.hold(start, rows, n)) - limits[n] for n in rows}
-                name = max(excess, key=excess.get)
-                if excess[name] > SLACK * max(limits[name], 1.0):
-                    modes = modes | {name: -int(np.sign(self.hold(start, rows, name)))}
+                excess = self.excess(built, start)
+                name = max(excess, key=lambda n: excess[n][0])
+                over, limit, slip = excess[name]
+                if over > SLACK * max(limit, 1.0):
+                    modes = modes | slip
                     continue
-            return modes, self.attempt(span, built, extra), built[0], rows
+            return modes, self.attempt(span, built, extra), built
 
     def run(self, t_end, step, extra) -> Result:
         t = 0.0
         q, q_dot = assembly.initial_state(self.functions, t, self.settings.options.solver.assembly)
         _, rates = self.values(q, q_dot)
         modes = {n: int(np.sign(r)) if abs(r) > STILL else 0 for n, r in rates.items()}
+        modes |= self.contacts.start(t, q, q_dot)
         grid = output_times(0.0, t_end, step)
-        first, fired = True, []
+        first, fired, last = True, [], modes
         while t < t_end - 1e-12 * max(1.0, t_end):
             later = grid[grid > t + 1e-9 * step]
             t1 = t_end if np.isclose(t, grid, rtol=0, atol=1e-9 * step).any() else later[0]
             span = (t, t1, step if t1 == t_end else t1 - t)
             try:
-                modes, found, functions, rows = self.settle(span, q, q_dot, modes, extra)
+                modes, found, built = self.settle(span, q, q_dot, modes, extra)
             except AnalysisError as error:  # a failure or an interrupt: the rows before it
                 error.partial = self.finish()  # (of the segments done) in the base bundle's
                 raise
-            self.switches += [{"t": float(t), "joint": name, "mode": modes[name]}
-                              for name in fired]
+            joints = [n for n in fired if n not in self.contacts.names]
+            points = [n for n in self.contacts.names if self.label(n, modes[n]) !=
+                      self.label(n, last[n])]  # a point's every change, a renewed slip none
+            self.switches += [self.switch(t, name, modes) for name in joints + points]
+            last = modes
             if first:
-                self.result.metadata["friction_start_modes"] = dict(modes)
+                self.result.metadata["friction_start_modes"] = {
+                    n: self.label(n, m) for n, m in modes.items()}
             fired = [r.name.removesuffix(".friction") for r in found.events
                      if r.name.endswith(".friction") and r.action == "stop"
                      and r.t == found.times[-1]]
-            self.keep(found, functions, rows, modes, first)
+            self.keep(found, built, modes, first)
             first = False
             t, q, q_dot = found.times[-1], found.q[-1], found.q_dot[-1]
             if found.status == events.STOPPED and not fired:
@@ -249,17 +275,34 @@ class _Run:
                 break
             if len(self.switches) >= SWITCHES:
                 break
+            modes = modes | self.contacts.renewed(modes, t, q, q_dot)
             for name in fired:  # a stuck joint slips against its holding force; a sliding
                 # one whose rate reached 0 is tried stuck (settle releases it if it cannot be)
-                modes = modes | {name: -int(np.sign(self.hold(found, rows, name, -1)))
-                                 if modes[name] == 0 else 0}
+                modes = modes | self.stopped(name, modes[name], found, built)
         return self.finish()
 
-    def keep(self, found, functions, rows, modes, first):
+    def stopped(self, name, mode, found, built) -> dict:
+        """The new modes after a joint's or contact point's event stopped a segment."""
+        if name in self.contacts.names:
+            return self.contacts.stopped(name, mode, built[0], built[3], found)
+        return {name: -int(np.sign(self.hold(found, built[2], name, -1))) if mode == 0 else 0}
+
+    def label(self, name, mode):
+        """A mode as metadata writes it (a joint's -1, 0, +1; a point's free, stuck,
+        sliding)."""
+        return contact_friction.label(mode) if name in self.contacts.names else mode
+
+    def switch(self, t, name, modes) -> dict:
+        """A switch of the run's list: {t, joint, mode} or {t, contact, mode}."""
+        unit = "contact" if name in self.contacts.names else "joint"
+        return {"t": float(t), unit: name, "mode": self.label(name, modes[name])}
+
+    def keep(self, found, built, modes, first):
         """Append a segment's rows (without its first, the previous one's last) in the base
         bundle's multipliers, with the friction columns it computed."""
+        functions, _, rows, held = built
         start = 0 if first else 1
-        extra = sorted(rows.values())
+        extra = sorted([*rows.values(), *contact_friction.rows_of(held)])
         kept = [k for k in range(found.lam.shape[1]) if k not in extra]
         names, values = table(functions, found)
         for name in self.names:
@@ -269,11 +312,13 @@ class _Run:
                 if column == "friction" and modes[name] == 0:
                     value = -found.lam[start:, rows[name]]
                 self.fixed[key].append(value)
+        for key, value in self.contacts.friction_force(functions, held, found, start).items():
+            self.fixed[key].append(value)
         self.result.fixed_columns = {k: np.concatenate(v) for k, v in self.fixed.items()}
         self.result.extend(found.times[start:], found.q[start:], found.q_dot[start:],
                            found.q_ddot[start:], found.lam[start:, kept])
         for record, k in zip(found.events, range(len(found.events)), strict=True):
-            if record.name.removesuffix(".friction") in self.names:
+            if record.name.removesuffix(".friction") in self.names + self.contacts.names:
                 continue
             state = found.event_states
             self.result.events.append(record)

@@ -11,6 +11,9 @@ the opposite:
     F_t = -mu(s) F_n v_t / s,  v_t = v_rel - (n . v_rel) n,  s = sqrt(|v_t|^2 + (eps v_s)^2)
     mu(s) = step(s, 0, 0, v_s, mu_s) + step(s, v_s, 0, v_t, mu_d - mu_s)   (Adams' STEP curve)
 
+(the smooth law; `friction: {model: exact}` replaces F_t by exact Coulomb stick and slip at
+each point: exact_friction, runtime/contact_friction.py)
+
 v_rel = v_j(P) - v_i(P), the velocities of the two bodies' material points at P. The
 generalized force is v_rel's Jacobian in q_dot transposed times F (virtual work: the virtual
 displacement of a material point is its velocity's). With P on the normal line through the
@@ -124,15 +127,45 @@ def friction_coefficient(params, s):
     return step(s, 0, 0, v_s, mu_s) + step(s, v_s, 0, v_t, mu_d - mu_s)
 
 
-def _point_law(force, x, point: Point) -> tuple:
-    """(generalized force, potential, F_n, F_t) of one contact point."""
+def tangential(force, x, point: Point) -> tuple:
+    """(F_n, potential, v_t) of one contact point: its normal force and the tangential part
+    of the relative velocity of the two bodies' material points at P."""
     d = ca.fmax(0, -point.gap)
-    d_dot = -x.rate(point.gap)
-    f_n, potential = normal_force(force.params, d, d_dot)
+    f_n, potential = normal_force(force.params, d, -x.rate(point.gap))
     v_rel = _velocity(x, force.body_j, point.at) - _velocity(x, force.body_i, point.at)
-    v_t = v_rel - (point.normal.T @ v_rel) * point.normal
+    return f_n, potential, v_rel - (point.normal.T @ v_rel) * point.normal
+
+
+def exact_friction(force, k: int, f_n, v_t):
+    """The exact law's friction at point k (`friction: {model: exact}`, the mode the runtime
+    sets in params["modes"][k]: runtime/contact_friction.py): 0 while stuck (rows hold the
+    point); else -mu_d F_n v_t / |v_t|, and along the slip direction u0 of a sliding mode (a
+    3-tuple) where v_t . u0 <= 0 (a point just released, or one whose slip has reversed past
+    the event that ends its segment); 0 while free (apart at the segment's start: the
+    overshoot past the touch the runtime locates stays smooth); without a mode (the other
+    analyses) the sliding law, 0 at v_t = 0."""
+    modes = force.params.get("modes")
+    mode = None if modes is None else modes[k]
+    if mode in ("stuck", "free"):  # free: apart, until the event where it touches
+        return ca.SX.zeros(3, 1)
+    squared = v_t.T @ v_t
+    if isinstance(mode, tuple):  # along u0 wherever the slip is not ahead of it: smooth
+        u0 = ca.SX(ca.DM(mode))  # through the reversal of a straight slip, which the
+        moving = (v_t.T @ u0 > 0) * (squared > 0)  # runtime's event locates
+    else:
+        u0, moving = ca.SX.zeros(3, 1), squared > 0
+    speed = ca.sqrt(ca.if_else(moving, squared, 1))  # both branches and their AD finite
+    return -force.params["mu_d"] * f_n * ca.if_else(moving, v_t / speed, u0)
+
+
+def _point_law(force, x, point: Point, k: int) -> tuple:
+    """(generalized force, potential, F_n, F_t) of contact point k."""
+    f_n, potential, v_t = tangential(force, x, point)
+    v_rel = _velocity(x, force.body_j, point.at) - _velocity(x, force.body_i, point.at)
     if force.params["mu_s"] == 0 and force.params["mu_d"] == 0:
         f_t = ca.SX.zeros(3, 1)
+    elif force.params.get("exact"):
+        f_t = exact_friction(force, k, f_n, v_t)
     else:
         s = ca.sqrt(v_t.T @ v_t + (EPS * force.params["v_s"]) ** 2)
         f_t = -friction_coefficient(force.params, s) * f_n / s * v_t
@@ -141,7 +174,7 @@ def _point_law(force, x, point: Point) -> tuple:
 
 
 def _laws(force, x, shape) -> list[tuple]:
-    return [(*_point_law(force, x, p), p.gap) for p in shape(force, x)]
+    return [(*_point_law(force, x, p, k), p.gap) for k, p in enumerate(shape(force, x))]
 
 
 def generalized_force(force, x, read, shape) -> tuple:

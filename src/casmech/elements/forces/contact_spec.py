@@ -43,9 +43,12 @@ class NormalLaw(Spec):
 
 
 class Friction(Spec):
-    """Regularized Coulomb friction: mu from 0 at slip 0 up to `static` at stiction_velocity,
-    down to `dynamic` at transition_velocity, then constant (Adams' STEP curve)."""
+    """model smooth: regularized Coulomb friction, mu from 0 at slip 0 up to `static` at
+    stiction_velocity, down to `dynamic` at transition_velocity, then constant (Adams' STEP
+    curve); model exact: Coulomb's stick (|F_t| <= static N, the point held) and slip
+    (dynamic N against the slip), switched at located events in dynamics."""
 
+    model: Literal["smooth", "exact"] = "smooth"
     static: Scalar
     dynamic: Scalar | None = None  # default: static
     stiction_velocity: Scalar = 1e-3
@@ -185,9 +188,16 @@ def _linear(check, path, given, numbers) -> dict[str, float] | None:
 
 
 def friction(check, path, given) -> dict[str, float] | None:
-    """mu_s, mu_d, v_s, v_t (no friction: mu_s = mu_d = 0)."""
+    """mu_s, mu_d, v_s, v_t, exact (no friction: mu_s = mu_d = 0)."""
     if given is None:
-        return {"mu_s": 0.0, "mu_d": 0.0, "v_s": 1.0, "v_t": 2.0}
+        return {"mu_s": 0.0, "mu_d": 0.0, "v_s": 1.0, "v_t": 2.0, "exact": 0.0}
+    if given.model == "exact":
+        for key in ("stiction_velocity", "transition_velocity"):
+            if key in given.model_fields_set:
+                check.error("E103", (*path, key), f"model: exact has no {key}",
+                            hint="exact Coulomb friction sticks at zero slip speed; the "
+                            "stiction and transition velocities shape model: smooth's curve")
+                return None
     mu_s = positive(check, (*path, "static"), check.number((*path, "static"), given.static),
                      "static friction coefficient", True)
     mu_d = mu_s if given.dynamic is None else positive(
@@ -205,7 +215,8 @@ def friction(check, path, given) -> dict[str, float] | None:
             v_t = None
     if failed([mu_s, mu_d, v_s, v_t]):
         return None
-    return {"mu_s": mu_s, "mu_d": mu_d, "v_s": v_s, "v_t": v_t}
+    return {"mu_s": mu_s, "mu_d": mu_d, "v_s": v_s, "v_t": v_t,
+            "exact": float(given.model == "exact")}
 
 
 def plane(check, path, given) -> dict[str, np.ndarray | None]:
