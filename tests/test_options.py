@@ -314,6 +314,7 @@ CONSTANTS = {
     "runtime/singular_poses.py MAX_ENTRIES": "dense Jacobians held at once (memory)",
     "runtime/solver_messages.py MAX_LINES": "solver lines kept in metadata (size)",
     "formulations/joint_system.py ROW_NORM_FLOOR": "a roundoff floor compiled into libraries",
+    "formulations/joint_system.py IDENTITY_STATES": "which Jacobian graph a tree's build makes",
     "formulations/prescribed.py ITERATIONS": "chord steps compiled into the library's step",
     "formulations/prescribed.py CHUNK": "the inner map of the step (batch work)",
     "formulations/residuals.py UNROLLED_INSTRUCTIONS": "which residual code is built",

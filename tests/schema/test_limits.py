@@ -3,6 +3,8 @@ grid (E409), and the other nonsense a model must not get past `check` with."""
 
 import pytest
 
+import casmech
+from casmech.cli import main
 from casmech.errors import ModelError
 from casmech.schema import limits, load_model_text
 
@@ -58,7 +60,6 @@ def test_parameters_are_not_bounded_where_they_are_used_they_are():
 @pytest.mark.parametrize("setting, value, words", [
     ("rtol", "10", "between"), ("rtol", "1e-300", "between"), ("atol", "1e-300", "between"),
     ("atol", "0", "must be positive"), ("t_end", "1e300", "at most"),
-    ("output_step", "1e-9", "output grid would have"),
     # subnormal numbers: t_end / output_step overflowed to an OverflowError traceback
     ("output_step", "2e-320", "at least"), ("output_step", "5e-324", "at least"),
     ("t_end", "1e-320", "at least"), ("output_step", "1e-13", "at least"),
@@ -72,6 +73,26 @@ def test_analysis_settings_within_limits(setting, value, words):
     [diagnostic] = caught.value.diagnostics
     assert (diagnostic.code, diagnostic.path) == ("E409", f"analysis.{setting}")
     assert words in diagnostic.message and diagnostic.source.line == 14
+
+
+def test_an_output_grid_too_large_is_refused_by_the_run_that_has_it(tmp_path, capsys):
+    """The grid's size is a run's: a file whose own grid (1e9 rows) is too large loads; a run
+    with its settings, and `casmech check`, give the located E409; a shorter t_end runs."""
+    file = tmp_path / "m.yaml"
+    file.write_text(MODEL.replace("output_step: 0.01", "output_step: 1e-9"))
+    functions = casmech.compile(casmech.load(file))
+    with pytest.raises(ModelError) as caught:
+        casmech.analyze(functions)
+    [diagnostic] = caught.value.diagnostics
+    assert (diagnostic.code, diagnostic.path) == ("E409", "analysis.output_step")
+    assert diagnostic.source.line == 14 and "output grid would have" in diagnostic.message
+    assert len(casmech.analyze(functions, t_end=1e-6).times) == 1001  # 0, 1e-9, ..., 1e-6
+    assert main(["check", str(file)]) == 1
+    assert f"{file}:14:" in capsys.readouterr().err
+    assert main(["run", str(file), "--t-end", "1e-6", "--out", str(tmp_path / "out"),
+                 "-q"]) == 0
+    assert main(["run", str(file), "--out", str(tmp_path / "out2"), "-q"]) == 1
+    assert "error[E409]" in capsys.readouterr().err
 
 
 def test_output_grid_counts_rows_and_columns():

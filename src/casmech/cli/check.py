@@ -34,10 +34,12 @@ def redundancy_warnings(report) -> list[Diagnostic]:
             for row in report.redundant]
 
 
-def analysis_errors(analysis, report) -> list[Diagnostic]:
+def analysis_errors(functions, report) -> list[Diagnostic]:
     """What `casmech run` would refuse in the model's `analysis:` block."""
     from casmech.api import ANALYSES
+    from casmech.runtime.analyses import analysis_settings
 
+    analysis = functions.ir.analysis
     if analysis.type not in ANALYSES:
         return [Diagnostic("E409", "analysis.type", f"analysis type '{analysis.type}' is not "
                            "available yet", analysis.source, expected=" | ".join(ANALYSES),
@@ -50,6 +52,10 @@ def analysis_errors(analysis, report) -> list[Diagnostic]:
             analysis.source, expected="0 degrees of freedom", got=f"{report.dof}",
             hint="add drivers (`driver: {angle: ...}` on a revolute joint, `f:` on a basic "
                  "constraint) or run a dynamics analysis")]
+    try:  # its output grid's size, for the results table the model has
+        analysis_settings(functions)
+    except ModelError as error:
+        return list(error.diagnostics)
     return []
 
 
@@ -114,7 +120,7 @@ def run(args) -> int:
           f"{len(model.forces)} forces; at the {where}:")
     print(report.summary())
     errors = [*(assembly_errors(failure) if failure is not None else ()),
-              *analysis_errors(functions.ir.analysis, report), *check_only.problems(model),
+              *analysis_errors(functions, report), *check_only.problems(model),
               *mesh_errors(model)]
     if errors:
         raise ModelError(errors)

@@ -20,7 +20,7 @@ from casmech.core import option_values
 from casmech.core.options import FORMULATIONS, METHODS, OPTIONS, STABILIZATIONS
 from casmech.equations.checks import Structure, structure
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, Interrupted, UsageError
+from casmech.errors import AnalysisError, Diagnostic, Interrupted, ModelError, UsageError
 from casmech.runtime import (
     assembly,
     auto_formulation,
@@ -271,7 +271,14 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     numbers = {name: float(getattr(settings, name))
                for name in ("t_end", "output_step", "rtol", "atol")}
     problems = limits.analysis_problems(numbers, len(column_names(functions)), step_within=False)
-    if problems:  # the model's own settings were checked when it was loaded: these were given
+    written = dict(functions.ir.analysis.sources)
+    if problems and all(given[name] is None and name in written for name in problems):
+        # the file's own settings (an output grid too large for its results table): located
+        raise ModelError([Diagnostic("E409", f"analysis.{name}", problem, written[name],
+                                     got=f"{numbers[name]:g}",
+                                     hint=limits.HINTS.get(name))
+                          for name, problem in problems.items()])
+    if problems:
         raise UsageError("\n".join(f"error[E409] {name} = {numbers[name]:g}: {problem}"
                                     for name, problem in problems.items()))
     return settings

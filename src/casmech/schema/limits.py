@@ -45,6 +45,14 @@ MAX_ROWS = 1_000_000  # rows of the output grid (t_end / output_step + 1)
 MAX_VALUES = 20_000_000  # rows x results columns: the results table passes through CasADi's
 #                          DM -> list -> NumPy conversion at ~50 bytes a value (1 GB here)
 
+# the hint of an E409 finding, by setting
+HINTS = {
+    "output_step": "a larger output_step or a shorter t_end (output_step is the interval of "
+                   "the rows written, not the integrator's step)",
+    "rtol": "1e-6 (quick) to 1e-10 (tight); the default is 1e-8",
+    "atol": "the absolute error allowed in metres and radians; the default is 1e-10",
+}
+
 
 def limit(path: Path | str) -> tuple[float, str, str] | None:
     """(largest magnitude, what, unit) of the number at `path`, or None (not bounded)."""
@@ -72,10 +80,10 @@ def grid_rows(t_end: float, output_step: float) -> float:
 
 
 def analysis_problems(settings: dict[str, float], columns: int,
-                      step_within: bool = True) -> dict[str, str]:
+                      step_within: bool = True, grid: bool = True) -> dict[str, str]:
     """{setting: problem} of t_end, output_step, rtol, atol (non-positive, not finite, out of
-    range (t_end and output_step below MIN_TIME included), or an output grid of more than
-    MAX_ROWS rows or MAX_VALUES values; with `step_within`, an output_step larger than
+    range (t_end and output_step below MIN_TIME included), with `grid` an output grid of more
+    than MAX_ROWS rows or MAX_VALUES values; with `step_within`, an output_step larger than
     t_end)."""
     problems: dict[str, str] = {}
     for key, value in settings.items():
@@ -101,6 +109,8 @@ def analysis_problems(settings: dict[str, float], columns: int,
         return problems
     if step_within and step > t_end:
         problems["output_step"] = "output_step must not exceed t_end"
+        return problems
+    if not grid:
         return problems
     rows = grid_rows(t_end, step)
     if rows > MAX_ROWS or rows * columns > MAX_VALUES:

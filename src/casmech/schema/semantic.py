@@ -33,32 +33,21 @@ from casmech.schema.force_laws import StateChecker, force  # forces read the sta
 from casmech.schema.loader import Document, Path
 from casmech.schema.modal import modal_settings
 
-ANALYSIS_HINTS = {
-    "output_step": "a larger output_step or a shorter t_end (output_step is the interval of "
-                   "the rows written, not the integrator's step)",
-    "rtol": "1e-6 (quick) to 1e-10 (tight); the default is 1e-8",
-    "atol": "the absolute error allowed in metres and radians; the default is 1e-10",
-}
-
-
-def result_columns(bodies: int, joints: int) -> int:
-    """Columns of the results table (the results contract of docs/format.md)."""
-    return 3 + 19 * bodies + 6 * joints
-
 
 def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
-    """The analysis settings, within limits.analysis_problems (E409); call it once the bodies
-    and joints are known (the output grid is bounded in rows x results columns)."""
+    """The analysis settings, each within limits.analysis_problems (E409), with where each is
+    written (the run checks its output grid's size: runtime.analyses.analysis_settings)."""
     path: Path = ("analysis",)
     keys = ("t_end", "output_step", "rtol", "atol")
     values = {key: check.setting((*path, key), getattr(given, key)) for key in keys}
     if failed(values.values()):
         return None
-    columns = result_columns(len(check.bodies), len(check.joint_types))
-    problems = limits.analysis_problems(values, columns)
+    # the output grid's size is a run's: a command line's --t-end may shorten it (the run checks
+    # it with the settings it runs: runtime.analyses.analysis_settings, `casmech check`)
+    problems = limits.analysis_problems(values, 0, grid=False)
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
-                    hint=ANALYSIS_HINTS.get(key))
+                    hint=limits.HINTS.get(key))
     if given.method == "adams" and given.formulation in ("rp", "romega"):
         check.error("E409", (*path, "method"), "method adams integrates joint coordinates of a "
                     "tree; the rp and romega DAEs are integrated by IDAS's BDF method",
@@ -69,7 +58,8 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
         None
         if problems or options is None
         else resolved.Analysis(given.type, **values, options=options, source=source,
-                               written=written)
+                               written=written, sources=tuple(
+                                   (key, check.doc.locate((*path, key))) for key in keys))
     )
 
 
