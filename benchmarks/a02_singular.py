@@ -29,9 +29,9 @@ REFERENCES = {2: ("A02_Nfourbar_N2_0-10s.csv", 10.0, 0.01),
 
 
 def measure(n: int, formulation: str, repeats: int) -> dict:
-    from tests.runtime.a02_model import a02_model
-    from tests.runtime.reference_data import read_analytic
-    from tests.runtime.test_validation_iftomm import a02_b0_error
+    from tests.helpers.a02_model import a02_model
+    from tests.helpers.reference_data import read_analytic
+    from tests.validation.runtime.test_validation_iftomm import a02_b0_error
 
     import casmech
 

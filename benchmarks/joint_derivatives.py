@@ -13,8 +13,8 @@ tau)` and CasADi's FunctionBuffer (`Function.buffer`: preset argument and result
 C call). Every timing is the thread's CPU time of a batch of `--calls` calls; the batches of
 all candidates and of Pinocchio alternate in one process, `--repeats` times; the table shows
 the median per call and the ratio to Pinocchio's median. Pinocchio sees the same (q, v, tau),
-mapped as tests/api/test_joint_space.py does (its joint order, a continuous joint's angle as
-(cos, sin)). Needs `pin` and `example-robot-data` (pip install ".[bench]").
+mapped as tests/validation/formulations/test_joint_space.py does (its joint order, a continuous
+joint's angle as (cos, sin)). Needs `pin` and `example-robot-data` (pip install ".[bench]").
 """
 
 from __future__ import annotations

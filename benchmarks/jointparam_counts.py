@@ -21,7 +21,7 @@ from casmech.formulations.tree import spanning_tree  # noqa: E402
 
 MODELS = {"chain8": lambda: casmech.loads(yaml_text(systems.chain(8))),
           "four_bar": lambda: casmech.load(ROOT / "benchmarks/models/four_bar.yaml"),
-          "zoo": lambda: casmech.load(ROOT / "tests/runtime/joint_zoo.yaml"),
+          "zoo": lambda: casmech.load(ROOT / "tests/helpers/joint_zoo.yaml"),
           "four_bar_models": lambda: casmech.load(ROOT / "models/four_bar.yaml"),
           "double_pendulum": lambda: casmech.load(ROOT / "models/double_pendulum.yaml"),
           "bricard": lambda: casmech.load(ROOT / "models/bricard.yaml")}

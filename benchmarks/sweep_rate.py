@@ -34,7 +34,7 @@ from casmech.study import sweep as study  # noqa: E402
 
 # name -> (model, grid parameter, its values as a range text with {n} points, kept, settings)
 MODELS = {
-    "pendulum": (ROOT / "tests" / "study" / "pendulum.yaml", "L", "0.5:2:{n}",
+    "pendulum": (ROOT / "tests" / "helpers" / "study_models" / "pendulum.yaml", "L", "0.5:2:{n}",
                  ["crossing(bob.y)"], {}),
     "four_bar": (ROOT / "models" / "four_bar.yaml", "a", "0.4:0.6:{n}",
                  ["max(rocker.wz)"], {}),

@@ -3,8 +3,8 @@
     python -m tests.cli_reference        # rewrite the tables in docs/cli.md
 
 Each command's table sits between `<!-- options: casmech COMMAND -->` and `<!-- end options -->`;
-the text around them is written by hand. tests/test_cli_docs.py fails when a table differs from
-what the parsers say now (an option added, renamed, its help or choices changed).
+the text around them is written by hand. tests/integration/test_cli_docs.py fails when a table
+differs from what the parsers say now (an option added, renamed, its help or choices changed).
 """
 
 from __future__ import annotations

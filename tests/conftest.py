@@ -1,4 +1,6 @@
-"""Shared fixtures: paths to the example models, running a model through the API."""
+"""Shared fixtures: paths to the example models, running a model through the API, seeded
+generators, and the markers `unit`, `integration` and `validation` given by folder
+(tests/README.md)."""
 
 import re
 from pathlib import Path
@@ -12,6 +14,25 @@ from casmech.runtime.buffers import BufferedCall, ColumnCall
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
+TESTS = ROOT / "tests"
+# The kind of a test is the first folder under tests/ that holds it; its marker has that name
+KINDS = ("unit", "integration", "validation")
+SEEDS = [0, 1, 2, 3, 4]
+
+
+def kind_of(path) -> str | None:
+    """The kind folder ("unit", "integration", "validation") holding a test file, or None."""
+    parts = Path(path).resolve().relative_to(TESTS).parts
+    return parts[0] if len(parts) > 1 and parts[0] in KINDS else None
+
+
+def pytest_collection_modifyitems(config, items):
+    """Mark every test with the kind of the folder it lives in (`-m unit`, `-m validation`...);
+    tests/unit/test_test_layout.py fails for a test outside the three folders."""
+    for item in items:
+        kind = kind_of(item.path)
+        if kind is not None:
+            item.add_marker(getattr(pytest.mark, kind))
 
 
 class Table:
@@ -77,7 +98,7 @@ def private_caches(session_cache, monkeypatch) -> Path:
     (CASMECH_CACHE_DIR; subprocesses inherit it) and the folders derived from HOME that a
     library may cache into (XDG_CACHE_HOME: platformdirs' user cache folder on Linux;
     MPLCONFIGDIR: matplotlib's font cache) point into the session's temporary folder.
-    tests/test_private_cache.py proves it."""
+    tests/integration/test_private_cache.py proves it."""
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(session_cache / "casmech"))
     monkeypatch.setenv("XDG_CACHE_HOME", str(session_cache / "xdg"))
     monkeypatch.setenv("MPLCONFIGDIR", str(session_cache / "matplotlib"))
@@ -101,3 +122,9 @@ def mujoco_warnings_kept():
     seen: list[str] = []
     mujoco.set_mju_user_warning(seen.append)
     yield seen
+
+
+@pytest.fixture(params=SEEDS, ids=lambda s: f"seed{s}")
+def rng(request) -> np.random.Generator:
+    """A seeded generator; every test using it runs once per seed."""
+    return np.random.default_rng(request.param)

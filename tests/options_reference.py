@@ -3,8 +3,8 @@
     python -m tests.options_reference        # rewrite the tables in docs/analyses.md
 
 Each table sits between `<!-- options: NAME -->` and `<!-- end options -->` (NAME a class of
-casmech.core.options); the text around them is written by hand. tests/test_options.py fails
-when a table differs from what the classes say now (an option added, renamed, its default,
+casmech.core.options); the text around them is written by hand. tests/integration/test_options.py
+fails when a table differs from what the classes say now (an option added, renamed, its default,
 range or meaning changed).
 """
 

@@ -26,7 +26,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 # Every diagnostic code casmech emits, with a one-line title. Tests keep one bad-model fixture
-# per code (tests/schema/bad_models/), so adding a code here means adding a fixture.
+# per code (tests/unit/schema/bad_models/), so adding a code here means adding a fixture.
 CODES: dict[str, str] = {
     # E0xx: the YAML text itself
     "E001": "YAML syntax error",

@@ -25,7 +25,7 @@ stage reads the kind's entry:
   turn-continuous rows.
 
 Adding a kind is `register(CoordinateKind(...))` (docs/architecture.md, "Adding a coordinate
-kind"; tests/compiler/test_coordinate_kinds.py registers one).
+kind"; tests/unit/elements/test_coordinate_kinds.py registers one).
 
 The built-in kinds: angle, the rotation of body j about the joint axis, atan2(v_i . u_j,
 u_i . u_j) (u_i, v_i on body i, u_j on body j: the joint frame's u, v at the file's pose), in

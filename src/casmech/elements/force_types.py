@@ -10,7 +10,7 @@ read the state, its extra results columns (`outputs`; contacts), whether it limi
 integrator's step (runtime/contact_steps.py) and its mapped kernel (equations/force_kernels.py). The
 code of the built-in types is in casmech.elements.forces. Adding a force element is
 `register(ForceType(...))` (docs/architecture.md, "Adding a force element";
-tests/compiler/test_force_registry.py registers one).
+tests/unit/elements/test_force_registry.py registers one).
 
 The callables receive what they need from the calling layer as arguments, so this module and
 casmech.elements.forces import nothing from schema/ or model/:

@@ -7,7 +7,7 @@ i.e. the coordinate kinds a driver, motor, rsda, stop, control or force law acts
 kind's entry of elements/coordinate_kinds.py, `COORDINATES`, says how), and
 its tree motion in the joint formulation (`MOTIONS`; formulations/tree.py, articulated.py).
 Adding a joint type is `register(JointType(...))` (docs/architecture.md, "Adding a joint type";
-tests/compiler/test_joint_registry.py registers one).
+tests/unit/elements/test_joint_registry.py registers one).
 
 Row templates: a primitive kind, for each vector key of that primitive a joint-frame quantity
 and the body whose frame it is expressed in, and a label. Joint-frame quantities are GLOBAL at
@@ -271,7 +271,7 @@ def state_names(joint_type: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
     ("free": a floating body's) in the joint formulation: its Motion's `names`, else each
     coordinate kind's value and rate at the index its `drivers` give (`q<k>`, `u<k>` where
     neither names one). Where a name is one of the joint's state attributes, the entry is
-    that results column's value (tests/formulations/test_state_names.py)."""
+    that results column's value (tests/unit/formulations/test_state_names.py)."""
     motion = MOTIONS[joint_type]
     if motion.names is not None:
         return motion.names

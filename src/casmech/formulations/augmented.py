@@ -15,8 +15,8 @@ range(P)), which spreads the reaction over redundant joints instead of choosing 
 Each iterate is computed as a correction, v_dot_k = v_dot_k-1 + (M + a P^T P)^-1 (F - M v_dot_k-1
 - P^T lam_k-1 - a P^T (P v_dot_k-1 - gamma)): the same iterates, but the solve's roundoff
 (condition ~ the penalty ratio) then scales the shrinking residual, not F + a P^T gamma. Solved
-directly, v_dot was 4e-8 off the saddle-point solution on tests/runtime's chain; as
-corrections, 1e-16 (tests/compiler/test_augmented.py).
+directly, v_dot was 4e-8 off the saddle-point solution on tests/integration/runtime's chain; as
+corrections, 1e-16 (tests/unit/formulations/test_augmented.py).
 
 The penalty a is an input: the runtime scales it to the model (core.options.Fallback.penalty
 times mass over constraint-gradient size), so no user constant is involved; the iteration

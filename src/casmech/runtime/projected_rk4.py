@@ -8,8 +8,8 @@ cross. Each step starts on the manifold and moves along the motion's tangent, so
 lies far nearer the branch the mechanism is on than the other one (they part linearly from the
 crossing, the step errs by h^5), and the mass-orthogonal projection takes the nearest. On A02
 N = 2 every fixed step tried kept both formulations on the branch this way
-(tests/runtime/test_projected_rk4); projecting only at the outputs, or IDAS on the same ODE,
-did not always (docs/decisions/singular-fallback.md).
+(tests/integration/runtime/test_projected_rk4); projecting only at the outputs, or IDAS on the
+same ODE, did not always (docs/decisions/singular-fallback.md).
 
 Error control: an output interval is integrated with n and with 2n steps; the fine result is
 kept when |fine - coarse| / 15 (its error for a 4th-order method) is within the tolerance,
@@ -134,7 +134,7 @@ class ProjectedRK4:
         an interval whose positions meet the tolerance and whose velocity estimate shrank by
         less than the square of the factor the steps were multiplied by (a 4th-order
         discretization error shrinks by its 4th power; docs/decisions/singular-fallback.md).
-        On the whipping chain of tests/runtime, controlling the positions alone left
+        On the whipping chain of tests/integration/runtime, controlling the positions alone left
         10x the error at rtol 1e-8 (3.6e-8 against 3.5e-9 m at t <= 1 s)."""
         if not (np.all(np.isfinite(coarse)) and np.all(np.isfinite(fine))):
             return math.inf, math.inf

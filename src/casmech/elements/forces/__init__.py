@@ -2,7 +2,7 @@
 their
 registry entries. Bottom layer: imports casmech.core, casmech.elements.joint_types,
 casmech.core.spec_base
-and third-party libraries only (tests/test_layering.py).
+and third-party libraries only (tests/unit/test_layering.py).
 
     terms         shared terms: points of frames, the spring law, a point force, a torque
     springs       tsda, rsda

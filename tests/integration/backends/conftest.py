@@ -1,0 +1,11 @@
+"""The code-generation fixtures (tests/helpers/codegen.py) for the tests of this folder."""
+
+from tests.helpers.codegen import (  # noqa: F401
+    build_dir,
+    cache_root,
+    compiled,
+    interpreted,
+    model,
+    private_cache,
+    toolchain,
+)

@@ -1,0 +1,120 @@
+"""The joint formulation on a compiled bundle: its tree's ODE and results rows compiled
+(runtime.joint_dynamics.compiled_system for the mapped library; for a parametric library
+(codegen.parametric) compiled in it over the model data) and equal to the interpreted ones."""
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import casmech
+from casmech.backends import codegen
+from casmech.core.options import DynamicsSolver, JointCompile
+from casmech.runtime.joint_dynamics import joint_system
+from casmech.runtime.workspace import Workspace
+from tests.conftest import Table
+
+RNG = np.random.default_rng(11)
+
+
+@pytest.fixture(scope="module")
+def compiled(model, toolchain, cache_root):
+    """The mapped library of the session's model (it has parameters: by default parametric)."""
+    return codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
+
+
+def test_a_parametric_bundle_runs_the_tree_from_its_library(model, toolchain, cache_root,
+                                                            interpreted):
+    bundle = codegen.compiled(model, toolchain, root=cache_root)
+    assert bundle.data is not None and codegen.mode_of(bundle) == "compiled"
+    fast, slow = joint_system(bundle), joint_system(interpreted)
+    assert fast.dynamics is bundle.joint_functions["joint_ode"]
+    # the same equations, the model's constants computed from d: roundoff
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    # a tree's Jacobian: forward sweeps of the library's ODE (no identity in the library)
+    assert "joint_jacobian" not in bundle.joint_functions and fast.identity_jacobian is None
+
+
+def _assert_jacobian_is_the_odes(fast, slow) -> None:
+    """fast's ODE Jacobian (JointSystem.jacobian) equals CasADi's AD of slow's ODE (the
+    articulated-body recursion) at random (t, x)."""
+    t_sym, x_sym = ca.SX.sym("t"), ca.SX.sym("x", slow.layout.n_x)
+    ode = slow.dynamics(t_sym, x_sym)
+    reference = ca.Function("reference", [t_sym, x_sym],
+                            [ca.jacobian(ode, t_sym), ca.jacobian(ode, x_sym)])
+    for _ in range(3):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        for a, b in zip(fast.jacobian(t, x, fast.dynamics(t, x)), reference(t, x), strict=True):
+            b = np.array(b)
+            # two derivatives of the same dynamics (the compiled ODE's forward sweeps, AD of
+            # the interpreted one): roundoff, relative to the largest entry
+            np.testing.assert_allclose(np.array(a), b, rtol=0, atol=1e-9 * np.max(np.abs(b)))
+
+
+def _assert_same_tree_functions(fast, slow, nb: int) -> None:
+    """The ODE and the results rows of two joint systems at random (t, x), to 1e-12."""
+    for _ in range(3):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        np.testing.assert_allclose(np.array(fast.dynamics(t, x)), np.array(slow.dynamics(t, x)),
+                                   rtol=1e-12, atol=1e-12)
+        for a, b in zip(fast.motion(t, x, [], np.ones(nb)), slow.motion(t, x, [], np.ones(nb)),
+                        strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+
+
+def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):
+    fast, slow = joint_system(compiled), joint_system(interpreted)
+    assert fast.dynamics.class_name() == "External" and slow.dynamics.is_a("SXFunction")
+    # the same SX compiled to C: equal to roundoff
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    # forward sweeps of the compiled ODE (its fwd1_ in the library), not the interpreted
+    # identity the numeric build offers
+    assert fast.identity_jacobian is None and slow.identity_jacobian is not None
+    _assert_jacobian_is_the_odes(fast, slow)
+
+
+def test_compiled_run_is_the_interpreted_run(interpreted, compiled):
+    runs = [Table(*casmech.results_table(f, casmech.analyze(
+        f, "dynamics", formulation="joint", t_end=0.5, rtol=1e-10, atol=1e-12)))
+        for f in (interpreted, compiled)]
+    for name in runs[0].names[1:]:
+        scale = max(1.0, np.max(np.abs(runs[0][name])))
+        # the same equations; roundoff may change a step size, within the rtol 1e-10 runs'
+        # own error
+        np.testing.assert_allclose(runs[1][name], runs[0][name], rtol=0, atol=1e-8 * scale,
+                                   err_msg=name)
+
+
+def test_large_trees_keep_their_results_rows_interpreted(compiled):
+    """Above solver.compile.motion_bodies only the ODE is compiled; above ode_bodies nothing
+    of the tree (their C builds grow with the tree); each in its own workspace entry."""
+    workspace = Workspace(compiled)
+    system = joint_system(compiled, DynamicsSolver(compile=JointCompile(motion_bodies=0)),
+                          workspace)
+    assert system.dynamics.class_name() == "External" and system.motion.is_a("SXFunction")
+    system = joint_system(compiled, DynamicsSolver(compile=JointCompile(ode_bodies=0)),
+                          workspace)
+    assert system.dynamics.is_a("SXFunction") and system.motion.is_a("SXFunction")
+    assert len(workspace.store("joint_system")) == 2
+    default = joint_system(compiled, workspace=workspace)
+    assert default.dynamics.class_name() == "External" and default.motion.class_name() == \
+        "External"
+
+
+def test_a_coupled_mechanism_runs_its_compiled_joint_dae(toolchain, cache_root):
+    """The pinion and rack (no parameters: a mapped library) in joint coordinates, the rack's
+    coupling a closure row of the compiled joint DAE: the closed-form accelerations and rack
+    force, T / (J + m R^2) (tests/validation/runtime/test_couplings.py)."""
+    from tests.validation.runtime.test_couplings import J_PINION, M_RACK, R_PINION, RACK, TORQUE
+
+    bundle = codegen.compiled(casmech.loads(RACK), toolchain, root=cache_root)
+    assert codegen.mode_of(bundle) == "compiled"
+    system = joint_system(bundle)
+    assert system.n_cut == 1 and system.dynamics.class_name() == "External"
+    result = casmech.analyze(bundle, "dynamics", formulation="joint")
+    assert result.metadata["formulation"] == "joint"
+    table = Table(*casmech.results_table(bundle, result))
+    alpha = TORQUE / (J_PINION + M_RACK * R_PINION ** 2)
+    # the consistent start solves a linear system: round-off
+    np.testing.assert_allclose(table["pinion.alphaz"][0], alpha, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(table["teeth.force"][0], M_RACK * R_PINION * alpha, rtol=1e-9,
+                               atol=0)

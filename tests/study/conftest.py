@@ -1,9 +1,0 @@
-"""Models of the study tests (closed forms in their comments) and a study runner."""
-
-from pathlib import Path
-
-HERE = Path(__file__).resolve().parent
-PENDULUM = HERE / "pendulum.yaml"
-SPRING_MASS = HERE / "spring_mass.yaml"
-FOUR_BAR = HERE.parents[1] / "models" / "four_bar.yaml"
-G = 9.81
