@@ -9,7 +9,7 @@ projection). The controls inside the interval come from the control shape
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import casadi as ca
 
@@ -34,3 +34,66 @@ class MultipleShooting:
             x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
             points.append((t + dt, s1, x))
         return x, points
+
+
+INTEGRATORS = ("rk4", "cvodes", "idas")  # MultipleShooting's RK4, SundialsShooting's
+
+
+@dataclass
+class SundialsShooting:
+    """Multiple shooting with a SUNDIALS integrator per control interval (rockit's
+    MultipleShooting(intg='cvodes')): CVODES on an ODE, IDAS on an ODE or an index-1 DAE
+    (a mechanism with loops: its closure multipliers the algebraic variables).
+
+    The interval is integrated in its own time s in [0, 1] (t = t0 + s h, so h may be a
+    variable: free final time), with the controls c(s) = (1 - s) c(0) + s c(1), which is
+    either control shape exactly (optimal/control_shapes.py; the decision parameters
+    constant). The integrator reports the state at `outputs` equal fractions of the interval
+    (the fine path grid's points); CasADi's forward and adjoint sensitivities of the
+    integrator give the NLP its first and second derivatives.
+    """
+
+    integrator: str = "cvodes"
+    outputs: int = 4  # states reported per interval, the last at its end
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    _made: dict = field(default_factory=dict, repr=False, compare=False)
+
+    def _function(self, f: ca.Function, dae: ca.Function | None) -> ca.Function:
+        """(x0, [c(0); c(1); t0; h], z0) -> states at the outputs (n x outputs), one per f."""
+        key = id(dae if dae is not None else f)
+        if key in self._made:
+            return self._made[key][1]
+        n, n_c = f.size1_in(1), f.size1_in(2)
+        s, x = ca.MX.sym("s"), ca.MX.sym("x", n)
+        p = ca.MX.sym("p", 2 * n_c + 2)
+        c0, c1, t0, h = p[:n_c], p[n_c:2 * n_c], p[2 * n_c], p[2 * n_c + 1]
+        c, t = (1 - s) * c0 + s * c1, t0 + s * h
+        problem = {"t": s, "x": x, "p": p}
+        if dae is None:
+            problem["ode"] = h * f(t, x, c)
+        else:
+            z = ca.MX.sym("z", dae.size1_in(2))
+            ode, alg = dae(t, x, z, c)
+            problem.update(z=z, ode=h * ode, alg=alg)
+        grid = [(j + 1) / self.outputs for j in range(self.outputs)]
+        made = ca.integrator("interval", self.integrator, problem, 0.0, grid,
+                             {"reltol": self.rtol, "abstol": self.atol,
+                              "max_num_steps": 100000})
+        x0, z0 = ca.MX.sym("x0", n), ca.MX.sym("z0", problem["z"].numel() if dae else 0)
+        out = made(x0=x0, p=p, z0=z0)
+        function = ca.Function("shoot", [x0, p, z0], [out["xf"]])
+        self._made[key] = (dae if dae is not None else f, function)
+        return function
+
+    def interval(self, opti, f: ca.Function, t0, h, x_begin, control, guess,
+                 dae: ca.Function | None = None) -> tuple:
+        """(state at the end, [(t, s, x) at every output]) of one interval; `control(s)`:
+        the control at fraction s (affine in s); `dae(t, x, z, c) -> (x', 0 = alg)`: the
+        DAE IDAS integrates instead of f, with z starting at 0."""
+        shoot = self._function(f, dae if self.integrator == "idas" else None)
+        z0 = ca.DM.zeros(shoot.size1_in(2))
+        states = shoot(x_begin, ca.vertcat(control(0.0), control(1.0), t0, h), z0)
+        points = [(t0 + (j + 1) / self.outputs * h, (j + 1) / self.outputs, states[:, j])
+                  for j in range(self.outputs)]
+        return states[:, -1], points

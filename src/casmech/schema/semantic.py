@@ -197,7 +197,7 @@ def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), force
                                    given.piecewise, given.steps, given.path_grid, weights,
                                    terminal_bounds, design, given.initial_free, initial,
                                    initial_bounds, integral, final, track, ipopt,
-                                   guess_file or None)
+                                   guess_file or None, given.integrator)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

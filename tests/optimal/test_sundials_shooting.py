@@ -1,0 +1,77 @@
+"""Multiple shooting with CVODES and IDAS (optimal/shooting.py SundialsShooting): the same
+optimum as a fine Radau collocation of the same problem, the nodes replayed by DOP853, and
+the settings it refuses."""
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.errors import UsageError
+from casmech.optimal.ocp import from_block, replay, solve
+
+MODELS = Path(__file__).parents[2] / "models"
+
+
+@pytest.fixture(autouse=True)
+def _cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+
+
+def _gallery(name: str):
+    model = casmech.load(MODELS / f"{name}.yaml")
+    return model, from_block(model.ocp)[0]
+
+
+def _same_optimum(name: str):
+    """CVODES shooting against Radau 3 collocation with 8 elements per interval: both
+    transcribe the same continuous problem (piecewise-constant controls), CVODES to its
+    tolerances (1e-10), the collocation to its local error O((h/8)^5)."""
+    model, problem = _gallery(name)
+    shooting = solve(model, replace(problem, integrator="cvodes"), "shooting")
+    fine = solve(model, replace(problem, elements=8), "collocation")
+    coarse = solve(model, problem, "collocation")
+    assert shooting.formulation == "joints" and shooting.status == "Solve_Succeeded"
+    # the fine collocation's cost error: ~1/32 of its difference from 4 elements (order 5),
+    # measured 1e-9 relative; 1e-7 lies above it and below one element's 2e-5 (cart-pole)
+    np.testing.assert_allclose(shooting.objective, fine.objective, rtol=1e-7, atol=0)
+    # the controls: the same optimum (measured 1e-6 N m on the pendulum)
+    np.testing.assert_allclose(shooting.u, fine.u, rtol=0, atol=1e-4)
+    # each interval's end is CVODES's at rtol 1e-10: DOP853 from each node meets the next
+    replayed = replay(model, problem, shooting)
+    np.testing.assert_allclose(replayed, shooting.x, rtol=0, atol=1e-7)
+    return shooting, fine, coarse
+
+
+def test_cvodes_shooting_has_the_pendulums_optimum():
+    _same_optimum("ocp_pendulum_swing_up")
+
+
+@pytest.mark.slow
+def test_cvodes_shooting_has_the_cart_poles_optimum():
+    shooting, fine, coarse = _same_optimum("ocp_cart_pole_swing_up")
+    # the test can tell: one element per interval is off by more than the tolerance
+    assert abs(coarse.objective - fine.objective) > 1e-6 * fine.objective
+
+
+def test_an_integrator_is_refused_where_it_integrates_nothing():
+    model, problem = _gallery("ocp_pendulum_swing_up")
+    with pytest.raises(UsageError, match="use transcription shooting"):
+        solve(model, replace(problem, integrator="cvodes"), "collocation")
+    with pytest.raises(UsageError, match="integrator cvodes"):
+        solve(model, replace(problem, integrator="cvodes", formulation="bodies"), "shooting")
+    with pytest.raises(UsageError, match="rk4, cvodes, idas"):
+        solve(model, replace(problem, integrator="cvode"), "shooting")
+
+
+def test_a_misspelt_integrator_is_located(tmp_path):
+    text = (MODELS / "ocp_pendulum_swing_up.yaml").read_text().replace(
+        "  transcription: collocation\n", "  transcription: shooting\n  integrator: cvode\n")
+    path = tmp_path / "model.yaml"
+    path.write_text(text)
+    with pytest.raises(casmech.ModelError) as error:
+        casmech.load(path)
+    line = text.splitlines().index("  integrator: cvode") + 1
+    assert f"model.yaml:{line}:" in str(error.value) and "cvodes" in str(error.value)
