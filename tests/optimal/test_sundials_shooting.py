@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.cli import main
 from casmech.errors import UsageError
 from casmech.optimal.ocp import from_block, replay, solve
 
@@ -75,3 +76,17 @@ def test_a_misspelt_integrator_is_located(tmp_path):
         casmech.load(path)
     line = text.splitlines().index("  integrator: cvode") + 1
     assert f"model.yaml:{line}:" in str(error.value) and "cvodes" in str(error.value)
+
+
+def test_the_command_line_takes_the_integrator(tmp_path, capsys):
+    """casmech optimize --transcription shooting --integrator cvodes: the pendulum's optimum
+    on 10 intervals, the same as the API's."""
+    path = MODELS / "ocp_pendulum_swing_up.yaml"
+    code = main(["optimize", str(path), "--transcription", "shooting", "--integrator",
+                 "cvodes", "--intervals", "10", "--out", str(tmp_path)])
+    assert code == 0
+    printed = capsys.readouterr().out
+    model, problem = _gallery("ocp_pendulum_swing_up")
+    expected = solve(model, replace(problem, intervals=10, integrator="cvodes"), "shooting")
+    assert f"objective {expected.objective:.10g}" in printed
+    assert (tmp_path / "results.csv").exists()

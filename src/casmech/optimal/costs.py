@@ -47,8 +47,11 @@ def _environment(model: JointModel, problem, t, x, c) -> dict:
     values = continued(model)(t, x, c)
     environment = {name: values[k] for k, name in enumerate(model.names)}
     environment["t"] = t
-    for k, name in enumerate(problem.parameters):
-        environment[name] = c[model.n_u + k]
+    design = [c[model.n_u + k] for k in range(len(problem.parameters))]
+    for name, design_value in zip(problem.parameters, design, strict=True):
+        environment[name] = design_value
+    for name, function in model.derived.items():  # parameters of decision parameters
+        environment[name] = function(*design)
     return environment
 
 
