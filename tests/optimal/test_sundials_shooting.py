@@ -90,3 +90,16 @@ def test_the_command_line_takes_the_integrator(tmp_path, capsys):
     expected = solve(model, replace(problem, intervals=10, integrator="cvodes"), "shooting")
     assert f"objective {expected.objective:.10g}" in printed
     assert (tmp_path / "results.csv").exists()
+
+
+@pytest.mark.slow
+def test_idas_on_a_tree_takes_cvodes_optimum():
+    """IDAS integrates a tree's ODE as CVODES does: the same NLP optimum to the integrators'
+    tolerances (rtol 1e-10)."""
+    model, problem = _gallery("ocp_pendulum_swing_up")
+    problem = replace(problem, intervals=10)
+    cvodes = solve(model, replace(problem, integrator="cvodes"), "shooting")
+    idas = solve(model, replace(problem, integrator="idas"), "shooting")
+    # two integrators of one ODE at rtol 1e-10: measured 1e-9 relative
+    np.testing.assert_allclose(idas.objective, cvodes.objective, rtol=1e-7, atol=0)
+    np.testing.assert_allclose(idas.u, cvodes.u, rtol=0, atol=1e-5)  # N m, as above

@@ -236,7 +236,8 @@ class JointModel:
         else:
             mask = 1.0 - self.start[2]
             ode = self.joints.dynamics(t, x, self._algebraic(t, x, c), mask, self._data(c))[0]
-        return ca.Function("rhs", [t, x, c], [ode], ["t", "x", "c"], ["ode"])
+        # common subexpressions merged: a smaller graph for the NLP's derivatives
+        return ca.Function("rhs", [t, x, c], [ca.cse(ode)], ["t", "x", "c"], ["ode"])
 
     @cached_property
     def dae(self) -> ca.Function | None:
