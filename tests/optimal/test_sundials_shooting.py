@@ -103,3 +103,21 @@ def test_idas_on_a_tree_takes_cvodes_optimum():
     # two integrators of one ODE at rtol 1e-10: measured 1e-9 relative
     np.testing.assert_allclose(idas.objective, cvodes.objective, rtol=1e-7, atol=0)
     np.testing.assert_allclose(idas.u, cvodes.u, rtol=0, atol=1e-5)  # N m, as above
+
+
+def test_loops_refuse_a_sundials_integrator_at_its_key(tmp_path):
+    """A four-bar (one loop) with `integrator: cvodes`: located at the key, naming the
+    transcriptions that take loops."""
+    text = (MODELS / "four_bar.yaml").read_text().replace(
+        "    driver:\n      angle: omega * t\n", "")
+    text += ("ocp:\n  horizon: 1.0\n  intervals: 5\n  transcription: shooting\n"
+             "  integrator: cvodes\n  formulation: joints\n"
+             "  controls:\n    - {joint: crank_pivot, type: torque, bounds: [-50, 50]}\n")
+    path = tmp_path / "four_bar.yaml"
+    path.write_text(text)
+    model = casmech.load(path)
+    problem, transcription = from_block(model.ocp)
+    line = text.splitlines().index("  integrator: cvodes") + 1
+    with pytest.raises(UsageError, match=f"four_bar.yaml:{line}:3: ocp integrator 'cvodes' "
+                                         "integrates trees.*collocation.*rk4"):
+        solve(model, problem, transcription)

@@ -149,12 +149,3 @@ def with_quadrature(rhs: ca.Function, integrand: ca.Function, n_x: int) -> ca.Fu
     return ca.Function("rhs_with_cost", [t, x, c],
                        [ca.vertcat(rhs(t, state, c), integrand(t, state, c))])
 
-
-def dae_with_quadrature(dae: ca.Function, integrand: ca.Function, n_x: int) -> ca.Function:
-    """(t, [x; q], z, c) -> ([x'; integrand], alg): with_quadrature for an index-1 DAE."""
-    t, x, z, c = (ca.SX.sym(name, size) for name, size in
-                  (("t", 1), ("x", n_x + 1), ("z", dae.size1_in(2)), ("c", dae.size1_in(3))))
-    state = x[:n_x]
-    ode, alg = dae(t, state, z, c)
-    return ca.Function("dae_with_cost", [t, x, z, c],
-                       [ca.vertcat(ode, integrand(t, state, c)), alg])

@@ -10,7 +10,6 @@ exactly as an effort motor does, and the reaction columns include it as they inc
     c = [controls; design]  the controls and the decision parameters (optimal/ocp.py)
     rhs(t, x, c) -> x'      a tree: its ODE; loops: the ODE with the closure multipliers lam
                             solved from the acceleration-level rows (index 1; mu = 0)
-    dae(t, x, z, c)         loops: the same with z = lam as algebraic variables, for IDAS
     closure(t, x) -> rows   loops: the cut joints' rows Phi_c and d/dt Phi_c (unit rows,
                             those independent at t0), and |p|^2 - 1 of every quaternion among
                             the coordinates: constraints the transcription imposes at its nodes
@@ -238,26 +237,6 @@ class JointModel:
             ode = self.joints.dynamics(t, x, self._algebraic(t, x, c), mask, self._data(c))[0]
         # common subexpressions merged: a smaller graph for the NLP's derivatives
         return ca.Function("rhs", [t, x, c], [ca.cse(ode)], ["t", "x", "c"], ["ode"])
-
-    @cached_property
-    def dae(self) -> ca.Function | None:
-        """Loops: (t, x, z, c) -> (x', alg), the index-1 DAE whose algebraic variables z are
-        the kept rows' multipliers lam and alg their acceleration rows (rhs solves them
-        instead); a tree: None."""
-        if not self.joints.n_cut:
-            return None
-        t, x, c = self.symbols
-        m, kept = self.joints.n_cut, list(np.flatnonzero(self.start[2]))
-        z = ca.SX.sym("z", len(kept))
-        matrix, base = self.joints.acceleration_system(t, x, self._data(c))
-        lam = ca.SX.zeros(m, 1)
-        if kept:
-            lam[kept] = z
-        ode = self.joints.dynamics(t, x, ca.vertcat(lam, ca.SX.zeros(m, 1)),
-                                   1.0 - self.start[2], self._data(c))[0]
-        alg = matrix[kept, kept] @ z + base[kept] if kept else ca.SX(0, 1)
-        return ca.Function("dae", [t, x, z, c], [ode, alg], ["t", "x", "z", "c"],
-                           ["ode", "alg"])
 
     @cached_property
     def closure(self) -> ca.Function:

@@ -39,6 +39,7 @@ from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
 from casmech.optimal.joint_model import JointModel, joint_model
 from casmech.optimal.shooting import INTEGRATORS, MultipleShooting, SundialsShooting
+from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
 
 REPLAY_RTOL, REPLAY_ATOL = 1e-12, 1e-12  # DOP853's tolerances in replay_nodes
@@ -89,6 +90,12 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
             _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
         _JOINT_MODELS[key] = joint_model(model, list(problem.controls), design)
     found = _JOINT_MODELS[key]
+    if found is not None and found.joints.n_cut and problem.integrator != "rk4":
+        raise UsageError(f"{_where(model, 'integrator')}: ocp integrator "
+                         f"'{problem.integrator}' integrates trees; this mechanism has loops, "
+                         "whose joint transcription is collocation or shooting with "
+                         "integrator rk4 (body coordinates: IDAS per interval, transcription "
+                         "shooting with formulation bodies)")
     if found is not None and found.joints.n_cut and problem.formulation == "auto" \
             and not joints_only:
         return None  # loops: joint coordinates when asked (docs/optimal.md)
@@ -101,6 +108,14 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
                          "floating body, or a control acts on a joint of a component "
                          "instance; use formulation 'bodies' (or auto)")
     return found
+
+
+def _where(model: ResolvedModel, key: str) -> str:
+    """FILE:LINE:COL of the model's `ocp: <key>`, or the file where the key is not written
+    (a problem given through the API)."""
+    document = load_document(model.text, model.file)
+    written = (document.data.get("ocp") or {}) if isinstance(document.data, dict) else {}
+    return str(document.locate_key(("ocp", key))) if key in written else model.file
 
 
 @dataclass(frozen=True)
@@ -320,17 +335,14 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
         ca.jacobian(closure(t_sym, x_sym), x_sym)]) if rows else None
     samples, fine = [], [(model.t0, x[:, 0], _with_design(shape, u, 0, design, 0.0))]
     terms = costs.terms(model, problem)
-    rhs, dae, running = model.rhs, model.dae, 0
+    rhs, running = model.rhs, 0
     if terms.integrand is not None:  # the running cost: a last state from 0 per interval
         rhs = costs.with_quadrature(model.rhs, terms.integrand, model.n_x)
-        dae = dae and costs.dae_with_quadrature(dae, terms.integrand, model.n_x)
-    # IDAS takes the loops' DAE (its multipliers algebraic) where the others take the ODE
-    extra = {"dae": dae} if isinstance(how, SundialsShooting) else {}
     for k in range(n):
         t_k = model.t0 + k * h
         control = partial(_with_design, shape, u, k, design)
         begin, guess_k = _begin(terms, x[:, k], guess, k)
-        end, points = how.interval(opti, rhs, t_k, h, begin, control, guess_k, **extra)
+        end, points = how.interval(opti, rhs, t_k, h, begin, control, guess_k)
         if terms.integrand is not None:
             running += end[model.n_x]
             end = end[:model.n_x]
@@ -356,7 +368,7 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     if terms.final is not None:
         cost += terms.final(model.t0 + horizon, x[:, n], c_end)
     opti.minimize(cost)
-    if extra:  # an integrator's Function has no SX graph to expand; BFGS unless asked
+    if isinstance(how, SundialsShooting):  # no SX graph to expand; BFGS unless asked
         settings = {"ipopt.hessian_approximation": "limited-memory",
                     **{key: value for key, value in settings.items() if key != "expand"}}
     opti.solver("ipopt", dict(settings))
