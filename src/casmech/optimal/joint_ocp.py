@@ -39,7 +39,6 @@ from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
 from casmech.optimal.joint_model import JointModel, joint_model
 from casmech.optimal.shooting import INTEGRATORS, MultipleShooting, SundialsShooting
-from casmech.schema.loader import load_document
 from casmech.schema.resolved import ResolvedModel
 
 REPLAY_RTOL, REPLAY_ATOL = 1e-12, 1e-12  # DOP853's tolerances in replay_nodes
@@ -90,12 +89,6 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
             _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
         _JOINT_MODELS[key] = joint_model(model, list(problem.controls), design)
     found = _JOINT_MODELS[key]
-    if found is not None and found.joints.n_cut and problem.integrator != "rk4":
-        raise UsageError(f"{_where(model, 'integrator')}: ocp integrator "
-                         f"'{problem.integrator}' integrates trees; this mechanism has loops, "
-                         "whose joint transcription is collocation or shooting with "
-                         "integrator rk4 (body coordinates: IDAS per interval, transcription "
-                         "shooting with formulation bodies)")
     if found is not None and found.joints.n_cut and problem.formulation == "auto" \
             and not joints_only:
         return None  # loops: joint coordinates when asked (docs/optimal.md)
@@ -108,14 +101,6 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
                          "floating body, or a control acts on a joint of a component "
                          "instance; use formulation 'bodies' (or auto)")
     return found
-
-
-def _where(model: ResolvedModel, key: str) -> str:
-    """FILE:LINE:COL of the model's `ocp: <key>`, or the file where the key is not written
-    (a problem given through the API)."""
-    document = load_document(model.text, model.file)
-    written = (document.data.get("ocp") or {}) if isinstance(document.data, dict) else {}
-    return str(document.locate_key(("ocp", key))) if key in written else model.file
 
 
 @dataclass(frozen=True)
