@@ -129,3 +129,15 @@ def test_cvodes_shooting_on_a_loop_has_the_fine_collocations_optimum():
                                atol=1e-7)
     violation = columns_at(model, problem, shooting, ["constraint_violation"])[:, 0]
     assert violation.max() <= 1e-10  # the loop's rows, imposed at every node
+
+
+def test_an_integrator_with_collocation_is_located(tmp_path):
+    text = (MODELS / "ocp_pendulum_swing_up.yaml").read_text().replace(
+        "  transcription: collocation\n", "  transcription: collocation\n  integrator: cvodes\n")
+    path = tmp_path / "model.yaml"
+    path.write_text(text)
+    with pytest.raises(casmech.ModelError) as error:
+        casmech.load(path)
+    line = text.splitlines().index("  integrator: cvodes") + 1
+    assert f"model.yaml:{line}:" in str(error.value) and "E409" in str(error.value)
+    assert "transcription: shooting" in str(error.value)

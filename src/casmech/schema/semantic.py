@@ -148,6 +148,11 @@ def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), force
                     written=()) -> resolved.OptimalControl | None:
     path: Path = ("ocp",)
     horizon = check.setting((*path, "horizon"), given.horizon)
+    if given.integrator != "rk4" and given.transcription != "shooting":
+        check.error("E409", (*path, "integrator"), f"integrator {given.integrator} integrates "
+                    "the intervals of multiple shooting", expected="transcription: shooting",
+                    got=f"transcription: {given.transcription}",
+                    hint="collocation has no integrator: remove the key or shoot")
     problems = limits.ocp_problems(horizon, given.intervals, given.elements)
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem,
