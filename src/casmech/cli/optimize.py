@@ -17,6 +17,7 @@ from casmech.io.csv import read_measurements, write_csv
 from casmech.optimal import estimate as estimation
 from casmech.optimal import ocp
 from casmech.optimal.estimate_kinematics import estimate_kinematics
+from casmech.optimal.shooting import INTEGRATORS
 from casmech.schema import limits
 
 
@@ -26,6 +27,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--transcription", choices=ocp.TRANSCRIPTIONS,
                         help="ocp: override the block's transcription")
     parser.add_argument("--intervals", type=int, help="ocp: override the number of intervals")
+    parser.add_argument("--integrator", choices=INTEGRATORS,
+                        help="ocp, joint coordinates: override the block's shooting integrator "
+                             "(RK4 steps, or CVODES / IDAS with sensitivities)")
     parser.add_argument("--formulation", choices=ocp.FORMULATIONS,
                         help="ocp: override the block's formulation (joint coordinates where "
                              "they take the mechanism, or body coordinates)")
@@ -62,6 +66,7 @@ def _optimal_control(model, args, out: Path) -> None:
         problem = ocp.OCP(**{**problem.__dict__, "intervals": args.intervals})
     problem = ocp.OCP(**{**problem.__dict__, "mode": args.mode,
                          "formulation": args.formulation or problem.formulation,
+                         "integrator": args.integrator or problem.integrator,
                          "solver": {**problem.solver, **_ipopt(options(args.option))}})
     transcription = args.transcription or transcription
     start = time.perf_counter()

@@ -44,16 +44,30 @@ def used(problem) -> bool:
 def _environment(model: JointModel, problem, t, x, c) -> dict:
     """Every name an expression may read: t, the results columns (angles continued, below),
     the decision parameters."""
-    values = model.columns(t, x, c)
+    values = continued(model)(t, x, c)
     environment = {name: values[k] for k, name in enumerate(model.names)}
     environment["t"] = t
-    for k, name in enumerate(problem.parameters):
-        environment[name] = c[model.n_u + k]
-    for name, (slot, sign, offset) in _angles(model).items():
-        wrapped = environment[name]
-        turns = ca.floor((sign * x[slot] + offset - wrapped) / (2 * np.pi) + 0.5)
-        environment[name] = wrapped + 2 * np.pi * turns
+    design = [c[model.n_u + k] for k in range(len(problem.parameters))]
+    for name, design_value in zip(problem.parameters, design, strict=True):
+        environment[name] = design_value
+    for name, function in model.derived.items():  # parameters of decision parameters
+        environment[name] = function(*design)
     return environment
+
+
+def continued(model: JointModel) -> ca.Function:
+    """(t, x, c) -> every results column, each angle column that follows a joint coordinate
+    (_angles) continued past pi as that coordinate goes: what cost terms, `terminal:`,
+    `terminal_bounds:`, `initial:` and `path:` read."""
+    t, x, c = model.symbols
+    values = model.columns(t, x, c)
+    rows = ca.vertsplit(values)
+    for name, (slot, sign, offset) in _angles(model).items():
+        k = model.names.index(name)
+        turns = ca.floor((sign * x[slot] + offset - rows[k]) / (2 * np.pi) + 0.5)
+        rows[k] = rows[k] + 2 * np.pi * turns
+    return ca.Function("continued_columns", [t, x, c], [ca.vertcat(*rows)],
+                       ["t", "x", "c"], ["columns"])
 
 
 def _angles(model: JointModel, step: float = 1e-3) -> dict:
@@ -134,3 +148,4 @@ def with_quadrature(rhs: ca.Function, integrand: ca.Function, n_x: int) -> ca.Fu
     state = x[:n_x]
     return ca.Function("rhs_with_cost", [t, x, c],
                        [ca.vertcat(rhs(t, state, c), integrand(t, state, c))])
+

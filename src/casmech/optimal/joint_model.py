@@ -22,13 +22,14 @@ body, runtime/auto_formulation.py's rule; a control on a joint of a component in
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 import yaml
 
+from casmech.core import traced
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.errors import ModelError, UsageError
@@ -37,7 +38,7 @@ from casmech.formulations.joint_system import JointSystem, build, forced_ode
 from casmech.formulations.tree import spanning_tree
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import body_columns
-from casmech.optimal.system import ParametricSystem, parametric_system
+from casmech.optimal.system import ParametricSystem, classify, parametric_system, traced_model
 from casmech.runtime import assembly
 from casmech.runtime.results import column_names
 from casmech.schema import load_model_text
@@ -92,6 +93,8 @@ class JointModel:
     joints: JointSystem  # over the model data
     t0: float
     n_design: int = 0  # decision parameters of the model, last in theta
+    # parameters derived from decision parameters: name -> Function(decision parameters)
+    derived: dict = field(default_factory=dict)
 
     @property
     def n_x(self) -> int:
@@ -232,7 +235,8 @@ class JointModel:
         else:
             mask = 1.0 - self.start[2]
             ode = self.joints.dynamics(t, x, self._algebraic(t, x, c), mask, self._data(c))[0]
-        return ca.Function("rhs", [t, x, c], [ode], ["t", "x", "c"], ["ode"])
+        # common subexpressions merged: a smaller graph for the NLP's derivatives
+        return ca.Function("rhs", [t, x, c], [ca.cse(ode)], ["t", "x", "c"], ["ode"])
 
     @cached_property
     def closure(self) -> ca.Function:
@@ -303,4 +307,19 @@ def joint_model(model: ResolvedModel, controls: list[Control], design=()) -> Joi
     if tree.floating_loops:
         return None
     joints = build(system.split.ir, tree, data=system.split.symbols)
-    return JointModel(system, joints, 0.0, len(tuple(design)))
+    return JointModel(system, joints, 0.0, len(tuple(design)), _derived(motored, design))
+
+
+def _derived(model: ResolvedModel, design) -> dict:
+    """The parameters that depend on the decision parameters, as functions of them:
+    name -> Function(the decision parameters' values) (the model traced again with them
+    symbolic, optimal/system.py)."""
+    parameters = classify(model, design)[0]
+    if not parameters:
+        return {}
+    again = traced_model(model, parameters)
+    inputs = [again.symbols[name] if name in parameters else ca.SX.sym(name)
+              for name in design]
+    return {name: ca.Function(name, inputs, [traced.expression(value)])
+            for name, value in again.parameters.items()
+            if name not in design and traced.is_traced(value)}

@@ -12,7 +12,9 @@ optimal/control_shapes.py, solved by IPOPT (casadi.Opti).
                no quaternion coordinates) x_{k+1} = end_k
     path       bounds on results columns at every node after the first (the control of the
                interval ending there) and, with `path_grid: fine`, at every point inside the
-               intervals the method has (collocation points; RK4 step ends)
+               intervals the method has (collocation points; RK4 step ends; a SUNDIALS
+               integrator's `steps` outputs); path, terminal and initial conditions read an
+               angle column continued past pi as its joint coordinate (costs.continued)
     costs      the integral and tracking terms (optimal/costs.py) as a last state of the ODE,
                from 0 in every interval, its ends summed; the final term at the last node
 
@@ -36,7 +38,7 @@ from casmech.optimal import costs
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
 from casmech.optimal.control_shapes import SHAPES, ControlShape
 from casmech.optimal.joint_model import JointModel, joint_model
-from casmech.optimal.shooting import MultipleShooting
+from casmech.optimal.shooting import INTEGRATORS, MultipleShooting, SundialsShooting
 from casmech.schema.resolved import ResolvedModel
 
 REPLAY_RTOL, REPLAY_ATOL = 1e-12, 1e-12  # DOP853's tolerances in replay_nodes
@@ -62,7 +64,8 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
     joints_only = [name for name, used in (
         ("decision parameters", bool(problem.parameters)),
         ("a free initial state", problem.initial_free),
-        ("integral, tracking and final cost terms", costs.used(problem))) if used]
+        ("integral, tracking and final cost terms", costs.used(problem)),
+        (f"integrator {problem.integrator}", problem.integrator != "rk4")) if used]
     if joints_only and problem.formulation == "bodies":
         raise UsageError(f"{' and '.join(joints_only)} are solved in joint coordinates "
                          "only; use formulation auto or joints")
@@ -129,6 +132,13 @@ def control_weights(problem) -> np.ndarray:
 
 def method(problem, transcription: str):
     """The transcription method of the problem's settings."""
+    if problem.integrator not in INTEGRATORS:
+        raise UsageError(f"integrator '{problem.integrator}' is not one of "
+                         f"{', '.join(INTEGRATORS)}")
+    if transcription == "collocation" and problem.integrator != "rk4":
+        raise UsageError(f"integrator '{problem.integrator}' integrates the intervals of "
+                         "multiple shooting; use transcription shooting (collocation has "
+                         "no integrator)")
     if transcription == "collocation":
         if problem.scheme not in SCHEMES:
             raise UsageError(f"collocation scheme '{problem.scheme}' is not one of "
@@ -138,7 +148,9 @@ def method(problem, transcription: str):
         return DirectCollocation(problem.degree, problem.scheme, problem.elements)
     if problem.steps < 1:
         raise UsageError(f"shooting steps {problem.steps} must be at least 1")
-    return MultipleShooting(problem.steps)
+    if problem.integrator == "rk4":
+        return MultipleShooting(problem.steps)
+    return SundialsShooting(problem.integrator, problem.steps, problem.rtol, problem.atol)
 
 
 def shape_of(problem) -> ControlShape:
@@ -220,22 +232,22 @@ def _bounds(opti, problem, u):
             opti.subject_to(u[k, :] <= control.upper)
 
 
-def _path(opti, model: JointModel, problem, samples):
+def _path(opti, model: JointModel, columns, problem, samples):
     """Bounds on results columns at the samples (t, x, c)."""
     if not problem.path:
         return
     index = {name: model.column(name) for name in problem.path}
     for t, x, c in samples:
-        values = model.columns(t, x, c)
+        values = columns(t, x, c)
         for name, (low, high) in problem.path.items():
             opti.subject_to(opti.bounded(low, values[index[name]], high))
 
 
-def _terminal(opti, model: JointModel, problem, t_end, x_end, c_end):
+def _terminal(opti, model: JointModel, columns, problem, t_end, x_end, c_end):
     cost = 0
     if not (problem.terminal or problem.terminal_cost or problem.terminal_bounds):
         return cost
-    values = model.columns(t_end, x_end, c_end)
+    values = columns(t_end, x_end, c_end)
     for name, target in problem.terminal.items():
         opti.subject_to(values[model.column(name)] == target)
     for name, (weight, target) in problem.terminal_cost.items():
@@ -245,7 +257,7 @@ def _terminal(opti, model: JointModel, problem, t_end, x_end, c_end):
     return cost
 
 
-def _start_state(opti, model: JointModel, problem, x0, c0) -> None:
+def _start_state(opti, model: JointModel, columns, problem, x0, c0) -> None:
     """x(t0): the model's assembled state, or with `initial_free` a variable on the closure
     rows meeting the `initial` equalities and `initial_bounds` on results columns."""
     if not problem.initial_free:
@@ -258,7 +270,7 @@ def _start_state(opti, model: JointModel, problem, x0, c0) -> None:
         opti.subject_to(model.closure(model.t0, x0) == 0)
     if not (problem.initial or problem.initial_bounds):
         return
-    values = model.columns(model.t0, x0, c0)
+    values = columns(model.t0, x0, c0)
     for name, target in problem.initial.items():
         opti.subject_to(values[model.column(name)] == target)
     for name, (low, high) in problem.initial_bounds.items():
@@ -299,7 +311,8 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
         opti.subject_to(opti.bounded(low, design[k], high))
     x = opti.variable(model.n_x, n + 1)
     opti.set_initial(x, x_nodes.T)
-    _start_state(opti, model, problem, x[:, 0], _with_design(shape, u, 0, design, 0.0))
+    columns = costs.continued(model)  # angle columns continued past pi
+    _start_state(opti, model, columns, problem, x[:, 0], _with_design(shape, u, 0, design, 0.0))
     closure = model.closure
     rows = closure.size1_out(0)
     t_sym, x_sym = closure.mx_in()
@@ -331,15 +344,18 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
         fine += inner + [(t_next, x[:, k + 1], control(1.0))]
         samples += (inner if problem.path_grid == "fine" else []) + [fine[-1]]
     _bounds(opti, problem, u)
-    _path(opti, model, problem, samples)
+    _path(opti, model, columns, problem, samples)
     horizon = h * n
     scales = ca.DM(np.sqrt(control_weights(problem)))
     cost = problem.effort * shape.effort(scales * u, h) + problem.time_weight * horizon
     c_end = _with_design(shape, u, n - 1, design, 1.0)
-    cost += _terminal(opti, model, problem, model.t0 + horizon, x[:, n], c_end) + running
+    cost += _terminal(opti, model, columns, problem, model.t0 + horizon, x[:, n], c_end) + running
     if terms.final is not None:
         cost += terms.final(model.t0 + horizon, x[:, n], c_end)
     opti.minimize(cost)
+    if isinstance(how, SundialsShooting):  # no SX graph to expand; BFGS unless asked
+        settings = {"ipopt.hessian_approximation": "limited-memory",
+                    **{key: value for key, value in settings.items() if key != "expand"}}
     opti.solver("ipopt", dict(settings))
     try:
         result = opti.solve()

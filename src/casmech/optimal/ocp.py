@@ -101,6 +101,7 @@ class OCP:
     track: Mapping[str, tuple] = field(default_factory=dict)
     solver: Mapping[str, object] = field(default_factory=dict)  # IPOPT options (no prefix)
     guess_file: tuple[str, str] | None = None  # a previous result (optimal/warm_start.py)
+    integrator: str = "rk4"  # joints, shooting: rk4 | cvodes | idas (optimal/shooting.py)
 
 
 def default_guess(problem: OCP) -> np.ndarray:
@@ -474,7 +475,8 @@ def from_block(block) -> tuple[OCP, str]:
                parameters=dict(block.parameters), initial_free=block.initial_free,
                initial=dict(block.initial), initial_bounds=dict(block.initial_bounds),
                integral=dict(block.integral), final=block.final, track=dict(block.track),
-               solver=dict(block.solver), guess_file=block.guess_file), block.transcription
+               solver=dict(block.solver), guess_file=block.guess_file,
+               integrator=block.integrator), block.transcription
 
 
 def fine_columns(model: ResolvedModel, problem: OCP, solution: Solution,

@@ -234,6 +234,7 @@ class OptimalControl:
     track: Mapping[str, tuple[ScalarFunction, float]] = field(default_factory=dict)  # table(t)
     solver: tuple[tuple[str, Any], ...] = ()  # IPOPT options written (core.ipopt_options)
     guess_file: tuple[str, str] | None = None  # a previous result's results.csv, controls.csv
+    integrator: str = "rk4"  # joints, shooting: rk4 | cvodes | idas
 
 
 @dataclass(frozen=True)

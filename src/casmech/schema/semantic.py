@@ -138,6 +138,11 @@ def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), force
                     written=()) -> resolved.OptimalControl | None:
     path: Path = ("ocp",)
     horizon = check.setting((*path, "horizon"), given.horizon)
+    if given.integrator != "rk4" and given.transcription != "shooting":
+        check.error("E409", (*path, "integrator"), f"integrator {given.integrator} integrates "
+                    "the intervals of multiple shooting", expected="transcription: shooting",
+                    got=f"transcription: {given.transcription}",
+                    hint="collocation has no integrator: remove the key or shoot")
     problems = limits.ocp_problems(horizon, given.intervals, given.elements)
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem,
@@ -187,7 +192,7 @@ def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), force
                                    given.piecewise, given.steps, given.path_grid, weights,
                                    terminal_bounds, design, given.initial_free, initial,
                                    initial_bounds, integral, final, track, ipopt,
-                                   guess_file or None)
+                                   guess_file or None, given.integrator)
 
 
 def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedModel | None:

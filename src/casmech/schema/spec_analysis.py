@@ -149,6 +149,8 @@ class OptimalControl(Spec):
     initial_bounds: dict[StrictStr, Pair] = Field(default_factory=dict)  # column -> [lo, hi]
     # IPOPT's options (casmech.core.ipopt_options, checked by schema.ocp_terms)
     solver: dict[StrictStr, Any] | None = None
+    # joints, shooting: the intervals' integrator (RK4 steps, or SUNDIALS with sensitivities)
+    integrator: Literal["rk4", "cvodes", "idas"] = "rk4"
 
 
 # ---------------------------------------------------------- parameter studies (issue 18)
