@@ -36,6 +36,9 @@ SKIPPED = frozenset({"file", "text", "source", "sources"})  # paths that depend 
 ADDED = {"outputs": (), "reference_pose": None, "initial": {}, "initial_sources": {},
          "others": (), "couples": (), "coefficients": ()}
 ADDED_GEOMETRY = frozenset({"q@i", "q@j"})
+# entries of a table added after the reference, skipped while they hold their default: a
+# contact friction's `exact` (model: smooth)
+ADDED_ENTRIES = {"exact": 0.0}
 # the analysis options as the reference's IR held them, with their defaults
 OLD_OPTIONS = {"formulation": "auto", "stabilization": "ggl", "method": "auto", "at": None,
                "inputs": None}
@@ -79,7 +82,8 @@ def _walk(value, numbers: list, tokens: list) -> None:
                 tokens.append(item.name)
                 _walk(getattr(value, item.name), numbers, tokens)
     elif isinstance(value, dict) or hasattr(value, "items"):
-        kept = {key: item for key, item in value.items() if key not in ADDED_GEOMETRY}
+        kept = {key: item for key, item in value.items() if key not in ADDED_GEOMETRY
+                and not (key in ADDED_ENTRIES and item == ADDED_ENTRIES[key])}
         tokens.append(f"{{{len(kept)}")
         for key, item in kept.items():
             tokens.append(str(key))
