@@ -5,15 +5,13 @@ there, as the results table's angles, unwrapped from node to node, and the bar's
 (upright: z = L/2) say."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import casmech
 from casmech.optimal.ocp import columns_at, from_block, solve
-
-MODELS = Path(__file__).parents[2] / "models"
+from tests.conftest import MODELS
 
 
 @pytest.fixture(autouse=True)

@@ -3,7 +3,6 @@ optimum as a fine Radau collocation of the same problem, the nodes replayed by D
 the settings it refuses."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +12,7 @@ from casmech.cli import main
 from casmech.errors import UsageError
 from casmech.optimal.controls import Control
 from casmech.optimal.ocp import OCP, columns_at, from_block, replay, solve
-
-MODELS = Path(__file__).parents[2] / "models"
+from tests.conftest import MODELS
 
 
 @pytest.fixture(autouse=True)
