@@ -108,6 +108,13 @@ def _one(mu, d, n0, n1):
     return ca.if_else(c == 0, 0, -2 * c / ca.if_else(root == 0, 1, root))
 
 
+def _length(vector):
+    """|vector|, its derivative 0 (not 0/0) where the vector is 0: an unloaded joint's load
+    part stays 0 and Newton's steps stay finite."""
+    square = ca.dot(vector, vector)
+    return (square != 0) * ca.sqrt(ca.if_else(square == 0, 1, square))
+
+
 def sliding(functions, elements, directions) -> ca.Function:
     """(t, q, q_dot) -> (g_1..g_k, residual, A) while the joints `elements` slide in
     `directions`, in the model of `functions` (the load parts absent from it; module
@@ -129,7 +136,7 @@ def sliding(functions, elements, directions) -> ca.Function:
     g = ca.SX.sym("g", k)
     n0_s = [ca.SX.sym(f"n0_{i}", 3) for i in range(k)]
     n1_s = [[ca.SX.sym(f"n1_{i}_{j}", 3) for j in range(k)] for i in range(k)]
-    residual = g - ca.vertcat(*(mu[i] * ca.norm_2(n0_s[i] - sum(
+    residual = g - ca.vertcat(*(mu[i] * _length(n0_s[i] - sum(
         d[j] * g[j] * n1_s[i][j] for j in range(k))) for i in range(k)))
     given = [*n0_s, *(v for row in n1_s for v in row)]
     values = [*n0, *(v for row in n1 for v in row)]

@@ -150,6 +150,11 @@ def _check_loads(t, sliding: list, values) -> None:
     """Stop with an analysis error naming the sliding joints with load parts where their
     loads are not unique (A's spectral radius >= 1: friction_load.sliding) or not solved."""
     k = len(sliding)
+    if not np.all(np.isfinite(values)):  # a load vector of 0 length where a root needs it
+        raise AnalysisError(FailureContext(
+            t, "the loads of the sliding joints with load parts have no finite solution",
+            [(e.name, e.source, float(v)) for e, v in zip(sliding, values, strict=False)],
+            "load part"))
     radius = float(np.max(np.abs(np.linalg.eigvals(values[k + 1:].reshape(k, k)))))
     if not radius < 1:
         raise AnalysisError(FailureContext(

@@ -179,3 +179,70 @@ def test_frictions_that_would_lock_two_joints_together_are_an_analysis_error():
         casmech.analyze(functions)
     message = str(raised.value)
     assert "Painleve" in message and "'floor'" in message and "'slope'" in message
+
+
+def test_a_held_wedge_slips_where_a_ramp_reaches_its_load_dependent_limit():
+    """The wedge held by the floor (mu_static) while the block slides down its slope: the
+    floor's load and the force needed to hold the wedge come from the block's sliding friction
+    (itself a load part); a ramp k t to -x on the wedge makes it slip at
+    k t* = mu_s R - N (sin - mu2 cos), after which both slide, their loads solved together."""
+    k, mu_s, t_end = 20.0, 0.2, 0.6
+    c, s, m, big = math.cos(THETA), math.sin(THETA), M_BLOCK, M_WEDGE
+    text = wedge("joint").replace(f"friction: {{mu: {MU_FLOOR}}}, initial: {{displacement_dot: "
+                                  f"{V_WEDGE}}}", f"friction: {{mu: {MU_FLOOR}, mu_static: "
+                                  f"{mu_s}}}")
+    text = text.replace("analysis:", f"forces:\n  - {{name: push, type: force, body: wedge, "
+                        f"value: [-{k} * t, 0, 0]}}\nanalysis:").replace("t_end: 0.5",
+                                                                         f"t_end: {t_end}")
+    assert "mu_static" in text and "push" in text
+    # held: the block on a fixed slope
+    normal = m * G * c
+    floor = big * G + normal * (c + MU_SLOPE * s)
+    start = (mu_s * floor - normal * (s - MU_SLOPE * c)) / k
+    assert 0 < start < t_end
+    # both sliding: the wedge's equation of wedge_closed_form with the ramp, A = A0 + A1 t
+    lhs = np.array([[m * s, 0, -1, 0], [m * c, m, MU_SLOPE, 0],
+                    [big, 0, s - MU_SLOPE * c, -MU_FLOOR], [0, 0, c + MU_SLOPE * s, -1]])
+    base = np.linalg.solve(lhs, [-m * G * c, m * G * s, 0, -big * G])
+    slope = np.linalg.solve(lhs, [0, 0, -k, 0])  # per unit t
+    result, columns = run(text)
+    switches = result.metadata["friction_switches"]
+    assert [(w["joint"], w["mode"]) for w in switches] == [("floor", -1)]
+    # the located event, to the run's tolerance
+    np.testing.assert_allclose(switches[0]["t"], start, rtol=1e-9, atol=0)
+    t = np.array(result.times)
+    held, after = t < start, t > start
+    assert np.max(np.abs(columns["floor.displacement"][held])) < 1e-9
+    tau = t[after] - start
+
+    def twice(a0, a1):  # the double integral from rest at `start` of a0 + a1 t
+        return a0 * tau ** 2 / 2 + a1 * ((t[after] ** 3 - start ** 3) / 6 - start ** 2 * tau / 2)
+
+    acc_free = G * (s - MU_SLOPE * c)  # the block on the held wedge
+    block_start = V_BLOCK * start + acc_free * start ** 2 / 2
+    # the assumed directions hold over the run: the closed forms' rates on the grid
+    wedge_rate = base[0] * tau + slope[0] * (t[after] ** 2 - start ** 2) / 2
+    block_rate = V_BLOCK + acc_free * start + base[1] * tau + slope[1] * (
+        t[after] ** 2 - start ** 2) / 2
+    assert np.all(wedge_rate[1:] < 0) and np.all(block_rate > 0)
+    # closed forms integrated at rtol 1e-10
+    np.testing.assert_allclose(columns["floor.displacement"][after], twice(base[0], slope[0]),
+                               rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(columns["slope.displacement"][after], block_start + (
+        V_BLOCK + acc_free * start) * tau + twice(base[1], slope[1]), rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize("formulation", ["joint", "rp"])
+def test_an_unloaded_wedge_and_block_glide_at_their_initial_rates(formulation):
+    """Without gravity the block glides down the slope of the gliding wedge with no load on
+    either joint: the coupled load parts are 0 (their derivative at a zero load is no 0/0
+    in Newton's steps) and both move at their initial rates."""
+    text = wedge(formulation).replace(f"gravity: [0, 0, -{G}]", "gravity: [0, 0, 0]")
+    result, columns = run(text)
+    t = np.array(result.times)
+    for name, rate in (("floor", V_WEDGE), ("slope", V_BLOCK)):
+        # uniform motion, integrated at rtol 1e-10 (atol: IDAS's absolute error)
+        np.testing.assert_allclose(columns[f"{name}.displacement"], rate * t, rtol=1e-9,
+                                   atol=1e-11)
+        # no load, no Coulomb part: no friction, to roundoff
+        np.testing.assert_allclose(columns[f"{name}.friction"], 0, rtol=0, atol=1e-12)
