@@ -148,7 +148,8 @@ def _events(functions, switched: list, modes: dict, rows: dict) -> list:
 
 def _check_loads(t, sliding: list, values) -> None:
     """Stop with an analysis error naming the sliding joints with load parts where their
-    loads are not unique (A's spectral radius >= 1: friction_load.sliding) or not solved."""
+    loads are not unique (A's spectral radius >= 1: friction_load.sliding) or not solved
+    (at a segment's start and at each of its rows)."""
     k = len(sliding)
     if not np.all(np.isfinite(values)):  # a load vector of 0 length where a root needs it
         raise AnalysisError(FailureContext(
@@ -185,6 +186,7 @@ class _Run:
         self.fixed = {f"{n}.{c}": [] for n in self.names for c in friction.COLUMNS}
         self.fixed |= {f"{f.name}.friction_force": [] for f in self.contacts.forces}
         self.segments = 0
+        self.loads = None  # (the last built segment's load system, its joints) or None
 
     def values(self, q, q_dot) -> tuple[dict, dict]:
         out = np.array(self.coordinates(q, q_dot)).ravel()
@@ -202,10 +204,12 @@ class _Run:
         ir, held = self.contacts.segment(ir, t, q, q_dot, modes)
         functions = build_functions(ir)
         sliding = [e for e in elements(ir) if loaded(e) and modes[e.name] != 0]
+        self.loads = None
         if sliding:
             load = friction_load.sliding(functions, sliding, [modes[e.name] for e in sliding])
             _check_loads(t, sliding, np.array(load(t, q, q_dot)).ravel())
             parts = {e.name: friction_load.part(load, i) for i, e in enumerate(sliding)}
+            self.loads = (load, sliding)
             ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {
                 "load": parts[f.name]}) if any(f is e for e in sliding) else f for f in ir.limits))
             functions = build_functions(ir)
@@ -274,6 +278,11 @@ class _Run:
             span = (t, t1, step if t1 == t_end else t1 - t)
             try:
                 modes, found, built = self.settle(span, q, q_dot, modes, extra)
+                if self.loads is not None:  # the loads solved at every row of the segment
+                    load, sliding = self.loads
+                    for k, time in enumerate(found.times):
+                        _check_loads(time, sliding, np.array(load(
+                            time, found.q[k], found.q_dot[k])).ravel())
             except AnalysisError as error:  # a failure or an interrupt: the rows before it
                 error.partial = self.finish()  # (of the segments done) in the base bundle's
                 raise
