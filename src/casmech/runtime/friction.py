@@ -45,6 +45,7 @@ from casmech.schema.resolved import ScalarFunction
 SWITCHES = 100_000  # mode switches a run may make (a Zeno cascade ends the run there)
 COUNTERS = ("steps", "idas_steps", "idas_calls", "event_probes", "projections")  # summed
 SLACK = 1e-9  # a holding force this far (relative) past the static limit still holds
+LOADS = 1e-10  # the largest residual (relative) of solved friction loads at a segment start
 STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
 
 
@@ -145,6 +146,31 @@ def _events(functions, switched: list, modes: dict, rows: dict) -> list:
     return found
 
 
+def _check_loads(t, sliding: list, values) -> None:
+    """Stop with an analysis error naming the sliding joints with load parts where their
+    loads are not unique (A's spectral radius >= 1: friction_load.sliding) or not solved
+    (at a segment's start and at each of its rows)."""
+    k = len(sliding)
+    if not np.all(np.isfinite(values)):  # a load vector of 0 length where a root needs it
+        raise AnalysisError(FailureContext(
+            t, "the loads of the sliding joints with load parts have no finite solution",
+            [(e.name, e.source, float(v)) for e, v in zip(sliding, values, strict=False)],
+            "load part"))
+    radius = float(np.max(np.abs(np.linalg.eigvals(values[k + 1:].reshape(k, k)))))
+    if not radius < 1:
+        raise AnalysisError(FailureContext(
+            t, "the sliding friction would lock its joint(s) on their own (mu times the "
+            "change of the load per unit friction force >= 1; with several joints, the "
+            "spectral radius of that matrix: Painleve's paradox); give a smaller mu",
+            [(e.name, e.source, radius) for e in sliding], "mu |dL/df|"))
+    scale = max(1.0, float(np.max(np.abs(values[:k]))))
+    if not values[k] <= LOADS * scale:
+        raise AnalysisError(FailureContext(
+            t, "the loads of the sliding joints with load parts were not solved (Newton's "
+            "method did not converge from their one-joint roots)",
+            [(e.name, e.source, float(values[k])) for e in sliding], "residual (N or N m)"))
+
+
 class _Run:
     """One friction run: its segments joined into one Result over the base bundle."""
 
@@ -160,6 +186,7 @@ class _Run:
         self.fixed = {f"{n}.{c}": [] for n in self.names for c in friction.COLUMNS}
         self.fixed |= {f"{f.name}.friction_force": [] for f in self.contacts.forces}
         self.segments = 0
+        self.loads = None  # (the last built segment's load system, its joints) or None
 
     def values(self, q, q_dot) -> tuple[dict, dict]:
         out = np.array(self.coordinates(q, q_dot)).ravel()
@@ -169,24 +196,22 @@ class _Run:
 
     def build(self, t, q, q_dot, modes):
         """The bundle of a segment from (q, q_dot) at t in `modes`, its events, the stuck
-        joints' rows, the stuck contact points' row pairs. A sliding joint with a load part
-        gets its law's load (friction_load.sliding) from the segment's model without it."""
+        joints' rows, the stuck contact points' row pairs. The sliding joints with load parts
+        get their laws' loads (friction_load.sliding, solved together) from the segment's
+        model without them."""
         s, _ = self.values(q, q_dot)
         ir, rows = segment_model(self.ir, q, q_dot, modes, s)
         ir, held = self.contacts.segment(ir, t, q, q_dot, modes)
         functions = build_functions(ir)
         sliding = [e for e in elements(ir) if loaded(e) and modes[e.name] != 0]
+        self.loads = None
         if sliding:
-            (e,) = sliding  # one joint with a load part per model (schema/contact.py)
-            load = friction_load.sliding(functions, e, float(modes[e.name]))
-            ratio = float(load(t, q, q_dot)[1])
-            if not ratio < 1:
-                raise AnalysisError(FailureContext(
-                    t, "the sliding friction of a joint would lock it on its own (mu times "
-                    "the change of its load per unit friction force >= 1: Painleve's paradox)"
-                    "; give it a smaller mu", [(e.name, e.source, ratio)], "mu |dL/df|"))
-            ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {"load": load})
-                                          if f is e else f for f in ir.limits))
+            load = friction_load.sliding(functions, sliding, [modes[e.name] for e in sliding])
+            _check_loads(t, sliding, np.array(load(t, q, q_dot)).ravel())
+            parts = {e.name: friction_load.part(load, i) for i, e in enumerate(sliding)}
+            self.loads = (load, sliding)
+            ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {
+                "load": parts[f.name]}) if any(f is e for e in sliding) else f for f in ir.limits))
             functions = build_functions(ir)
         stops = _events(functions, elements(self.ir), modes, rows)
         return functions, stops + self.contacts.events(functions, modes, held), rows, held
@@ -253,6 +278,11 @@ class _Run:
             span = (t, t1, step if t1 == t_end else t1 - t)
             try:
                 modes, found, built = self.settle(span, q, q_dot, modes, extra)
+                if self.loads is not None:  # the loads solved at every row of the segment
+                    load, sliding = self.loads
+                    for k, time in enumerate(found.times):
+                        _check_loads(time, sliding, np.array(load(
+                            time, found.q[k], found.q_dot[k])).ravel())
             except AnalysisError as error:  # a failure or an interrupt: the rows before it
                 error.partial = self.finish()  # (of the segments done) in the base bundle's
                 raise

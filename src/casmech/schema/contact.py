@@ -119,20 +119,3 @@ def _radius(check: Checker, path: Path, given, entry, values):
     radius = positive(check, (*path, "radius"), check.number((*path, "radius"), given.radius),
                       "friction radius")
     return radius
-
-
-def one_load_part(check: Checker, joints) -> None:
-    """E103 at a second joint's `mu` (or `mu_static`): one joint of a model may have a
-    friction with a load part (equations/friction_load.py solves one in closed form)."""
-    first = None
-    for index, joint in enumerate(joints):
-        if joint is None or not joint.friction or not traced.value(joint.friction["mu_static"]):
-            continue
-        if first is None:
-            first = joint.name
-            continue
-        key = "mu" if traced.value(joint.friction["mu"]) else "mu_static"
-        check.error("E103", ("joints", index, "friction", key), "a second joint with a "
-                    "friction load part", got=f"'{first}' has one already",
-                    hint="give `mu` on one joint only; the others' friction as `coulomb` and "
-                    "`static`")

@@ -15,7 +15,6 @@ from casmech.core.option_values import SOLVER, flat, lookup, with_values
 from casmech.core.options import OPTIONS
 from casmech.errors import Diagnostic, failed
 from casmech.schema import (
-    contact,
     events,
     files,
     initial,
@@ -215,7 +214,6 @@ def resolve_model(check: Checker, given: spec.ModelSpec) -> resolved.ResolvedMod
     forces = [force(check, index, item) for index, item in enumerate(given.forces)]
     initial.driven(check, joints)
     initial.velocities(check, given.bodies, joints)
-    contact.one_load_part(check, joints)
     settings = modal_settings(check, given.analysis, analysis(check, given.analysis), joints,
                               forces)
     written = outputs.outputs(check, given.outputs, joints, forces)

@@ -240,22 +240,6 @@ def test_a_screw_refuses_a_load_part_at_its_key():
         ("E103", "joints[0].friction.mu")]
 
 
-def test_a_second_joint_with_a_load_part_is_located():
-    text = INCLINE.format(theta=0.3, joint="translational", formulation="rp",
-                          friction="{mu: 0.5}")
-    text = text.replace("  - {name: block,", "  - {name: other, mass: 1, inertia: [1, 1, 1], "
-                        "position: [0, 1, 0]}\n  - {name: block,")
-    text = text.replace("analysis:", "  - {name: second, type: translational, body_i: ground, "
-                        "body_j: other, at: [0, 1, 0], axis: [1, 0, 0], friction: {mu: 0.1}}\n"
-                        "analysis:")
-    with pytest.raises(ModelError) as raised:
-        casmech.loads(text)
-    found = raised.value.diagnostics
-    assert [(d.code, d.path) for d in found] == [("E103", "joints[1].friction.mu")]
-    assert "'slide' has one already" in str(raised.value)
-    assert found[0].source.line == 16  # the second joint's line
-
-
 def rough_pendulum(formulation: str, friction: str, initial: str = "") -> str:
     """A bar on a horizontal pivot released level: its bearing's radial load changes with its
     swing and with the friction torque itself (the load's response n1 is not 0)."""
