@@ -47,6 +47,13 @@ def _column(functions, element) -> int:
     return [j.name for j in functions.ir.joints].index(element.name)
 
 
+def load_vector(functions, element, x: Coordinates, lam):
+    """The load's vector of `element`'s joint reaction for the multipliers lam (an
+    expression of x and lam, linear in lam): |load_vector| is its load L."""
+    force = functions["reactions"](x.t, x.q, x.q_dot, lam)[0][:, _column(functions, element)]
+    return _normal(element, x, force)
+
+
 def normal(functions, element) -> ca.Function:
     """(t, q, q_dot, lam) -> L, the load of `element`'s joint in the model of `functions`."""
     x = Coordinates.create(functions.ir.n_bodies)
@@ -115,6 +122,29 @@ def _length(vector):
     return (square != 0) * ca.sqrt(ca.if_else(square == 0, 1, square))
 
 
+def coupled(mu, d, n0, n1):
+    """(g, worst residual): the load parts g_i = mu_i |n0_i - sum_j d_j g_j n1_ij| (`sliding`)
+    as expressions of the given ones (d_j numbers or expressions): one joint's the quadratic's
+    root (`_one`, exact), several by NEWTON_STEPS of Newton's method from those roots."""
+    k = len(mu)
+    seed = ca.vertcat(*(_one(mu[i], d[i], n0[i], n1[i][i]) for i in range(k)))
+    g = ca.SX.sym("g", k)
+    d_s = ca.SX.sym("d", k)
+    n0_s = [ca.SX.sym(f"n0_{i}", 3) for i in range(k)]
+    n1_s = [[ca.SX.sym(f"n1_{i}_{j}", 3) for j in range(k)] for i in range(k)]
+    residual = g - ca.vertcat(*(mu[i] * _length(n0_s[i] - sum(
+        d_s[j] * g[j] * n1_s[i][j] for j in range(k))) for i in range(k)))
+    given = [d_s, *n0_s, *(v for row in n1_s for v in row)]
+    values = [ca.vertcat(*d), *n0, *(v for row in n1 for v in row)]
+    left = ca.Function("friction_load_residual", [g, *given], [residual])
+    step = ca.Function("friction_load_newton", [g, *given],
+                       [g - ca.solve(ca.jacobian(residual, g), residual)])
+    solved = seed
+    for _ in range(NEWTON_STEPS if k > 1 else 0):
+        solved = step(solved, *values)
+    return solved, ca.mmax(ca.fabs(left(solved, *values)))
+
+
 def sliding(functions, elements, directions) -> ca.Function:
     """(t, q, q_dot) -> (g_1..g_k, residual, A) while the joints `elements` slide in
     `directions`, in the model of `functions` (the load parts absent from it; module
@@ -131,24 +161,9 @@ def sliding(functions, elements, directions) -> ca.Function:
     x, n0, n1 = _responses(functions, elements)
     k = len(elements)
     mu = [e.params["mu"] for e in elements]
-    d = [float(value) for value in directions]
-    seed = ca.vertcat(*(_one(mu[i], d[i], n0[i], n1[i][i]) for i in range(k)))
-    g = ca.SX.sym("g", k)
-    n0_s = [ca.SX.sym(f"n0_{i}", 3) for i in range(k)]
-    n1_s = [[ca.SX.sym(f"n1_{i}_{j}", 3) for j in range(k)] for i in range(k)]
-    residual = g - ca.vertcat(*(mu[i] * _length(n0_s[i] - sum(
-        d[j] * g[j] * n1_s[i][j] for j in range(k))) for i in range(k)))
-    given = [*n0_s, *(v for row in n1_s for v in row)]
-    values = [*n0, *(v for row in n1 for v in row)]
-    left = ca.Function("friction_load_residual", [g, *given], [residual])
-    step = ca.Function("friction_load_newton", [g, *given],
-                       [g - ca.solve(ca.jacobian(residual, g), residual)])
-    solved = seed
-    for _ in range(NEWTON_STEPS if k > 1 else 0):
-        solved = step(solved, *values)
+    solved, worst = coupled(mu, [float(value) for value in directions], n0, n1)
     ratios = [mu[i] * ca.norm_2(n1[i][j]) for i in range(k) for j in range(k)]
-    outputs = x.ground_fixed(ca.vertcat(solved, ca.mmax(ca.fabs(left(solved, *values))),
-                                        *ratios))
+    outputs = x.ground_fixed(ca.vertcat(solved, worst, *ratios))
     return ca.Function("friction_sliding_load", [x.t, x.q, x.q_dot], [outputs])
 
 

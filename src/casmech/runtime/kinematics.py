@@ -24,8 +24,8 @@ import numpy as np
 from casmech.core.options import Assembly, KinematicsSolver
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, Diagnostic, ModelError
-from casmech.formulations import prescribed
+from casmech.errors import AnalysisError, Diagnostic, FailureContext, ModelError
+from casmech.formulations import prescribed, prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.results import Result
@@ -90,6 +90,7 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
     require_fully_driven(functions, t0, q, analysis, settings.assembly)
     times = output_times(t0, t_end, step)
     mapped = _MappedGrid(functions, settings, workspace)
+    loads = _Loads(functions, result)
     state, previous, done = np.concatenate([q, 0 * q, 0 * q]), t0, 0
     most = settings.max_block
     span = min(len(times), most)
@@ -101,7 +102,8 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
             states, lam, passed = mapped(state, previous, block)
             if time.perf_counter() - clock > BLOCK_SECONDS:  # bounded in wall time
                 most = max(settings.min_block, len(block) // 2)
-            result.extend(block[:passed], *np.split(states[:passed], 3, axis=1), lam[:passed])
+            result.extend(block[:passed], *np.split(states[:passed], 3, axis=1),
+                          loads(block[:passed], states[:passed], lam[:passed]))
             done += passed
             if passed:
                 state, previous = states[passed - 1], block[passed - 1]
@@ -110,13 +112,75 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
             if passed < len(block):  # the per-row code does (or reports) the rejected row
                 state, lam_row = _per_row(functions, state, previous, times[done],
                                           settings.assembly)
-                result.append(times[done], *np.split(state, 3), lam_row)
+                result.append(times[done], *np.split(state, 3),
+                              loads(times[done:done + 1], state[None], lam_row[None])[0])
                 result.metadata["per_row_rows"] += 1
                 previous, done = times[done], done + 1
     except AnalysisError as error:
         error.partial = result
         raise
+    finally:
+        loads.record()
     return result
+
+
+class _Loads:
+    """The load parts of joint frictions with `mu` (formulations/prescribed_friction.py): a
+    call takes a block's times, states [q, q_dot, q_ddot] (rows) and multipliers without them
+    and returns the multipliers with them, keeping each friction's force for its results
+    column (`record`: Result.fixed_columns)."""
+
+    def __init__(self, functions: SystemFunctions, result: Result):
+        self.loaded = prescribed_friction.elements(functions.ir)
+        self.result, self.forces = result, []
+        if self.loaded:
+            self.function = prescribed_friction.correction(functions, self.loaded)
+            self.n = functions.ir.n_bodies * 7
+
+    def __call__(self, times, states, lam):
+        if not self.loaded or not len(times):
+            return lam
+        n = self.n
+        mapped = self.function.map(len(times))
+        lam, forces, loads = (np.array(v) for v in mapped(
+            np.reshape(times, (1, -1)), states[:, :n].T, states[:, n:2 * n].T, lam.T))
+        for t, values in zip(times, loads.T, strict=True):
+            _check_loads(t, self.loaded, values)
+        self.forces.append(forces.T)
+        return lam.T
+
+    def record(self) -> None:
+        if self.forces:
+            forces = np.concatenate(self.forces)
+            self.result.fixed_columns |= {f"{e.name}.friction": forces[:, i]
+                                          for i, e in enumerate(self.loaded)}
+
+
+LOADS = 1e-10  # the largest residual (relative) of solved friction loads, as dynamics'
+
+
+def _check_loads(t: float, loaded: list, values: np.ndarray) -> None:
+    """Stop with an analysis error naming the joints with load parts where their loads
+    (prescribed_friction.correction's `loads`: g, residual, A) are not finite, not unique
+    (A's spectral radius >= 1: Painleve's paradox) or not solved, as a dynamics run does."""
+    k = len(loaded)
+    radius = float(np.max(np.abs(np.linalg.eigvals(values[k + 1:].reshape(k, k))))) \
+        if np.all(np.isfinite(values)) else np.nan
+    scale = max(1.0, float(np.max(np.abs(values[:k])))) if radius < 1 else np.nan
+    if values[k] <= LOADS * scale:
+        return
+    message, label, value = (
+        ("the loads of the joints with load parts have no finite solution", "load part",
+         values[:k]) if np.isnan(radius) else
+        ("the friction would lock its joint(s) on their own (mu times the change of the load "
+         "per unit friction force >= 1; with several joints, the spectral radius of that "
+         "matrix: Painleve's paradox); give a smaller mu", "mu |dL/df|", [radius] * k)
+        if not radius < 1 else
+        ("the loads of the joints with load parts were not solved (Newton's method did not "
+         "converge from their one-joint roots)", "residual (N or N m)", [values[k]] * k))
+    raise AnalysisError(FailureContext(
+        t, message, [(e.name, e.source, float(v)) for e, v in zip(loaded, value, strict=True)],
+        label))
 
 
 def _per_row(functions: SystemFunctions, state: np.ndarray, previous: float, t: float,

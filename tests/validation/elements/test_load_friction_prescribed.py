@@ -1,0 +1,177 @@
+"""Joint friction's load part in prescribed motion (kinematics, inverse dynamics;
+formulations/prescribed_friction.py): the load solved together with the multipliers, against
+closed forms written here (a driven block on an incline, pressed by a known force; a rotor
+spun about a horizontal axle) and against a dynamics run of the same motion (a slider-crank
+whose slider friction's load depends on the rod's force, the crank torque of inverse dynamics
+fed back as an effort motor)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.api import results_table
+from casmech.errors import AnalysisError
+
+G = 9.81
+THETA, M, MU, TC, C = 0.6, 2.0, 0.4, 0.7, 0.3
+W = np.array([math.cos(THETA), 0.0, -math.sin(THETA)])  # the slide's axis, down the slope
+
+INCLINE = f"""casmech: 1
+name: driven_incline
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: block, mass: {M}, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: slide
+    type: translational
+    body_i: ground
+    body_j: block
+    at: [0, 0, 0]
+    axis: [{W[0]}, 0, {W[2]}]
+    driver: {{displacement: "0.3*t + 0.2*sin(3*t)"}}
+    friction: {{coulomb: {TC}, viscous: {C}, mu: {MU}}}
+FORCESanalysis: {{type: ANALYSIS, t_end: 2.0, output_step: 0.01}}
+"""
+
+
+def run(text: str, path=None):
+    model = casmech.loads(text) if path is None else casmech.load(path)
+    functions = casmech.compile(model)
+    result = casmech.analyze(functions)
+    names, values = results_table(functions, result)
+    return result, dict(zip(names, values.T, strict=True))
+
+
+def along(columns, joint: str, axis, kind: str = "f") -> np.ndarray:
+    return sum(axis[k] * columns[f"{joint}.{kind}{c}"] for k, c in enumerate("xyz"))
+
+
+@pytest.mark.parametrize("analysis", ["inverse_dynamics", "kinematics"])
+@pytest.mark.parametrize("press", [0.0, 15.0])
+def test_a_driven_block_on_an_incline_needs_m_a_minus_m_g_sin_plus_its_friction(press,
+                                                                                analysis):
+    """The driver's force along the slide: m s_ddot - m g sin(theta) - f, with the friction
+    f = -sign(s_dot) (Tc + mu (m g cos(theta) + P)) - c s_dot, P a force pressing the block
+    onto the slope (normal to it, into it); the rate crosses 0, where the friction is 0."""
+    normal = np.array([math.sin(THETA), 0.0, math.cos(THETA)])  # out of the slope
+    forces = "" if press == 0 else (
+        "forces:\n  - {name: press, type: force, body: block, "
+        f"value: [{-press * normal[0]}, 0, {-press * normal[2]}]}}\n")
+    result, columns = run(INCLINE.replace("FORCES", forces).replace("ANALYSIS", analysis))
+    t = np.array(result.times)
+    rate, acceleration = 0.3 + 0.6 * np.cos(3 * t), -1.8 * np.sin(3 * t)
+    assert np.any(rate > 0) and np.any(rate < 0)
+    load = M * G * math.cos(THETA) + press
+    friction = -np.sign(rate) * (TC + MU * load) - C * rate
+    # the law on the solved load: roundoff of a few terms of size m g
+    np.testing.assert_allclose(columns["slide.friction"], friction, rtol=1e-12, atol=1e-12)
+    # the driver's force along the slide, closed form; rtol 1e-9 relative to its scale
+    np.testing.assert_allclose(along(columns, "slide", W),
+                               M * acceleration - M * G * math.sin(THETA) - friction,
+                               rtol=0, atol=1e-9 * M * G)
+
+
+ROTOR = f"""casmech: 1
+name: rotor
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: rotor, mass: 3.0, inertia: [0.1, 0.2, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: axle
+    type: revolute
+    body_i: ground
+    body_j: rotor
+    at: [0, 0, 0]
+    axis: [0, 1, 0]
+    driver: {{angle: "SPEED * t"}}
+    friction: {{coulomb: 0.05, mu: 0.3, radius: 0.02}}
+analysis: {{type: inverse_dynamics, t_end: 1.0, output_step: 0.01}}
+"""
+
+
+@pytest.mark.parametrize("speed", [4.0, -4.0, 0.0])
+def test_a_rotor_spun_about_a_horizontal_axle_needs_tc_plus_mu_radius_m_g(speed):
+    """The bearing carries m g radially at any constant rate: the torque holding the rate is
+    sign(w) (Tc + mu radius m g); at rest (w = 0) no friction, as the sliding law says."""
+    result, columns = run(ROTOR.replace("SPEED", repr(speed)))
+    torque = math.copysign(0.05 + 0.3 * 0.02 * 3.0 * G, speed) if speed else 0.0
+    # the actuation about the axle (y): closed form, to roundoff of terms of size m g radius
+    np.testing.assert_allclose(columns["axle.ty"], torque, rtol=1e-9, atol=1e-14)
+    np.testing.assert_allclose(columns["axle.friction"], -torque, rtol=1e-9, atol=1e-14)
+
+
+A_CRANK, B_ROD, W0, ANGLE0 = 0.5, 2.0, 2.5, 0.3
+CRANK_FRICTION = "{coulomb: 0.05, mu: 0.2, radius: 0.02}"
+SLIDE_FRICTION = "{viscous: 0.1, mu: 0.3}"
+
+
+def slider_crank(crank: str, analysis: str) -> str:
+    """models/slider_crank.yaml's mechanism under gravity along -y (the slider pressed onto
+    its rail by its weight and the rod's force), with friction at the crank bearing and the
+    slide; the crank turns from 0.3 to 2.8 rad, so the slider moves one way throughout."""
+    return f"""casmech: 1
+name: slider_crank_friction
+gravity: [0, -{G}, 0]
+bodies:
+  - {{name: crank, mass: 1.0, inertia: [0.0003, 0.021, 0.021], position: [{A_CRANK / 2}, 0, 0]}}
+  - {{name: rod, mass: 2.0, inertia: [0.0005, 0.67, 0.67], position: [{A_CRANK + B_ROD / 2}, 0, 0]}}
+  - {{name: slider, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [{A_CRANK + B_ROD}, 0, 0]}}
+joints:
+  - {{name: crank_pivot, type: revolute, body_i: ground, body_j: crank, at: [0, 0, 0],
+     axis: [0, 0, 1], friction: {CRANK_FRICTION}, {crank}}}
+  - {{name: crank_pin, type: spherical, body_i: crank, body_j: rod, at: [{A_CRANK}, 0, 0]}}
+  - {{name: wrist_pin, type: universal, body_i: slider, body_j: rod, at: [{A_CRANK + B_ROD}, 0, 0],
+     axis_i: [0, 0, 1], axis_j: [0, 1, 0]}}
+  - {{name: slide, type: translational, body_i: ground, body_j: slider,
+     at: [{A_CRANK + B_ROD}, 0, 0], axis: [1, 0, 0], friction: {SLIDE_FRICTION}}}
+analysis: {{type: {analysis}, t_end: 1.0, output_step: 0.001, rtol: 1.0e-11, atol: 1.0e-12}}
+"""
+
+
+def test_a_slider_crank_torque_from_inverse_dynamics_drives_the_same_motion(tmp_path):
+    """Inverse dynamics with both loads (the slide's depends on the rod's force, which its
+    friction changes; the crank bearing's on the rod's force too); its crank torque, as a
+    cubic table on an effort motor, makes a dynamics run follow the driven crank angle."""
+    driven = f'driver: {{angle: "{ANGLE0} + {W0} * t"}}'
+    result, columns = run(slider_crank(driven, "inverse_dynamics"))
+    t = np.array(result.times)
+    # the frictions are the laws on the reactions the multipliers give (solved together)
+    slide_rate = columns["slide.displacement_dot"]
+    assert np.all(slide_rate < 0)
+    normal = np.hypot(columns["slide.fy"], columns["slide.fz"])
+    # the law evaluated on the written columns: roundoff of forces of some 30 N
+    np.testing.assert_allclose(columns["slide.friction"], 0.3 * normal - 0.1 * slide_rate,
+                               rtol=1e-12, atol=1e-12)
+    radial = np.hypot(columns["crank_pivot.fx"], columns["crank_pivot.fy"])
+    np.testing.assert_allclose(columns["crank_pivot.friction"], -(0.05 + 0.2 * 0.02 * radial),
+                               rtol=1e-12, atol=1e-12)  # as above
+    table = tmp_path / "torque.csv"
+    np.savetxt(table, np.column_stack([t, columns["crank_pivot.tz"]]), delimiter=",",
+               header="t,torque", comments="")
+    motor = (f"motor: {{torque: {{table: torque.csv, column: torque}}}}, "
+             f"initial: {{angle: {ANGLE0}, angle_dot: {W0}}}")
+    path = tmp_path / "forward.yaml"
+    path.write_text(slider_crank(motor, "dynamics"))
+    forward, replay = run(None, path)
+    assert forward.metadata["friction_switches"] == []  # both slide throughout
+    # the same motion: the torque's cubic spline (h = 1 ms) and IDAS at rtol 1e-11 over 1 s
+    np.testing.assert_allclose(replay["crank_pivot.angle"], ANGLE0 + W0 * np.array(forward.times),
+                               rtol=0, atol=1e-6)
+    # and the same slide friction (its load from the dynamics run's own coupled solve)
+    np.testing.assert_allclose(replay["slide.friction"],
+                               np.interp(forward.times, t, columns["slide.friction"]),
+                               rtol=0, atol=1e-6)  # as above, in newtons
+
+
+def test_a_friction_that_could_lock_its_joint_is_a_located_analysis_error():
+    """mu times the change of the slide's load per unit friction force (the rod's slope,
+    here up to some 0.13) reaching 1: no unique load, as in a dynamics run (Painleve)."""
+    text = slider_crank(f'driver: {{angle: "{ANGLE0} + {W0} * t"}}', "inverse_dynamics")
+    with pytest.raises(AnalysisError, match="Painleve") as raised:
+        run(text.replace("mu: 0.3", "mu: 10.0"))
+    assert "joint 'slide'" in str(raised.value)
+    assert raised.value.partial is not None
