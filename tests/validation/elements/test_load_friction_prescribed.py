@@ -38,10 +38,10 @@ FORCESanalysis: {{type: ANALYSIS, t_end: 2.0, output_step: 0.01}}
 """
 
 
-def run(text: str, path=None):
+def run(text: str, path=None, options=None):
     model = casmech.loads(text) if path is None else casmech.load(path)
     functions = casmech.compile(model)
-    result = casmech.analyze(functions)
+    result = casmech.analyze(functions, options=options)
     names, values = results_table(functions, result)
     return result, dict(zip(names, values.T, strict=True))
 
@@ -50,10 +50,13 @@ def along(columns, joint: str, axis, kind: str = "f") -> np.ndarray:
     return sum(axis[k] * columns[f"{joint}.{kind}{c}"] for k, c in enumerate("xyz"))
 
 
-@pytest.mark.parametrize("analysis", ["inverse_dynamics", "kinematics"])
+@pytest.mark.parametrize(("analysis", "options"), [
+    ("inverse_dynamics", None), ("kinematics", None),
+    ("inverse_dynamics", {"pivot_ratio": 1.0})])  # every row by the per-row code
 @pytest.mark.parametrize("press", [0.0, 15.0])
 def test_a_driven_block_on_an_incline_needs_m_a_minus_m_g_sin_plus_its_friction(press,
-                                                                                analysis):
+                                                                                analysis,
+                                                                                options):
     """The driver's force along the slide: m s_ddot - m g sin(theta) - f, with the friction
     f = -sign(s_dot) (Tc + mu (m g cos(theta) + P)) - c s_dot, P a force pressing the block
     onto the slope (normal to it, into it); the rate crosses 0, where the friction is 0."""
@@ -61,7 +64,9 @@ def test_a_driven_block_on_an_incline_needs_m_a_minus_m_g_sin_plus_its_friction(
     forces = "" if press == 0 else (
         "forces:\n  - {name: press, type: force, body: block, "
         f"value: [{-press * normal[0]}, 0, {-press * normal[2]}]}}\n")
-    result, columns = run(INCLINE.replace("FORCES", forces).replace("ANALYSIS", analysis))
+    result, columns = run(INCLINE.replace("FORCES", forces).replace("ANALYSIS", analysis),
+                          options=options)
+    assert result.metadata["per_row_rows"] == (len(result) if options else 0)
     t = np.array(result.times)
     rate, acceleration = 0.3 + 0.6 * np.cos(3 * t), -1.8 * np.sin(3 * t)
     assert np.any(rate > 0) and np.any(rate < 0)
