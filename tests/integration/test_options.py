@@ -290,10 +290,8 @@ CONSTANTS = {
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",
     "runtime/friction.py SWITCHES": "friction switches before a Zeno cascade ends a run",
-    "runtime/friction.py LOADS": "a roundoff floor of solved friction loads' residual (a "
-    "check at a segment's start, not a stop of an iteration)",
-    "runtime/kinematics.py LOADS": "the same roundoff floor, checked at each row of a "
-    "prescribed motion with friction load parts",
+    "runtime/load_checks.py LOADS": "a roundoff floor of solved friction loads' residual (a "
+    "check at a segment's start and rows, not a stop of an iteration)",
     "equations/friction_load.py NEWTON_STEPS": "Newton steps unrolled on coupled friction "
     "loads (structure: quadratic from their one-joint roots; checked by LOADS)",
     "runtime/contact_friction.py STILL": "a slip at rest in the start state, a roundoff floor",

@@ -36,16 +36,16 @@ from casmech.elements.joint_types import COORDINATES
 from casmech.equations import friction, friction_load
 from casmech.equations.functions import build_functions
 from casmech.equations.symbols import Coordinates
-from casmech.errors import AnalysisError, FailureContext
+from casmech.errors import AnalysisError
 from casmech.runtime import assembly, contact_friction, events
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.load_checks import check_loads
 from casmech.runtime.results import Result, table
 from casmech.schema.resolved import ScalarFunction
 
 SWITCHES = 100_000  # mode switches a run may make (a Zeno cascade ends the run there)
 COUNTERS = ("steps", "idas_steps", "idas_calls", "event_probes", "projections")  # summed
 SLACK = 1e-9  # a holding force this far (relative) past the static limit still holds
-LOADS = 1e-10  # the largest residual (relative) of solved friction loads at a segment start
 STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
 
 
@@ -146,31 +146,6 @@ def _events(functions, switched: list, modes: dict, rows: dict) -> list:
     return found
 
 
-def _check_loads(t, sliding: list, values) -> None:
-    """Stop with an analysis error naming the sliding joints with load parts where their
-    loads are not unique (A's spectral radius >= 1: friction_load.sliding) or not solved
-    (at a segment's start and at each of its rows)."""
-    k = len(sliding)
-    if not np.all(np.isfinite(values)):  # a load vector of 0 length where a root needs it
-        raise AnalysisError(FailureContext(
-            t, "the loads of the sliding joints with load parts have no finite solution",
-            [(e.name, e.source, float(v)) for e, v in zip(sliding, values, strict=False)],
-            "load part"))
-    radius = float(np.max(np.abs(np.linalg.eigvals(values[k + 1:].reshape(k, k)))))
-    if not radius < 1:
-        raise AnalysisError(FailureContext(
-            t, "the sliding friction would lock its joint(s) on their own (mu times the "
-            "change of the load per unit friction force >= 1; with several joints, the "
-            "spectral radius of that matrix: Painleve's paradox); give a smaller mu",
-            [(e.name, e.source, radius) for e in sliding], "mu |dL/df|"))
-    scale = max(1.0, float(np.max(np.abs(values[:k]))))
-    if not values[k] <= LOADS * scale:
-        raise AnalysisError(FailureContext(
-            t, "the loads of the sliding joints with load parts were not solved (Newton's "
-            "method did not converge from their one-joint roots)",
-            [(e.name, e.source, float(values[k])) for e in sliding], "residual (N or N m)"))
-
-
 class _Run:
     """One friction run: its segments joined into one Result over the base bundle."""
 
@@ -207,7 +182,7 @@ class _Run:
         self.loads = None
         if sliding:
             load = friction_load.sliding(functions, sliding, [modes[e.name] for e in sliding])
-            _check_loads(t, sliding, np.array(load(t, q, q_dot)).ravel())
+            check_loads(t, sliding, np.array(load(t, q, q_dot)).ravel())
             parts = {e.name: friction_load.part(load, i) for i, e in enumerate(sliding)}
             self.loads = (load, sliding)
             ir = replace(ir, limits=tuple(replace(f, params=dict(f.params) | {
@@ -281,7 +256,7 @@ class _Run:
                 if self.loads is not None:  # the loads solved at every row of the segment
                     load, sliding = self.loads
                     for k, time in enumerate(found.times):
-                        _check_loads(time, sliding, np.array(load(
+                        check_loads(time, sliding, np.array(load(
                             time, found.q[k], found.q_dot[k])).ravel())
             except AnalysisError as error:  # a failure or an interrupt: the rows before it
                 error.partial = self.finish()  # (of the segments done) in the base bundle's

@@ -24,10 +24,11 @@ import numpy as np
 from casmech.core.options import Assembly, KinematicsSolver
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, Diagnostic, FailureContext, ModelError
+from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.formulations import prescribed, prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
+from casmech.runtime.load_checks import check_loads
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -145,7 +146,7 @@ class _Loads:
         lam, forces, loads = (np.array(v) for v in mapped(
             np.reshape(times, (1, -1)), states[:, :n].T, states[:, n:2 * n].T, lam.T))
         for t, values in zip(times, loads.T, strict=True):
-            _check_loads(t, self.loaded, values)
+            check_loads(t, self.loaded, values)
         self.forces.append(forces.T)
         return lam.T
 
@@ -154,33 +155,6 @@ class _Loads:
             forces = np.concatenate(self.forces)
             self.result.fixed_columns |= {f"{e.name}.friction": forces[:, i]
                                           for i, e in enumerate(self.loaded)}
-
-
-LOADS = 1e-10  # the largest residual (relative) of solved friction loads, as dynamics'
-
-
-def _check_loads(t: float, loaded: list, values: np.ndarray) -> None:
-    """Stop with an analysis error naming the joints with load parts where their loads
-    (prescribed_friction.correction's `loads`: g, residual, A) are not finite, not unique
-    (A's spectral radius >= 1: Painleve's paradox) or not solved, as a dynamics run does."""
-    k = len(loaded)
-    radius = float(np.max(np.abs(np.linalg.eigvals(values[k + 1:].reshape(k, k))))) \
-        if np.all(np.isfinite(values)) else np.nan
-    scale = max(1.0, float(np.max(np.abs(values[:k])))) if radius < 1 else np.nan
-    if values[k] <= LOADS * scale:
-        return
-    message, label, value = (
-        ("the loads of the joints with load parts have no finite solution", "load part",
-         values[:k]) if np.isnan(radius) else
-        ("the friction would lock its joint(s) on their own (mu times the change of the load "
-         "per unit friction force >= 1; with several joints, the spectral radius of that "
-         "matrix: Painleve's paradox); give a smaller mu", "mu |dL/df|", [radius] * k)
-        if not radius < 1 else
-        ("the loads of the joints with load parts were not solved (Newton's method did not "
-         "converge from their one-joint roots)", "residual (N or N m)", [values[k]] * k))
-    raise AnalysisError(FailureContext(
-        t, message, [(e.name, e.source, float(v)) for e, v in zip(loaded, value, strict=True)],
-        label))
 
 
 def _per_row(functions: SystemFunctions, state: np.ndarray, previous: float, t: float,
