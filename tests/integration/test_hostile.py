@@ -297,7 +297,11 @@ def test_interrupt_keeps_the_rows_computed(tmp_path, formulation, signum):
                                 "--out", "out"], cwd=tmp_path, stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True, preexec_fn=limit_memory,
                                env=ENV)
-    time.sleep(6.0)
+    written = tmp_path / "out/results.csv"  # the rows stream to it as they are computed
+    waited = time.perf_counter() + 6.0
+    while time.perf_counter() < waited and (not written.exists() or written.read_bytes().count(
+            b"\n") <= 7):  # until more rows than the first run's 6 are on disk (or 6 s)
+        time.sleep(0.1)
     assert process.poll() is None, process.communicate()[0]
     process.send_signal(signum)
     sent = time.perf_counter()
