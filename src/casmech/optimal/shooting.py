@@ -1,6 +1,6 @@
 """Multiple shooting (rockit's MultipleShooting): the transcription of an ODE
 x' = f(t, x, c) on the nodes of the control grid, with fixed RK4 steps (MultipleShooting)
-or a SUNDIALS integrator (SundialsShooting: CVODES, or IDAS on an ODE or an index-1 DAE).
+or a SUNDIALS integrator on the ODE (SundialsShooting: CVODES or IDAS).
 
 Each control interval [t_k, t_k + h] is integrated from the node state x_k; the end must
 meet x_{k+1} (optimal/joint_ocp.py adds the closure projection). The controls inside the
