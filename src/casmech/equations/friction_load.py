@@ -58,8 +58,7 @@ def normal(functions, element) -> ca.Function:
     """(t, q, q_dot, lam) -> L, the load of `element`'s joint in the model of `functions`."""
     x = Coordinates.create(functions.ir.n_bodies)
     lam = ca.SX.sym("lam", functions.n_rows)
-    force = functions["reactions"](x.t, x.q, x.q_dot, lam)[0][:, _column(functions, element)]
-    value = x.ground_fixed(ca.norm_2(_normal(element, x, force)))
+    value = x.ground_fixed(ca.norm_2(load_vector(functions, element, x, lam)))
     return ca.Function("friction_load", [x.t, x.q, x.q_dot, lam], [value])
 
 
@@ -80,7 +79,7 @@ def _responses(functions, elements):
     multipliers are the joints' reactions; one solve gives every column."""
     nb = functions.ir.n_bodies
     x = Coordinates.create(nb)
-    t, q, q_dot = x.t, x.q, x.q_dot
+    t, q = x.t, x.q
     v = _velocities(x, nb)
     inverse = ca.inv(ca.DM(functions["romega_mass"](ca.DM.zeros(7 * nb))))
     jacobian = functions["romega_jacobian"](t, q)
@@ -94,14 +93,10 @@ def _responses(functions, elements):
                      - functions["romega_gamma"](t, q, v), *(jacobian @ inverse @ u for u in units))
     z = ca.solve(jacobian @ inverse @ jacobian.T, rhs)
     rows = ca.SX(functions.n_rows - m, 1)  # the bodies' normalization rows, after the joints'
-    lam0 = ca.vertcat(z[:, 0], rows)
-    reactions = functions["reactions"](t, q, q_dot, lam0)[0]
-    n0, n1 = [], []
-    for e in elements:
-        base = reactions[:, _column(functions, e)]
-        n0.append(_normal(e, x, base))
-        n1.append([_normal(e, x, functions["reactions"](t, q, q_dot, ca.vertcat(
-            z[:, 1 + j], rows))[0][:, _column(functions, e)]) for j in range(len(elements))])
+    lam0, lam1 = ca.vertcat(z[:, 0], rows), [ca.vertcat(z[:, 1 + j], rows)
+                                             for j in range(len(elements))]
+    n0 = [load_vector(functions, e, x, lam0) for e in elements]
+    n1 = [[load_vector(functions, e, x, u) for u in lam1] for e in elements]
     return x, n0, n1
 
 
@@ -123,9 +118,11 @@ def _length(vector):
 
 
 def coupled(mu, d, n0, n1):
-    """(g, worst residual): the load parts g_i = mu_i |n0_i - sum_j d_j g_j n1_ij| (`sliding`)
-    as expressions of the given ones (d_j numbers or expressions): one joint's the quadratic's
-    root (`_one`, exact), several by NEWTON_STEPS of Newton's method from those roots."""
+    """(g, checked): the load parts g_i = mu_i |n0_i - sum_j d_j g_j n1_ij| (`sliding`) as
+    expressions of the given ones (d_j numbers or expressions), one joint's the quadratic's
+    root (`_one`, exact), several by NEWTON_STEPS of Newton's method from those roots; and
+    what runtime/load_checks.py reads of them: [g; the largest residual; A_ij = mu_i |n1_ij|
+    row by row]."""
     k = len(mu)
     seed = ca.vertcat(*(_one(mu[i], d[i], n0[i], n1[i][i]) for i in range(k)))
     g = ca.SX.sym("g", k)
@@ -142,7 +139,8 @@ def coupled(mu, d, n0, n1):
     solved = seed
     for _ in range(NEWTON_STEPS if k > 1 else 0):
         solved = step(solved, *values)
-    return solved, ca.mmax(ca.fabs(left(solved, *values)))
+    ratios = [mu[i] * ca.norm_2(n1[i][j]) for i in range(k) for j in range(k)]
+    return solved, ca.vertcat(solved, ca.mmax(ca.fabs(left(solved, *values))), *ratios)
 
 
 def sliding(functions, elements, directions) -> ca.Function:
@@ -159,12 +157,9 @@ def sliding(functions, elements, directions) -> ca.Function:
     norm), so the loads are unique; at 1 or above the frictions could lock the joints on
     their own (Painleve's paradox), which the run reports."""
     x, n0, n1 = _responses(functions, elements)
-    k = len(elements)
-    mu = [e.params["mu"] for e in elements]
-    solved, worst = coupled(mu, [float(value) for value in directions], n0, n1)
-    ratios = [mu[i] * ca.norm_2(n1[i][j]) for i in range(k) for j in range(k)]
-    outputs = x.ground_fixed(ca.vertcat(solved, worst, *ratios))
-    return ca.Function("friction_sliding_load", [x.t, x.q, x.q_dot], [outputs])
+    _, checked = coupled([e.params["mu"] for e in elements],
+                         [float(value) for value in directions], n0, n1)
+    return ca.Function("friction_sliding_load", [x.t, x.q, x.q_dot], [x.ground_fixed(checked)])
 
 
 def part(system: ca.Function, index: int) -> ca.Function:
