@@ -39,6 +39,7 @@ from casmech.elements.force_types import entry_of
 from casmech.elements.forces import contact
 from casmech.equations.symbols import Coordinates
 from casmech.model.ir import GROUND_INDEX, JointIR, PrimitiveIR, RowInfo
+from casmech.model.lower import perpendicular_pair
 from casmech.runtime import events
 
 STILL = 1e-9  # slip speed (m/s) at or below which a point starting a run is tried stuck
@@ -61,14 +62,6 @@ def elements(ir) -> list:
 def label(mode) -> str:
     """A mode as the switch list writes it: free, stuck or sliding."""
     return mode if isinstance(mode, str) else "sliding"
-
-
-def _tangents(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors completing the unit `normal` to a right-handed frame."""
-    seed = np.eye(3)[int(np.argmin(np.abs(normal)))]
-    a = np.cross(normal, seed)
-    a /= np.linalg.norm(a)
-    return a, np.cross(normal, a)
 
 
 class Contacts:
@@ -145,7 +138,7 @@ class Contacts:
         at = found[AT][:, members].T
         normal = np.asarray(found[NORMAL, members[0]], float)
         c = at.mean(axis=0)
-        t1, t2 = _tangents(normal)
+        t1, t2 = perpendicular_pair(normal)  # (t1, t2, normal) right-handed
         i, j = force.body_i, force.body_j
         names = tuple(self.units[k][0] for k in members)
         info = RowInfo(names[0], "dp2", f"contact '{', '.join(names)}': stuck")
@@ -306,9 +299,10 @@ class Contacts:
                     total += contact.exact_friction(force, k, f_n, v_t)
             function = ca.Function("friction_force", [x.t, x.q, x.q_dot, lam],
                                    [x.ground_fixed(ca.norm_2(total))])
-            columns[f"{force.name}.friction_force"] = np.array([
-                float(function(result.times[i], result.q[i], result.q_dot[i], result.lam[i]))
-                for i in range(start, len(result.times))])
+            count = len(result.times) - start  # one mapped call over the segment's rows
+            columns[f"{force.name}.friction_force"] = np.array(function.map(count)(
+                np.reshape(result.times[start:], (1, -1)), result.q[start:].T,
+                result.q_dot[start:].T, result.lam[start:].T)).ravel() if count else np.zeros(0)
         return columns
 
 
