@@ -41,10 +41,10 @@ def used(problem) -> bool:
     return bool(problem.integral or problem.track or problem.final is not None)
 
 
-def _environment(model: JointModel, problem, t, x, c) -> dict:
-    """Every name an expression may read: t, the results columns (angles continued, below),
-    the decision parameters."""
-    values = continued(model)(t, x, c)
+def _environment(model: JointModel, problem, columns: ca.Function, t, x, c) -> dict:
+    """Every name an expression may read: t, the results columns (`columns`: `continued`'s,
+    angles continued past pi), the decision parameters."""
+    values = columns(t, x, c)
     environment = {name: values[k] for k, name in enumerate(model.names)}
     environment["t"] = t
     design = [c[model.n_u + k] for k in range(len(problem.parameters))]
@@ -122,10 +122,11 @@ def _value(term: ScalarFunction, text: str, environment: Mapping):
     return expr.evaluate({**constants, **environment}, "casadi")
 
 
-def terms(model: JointModel, problem) -> Terms:
-    """The problem's cost terms on the model."""
+def terms(model: JointModel, problem, columns: ca.Function) -> Terms:
+    """The problem's cost terms on the model, reading the results columns of `columns`
+    (`continued(model)`)."""
     t, x, c = model.symbols
-    environment = _environment(model, problem, t, x, c) if used(problem) else {}
+    environment = _environment(model, problem, columns, t, x, c) if used(problem) else {}
     integrand = 0
     for text, term in problem.integral.items():
         function, weight = term

@@ -319,7 +319,7 @@ def solve(model: JointModel, problem, transcription: str, settings: Mapping,
     jacobian = ca.Function("closure_jacobian", [t_sym, x_sym], [
         ca.jacobian(closure(t_sym, x_sym), x_sym)]) if rows else None
     samples, fine = [], [(model.t0, x[:, 0], _with_design(shape, u, 0, design, 0.0))]
-    terms = costs.terms(model, problem)
+    terms = costs.terms(model, problem, columns)
     rhs, running = model.rhs, 0
     if terms.integrand is not None:  # the running cost: a last state from 0 per interval
         rhs = costs.with_quadrature(model.rhs, terms.integrand, model.n_x)
