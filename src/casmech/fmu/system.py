@@ -1,9 +1,8 @@
 """The CasADi Functions an FMU's C calls, over the state x = [theta; u] of the joint
 formulation and jd, the joint functions' data (the registered joint formulation's equations
 over fmu.model's IR, FORMULATIONS["joint"].equations: [d; inputs; the tree's constants]). The
-states are named
-as the formulation's `states` name them (`<joint>.angle`, ...: the joint's results columns
-where they are its states).
+states are named as the formulation's `states` name them (`<joint>.angle`, ...: the joint's
+results columns where they are its states).
 
     data(theta) -> jd                  the model data at the parameters (inputs at their start)
     ode(t, x, jd) -> x_dot             the ODE (below)
