@@ -66,17 +66,6 @@ def test_an_integrator_is_refused_where_it_integrates_nothing():
         solve(model, replace(problem, integrator="cvode"), "shooting")
 
 
-def test_a_misspelt_integrator_is_located(tmp_path):
-    text = (MODELS / "ocp_pendulum_swing_up.yaml").read_text().replace(
-        "  transcription: collocation\n", "  transcription: shooting\n  integrator: cvode\n")
-    path = tmp_path / "model.yaml"
-    path.write_text(text)
-    with pytest.raises(casmech.ModelError) as error:
-        casmech.load(path)
-    line = text.splitlines().index("  integrator: cvode") + 1
-    assert f"model.yaml:{line}:" in str(error.value) and "cvodes" in str(error.value)
-
-
 def test_the_command_line_takes_the_integrator(tmp_path, capsys):
     """casmech optimize --transcription shooting --integrator cvodes: the pendulum's optimum
     on 10 intervals, the same as the API's."""
@@ -129,13 +118,18 @@ def test_cvodes_shooting_on_a_loop_has_the_fine_collocations_optimum():
     assert violation.max() <= 1e-10  # the loop's rows, imposed at every node
 
 
-def test_an_integrator_with_collocation_is_located(tmp_path):
+@pytest.mark.parametrize("transcription, integrator, words", [
+    ("shooting", "cvode", ("cvodes",)),  # misspelt: the values it takes
+    ("collocation", "cvodes", ("E409", "transcription: shooting")),  # no integrator there
+], ids=["misspelt", "with_collocation"])
+def test_a_wrong_integrator_is_located(tmp_path, transcription, integrator, words):
     text = (MODELS / "ocp_pendulum_swing_up.yaml").read_text().replace(
-        "  transcription: collocation\n", "  transcription: collocation\n  integrator: cvodes\n")
+        "  transcription: collocation\n",
+        f"  transcription: {transcription}\n  integrator: {integrator}\n")
     path = tmp_path / "model.yaml"
     path.write_text(text)
     with pytest.raises(casmech.ModelError) as error:
         casmech.load(path)
-    line = text.splitlines().index("  integrator: cvodes") + 1
-    assert f"model.yaml:{line}:" in str(error.value) and "E409" in str(error.value)
-    assert "transcription: shooting" in str(error.value)
+    line = text.splitlines().index(f"  integrator: {integrator}") + 1
+    assert f"model.yaml:{line}:" in str(error.value)
+    assert all(word in str(error.value) for word in words)
