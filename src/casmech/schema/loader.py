@@ -171,6 +171,36 @@ class _Anchor:
     size: int  # values under it, itself included
 
 
+@dataclass(frozen=True)
+class _Copy:
+    """A source-map log entry standing for the entries an alias repeats: log[start:stop], each
+    path with its first `prefix` parts replaced by `path`. Expanded once the document is read
+    (`_expanded`), so an alias refused by MAX_VALUES costs nothing to copy."""
+
+    path: Path
+    prefix: int
+    start: int
+    stop: int
+
+
+def _expanded(log: list) -> list:
+    """The (path, entry) pairs of a log with its alias copies written out, in reading order."""
+    out: list = []
+    stack = [(0, len(log), (), 0)]  # (next, stop, new prefix, old prefix length)
+    while stack:
+        k, stop, new, old = stack.pop()
+        while k < stop:
+            path, entry = (log[k].path, log[k]) if isinstance(log[k], _Copy) else log[k]
+            path = (*new, *path[old:]) if old or new else path
+            k += 1
+            if isinstance(entry, _Copy):
+                stack.append((k, stop, new, old))
+                k, stop, new, old = entry.start, entry.stop, path, entry.prefix
+            else:
+                out.append((path, entry))
+    return out
+
+
 class _Builder:
     """Data and source map from parser events: an explicit stack, so nesting costs no
     recursion; an alias counts the whole size of what it stands for against MAX_VALUES."""
@@ -330,7 +360,8 @@ class _Builder:
         self.counted(anchor.size, event.start_mark)
         prefix = len(anchor.path)
         for log, (start, stop) in zip(self.logs, anchor.ranges, strict=True):
-            log.extend([((*path, *old[prefix:]), entry) for old, entry in log[start:stop]])
+            if stop > start:
+                log.append(_Copy(path, prefix, start, stop))
         self.place(anchor.value)
 
     def scalar_start(self, event) -> Source | None:
@@ -343,7 +374,7 @@ class _Builder:
         return Source(self.file, start.line + 1, start.column + 1 + quote)
 
     def source_map(self) -> SourceMap:
-        values, keys, scalars = (dict(log) for log in self.logs)
+        values, keys, scalars = (dict(_expanded(log)) for log in self.logs)
         return SourceMap(values, keys, scalars, frozenset(self.nulls))
 
 

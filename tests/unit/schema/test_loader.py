@@ -169,6 +169,23 @@ def test_aliases_are_located_at_their_anchor():
     assert document.locate(("c", "b", 1)) == Source("s.yaml", 1, 15)
 
 
+def test_aliases_of_aliases_are_located_at_the_innermost_anchor():
+    """Every value an alias repeats, through an alias inside an anchored value, is located
+    where it is written, and each key at its key."""
+    text = ("a: &x {b: [1, 2], c: 3}\n"
+            "d: &y {e: *x, f: [*x, 4]}\n"
+            "g: [*y, *y]\n")
+    document = load_document(text, "s.yaml")
+    assert document.data["g"][1]["f"][0] == {"b": [1, 2], "c": 3}
+    at = {("a", "b", 1): (1, 15), ("a", "c"): (1, 22)}  # where each value of x is written
+    for path, (line, col) in at.items():
+        tail = path[1:]
+        for prefix in [("a",), ("d", "e"), ("d", "f", 0), ("g", 0, "e"), ("g", 1, "f", 0)]:
+            assert document.locate((*prefix, *tail)) == Source("s.yaml", line, col), prefix
+    assert document.locate(("g", 1, "f", 1)) == Source("s.yaml", 2, 23)
+    assert document.source_map.keys[("g", 0, "e", "c")] == Source("s.yaml", 1, 19)
+
+
 def test_alias_expansion_is_bounded():
     """A 'billion laughs' (9 levels of 8 aliases: 8^9 values) stops at MAX_VALUES."""
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x]"]
