@@ -28,7 +28,7 @@ from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.formulations import prescribed, prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.load_checks import check_loads
+from casmech.runtime.load_checks import check_rows
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -146,8 +146,7 @@ class Loads:
         mapped = self.function.map(len(times))
         lam, forces, loads = (np.array(v) for v in mapped(
             np.reshape(times, (1, -1)), states[:, :n].T, states[:, n:2 * n].T, lam.T))
-        for t, values in zip(times, loads.T, strict=True):
-            check_loads(t, self.loaded, values)
+        check_rows(times, self.loaded, loads.T)
         self.forces.append(forces.T)
         return lam.T
 
