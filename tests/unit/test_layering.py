@@ -4,7 +4,8 @@ Every import counts: at module level, inside functions and under `if TYPE_CHECKI
 (a subpackage of casmech, or a top-level module) imports only units of lower layers and
 itself; no module reaches itself through others (no cycle of modules, inside a package
 either); no module imports a private name (`_name`) of another module, by `from ... import`
-or as an attribute of an imported module."""
+or as an attribute of an imported module; optimal/ takes formulations/ through its protocol
+and registry only."""
 
 import ast
 from functools import cache
@@ -48,10 +49,11 @@ MODULES = {module_name(path): path for path in SRC.rglob("*.py")}
 
 
 @cache
-def imports(path: Path) -> list[tuple[str, str | None, int]]:
+def imports(path: Path, name: str | None = None) -> list[tuple[str, str | None, int]]:
     """(module imported, name imported from it or None, line) for every casmech import of a
-    file: a name that is itself a module counts as that module (parsed once per file)."""
-    package = module_name(path).split(".")
+    file (the module `name`, by default its own under src/casmech): a name that is itself a
+    module counts as that module (parsed once per file)."""
+    package = (name or module_name(path)).split(".")
     if path.name != "__init__.py":
         package = package[:-1]
     found = []
@@ -171,6 +173,36 @@ def test_private_names_are_found(tmp_path):
     finally:
         MODULES.pop(module_name(file), None)
         file.unlink()
+
+
+# what optimal/ takes of formulations/: the protocol and its registry; optimal control,
+# sensitivities and estimation take a registered Formulation (FORMULATIONS["joint"].controlled,
+# FORMULATIONS["rp"].residual), never a formulation's own modules (docs/architecture.md)
+FORMULATION_ENTRIES = {"casmech.formulations", "casmech.formulations.protocol",
+                       "casmech.formulations.registry"}
+
+
+def formulation_modules(found: list[tuple[str, str | None, int]]) -> list[str]:
+    """The imports among `found` of a module of formulations/ other than its entries."""
+    return [f"{line}: {target}" for target, _, line in found
+            if unit(target) == "formulations" and target not in FORMULATION_ENTRIES]
+
+
+def test_optimal_takes_formulations_through_the_protocol():
+    found = {str(path.relative_to(SRC)): uses for name, path in MODULES.items()
+             if unit(name) == "optimal" and (uses := formulation_modules(imports(path)))}
+    assert found == {}
+
+
+def test_a_formulation_module_imported_by_optimal_is_found(tmp_path):
+    """The rule above on a module of optimal/ importing joint_system (a test that cannot pass
+    vacuously), in both import forms, next to the registry it may import."""
+    probe = tmp_path / "probe.py"
+    probe.write_text("from casmech.formulations.joint_system import build\n"
+                     "from casmech.formulations.registry import FORMULATIONS\n"
+                     "from casmech.formulations import joint_start, protocol\n")
+    assert formulation_modules(imports(probe, "casmech.optimal.probe")) == [
+        "1: casmech.formulations.joint_system", "3: casmech.formulations.joint_start"]
 
 
 def test_no_module_is_over_500_lines():

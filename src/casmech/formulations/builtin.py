@@ -1,7 +1,7 @@
 """The built-in formulations as implementations of formulations.protocol: rp and romega (body
 coordinates: the DAEs of formulations.dae over the function names of formulations.table) and
 joint (joint coordinates: the tree's ODE or the loops' DAE of formulations.joint_system, started
-by formulations.joint_start)."""
+by formulations.joint_start; for optimal control formulations.joint_control)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+from casmech.formulations.joint_control import JointControl
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, labels
 from casmech.formulations.protocol import (
@@ -162,6 +163,15 @@ class JointCoordinates(Formulation):
         """formulations.joint_system's JointSystem of the model's spanning tree: the ODE or
         DAE, the results row's motion, the loops' start terms, the relative states."""
         return build(ir, spanning_tree(ir), data)
+
+    def controlled(self, ir: ModelIR, data: ca.SX) -> JointControl | None:
+        """formulations.joint_control's equations over the JointSystem `equations` builds
+        over `data`; None for loops through a floating body (formulations.tree: its joint
+        coordinates are its r-p ones plus the recursion's overhead)."""
+        tree = spanning_tree(ir)
+        if tree.floating_loops:
+            return None
+        return JointControl(build(ir, tree, data), ir, data)
 
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
         joint = self.equations(functions.ir)

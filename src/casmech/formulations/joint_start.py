@@ -96,6 +96,12 @@ class Loops:
 def quaternion_signs(system: JointSystem, t0: float, x0, z0, q0, n_bodies: int):
     """+1 or -1 per body, so the tree's Euler parameters continue the r-p state's."""
     q = np.array(system.motion(t0, x0, z0, np.ones(n_bodies))[0].full()).ravel()
-    p_tree = q[3 * n_bodies:].reshape(n_bodies, 4)
-    p_rp = q0[3 * n_bodies:].reshape(n_bodies, 4)
+    return continuing_signs(q, q0, n_bodies)
+
+
+def continuing_signs(q_tree, q0, n_bodies: int) -> np.ndarray:
+    """+1 or -1 per body: the sign that turns the Euler parameters of the r-p positions q_tree
+    into those continuing q0's (a negative dot product flips them)."""
+    p_tree = np.ravel(q_tree)[3 * n_bodies:].reshape(n_bodies, 4)
+    p_rp = np.ravel(q0)[3 * n_bodies:].reshape(n_bodies, 4)
     return np.where(np.sum(p_tree * p_rp, axis=1) < 0, -1.0, 1.0)

@@ -402,7 +402,7 @@ def _body_rates(sign, p, rotation, velocity, acceleration):
 def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Function:
     """A tree's ODE with generalized forces along its free velocities as an input:
     (t, x, tau[, d]) -> ode, tau in the order of x's velocities (optimal control's joint
-    efforts, optimal/joint_model.py)."""
+    efforts: ControlEquations.forced, formulations/joint_control.py)."""
     if tree.cut:
         raise ValueError("forced_ode takes a tree (no cut joints)")
     constants = Constants(data)

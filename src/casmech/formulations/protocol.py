@@ -21,6 +21,10 @@ A formulation is one small frozen class (docs/architecture.md, "Adding a formula
   data's symbols, where it has such an object (joint: the JointSystem its `system` wraps):
   what the consumers that build on a formulation's own terms take (the FMU, the Python
   controller, the parametric library); None by default;
+- `controlled(ir, data)`: its equations for optimal control (ControlEquations: the ODE with
+  the efforts as an input, the rows its state must satisfy, the conversions to and from
+  body coordinates), over the model data's symbols; the joint formulation offers them,
+  another raises a UsageError saying so (optimal control takes FORMULATIONS["joint"]'s);
 - `residual(functions, stabilization)` and `library_stabilizations()`: the residual a compiled
   C library generates for it (backends: formulations.residuals.oracles and
   backends.parametric.bundle loop over the registry), for which stabilizations (none by
@@ -43,6 +47,7 @@ import numpy as np
 
 from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
+from casmech.errors import UsageError
 from casmech.model.ir import ModelIR
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
@@ -85,6 +90,75 @@ class Start:
     p: np.ndarray
 
 
+class ControlEquations(ABC):
+    """A formulation's equations for optimal control over one model (Formulation.controlled),
+    in its state x = [coordinates; velocities] (the first n_coordinates entries, then the
+    rest). Every method takes the model data `d` (model.parametric.split's vector: numeric,
+    or an expression of the controls and design parameters) and returns CasADi expressions,
+    except the numeric start terms (`state`, `independent`, `signs`). A formulation with
+    loop closures keeps n_cut rows: the multipliers z = [lam; mu] of its DAE, `closure`'s
+    rows, and `mask` (1 for a row left out, 0 for one kept)."""
+
+    @property
+    @abstractmethod
+    def n_x(self) -> int:
+        """The size of x."""
+
+    @property
+    @abstractmethod
+    def n_coordinates(self) -> int:
+        """How many of x's entries are coordinates (the velocities follow)."""
+
+    @property
+    @abstractmethod
+    def n_cut(self) -> int:
+        """How many loop-closure rows (0: x' is an ODE of x alone)."""
+
+    @abstractmethod
+    def ode(self, t, x, d, z=None, mask=None):
+        """x' under the model's own forces (its motors included); with loops, the DAE's x'
+        at multipliers z with the rows of `mask` left out."""
+
+    @abstractmethod
+    def forced(self, t, x, tau, d):
+        """x' with the efforts tau (generalized forces along x's velocities, in their order)
+        added to the model's own forces: the ODE optimal control's controls drive."""
+
+    @abstractmethod
+    def closure(self, t, x, d) -> tuple:
+        """(the loop-closure rows at position level, at velocity level), each n_cut rows."""
+
+    @abstractmethod
+    def multipliers(self, t, x, d, kept) -> ca.SX:
+        """z = [lam; mu = 0] making the kept rows' (indices) accelerations vanish."""
+
+    @abstractmethod
+    def invariants(self, x) -> ca.SX:
+        """Rows of x alone that every state satisfies (unit quaternions: |p|^2 - 1)."""
+
+    @abstractmethod
+    def periodic(self) -> list[int]:
+        """The indices into x of the coordinates that are angles (2 pi leaves the pose)."""
+
+    @abstractmethod
+    def state(self, q, q_dot, d) -> np.ndarray:
+        """x at the body coordinates (q, q_dot) (r-p positions and their rates)."""
+
+    @abstractmethod
+    def independent(self, t, x, d) -> np.ndarray:
+        """1 for each loop-closure row independent of the rows before it at (t, x), else 0."""
+
+    @abstractmethod
+    def signs(self, t, x, q, d) -> np.ndarray:
+        """+1 or -1 per body: the Euler parameters of `body` that continue those of q."""
+
+    @abstractmethod
+    def body(self, t, x, z, signs, d) -> tuple:
+        """(q, q_dot, q_ddot, lam) at (t, x, z): the body coordinates, their rates and
+        accelerations (Euler parameters times `signs`) and every constraint row's
+        multiplier, which the results columns and the costs read."""
+
+
 @dataclass(frozen=True)
 class Formulation(ABC):
     """The protocol (module docstring): a frozen dataclass per formulation implements states,
@@ -110,6 +184,17 @@ class Formulation(ABC):
         functions, a parametric library's joint functions: docs/architecture.md "Adding a
         formulation"). None by default: the formulation's equations are its System alone."""
         return None
+
+    def controlled(self, ir: ModelIR, data: ca.SX) -> ControlEquations | None:
+        """Its equations for optimal control over the parametric IR `ir` written in the model
+        data's symbols `data` (model.parametric.split), or None for a model it does not take
+        (joint: loops through a floating body). Not offered by default: a UsageError naming
+        the formulation."""
+        raise UsageError(f"the {self.name} formulation does not offer the equations optimal "
+                         "control takes (Formulation.controlled: the ODE with the efforts as "
+                         "an input, its closure rows, body coordinates); optimal control "
+                         "takes the joint formulation's (formulations.registry.FORMULATIONS"
+                         "['joint']), or body coordinates with formulation: bodies")
 
     def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
         """Its system's residual alone, (t, x, z, p) -> (ode, alg): what a compiled C library

@@ -1,4 +1,6 @@
-"""The model in joint coordinates for optimal control (formulations/joint_system.py).
+"""The model in joint coordinates for optimal control: the joint formulation's equations for
+it, FORMULATIONS["joint"].controlled (formulations.protocol's ControlEquations), with the
+controls as inputs.
 
 The controls become effort motors: the model is read again with one parameter per control
 (`ocp_u0`, ...) as the value of a `motor:` in torque or force mode on its joint (added to a
@@ -30,12 +32,9 @@ import numpy as np
 import yaml
 
 from casmech.core import traced
-from casmech.elements.joint_types import MOTIONS
-from casmech.equations.checks import independent_rows
 from casmech.errors import ModelError, UsageError
-from casmech.formulations.joint_start import joint_state
-from casmech.formulations.joint_system import JointSystem, build, forced_ode
-from casmech.formulations.tree import spanning_tree
+from casmech.formulations.protocol import ControlEquations
+from casmech.formulations.registry import FORMULATIONS
 from casmech.optimal.controls import Control, control_forces
 from casmech.optimal.dae import body_columns
 from casmech.optimal.system import ParametricSystem, classify, parametric_system, traced_model
@@ -77,20 +76,12 @@ def motored_text(model: ResolvedModel, controls: list[Control]):
     return yaml.safe_dump(document, sort_keys=False), names
 
 
-def _bind(function: ca.Function, data) -> ca.Function:
-    """`function` with its trailing input (the model data) fixed to `data`."""
-    inputs = [ca.SX.sym(function.name_in(k), function.sparsity_in(k))
-              for k in range(function.n_in() - 1)]
-    return ca.Function(function.name(), inputs, function.call([*inputs, data]),
-                       function.name_in()[:-1], function.name_out())
-
-
 @dataclass
 class JointModel:
     """The functions of the joint-coordinate transcription (module docstring)."""
 
     system: ParametricSystem  # body coordinates, theta = the controls' parameters, the design
-    joints: JointSystem  # over the model data
+    equations: ControlEquations  # FORMULATIONS["joint"].controlled over the model data
     t0: float
     n_design: int = 0  # decision parameters of the model, last in theta
     # parameters derived from decision parameters: name -> Function(decision parameters)
@@ -98,7 +89,7 @@ class JointModel:
 
     @property
     def n_x(self) -> int:
-        return self.joints.layout.n_x
+        return self.equations.n_x
 
     @property
     def n_u(self) -> int:
@@ -118,94 +109,49 @@ class JointModel:
     def symbols(self):
         return ca.SX.sym("t"), ca.SX.sym("x", self.n_x), ca.SX.sym("c", self.n_c)
 
-    def _data(self, c):
-        """The joint functions' trailing input at controls c."""
-        d = self.system.data(c)
-        return self.joints.data(d) if self.joints.data is not None else d
-
     @cached_property
     def _numeric_data(self):
-        return self._data(ca.DM(self.system.values))
+        """The model data at the file's values of the controls and the design."""
+        return self.system.data(ca.DM(self.system.values))
 
     @cached_property
     def start(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x0, the quaternion signs of the results rows, the rows kept: 1 where a cut row
         is independent at t0) from the assembled r-p state (runtime.assembly)."""
-        nominal, joints = self.system.nominal, self.joints
-        q0, q_dot0 = assembly.initial_state(nominal, self.t0)
+        q0, q_dot0 = assembly.initial_state(self.system.nominal, self.t0)
         x0 = self.state_of(q0, q_dot0)
-        keep = np.ones(0)
-        if joints.n_cut:
-            jacobian = _bind(joints.velocity_jacobian, self._numeric_data)(self.t0, x0)
-            keep = np.array(independent_rows(np.array(jacobian.full())), float)
-        nb = nominal.n_bodies
-        motion = _bind(joints.motion, self._numeric_data)
-        q = np.array(motion(self.t0, x0, np.zeros(2 * joints.n_cut), np.ones(nb))[0].full())
-        tree_p, file_p = q.ravel()[3 * nb:].reshape(nb, 4), q0[3 * nb:].reshape(nb, 4)
-        signs = np.where(np.sum(tree_p * file_p, axis=1) < 0, -1.0, 1.0)
-        return x0, signs, keep
+        keep = self.equations.independent(self.t0, x0, self._numeric_data)
+        return x0, self.equations.signs(self.t0, x0, q0, self._numeric_data), keep
 
     def state_of(self, q, q_dot) -> np.ndarray:
         """x = [theta; u] of the free joint coordinates at the r-p state (q, q_dot)."""
-        joints = self.joints
-        relative = _bind(joints.relative_states, self._numeric_data)
-        rotations, gaps, twists = (np.array(v.full()) for v in relative(q, q_dot))
-        lay, x = joints.layout, np.zeros(joints.layout.n_x)
-        for k, joint in enumerate(joints.tree.joints):
-            theta, u = joint_state(joint, rotations[:, 3 * k:3 * k + 3], gaps[:, k], twists[:, k])
-            x[list(lay.theta[k])] = theta[list(lay.free_theta[k])]
-            x[list(lay.u[k])] = u[list(lay.free_u[k])]
-        return x
+        return self.equations.state(q, q_dot, self._numeric_data)
 
     def periodic(self) -> list[int]:
         """The indices into x of the free coordinates that are angles: adding 2 pi to one
         leaves its joint's pose unchanged (a revolute joint's angle, not a quaternion's
         component or a displacement)."""
-        lay, found = self.joints.layout, []
-        for k, joint in enumerate(self.joints.tree.joints):
-            motion = MOTIONS[joint.type]
-            inside = {start + i for start in motion.quaternions for i in range(4)}
-            base = np.full(motion.n_q, 0.3)
-            for slot, c in zip(lay.theta[k], lay.free_theta[k], strict=True):
-                if c in inside:
-                    continue
-                turned = base.copy()
-                turned[c] += 2 * np.pi
-                (p, p_turned), (r, r_turned) = ((np.array(ca.DM(f(v))) for v in (base, turned))
-                                                for f in (motion.rotation, motion.translation))
-                same = np.allclose(r, r_turned, rtol=0, atol=1e-9) and (  # p: -p, the same
-                    np.allclose(p, p_turned, rtol=0, atol=1e-9)
-                    or np.allclose(p, -p_turned, rtol=0, atol=1e-9))
-                found += [slot] if same else []
-        return found
+        return self.equations.periodic()
 
     def _algebraic(self, t, x, c):
         """z = [lam; mu = 0] of the loops (unit rows): the acceleration rows kept, solved."""
-        m = self.joints.n_cut
-        if not m:
-            return ca.SX(0, 1)
-        matrix, base = self.joints.acceleration_system(t, x, self._data(c))
-        kept = list(np.flatnonzero(self.start[2]))
-        lam = ca.SX.zeros(m, 1)
-        if kept:
-            lam[kept] = -ca.solve(matrix[kept, kept], base[kept])
-        return ca.vertcat(lam, ca.SX.zeros(m, 1))
+        return self.equations.multipliers(t, x, self.system.data(c),
+                                          np.flatnonzero(self.start[2]))
 
     @cached_property
     def efforts(self) -> np.ndarray | None:
         """B with the controls' generalized forces along the tree's free velocities tau =
         B c (a tree), when that map is constant: read off the motors' ODE and the forced
-        ODE (formulations.joint_system.forced_ode) at sample states, kept only where they
-        agree there; else None."""
-        if self.joints.n_cut or not self.n_u:
+        ODE (ControlEquations.forced) at sample states, kept only where they agree there;
+        else None."""
+        if self.equations.n_cut or not self.n_u:
             return None
-        forced = forced_ode(self.system.split.ir, self.joints.tree, self.system.split.symbols)
         t, x, c = self.symbols
-        n_theta = self.joints.layout.n_theta
+        n_theta = self.equations.n_coordinates
         tau = ca.SX.sym("tau", self.n_x - n_theta)
-        motors = ca.jacobian(self.joints.dynamics(t, x, self._data(c)),
+        motors = ca.jacobian(self.equations.ode(t, x, self.system.data(c)),
                              c[list(range(self.n_u))])
-        torques = ca.jacobian(forced(t, x, tau, self._numeric_data), tau)
+        torques = ca.jacobian(self.equations.forced(t, x, tau, self._numeric_data), tau)
         slopes = ca.Function("slopes", [x, c, tau], [motors[n_theta:, :], torques[n_theta:, :]])
         samples = np.sin(1.3 * np.arange(1, 3 * self.n_x + 1)).reshape(3, self.n_x) * 1.5
         maps = []
@@ -227,14 +173,13 @@ class JointModel:
         if self.efforts is not None:
             design = c[list(range(self.n_u, self.n_c))] if self.n_design else ca.SX(0, 1)
             zero = ca.vertcat(ca.DM.zeros(self.n_u), design)
-            forced = forced_ode(self.system.split.ir, self.joints.tree,
-                                self.system.split.symbols)
-            ode = forced(t, x, ca.DM(self.efforts) @ c[list(range(self.n_u))], self._data(zero))
-        elif not self.joints.n_cut:
-            ode = self.joints.dynamics(t, x, self._data(c))
+            ode = self.equations.forced(t, x, ca.DM(self.efforts) @ c[list(range(self.n_u))],
+                                        self.system.data(zero))
+        elif not self.equations.n_cut:
+            ode = self.equations.ode(t, x, self.system.data(c))
         else:
             mask = 1.0 - self.start[2]
-            ode = self.joints.dynamics(t, x, self._algebraic(t, x, c), mask, self._data(c))[0]
+            ode = self.equations.ode(t, x, self.system.data(c), self._algebraic(t, x, c), mask)
         # common subexpressions merged: a smaller graph for the NLP's derivatives
         return ca.Function("rhs", [t, x, c], [ca.cse(ode)], ["t", "x", "c"], ["ode"])
 
@@ -242,22 +187,11 @@ class JointModel:
     def closure(self) -> ca.Function:
         """Position- and velocity-level rows of the loops and the quaternions' norms."""
         t, x, _ = self.symbols
-        rows = []
-        m = self.joints.n_cut
-        if m:
-            kept = list(np.flatnonzero(self.start[2]))
-            alg = self.joints.dynamics(t, x, ca.SX.zeros(2 * m), ca.DM.zeros(m),
-                                       self._numeric_data)[1]
-            rows += [alg[kept], alg[[m + k for k in kept]]]
-        lay = self.joints.layout
-        for k, joint in enumerate(self.joints.tree.joints):
-            for start in MOTIONS[joint.type].quaternions:
-                slots = [lay.theta[k][lay.free_theta[k].index(s)]
-                         for s in range(start, start + 4) if s in lay.free_theta[k]]
-                if len(slots) == 4:
-                    rows.append(ca.sumsqr(x[slots]) - 1)
-        residual = ca.vertcat(*rows) if rows else ca.SX(0, 1)
-        return ca.Function("closure", [t, x], [residual], ["t", "x"], ["rows"])
+        kept = list(np.flatnonzero(self.start[2]))
+        positions, velocities = self.equations.closure(t, x, self._numeric_data)
+        rows = [positions[kept], velocities[kept]] if self.equations.n_cut else []
+        rows.append(self.equations.invariants(x))
+        return ca.Function("closure", [t, x], [ca.vertcat(*rows)], ["t", "x"], ["rows"])
 
     @cached_property
     def names(self) -> list[str]:
@@ -266,12 +200,12 @@ class JointModel:
     @cached_property
     def columns(self) -> ca.Function:
         """Every results column at (t, x, c): the r-p state of the tree and every joint's
-        multipliers (formulations/joint_system.py's motion), through optimal/dae.py's
-        columns of (t, q, q_dot, q_ddot, lam, theta)."""
+        multipliers (ControlEquations.body), through optimal/dae.py's columns of (t, q,
+        q_dot, q_ddot, lam, theta)."""
         t, x, c = self.symbols
         signs = ca.DM(self.start[1])
-        q, q_dot, q_ddot, lam = self.joints.motion(t, x, self._algebraic(t, x, c), signs,
-                                                   self._data(c))
+        q, q_dot, q_ddot, lam = self.equations.body(t, x, self._algebraic(t, x, c), signs,
+                                                    self.system.data(c))
         values = body_columns(self.system)(t, q, q_dot, q_ddot, lam, c)
         return ca.Function("columns", [t, x, c], [values], ["t", "x", "c"], ["columns"])
 
@@ -303,11 +237,10 @@ def joint_model(model: ResolvedModel, controls: list[Control], design=()) -> Joi
         raise UsageError(f"a control cannot act on this joint: "
                          f"{error.diagnostics[0].format()}") from None
     system = parametric_system(motored, [*names, *design])
-    tree = spanning_tree(system.split.ir)
-    if tree.floating_loops:
+    equations = FORMULATIONS["joint"].controlled(system.split.ir, system.split.symbols)
+    if equations is None:
         return None
-    joints = build(system.split.ir, tree, data=system.split.symbols)
-    return JointModel(system, joints, 0.0, len(tuple(design)), _derived(motored, design))
+    return JointModel(system, equations, 0.0, len(tuple(design)), _derived(motored, design))
 
 
 def _derived(model: ResolvedModel, design) -> dict:

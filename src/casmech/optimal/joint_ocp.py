@@ -32,7 +32,6 @@ import casadi as ca
 import numpy as np
 
 from casmech.errors import AnalysisError, FailureContext, UsageError
-from casmech.formulations.tree import spanning_tree
 from casmech.model.lower import lower
 from casmech.optimal import costs
 from casmech.optimal.collocation import SCHEMES, DirectCollocation
@@ -73,7 +72,7 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
         ("stabilized", problem.stabilized), ("a compiled mode", problem.mode != "interpreted"),
         ("initial_guess: interpolation", problem.initial_guess == "interpolation"),
         ("couplings of joint coordinates (gears, racks, couplers, screws)",
-         bool(spanning_tree(lower(model)).couplings))) if used]
+         any(joint.couples for joint in lower(model).joints))) if used]
     if (problem.formulation == "joints" or joints_only) and bodies_only:
         raise UsageError(f"formulation 'joints' does not take {', '.join(bodies_only)} "
                          "(settings of the body-coordinate transcription)")
@@ -89,7 +88,7 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
             _JOINT_MODELS.pop(next(iter(_JOINT_MODELS)))
         _JOINT_MODELS[key] = joint_model(model, list(problem.controls), design)
     found = _JOINT_MODELS[key]
-    if found is not None and found.joints.n_cut and problem.formulation == "auto" \
+    if found is not None and found.equations.n_cut and problem.formulation == "auto" \
             and not joints_only:
         return None  # loops: joint coordinates when asked (docs/optimal.md)
     if found is None and joints_only:

@@ -439,7 +439,7 @@ def replay_error(model: ResolvedModel, problem: OCP, solution: Solution) -> floa
     replayed = replay(model, problem, solution)
     n = replayed.shape[1] // 2
     if solution.formulation == "joints":
-        n = joints_of(model, problem).joints.layout.n_theta
+        n = joints_of(model, problem).equations.n_coordinates
     return float(np.max(np.abs(replayed[:, :n] - solution.x[:, :n])))
 
 

@@ -24,6 +24,7 @@ from casmech.errors import AnalysisError, Diagnostic, Interrupted, ModelError, U
 from casmech.runtime import (
     assembly,
     auto_formulation,
+    driven_friction,
     formulation_run,
     friction,
     interrupts,
@@ -48,13 +49,20 @@ DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS
 def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
               extra_events=()) -> Result:
     """A model with joint friction or exact contact friction: segments in its modes
-    (runtime.friction); else one run."""
-    if friction.switched(f.ir):
-        def segment(functions, span, events):
-            return _run_dynamics(functions, s, None, None, events, span)
+    (runtime.friction); else one run. The load parts of driven coordinates' frictions are
+    added to the rows, and to a failed run's (runtime.driven_friction)."""
+    try:
+        if friction.switched(f.ir):
+            def segment(functions, span, events):
+                return _run_dynamics(functions, s, None, None, events, span)
 
-        return friction.run(f, s, progress, segment, extra_events)
-    return _run_dynamics(f, s, progress, workspace, extra_events)
+            result = friction.run(f, s, progress, segment, extra_events)
+        else:
+            result = _run_dynamics(f, s, progress, workspace, extra_events)
+    except AnalysisError as error:
+        error.partial = driven_friction.amended(f, error.partial)
+        raise
+    return driven_friction.amended(f, result)
 
 
 def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace | None,

@@ -49,14 +49,21 @@ SLACK = 1e-9  # a holding force this far (relative) past the static limit still 
 STILL = 1e-9  # |rate| (SI) at or below which a joint starting a run is tried stuck
 
 
-def elements(ir) -> list:
-    """The friction elements whose modes a run switches (ir.limits holds them after the
-    stops): those of joints whose coordinate is free and with a Coulomb or static part; on a
-    driven coordinate the friction is the sliding law by the prescribed rate's sign, never
-    stuck (the driver holds it)."""
+def on_driven(ir) -> list:
+    """The friction elements (ir.limits holds them after the stops) on a driven coordinate (a
+    `driver:`, a position or speed motor): the sliding law by the prescribed rate's sign,
+    never stuck (the driver holds it); their load parts: runtime/driven_friction.py."""
     driven = {(j.name, key) for j in ir.joints for key in j.drivers}
     return [e for e in ir.limits if e.type in friction.COORDINATE
-            and (e.name, friction.COORDINATE[e.type]) not in driven and not _smooth(e)]
+            and (e.name, friction.COORDINATE[e.type]) in driven]
+
+
+def elements(ir) -> list:
+    """The friction elements whose modes a run switches: those of joints whose coordinate is
+    free and with a Coulomb or static part (`on_driven`: the others)."""
+    held = {e.name for e in on_driven(ir)}
+    return [e for e in ir.limits if e.type in friction.COORDINATE
+            and e.name not in held and not _smooth(e)]
 
 
 def switched(ir) -> bool:

@@ -28,7 +28,7 @@ from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.formulations import prescribed, prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.load_checks import check_loads
+from casmech.runtime.load_checks import check_rows
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -91,7 +91,7 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
     require_fully_driven(functions, t0, q, analysis, settings.assembly)
     times = output_times(t0, t_end, step)
     mapped = _MappedGrid(functions, settings, workspace)
-    loads = _Loads(functions, result)
+    loads = Loads(functions)
     state, previous, done = np.concatenate([q, 0 * q, 0 * q]), t0, 0
     most = settings.max_block
     span = min(len(times), most)
@@ -121,19 +121,20 @@ def run_prescribed_motion(functions: SystemFunctions, t_end: float, step: float,
         error.partial = result
         raise
     finally:
-        loads.record()
+        loads.record(result)
     return result
 
 
-class _Loads:
-    """The load parts of joint frictions with `mu` (formulations/prescribed_friction.py): a
-    call takes a block's times, states [q, q_dot, q_ddot] (rows) and multipliers without them
-    and returns the multipliers with them, keeping each friction's force for its results
-    column (`record`: Result.fixed_columns)."""
+class Loads:
+    """The load parts of joint frictions with `mu` (formulations/prescribed_friction.py;
+    `loaded`: those frictions, by default all): a call takes a block's times, states
+    [q, q_dot, q_ddot] (rows) and multipliers without them and returns the multipliers with
+    them, keeping each friction's force for its results column (`record`:
+    Result.fixed_columns)."""
 
-    def __init__(self, functions: SystemFunctions, result: Result):
-        self.loaded = prescribed_friction.elements(functions.ir)
-        self.result, self.forces = result, []
+    def __init__(self, functions: SystemFunctions, loaded: list | None = None):
+        self.loaded = prescribed_friction.elements(functions.ir) if loaded is None else loaded
+        self.forces = []
         if self.loaded:
             self.function = prescribed_friction.correction(functions, self.loaded)
             self.n = functions.ir.n_bodies * 7
@@ -145,16 +146,15 @@ class _Loads:
         mapped = self.function.map(len(times))
         lam, forces, loads = (np.array(v) for v in mapped(
             np.reshape(times, (1, -1)), states[:, :n].T, states[:, n:2 * n].T, lam.T))
-        for t, values in zip(times, loads.T, strict=True):
-            check_loads(t, self.loaded, values)
+        check_rows(times, self.loaded, loads.T)
         self.forces.append(forces.T)
         return lam.T
 
-    def record(self) -> None:
+    def record(self, result: Result) -> None:
         if self.forces:
             forces = np.concatenate(self.forces)
-            self.result.fixed_columns |= {f"{e.name}.friction": forces[:, i]
-                                          for i, e in enumerate(self.loaded)}
+            result.fixed_columns |= {f"{e.name}.friction": forces[:, i]
+                                     for i, e in enumerate(self.loaded)}
 
 
 def _per_row(functions: SystemFunctions, state: np.ndarray, previous: float, t: float,

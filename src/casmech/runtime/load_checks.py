@@ -1,7 +1,8 @@
 """The check of solved joint friction loads (equations/friction_load.py), one for dynamics
-segments (runtime/friction.py) and prescribed motions (runtime/kinematics.py): the loads of the
-joints with load parts must be finite, unique and solved, else the run stops with an analysis
-error naming the joints."""
+segments (runtime/friction.py) and prescribed motions (runtime/kinematics.py, and a driven
+coordinate's in dynamics: runtime/driven_friction.py): the loads of the joints with load parts
+must be finite, unique and solved, else the run stops with an analysis error naming the
+joints."""
 
 from __future__ import annotations
 
@@ -35,3 +36,18 @@ def check_loads(t: float, joints: list, values: np.ndarray) -> None:
             t, "the loads of the joints with load parts were not solved (Newton's method did "
             "not converge from their one-joint roots)",
             [(e.name, e.source, float(values[k])) for e in joints], "residual (N or N m)"))
+
+
+def check_rows(times, joints: list, values: np.ndarray) -> None:
+    """check_loads over rows at once (`values`: one row of friction_load's outputs per time):
+    the first row that fails stops the run with its error."""
+    k = len(joints)
+    values = np.asarray(values, float).reshape(len(times), -1)
+    finite = np.isfinite(values).all(axis=1)
+    ratios = np.where(finite[:, None, None], values[:, k + 1:].reshape(-1, k, k), 0.0)
+    radius = np.max(np.abs(np.linalg.eigvals(ratios)), axis=-1)
+    scale = np.maximum(1.0, np.max(np.abs(values[:, :k]), axis=1))
+    good = finite & (radius < 1) & (values[:, k] <= LOADS * scale)
+    if not good.all():
+        first = int(np.argmin(good))
+        check_loads(float(times[first]), joints, values[first])

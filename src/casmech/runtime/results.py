@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Mapping
 
 import casadi as ca
@@ -87,6 +88,15 @@ class Result:
         for name, value in zip(("t", *STATES), (times, q, q_dot, q_ddot, lam), strict=True):
             result._blocks[name].append(np.asarray(value, float))
         return result
+
+    def with_lam(self, lam) -> Result:
+        """A copy with the same rows and the multipliers `lam` (rows x m), its own
+        fixed_columns; the rest (metadata, events, callbacks) shared."""
+        copied = copy.copy(self)
+        copied._blocks = {name: [self._array(name)] for name in ("t", *STATES)}
+        copied._blocks["lam"] = [np.asarray(lam, float)]
+        copied.fixed_columns = dict(self.fixed_columns)
+        return copied
 
     def _array(self, name: str) -> np.ndarray:
         blocks = self._blocks[name]

@@ -1,0 +1,160 @@
+"""Joint friction's load part on a driven coordinate in a dynamics run
+(runtime/driven_friction.py): the driver's actuation and the friction column against closed
+forms written here (a block driven along an incline; a rotor spun about a horizontal axle), in
+every formulation, and against inverse dynamics of the same motion (a slider-crank driven at
+its crank, whose slide friction's load is solved in the run's sliding segment)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.api import results_table
+
+G = 9.81
+THETA, M, MU, TC, C = 0.6, 2.0, 0.4, 0.7, 0.3
+W = np.array([math.cos(THETA), 0.0, -math.sin(THETA)])  # the slide's axis, down the slope
+
+INCLINE = f"""casmech: 1
+name: driven_incline
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: block, mass: {M}, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: slide
+    type: translational
+    body_i: ground
+    body_j: block
+    at: [0, 0, 0]
+    axis: [{W[0]}, 0, {W[2]}]
+    driver: {{displacement: "SIGN * (0.3*t + 0.05*sin(3*t))"}}
+    friction: {{coulomb: {TC}, viscous: {C}, mu: {MU}}}
+events:
+  - {{name: halfway, when: "t - 0.55"}}
+analysis: {{type: dynamics, t_end: 1.0, output_step: 0.02, rtol: 1.0e-11, atol: 1.0e-12}}
+"""
+
+
+def run(text: str, formulation: str | None = None):
+    functions = casmech.compile(casmech.loads(text))
+    result = casmech.analyze(functions, formulation=formulation)
+    names, values = results_table(functions, result)
+    return functions, result, dict(zip(names, values.T, strict=True))
+
+
+def along(columns, joint: str, axis, kind: str = "f") -> np.ndarray:
+    return sum(axis[k] * columns[f"{joint}.{kind}{c}"] for k, c in enumerate("xyz"))
+
+
+@pytest.mark.parametrize(("formulation", "sign"),
+                         [("rp", 1.0), ("romega", -1.0), ("joint", 1.0), ("joint", -1.0)])
+def test_a_block_driven_along_an_incline_needs_its_load_part_in_every_formulation(formulation,
+                                                                                 sign):
+    """The driver's force along the slide is m s_ddot - m g sin(theta) - f with the friction
+    f = -sign(s_dot) (Tc + mu m g cos(theta)) - c s_dot (up the slope: m a + m g sin(theta)
+    + Tc + mu m g cos(theta) + c |s_dot|); the rate never reaches 0. The event's row too."""
+    _, result, columns = run(INCLINE.replace("SIGN", repr(sign)), formulation)
+    assert result.metadata["formulation"] == formulation
+    t = np.array(result.times)
+    rate, acceleration = sign * (0.3 + 0.15 * np.cos(3 * t)), sign * -0.45 * np.sin(3 * t)
+    friction = -sign * (TC + MU * M * G * math.cos(THETA)) - C * rate
+    # the law on the row's load: the integrated rate's error (rtol 1e-6 of a DAE) times c
+    np.testing.assert_allclose(columns["slide.friction"], friction, rtol=1e-9, atol=0)
+    # the driver's force along the slide, closed form, 1e-9 of its scale m g
+    np.testing.assert_allclose(along(columns, "slide", W),
+                               M * acceleration - M * G * math.sin(THETA) - friction,
+                               rtol=0, atol=1e-9 * M * G)
+    # the event's row (events.csv) as the rows: the same closed form at t = 0.55
+    event = result.events_dataframe().iloc[0]
+    at = event["t"]
+    assert event["name"] == "halfway"
+    np.testing.assert_allclose(at, 0.55, rtol=0, atol=1e-9)  # located to the run's tolerance
+    expected = (M * sign * -0.45 * math.sin(3 * at) - M * G * math.sin(THETA)
+                + sign * (TC + MU * M * G * math.cos(THETA) + C * (0.3 + 0.15 * math.cos(3 * at))))
+    np.testing.assert_allclose(sum(W[k] * event[f"slide.f{c}"] for k, c in enumerate("xyz")),
+                               expected, rtol=0, atol=1e-9 * M * G)  # as the rows
+
+
+ROTOR = f"""casmech: 1
+name: rotor
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: rotor, mass: 3.0, inertia: [0.1, 0.2, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: axle
+    type: revolute
+    body_i: ground
+    body_j: rotor
+    at: [0, 0, 0]
+    axis: [0, 1, 0]
+    driver: {{angle: "SPEED * t"}}
+    friction: {{coulomb: 0.05, mu: 0.3, radius: 0.02}}
+analysis: {{type: dynamics, t_end: 1.0, output_step: 0.05, rtol: 1.0e-11, atol: 1.0e-12}}
+"""
+
+
+@pytest.mark.parametrize(("formulation", "speed"),
+                         [("rp", 4.0), ("romega", -4.0), ("joint", 4.0), ("joint", 0.0)])
+def test_a_rotor_spun_about_a_horizontal_axle_needs_tc_plus_mu_radius_m_g(formulation, speed):
+    """The bearing carries m g radially at any constant rate: the driver's torque is
+    sign(w) (Tc + mu radius m g), the friction its opposite; at rest no friction."""
+    _, _, columns = run(ROTOR.replace("SPEED", repr(speed)), formulation)
+    torque = math.copysign(0.05 + 0.3 * 0.02 * 3.0 * G, speed) if speed else 0.0
+    # closed form; the multipliers to 1e-8 of the largest reaction (m g) in every formulation
+    # (rp's are IDAS's algebraic states, not error-tested)
+    np.testing.assert_allclose(columns["axle.ty"], torque, rtol=0, atol=1e-8 * 3.0 * G)
+    # the law on the row's load: roundoff of the rows' reaction m g
+    np.testing.assert_allclose(columns["axle.friction"], -torque, rtol=1e-9, atol=1e-12)
+
+
+A_CRANK, B_ROD, W0, ANGLE0 = 0.5, 2.0, 2.5, 0.3
+
+
+def slider_crank(analysis: str) -> str:
+    """models/slider_crank.yaml's mechanism under gravity along -y, its crank driven at a
+    constant rate, with friction with load parts at the crank bearing (driven) and the slide
+    (free: a dynamics run slides it with its load solved in the segment)."""
+    return f"""casmech: 1
+name: slider_crank_friction
+gravity: [0, -{G}, 0]
+bodies:
+  - {{name: crank, mass: 1.0, inertia: [0.0003, 0.021, 0.021], position: [{A_CRANK / 2}, 0, 0]}}
+  - {{name: rod, mass: 2.0, inertia: [0.0005, 0.67, 0.67], position: [{A_CRANK + B_ROD / 2}, 0, 0]}}
+  - {{name: slider, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [{A_CRANK + B_ROD}, 0, 0]}}
+joints:
+  - {{name: crank_pivot, type: revolute, body_i: ground, body_j: crank, at: [0, 0, 0],
+     axis: [0, 0, 1], friction: {{coulomb: 0.05, mu: 0.2, radius: 0.02}},
+     driver: {{angle: "{ANGLE0} + {W0} * t"}}}}
+  - {{name: crank_pin, type: spherical, body_i: crank, body_j: rod, at: [{A_CRANK}, 0, 0]}}
+  - {{name: wrist_pin, type: universal, body_i: slider, body_j: rod, at: [{A_CRANK + B_ROD}, 0, 0],
+     axis_i: [0, 0, 1], axis_j: [0, 1, 0]}}
+  - {{name: slide, type: translational, body_i: ground, body_j: slider,
+     at: [{A_CRANK + B_ROD}, 0, 0], axis: [1, 0, 0], friction: {{viscous: 0.1, mu: 0.3}}}}
+analysis: {{type: {analysis}, t_end: 0.25, output_step: 0.01, rtol: 1.0e-11, atol: 1.0e-12}}
+"""
+
+
+@pytest.fixture(scope="module")
+def inverse():
+    return run(slider_crank("inverse_dynamics"))[2]
+
+
+@pytest.mark.parametrize("formulation", [
+    "joint", pytest.param("romega", marks=pytest.mark.slow)])
+def test_a_driven_slider_crank_needs_the_torque_inverse_dynamics_gives(inverse, formulation):
+    """The dynamics run of the driven crank: its torque and every joint's reaction and
+    friction are inverse dynamics' of the same motion (the crank bearing's load depends on
+    the rod's force, which the slide's friction changes; the slide's load is the segment's)."""
+    _, result, columns = run(slider_crank("dynamics"), formulation)
+    assert result.metadata["formulation"] == formulation
+    assert np.all(columns["slide.displacement_dot"] < 0)  # the slide slides throughout
+    names = ("crank_pivot.tz", "crank_pivot.friction", "crank_pivot.fx", "crank_pivot.fy",
+             "slide.friction", "slide.fy", "slide.fz")
+    scale = max(np.max(np.abs(inverse[name])) for name in names)
+    for name in names:
+        # the integrated motion at rtol 1e-11 against the prescribed one: 1e-8 of the largest
+        np.testing.assert_allclose(columns[name], inverse[name], rtol=0, atol=1e-8 * scale,
+                                   err_msg=name)
