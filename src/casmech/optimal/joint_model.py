@@ -19,7 +19,8 @@ exactly as an effort motor does, and the reaction columns include it as they inc
 
 A mechanism the joint formulation does not take for optimal control (loops with a floating
 body, runtime/auto_formulation.py's rule; a control on a joint of a component instance) has
-`available` False, and the problem stays on body coordinates (optimal/ocp.py).
+no JointModel (`joint_model` returns None), and the problem stays on body coordinates
+(optimal/ocp.py).
 """
 
 from __future__ import annotations
