@@ -37,7 +37,16 @@ from casmech.core.quaternions import IDENTITY, about, angle_about, from_matrix, 
 from casmech.core.registry import Registry
 from casmech.core.states import JOINT_STATES
 from casmech.elements import coordinate_kinds, couplings
-from casmech.elements.motions import FREE, Motion, no_translation, slide, universal_angles
+from casmech.elements.motions import (
+    FREE,
+    Motion,
+    about_z,
+    no_translation,
+    slide,
+    universal_angles,
+    universal_spin,
+    universal_turn,
+)
 
 Template = tuple[str, dict[str, str], str]  # (kind, {vector key: quantity@body}, label)
 Problem = tuple[str, str, str, dict]  # (code, key, message, {got/hint: text}) of a check
@@ -185,7 +194,8 @@ BUILT_IN = (
     JointType("revolute", ("at", "axis"), SPHERICAL + PARALLEL, coordinates=("angle",),
               limit="angle",
               motion=Motion(1, 1, lambda th: about(2, th[0]), no_translation,
-                            lambda r, d: np.array([angle_about(r, 2)]), drivers={"angle": 0})),
+                            lambda r, d: np.array([angle_about(r, 2)]), drivers={"angle": 0},
+                            **about_z(0))),
     JointType("spherical", ("at",), SPHERICAL, states=JOINT_STATES["spherical"],
               initial=("orientation", "angular_velocity"),
               motion=Motion(4, 3, lambda th: unit(th[0:4]), no_translation,
@@ -199,12 +209,14 @@ BUILT_IN = (
               motion=Motion(2, 2, lambda th: product(about(0, th[0]), about(1, th[1])),
                             no_translation, universal_angles, frame="cross",
                             names=(JOINT_STATES["universal"][0::2],
-                                   JOINT_STATES["universal"][1::2]))),
+                                   JOINT_STATES["universal"][1::2]),
+                            turn=universal_turn, spin=universal_spin)),
     JointType("cylindrical", ("at", "axis"), PARALLEL + ON_AXIS,
               coordinates=("angle", "displacement"), limit="displacement",
               motion=Motion(2, 2, lambda th: about(2, th[0]), slide,
                             lambda r, d: np.array([angle_about(r, 2), d[2]]),
-                            drivers={"angle": 0, "displacement": 1})),
+                            drivers={"angle": 0, "displacement": 1},
+                            **about_z(0))),
     JointType("translational", ("at", "axis"), PARALLEL + ON_AXIS + NO_SPIN,
               coordinates=("displacement",), limit="displacement",
               motion=Motion(1, 1, lambda th: IDENTITY, slide, lambda r, d: np.array([d[2]]),
@@ -229,7 +241,8 @@ BUILT_IN = (
               motion=Motion(3, 3, lambda th: about(2, th[2]),
                             lambda th: ca.vertcat(th[0], th[1], 0),
                             lambda r, d: np.array([d[0], d[1], angle_about(r, 2)]),
-                            names=(("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")))),
+                            names=(("x", "y", "angle"), ("x_dot", "y_dot", "angle_dot")),
+                            **about_z(2))),
     # couplings of joint coordinates (elements/couplings.py)
     _coupling("gear", ("joint_i", "joint_j"), ("angle", "angle"), ("ratio",),
               lambda s: (-s["ratio"], 1.0), 1, "torque", "angle_j = ratio angle_i"),

@@ -2,15 +2,16 @@
 `motion` of its casmech.elements.joint_types entry; `FREE` for a body no tree joint reaches).
 
 A tree joint moves the child's joint frame F_c relative to the parent's F_p by a rotation (a
-quaternion of the joint coordinates theta) and a translation (F_c's origin in F_p
+quaternion of the joint coordinates theta, and the same rotation as a matrix: of cos and sin of
+the angles for the types that turn about axes) and a translation (F_c's origin in F_p
 coordinates). Its velocities u are theta_dot, except for quaternion coordinates, whose
 velocities are the relative angular velocity in F_c (theta_dot = 1/2 G(theta)^T u, the rate
-law of Euler parameters). Everything else (the motion subspace, its rate) comes from AD of
-these two maps (formulations/articulated.py). `coordinates` inverts them numerically, for initial
-states. `drivers` names the coordinate a joint driver prescribes: the driver rows of
-casmech.elements.joint_types measure the same angle (atan2 of the joint frames, 0 at the file's
-pose)
-and the same slide along the axis.
+law of Euler parameters); the relative angular velocity in F_c is the type's `spin` (the sum of
+its axes' rates, each axis seen in F_c), or u[0:3] for a quaternion joint. Everything else (the
+motion subspace, its rate) comes from AD of these maps (formulations/articulated.py).
+`coordinates` inverts them numerically, for initial states. `drivers` names the coordinate a
+joint driver prescribes: the driver rows of casmech.elements.joint_types measure the same angle
+(atan2 of the joint frames, 0 at the file's pose) and the same slide along the axis.
 
 Frames (tree.frames): "axes" uses the joint's triad u, v, w (w the axis; ex, ey, ez when the
 type has no axis), the same on both bodies; "cross" (universal) puts the parent's axis on F_p's
@@ -25,7 +26,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
-from casmech.core import euler
+from casmech.core import euler, rotations
 from casmech.core.quaternions import from_matrix, unit
 
 
@@ -46,10 +47,22 @@ class Motion:
     # it is not; None: from `drivers`, each coordinate kind's value and rate
     # (elements.joint_types.state_names reads both)
     names: tuple[tuple[str, ...], tuple[str, ...]] | None = None
+    # theta -> the rotation matrix of F_c in F_p, of cos and sin of the angles (None: the
+    # matrix of `rotation`'s quaternion)
+    turn: Callable | None = None
+    # (theta, u) -> the relative angular velocity in F_c (None: see angular_velocity)
+    spin: Callable | None = None
+
+    def matrix(self, theta):
+        """The rotation matrix of F_c in F_p."""
+        return euler.rotation(self.rotation(theta)) if self.turn is None else self.turn(theta)
 
     def angular_velocity(self, theta, u):
-        """The relative angular velocity in F_c: u[0:3] for a quaternion joint (by the
-        definition of its velocities), else None (formulations.articulated takes it by AD)."""
+        """The relative angular velocity in F_c: the type's `spin`, u[0:3] for a quaternion
+        joint (by the definition of its velocities), else None (formulations.articulated
+        takes it by AD of the quaternion)."""
+        if self.spin is not None:
+            return self.spin(theta, u)
         return u[0:3] if self.quaternions == (0,) else None
 
     def rates(self, theta, u):
@@ -73,6 +86,24 @@ def no_translation(theta):
 def slide(theta):
     """F_c's origin moved along F_p's z (the joint axis) by the last coordinate."""
     return ca.vertcat(0, 0, theta[-1])
+
+
+def about_z(index: int) -> dict:
+    """The Motion's turn and spin of a joint turning about F_p's z (the joint axis) by
+    coordinate `index`: Rz(theta[index]), and that coordinate's rate about z."""
+    return {"turn": lambda theta: rotations.about(2, theta[index]),
+            "spin": lambda theta, u: ca.vertcat(0, 0, u[index])}
+
+
+def universal_turn(theta):
+    """Rx(alpha) Ry(beta) of a universal joint's (alpha, beta)."""
+    return rotations.about(0, theta[0]) @ rotations.about(1, theta[1])
+
+
+def universal_spin(theta, u):
+    """A universal joint's angular velocity in F_c: alpha's rate about F_p's x, seen through
+    Ry(beta), plus beta's about F_c's y."""
+    return rotations.about(1, theta[1]).T @ ca.vertcat(u[0], 0, 0) + ca.vertcat(0, u[1], 0)
 
 
 def universal_angles(r: np.ndarray, d: np.ndarray) -> np.ndarray:

@@ -23,7 +23,7 @@ from functools import cache, cached_property
 
 import casadi as ca
 
-from casmech.core import euler, spatial
+from casmech.core import spatial
 from casmech.core.quaternions import conjugate, product
 from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
@@ -36,22 +36,24 @@ from casmech.model.ir import GROUND_INDEX, ModelIR
 
 @cache
 def local_motion(kind: str) -> ca.Function:
-    """(theta, u) -> (rotation quaternion, translation, S_J, c_J, theta_dot) of a joint type:
-    S_J maps u to the twist of F_c relative to F_p in F_c coordinates (angular first, the
-    origin's velocity second), c_J = S_J_dot u."""
+    """(theta, u) -> (rotation quaternion, translation, S_J, c_J, theta_dot, rotation matrix)
+    of a joint type: S_J maps u to the twist of F_c relative to F_p in F_c coordinates
+    (angular first, the origin's velocity second), c_J = S_J_dot u."""
     motion = MOTIONS[kind]
     theta, u = ca.SX.sym("theta", motion.n_q), ca.SX.sym("u", motion.n_v)
     rotation, translation = motion.rotation(theta), motion.translation(theta)
+    matrix = motion.matrix(theta)
     theta_dot = motion.rates(theta, u)
     omega = motion.angular_velocity(theta, u)
     if omega is None:
         omega = body.angular_velocity(rotation, ca.jtimes(rotation, theta, theta_dot))
-    velocity = euler.rotation(rotation).T @ ca.jtimes(translation, theta, theta_dot)
+    velocity = matrix.T @ ca.jtimes(translation, theta, theta_dot)
     subspace = ca.jacobian(ca.vertcat(omega, velocity), u)
     rate = ca.jtimes(subspace @ u, theta, theta_dot)
     return ca.Function(f"motion_{kind}", [theta, u],
-                       [rotation, translation, subspace, rate, theta_dot],
-                       ["theta", "u"], ["rotation", "translation", "S", "c", "theta_dot"])
+                       [rotation, translation, subspace, rate, theta_dot, matrix],
+                       ["theta", "u"], ["rotation", "translation", "S", "c", "theta_dot",
+                                        "matrix"])
 
 
 NUMERIC = Constants()  # a numeric build's: every constant a casadi.DM
@@ -89,9 +91,9 @@ class Joint:
             rate = ca.jacobian(value, t)
             theta[c], u[c], u_dot[c] = value, rate, ca.jacobian(rate, t)
         self.theta, self.u = ca.vertcat(*theta), ca.vertcat(*u)
-        rotation, translation, subspace, rate, self.theta_dot = local_motion(joint.type)(
-            self.theta, self.u)
-        self.rotation, self.translation = rotation, translation
+        rotation, translation, subspace, rate, self.theta_dot, matrix = local_motion(
+            joint.type)(self.theta, self.u)
+        self.rotation, self.translation, self.matrix = rotation, translation, matrix
         self.free = sorted(u_free)
         self.s_free = subspace[:, self.free]
         self.selection = spatial.selection(self.s_free)  # rows S selects, when it does
@@ -107,27 +109,40 @@ class Joint:
         else:
             c_ref, o_ref = (constants.raw(v) for v in parent_reference)
             e_t, r_t = constants(c_p.T @ c_ref), constants(c_ref.T @ (s_p - o_ref))
-        self.e, self.r = _joint_transform(rotation, translation, e_t, r_t)
+        self.e, self.r = _joint_transform(matrix, translation, e_t, r_t)
 
 
 @traced
-def _joint_transform(rotation, translation, e_t, r_t):
+def _joint_transform(matrix, translation, e_t, r_t):
     """(E, r) of the motion transform from the parent's reference frame to the child's: the
-    constant one (e_t, r_t) to F_p, then the joint's motion."""
-    return euler.rotation(rotation).T @ e_t, r_t + e_t.T @ translation
+    constant one (e_t, r_t) to F_p, then the joint's motion (its rotation matrix)."""
+    return matrix.T @ e_t, r_t + e_t.T @ translation
 
 
 @dataclass(frozen=True)
 class Kinematics:
     """Global poses, and spatial velocities of every body (IR order) on the tree: V in the
-    body's reference frame, `velocity` in its CM frame (body axes)."""
+    body's reference frame, `velocity` in its CM frame (body axes). The rotation matrices
+    compose the joints' (of cos and sin of their angles); the Euler parameters `p` are
+    composed from the joints' quaternions when read (results rows, forces of r-p
+    coordinates), so a graph that does not read them has no half-angle terms."""
 
     r: list
-    p: list
     rotation: list
     frame_velocity: list
     frames: list  # each body's reference frame (the child frame of its tree joint)
     constants: Constants
+    # per tree joint, root to leaves: (child, parent, parent frame's quaternion, the joint's
+    # rotation quaternion, child frame's quaternion)
+    turns: tuple
+
+    @cached_property
+    def p(self) -> list:
+        p = [None] * len(self.r)
+        for child, parent, q_cp, rotation, q_cc in self.turns:
+            p_p = GROUND_STATE[1] if parent == GROUND_INDEX else p[parent]
+            p[child] = _orientation(p_p, q_cp, rotation, q_cc)[0]
+        return p
 
     @cached_property
     def velocity(self) -> list:
@@ -149,20 +164,22 @@ class Kinematics:
 
 def kinematics(joints: list[Joint], n_bodies: int, constants: Constants = NUMERIC
                ) -> Kinematics:
-    r, p, rot, vel, frames = ([None] * n_bodies for _ in range(5))
+    r, rot, vel, frames = ([None] * n_bodies for _ in range(4))
+    turns = []
     for j in joints:
         tj = j.joint
         if tj.parent == GROUND_INDEX:
-            r_p, p_p, rot_p, v_p = GROUND_STATE
+            r_p, _, rot_p, v_p = GROUND_STATE
         else:
-            r_p, p_p, rot_p, v_p = r[tj.parent], p[tj.parent], rot[tj.parent], vel[tj.parent]
+            r_p, rot_p, v_p = r[tj.parent], rot[tj.parent], vel[tj.parent]
         (c_p, s_p), (c_c, s_c) = tj.parent_frame, tj.child_frame
-        p[tj.child], rot[tj.child], r[tj.child], vel[tj.child] = _link(
-            p_p, r_p, rot_p, v_p, constants.quaternion(c_p), constants.quaternion(c_c),
-            constants(s_p), constants(c_p), constants(s_c), j.rotation, j.translation, j.e,
-            j.r, j.relative)
+        rot[tj.child], r[tj.child], vel[tj.child] = _link(
+            r_p, rot_p, v_p, constants(s_p), constants(c_p), constants(c_c), constants(s_c),
+            j.matrix, j.translation, j.e, j.r, j.relative)
         frames[tj.child] = tj.child_frame
-    return Kinematics(r, p, rot, vel, frames, constants)
+        turns.append((tj.child, tj.parent, constants.quaternion(c_p), j.rotation,
+                      constants.quaternion(c_c)))
+    return Kinematics(r, rot, vel, frames, constants, tuple(turns))
 
 
 # ground's (r, p, A, V): the global frame at rest
@@ -170,13 +187,18 @@ GROUND_STATE = (ca.DM.zeros(3), ca.DM(GROUND_POSE[3:]), ca.DM.eye(3), ca.DM.zero
 
 
 @traced
-def _link(p_p, r_p, rot_p, v_p, q_cp, q_cc, s_p, c_p, s_c, rotation, translation, e, r,
-          relative):
-    """A child's (p, A, r, V) from its parent's and its tree joint's motion."""
-    p_k = product(product(product(p_p, q_cp), rotation), conjugate(q_cc))
-    rot_k = euler.rotation(p_k)
+def _link(r_p, rot_p, v_p, s_p, c_p, c_c, s_c, matrix, translation, e, r, relative):
+    """A child's (A, r, V) from its parent's and its tree joint's motion: A = A_p C_p R C_c^T
+    with R the joint's rotation matrix."""
+    rot_k = rot_p @ (c_p @ matrix @ c_c.T)
     r_k = r_p + rot_p @ (s_p + c_p @ translation) - rot_k @ s_c
-    return p_k, rot_k, r_k, spatial.motion(e, r, v_p) + relative
+    return rot_k, r_k, spatial.motion(e, r, v_p) + relative
+
+
+@traced
+def _orientation(p_p, q_cp, rotation, q_cc):
+    """A child's Euler parameters p_p (x) q_cp (x) rotation (x) conj(q_cc)."""
+    return (product(product(product(p_p, q_cp), rotation), conjugate(q_cc)),)
 
 
 @traced

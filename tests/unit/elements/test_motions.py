@@ -4,7 +4,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from casmech.core import euler
+from casmech.core import euler, spatial
 from casmech.core.quaternions import from_matrix
 from casmech.elements.joint_types import MOTIONS
 from casmech.formulations.articulated import local_motion
@@ -90,3 +90,27 @@ def test_from_matrix_inverts_the_rotation(angle):
     back = from_matrix(euler.numeric(euler.rotation, p))
     # Shepperd's branch choice keeps the division well conditioned up to 180 degrees
     np.testing.assert_allclose(back * np.sign(back @ p), p, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("kind", sorted(MOTIONS))
+def test_rotation_matrix_is_the_quaternion_s(kind):
+    """The matrix of cos and sin of the angles (the recursion's) against A(p) of the joint's
+    quaternion (the results rows')."""
+    for _ in range(5):
+        theta = random_theta(kind)
+        matrix = local_motion(kind)(theta, np.zeros(MOTIONS[kind].n_v))[5]
+        # two closed forms of one rotation of O(1) entries: roundoff only
+        np.testing.assert_allclose(np.array(matrix.full()), pose(kind, theta)[0],
+                                   rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("kind", ["revolute", "cylindrical", "translational"])
+def test_axis_joints_select_constant_rows(kind):
+    """A joint moving along one fixed axis has a constant selecting S and c_J = 0 exactly, so
+    the articulated-body algorithm eliminates it blockwise and its graph has no terms of the
+    angle there."""
+    motion = MOTIONS[kind]
+    theta, u = ca.SX.sym("theta", motion.n_q), ca.SX.sym("u", motion.n_v)
+    _, _, subspace, rate, _, _ = local_motion(kind)(theta, u)
+    assert spatial.selection(subspace) is not None
+    assert rate.is_constant() and not np.any(np.array(ca.evalf(rate)))

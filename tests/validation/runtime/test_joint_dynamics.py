@@ -188,8 +188,9 @@ def test_method_auto_takes_bdf_for_a_stiff_tree_and_both_agree():
     assert casmech.analyze(chain, t_end=0.1).metadata["method"] == "adams"
     adams, bdf = (Table(*casmech.results_table(stiff, runs[m])) for m in ("adams", "bdf"))
     for name in ("tip.x", "tip.z", "arm.e2"):
-        # two methods at rtol 1e-8: global errors of ~1e-8 of the 1 m scale
-        np.testing.assert_allclose(adams[name], bdf[name], rtol=0, atol=1e-6, err_msg=name)
+        # two methods at rtol 1e-8: BDF's global error on this stiff tip scatters from 2e-7
+        # to 3e-6 m with its step sequence (against a run at rtol 1e-12), Adams' is ~4e-9
+        np.testing.assert_allclose(adams[name], bdf[name], rtol=0, atol=5e-6, err_msg=name)
 
 
 def test_method_auto_does_not_examine_a_tree_without_force_elements(monkeypatch):
