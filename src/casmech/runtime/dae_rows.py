@@ -1,7 +1,8 @@
-"""The output rows of the r-p / r-omega DAE runs (runtime.dynamics) for a block of states, each
-by mapped casadi.Function calls: the drift check (index-1 DAE only) and the results' r-p
-rates and multipliers. The Functions and their maps are kept in the run's workspace
-(runtime.workspace), so a later run builds none of them."""
+"""The output rows of the r-p / r-omega DAE runs (runtime.dynamics) for a block of states, each by
+mapped casadi.Function calls: the accelerations and multipliers solved at each row's state, the
+drift check (index-1 DAE only) and the results' r-p rates and multipliers. The Functions and
+their maps are kept in the run's workspace (runtime.workspace), so a later run builds none of
+them."""
 
 from __future__ import annotations
 
@@ -9,7 +10,9 @@ import casadi as ca
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
+from casmech.formulations import dae
 from casmech.formulations.table import BODY_FORMS
+from casmech.numerics import kkt
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -40,6 +43,25 @@ def minimum_norm(jacobian, lam, keep: list[int]):
     y = ca.solve(gram, kept_rows @ (jacobian.T @ lam), "qr")
     c = ca.solve(gram, kept_rows @ jacobian.T, "qr").T
     return c @ ca.solve(c.T @ c, y, "qr")
+
+
+def solve(f: SystemFunctions, name: str) -> ca.Function:
+    """(t, q, v, w, s) -> (v_dot, lam / s): the equations of motion's linear part
+    [M P_s^T; P_s -diag(w)] [v_dot; lam / s] = [F; gamma_s] solved at one state
+    (numerics.kkt.saddle inlined; P_s = diag(s) P, gamma_s = s * gamma, as the DAE scales
+    them: formulations.dae). A row's v_dot and lam come from here, not from the integrator's
+    algebraic states: those are interpolated over IDAS's step and kept out of its error test,
+    so they are neither as accurate as the state nor right after a force's jump within a
+    step (a Coulomb friction's reversal on a driven joint)."""
+    form = BODY_FORMS[name]
+    n_q, n_v, m = dae.sizes(f.functions, name)
+    t, q, v = ca.MX.sym("t"), ca.MX.sym("q", n_q), ca.MX.sym("v", n_v)
+    w, s = ca.MX.sym("w", m), ca.MX.sym("s", m)
+    mass, jacobian = f[form.mass](q), f[form.jacobian](t, q) * ca.repmat(s, 1, n_v)
+    saddle = kkt.saddle(mass.sparsity(), jacobian.sparsity())
+    v_dot, lam = saddle(mass, jacobian, f[form.forces](t, q, v), f[form.gamma](t, q, v) * s, w)
+    return ca.Function(f"row_accelerations_{name}", [t, q, v, w, s], [v_dot, lam],
+                       ["t", "q", "v", "w", "s"], ["v_dot", "lam"])
 
 
 def _functions(f: SystemFunctions, name: str, sizes: tuple[int, int, int],

@@ -15,8 +15,10 @@ index-2 DAE fails on is done this way (run_dynamics).
 
 With ggl the whole output grid is one IDAS call, unless a progress callback wants rows as they
 come or the DAE failed (then chunks of `chunk` intervals, core.options.DynamicsSolver, over
-runtime.driver); the output rows of a chunk (r-p rates, true or least-norm multipliers, the
-index-1 DAE's drift check) are each one mapped casadi.Function call, never Python per row.
+runtime.driver); the output rows of a chunk (accelerations and multipliers solved at each
+row's state, not read from IDAS's algebraic states: docs/decisions/row-multipliers.md; r-p
+rates, true or least-norm multipliers, the index-1 DAE's drift check) are each one mapped
+casadi.Function call, never Python per row.
 
 Rows that depend on the others at t0 (redundant joints) are masked out of both DAEs. Every
 start hands IDAS the exact derivative and algebraic state (init_xdot, z0), solved here from
@@ -59,6 +61,7 @@ from casmech.runtime import (
     cancel,
     contact_steps,
     dae_integrators,
+    dae_rows,
     events,
     nonfinite,
     projected_rk4,
@@ -146,6 +149,26 @@ class _Model:
         """(v_dot, true multipliers) at (t, q, v)."""
         s, _, v_dot, lam = self.start(t, q, v, mask)
         return v_dot, s * lam
+
+    def solved(self, times: np.ndarray, states: np.ndarray, mask, s
+               ) -> tuple[np.ndarray, np.ndarray]:
+        """(states, true multipliers) of the integrator's states at `times`: rows [q, v, v_dot]
+        with v_dot and the multipliers solved at each column's (t, q, v) with row scales s,
+        one mapped call (dae_rows.solve); a column whose saddle matrix is singular by
+        `consistent`'s least squares."""
+        q, v = states[:self.n_q], states[self.n_q:self.n_q + self.n_v]
+        solve = self.workspace.kept("dae_rows", ("solve", self.name),
+                                    lambda: dae_rows.solve(self.functions, self.name))
+        try:
+            v_dot, lam = mapped(solve, times[None, :], q, v, mask[:, None], s[:, None],
+                                workspace=self.workspace)
+        except RuntimeError as error:  # the LU met a zero pivot
+            cancel.check(error)
+            v_dot, lam = np.full((self.n_v, len(times)), np.nan), np.full((self.m, len(times)),
+                                                                         np.nan)
+        for j in np.flatnonzero(~(np.isfinite(v_dot).all(0) & np.isfinite(lam).all(0))):
+            v_dot[:, j], lam[:, j] = self.consistent(times[j], q[:, j], v[:, j], mask, s)
+        return np.vstack([q, v, v_dot]), s[:, None] * lam
 
     def q_dot(self, q, v) -> np.ndarray:
         if self.form.q_dot is None:
@@ -268,20 +291,21 @@ class _Stepper:
             done = getattr(interrupted, "outputs", None)
             count = 0 if done is None else completed(done["xf"], done["zf"])
             if count:
-                states, lam = self._dae_states({k: v[:, :count] for k, v in done.items()})
-                interrupted.done = (states, s[:, None] * lam, kind)
+                x = self._dae_states({k: v[:, :count] for k, v in done.items()})
+                interrupted.done = (*model.solved(times[:count], x, mask, s), kind)
             raise
         finally:
             self.idas_steps += int(integrator.stats().get("nsteps", 0))
-        states, lam = self._dae_states(out)
-        return states, s[:, None] * lam
+        return model.solved(times, self._dae_states(out), mask, s)
 
-    def _dae_states(self, out):
+    @staticmethod
+    def _dae_states(out) -> np.ndarray:
+        """The integrator's x = [q, v] at its output times (its algebraic states are checked
+        only: the rows solve v_dot and the multipliers at each state, _Model.solved)."""
         x, z = np.array(out["xf"]), np.array(out["zf"])
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
             raise RuntimeError("the state became NaN or infinite")
-        n_v, m = self.model.n_v, self.model.m
-        return np.vstack([x, z[:n_v]]), z[n_v:n_v + m]
+        return x
 
     def _ode(self, t0, times, q, v):
         """The augmented-Lagrangian ODE by projected Runge-Kutta steps over the chunk. On a

@@ -1,0 +1,46 @@
+"""runtime.dynamics._Model.solved: a row whose saddle matrix is singular (a joint written twice,
+no row masked) is solved by least squares, not left NaN."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import casmech
+from casmech.formulations.builtin import velocities
+from casmech.formulations.table import BODY_FORMS
+from casmech.runtime import dynamics
+from casmech.runtime.assembly import initial_state
+
+TWICE_HINGED = """casmech: 1
+name: twice_hinged
+bodies:
+  - {name: bar, mass: 1.0, inertia: [0.01, 0.1, 0.1], position: [0.5, 0, 0]}
+joints:
+  - {name: hinge_a, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 0, 1]}
+  - {name: hinge_b, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 0, 1]}
+analysis: {type: dynamics, t_end: 0.1, output_step: 0.01}
+"""
+
+
+@pytest.mark.parametrize("name", ["rp", "romega"])
+def test_a_singular_rows_accelerations_and_multipliers_solve_the_equations(name):
+    functions = casmech.compile(casmech.loads(TWICE_HINGED))
+    model, form = dynamics._Model(functions, name), BODY_FORMS[name]
+    q, q_dot = initial_state(functions, 0.0, model.settings.assembly, model.workspace)
+    v = velocities(functions, name, q, q_dot)
+    s = model.scales(0.0, q)[0]
+    state = np.concatenate([q, v, np.zeros(model.n_v)])[:, None]
+    states, lam = model.solved(np.array([0.0]), state, np.zeros(model.m), s)
+    v_dot, lam = states[model.n_q + model.n_v:, 0], lam[:, 0]
+    assert np.all(np.isfinite(v_dot)) and np.all(np.isfinite(lam))
+    mass, jacobian = functions.matrix(form.mass, q), functions.matrix(form.jacobian, 0.0, q)
+    forces = functions.vector(form.forces, 0.0, q, v)
+    gamma = functions.vector(form.gamma, 0.0, q, v)
+    # the equations of motion the rows satisfy (a consistent singular system: exactly)
+    np.testing.assert_allclose(mass @ v_dot + jacobian.T @ lam, forces, rtol=0,
+                               atol=1e-12)  # roundoff of the least squares
+    np.testing.assert_allclose(jacobian @ v_dot, gamma, rtol=0, atol=1e-12)  # as above
+    # least norm: the two hinges (five rows each, in file order) share the load equally
+    np.testing.assert_allclose(lam[:5], lam[5:10], rtol=0, atol=1e-12)  # as above
+    assert np.abs(lam[:10]).max() > 1.0  # the bar's weight is carried (m g = 9.81 N)
