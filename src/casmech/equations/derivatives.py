@@ -8,6 +8,8 @@ Ground's pose, GROUND_POSE, is what its constant frame is in every kernel.
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
+
 import casadi as ca
 import numpy as np
 
@@ -21,6 +23,38 @@ def of_phi(phi, q, t, q_dot) -> dict[str, ca.SX]:
     phi_q = ca.jacobian(phi, q)
     nu = -ca.jacobian(phi, t)
     return {"phi_q": phi_q, "nu": nu, "gamma": gamma_of(phi_q, nu, q, t, q_dot)}
+
+
+class Derived(Mapping):
+    """phi and what of_phi derives from it, each derivative taken when first read (the same
+    expressions as of_phi's): a run that reads phi and nu alone never builds phi_q's graph nor
+    gamma's second derivatives. `gamma`: whether gamma is one of the keys."""
+
+    def __init__(self, phi, q, t, q_dot, gamma: bool = True):
+        self._values: dict[str, ca.SX] = {"phi": phi}
+        self._q, self._t, self._q_dot = q, t, q_dot
+        self._keys = ("phi_q", "nu", "gamma", "phi") if gamma else ("phi_q", "nu", "phi")
+
+    def __getitem__(self, key: str) -> ca.SX:
+        if key not in self._keys:
+            raise KeyError(key)
+        if key not in self._values:
+            self._values[key] = self._derive(key)
+        return self._values[key]
+
+    def _derive(self, key: str) -> ca.SX:
+        phi, q, t = self._values["phi"], self._q, self._t
+        if key == "phi_q":
+            return ca.jacobian(phi, q)
+        if key == "nu":
+            return -ca.jacobian(phi, t)
+        return gamma_of(self["phi_q"], self["nu"], q, t, self._q_dot)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._keys)
+
+    def __len__(self) -> int:
+        return len(self._keys)
 
 
 def gamma_of(phi_q, nu, q, t, q_dot) -> ca.SX:

@@ -79,19 +79,15 @@ def grounded(ir: ModelIR, ev: Evaluation, groups: list, t, q) -> tuple:
 
 
 def constraints(ir: ModelIR, ev: Evaluation, groups: list, t, q, q_dot=None,
-                scale=None, shared=None) -> dict:
-    """phi, phi_q, nu and (given q_dot) gamma by AD of the whole phi; `shared`: grounded's
-    output (unscaled rows only)."""
+                scale=None, shared=None) -> derivatives.Derived:
+    """phi, phi_q, nu and (given q_dot) gamma by AD of the whole phi, each derivative when
+    first read (derivatives.Derived); `shared`: grounded's output (unscaled rows only)."""
     if scale is None:
         rows, ground, _ = shared or grounded(ir, ev, groups, t, q)
         value = ca.substitute(rows, ground, ca.DM(GROUND_POSE))
     else:
         value = phi(ir, ev, groups, t, q, scale)
-    out = derivatives.of_phi(value, q, t, q_dot if q_dot is not None else ca.SX(q.numel(), 1))
-    if q_dot is None:
-        del out["gamma"]
-    out["phi"] = value
-    return out
+    return derivatives.Derived(value, q, t, q_dot, gamma=q_dot is not None)
 
 
 def variations(ir: ModelIR, phi_q, q):

@@ -20,18 +20,23 @@ file, so that p_k (x) q_k is the joint frame carried by body k.
 
 Every rate is the time derivative by AD (x.rate), as coordinates.py's. A spherical joint's
 seven states are one traced step (core.traced_steps) evaluated once per joint and state x
-(`spherical_states`; GROUPS names it for readers that keep a joint's values together).
+(`spherical_states`; GROUPS names it for readers that keep a joint's values together), or once
+for many joints, mapped (`spherical_states_of`).
 """
 
 from __future__ import annotations
 
+import functools
+
 import casadi as ca
+import numpy as np
 
 from casmech.core import euler
 from casmech.core.quaternions import conjugate, product
 from casmech.core.traced_steps import traced
 from casmech.core.values import constant
 from casmech.equations import body
+from casmech.model.ir import GROUND_INDEX
 
 
 def _direction(x, k: int, vector):
@@ -76,6 +81,36 @@ def spherical_states(geometry, x) -> dict:
     e, w = SPHERICAL(x.p(i), x.p(j), x.p(i, x.q_dot), x.p(j, x.q_dot),
                      constant(geometry.axes["q_i"]), constant(geometry.axes["q_j"]))
     return dict(zip(SPHERICAL_STATES, ca.vertsplit(ca.vertcat(e, w)), strict=True))
+
+
+@functools.cache
+def _spherical_step() -> ca.Function:
+    """_spherical as one Function of dense 4 x 1 arguments (the graph SPHERICAL traces for
+    them)."""
+    symbols = [ca.SX.sym(f"a{k}", 4) for k in range(6)]
+    return ca.Function("step_spherical", symbols, list(_spherical(*symbols)))
+
+
+def spherical_states_of(geometries, x) -> dict:
+    """spherical_states of several joints at x (joint name -> its states): the spherical step
+    mapped over the joints in one call, each joint's values the expressions a call of its own
+    gives."""
+    if not geometries:
+        return {}
+    nb = x.n_bodies
+    columns = [nb if k == GROUND_INDEX else k for g in geometries for k in (g.body_i, g.body_j)]
+    ground = x.q_ground[3:7]  # ground's p (and, as x.p reads it, its rate)
+    pose, rate = (ca.horzcat(ca.reshape(v[3 * nb:], 4, nb), ground) for v in (x.q, x.q_dot))
+    given = [[g.axes[key] for g in geometries] for key in ("q_i", "q_j")]
+    frames = [ca.horzcat(*map(constant, values)) if any(isinstance(v, ca.SX) for v in values)
+              else ca.DM(np.column_stack(values)) for values in given]
+    e, w = _spherical_step().map(len(geometries))(
+        pose[:, columns[0::2]], pose[:, columns[1::2]], rate[:, columns[0::2]],
+        rate[:, columns[1::2]], *frames)
+    values = ca.vertsplit(ca.vec(ca.vertcat(e, w)))
+    n = len(SPHERICAL_STATES)
+    return {g.name: dict(zip(SPHERICAL_STATES, values[n * k:n * (k + 1)], strict=True))
+            for k, g in enumerate(geometries)}
 
 
 def relative_rotation(geometry, x):

@@ -137,12 +137,22 @@ class Readings:
         if self.ir.joints[index].couples:
             return coupling_column(self.x, self.ir.joints[index], self.force[:, index],
                                    self.torque[:, index])
+        if attribute in joint_states.GROUPS:  # every spherical joint's states at once
+            spherical = self._group("spherical", self._spherical)
+            if owner in spherical:
+                return spherical[owner][attribute]
         geometry = coordinate_geometry(self.ir.joints[index])
         group = joint_states.GROUPS.get(attribute)
         if group is not None:  # the joint's states evaluated together, once
             return self._group((group.__name__, owner),
                                lambda: group(geometry, self.x))[attribute]
         return coordinates.JOINT_VALUES[attribute](geometry, self.x)
+
+    def _spherical(self) -> dict:
+        """The grouped states (joint_states.GROUPS) of every joint that has them, mapped."""
+        grouped = [coordinate_geometry(joint) for joint in self.ir.joints if not joint.couples
+                   and set(attributes(joint.type)) & joint_states.GROUPS.keys()]
+        return joint_states.spherical_states_of(grouped, self.x)
 
 
 def columns(ir: ModelIR, x: Coordinates, force, torque):

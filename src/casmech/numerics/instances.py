@@ -35,23 +35,21 @@ def plain_map(kernel: ca.Function, count: int) -> ca.Function:
     return kernel.map(count, "serial")
 
 
-def _columns(kernel: ca.Function, k: int, arg, count: int) -> list:
-    """Instance by instance, the value of the kernel's input k: column blocks of `arg`, or
-    `arg` itself for every instance when it is one instance wide."""
-    width = kernel.size2_in(k)
+def _side_by_side(kernel: ca.Function, k: int, arg, count: int) -> ca.SX:
+    """The kernel's input k for `count` instances side by side: `arg` itself, or repeated
+    when it is one instance wide."""
     arg = ca.SX(arg) if not isinstance(arg, ca.SX) else arg
-    if arg.size2() == width:
-        return [arg] * count
-    return ca.horzsplit(arg, width)
+    return ca.repmat(arg, 1, count) if arg.size2() == kernel.size2_in(k) and count > 1 else arg
 
 
 def inline(kernel: ca.Function, count: int, args) -> list[ca.SX]:
     """The kernel's outputs over `count` instances, side by side, each instance's kernel
-    expanded into SX."""
-    columns = [_columns(kernel, k, arg, count) for k, arg in enumerate(args)]
-    results = [kernel.call([column[i] for column in columns]) for i in range(count)]
-    return [ca.horzcat(*[result[o] for result in results]) if count
-            else ca.SX(kernel.size1_out(o), 0) for o in range(kernel.n_out())]
+    expanded into SX: one evaluation of the kernel mapped over the instances on SX, which
+    expands every instance as its own call would, in one call from Python."""
+    if not count:
+        return [ca.SX(kernel.size1_out(o), 0) for o in range(kernel.n_out())]
+    function = kernel if count == 1 else plain_map(kernel, count)
+    return function.call([_side_by_side(kernel, k, arg, count) for k, arg in enumerate(args)])
 
 
 def over(kernel: ca.Function, count: int, args, is_inline: bool, map_with=mapped) -> list:

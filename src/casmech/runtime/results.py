@@ -229,11 +229,11 @@ def row_function(functions: SystemFunctions) -> ca.Function:
     kinetic, potential = bundle["energy"](t, q, q_dot)
     phi = bundle["phi"](t, q)
     violation = ca.mmax(ca.fabs(phi)) if phi.numel() else sym(1, 1)
-    parts = [t]
-    for k in range(nb):
-        parts += [q[3 * k:3 * k + 3], q[3 * nb + 4 * k:3 * nb + 4 * k + 4], q_dot[3 * k:3 * k + 3],
-                  omega[:, k], q_ddot[3 * k:3 * k + 3], alpha[:, k]]
-    parts += [ca.vertcat(force[:, j], torque[:, j]) for j in range(len(functions.joints))]
+    # each body's columns (BODY_COLUMNS) as one column of a matrix, then each joint's
+    per_body = ca.vertcat(ca.reshape(q[:3 * nb], 3, nb), ca.reshape(q[3 * nb:], 4, nb),
+                          ca.reshape(q_dot[:3 * nb], 3, nb), omega,
+                          ca.reshape(q_ddot[:3 * nb], 3, nb), alpha)
+    parts = [t, ca.vec(per_body), ca.vec(ca.vertcat(force, torque))]
     parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot),
               readings_function(functions)(t, q, q_dot, q_ddot, force, torque)]
     return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],

@@ -129,8 +129,10 @@ class Checker:
             self.error(error.code, path, error.message, source=self.inside(path, error.offset),
                        hint=error.hint)
             return False
+        if found is None:
+            return True
         wanted = expected(self.doc.data, path)
-        if found is None or wanted is None or found == wanted:
+        if wanted is None or found == wanted:
             return True
         self.error("E205", path, f"expected a {units.describe(wanted)}, got a "
                    f"{units.describe(found)}", expected=units.describe(wanted),
@@ -180,6 +182,13 @@ class Checker:
         return traced.scalar(result) if isinstance(result, traced.Traced) else value
 
     def number(self, path: Path | str, value: Any) -> float | None:
+        if type(value) is float or type(value) is int:  # a plain number: no names, no unit
+            try:
+                plain = float(value)
+            except OverflowError:
+                plain = math.nan  # reported below
+            if math.isfinite(plain) and limits.implausible(path, plain) is None:
+                return plain
         if isinstance(value, traced.Traced):  # an instance's value of a component parameter
             return self.finite(path, Expr(repr(value.value), _Given(value)), {})
         expr = self.expression(path, value)

@@ -135,6 +135,8 @@ def events(check: Checker, given: tuple[spec.Event, ...], joints=(), forces=(), 
     states, `when` reads the contacts' and joint stops' columns (`floor.gap`,
     `pivot.limit_torque`; value 0 for the finite check at t = 0) and the `outputs:` that do
     not read reactions (schema/outputs.py)."""
+    if not given:
+        return ()
     states = state_names(check) | dict.fromkeys(contact.output_names(joints, forces), 0.0)
     first: dict[str, Path] = {}
     found = []

@@ -15,6 +15,7 @@ bounded before it costs time or memory (limits below, each error E006 at its pla
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass, field
@@ -128,6 +129,7 @@ class Fatal(Exception):
         self.diagnostic = diagnostic
 
 
+@functools.lru_cache(maxsize=8192)  # a large model repeats its numbers (0.0, 1.0, sizes)
 def plain_value(text: str) -> tuple[Any, str | None]:
     """(value, None) of a plain scalar read as YAML 1.2 reads it, or (text, kind) of a YAML 1.1
     spelling that reads differently there (a key of SURPRISES)."""
@@ -235,7 +237,8 @@ class _Builder:
         return None if top.key is None else (*top.path, top.key)
 
     def marks(self) -> tuple[int, ...]:
-        return tuple(len(log) for log in self.logs)
+        values, keys, scalars = self.logs
+        return len(values), len(keys), len(scalars)
 
     def ranges(self, starts: tuple[int, ...]) -> tuple[tuple[int, int], ...]:
         return tuple((start, len(log)) for start, log in zip(starts, self.logs, strict=True))
@@ -285,7 +288,7 @@ class _Builder:
         self.counted(1, event.start_mark)
         if not self.stack:
             self.root_kind, self.root_mark = "scalar", event.start_mark
-        starts = self.marks()
+        starts = self.marks() if event.anchor is not None else None
         self.logs[0].append((path, source))
         value = self.scalar_value(event, path, source)
         if event.anchor is not None:
@@ -335,7 +338,7 @@ class _Builder:
         if not self.stack:
             self.root_kind = "list" if kind is list else "mapping"
             self.root_mark = event.start_mark
-        starts = self.marks()
+        starts = self.marks() if event.anchor is not None else None  # read by end()
         self.logs[0].append((path, _source(self.file, event.start_mark)))
         self.stack.append(_Node(kind(), path, event.anchor, starts, self.count - 1, is_key))
 

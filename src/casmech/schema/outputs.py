@@ -88,6 +88,8 @@ def _unknown(check: Checker, path: Path, given: spec.Output, names, earlier,
 def outputs(check: Checker, given: tuple[spec.Output, ...], joints=(), forces=()
             ) -> tuple[resolved.Output, ...] | None:
     """The resolved outputs (None when any is wrong; every finding reported)."""
+    if not given:
+        return ()
     names = readable(check, joints, forces)
     first: dict[str, Path] = {}
     earlier: dict[str, float] = {}

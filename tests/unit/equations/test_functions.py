@@ -3,7 +3,7 @@
 import numpy as np
 
 import casmech
-from casmech.equations import bodies, rows
+from casmech.equations import bodies, derivatives, rows
 from casmech.equations.functions import all_sx, build_functions
 from casmech.model.lower import lower
 from tests.conftest import MODELS
@@ -83,3 +83,30 @@ def test_a_first_read_of_a_function_whose_name_needs_its_group_keeps_the_listing
     expected = list(listed.functions)
     fresh["romega_mass"]
     assert list(fresh.functions) == expected and len(fresh.functions) == len(expected)
+
+
+def test_phi_and_nu_alone_take_no_second_derivative_and_phi_q_matches_differences(monkeypatch):
+    """A joint-coordinate run reads phi and nu (assembly) but never phi_q or gamma: those
+    derivatives of the whole phi are taken only when read, and then agree with central
+    differences of phi."""
+    derived = []
+    original = derivatives.Derived._derive
+
+    def counted(self, key):
+        derived.append(key)
+        return original(self, key)
+    monkeypatch.setattr(derivatives.Derived, "_derive", counted)
+    bundle = build_functions(lower(casmech.load(MODELS / "four_bar.yaml")))
+    bundle["phi"], bundle["nu"], bundle["reactions"]
+    assert derived == ["nu"]
+    phi, phi_q = bundle["phi"], bundle["phi_q"]
+    assert derived == ["nu", "phi_q"]
+    q = np.random.default_rng(5).uniform(-1, 1, phi_q.size1_in(1))
+    step = 1e-6
+    columns = [(np.array(phi(0.3, q + step * e)) - np.array(phi(0.3, q - step * e))).ravel()
+               / (2 * step) for e in np.eye(q.size)]
+    # central differences of a smooth phi at step 1e-6: truncation ~1e-12, round-off ~1e-10
+    np.testing.assert_allclose(np.array(phi_q(0.3, q)), np.array(columns).T, rtol=0,
+                               atol=1e-7)
+    bundle["gamma"]
+    assert derived == ["nu", "phi_q", "gamma"]

@@ -1,8 +1,9 @@
 """A spherical joint's results states (equations/joint_states.py: e0 .. e3, wx .. wz) as one
-traced step per joint, read once per joint by the results row (equations/readings.py): equal
-to the same formulas run directly on the SX (core.traced_steps.direct) and to each state read
-on its own through coordinates.JOINT_VALUES (the path force laws take). The formulas
-themselves are checked against closed forms in tests/validation/runtime/test_joint_columns.py."""
+traced step per joint (the results row reads them mapped over the joints:
+equations/readings.py): equal to the same formulas run directly on the SX
+(core.traced_steps.direct) and to each state read on its own through coordinates.JOINT_VALUES
+(the path force laws take). The formulas themselves are checked against closed forms in
+tests/validation/runtime/test_joint_columns.py."""
 
 import casadi as ca
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 
 import casmech
 from casmech.core import traced_steps
-from casmech.equations import coordinates, readings
+from casmech.equations import coordinates, joint_states, readings
 from casmech.equations.joint_states import SPHERICAL_STATES
 from casmech.equations.symbols import Coordinates
 from casmech.model.bindings import coordinate_geometry
@@ -54,3 +55,32 @@ def test_spherical_states_traced_equal_direct_and_one_by_one(case):
         one_by_one = np.array(alone(args[1], args[2]).full())
         # the same step evaluated per state: identical arithmetic
         np.testing.assert_allclose(got[rows], one_by_one, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_spherical_states_mapped_over_joints_equal_each_joints_own(case):
+    """The results row reads every spherical joint's states from one mapped call
+    (joint_states.spherical_states_of): bitwise the traced step's per joint, and the formulas
+    run directly on the SX up to round-off (a joint on ground included)."""
+    ir = casmech.compile(CASES[case](), "interpreted").ir
+    geometries = [coordinate_geometry(joint) for joint in ir.joints if joint.type == "spherical"]
+    x = Coordinates.create(ir.n_bodies)
+    mapped = joint_states.spherical_states_of(geometries, x)
+    assert list(mapped) == [g.name for g in geometries]
+
+    def function(states):
+        return ca.Function("f", [x.q, x.q_dot], [x.ground_fixed(ca.vertcat(*(
+            states[g.name][name] for g in geometries for name in SPHERICAL_STATES)))])
+    each = {g.name: joint_states.spherical_states(g, x) for g in geometries}
+    with traced_steps.direct():
+        direct = {g.name: joint_states.spherical_states(g, x) for g in geometries}
+    rng = np.random.default_rng(4)
+    for _ in range(3):
+        q = _unit_quaternions(rng.uniform(-1, 1, 7 * ir.n_bodies), ir.n_bodies)
+        q_dot = rng.uniform(-1, 1, 7 * ir.n_bodies)
+        got = np.array(function(mapped)(q, q_dot).full())
+        # the same step on the same arguments: identical arithmetic
+        np.testing.assert_array_equal(got, np.array(function(each)(q, q_dot).full()))
+        # the same operations in a step or on the SX directly: round-off
+        np.testing.assert_allclose(got, np.array(function(direct)(q, q_dot).full()),
+                                   rtol=1e-12, atol=1e-12)

@@ -408,3 +408,24 @@ def test_euler_parameter_hint_shows_the_normalised_vector():
     [diagnostic] = findings(bodies=body("b", "orientation: {euler_parameters: [1, 0, 0, 1]}"))
     assert diagnostic.code == "E403"
     assert diagnostic.hint == "normalised: [0.707106781187, 0, 0, 0.707106781187]"
+
+
+@pytest.mark.parametrize(("written", "code", "words"), [
+    ("1" + "0" * 400, "E204", "number too large"),  # an int beyond float: no number
+    (".inf", "E204", "evaluates to inf"),
+    (".nan", "E204", "evaluates to nan"),
+    ("2.0e+6", "E411", "a position or length of magnitude 2e+06 m is implausible"),
+])
+def test_a_plain_number_that_is_no_usable_number_is_located(written, code, words):
+    """Plain numbers (YAML ints and floats) are checked as expressions are: too large for a
+    float, not finite, implausible for their key, each reported where it is written."""
+    from tests.texts import pendulum
+
+    text = pendulum().replace("position: [0, 0, -1]", f"position: [0, {written}, -1]")
+    with pytest.raises(ModelError) as caught:
+        load_model_text(text, "m.yaml")
+    (found,) = caught.value.diagnostics
+    column = text.splitlines()[3].index(f"[0, {written}") + 5  # 1-based, after "[0, "
+    assert (found.code, found.path, found.source.line, found.source.col) == \
+        (code, "bodies[0].position[1]", 4, column)
+    assert words in found.message
