@@ -6,6 +6,7 @@ metadata.json saying failed; and the rows are on disk while the run goes."""
 
 import json
 import os
+import re
 import resource
 import signal
 import subprocess
@@ -62,8 +63,10 @@ def test_a_driver_whose_rate_overflows_stops_at_the_first_row(tmp_path, capsys, 
     path = write(tmp_path, pendulum("1e300*t", "ANALYSIS"), analysis)
     assert cli.main(["run", str(path), "--out", str(tmp_path / "out")]) == 3
     err = capsys.readouterr().err
-    assert "analysis failed at t = 0: the results are not finite from this row on (bar.ax = " \
-           "nan)" in err
+    # the first column not finite: an acceleration of bar (which one depends on how the
+    # analysis solves them: a saddle solve at the row's state keeps ax, off the y-z plane, 0)
+    assert re.search(r"analysis failed at t = 0: the results are not finite from this row on "
+                     r"\(bar\.a[xyz] = nan\)", err), err
     assert f"{path}:12:5: joint 'pivot': rotation angle = f(t): its rate nu = 1e+300" in err
     meta = json.loads((tmp_path / "out/metadata.json").read_text())
     assert (meta["status"], meta["rows"]) == ("failed", 0) and "not finite" in meta["error"]
