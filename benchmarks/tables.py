@@ -13,6 +13,7 @@ PEERS = ("exudyn", "exudyn-fast", "mujoco", "casadi-script")
 def _setting(tool: str, setting: dict | None) -> str:
     if not setting:
         return ""
+    tool = tool.partition("@")[0]
     knob = "rtol" if tool.startswith("casmech") or tool == "casadi-script" else KNOB[tool]
     return f"{knob}={setting[knob]:g}"
 
@@ -141,6 +142,80 @@ def cross_table(report: dict) -> list[str]:
     return lines
 
 
+def _verdict(new: list[float], old: list[float]) -> str:
+    """Beyond noise only where the two commits' runs do not overlap at all."""
+    if min(new) > max(old):
+        return "**slower**"
+    if max(new) < min(old):
+        return "faster"
+    return "within noise"
+
+
+def commit_tables(report: dict, tools: list[str]) -> list[str]:
+    """Each later commit against the first (run.py --casmech-commit with several commits)."""
+    commits = report["machine"].get("commits") or []
+    if len(commits) < 2:
+        return []
+    old = commits[0]
+    bases = list(dict.fromkeys(t.partition("@")[0] for t in tools if "@" in t))
+    out = [f"### Each commit against {old} (new / old: below 1 the later commit is faster)", "",
+           "Time to an accuracy: the fastest setting of each commit that reaches it.", "",
+           "| system | tool | error <= | " + " | ".join(f"@{c}" for c in commits) + " | "
+           + " | ".join(f"@{c} / @{old}" for c in commits[1:]) + " |",
+           "|---|---|---|" + "---|" * (2 * len(commits) - 1)]
+    for entry in report["systems"]:
+        for b in bases:
+            for level in report["levels"]:
+                best = [best_at(entry["results"], f"{b}@{c}", level) for c in commits]
+                cells = [f"{_seconds(x['median'])} s ({_setting(b, x['setting'])})" if x
+                         else "not reached" for x in best]
+                ratios = [f"{x['median'] / best[0]['median']:.3g}" if x and best[0] else "-"
+                          for x in best[1:]]
+                out.append(f"| {entry['system']} | {b} | {level:g} m | " + " | ".join(cells)
+                           + " | " + " | ".join(ratios) + " |")
+    out += ["", "Every setting: median wall time [min - max] of each commit; a difference is "
+            "beyond noise only where the two commits' runs do not overlap.", "",
+            "| system | tool | setting | " + " | ".join(f"@{c}" for c in commits) + " | "
+            + " | ".join(f"@{c} / @{old} | verdict" for c in commits[1:]) + " |",
+            "|---|---|---|" + "---|" * (len(commits) + 2 * (len(commits) - 1))]
+    for entry in report["systems"]:
+        for b in bases:
+            runs = {c: [r for r in entry["results"] if r["tool"] == f"{b}@{c}"]
+                    for c in commits}
+            for k, first in enumerate(runs[old]):
+                row = [runs[c][k] if k < len(runs[c]) else {} for c in commits]
+                cells = [f"{_seconds(r['median'])} [{_seconds(min(r['walls']))} - "
+                         f"{_seconds(max(r['walls']))}]" if "median" in r
+                         else r.get("status", "-") for r in row]
+                ratios = []
+                for r in row[1:]:
+                    if "median" in r and "median" in first:
+                        ratios.append(f"{r['median'] / first['median']:.3g} | "
+                                      f"{_verdict(r['walls'], first['walls'])}")
+                    else:
+                        ratios.append("- | -")
+                out.append(f"| {entry['system']} | {b} | {_setting(b, first.get('setting'))} | "
+                           + " | ".join(cells) + " | " + " | ".join(ratios) + " |")
+    out += ["", "Build (load + compile, median over the setting's processes):", "",
+            "| system | tool | " + " | ".join(f"@{c}" for c in commits) + " | "
+            + " | ".join(f"@{c} / @{old}" for c in commits[1:]) + " |",
+            "|---|---|" + "---|" * (2 * len(commits) - 1)]
+    for entry in report["systems"]:
+        for b in bases:
+            times = []
+            for c in commits:
+                parts = [r["build"]["parts"] for r in entry["results"]
+                         if r["tool"] == f"{b}@{c}" and "build" in r]
+                times.append(statistics.median(p["load"] + p["compile"] for p in parts)
+                             if parts else None)
+            cells = [f"{_seconds(x)} s" if x is not None else "-" for x in times]
+            ratios = [f"{x / times[0]:.3g}" if x is not None and times[0] else "-"
+                      for x in times[1:]]
+            out.append(f"| {entry['system']} | {b} | " + " | ".join(cells) + " | "
+                       + " | ".join(ratios) + " |")
+    return out + [""]
+
+
 def markdown(report: dict) -> str:
     tools = []
     for entry in report["systems"]:
@@ -164,6 +239,7 @@ def markdown(report: dict) -> str:
     for entry in report["systems"]:
         out += [f"**{entry['system']}** ({entry['description']})", ""]
         out += level_table(entry, report["levels"], tools) + [""]
+    out += commit_tables(report, tools)
     out += ["### Model build / compile time (median over the setting's processes)", ""]
     out += build_table(report, tools) + [""]
     out += ["### Reference and cross-check", ""] + cross_table(report) + [""]
