@@ -187,6 +187,10 @@ def summarize(outcome: dict, reference: np.ndarray) -> dict:
     walls = [r["wall"] for r in runs]
     errors = [systems.error(r["points"], reference) for r in runs]
     outcome["walls"] = walls
+    cpus = [r["cpu"] for r in runs if r.get("cpu") is not None]
+    if cpus:  # the process's CPU time of the same span: steadier than wall on a loaded machine
+        outcome["cpus"] = cpus
+        outcome["cpu_median"] = statistics.median(cpus)
     if walls:
         outcome["median"] = statistics.median(walls)
         outcome["error"] = max(errors)  # deterministic: the repeats agree
