@@ -79,7 +79,7 @@ def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt:
                      lambda run: base))
         for k, src in enumerate(sources):
             run_cmd = [sys.executable, "-c", CONSOLE, "run", str(model), "--t-end", str(t_end),
-                       "--out", str(work / "out"), "--quiet"]
+                       "--out", str(work / "out"), *quiet(src, base)]
             warm = {**base, "PYTHONPATH": str(src), "CASMECH_CACHE_DIR": str(work / f"warm{k}")}
             rows.append((name, f"casmech run {name} (warm cache) [{k}]", run_cmd,
                          lambda run, warm=warm: warm))
@@ -90,6 +90,13 @@ def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt:
             build = [*run_cmd, "--mode", "compiled"]
             timed(build, warm)  # the warm cache's library, not timed
     return rows
+
+
+def quiet(src: Path, base: dict) -> list[str]:
+    """["--quiet"] where that source's `casmech run` has the flag (older commits do not)."""
+    usage = subprocess.run([sys.executable, "-c", CONSOLE, "run", "--help"], capture_output=True,
+                           text=True, env={**base, "PYTHONPATH": str(src)}).stdout
+    return ["--quiet"] if "--quiet" in usage else []
 
 
 def describe(src: Path, commits: dict[Path, str]) -> str:
