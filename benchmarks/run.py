@@ -145,7 +145,8 @@ def _follow(process, tool, system, setting, deadline, stop_after) -> dict:
     while True:
         now = time.perf_counter()
         whole = deadline - (now - last)  # every run (the first with the build) gets `deadline`
-        single = stop_after() if stop_after else None
+        # pruning bounds the timed runs only: the model's build is bounded by `deadline`
+        single = stop_after() if stop_after and "build" in outcome else None
         this_run = single - (now - last) if single is not None else float("inf")
         if min(whole, this_run) <= 0:
             os.killpg(process.pid, signal.SIGKILL)
@@ -306,7 +307,8 @@ def machine() -> dict:
         pass
     probe = subprocess.run([sys.executable, "-c", "import casmech; print(casmech.__file__)"],
                            capture_output=True, text=True)
-    info["casmech_file"] = probe.stdout.strip() or probe.stderr.strip()[-300:]
+    info["casmech_file"] = ("each tool's commit's exported src/" if SNAPSHOTS
+                            else probe.stdout.strip() or probe.stderr.strip()[-300:])
     snapshot = os.environ.get("CASMECH_BENCH_COMMIT")
     if SNAPSHOTS:
         info["casmech_source"] = ("src/ of each tool's commit (--casmech-commit): " + ", ".join(
