@@ -451,6 +451,7 @@ def main(argv=None) -> int:
         report["systems"].append(run_system(name, tools, args, sweeps, log))
         json_path.write_text(json.dumps(report, indent=1))  # after every system
     report["machine"]["loadavg_end"] = os.getloadavg()
+    json_path.write_text(json.dumps(report, indent=1))
     from tables import markdown
 
     md_path = args.out / f"{stamp}.md"
