@@ -134,6 +134,9 @@ def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: floa
             stderr.seek(0)
             outcome.update(status="error", message=f"worker exit {process.returncode}",
                            stderr=stderr.read()[-4000:])
+    if "CASMECH_CACHE_DIR" in env and env["CASMECH_CACHE_DIR"] != os.environ.get(
+            "CASMECH_CACHE_DIR"):  # the worker's private cache
+        shutil.rmtree(env["CASMECH_CACHE_DIR"], ignore_errors=True)
     return outcome
 
 
