@@ -137,13 +137,14 @@ class Runner:
         options = {"reltol": setting["rtol"], "abstol": setting["atol"],
                    "max_num_steps": 100000, "suppress_algebraic": True, "calc_ic": False,
                    "step0": 1e-6, "init_xdot": list(x_dot)}
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         integrator = ca.integrator("chain", "idas", {"x": x, "z": z, "ode": ode, "alg": alg},
                                    0.0, list(times), options)
         xf = np.array(integrator(x0=self.x0, z0=self.z0)["xf"])
         wall = time.perf_counter() - start
+        cpu = time.process_time() - cpu_start
         q = xf[:7 * self.n, int(round(T_CHECK / OUTPUT_STEP)) - 1]
-        return {"wall": wall, "points": chain_points(q, self.n),
+        return {"wall": wall, "cpu": cpu, "points": chain_points(q, self.n),
                 "extra": {"steps": int(integrator.stats()["nsteps"])}}
 
 

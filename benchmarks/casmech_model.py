@@ -113,11 +113,12 @@ class Runner:
         results_table is timed apart) and the measured points at T_CHECK."""
         import casmech
 
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         result = casmech.analyze(self.functions, "dynamics", t_end=t_end,
                                  output_step=OUTPUT_STEP, rtol=setting["rtol"],
                                  atol=setting["atol"], formulation=self.formulation)
         wall = time.perf_counter() - start
+        cpu = time.process_time() - cpu_start
         start = time.perf_counter()
         names, values = casmech.results_table(self.functions, result)
         table_time = time.perf_counter() - start
@@ -134,5 +135,6 @@ class Runner:
                  "final_time": float(values[-1, 0])}
         extra.update({k: v for k, v in result.metadata.items()
                       if isinstance(v, (int, float, str))})
-        return {"wall": wall, "points": points(self.system, np.array(cms), np.array(rotations)),
+        return {"wall": wall, "cpu": cpu,
+                "points": points(self.system, np.array(cms), np.array(rotations)),
                 "extra": extra}

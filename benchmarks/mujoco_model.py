@@ -126,13 +126,14 @@ class Runner:
         if abs(per_output * h - period) > 1e-12 * period or abs(check * period - T_CHECK) > 1e-12:
             raise ValueError(f"timestep {h} does not divide the output period and {T_CHECK} s")
         qpos = np.empty((n_outputs + 1, model.nq))
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         mujoco.mj_resetData(model, data)
         qpos[0] = data.qpos
         for k in range(1, n_outputs + 1):
             mujoco.mj_step(model, data, nstep=per_output)
             qpos[k] = data.qpos
         wall = time.perf_counter() - start
+        cpu = time.process_time() - cpu_start
         final = float(data.time)
         # positions at T_CHECK from the recorded coordinates
         probe = mujoco.MjData(model)
@@ -149,4 +150,4 @@ class Runner:
         if self.system.loop_joints:
             mujoco.mj_forward(model, probe)
             extra["loop_violation"] = float(np.max(np.abs(probe.efc_pos[:probe.ne]), initial=0))
-        return {"wall": wall, "points": pts, "extra": extra}
+        return {"wall": wall, "cpu": cpu, "points": pts, "extra": extra}

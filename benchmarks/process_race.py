@@ -5,6 +5,7 @@ date and commit.
     python benchmarks/process_race.py                         # chain8 and chain32, 10 s, 7 repeats
     python benchmarks/process_race.py --systems chain8 --t-end 1 --repeats 5
     python benchmarks/process_race.py --src /work/main/src --src src    # before/after, one run
+    python benchmarks/process_race.py --commit a5d48e1 --commit HEAD    # src/ at two commits
 
 The models come from benchmarks/systems.py (casmech_model.yaml_text, mujoco_model.mjcf), written
 to a temporary folder. casmech: the console script (`from casmech.cli import main`) with
@@ -36,6 +37,7 @@ sys.path.insert(0, str(HERE))
 
 from casmech_model import yaml_text  # noqa: E402
 from mujoco_model import mjcf  # noqa: E402
+from run import export_src  # noqa: E402
 from systems import OUTPUT_STEP, make  # noqa: E402
 
 CONSOLE = "import sys; from casmech.cli import main; sys.exit(main())"
@@ -77,7 +79,7 @@ def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt:
                      lambda run: base))
         for k, src in enumerate(sources):
             run_cmd = [sys.executable, "-c", CONSOLE, "run", str(model), "--t-end", str(t_end),
-                       "--out", str(work / "out"), "--quiet"]
+                       "--out", str(work / "out"), *quiet(src, base)]
             warm = {**base, "PYTHONPATH": str(src), "CASMECH_CACHE_DIR": str(work / f"warm{k}")}
             rows.append((name, f"casmech run {name} (warm cache) [{k}]", run_cmd,
                          lambda run, warm=warm: warm))
@@ -90,7 +92,17 @@ def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt:
     return rows
 
 
-def describe(src: Path) -> str:
+def quiet(src: Path, base: dict) -> list[str]:
+    """["--quiet"] where that source's `casmech run` has the flag (older commits do not)."""
+    usage = subprocess.run([sys.executable, "-c", CONSOLE, "run", "--help"], capture_output=True,
+                           text=True, env={**base, "PYTHONPATH": str(src)}).stdout
+    return ["--quiet"] if "--quiet" in usage else []
+
+
+def describe(src: Path, commits: dict[Path, str]) -> str:
+    if src in commits:  # exported by --commit
+        return commits[src]
+
     def git(*args):
         return subprocess.run(["git", "-C", str(src), *args], capture_output=True,
                               text=True).stdout.strip()
@@ -103,11 +115,20 @@ def main() -> None:
     parser.add_argument("--systems", nargs="+", default=["chain8", "chain32"])
     parser.add_argument("--src", action="append", type=Path,
                         help="casmech source tree(s), side by side (default: ../src)")
+    parser.add_argument("--commit", action="append", default=[],
+                        help="src/ as of this git commit (exported to a temporary folder), "
+                             "side by side after the --src trees")
     parser.add_argument("--t-end", type=float, default=10.0)
     parser.add_argument("--mujoco-dt", type=float, default=1e-3)
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args()
-    sources = [path.resolve() for path in (args.src or [HERE.parent / "src"])]
+    sources = [path.resolve() for path in (args.src or ([] if args.commit
+                                                         else [HERE.parent / "src"]))]
+    commits = {}
+    for commit in args.commit:
+        full, src = export_src(commit)
+        commits[src] = full[:10]
+        sources.append(src)
     samples: dict[str, list] = {}
     with tempfile.TemporaryDirectory(prefix="process-race-") as folder:
         rows = cases(args.systems, sources, Path(folder), args.t_end, args.mujoco_dt)
@@ -120,7 +141,7 @@ def main() -> None:
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {load} "
           f"at the end; Python {platform.python_version()}; "
           f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC; --t-end {args.t_end:g}; sources: "
-          + ", ".join(f"[{k}] {src} @ {describe(src)}" for k, src in enumerate(sources))
+          + ", ".join(f"[{k}] {src} @ {describe(src, commits)}" for k, src in enumerate(sources))
           + f"; medians of {args.repeats} after a warm-up\n")
     print("| process | wall [s] | CPU [s] | wall / MuJoCo |")
     print("|---|---:|---:|---:|")

@@ -18,6 +18,11 @@ tool has reached the tightest accuracy level, a run of that tool that takes long
 After a timeout the tool's remaining settings on that system are skipped. Every such event is
 recorded and shown in the tables.
 
+Several --casmech-commit commits make each casmech tool one tool per commit (`casmech@a5d48e1`,
+`casmech-c@a5d48e1`, `casmech@8730f06`, ...), each importing src/ as of its commit; the tools run
+interleaved (setting k of every tool before setting k + 1 of any), so a change of the machine's
+load hits every commit alike, and the tables add each commit's figures against the first's.
+
 Writes benchmarks/results/<date>_<time>.json and .md (tables) and copies them to latest.*.
 """
 
@@ -83,8 +88,18 @@ for _tool in (*CASMECH_TOOLS, "casadi-script"):  # rtol sweeps and cross-checks 
         _table[_tool] = _table["casmech"]
 
 
+# --casmech-commit with several commits: commit label -> the exported src/ folder; a tool
+# "casmech-c@<label>" is casmech-c importing casmech from that folder
+SNAPSHOTS: dict[str, Path] = {}
+
+
+def base(tool: str) -> str:
+    """The tool without its commit: "casmech-c@a5d48e1" -> "casmech-c"."""
+    return tool.partition("@")[0]
+
+
 def knob(tool: str, setting: dict) -> str:
-    return f"{KNOB[tool]}={setting[KNOB[tool]]:g}"
+    return f"{KNOB[base(tool)]}={setting[KNOB[base(tool)]]:g}"
 
 
 def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: float,
@@ -96,11 +111,15 @@ def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: floa
         env.update({name: str(THREADS) for name in THREAD_VARIABLES})
     if tool == "exudyn-fast":
         env["EXUDYN_MODULE"] = "fast"
-    if CASMECH_TOOLS.get(tool, {}).get("mode") == "compiled":
+    label = tool.partition("@")[2]
+    if label:  # this commit's src/ first on the path
+        env["PYTHONPATH"] = os.pathsep.join(
+            p for p in (str(SNAPSHOTS[label]), os.environ.get("PYTHONPATH")) if p)
+    if CASMECH_TOOLS.get(base(tool), {}).get("mode") == "compiled":
         # simulation-speed flags; a private cache so the build is timed
         env["CASMECH_CFLAGS"] = "-O2"
         env["CASMECH_CACHE_DIR"] = tempfile.mkdtemp(prefix="casmech_bench_cache_")
-    command = [sys.executable, str(HERE / "worker.py"), tool, system, json.dumps(setting),
+    command = [sys.executable, str(HERE / "worker.py"), base(tool), system, json.dumps(setting),
                "--repeats", str(repeats), "--t-end", repr(t_end)]
     with tempfile.TemporaryFile("w+") as stderr:
         process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, env=env,
@@ -115,6 +134,9 @@ def call_worker(tool: str, system: str, setting: dict, repeats: int, t_end: floa
             stderr.seek(0)
             outcome.update(status="error", message=f"worker exit {process.returncode}",
                            stderr=stderr.read()[-4000:])
+    if "CASMECH_CACHE_DIR" in env and env["CASMECH_CACHE_DIR"] != os.environ.get(
+            "CASMECH_CACHE_DIR"):  # the worker's private cache
+        shutil.rmtree(env["CASMECH_CACHE_DIR"], ignore_errors=True)
     return outcome
 
 
@@ -126,7 +148,8 @@ def _follow(process, tool, system, setting, deadline, stop_after) -> dict:
     while True:
         now = time.perf_counter()
         whole = deadline - (now - last)  # every run (the first with the build) gets `deadline`
-        single = stop_after() if stop_after else None
+        # pruning bounds the timed runs only: the model's build is bounded by `deadline`
+        single = stop_after() if stop_after and "build" in outcome else None
         this_run = single - (now - last) if single is not None else float("inf")
         if min(whole, this_run) <= 0:
             os.killpg(process.pid, signal.SIGKILL)
@@ -168,6 +191,10 @@ def summarize(outcome: dict, reference: np.ndarray) -> dict:
     walls = [r["wall"] for r in runs]
     errors = [systems.error(r["points"], reference) for r in runs]
     outcome["walls"] = walls
+    cpus = [r["cpu"] for r in runs if r.get("cpu") is not None]
+    if cpus:  # the process's CPU time of the same span: steadier than wall on a loaded machine
+        outcome["cpus"] = cpus
+        outcome["cpu_median"] = statistics.median(cpus)
     if walls:
         outcome["median"] = statistics.median(walls)
         outcome["error"] = max(errors)  # deterministic: the repeats agree
@@ -202,53 +229,57 @@ def run_system(name: str, tools: list[str], args, sweeps: dict, log) -> dict:
     reference = ref["points"]
     if not args.no_cross_check:
         for tool in tools:
-            setting = CROSS_CHECK[tool]
+            setting = CROSS_CHECK[base(tool)]
             outcome = call_worker(tool, name, setting, 1, systems.T_CHECK, args.timeout)
             outcome = summarize(outcome, reference)
             entry["cross_check"].append(outcome)
             log(f"   cross-check {tool} {knob(tool, setting)} (to t = 1 s): "
                 + (f"{outcome['error']:.2e} m from the reference" if "error" in outcome
                    else outcome["status"]))
+    # every tool's sweep, interleaved: setting k of each tool, then setting k + 1 of each
+    mine: dict[str, list[dict]] = {tool: [] for tool in tools}
+    skip_reason: dict[str, str | None] = {tool: None for tool in tools}
     for tool in tools:
         if (tool.startswith("casmech") and args.casmech_max_bars
                 and len(system.bars) > args.casmech_max_bars):
-            entry["results"].append({"tool": tool, "system": name, "status": "skipped",
-                                     "message": f"--casmech-max-bars {args.casmech_max_bars}"})
+            skip_reason[tool] = f"--casmech-max-bars {args.casmech_max_bars}"
             log(f"   {tool}: skipped (more than {args.casmech_max_bars} bars)")
-            continue
-        mine: list[dict] = []
-        skip_reason = None
-        for setting in sweeps[tool]:
-            if skip_reason:
-                mine.append({"tool": tool, "system": name, "setting": setting,
-                             "status": "skipped", "message": skip_reason})
+    for k in range(max(len(sweeps[base(tool)]) for tool in tools)):
+        for tool in tools:
+            if k >= len(sweeps[base(tool)]):
+                continue
+            setting = sweeps[base(tool)][k]
+            if skip_reason[tool]:
+                mine[tool].append({"tool": tool, "system": name, "setting": setting,
+                                   "status": "skipped", "message": skip_reason[tool]})
                 continue
 
-            def stop_after(tool=tool, mine=mine):
-                best = best_at(mine, tool, LEVELS[-1])
+            def stop_after(tool=tool):
+                best = best_at(mine[tool], tool, LEVELS[-1])
                 return max(args.prune_floor, args.prune_factor * best["median"]) if best else None
 
             outcome = summarize(call_worker(tool, name, setting, args.repeats,
                                             args.t_end, args.timeout, stop_after), reference)
-            mine.append(outcome)
+            mine[tool].append(outcome)
             if "median" in outcome:
-                log(f"   {tool:11s} {knob(tool, setting):16s} {outcome['median']:10.4f} s "
+                log(f"   {tool:18s} {knob(tool, setting):16s} {outcome['median']:10.4f} s "
                     f"(n={len(outcome['walls'])})  error {outcome['error']:.2e} m"
                     + ("" if outcome["status"] == "ok" else f"  [{outcome['status']}]"))
             else:
-                log(f"   {tool:11s} {knob(tool, setting):16s} {outcome['status']}: "
+                log(f"   {tool:18s} {knob(tool, setting):16s} {outcome['status']}: "
                     f"{outcome.get('message', '')} after {outcome.get('seconds', 0):.0f} s")
             if outcome["status"] == "timeout":
-                skip_reason = (f"an earlier setting timed out (--timeout {args.timeout:g} s)")
-            elif outcome["status"] == "error" and KNOB[tool] != "rtol":
-                skip_reason = "an earlier setting failed"  # an rtol sweep goes on: a failure
-                # at the tightest rtol says nothing of the looser ones
+                skip_reason[tool] = (f"an earlier setting timed out (--timeout {args.timeout:g} s)")
+            elif outcome["status"] == "error" and KNOB[base(tool)] != "rtol":
+                skip_reason[tool] = "an earlier setting failed"  # an rtol sweep goes on: a
+                # failure at the tightest rtol says nothing of the looser ones
             elif (not tool.startswith("casmech") and "median" in outcome
                   and outcome["error"] <= LEVELS[-1]
                   and outcome["median"] > args.skip_after):
-                skip_reason = (f"a cheaper setting already reached {LEVELS[-1]:g} m and took "
-                               f"more than {args.skip_after:g} s")
-        entry["results"] += mine
+                skip_reason[tool] = (f"a cheaper setting already reached {LEVELS[-1]:g} m and "
+                                     f"took more than {args.skip_after:g} s")
+    for tool in tools:
+        entry["results"] += mine[tool]
     return entry
 
 
@@ -279,29 +310,54 @@ def machine() -> dict:
         pass
     probe = subprocess.run([sys.executable, "-c", "import casmech; print(casmech.__file__)"],
                            capture_output=True, text=True)
-    info["casmech_file"] = probe.stdout.strip() or probe.stderr.strip()[-300:]
+    info["casmech_file"] = ("each tool's commit's exported src/" if SNAPSHOTS
+                            else probe.stdout.strip() or probe.stderr.strip()[-300:])
     snapshot = os.environ.get("CASMECH_BENCH_COMMIT")
-    info["casmech_source"] = (f"src/ of git commit {snapshot} (--casmech-commit)" if snapshot
-                              else "the installed casmech (git HEAD above; src_dirty: "
-                                   "uncommitted changes in src/)")
+    if SNAPSHOTS:
+        info["casmech_source"] = ("src/ of each tool's commit (--casmech-commit): " + ", ".join(
+            f"@{label} = {folder.parent.name.split('_')[1]}"
+            for label, folder in SNAPSHOTS.items()))
+        info["commits"] = list(SNAPSHOTS)
+    else:
+        info["casmech_source"] = (f"src/ of git commit {snapshot} (--casmech-commit)" if snapshot
+                                  else "the installed casmech (git HEAD above; src_dirty: "
+                                       "uncommitted changes in src/)")
     info["loadavg_start"] = os.getloadavg()
     return info
 
 
-def use_snapshot(commit: str) -> None:
-    """Export src/ at `commit` and make the workers import casmech from there."""
+def export_src(commit: str) -> tuple[str, Path]:
+    """src/ as of `commit` in a temporary folder (removed at exit): (full hash, its src/)."""
     repo = HERE.parent
-    full = subprocess.run(["git", "rev-parse", commit], cwd=repo, capture_output=True,
-                          text=True, check=True).stdout.strip()
+    full = subprocess.run(["git", "rev-parse", "--verify", f"{commit}^{{commit}}"], cwd=repo,
+                          capture_output=True, text=True, check=True).stdout.strip()
     folder = Path(tempfile.mkdtemp(prefix=f"casmech_{full[:10]}_"))
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
     archive = subprocess.run(["git", "archive", "--format=tar", full, "src"], cwd=repo,
                              capture_output=True, check=True).stdout
     with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
         tar.extractall(folder, filter="data")
+    return full, folder / "src"
+
+
+def use_snapshot(commit: str) -> None:
+    """Export src/ at `commit` and make the workers import casmech from there."""
+    full, src = export_src(commit)
     os.environ["PYTHONPATH"] = os.pathsep.join(
-        p for p in (str(folder / "src"), os.environ.get("PYTHONPATH")) if p)
+        p for p in (str(src), os.environ.get("PYTHONPATH")) if p)
     os.environ["CASMECH_BENCH_COMMIT"] = full
+
+
+def use_snapshots(commits: list[str], tools: list[str]) -> list[str]:
+    """Export src/ at each commit; every casmech tool becomes one tool per commit, labelled by
+    the commit's short hash, the commits of a tool side by side."""
+    for commit in commits:
+        full, src = export_src(commit)
+        SNAPSHOTS[full[:7]] = src
+    if len(SNAPSHOTS) < len(commits):
+        raise SystemExit("--casmech-commit: two of the commits are the same commit")
+    return [f"{tool}@{label}" if tool in CASMECH_TOOLS else tool
+            for tool in tools for label in (SNAPSHOTS if tool in CASMECH_TOOLS else [None])]
 
 
 def export_models() -> None:
@@ -349,10 +405,12 @@ def main(argv=None) -> int:
                              "0: leave the environment alone. Default 1: every tool runs "
                              "single-threaded (casmech's NumPy calls were 10-60x slower with "
                              "2 OpenBLAS threads on the 2-core benchmark machine)")
-    parser.add_argument("--casmech-commit", metavar="COMMIT",
+    parser.add_argument("--casmech-commit", metavar="COMMIT", nargs="+",
                         help="benchmark casmech's src/ as of this git commit (exported to a "
                              "temporary directory and put first on PYTHONPATH) instead of the "
-                             "installed casmech")
+                             "installed casmech; several commits: each casmech tool once per "
+                             "commit (casmech@<hash>, ...), interleaved, with tables of each "
+                             "commit against the first")
     parser.add_argument("--casmech-rtols", type=float, nargs="+", metavar="RTOL",
                         help="casmech's rtol sweep (atol = rtol / 100) instead of the default")
     parser.add_argument("--out", type=Path, default=HERE / "results")
@@ -369,9 +427,12 @@ def main(argv=None) -> int:
         sweeps = QUICK_SWEEPS
     if args.casmech_rtols:
         mine = [{"rtol": r, "atol": r * 1e-2} for r in sorted(args.casmech_rtols)]
-        sweeps = {**sweeps, "casmech": mine, "casmech-c": mine}
-    if args.casmech_commit:
-        use_snapshot(args.casmech_commit)
+        sweeps = {**sweeps, **{tool: mine for tool in CASMECH_TOOLS}}
+    tools = args.tools
+    if args.casmech_commit and len(args.casmech_commit) > 1:
+        tools = use_snapshots(args.casmech_commit, args.tools)
+    elif args.casmech_commit:
+        use_snapshot(args.casmech_commit[0])
     export_models()
     args.out.mkdir(parents=True, exist_ok=True)
     stamp = datetime.datetime.now().strftime("%Y%m%d_%H%M%S")
@@ -390,9 +451,10 @@ def main(argv=None) -> int:
     log(f"machine: {json.dumps(report['machine'])}")
     json_path = args.out / f"{stamp}.json"
     for name in args.systems:
-        report["systems"].append(run_system(name, args.tools, args, sweeps, log))
+        report["systems"].append(run_system(name, tools, args, sweeps, log))
         json_path.write_text(json.dumps(report, indent=1))  # after every system
     report["machine"]["loadavg_end"] = os.getloadavg()
+    json_path.write_text(json.dumps(report, indent=1))
     from tables import markdown
 
     md_path = args.out / f"{stamp}.md"

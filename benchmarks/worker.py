@@ -86,8 +86,8 @@ def main(argv=None) -> int:
                 emit(event="warmup", wall=out["wall"])
                 repeats = max(repeats, SHORT_REPEATS)
                 out = run.run(setting, t_end=args.t_end)
-            emit(event="run", wall=out["wall"], points=out["points"].tolist(),
-                 extra=out["extra"])
+            emit(event="run", wall=out["wall"], cpu=out.get("cpu"),
+                 points=out["points"].tolist(), extra=out["extra"])
             k += 1
     except Exception as error:  # reported to run.py, which records it as the outcome
         emit(event="error", message=f"{type(error).__name__}: {error}",
