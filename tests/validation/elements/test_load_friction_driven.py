@@ -13,29 +13,12 @@ import pytest
 
 import casmech
 from casmech.api import results_table
+from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline
 
-G = 9.81
-THETA, M, MU, TC, C = 0.6, 2.0, 0.4, 0.7, 0.3
-W = np.array([math.cos(THETA), 0.0, -math.sin(THETA)])  # the slide's axis, down the slope
-
-INCLINE = f"""casmech: 1
-name: driven_incline
-gravity: [0, 0, -{G}]
-bodies:
-  - {{name: block, mass: {M}, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}}
-joints:
-  - name: slide
-    type: translational
-    body_i: ground
-    body_j: block
-    at: [0, 0, 0]
-    axis: [{W[0]}, 0, {W[2]}]
-    driver: {{displacement: "SIGN * (0.3*t + 0.05*sin(3*t))"}}
-    friction: {{coulomb: {TC}, viscous: {C}, mu: {MU}}}
-events:
-  - {{name: halfway, when: "t - 0.55"}}
-analysis: {{type: dynamics, t_end: 1.0, output_step: 0.02, rtol: 1.0e-11, atol: 1.0e-12}}
-"""
+INCLINE = driven_incline("SIGN * (0.3*t + 0.05*sin(3*t))", """events:
+  - {name: halfway, when: "t - 0.55"}
+analysis: {type: dynamics, t_end: 1.0, output_step: 0.02, rtol: 1.0e-11, atol: 1.0e-12}
+""")
 
 
 def run(text: str, formulation: str | None = None):

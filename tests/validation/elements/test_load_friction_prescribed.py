@@ -15,27 +15,10 @@ import pytest
 import casmech
 from casmech.api import results_table
 from casmech.errors import AnalysisError
+from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline
 
-G = 9.81
-THETA, M, MU, TC, C = 0.6, 2.0, 0.4, 0.7, 0.3
-W = np.array([math.cos(THETA), 0.0, -math.sin(THETA)])  # the slide's axis, down the slope
-
-INCLINE = f"""casmech: 1
-name: driven_incline
-gravity: [0, 0, -{G}]
-bodies:
-  - {{name: block, mass: {M}, inertia: [0.1, 0.1, 0.1], position: [0, 0, 0]}}
-joints:
-  - name: slide
-    type: translational
-    body_i: ground
-    body_j: block
-    at: [0, 0, 0]
-    axis: [{W[0]}, 0, {W[2]}]
-    driver: {{displacement: "0.3*t + 0.2*sin(3*t)"}}
-    friction: {{coulomb: {TC}, viscous: {C}, mu: {MU}}}
-FORCESanalysis: {{type: ANALYSIS, t_end: 2.0, output_step: 0.01}}
-"""
+INCLINE = driven_incline("0.3*t + 0.2*sin(3*t)",
+                         "FORCESanalysis: {type: ANALYSIS, t_end: 2.0, output_step: 0.01}\n")
 
 
 def run(text: str, path=None, options=None):
