@@ -248,7 +248,21 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     the wrong type or out of range, and for values outside schema.limits (E409: rtol, atol,
     t_end, an output grid too large). A type other than the file's takes the option keys
     the file wrote that it has; formulation, stabilization and method apply to the types
-    that have them (dynamics, modal)."""
+    that have them (dynamics, modal). Checked settings are kept in the bundle's workspace by
+    the arguments (and their types) that made them, so a repeated run checks them once."""
+    given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
+             options)
+    key = tuple((type(value), value) for value in given)
+    try:
+        hash(key)
+    except TypeError:  # options as a mapping: checked every time
+        return _settings(functions, *given)
+    return of(functions, None).kept("analysis_settings", key,
+                                    lambda: _settings(functions, *given))
+
+
+def _settings(functions: SystemFunctions, analysis, t_end, output_step, rtol, atol,
+              formulation, stabilization, method, options) -> Analysis:
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}

@@ -69,6 +69,16 @@ def running(token: CancelToken) -> Iterator[CancelToken]:
         _running.reset(reset)
 
 
+def enter(token: CancelToken):
+    """Make `token` the running one until leave(the value returned) (running() as calls)."""
+    return _running.set(token)
+
+
+def leave(reset) -> None:
+    """Undo the enter() that returned `reset`."""
+    _running.reset(reset)
+
+
 def poll() -> None:
     """Raise Interrupted if the run in progress was cancelled."""
     token = _running.get()

@@ -24,6 +24,7 @@ T = TypeVar("T")
 
 # kind of entry -> the most entries kept (what each is: the module that builds it)
 KINDS: dict[str, int] = {
+    "analysis_settings": 16,  # checked settings, by analyze's arguments (runtime.analyses)
     "spanning_tree": 1,  # formulations.tree.spanning_tree (runtime.joint_dynamics)
     "joint_system": 4,  # the joint formulation's functions, by the compile options
     "joint_starts": 8,  # joint coordinates' initial states, by t0 and assembly options
