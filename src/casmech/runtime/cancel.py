@@ -103,8 +103,18 @@ def armed() -> bool:
 @contextmanager
 def solving() -> Iterator[None]:
     """Around the evaluation of a solver call only (runtime.buffers)."""
-    _armed[0] += 1
+    arm()
     try:
         yield
     finally:
-        _armed[0] -= 1
+        disarm()
+
+
+def arm() -> None:
+    """A solver call's evaluation begins (solving() as calls: disarm() after it, always)."""
+    _armed[0] += 1
+
+
+def disarm() -> None:
+    """The evaluation arm() announced has ended."""
+    _armed[0] -= 1
