@@ -50,9 +50,14 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
               extra_events=()) -> Result:
     """A model with joint friction or exact contact friction: segments in its modes
     (runtime.friction); else one run. The load parts of driven coordinates' frictions are
-    added to the rows, and to a failed run's (runtime.driven_friction)."""
+    added to the rows, and to a failed run's (runtime.driven_friction). Which of these a
+    model has is found once per workspace."""
+    switched, loaded = workspace.one("frictions", lambda: (
+        friction.switched(f.ir), bool(driven_friction.elements(f.ir))))
+    if not (switched or loaded):
+        return _run_dynamics(f, s, progress, workspace, extra_events)
     try:
-        if friction.switched(f.ir):
+        if switched:
             def segment(functions, span, events):
                 return _run_dynamics(functions, s, None, None, events, span)
 

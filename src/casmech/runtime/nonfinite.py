@@ -103,7 +103,7 @@ class NonFinite(AnalysisError):
 
 
 _ALL = np.logical_and.reduce
-ONE_ARRAY = 1 << 16  # blocks up to this many values are checked as one array
+ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
@@ -111,7 +111,7 @@ def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
     block is checked as one array of its rows (one call into NumPy, not one per state)."""
     times = np.reshape(times, (-1, 1))
     blocks = (times, q, q_dot, q_ddot, lam)
-    if sum(block.size for block in blocks) <= ONE_ARRAY:
+    if len(times) <= ONE_ARRAY:
         finite = _ALL(np.isfinite(np.concatenate(blocks, axis=1)), axis=1)
     else:
         finite = np.isfinite(times[:, 0])
