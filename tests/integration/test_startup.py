@@ -105,7 +105,8 @@ def test_no_module_builds_a_function_or_reads_a_file_at_import():
 
 def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     """`casmech run` of a dynamics model (the joint formulation's tree) loads neither Dask nor
-    pandas, plotting, SciPy's optimizers, the importers or the optimal-control layer."""
+    pandas, plotting, SciPy's optimizers, the importers or the optimal-control layer, nor
+    the schema of a replayed run's record (only `--replay` reads one)."""
     code = ("import sys; from casmech import cli; "
             f"code = cli.main(['run', {str(MODELS / 'double_pendulum.yaml')!r}, '--t-end', "
             f"'0.05', '--out', {str(tmp_path / 'out')!r}, '--mode', 'interpreted', '--quiet'])"
@@ -115,4 +116,5 @@ def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     assert loaded(modules, ["dask", "distributed", "pandas", "matplotlib", "scipy.optimize",
                             "h5py", "meshio", "casmech.study", "casmech.optimal",
                             "casmech.importers", "casmech.fmu", "casmech.io.plot",
-                            "casmech.io.animate", *COMPILER]) == []
+                            "casmech.io.animate", "casmech.cli.replay_record",
+                            *COMPILER]) == []
