@@ -118,3 +118,25 @@ def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
                             "casmech.importers", "casmech.fmu", "casmech.io.plot",
                             "casmech.io.animate", "casmech.cli.replay_record",
                             *COMPILER]) == []
+
+
+def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch):
+    """A compiled run whose library is in the cache ($CASMECH_CACHE_DIR given) imports neither
+    filelock (a lock is taken to build a missing entry only) nor platformdirs (the folder is
+    the one given); the run that built the entry did take the lock."""
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    model = str(MODELS / "pendulum.yaml")
+
+    def run(out: str) -> set[str]:
+        return modules_after(
+            "import sys; from casmech import cli; "
+            f"code = cli.main(['run', {model!r}, '--t-end', '0.02', '--out', "
+            f"{str(tmp_path / out)!r}, '--mode', 'compiled', '--quiet'])"
+            "\nassert code == 0, code")
+
+    built = run("first")
+    assert "filelock" in built and "casmech.backends.cache" in built
+    again = run("again")
+    assert loaded(again, ["filelock", "platformdirs"]) == []
+    assert (tmp_path / "again" / "results.csv").read_bytes() == \
+        (tmp_path / "first" / "results.csv").read_bytes()
