@@ -182,7 +182,11 @@ class Result:
 
 def column_names(functions: SystemFunctions) -> list[str]:
     """The results contract's columns, then the joint states and the outputs
-    (equations/readings.py)."""
+    (equations/readings.py); named once per bundle (its workspace)."""
+    return list(of(functions, None).one("column_names", lambda: tuple(_names(functions))))
+
+
+def _names(functions: SystemFunctions) -> list[str]:
     names = ["t"]
     names += [f"{b}.{c}" for b in functions.body_names for c in BODY_COLUMNS]
     names += [f"{j.name}.{c}" for j in functions.joints for c in JOINT_COLUMNS]

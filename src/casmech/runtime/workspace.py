@@ -25,6 +25,7 @@ T = TypeVar("T")
 # kind of entry -> the most entries kept (what each is: the module that builds it)
 KINDS: dict[str, int] = {
     "analysis_settings": 16,  # checked settings, by analyze's arguments (runtime.analyses)
+    "column_names": 1,  # the results table's column names (runtime.results)
     "frictions": 1,  # whether dynamics switches frictions' modes, amends driven ones' loads
     "spanning_tree": 1,  # formulations.tree.spanning_tree (runtime.joint_dynamics)
     "joint_system": 4,  # the joint formulation's functions, by the compile options
