@@ -36,3 +36,13 @@ def test_the_first_bad_row_is_found_in_small_and_large_blocks(rows):
                 else:
                     blocks[where - 1][row, int(rng.integers(0, widths[where - 1]))] = bad
         assert check_states(times, *blocks) == _scan(times, *blocks)
+
+
+@pytest.mark.parametrize("rows", [1, 3, ONE_ARRAY + 5])
+def test_finite_values_whose_sum_overflows_are_finite(rows):
+    """Values near the largest float: their sum is infinite, every row is still finite."""
+    big = np.full((rows, 6), 1.5e308)
+    times = np.linspace(0.0, 1.0, rows)
+    assert check_states(times, big, -big[:, :3], big, np.zeros((rows, 0))) is None
+    big[rows - 1, 2] = np.inf
+    assert check_states(times, big, big, big, big) == rows - 1
