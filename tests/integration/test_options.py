@@ -287,6 +287,7 @@ CONSTANTS = {
     "runtime/buffers.py BLOCK": "columns per mapped call (batch work)",
     "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",
     "runtime/events.py ULPS": "the narrowest bracket, a roundoff floor",
+    "runtime/nonfinite.py ONE_ARRAY": "rows checked in one NumPy call (call overhead, memory)",
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",
     "runtime/friction.py SWITCHES": "friction switches before a Zeno cascade ends a run",

@@ -32,8 +32,6 @@ from pathlib import Path
 
 import casadi as ca
 import numpy as np
-import platformdirs
-from filelock import FileLock
 
 from casmech.backends import trust
 from casmech.backends.build import LIBRARY
@@ -56,8 +54,11 @@ SOURCE_MODULES = ()
 def cache_dir() -> Path:
     """$CASMECH_CACHE_DIR, else the platform's user cache folder for casmech."""
     configured = os.environ.get(ENVIRONMENT)
-    return Path(configured) if configured else platformdirs.user_cache_path("casmech",
-                                                                             appauthor=False)
+    if configured:
+        return Path(configured)
+    import platformdirs  # imported on use: a run with $CASMECH_CACHE_DIR never needs it
+
+    return platformdirs.user_cache_path("casmech", appauthor=False)
 
 
 @lru_cache(maxsize=1)
@@ -170,6 +171,8 @@ def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = No
     final = root / entry_key
     if usable(final):
         return final, True
+    from filelock import FileLock  # imported on a miss only: a hit takes no lock
+
     with FileLock(root / f"{entry_key}.lock"):
         if usable(final):
             return final, True

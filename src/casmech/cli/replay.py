@@ -24,7 +24,6 @@ import os
 import stat
 from pathlib import Path
 
-from casmech.cli import replay_record
 from casmech.errors import UsageError, escape
 
 # run's argument -> the key of metadata.json's `analysis` that records it
@@ -43,6 +42,8 @@ def direct(args: argparse.Namespace) -> argparse.Namespace:
 
 def replayed(args: argparse.Namespace) -> argparse.Namespace:
     _alone(args)
+    from casmech.cli import replay_record  # its pydantic models: only for a replay
+
     record = replay_record.read(args.replay)
     options = record.options
     given = [Path(folder).expanduser().resolve() for folder in args.allow_dir]

@@ -50,9 +50,14 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
               extra_events=()) -> Result:
     """A model with joint friction or exact contact friction: segments in its modes
     (runtime.friction); else one run. The load parts of driven coordinates' frictions are
-    added to the rows, and to a failed run's (runtime.driven_friction)."""
+    added to the rows, and to a failed run's (runtime.driven_friction). Which of these a
+    model has is found once per workspace."""
+    switched, loaded = workspace.one("frictions", lambda: (
+        friction.switched(f.ir), bool(driven_friction.elements(f.ir))))
+    if not (switched or loaded):
+        return _run_dynamics(f, s, progress, workspace, extra_events)
     try:
-        if friction.switched(f.ir):
+        if switched:
             def segment(functions, span, events):
                 return _run_dynamics(functions, s, None, None, events, span)
 
@@ -248,7 +253,21 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     the wrong type or out of range, and for values outside schema.limits (E409: rtol, atol,
     t_end, an output grid too large). A type other than the file's takes the option keys
     the file wrote that it has; formulation, stabilization and method apply to the types
-    that have them (dynamics, modal)."""
+    that have them (dynamics, modal). Checked settings are kept in the bundle's workspace by
+    the arguments (and their types) that made them, so a repeated run checks them once."""
+    given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
+             options)
+    key = tuple((type(value), value) for value in given)
+    try:
+        hash(key)
+    except TypeError:  # options as a mapping: checked every time
+        return _settings(functions, *given)
+    return of(functions, None).kept("analysis_settings", key,
+                                    lambda: _settings(functions, *given))
+
+
+def _settings(functions: SystemFunctions, analysis, t_end, output_step, rtol, atol,
+              formulation, stabilization, method, options) -> Analysis:
     settings = functions.ir.analysis
     given = {"type": analysis, "t_end": t_end, "output_step": output_step, "rtol": rtol,
              "atol": atol}

@@ -37,21 +37,27 @@ class BufferedCall:
         # casadi stores a dense matrix column by column: the C-ordered transpose
         inputs = [np.ascontiguousarray(np.asarray(a, float).reshape(shape).T)
                   for a, shape in zip(args, self.shapes_in, strict=True)]
-        outputs = [np.full(shape[::-1], np.nan) for shape in self.shapes_out]
+        buffer = self.buffer
         for i, a in enumerate(inputs):
-            self.buffer.set_arg(i, memoryview(a.reshape(-1)))
-        for i, out in enumerate(outputs):
-            self.buffer.set_res(i, memoryview(out.reshape(-1)))
-        with cancel.solving():  # a signal may stop an integrator here (runtime.cancel)
+            buffer.set_arg(i, memoryview(a.reshape(-1)))
+        outputs = []
+        for i, shape in enumerate(self.shapes_out):
+            out = np.empty(shape[::-1])
+            out.fill(np.nan)  # what an interrupted call did not write
+            buffer.set_res(i, memoryview(out.reshape(-1)))
+            outputs.append(out)
+        cancel.arm()  # a signal may stop an integrator here (runtime.cancel.solving)
+        try:
+            self.evaluate()
+        except RuntimeError as error:
             try:
-                self.evaluate()
-            except RuntimeError as error:
-                try:
-                    cancel.check(error)  # the signal that stopped it, not a failure
-                except Interrupted as interrupted:
-                    interrupted.outputs = tuple(out.T for out in outputs)
-                    raise
+                cancel.check(error)  # the signal that stopped it, not a failure
+            except Interrupted as interrupted:
+                interrupted.outputs = tuple(out.T for out in outputs)
                 raise
+            raise
+        finally:
+            cancel.disarm()
         return tuple(out.T for out in outputs)
 
 

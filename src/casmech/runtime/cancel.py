@@ -69,6 +69,16 @@ def running(token: CancelToken) -> Iterator[CancelToken]:
         _running.reset(reset)
 
 
+def enter(token: CancelToken):
+    """Make `token` the running one until leave(the value returned) (running() as calls)."""
+    return _running.set(token)
+
+
+def leave(reset) -> None:
+    """Undo the enter() that returned `reset`."""
+    _running.reset(reset)
+
+
 def poll() -> None:
     """Raise Interrupted if the run in progress was cancelled."""
     token = _running.get()
@@ -93,8 +103,18 @@ def armed() -> bool:
 @contextmanager
 def solving() -> Iterator[None]:
     """Around the evaluation of a solver call only (runtime.buffers)."""
-    _armed[0] += 1
+    arm()
     try:
         yield
     finally:
-        _armed[0] -= 1
+        disarm()
+
+
+def arm() -> None:
+    """A solver call's evaluation begins (solving() as calls: disarm() after it, always)."""
+    _armed[0] += 1
+
+
+def disarm() -> None:
+    """The evaluation arm() announced has ended."""
+    _armed[0] -= 1

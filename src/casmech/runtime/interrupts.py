@@ -26,6 +26,12 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
+try:  # the raw calls signal.signal wraps (it converts each handler to an enum member)
+    from _signal import getsignal as _getsignal
+    from _signal import signal as _setsignal
+except ImportError:  # pragma: no cover - an interpreter without the C module
+    _getsignal, _setsignal = signal.getsignal, signal.signal
+
 from casmech.runtime import cancel
 from casmech.runtime.cancel import CancelToken
 
@@ -80,7 +86,7 @@ def trap(token: CancelToken | None = None, signals=SIGNALS,
     token of runtime.cancel; with `abandon`, the third ends the process. The previous
     handlers are restored after the block."""
     found = _Trap(token or CancelToken(), abandon)
-    previous = {number: signal.signal(number, found.handler) for number in signals}
+    previous = {number: _setsignal(number, found.handler) for number in signals}
     _traps.append(found)
     try:
         with cancel.running(found.token):
@@ -88,22 +94,34 @@ def trap(token: CancelToken | None = None, signals=SIGNALS,
     finally:
         _traps.remove(found)
         for number, handler in previous.items():
-            signal.signal(number, handler)
+            _setsignal(number, handler)
 
 
-@contextmanager
-def guard(token: CancelToken) -> Iterator[CancelToken]:
+class guard:
     """Ctrl-C cancels `token` during this block when no trap() is active, this is the main
     thread and SIGINT has Python's default handler (a program's own handler is left alone);
-    otherwise the token is only the running one."""
-    plain = (not _traps and threading.current_thread() is threading.main_thread()
-             and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    if not plain:
-        with cancel.running(token):
-            yield token
-        return
-    with trap(token, (signal.SIGINT,), abandon=False):
-        yield token
+    otherwise the token is only the running one. An analysis nested in another's block
+    (inside a trap() or guard()) installs no handler of its own: the outer one serves both."""
+
+    __slots__ = ("token", "_trap", "_previous", "_reset")
+
+    def __init__(self, token: CancelToken):
+        self.token, self._trap, self._previous, self._reset = token, None, None, None
+
+    def __enter__(self) -> CancelToken:
+        if (not _traps and threading.current_thread() is threading.main_thread()
+                and _getsignal(signal.SIGINT) is signal.default_int_handler):
+            self._trap = _Trap(self.token, abandon=False)
+            self._previous = _setsignal(signal.SIGINT, self._trap.handler)
+            _traps.append(self._trap)
+        self._reset = cancel.enter(self.token)
+        return self.token
+
+    def __exit__(self, *exc) -> None:
+        cancel.leave(self._reset)
+        if self._trap is not None:
+            _traps.remove(self._trap)
+            _setsignal(signal.SIGINT, self._previous)
 
 
 @contextmanager

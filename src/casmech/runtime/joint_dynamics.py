@@ -347,15 +347,18 @@ class _Recorder:
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
                  workspace: Workspace):
         self.functions, self.system, self.signs = functions, system, signs
-        self.workspace = workspace
+        self.workspace, self._call = workspace, None
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
 
     def _mapped(self) -> ColumnCall:
-        """The results rows' function over columns (kept in the workspace)."""
-        return self.workspace.kept("joint_motion_maps", self.system.motion,
-                                   lambda: ColumnCall(self.system.motion))
+        """The results rows' function over columns (kept in the workspace; looked up once
+        per run)."""
+        if self._call is None:
+            self._call = self.workspace.kept("joint_motion_maps", self.system.motion,
+                                             lambda: ColumnCall(self.system.motion))
+        return self._call
 
     def rows(self, times, states, algebraic):
         """(q, q_dot, q_ddot, lam), one row per time."""

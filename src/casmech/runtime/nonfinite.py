@@ -102,12 +102,22 @@ class NonFinite(AnalysisError):
         self.args = (self.context.format(),)
 
 
+_ALL = np.logical_and.reduce
+ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
+
+
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
-    """The first row of a block whose states are not all finite (None: all are)."""
-    finite = np.isfinite(times)
-    for block in (q, q_dot, q_ddot, lam):
-        finite &= np.isfinite(block).all(axis=1) if block.size else True
-    return None if finite.all() else int(np.argmin(finite))
+    """The first row of a block whose states are not all finite (None: all are). A small
+    block is checked as one array of its rows (one call into NumPy, not one per state)."""
+    times = np.reshape(times, (-1, 1))
+    blocks = (times, q, q_dot, q_ddot, lam)
+    if len(times) <= ONE_ARRAY:
+        finite = _ALL(np.isfinite(np.concatenate(blocks, axis=1)), axis=1)
+    else:
+        finite = np.isfinite(times[:, 0])
+        for block in blocks[1:]:
+            finite &= _ALL(np.isfinite(block), axis=1)
+    return None if _ALL(finite) else int(np.argmin(finite))
 
 
 def column_of(functions, quantity: str, index: int) -> str:

@@ -55,12 +55,13 @@ class Result:
         whose states are not all finite is refused: the rows before it are added, then
         runtime.nonfinite.NonFinite is raised."""
         times = np.asarray(times, float).reshape(-1)
-        values = dict(zip(STATES, (np.asarray(v, float) for v in (q, q_dot, q_ddot, lam)),
-                          strict=True))
-        for name, value in values.items():
-            if value.ndim != 2 or value.shape[0] != len(times):
-                raise ValueError(f"{name}: expected {len(times)} rows, got shape {value.shape}")
-        bad = check_states(times, *values.values())
+        arrays = [np.asarray(v, float) for v in (q, q_dot, q_ddot, lam)]
+        count = len(times)
+        for name, value in zip(STATES, arrays, strict=True):
+            if value.ndim != 2 or value.shape[0] != count:
+                raise ValueError(f"{name}: expected {count} rows, got shape {value.shape}")
+        values = dict(zip(STATES, arrays, strict=True))
+        bad = check_states(times, *arrays)
         if bad is not None:
             if bad:
                 self._add(times[:bad], {name: value[:bad] for name, value in values.items()})
@@ -181,7 +182,11 @@ class Result:
 
 def column_names(functions: SystemFunctions) -> list[str]:
     """The results contract's columns, then the joint states and the outputs
-    (equations/readings.py)."""
+    (equations/readings.py); named once per bundle (its workspace)."""
+    return list(of(functions, None).one("column_names", lambda: tuple(_names(functions))))
+
+
+def _names(functions: SystemFunctions) -> list[str]:
     names = ["t"]
     names += [f"{b}.{c}" for b in functions.body_names for c in BODY_COLUMNS]
     names += [f"{j.name}.{c}" for j in functions.joints for c in JOINT_COLUMNS]

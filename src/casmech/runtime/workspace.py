@@ -24,6 +24,9 @@ T = TypeVar("T")
 
 # kind of entry -> the most entries kept (what each is: the module that builds it)
 KINDS: dict[str, int] = {
+    "analysis_settings": 16,  # checked settings, by analyze's arguments (runtime.analyses)
+    "column_names": 1,  # the results table's column names (runtime.results)
+    "frictions": 1,  # whether dynamics switches frictions' modes, amends driven ones' loads
     "spanning_tree": 1,  # formulations.tree.spanning_tree (runtime.joint_dynamics)
     "joint_system": 4,  # the joint formulation's functions, by the compile options
     "joint_starts": 8,  # joint coordinates' initial states, by t0 and assembly options
@@ -77,6 +80,9 @@ class Workspace:
     def kept(self, kind: str, key: Hashable, build: Callable[[], T]) -> T:
         """The entry of `kind` under `key`, built by build() when missing (at KINDS[kind]
         entries, the oldest goes first)."""
+        store = self._stores.get(kind)
+        if store is not None and key in store:
+            return store[key]
         return kept(self.store(kind), key, build, KINDS[kind])
 
     def one(self, kind: str, build: Callable[[], T]) -> T:

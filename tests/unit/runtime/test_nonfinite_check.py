@@ -1,0 +1,48 @@
+"""runtime.nonfinite.check_states: the first row of a block with a value that is not finite,
+whether the block is checked as one array (small) or state by state (large), against a
+value-by-value scan with math.isfinite."""
+
+import math
+
+import numpy as np
+import pytest
+
+from casmech.runtime.nonfinite import ONE_ARRAY, check_states
+
+
+def _scan(times, *blocks) -> int | None:
+    """The first row holding a non-finite value, by a plain loop over every value."""
+    for row in range(len(times)):
+        values = [times[row]] + [v for block in blocks for v in block[row]]
+        if not all(math.isfinite(v) for v in values):
+            return row
+    return None
+
+
+@pytest.mark.parametrize("rows", [0, 1, 7, ONE_ARRAY, ONE_ARRAY + 1, 3 * ONE_ARRAY])
+def test_the_first_bad_row_is_found_in_small_and_large_blocks(rows):
+    rng = np.random.default_rng(rows)
+    widths = (14, 14, 14, 0 if rows % 2 else 9)  # lam empty for a tree
+    for trial in range(12):
+        times = np.linspace(0.0, 1.0, rows)
+        blocks = [rng.normal(size=(rows, w)) for w in widths]
+        if rows and trial:  # trial 0: all finite
+            for _ in range(int(rng.integers(1, 4))):
+                where = int(rng.integers(0, 5))
+                row = int(rng.integers(0, rows))
+                bad = (np.nan, np.inf, -np.inf)[int(rng.integers(0, 3))]
+                if where == 0 or not widths[where - 1]:
+                    times[row] = bad
+                else:
+                    blocks[where - 1][row, int(rng.integers(0, widths[where - 1]))] = bad
+        assert check_states(times, *blocks) == _scan(times, *blocks)
+
+
+@pytest.mark.parametrize("rows", [1, 3, ONE_ARRAY + 5])
+def test_finite_values_whose_sum_overflows_are_finite(rows):
+    """Values near the largest float: their sum is infinite, every row is still finite."""
+    big = np.full((rows, 6), 1.5e308)
+    times = np.linspace(0.0, 1.0, rows)
+    assert check_states(times, big, -big[:, :3], big, np.zeros((rows, 0))) is None
+    big[rows - 1, 2] = np.inf
+    assert check_states(times, big, big, big, big) == rows - 1
