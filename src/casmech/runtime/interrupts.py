@@ -26,12 +26,6 @@ import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-try:  # the raw calls signal.signal wraps (it converts each handler to an enum member)
-    from _signal import getsignal as _getsignal
-    from _signal import signal as _setsignal
-except ImportError:  # pragma: no cover - an interpreter without the C module
-    _getsignal, _setsignal = signal.getsignal, signal.signal
-
 from casmech.runtime import cancel
 from casmech.runtime.cancel import CancelToken
 
@@ -86,7 +80,7 @@ def trap(token: CancelToken | None = None, signals=SIGNALS,
     token of runtime.cancel; with `abandon`, the third ends the process. The previous
     handlers are restored after the block."""
     found = _Trap(token or CancelToken(), abandon)
-    previous = {number: _setsignal(number, found.handler) for number in signals}
+    previous = {number: signal.signal(number, found.handler) for number in signals}
     _traps.append(found)
     try:
         with cancel.running(found.token):
@@ -94,7 +88,7 @@ def trap(token: CancelToken | None = None, signals=SIGNALS,
     finally:
         _traps.remove(found)
         for number, handler in previous.items():
-            _setsignal(number, handler)
+            signal.signal(number, handler)
 
 
 class guard:
@@ -110,9 +104,9 @@ class guard:
 
     def __enter__(self) -> CancelToken:
         if (not _traps and threading.current_thread() is threading.main_thread()
-                and _getsignal(signal.SIGINT) is signal.default_int_handler):
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
             self._trap = _Trap(self.token, abandon=False)
-            self._previous = _setsignal(signal.SIGINT, self._trap.handler)
+            self._previous = signal.signal(signal.SIGINT, self._trap.handler)
             _traps.append(self._trap)
         self._reset = cancel.enter(self.token)
         return self.token
@@ -121,7 +115,7 @@ class guard:
         cancel.leave(self._reset)
         if self._trap is not None:
             _traps.remove(self._trap)
-            _setsignal(signal.SIGINT, self._previous)
+            signal.signal(signal.SIGINT, self._previous)
 
 
 @contextmanager
