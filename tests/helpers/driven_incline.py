@@ -1,6 +1,6 @@
-"""A block driven along an incline by a translational joint with joint friction and a load
-part (docs/forces.md#joint-friction): the model the load-friction tests of prescribed motions
-and of dynamics runs share, with its constants for their closed forms."""
+"""Driven models with joint friction and a load part (docs/forces.md#joint-friction) that the
+load-friction tests of prescribed motions and of dynamics runs share, with the constants of
+their closed forms: a block driven along an incline, a rotor driven about a horizontal axle."""
 
 import math
 
@@ -29,3 +29,25 @@ joints:
     driver: {{displacement: "{displacement}"}}
     friction: {{coulomb: {TC}, viscous: {C}, mu: {MU}}}
 {after}"""
+
+
+def driven_rotor(analysis: str) -> str:
+    """A 3 kg rotor spun about a horizontal axle (y) at SPEED rad/s (replace SPEED), its
+    bearing's friction 0.05 N m plus mu 0.3 at radius 0.02 m of the radial load; `analysis`
+    the model's analysis mapping (YAML flow text)."""
+    return f"""casmech: 1
+name: rotor
+gravity: [0, 0, -{G}]
+bodies:
+  - {{name: rotor, mass: 3.0, inertia: [0.1, 0.2, 0.1], position: [0, 0, 0]}}
+joints:
+  - name: axle
+    type: revolute
+    body_i: ground
+    body_j: rotor
+    at: [0, 0, 0]
+    axis: [0, 1, 0]
+    driver: {{angle: "SPEED * t"}}
+    friction: {{coulomb: 0.05, mu: 0.3, radius: 0.02}}
+analysis: {analysis}
+"""

@@ -13,7 +13,7 @@ import pytest
 
 import casmech
 from casmech.api import results_table
-from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline
+from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline, driven_rotor
 
 INCLINE = driven_incline("SIGN * (0.3*t + 0.05*sin(3*t))", """events:
   - {name: halfway, when: "t - 0.55"}
@@ -61,22 +61,8 @@ def test_a_block_driven_along_an_incline_needs_its_load_part_in_every_formulatio
                                expected, rtol=0, atol=1e-9 * M * G)  # as the rows
 
 
-ROTOR = f"""casmech: 1
-name: rotor
-gravity: [0, 0, -{G}]
-bodies:
-  - {{name: rotor, mass: 3.0, inertia: [0.1, 0.2, 0.1], position: [0, 0, 0]}}
-joints:
-  - name: axle
-    type: revolute
-    body_i: ground
-    body_j: rotor
-    at: [0, 0, 0]
-    axis: [0, 1, 0]
-    driver: {{angle: "SPEED * t"}}
-    friction: {{coulomb: 0.05, mu: 0.3, radius: 0.02}}
-analysis: {{type: dynamics, t_end: 1.0, output_step: 0.05, rtol: 1.0e-11, atol: 1.0e-12}}
-"""
+ROTOR = driven_rotor(
+    "{type: dynamics, t_end: 1.0, output_step: 0.05, rtol: 1.0e-11, atol: 1.0e-12}")
 
 
 @pytest.mark.parametrize(("formulation", "speed"),

@@ -15,7 +15,7 @@ import pytest
 import casmech
 from casmech.api import results_table
 from casmech.errors import AnalysisError
-from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline
+from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline, driven_rotor
 
 INCLINE = driven_incline("0.3*t + 0.2*sin(3*t)",
                          "FORCESanalysis: {type: ANALYSIS, t_end: 2.0, output_step: 0.01}\n")
@@ -63,22 +63,7 @@ def test_a_driven_block_on_an_incline_needs_m_a_minus_m_g_sin_plus_its_friction(
                                rtol=0, atol=1e-9 * M * G)
 
 
-ROTOR = f"""casmech: 1
-name: rotor
-gravity: [0, 0, -{G}]
-bodies:
-  - {{name: rotor, mass: 3.0, inertia: [0.1, 0.2, 0.1], position: [0, 0, 0]}}
-joints:
-  - name: axle
-    type: revolute
-    body_i: ground
-    body_j: rotor
-    at: [0, 0, 0]
-    axis: [0, 1, 0]
-    driver: {{angle: "SPEED * t"}}
-    friction: {{coulomb: 0.05, mu: 0.3, radius: 0.02}}
-analysis: {{type: inverse_dynamics, t_end: 1.0, output_step: 0.01}}
-"""
+ROTOR = driven_rotor("{type: inverse_dynamics, t_end: 1.0, output_step: 0.01}")
 
 
 @pytest.mark.parametrize("speed", [4.0, -4.0, 0.0])
