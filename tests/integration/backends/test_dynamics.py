@@ -44,6 +44,7 @@ def test_compiled_and_interpreted_dynamics_agree(compiled, interpreted, formulat
         assert np.max(np.abs(got - reference)[:, columns]) <= 3 * error
 
 
+@pytest.mark.slow  # builds a C library: the compiled set
 def test_compiled_fallback_at_a_singular_pose():
     """IFToMM A02 (N = 2) over its first flat pose (0.72 s), where both DAEs fail and the
     projected Runge-Kutta steps run on the compiled functions (no derivatives needed)."""

@@ -68,9 +68,10 @@ def assert_same_rows(result, rows, scale_atol):
                                    atol=scale_atol * scale, err_msg=name)
 
 
-# compiled mode on one model: building a library takes seconds
+# compiled mode on one model, in the slow set: building its library takes seconds
 @pytest.mark.parametrize("model, mode", [(model, "interpreted") for model in PRESCRIBED]
-                         + [("bricard_driven", "interpreted"), ("four_bar", "compiled")])
+                         + [("bricard_driven", "interpreted"),
+                            pytest.param("four_bar", "compiled", marks=pytest.mark.slow)])
 def test_mapped_rows_equal_the_per_row_code(model, mode):
     """The per-row code here runs Newton to |Phi| <= 1e-14 (the analysis stops at 1e-12, which
     leaves q up to ~3e-12 from the solution; the mapped step's three Newton steps reach

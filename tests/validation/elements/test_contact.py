@@ -260,6 +260,7 @@ def test_friction_curve_levels():
     np.testing.assert_allclose(values, [0.0, 0.5, 0.3, 0.3], rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow  # builds a C library: the compiled set
 def test_compiled_mode_equals_interpreted():
     text = TWO_BALLS.replace("t_end: 0.5", "t_end: 0.2")
     model = casmech.loads(text)
