@@ -13,7 +13,19 @@ import pytest
 
 import casmech
 from casmech.api import results_table
-from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline, driven_rotor
+from tests.helpers.friction_models import (
+    CRANK_DRIVER,
+    MU,
+    TC,
+    THETA,
+    C,
+    G,
+    M,
+    W,
+    driven_incline,
+    driven_rotor,
+    slider_crank,
+)
 
 INCLINE = driven_incline("SIGN * (0.3*t + 0.05*sin(3*t))", """events:
   - {name: halfway, when: "t - 0.55"}
@@ -79,36 +91,14 @@ def test_a_rotor_spun_about_a_horizontal_axle_needs_tc_plus_mu_radius_m_g(formul
     np.testing.assert_allclose(columns["axle.friction"], -torque, rtol=1e-9, atol=1e-12)
 
 
-A_CRANK, B_ROD, W0, ANGLE0 = 0.5, 2.0, 2.5, 0.3
-
-
-def slider_crank(analysis: str) -> str:
-    """models/slider_crank.yaml's mechanism under gravity along -y, its crank driven at a
-    constant rate, with friction with load parts at the crank bearing (driven) and the slide
-    (free: a dynamics run slides it with its load solved in the segment)."""
-    return f"""casmech: 1
-name: slider_crank_friction
-gravity: [0, -{G}, 0]
-bodies:
-  - {{name: crank, mass: 1.0, inertia: [0.0003, 0.021, 0.021], position: [{A_CRANK / 2}, 0, 0]}}
-  - {{name: rod, mass: 2.0, inertia: [0.0005, 0.67, 0.67], position: [{A_CRANK + B_ROD / 2}, 0, 0]}}
-  - {{name: slider, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [{A_CRANK + B_ROD}, 0, 0]}}
-joints:
-  - {{name: crank_pivot, type: revolute, body_i: ground, body_j: crank, at: [0, 0, 0],
-     axis: [0, 0, 1], friction: {{coulomb: 0.05, mu: 0.2, radius: 0.02}},
-     driver: {{angle: "{ANGLE0} + {W0} * t"}}}}
-  - {{name: crank_pin, type: spherical, body_i: crank, body_j: rod, at: [{A_CRANK}, 0, 0]}}
-  - {{name: wrist_pin, type: universal, body_i: slider, body_j: rod, at: [{A_CRANK + B_ROD}, 0, 0],
-     axis_i: [0, 0, 1], axis_j: [0, 1, 0]}}
-  - {{name: slide, type: translational, body_i: ground, body_j: slider,
-     at: [{A_CRANK + B_ROD}, 0, 0], axis: [1, 0, 0], friction: {{viscous: 0.1, mu: 0.3}}}}
-analysis: {{type: {analysis}, t_end: 0.25, output_step: 0.01, rtol: 1.0e-11, atol: 1.0e-12}}
-"""
+def driven_slider_crank(analysis: str) -> str:
+    """The slider-crank with its crank driven at a constant rate, over 0.25 s."""
+    return slider_crank(CRANK_DRIVER, analysis, 0.25, 0.01)
 
 
 @pytest.fixture(scope="module")
 def inverse():
-    return run(slider_crank("inverse_dynamics"))[2]
+    return run(driven_slider_crank("inverse_dynamics"))[2]
 
 
 @pytest.mark.parametrize("formulation", [
@@ -117,7 +107,7 @@ def test_a_driven_slider_crank_needs_the_torque_inverse_dynamics_gives(inverse, 
     """The dynamics run of the driven crank: its torque and every joint's reaction and
     friction are inverse dynamics' of the same motion (the crank bearing's load depends on
     the rod's force, which the slide's friction changes; the slide's load is the segment's)."""
-    _, result, columns = run(slider_crank("dynamics"), formulation)
+    _, result, columns = run(driven_slider_crank("dynamics"), formulation)
     assert result.metadata["formulation"] == formulation
     assert np.all(columns["slide.displacement_dot"] < 0)  # the slide slides throughout
     names = ("crank_pivot.tz", "crank_pivot.friction", "crank_pivot.fx", "crank_pivot.fy",

@@ -15,7 +15,21 @@ import pytest
 import casmech
 from casmech.api import results_table
 from casmech.errors import AnalysisError
-from tests.helpers.driven_incline import MU, TC, THETA, C, G, M, W, driven_incline, driven_rotor
+from tests.helpers.friction_models import (
+    ANGLE0,
+    CRANK_DRIVER,
+    MU,
+    TC,
+    THETA,
+    W0,
+    C,
+    G,
+    M,
+    W,
+    driven_incline,
+    driven_rotor,
+    slider_crank,
+)
 
 INCLINE = driven_incline("0.3*t + 0.2*sin(3*t)",
                          "FORCESanalysis: {type: ANALYSIS, t_end: 2.0, output_step: 0.01}\n")
@@ -77,40 +91,18 @@ def test_a_rotor_spun_about_a_horizontal_axle_needs_tc_plus_mu_radius_m_g(speed)
     np.testing.assert_allclose(columns["axle.friction"], -torque, rtol=1e-9, atol=1e-14)
 
 
-A_CRANK, B_ROD, W0, ANGLE0 = 0.5, 2.0, 2.5, 0.3
-CRANK_FRICTION = "{coulomb: 0.05, mu: 0.2, radius: 0.02}"
-SLIDE_FRICTION = "{viscous: 0.1, mu: 0.3}"
-
-
-def slider_crank(crank: str, analysis: str) -> str:
-    """models/slider_crank.yaml's mechanism under gravity along -y (the slider pressed onto
-    its rail by its weight and the rod's force), with friction at the crank bearing and the
-    slide; the crank turns from 0.3 to 2.8 rad, so the slider moves one way throughout."""
-    return f"""casmech: 1
-name: slider_crank_friction
-gravity: [0, -{G}, 0]
-bodies:
-  - {{name: crank, mass: 1.0, inertia: [0.0003, 0.021, 0.021], position: [{A_CRANK / 2}, 0, 0]}}
-  - {{name: rod, mass: 2.0, inertia: [0.0005, 0.67, 0.67], position: [{A_CRANK + B_ROD / 2}, 0, 0]}}
-  - {{name: slider, mass: 0.5, inertia: [0.001, 0.001, 0.001], position: [{A_CRANK + B_ROD}, 0, 0]}}
-joints:
-  - {{name: crank_pivot, type: revolute, body_i: ground, body_j: crank, at: [0, 0, 0],
-     axis: [0, 0, 1], friction: {CRANK_FRICTION}, {crank}}}
-  - {{name: crank_pin, type: spherical, body_i: crank, body_j: rod, at: [{A_CRANK}, 0, 0]}}
-  - {{name: wrist_pin, type: universal, body_i: slider, body_j: rod, at: [{A_CRANK + B_ROD}, 0, 0],
-     axis_i: [0, 0, 1], axis_j: [0, 1, 0]}}
-  - {{name: slide, type: translational, body_i: ground, body_j: slider,
-     at: [{A_CRANK + B_ROD}, 0, 0], axis: [1, 0, 0], friction: {SLIDE_FRICTION}}}
-analysis: {{type: {analysis}, t_end: 1.0, output_step: 0.001, rtol: 1.0e-11, atol: 1.0e-12}}
-"""
+def over_a_second(crank: str, analysis: str) -> str:
+    """The slider-crank over 1 s: the crank turns from 0.3 to 2.8 rad when driven, so the
+    slider moves one way throughout."""
+    return slider_crank(crank, analysis, 1.0, 0.001)
 
 
 def test_a_slider_crank_torque_from_inverse_dynamics_drives_the_same_motion(tmp_path):
     """Inverse dynamics with both loads (the slide's depends on the rod's force, which its
     friction changes; the crank bearing's on the rod's force too); its crank torque, as a
     cubic table on an effort motor, makes a dynamics run follow the driven crank angle."""
-    driven = f'driver: {{angle: "{ANGLE0} + {W0} * t"}}'
-    result, columns = run(slider_crank(driven, "inverse_dynamics"))
+    driven = CRANK_DRIVER
+    result, columns = run(over_a_second(driven, "inverse_dynamics"))
     t = np.array(result.times)
     # the frictions are the laws on the reactions the multipliers give (solved together)
     slide_rate = columns["slide.displacement_dot"]
@@ -128,7 +120,7 @@ def test_a_slider_crank_torque_from_inverse_dynamics_drives_the_same_motion(tmp_
     motor = (f"motor: {{torque: {{table: torque.csv, column: torque}}}}, "
              f"initial: {{angle: {ANGLE0}, angle_dot: {W0}}}")
     path = tmp_path / "forward.yaml"
-    path.write_text(slider_crank(motor, "dynamics"))
+    path.write_text(over_a_second(motor, "dynamics"))
     forward, replay = run(None, path)
     assert forward.metadata["friction_switches"] == []  # both slide throughout
     # the same motion: the torque's cubic spline (h = 1 ms) and IDAS at rtol 1e-11 over 1 s
@@ -143,7 +135,7 @@ def test_a_slider_crank_torque_from_inverse_dynamics_drives_the_same_motion(tmp_
 def test_a_friction_that_could_lock_its_joint_is_a_located_analysis_error():
     """mu times the change of the slide's load per unit friction force (the rod's slope,
     here up to some 0.13) reaching 1: no unique load, as in a dynamics run (Painleve)."""
-    text = slider_crank(f'driver: {{angle: "{ANGLE0} + {W0} * t"}}', "inverse_dynamics")
+    text = over_a_second(CRANK_DRIVER, "inverse_dynamics")
     with pytest.raises(AnalysisError, match="Painleve") as raised:
         run(text.replace("mu: 0.3", "mu: 10.0"))
     assert "joint 'slide'" in str(raised.value)
