@@ -17,6 +17,7 @@ import weakref
 from collections.abc import Callable, Hashable
 from typing import TypeVar
 
+from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.runtime.memo import kept
 
@@ -111,7 +112,14 @@ _defaults: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 def default(functions) -> Workspace:
     """The workspace analyses use for `functions` when their caller gives none: one per
-    bundle, for as long as the bundle lives."""
+    bundle, for as long as the bundle lives. Anything but a bundle is a UsageError: a
+    ResolvedModel (casmech.load's) still needs casmech.compile."""
+    if not isinstance(functions, SystemFunctions):
+        loaded = type(functions).__name__ == "ResolvedModel"
+        raise UsageError(
+            f"analyses take a model's system functions, not {type(functions).__name__}"
+            + ("; compile the loaded model first: casmech.analyze(casmech.compile(model))"
+               if loaded else "; casmech.compile(casmech.load(path)) gives them"))
     found = _defaults.get(functions)
     if found is None:
         found = _defaults[functions] = Workspace(functions)

@@ -89,3 +89,16 @@ def test_every_kind_is_bounded():
 def test_kinds_are_a_closed_list():
     with pytest.raises(KeyError, match="no workspace entry kind"):
         Workspace().store("anything")
+
+
+@pytest.mark.parametrize("given", ["loaded", "path"])
+def test_an_analysis_of_anything_but_a_bundle_is_a_usage_error(given):
+    """casmech.analyze(casmech.load(path)) forgets the compile step: a UsageError that says
+    so, not a TypeError from inside the workspace."""
+    path = MODELS / "double_pendulum.yaml"
+    value = casmech.load(path) if given == "loaded" else path
+    with pytest.raises(UsageError, match="system functions, not (ResolvedModel|PosixPath)"):
+        casmech.analyze(value, t_end=0.1)
+    if given == "loaded":
+        with pytest.raises(UsageError, match=r"casmech.compile\(model\)"):
+            casmech.analyze(value)
