@@ -39,7 +39,7 @@ class Group:
         self.count = len(members)
         self.columns = [[i for b in p.bodies for i in layout.q(b)] for _, p in members]
         self.v_columns = [[i for b in p.bodies for i in layout.v(b)] for _, p in members]
-        pattern = kernels.constraint(key).sparsity_in(1)
+        pattern = evaluation.sparse_column(key.pattern)  # the kernels' c (row_kernels._Row)
         chosen = list(pattern.row())
         self.c = ev.constant(evaluation.columns(pattern, [
             [kernels.vectors_of(p)[k] for k in chosen] for _, p in members]))
