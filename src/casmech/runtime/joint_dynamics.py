@@ -9,8 +9,9 @@ same state. Loop closures start from their consistent multipliers (the accelerat
 constraints solved for lam; the ABA's accelerations are affine in lam), with the rows that
 depend on the others at t0 masked out; the reactions are then reported as the minimum-norm
 ones, as the r-p DAE does. Each results row holds the r-p state the tree gives and every joint
-row's multiplier. The grid is integrated in chunks of `joint_chunk` output intervals
-(core.options.DynamicsSolver) by runtime.driver, a chunk a solver fails on again in halves.
+row's multiplier, the loops' solved at the row's state (runtime.joint_rows). The grid is
+integrated in chunks of `joint_chunk` output intervals (core.options.DynamicsSolver) by
+runtime.driver, a chunk a solver fails on again in halves.
 The spanning tree, the joint system, the starts and the integrators are kept in the run's
 workspace (runtime.workspace).
 """
@@ -36,6 +37,7 @@ from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.driver import Block, Chunks, completed, drive
+from casmech.runtime.joint_rows import LoopRows
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -351,6 +353,9 @@ class _Recorder:
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
+        self.loops = workspace.kept(
+            "joint_loop_rows", (mask.tobytes(), system.dynamics),
+            lambda: LoopRows(functions.ir, system, mask)) if system.n_cut else None
 
     def _mapped(self) -> ColumnCall:
         """The results rows' function over columns (kept in the workspace; looked up once
@@ -361,10 +366,14 @@ class _Recorder:
         return self._call
 
     def rows(self, times, states, algebraic):
-        """(q, q_dot, q_ddot, lam), one row per time."""
+        """(q, q_dot, q_ddot, lam), one row per time; with loops, their multipliers solved at
+        each row's state (runtime.joint_rows), not the integrator's `algebraic` states."""
         times = np.asarray(times, float)
-        q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
-                                               self.signs[:, None])
+        if self.loops is not None:
+            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
+        else:
+            q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
+                                                   self.signs[:, None])
         if self.least_norm is not None:
             (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T
