@@ -15,7 +15,7 @@ import numpy as np
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.model.ir import ModelIR
 from casmech.numerics import kkt
-from casmech.runtime import cancel
+from casmech.runtime import cancel, solver_messages
 from casmech.runtime.assembly import saddle_solution
 from casmech.runtime.buffers import ColumnCall
 
@@ -47,7 +47,8 @@ class LoopRows:
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
         try:
-            return self.call(times[None, :], states, self.mask[:, None], signs[:, None])
+            with solver_messages.without_input_dumps():
+                return self.call(times[None, :], states, self.mask[:, None], signs[:, None])
         except RuntimeError as error:  # the LU met a zero pivot
             cancel.check(error)
         columns = [self.column(t, states[:, j], signs) for j, t in enumerate(times)]
