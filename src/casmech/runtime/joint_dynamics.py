@@ -353,9 +353,12 @@ class _Recorder:
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
+        # a system built over functions.ir (not a library's or a controller's functions,
+        # whose forces that IR does not hold): its loop rows solved at each row's state
+        solved = system.n_cut and functions.joint_functions is None
         self.loops = workspace.kept(
             "joint_loop_rows", (mask.tobytes(), system.dynamics),
-            lambda: LoopRows(functions.ir, system, mask)) if system.n_cut else None
+            lambda: LoopRows(functions.ir, system, mask)) if solved else None
 
     def _mapped(self) -> ColumnCall:
         """The results rows' function over columns (kept in the workspace; looked up once
@@ -367,7 +370,8 @@ class _Recorder:
 
     def rows(self, times, states, algebraic):
         """(q, q_dot, q_ddot, lam), one row per time; with loops, their multipliers solved at
-        each row's state (runtime.joint_rows), not the integrator's `algebraic` states."""
+        each row's state (runtime.joint_rows) where the system was built over the bundle's IR,
+        else the integrator's `algebraic` states."""
         times = np.asarray(times, float)
         if self.loops is not None:
             q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
