@@ -141,3 +141,25 @@ def test_a_driven_blocks_force_is_the_closed_form_also_right_after_the_friction_
     # the reaction is what the joint exerts on the block, the driving force with it. The
     # driven state is exact, so is the solve at it: roundoff of one body's small system
     np.testing.assert_allclose(rows["slide.fx"], force, rtol=0, atol=1e-12)
+
+
+def test_a_joint_event_rows_reactions_are_inverse_dynamics_at_the_event():
+    """The event row of the driven slider-crank in the joint formulation (the slider passing
+    x = 2) is solved at its own state too: its reactions and crank torque are inverse
+    dynamics' at the event's time."""
+    text = (MODELS / "slider_crank.yaml").read_text().replace(
+        "analysis:", 'events:\n  - {name: mid, when: "slider.x - 2.0"}\nanalysis:', 1)
+    functions = casmech.compile(casmech.loads(text))
+    frame = casmech.analyze(functions, analysis="dynamics", formulation="joint", t_end=0.5,
+                            rtol=1e-10, atol=1e-12).events_dataframe()
+    assert frame["name"].tolist() == ["mid"]
+    t_event = float(frame["t"].iloc[0])
+    reference = _columns(functions, casmech.analyze(
+        functions, analysis="inverse_dynamics", t_end=t_event, output_step=t_event))
+    assert reference["t"][-1] == pytest.approx(t_event, rel=1e-14, abs=0)
+    names = [f"{joint}.{c}" for joint in CRANK_JOINTS for c in COMPONENTS]
+    row = frame[names].to_numpy(float)[0]
+    expected = np.array([reference[name][-1] for name in names])
+    # the event's state lies on the driven motion to the integrator's accuracy over the
+    # short located step, and the row is an exact solve at it: 1e-11 of the largest value
+    np.testing.assert_allclose(row, expected, rtol=0, atol=1e-11 * np.abs(expected).max())
