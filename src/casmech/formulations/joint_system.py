@@ -430,10 +430,10 @@ def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
     applied = articulated.applied_wrenches(ir, t, b.kin)
     tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(ir, b.joints, b.kin, applied, u_dot))
     jacobian = ca.repmat(scale, 1, a.numel()) * ca.jacobian(rate, u)
-    gamma = -scale * (ca.jacobian(rate, theta) @ b.theta_dot + ca.jacobian(rate, t))
-    return ca.Function("joint_saddle_terms", [t, b.x], [
-        ca.jacobian(tau, a), jacobian, -ca.substitute(tau, a, ca.DM.zeros(a.shape)), gamma],
-        ["t", "x"], ["M", "P", "F", "gamma"])
+    gamma = -scale * (ca.jtimes(rate, theta, b.theta_dot) + ca.jacobian(rate, t))
+    outputs = [ca.jacobian(tau, a), jacobian, -ca.substitute(tau, a, ca.DM.zeros(a.shape)), gamma]
+    return ca.Function("joint_saddle_terms", [t, b.x], ca.cse(outputs), ["t", "x"],
+                       ["M", "P", "F", "gamma"])
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
