@@ -115,6 +115,7 @@ class JointSystem:
     # a numeric tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian),
     # built on the first call; jacobian()'s signature (t, x, ode) -> (d ode/dt, d ode/dx)
     identity_jacobian: Callable[[], ca.Function] | None = None
+    saddle_terms: ca.Function | None = None  # loops' saddle_terms, compiled with the motion
 
     @property
     def n_cut(self) -> int:

@@ -12,8 +12,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from casmech.formulations.joint_system import JointSystem, saddle_terms
-from casmech.model.ir import ModelIR
+from casmech.formulations.joint_system import JointSystem
 from casmech.numerics import kkt
 from casmech.runtime import cancel, solver_messages
 from casmech.runtime.assembly import saddle_solution
@@ -39,8 +38,8 @@ class LoopRows:
     call; a column whose saddle matrix is singular (the LU meets a zero pivot) by
     runtime.assembly.saddle_solution's least squares."""
 
-    def __init__(self, ir: ModelIR, system: JointSystem, mask: np.ndarray):
-        self.terms = saddle_terms(ir, system.tree)
+    def __init__(self, terms: ca.Function, system: JointSystem, mask: np.ndarray):
+        self.terms = terms  # formulations.joint_system.saddle_terms (compiled or not)
         self.motion, self.mask = system.motion, np.asarray(mask, float)
         self.saddle = kkt.saddle(self.terms.sparsity_out(0), self.terms.sparsity_out(1))
         self.call = ColumnCall(solved_motion(self.terms, system.motion))
