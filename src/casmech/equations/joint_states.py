@@ -99,8 +99,9 @@ def spherical_states_of(geometries, x) -> dict:
         return {}
     nb = x.n_bodies
     columns = [nb if k == GROUND_INDEX else k for g in geometries for k in (g.body_i, g.body_j)]
-    ground = x.q_ground[3:7]  # ground's p (and, as x.p reads it, its rate)
-    pose, rate = (ca.horzcat(ca.reshape(v[3 * nb:], 4, nb), ground) for v in (x.q, x.q_dot))
+    # ground's p, and its rate as x.p reads it: zero
+    pose, rate = (ca.horzcat(ca.reshape(v[3 * nb:], 4, nb), ground) for v, ground in (
+        (x.q, x.q_ground[3:7]), (x.q_dot, ca.SX.zeros(4, 1))))
     given = [[g.axes[key] for g in geometries] for key in ("q_i", "q_j")]
     frames = [ca.horzcat(*map(constant, values)) if any(isinstance(v, ca.SX) for v in values)
               else ca.DM(np.column_stack(values)) for values in given]

@@ -34,13 +34,18 @@ class Coordinates:
                            ca.SX.sym("q_ddot", n), ca.SX.sym("q_ground", 7), n_bodies)
 
     def r(self, k: int, vector=None):
-        vector = self.q if vector is None else vector
-        return self.q_ground[0:3] if k == GROUND_INDEX else vector[3 * k:3 * k + 3]
-
-    def p(self, k: int, vector=None):
+        """Body k's position in `vector` (default q; another: its rate of that order). Ground:
+        its pseudo-coordinates in q, zero in a rate (ground is at rest)."""
         vector = self.q if vector is None else vector
         if k == GROUND_INDEX:
-            return self.q_ground[3:7]
+            return self.q_ground[0:3] if vector is self.q else ca.SX.zeros(3, 1)
+        return vector[3 * k:3 * k + 3]
+
+    def p(self, k: int, vector=None):
+        """Body k's Euler parameters in `vector`, as r."""
+        vector = self.q if vector is None else vector
+        if k == GROUND_INDEX:
+            return self.q_ground[3:7] if vector is self.q else ca.SX.zeros(4, 1)
         start = 3 * self.n_bodies + 4 * k
         return vector[start:start + 4]
 

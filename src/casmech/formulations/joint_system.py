@@ -115,6 +115,7 @@ class JointSystem:
     # a numeric tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian),
     # built on the first call; jacobian()'s signature (t, x, ode) -> (d ode/dt, d ode/dx)
     identity_jacobian: Callable[[], ca.Function] | None = None
+    saddle_terms: ca.Function | None = None  # loops' saddle_terms, compiled with the motion
 
     @property
     def n_cut(self) -> int:
@@ -413,6 +414,27 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
                                                  {DATA: constants.inputs})
     return ca.Function("joint_forced_ode", list(inputs.values()),
                        [ca.vertcat(b.theta_dot, *dyn.u_dot)], list(inputs), ["ode"])
+
+
+def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
+    """(t, x) -> (M, P, F, gamma): the loops' DAE at acceleration level as numerics.kkt's
+    saddle system [M P^T; P -diag(w)] [u_dot; lam] = [F; gamma], lam the DAE's unit-row
+    multipliers: M the tree's joint-space mass matrix and F its generalized forces less the
+    bias (the RNEA's d tau/d u_dot and -tau at u_dot = 0), P = S d/du d/dt Phi_c (the DAE's
+    velocity Jacobian) and gamma = -S d/dt Phi_c's rate at u_dot = 0 (a numeric IR)."""
+    b = _Builder(ir, tree, Constants(None))
+    _, rate, scale, _, _ = b.loop_closure()
+    lay, t = b.layout, b.t
+    theta, u = b.x[:lay.n_theta], b.x[lay.n_theta:]
+    a = ca.SX.sym("a", lay.n_x - lay.n_theta)
+    u_dot = [a[[k - lay.n_theta for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
+    applied = articulated.applied_wrenches(ir, t, b.kin)
+    tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(ir, b.joints, b.kin, applied, u_dot))
+    jacobian = ca.repmat(scale, 1, a.numel()) * ca.jacobian(rate, u)
+    gamma = -scale * (ca.jtimes(rate, theta, b.theta_dot) + ca.jacobian(rate, t))
+    outputs = [ca.jacobian(tau, a), jacobian, -ca.substitute(tau, a, ca.DM.zeros(a.shape)), gamma]
+    return ca.Function("joint_saddle_terms", [t, b.x], ca.cse(outputs), ["t", "x"],
+                       ["M", "P", "F", "gamma"])
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,

@@ -72,7 +72,10 @@ def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
     """(M, P, F, gamma, w) -> (v_dot, lam) solving [M P^T; P -diag(w)] [v_dot; lam] =
     [F; gamma] (module docstring), M and P with the given sparsity, by CSparse's LU
     (SADDLE_SOLVER; docs/decisions/saddle-solve.md). Called with symbols it inlines
-    into a graph (casmech.optimal), with numbers it is the numeric solve (runtime)."""
+    into a graph (casmech.optimal), with numbers it is the numeric solve (runtime). A singular
+    matrix raises RuntimeError; inside a mapped or buffered call CasADi first prints the
+    inputs to sys.stderr, which runtime.solver_messages.without_input_dumps holds back where
+    the runtime solves by least squares instead (runtime.assembly.saddle_solution)."""
     n, m = mass.size1(), jacobian.size1()
     m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)
     forces, gamma, w = ca.MX.sym("F", n), ca.MX.sym("gamma", m), ca.MX.sym("w", m)

@@ -65,6 +65,7 @@ from casmech.runtime import (
     events,
     nonfinite,
     projected_rk4,
+    solver_messages,
 )
 from casmech.runtime.dae_rows import Rows, mapped
 from casmech.runtime.driver import Block, Chunks, completed, drive
@@ -160,8 +161,9 @@ class _Model:
         solve = self.workspace.kept("dae_rows", ("solve", self.name),
                                     lambda: dae_rows.solve(self.functions, self.name))
         try:
-            v_dot, lam = mapped(solve, times[None, :], q, v, mask[:, None], s[:, None],
-                                workspace=self.workspace)
+            with solver_messages.without_input_dumps():
+                v_dot, lam = mapped(solve, times[None, :], q, v, mask[:, None], s[:, None],
+                                    workspace=self.workspace)
         except RuntimeError as error:  # the LU met a zero pivot
             cancel.check(error)
             v_dot, lam = np.full((self.n_v, len(times)), np.nan), np.full((self.m, len(times)),

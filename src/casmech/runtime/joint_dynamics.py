@@ -9,8 +9,9 @@ same state. Loop closures start from their consistent multipliers (the accelerat
 constraints solved for lam; the ABA's accelerations are affine in lam), with the rows that
 depend on the others at t0 masked out; the reactions are then reported as the minimum-norm
 ones, as the r-p DAE does. Each results row holds the r-p state the tree gives and every joint
-row's multiplier. The grid is integrated in chunks of `joint_chunk` output intervals
-(core.options.DynamicsSolver) by runtime.driver, a chunk a solver fails on again in halves.
+row's multiplier, the loops' solved at the row's state (runtime.joint_rows). The grid is
+integrated in chunks of `joint_chunk` output intervals (core.options.DynamicsSolver) by
+runtime.driver, a chunk a solver fails on again in halves.
 The spanning tree, the joint system, the starts and the integrators are kept in the run's
 workspace (runtime.workspace).
 """
@@ -29,13 +30,14 @@ from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
-from casmech.formulations.joint_system import JointSystem, build, layout
+from casmech.formulations.joint_system import JointSystem, build, layout, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.numerics import lazy_jacobian
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.driver import Block, Chunks, completed, drive
+from casmech.runtime.joint_rows import LoopRows
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -90,8 +92,10 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         system = build(functions.ir, tree_of(functions, workspace),
                        identity_states=settings.stiff_states)
         if _compiled(functions) and not lags_bundle(functions, compile_):
-            system = compiled_system(system, functions.n_bodies <= compile_.motion_bodies,
-                                     settings)
+            with_motion = functions.n_bodies <= compile_.motion_bodies
+            terms = saddle_terms(functions.ir, system.tree) if system.n_cut and with_motion \
+                else None
+            system = compiled_system(system, with_motion, settings, terms)
         return system
 
     return workspace.kept("joint_system", (compile_, settings.stiff_states), make)
@@ -110,26 +114,31 @@ def library_system(functions: SystemFunctions,
 
 
 def compiled_system(system: JointSystem, with_motion: bool = True,
-                    settings: DynamicsSolver = DEFAULT) -> JointSystem:
+                    settings: DynamicsSolver = DEFAULT,
+                    terms: ca.Function | None = None) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache; with the tree's ODE its forward derivative where method auto may choose
     BDF (up to settings.stiff_states; its Jacobian by forward sweeps of the compiled ODE:
     casadi's externals find fwd1_<name> in their library, and the interpreted RNEA identity
     is dropped: the identity's C would lengthen the cold build, joint-derivatives.md), with
-    the DAE its Jacobian (JointSystem.problem)."""
+    the DAE its Jacobian (JointSystem.problem); `terms`, the loops' saddle_terms for their
+    results rows (runtime.joint_rows), in the same library."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
+    if terms is not None:
+        functions["joint_saddle_terms"] = terms
     if not system.n_cut and system.layout.n_x <= settings.stiff_states:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion), identity_jacobian=None)
+                   motion=built.get("joint_motion", system.motion), identity_jacobian=None,
+                   saddle_terms=built.get("joint_saddle_terms"))
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
@@ -351,6 +360,13 @@ class _Recorder:
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
+        # a system built over functions.ir (not a library's or a controller's functions,
+        # whose forces that IR does not hold): its loop rows solved at each row's state
+        solved = system.n_cut and functions.joint_functions is None
+        self.loops = workspace.kept(
+            "joint_loop_rows", (mask.tobytes(), system.dynamics),
+            lambda: LoopRows(system.saddle_terms or saddle_terms(functions.ir, system.tree),
+                             system, mask)) if solved else None
 
     def _mapped(self) -> ColumnCall:
         """The results rows' function over columns (kept in the workspace; looked up once
@@ -361,10 +377,15 @@ class _Recorder:
         return self._call
 
     def rows(self, times, states, algebraic):
-        """(q, q_dot, q_ddot, lam), one row per time."""
+        """(q, q_dot, q_ddot, lam), one row per time; with loops, their multipliers solved at
+        each row's state (runtime.joint_rows) where the system was built over the bundle's IR,
+        else the integrator's `algebraic` states."""
         times = np.asarray(times, float)
-        q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
-                                               self.signs[:, None])
+        if self.loops is not None:
+            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
+        else:
+            q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
+                                                   self.signs[:, None])
         if self.least_norm is not None:
             (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T

@@ -8,12 +8,16 @@ progress bar, warnings) passes through unchanged."""
 from __future__ import annotations
 
 import io
+import re
 import sys
 from contextlib import contextmanager
 
 # lines the solvers start (the first two: CasADi's word of a callback that raised, a signal)
 PREFIXES = ("rhs failed: ", "res failed: ", "CasADi - ", "At t = ", "At t=")
 MAX_LINES = 50
+# the first line of the inputs CasADi prints when a Function's evaluation raises inside
+# another's (a mapped or buffered call: Function::operator() prints them unconditionally)
+DUMP_HEADER = re.compile(r"^Function \S+ \(0x[0-9a-fA-F]+\)$", re.MULTILINE)
 
 
 class _Filter(io.TextIOBase):
@@ -85,3 +89,27 @@ def collected(kept: list[str]):
     finally:
         stream.close_line()
         sys.stderr = target
+
+
+@contextmanager
+def without_input_dumps():
+    """Within the block, what is written to sys.stderr is held and passed on at its end, less
+    the input dumps CasADi writes before raising an evaluation's error (DUMP_HEADER onwards)
+    when a RuntimeError leaves the block: the caller handles that error (a singular saddle
+    matrix's least squares, runtime.assembly.saddle_solution) and the dump, the matrices of
+    a numeric solve, says nothing a user can act on."""
+    target, held = sys.stderr, io.StringIO()
+    sys.stderr = held
+    failed = False
+    try:
+        yield
+    except RuntimeError:
+        failed = True
+        raise
+    finally:
+        sys.stderr = target
+        text = held.getvalue()
+        dump = DUMP_HEADER.search(text) if failed else None
+        text = text[:dump.start()] if dump else text
+        if text:
+            target.write(text)

@@ -1,5 +1,6 @@
-"""runtime.dynamics._Model.solved: a row whose saddle matrix is singular (a joint written twice,
-no row masked) is solved by least squares, not left NaN."""
+"""runtime.dynamics._Model.solved and runtime.joint_rows.LoopRows: a row whose saddle matrix
+is singular (a joint written twice, no row masked) is solved by least squares, not left NaN,
+and nothing is written to stderr (CasADi prints a failing mapped call's inputs)."""
 
 from __future__ import annotations
 
@@ -7,10 +8,14 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.core.options import DynamicsSolver
 from casmech.formulations.builtin import velocities
+from casmech.formulations.joint_system import saddle_terms
 from casmech.formulations.table import BODY_FORMS
-from casmech.runtime import dynamics
+from casmech.runtime import dynamics, joint_dynamics
 from casmech.runtime.assembly import initial_state
+from casmech.runtime.joint_rows import LoopRows
+from casmech.runtime.workspace import of
 
 TWICE_HINGED = """casmech: 1
 name: twice_hinged
@@ -24,7 +29,7 @@ analysis: {type: dynamics, t_end: 0.1, output_step: 0.01}
 
 
 @pytest.mark.parametrize("name", ["rp", "romega"])
-def test_a_singular_rows_accelerations_and_multipliers_solve_the_equations(name):
+def test_a_singular_rows_accelerations_and_multipliers_solve_the_equations(name, capfd):
     functions = casmech.compile(casmech.loads(TWICE_HINGED))
     model, form = dynamics._Model(functions, name), BODY_FORMS[name]
     q, q_dot = initial_state(functions, 0.0, model.settings.assembly, model.workspace)
@@ -44,3 +49,24 @@ def test_a_singular_rows_accelerations_and_multipliers_solve_the_equations(name)
     # least norm: the two hinges (five rows each, in file order) share the load equally
     np.testing.assert_allclose(lam[:5], lam[5:10], rtol=0, atol=1e-12)  # as above
     assert np.abs(lam[:10]).max() > 1.0  # the bar's weight is carried (m g = 9.81 N)
+    assert capfd.readouterr().err == ""
+
+
+def test_a_singular_joint_loop_row_is_solved_by_least_squares_quietly(capfd):
+    """The joint formulation cuts hinge_b, whose rows all depend on the tree's: its DAE masks
+    them; with no row masked the row's saddle matrix is singular, and its least-squares row
+    is the masked one (the cut rows carry nothing, the tree's hinge the weight)."""
+    functions = casmech.compile(casmech.loads(TWICE_HINGED))
+    system = joint_dynamics.joint_system(functions)
+    workspace = of(functions, None)
+    x, _, loops, signs = joint_dynamics._start(functions, system, 0.0,
+                                               DynamicsSolver().assembly, workspace)
+    assert loops.mask.sum() == 5  # hinge_b's five rows
+    times, states = np.array([0.0, 0.01]), np.column_stack([x, x])
+    terms = saddle_terms(functions.ir, system.tree)
+    masked = LoopRows(terms, system, loops.mask)(times, states, signs)
+    singular = LoopRows(terms, system, np.zeros(system.n_cut))(times, states, signs)
+    for a, b in zip(masked, singular, strict=True):
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-12)  # roundoff of the least squares
+    assert np.abs(masked[3]).max() > 1.0  # the weight is carried (by hinge_a's rows)
+    assert capfd.readouterr().err == ""

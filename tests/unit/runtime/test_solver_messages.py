@@ -6,7 +6,11 @@ import json
 import subprocess
 import sys
 
-from casmech.runtime.solver_messages import _Filter, collected
+import casadi as ca
+import numpy as np
+import pytest
+
+from casmech.runtime.solver_messages import _Filter, collected, without_input_dumps
 from tests.conftest import ROOT
 from tests.validation.runtime.test_joint_dynamics import BLOWING_UP
 
@@ -55,3 +59,19 @@ def test_a_failing_run_prints_only_casmechs_lines(tmp_path):
     kept = metadata["result"]
     assert kept["solver_message_count"] >= 2  # IDAS's and the fallback's (measured: 26)
     assert any(line.startswith("At t = ") for line in kept["solver_messages"])
+
+
+def test_a_failing_mapped_calls_input_dump_is_dropped_and_other_text_kept(capsys):
+    """CasADi prints the inputs of a Function whose mapped evaluation raises; within
+    without_input_dumps that dump is dropped, the error still raised, other text passed on."""
+    x = ca.MX.sym("x", 2, 2)
+    solve = ca.Function("solve", [x], [ca.solve(x, ca.DM.ones(2), "csparse")]).map(2)
+    with pytest.raises(RuntimeError, match="singular"):
+        with without_input_dumps():
+            print("before", file=sys.stderr)
+            solve(np.ones((2, 4)))  # singular matrices
+    assert capsys.readouterr().err == "before\n"
+    with without_input_dumps():
+        print("kept", file=sys.stderr)
+        solve(np.hstack([np.eye(2), np.eye(2)]))
+    assert capsys.readouterr().err == "kept\n"
