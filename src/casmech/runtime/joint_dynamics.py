@@ -289,7 +289,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings)
-    recorder = _Recorder(functions, system, signs, loops.mask, workspace)
+    recorder = _Recorder(functions, system, signs, loops.mask, workspace,
+                         settings.loop_rows == "solved")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
     integrate.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
     times = output_times(t0, t_end, step)
@@ -354,15 +355,16 @@ class _Recorder:
     a block by one mapped call."""
 
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
-                 workspace: Workspace):
+                 workspace: Workspace, solve_loops: bool = False):
         self.functions, self.system, self.signs = functions, system, signs
         self.workspace, self._call = workspace, None
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
-        # a system built over functions.ir (not a library's or a controller's functions,
-        # whose forces that IR does not hold): its loop rows solved at each row's state
-        solved = system.n_cut and functions.joint_functions is None
+        # with solve_loops (the loop_rows option), a system built over functions.ir (not a
+        # library's or a controller's functions, whose forces that IR does not hold): its loop
+        # rows solved at each row's state
+        solved = solve_loops and system.n_cut and functions.joint_functions is None
         self.loops = workspace.kept(
             "joint_loop_rows", (mask.tobytes(), system.dynamics),
             lambda: LoopRows(system.saddle_terms or saddle_terms(functions.ir, system.tree),

@@ -1,7 +1,8 @@
 """The multipliers of r-p / r-omega dynamics rows (reactions and a driver's actuation) are solved
-at each row's state (runtime.dae_rows.solve), so they are as accurate as the state: against
-inverse dynamics of the same motion, the joint formulation, and the closed form of a driven
-block whose Coulomb friction reverses between two output rows."""
+at each row's state (runtime.dae_rows.solve), and the joint formulation's loop rows with
+`solver: {loop_rows: solved}` (runtime.joint_rows), so they are as accurate as the state:
+against inverse dynamics of the same motion, the other formulations, and the closed form of a
+driven block whose Coulomb friction reverses between two output rows."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ from casmech.api import results_table
 from tests.conftest import MODELS
 
 CRANK_JOINTS = ("crank_pivot", "crank_pin", "wrist_pin", "slide")
+SOLVED = {"loop_rows": "solved"}  # the joint loop rows solved at each row's state
 COMPONENTS = ("fx", "fy", "fz", "tx", "ty", "tz")
 
 BLOCK = """casmech: 1
@@ -43,12 +45,14 @@ def _columns(functions, result) -> dict[str, np.ndarray]:
 @pytest.fixture(scope="module")
 def crank():
     """The driven slider-crank over 0.5 s (a half turn): inverse dynamics, and dynamics in
-    each formulation at rtol 1e-10."""
+    each formulation at rtol 1e-10 (joint: its loop rows solved; joint_z: from IDAS's
+    algebraic states, the default)."""
     functions = casmech.compile(casmech.load(MODELS / "slider_crank.yaml"))
     runs = {"inverse": casmech.analyze(functions, analysis="inverse_dynamics", t_end=0.5)}
-    for name in ("rp", "romega", "joint"):
-        runs[name] = casmech.analyze(functions, analysis="dynamics", formulation=name,
-                                     t_end=0.5, rtol=1e-10, atol=1e-12)
+    for name, formulation, options in (("rp", "rp", None), ("romega", "romega", None),
+                                       ("joint", "joint", SOLVED), ("joint_z", "joint", None)):
+        runs[name] = casmech.analyze(functions, analysis="dynamics", formulation=formulation,
+                                     t_end=0.5, rtol=1e-10, atol=1e-12, options=options)
     return {name: _columns(functions, result) for name, result in runs.items()}
 
 
@@ -83,6 +87,18 @@ def test_a_driven_slider_cranks_reactions_are_the_joint_formulations(crank, form
                                rtol=0, atol=1e-9 * scale)
 
 
+def test_a_joint_runs_default_loop_rows_are_the_integrators_within_its_error(crank):
+    """By default the joint loop rows read IDAS's algebraic states (loop_rows: integrator):
+    the run's states are the solved run's, its reactions within IDAS's interpolation of them
+    (out of its error test) of inverse dynamics."""
+    for column in ("slider.x", "slider.vx", "crank.e0"):  # one integration, two readings
+        np.testing.assert_array_equal(crank["joint_z"][column], crank["joint"][column])
+    scale = np.abs(_reactions(crank["inverse"])).max()
+    # measured 4.9e-8 of the largest reaction at rtol 1e-10 (docs/decisions/row-multipliers.md)
+    np.testing.assert_allclose(_reactions(crank["joint_z"]), _reactions(crank["inverse"]),
+                               rtol=0, atol=1e-7 * scale)
+
+
 def _planar_four_bar() -> str:
     """models/four_bar.yaml with its pins revolute about z: a planar loop whose cut joint's
     out-of-plane rows depend on the tree's (the joint DAE masks them; r-p drops them)."""
@@ -105,7 +121,8 @@ def test_a_planar_four_bars_joint_rows_with_masked_loop_rows_are_inverse_dynamic
     reference = _columns(functions, casmech.analyze(functions, analysis="inverse_dynamics",
                                                    t_end=0.3))
     runs = {name: casmech.analyze(functions, analysis="dynamics", formulation=name,
-                                  t_end=0.3, rtol=1e-10, atol=1e-12) for name in ("joint", "rp")}
+                                  t_end=0.3, rtol=1e-10, atol=1e-12, options=SOLVED)
+            for name in ("joint", "rp")}
     assert runs["joint"].metadata["dropped_rows"] == 3  # the out-of-plane rows
     rows = {name: _columns(functions, run) for name, run in runs.items()}
     joints = ("crank_pivot", "coupler_pin", "rocker_pin", "rocker_pivot")
@@ -151,7 +168,7 @@ def test_a_joint_event_rows_reactions_are_inverse_dynamics_at_the_event():
         "analysis:", 'events:\n  - {name: mid, when: "slider.x - 2.0"}\nanalysis:', 1)
     functions = casmech.compile(casmech.loads(text))
     frame = casmech.analyze(functions, analysis="dynamics", formulation="joint", t_end=0.5,
-                            rtol=1e-10, atol=1e-12).events_dataframe()
+                            rtol=1e-10, atol=1e-12, options=SOLVED).events_dataframe()
     assert frame["name"].tolist() == ["mid"]
     t_event = float(frame["t"].iloc[0])
     reference = _columns(functions, casmech.analyze(
