@@ -14,7 +14,6 @@ on its arguments instead (the tests compare both).
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Callable
 from contextlib import contextmanager
 
@@ -35,7 +34,7 @@ class Traced:
     def __call__(self, *args, **static) -> list:
         if _DIRECT[0]:
             return list(self.fn(*args, **static))
-        args = [a if isinstance(a, ca.SX) else _as_sx(a) for a in args]
+        args = [a if isinstance(a, (ca.SX, ca.DM)) else _as_sx(a) for a in args]
         key = (tuple(sorted(static.items())), *(_structure(a) for a in args))
         function = self.functions.get(key)
         if function is None:
@@ -60,24 +59,13 @@ def direct():
         _DIRECT[0] = False
 
 
-# id(DM) -> (a weak reference to it, its SX): a constant passed to several steps (a frame, an
-# inertia; joint_constants.Constants gives the same DM for the same value) converted once
-_CONVERTED: dict[int, tuple[weakref.ref, ca.SX]] = {}
-
-
 def _as_sx(value) -> ca.SX:
-    """A constant argument as SX (a DM's conversion kept while the DM lives)."""
-    if not isinstance(value, ca.DM):
-        return ca.SX(ca.DM(np.asarray(value, float)))
-    key = id(value)
-    seen = _CONVERTED.get(key)
-    if seen is None or seen[0]() is not value:
-        seen = _CONVERTED[key] = (weakref.ref(value, lambda _, key=key: _CONVERTED.pop(key, None)),
-                                  ca.SX(value))
-    return seen[1]
+    """A constant argument other than a DM (a number, a NumPy array) as SX. A DM is passed as
+    it is: the call converts it in CasADi, structural zeros kept, as SX(DM) would."""
+    return ca.SX(ca.DM(np.asarray(value, float)))
 
 
-def _structure(matrix: ca.SX) -> tuple:
+def _structure(matrix: ca.SX | ca.DM) -> tuple:
     if matrix.is_dense():
         return matrix.size()
     sparsity = matrix.sparsity()

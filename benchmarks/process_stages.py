@@ -1,0 +1,191 @@
+"""Where a whole `casmech run` process spends its CPU, stage by stage, without a profiler.
+
+    python benchmarks/process_stages.py --chain 1000 --t-end 1            # this checkout's src/
+    python benchmarks/process_stages.py --chain 1000 --t-end 1 --src /tmp/main/src --src src
+    python benchmarks/process_stages.py --model models/four_bar.yaml --repeats 5
+
+Each run is a fresh interpreter (PYTHONPATH=<src>) that starts casmech's command line as the
+console script does, with thin wrappers around its stages reading the process's CPU clock
+(time.process_time): the imports, loading the YAML (api.load_model), the joint system's build
+(formulations.joint_system.build), assembly (runtime.assembly.initial_state), the results
+row's function (runtime.results.row_function) and the results table with its evaluation
+(results.table, which includes row_function), the results files' writing (streaming
+flush, which includes the table), and CVODES/IDAS (runtime.joint_dynamics._Integrator.__call__),
+whose counters (steps, right-hand sides, Jacobians, linear setups) are read from the kept
+integrator. A profiler's cost per Python call inflates the Python-heavy stages several times
+over; these wrappers cost a few function calls per stage. The parent times each child as a
+whole (wall, and user + sys from getrusage) and prints medians (ranges) over --repeats runs,
+round-robin over the source trees so that a change in the machine's load hits them alike.
+
+`--chain N` writes benchmarks/systems.py's N-link chain through casmech_model.py with its
+`t_end` set to --t-end (the generated 10 s span is the benchmark's), into a temporary folder;
+the cache is a private folder kept over the runs (warm after the first run of each tree, which
+is not timed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+# (label, module, attribute path) of each wrapped stage, in the order the table shows them
+STAGES = (
+    ("load", "casmech.api", "load_model"),
+    ("joint system build", "casmech.formulations.joint_system", "build"),
+    ("assembly", "casmech.runtime.assembly", "initial_state"),
+    ("integrator", "casmech.runtime.joint_dynamics", "_Integrator.__call__"),
+    ("results row function", "casmech.runtime.results", "row_function"),
+    ("results table (incl. row function)", "casmech.runtime.results", "table"),
+    ("results writing (incl. table)", "casmech.io.streaming", "ResultsWriter.flush"),
+)
+COUNTERS = ("nsteps", "nfevals", "nniters", "nlinsetups", "njevals", "netfails", "nncfails")
+
+
+def child(arguments: list[str]) -> None:
+    """Run `casmech <arguments>` here with the stages wrapped; print one JSON line."""
+    import importlib
+
+    start = time.process_time()
+    import casmech.cli
+
+    for _, module, _ in STAGES:
+        importlib.import_module(module)
+    spent = {"imports": time.process_time() - start}
+    counters: dict[str, int] = {}
+
+    def wrap(label: str, owner, name: str) -> None:
+        function = getattr(owner, name)
+
+        def timed(*args, **kwargs):
+            begin = time.process_time()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                spent[label] = spent.get(label, 0.0) + time.process_time() - begin
+        setattr(owner, name, timed)
+
+    for label, module, path in STAGES:
+        owner = importlib.import_module(module)
+        *classes, name = path.split(".")
+        for cls in classes:
+            owner = getattr(owner, cls)
+        wrap(label, owner, name)
+    # modules that imported `build` by name call it through their own binding
+    joint_dynamics = sys.modules["casmech.runtime.joint_dynamics"]
+    joint_dynamics.build = sys.modules["casmech.formulations.joint_system"].build
+
+    from casmech.runtime import buffers
+
+    named_call = buffers.NamedCall.__call__
+
+    def counted(self, **inputs):
+        try:
+            return named_call(self, **inputs)
+        finally:
+            if self.function.is_a("Integrator", True) or self.function.name() == "joint":
+                stats = self.stats()
+                for key in COUNTERS:
+                    counters[key] = counters.get(key, 0) + int(stats.get(key) or 0)
+    buffers.NamedCall.__call__ = counted
+
+    sys.argv = ["casmech", *arguments]
+    try:
+        casmech.cli.main()
+    except SystemExit as exit_:
+        if exit_.code not in (0, None):
+            raise
+    finally:
+        spent["total (in process)"] = time.process_time()
+        print("STAGES " + json.dumps({"stages": spent, "counters": counters}), flush=True)
+
+
+def chain_model(n: int, t_end: float, folder: Path) -> Path:
+    sys.path.insert(0, str(HERE))
+    from casmech_model import yaml_text
+    from systems import chain
+
+    text = re.sub(r"t_end: [0-9.e+-]+", f"t_end: {t_end!r}", yaml_text(chain(n)), count=1)
+    path = folder / f"chain{n}.yaml"
+    path.write_text(text)
+    return path
+
+
+def timed_child(src: str, model: Path, arguments: list[str], environment: dict) -> dict:
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    begin = time.perf_counter()
+    done = subprocess.run([sys.executable, __file__, "--child", "--", "run", str(model),
+                           *arguments], env=environment | {"PYTHONPATH": src},
+                          capture_output=True, text=True, cwd=model.parent)
+    wall = time.perf_counter() - begin
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if done.returncode:
+        raise SystemExit(f"{src}: casmech run failed\n{done.stderr[-2000:]}")
+    line = next(x for x in done.stdout.splitlines() + done.stderr.splitlines()
+                if x.startswith("STAGES "))
+    found = json.loads(line[len("STAGES "):])
+    found["wall"] = wall
+    found["cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return found
+
+
+def median(values: list[float]) -> str:
+    return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+
+
+def main() -> None:
+    if "--child" in sys.argv:
+        child(sys.argv[sys.argv.index("--") + 1:])
+        return
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    which = parser.add_mutually_exclusive_group(required=True)
+    which.add_argument("--model", type=Path, help="a YAML model")
+    which.add_argument("--chain", type=int, help="benchmarks/systems.py's N-link chain")
+    parser.add_argument("--t-end", type=float, default=1.0)
+    parser.add_argument("--src", action="append", help="source trees (default: ./src)")
+    parser.add_argument("--repeats", type=int, default=3)
+    options, extra = parser.parse_known_args()
+    sources = [str(Path(s).resolve()) for s in (options.src or ["src"])]
+    with tempfile.TemporaryDirectory() as folder:
+        folder = Path(folder)
+        model = (chain_model(options.chain, options.t_end, folder) if options.chain
+                 else options.model.resolve())
+        arguments = ["--t-end", repr(options.t_end), "-q", "--out",
+                     str(folder / "results"), *extra]
+        environment = os.environ | {"CASMECH_CACHE_DIR": str(folder / "cache")}
+        for src in sources:  # warm the cache and the bytecode
+            timed_child(src, model, arguments, environment)
+        runs: dict[str, list[dict]] = {src: [] for src in sources}
+        for _ in range(options.repeats):
+            for src in sources:
+                runs[src].append(timed_child(src, model, arguments, environment))
+    print(f"# {model.name}, `casmech run --t-end {options.t_end}`, {options.repeats} runs "
+          f"each, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load average "
+          f"{os.getloadavg()[0]:.1f}; CPU seconds, medians (ranges)\n")
+    print("| stage | " + " | ".join(sources) + " |")
+    print("|---|" + "---:|" * len(sources))
+    labels = ["imports", *(label for label, _, _ in STAGES), "total (in process)"]
+    for label in labels:
+        print(f"| {label} | " + " | ".join(
+            median([r["stages"].get(label, 0.0) for r in runs[s]]) for s in sources) + " |")
+    for key in ("cpu", "wall"):
+        name = {"cpu": "whole process, user + sys", "wall": "whole process, wall"}[key]
+        print(f"| {name} | " + " | ".join(median([r[key] for r in runs[s]])
+                                          for s in sources) + " |")
+    for key in COUNTERS:
+        print(f"| integrator {key} | " + " | ".join(
+            str(int(statistics.median([r["counters"].get(key, 0) for r in runs[s]])))
+            for s in sources) + " |")
+
+
+if __name__ == "__main__":
+    main()
