@@ -119,37 +119,22 @@ def test_mapped_functions_equal_inline(name):
 EVERY_MODEL = sorted(path.name for path in (ROOT / "models").glob("*.yaml"))
 
 
-@pytest.fixture(scope="module")
-def lowered():
-    """file -> (its ModelIR, its inline bundle), each built once for the module's two tests
-    of every model (the inline bundle is the larger part of a test's cost)."""
-    built = {}
-
-    def get(file: str):
-        if file not in built:
-            ir = lower(casmech.load(ROOT / "models" / file))
-            built[file] = ir, _inline(ir)
-        return built[file]
-
-    return get
+@pytest.mark.parametrize("file", EVERY_MODEL)
+def test_every_model_mapped_equals_inline(file):
+    ir = lower(casmech.load(ROOT / "models" / file))
+    _compare_bundles(mapped_functions(ir), _inline(ir))
 
 
 @pytest.mark.parametrize("file", EVERY_MODEL)
-def test_every_model_mapped_equals_inline(file, lowered):
-    ir, inline = lowered(file)
-    _compare_bundles(mapped_functions(ir), inline)
-
-
-@pytest.mark.parametrize("file", EVERY_MODEL)
-def test_every_model_over_its_data_mapped_equals_inline(file, lowered):
+def test_every_model_over_its_data_mapped_equals_inline(file):
     """Both evaluations over the model data d (every number of the lowering an input) agree at
     random d too, and at the model's own d they are the numeric bundle."""
-    ir, numeric = lowered(file)
+    ir = lower(casmech.load(ROOT / "models" / file))
     split = parametric.split(ir)
     inline = build_functions(split.ir, split.symbols).functions
     _compare_bundles(mapped_functions(split.ir, split.symbols),
                      {name: inline[name] for name in inline}, seed=11)
-    rng = np.random.default_rng(5)
+    numeric, rng = _inline(ir), np.random.default_rng(5)
     for name, function in numeric.items():
         args = _random(function, rng)
         for a, b in zip(inline[name].call([*args, ca.DM(split.values)]), function.call(args),
