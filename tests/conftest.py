@@ -105,6 +105,14 @@ def private_caches(session_cache, monkeypatch) -> Path:
     return session_cache / "casmech"
 
 
+@pytest.fixture
+def quick_builds(monkeypatch) -> None:
+    """C built at -O0 (CASMECH_CFLAGS, what the CLI and casmech.compile build with): for a test
+    of what compiled code computes, not of its speed; gcc's quickest build, as the backends'
+    tests build (tests/helpers/codegen.py)."""
+    monkeypatch.setenv("CASMECH_CFLAGS", "-O0")
+
+
 @pytest.fixture(scope="session")
 def models_dir():
     return MODELS

@@ -120,7 +120,7 @@ def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
                             *COMPILER]) == []
 
 
-def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch):
+def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch, quick_builds):
     """A compiled run whose library is in the cache ($CASMECH_CACHE_DIR given) imports neither
     filelock (a lock is taken to build a missing entry only) nor platformdirs (the folder is
     the one given); the run that built the entry did take the lock."""

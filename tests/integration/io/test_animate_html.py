@@ -10,13 +10,12 @@ import json
 import os
 import re
 import shutil
-import struct
 import subprocess
 import tempfile
-import zlib
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from casmech import cli
 from tests.unit.io.test_animate import BODIES, TIMES, make_case
@@ -84,41 +83,10 @@ def chromium():
 
 
 def read_png(path):
-    """8-bit RGB(A), non-interlaced PNG -> (height, width, 3) array (all five row filters)."""
-    data = path.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    position, chunks = 8, {}
-    while position < len(data):
-        size, kind = struct.unpack(">I4s", data[position:position + 8])
-        chunks.setdefault(kind, []).append(data[position + 8:position + 8 + size])
-        position += 12 + size
-    width, height, depth, colour, _, _, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"][0])
-    assert depth == 8 and colour in (2, 6) and interlace == 0
-    step = 3 if colour == 2 else 4
-    raw = zlib.decompress(b"".join(chunks[b"IDAT"]))
-    stride = width * step
-    rows, previous = [], bytearray(stride)
-    for y in range(height):
-        start = y * (stride + 1)
-        kind, line = raw[start], bytearray(raw[start + 1:start + 1 + stride])
-        for x in range(stride):
-            left = line[x - step] if x >= step else 0
-            up, corner = previous[x], previous[x - step] if x >= step else 0
-            if kind == 1:
-                line[x] = (line[x] + left) & 255
-            elif kind == 2:
-                line[x] = (line[x] + up) & 255
-            elif kind == 3:
-                line[x] = (line[x] + (left + up) // 2) & 255
-            elif kind == 4:
-                p = left + up - corner
-                pa, pb, pc = abs(p - left), abs(p - up), abs(p - corner)
-                best = left if pa <= pb and pa <= pc else up if pb <= pc else corner
-                line[x] = (line[x] + best) & 255
-        rows.append(bytes(line))
-        previous = line
-    pixels = np.frombuffer(b"".join(rows), np.uint8).reshape(height, width, step)
-    return pixels[..., :3]
+    """A PNG screenshot -> (height, width, 3) uint8 RGB array (decoded by Pillow)."""
+    with Image.open(path) as image:
+        assert image.format == "PNG"
+        return np.asarray(image.convert("RGB"))
 
 
 def browse(chromium, url, *action):

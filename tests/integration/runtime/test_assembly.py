@@ -207,7 +207,7 @@ def test_assembled_pose_is_the_closest_point_with_degrees_of_freedom(model):
     assert np.linalg.norm(q - reference) < np.linalg.norm(newton_q - reference)
 
 
-def test_closest_point_of_a_compiled_bundle():
+def test_closest_point_of_a_compiled_bundle(quick_builds):
     """Through the C functions (the rootfinder's Jacobian then differentiates the externals'
     phi_q by its generated forward derivative): the interpreted bundle's point."""
     points = []

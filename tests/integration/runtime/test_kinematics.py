@@ -108,7 +108,7 @@ def test_redundant_rows_get_minimum_norm_multipliers():
 
 
 @pytest.mark.parametrize("mode", ["interpreted", "compiled"])
-def test_function_calls_do_not_grow_with_rows(monkeypatch, mode):
+def test_function_calls_do_not_grow_with_rows(monkeypatch, quick_builds, mode):
     """No Python per output row: the four-bar's 101 and 1001 rows take the same CasADi calls."""
     functions = casmech.compile(casmech.load(MODELS / "four_bar.yaml"), mode)
     # a first run builds the interpreted bundle's functions (built on first use; their

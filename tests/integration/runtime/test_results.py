@@ -21,7 +21,7 @@ def per_row(functions, result):
     ("four_bar.yaml", {"t_end": 0.3}),  # inverse dynamics: rows appended one at a time
     ("double_pendulum.yaml", {"t_end": 0.3, "mode": "compiled"}),  # compiled bundle: MX map
 ])
-def test_table_equals_the_per_row_computation(path, kwargs):
+def test_table_equals_the_per_row_computation(path, kwargs, quick_builds):
     """The mapped table against `row` evaluated row by row, to 1e-12 relative to each
     column's scale (the same operations in another evaluation order)."""
     mode = kwargs.pop("mode", "interpreted")

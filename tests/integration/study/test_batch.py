@@ -17,8 +17,8 @@ FOUR_BAR_RELEASED = MODELS / "four_bar_released.yaml"
 
 
 @pytest.fixture(autouse=True)
-def cache(tmp_path_factory, monkeypatch):
-    """One compiled-model cache for this module's tests (the library is built once)."""
+def cache(tmp_path_factory, monkeypatch, quick_builds):
+    """One compiled-model cache for this module's tests (the library is built once, at -O0)."""
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path_factory.getbasetemp() / "batch-cache"))
 
 

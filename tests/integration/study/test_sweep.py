@@ -92,7 +92,7 @@ def test_no_library_is_built(tmp_path, monkeypatch):
 
 
 @pytest.mark.skipif(not codegen.available(), reason="no C compiler")
-def test_compiled_study_builds_one_library_for_every_value(tmp_path, monkeypatch):
+def test_compiled_study_builds_one_library_for_every_value(tmp_path, monkeypatch, quick_builds):
     """mode compiled: the pendulum's parametric library is built once, before the runs, and
     every L is bound to it; the kept outputs equal the interpreted study's."""
     from casmech.backends import cache

@@ -173,7 +173,7 @@ analysis: {type: dynamics, t_end: 1.0, output_step: 0.01, rtol: 1e-10, atol: 1e-
 
 @pytest.mark.parametrize("text", [SLIDER.format(joint="translational", c=2000, t_end=0.3),
                                   MOTORED], ids=["slider", "motor_and_stop"])
-def test_compiled_mode_equals_interpreted(text):
+def test_compiled_mode_equals_interpreted(text, quick_builds):
     model = casmech.loads(text)
     results = [casmech.analyze(casmech.compile(model, mode), formulation="rp").to_dataframe()
                for mode in ("interpreted", "compiled")]

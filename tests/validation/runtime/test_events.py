@@ -75,7 +75,7 @@ def test_pendulum_reaches_the_bottom_at_the_quarter_period(formulation):
     assert result.status == "complete" and result.times[-1] == 1.0  # log: the run goes on
 
 
-def test_compiled_functions_locate_the_same_event(monkeypatch, tmp_path):
+def test_compiled_functions_locate_the_same_event(monkeypatch, tmp_path, quick_builds):
     if not codegen.available():
         pytest.skip("no C compiler")
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path))  # never the user's cache

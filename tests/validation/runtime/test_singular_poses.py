@@ -23,7 +23,9 @@ def flat_times(t_end: float) -> np.ndarray:
 
 def test_a02_reports_each_flat_pose_at_its_time_with_its_joints():
     functions = casmech.compile(casmech.load(A02))
-    result = casmech.analyze(functions, "dynamics", t_end=3.5, rtol=1e-8, atol=1e-10)
+    # rtol 1e-7: the flat poses' times come out the same as at 1e-8 (within half the output
+    # step of the exact ones); the check is where they are reported, not the motion's accuracy
+    result = casmech.analyze(functions, "dynamics", t_end=3.5, rtol=1e-7, atol=1e-9)
     poses = result.metadata["singular_poses"]
     expected = flat_times(3.5)
     assert len(expected) == 4 and len(poses) == len(expected)
