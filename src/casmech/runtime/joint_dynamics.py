@@ -9,9 +9,10 @@ same state. Loop closures start from their consistent multipliers (the accelerat
 constraints solved for lam; the ABA's accelerations are affine in lam), with the rows that
 depend on the others at t0 masked out; the reactions are then reported as the minimum-norm
 ones, as the r-p DAE does. Each results row holds the r-p state the tree gives and every joint
-row's multiplier, the loops' solved at the row's state (runtime.joint_rows). The grid is
-integrated in chunks of `joint_chunk` output intervals (core.options.DynamicsSolver) by
-runtime.driver, a chunk a solver fails on again in halves.
+row's multiplier, the loops' from IDAS's algebraic states, or with `loop_rows: solved` solved
+at the row's state (runtime.joint_rows). The grid is integrated in chunks of `joint_chunk`
+output intervals (core.options.DynamicsSolver) by runtime.driver, a chunk a solver fails on
+again in halves.
 The spanning tree, the joint system, the starts and the integrators are kept in the run's
 workspace (runtime.workspace).
 """
@@ -93,12 +94,13 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
                        identity_states=settings.stiff_states)
         if _compiled(functions) and not lags_bundle(functions, compile_):
             with_motion = functions.n_bodies <= compile_.motion_bodies
-            terms = saddle_terms(functions.ir, system.tree) if system.n_cut and with_motion \
-                else None
+            solved = with_motion and system.n_cut and settings.loop_rows == "solved"
+            terms = saddle_terms(functions.ir, system.tree) if solved else None
             system = compiled_system(system, with_motion, settings, terms)
         return system
 
-    return workspace.kept("joint_system", (compile_, settings.stiff_states), make)
+    return workspace.kept("joint_system", (compile_, settings.stiff_states, settings.loop_rows),
+                          make)
 
 
 def library_system(functions: SystemFunctions,
