@@ -19,14 +19,14 @@ from casmech.runtime.assembly import saddle_solution
 from casmech.runtime.buffers import ColumnCall
 
 
-def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
-    """(t, x, w, signs) -> motion's (q, q_dot, q_ddot, lam) at z = [lam solved at (t, x);
-    mu = 0] (module docstring), w the DAE's row mask."""
+def solved_motion(terms: ca.Function, saddle: ca.Function, motion: ca.Function) -> ca.Function:
+    """(t, x, w, signs) -> motion's (q, q_dot, q_ddot, lam) at z = [lam solved at (t, x) by
+    `saddle` (numerics.kkt.saddle of the terms' patterns); mu = 0] (module docstring), w the
+    DAE's row mask."""
     t, x = ca.MX.sym("t"), ca.MX.sym("x", terms.size1_in(1))
     m = terms.size1_out(1)
     w, signs = ca.MX.sym("w", m), ca.MX.sym("signs", motion.size1_in(3))
     mass, jacobian, forces, gamma = terms(t, x)
-    saddle = kkt.saddle(terms.sparsity_out(0), terms.sparsity_out(1))
     _, lam = saddle(mass, jacobian, forces, gamma, w)
     outputs = motion(t, x, ca.vertcat(lam, ca.MX.zeros(m)), signs)
     return ca.Function("joint_solved_motion", [t, x, w, signs], outputs[:4],
@@ -42,7 +42,7 @@ class LoopRows:
         self.terms = terms  # formulations.joint_system.saddle_terms (compiled or not)
         self.motion, self.mask = system.motion, np.asarray(mask, float)
         self.saddle = kkt.saddle(self.terms.sparsity_out(0), self.terms.sparsity_out(1))
-        self.call = ColumnCall(solved_motion(self.terms, system.motion))
+        self.call = ColumnCall(solved_motion(self.terms, self.saddle, system.motion))
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
         try:
