@@ -3,6 +3,7 @@
     python benchmarks/process_stages.py --chain 1000 --t-end 1            # this checkout's src/
     python benchmarks/process_stages.py --chain 1000 --t-end 1 --src /tmp/main/src --src src
     python benchmarks/process_stages.py --model models/four_bar.yaml --repeats 5
+    python benchmarks/process_stages.py --chain 32 --t-end 10 --warm-compiled  # library cached
 
 Each run is a fresh interpreter (PYTHONPATH=<src>) that starts casmech's command line as the
 console script does, with thin wrappers around its stages reading the process's CPU clock
@@ -41,7 +42,12 @@ HERE = Path(__file__).resolve().parent
 # (label, module, attribute path) of each wrapped stage, in the order the table shows them
 STAGES = (
     ("load", "casmech.api", "load_model"),
+    ("model functions (api.compile)", "casmech.api", "compile"),
     ("joint system build", "casmech.formulations.joint_system", "build"),
+    ("joint system library (key, load or build)", "casmech.runtime.joint_dynamics",
+     "compiled_system"),
+    ("joint system library (key, load or build)", "casmech.runtime.joint_dynamics",
+     "keyed_system"),
     ("assembly", "casmech.runtime.assembly", "initial_state"),
     ("integrator", "casmech.runtime.joint_dynamics", "_Integrator.__call__"),
     ("results row function", "casmech.runtime.results", "row_function"),
@@ -79,7 +85,8 @@ def child(arguments: list[str]) -> None:
         *classes, name = path.split(".")
         for cls in classes:
             owner = getattr(owner, cls)
-        wrap(label, owner, name)
+        if hasattr(owner, name):  # (a source tree may not have every stage)
+            wrap(label, owner, name)
     # modules that imported `build` by name call it through their own binding
     joint_dynamics = sys.modules["casmech.runtime.joint_dynamics"]
     joint_dynamics.build = sys.modules["casmech.formulations.joint_system"].build
@@ -153,6 +160,9 @@ def main() -> None:
     parser.add_argument("--t-end", type=float, default=1.0)
     parser.add_argument("--src", action="append", help="source trees (default: ./src)")
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--warm-compiled", action="store_true",
+                        help="warm the cache with `--mode compiled` (the timed runs keep the "
+                             "default mode, which then finds the model's library cached)")
     options, extra = parser.parse_known_args()
     sources = [str(Path(s).resolve()) for s in (options.src or ["src"])]
     with tempfile.TemporaryDirectory() as folder:
@@ -162,8 +172,9 @@ def main() -> None:
         arguments = ["--t-end", repr(options.t_end), "-q", "--out",
                      str(folder / "results"), *extra]
         environment = os.environ | {"CASMECH_CACHE_DIR": str(folder / "cache")}
+        warm = ["--mode", "compiled"] if options.warm_compiled else []
         for src in sources:  # warm the cache and the bytecode
-            timed_child(src, model, arguments, environment)
+            timed_child(src, model, [*arguments, *warm], environment)
         runs: dict[str, list[dict]] = {src: [] for src in sources}
         for _ in range(options.repeats):
             for src in sources:
@@ -173,7 +184,7 @@ def main() -> None:
           f"{os.getloadavg()[0]:.1f}; CPU seconds, medians (ranges)\n")
     print("| stage | " + " | ".join(sources) + " |")
     print("|---|" + "---:|" * len(sources))
-    labels = ["imports", *(label for label, _, _ in STAGES), "total (in process)"]
+    labels = ["imports", *dict.fromkeys(label for label, _, _ in STAGES), "total (in process)"]
     for label in labels:
         print(f"| {label} | " + " | ".join(
             median([r["stages"].get(label, 0.0) for r in runs[s]]) for s in sources) + " |")

@@ -14,13 +14,19 @@ is differentiated in compiled code. `integrators` names DAE residuals (t, x, z, 
 Jacobian blocks under the names casadi's IDAS interface looks up (daeF, jacF; the Jacobian by
 CasADi's AD of the function), and comes back with the integrator's signature (t, x, z, p, u)
 -> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem.
+
+`compile_keyed` caches the same kind of library under a key its caller gives (whatever the
+functions are a function of), so that a cache hit builds no symbolic graph at all; functions it
+is asked to keep rather than compile (evaluated a few times per run) are stored as CasADi's
+serialization beside the library (<name>.casadi, checked like the library by codegen.trust) and
+load interpreted.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
 import casadi as ca
@@ -81,22 +87,67 @@ def compile_functions(functions: Mapping[str, ca.Function], with_jacobian: Itera
     key = content_key(named, with_jacobian, integrators, toolchain)
 
     def build(directory: Path) -> None:
-        plain = {n: f for n, f in named.items() if n not in integrators}
-        groups = {n: [f, *([f.jacobian()] if n in with_jacobian else [])]
-                  for n, f in plain.items()}
-        sources = generate.write_units(groups, directory, toolchain.jobs, HEADER_PREFIX)
-        oracles = {n: residuals.from_residual(named[n]) for n in sorted(integrators)}
-        dae_sources = generate.write_dae_sources(oracles, directory)
-        build_libraries({LIBRARY: sources, **dae_sources} if sources else dae_sources,
-                        directory, toolchain)
-        manifest.write(directory, {**plain, **{n: o[n] for n, o in oracles.items()}},
-                       with_jacobian, {
-                           "model": "functions " + ", ".join(sorted(named)), "key": key,
-                           "casmech": VERSION, "casadi": ca.__version__,
-                           "compiler": toolchain.compiler,
-                           "compiler_version": toolchain.version(),
-                           "flags": list(toolchain.all_flags), "library": LIBRARY},
-                       {n: generate.dae_library(n) for n in oracles})
+        _write(directory, key, named, {}, with_jacobian, integrators, toolchain)
 
     directory, _ = cache.lookup(key, build, root)
     return externals(directory)
+
+
+def compile_keyed(content: Mapping, make: Callable[[], tuple[Mapping[str, ca.Function],
+                                                              Mapping[str, ca.Function],
+                                                              Toolchain]],
+                  with_jacobian: Iterable[str] = (), integrators: Iterable[str] = (),
+                  toolchain: Toolchain | None = None, root: Path | None = None
+                  ) -> dict[str, ca.Function]:
+    """Functions compiled and loaded as compile_functions does, cached under `content` (JSON:
+    everything they are a function of, e.g. a model library's key and the settings that shape
+    them) with the default `toolchain` instead of under their own serialization, so that a
+    cache hit builds none of them. On a miss, make() -> (functions to compile, functions to keep
+    as CasADi's serialization, the toolchain to build with: the default or one chosen from the
+    functions, itself a function of `content`). Returns every function by name: the compiled
+    ones as externals, the kept ones deserialized."""
+    with_jacobian, integrators = set(with_jacobian), set(integrators)
+    toolchain = toolchain or Toolchain()
+    key = hashlib.sha256(json.dumps({
+        "format": manifest.FORMAT, "kind": "keyed", "content": content, "casmech": VERSION,
+        "sources": cache.source_digest(), "casadi": ca.__version__,
+        "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
+        "jacobian": sorted(with_jacobian), "integrators": sorted(integrators)},
+        sort_keys=True).encode()).hexdigest()[:32]
+
+    def build(directory: Path) -> None:
+        compiled, kept, chosen = make()
+        _check({**compiled, **kept}, with_jacobian, integrators)
+        if with_jacobian & set(kept) or integrators & set(kept):
+            raise ValueError("kept functions are neither differentiated nor integrators")
+        _write(directory, key, {n: _named(n, f) for n, f in compiled.items()},
+               {n: _named(n, f) for n, f in kept.items()}, with_jacobian, integrators, chosen)
+
+    directory, _ = cache.lookup(key, build, root)
+    return externals(directory)
+
+
+def _write(directory: Path, key: str, named: Mapping[str, ca.Function],
+           kept: Mapping[str, ca.Function], with_jacobian: set[str], integrators: set[str],
+           toolchain: Toolchain) -> None:
+    """A build directory: the C of `named` (their Jacobians with_jacobian; integrators as
+    IDAS's DAE libraries) compiled, `kept` serialized, and the manifest listing them all."""
+    plain = {n: f for n, f in named.items() if n not in integrators}
+    groups = {n: [f, *([f.jacobian()] if n in with_jacobian else [])]
+              for n, f in plain.items()}
+    sources = generate.write_units(groups, directory, toolchain.jobs, HEADER_PREFIX)
+    oracles = {n: residuals.from_residual(named[n]) for n in sorted(integrators)}
+    dae_sources = generate.write_dae_sources(oracles, directory)
+    build_libraries({LIBRARY: sources, **dae_sources} if sources else dae_sources,
+                    directory, toolchain)
+    for name, function in kept.items():
+        function.save(str(directory / f"{name}{manifest.KEPT}"))
+    manifest.write(directory, {**plain, **{n: o[n] for n, o in oracles.items()}, **kept},
+                   with_jacobian, {
+                       "model": "functions " + ", ".join(sorted({*named, *kept})),
+                       "key": key, "casmech": VERSION, "casadi": ca.__version__,
+                       "compiler": toolchain.compiler,
+                       "compiler_version": toolchain.version(),
+                       "flags": list(toolchain.all_flags), "library": LIBRARY},
+                   {**{n: generate.dae_library(n) for n in oracles},
+                    **{n: f"{n}{manifest.KEPT}" for n in kept}})

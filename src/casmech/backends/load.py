@@ -10,6 +10,7 @@ import casadi as ca
 
 from casmech.backends import trust
 from casmech.backends.build import LIBRARY
+from casmech.backends.manifest import KEPT
 from casmech.equations.functions import JointMeta, SystemFunctions
 from casmech.model.ir import GROUND_INDEX, ModelIR
 
@@ -32,12 +33,23 @@ def externals(directory: Path) -> dict[str, ca.Function]:
     codegen.trust has found the directory the user's and its libraries as built (a
     UsageError naming what is wrong otherwise; nothing is loaded then)."""
     entries = trust.verify(directory, LIBRARY)["functions"]
-    return {entry["name"]: ca.external(entry["name"], str(
-        (directory / (entry.get("library") or LIBRARY)).resolve())) for entry in entries}
+    return {entry["name"]: _loaded(entry["name"], directory / (entry.get("library") or LIBRARY))
+            for entry in entries}
+
+
+def _loaded(name: str, path: Path) -> ca.Function:
+    """A function from its library, or from CasADi's serialization of it (a kept function of
+    backends.library.compile_keyed)."""
+    if path.name.endswith(KEPT):
+        return ca.Function.load(str(path))
+    return ca.external(name, str(path.resolve()))
 
 
 def load(directory: Path, ir: ModelIR) -> SystemFunctions:
-    return SystemFunctions(externals(directory), **metadata(ir), mode="compiled")
+    """The bundle of a build directory over `ir` (the IR it was built from), carrying the
+    directory's cache key."""
+    return SystemFunctions(externals(directory), **metadata(ir), mode="compiled",
+                           library_key=directory.name)
 
 
 def mode_of(functions: SystemFunctions) -> str:

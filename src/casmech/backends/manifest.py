@@ -15,6 +15,7 @@ DIRECTIONAL = frozenset({"mass_matrix", "phi_q"})
 # sha256, codegen.trust)
 FORMAT = 3
 DIGESTS = "library_sha256"  # key: library file name -> sha256 of its bytes at build
+KEPT = ".casadi"  # a kept function's file (library.compile_keyed): CasADi's serialization
 
 
 def _sparsity(sparsity: ca.Sparsity) -> dict:

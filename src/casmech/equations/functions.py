@@ -61,6 +61,10 @@ class SystemFunctions:
     joint_functions: Mapping[str, ca.Function] | None = field(default=None, repr=False)
     # the parametric library the functions are bound to (codegen.parametric), None: none
     parametric: Library | None = field(default=None, repr=False)
+    # the cache key of the library its compiled functions and `ir` came from (backends.load),
+    # which keys what is compiled for it later (runtime.joint_dynamics); a bundle made over
+    # another IR must not carry it
+    library_key: str | None = field(default=None, repr=False)
 
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 import sys
-from dataclasses import replace
+from dataclasses import asdict, replace
 
 import casadi as ca
 import numpy as np
@@ -90,17 +90,32 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     def make() -> JointSystem:
         if functions.joint_functions is not None:
             return library_system(functions, workspace)
-        system = build(functions.ir, tree_of(functions, workspace),
-                       identity_states=settings.stiff_states)
         if _compiled(functions) and not lags_bundle(functions, compile_):
-            with_motion = functions.n_bodies <= compile_.motion_bodies
-            solved = with_motion and system.n_cut and settings.loop_rows == "solved"
-            terms = saddle_terms(functions.ir, system.tree) if solved else None
-            system = compiled_system(system, with_motion, settings, terms)
-        return system
+            if functions.library_key is not None:
+                return keyed_system(functions, settings, workspace)
+            return compiled_system(_built(functions, settings, workspace),
+                                   *_compiled_parts(functions, settings, workspace))
+        return _built(functions, settings, workspace)
 
     return workspace.kept("joint_system", (compile_, settings.stiff_states, settings.loop_rows),
                           make)
+
+
+def _built(functions: SystemFunctions, settings: DynamicsSolver,
+           workspace: Workspace) -> JointSystem:
+    """The joint system's symbolic build over the bundle's IR."""
+    return build(functions.ir, tree_of(functions, workspace),
+                 identity_states=settings.stiff_states)
+
+
+def _compiled_parts(functions: SystemFunctions, settings: DynamicsSolver,
+                    workspace: Workspace) -> tuple[bool, DynamicsSolver, ca.Function | None]:
+    """compiled_system's (with_motion, settings, terms) for a compiled bundle: the results rows
+    compiled up to compile.motion_bodies, the loops' saddle terms for loop_rows solved."""
+    with_motion = functions.n_bodies <= settings.compile.motion_bodies
+    tree = tree_of(functions, workspace)
+    solved = with_motion and bool(tree.cut) and settings.loop_rows == "solved"
+    return with_motion, settings, saddle_terms(functions.ir, tree) if solved else None
 
 
 def library_system(functions: SystemFunctions,
@@ -108,25 +123,58 @@ def library_system(functions: SystemFunctions,
     """The joint system of a parametric library's functions, bound to this bundle's values
     (codegen.parametric), over the numeric IR's tree."""
     library, tree = functions.joint_functions, tree_of(functions, workspace)
+    return _from_library(tree, library)
+
+
+def _from_library(tree: Tree, library) -> JointSystem:
+    """A joint system of library functions under their library names (joint_ode or
+    joint_dae, joint_motion, joint_acceleration_system, joint_velocity_jacobian,
+    joint_relative_states; joint_jacobian, joint_saddle_terms where there)."""
     dynamics = library["joint_dae" if tree.cut else "joint_ode"]
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
                        library["joint_velocity_jacobian"], library["joint_relative_states"],
-                       given_jacobian=library.get("joint_jacobian"))
+                       given_jacobian=library.get("joint_jacobian"),
+                       saddle_terms=library.get("joint_saddle_terms"))
 
 
-def compiled_system(system: JointSystem, with_motion: bool = True,
-                    settings: DynamicsSolver = DEFAULT,
-                    terms: ca.Function | None = None) -> JointSystem:
-    """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
-    codegen's cache; with the tree's ODE its forward derivative where method auto may choose
-    BDF (up to settings.stiff_states; its Jacobian by forward sweeps of the compiled ODE:
-    casadi's externals find fwd1_<name> in their library, and the interpreted RNEA identity
-    is dropped: the identity's C would lengthen the cold build, joint-derivatives.md), with
-    the DAE its Jacobian (JointSystem.problem); `terms`, the loops' saddle_terms for their
-    results rows (runtime.joint_rows), in the same library."""
-    from casmech.backends import codegen
+def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
+                 workspace: Workspace | None = None) -> JointSystem:
+    """A compiled bundle's joint system from a library cached under the bundle's own library
+    key and the settings that shape it (backends.library.compile_keyed), so that a warm cache
+    builds no symbolic graph: on a miss, the system is built and what compiled_system compiles
+    is compiled, and the functions a run evaluates a few times (the start's and the loops'
+    acceleration_system, velocity_jacobian, relative_states, and the results rows above
+    compile.motion_bodies) are kept as CasADi's serialization beside it."""
+    from casmech.backends.library import compile_keyed
 
+    workspace = of(functions, workspace)
+    tree = tree_of(functions, workspace)
+    name = "joint_dae" if tree.cut else "joint_ode"
+    content = {"kind": "joint system", "bundle": functions.library_key,
+               "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
+               "loop_rows": settings.loop_rows}
+
+    def make():
+        system = _built(functions, settings, workspace)
+        with_motion, _, terms = _compiled_parts(functions, settings, workspace)
+        compiled = _library_functions(system, with_motion, settings, terms)
+        kept = {"joint_acceleration_system": system.acceleration_system,
+                "joint_velocity_jacobian": system.velocity_jacobian,
+                "joint_relative_states": system.relative_states}
+        if not with_motion:
+            kept["joint_motion"] = system.motion
+        return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
+
+    library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
+    return _from_library(tree, library)
+
+
+def _library_functions(system: JointSystem, with_motion: bool, settings: DynamicsSolver,
+                       terms: ca.Function | None) -> dict[str, ca.Function]:
+    """What a compiled bundle's joint system compiles, by library name: the tree's ODE (with
+    its forward derivative where method auto may choose BDF, up to settings.stiff_states) or
+    the loops' DAE, with_motion the results rows, and `terms`, the loops' saddle terms."""
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
@@ -135,6 +183,23 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
         functions["joint_saddle_terms"] = terms
     if not system.n_cut and system.layout.n_x <= settings.stiff_states:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
+    return functions
+
+
+def compiled_system(system: JointSystem, with_motion: bool = True,
+                    settings: DynamicsSolver = DEFAULT,
+                    terms: ca.Function | None = None) -> JointSystem:
+    """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
+    codegen's cache, keyed by their content (_library_functions); with the tree's ODE its
+    forward derivative (casadi's externals find fwd1_<name> in their library: its Jacobian by
+    forward sweeps of the compiled ODE, and the interpreted RNEA identity is dropped: the
+    identity's C would lengthen the cold build, joint-derivatives.md), with the DAE its
+    Jacobian (JointSystem.problem); `terms`, the loops' saddle_terms for their results rows
+    (runtime.joint_rows), in the same library."""
+    from casmech.backends import codegen
+
+    name = "joint_dae" if system.n_cut else "joint_ode"
+    functions = _library_functions(system, with_motion, settings, terms)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())

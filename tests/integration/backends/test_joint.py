@@ -9,6 +9,7 @@ import pytest
 import casmech
 from casmech.backends import codegen
 from casmech.core.options import DynamicsSolver, JointCompile
+from casmech.runtime import joint_dynamics
 from casmech.runtime.joint_dynamics import joint_system
 from casmech.runtime.workspace import Workspace
 from tests.conftest import Table
@@ -125,3 +126,75 @@ def test_a_coupled_mechanism_runs_its_compiled_joint_dae(toolchain, cache_root):
     # every row's multiplier solved at its state by the compiled terms: the same closed form
     np.testing.assert_allclose(table["teeth.force"], M_RACK * R_PINION * alpha, rtol=1e-9,
                                atol=0)
+
+
+
+def _refuse_builds(monkeypatch) -> None:
+    def refused(*args, **kwargs):
+        raise AssertionError("a symbolic joint system was built")
+
+    monkeypatch.setattr(joint_dynamics, "build", refused)
+
+
+def _assert_same_start_functions(fast, slow) -> None:
+    """The functions a run's start and loops evaluate, equal at random states."""
+    n = slow.relative_states.size1_in(0)
+    for _ in range(2):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        q, q_dot = RNG.uniform(-0.5, 0.5, n), RNG.uniform(-0.5, 0.5, n)
+        for a, b in ((fast.acceleration_system(t, x), slow.acceleration_system(t, x)),
+                     (fast.velocity_jacobian(t, x), slow.velocity_jacobian(t, x)),
+                     (fast.relative_states(q, q_dot), slow.relative_states(q, q_dot))):
+            for u, v in zip(a if isinstance(a, (list, tuple)) else [a],
+                            b if isinstance(b, (list, tuple)) else [b], strict=True):
+                # CasADi's serialization of the same graph: the same operations
+                np.testing.assert_array_equal(np.array(u), np.array(v))
+
+
+def test_a_warm_cache_builds_no_joint_system(interpreted, compiled, monkeypatch):
+    """The compiled bundle's joint library is keyed by the bundle's own library and the
+    settings (runtime.joint_dynamics.keyed_system): once built, a new workspace (a new
+    process) takes the tree's ODE, results rows and start functions from the cache without
+    building the symbolic system, and they are the interpreted system's; above motion_bodies
+    the results rows too are kept beside the library."""
+    above = DynamicsSolver(compile=JointCompile(motion_bodies=0))
+    for settings in (DynamicsSolver(), above):  # in the cache (maybe already)
+        joint_system(compiled, settings, Workspace(compiled))
+    slow = joint_system(interpreted)
+    _refuse_builds(monkeypatch)
+    fast = joint_system(compiled, workspace=Workspace(compiled))
+    assert fast.dynamics.class_name() == "External" and fast.identity_jacobian is None
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    _assert_same_start_functions(fast, slow)
+    _assert_jacobian_is_the_odes(fast, slow)
+    kept = joint_system(compiled, above, Workspace(compiled))
+    assert kept.motion.is_a("SXFunction") and kept.dynamics.class_name() == "External"
+    _assert_same_tree_functions(kept, slow, interpreted.n_bodies)
+
+
+def test_a_warm_cache_builds_no_loop_system(toolchain, cache_root, monkeypatch):
+    """The same for the loops' DAE with its saddle terms (loop_rows solved): the pinion and
+    rack's system from the cache equals the interpreted one."""
+    from tests.validation.runtime.test_couplings import RACK
+
+    model = casmech.loads(RACK)
+    bundle = codegen.compiled(model, toolchain, root=cache_root)
+    interpreted = casmech.compile(model)
+    solved = DynamicsSolver(loop_rows="solved")
+    joint_system(bundle, solved, Workspace(bundle))
+    slow = joint_system(interpreted, solved)
+    _refuse_builds(monkeypatch)
+    fast = joint_system(bundle, solved, Workspace(bundle))
+    assert fast.n_cut == slow.n_cut == 1
+    assert fast.saddle_terms.class_name() == "External"
+    _assert_same_start_functions(fast, slow)
+    nb, n_z = interpreted.n_bodies, slow.dynamics.size1_in(2)
+    for _ in range(2):
+        t, x = RNG.uniform(0, 2), RNG.uniform(-0.5, 0.5, slow.layout.n_x)
+        z, p = RNG.uniform(-1, 1, n_z), np.zeros(slow.dynamics.size1_in(3))
+        for a, b in zip(fast.dynamics(t, x, z, p), slow.dynamics(t, x, z, p), strict=True):
+            # the same SX compiled to C: roundoff
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+        for a, b in zip(fast.motion(t, x, z, np.ones(nb)), slow.motion(t, x, z, np.ones(nb)),
+                        strict=True):
+            np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)

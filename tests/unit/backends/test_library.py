@@ -83,3 +83,51 @@ def test_bad_names_are_refused(toolchain, tmp_path):
         codegen.compile_functions({"f": _function()}, with_jacobian={"g"}, root=tmp_path)
     with pytest.raises(ValueError, match="DAE residual"):
         codegen.compile_functions({"f": _function()}, integrators={"f"}, root=tmp_path)
+
+
+def _keyed(toolchain, root, content, calls: list, gain: float = 2.0) -> dict:
+    """library.compile_keyed of f (compiled, with its Jacobian) and g (kept), counting make()."""
+    def make():
+        calls.append(content)
+        x = ca.SX.sym("x", 2)
+        kept = ca.Function("g", [x], [ca.exp(x[0]) * x[1]], ["x"], ["y"])
+        return {"f": _function(gain)}, {"g": kept}, toolchain
+
+    return library.compile_keyed(content, make, with_jacobian={"f"}, toolchain=toolchain,
+                                 root=root)
+
+
+def test_keyed_functions_build_once_per_content_and_keep_the_kept_serialized(toolchain,
+                                                                            tmp_path):
+    calls = []
+    first = _keyed(toolchain, tmp_path, {"model": "a"}, calls)
+    assert len(calls) == 1 and first["f"].class_name() == "External"
+    assert first["g"].is_a("SXFunction")  # deserialized, evaluated interpreted
+    inputs = [np.array([0.3, -0.7, 0.2]), 0.4]
+    for a, b in zip(first["f"](*inputs), _function()(*inputs), strict=True):
+        # the same operations in C: the compiled-vs-interpreted bound
+        np.testing.assert_allclose(a.full(), b.full(), rtol=1e-12, atol=1e-12)
+    # CasADi's serialization round trip keeps the graph: exactly the same value
+    assert float(first["g"]([0.5, 2.0])) == np.exp(0.5) * 2.0
+    again = _keyed(toolchain, tmp_path, {"model": "a"}, calls, gain=5.0)
+    # the same content: the cached library, make() not called (the gain it would build with
+    # is not the one in the library)
+    assert len(calls) == 1
+    np.testing.assert_array_equal(again["f"](*inputs)[0].full(), first["f"](*inputs)[0].full())
+    other = _keyed(toolchain, tmp_path, {"model": "b"}, calls, gain=5.0)
+    assert len(calls) == 2  # another content: another library, built by make()
+    assert float(other["f"](*inputs)[0][0]) == pytest.approx(
+        np.sin(0.3) * -0.7 + 5.0 * 0.4, rel=1e-12)  # the closed form of its f
+
+
+def test_an_edited_kept_function_is_rebuilt(toolchain, tmp_path):
+    """A kept function's file is checked like a library (codegen.trust: its sha256 in the
+    manifest); an edited one makes the entry corrupt, which the cache builds again."""
+    calls = []
+    _keyed(toolchain, tmp_path, {"model": "a"}, calls)
+    [kept] = list(tmp_path.glob("*/g.casadi"))
+    kept.write_text(kept.read_text() + "0")  # (another size: trust rehashes it)
+    with pytest.warns(UserWarning):  # the cache says it discards a corrupt entry
+        functions = _keyed(toolchain, tmp_path, {"model": "a"}, calls)
+    assert len(calls) == 2
+    assert float(functions["g"]([0.5, 2.0])) == np.exp(0.5) * 2.0
