@@ -44,11 +44,11 @@ from casmech.schema.tables import TableExpr
 
 ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(__file__).resolve().parents[1]
-# what the generated code depends on: these packages (with their subpackages) and top-level
-# modules
+# what the generated code depends on: these packages (with their subpackages) and modules (the
+# joint system's library: which functions runtime.joint_dynamics.keyed_system compiles or keeps)
 SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations", "formulations",
                    "backends")
-SOURCE_MODULES = ()
+SOURCE_MODULES = ("runtime/joint_dynamics.py",)
 
 
 def cache_dir() -> Path:
