@@ -65,7 +65,11 @@ def timed(command: list[str], env: dict) -> tuple[float, float]:
 
 def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt: float):
     """(system, label, command, environment maker(run) -> env)."""
-    base = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    # bytecode written to a private folder by the untimed first run of each command, as
+    # `pip install` byte-compiles (an inherited PYTHONDONTWRITEBYTECODE would make every
+    # process compile casmech's sources again)
+    base = {k: v for k, v in os.environ.items()
+            if k not in ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE")}
     base.update(PYTHONPYCACHEPREFIX=str(work / "pycache"), OPENBLAS_NUM_THREADS="1")
     rows = []
     for name in systems:
