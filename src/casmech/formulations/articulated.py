@@ -369,19 +369,32 @@ def _eliminate(s_free, rows, ia, pa, c, tau):
     return ia, pa, (u_mat, d_inv, residual)
 
 
-def joint_wrenches(joints: list[Joint], dynamics: Dynamics) -> list:
+def joint_wrenches(joints: list[Joint], dynamics: Dynamics, applied: list | None = None
+                   ) -> list:
     """The wrench each tree joint exerts on its child (CM frame, body axes): the Newton-Euler
-    balance of the child's subtree, per joint in tree order."""
+    balance of the child's subtree, per joint in tree order; `applied`: further body wrenches
+    (CM frame) that the dynamics took as joint forces (formulations/joint_forces.py), in the
+    balance as applied forces."""
     wrench, zero = {}, ca.DM.zeros(6)
+    constants = dynamics.constants
     for j in reversed(joints):
         k, parent = j.joint.child, j.joint.parent
+        bias = dynamics.bias[k]
+        if applied is not None:
+            bias = _less(bias, *to_center(dynamics.frames[k], constants), applied[k])[0]
         wrench[k], back = _subtree(wrench.get(k, zero), dynamics.inertia[k],
-                                   dynamics.frame_accelerations[k], dynamics.bias[k], j.e, j.r)
+                                   dynamics.frame_accelerations[k], bias, j.e, j.r)
         if parent != GROUND_INDEX:
             wrench[parent] = wrench.get(parent, zero) + back
-    constants = dynamics.constants
     return [_at_center(*(constants(v) for v in dynamics.frames[j.joint.child]),
                        wrench[j.joint.child])[0] for j in joints]
+
+
+@traced
+def _less(bias, e_c, r_c, applied):
+    """A body's bias force less an applied body wrench (CM frame), as _velocity_terms takes
+    one."""
+    return (bias - spatial.force_back(e_c, r_c, applied),)
 
 
 @traced
