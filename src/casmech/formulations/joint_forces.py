@@ -1,21 +1,24 @@
 """The joint formulation's applied forces: body wrenches, and generalized forces on the tree
 joints' coordinates of the elements local to one tree joint.
 
-An element is local to a tree joint when it acts between that joint's two bodies and its law
+An element is local to a tree joint when it acts between that joint's two bodies, its law
 reads t and the motion of one body relative to the other only (equations.force_laws.relative:
 a tsda, an rsda, a joint's stop or effort motor), no driver prescribes a coordinate of the
-joint and its coordinates have no quaternion (a spherical or free joint's stay as they are). Its law is then a function of that joint's coordinates theta and velocities u alone:
-`JointCoordinates` places the two bodies by the joint's motion relative to its parent frame
-F_p (the law is invariant under a common rigid motion of the pair), so the same law
-(equations.force_laws.FORCE_ELEMENTS) gives its generalized force over theta, and virtual
-power gives the one along u: tau = (d theta_dot / d u)^T Q_theta. Its derivative stays on the
-joint's own coordinates instead of running through the kinematic chain. Every other element
-(gravity, one-body loads, elements between bodies of different joints, elements on cut or
-driven joints, laws reading other state) stays a body wrench (articulated.applied_wrenches).
+joint and the joint's coordinates hold no quaternion (a spherical or free joint's elements
+stay body wrenches). Its law is then a function of that joint's coordinates theta and
+velocities u alone: `JointCoordinates` places the two bodies by the joint's motion relative
+to its parent frame F_p (the law is invariant under a common rigid motion of the pair), so
+the same law (equations.force_laws.FORCE_ELEMENTS) gives its generalized force over theta,
+and virtual power the one along u, tau = (d theta_dot / d u)^T Q_theta: its derivative stays
+on the joint's own coordinates instead of running through the kinematic chain. A cut joint
+has no coordinates, so its elements stay body wrenches, as do gravity, one-body loads,
+elements between bodies of different tree joints and laws that read other state
+(articulated.applied_wrenches).
 
 The constraint wrench of a tree joint (the results row's multipliers) is the Newton-Euler
 balance of its subtree with every applied force a body wrench: `local_wrenches` gives the
-local elements' body wrenches for it (articulated.joint_wrenches' `applied`).
+local elements' body wrenches for it (articulated.joint_wrenches' `applied`), so the
+reactions are those of the body-wrench evaluation whatever direction an element acts in.
 """
 
 from __future__ import annotations
