@@ -138,8 +138,12 @@ def test_joint_space_functions(tmp_path, monkeypatch):
 
 def test_elements_that_stay_body_wrenches(tmp_path):
     """A force whose law reads another joint's state, and the elements of a driven joint,
-    stay body wrenches; a tsda between a tree joint's bodies is local."""
+    stay body wrenches; a tsda between a tree joint's bodies (off its axis: the reactions
+    come from its body wrenches) and an effort motor whose law reads t and its own angle are
+    local."""
     model = yaml.safe_load((MODELS / "flyball_governor.yaml").read_text())
+    hinge = next(j for j in model["joints"] if j["name"] == "hinge_b")
+    hinge["motor"] = {"torque": "0.3 * sin(2 * t) - 0.5 * angle - 0.1 * angle_dot"}
     model["forces"] += [
         {"name": "reads_other", "type": "rsda", "joint": "hinge_b",
          "actuator": "0.1 * hinge_a.angle"},
@@ -149,7 +153,7 @@ def test_elements_that_stay_body_wrenches(tmp_path):
     path = tmp_path / "flyball_more.yaml"
     path.write_text(yaml.safe_dump(model, sort_keys=False))
     ir = casmech.compile(casmech.load(path), "interpreted").ir
-    assert local_names(ir, spanning_tree(ir)) == {"damper_a", "damper_b", "spring"}
+    assert local_names(ir, spanning_tree(ir)) == {"damper_a", "damper_b", "spring", "hinge_b"}
     assert_same_system(ir, count=4)
 
 
