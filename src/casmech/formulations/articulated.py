@@ -7,13 +7,13 @@ Spatial vectors are per body, in its frame at its CM, angular part first (core/s
 velocity V = (omega_bar, A^T r_dot), inertia [[J_bar, 0], [0, m 1]], force (n_bar, A^T F). A
 tree joint's motion subspace S and the rate term c_J = S_dot u come from AD of its registry
 entry (casmech.elements.joint_types.MOTIONS). Applied forces are the r-p ones (eom.applied_forces:
-gravity,
-force elements, effort motors) evaluated on the tree's poses and velocities, as body wrenches; a
-driver's coordinate is a function of time (its rate and acceleration by AD). The quantities
-of the model alone (frames, their quaternions, inertias in reference frames) go through a
-joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
-in a parametric one. Each pass's work on one body is a step traced once per structure and
-evaluated inside CasADi (core/traced_steps.py).
+gravity, force elements, effort motors) evaluated on the tree's poses and velocities, as body
+wrenches, but for the elements local to one tree joint, which act as generalized forces on its
+coordinates (formulations/joint_forces.py); a driver's coordinate is a function of time (its
+rate and acceleration by AD). The quantities of the model alone (frames, their quaternions,
+inertias in reference frames) go through a joint_constants.Constants: numbers in a numeric
+build, symbols computed once per parameter value in a parametric one. Each pass's work on one
+body is a step traced once per structure and evaluated inside CasADi (core/traced_steps.py).
 """
 
 from __future__ import annotations
