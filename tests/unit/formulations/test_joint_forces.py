@@ -113,6 +113,12 @@ def test_gallery_rsda_and_stop(tmp_path):
     tree = spanning_tree(ir)
     # the driven spindle's joint has none; the hinges' dampers and the stop are local
     assert local_names(ir, tree) == {"damper_a", "damper_b", "hinge_a"}
+    system = build(ir, tree)
+    k = next(i for i, j in enumerate(tree.joints) if j.name == "hinge_a")
+    stop = joint_forces.local_torque(tree.joints[k], tuple(ir.limits))
+    pushed = [float(stop(x[system.layout.theta[k][0]], x[system.layout.u[k][0]], t))
+              for t, x in states(system, ir, 4)[1::2]]
+    assert all(abs(f) > 1 for f in pushed)  # the states past a bound are inside the stop
     assert_same_system(ir)
 
 
