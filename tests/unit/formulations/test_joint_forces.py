@@ -208,3 +208,37 @@ def test_parametric_build_with_local_elements(tmp_path):
                 # the same arithmetic but for the constants' association: roundoff
                 np.testing.assert_allclose(np.array(a), b, rtol=0,
                                            atol=1e-12 * max(np.max(np.abs(b), initial=0), 1))
+
+
+def test_loop_dae_with_local_elements():
+    """A tree with a cut joint (the free four-bar of test_joint_system: its universal joint
+    cut) with an rsda on the crank's pivot and a stop on the rocker's: the DAE, its
+    acceleration system and the results row (the cut rows' multipliers from z, the tree
+    joints' from the subtree balance) equal the body-wrench evaluation's at random (t, x, z,
+    p)."""
+    from tests.unit.formulations.test_joint_system import free_four_bar
+
+    model = yaml.safe_load(free_four_bar())
+    pivot = next(j for j in model["joints"] if j["name"] == "rocker_pivot")
+    pivot["limit"] = {"lower": -0.3, "upper": 0.2, "stiffness": 800.0, "damping": 4.0}
+    model["forces"] = [{"name": "spring", "type": "rsda", "joint": "crank_pivot",
+                        "stiffness": 20.0, "damping": 0.5, "free_angle": 0.2}]
+    ir = casmech.compile(casmech.loads(yaml.safe_dump(model, sort_keys=False)),
+                         "interpreted").ir
+    tree = spanning_tree(ir)
+    assert tree.cut and local_names(ir, tree) == {"spring", "rocker_pivot"}
+    local, wrenches = build(ir, tree), build(ir, tree, joint_local=False)
+    for t, x in states(local, ir, 6):
+        z = RNG.uniform(-5, 5, local.dynamics.size1_in(2))
+        p = RNG.integers(0, 2, local.dynamics.size1_in(3))
+        pairs = list(zip(local.dynamics(t, x, z, p), wrenches.dynamics(t, x, z, p),
+                         strict=True))
+        pairs += zip(local.acceleration_system(t, x), wrenches.acceleration_system(t, x),
+                     strict=True)
+        pairs += zip(local.motion(t, x, z, np.ones(ir.n_bodies)),
+                     wrenches.motion(t, x, z, np.ones(ir.n_bodies)), strict=True)
+        for a, b in pairs:
+            b = np.array(b)
+            # as assert_same_system
+            np.testing.assert_allclose(np.array(a), b, rtol=0,
+                                       atol=1e-10 * max(np.max(np.abs(b), initial=0), 1))
