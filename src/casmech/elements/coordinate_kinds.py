@@ -57,6 +57,9 @@ from casmech.core.units import (
 from casmech.elements.forces.terms import relative_angle
 
 ROLES = ("effort", "limit", "friction")  # the ForceIR types a kind names (CoordinateKind.types)
+# the roles whose law reads t and its joint's coordinate and rate only, the relative motion of
+# the joint's two bodies (a friction's also reads the runtime's mode and the joint's load)
+RELATIVE_ROLES = ("effort", "limit")
 
 
 @dataclass(frozen=True)

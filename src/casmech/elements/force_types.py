@@ -75,6 +75,10 @@ class ForceType:
     one_body: bool = False  # acts on body_i only (none on ground)
     kernel: Kernel | None = None
     points: Callable | None = None  # a contact's (ForceIR, x) -> its contact.Point list
+    # its law reads t and the motion of body_j relative to body_i only, not where the pair is:
+    # on the two bodies of a tree joint, a generalized force on that joint's coordinates
+    # (formulations/joint_forces.py)
+    relative: bool = False
 
 
 def _contact(name: str, spec: type, shape_spec: Callable, shape: Callable, **extra) -> ForceType:
@@ -87,10 +91,10 @@ def _contact(name: str, spec: type, shape_spec: Callable, shape: Callable, **ext
 BUILT_IN = (
     ForceType("tsda", springs.TSDA, springs.resolve_tsda, springs.lower_tsda, springs.law,
               state_keys=("actuator",), inputs=("force",), with_inputs=springs.with_inputs,
-              kernel=Kernel(springs.kernel_data, springs.kernel)),
+              kernel=Kernel(springs.kernel_data, springs.kernel), relative=True),
     ForceType("rsda", springs.RSDA, springs.resolve_rsda, springs.lower_rsda, springs.law,
               state_keys=("actuator",), inputs=("torque",), with_inputs=springs.with_inputs,
-              kernel=Kernel(springs.kernel_data, springs.kernel)),
+              kernel=Kernel(springs.kernel_data, springs.kernel), relative=True),
     ForceType("force", loads.PointForce, loads.resolve_force, loads.lower, loads.force_law,
               state_keys=("value",), inputs=("fx", "fy", "fz"), with_inputs=loads.with_inputs,
               one_body=True, kernel=Kernel(loads.force_data, loads.force_kernel, 3)),

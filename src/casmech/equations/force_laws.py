@@ -9,9 +9,10 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from functools import partial
 
-from casmech.elements.coordinate_kinds import BY_TYPE, View
+from casmech.elements.coordinate_kinds import BY_TYPE, RELATIVE_ROLES, View
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.equations import coordinates, friction, limits, motors
+from casmech.schema.resolved import ScalarFunction
 
 
 class _Elements(Mapping):
@@ -64,3 +65,19 @@ INPUT_KINDS: Mapping[str, tuple] = _Inputs()
 def elements(ir) -> tuple:
     """Every element with a law: the force elements, the effort motors, the stops."""
     return (*ir.forces, *ir.motors, *ir.limits)
+
+
+def relative(element) -> bool:
+    """Whether an element's law reads t and the motion of its body_j relative to its body_i
+    only: a force type whose entry says so (ForceType.relative) or a joint's effort motor or
+    stop (coordinate_kinds.RELATIVE_ROLES), whose laws are expressions of t and its own
+    coordinate and rate (no other state bound, no input symbol)."""
+    entry = FORCE_TYPES.get(element.type)
+    if entry is not None:
+        if not entry.relative:
+            return False
+    elif BY_TYPE[element.type][1] not in RELATIVE_ROLES:
+        return False
+    laws = ([element.actuator] if element.actuator is not None else []) + list(element.value or ())
+    return all(isinstance(law, ScalarFunction) and not getattr(law, "states", None)
+               for law in laws)

@@ -7,13 +7,13 @@ Spatial vectors are per body, in its frame at its CM, angular part first (core/s
 velocity V = (omega_bar, A^T r_dot), inertia [[J_bar, 0], [0, m 1]], force (n_bar, A^T F). A
 tree joint's motion subspace S and the rate term c_J = S_dot u come from AD of its registry
 entry (casmech.elements.joint_types.MOTIONS). Applied forces are the r-p ones (eom.applied_forces:
-gravity,
-force elements, effort motors) evaluated on the tree's poses and velocities, as body wrenches; a
-driver's coordinate is a function of time (its rate and acceleration by AD). The quantities
-of the model alone (frames, their quaternions, inertias in reference frames) go through a
-joint_constants.Constants: numbers in a numeric build, symbols computed once per parameter value
-in a parametric one. Each pass's work on one body is a step traced once per structure and
-evaluated inside CasADi (core/traced_steps.py).
+gravity, force elements, effort motors) evaluated on the tree's poses and velocities, as body
+wrenches, but for the elements local to one tree joint, which act as generalized forces on its
+coordinates (formulations/joint_forces.py); a driver's coordinate is a function of time (its
+rate and acceleration by AD). The quantities of the model alone (frames, their quaternions,
+inertias in reference frames) go through a joint_constants.Constants: numbers in a numeric
+build, symbols computed once per parameter value in a parametric one. Each pass's work on one
+body is a step traced once per structure and evaluated inside CasADi (core/traced_steps.py).
 """
 
 from __future__ import annotations
@@ -369,19 +369,32 @@ def _eliminate(s_free, rows, ia, pa, c, tau):
     return ia, pa, (u_mat, d_inv, residual)
 
 
-def joint_wrenches(joints: list[Joint], dynamics: Dynamics) -> list:
+def joint_wrenches(joints: list[Joint], dynamics: Dynamics, applied: list | None = None
+                   ) -> list:
     """The wrench each tree joint exerts on its child (CM frame, body axes): the Newton-Euler
-    balance of the child's subtree, per joint in tree order."""
+    balance of the child's subtree, per joint in tree order; `applied`: further body wrenches
+    (CM frame) that the dynamics took as joint forces (formulations/joint_forces.py), in the
+    balance as applied forces."""
     wrench, zero = {}, ca.DM.zeros(6)
+    constants = dynamics.constants
     for j in reversed(joints):
         k, parent = j.joint.child, j.joint.parent
+        bias = dynamics.bias[k]
+        if applied is not None:
+            bias = _less(bias, *to_center(dynamics.frames[k], constants), applied[k])[0]
         wrench[k], back = _subtree(wrench.get(k, zero), dynamics.inertia[k],
-                                   dynamics.frame_accelerations[k], dynamics.bias[k], j.e, j.r)
+                                   dynamics.frame_accelerations[k], bias, j.e, j.r)
         if parent != GROUND_INDEX:
             wrench[parent] = wrench.get(parent, zero) + back
-    constants = dynamics.constants
     return [_at_center(*(constants(v) for v in dynamics.frames[j.joint.child]),
                        wrench[j.joint.child])[0] for j in joints]
+
+
+@traced
+def _less(bias, e_c, r_c, applied):
+    """A body's bias force less an applied body wrench (CM frame), as _velocity_terms takes
+    one."""
+    return (bias - spatial.force_back(e_c, r_c, applied),)
 
 
 @traced

@@ -40,7 +40,7 @@ import numpy as np
 
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
-from casmech.formulations import articulated, rnea
+from casmech.formulations import articulated, joint_forces, rnea
 from casmech.formulations.joint_system import labels, layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
@@ -62,8 +62,10 @@ def _function(name: str, inputs: list, outputs: list) -> ca.Function:
     return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
 
 
-def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
-    """The SIGNATURES' functions of a tree (module docstring), SX."""
+def functions(ir: ModelIR, tree: Tree, joint_local: bool = True) -> dict[str, ca.Function]:
+    """The SIGNATURES' functions of a tree (module docstring), SX; the elements local to one
+    tree joint as generalized forces on its coordinates (formulations/joint_forces.py; not
+    `joint_local`: as body wrenches)."""
     lay = layout(tree)
     nq, nv = lay.n_theta, lay.n_x - lay.n_theta
     t, q, v = ca.SX.sym("t"), ca.SX.sym("q", nq), ca.SX.sym("v", nv)
@@ -76,13 +78,13 @@ def functions(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
               for j, kq, kv, fq, fv in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                            lay.free_u, strict=True)]
     kin = articulated.kinematics(joints, ir.n_bodies)
-    external = articulated.applied_wrenches(ir, t, kin)
-    torques = [tau[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
-    dynamics = articulated.articulated_body(ir, joints, kin, external, torques)
+    forces = joint_forces.TreeForces(ir, tree, joints, kin, t, joint_local)
+    torques = [local + tau[[k - nq for k in slots]] if slots else ca.SX(0, 1)
+               for local, slots in zip(forces.torques, lay.u, strict=True)]
+    dynamics = articulated.articulated_body(ir, joints, kin, forces.wrenches, torques)
     forward = ca.vertcat(*dynamics.u_dot) if nv else ca.SX(0, 1)
     u_dot = [acceleration[[k - nq for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
-    inverse = ca.vertcat(*rnea.inverse_dynamics(ir, joints, kin, external, u_dot)) if nv \
-        else ca.SX(0, 1)
+    inverse = forces.inverse_dynamics(u_dot) if nv else ca.SX(0, 1)
     mass = ca.jacobian(inverse, acceleration)
     bias = ca.substitute(inverse, acceleration, ca.DM.zeros(nv))
     bodies = articulated.state(kin, ir.n_bodies)

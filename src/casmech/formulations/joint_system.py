@@ -40,7 +40,7 @@ from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
 from casmech.equations.assemble import driver_value
-from casmech.formulations import articulated, rnea
+from casmech.formulations import articulated, joint_forces, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
@@ -252,7 +252,8 @@ def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
 class _Builder:
     """The SX of one model's tree; see build."""
 
-    def __init__(self, ir: ModelIR, tree: Tree, constants: Constants):
+    def __init__(self, ir: ModelIR, tree: Tree, constants: Constants,
+                 joint_local: bool = True):
         self.ir, self.tree, self.layout = ir, tree, layout(tree)
         self.constants = constants
         self.joint_rows: dict[str, list] = {}  # joint name -> rows_of at the tree's state
@@ -269,6 +270,8 @@ class _Builder:
             for j, th, us, ft, fu in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                          lay.free_u, strict=True)]
         self.kin = articulated.kinematics(self.joints, ir.n_bodies, constants)
+        self.forces = joint_forces.TreeForces(ir, tree, self.joints, self.kin, self.t,
+                                              joint_local)
         self.theta_dot = ca.vertcat(*[j.theta_dot[list(free)] if free else ca.SX(0, 1)
                                       for j, free in zip(self.joints, lay.free_theta,
                                                          strict=True)])
@@ -319,15 +322,13 @@ class _Builder:
         """The articulated-body accelerations under the applied forces, the cut rows'
         multipliers lam and generalized forces tau along the free velocities (x's u part,
         in its order; none: zero)."""
-        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
         cut = self.cut_wrenches(lam)
-        external = [a + c for a, c in zip(applied, cut, strict=True)]
-        if tau is None:
-            torques = [ca.SX.zeros(len(j.free), 1) for j in self.joints]
-        else:
+        external = [a + c for a, c in zip(self.forces.wrenches, cut, strict=True)]
+        torques = self.forces.torques  # the joint-local elements' (joint_forces)
+        if tau is not None:
             start = self.layout.n_theta
-            torques = [tau[[k - start for k in slots]] if slots else ca.SX(0, 1)
-                       for slots in self.layout.u]
+            torques = [local + tau[[k - start for k in slots]] if slots else ca.SX(0, 1)
+                       for local, slots in zip(torques, self.layout.u, strict=True)]
         return articulated.articulated_body(self.ir, self.joints, self.kin, external, torques)
 
     def ode_jacobian(self) -> ca.Function:
@@ -340,9 +341,7 @@ class _Builder:
         ode, u_dot = ca.SX.sym("ode", lay.n_x), ca.SX.sym("u_dot", n_u)
         accelerations = [u_dot[[k - lay.n_theta for k in slots]] if slots else ca.SX(0, 1)
                          for slots in lay.u]
-        applied = articulated.applied_wrenches(self.ir, self.t, self.kin)
-        tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(self.ir, self.joints, self.kin,
-                                                             applied, accelerations))
+        tau = self.forces.inverse_dynamics(accelerations)
         by_t, by_x, _ = rnea.forward_derivatives(tau, u_dot, ode[lay.n_theta:],
                                                  [self.t, self.x])
         outputs = [ca.vertcat(ca.jacobian(self.theta_dot, self.t), by_t),
@@ -356,7 +355,8 @@ class _Builder:
         Jacobian at the child (global force, body-frame torque)."""
         lam = ca.SX.zeros(len(self.ir.row_info()), 1)
         lam[list(self.cut_rows)] = lam_cut
-        wrenches = articulated.joint_wrenches(self.joints, dynamics)
+        wrenches = articulated.joint_wrenches(self.joints, dynamics,
+                                              self.forces.local_wrenches())
         for j, w in zip(self.joints, wrenches, strict=True):
             joint = j.joint.joint
             if joint is None:  # a floating body's free joint has no rows
@@ -428,8 +428,7 @@ def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
     theta, u = b.x[:lay.n_theta], b.x[lay.n_theta:]
     a = ca.SX.sym("a", lay.n_x - lay.n_theta)
     u_dot = [a[[k - lay.n_theta for k in slots]] if slots else ca.SX(0, 1) for slots in lay.u]
-    applied = articulated.applied_wrenches(ir, t, b.kin)
-    tau = ca.vertcat(ca.SX(0, 1), *rnea.inverse_dynamics(ir, b.joints, b.kin, applied, u_dot))
+    tau = b.forces.inverse_dynamics(u_dot)
     jacobian = ca.repmat(scale, 1, a.numel()) * ca.jacobian(rate, u)
     gamma = -scale * (ca.jtimes(rate, theta, b.theta_dot) + ca.jacobian(rate, t))
     outputs = [ca.jacobian(tau, a), jacobian, -ca.substitute(tau, a, ca.DM.zeros(a.shape)), gamma]
@@ -438,15 +437,17 @@ def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
-          identity_states: int = IDENTITY_STATES) -> JointSystem:
+          identity_states: int = IDENTITY_STATES, joint_local: bool = True) -> JointSystem:
     """The joint system of a numeric IR, or (data: the symbols of model.parametric.split)
     of a parametric one, every function with the trailing input "d" (module docstring); a
     numeric tree's of up to identity_states states with its ODE's Jacobian by the RNEA
     identity (JointSystem.identity_jacobian, built when first asked for). A build over
     symbols makes none: its constants are hoisted into the data input as they are met, and the
-    data function is fixed with the build (docs/decisions/joint-derivatives.md)."""
+    data function is fixed with the build (docs/decisions/joint-derivatives.md). Elements local
+    to one tree joint act on its coordinates (formulations/joint_forces.py; not `joint_local`:
+    as body wrenches, like every other applied force)."""
     constants = Constants(data)
-    b = _Builder(ir, tree, constants)
+    b = _Builder(ir, tree, constants, joint_local)
     t, x, z, w = b.t, b.x, b.z, b.w
     signs = ca.SX.sym("signs", ir.n_bodies)
     if not b.cut_rows:
