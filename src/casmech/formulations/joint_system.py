@@ -115,7 +115,9 @@ class JointSystem:
     # a numeric tree's: () -> its ODE's Jacobian by the RNEA identity (_Builder.ode_jacobian),
     # built on the first call; jacobian()'s signature (t, x, ode) -> (d ode/dt, d ode/dx)
     identity_jacobian: Callable[[], ca.Function] | None = None
-    saddle_terms: ca.Function | None = None  # loops' saddle_terms, compiled with the motion
+    # loops: (t, x, w, signs) -> (q, q_dot, q_ddot, lam), the rows with the loop multipliers
+    # solved at (t, x) (runtime.joint_rows.solved_motion), compiled with the motion
+    solved_motion: ca.Function | None = None
 
     @property
     def n_cut(self) -> int:

@@ -4,6 +4,8 @@ runtime and casmech.optimal both call:
     closest_point(phi, phi_q, rows)    assembly: the point of Phi(t, q) = 0 nearest to q_ref
     saddle(M pattern, P pattern)       accelerations and multipliers:
                                        [M P^T; P -diag(w)] [v_dot; lam] = [F; gamma]
+    solve_saddle(M, P, F, gamma, w)    the same as expressions (MX: the LU; SX: unrolled
+                                       Cholesky factors of M and the Schur complement)
 
 closest_point is a CasADi rootfinder on the first-order optimality (KKT) conditions of
 min 1/2 |q - q_ref|^2 subject to Phi_I(t, q) = 0 over the independent rows I:
@@ -79,7 +81,30 @@ def saddle(mass: ca.Sparsity, jacobian: ca.Sparsity) -> ca.Function:
     n, m = mass.size1(), jacobian.size1()
     m_in, p_in = ca.MX.sym("M", mass), ca.MX.sym("P", jacobian)
     forces, gamma, w = ca.MX.sym("F", n), ca.MX.sym("gamma", m), ca.MX.sym("w", m)
-    lhs = ca.blockcat([[m_in, p_in.T], [p_in, -ca.diag(w)]])
-    z = ca.solve(lhs, ca.vertcat(forces, gamma), SADDLE_SOLVER)
-    return ca.Function("saddle", [m_in, p_in, forces, gamma, w], [z[:n], z[n:]],
+    return ca.Function("saddle", [m_in, p_in, forces, gamma, w],
+                       list(solve_saddle(m_in, p_in, forces, gamma, w)),
                        ["M", "P", "F", "gamma", "w"], ["v_dot", "lam"])
+
+
+def solve_saddle(mass, jacobian, forces, gamma, w) -> tuple:
+    """(v_dot, lam) of [M P^T; P -diag(w)] [v_dot; lam] = [F; gamma] as expressions: over MX
+    by CSparse's LU (SADDLE_SOLVER, saddle's); over SX unrolled into the graph of what builds
+    M, P, F and gamma, by the range space: M = R^T R and the Schur complement
+    S = P M^-1 P^T + diag(w) = R_s^T R_s by Cholesky factorizations (casadi.chol: M and S
+    are symmetric positive definite, so no pivot is needed), then
+
+        (P M^-1 P^T + diag(w)) lam = P M^-1 F - gamma,   M v_dot = F - P^T lam.
+
+    S is singular where P lost rank and no row is masked (or M where a body has no mass):
+    the SX solve then gives NaN or infinities, not an error."""
+    n = mass.size1()
+    if isinstance(mass, ca.MX):
+        lhs = ca.blockcat([[mass, jacobian.T], [jacobian, -ca.diag(w)]])
+        z = ca.solve(lhs, ca.vertcat(forces, gamma), SADDLE_SOLVER)
+        return z[:n], z[n:]
+    factor = ca.chol(mass)  # M = R^T R, R upper triangular
+    spread = ca.solve(factor.T, jacobian.T)  # R^-T P^T
+    applied = ca.solve(factor.T, forces)  # R^-T F
+    schur = ca.chol(ca.mtimes(spread.T, spread) + ca.diag(w))
+    lam = ca.solve(schur, ca.solve(schur.T, ca.mtimes(spread.T, applied) - gamma))
+    return ca.solve(factor, applied - ca.mtimes(spread, lam)), lam

@@ -38,7 +38,7 @@ from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.joint_rows import LoopRows
+from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -93,8 +93,9 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         if _compiled(functions) and not lags_bundle(functions, compile_):
             if functions.library_key is not None:
                 return keyed_system(functions, settings, workspace)
-            return compiled_system(_built(functions, settings, workspace),
-                                   *_compiled_parts(functions, settings, workspace))
+            system = _built(functions, settings, workspace)
+            with_motion, rows = _compiled_parts(functions, system, settings)
+            return compiled_system(system, with_motion, settings, rows)
         return _built(functions, settings, workspace)
 
     return workspace.kept("joint_system", (compile_, settings.stiff_states, settings.loop_rows),
@@ -108,14 +109,16 @@ def _built(functions: SystemFunctions, settings: DynamicsSolver,
                  identity_states=settings.stiff_states)
 
 
-def _compiled_parts(functions: SystemFunctions, settings: DynamicsSolver,
-                    workspace: Workspace) -> tuple[bool, DynamicsSolver, ca.Function | None]:
-    """compiled_system's (with_motion, settings, terms) for a compiled bundle: the results rows
-    compiled up to compile.motion_bodies, the loops' saddle terms for loop_rows solved."""
+def _compiled_parts(functions: SystemFunctions, system: JointSystem,
+                    settings: DynamicsSolver) -> tuple[bool, ca.Function | None]:
+    """compiled_system's (with_motion, rows) for a compiled bundle's built `system`: the results
+    rows compiled up to compile.motion_bodies, and with them for loop_rows solved the loops'
+    rows solved at each state (runtime.joint_rows.solved_motion)."""
     with_motion = functions.n_bodies <= settings.compile.motion_bodies
-    tree = tree_of(functions, workspace)
-    solved = with_motion and bool(tree.cut) and settings.loop_rows == "solved"
-    return with_motion, settings, saddle_terms(functions.ir, tree) if solved else None
+    solved = with_motion and bool(system.n_cut) and settings.loop_rows == "solved"
+    if not solved:
+        return with_motion, None
+    return with_motion, solved_motion(saddle_terms(functions.ir, system.tree), system.motion)
 
 
 def library_system(functions: SystemFunctions,
@@ -129,13 +132,13 @@ def library_system(functions: SystemFunctions,
 def _from_library(tree: Tree, library) -> JointSystem:
     """A joint system of library functions under their library names (joint_ode or
     joint_dae, joint_motion, joint_acceleration_system, joint_velocity_jacobian,
-    joint_relative_states; joint_jacobian, joint_saddle_terms where there)."""
+    joint_relative_states; joint_jacobian, joint_solved_motion where there)."""
     dynamics = library["joint_dae" if tree.cut else "joint_ode"]
     return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
                        dynamics, library["joint_motion"], library["joint_acceleration_system"],
                        library["joint_velocity_jacobian"], library["joint_relative_states"],
                        given_jacobian=library.get("joint_jacobian"),
-                       saddle_terms=library.get("joint_saddle_terms"))
+                       solved_motion=library.get("joint_solved_motion"))
 
 
 def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
@@ -157,8 +160,8 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
 
     def make():
         system = _built(functions, settings, workspace)
-        with_motion, _, terms = _compiled_parts(functions, settings, workspace)
-        compiled = _library_functions(system, with_motion, settings, terms)
+        with_motion, rows = _compiled_parts(functions, system, settings)
+        compiled = _library_functions(system, with_motion, settings, rows)
         kept = {"joint_acceleration_system": system.acceleration_system,
                 "joint_velocity_jacobian": system.velocity_jacobian,
                 "joint_relative_states": system.relative_states}
@@ -171,16 +174,17 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
 
 
 def _library_functions(system: JointSystem, with_motion: bool, settings: DynamicsSolver,
-                       terms: ca.Function | None) -> dict[str, ca.Function]:
+                       rows: ca.Function | None) -> dict[str, ca.Function]:
     """What a compiled bundle's joint system compiles, by library name: the tree's ODE (with
     its forward derivative where method auto may choose BDF, up to settings.stiff_states) or
-    the loops' DAE, with_motion the results rows, and `terms`, the loops' saddle terms."""
+    the loops' DAE, with_motion the results rows, and `rows`, the loops' rows solved at each
+    state (runtime.joint_rows.solved_motion)."""
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
         functions["joint_motion"] = system.motion
-    if terms is not None:
-        functions["joint_saddle_terms"] = terms
+    if rows is not None:
+        functions["joint_solved_motion"] = rows
     if not system.n_cut and system.layout.n_x <= settings.stiff_states:
         functions["fwd1_joint_ode"] = system.dynamics.forward(1)
     return functions
@@ -188,24 +192,24 @@ def _library_functions(system: JointSystem, with_motion: bool, settings: Dynamic
 
 def compiled_system(system: JointSystem, with_motion: bool = True,
                     settings: DynamicsSolver = DEFAULT,
-                    terms: ca.Function | None = None) -> JointSystem:
+                    rows: ca.Function | None = None) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache, keyed by their content (_library_functions); with the tree's ODE its
     forward derivative (casadi's externals find fwd1_<name> in their library: its Jacobian by
     forward sweeps of the compiled ODE, and the interpreted RNEA identity is dropped: the
     identity's C would lengthen the cold build, joint-derivatives.md), with the DAE its
-    Jacobian (JointSystem.problem); `terms`, the loops' saddle_terms for their results rows
-    (runtime.joint_rows), in the same library."""
+    Jacobian (JointSystem.problem); `rows`, the loops' rows solved at each state
+    (runtime.joint_rows.solved_motion), in the same library."""
     from casmech.backends import codegen
 
     name = "joint_dae" if system.n_cut else "joint_ode"
-    functions = _library_functions(system, with_motion, settings, terms)
+    functions = _library_functions(system, with_motion, settings, rows)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
     built = codegen.compile_functions(functions, toolchain=toolchain,
                                       with_jacobian=[name] if system.n_cut else ())
     return replace(system, dynamics=built[name],
                    motion=built.get("joint_motion", system.motion), identity_jacobian=None,
-                   saddle_terms=built.get("joint_saddle_terms"))
+                   solved_motion=built.get("joint_solved_motion"))
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
@@ -432,10 +436,8 @@ class _Recorder:
         # library's or a controller's functions, whose forces that IR does not hold): its loop
         # rows solved at each row's state
         solved = solve_loops and system.n_cut and functions.joint_functions is None
-        self.loops = workspace.kept(
-            "joint_loop_rows", (mask.tobytes(), system.dynamics),
-            lambda: LoopRows(system.saddle_terms or saddle_terms(functions.ir, system.tree),
-                             system, mask)) if solved else None
+        self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
+                                    lambda: _loop_rows(functions, system, mask)) if solved else None
 
     def _mapped(self) -> ColumnCall:
         """The results rows' function over columns (kept in the workspace; looked up once
@@ -458,6 +460,18 @@ class _Recorder:
         if self.least_norm is not None:
             (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T
+
+
+def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:
+    """The loops' rows solved at each state (runtime.joint_rows): the compiled library's where
+    it holds them, else solved_motion of the saddle terms and the system's motion (SX)."""
+    def terms() -> ca.Function:
+        return saddle_terms(functions.ir, system.tree)
+
+    if system.solved_motion is not None:  # the terms only for a singular column
+        return LoopRows(system.solved_motion, terms, system.motion, mask)
+    built = terms()
+    return LoopRows(solved_motion(built, system.motion), lambda: built, system.motion, mask)
 
 
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:

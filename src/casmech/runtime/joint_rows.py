@@ -1,62 +1,77 @@
 """The results rows of the joint formulation's loop DAE (runtime.joint_dynamics), with the loop
 closures' multipliers solved at each row's (t, x): the saddle system of the DAE at
-acceleration level (formulations.joint_system.saddle_terms) by numerics.kkt.saddle, with the
-rows the DAE masks turned into lam_k = P_k u_dot - gamma_k as the r-p DAE's rows are
-(runtime.dae_rows.solve). Those multipliers then give the row's accelerations and every joint
-row's multiplier through the joint system's results function, as the integrator's would. The
+acceleration level (formulations.joint_system.saddle_terms) solved by
+numerics.kkt.solve_saddle, with the rows the DAE masks turned into lam_k = P_k u_dot - gamma_k
+as the r-p DAE's rows are (runtime.dae_rows.solve). Those multipliers then give the row's
+accelerations and every joint row's multiplier through the joint system's results function, as
+the integrator's would. The terms, the solve and the results function are one SX graph
+(solved_motion), compiled with the motion in a compiled bundle's joint library. The
 integrator's algebraic states are not read: IDAS interpolates them over its step and keeps
 them out of its error test (docs/decisions/row-multipliers.md)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 
-from casmech.formulations.joint_system import JointSystem
 from casmech.numerics import kkt
 from casmech.runtime import cancel, solver_messages
 from casmech.runtime.assembly import saddle_solution
 from casmech.runtime.buffers import ColumnCall
 
 
-def solved_motion(terms: ca.Function, saddle: ca.Function, motion: ca.Function) -> ca.Function:
-    """(t, x, w, signs) -> motion's (q, q_dot, q_ddot, lam) at z = [lam solved at (t, x) by
-    `saddle` (numerics.kkt.saddle of the terms' patterns); mu = 0] (module docstring), w the
-    DAE's row mask."""
-    t, x = ca.MX.sym("t"), ca.MX.sym("x", terms.size1_in(1))
+def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
+    """(t, x, w, signs) -> motion's (q, q_dot, q_ddot, lam) at z = [lam solved at (t, x) from
+    the saddle terms by numerics.kkt.solve_saddle; mu = 0], w the DAE's row mask: one SX
+    Function, terms and motion (SX Functions: formulations.joint_system's) inlined into it
+    and their common subexpressions (the tree's kinematics) evaluated once."""
+    t, x = ca.SX.sym("t"), ca.SX.sym("x", terms.size1_in(1))
     m = terms.size1_out(1)
-    w, signs = ca.MX.sym("w", m), ca.MX.sym("signs", motion.size1_in(3))
+    w, signs = ca.SX.sym("w", m), ca.SX.sym("signs", motion.size1_in(3))
     mass, jacobian, forces, gamma = terms(t, x)
-    _, lam = saddle(mass, jacobian, forces, gamma, w)
-    outputs = motion(t, x, ca.vertcat(lam, ca.MX.zeros(m)), signs)
-    return ca.Function("joint_solved_motion", [t, x, w, signs], outputs[:4],
+    _, lam = kkt.solve_saddle(mass, jacobian, forces, gamma, w)
+    outputs = motion(t, x, ca.vertcat(lam, ca.SX.zeros(m)), signs)[:4]
+    return ca.Function("joint_solved_motion", [t, x, w, signs], ca.cse(list(outputs)),
                        ["t", "x", "w", "signs"], ["q", "q_dot", "q_ddot", "lam"])
 
 
 class LoopRows:
     """The rows of one loop system: (q, q_dot, q_ddot, lam) per column of states, one mapped
-    call; a column whose saddle matrix is singular (the LU meets a zero pivot) by
-    runtime.assembly.saddle_solution's least squares."""
+    call of `rows` (solved_motion's, compiled or not); a column whose saddle matrix is
+    singular (the solve's outputs not finite at a finite state) by
+    runtime.assembly.saddle_solution's least squares, from the saddle terms `terms()` builds
+    (called for the first such column only)."""
 
-    def __init__(self, terms: ca.Function, system: JointSystem, mask: np.ndarray):
-        self.terms = terms  # formulations.joint_system.saddle_terms (compiled or not)
-        self.motion, self.mask = system.motion, np.asarray(mask, float)
-        self.saddle = kkt.saddle(self.terms.sparsity_out(0), self.terms.sparsity_out(1))
-        self.call = ColumnCall(solved_motion(self.terms, self.saddle, system.motion))
+    def __init__(self, rows: ca.Function, terms: Callable[[], ca.Function],
+                 motion: ca.Function, mask: np.ndarray):
+        self.call, self.terms, self.motion = ColumnCall(rows), terms, motion
+        self.mask = np.asarray(mask, float)
+        self._saddle: tuple[ca.Function, ca.Function] | None = None
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
         try:
             with solver_messages.without_input_dumps():
-                return self.call(times[None, :], states, self.mask[:, None], signs[:, None])
-        except RuntimeError as error:  # the LU met a zero pivot
+                rows = self.call(times[None, :], states, self.mask[:, None], signs[:, None])
+        except RuntimeError as error:  # an evaluation that failed: every column alone
             cancel.check(error)
-        columns = [self.column(t, states[:, j], signs) for j, t in enumerate(times)]
-        return tuple(np.column_stack(parts) for parts in zip(*columns, strict=True))
+            rows = tuple(np.full((self.motion.size1_out(k), len(times)), np.nan)
+                         for k in range(4))
+        solved = np.all(np.isfinite(rows[2]), axis=0) & np.all(np.isfinite(rows[3]), axis=0)
+        for j in np.flatnonzero(~solved & np.all(np.isfinite(states), axis=0)):
+            for row, value in zip(rows, self.column(times[j], states[:, j], signs), strict=True):
+                row[:, j] = value
+        return rows
 
     def column(self, t: float, x: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:
         """One row, its multipliers by saddle_solution (least squares where singular)."""
-        mass, jacobian, forces, gamma = self.terms(t, x)
-        _, lam = saddle_solution(self.saddle, mass, jacobian, forces,
-                                 np.ravel(np.array(gamma)), self.mask)
+        if self._saddle is None:
+            terms = self.terms()
+            self._saddle = terms, kkt.saddle(terms.sparsity_out(0), terms.sparsity_out(1))
+        terms, saddle = self._saddle
+        mass, jacobian, forces, gamma = terms(t, x)
+        _, lam = saddle_solution(saddle, mass, jacobian, forces, np.ravel(np.array(gamma)),
+                                 self.mask)
         z = np.concatenate([lam, np.zeros(len(lam))])
         return [np.array(out.full()).ravel() for out in self.motion(t, x, z, signs)[:4]]

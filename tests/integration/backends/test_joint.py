@@ -109,11 +109,11 @@ def test_a_coupled_mechanism_runs_its_compiled_joint_dae(toolchain, cache_root):
 
     bundle = codegen.compiled(casmech.loads(RACK), toolchain, root=cache_root)
     assert codegen.mode_of(bundle) == "compiled"
-    assert joint_system(bundle).saddle_terms is None  # built only for loop_rows: solved
+    assert joint_system(bundle).solved_motion is None  # built only for loop_rows: solved
     system = joint_system(bundle, DynamicsSolver(loop_rows="solved"))
     assert system.n_cut == 1 and system.dynamics.class_name() == "External"
-    # the rows' saddle terms (runtime.joint_rows) are compiled with the motion
-    assert system.saddle_terms.class_name() == "External"
+    # the rows solved at each state (runtime.joint_rows) are compiled with the motion
+    assert system.solved_motion.class_name() == "External"
     result = casmech.analyze(bundle, "dynamics", formulation="joint",
                              options={"loop_rows": "solved"})
     assert result.metadata["formulation"] == "joint"
@@ -173,7 +173,7 @@ def test_a_warm_cache_builds_no_joint_system(interpreted, compiled, monkeypatch)
 
 
 def test_a_warm_cache_builds_no_loop_system(toolchain, cache_root, monkeypatch):
-    """The same for the loops' DAE with its saddle terms (loop_rows solved): the pinion and
+    """The same for the loops' DAE with its solved rows (loop_rows solved): the pinion and
     rack's system from the cache equals the interpreted one."""
     from tests.validation.runtime.test_couplings import RACK
 
@@ -186,7 +186,7 @@ def test_a_warm_cache_builds_no_loop_system(toolchain, cache_root, monkeypatch):
     _refuse_builds(monkeypatch)
     fast = joint_system(bundle, solved, Workspace(bundle))
     assert fast.n_cut == slow.n_cut == 1
-    assert fast.saddle_terms.class_name() == "External"
+    assert fast.solved_motion.class_name() == "External"
     _assert_same_start_functions(fast, slow)
     nb, n_z = interpreted.n_bodies, slow.dynamics.size1_in(2)
     for _ in range(2):
