@@ -167,11 +167,11 @@ class DynamicsSolver:
                                         "falls below this times its value at t0", low=0,
                                         high=1, open_low=True)
     event_iterations: int = option(100, "Illinois steps locating one event crossing", low=1)
-    loop_rows: str = option("integrator", "the loop closures' multipliers of a joint-coordinate "
-                            "run's results rows: integrator (IDAS's algebraic states at the row, "
-                            "interpolated over its step) or solved (the saddle system solved at "
-                            "each row's state: reactions as accurate as the state, a few us per "
-                            "row more); docs/formulations.md", choices=LOOP_ROWS)
+    loop_rows: str = option("solved", "the loop closures' multipliers of a joint-coordinate "
+                            "run's results rows: solved (the saddle system solved at each row's "
+                            "state: reactions as accurate as the state) or integrator (IDAS's "
+                            "algebraic states at the row, interpolated over its step and out of "
+                            "its error test); docs/formulations.md", choices=LOOP_ROWS)
     min_closing_speed: float = option(1.0, "the least closing speed a sphere pair's step cap "
                                       "assumes (docs/forces.md#contact)", unit="m/s", low=0,
                                       open_low=True)

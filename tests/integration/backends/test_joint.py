@@ -198,3 +198,23 @@ def test_a_warm_cache_builds_no_loop_system(toolchain, cache_root, monkeypatch):
         for a, b in zip(fast.motion(t, x, z, np.ones(nb)), slow.motion(t, x, z, np.ones(nb)),
                         strict=True):
             np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+
+
+# the four-bar's mapped library builds for a minute or more on loaded cores: slow
+@pytest.mark.parametrize("name", [pytest.param("four_bar", marks=pytest.mark.slow), "gear_pair"])
+def test_the_compiled_loop_rows_are_the_composed_ones_and_the_rp_multipliers(
+        name, toolchain, cache_root):
+    """The loop rows solved at each state, compiled as one function in the joint library
+    (runtime.joint_rows.solved_motion), against the interpreted terms, LU solve and compiled
+    rows one after another and the r-p multipliers at the same state
+    (tests/integration/runtime/test_loop_rows.py)."""
+    from casmech.formulations.joint_system import saddle_terms
+    from tests.conftest import MODELS
+    from tests.integration.runtime.test_loop_rows import assert_rows_agree
+
+    bundle = codegen.compiled(casmech.load(MODELS / f"{name}.yaml"), toolchain,
+                              root=cache_root, parametric_library=False)
+    system = joint_system(bundle, DynamicsSolver(loop_rows="solved"))
+    assert system.solved_motion.class_name() == "External"
+    assert system.motion.class_name() == "External"
+    assert_rows_agree(bundle, system, system.solved_motion, saddle_terms(bundle.ir, system.tree))
