@@ -29,11 +29,15 @@ algorithm for singular configurations, where this matrix is singular.
 from __future__ import annotations
 
 import casadi as ca
+import numpy as np
 
 from casmech.core.options import Assembly
 
 SADDLE_SOLVER = "csparse"  # sparse LU with partial pivoting (the matrix is indefinite)
 DEFAULT = Assembly()  # the rootfinder's tolerance and iterations (core.options)
+# solve_saddle over SX: a Cholesky factor whose diagonal spans more than 1 / this is singular
+# (its squares, the pivots, span more than 1 / machine epsilon)
+RANK_TOLERANCE = float(np.sqrt(np.finfo(float).eps))
 
 
 def _symbols(*functions: ca.Function):
@@ -95,8 +99,10 @@ def solve_saddle(mass, jacobian, forces, gamma, w) -> tuple:
 
         (P M^-1 P^T + diag(w)) lam = P M^-1 F - gamma,   M v_dot = F - P^T lam.
 
-    S is singular where P lost rank and no row is masked (or M where a body has no mass):
-    the SX solve then gives NaN or infinities, not an error."""
+    S is singular where P lost rank and no row is masked (M where a body has no mass): the SX
+    solve then gives NaN, not an error, where a factor's smallest diagonal entry is within
+    RANK_TOLERANCE of its largest or not a number (a pivot of S at roundoff of the others:
+    rank lost to the last digits, where an LU would meet a zero pivot or roundoff of one)."""
     n = mass.size1()
     if isinstance(mass, ca.MX):
         lhs = ca.blockcat([[mass, jacobian.T], [jacobian, -ca.diag(w)]])
@@ -107,4 +113,13 @@ def solve_saddle(mass, jacobian, forces, gamma, w) -> tuple:
     applied = ca.solve(factor.T, forces)  # R^-T F
     schur = ca.chol(ca.mtimes(spread.T, spread) + ca.diag(w))
     lam = ca.solve(schur, ca.solve(schur.T, ca.mtimes(spread.T, applied) - gamma))
-    return ca.solve(factor, applied - ca.mtimes(spread, lam)), lam
+    v_dot = ca.solve(factor, applied - ca.mtimes(spread, lam))
+    lost = ca.logic_or(_lost_rank(factor), _lost_rank(schur))
+    return ca.if_else(lost, np.nan, v_dot), ca.if_else(lost, np.nan, lam)
+
+
+def _lost_rank(factor: ca.SX) -> ca.SX:
+    """Whether a Cholesky factor's smallest diagonal entry is within RANK_TOLERANCE of its
+    largest (the factored matrix singular to roundoff)."""
+    diagonal = ca.diag(factor)
+    return ca.mmin(diagonal) <= RANK_TOLERANCE * ca.mmax(diagonal)

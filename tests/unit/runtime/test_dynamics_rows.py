@@ -74,3 +74,43 @@ def test_a_singular_joint_loop_row_is_solved_by_least_squares_quietly(capfd):
         np.testing.assert_allclose(b, a, rtol=0, atol=1e-12)  # roundoff of the least squares
     assert np.abs(masked[3]).max() > 1.0  # the weight is carried (by hinge_a's rows)
     assert capfd.readouterr().err == ""
+
+
+PROPPED = """casmech: 1
+name: propped_bar
+bodies:
+  - {name: bar, mass: 1.0, inertia: [0.01, 0.1, 0.1], position: [0.5, 0, 0]}
+joints:
+  - {name: hinge, type: revolute, body_i: ground, body_j: bar, at: [0, 0, 0], axis: [0, 0, 1]}
+  - {name: prop_a, type: spherical, body_i: ground, body_j: bar, at: [1, 0, 0]}
+  - {name: prop_b, type: spherical, body_i: ground, body_j: bar, at: [1, 0, 0]}
+gravity: [0, -9.81, 0]
+analysis: {type: dynamics, t_end: 0.1, output_step: 0.01}
+"""
+
+
+def test_a_loop_column_singular_to_roundoff_is_solved_by_least_squares_quietly(capfd):
+    """Two props at the tip of a hinged bar, both cut: their y rows (which the hinge's turn
+    moves) are the same row twice. Unmasked, the fused rows' saddle solve is singular (not
+    finite, numerics.kkt.solve_saddle), and LoopRows solves the column by least squares: the
+    bar stays at rest and the props share their half of the weight equally (least norm)."""
+    functions = casmech.compile(casmech.loads(PROPPED))
+    system = joint_dynamics.joint_system(functions)
+    x, _, loops, signs = joint_dynamics._start(functions, system, 0.0,
+                                               DynamicsSolver().assembly, of(functions, None))
+    terms = saddle_terms(functions.ir, system.tree)
+    rows = solved_motion(terms, system.motion)
+    unmasked = np.zeros(system.n_cut)
+    fused = rows(0.0, x, unmasked, signs)
+    assert not np.all(np.isfinite(np.array(fused[3])))  # the fallback is what is tested
+    times, states = np.array([0.0, 0.01]), np.column_stack([x, x])
+    _, _, q_ddot, lam = LoopRows(rows, lambda: terms, system.motion, unmasked)(times, states,
+                                                                             signs)
+    np.testing.assert_allclose(q_ddot, 0.0, rtol=0, atol=1e-12)  # at rest: roundoff
+    prop_a, prop_b = (list(functions.ir.joints[k].rows) for k in (1, 2))
+    weight = 9.81 * 0.5  # the props carry the bar's weight at its tip: m g (0.5 / 1)
+    np.testing.assert_allclose(lam[prop_a[1]], lam[prop_b[1]], rtol=0,
+                               atol=1e-12)  # least norm: equal shares, to roundoff
+    np.testing.assert_allclose(np.abs(lam[prop_a[1]] + lam[prop_b[1]]), weight, rtol=1e-12,
+                               atol=0)  # their sum is the static tip load, to roundoff
+    assert capfd.readouterr().err == ""

@@ -182,8 +182,8 @@ def test_a_driven_blocks_force_is_the_closed_form_also_right_after_the_friction_
 
 def test_a_joint_event_rows_reactions_are_inverse_dynamics_at_the_event():
     """The event row of the driven slider-crank in the joint formulation (the slider passing
-    x = 2) is solved at its own state too (the default loop_rows): its reactions and crank torque are inverse
-    dynamics' at the event's time."""
+    x = 2) is solved at its own state too (the default loop_rows): its reactions and crank
+    torque are inverse dynamics' at the event's time."""
     text = (MODELS / "slider_crank.yaml").read_text().replace(
         "analysis:", 'events:\n  - {name: mid, when: "slider.x - 2.0"}\nanalysis:', 1)
     functions = casmech.compile(casmech.loads(text))
