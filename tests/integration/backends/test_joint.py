@@ -109,13 +109,13 @@ def test_a_coupled_mechanism_runs_its_compiled_joint_dae(toolchain, cache_root):
 
     bundle = codegen.compiled(casmech.loads(RACK), toolchain, root=cache_root)
     assert codegen.mode_of(bundle) == "compiled"
-    assert joint_system(bundle).solved_motion is None  # built only for loop_rows: solved
-    system = joint_system(bundle, DynamicsSolver(loop_rows="solved"))
+    integrator = DynamicsSolver(loop_rows="integrator")
+    assert joint_system(bundle, integrator).solved_motion is None  # only for loop_rows solved
+    system = joint_system(bundle)  # loop_rows solved, the default
     assert system.n_cut == 1 and system.dynamics.class_name() == "External"
     # the rows solved at each state (runtime.joint_rows) are compiled with the motion
     assert system.solved_motion.class_name() == "External"
-    result = casmech.analyze(bundle, "dynamics", formulation="joint",
-                             options={"loop_rows": "solved"})
+    result = casmech.analyze(bundle, "dynamics", formulation="joint")
     assert result.metadata["formulation"] == "joint"
     table = Table(*casmech.results_table(bundle, result))
     alpha = TORQUE / (J_PINION + M_RACK * R_PINION ** 2)
