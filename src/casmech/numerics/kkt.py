@@ -100,8 +100,8 @@ def solve_saddle(mass, jacobian, forces, gamma, w) -> tuple:
         (P M^-1 P^T + diag(w)) lam = P M^-1 F - gamma,   M v_dot = F - P^T lam.
 
     S is singular where P lost rank and no row is masked (M where a body has no mass): the SX
-    solve then gives NaN, not an error, where a factor's smallest diagonal entry is within
-    RANK_TOLERANCE of its largest or not a number (a pivot of S at roundoff of the others:
+    solve then gives NaN, not an error, where a factor's smallest diagonal entry is at most
+    RANK_TOLERANCE times its largest or not a number (a pivot of S at roundoff of the others:
     rank lost to the last digits, where an LU would meet a zero pivot or roundoff of one)."""
     n = mass.size1()
     if isinstance(mass, ca.MX):
@@ -119,7 +119,7 @@ def solve_saddle(mass, jacobian, forces, gamma, w) -> tuple:
 
 
 def _lost_rank(factor: ca.SX) -> ca.SX:
-    """Whether a Cholesky factor's smallest diagonal entry is within RANK_TOLERANCE of its
+    """Whether a Cholesky factor's smallest diagonal entry is at most RANK_TOLERANCE times its
     largest (the factored matrix singular to roundoff)."""
     diagonal = ca.diag(factor)
     return ca.mmin(diagonal) <= RANK_TOLERANCE * ca.mmax(diagonal)
