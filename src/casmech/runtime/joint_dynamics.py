@@ -432,10 +432,11 @@ class _Recorder:
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
             lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
-        # with solve_loops (the loop_rows option), a system built over functions.ir (not a
-        # library's or a controller's functions, whose forces that IR does not hold): its loop
-        # rows solved at each row's state
-        solved = solve_loops and system.n_cut and functions.joint_functions is None
+        # with solve_loops (the loop_rows option), a system over functions.ir, its own or a
+        # parametric library's bound to the IR's values (not a controller's, whose forces
+        # that IR does not hold): its loop rows solved at each row's state
+        solved = solve_loops and system.n_cut and (functions.joint_functions is None
+                                                    or functions.parametric is not None)
         self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
                                     lambda: _loop_rows(functions, system, mask)) if solved else None
 
@@ -464,7 +465,8 @@ class _Recorder:
 
 def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:
     """The loops' rows solved at each state (runtime.joint_rows): the compiled library's where
-    it holds them, else solved_motion of the saddle terms and the system's motion (SX)."""
+    it holds them, else solved_motion of the saddle terms and the system's motion (SX, or a
+    parametric library's motion called through MX)."""
     def terms() -> ca.Function:
         return saddle_terms(functions.ir, system.tree)
 

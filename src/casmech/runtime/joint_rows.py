@@ -25,15 +25,18 @@ from casmech.runtime.buffers import ColumnCall
 def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
     """(t, x, w, signs) -> motion's (q, q_dot, q_ddot, lam) at z = [lam solved at (t, x) from
     the saddle terms by numerics.kkt.solve_saddle; mu = 0], w the DAE's row mask: one SX
-    Function, terms and motion (SX Functions: formulations.joint_system's) inlined into it
-    and their common subexpressions (the tree's kinematics) evaluated once."""
-    t, x = ca.SX.sym("t"), ca.SX.sym("x", terms.size1_in(1))
+    Function where terms and motion are SX Functions (formulations.joint_system's: inlined,
+    their common subexpressions, the tree's kinematics, evaluated once), else one MX Function
+    calling them (a parametric library's motion, bound to its model data) with the LU solve."""
+    sym = ca.SX if terms.is_a("SXFunction") and motion.is_a("SXFunction") else ca.MX
+    t, x = sym.sym("t"), sym.sym("x", terms.size1_in(1))
     m = terms.size1_out(1)
-    w, signs = ca.SX.sym("w", m), ca.SX.sym("signs", motion.size1_in(3))
+    w, signs = sym.sym("w", m), sym.sym("signs", motion.size1_in(3))
     mass, jacobian, forces, gamma = terms(t, x)
     _, lam = kkt.solve_saddle(mass, jacobian, forces, gamma, w)
-    outputs = motion(t, x, ca.vertcat(lam, ca.SX.zeros(m)), signs)[:4]
-    return ca.Function("joint_solved_motion", [t, x, w, signs], ca.cse(list(outputs)),
+    outputs = list(motion(t, x, ca.vertcat(lam, sym.zeros(m)), signs)[:4])
+    return ca.Function("joint_solved_motion", [t, x, w, signs],
+                       ca.cse(outputs) if sym is ca.SX else outputs,
                        ["t", "x", "w", "signs"], ["q", "q_dot", "q_ddot", "lam"])
 
 

@@ -175,3 +175,30 @@ def test_no_joint_functions_for_loops_through_a_floating_body():
 
     assert names(MODELS / "ocp_arm3d.yaml") == set()
     assert {"joint_ode", "joint_motion", "joint_data"} <= names(MODELS / "double_pendulum.yaml")
+
+
+def test_a_parametric_library_solves_its_loop_rows():
+    """The four-bar's parametric library (its joint functions bound to the values): a run's
+    loop multipliers are solved at each row's state by default (loop_rows solved), as an
+    interpreted bundle's are: they are the r-p multipliers at the row's (q, q_dot) to
+    roundoff, where IDAS's algebraic states (loop_rows integrator) carry their own error."""
+    from tests.integration.runtime.test_loop_rows import rp_multipliers
+    from tests.unit.formulations.test_joint_system import PARAMETRIC_CASES
+
+    model = casmech.loads(PARAMETRIC_CASES["four_bar"][0], overrides={"b": "2.2"})
+    bundle = casmech.compile(model, "compiled")  # (the session's library of this structure)
+    assert bundle.parametric is not None and bundle.joint_functions is not None
+    plain = casmech.compile(model)
+
+    def worst(options: dict) -> float:
+        result = casmech.analyze(bundle, "dynamics", formulation="joint", t_end=0.5, rtol=1e-6,
+                                 atol=1e-8, options=options)
+        errors = []
+        for k in range(0, len(result), 10):
+            rp = rp_multipliers(plain, result.times[k], result.q[k], result.q_dot[k])
+            errors.append(np.abs(result.lam[k][:len(rp)] - rp).max() / np.abs(rp).max())
+        return max(errors)
+
+    solved, integrator = worst({}), worst({"loop_rows": "integrator"})
+    assert solved < 1e-8  # two solves of the same saddle system: roundoff times its condition
+    assert integrator > 100 * solved  # IDAS's interpolated algebraic states at rtol 1e-6
