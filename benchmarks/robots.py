@@ -14,9 +14,9 @@ left arm, Solo12 (fixed base). Each engine reads the same URDF copy:
   run gets, interpreted) + `casmech.analyze(..., "dynamics", t_end=1, rtol=r, atol=r/100)`,
   then the same analyze again on the same functions (the integrator built); the same with
   `compile(model, "compiled")` from a warm cache; the cold build (`compile(model,
-  "compiled")` into an empty CASMECH_CACHE_DIR: wall time, and the CPU time of the process and
-  its compiler children); and the default call on the import as it is, with its stops,
-  against its own rtol 1e-12 run.
+  "compiled")` into an empty CASMECH_CACHE_DIR and the first analyze, which builds the tree's
+  ODE library: wall time, and the CPU time of the process and its compiler children); and the
+  default call on the import as it is, with its stops, against its own rtol 1e-12 run.
 - MuJoCo: `MjModel.from_xml_path` of the URDF copy without visual and collision elements
   (fixed links fused as casmech merges them); contacts, joint limits and joint friction (URDF
   `friction`, which casmech does not translate) off; the URDF damping kept; RK4 at the largest
@@ -299,15 +299,20 @@ def casmech_call(yaml: Path, rtol: float, mode: str, cache: Path) -> tuple[dict,
             "total": end - start, "again": again - end}, result
 
 
-def casmech_cold_build(yaml: Path) -> dict:
-    """compile(model, "compiled") into an empty cache: wall time and CPU time with gcc's."""
+def casmech_cold_build(yaml: Path, rtol: float) -> dict:
+    """compile(model, "compiled") into an empty cache, then the first analyze, which builds
+    the tree's ODE library (runtime.joint_dynamics.compiled_system): wall times, and CPU times
+    with the compilers'."""
     import casmech
 
     model = casmech.load(yaml)
     with tempfile.TemporaryDirectory(prefix="robots-cold-") as tmp, cache_dir(Path(tmp)):
         wall, start = time.perf_counter(), cpu()
-        casmech.compile(model, "compiled")
-        return {"wall": time.perf_counter() - wall, "cpu": cpu() - start}
+        functions = casmech.compile(model, "compiled")
+        wall_bundle, cpu_bundle = time.perf_counter() - wall, cpu() - start
+        casmech.analyze(functions, "dynamics", t_end=T_END, rtol=rtol, atol=rtol / 100)
+        return {"wall": time.perf_counter() - wall, "cpu": cpu() - start,
+                "wall_bundle": wall_bundle, "cpu_bundle": cpu_bundle}
 
 
 def mujoco_run(robot: Robot, model, data, q0, v0, steps: int) -> tuple[float, dict]:
@@ -414,6 +419,7 @@ def measure(prepared: dict, repeats: int, builds: int, log) -> dict:
     samples = {k: [] for k in ("auto_total", "auto_setup", "auto_first", "auto_again",
                                "compiled_total", "compiled_first", "compiled_again",
                                "mujoco_load", "mujoco", "build_wall", "build_cpu",
+                               "build_wall_bundle", "build_cpu_bundle",
                                "stops_total", "stops_again",
                                *(f"pin_{m}" for m in prepared["pin"]))}
     errors = {}
@@ -451,9 +457,9 @@ def measure(prepared: dict, repeats: int, builds: int, log) -> dict:
             samples[f"pin_{method}"].append(elapsed)
             errors[f"pin_{method}"] = error(centres, reference)
         if k < builds:
-            build = casmech_cold_build(yaml)
-            samples["build_wall"].append(build["wall"])
-            samples["build_cpu"].append(build["cpu"])
+            build = casmech_cold_build(yaml, rtol)
+            for key, value in build.items():
+                samples[f"build_{key}"].append(value)
     shutil.rmtree(empty, ignore_errors=True)
     median = {k: statistics.median(s) for k, s in samples.items() if s}
     best = min(prepared["pin"], key=lambda m: median[f"pin_{m}"])
@@ -497,12 +503,13 @@ def table(rows: list[dict]) -> str:
         "| robot | nv | stops / dampers | casmech rtol | default call (auto) ms: whole "
         "(load + compile, first analyze) | again ms | compiled ms: whole (first analyze) | "
         "again ms | MuJoCo RK4 dt | MuJoCo ms (load ms) | Pinocchio | Pinocchio ms | "
-        "cold build s wall (CPU) |",
+        "cold build s wall (CPU): compile() + first analyze; compile() alone |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         m = r["median"]
-        build = (f"{m['build_wall']:.1f} ({m['build_cpu']:.1f})" if "build_wall" in m
-                 else "not run")
+        build = (f"{m['build_wall']:.1f} ({m['build_cpu']:.1f}); compile() "
+                 f"{m['build_wall_bundle']:.1f} ({m['build_cpu_bundle']:.1f})"
+                 if "build_wall" in m else "not run")
         lines.append(
             f"| {LABELS[r['robot']]} | {r['nv']} | {r['stops']} / {r['damped']} | "
             f"{r['rtol']:g} | {ms * m['auto_total']:.1f} ({ms * m['auto_setup']:.1f}, "
