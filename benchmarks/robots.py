@@ -474,6 +474,83 @@ def measure(prepared: dict, repeats: int, builds: int, log) -> dict:
     return row
 
 
+# -- where a cold build goes -----------------------------------------------------------------
+
+STAGES = (  # (module, function): each call timed in a cold build, nested calls included
+    ("casmech.backends.codegen", "bundle"),  # the bundle's CasADi graphs (mapped kernels)
+    ("casmech.backends.codegen", "dae_oracles"),  # the DAE residuals and their Jacobians
+    ("casmech.backends.generate", "write_sources"),  # C of the bundle
+    ("casmech.backends.generate", "write_dae_sources"),  # C of the DAE residuals
+    ("casmech.backends.generate", "write_units"),  # C of a functions library (the joint ODE)
+    ("casmech.backends.codegen", "build_libraries"),  # gcc of the bundle and DAE residuals
+    ("casmech.backends.library", "build_libraries"),  # gcc of a functions library
+    ("casmech.backends.manifest", "write"),  # the manifest (cache write)
+    ("casmech.backends.trust", "private"),  # the cache directory's permissions
+    ("casmech.backends.trust", "verify"),  # hashes of the libraries when loaded
+    ("casmech.runtime.joint_dynamics", "build"),  # the joint system's CasADi graph
+    ("casmech.backends.library", "content_key"),  # the functions' serialization (cache key)
+)
+
+
+def build_stages(yaml: Path, rtol: float) -> tuple[dict, list]:
+    """One cold build (casmech_cold_build) with every STAGES function wrapped by a wall-clock
+    timer, and every compiler command timed: ({stage: (calls, s)}, [(command's source, s,
+    bytes of C)]); the stages overlap where one calls another."""
+    import importlib
+
+    from casmech.backends import build as build_module
+
+    timings: dict[str, list] = {}
+    commands: list = []
+    originals = []
+    for module_name, name in STAGES:
+        module = importlib.import_module(module_name)
+        original = getattr(module, name)
+        originals.append((module, name, original))
+        key = f"{module_name.rsplit('.', 1)[1]}.{name}"
+
+        def timed(*args, _original=original, _key=key, **kwargs):
+            start = time.perf_counter()
+            try:
+                return _original(*args, **kwargs)
+            finally:
+                entry = timings.setdefault(_key, [0, 0.0])
+                entry[0] += 1
+                entry[1] += time.perf_counter() - start
+
+        setattr(module, name, timed)
+    run = build_module._run
+
+    def timed_run(command, cwd):
+        start = time.perf_counter()
+        try:
+            return run(command, cwd)
+        finally:
+            source = next((c for c in command if c.endswith(".c")), None)
+            size = (Path(cwd) / source).stat().st_size if source else 0
+            commands.append((source or "link " + command[-2], time.perf_counter() - start,
+                             size))
+
+    build_module._run = timed_run
+    try:
+        totals = casmech_cold_build(yaml, rtol)
+    finally:
+        build_module._run = run
+        for module, name, original in originals:
+            setattr(module, name, original)
+    timings.update({k: (1, v) for k, v in totals.items()})
+    return timings, commands
+
+
+def stages_report(name: str, yaml: Path, rtol: float) -> str:
+    timings, commands = build_stages(yaml, rtol)
+    lines = [f"### {LABELS[name]}", "", "| stage | calls | wall s |", "|---|---|---|"]
+    lines += [f"| {k} | {calls} | {seconds:.2f} |" for k, (calls, seconds) in timings.items()]
+    lines += ["", "| compiler command (source) | wall s | C bytes |", "|---|---|---|"]
+    lines += [f"| {source} | {seconds:.2f} | {size} |" for source, seconds, size in commands]
+    return "\n".join(lines)
+
+
 # -- output -----------------------------------------------------------------------------------
 
 def header() -> str:
@@ -557,6 +634,8 @@ def main() -> None:
     parser.add_argument("--builds", type=int, default=3, help="cold builds per robot (at "
                         "most --repeats; 0: none)")
     parser.add_argument("--seed", type=int, default=36)
+    parser.add_argument("--stages", action="store_true", help="instead: one cold build of "
+                        "each robot with its stages timed (where the build goes)")
     args = parser.parse_args()
     started = header()
 
@@ -569,6 +648,12 @@ def main() -> None:
         for name in args.robots:
             folder = Path(tmp) / name
             folder.mkdir()
+            if args.stages:
+                robot = Robot(name, folder)
+                q0, v0 = robot.draw_state(np.random.default_rng(args.seed))
+                print(stages_report(name, robot.write_casmech(q0, v0, stops=False), 1e-7),
+                      "\n", flush=True)
+                continue
             try:
                 prepared = prepare(name, folder, args.seed, log)
                 rows.append(measure(prepared, args.repeats, min(args.builds, args.repeats),
@@ -576,7 +661,8 @@ def main() -> None:
             except Exception as failure:  # noqa: BLE001 - reported; the other robots run
                 log(f"{name} failed: {type(failure).__name__}: {failure}")
     print(f"\nStarted {started}; load at the end {os.getloadavg()[0]:.1f}\n")
-    print(table(rows))
+    if rows:
+        print(table(rows))
 
 
 if __name__ == "__main__":
