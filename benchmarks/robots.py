@@ -551,6 +551,62 @@ def stages_report(name: str, yaml: Path, rtol: float) -> str:
     return "\n".join(lines)
 
 
+# -- a cold build at two commits -----------------------------------------------------------
+
+def cold_build_worker(yaml: Path, rtol: float, runs: int) -> dict:
+    """In a fresh process (the `src/` on PYTHONPATH): casmech_cold_build, then the compiled
+    run's analyze on the built functions `runs` times (CPU s, median)."""
+    import casmech
+
+    build = casmech_cold_build(yaml, rtol)
+    with tempfile.TemporaryDirectory(prefix="robots-run-") as tmp, cache_dir(Path(tmp)):
+        functions = casmech.compile(casmech.load(yaml), "compiled")
+        casmech.analyze(functions, "dynamics", t_end=T_END, rtol=rtol, atol=rtol / 100)
+        times = []
+        for _ in range(runs):
+            start = time.process_time()
+            casmech.analyze(functions, "dynamics", t_end=T_END, rtol=rtol, atol=rtol / 100)
+            times.append(time.process_time() - start)
+    return {**build, "run": statistics.median(times)}
+
+
+def compare_builds(names: list[str], commit: str, repeats: int, seed: int, log) -> str:
+    """Cold build and compiled run of each robot by `src/` at `commit` and by this checkout's,
+    alternating, each in a fresh process (cold_build_worker); medians."""
+    import json
+    import sys
+
+    here = Path(__file__).resolve().parent
+    lines = ["| robot | src | cold build s wall (CPU) | compile() s wall (CPU) | compiled "
+             "run ms (median of 5) |", "|---|---|---|---|---|"]
+    with tempfile.TemporaryDirectory(prefix="robots-ab-") as tmp:
+        archive = subprocess.run(["git", "archive", commit, "src"], cwd=here.parent,
+                                 capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        sources = {commit: Path(tmp) / "src", "this": here.parent / "src"}
+        for name in names:
+            folder = Path(tmp) / name
+            folder.mkdir()
+            robot = Robot(name, folder)
+            q0, v0 = robot.draw_state(np.random.default_rng(seed))
+            yaml = robot.write_casmech(q0, v0, stops=False)
+            samples = {label: [] for label in sources}
+            for _ in range(repeats):
+                for label, src in sources.items():
+                    env = {**os.environ, "PYTHONPATH": str(src)}
+                    done = subprocess.run(
+                        [sys.executable, str(here / "robots.py"), "--cold-build-worker",
+                         str(yaml)], env=env, capture_output=True, text=True, check=True)
+                    samples[label].append(json.loads(done.stdout.splitlines()[-1]))
+                    log(f"{name} {label}: {samples[label][-1]}")
+            for label, runs in samples.items():
+                m = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
+                lines.append(f"| {LABELS[name]} | {label} | {m['wall']:.1f} ({m['cpu']:.1f}) | "
+                             f"{m['wall_bundle']:.1f} ({m['cpu_bundle']:.1f}) | "
+                             f"{1e3 * m['run']:.2f} |")
+    return "\n".join(lines)
+
+
 # -- output -----------------------------------------------------------------------------------
 
 def header() -> str:
@@ -636,12 +692,29 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=36)
     parser.add_argument("--stages", action="store_true", help="instead: one cold build of "
                         "each robot with its stages timed (where the build goes)")
+    parser.add_argument("--compare-builds", metavar="COMMIT", help="instead: the cold build "
+                        "and compiled run of each robot by src/ at COMMIT and by this checkout, "
+                        "alternating, --repeats times each")
+    parser.add_argument("--cold-build-worker", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.cold_build_worker:
+        import json
+
+        os.environ["CASMECH_ALLOWED_DIRS"] = str(robots_folder())
+        print(json.dumps(cold_build_worker(args.cold_build_worker, 1e-7, 5)))
+        return
     started = header()
 
     def log(text: str) -> None:
         print(f"# {text}", flush=True)
 
+    if args.compare_builds:
+        os.environ["CASMECH_ALLOWED_DIRS"] = str(robots_folder())
+        table_text = compare_builds(args.robots, args.compare_builds, args.repeats, args.seed,
+                                    log)
+        print(f"\nStarted {started}; load at the end {os.getloadavg()[0]:.1f}\n")
+        print(table_text)
+        return
     rows = []
     with tempfile.TemporaryDirectory(prefix="robots-") as tmp:
         os.environ["CASMECH_ALLOWED_DIRS"] = str(robots_folder())
