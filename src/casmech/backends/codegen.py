@@ -118,14 +118,16 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
     (codegen.parametric) where it applies and `mapped` is not asked for, with the values its
     load binds and the structure's signature, else the mapped one with the values baked in (and
     in its key), and None. With `defer` (a run's library), the mapped library of a joint tree
-    (_deferred) holds no DAE residuals: they are built on first use (backends.deferred)."""
+    (_deferred) holds no DAE residuals (built on first use) and is built at -O0 where the user
+    chose no flags (backends.deferred)."""
     if not mapped and parametric.applies(model):
         values, signature = data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
             ir, directory, toolchain, info, dae, build_libraries), (values, signature)
-    dae = dae and not (defer and _deferred(model, ir))
+    if defer and _deferred(model, ir):
+        dae, toolchain = False, deferred.bundle_toolchain(toolchain)
     model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
     info = {"model": model.name, "model_hash": model_hash, "key": entry}

@@ -1,27 +1,42 @@
-"""The DAE residual libraries of a compiled bundle whose dynamics run in joint coordinates on a
-tree, built when first read instead of with the bundle.
+"""The compiled bundle of a model whose dynamics run in joint coordinates on a tree: its DAE
+residual libraries built when first read instead of with the bundle, the bundle itself at -O0
+unless the user chose flags.
 
-A tree's run in joint coordinates reads none of them (runtime.joint_dynamics compiles the
-tree's ODE itself), and they are most of the C of a cold build: four residuals (rp and romega,
-both stabilizations) with their Jacobian blocks. So codegen.compiled builds such a bundle
-without them, and the bundle's mapping (an equations.functions.LazyFunctions) names them all
-the same; the first read of one (an rp or romega run asked for) builds them all, in a cache
-entry of their own (`key`), once, and loads them from there afterwards. Measurements:
-docs/decisions/deferred-dae-libraries.md.
+A tree's run in joint coordinates reads none of the residuals (runtime.joint_dynamics compiles
+the tree's ODE and results rows itself), and they are most of the C of a cold build: four
+residuals (rp and romega, both stabilizations) with their Jacobian blocks. So codegen.compiled
+builds such a bundle without them, and the bundle's mapping (an
+equations.functions.LazyFunctions) names them all the same; the first read of one (an rp or
+romega run asked for) builds them all, with the user's toolchain, in a cache entry of their own
+(`key`), once, and loads them from there afterwards. Of the bundle such a run reads little (the
+assembly's functions, once), so gcc's optimization would lengthen the build for nothing.
+Measurements: docs/decisions/deferred-dae-libraries.md.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
 import casadi as ca
 
 from casmech.backends import generate, manifest
+from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain
 from casmech.equations.functions import LazyFunctions
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.residuals import name
+
+BUNDLE_FLAGS = ("-O0",)  # the bundle's, where the user chose no flags (module docstring)
+
+
+def bundle_toolchain(toolchain: Toolchain) -> Toolchain:
+    """`toolchain` with BUNDLE_FLAGS where its flags are the default and $CASMECH_CFLAGS is
+    unset (no flags chosen)."""
+    if toolchain.flags != DEFAULT_FLAGS or os.environ.get(FLAGS_ENVIRONMENT) is not None:
+        return toolchain
+    return Toolchain(toolchain.compiler, BUNDLE_FLAGS, toolchain.jobs)
 
 
 def residual_names() -> tuple[str, ...]:

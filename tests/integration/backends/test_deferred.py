@@ -49,3 +49,14 @@ def test_joint_tree_builds_its_residuals_on_first_use(model, toolchain, tmp_path
     again = codegen.compiled(model, toolchain, root=root, parametric_library=False)
     again["dae_ggl_rp"]
     assert len(builds) == residual_builds  # both entries loaded from the cache
+
+
+def test_joint_tree_bundle_flags(monkeypatch):
+    """The bundle of a joint tree is built at -O0 only where the user chose no flags: the
+    default toolchain without $CASMECH_CFLAGS."""
+    monkeypatch.delenv("CASMECH_CFLAGS", raising=False)
+    assert deferred.bundle_toolchain(codegen.Toolchain()).flags == ("-O0",)
+    chosen = codegen.Toolchain(flags=("-O2",))
+    assert deferred.bundle_toolchain(chosen) is chosen
+    monkeypatch.setenv("CASMECH_CFLAGS", "-O1")  # the default's value, chosen
+    assert deferred.bundle_toolchain(codegen.Toolchain()).flags == ("-O1",)
