@@ -380,7 +380,8 @@ def prepare(name: str, folder: Path, seed: int, log) -> dict:
             if e <= LEVEL:
                 out["stops_rtol"], out["stops_own"] = rtol, own
                 break
-    # MuJoCo: the largest step reaching LEVEL
+    # MuJoCo: the largest step reaching LEVEL (the larger ones that diverge print MuJoCo's
+    # instability warning)
     import mujoco
 
     robot.mujoco_check(robot.mujoco_model(1000))
