@@ -44,6 +44,7 @@ import os
 import shutil
 import signal
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import casadi as ca
@@ -52,7 +53,8 @@ import numpy as np
 from casmech.backends import cache, deferred, generate, manifest, parametric
 from casmech.backends.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.backends.library import compile_functions
-from casmech.backends.load import externals, metadata, mode_of
+from casmech.backends.load import externals, mode_of
+from casmech.backends.load import load as load_build
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import is_inline
@@ -179,11 +181,11 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     directory, _ = cache.lookup(entry, build, root)
     if bound is not None:
         return parametric.load(directory, ir, *bound)
-    functions = externals(directory)
+    bundle = load_build(directory, ir)
     if dae and _deferred(model, ir):
-        functions = deferred.with_residuals(
-            functions, lambda: _residuals(model, ir, toolchain, entry, root))
-    return SystemFunctions(functions, **metadata(ir), mode="compiled")
+        bundle = replace(bundle, functions=deferred.with_residuals(
+            bundle.functions, lambda: _residuals(model, ir, toolchain, entry, root)))
+    return bundle
 
 
 def parametric_functions(model: ResolvedModel, toolchain: Toolchain | None = None,
