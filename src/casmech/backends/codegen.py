@@ -18,7 +18,9 @@ What is compiled (write_build):
   - each DAE residual dae_[ggl_]<rp|romega> (formulations.residuals.oracles: a sum of elements,
     one kernel per joint, body and force element, the Jacobian from the kernels' own SX
     Jacobians; for a small model the inline SX), in a library of its own with the daeF and jacF
-    casadi's IDAS interface loads from it.
+    casadi's IDAS interface loads from it; for a run of a tree in joint coordinates, which
+    reads none of them, built on first use instead, in a cache entry of their own
+    (backends.deferred).
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). The measurements behind this: docs/decisions/codegen-element-residuals.md.
 
@@ -42,16 +44,17 @@ import os
 import shutil
 import signal
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from casmech.backends import cache, generate, manifest, parametric
+from casmech.backends import cache, deferred, generate, manifest, parametric
 from casmech.backends.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.backends.library import compile_functions
+from casmech.backends.load import externals, mode_of
 from casmech.backends.load import load as load_build
-from casmech.backends.load import mode_of
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import is_inline
@@ -111,27 +114,53 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
 
 
 def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
-           mapped: bool = False
+           mapped: bool = False, defer: bool = False
            ) -> tuple[str, Callable[[Path], None], tuple[np.ndarray, str] | None]:
     """(cache key, build(directory), (model data, signature)): the parametric library
     (codegen.parametric) where it applies and `mapped` is not asked for, with the values its
     load binds and the structure's signature, else the mapped one with the values baked in (and
-    in its key), and None."""
+    in its key), and None. With `defer` (a run's library), the mapped library of a joint tree
+    (_deferred) holds no DAE residuals (built on first use) and is built at -O0 where the user
+    chose no flags (backends.deferred)."""
     if not mapped and parametric.applies(model):
         values, signature = data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
             ir, directory, toolchain, info, dae, build_libraries), (values, signature)
+    if defer and _deferred(model, ir):
+        dae, toolchain = False, deferred.bundle_toolchain(toolchain)
     model_hash = cache.model_digest(model)
     entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
     info = {"model": model.name, "model_hash": model_hash, "key": entry}
     return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), None
 
 
+def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:
+    """Whether the DAE residuals of the model's mapped library for a run wait for their first
+    use (backends.deferred): a tree whose dynamics run in joint coordinates."""
+    return _joint_tree(model, ir)
+
+
+def _residuals(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, bundle_key: str,
+               root: Path | None) -> dict[str, ca.Function]:
+    """The DAE residuals of a bundle built without them (backends.deferred), loaded from their
+    cache entry, built when it is missing."""
+    entry = deferred.key(bundle_key)
+    info = {"model": model.name, "model_hash": cache.model_digest(model), "key": entry,
+            "casmech": VERSION, "casmech_sources": cache.source_digest(),
+            "casadi": ca.__version__, "compiler": toolchain.compiler,
+            "compiler_version": toolchain.version(), "flags": list(toolchain.all_flags)}
+    directory, _ = cache.lookup(entry, lambda directory: deferred.write_build(
+        dae_oracles(ir), directory, info,
+        lambda libraries, where: build_libraries(libraries, where, toolchain)), root)
+    return externals(directory)
+
+
 def _cached(model: ResolvedModel, toolchain: Toolchain, root: Path | None,
-            dae: bool = False, mapped: bool = False) -> tuple[Path, bool]:
-    entry, build, _ = _entry(model, lower(model), toolchain, dae, mapped)
+            dae: bool = False, mapped: bool = False, defer: bool = False
+            ) -> tuple[Path, bool]:
+    entry, build, _ = _entry(model, lower(model), toolchain, dae, mapped, defer)
     return cache.lookup(entry, build, root)
 
 
@@ -143,15 +172,20 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     parameter values; codegen.parametric), casmech/CasADi version, compiler and flags. With
     `dae`, the bundle also carries the DAE residuals dae_[ggl_]<formulation> as IDAS integrates
     them (t, x, z, p, u) -> (ode, alg, quad, zero) (formulations.dae.residual takes them from the
-    bundle, formulations.dae.problem hands them to casadi as they are). `parametric_library` False:
+    bundle, formulations.dae.problem hands them to casadi as they are; a mapped library of a
+    joint tree builds them on their first use: backends.deferred). `parametric_library` False:
     the mapped library even where the parametric one applies."""
     ir = lower(model)
-    entry, build, bound = _entry(model, ir, toolchain or Toolchain(), dae,
-                                 not parametric_library)
+    toolchain = toolchain or Toolchain()
+    entry, build, bound = _entry(model, ir, toolchain, dae, not parametric_library, True)
     directory, _ = cache.lookup(entry, build, root)
     if bound is not None:
         return parametric.load(directory, ir, *bound)
-    return load_build(directory, ir)
+    bundle = load_build(directory, ir)
+    if dae and _deferred(model, ir):
+        bundle = replace(bundle, functions=deferred.with_residuals(
+            bundle.functions, lambda: _residuals(model, ir, toolchain, entry, root)))
+    return bundle
 
 
 def parametric_functions(model: ResolvedModel, toolchain: Toolchain | None = None,
@@ -188,7 +222,7 @@ def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
 
 def _in_cache(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, root: Path | None,
               dae: bool = True) -> bool:
-    entry = _entry(model, ir, toolchain, dae)[0]
+    entry = _entry(model, ir, toolchain, dae, defer=True)[0]  # the library compiled() loads
     return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
 
 
@@ -242,7 +276,8 @@ def build_in_background(model: ResolvedModel, toolchain: Toolchain | None = None
         quiet = os.open(os.devnull, os.O_RDWR)
         for stream in (0, 1, 2):
             os.dup2(quiet, stream)
-        _cached(model, Toolchain(toolchain.compiler, toolchain.flags, 1), root, True)
+        _cached(model, Toolchain(toolchain.compiler, toolchain.flags, 1), root, True,
+                defer=True)
         os._exit(0)
     except BaseException:  # noqa: BLE001 - a detached child reports nothing and never returns
         os._exit(1)
