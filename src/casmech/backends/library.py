@@ -46,10 +46,16 @@ def content_key(functions: Mapping[str, ca.Function], with_jacobian: set[str],
     entries = [[name, hashlib.sha256(function.serialize().encode()).hexdigest(),
                 name in with_jacobian, name in integrators]
                for name, function in sorted(functions.items())]
-    content = json.dumps({"format": manifest.FORMAT, "kind": "functions", "entries": entries,
-                          "casmech": VERSION, "sources": cache.source_digest(),
-                          "casadi": ca.__version__, "compiler": toolchain.version(),
-                          "flags": list(toolchain.all_flags)})
+    return _key("functions", toolchain, entries=entries)
+
+
+def _key(kind: str, toolchain: Toolchain, **fields) -> str:
+    """A library's cache key: `fields` (what its functions are), the versions, casmech's
+    sources and the toolchain."""
+    content = json.dumps({"format": manifest.FORMAT, "kind": kind, **fields, "casmech": VERSION,
+                          "sources": cache.source_digest(), "casadi": ca.__version__,
+                          "compiler": toolchain.version(), "flags": list(toolchain.all_flags)},
+                         sort_keys=True)
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 
@@ -108,12 +114,8 @@ def compile_keyed(content: Mapping, make: Callable[[], tuple[Mapping[str, ca.Fun
     ones as externals, the kept ones deserialized."""
     with_jacobian, integrators = set(with_jacobian), set(integrators)
     toolchain = toolchain or Toolchain()
-    key = hashlib.sha256(json.dumps({
-        "format": manifest.FORMAT, "kind": "keyed", "content": content, "casmech": VERSION,
-        "sources": cache.source_digest(), "casadi": ca.__version__,
-        "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
-        "jacobian": sorted(with_jacobian), "integrators": sorted(integrators)},
-        sort_keys=True).encode()).hexdigest()[:32]
+    key = _key("keyed", toolchain, content=content, jacobian=sorted(with_jacobian),
+               integrators=sorted(integrators))
 
     def build(directory: Path) -> None:
         compiled, kept, chosen = make()
