@@ -338,6 +338,19 @@ def pin_run(robot: Robot, q0, v0, method: str, rtol: float) -> tuple[float, dict
 
 # -- one robot ------------------------------------------------------------------------------
 
+
+def loosest_casmech(yaml, mode: str, cache, target, log, label: str, against: str = ""):
+    """(rtol, error) of the loosest of CASMECH_RTOLS whose run of `yaml` ends within LEVEL of
+    the centres `target`, or None."""
+    for rtol in CASMECH_RTOLS:
+        _, result = casmech_call(yaml, rtol, mode, cache)
+        e = error(Robot.centres_casmech(result), target)
+        log(f"  {label} rtol {rtol:g}: {e:.2e} m{against}")
+        if e <= LEVEL:
+            return rtol, e
+    return None
+
+
 def prepare(name: str, folder: Path, seed: int, log) -> dict:
     """The robot at its initial state, the reference, each engine's setting reaching LEVEL."""
     robot = Robot(name, folder)
@@ -360,26 +373,18 @@ def prepare(name: str, folder: Path, seed: int, log) -> dict:
     out["casmech_vs_reference"] = error(Robot.centres_casmech(tight), reference)
     log(f"{name}: casmech compiled at rtol 1e-12 is {out['casmech_vs_reference']:.2e} m from "
         "the reference")
-    for rtol in CASMECH_RTOLS:
-        _, result = casmech_call(yaml, rtol, "compiled", warm)
-        e = error(Robot.centres_casmech(result), reference)
-        log(f"  casmech rtol {rtol:g}: {e:.2e} m")
-        if e <= LEVEL:
-            out["casmech_rtol"], out["casmech_error"] = rtol, e
-            break
-    else:
+    found = loosest_casmech(yaml, "compiled", warm, reference, log, "casmech")
+    if found is None:
         raise RuntimeError(f"{name}: casmech reaches {LEVEL} m at no rtol of {CASMECH_RTOLS}")
+    out["casmech_rtol"], out["casmech_error"] = found
     if robot.stops:  # the import as it is, with its stops: against its own tight run
         out["yaml_stops"] = robot.write_casmech(q0, v0, stops=True)
         _, tight = casmech_call(out["yaml_stops"], 1e-12, "interpreted", warm)
         own = Robot.centres_casmech(tight)
-        for rtol in CASMECH_RTOLS:
-            _, result = casmech_call(out["yaml_stops"], rtol, "interpreted", warm)
-            e = error(Robot.centres_casmech(result), own)
-            log(f"  casmech with stops, rtol {rtol:g}: {e:.2e} m from its rtol 1e-12 run")
-            if e <= LEVEL:
-                out["stops_rtol"], out["stops_own"] = rtol, own
-                break
+        found = loosest_casmech(out["yaml_stops"], "interpreted", warm, own, log,
+                                "casmech with stops", " from its rtol 1e-12 run")
+        if found is not None:
+            out["stops_rtol"], out["stops_own"] = found[0], own
     # MuJoCo: the largest step reaching LEVEL (the larger ones that diverge print MuJoCo's
     # instability warning)
     import mujoco
