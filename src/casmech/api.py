@@ -12,7 +12,7 @@ what `compile` returns; this module is the one entry the command line uses.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import field, fields
 from pathlib import Path
 from types import MappingProxyType
 
@@ -20,6 +20,7 @@ import numpy as np
 
 from casmech import backends
 from casmech.backends import COMPILE_MODES  # noqa: F401
+from casmech.core.records import record
 from casmech.equations import checks
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
@@ -39,7 +40,7 @@ from casmech.schema import load_model, load_model_text
 from casmech.schema.resolved import ResolvedModel
 
 
-@dataclass(frozen=True, repr=False, eq=False)
+@record(repr=False, eq=False)
 class CompiledModel(SystemFunctions):
     """What casmech.compile returns: the system functions of `model` (a SystemFunctions, which
     casmech.analyze takes) compiled in `mode`, and `set` to move them to other parameter

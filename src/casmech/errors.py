@@ -23,7 +23,9 @@ import difflib
 import re
 import signal
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
+
+from casmech.core.records import record
 
 # Every diagnostic code casmech emits, with a one-line title. Tests keep one bad-model fixture
 # per code (tests/unit/schema/bad_models/), so adding a code here means adding a fixture.
@@ -103,7 +105,7 @@ def escape(text: object, keep_newlines: bool = False) -> str:
     return _CONTROL.sub(_escaped, text)
 
 
-@dataclass(frozen=True)
+@record
 class Source:
     """Where something came from: 1-based line and column in a file."""
 
@@ -115,7 +117,7 @@ class Source:
         return f"{escape(self.file)}:{self.line}:{self.col}"
 
 
-@dataclass(frozen=True)
+@record
 class Diagnostic:
     code: str
     path: str
@@ -211,7 +213,7 @@ class BodyName(str):
     `FailureContext` calls it a body."""
 
 
-@dataclass
+@record(frozen=False)
 class FailureContext:
     """What an analysis failure names: time, cause, joints involved (with their sources); an
     entry whose name is a BodyName is a body's normalization row."""

@@ -8,10 +8,11 @@ import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import field
 from functools import lru_cache
 from pathlib import Path
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, UsageError
 
 # -O1: the generated functions run much faster than at -O0 for a build -O2 would lengthen more
@@ -43,7 +44,7 @@ def default_flags() -> tuple[str, ...]:
     return tuple(configured.split()) if configured is not None else DEFAULT_FLAGS
 
 
-@dataclass(frozen=True)
+@record
 class Toolchain:
     """A C compiler ($CC, default the first of gcc, clang, cc found; a launcher may lead:
     "ccache gcc") and the flags every unit is compiled with ($CASMECH_CFLAGS, default

@@ -25,13 +25,13 @@ import math
 import operator
 import re
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import casadi
 import numpy as np
 
 from casmech.core import traced, units
+from casmech.core.records import record
 from casmech.errors import did_you_mean
 
 # limits that keep the recursive parser and evaluator far from Python's recursion limit
@@ -145,7 +145,7 @@ def _number(value: float, backend: int) -> Any:
     return np.float64(value) if backend == BACKENDS["numpy"] else value
 
 
-@dataclass(frozen=True)
+@record
 class Number:
     value: float  # SI (a unit's factor applied)
     offset: int
@@ -160,7 +160,7 @@ class Number:
         return ()
 
 
-@dataclass(frozen=True)
+@record
 class Constant:
     name: str
     offset: int
@@ -173,7 +173,7 @@ class Constant:
         return ()
 
 
-@dataclass(frozen=True)
+@record
 class Name:
     name: str
     offset: int
@@ -189,7 +189,7 @@ class Name:
         return ((self.name, self.offset, self.length),)
 
 
-@dataclass(frozen=True)
+@record
 class Unary:
     op: str
     operand: Any
@@ -202,7 +202,7 @@ class Unary:
         return self.operand.names()
 
 
-@dataclass(frozen=True)
+@record
 class Binary:
     op: str
     left: Any
@@ -217,7 +217,7 @@ class Binary:
         return self.left.names() + self.right.names()
 
 
-@dataclass(frozen=True)
+@record
 class Call:
     function: str
     args: tuple[Any, ...]
@@ -232,7 +232,7 @@ class Call:
         return tuple(n for arg in self.args for n in arg.names())
 
 
-@dataclass(frozen=True)
+@record
 class Expr:
     """A parsed expression: immutable, evaluable with either backend."""
 
@@ -271,7 +271,7 @@ _TOKEN = re.compile(
 )
 
 
-@dataclass(frozen=True)
+@record
 class Token:
     kind: str  # number | name | op | end
     text: str

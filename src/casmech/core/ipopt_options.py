@@ -10,14 +10,13 @@ stay unless written.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from casmech.core.option_values import option
+from casmech.core.records import record
 
 YES_NO = ("yes", "no")
 
 
-@dataclass(frozen=True)
+@record
 class IpoptOptions:
     max_iter: int = option(500, "largest number of IPOPT iterations", low=0, high=100_000)
     tol: float = option(1e-10, "IPOPT's relative convergence tolerance", low=0, high=1,

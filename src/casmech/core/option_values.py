@@ -18,16 +18,16 @@ import math
 import types
 import typing
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
 from functools import cache
 from typing import Any
 
+from casmech.core.records import record
 from casmech.errors import did_you_mean
 
 SOLVER = "solver"  # the nested options a YAML `analysis:` block writes under `solver:`
 
 
-@dataclass(frozen=True)
+@record
 class Meaning:
     """What an option field is: its meaning, unit, range and choices."""
 
@@ -63,7 +63,7 @@ def nested(kind: type, doc: str) -> Any:
     return dataclasses.field(default_factory=kind, metadata={"meaning": Meaning(doc)})
 
 
-@dataclass(frozen=True)
+@record
 class Problem:
     """A value that cannot be set: `path` the keys inside the options object; `code` the
     diagnostic code (E101 unknown key, E102 wrong type, E409 out of range)."""

@@ -15,9 +15,8 @@ per workspace, the columns per mapped call, the inner map of the prescribed step
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from casmech.core.option_values import nested, option
+from casmech.core.records import record
 from casmech.core.registry import Names
 
 # the registered formulations and auto: formulations.registry keeps it current
@@ -47,7 +46,7 @@ def _method():
                   choices=METHODS)
 
 
-@dataclass(frozen=True)
+@record
 class LinearAlgebra:
     """Sizes (entries, rows x columns) up to which LAPACK's dense routines are used instead of
     casmech's sparse QR (numerics.numeric_qr, equations.checks), and the rank cuts. The dense
@@ -69,7 +68,7 @@ class LinearAlgebra:
                                    "the rows the DAEs mask)", low=0, high=1, open_low=True)
 
 
-@dataclass(frozen=True)
+@record
 class Assembly:
     """Newton's method on the position constraints: the assembly every analysis starts from,
     the rows kinematics does one by one, the projections of dynamics (runtime.assembly)."""
@@ -93,7 +92,7 @@ class Assembly:
     linear_algebra: LinearAlgebra = nested(LinearAlgebra, "dense or sparse linear algebra")
 
 
-@dataclass(frozen=True)
+@record
 class Fallback:
     """The augmented-Lagrangian ODE integrated by projected Runge-Kutta steps, which r-p and
     r-omega dynamics fall back to where IDAS fails at a singular pose (formulations.augmented,
@@ -113,7 +112,7 @@ class Fallback:
                           "DAE (to compare the two)")
 
 
-@dataclass(frozen=True)
+@record
 class JointCompile:
     """How much of the joint formulation a compiled bundle compiles too (runtime.joint_dynamics;
     an interpreted bundle compiles nothing, a parametric library holds its own)."""
@@ -126,7 +125,7 @@ class JointCompile:
                                            "-O0 unless $CASMECH_CFLAGS is set", low=0)
 
 
-@dataclass(frozen=True)
+@record
 class DynamicsSolver:
     """The integrators of dynamics: SUNDIALS IDAS (r-p, r-omega, loops in joint coordinates)
     and CVODES (trees), and what surrounds them."""
@@ -180,7 +179,7 @@ class DynamicsSolver:
     assembly: Assembly = nested(Assembly, "the initial assembly and the projections")
 
 
-@dataclass(frozen=True)
+@record
 class DynamicsOptions:
     """analysis type dynamics (runtime.dynamics, runtime.joint_dynamics)."""
 
@@ -190,7 +189,7 @@ class DynamicsOptions:
     solver: DynamicsSolver = nested(DynamicsSolver, "the integrators")
 
 
-@dataclass(frozen=True)
+@record
 class KinematicsSolver:
     """The prescribed motion over the output grid (runtime.kinematics)."""
 
@@ -204,19 +203,19 @@ class KinematicsSolver:
     assembly: Assembly = nested(Assembly, "the assembly at t0 and the per-row Newton")
 
 
-@dataclass(frozen=True)
+@record
 class KinematicsOptions:
     """analysis type kinematics."""
 
     solver: KinematicsSolver = nested(KinematicsSolver, "the prescribed motion")
 
 
-@dataclass(frozen=True)
+@record
 class InverseDynamicsOptions(KinematicsOptions):
     """analysis type inverse_dynamics: the kinematics rows read as the forces that drive them."""
 
 
-@dataclass(frozen=True)
+@record
 class StaticsSolver:
     """Pseudo-transient continuation to the equilibrium (runtime.statics)."""
 
@@ -242,14 +241,14 @@ class StaticsSolver:
     assembly: Assembly = nested(Assembly, "the assembly and each step's projection")
 
 
-@dataclass(frozen=True)
+@record
 class StaticsOptions:
     """analysis type statics."""
 
     solver: StaticsSolver = nested(StaticsSolver, "the equilibrium")
 
 
-@dataclass(frozen=True)
+@record
 class ModalSolver:
     """Modes at the equilibrium (statics) or at a time of a dynamics run."""
 
@@ -259,7 +258,7 @@ class ModalSolver:
     dynamics: DynamicsSolver = nested(DynamicsSolver, "the dynamics run to `at`")
 
 
-@dataclass(frozen=True)
+@record
 class ModalOptions:
     """analysis type modal (runtime.modal)."""
 
@@ -278,14 +277,14 @@ class ModalOptions:
                                self.solver.dynamics)
 
 
-@dataclass(frozen=True)
+@record
 class AssemblySolver:
     """The assembly analysis: one state at t0."""
 
     assembly: Assembly = nested(Assembly, "Newton on the position constraints")
 
 
-@dataclass(frozen=True)
+@record
 class AssemblyOptions:
     """analysis type assembly."""
 

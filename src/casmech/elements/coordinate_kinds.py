@@ -36,11 +36,11 @@ w_i . (P_j - P_i).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
 
 import casadi as ca
 
 from casmech.core import columns, states
+from casmech.core.records import record
 from casmech.core.registry import Registry
 from casmech.core.units import (
     DAMPING,
@@ -62,7 +62,7 @@ ROLES = ("effort", "limit", "friction")  # the ForceIR types a kind names (Coord
 RELATIVE_ROLES = ("effort", "limit")
 
 
-@dataclass(frozen=True)
+@record
 class Quantity:
     """What a coordinate measures: the dimensions and SI units of its value and what acts
     along it."""
@@ -83,7 +83,7 @@ DISTANCE = Quantity("length", LENGTH, VELOCITY, FORCE, STIFFNESS, DAMPING,
                     ("m", "m/s", "m/s^2"), "N")
 
 
-@dataclass(frozen=True)
+@record
 class CoordinateKind:
     """One coordinate kind (module docstring)."""
 

@@ -34,16 +34,16 @@ casmech.elements.forces import nothing from schema/ or model/:
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.core.registry import Registry
 from casmech.elements.forces import bushing, contact, contact_spec, loads, springs
 
 
-@dataclass(frozen=True)
+@record
 class Kernel:
     """An element's law as one SX kernel mapped over its instances (equations/force_kernels.py):
     the numbers of an instance (`data(force)`), the entries of its value input (a force or torque
@@ -56,7 +56,7 @@ class Kernel:
     n_value: int = 0
 
 
-@dataclass(frozen=True)
+@record
 class ForceType:
     """One force element type (module docstring)."""
 

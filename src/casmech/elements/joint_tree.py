@@ -15,14 +15,14 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass
 
+from casmech.core.records import record
 from casmech.elements.joint_types import REGISTRY
 
 GROUND = "ground"
 
 
-@dataclass(frozen=True)
+@record
 class Link:
     """A joint as the tree sees it."""
 
@@ -33,7 +33,7 @@ class Link:
     cut: bool = False
 
 
-@dataclass(frozen=True)
+@record
 class TreeJoint:
     index: int  # the joint's index among the links
     parent: str
@@ -44,7 +44,7 @@ class TreeJoint:
         return links[self.index].body_i != self.parent
 
 
-@dataclass(frozen=True)
+@record
 class Tree:
     joints: tuple[TreeJoint, ...]  # parents before children
     roots: tuple[str, ...]  # bodies that float (no tree joint reaches them from ground)

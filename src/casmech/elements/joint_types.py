@@ -26,7 +26,7 @@ plus distance (D), revolute_spherical (D + DP2) and planar (2 DP1 + DP2).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from types import MappingProxyType
 from typing import Any
 
@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.quaternions import IDENTITY, about, angle_about, from_matrix, product, unit
+from casmech.core.records import record
 from casmech.core.registry import Registry
 from casmech.core.states import JOINT_STATES
 from casmech.elements import coordinate_kinds, couplings
@@ -63,7 +64,7 @@ FRAME = MappingProxyType({"at": "P", "at_i": "Pi", "at_j": "Pj", "axis": "w",
                           "axis_i": "axis_i", "axis_j": "axis_j"})
 
 
-@dataclass(frozen=True)
+@record
 class Couples:
     """A coupling between joint coordinates (elements/couplings.py): a type whose one row is
     sum_k c_k s_k = 0 over the coordinates s_k of the joints it names, over their bodies."""
@@ -78,7 +79,7 @@ class Couples:
     label: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class JointType:
     """One joint type (module docstring)."""
 

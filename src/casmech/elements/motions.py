@@ -21,16 +21,17 @@ x and the child's on F_c's y, so the joint keeps them perpendicular.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler, rotations
 from casmech.core.quaternions import from_matrix, unit
+from casmech.core.records import record
 
 
-@dataclass(frozen=True)
+@record
 class Motion:
     """The motion a tree joint allows (module docstring)."""
 

@@ -11,12 +11,13 @@ three to couple them), `unregister` removes it.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 
 import casadi as ca
 
+from casmech.core.records import record
 
-@dataclass(frozen=True)
+
+@record
 class Frame:
     """Position of the body frame origin (the CM) and rotation matrix, both global."""
 

@@ -7,11 +7,11 @@ own over them (casmech.optimal). The bundle's functions are equations.functions'
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 
+from casmech.core.records import record
 from casmech.equations.derivatives import GROUND_POSE
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.row_kernels import driver_value
@@ -34,7 +34,7 @@ def system_over(ir: ModelIR, x: Coordinates, lam=None, scale=None) -> System:
     return System(ir, Evaluation.of(True), symbols)
 
 
-@dataclass(frozen=True)
+@record
 class ConstraintSystem:
     """Phi, phi_q, nu (and the rest when first read) of one model over x."""
 

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
 from casmech.core.options import LinearAlgebra
+from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import BodyName
 from casmech.model.ir import RowInfo
@@ -16,7 +15,7 @@ from casmech.numerics import numeric_qr
 LIMITS = LinearAlgebra()  # the defaults (core.options)
 
 
-@dataclass(frozen=True)
+@record
 class Structure:
     n_coordinates: int
     n_rows: int

@@ -20,11 +20,12 @@ expressions of d (inline: the SX themselves; mapped: MX through a Function of d)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.numerics import instances
 
 # What each compiled (or interpreted) use of the builder evaluates inline, by the model's number
@@ -48,7 +49,7 @@ def is_inline(use: str, n_bodies: int) -> bool:
     return n_bodies <= WHERE_INLINE[use]
 
 
-@dataclass(frozen=True)
+@record
 class Evaluation:
     """Inline (SX) or mapped (MX) evaluation of kernels; `data`: the symbols of a symbolic IR's
     numbers (model.parametric.split), None for a numeric IR."""

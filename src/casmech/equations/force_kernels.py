@@ -14,12 +14,12 @@ functions, formulations.residuals).
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.elements.force_types import REGISTRY, entry_of
 from casmech.elements.primitives import Frame
 from casmech.equations import evaluation, friction, limits
@@ -32,7 +32,7 @@ from casmech.schema.resolved import ScalarFunction
 ROW = 14  # x of an element: [r_i, p_i, r_j, p_j]
 
 
-@dataclass(frozen=True)
+@record
 class ForceKey:
     type: str
     frame: str

@@ -9,19 +9,20 @@ compiles maps them (mapped_functions).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, MutableMapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.equations import system
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.system import System
 from casmech.model.ir import GROUND_INDEX, ModelIR, RowInfo
 
 
-@dataclass(frozen=True)
+@record
 class JointMeta:
     name: str
     type: str
@@ -31,7 +32,7 @@ class JointMeta:
     source: object = None
 
 
-@dataclass(frozen=True)
+@record
 class Library:
     """The parametric library a compiled bundle is bound to: its folder and the structure's
     signature it was built for (backends.rebind binds it to other values)."""
@@ -40,7 +41,7 @@ class Library:
     signature: str | None
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class SystemFunctions:
     """casadi.Functions by name plus what analyses need to know about the model. Immutable:
     what analyses derive from it and reuse lives in a runtime.workspace.Workspace. Compared

@@ -13,11 +13,10 @@ results show at t = 0.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 
 from casmech.core.quaternions import conjugate, product
+from casmech.core.records import record
 from casmech.core.values import constant
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.equations import coordinates, joint_states
@@ -46,7 +45,7 @@ def rate_keys() -> tuple[str, ...]:
     return (*(kind.rate for kind in KINDS.values()), *(f"{key}_dot" for key in UNIVERSAL))
 
 
-@dataclass(frozen=True)
+@record
 class Held:
     """The rows of one kind: residuals (positions) or rates with their targets."""
 

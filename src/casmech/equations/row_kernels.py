@@ -23,12 +23,12 @@ r-omega gamma_hat; a row's reaction.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.elements.forces.terms import at
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body, derivatives, evaluation
@@ -43,7 +43,7 @@ SIDES = "ijklmnop"  # the row's bodies in order: body_i, body_j, then the others
 ZERO, CONSTANT, TIME = "zero", "constant", "time"  # how f depends on t
 
 
-@dataclass(frozen=True)
+@record
 class RowKey:
     kind: str
     ground: str | None  # the sides (SIDES) that are ground, or None

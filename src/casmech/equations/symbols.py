@@ -4,18 +4,19 @@ law reads a body's frame, point or rate."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.core.values import constant
 from casmech.elements.primitives import Frame
 from casmech.equations.derivatives import GROUND_POSE
 from casmech.model.ir import GROUND_INDEX
 
 
-@dataclass(frozen=True)
+@record
 class Coordinates:
     """Symbols of one model: time, coordinates and their rates, ground's pseudo-coordinates."""
 

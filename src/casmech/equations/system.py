@@ -10,18 +10,18 @@ every bundle lists them.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 
+from casmech.core.records import record
 from casmech.equations import bodies, forces, inline, rows
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.layout import Layout
 from casmech.model.ir import ModelIR
 
 
-@dataclass(frozen=True)
+@record
 class Symbols:
     """The functions' inputs: time, coordinates and rates, multipliers, the drivers' scale, the
     r-omega velocities."""

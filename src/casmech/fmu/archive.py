@@ -16,7 +16,7 @@ import re
 import sys
 import tempfile
 import zipfile
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 
@@ -24,6 +24,7 @@ import casadi as ca
 
 from casmech.backends import generate
 from casmech.backends.build import SUFFIX, Toolchain, build_libraries
+from casmech.core.records import record
 from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.equations.functions import build_functions
 from casmech.errors import UsageError
@@ -42,13 +43,15 @@ PLATFORMS = {"linux": "linux64", "darwin": "darwin64", "win32": "win64", "cygwin
 VISIBILITY = ("-fvisibility=hidden",)  # only the FMI functions (FMI2_Export) are exported
 
 
-@dataclass(frozen=True)
+@record
 class Options:
     outputs: tuple[str, ...] | None = None  # results columns or globs (None: all)
     inputs: tuple[str, ...] | None = None  # inputs (None: every effort motor and control)
     toolchain: Toolchain | None = None
     identifier: str | None = None  # modelIdentifier (default: from the file name)
 
+
+DEFAULT_OPTIONS = Options()
 
 def identifier_of(path: Path) -> str:
     """A C identifier from the FMU's file name (FMI: the binary's name)."""
@@ -136,7 +139,7 @@ def quantity_title(name: str) -> str:
     return description.quantity(name)[2]
 
 
-@dataclass(frozen=True)
+@record
 class Written:
     path: Path
     summary: str  # what it holds, in words (fmu.archive.summary)
@@ -158,7 +161,7 @@ def notes(model: ResolvedModel) -> tuple[str, ...]:
     return tuple(found)
 
 
-def export(model: ResolvedModel, path: Path, options: Options = Options()) -> Written:
+def export(model: ResolvedModel, path: Path, options: Options = DEFAULT_OPTIONS) -> Written:
     """Write the model's FMU to `path` (module docstring)."""
     if path.suffix != ".fmu":
         raise UsageError(f"{path}: an FMU's file name ends in .fmu")

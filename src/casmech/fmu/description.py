@@ -12,9 +12,9 @@ import hashlib
 import uuid
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from casmech.core.columns import quantity
+from casmech.core.records import record
 from casmech.core.version import VERSION
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 
@@ -37,7 +37,7 @@ PARAMETER_WORDS = {
 LOG_CATEGORIES = ("logStatusError", "logStatusWarning")
 
 
-@dataclass(frozen=True)
+@record
 class Variable:
     name: str
     causality: str

@@ -25,12 +25,13 @@ The inputs are appended to the model data, so every function of the lowered mode
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 
 from casmech.core import traced
 from casmech.core.expressions import ExpressionError, parse
+from casmech.core.records import record
 from casmech.elements.coordinate_kinds import BY_TYPE, View
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 from casmech.equations.motors import INPUTS
@@ -48,14 +49,14 @@ CONTROL_VARIABLES = View(lambda: {kind.motor[2]: ("t", *kind.attributes)
                                   for kind in COORDINATE_KINDS.values()})
 
 
-@dataclass(frozen=True)
+@record
 class Parameter:
     name: str
     value: float
     kind: str  # one of KINDS
 
 
-@dataclass(frozen=True)
+@record
 class Input:
     name: str  # "<joint>.torque" | "<joint>.force"
     joint: str
@@ -63,7 +64,7 @@ class Input:
     control: bool  # an `ocp:` control (else the joint's effort motor)
 
 
-@dataclass(frozen=True)
+@record
 class Exported:
     """The model as the FMU computes it: the lowered IR with theta traced, split into its
     structure and model data d (d(theta): split.expressions), effort motors' laws replaced

@@ -11,11 +11,10 @@ for other parameter values (fmu.system), so at the model's values it starts exac
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import build_functions
@@ -29,7 +28,7 @@ from casmech.runtime import assembly
 from casmech.schema.resolved import ResolvedModel
 
 
-@dataclass(frozen=True)
+@record
 class Start:
     t0: float
     x0: np.ndarray

@@ -38,12 +38,11 @@ the start state computed by casmech (fmu.start).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.fmu import outputs
@@ -52,7 +51,7 @@ from casmech.fmu.start import Start
 from casmech.formulations.registry import FORMULATIONS
 
 
-@dataclass(frozen=True)
+@record
 class FmuSystem:
     functions: dict[str, ca.Function]  # the C functions by name (module docstring)
     state_names: tuple[str, ...]

@@ -18,13 +18,13 @@ body is a step traced once per structure and evaluated inside CasADi (core/trace
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cache, cached_property
 
 import casadi as ca
 
 from casmech.core import spatial
 from casmech.core.quaternions import conjugate, product
+from casmech.core.records import record
 from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations import body, eom
@@ -119,7 +119,7 @@ def _joint_transform(matrix, translation, e_t, r_t):
     return matrix.T @ e_t, r_t + e_t.T @ translation
 
 
-@dataclass(frozen=True)
+@record
 class Kinematics:
     """Global poses, and spatial velocities of every body (IR order) on the tree: V in the
     body's reference frame, `velocity` in its CM frame (body axes). The rotation matrices
@@ -240,7 +240,7 @@ def _wrench(p, rotation, force, q_p):
     return (ca.vertcat(body.moment(p, q_p), rotation.T @ force),)
 
 
-@dataclass(frozen=True)
+@record
 class Dynamics:
     """What the articulated-body algorithm gives: per tree joint its free accelerations, per
     body its spatial acceleration (reference frame; `accelerations`: CM frame) and what the

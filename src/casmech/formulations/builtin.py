@@ -5,13 +5,12 @@ by formulations.joint_start; for optimal control formulations.joint_control)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
 from casmech.core.options import DynamicsSolver, LinearAlgebra
+from casmech.core.records import record
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
@@ -62,7 +61,7 @@ def masked_rows(functions: SystemFunctions, name: str, t, q,
     return 1.0 - keep[:dae.sizes(functions.functions, name)[2]]
 
 
-@dataclass(frozen=True)
+@record
 class BodyCoordinates(Formulation):
     """rp or romega: x = [q, v], z = [v_dot, lam (scaled), mu (ggl)], p = [t0, w, s (, s_phi),
     d] as formulations.dae writes them; t relative to p[0]."""
@@ -139,14 +138,14 @@ class BodyCoordinates(Formulation):
         return out
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class TreeSystem(System):
     """The joint formulation's System, with the JointSystem its start reads."""
 
     joint: JointSystem | None = None
 
 
-@dataclass(frozen=True)
+@record
 class JointCoordinates(Formulation):
     """joint: x = [theta; u] of the free tree joints, z = [lam, mu] of the cut joints' rows
     (none on a tree), p = [w (one per cut row), quaternion signs (one per body)]; t

@@ -12,9 +12,9 @@ has only some (a joint no M, F or q_dot; a force element only F)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
+
+from casmech.core.records import record
 
 
 def scaled(matrix, s):
@@ -52,7 +52,7 @@ def ggl_q_dot(q_dot, phi_q_s, mu):
     return q_dot + constraint_forces(phi_q_s, mu)
 
 
-@dataclass(frozen=True)
+@record
 class Rows:
     """Constraint rows of a residual: P_s (over v) with its multipliers lam, masks w and
     gamma_s (projection) or nu_s (ggl); for ggl also Phi's rows phi_s, Phi_q_s (over q), their
@@ -69,7 +69,7 @@ class Rows:
     mu: object = None
 
 
-@dataclass(frozen=True)
+@record
 class Parts:
     """What a residual (or one element of it) is made of; None: the part is absent."""
 

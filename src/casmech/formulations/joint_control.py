@@ -14,12 +14,12 @@ built over the model data's symbols, read with the model data d as their last in
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations.checks import independent_rows
 from casmech.errors import UsageError
@@ -29,7 +29,7 @@ from casmech.formulations.protocol import ControlEquations
 from casmech.model.ir import ModelIR
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class JointControl(ControlEquations):
     """ControlEquations of the joint formulation: `joints` built over `symbols` (the model
     data's) from `ir`, the parametric IR written in them."""

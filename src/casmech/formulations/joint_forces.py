@@ -23,12 +23,13 @@ reactions are those of the body-wrench evaluation whatever direction an element 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.elements.primitives import Frame
 from casmech.equations.force_kernels import on_ground
@@ -41,7 +42,7 @@ from casmech.model.ir import ForceIR, ModelIR
 GROUPS = ("forces", "motors", "limits")  # the ModelIR fields that hold elements with a law
 
 
-@dataclass(frozen=True)
+@record
 class Applied:
     """A model's applied forces split for a tree: `bodies` the IR whose forces act as body
     wrenches, `local` per tree joint (tree order) its local elements, `only_local` the IR of

@@ -33,11 +33,11 @@ the coordinates): build refuses them, naming the cut joints.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
 from casmech.formulations import articulated, joint_forces, rnea
@@ -103,7 +103,7 @@ def functions(ir: ModelIR, tree: Tree, joint_local: bool = True) -> dict[str, ca
     }
 
 
-@dataclass(frozen=True)
+@record
 class JointSpace:
     """A tree's joint-space dynamics (module docstring): CasADi Functions by name
     (`functions`, SIGNATURES) and NumPy calls, Pinocchio's argument order with t last."""

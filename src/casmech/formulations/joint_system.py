@@ -28,13 +28,13 @@ parameter value.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import cache, cached_property
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
@@ -55,7 +55,7 @@ ROW_NORM_FLOOR = 1e-9
 IDENTITY_STATES = 200
 
 
-@dataclass(frozen=True)
+@record
 class Layout:
     """Which coordinates and velocities are states: per tree joint, the indices into x of its
     free coordinates and velocities, and which of its own they are."""
@@ -96,7 +96,7 @@ def labels(tree: Tree, body_names: tuple[str, ...]) -> tuple[tuple[str, ...], tu
     return tuple(coordinates), tuple(velocities)
 
 
-@dataclass(frozen=True)
+@record
 class JointSystem:
     tree: Tree
     layout: Layout

@@ -40,12 +40,12 @@ runs them too. The registry is formulations.registry.FORMULATIONS.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.options import DynamicsSolver
+from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.model.ir import ModelIR
@@ -53,7 +53,7 @@ from casmech.model.ir import ModelIR
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
 
-@dataclass(frozen=True)
+@record
 class States:
     """The names of a formulation's states: x (differential) and z (algebraic)."""
 
@@ -61,7 +61,7 @@ class States:
     algebraic: tuple[str, ...] = ()
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class System:
     """A formulation's equations for one model (module docstring). `time_offset`: the index
     of p that holds the start time, the residual's and rows' t being relative to it (None:
@@ -81,7 +81,7 @@ class System:
         return "idas" if self.n_z else "cvodes"
 
 
-@dataclass(frozen=True)
+@record
 class Start:
     """A consistent start: states x, algebraic states z and parameters p."""
 
@@ -159,7 +159,7 @@ class ControlEquations(ABC):
         multiplier, which the results columns and the costs read."""
 
 
-@dataclass(frozen=True)
+@record
 class Formulation(ABC):
     """The protocol (module docstring): a frozen dataclass per formulation implements states,
     system and start."""

@@ -8,10 +8,10 @@ r-p (Euler parameters, v = q_dot, every row of Phi including normalization) and 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from casmech.core.records import record
 
 
-@dataclass(frozen=True)
+@record
 class BodyForm:
     """Which system functions play M, F, P, gamma and nu; q_dot(q, v) (None: v is q_dot)."""
 

@@ -15,11 +15,12 @@ one (model.parametric.split); the tree itself depends on the structure alone.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.schema.resolved import ScalarFunction
@@ -27,7 +28,7 @@ from casmech.schema.resolved import ScalarFunction
 Frame = tuple  # (axes as columns, origin), in a body's frame: NumPy arrays or SX
 
 
-@dataclass(frozen=True)
+@record
 class TreeJoint:
     """A tree joint: its motion type, parent and child bodies and joint frames on each."""
 
@@ -43,7 +44,7 @@ class TreeJoint:
     joint: JointIR | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Tree:
     joints: tuple[TreeJoint, ...]  # every body once as a child, parents before children
     cut: tuple[JointIR, ...]  # joints kept as constraint rows

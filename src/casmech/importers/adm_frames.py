@@ -9,9 +9,9 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from casmech.core.records import record
 
 # SI value of one unit (Adams UNITS keywords)
 LENGTH = {"METER": 1.0, "MILLIMETER": 1e-3, "CENTIMETER": 1e-2, "KILOMETER": 1e3,
@@ -31,7 +31,7 @@ SYSTEMS = {"MKS": ("NEWTON", "KILOGRAM", "METER", "SECOND"),
 TABLES = {"FORCE": FORCE, "MASS": MASS, "LENGTH": LENGTH, "TIME": TIME}
 
 
-@dataclass(frozen=True)
+@record
 class Units:
     """SI factors of the deck's base units."""
 
@@ -93,7 +93,7 @@ def from_points(origin, z_point, x_point) -> np.ndarray | None:
     return np.column_stack([x, np.cross(z, x), z])
 
 
-@dataclass(frozen=True)
+@record
 class Frame:
     """A placement in the global frame: origin and rotation (columns = axes)."""
 

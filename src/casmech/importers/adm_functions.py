@@ -14,11 +14,11 @@ CasADi gives the coefficients (the gradient) and checks the expression is affine
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 
 import casadi as ca
 
 from casmech.core.expressions import ExpressionError, parse
+from casmech.core.records import record
 
 # Adams constants and the symbols of time
 CONSTANTS = {"rtod": 180.0 / 3.141592653589793, "dtor": 3.141592653589793 / 180.0}
@@ -31,7 +31,7 @@ class NotTranslated(Exception):
     """The expression is outside the translated forms (the message says why)."""
 
 
-@dataclass(frozen=True)
+@record
 class Measure:
     name: str  # dm, vr, az, wz, ...
     markers: tuple[int, ...]
@@ -41,7 +41,7 @@ class Measure:
         return "_".join([self.name, *map(str, self.markers)])
 
 
-@dataclass(frozen=True)
+@record
 class Affine:
     constant: float
     coefficients: dict[Measure, float]

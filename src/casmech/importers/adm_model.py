@@ -8,10 +8,11 @@ ground is the global frame.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source, did_you_mean
 from casmech.importers.adm_frames import (
     IDENTITY,
@@ -102,7 +103,7 @@ def view_name(statement: Statement, fallback: str) -> str:
     return fallback
 
 
-@dataclass
+@record(frozen=False)
 class Part:
     statement: Statement
     name: str
@@ -111,7 +112,7 @@ class Part:
     body_frame: Frame = IDENTITY  # CM marker frame (global); ground: identity
 
 
-@dataclass
+@record(frozen=False)
 class Marker:
     statement: Statement
     part: int
@@ -119,7 +120,7 @@ class Marker:
     frame: Frame = IDENTITY  # global, set once parts are placed
 
 
-@dataclass
+@record(frozen=False)
 class Deck:
     dataset: Dataset
     reader: Reader

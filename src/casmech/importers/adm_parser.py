@@ -15,21 +15,22 @@ Keys and flags are upper-cased; columns are 1-based character positions in the r
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source
 
 _HEAD = re.compile(r"\s*([A-Za-z_]+)\s*/\s*([^,]*)")
 
 
-@dataclass(frozen=True)
+@record
 class Value:
     text: str
     line: int
     col: int
 
 
-@dataclass
+@record(frozen=False)
 class Argument:
     key: str  # upper case; for a flag, the flag itself
     values: list[Value] = field(default_factory=list)
@@ -37,7 +38,7 @@ class Argument:
     col: int = 0
 
 
-@dataclass
+@record(frozen=False)
 class Statement:
     name: str  # upper case, e.g. PART
     ident: str  # the text after the slash ("" for UNITS/, ACCGRAV/)
@@ -61,7 +62,7 @@ class Statement:
         return [a for a in self.arguments if not a.values]
 
 
-@dataclass
+@record(frozen=False)
 class Dataset:
     file: str
     title: str

@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic
 
 LINE_BREAKS = re.compile("\r\n|[\r\n\x85\u2028\u2029]")  # every line break YAML knows
@@ -26,13 +27,13 @@ NOT_PRINTABLE = re.compile("[^\x09\x20-\x7e\xa0-\ud7ff\ue000-\ufffd\U00010000-\U
 NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 
 
-@dataclass
+@record(frozen=False)
 class Item:
     data: dict[str, Any]
     comments: list[str] = field(default_factory=list)
 
 
-@dataclass
+@record(frozen=False)
 class Imported:
     name: str
     description: str

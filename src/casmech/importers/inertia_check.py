@@ -14,16 +14,16 @@ sets the three principal moments to their mean where they violate the triangle i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from casmech.core.records import record
 
 HINT = ("--bound-inertia VALUE raises principal moments below VALUE [kg m^2] to it and "
         "--balance-inertia sets moments that violate the triangle inequality to their mean "
         "(MuJoCo's compiler options boundinertia and balanceinertia)")
 
 
-@dataclass(frozen=True)
+@record
 class Repair:
     bound: float = 0.0  # [kg m^2]: principal moments below it are raised to it (0: none)
     balance: bool = False  # moments violating the triangle inequality -> their mean

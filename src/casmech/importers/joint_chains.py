@@ -26,10 +26,9 @@ and joint limits. Vectors are global, at the initial pose.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.joint_types import PERPENDICULAR
 from casmech.importers.adm_frames import tidy
 
@@ -37,7 +36,7 @@ SAME = 1e-9  # relative distance below which two joint lines meet, two points co
 INDEPENDENT = 1e-6  # |det| (or the smallest singular value) of unit axes above which they span
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class Elementary:
     kind: str  # "hinge" | "slide" | "ball"
     axis: np.ndarray  # unit, global (not used for a ball)
@@ -45,7 +44,7 @@ class Elementary:
     name: str = ""
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class BodyFrame:
     """A body's rotation (columns: its axes, global) and origin (global), for basic
     constraints written in body frames."""

@@ -20,8 +20,10 @@ The caller warns.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
+
+from casmech.core.records import record
 
 ROS_PACKAGE_PATHS = "ROS_PACKAGE_PATH"
 PREFIX_PATHS = ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH")
@@ -31,7 +33,7 @@ def _entries(variable: str) -> list[Path]:
     return [Path(p) for p in os.environ.get(variable, "").split(os.pathsep) if p.strip()]
 
 
-@dataclass
+@record(frozen=False)
 class MeshPaths:
     source: Path  # the file being imported
     output_dir: Path  # the folder the YAML is written to

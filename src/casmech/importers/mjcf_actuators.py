@@ -21,10 +21,9 @@ were merged into a composite casmech joint.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.mjcf_defaults import Defaults
 from casmech.importers.mjcf_read import Element, Reader
 
@@ -33,7 +32,7 @@ OTHERS = ("intvelocity", "damper", "cylinder", "muscle", "adhesion", "plugin")
 TRANSMISSIONS = ("joint", "jointinparent", "tendon", "site", "body", "cranksite")
 
 
-@dataclass
+@record(frozen=False)
 class Actuator:
     name: str
     element: Element

@@ -10,10 +10,11 @@ warning naming its line.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.mjcf_defaults import Compiler, Defaults
 from casmech.importers.mjcf_frames import IDENTITY, Frame, frame, fromto
 from casmech.importers.mjcf_inertia import Mass, combine, geom_mass, inertial
@@ -28,7 +29,7 @@ SIZES = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3, "ellipsoid": 3, "pl
 QUIET = {"camera", "light"}  # pictures: skipped without a warning (the header says so)
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Joint:
     name: str
     kind: str
@@ -41,7 +42,7 @@ class Joint:
     body: Body | None = None
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Geom:
     name: str
     kind: str
@@ -51,7 +52,7 @@ class Geom:
     at: Frame  # in the body frame
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Body:
     name: str
     element: Element

@@ -13,14 +13,14 @@ per element tag (an actuator shortcut such as `<position>` takes the defaults wr
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
+from casmech.core.records import record
 from casmech.importers.mjcf_read import Element, Reader
 
 MAIN = "main"
 
 
-@dataclass(frozen=True)
+@record
 class Compiler:
     degrees: bool = True  # compiler angle="degree" (MJCF's default)
     eulerseq: str = "xyz"

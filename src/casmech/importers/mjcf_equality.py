@@ -16,10 +16,9 @@ warning).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.mjcf_bodies import Body
 from casmech.importers.mjcf_frames import Frame
 from casmech.importers.mjcf_read import Element, Reader
@@ -27,7 +26,7 @@ from casmech.importers.mjcf_read import Element, Reader
 KINDS = {"connect": "spherical", "weld": "fixed"}
 
 
-@dataclass
+@record(frozen=False)
 class Loop:
     name: str
     element: Element

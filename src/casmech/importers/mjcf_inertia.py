@@ -11,15 +11,14 @@ geom is left out with a warning.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.mjcf_read import Element, Reader
 from casmech.importers.urdf_tree import Frame
 
 
-@dataclass
+@record(frozen=False)
 class Mass:
     mass: float
     centre: np.ndarray  # in the body frame

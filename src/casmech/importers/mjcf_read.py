@@ -12,11 +12,11 @@ the included file's line.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import ModelError
 from casmech.importers import xml_read
 from casmech.importers.source import read_source
@@ -95,7 +95,7 @@ def _included(include: Element, main: Path, seen: set[Path], depth: int) -> list
     return root.children
 
 
-@dataclass
+@record(frozen=False)
 class Reader(xml_read.Reader):
     """Located access to an MJCF document's elements; collects warnings."""
 

@@ -14,10 +14,9 @@ frame, a free joint's linear velocity is the body origin's, global (MuJoCo's con
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import UsageError, did_you_mean
 from casmech.importers.mjcf_bodies import QPOS, QVEL, Body, Joint, Tree
 from casmech.importers.mjcf_frames import Frame, quaternion_matrix
@@ -25,7 +24,7 @@ from casmech.importers.mjcf_read import Element, Reader
 from casmech.importers.urdf_tree import axis_rotation
 
 
-@dataclass
+@record(frozen=False)
 class State:
     frames: dict[Body, Frame]  # global
     omega: dict[Body, np.ndarray]  # global

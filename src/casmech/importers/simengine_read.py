@@ -8,13 +8,14 @@ line of the offending value.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from casmech.core.expressions import ExpressionError, parse
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source
 from casmech.importers.source import read_source
 from casmech.schema.loader import format_path, load_document
@@ -26,7 +27,7 @@ def rotation(p) -> np.ndarray:
     return (e0**2 - e @ e) * np.eye(3) + 2 * np.outer(e, e) + 2 * e0 * skew
 
 
-@dataclass
+@record(frozen=False)
 class Located:
     file: str
     data: dict

@@ -14,15 +14,16 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.urdf_read import Reader
 from casmech.importers.urdf_tree import Frame, Joint, Link, Tree
 
 
-@dataclass
+@record(frozen=False)
 class Group:
     """Links welded together by fixed (or locked) joints: one casmech body (or the ground)."""
 
@@ -45,7 +46,7 @@ class Group:
         return mass, centre, inertia
 
 
-@dataclass
+@record(frozen=False)
 class Plan:
     groups: dict[str, Group]  # link name -> its group (the root's is the ground's)
     heads: list[str]  # the links heading a body, in file order (parents first)

@@ -7,11 +7,11 @@ importers.source.read_source's 16 MiB bound (E006).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import ModelError
 from casmech.importers import xml_read
 from casmech.importers.source import read_source
@@ -27,7 +27,7 @@ def located(file: str, line: int, col: int, code: str, message: str, expected: s
     return xml_read.located(file, line, col, code, message, expected, path, got, hint)
 
 
-@dataclass
+@record(frozen=False)
 class Reader(xml_read.Reader):
     """Located access to a URDF document's elements; collects warnings."""
 

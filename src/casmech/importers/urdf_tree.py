@@ -8,10 +8,11 @@ inertia tensor's frame in the link frame, its `ixy`... being the tensor's entrie
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.importers.urdf_read import Element, Reader
 
 MOVING = {"revolute": "revolute", "continuous": "revolute", "prismatic": "translational",
@@ -33,7 +34,7 @@ def axis_rotation(axis, angle: float) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * skew + (1 - np.cos(angle)) * skew @ skew
 
 
-@dataclass(frozen=True, eq=False)
+@record(eq=False)
 class Frame:
     """A frame: rotation (columns = its axes) and origin, in the frame it is given in."""
 
@@ -51,14 +52,14 @@ class Frame:
 IDENTITY = Frame(np.eye(3), np.zeros(3))
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Inertial:
     mass: float
     frame: Frame  # of the centre of mass and the tensor's axes, in the link frame
     tensor: np.ndarray  # about the centre of mass, in `frame`'s axes
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Link:
     name: str
     element: Element
@@ -66,7 +67,7 @@ class Link:
     visuals: list[Element] = field(default_factory=list)
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Joint:
     name: str
     element: Element
@@ -146,7 +147,7 @@ def read_joint(reader: Reader, element: Element) -> Joint:
                  frame(reader, element.find("origin"), f"{path}.origin"), axis)
 
 
-@dataclass
+@record(frozen=False)
 class Tree:
     links: dict[str, Link]
     joints: list[Joint]  # parents before children (depth first, in file order)
@@ -237,7 +238,7 @@ def _depth_first(root: str, joints: list[Joint]) -> list[Joint]:
     return order
 
 
-@dataclass
+@record(frozen=False)
 class State:
     """Every link's frame (global), angular velocity and the velocity of its frame's origin."""
 

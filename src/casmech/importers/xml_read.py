@@ -9,17 +9,18 @@ the tree recursively.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from xml.parsers import expat
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source
 
 MAX_NESTING = 200  # nested elements (a chain of 200 bodies or links)
 
 
-@dataclass(eq=False)
+@record(frozen=False, eq=False)
 class Element:
     """One XML element: tag, attributes, children, its file and where it starts (1-based)."""
 
@@ -43,7 +44,7 @@ class Element:
             yield from child.iter(tag)
 
 
-@dataclass(frozen=True)
+@record
 class Format:
     """What the errors of one XML format say: its name, what a file of it looks like, its
     root element and where its reference is."""
@@ -120,7 +121,7 @@ def finite_numbers(text: str) -> np.ndarray | None:
     return values if np.all(np.isfinite(values)) else None
 
 
-@dataclass
+@record(frozen=False)
 class Reader:
     """Located access to an XML document's elements; collects warnings (each format's reader
     adds its own accessors)."""

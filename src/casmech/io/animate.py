@@ -15,7 +15,6 @@ along the principal axes of inertia.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
@@ -23,6 +22,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, UsageError
 from casmech.schema.loader import load_document
 from casmech.schema.resolved import GROUND, ResolvedModel
@@ -35,7 +35,7 @@ THINNEST = 0.05  # smallest ellipsoid semi-axis, as a fraction of the largest
 POSE = ("x", "y", "z", "e0", "e1", "e2", "e3")
 
 
-@dataclass(frozen=True)
+@record
 class Part:
     """A triangle surface fixed in the frame of body `body` (GROUND_INDEX: global)."""
 
@@ -46,7 +46,7 @@ class Part:
     triangles: np.ndarray  # (m, 3) indices into points
 
 
-@dataclass(frozen=True)
+@record
 class Link:
     """A line between a point of one body and a point of another (e.g. a distance joint)."""
 
@@ -57,7 +57,7 @@ class Link:
     point_b: np.ndarray
 
 
-@dataclass(frozen=True)
+@record
 class Scene:
     name: str
     bodies: tuple[str, ...]

@@ -32,10 +32,10 @@ is one, else the plane normal to `up` through the lowest point any part reaches.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.coordinate_kinds import ANGLE, BY_MODE, View
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATES
 from casmech.errors import UsageError
@@ -56,7 +56,7 @@ def _motor(drive: str) -> tuple[str, bool]:
     return kind.effort, kind.quantity is ANGLE
 
 
-@dataclass(frozen=True)
+@record
 class Arrow:
     """A vector drawn at every frame: origin and value (F, 3), global; `kind` in UNITS.
     `carrier`: (body, point in its frame) when the origin is a point fixed in a body."""
@@ -68,7 +68,7 @@ class Arrow:
     carrier: tuple[int, np.ndarray] | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Triad:
     """A joint's frame u, v, w (columns of axes) at a point, both in body `body`'s frame."""
 
@@ -78,7 +78,7 @@ class Triad:
     axes: np.ndarray
 
 
-@dataclass(frozen=True)
+@record
 class Plane:
     """A contact plane carried by body `body` (point and unit normal in its frame)."""
 
@@ -88,7 +88,7 @@ class Plane:
     normal: np.ndarray
 
 
-@dataclass(frozen=True)
+@record
 class Trail:
     name: str
     body: int
@@ -96,7 +96,7 @@ class Trail:
     chosen: bool  # asked for (shown at start) rather than a body's CM offered by default
 
 
-@dataclass(frozen=True)
+@record
 class Overlays:
     shapes: tuple[Part, ...]  # what each contact element collides with, in its body's frame
     arrows: tuple[Arrow, ...]

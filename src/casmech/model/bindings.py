@@ -7,9 +7,10 @@ motors.py, limits.py).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import field, fields, replace
 from typing import Any
 
+from casmech.core.records import record
 from casmech.core.states import BODY_STATES, split
 from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
@@ -23,7 +24,7 @@ def has_coordinates(joint_type: str) -> bool:
     return bool(attributes(joint_type))
 
 
-@dataclass(frozen=True)
+@record
 class BoundFunction(ScalarFunction):
     """A force law with the state it reads bound: name -> (kind, attribute, joint or body)."""
 

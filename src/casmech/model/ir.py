@@ -7,18 +7,19 @@ Body index -1 is ground. Every vector here is in the frame the primitive expects
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import Source
 from casmech.schema.resolved import Analysis, Output, ScalarFunction
 
 GROUND_INDEX = -1
 
 
-@dataclass(frozen=True)
+@record
 class RowInfo:
     """Provenance of one constraint row."""
 
@@ -28,7 +29,7 @@ class RowInfo:
     source: Source | None = None
 
 
-@dataclass(frozen=True)
+@record
 class PrimitiveIR:
     kind: str
     body_i: int
@@ -46,7 +47,7 @@ class PrimitiveIR:
         return (self.body_i, self.body_j, *self.others)
 
 
-@dataclass(frozen=True)
+@record
 class BodyIR:
     name: str
     mass: float
@@ -58,7 +59,7 @@ class BodyIR:
     source: Source | None = None
 
 
-@dataclass(frozen=True)
+@record
 class JointIR:
     """A joint of the file and the rows of phi it owns."""
 
@@ -86,7 +87,7 @@ class JointIR:
     coefficients: tuple[Any, ...] = ()
 
 
-@dataclass(frozen=True)
+@record
 class ForceIR:
     name: str
     type: str
@@ -101,7 +102,7 @@ class ForceIR:
     source: Source | None = None
 
 
-@dataclass(frozen=True)
+@record
 class ModelIR:
     name: str
     file: str

@@ -28,13 +28,14 @@ from __future__ import annotations
 import hashlib
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, is_dataclass, replace
+from dataclasses import fields, is_dataclass, replace
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import traced
 from casmech.core.expressions import Expr
+from casmech.core.records import record
 from casmech.errors import Source
 from casmech.model.ir import ModelIR, RowInfo
 from casmech.schema.resolved import Analysis
@@ -70,7 +71,7 @@ def _zero(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and value == 0
 
 
-@dataclass(frozen=True)
+@record
 class Split:
     ir: ModelIR  # numbers replaced by entries of `symbols` (structural zeros kept)
     symbols: ca.SX  # d, the column of every symbol in `ir`, in walk order

@@ -14,18 +14,18 @@ slower than the interpreted SX Jacobian, where this is faster
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import lru_cache
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.numerics import instances
 
 DROPPED = -1  # an output index that is not added anywhere (e.g. ground's rows)
 
 
-@dataclass(frozen=True)
+@record
 class Group:
     """Instances of one kernel (y [n_y], d [n_d]) -> out [n_out] (SX).
 
@@ -43,7 +43,7 @@ class Group:
         return len(self.inputs)
 
 
-@dataclass(frozen=True)
+@record
 class ElementSum:
     """r(u) (n_rows) as the sum of its groups' contributions; u is followed by the constant
     `padding` (the entries that inputs >= n_u pick)."""

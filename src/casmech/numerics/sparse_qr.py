@@ -14,12 +14,12 @@ compiled bundle) they are called.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 
+from casmech.core.records import record
 
-@dataclass(frozen=True)
+
+@record
 class SparseQR:
     """factor(A) -> (V, R, beta, pivot_ratio); solve(V, R, beta, b) -> x;
     solve_transposed(V, R, beta, c) -> y. pivot_ratio = min |R_kk| / max |R_kk| (0 for a

@@ -9,16 +9,17 @@ element's start and them has slope f at every point.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
+
 SCHEMES = ("radau", "legendre")
 
 
-@dataclass(frozen=True)
+@record
 class DirectCollocation:
     degree: int = 3
     scheme: str = "radau"

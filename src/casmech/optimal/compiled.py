@@ -8,17 +8,16 @@ C externals with first derivatives, so IPOPT runs with a limited-memory Hessian)
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 
 from casmech import backends
 from casmech.backends import codegen
+from casmech.core.records import record
 from casmech.optimal.dae import DAE
 from casmech.schema.resolved import ResolvedModel
 
 
-@dataclass(frozen=True)
+@record
 class Residuals:
     residual: ca.Function
     kinematics: ca.Function

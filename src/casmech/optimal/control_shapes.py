@@ -3,14 +3,14 @@ piecewise linear (one value per node, continuous), and the exact integral of u^T
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
+
+from casmech.core.records import record
 
 SHAPES = ("constant", "linear")
 
 
-@dataclass(frozen=True)
+@record
 class ControlShape:
     kind: str = "constant"
 

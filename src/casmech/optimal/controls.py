@@ -11,11 +11,11 @@ same as an effort motor's (equations/motors.py):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.elements.coordinate_kinds import BY_MODE
 from casmech.elements.joint_types import having
 from casmech.equations.assemble import Coordinates
@@ -30,7 +30,7 @@ def kinds() -> dict[str, str]:
     return {mode: kind.name for mode, (kind, k) in BY_MODE.items() if k == 2}
 
 
-@dataclass(frozen=True)
+@record
 class Control:
     joint: str
     kind: str = "torque"  # torque | force

@@ -16,13 +16,13 @@ joint_ocp.py): the collocation's quadrature at its points, RK4's stages in multi
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.expressions import ExpressionError
 from casmech.core.expressions import parse as parse_expression
+from casmech.core.records import record
 from casmech.errors import UsageError
 from casmech.optimal.joint_model import JointModel
 from casmech.schema.resolved import ScalarFunction
@@ -30,7 +30,7 @@ from casmech.schema.resolved import ScalarFunction
 ANGLES = ("angle", "angle_i", "angle_j")  # joint state columns that are angles
 
 
-@dataclass(frozen=True)
+@record
 class Terms:
     integrand: ca.Function | None  # (t, x, c) -> the Lagrange integrand; None: no such term
     final: ca.Function | None  # (t, x, c) -> the Mayer term; None: no such term

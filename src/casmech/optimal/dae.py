@@ -16,11 +16,10 @@ Phi_q q_dot = nu."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.equations.checks import structure
 from casmech.formulations.registry import FORMULATIONS
 from casmech.numerics import kkt
@@ -31,7 +30,7 @@ from casmech.runtime.results import column_names
 FORMULATION = "rp"  # the registered formulation whose residual the DAE is (body coordinates)
 
 
-@dataclass(frozen=True)
+@record
 class DAE:
     """Symbols and residuals of the index-1 DAE (SX), with the rows it keeps."""
 

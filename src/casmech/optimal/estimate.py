@@ -12,11 +12,11 @@ models included) is exact at every theta the solver tries, through d(theta).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import build_dae
 from casmech.optimal.sensitivity import check_times, output_graph
@@ -24,7 +24,7 @@ from casmech.optimal.system import parametric_system
 from casmech.schema.resolved import ResolvedModel
 
 
-@dataclass(frozen=True)
+@record
 class Estimate:
     parameters: tuple[str, ...]
     values: np.ndarray  # estimated

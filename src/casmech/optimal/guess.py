@@ -18,12 +18,12 @@ with guessed controls flails through poses far from the optimum.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.numerics import kkt
 from casmech.optimal.dae import DAE
 from casmech.runtime.assembly import newton, solve_velocities
@@ -33,7 +33,7 @@ TOLERANCE = 1e-10
 MAX_STEP = 0.1  # largest change of a coordinate per Gauss-Newton step (far targets)
 
 
-@dataclass(frozen=True)
+@record
 class Guess:
     """States at any time of the horizon and piecewise-constant controls."""
 

@@ -25,7 +25,7 @@ no JointModel (`joint_model` returns None), and the problem stays on body coordi
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from functools import cached_property
 
 import casadi as ca
@@ -33,6 +33,7 @@ import numpy as np
 import yaml
 
 from casmech.core import traced
+from casmech.core.records import record
 from casmech.errors import ModelError, UsageError
 from casmech.formulations.protocol import ControlEquations
 from casmech.formulations.registry import FORMULATIONS
@@ -77,7 +78,7 @@ def motored_text(model: ResolvedModel, controls: list[Control]):
     return yaml.safe_dump(document, sort_keys=False), names
 
 
-@dataclass
+@record(frozen=False)
 class JointModel:
     """The functions of the joint-coordinate transcription (module docstring)."""
 

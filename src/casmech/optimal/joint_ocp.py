@@ -25,12 +25,13 @@ optimal controls: an integrator independent of the transcription.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from functools import partial
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.model.lower import lower
 from casmech.optimal import costs
@@ -102,7 +103,7 @@ def joints_of(model: ResolvedModel, problem) -> JointModel | None:
     return found
 
 
-@dataclass(frozen=True)
+@record
 class JointResult:
     times: np.ndarray  # the nodes (intervals + 1)
     x: np.ndarray  # (intervals + 1, n_x) joint states at the nodes

@@ -23,12 +23,13 @@ path instead of the forward simulation.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.ipopt_options import settings as ipopt_settings
+from casmech.core.records import record
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal import costs, joint_ocp, warm_start
 from casmech.optimal.collocation import DirectCollocation
@@ -62,7 +63,7 @@ INITIAL_GUESSES = ("simulation", "interpolation")
 MUMPS = {"ipopt.mumps_pivtol": 1e-4, "ipopt.mumps_pivtolmax": 0.1}
 
 
-@dataclass(frozen=True)
+@record
 class OCP:
     controls: Sequence[Control]
     horizon: float
@@ -112,7 +113,7 @@ def default_guess(problem: OCP) -> np.ndarray:
     return np.array([0.1 * c.upper if np.isfinite(c.upper) else 0.0 for c in problem.controls])
 
 
-@dataclass(frozen=True)
+@record
 class Solution:
     transcription: str
     times: np.ndarray  # interval boundaries (intervals + 1)
@@ -131,7 +132,7 @@ class Solution:
         return float(self.times[1] - self.times[0])
 
 
-@dataclass(frozen=True)
+@record
 class _Setup:
     dae: DAE
     x0: np.ndarray
@@ -142,7 +143,7 @@ class _Setup:
     functions: Residuals  # the residual and kinematics the collocation imposes
 
 
-@dataclass(frozen=True)
+@record
 class _Start:
     """The initial guess: states at the interval boundaries, controls, the step and, when
     known, the states at any time (for the collocation points)."""

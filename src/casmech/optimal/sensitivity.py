@@ -19,11 +19,11 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.optimal.dae import (
     DAE,
@@ -40,7 +40,7 @@ MODES = ("forward", "adjoint")
 INTEGRAL = re.compile(r"integral\((.+)\)")
 
 
-@dataclass(frozen=True)
+@record
 class Sensitivity:
     parameters: tuple[str, ...]
     outputs: tuple[str, ...]

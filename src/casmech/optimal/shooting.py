@@ -9,12 +9,14 @@ interval come from the control shape (optimal/control_shapes.py).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 
+from casmech.core.records import record
 
-@dataclass(frozen=True)
+
+@record
 class MultipleShooting:
     steps: int = 4  # RK4 steps per control interval
 
@@ -39,7 +41,7 @@ class MultipleShooting:
 INTEGRATORS = ("rk4", "cvodes", "idas")  # MultipleShooting's RK4, SundialsShooting's
 
 
-@dataclass
+@record(frozen=False)
 class SundialsShooting:
     """Multiple shooting with a SUNDIALS integrator per control interval (rockit's
     MultipleShooting(intg='cvodes')): CVODES or IDAS on the ODE.

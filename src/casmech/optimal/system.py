@@ -21,12 +21,13 @@ quaternion); a parameter that sets a count is refused.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler, traced
+from casmech.core.records import record
 from casmech.core.values import constant
 from casmech.equations import initial_rows, readings
 from casmech.equations.assemble import Coordinates
@@ -47,7 +48,7 @@ BUNDLE = ("phi", "phi_q", "phi_scaled", "nu", "gamma", "mass_matrix", "generaliz
 SAME = 8  # ulps within which the model loaded again must give each parameter's value
 
 
-@dataclass(frozen=True)
+@record
 class ParametricSystem:
     """Named casadi.Functions with a trailing `theta` input, and the nominal bundle."""
 

@@ -11,18 +11,18 @@ control, named <joint>.torque or <joint>.force), interpolated to the problem's c
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from casmech.core.columns import BODY_COLUMNS
+from casmech.core.records import record
 from casmech.errors import UsageError
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.tables import TableError, read_columns
 
 
-@dataclass(frozen=True)
+@record
 class Previous:
     """The guess: states at the nodes, controls on the problem's grid."""
 

@@ -23,13 +23,14 @@ step rejects) stays dense. The Functions built here are kept in the run's worksp
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
 from casmech.core.options import Assembly, Fallback
+from casmech.core.records import record
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
@@ -62,7 +63,7 @@ def file_velocities(functions: SystemFunctions, q: np.ndarray) -> np.ndarray:
     return np.concatenate([np.concatenate([b.r_dot0 for b in bodies]), p_dot.ravel()])
 
 
-@dataclass
+@record(frozen=False)
 class UnmetRows(FailureContext):
     """A failure naming constraint rows (RowInfo, residual), worst first: the constraints that
     cannot be met (`casmech check` reports each as an E502)."""

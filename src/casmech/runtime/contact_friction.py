@@ -29,12 +29,13 @@ when it has none.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import euler
+from casmech.core.records import record
 from casmech.elements.force_types import entry_of
 from casmech.elements.forces import contact
 from casmech.equations.symbols import Coordinates
@@ -306,7 +307,7 @@ class Contacts:
         return columns
 
 
-@dataclass(frozen=True)
+@record
 class Group:
     """The stuck points of one body pair on one plane and the rows holding them."""
 

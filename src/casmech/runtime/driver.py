@@ -29,17 +29,17 @@ run's results must not depend on how fast the machine ran it.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, Interrupted
 from casmech.runtime import cancel, events
 from casmech.runtime.results import Result
 
 
-@dataclass
+@record(frozen=False)
 class Block:
     """What one step integrated: `times` (a leading part of the times asked), their results
     `rows` (q, q_dot, q_ddot, lam: one row per time), the state to continue from

@@ -24,13 +24,13 @@ last, status "stopped by event" (raises Stopped for the run to end its loop).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.options import DynamicsSolver
+from casmech.core.records import record
 from casmech.equations import readings
 from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions
@@ -48,7 +48,7 @@ ULPS = 64  # the narrowest bracket location stops at, in units of eps * |t| (a r
 ITERATIONS = DynamicsSolver().event_iterations  # Illinois steps per crossing, by default
 
 
-@dataclass(frozen=True)
+@record
 class Event:
     """A zero crossing to watch: `function` (t, q, q_dot, q_ddot, lam) -> scalar."""
 
@@ -63,7 +63,7 @@ class Event:
                              f"{self.action!r} not in {tuple(DIRECTIONS)} / {ACTIONS}")
 
 
-@dataclass(frozen=True)
+@record
 class EventRecord:
     """An event that happened: its name, time, the crossing's sign and the action taken."""
 

@@ -13,12 +13,12 @@ call of the System's `rows`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.options import DynamicsOptions, DynamicsSolver
+from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
 from casmech.formulations import dae
@@ -36,7 +36,7 @@ from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
 
-@dataclass(frozen=True)
+@record
 class Run:
     """What a dynamics run is asked: the output grid from t0 to t_end by step, the
     tolerances, the analysis's options, the progress callback, the events declared by code

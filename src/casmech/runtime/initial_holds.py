@@ -19,11 +19,12 @@ and the findings they make, as located model errors at the `initial:` keys:
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.equations import initial_rows
 from casmech.equations.assemble import Coordinates
 from casmech.equations.checks import structure
@@ -106,7 +107,7 @@ def _overlay(functions: SystemFunctions, replaced: dict, held: tuple[RowInfo, ..
     return replace(functions, functions=_Overlay(functions.functions, replaced), rows=rows)
 
 
-@dataclass
+@record(frozen=False)
 class Holds:
     """The bundles with the values held, and what assembly needs besides."""
 

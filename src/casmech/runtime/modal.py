@@ -28,13 +28,14 @@ body motions (n_modes x n_bodies x 6), scaled so that the largest entry is 1.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 
 import numpy as np
 
 from casmech.core.atomic import atomic
 from casmech.core.options import ModalOptions, ModalSolver
+from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, UsageError
 from casmech.runtime import kinematics, labelled, statics
@@ -52,7 +53,7 @@ FILES = ("modes.csv", "linear_model.npz")
 DEFAULT = ModalSolver()  # real_cut: |Im s| <= real_cut |s| is a real eigenvalue
 
 
-@dataclass
+@record(frozen=False)
 class LinearModel:
     """x' = A x + B u, y = C x + D u about q (states z, z'): the static equilibrium or a state
     (t, q, q_dot) of a run; and its modes."""

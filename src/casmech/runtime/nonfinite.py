@@ -27,12 +27,13 @@ elements at the states extrapolated over it from the last row (its q, q_dot, q_d
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
 
 from casmech.core.columns import JOINT_COLUMNS
+from casmech.core.records import record
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 
 # the integrators' options that make a non-finite right-hand side a failure at once
@@ -45,7 +46,7 @@ OVERFLOWING = 1e150  # a rate beyond this overflows when squared (double precisi
 STATES = ("q", "q_dot", "q_ddot", "lam")
 
 
-@dataclass
+@record(frozen=False)
 class NotFinite(FailureContext):
     """What a NonFinite names: the column and the elements (kind, name, source, what)."""
 

@@ -34,7 +34,7 @@ neutral case keeps the equilibrium row found.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
@@ -42,6 +42,7 @@ import scipy.linalg
 
 from casmech.core import euler
 from casmech.core.options import StaticsSolver
+from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions, all_sx, build_functions
 from casmech.errors import AnalysisError, BodyName, FailureContext, Interrupted
 from casmech.runtime import assembly, cancel
@@ -51,7 +52,7 @@ from casmech.runtime.workspace import Workspace, of
 DEFAULT = StaticsSolver()  # the settings of every function here (core.options)
 
 
-@dataclass
+@record(frozen=False)
 class ReducedSystem:
     """Everything at one configuration q (on Phi = 0), in the independent coordinates z."""
 
@@ -107,7 +108,7 @@ class ReducedSystem:
         return float(np.sqrt(max(self.force @ np.linalg.solve(self.mass, self.force), 0.0)))
 
 
-@dataclass
+@record(frozen=False)
 class Equilibrium:
     q: np.ndarray
     lam: np.ndarray

@@ -21,11 +21,12 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path as FilePath
 from typing import Any
 
 from casmech.core import traced
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source, UsageError, did_you_mean
 from casmech.schema import files, placement, repeat, spec
 from casmech.schema.bodies import orientation, rotation_matrix
@@ -97,14 +98,14 @@ def listing(names: list[str]) -> str:
 
 
 # ----------------------------------------------------------------------------- context
-@dataclass(frozen=True)
+@record
 class Scope:
     """The components an instance may use: name -> (definition, document it is written in)."""
 
     definitions: Mapping[str, tuple[Any, Document]] = field(default_factory=dict)
 
 
-@dataclass
+@record(frozen=False)
 class Context:
     stack: tuple[tuple[tuple, str], ...] = ()  # (key, name) of the components being expanded
     files: dict[str, Document | list[Diagnostic]] = field(default_factory=dict)
@@ -117,7 +118,7 @@ class Context:
         return Context((*self.stack, (key, name)), self.files, self.inline, self.budget)
 
 
-@dataclass
+@record(frozen=False)
 class Members:
     bodies: list = field(default_factory=list)
     joints: list = field(default_factory=list)

@@ -18,11 +18,12 @@ from __future__ import annotations
 import functools
 import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 import yaml
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, Source, UsageError
 from casmech.schema import files
 
@@ -59,7 +60,7 @@ def format_path(path: Path) -> str:
     return text
 
 
-@dataclass(frozen=True)
+@record
 class ScalarText:
     """Where a string scalar's characters are: `start` is the source of its first character when
     the text maps 1:1 onto the file (single line, no escapes), else None."""
@@ -67,7 +68,7 @@ class ScalarText:
     start: Source | None
 
 
-@dataclass
+@record(frozen=False)
 class SourceMap:
     values: dict[Path, Source] = field(default_factory=dict)
     keys: dict[Path, Source] = field(default_factory=dict)
@@ -75,7 +76,7 @@ class SourceMap:
     nulls: frozenset[Path] = frozenset()  # values written as null or ~ (not left empty)
 
 
-@dataclass(frozen=True)
+@record
 class Document:
     data: dict[str, Any]
     file: str
@@ -165,7 +166,7 @@ class _Node:
         self.seen: dict[str, Source] = {}  # a mapping's keys -> where first written
 
 
-@dataclass
+@record(frozen=False)
 class _Anchor:
     value: Any
     path: Path
@@ -173,7 +174,7 @@ class _Anchor:
     size: int  # values under it, itself included
 
 
-@dataclass(frozen=True)
+@record
 class _Copy:
     """A source-map log entry standing for the entries an alias repeats: log[start:stop], each
     path with its first `prefix` parts replaced by `path`. Expanded once the document is read

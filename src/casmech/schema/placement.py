@@ -17,12 +17,13 @@ on `ground` the a/s vectors of basic constraints are component-frame vectors and
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, is_dataclass, replace
+from dataclasses import fields, is_dataclass, replace
 
 import numpy as np
 
 from casmech.core import traced
 from casmech.core.expressions import Binary, Expr, Name, Number
+from casmech.core.records import record
 from casmech.schema import resolved
 from casmech.schema.resolved import GROUND
 
@@ -40,7 +41,7 @@ def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.concatenate([[a0 * b0 - av @ bv], a0 * bv + b0 * av + np.cross(av, bv)])
 
 
-@dataclass(frozen=True)
+@record
 class Frame:
     """An instance's frame: origin and orientation in its parent's frame."""
 

@@ -16,12 +16,13 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from typing import Any
 
 from casmech.core import traced
 from casmech.core.expressions import CONSTANTS, ExpressionError, tokenize
 from casmech.core.expressions import parse as parse_expression
+from casmech.core.records import record
 from casmech.errors import Diagnostic, Source, did_you_mean
 from casmech.schema.checker import NAME, RESERVED
 from casmech.schema.loader import Document, Path, ScalarText, SourceMap, format_path
@@ -40,7 +41,7 @@ TOO_MANY = (f"the model has more than {MAX_ITEMS} bodies, joints, forces and ins
 TOO_MANY_HINT = "a model this large takes too long to check and compile"
 
 
-@dataclass(frozen=True)
+@record
 class ExpandedDocument(Document):
     """A Document whose repeated items are expanded; locations map back to the written file."""
 
@@ -60,7 +61,7 @@ class ExpandedDocument(Document):
         return super().source_in_scalar(path, offset - delta)
 
 
-@dataclass
+@record(frozen=False)
 class Budget:
     """Items a whole model may still make (shared by the documents of its components)."""
 

@@ -9,17 +9,18 @@ functions of time are parsed expressions with the parameters bound. Names are st
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 import numpy as np
 
 from casmech.core.expressions import Expr
 from casmech.core.options import AnalysisOptions, DynamicsOptions
+from casmech.core.records import record
 from casmech.errors import Source
 
 GROUND = "ground"
-@dataclass(frozen=True)
+@record
 class ScalarFunction:
     """A scalar expression of some named variables (t, length, ...) with parameters bound."""
 
@@ -42,7 +43,7 @@ class ScalarFunction:
         return self.expr.is_constant and self.value(**dict.fromkeys(self.variables, 0.0)) == 0.0
 
 
-@dataclass(frozen=True)
+@record
 class Body:
     name: str
     mass: float
@@ -55,7 +56,7 @@ class Body:
     source: Source | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Joint:
     """One entry of `joints:`; composite and basic alike (a joint type is data, not a class).
 
@@ -97,7 +98,7 @@ class Joint:
     coefficients: tuple[Any, ...] = ()
 
 
-@dataclass(frozen=True)
+@record
 class Force:
     """One entry of `forces:`. Points are GLOBAL at t = 0.
 
@@ -135,7 +136,7 @@ class Force:
     params: Mapping[str, float] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
+@record
 class Event:
     """One entry of `events:` (schema/events.py): `when` reads the names of
     schema.events.state_names besides t and parameters."""
@@ -147,7 +148,7 @@ class Event:
     source: Source | None = None
 
 
-@dataclass(frozen=True)
+@record
 class Output:
     """One entry of `outputs:` (schema/outputs.py): `value` reads t, parameters, earlier
     outputs, the state and reactions (its `variables` name them)."""
@@ -158,7 +159,7 @@ class Output:
     unit: str | None = None  # SI unit of its dimension ("m/s"), None when not stated
 
 
-@dataclass(frozen=True)
+@record
 class Analysis:
     """The `analysis:` block: what to run over which grid, and the options of its type (a
     core.options dataclass: formulation, ..., and the `solver:` block). `written`: the option
@@ -177,7 +178,7 @@ class Analysis:
     sources: tuple[tuple[str, Source | None], ...] = ()  # where t_end, output_step, ... are
 
 
-@dataclass(frozen=True)
+@record
 class Estimation:
     """The `estimate:` block: parameters to fit (starting from their values), measurements."""
 
@@ -190,7 +191,7 @@ class Estimation:
     analysis: str = "dynamics"  # dynamics | kinematics (optimal/estimate_kinematics.py)
 
 
-@dataclass(frozen=True)
+@record
 class ControlInput:
     joint: str
     type: str  # torque | force
@@ -198,7 +199,7 @@ class ControlInput:
     upper: float
 
 
-@dataclass(frozen=True)
+@record
 class OptimalControl:
     """The `ocp:` block (columns are results-table column names)."""
 
@@ -237,7 +238,7 @@ class OptimalControl:
     integrator: str = "rk4"  # joints, shooting: rk4 | cvodes | idas
 
 
-@dataclass(frozen=True)
+@record
 class ResolvedModel:
     name: str
     description: str

@@ -32,11 +32,11 @@ every body.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from casmech.core import traced
+from casmech.core.records import record
 from casmech.schema import limits
 
 MASS_RATIO = 1e-12  # least mass / heaviest mass
@@ -46,7 +46,7 @@ DIRECTION_RATIO = 1e-6  # least length of a normalised direction / the length sc
 MIN_ROW_VECTOR = 1e-3  # least length of a basic constraint's a_i, a_j, c
 
 
-@dataclass
+@record(frozen=False)
 class Scale:
     """The heaviest body (name, mass [kg], radius of gyration [m]) and the farthest centre from
     the origin [m] among the bodies so far."""

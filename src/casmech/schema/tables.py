@@ -22,7 +22,7 @@ antiderivative (speed motors driven by a table) is the same kind of function, of
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from functools import cached_property
 from pathlib import Path
 from typing import Any
@@ -30,6 +30,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import did_you_mean
 from casmech.schema import files
 from casmech.schema.resolved import ScalarFunction
@@ -196,7 +197,7 @@ def spline_coefficients(t, y, interpolation: str, periodic: bool) -> np.ndarray:
     return np.column_stack([y[:-1], b, m[:-1] / 2, (m[1:] - m[:-1]) / (6 * h)])
 
 
-@dataclass(frozen=True)
+@record
 class PiecewisePolynomial:
     """Pieces on `breaks` (ascending powers of t - t_k, any degree), extended outside the
     breaks linearly (`slopes` below/above; zero: clamped) or periodically, each period adding
@@ -261,7 +262,7 @@ class PiecewisePolynomial:
 
 
 # ------------------------------------------------------------------------------ the function
-@dataclass(frozen=True)
+@record
 class TableExpr:
     """A table as an expression of t: the `Expr` interface (evaluate with the "numpy" or
     "casadi" backend, names, is_constant), so a table is an ordinary resolved.ScalarFunction

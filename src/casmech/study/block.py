@@ -10,8 +10,8 @@ naming the option (`usage`).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
+from casmech.core.records import record
 from casmech.errors import Diagnostic, ModelError, UsageError, did_you_mean
 from casmech.study import design, kept
 from casmech.study.design import Study, StudyError
@@ -21,7 +21,7 @@ OPTIONS = {"grid": "--grid", "normal": "--normal", "uniform": "--uniform",
            "samples": "--samples", "seed": "--seed", "keep": "--keep"}
 
 
-@dataclass(frozen=True)
+@record
 class Problem:
     path: tuple  # inside the form: ("grid", "L"), ("keep", 0), ("samples",)
     code: str  # errors.CODES: E300 unknown name, E103 malformed value, E409 inconsistent

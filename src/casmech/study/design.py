@@ -18,9 +18,11 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
+
+from casmech.core.records import record
 
 DISTRIBUTIONS = ("normal", "uniform")
 MAX_RUNS = 10_000_000  # a study larger than this is a typo, not a plan
@@ -98,7 +100,7 @@ def distribution(kind: str, given: str | Sequence[float]) -> tuple[str, float, f
     return kind, a, b
 
 
-@dataclass(frozen=True)
+@record
 class Study:
     grid: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     distributions: Mapping[str, tuple[str, float, float]] = field(default_factory=dict)

@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import did_you_mean
 from casmech.study.design import StudyError
 
@@ -55,7 +55,7 @@ REDUCTIONS = {
 _CALL = re.compile(r"^\s*(\w+)\s*\(\s*(.+?)\s*\)\s*$")
 
 
-@dataclass(frozen=True)
+@record
 class Kept:
     text: str  # as written: the column name in sweep.csv
     reduction: str

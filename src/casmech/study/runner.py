@@ -18,10 +18,11 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 
 import numpy as np
 
+from casmech.core.records import record
 from casmech.errors import AnalysisError, Interrupted, ModelError
 from casmech.runtime import interrupts
 from casmech.study import kept as kept_outputs
@@ -31,7 +32,7 @@ SETTINGS = ("analysis", "t_end", "output_step", "rtol", "atol", "formulation", "
             "method")
 
 
-@dataclass(frozen=True)
+@record
 class Job:
     file: str  # the model file's path: names it in messages, roots the files it reads
     text: str
@@ -43,7 +44,7 @@ class Job:
     batched: tuple[str, ...] = ()  # the study's parameters when its runs go in batches
 
 
-@dataclass
+@record(frozen=False)
 class Outcome:
     values: dict[str, float]
     status: str  # complete | failed

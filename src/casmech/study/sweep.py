@@ -19,9 +19,9 @@ from __future__ import annotations
 import importlib.util
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 
+from casmech.core.records import record
 from casmech.study import block, execute, journal
 from casmech.study.design import Study
 from casmech.study.progress import runs_bar
@@ -31,7 +31,7 @@ FIXED = ("run",)  # columns before the parameters; after them:
 STATUS = ("status", "wall_s")  # then the kept outputs, then "reason"
 
 
-@dataclass
+@record(frozen=False)
 class Prepared:
     model: object  # schema.resolved.ResolvedModel at the file's (and --set) values
     study: Study

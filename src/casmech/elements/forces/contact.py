@@ -29,13 +29,13 @@ so that it is the file's `restitution` at its `impact_velocity` (docs/forces.md#
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 
 from casmech.core import euler, traced
 from casmech.core.expressions import step
+from casmech.core.records import record
 from casmech.core.values import constant
 
 EPS = 1e-6  # slip speed regularization, relative to the stiction velocity
@@ -43,7 +43,7 @@ GROUND = -1  # body index of ground (model/ir.GROUND_INDEX)
 OUTPUTS = ("normal_force", "friction_force", "gap")  # results columns of a contact element
 
 
-@dataclass(frozen=True)
+@record
 class Point:
     """One contact point: gap, unit normal (body_i -> body_j), contact point P (global)."""
 

@@ -10,11 +10,11 @@ origin, global) and `A` (its rotation matrix), e.g. elements.primitives.Frame.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import casadi as ca
 
 from casmech.core import euler
+from casmech.core.records import record
 
 
 def at(frame, s_bar):
@@ -35,7 +35,7 @@ def relative_angle(ai, aj, u_i, v_i, u_j):
     return ca.atan2(v_i.T @ u_j, u_i.T @ u_j)
 
 
-@dataclass(frozen=True)
+@record
 class SpringKind:
     """A spring-damper-actuator element type: the coordinate it acts along, of its two frames
     and its vectors; the vectors' keys (in ForceIR.points | ForceIR.axes); the parameter of the

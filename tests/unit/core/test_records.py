@@ -1,0 +1,114 @@
+"""core.records.record against the dataclass it replaces: the same repr, equality, hash,
+replace(), immutability and field options, class by class."""
+
+import dataclasses
+import pickle
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+
+from casmech.core.records import record
+
+
+@record
+class Pickled:
+    a: float
+    b: tuple = ()
+
+
+def _pair(frozen: bool = True, **options):
+    """The same class body as a dataclass and as a record."""
+
+    def body():
+        class Point:
+            __annotations__ = {"x": "float", "y": "float", "tags": "tuple",
+                               "note": "str", "cached": "int"}
+            x: float
+            y: float = 2.0
+            tags: tuple = field(default_factory=tuple)
+            note: str = field(default="", compare=False, repr=False)
+            cached: int = field(default=0, hash=False)
+
+        return Point
+
+    return (dataclass(frozen=frozen, **options)(body()),
+            record(frozen=frozen, **options)(body()))
+
+
+@pytest.mark.parametrize("frozen", [True, False])
+def test_repr_eq_hash_as_a_dataclass(frozen):
+    made, rec = _pair(frozen)
+    for args in [(1.0,), (1.0, 3.0, (1, 2), "a", 4), (np.float64(2.5), -1.0)]:
+        a, b = made(*args), rec(*args)
+        assert repr(a) == repr(b)
+        assert (a == made(*args)) is (b == rec(*args)) is True
+        assert (a == made(9.0)) is (b == rec(9.0)) is False
+        assert b.__eq__(a) is NotImplemented  # another class: never equal
+        if frozen:
+            assert hash(a) == hash(b)
+        else:
+            assert made.__hash__ is None and rec.__hash__ is None
+    # compare=False: a field left out of equality (and of the hash) in both
+    assert rec(1.0, note="a") == rec(1.0, note="b")
+    assert made(1.0, note="a") == made(1.0, note="b")
+    assert dataclasses.replace(rec(1.0), y=5.0) == rec(1.0, 5.0)
+    assert [f.name for f in dataclasses.fields(rec)] == [f.name for f in dataclasses.fields(made)]
+    assert dataclasses.asdict(rec(1.0)) == dataclasses.asdict(made(1.0))
+
+
+def test_frozen_fields_are_written_once():
+    _, rec = _pair()
+    value = rec(1.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        value.x = 2.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        value.other = 2.0  # not a field either
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        del value.x
+    object.__setattr__(value, "cached", 3)  # what a __post_init__ may do, as with a dataclass
+    assert value.cached == 3
+    kept = Pickled(1.0, (2, 3))
+    assert pickle.loads(pickle.dumps(kept)) == kept  # unpickling writes __dict__, not fields
+
+
+def test_mutable_record_assigns():
+    _, rec = _pair(frozen=False)
+    value = rec(1.0)
+    value.x = 4.0
+    assert value == rec(4.0)
+
+
+def test_own_methods_and_eq_false_are_kept():
+    @record(eq=False)
+    class Identity:
+        a: int
+
+    one = Identity(1)
+    assert one == one and Identity(1) != Identity(1)
+
+    @record
+    class Own:
+        a: int
+
+        def __eq__(self, other):
+            return True
+
+        __hash__ = object.__hash__
+
+        def __repr__(self):
+            return "own"
+
+    assert Own(1) == Own(2) and repr(Own(1)) == "own"
+
+    @record
+    class Base:
+        a: int
+
+    @record
+    class Child(Base):
+        b: int = 0
+
+    assert Child(1, 2) != Base(1) and Child(1, 2) == Child(1, 2)
+    assert repr(Child(1, 2)) == "test_own_methods_and_eq_false_are_kept.<locals>.Child(a=1, b=2)"
+    assert hash(Child(1, 2)) == hash((1, 2))
