@@ -11,6 +11,7 @@ deletion raises dataclasses.FrozenInstanceError."""
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import reprlib
 from operator import attrgetter
@@ -22,11 +23,22 @@ def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = Tr
     default; `order` and `unsafe_hash` are not taken (use dataclass for those)."""
 
     def wrap(cls):
-        made = dataclasses.dataclass(cls, eq=False, repr=False, **options)
+        # a frozen base (a record or a dataclass) needs dataclasses' own frozen subclass
+        made = dataclasses.dataclass(cls, eq=False, repr=False, frozen=frozen and _frozen_base(cls),
+                                     **options)
+        if frozen:  # to dataclasses a frozen record is frozen: a frozen dataclass may extend it
+            params = copy.copy(made.__dataclass_params__)
+            params.frozen = True
+            made.__dataclass_params__ = params
         _share(made, eq, repr, frozen)
         return made
 
     return wrap if cls is None else wrap(cls)
+
+
+def _frozen_base(cls) -> bool:
+    return any(dataclasses.is_dataclass(base) and base.__dataclass_params__.frozen
+               for base in cls.__mro__[1:])
 
 
 def _getter(names: tuple[str, ...]):

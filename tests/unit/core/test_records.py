@@ -112,3 +112,28 @@ def test_own_methods_and_eq_false_are_kept():
     assert Child(1, 2) != Base(1) and Child(1, 2) == Child(1, 2)
     assert repr(Child(1, 2)) == "test_own_methods_and_eq_false_are_kept.<locals>.Child(a=1, b=2)"
     assert hash(Child(1, 2)) == hash((1, 2))
+
+
+def test_a_frozen_dataclass_extends_a_record():
+    """What a formulation written by a user does (docs/architecture.md): a frozen dataclass
+    over a frozen record, and a record over that."""
+
+    @record
+    class Base:
+        a: float = 1.0
+
+    @dataclass(frozen=True)
+    class User(Base):
+        b: float = 2.0
+
+    @record
+    class Again(User):
+        c: float = 3.0
+
+    assert User(1.0, 2.0) == User(1.0, 2.0) and hash(User()) == hash((1.0, 2.0))
+    assert repr(Again()).endswith("Again(a=1.0, b=2.0, c=3.0)")
+    for value in (User(), Again()):
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            value.a = 5.0
+    with pytest.raises(TypeError, match="non-frozen"):  # as for a frozen dataclass
+        dataclass(type("Mutable", (Base,), {"__annotations__": {"d": "int"}, "d": 0}))
