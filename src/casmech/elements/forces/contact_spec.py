@@ -71,7 +71,7 @@ class ContactBase(Spec):
 class SpherePlane(ContactBase):
     type: Literal["sphere_plane"]
     body_i: Name = "ground"  # carries the plane
-    plane: Plane = Plane()
+    plane: Plane = Field(default_factory=Plane)
     radius: Scalar | None = None  # default: body_j's sphere geometry
     center: Vector | None = None  # global at t = 0; default: that sphere's centre
 
@@ -88,14 +88,14 @@ class SphereSphere(ContactBase):
 class PointsPlane(ContactBase):
     type: Literal["points_plane"]
     body_i: Name = "ground"
-    plane: Plane = Plane()
+    plane: Plane = Field(default_factory=Plane)
     points: tuple[Vector, ...] | None = None  # global at t = 0; default: body_j's box corners
 
 
 class CapsulePlane(ContactBase):
     type: Literal["capsule_plane"]
     body_i: Name = "ground"
-    plane: Plane = Plane()
+    plane: Plane = Field(default_factory=Plane)
     radius: Scalar | None = None  # default: body_j's cylinder geometry
     ends: Annotated[tuple[Vector, ...], Field(min_length=2, max_length=2)] | None = None
 
