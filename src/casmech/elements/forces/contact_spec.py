@@ -60,6 +60,11 @@ class Plane(Spec):
     normal: Vector = (0, 0, 1)  # its outward normal (towards the other body), global at t = 0
 
 
+# a contact's plane when it names none: made on use, so that importing builds no validator
+DEFAULT_PLANE = Field(default_factory=Plane,
+                      json_schema_extra={"default": {"at": [0, 0, 0], "normal": [0, 0, 1]}})
+
+
 class ContactBase(Spec):
     name: Name
     body_j: Name
@@ -71,7 +76,7 @@ class ContactBase(Spec):
 class SpherePlane(ContactBase):
     type: Literal["sphere_plane"]
     body_i: Name = "ground"  # carries the plane
-    plane: Plane = Field(default_factory=Plane)
+    plane: Plane = DEFAULT_PLANE
     radius: Scalar | None = None  # default: body_j's sphere geometry
     center: Vector | None = None  # global at t = 0; default: that sphere's centre
 
@@ -88,14 +93,14 @@ class SphereSphere(ContactBase):
 class PointsPlane(ContactBase):
     type: Literal["points_plane"]
     body_i: Name = "ground"
-    plane: Plane = Field(default_factory=Plane)
+    plane: Plane = DEFAULT_PLANE
     points: tuple[Vector, ...] | None = None  # global at t = 0; default: body_j's box corners
 
 
 class CapsulePlane(ContactBase):
     type: Literal["capsule_plane"]
     body_i: Name = "ground"
-    plane: Plane = Field(default_factory=Plane)
+    plane: Plane = DEFAULT_PLANE
     radius: Scalar | None = None  # default: body_j's cylinder geometry
     ends: Annotated[tuple[Vector, ...], Field(min_length=2, max_length=2)] | None = None
 
