@@ -62,6 +62,8 @@ def load(name: str, workdir: Path, stops: bool = True):
     out = workdir / f"{name}.yaml"
     model = import_urdf(path, output=out)
     model.joints = [j for j in model.joints if j.data["type"] != "coupler"]
+    for joint in model.joints:  # the URDF's dry friction (Talos): Pinocchio's aba has none
+        joint.data.pop("friction", None)
     for joint in model.joints if not stops else ():
         joint.data.pop("limit", None)
     if not stops:

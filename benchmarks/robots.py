@@ -16,10 +16,11 @@ left arm, Solo12 (fixed base). Each engine reads the same URDF copy:
   `compile(model, "compiled")` from a warm cache; the cold build (`compile(model,
   "compiled")` into an empty CASMECH_CACHE_DIR and the first analyze, which builds the tree's
   ODE library: wall time, and the CPU time of the process and its compiler children); and the
-  default call on the import as it is, with its stops, against its own rtol 1e-12 run.
+  default call on the import with its stops, against its own rtol 1e-12 run. The joints'
+  Coulomb friction casmech imports from URDF `friction` (the Talos arm) is left out of both.
 - MuJoCo: `MjModel.from_xml_path` of the URDF copy without visual and collision elements
   (fixed links fused as casmech merges them); contacts, joint limits and joint friction (URDF
-  `friction`, which casmech does not translate) off; the URDF damping kept; RK4 at the largest
+  `friction`, which MuJoCo reads as frictionloss) off; the URDF damping kept; RK4 at the largest
   step of 1/n s (n about 1.25x apart) that reaches 1e-7 m.
 - Pinocchio: `pin.aba` with tau = -D v (the URDF damping, which casmech imports as damping
   elements) in `scipy.integrate.solve_ivp`, the fastest of DOP853, RK45 and LSODA at the
@@ -197,8 +198,8 @@ class Robot:
 
     # -- casmech -----------------------------------------------------------------------
     def write_casmech(self, q0, v0, stops: bool) -> Path:
-        """The import posed at (q0, v0) as YAML; without `stops`, the joints' `limit:` stops
-        left out."""
+        """The import posed at (q0, v0) as YAML without the joints' Coulomb friction; without
+        `stops`, the joints' `limit:` stops left out too."""
         from casmech.importers.emit import to_yaml
         from casmech.importers.urdf import import_urdf
 
@@ -206,8 +207,11 @@ class Robot:
         imported = import_urdf(self.urdf, dict(zip(self.joints, q0, strict=True)),
                                dict(zip(self.joints, v0, strict=True)), output=out,
                                mesh_dirs=(robots_folder().parent,))
-        for joint in imported.joints if not stops else ():
-            joint.data.pop("limit", None)
+        for joint in imported.joints:
+            # the URDF's dry friction (Talos arm), as in MuJoCo's model and pin.aba: none
+            joint.data.pop("friction", None)
+            if not stops:
+                joint.data.pop("limit", None)
         out.write_text(to_yaml(imported))
         return out
 

@@ -15,14 +15,15 @@ Translated:
   (axis = the plane's normal), floating -> none (a free body); placed at the initial pose;
   a chain through massless links -> the joint it amounts to (importers/joint_chains.py);
 - `dynamics damping` -> an rsda (revolute) or a tsda along the axis (prismatic) with that damping;
+  `dynamics friction` -> the joint's Coulomb `friction:` (docs/forces.md, joint friction);
 - `limit` lower and upper of a revolute or prismatic joint -> the joint's `limit:` stop
   (importers/urdf_limits.py: bounds from the imported pose, MuJoCo's default softness);
   effort and velocity limits, and the limits of joints merged through massless links, are
   comments.
 - `mimic` -> a coupler of the two joints (importers/urdf_mimic.py).
-Not translated (a warning naming the line): `friction`, `calibration`,
-`safety_controller`, `transmission`, `gazebo` and other extensions; `collision` elements are
-skipped (casmech has no contact). URDF has no gravity: the model gets [0, 0, -9.81].
+Not translated (a warning naming the line): `calibration`, `safety_controller`,
+`transmission`, `gazebo` and other extensions; `collision` elements are skipped (a URDF names
+no contact pairs or contact laws). URDF has no gravity: the model gets [0, 0, -9.81].
 
 The initial pose is the one at the joint values `positions` (default 0, the URDF's reference
 pose) with joint rates `velocities` (default 0); casmech's joint angles are measured from it.
@@ -178,6 +179,7 @@ class Translator:
                 "at": tidy(frame.origin), "axis": tidy(axis)}
         comments = [f"{joint.type} joint {joint.name} (line {joint.element.line})"]
         comments += self.limit(joint, path, data, joint.child)
+        comments += self.friction(joint, path, data)
         self.model.joints.append(Item(data, comments))
         self.single_names[joint.name] = name
         self.damper(joint, path, data)
@@ -262,13 +264,29 @@ class Translator:
                 f"{urdf_limits.TIME_CONSTANT:g} s, critically damped)"
                 + (f"; {rest} not enforced" if rest else "")]
 
+    def friction(self, joint: Joint, path: str, data: dict) -> list[str]:
+        """`dynamics friction` (dry friction along the joint's coordinate, as MuJoCo's URDF
+        import reads it into frictionloss) -> the joint's Coulomb `friction:`, its comment."""
+        element = joint.element.find("dynamics")
+        if element is None or "friction" not in element.attrib:
+            return []
+        value = self.reader.number(element, f"{path}.dynamics", "friction", 0.0)
+        if value < 0:
+            raise self.reader.error(element, f"{path}.dynamics", f"friction {value:g} is "
+                                    "negative", "a dry friction force or torque >= 0",
+                                    code="E103", hint="URDF's friction is the joint's Coulomb "
+                                    "friction: N m (revolute) or N (prismatic)")
+        if not value:
+            return []
+        data["friction"] = {"coulomb": value}
+        unit = "N" if joint.type == "prismatic" else "N m"
+        return [f"dynamics friction of joint {joint.name} (line {element.line}): Coulomb "
+                f"friction {value:g} {unit}, static limit the same"]
+
     def damper(self, joint: Joint, path: str, data: dict) -> None:
         element = joint.element.find("dynamics")
         damping = self.reader.number(element, f"{path}.dynamics", "damping", 0.0) \
             if element is not None else 0.0
-        if element is not None and "friction" in element.attrib:
-            self.reader.warn(element, f"{path}.dynamics", "friction not translated",
-                             hint="casmech has no joint friction; add a force by hand")
         if not damping:
             return
         name = self.names(f"{data['name']}_damping", "_force")

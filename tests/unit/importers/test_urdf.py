@@ -217,14 +217,13 @@ def test_fixed_joints_merge_and_damping_becomes_forces():
 
 
 def test_untranslated_elements_are_warnings_with_lines(tmp_path):
-    text = GOOD.replace('<limit lower="-1"', '<dynamics damping="0" friction="0.1"/>\n'
+    text = GOOD.replace('<limit lower="-1"', '<dynamics damping="0"/>\n'
                         '    <mimic joint="other"/>\n    <limit lower="-1"').replace(
         "</robot>", '<transmission name="t"/>\n<gazebo/>\n</robot>')
     _, imported = load(tmp_path, text)
     warnings = [w.format() for w in imported.warnings]
     file = tmp_path / "robot.urdf"
     assert [w.split("\n")[0] for w in warnings] == [
-        f"{file}:9:5: warning[E101] joint[hinge].dynamics: friction not translated",
         f"{file}:10:5: warning[E101] joint[hinge].mimic: mimic not translated: the URDF has "
         "no joint 'other'",
         f"{file}:27:1: warning[E101] robot: <transmission> not translated",
@@ -273,3 +272,19 @@ def test_command_line(tmp_path, capsys):
     bad = write(tmp_path, GOOD.replace('type="revolute"', 'type="ball"'))
     assert main(["import", str(bad), "-o", str(tmp_path / "bad.yaml")]) == 1
     assert f"{bad}:4:3: error[E103]" in capsys.readouterr().err
+
+
+def test_dynamics_friction_is_the_joints_coulomb_friction(tmp_path):
+    """URDF's dry joint friction (MuJoCo's URDF import: frictionloss) is the joint's Coulomb
+    friction, static limit the same; 0 adds none; a negative one is a located error."""
+    text = GOOD.replace('<limit lower="-1"', '<dynamics damping="0.2" friction="0.35"/>\n'
+                        '    <limit lower="-1"')
+    model, imported = load(tmp_path, text)
+    (joint,) = imported.joints
+    assert joint.data["friction"] == {"coulomb": 0.35}
+    assert not imported.warnings
+    assert model.joints[0].friction["coulomb"] == model.joints[0].friction["static"] == 0.35
+    _, none = load(tmp_path, text.replace('friction="0.35"', 'friction="0"'))
+    assert "friction" not in none.joints[0].data
+    message = error_of(tmp_path, text.replace('friction="0.35"', 'friction="-1"'))
+    assert ":9:5: error[E103] joint[hinge].dynamics: friction -1 is negative" in message
