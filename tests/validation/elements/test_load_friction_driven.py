@@ -85,7 +85,7 @@ def test_a_rotor_spun_about_a_horizontal_axle_needs_tc_plus_mu_radius_m_g(formul
     _, _, columns = run(ROTOR.replace("SPEED", repr(speed)), formulation)
     torque = math.copysign(0.05 + 0.3 * 0.02 * 3.0 * G, speed) if speed else 0.0
     # closed form; the multipliers to 1e-8 of the largest reaction (m g) in every formulation
-    # (rp's are IDAS's algebraic states, not error-tested)
+    # (solved at each row's state, which carries the integrator's error)
     np.testing.assert_allclose(columns["axle.ty"], torque, rtol=0, atol=1e-8 * 3.0 * G)
     # the law on the row's load: roundoff of the rows' reaction m g
     np.testing.assert_allclose(columns["axle.friction"], -torque, rtol=1e-9, atol=1e-12)

@@ -103,7 +103,8 @@ def test_speed_motor_holds_its_speed_under_gravity(speed, rate, acceleration):
     integral = [quad(rate, 0, s, epsabs=1e-13, epsrel=1e-13)[0] for s in t]
     np.testing.assert_allclose(theta, integral, rtol=1e-9, atol=1e-9)
     # the motor torque is the joint's reaction about the axis; against the closed form: measured
-    # up to 4e-6 N m of 11.8 at a few outputs (the multipliers are IDAS algebraic states)
+    # up to 4e-6 N m of 11.8 at a few outputs (the multipliers solved at each row's state, whose
+    # positions and rates carry the integrator's error)
     np.testing.assert_allclose(table["pivot.tx"], rod_torque(theta, acceleration(t)),
                                rtol=0, atol=2e-5)
 

@@ -165,7 +165,8 @@ def test_actuator_reading_the_body_spin_equals_rsda_damping():
     first, second = run(damped, t_end=1.0, **TIGHT), run(actuated, t_end=1.0, **TIGHT)
     # tension = k angle + c angle_dot + actuator, and bar.wz = angle_dot here, differently
     # rounded: at rtol 1e-10 measured 6.6e-11 in positions and rates, 1.6e-8 at most in the
-    # accelerations (IDAS algebraic states, the noisiest columns)
+    # accelerations (solved at each row's state from positions and rates of that rounding: the
+    # noisiest columns)
     np.testing.assert_allclose(first.values[:, 1:14], second.values[:, 1:14], rtol=0, atol=1e-8)
     _compare(first, second, atol=2e-6, skip=())
 
