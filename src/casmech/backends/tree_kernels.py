@@ -20,15 +20,16 @@ import casadi as ca
 from casmech.backends import build
 from casmech.backends.library import compile_keyed
 from casmech.errors import AnalysisError, UsageError
-from casmech.formulations import mapped_tree
+from casmech.formulations import mapped_rows, mapped_tree
 
 CONTENT = {"kind": "tree kernels", "passes": list(mapped_tree.PASSES),
            "constants": mapped_tree.CONSTANTS}
 
 
 def _functions() -> dict[str, ca.Function]:
-    """Every kernel and its forward derivative under the name casadi.external looks it up."""
-    kernels = mapped_tree.all_kernels()
+    """Every kernel (the ODE's and the results rows') and its forward derivative under the
+    name casadi.external looks it up."""
+    kernels = mapped_tree.all_kernels() | mapped_rows.all_kernels()
     return kernels | {f"fwd1_{name}": f.forward(1) for name, f in kernels.items()}
 
 
@@ -52,10 +53,15 @@ def kernels(root: Path | None = None, toolchain: build.Toolchain | None = None
         warnings.warn(f"no C compiler '{toolchain.compiler}' found: the large tree's ODE runs "
                       "its kernels interpreted, which is slower; install gcc or set CC",
                       stacklevel=2)
-        return mapped_tree.all_kernels()
+        return interpreted()
     try:
         return compiled(root, toolchain)
     except (AnalysisError, UsageError) as error:
         warnings.warn(f"{str(error).splitlines()[0]}; the large tree's ODE runs its kernels "
                       "interpreted", stacklevel=2)
-        return mapped_tree.all_kernels()
+        return interpreted()
+
+
+def interpreted() -> dict[str, ca.Function]:
+    """Every kernel as SX."""
+    return mapped_tree.all_kernels() | mapped_rows.all_kernels()

@@ -38,7 +38,7 @@ def kernel_name(kind: str, step: str) -> str:
     return f"tree_{step}_{kind}"
 
 
-def _terms(kind: str, theta, u, data):
+def terms(kind: str, theta, u, data):
     """(E, r, S, c_J, theta_dot, inertia) of a body from its joint's (theta, u) and its data."""
     e_t, r_t = ca.reshape(data[0:9], 3, 3), data[9:12]
     inertia = ca.reshape(data[12:48], 6, 6)
@@ -61,7 +61,7 @@ def kernels(kind: str) -> dict[str, ca.Function]:
     ia_children, pa_children = ca.SX.sym("ia_children", 6, 6), ca.SX.sym("pa_children", 6)
     n_v = motion.n_v
     solved = ca.SX.sym("solved", 6 * n_v + n_v * n_v + n_v)
-    e, r, subspace, rate, theta_dot, inertia = _terms(kind, theta, u, data)
+    e, r, subspace, rate, theta_dot, inertia = terms(kind, theta, u, data)
     relative = subspace @ u
     c = rate + spatial.cross_motion(v, relative)
 
@@ -129,6 +129,8 @@ def supported(ir: ModelIR, tree: Tree) -> str | None:
         return "the model has loop closures or couplings (cut joints)"
     if any(j.prescribed for j in tree.joints):
         return "a driver prescribes a joint coordinate"
+    if any(prim.f is not None for prim in ir.primitives):
+        return "a joint's rows depend on time"
     if ir.forces or ir.motors or ir.limits:
         return "the model has force elements, motors or stops"
     if any(isinstance(v, ca.SX) for j in tree.joints for v in (*j.parent_frame, *j.child_frame)):
@@ -165,58 +167,82 @@ def _transform(e: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.block([[e, np.zeros((3, 3))], [-e @ skew, e]])
 
 
+def kernel_of(functions: Mapping[str, ca.Function], kind: str, step: str,
+              made=None) -> ca.Function:
+    """A kernel by joint type and step: from `functions` (by kernel_name) where there, else
+    made(kind) (default: kernels, the SX ones)."""
+    name = kernel_name(kind, step)
+    return functions[name] if name in functions else (made or kernels)(kind)[name]
+
+
+class Passes:
+    """The three passes of the articulated-body algorithm over a supported tree at the MX state
+    x = [theta; u] (joint_system's layout), per tree joint: theta, u, the body's data, V,
+    theta_dot, the acceleration a (relative to the ground's -g) and u_dot; `index`: body ->
+    its tree joint."""
+
+    def __init__(self, ir: ModelIR, tree: Tree, x: ca.MX,
+                 functions: Mapping[str, ca.Function] | None = None):
+        functions = functions or {}
+        joints = tree.joints
+        n = len(joints)
+        n_q = [MOTIONS[j.type].n_q for j in joints]
+        n_v = [MOTIONS[j.type].n_v for j in joints]
+        pieces = ca.vertsplit(x, [0, *np.cumsum(n_q + n_v).tolist()]) if x.numel() else []
+        self.theta, self.u = pieces[:n], pieces[n:]
+        columns = body_data(ir, tree)
+        self.data = [ca.MX(ca.DM(columns[:, k])) for k in range(n)]
+        self.index = {j.child: k for k, j in enumerate(joints)}
+        zero6, zero66 = ca.MX(ca.DM.zeros(6, 1)), ca.MX(ca.DM.zeros(6, 6))
+
+        def kernel(kind: str, step: str) -> ca.Function:
+            return kernel_of(functions, kind, step)
+
+        self.v, self.theta_dot = [None] * n, [None] * n
+        for k, j in enumerate(joints):
+            parent = zero6 if j.parent == GROUND_INDEX else self.v[self.index[j.parent]]
+            self.v[k], self.theta_dot[k] = kernel(j.type, "down").call(
+                [self.theta[k], self.u[k], self.data[k], parent])
+        passed: list[list] = [[] for _ in joints]  # per joint, its children's (IA, pA)
+        solved = [None] * n
+        for k in reversed(range(n)):
+            j = joints[k]
+            ia, pa, solved[k] = kernel(j.type, "up").call(
+                [self.theta[k], self.u[k], self.data[k], self.v[k],
+                 total([ia for ia, _ in passed[k]], zero66),
+                 total([pa for _, pa in passed[k]], zero6)])
+            if j.parent != GROUND_INDEX:
+                passed[self.index[j.parent]].append((ia, pa))
+        falling = ca.MX(ca.DM(np.concatenate([np.zeros(3), -np.asarray(ir.gravity, float)])))
+        self.a, self.u_dot = [None] * n, [None] * n
+        for k, j in enumerate(joints):
+            parent = falling if j.parent == GROUND_INDEX else self.a[self.index[j.parent]]
+            self.a[k], self.u_dot[k] = kernel(j.type, "accelerate").call(
+                [self.theta[k], self.u[k], self.data[k], self.v[k], parent, solved[k]])
+
+    @property
+    def ode(self) -> ca.MX:
+        return ca.vertcat(ca.MX(0, 1), *self.theta_dot, *self.u_dot)
+
+
 def tree_ode(ir: ModelIR, tree: Tree, functions: Mapping[str, ca.Function] | None = None
              ) -> ca.Function:
     """(t, x) -> ode of a supported tree (joint_system.build's joint_ode: x = [theta; u] in
     its layout), as the MX graph of the kernels `functions` (by kernel_name; default the SX
-    ones) called per body: pass 1 root to leaves, pass 2 leaves to root (each body's IA and pA
-    summed over its children), pass 3 root to leaves from the ground's acceleration -g."""
-    functions = functions or {}
-    joints = tree.joints
-
-    def kernel(kind: str, step: str) -> ca.Function:
-        name = kernel_name(kind, step)
-        return functions[name] if name in functions else kernels(kind)[name]
-
-    n_q = [MOTIONS[j.type].n_q for j in joints]
-    n_v = [MOTIONS[j.type].n_v for j in joints]
-    t, x = ca.MX.sym("t"), ca.MX.sym("x", sum(n_q) + sum(n_v))
-    pieces = ca.vertsplit(x, [0, *np.cumsum(n_q + n_v).tolist()]) if x.numel() else []
-    theta, u = pieces[:len(joints)], pieces[len(joints):]
-    columns = body_data(ir, tree)
-    data = [ca.MX(ca.DM(columns[:, k])) for k in range(len(joints))]
-    body = {j.child: k for k, j in enumerate(joints)}
-    zero6, zero66 = ca.MX(ca.DM.zeros(6, 1)), ca.MX(ca.DM.zeros(6, 6))
-
-    v, theta_dot = [None] * len(joints), [None] * len(joints)
-    for k, j in enumerate(joints):
-        parent = zero6 if j.parent == GROUND_INDEX else v[body[j.parent]]
-        v[k], theta_dot[k] = kernel(j.type, "down").call([theta[k], u[k], data[k], parent])
-    passed: list[list] = [[] for _ in joints]  # per joint, its children's (IA, pA)
-    solved = [None] * len(joints)
-    for k in reversed(range(len(joints))):
-        j = joints[k]
-        ia_children = _sum(passed[k], 0, zero66)
-        pa_children = _sum(passed[k], 1, zero6)
-        ia, pa, solved[k] = kernel(j.type, "up").call(
-            [theta[k], u[k], data[k], v[k], ia_children, pa_children])
-        if j.parent != GROUND_INDEX:
-            passed[body[j.parent]].append((ia, pa))
-    falling = ca.MX(ca.DM(np.concatenate([np.zeros(3), -np.asarray(ir.gravity, float)])))
-    a, u_dot = [None] * len(joints), [None] * len(joints)
-    for k, j in enumerate(joints):
-        parent = falling if j.parent == GROUND_INDEX else a[body[j.parent]]
-        a[k], u_dot[k] = kernel(j.type, "accelerate").call(
-            [theta[k], u[k], data[k], v[k], parent, solved[k]])
-    ode = ca.vertcat(*theta_dot, *u_dot) if joints else ca.MX(0, 1)
-    return ca.Function("joint_ode", [t, x], [ode], ["t", "x"], ["ode"])
+    ones) called per body (Passes): pass 1 root to leaves, pass 2 leaves to root (each body's
+    IA and pA summed over its children), pass 3 root to leaves from the ground's
+    acceleration -g."""
+    n_x = sum(MOTIONS[j.type].n_q + MOTIONS[j.type].n_v for j in tree.joints)
+    t, x = ca.MX.sym("t"), ca.MX.sym("x", n_x)
+    return ca.Function("joint_ode", [t, x], [Passes(ir, tree, x, functions).ode], ["t", "x"],
+                       ["ode"])
 
 
-def _sum(terms: list, k: int, zero):
-    """The sum of the k-th entries of `terms` (none: zero)."""
+def total(terms: list, zero):
+    """The sum of `terms` (none: zero)."""
     if not terms:
         return zero
-    total = terms[0][k]
+    result = terms[0]
     for term in terms[1:]:
-        total = total + term[k]
-    return total
+        result = result + term
+    return result
