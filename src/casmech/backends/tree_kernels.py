@@ -1,13 +1,16 @@
-"""The per-joint kernels of the mapped tree ODE (formulations/mapped_tree.py) compiled once into
-a shared library of the compiled-model cache, and loaded from it in every later process.
+"""The per-joint kernels of a mapped tree (formulations/mapped_tree.py: the ODE's passes;
+formulations/mapped_rows.py: the results rows' pose and wrench passes) compiled once per joint
+type into a shared library of the compiled-model cache, and loaded from it in every later
+process.
 
-The kernels depend on the joint types alone (a body's data is an input), so one library serves
-every model: it is cached by backends.library.compile_keyed under a key of its kind and the
-versions, casmech's sources and the toolchain (a new CasADi or an edited formulation builds it
-again), checked by backends.trust before it is loaded like any entry. Each kernel is compiled
-with its forward derivative (fwd1_<name>, which casadi.external finds in the library), so an
-MX graph over the kernels is differentiated in compiled code. Without a C compiler, or with a
-cache that cannot be written, the interpreted kernels serve, with one warning.
+The kernels depend on the joint type alone (a body's data is an input), so one library per
+joint type serves every model: it is cached by backends.library.compile_keyed under a key of
+its kind and joint type and the versions, casmech's sources and the toolchain (a new CasADi or
+an edited formulation builds it again), checked by backends.trust before it is loaded like any
+entry. The ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which
+casadi.external finds in the library), so the ODE's Jacobian is differentiated in compiled
+code. Without a C compiler, or with a cache that cannot be written, the interpreted kernels
+serve, with one warning.
 """
 
 from __future__ import annotations
@@ -23,45 +26,46 @@ from casmech.errors import AnalysisError, UsageError
 from casmech.formulations import mapped_rows, mapped_tree
 
 CONTENT = {"kind": "tree kernels", "passes": list(mapped_tree.PASSES),
-           "constants": mapped_tree.CONSTANTS}
+           "constants": [mapped_tree.CONSTANTS, mapped_rows.POSE_CONSTANTS]}
 
 
-def _functions() -> dict[str, ca.Function]:
-    """Every kernel (the ODE's and the results rows') and its forward derivative under the
-    name casadi.external looks it up."""
-    kernels = mapped_tree.all_kernels() | mapped_rows.all_kernels()
-    return kernels | {f"fwd1_{name}": f.forward(1) for name, f in kernels.items()}
+def _functions(kind: str) -> dict[str, ca.Function]:
+    """A joint type's kernels (the ODE's and the results rows'), the ODE's with their forward
+    derivatives under the names casadi.external looks them up."""
+    ode = mapped_tree.kernels(kind)
+    return ode | {f"fwd1_{name}": f.forward(1) for name, f in ode.items()} | \
+        mapped_rows.kernels(kind)
 
 
-def compiled(root: Path | None = None, toolchain: build.Toolchain | None = None
+def compiled(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None
              ) -> dict[str, ca.Function]:
-    """Every joint type's kernels as externals of the cached library (built on a miss)."""
+    """The kernels of the joint types `kinds` as externals of their cached libraries (one per
+    joint type, built on a miss)."""
     toolchain = toolchain or build.Toolchain()
+    found: dict[str, ca.Function] = {}
+    for kind in sorted(set(kinds)):
+        def make(kind=kind):
+            return _functions(kind), {}, toolchain
 
-    def make():
-        return _functions(), {}, toolchain
+        found |= compile_keyed(CONTENT | {"joint": kind}, make, toolchain=toolchain,
+                               root=root)
+    return found
 
-    return compile_keyed(CONTENT, make, toolchain=toolchain, root=root)
 
-
-def kernels(root: Path | None = None, toolchain: build.Toolchain | None = None
+def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None
             ) -> dict[str, ca.Function]:
-    """The compiled kernels, else (no C compiler, the build failed, no writable cache) the
-    interpreted ones with a warning saying why."""
+    """The compiled kernels of the joint types `kinds`, else (no C compiler, the build failed,
+    no writable cache) none, with a warning saying why: the mapped build then takes the
+    interpreted ones."""
     toolchain = toolchain or build.Toolchain()
     if not build.available(toolchain):
         warnings.warn(f"no C compiler '{toolchain.compiler}' found: the large tree's ODE runs "
                       "its kernels interpreted, which is slower; install gcc or set CC",
                       stacklevel=2)
-        return interpreted()
+        return {}
     try:
-        return compiled(root, toolchain)
+        return compiled(kinds, root, toolchain)
     except (AnalysisError, UsageError) as error:
         warnings.warn(f"{str(error).splitlines()[0]}; the large tree's ODE runs its kernels "
                       "interpreted", stacklevel=2)
-        return interpreted()
-
-
-def interpreted() -> dict[str, ca.Function]:
-    """Every kernel as SX."""
-    return mapped_tree.all_kernels() | mapped_rows.all_kernels()
+        return {}

@@ -71,12 +71,6 @@ def kernels(kind: str) -> dict[str, ca.Function]:
     return {f.name(): f for f in (pose, wrench)}
 
 
-def all_kernels() -> dict[str, ca.Function]:
-    """Every joint type's pose and wrench kernels and the per-body one, by name."""
-    found = {name: f for kind in MOTIONS for name, f in kernels(kind).items()}
-    return found | {"tree_body_rows": body_rows()}
-
-
 @cache
 def body_rows() -> ca.Function:
     """(sign, p, A, V, a, wrench, C_c, s_c, g) -> (p sign, r_dot, p_dot, r_ddot, p_ddot, the
@@ -130,7 +124,6 @@ class Rows:
                  functions: Mapping[str, ca.Function]):
         self.ir, self.tree, self.passes = ir, tree, passes
         self.kernel = lambda kind, step: mapped_tree.kernel_of(functions, kind, step, kernels)
-        self.functions = functions
 
     def motion(self, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row (joint_system.build's motion)."""
@@ -163,7 +156,7 @@ class Rows:
         frames = [joints[k].child_frame for k in order]
         axes = ca.DM(np.hstack([np.asarray(f[0], float) for f in frames]))
         origins = ca.DM(np.column_stack([np.asarray(f[1], float) for f in frames]))
-        rows = self.functions.get("tree_body_rows") or body_rows()
+        rows = body_rows()
         rotations = by_body(a_rot)
         signed, r_dot, p_dot, r_ddot, p_ddot, at_center = rows.map(nb).call(
             [ca.transpose(signs), by_body(p), rotations, by_body(passes.v), by_body(passes.a),

@@ -96,11 +96,6 @@ def kernels(kind: str) -> dict[str, ca.Function]:
     return {f.name(): f for f in (down, up, accelerate)}
 
 
-def all_kernels() -> dict[str, ca.Function]:
-    """Every joint type's kernels, by name (what backends/tree_kernels.py compiles)."""
-    return {name: f for kind in MOTIONS for name, f in kernels(kind).items()}
-
-
 def _eliminate(subspace, ia, pa, c):
     """The articulated inertia and bias a joint passes on, and (U, D^-1, residual) (no joint
     force), as articulated.articulated_body eliminates: blockwise when S selects rows (the

@@ -111,7 +111,8 @@ def _built(functions: SystemFunctions, settings: DynamicsSolver,
     if mapped and mapped_system.chosen(functions.ir, tree, settings.compile.mapped_bodies):
         from casmech.backends import tree_kernels
 
-        return mapped_system.build(functions.ir, tree, tree_kernels.kernels())
+        kinds = {joint.type for joint in tree.joints}
+        return mapped_system.build(functions.ir, tree, tree_kernels.kernels(kinds))
     return build(functions.ir, tree, identity_states=settings.stiff_states)
 
 
