@@ -204,17 +204,8 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
     and their r-omega Jacobians at each of those bodies, [Phi_r, Pi_bar] (global translation,
     body-frame rotation; zero for ground); through one Function per structure of the joint's
     rows (their kinds, which bodies each reads, which are ground, the vectors' shapes) that
-    takes the rows' vectors and driver values as inputs (_rows_template); `data` the model
+    takes the rows' vectors and driver values as inputs (rows_template); `data` the model
     data of a parametric IR, whose vectors are SX of it."""
-    template, stacked, drivers = rows_inputs(ir, joint, t, data)
-    poses = (r_i, p_i, r_j, p_j, *others)
-    return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
-                          for v in (*poses, stacked, drivers)])
-
-
-def rows_inputs(ir: ModelIR, joint: JointIR, t, data=None) -> tuple:
-    """(the Function of rows_of for the structure of a joint's rows, the rows' vectors stacked,
-    their driver values at t): its inputs after the poses."""
     prims = ir.primitives[joint.rows.start:joint.rows.stop]
     bodies = joint_bodies(ir, joint)
     vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
@@ -226,12 +217,14 @@ def rows_inputs(ir: ModelIR, joint: JointIR, t, data=None) -> tuple:
     drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
     grounds = tuple(b == GROUND_INDEX for b in bodies)
     reads = tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims)
-    kinds = tuple(p.kind for p in prims)
-    return _rows_template(kinds, grounds, shapes, reads), stacked, drivers
+    template = rows_template(tuple(p.kind for p in prims), grounds, shapes, reads)
+    poses = (r_i, p_i, r_j, p_j, *others)
+    return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
+                          for v in (*poses, stacked, drivers)])
 
 
 @cache
-def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
+def rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
                    shapes: tuple[tuple[int, ...], ...],
                    reads: tuple[tuple[int, ...], ...]) -> ca.Function:
     """(r_1, p_1, ..., r_n, p_n, the rows' vectors stacked, their driver values) -> (phi,

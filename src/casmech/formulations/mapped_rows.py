@@ -27,10 +27,11 @@ import numpy as np
 from casmech.core import euler, spatial
 from casmech.core.quaternions import conjugate, from_matrix, product
 from casmech.elements.joint_types import MOTIONS
+from casmech.elements.primitives import PRIMITIVES
 from casmech.equations import body
 from casmech.formulations import mapped_tree
 from casmech.formulations.articulated import local_motion
-from casmech.formulations.joint_system import relative_step, rows_inputs
+from casmech.formulations.joint_system import joint_bodies, relative_step, rows_template
 from casmech.formulations.tree import Tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
 
@@ -179,11 +180,10 @@ class Rows:
             ir_joint = joint.joint
             if ir_joint is None:  # a floating body's free joint has no rows
                 continue
-            template, stacked, drivers = rows_inputs(ir, ir_joint, 0.0)
+            template, stacked, drivers = _rows_inputs(ir, ir_joint)
             side = joint.child == ir_joint.body_i
             groups.setdefault((template, side), []).append(
-                (ir_joint, joint.child, np.asarray(ca.evalf(stacked)).ravel(),
-                 np.asarray(ca.evalf(drivers)).ravel()))
+                (ir_joint, joint.child, stacked, drivers))
         lam = ca.MX.zeros(len(ir.row_info()), 1)
         for (template, side), members in groups.items():
             count = len(members)
@@ -208,6 +208,22 @@ class Rows:
                 [block, child_rotations, at_center[:, children]])[0]
             lam[[row for m in members for row in m[0].rows]] = ca.vec(values)
         return lam
+
+
+def _rows_inputs(ir: ModelIR, joint) -> tuple:
+    """(joint_system.rows_template of a tree joint's rows, their vectors stacked, their
+    driver values): what joint_system.rows_of passes it after the poses, for a numeric IR
+    whose rows do not depend on time (mapped_tree.supported)."""
+    prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    bodies = joint_bodies(ir, joint)
+    vectors = [np.asarray(prim.vectors[k], float) for prim in prims
+               for k in PRIMITIVES[prim.kind][1]]
+    template = rows_template(tuple(p.kind for p in prims),
+                             tuple(b == GROUND_INDEX for b in bodies),
+                             tuple(v.shape for v in vectors),
+                             tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims))
+    drivers = np.array([prim.offset for prim in prims], float)
+    return template, np.concatenate([np.zeros(0), *(v.ravel() for v in vectors)]), drivers
 
 
 def relative_states(tree: Tree, n_bodies: int) -> ca.Function:
