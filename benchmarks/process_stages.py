@@ -45,7 +45,7 @@ STAGES = (
     ("model functions (api.compile)", "casmech.api", "compile"),
     ("joint system build", "casmech.formulations.joint_system", "build"),
     ("joint system build", "casmech.formulations.mapped_system", "build"),
-    ("tree kernels (load or build)", "casmech.backends.tree_kernels", "kernels"),
+    ("tree kernels (load or build)", "casmech.backends.tree_kernels", "for_tree"),
     ("joint system library (key, load or build)", "casmech.runtime.joint_dynamics",
      "compiled_system"),
     ("joint system library (key, load or build)", "casmech.runtime.joint_dynamics",

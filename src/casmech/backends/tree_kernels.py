@@ -16,14 +16,17 @@ serve, with one warning.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 
 import casadi as ca
 
 from casmech.backends import build
-from casmech.backends.library import compile_keyed
+from casmech.backends.library import compile_functions, compile_keyed
 from casmech.errors import AnalysisError, UsageError
 from casmech.formulations import mapped_rows, mapped_tree
+from casmech.formulations.tree import Tree
+from casmech.model.ir import ModelIR
 
 CONTENT = {"kind": "tree kernels", "passes": list(mapped_tree.PASSES),
            "constants": [mapped_tree.CONSTANTS, mapped_rows.POSE_CONSTANTS]}
@@ -52,9 +55,19 @@ def compiled(kinds, root: Path | None = None, toolchain: build.Toolchain | None 
     return found
 
 
-def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None
-            ) -> dict[str, ca.Function]:
-    """The compiled kernels of the joint types `kinds`, else (no C compiler, the build failed,
+def for_tree(ir: ModelIR, tree: Tree, root: Path | None = None,
+             toolchain: build.Toolchain | None = None) -> dict[str, ca.Function]:
+    """The compiled kernels a mapped tree calls: its joint types', the common ones
+    (mapped_rows.common) and its joints' rows Functions (mapped_rows.templates, each compiled
+    under its content), or none (kernels)."""
+    return kernels({joint.type for joint in tree.joints}, root, toolchain,
+                   mapped_rows.templates(ir, tree))
+
+
+def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None,
+            rows: Mapping[str, ca.Function] | None = None) -> dict[str, ca.Function]:
+    """The compiled kernels of the joint types `kinds` with the common ones and `rows` (rows
+    Functions by name, compiled under their content), else (no C compiler, the build failed,
     no writable cache) none, with a warning saying why: the mapped build then takes the
     interpreted ones."""
     toolchain = toolchain or build.Toolchain()
@@ -64,7 +77,11 @@ def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None =
                       stacklevel=2)
         return {}
     try:
-        return compiled(kinds, root, toolchain)
+        found = compiled(kinds, root, toolchain)
+        found |= compile_keyed(CONTENT | {"joint": "common"},
+                               lambda: (mapped_rows.common(), {}, toolchain),
+                               toolchain=toolchain, root=root)
+        return found | (compile_functions(rows, toolchain=toolchain, root=root) if rows else {})
     except (AnalysisError, UsageError) as error:
         warnings.warn(f"{str(error).splitlines()[0]}; the large tree's ODE runs its kernels "
                       "interpreted", stacklevel=2)

@@ -18,6 +18,7 @@ inertia times the falling frame's acceleration is the gravity wrench the unrolle
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping
 from functools import cache
 
@@ -96,13 +97,13 @@ def body_rows() -> ca.Function:
 
 
 @cache
-def _multipliers(rows: int) -> ca.Function:
+def multipliers(rows: int) -> ca.Function:
     """(B, A, wrench) -> a tree joint's row multipliers from its wrench on the child (CM,
     body axes): -B^T lam = (A w_force, w_torque), B the rows' r-omega Jacobian at the child,
     in the least-squares sense (joint_system's _tree_multipliers)."""
     block, rotation, w = ca.SX.sym("B", rows, 6), ca.SX.sym("A", 3, 3), ca.SX.sym("w", 6)
     force = ca.vertcat(rotation @ w[3:6], w[0:3])
-    return ca.Function("tree_multipliers", [block, rotation, w],
+    return ca.Function(f"tree_multipliers_{rows}", [block, rotation, w],
                        [-ca.solve(block @ block.T, block @ force)])
 
 
@@ -125,6 +126,7 @@ class Rows:
                  functions: Mapping[str, ca.Function]):
         self.ir, self.tree, self.passes = ir, tree, passes
         self.kernel = lambda kind, step: mapped_tree.kernel_of(functions, kind, step, kernels)
+        self.functions = functions
 
     def motion(self, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row (joint_system.build's motion)."""
@@ -157,7 +159,7 @@ class Rows:
         frames = [joints[k].child_frame for k in order]
         axes = ca.DM(np.hstack([np.asarray(f[0], float) for f in frames]))
         origins = ca.DM(np.column_stack([np.asarray(f[1], float) for f in frames]))
-        rows = body_rows()
+        rows = self.functions.get("tree_body_rows", body_rows())
         rotations = by_body(a_rot)
         signed, r_dot, p_dot, r_ddot, p_ddot, at_center = rows.map(nb).call(
             [ca.transpose(signs), by_body(p), rotations, by_body(passes.v), by_body(passes.a),
@@ -198,16 +200,51 @@ class Rows:
                 else ca.DM(0, count)
             drivers = ca.DM(np.column_stack([m[3] for m in members])) if members[0][3].size \
                 else ca.DM(0, count)
+            template = self.functions.get(rows_name(template), template)
             _, block_i, block_j = template.map(count).call(
                 [r_ext[:, cols_i], p_ext[:, cols_i], r_ext[:, cols_j], p_ext[:, cols_j],
                  stacked, drivers])
             block = block_i if side else block_j
             rows = len(members[0][0].rows)
             child_rotations = rotations[:, [3 * c + i for c in children for i in range(3)]]
-            values = _multipliers(rows).map(count).call(
+            solve = multipliers(rows)
+            values = self.functions.get(solve.name(), solve).map(count).call(
                 [block, child_rotations, at_center[:, children]])[0]
             lam[[row for m in members for row in m[0].rows]] = ca.vec(values)
         return lam
+
+
+MAX_ROWS = 6  # a tree joint's rows (its multipliers' kernels: 1 to MAX_ROWS)
+
+
+def common() -> dict[str, ca.Function]:
+    """The kernels of every tree whatever its joint types: the per-body rows and the
+    multipliers of 1 to MAX_ROWS rows, by name."""
+    return {f.name(): f for f in (body_rows(), *(multipliers(m)
+                                                  for m in range(1, MAX_ROWS + 1)))}
+
+
+def templates(ir: ModelIR, tree: Tree) -> dict[str, ca.Function]:
+    """The rows' Functions (joint_system.rows_template) the tree's multipliers call, by
+    rows_name."""
+    found = {}
+    for joint in tree.joints:
+        if joint.joint is not None:
+            template = _rows_inputs(ir, joint.joint)[0]
+            found[rows_name(template)] = template
+    return found
+
+
+_NAMES: dict[int, tuple[ca.Function, str]] = {}
+
+
+def rows_name(template: ca.Function) -> str:
+    """A rows Function's name by its content, the name its compiled version has."""
+    seen = _NAMES.get(id(template))
+    if seen is None or seen[0] is not template:
+        digest = hashlib.sha256(template.serialize().encode()).hexdigest()[:16]
+        seen = _NAMES[id(template)] = (template, f"tree_rows_{digest}")
+    return seen[1]
 
 
 def _rows_inputs(ir: ModelIR, joint) -> tuple:

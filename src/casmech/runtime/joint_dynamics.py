@@ -111,8 +111,8 @@ def _built(functions: SystemFunctions, settings: DynamicsSolver,
     if mapped and mapped_system.chosen(functions.ir, tree, settings.compile.mapped_bodies):
         from casmech.backends import tree_kernels
 
-        kinds = {joint.type for joint in tree.joints}
-        return mapped_system.build(functions.ir, tree, tree_kernels.kernels(kinds))
+        return mapped_system.build(functions.ir, tree,
+                                   tree_kernels.for_tree(functions.ir, tree))
     return build(functions.ir, tree, identity_states=settings.stiff_states)
 
 

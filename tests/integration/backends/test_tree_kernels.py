@@ -35,15 +35,20 @@ def _inputs(function: ca.Function) -> list[np.ndarray]:
 def test_compiled_kernels_equal_the_sx_ones_and_build_once(toolchain, tmp_path, builds):
     root = tmp_path / "cache"
     kernels = tree_kernels.kernels(["spherical", "revolute"], root, toolchain)
-    assert len(builds) == 2 and len(cache.entries(root)) == 2  # one library per joint type
-    for kind in ("spherical", "revolute"):
-        for name, sx in (mapped_tree.kernels(kind) | mapped_rows.kernels(kind)).items():
+    # one library per joint type, and one of the kernels every tree calls
+    assert len(builds) == 3 and len(cache.entries(root)) == 3
+    for kind in ("spherical", "revolute", None):
+        made = mapped_rows.common() if kind is None else \
+            mapped_tree.kernels(kind) | mapped_rows.kernels(kind)
+        for name, sx in made.items():
             compiled = kernels[name]
             assert compiled.class_name() == "External"
             args = _inputs(sx)
             for a, b in zip(compiled.call(args), sx.call(args), strict=True):
                 # the same operations in C: roundoff
                 np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+        if kind is None:
+            continue
         down = kernels[mapped_tree.kernel_name(kind, "down")]
         sx = mapped_tree.kernels(kind)[down.name()]
         args, seeds = _inputs(sx), _inputs(sx)
@@ -54,22 +59,44 @@ def test_compiled_kernels_equal_the_sx_ones_and_build_once(toolchain, tmp_path, 
         for a, b in zip(fast, slow, strict=True):
             np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
     again = tree_kernels.kernels(["revolute"], root, toolchain)
-    assert len(builds) == 2 and again.keys() <= kernels.keys()  # the cached library
+    assert len(builds) == 3 and again.keys() <= kernels.keys()  # the cached libraries
 
 
 def test_a_damaged_library_is_rebuilt_and_a_foreign_one_refused(toolchain, tmp_path, builds):
     root = tmp_path / "cache"
     tree_kernels.kernels(["revolute"], root, toolchain)
-    (entry,) = cache.entries(root)
+    entry = cache.entries(root)[0]
     data = (entry / LIBRARY).read_bytes()
     (entry / LIBRARY).write_bytes(data[:len(data) // 2])
     with pytest.warns(UserWarning, match="is damaged"):
         tree_kernels.kernels(["revolute"], root, toolchain)
-    assert len(builds) == 2
+    assert len(builds) == 3
     (entry / LIBRARY).chmod(0o775)  # writable by others: never loaded, nor built over
     with pytest.warns(UserWarning, match="writable by its group.*kernels interpreted"):
         assert tree_kernels.kernels(["revolute"], root, toolchain) == {}
-    assert len(builds) == 2
+    assert len(builds) == 3
+
+
+def test_a_trees_rows_functions_compile_under_their_content(toolchain, tmp_path, builds):
+    """The rows Functions of a tree's joints (joint_system.rows_template), by content: the
+    same structure in two models is one library; the compiled ones equal the SX ones."""
+    import casmech
+    from casmech.formulations.tree import spanning_tree
+    from tests.unit.formulations.test_mapped_tree import BRANCHED, spherical_chain
+
+    root = tmp_path / "cache"
+    for text in (spherical_chain(3), spherical_chain(5), BRANCHED):
+        ir = casmech.compile(casmech.loads(text)).ir
+        tree = spanning_tree(ir)
+        found = tree_kernels.for_tree(ir, tree, root, toolchain)
+        for name, sx in mapped_rows.templates(ir, tree).items():
+            args = _inputs(sx)
+            for a, b in zip(found[name].call(args), sx.call(args), strict=True):
+                # the same operations in C: roundoff
+                np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
+    # chain3: spherical, common and its rows; chain5 nothing; the branched tree: revolute,
+    # translational and its two rows Functions in one library
+    assert len(builds) == 6
 
 
 def test_without_a_compiler_the_interpreted_kernels_serve(tmp_path):
