@@ -4,10 +4,12 @@ type into a shared library of the compiled-model cache, and loaded from it in ev
 process.
 
 The kernels depend on the joint type alone (a body's data is an input), so one library per
-joint type serves every model: it is cached by backends.library.compile_keyed under a key of
-its kind and joint type and the versions, casmech's sources and the toolchain (a new CasADi or
-an edited formulation builds it again), checked by backends.trust before it is loaded like any
-entry. The ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which
+joint type serves every model, and one more holds the kernels every tree calls (the per-body
+rows, the multipliers): each cached by backends.library.compile_keyed under a key of its kind
+and joint type and the versions, casmech's sources and the toolchain (a new CasADi or an edited
+formulation builds it again), checked by backends.trust before it is loaded like any entry.
+The Functions of the tree joints' rows (joint_system.rows_template, one per structure of a
+joint's rows) are compiled under their content (backends.library.compile_functions). The ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which
 casadi.external finds in the library), so the ODE's Jacobian is differentiated in compiled
 code. Without a C compiler, or with a cache that cannot be written, the interpreted kernels
 serve, with one warning.

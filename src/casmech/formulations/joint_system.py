@@ -225,8 +225,8 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
 
 @cache
 def rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
-                   shapes: tuple[tuple[int, ...], ...],
-                   reads: tuple[tuple[int, ...], ...]) -> ca.Function:
+                  shapes: tuple[tuple[int, ...], ...],
+                  reads: tuple[tuple[int, ...], ...]) -> ca.Function:
     """(r_1, p_1, ..., r_n, p_n, the rows' vectors stacked, their driver values) -> (phi,
     B_1, ..., B_n) of rows of these kinds (rows_of), each row reading the bodies at its
     `reads` positions, built from the rows' primitives so that the cost stays per joint."""
