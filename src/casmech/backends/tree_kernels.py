@@ -9,10 +9,11 @@ rows, the multipliers): each cached by backends.library.compile_keyed under a ke
 and joint type and the versions, casmech's sources and the toolchain (a new CasADi or an edited
 formulation builds it again), checked by backends.trust before it is loaded like any entry.
 The Functions of the tree joints' rows (joint_system.rows_template, one per structure of a
-joint's rows) are compiled under their content (backends.library.compile_functions). The ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which
-casadi.external finds in the library), so the ODE's Jacobian is differentiated in compiled
-code. Without a C compiler, or with a cache that cannot be written, the interpreted kernels
-serve, with one warning.
+joint's rows) are compiled under their content (backends.library.compile_functions). The
+ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which casadi.external
+finds in the library), so the ODE's Jacobian is differentiated in compiled code. Without a C
+compiler, or with a cache that cannot be written, the interpreted kernels serve, with one
+warning.
 """
 
 from __future__ import annotations
