@@ -287,6 +287,8 @@ CONSTANTS = {
                                              "(structure)",
     "formulations/mapped_rows.py POSE_CONSTANTS": "the size of a joint's pose data in the tree "
                                                   "kernels (structure)",
+    "formulations/mapped_rows.py MAX_ROWS": "the most rows of a tree joint (structure: the "
+                                            "multipliers' compiled kernels)",
     "runtime/assembly.py MAX_CONTINUATION": "continuation steps: a bound on the time to fail",
     "runtime/buffers.py BLOCK": "columns per mapped call (batch work)",
     "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",
