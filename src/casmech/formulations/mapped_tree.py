@@ -183,7 +183,7 @@ class Passes:
         n = len(joints)
         n_q = [MOTIONS[j.type].n_q for j in joints]
         n_v = [MOTIONS[j.type].n_v for j in joints]
-        pieces = ca.vertsplit(x, [0, *np.cumsum(n_q + n_v).tolist()]) if x.numel() else []
+        pieces = ca.vertsplit(x, [0, *np.cumsum(n_q + n_v).tolist()])
         self.theta, self.u = pieces[:n], pieces[n:]
         columns = body_data(ir, tree)
         self.data = [ca.MX(ca.DM(columns[:, k])) for k in range(n)]

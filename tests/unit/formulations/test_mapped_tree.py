@@ -89,6 +89,20 @@ joints:
 analysis: {type: dynamics, t_end: 1.0, output_step: 0.01}
 """
 
+# no degree of freedom: an empty state, the weld's reactions the whole results row
+WELDED = """
+casmech: 1
+name: welded
+gravity: [0.3, 0, -9.81]
+bodies:
+  - {name: a, mass: 1.0, inertia: [0.1, 0.2, 0.15], position: [0.5, 0, 0]}
+  - {name: b, mass: 2.0, inertia: [0.1, 0.1, 0.3], position: [1.5, 0.2, 0]}
+joints:
+  - {name: w1, type: fixed, body_i: ground, body_j: a, at: [0, 0, 0]}
+  - {name: w2, type: fixed, body_i: a, body_j: b, at: [1, 0, 0]}
+analysis: {type: dynamics, t_end: 1.0, output_step: 0.1}
+"""
+
 RNG = np.random.default_rng(36)
 
 
@@ -110,9 +124,10 @@ def _values(outputs) -> list[np.ndarray]:
 # chain, whose axial inertia is 1/833 of the transverse one, amplifies roundoff by up to that
 # ratio along the chain (3.4e-12 seen over 20 states): 1e-11
 @pytest.mark.parametrize("text, bound", [(ZOO, 1e-12), (spherical_chain(7, 0.01), 1e-12),
-                                         (BRANCHED, 1e-12), (spherical_chain(7), 1e-11)],
+                                         (BRANCHED, 1e-12), (spherical_chain(7), 1e-11),
+                                         (WELDED, 1e-12)],
                          ids=["every_joint_type", "spherical_chain", "branched",
-                              "benchmark_chain"])
+                              "benchmark_chain", "welded"])
 def test_mapped_system_equals_the_unrolled_one(text, bound):
     ir = casmech.compile(casmech.loads(text)).ir
     tree = spanning_tree(ir)
