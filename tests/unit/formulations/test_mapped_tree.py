@@ -96,7 +96,7 @@ name: welded
 gravity: [0.3, 0, -9.81]
 bodies:
   - {name: a, mass: 1.0, inertia: [0.1, 0.2, 0.15], position: [0.5, 0, 0]}
-  - {name: b, mass: 2.0, inertia: [0.1, 0.1, 0.3], position: [1.5, 0.2, 0]}
+  - {name: b, mass: 2.0, inertia: [0.1, 0.15, 0.2], position: [1.5, 0.2, 0]}
 joints:
   - {name: w1, type: fixed, body_i: ground, body_j: a, at: [0, 0, 0]}
   - {name: w2, type: fixed, body_i: a, body_j: b, at: [1, 0, 0]}
