@@ -145,7 +145,7 @@ def test_mapped_system_equals_the_unrolled_one(text, bound):
             for a, b in zip(_values(expected), _values(got), strict=True):
                 # the same recursion in another association of the same products (and
                 # gravity as the ground's acceleration): `bound` of the values' scale
-                np.testing.assert_allclose(b, a, rtol=0, atol=bound * max(1.0, *np.abs(a).ravel()))
+                np.testing.assert_allclose(b, a, rtol=0, atol=bound * np.abs(a).max(initial=1.0))
 
 
 def test_the_chain_state_is_consistent_with_its_tree():
