@@ -12,8 +12,9 @@ The Functions of the tree joints' rows (joint_system.rows_template, one per stru
 joint's rows) are compiled under their content (backends.library.compile_functions). The
 ODE's kernels are compiled with their forward derivatives (fwd1_<name>, which casadi.external
 finds in the library), so the ODE's Jacobian is differentiated in compiled code. Without a C
-compiler, or with a cache that cannot be written, the interpreted kernels serve, with one
-warning.
+compiler, or with a cache that cannot be written, there are no compiled kernels (one warning)
+and runtime.joint_dynamics builds the tree unrolled, which evaluates faster than the kernels
+interpreted.
 """
 
 from __future__ import annotations
@@ -71,12 +72,11 @@ def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None =
             rows: Mapping[str, ca.Function] | None = None) -> dict[str, ca.Function]:
     """The compiled kernels of the joint types `kinds` with the common ones and `rows` (rows
     Functions by name, compiled under their content), else (no C compiler, the build failed,
-    no writable cache) none, with a warning saying why: the mapped build then takes the
-    interpreted ones."""
+    no writable cache) none, with a warning saying why."""
     toolchain = toolchain or build.Toolchain()
     if not build.available(toolchain):
-        warnings.warn(f"no C compiler '{toolchain.compiler}' found: the large tree's ODE runs "
-                      "its kernels interpreted, which is slower; install gcc or set CC",
+        warnings.warn(f"no C compiler '{toolchain.compiler}' found: the large tree is built "
+                      "unrolled, which is slower to build; install gcc or set CC",
                       stacklevel=2)
         return {}
     try:
@@ -86,6 +86,6 @@ def kernels(kinds, root: Path | None = None, toolchain: build.Toolchain | None =
                                toolchain=toolchain, root=root)
         return found | (compile_functions(rows, toolchain=toolchain, root=root) if rows else {})
     except (AnalysisError, UsageError) as error:
-        warnings.warn(f"{str(error).splitlines()[0]}; the large tree's ODE runs its kernels "
-                      "interpreted", stacklevel=2)
+        warnings.warn(f"{str(error).splitlines()[0]}; the large tree is built unrolled",
+                      stacklevel=2)
         return {}

@@ -111,8 +111,9 @@ def _built(functions: SystemFunctions, settings: DynamicsSolver,
     if mapped and mapped_system.chosen(functions.ir, tree, settings.compile.mapped_bodies):
         from casmech.backends import tree_kernels
 
-        return mapped_system.build(functions.ir, tree,
-                                   tree_kernels.for_tree(functions.ir, tree))
+        kernels = tree_kernels.for_tree(functions.ir, tree)
+        if kernels:  # else (no compiler, no usable cache) the unrolled SX runs faster
+            return mapped_system.build(functions.ir, tree, kernels)
     return build(functions.ir, tree, identity_states=settings.stiff_states)
 
 

@@ -1,8 +1,8 @@
 """backends/tree_kernels.py: the mapped tree's kernels compiled once per joint type into the
 compiled-model cache. The externals equal the SX kernels in value and forward derivative, a
 second process's call builds nothing (one entry per joint type, whatever the model), a damaged
-library is built again, one others could have written is refused and the interpreted kernels
-serve instead, as they do without a C compiler."""
+library is built again, one others could have written is refused, and then, as without a C
+compiler, there are no kernels (runtime.joint_dynamics builds the tree unrolled)."""
 
 import casadi as ca
 import numpy as np
@@ -72,7 +72,7 @@ def test_a_damaged_library_is_rebuilt_and_a_foreign_one_refused(toolchain, tmp_p
         tree_kernels.kernels(["revolute"], root, toolchain)
     assert len(builds) == 3
     (entry / LIBRARY).chmod(0o775)  # writable by others: never loaded, nor built over
-    with pytest.warns(UserWarning, match="writable by its group.*kernels interpreted"):
+    with pytest.warns(UserWarning, match="writable by its group.*built unrolled"):
         assert tree_kernels.kernels(["revolute"], root, toolchain) == {}
     assert len(builds) == 3
 
@@ -99,7 +99,7 @@ def test_a_trees_rows_functions_compile_under_their_content(toolchain, tmp_path,
     assert len(builds) == 6
 
 
-def test_without_a_compiler_the_interpreted_kernels_serve(tmp_path):
+def test_without_a_compiler_there_are_no_kernels(tmp_path):
     missing = build.Toolchain(compiler="no-such-compiler-cc")
     with pytest.warns(UserWarning, match="no C compiler 'no-such-compiler-cc'"):
         assert tree_kernels.kernels(["revolute"], tmp_path / "cache", missing) == {}

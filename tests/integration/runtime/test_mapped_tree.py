@@ -62,3 +62,14 @@ def test_bdf_differentiates_through_the_kernels(quick_builds):
 def test_a_tree_the_kernels_do_not_cover_runs_unrolled(model):
     functions = casmech.compile(casmech.load(MODELS / model))
     assert joint_system(functions, MAPPED).dynamics.is_a("SXFunction")
+
+
+def test_without_compiled_kernels_the_tree_is_built_unrolled(monkeypatch):
+    """No C compiler (or no usable cache): the unrolled SX, which evaluates faster than the
+    kernels interpreted in an MX graph, with the kernels' warning."""
+
+    monkeypatch.setenv("CC", "no-such-compiler-cc")
+    functions = casmech.compile(casmech.loads(spherical_chain(3)))
+    with pytest.warns(UserWarning, match="built unrolled"):
+        system = joint_system(functions, MAPPED)
+    assert system.dynamics.is_a("SXFunction")
