@@ -283,6 +283,12 @@ def test_event_iterations_bound_the_location():
 # they are no options: sizes that bound memory or batch work, roundoff floors, mathematical
 # facts, the structure of built (and compiled) code, the command line's signal count.
 CONSTANTS = {
+    "formulations/mapped_tree.py CONSTANTS": "the size of a body's data in the tree kernels "
+                                             "(structure)",
+    "formulations/mapped_rows.py POSE_CONSTANTS": "the size of a joint's pose data in the tree "
+                                                  "kernels (structure)",
+    "formulations/mapped_rows.py MAX_ROWS": "the most rows of a tree joint (structure: the "
+                                            "multipliers' compiled kernels)",
     "runtime/assembly.py MAX_CONTINUATION": "continuation steps: a bound on the time to fail",
     "runtime/buffers.py BLOCK": "columns per mapped call (batch work)",
     "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",

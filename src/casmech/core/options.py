@@ -123,6 +123,9 @@ class JointCompile:
                                 low=0)
     quick_build_instructions: int = option(30_000, "an ODE of more SX instructions is built at "
                                            "-O0 unless $CASMECH_CFLAGS is set", low=0)
+    mapped_bodies: int = option(128, "a tree of more bodies (no loops, drivers or force elements) "
+                                "not compiled whole runs as per-joint kernels, compiled once "
+                                "for every model", low=0)
 
 
 @record

@@ -169,14 +169,14 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
             return [ca.DM.zeros(3), ca.DM([1, 0, 0, 0]), ca.DM.zeros(3), ca.DM.zeros(4)]
         return [poses[0][k], poses[0][n_bodies + k], poses[1][k], poses[1][n_bodies + k]]
 
-    steps = [_relative_step(*state(joint.parent), *state(joint.child),
-                            *(constants(v) for v in (*joint.parent_frame, *joint.child_frame)))
+    steps = [relative_step(*state(joint.parent), *state(joint.child),
+                           *(constants(v) for v in (*joint.parent_frame, *joint.child_frame)))
              for joint in tree_joints]
     return [ca.horzcat(*parts) for parts in zip(*steps, strict=True)]
 
 
 @traced
-def _relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s_p, c_c, s_c):
+def relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s_p, c_c, s_c):
     """(rotation, gap, twist) of one tree joint (_relative) from its bodies' r-p states."""
     a_p, a_c = euler.rotation(p_p), euler.rotation(p_c)
     w_p, w_c = body.angular_velocity(p_p, p_p_dot), body.angular_velocity(p_c, p_c_dot)
@@ -204,7 +204,7 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
     and their r-omega Jacobians at each of those bodies, [Phi_r, Pi_bar] (global translation,
     body-frame rotation; zero for ground); through one Function per structure of the joint's
     rows (their kinds, which bodies each reads, which are ground, the vectors' shapes) that
-    takes the rows' vectors and driver values as inputs (_rows_template); `data` the model
+    takes the rows' vectors and driver values as inputs (rows_template); `data` the model
     data of a parametric IR, whose vectors are SX of it."""
     prims = ir.primitives[joint.rows.start:joint.rows.stop]
     bodies = joint_bodies(ir, joint)
@@ -217,16 +217,16 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
     drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
     grounds = tuple(b == GROUND_INDEX for b in bodies)
     reads = tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims)
-    template = _rows_template(tuple(p.kind for p in prims), grounds, shapes, reads)
+    template = rows_template(tuple(p.kind for p in prims), grounds, shapes, reads)
     poses = (r_i, p_i, r_j, p_j, *others)
     return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
                           for v in (*poses, stacked, drivers)])
 
 
 @cache
-def _rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
-                   shapes: tuple[tuple[int, ...], ...],
-                   reads: tuple[tuple[int, ...], ...]) -> ca.Function:
+def rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
+                  shapes: tuple[tuple[int, ...], ...],
+                  reads: tuple[tuple[int, ...], ...]) -> ca.Function:
     """(r_1, p_1, ..., r_n, p_n, the rows' vectors stacked, their driver values) -> (phi,
     B_1, ..., B_n) of rows of these kinds (rows_of), each row reading the bodies at its
     `reads` positions, built from the rows' primitives so that the cost stays per joint."""

@@ -29,6 +29,7 @@ import numpy as np
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Interrupted
+from casmech.formulations import mapped_system
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, layout, saddle_terms
@@ -96,17 +97,24 @@ def joint_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
             system = _built(functions, settings, workspace)
             with_motion, rows = _compiled_parts(functions, system, settings)
             return compiled_system(system, with_motion, settings, rows)
-        return _built(functions, settings, workspace)
+        return _built(functions, settings, workspace, mapped=True)
 
     return workspace.kept("joint_system", (compile_, settings.stiff_states, settings.loop_rows),
                           make)
 
 
 def _built(functions: SystemFunctions, settings: DynamicsSolver,
-           workspace: Workspace) -> JointSystem:
-    """The joint system's symbolic build over the bundle's IR."""
-    return build(functions.ir, tree_of(functions, workspace),
-                 identity_states=settings.stiff_states)
+           workspace: Workspace, mapped: bool = False) -> JointSystem:
+    """The joint system's symbolic build over the bundle's IR; `mapped`: a tree above
+    compile.mapped_bodies that formulations.mapped_system covers as its kernels' graph."""
+    tree = tree_of(functions, workspace)
+    if mapped and mapped_system.chosen(functions.ir, tree, settings.compile.mapped_bodies):
+        from casmech.backends import tree_kernels
+
+        kernels = tree_kernels.for_tree(functions.ir, tree)
+        if kernels:  # else (no compiler, no usable cache) the unrolled SX runs faster
+            return mapped_system.build(functions.ir, tree, kernels)
+    return build(functions.ir, tree, identity_states=settings.stiff_states)
 
 
 def _compiled_parts(functions: SystemFunctions, system: JointSystem,
