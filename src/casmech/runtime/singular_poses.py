@@ -44,15 +44,21 @@ def _jacobians(functions: SystemFunctions, workspace: Workspace | None) -> Colum
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
                      workspace: Workspace | None = None) -> np.ndarray:
-    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q)."""
+    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): from
+    a Cholesky factor of each J J^T (slogdet where one is not numerically positive definite)."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
     flat, = _jacobians(functions, workspace)(np.asarray(times, float)[None, :],
                                              np.asarray(q).T)
     jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
     jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
-    _, logdet = np.linalg.slogdet(np.einsum("kij,klj->kil", jacobian, jacobian))
-    return logdet
+    gram = jacobian @ jacobian.transpose(0, 2, 1)
+    try:
+        factor = np.linalg.cholesky(gram)
+    except np.linalg.LinAlgError:
+        return np.linalg.slogdet(gram)[1]
+    with np.errstate(divide="ignore"):
+        return 2.0 * np.sum(np.log(np.diagonal(factor, axis1=1, axis2=2)), axis=1)
 
 
 def examinable(functions: SystemFunctions, rows: int) -> bool:
