@@ -234,7 +234,7 @@ class _Integrator:
                         **nonfinite.SOLVER_OPTIONS}
         if not system.n_cut:
             self.options |= METHODS[method]
-        self.steps = 0
+        self.steps, self._options_key = 0, None
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -280,8 +280,10 @@ class _Integrator:
         workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
         of several compile settings), the start and grid and self.options, and called through
         a buffer (runtime.buffers.NamedCall)."""
-        key = (*key, self.system.dynamics, float(t0), tuple(float(t) for t in times),
-               tuple(sorted(self.options.items())))
+        if self._options_key is None:  # self.options are final by the first solver call
+            self._options_key = tuple(sorted(self.options.items()))
+        key = (*key, self.system.dynamics, float(t0), np.asarray(times, float).tobytes(),
+               self._options_key)
         return self.workspace.kept(plugin, key, lambda: NamedCall(
             ca.integrator("joint", plugin, problem, t0, list(times), options())))
 
