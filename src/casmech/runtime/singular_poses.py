@@ -71,8 +71,10 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
                    settings: DynamicsSolver = DEFAULT,
                    workspace: Workspace | None = None) -> list[dict] | None:
     """The singular poses the run passed near (module docstring); None when not examined."""
+    if not loops:
+        return None
     times, q = np.asarray(result.times), np.asarray(result.q)
-    if not loops or len(times) < 2 or not examinable(functions, len(times)):
+    if len(times) < 2 or not examinable(functions, len(times)):
         return None
     limits = settings.assembly.linear_algebra
     rows = _independent(functions, result, float(times[0]), q[0], limits)
