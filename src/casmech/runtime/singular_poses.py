@@ -44,15 +44,19 @@ def _jacobians(functions: SystemFunctions, workspace: Workspace | None) -> Colum
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
                      workspace: Workspace | None = None) -> np.ndarray:
-    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): from
-    a Cholesky factor of each J J^T (slogdet where one is not numerically positive definite)."""
+    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): the
+    rows' Gram matrix scaled by its diagonal, its log-determinant from a Cholesky factor
+    (slogdet where one is not numerically positive definite)."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
     flat, = _jacobians(functions, workspace)(np.asarray(times, float)[None, :],
                                              np.asarray(q).T)
-    jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
-    jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
+    jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)
+    if len(rows) < m:
+        jacobian = jacobian[:, rows, :]
     gram = jacobian @ jacobian.transpose(0, 2, 1)
+    scale = 1.0 / np.sqrt(np.diagonal(gram, axis1=1, axis2=2))
+    gram = gram * scale[:, :, None] * scale[:, None, :]
     try:
         factor = np.linalg.cholesky(gram)
     except np.linalg.LinAlgError:
