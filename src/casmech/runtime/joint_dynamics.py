@@ -34,7 +34,6 @@ from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, layout, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.numerics import lazy_jacobian
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
@@ -42,6 +41,7 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
+from casmech.runtime.stiffness import spectral_radius
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
@@ -242,7 +242,7 @@ class _Integrator:
                         **nonfinite.SOLVER_OPTIONS}
         if not system.n_cut:
             self.options |= METHODS[method]
-        self.steps = 0
+        self.steps, self._options_key = 0, None
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -288,8 +288,10 @@ class _Integrator:
         workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
         of several compile settings), the start and grid and self.options, and called through
         a buffer (runtime.buffers.NamedCall)."""
-        key = (*key, self.system.dynamics, float(t0), tuple(float(t) for t in times),
-               tuple(sorted(self.options.items())))
+        if self._options_key is None:  # self.options are final by the first solver call
+            self._options_key = tuple(sorted(self.options.items()))
+        key = (*key, self.system.dynamics, float(t0), np.asarray(times, float).tobytes(),
+               self._options_key)
         return self.workspace.kept(plugin, key, lambda: NamedCall(
             ca.integrator("joint", plugin, problem, t0, list(times), options())))
 
@@ -316,23 +318,22 @@ class _Integrator:
 
 
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
-                  settings: DynamicsSolver = DEFAULT) -> str:
+                  settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
     "adams".
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
-    solution follows, so it is not examined."""
+    solution follows, so it is not examined. The spectral radius at (t0, x0)
+    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`."""
     if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
-    rate = system.dynamics(t0, x0)
-    # one evaluation: by forward sweeps, built in a fraction of the RNEA identity's build time
-    # (which a run on functional iteration never needs), unless a library gives one
-    probe = system.given_jacobian or lazy_jacobian.jacobian(system.dynamics)
-    jacobian = np.array(probe(t0, x0, rate)[1].full())
-    if not np.all(np.isfinite(jacobian)):  # a law not differentiable at t0 (or worse: the
-        return "adams"  # first row then says so); no stiffness to judge by
-    radius = np.max(np.abs(np.linalg.eigvals(jacobian)))
+    x0 = np.asarray(x0, float)
+    radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
+        "stiffness", (system.dynamics, float(t0), x0.tobytes()),
+        lambda: spectral_radius(system, t0, x0))
+    if radius is None:
+        return "adams"
     return "bdf" if radius * step > settings.stiff_threshold else "adams"
 
 
@@ -367,7 +368,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     x, z, loops, signs = _start(functions, system, t0, settings.assembly, workspace)
     if method == "auto":
         method = choose_method(system, t0, x, step,
-                               bool(functions.ir.forces or functions.ir.motors), settings)
+                               bool(functions.ir.forces or functions.ir.motors), settings,
+                               workspace)
     recorder = _Recorder(functions, system, signs, loops.mask, workspace,
                          settings.loop_rows == "solved")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)

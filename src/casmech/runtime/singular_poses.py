@@ -44,15 +44,25 @@ def _jacobians(functions: SystemFunctions, workspace: Workspace | None) -> Colum
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
                      workspace: Workspace | None = None) -> np.ndarray:
-    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q)."""
+    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): the
+    rows' Gram matrix scaled by its diagonal, its log-determinant from a Cholesky factor
+    (slogdet where one is not numerically positive definite)."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
     flat, = _jacobians(functions, workspace)(np.asarray(times, float)[None, :],
                                              np.asarray(q).T)
-    jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)[:, rows, :]
-    jacobian = jacobian / np.linalg.norm(jacobian, axis=2, keepdims=True)
-    _, logdet = np.linalg.slogdet(np.einsum("kij,klj->kil", jacobian, jacobian))
-    return logdet
+    jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)
+    if len(rows) < m:
+        jacobian = jacobian[:, rows, :]
+    gram = jacobian @ jacobian.transpose(0, 2, 1)
+    scale = 1.0 / np.sqrt(np.diagonal(gram, axis1=1, axis2=2))
+    gram = gram * scale[:, :, None] * scale[:, None, :]
+    try:
+        factor = np.linalg.cholesky(gram)
+    except np.linalg.LinAlgError:
+        return np.linalg.slogdet(gram)[1]
+    with np.errstate(divide="ignore"):
+        return 2.0 * np.sum(np.log(np.diagonal(factor, axis1=1, axis2=2)), axis=1)
 
 
 def examinable(functions: SystemFunctions, rows: int) -> bool:
@@ -65,8 +75,10 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
                    settings: DynamicsSolver = DEFAULT,
                    workspace: Workspace | None = None) -> list[dict] | None:
     """The singular poses the run passed near (module docstring); None when not examined."""
+    if not loops:
+        return None
     times, q = np.asarray(result.times), np.asarray(result.q)
-    if not loops or len(times) < 2 or not examinable(functions, len(times)):
+    if len(times) < 2 or not examinable(functions, len(times)):
         return None
     limits = settings.assembly.linear_algebra
     rows = _independent(functions, result, float(times[0]), q[0], limits)

@@ -31,6 +31,7 @@ KINDS: dict[str, int] = {
     "spanning_tree": 1,  # formulations.tree.spanning_tree (runtime.joint_dynamics)
     "joint_system": 4,  # the joint formulation's functions, by the compile options
     "joint_starts": 8,  # joint coordinates' initial states, by t0 and assembly options
+    "stiffness": 8,  # method auto's spectral radius of the tree's ODE, by start
     "cvodes": 8,  # CVODES instances, by grid and integrator options
     "idas": 8,  # joint coordinates' IDAS instances, also by start
     "joint_least_norm": 8,  # least-norm multipliers of masked loop rows, by mask

@@ -1,0 +1,50 @@
+"""What a joint-coordinate run keeps in the bundle's workspace besides its integrators (method
+auto's stiffness probe): a later run with other options takes the decision a fresh bundle
+takes and gives its rows; a repeated run evaluates no Jacobian (call counts and equalities,
+never timings)."""
+
+import numpy as np
+
+import casmech
+from tests.conftest import count_calls
+from tests.validation.runtime.test_joint_dynamics import STIFF_ARM
+
+
+def _run(functions, t_end=0.05, **options):
+    return casmech.analyze(functions, "dynamics", t_end=t_end, **options)
+
+
+def test_method_auto_probes_stiffness_once_per_start_and_decides_per_run(monkeypatch):
+    stiff = casmech.compile(casmech.loads(STIFF_ARM))
+    first = _run(stiff)
+    assert first.metadata["method"] == "bdf"
+    calls = count_calls(monkeypatch)
+    again = _run(stiff)
+    assert again.metadata["method"] == "bdf"
+    assert not any(name.startswith(("jac", "map_fwd")) for name in calls), calls
+    np.testing.assert_array_equal(again.q, first.q)  # the same computation, repeated
+    # the kept radius (~2.6e4 1/s) is judged against each run's threshold and output step:
+    # another threshold or a fine enough grid makes it Adams, as on a fresh bundle (short
+    # runs: Adams on this stiff tip takes many steps)
+    for options in ({"options": {"solver.stiff_threshold": 1e12}}, {"output_step": 1e-4}):
+        kept = _run(stiff, 0.005, **options)
+        fresh = _run(casmech.compile(casmech.loads(STIFF_ARM)), 0.005, **options)
+        assert kept.metadata["method"] == fresh.metadata["method"] == "adams", options
+        np.testing.assert_array_equal(kept.q, fresh.q)
+    assert _run(stiff).metadata["method"] == "bdf"
+
+
+def test_the_kept_radius_is_per_start():
+    """Another t0 starts from another state: its radius is probed and kept beside the first,
+    and its run equals a fresh bundle's."""
+    from casmech.runtime.joint_dynamics import run_joint_dynamics
+    from casmech.runtime.workspace import default
+
+    stiff = casmech.compile(casmech.loads(STIFF_ARM))
+    _run(stiff)
+    later = run_joint_dynamics(stiff, 0.15, 0.01, 1e-6, 1e-8, t0=0.1, method="auto")
+    assert len(default(stiff).store("stiffness")) == 2
+    fresh = run_joint_dynamics(casmech.compile(casmech.loads(STIFF_ARM)), 0.15, 0.01, 1e-6,
+                               1e-8, t0=0.1, method="auto")
+    assert later.metadata["method"] == fresh.metadata["method"] == "bdf"
+    np.testing.assert_array_equal(later.q, fresh.q)
