@@ -10,6 +10,7 @@ Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis
 from __future__ import annotations
 
 import argparse
+import gc
 import importlib
 import os
 import sys
@@ -32,6 +33,10 @@ from casmech.errors import (  # noqa: E402
 )
 
 DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
+# The young generation's threshold of a command's own process: importing and building make
+# hundreds of thousands of small objects and few cycles, which the default (700) collected
+# over a hundred times per run (docs/decisions/cli-collector.md).
+YOUNG_OBJECTS = 20_000
 
 
 def chosen(argv: list[str]) -> str | None:
@@ -59,6 +64,8 @@ def main(argv: list[str] | None = None) -> int:
     """The command line; `argv` None: this process's own (then a command a signal stopped
     ends at once, its files written: see _end)."""
     own = argv is None
+    if own:
+        gc.set_threshold(YOUNG_OBJECTS, *gc.get_threshold()[1:])
     argv = sys.argv[1:] if argv is None else list(argv)
     parser, module = _parser(argv)
     args = parser.parse_args(argv)

@@ -1,5 +1,6 @@
 """End to end: the `casmech` console script on model files (exit codes, results contract)."""
 
+import gc
 import json
 import os
 import subprocess
@@ -9,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from casmech.cli import YOUNG_OBJECTS, main
 from casmech.cli.commands import COMMANDS
 from casmech.io.csv import read_csv
 from tests.conftest import MODELS, ROOT
@@ -265,3 +267,17 @@ def test_one_blas_thread_unless_the_user_chose(given, expected):
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == expected
+
+
+def test_the_processs_own_command_line_collects_less_often():
+    """main() as the process's command line raises the young generation's threshold
+    (docs/decisions/cli-collector.md); main([...]) from a caller's code leaves it as it was."""
+    code = ("import gc, sys; from casmech.cli import main; "
+            f"sys.argv = ['casmech', 'check', {str(MODELS / 'pendulum.yaml')!r}]; "
+            "code = main(); print(code, gc.get_threshold()[0])")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, check=True)
+    assert done.stdout.split()[-2:] == ["0", str(YOUNG_OBJECTS)]  # after check's own lines
+    before = gc.get_threshold()
+    assert main(["check", str(MODELS / "pendulum.yaml")]) == 0
+    assert gc.get_threshold() == before
