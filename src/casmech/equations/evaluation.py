@@ -113,14 +113,14 @@ class Evaluation:
         of = ca.Function("inlined", [*symbols, *extra], outputs)
         return of.call([*args, *([self.input] if extra else [])], True, False)
 
-    def function(self, name: str, inputs: dict, outputs: dict, merged: bool = False
+    def function(self, name: str, inputs: dict, outputs: dict, merged: bool | None = None
                  ) -> ca.Function:
         """A named Function of the bundle: the model data last (when symbolic); inline with its
-        common subexpressions merged (when `merged` or the evaluation is), mapped with one
-        derivative direction per kernel call."""
+        common subexpressions merged as `merged` says (None: as the evaluation is), mapped with
+        one derivative direction per kernel call."""
         if self.symbolic:
             inputs = inputs | {"d": self.input}
-        options = {"cse": self.merged or merged} if self.inline else \
+        options = {"cse": self.merged if merged is None else merged} if self.inline else \
             {"max_num_dir": instances.MAX_DIRECTIONS}
         return ca.Function(name, list(inputs.values()), list(outputs.values()), list(inputs),
                            list(outputs), options)
