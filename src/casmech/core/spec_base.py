@@ -36,7 +36,23 @@ def _version(value: Any) -> Any:
 
 
 Version = Annotated[Literal[1], BeforeValidator(_version)]
-Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
+_SCALAR = Annotated[Union[StrictInt, StrictFloat, StrictStr], WrapValidator(_scalar)]  # noqa: UP007
+
+
+class _ScalarType:
+    """Scalar's core schema, generated once and reused by every field that takes a Scalar,
+    instead of once per field when a process builds the model's validator."""
+
+    schema = None
+
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source, handler):
+        if cls.schema is None:
+            cls.schema = handler.generate_schema(_SCALAR)
+        return cls.schema
+
+
+Scalar = Annotated[Union[StrictInt, StrictFloat, StrictStr], _ScalarType]  # noqa: UP007
 Vector = Annotated[tuple[Scalar, ...], Field(min_length=3, max_length=3)]
 Vector4 = Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)]
 Vector6 = Annotated[tuple[Scalar, ...], Field(min_length=6, max_length=6)]
