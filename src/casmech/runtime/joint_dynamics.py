@@ -19,7 +19,6 @@ workspace (runtime.workspace).
 
 from __future__ import annotations
 
-import os
 import sys
 from dataclasses import asdict, replace
 
@@ -170,19 +169,29 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
 
     library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
-    return _from_library(tree, library)
+    return _from_library(tree, _joined(library))
+
+
+def _joined(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """A loaded library with the results rows' halves joined (backends.joint_library)."""
+    from casmech.backends.joint_library import joined_library
+
+    return joined_library(library)
 
 
 def _library_functions(system: JointSystem, with_motion: bool, settings: DynamicsSolver,
                        rows: ca.Function | None) -> dict[str, ca.Function]:
     """What a compiled bundle's joint system compiles, by library name: the tree's ODE (with
     its forward derivative where method auto may choose BDF, up to settings.stiff_states) or
-    the loops' DAE, with_motion the results rows, and `rows`, the loops' rows solved at each
-    state (runtime.joint_rows.solved_motion)."""
+    the loops' DAE, with_motion the results rows (backends.joint_library.motion: large ones as
+    two halves, which _joined joins again), and `rows`, the loops' rows solved at each state
+    (runtime.joint_rows.solved_motion)."""
+    from casmech.backends.joint_library import motion
+
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
-        functions["joint_motion"] = system.motion
+        functions |= motion(system.motion)
     if rows is not None:
         functions["joint_solved_motion"] = rows
     if not system.n_cut and system.layout.n_x <= settings.stiff_states:
@@ -205,22 +214,18 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = _library_functions(system, with_motion, settings, rows)
     toolchain = _toolchain(system, settings.compile.quick_build_instructions)
-    built = codegen.compile_functions(functions, toolchain=toolchain,
-                                      with_jacobian=[name] if system.n_cut else ())
+    built = _joined(codegen.compile_functions(functions, toolchain=toolchain,
+                                              with_jacobian=[name] if system.n_cut else ()))
     return replace(system, dynamics=built[name],
                    motion=built.get("joint_motion", system.motion), identity_jacobian=None,
                    solved_motion=built.get("joint_solved_motion"))
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
-    """The default toolchain, at -O0 for an ODE of more than quick_build_instructions SX
-    instructions when the user chose no flags."""
+    """The toolchain of the system's library (backends.joint_library.toolchain)."""
+    from casmech.backends.joint_library import toolchain
 
-    from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
-
-    quick = (system.dynamics.n_instructions() > quick_build_instructions
-             and os.environ.get(FLAGS_ENVIRONMENT) is None)
-    return Toolchain(flags=("-O0",)) if quick else Toolchain()
+    return toolchain(system.dynamics.n_instructions(), quick_build_instructions)
 
 
 class _Integrator:

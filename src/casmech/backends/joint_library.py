@@ -1,0 +1,56 @@
+"""What goes into the C of a compiled bundle's joint system (runtime.joint_dynamics): which
+functions, under which names, at which flags.
+
+  - the results rows' function above SPLIT_INSTRUCTIONS is compiled as its two halves
+    SPLIT_MOTION (backends.split), in two units gcc compiles at once, and `joined` makes
+    joint_motion of them again once loaded;
+  - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
+    quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
+    ($CASMECH_CFLAGS).
+Both choices are functions of the functions and the settings, so a library keyed by those
+(backends.library.compile_keyed) stays honest.
+"""
+
+from __future__ import annotations
+
+import os
+
+import casadi as ca
+
+from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
+from casmech.backends.split import halves, joined
+
+# gcc's time grows faster than the function: above this many SX instructions the results rows
+# are compiled as two halves in two units at once
+SPLIT_INSTRUCTIONS = 12_000
+SPLIT_MOTION = ("joint_motion_head", "joint_motion_tail")
+QUICK_FLAGS = ("-O0",)
+# evaluated seldom: once by method auto's stiffness probe, by BDF's Newton iteration only when
+# it updates its Jacobian (every tens of steps); -O1 would more than treble their gcc time
+SELDOM = ("fwd1_joint_ode",)
+
+
+def motion(function: ca.Function) -> dict[str, ca.Function]:
+    """The results rows' function by library name: joint_motion, or its halves."""
+    pair = halves(function, *SPLIT_MOTION) if (
+        function.n_instructions() > SPLIT_INSTRUCTIONS) else None
+    return dict(zip(SPLIT_MOTION, pair, strict=True)) if pair else {"joint_motion": function}
+
+
+def joined_library(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """A loaded library with its results rows' halves joined into joint_motion."""
+    if SPLIT_MOTION[0] not in library:
+        return library
+    return {**library, "joint_motion": joined(*(library[n] for n in SPLIT_MOTION),
+                                              "joint_motion")}
+
+
+def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
+    """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
+    for an ODE of more than quick_build_instructions SX `instructions`, and below that the
+    SELDOM functions alone at QUICK_FLAGS."""
+    if os.environ.get(FLAGS_ENVIRONMENT) is not None:
+        return Toolchain()
+    if instructions > quick_build_instructions:
+        return Toolchain(flags=QUICK_FLAGS)
+    return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM))
