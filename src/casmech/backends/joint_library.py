@@ -7,8 +7,8 @@ functions, under which names, at which flags.
   - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
     quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
     ($CASMECH_CFLAGS).
-Both choices are functions of the functions and the settings, so a library keyed by those
-(backends.library.compile_keyed) stays honest.
+Both choices are functions of the functions, the settings and chosen_flags(), so a library
+keyed by those (backends.library.compile_keyed) stays honest.
 """
 
 from __future__ import annotations
@@ -45,11 +45,17 @@ def joined_library(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
                                               "joint_motion")}
 
 
+def chosen_flags() -> str | None:
+    """The flags the user chose ($CASMECH_CFLAGS), or None: what `toolchain` depends on besides
+    its arguments, so part of the library's key."""
+    return os.environ.get(FLAGS_ENVIRONMENT)
+
+
 def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
     """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
     for an ODE of more than quick_build_instructions SX `instructions`, and below that the
     SELDOM functions alone at QUICK_FLAGS."""
-    if os.environ.get(FLAGS_ENVIRONMENT) is not None:
+    if chosen_flags() is not None:
         return Toolchain()
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)

@@ -148,6 +148,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     is compiled, and the functions a run evaluates a few times (the start's and the loops'
     acceleration_system, velocity_jacobian, relative_states, and the results rows above
     compile.motion_bodies) are kept as CasADi's serialization beside it."""
+    from casmech.backends.joint_library import chosen_flags
     from casmech.backends.library import compile_keyed
 
     workspace = of(functions, workspace)
@@ -155,7 +156,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     name = "joint_dae" if tree.cut else "joint_ode"
     content = {"kind": "joint system", "bundle": functions.library_key,
                "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
-               "loop_rows": settings.loop_rows}
+               "loop_rows": settings.loop_rows, "chosen_flags": chosen_flags()}
 
     def make():
         system = _built(functions, settings, workspace)

@@ -3,7 +3,8 @@ backends.joint_library) where the user chose no flags: the ODE's forward derivat
 fwd1_joint_ode compiled at -O0 and the rest at the default flags, large results rows as two
 halves (backends.split), all equal to the interpreted system's. The library does not depend on
 the run's method, so a BDF run after an Adams run from one cache is a BDF run from a fresh
-one."""
+one; with flags chosen ($CASMECH_CFLAGS) every function is built with them, under another
+key."""
 
 import numpy as np
 
@@ -63,3 +64,8 @@ def test_seldom_functions_build_quickly_and_large_rows_in_halves(
     for name in ("q", "q_dot", "q_ddot", "lam"):
         # the same library's C, built twice: the same computation
         np.testing.assert_array_equal(getattr(after, name), getattr(fresh, name))
+    # the same library with the flags chosen: the default's own value, all at it, another key
+    monkeypatch.setenv(build.FLAGS_ENVIRONMENT, " ".join(build.DEFAULT_FLAGS))
+    joint_system(bundle, workspace=Workspace(bundle))
+    assert sorted(len(manifest.read(path)["function_flags"])
+                  for path in cache.entries(tmp_path / "fresh")) == [0, 1]
