@@ -6,7 +6,11 @@ functions, under which names, at which flags.
     joint_motion of them again once loaded;
   - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
     quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
-    ($CASMECH_CFLAGS).
+    ($CASMECH_CFLAGS);
+  - BDF's Jacobian (forward sweeps of the ODE: numerics.lazy_jacobian) comes from a library of
+    its own, the ODE and its forward derivative at the library's flags, built when a BDF run
+    first asks for it (keyed_jacobian, content_jacobian: JointSystem.identity_jacobian's
+    place), so that a run on Adams, the rule for these trees, never compiles it at -O1.
 Both choices are functions of the functions, the settings and chosen_flags(), so a library
 keyed by those (backends.library.compile_keyed) stays honest.
 """
@@ -14,19 +18,22 @@ keyed by those (backends.library.compile_keyed) stays honest.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 
 import casadi as ca
 
 from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
+from casmech.backends.library import compile_functions, compile_keyed
 from casmech.backends.split import halves, joined
+from casmech.numerics import lazy_jacobian
 
 # gcc's time grows faster than the function: above this many SX instructions the results rows
 # are compiled as two halves in two units at once
 SPLIT_INSTRUCTIONS = 12_000
 SPLIT_MOTION = ("joint_motion_head", "joint_motion_tail")
 QUICK_FLAGS = ("-O0",)
-# evaluated seldom: once by method auto's stiffness probe, by BDF's Newton iteration only when
-# it updates its Jacobian (every tens of steps); -O1 would more than treble their gcc time
+# evaluated once per run, by method auto's stiffness probe (BDF's Newton iteration takes its
+# Jacobian from keyed_jacobian's library); -O1 would more than treble their gcc time
 SELDOM = ("fwd1_joint_ode",)
 
 
@@ -60,3 +67,37 @@ def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)
     return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM))
+
+
+def _bdf(ode: ca.Function, quick_build_instructions: int
+         ) -> tuple[dict[str, ca.Function], Toolchain]:
+    """The BDF Jacobian's library: the ODE and its forward derivative, and its toolchain (the
+    library's flags, none of its own)."""
+    chain = toolchain(ode.n_instructions(), quick_build_instructions)
+    return ({"joint_ode": ode, "fwd1_joint_ode": ode.forward(1)},
+            Toolchain(chain.compiler, chain.flags, chain.jobs))
+
+
+def keyed_jacobian(content: dict, ode: Callable[[], ca.Function],
+                   quick_build_instructions: int) -> Callable[[], ca.Function]:
+    """() -> the ODE's Jacobian (jacobian()'s signature) by forward sweeps of a library cached
+    under the joint library's `content` and this part, ode() giving the SX ODE on a miss."""
+    def jacobian() -> ca.Function:
+        def make():
+            functions, chain = _bdf(ode(), quick_build_instructions)
+            return functions, {}, chain
+
+        library = compile_keyed({**content, "part": "BDF Jacobian"}, make)
+        return lazy_jacobian.jacobian(library["joint_ode"])
+
+    return jacobian
+
+
+def content_jacobian(ode: ca.Function, quick_build_instructions: int
+                     ) -> Callable[[], ca.Function]:
+    """keyed_jacobian's Jacobian from a library keyed by the ODE's content."""
+    def jacobian() -> ca.Function:
+        functions, chain = _bdf(ode, quick_build_instructions)
+        return lazy_jacobian.jacobian(compile_functions(functions, toolchain=chain)["joint_ode"])
+
+    return jacobian

@@ -148,7 +148,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     is compiled, and the functions a run evaluates a few times (the start's and the loops'
     acceleration_system, velocity_jacobian, relative_states, and the results rows above
     compile.motion_bodies) are kept as CasADi's serialization beside it."""
-    from casmech.backends.joint_library import chosen_flags
+    from casmech.backends.joint_library import chosen_flags, joined_library, keyed_jacobian
     from casmech.backends.library import compile_keyed
 
     workspace = of(functions, workspace)
@@ -170,14 +170,12 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
 
     library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
-    return _from_library(tree, _joined(library))
-
-
-def _joined(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """A loaded library with the results rows' halves joined (backends.joint_library)."""
-    from casmech.backends.joint_library import joined_library
-
-    return joined_library(library)
+    system = _from_library(tree, joined_library(library))
+    if "fwd1_joint_ode" not in library:
+        return system
+    return replace(system, identity_jacobian=keyed_jacobian(
+        content, lambda: _built(functions, settings, workspace).dynamics,
+        settings.compile.quick_build_instructions))
 
 
 def _library_functions(system: JointSystem, with_motion: bool, settings: DynamicsSolver,
@@ -185,7 +183,7 @@ def _library_functions(system: JointSystem, with_motion: bool, settings: Dynamic
     """What a compiled bundle's joint system compiles, by library name: the tree's ODE (with
     its forward derivative where method auto may choose BDF, up to settings.stiff_states) or
     the loops' DAE, with_motion the results rows (backends.joint_library.motion: large ones as
-    two halves, which _joined joins again), and `rows`, the loops' rows solved at each state
+    two halves, joined again once loaded), and `rows`, the loops' rows solved at each state
     (runtime.joint_rows.solved_motion)."""
     from casmech.backends.joint_library import motion
 
@@ -205,20 +203,25 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
                     rows: ca.Function | None = None) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache, keyed by their content (_library_functions); with the tree's ODE its
-    forward derivative (casadi's externals find fwd1_<name> in their library: its Jacobian by
-    forward sweeps of the compiled ODE, and the interpreted RNEA identity is dropped: the
+    forward derivative (casadi's externals find fwd1_<name> in their library: method auto's
+    probe by forward sweeps of the compiled ODE; BDF's Jacobian from a library of its own,
+    built on first use: backends.joint_library; the interpreted RNEA identity is dropped: the
     identity's C would lengthen the cold build, joint-derivatives.md), with the DAE its
     Jacobian (JointSystem.problem); `rows`, the loops' rows solved at each state
     (runtime.joint_rows.solved_motion), in the same library."""
     from casmech.backends import codegen
+    from casmech.backends.joint_library import content_jacobian, joined_library
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = _library_functions(system, with_motion, settings, rows)
-    toolchain = _toolchain(system, settings.compile.quick_build_instructions)
-    built = _joined(codegen.compile_functions(functions, toolchain=toolchain,
-                                              with_jacobian=[name] if system.n_cut else ()))
+    quick = settings.compile.quick_build_instructions
+    built = joined_library(codegen.compile_functions(
+        functions, toolchain=_toolchain(system, quick),
+        with_jacobian=[name] if system.n_cut else ()))
+    jacobian = content_jacobian(system.dynamics, quick) if "fwd1_joint_ode" in functions \
+        else None
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion), identity_jacobian=None,
+                   motion=built.get("joint_motion", system.motion), identity_jacobian=jacobian,
                    solved_motion=built.get("joint_solved_motion"))
 
 
