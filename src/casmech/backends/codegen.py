@@ -19,8 +19,9 @@ What is compiled (write_build):
     one kernel per joint, body and force element, the Jacobian from the kernels' own SX
     Jacobians; for a small model the inline SX), in a library of its own with the daeF and jacF
     casadi's IDAS interface loads from it; for a run of a tree in joint coordinates, which
-    reads none of them, built on first use instead, in a cache entry of their own
-    (backends.deferred).
+    reads none of them and of the bundle only the assembly's functions, the bundle built with
+    those alone and the rest and the residuals on first use instead, each in a cache entry of
+    its own (backends.deferred).
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). The measurements behind this: docs/decisions/codegen-element-residuals.md.
 

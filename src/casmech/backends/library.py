@@ -13,7 +13,9 @@ is differentiated in compiled code. `integrators` names DAE residuals (t, x, z, 
 (as formulations.dae builds them): each goes into a library of its own with its residual and
 Jacobian blocks under the names casadi's IDAS interface looks up (daeF, jacF; the Jacobian by
 CasADi's AD of the function), and comes back with the integrator's signature (t, x, z, p, u)
--> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem.
+-> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem. A
+toolchain's function_flags compile the units of the functions they name with their own flags
+(the functions grouped by flags, each group in units of its own), and are in the key.
 
 `compile_keyed` caches the same kind of library under a key its caller gives (whatever the
 functions are a function of), so that a cache hit builds no symbolic graph at all; functions it
