@@ -20,8 +20,10 @@ _UNSPLIT = (ca.OP_CALL,)  # operations not rebuilt from their operands alone
 
 def halves(function: ca.Function, head_name: str, tail_name: str
            ) -> tuple[ca.Function, ca.Function] | None:
-    """(head, tail) of an SXFunction (module docstring), or None when its algorithm holds an
-    operation this cannot rebuild."""
+    """(head, tail) of an SXFunction (module docstring), or None for another kind of Function
+    or when its algorithm holds an operation this cannot rebuild."""
+    if not function.is_a("SXFunction"):
+        return None
     count = function.n_instructions()
     operations = [function.instruction_id(k) for k in range(count)]
     if any(op in _UNSPLIT for op in operations):

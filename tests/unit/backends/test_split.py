@@ -50,6 +50,11 @@ def test_head_then_tail_is_the_function():
             _assert_same(both(*arguments), function(*arguments))
 
 
+def test_an_mx_function_is_not_split():
+    x = ca.MX.sym("x", 2)
+    assert halves(ca.Function("g", [x], [ca.sin(x) * x[0]]), "head", "tail") is None
+
+
 def test_the_compiled_halves_are_the_function(toolchain, tmp_path):
     function = _function()
     head, tail = halves(function, "f_head", "f_tail")
