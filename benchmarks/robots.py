@@ -491,7 +491,8 @@ STAGES = (  # (module, function): each call timed in a cold build, nested calls 
     ("casmech.backends.codegen", "dae_oracles"),  # the DAE residuals and their Jacobians
     ("casmech.backends.generate", "write_sources"),  # C of the bundle
     ("casmech.backends.generate", "write_dae_sources"),  # C of the DAE residuals
-    ("casmech.backends.generate", "write_units"),  # C of a functions library (the joint ODE)
+    ("casmech.backends.generate", "write_unit_sets"),  # C of the bundle and the joint ODE's
+    ("casmech.backends.joint_library", "motion"),  # the results rows (in halves when large)
     ("casmech.backends.codegen", "build_libraries"),  # gcc of the bundle and DAE residuals
     ("casmech.backends.library", "build_libraries"),  # gcc of a functions library
     ("casmech.backends.manifest", "write"),  # the manifest (cache write)

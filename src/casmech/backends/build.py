@@ -53,10 +53,17 @@ class Toolchain:
     compiler: str = field(default_factory=default_compiler)
     flags: tuple[str, ...] = field(default_factory=lambda: default_flags())
     jobs: int = field(default_factory=lambda: os.cpu_count() or 1)
+    # (function name, flags) pairs: those functions' units compiled with these flags instead
+    # (backends.library groups a library's functions by them)
+    function_flags: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
     @property
     def all_flags(self) -> tuple[str, ...]:
         return REQUIRED_FLAGS + tuple(self.flags)
+
+    def flags_of(self, name: str) -> tuple[str, ...]:
+        """The flags of function `name`'s unit (REQUIRED_FLAGS apart)."""
+        return dict(self.function_flags).get(name, tuple(self.flags))
 
     def version(self) -> str:
         return compiler_version(self.compiler)
@@ -88,16 +95,22 @@ def _run(command: list[str], cwd: Path) -> None:
 
 
 def build_libraries(libraries: dict[str, list[Path]], directory: Path,
-                    toolchain: Toolchain) -> list[Path]:
-    """Compile every source to an object (toolchain.jobs at a time, all libraries in one pool)
-    and link each library (file name -> its sources)."""
+                    toolchain: Toolchain, unit_flags: dict[str, tuple[str, ...]] | None = None
+                    ) -> list[Path]:
+    """Compile every source to an object (toolchain.jobs at a time, all libraries in one pool,
+    the longest sources first) and link each library (file name -> its sources). unit_flags:
+    source file name -> its flags instead of toolchain.flags (REQUIRED_FLAGS always)."""
     if not available(toolchain):
         raise UsageError(f"no C compiler '{toolchain.compiler}' found; install gcc or clang "
                          "(on Windows: MinGW-w64's gcc) or set CC, "
                          "or use mode='interpreted' (casmech run --mode interpreted)")
     compiler, flags = shlex.split(toolchain.compiler), list(toolchain.all_flags)
+    unit_flags = unit_flags or {}
     sources = [src for group in libraries.values() for src in group]
-    commands = [[*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"] for src in sources]
+    commands = [[*compiler, *REQUIRED_FLAGS, *unit_flags[src.name], "-c", src.name, "-o",
+                 src.stem + ".o"] if src.name in unit_flags else
+                [*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"]
+                for src in sorted(sources, key=lambda src: -src.stat().st_size)]
     with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
         list(pool.map(lambda command: _run(command, directory), commands))
     for library, group in libraries.items():

@@ -111,13 +111,16 @@ def model_digest(model: ResolvedModel, values: bool = True) -> str:
     return digest.hexdigest()
 
 
-def key(model_hash: str, compiler: str, flags, dae: bool = False) -> str:
+def key(model_hash: str, compiler: str, flags, dae: bool = False,
+        names: tuple[str, ...] | None = None) -> str:
     """The mapped library's cache key; `dae`: with the residuals the registered formulations
-    compile (formulations.residuals.library_key)."""
+    compile (formulations.residuals.library_key); `names`: of the bundle's functions only
+    these (None: all)."""
     content = json.dumps({"format": FORMAT, "model": model_hash, "casmech": VERSION,
                           "sources": source_digest(), "casadi": ca.__version__,
                           "compiler": compiler, "flags": list(flags),
-                          "dae": residuals.library_key() if dae else False})
+                          "dae": residuals.library_key() if dae else False,
+                          "functions": None if names is None else list(names)})
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
 

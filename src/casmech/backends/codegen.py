@@ -19,8 +19,9 @@ What is compiled (write_build):
     one kernel per joint, body and force element, the Jacobian from the kernels' own SX
     Jacobians; for a small model the inline SX), in a library of its own with the daeF and jacF
     casadi's IDAS interface loads from it; for a run of a tree in joint coordinates, which
-    reads none of them, built on first use instead, in a cache entry of their own
-    (backends.deferred).
+    reads none of them and of the bundle only the assembly's functions, the bundle built with
+    those alone and the rest and the residuals on first use instead, each in a cache entry of
+    its own (backends.deferred).
 The C holds each kernel once; only index tables grow with the model. Default flags -O1
 (build.DEFAULT_FLAGS). The measurements behind this: docs/decisions/codegen-element-residuals.md.
 
@@ -57,7 +58,8 @@ from casmech.backends.load import externals, mode_of
 from casmech.backends.load import load as load_build
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
-from casmech.equations.evaluation import is_inline
+from casmech.equations import system
+from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import SystemFunctions, build_functions, mapped_functions
 from casmech.errors import UsageError
 from casmech.formulations import prescribed, residuals
@@ -79,10 +81,14 @@ def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")
 
 
-def bundle(ir: ModelIR) -> dict[str, ca.Function]:
+def bundle(ir: ModelIR, names: tuple[str, ...] | None = None) -> dict[str, ca.Function]:
     """The functions of the bundle's library (module docstring): the builder's, mapped;
     prescribed_step over its functions evaluated inline (one SX graph) or mapped, as the
-    switch says (equations.evaluation.WHERE_INLINE)."""
+    switch says (equations.evaluation.WHERE_INLINE). `names`: only those of the builder's
+    (a part of a joint tree's bundle, backends.deferred)."""
+    if names is not None:
+        shared = system.System(ir, Evaluation.of(False, None))
+        return {name: system.function(shared, name) for name in names}
     functions = mapped_functions(ir)
     if ir.analysis.type in PRESCRIBED_ANALYSES:
         over = build_functions(ir).functions if is_inline("prescribed_step", ir.n_bodies) \
@@ -92,11 +98,11 @@ def bundle(ir: ModelIR) -> dict[str, ca.Function]:
 
 
 def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
-                dae: bool = False) -> Path:
+                dae: bool = False, names: tuple[str, ...] | None = None) -> Path:
     """Generate the sources and headers, build the libraries and write the manifest (last, so
     a directory with a manifest is complete); `dae`: the DAE residuals dae_[ggl_]<formulation>
-    too, each in its own library."""
-    functions = bundle(ir)
+    too, each in its own library; `names`: only those of the bundle's functions."""
+    functions = bundle(ir, names)
     sources = generate.write_sources(functions, directory, toolchain.jobs)
     oracles = dae_oracles(ir) if dae else {}
     dae_sources = generate.write_dae_sources(oracles, directory)
@@ -120,33 +126,48 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
     (codegen.parametric) where it applies and `mapped` is not asked for, with the values its
     load binds and the structure's signature, else the mapped one with the values baked in (and
     in its key), and None. With `defer` (a run's library), the mapped library of a joint tree
-    (_deferred) holds no DAE residuals (built on first use) and is built at -O0 where the user
-    chose no flags (backends.deferred)."""
+    (_deferred) holds only the functions its run reads (deferred.READ; the rest and the DAE
+    residuals built on first use) and is built at -O0 where the user chose no flags
+    (backends.deferred)."""
     if not mapped and parametric.applies(model):
         values, signature = data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
             ir, directory, toolchain, info, dae, build_libraries), (values, signature)
+    names = None
     if defer and _deferred(model, ir):
-        dae, toolchain = False, deferred.bundle_toolchain(toolchain)
+        dae, toolchain, names = False, deferred.bundle_toolchain(toolchain), deferred.READ
     model_hash = cache.model_digest(model)
-    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae)
+    entry = cache.key(model_hash, toolchain.version(), toolchain.all_flags, dae, names)
     info = {"model": model.name, "model_hash": model_hash, "key": entry}
-    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae), None
+    return entry, lambda directory: write_build(ir, directory, toolchain, info, dae,
+                                                names), None
 
 
 def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:
-    """Whether the DAE residuals of the model's mapped library for a run wait for their first
-    use (backends.deferred): a tree whose dynamics run in joint coordinates."""
+    """Whether most of the model's mapped library for a run and its DAE residuals wait for
+    their first use (backends.deferred): a tree whose dynamics run in joint coordinates."""
     return _joint_tree(model, ir)
+
+
+def _rest(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, bundle_key: str,
+          root: Path | None) -> dict[str, ca.Function]:
+    """The bundle's functions a joint tree's bundle was built without (deferred.rest), with
+    the user's `toolchain`, loaded from their cache entry, built when it is missing."""
+    names = deferred.rest()
+    entry = deferred.key(bundle_key, "rest", toolchain)
+    info = {"model": model.name, "model_hash": cache.model_digest(model), "key": entry}
+    directory, _ = cache.lookup(entry, lambda directory: write_build(
+        ir, directory, toolchain, info, False, names), root)
+    return externals(directory)
 
 
 def _residuals(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, bundle_key: str,
                root: Path | None) -> dict[str, ca.Function]:
     """The DAE residuals of a bundle built without them (backends.deferred), loaded from their
     cache entry, built when it is missing."""
-    entry = deferred.key(bundle_key)
+    entry = deferred.key(bundle_key, "dae residuals", toolchain)
     info = {"model": model.name, "model_hash": cache.model_digest(model), "key": entry,
             "casmech": VERSION, "casmech_sources": cache.source_digest(),
             "casadi": ca.__version__, "compiler": toolchain.compiler,
@@ -182,9 +203,12 @@ def compiled(model: ResolvedModel, toolchain: Toolchain | None = None,
     if bound is not None:
         return parametric.load(directory, ir, *bound)
     bundle = load_build(directory, ir)
-    if dae and _deferred(model, ir):
-        bundle = replace(bundle, functions=deferred.with_residuals(
-            bundle.functions, lambda: _residuals(model, ir, toolchain, entry, root)))
+    if _deferred(model, ir):
+        later = [(deferred.rest(), lambda: _rest(model, ir, toolchain, entry, root))]
+        if dae:
+            later.append((deferred.residual_names(),
+                          lambda: _residuals(model, ir, toolchain, entry, root)))
+        bundle = replace(bundle, functions=deferred.with_deferred(bundle.functions, later))
     return bundle
 
 

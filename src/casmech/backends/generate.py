@@ -79,16 +79,29 @@ def write_units(groups: dict[str, list[ca.Function]], directory: Path, parts: in
                 prefix: str) -> list[Path]:
     """Write `<prefix>_<k>.c/.h` (k < parts) and `<prefix>.h` including them; the C sources.
     groups: name -> the functions generated for it (kept in one unit)."""
+    return [source for sources in write_unit_sets([groups], directory, parts, prefix)
+            for source in sources]
+
+
+def write_unit_sets(sets: list[dict[str, list[ca.Function]]], directory: Path, parts: int,
+                    prefix: str) -> list[list[Path]]:
+    """write_units over several sets of groups (e.g. one per set of compiler flags), each set
+    in up to `parts` units of its own, numbered on across the sets, behind one header; the C
+    sources of each set."""
     directory.mkdir(parents=True, exist_ok=True)
-    sources = [_unit(f"{prefix}_{k}", members, directory)
-               for k, members in enumerate(partition(groups, parts))]
+    numbered, k = [], 0
+    for set_units in (partition(groups, parts) for groups in sets):
+        numbered.append([_unit(f"{prefix}_{k + j}", members, directory)
+                         for j, members in enumerate(set_units)])
+        k += len(set_units)
+    sources = [source for set_sources in numbered for source in set_sources]
     includes = "".join(f'#include "{path.stem}.h"\n' for path in sources)
     guard = prefix.upper() + "_H"
     (directory / f"{prefix}.h").write_text(
         "/* casmech generated functions (casadi C API). Compile with -std=c99 (gnu modes\n"
         "   declare a math.h gamma() that clashes with ours). */\n"
         f"#ifndef {guard}\n#define {guard}\n" + includes + "#endif\n")
-    return sources
+    return numbered
 
 
 def write_sources(functions: dict[str, ca.Function], directory: Path,

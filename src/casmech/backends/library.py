@@ -13,7 +13,9 @@ is differentiated in compiled code. `integrators` names DAE residuals (t, x, z, 
 (as formulations.dae builds them): each goes into a library of its own with its residual and
 Jacobian blocks under the names casadi's IDAS interface looks up (daeF, jacF; the Jacobian by
 CasADi's AD of the function), and comes back with the integrator's signature (t, x, z, p, u)
--> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem.
+-> (ode, alg, quad, zero), ready for casadi.integrator or formulations.dae.problem. A
+toolchain's function_flags compile the units of the functions they name with their own flags
+(the functions grouped by flags, each group in units of its own), and are in the key.
 
 `compile_keyed` caches the same kind of library under a key its caller gives (whatever the
 functions are a function of), so that a cache hit builds no symbolic graph at all; functions it
@@ -54,7 +56,9 @@ def _key(kind: str, toolchain: Toolchain, **fields) -> str:
     sources and the toolchain."""
     content = json.dumps({"format": manifest.FORMAT, "kind": kind, **fields, "casmech": VERSION,
                           "sources": cache.source_digest(), "casadi": ca.__version__,
-                          "compiler": toolchain.version(), "flags": list(toolchain.all_flags)},
+                          "compiler": toolchain.version(), "flags": list(toolchain.all_flags),
+                          "function_flags": [[n, list(f)] for n, f in
+                                             sorted(toolchain.function_flags)]},
                          sort_keys=True)
     return hashlib.sha256(content.encode()).hexdigest()[:32]
 
@@ -133,15 +137,22 @@ def _write(directory: Path, key: str, named: Mapping[str, ca.Function],
            kept: Mapping[str, ca.Function], with_jacobian: set[str], integrators: set[str],
            toolchain: Toolchain) -> None:
     """A build directory: the C of `named` (their Jacobians with_jacobian; integrators as
-    IDAS's DAE libraries) compiled, `kept` serialized, and the manifest listing them all."""
+    IDAS's DAE libraries) compiled, each function's units with its flags
+    (toolchain.flags_of), `kept` serialized, and the manifest listing them all."""
     plain = {n: f for n, f in named.items() if n not in integrators}
-    groups = {n: [f, *([f.jacobian()] if n in with_jacobian else [])]
-              for n, f in plain.items()}
-    sources = generate.write_units(groups, directory, toolchain.jobs, HEADER_PREFIX)
+    by_flags: dict[tuple[str, ...], dict[str, list[ca.Function]]] = {}
+    for n, f in plain.items():
+        by_flags.setdefault(toolchain.flags_of(n), {})[n] = [
+            f, *([f.jacobian()] if n in with_jacobian else [])]
+    sets = generate.write_unit_sets(list(by_flags.values()), directory, toolchain.jobs,
+                                    HEADER_PREFIX) if plain else []
+    sources = [source for set_sources in sets for source in set_sources]
+    unit_flags = {source.name: flags for flags, set_sources in zip(by_flags, sets, strict=True)
+                  for source in set_sources if flags != tuple(toolchain.flags)}
     oracles = {n: residuals.from_residual(named[n]) for n in sorted(integrators)}
     dae_sources = generate.write_dae_sources(oracles, directory)
     build_libraries({LIBRARY: sources, **dae_sources} if sources else dae_sources,
-                    directory, toolchain)
+                    directory, toolchain, unit_flags)
     for name, function in kept.items():
         function.save(str(directory / f"{name}{manifest.KEPT}"))
     manifest.write(directory, {**plain, **{n: o[n] for n, o in oracles.items()}, **kept},
@@ -150,6 +161,8 @@ def _write(directory: Path, key: str, named: Mapping[str, ca.Function],
                        "key": key, "casmech": VERSION, "casadi": ca.__version__,
                        "compiler": toolchain.compiler,
                        "compiler_version": toolchain.version(),
-                       "flags": list(toolchain.all_flags), "library": LIBRARY},
+                       "flags": list(toolchain.all_flags), "library": LIBRARY,
+                       "function_flags": {n: list(f) for n, f in toolchain.function_flags
+                                          if n in plain}},
                    {**{n: generate.dae_library(n) for n in oracles},
                     **{n: f"{n}{manifest.KEPT}" for n in kept}})

@@ -19,7 +19,6 @@ workspace (runtime.workspace).
 
 from __future__ import annotations
 
-import os
 import sys
 from dataclasses import asdict, replace
 
@@ -157,6 +156,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     is compiled, and the functions a run evaluates a few times (the start's and the loops'
     acceleration_system, velocity_jacobian, relative_states, and the results rows above
     compile.motion_bodies) are kept as CasADi's serialization beside it."""
+    from casmech.backends.joint_library import chosen_flags, joined_library, keyed_jacobian
     from casmech.backends.library import compile_keyed
 
     workspace = of(functions, workspace)
@@ -164,7 +164,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     name = "joint_dae" if tree.cut else "joint_ode"
     content = {"kind": "joint system", "bundle": functions.library_key,
                "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
-               "loop_rows": settings.loop_rows}
+               "loop_rows": settings.loop_rows, "chosen_flags": chosen_flags()}
 
     def make():
         system = _built(functions, settings, workspace)
@@ -178,19 +178,27 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
 
     library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
-    return _from_library(tree, library)
+    system = _from_library(tree, joined_library(library))
+    if "fwd1_joint_ode" not in library:
+        return system
+    return replace(system, identity_jacobian=keyed_jacobian(
+        content, lambda: _built(functions, settings, workspace).dynamics,
+        settings.compile.quick_build_instructions))
 
 
 def _library_functions(system: JointSystem, with_motion: bool, settings: DynamicsSolver,
                        rows: ca.Function | None) -> dict[str, ca.Function]:
     """What a compiled bundle's joint system compiles, by library name: the tree's ODE (with
     its forward derivative where method auto may choose BDF, up to settings.stiff_states) or
-    the loops' DAE, with_motion the results rows, and `rows`, the loops' rows solved at each
-    state (runtime.joint_rows.solved_motion)."""
+    the loops' DAE, with_motion the results rows (backends.joint_library.motion: large ones as
+    two halves, joined again once loaded), and `rows`, the loops' rows solved at each state
+    (runtime.joint_rows.solved_motion)."""
+    from casmech.backends.joint_library import motion
+
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = {name: system.dynamics}
     if with_motion:
-        functions["joint_motion"] = system.motion
+        functions |= motion(system.motion)
     if rows is not None:
         functions["joint_solved_motion"] = rows
     if not system.n_cut and system.layout.n_x <= settings.stiff_states:
@@ -203,32 +211,33 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
                     rows: ca.Function | None = None) -> JointSystem:
     """A tree's ODE or the loops' DAE (and with_motion the results rows) compiled through
     codegen's cache, keyed by their content (_library_functions); with the tree's ODE its
-    forward derivative (casadi's externals find fwd1_<name> in their library: its Jacobian by
-    forward sweeps of the compiled ODE, and the interpreted RNEA identity is dropped: the
+    forward derivative (casadi's externals find fwd1_<name> in their library: method auto's
+    probe by forward sweeps of the compiled ODE; BDF's Jacobian from a library of its own,
+    built on first use: backends.joint_library; the interpreted RNEA identity is dropped: the
     identity's C would lengthen the cold build, joint-derivatives.md), with the DAE its
     Jacobian (JointSystem.problem); `rows`, the loops' rows solved at each state
     (runtime.joint_rows.solved_motion), in the same library."""
     from casmech.backends import codegen
+    from casmech.backends.joint_library import content_jacobian, joined_library
 
     name = "joint_dae" if system.n_cut else "joint_ode"
     functions = _library_functions(system, with_motion, settings, rows)
-    toolchain = _toolchain(system, settings.compile.quick_build_instructions)
-    built = codegen.compile_functions(functions, toolchain=toolchain,
-                                      with_jacobian=[name] if system.n_cut else ())
+    quick = settings.compile.quick_build_instructions
+    built = joined_library(codegen.compile_functions(
+        functions, toolchain=_toolchain(system, quick),
+        with_jacobian=[name] if system.n_cut else ()))
+    jacobian = content_jacobian(system.dynamics, quick) if "fwd1_joint_ode" in functions \
+        else None
     return replace(system, dynamics=built[name],
-                   motion=built.get("joint_motion", system.motion), identity_jacobian=None,
+                   motion=built.get("joint_motion", system.motion), identity_jacobian=jacobian,
                    solved_motion=built.get("joint_solved_motion"))
 
 
 def _toolchain(system: JointSystem, quick_build_instructions: int):
-    """The default toolchain, at -O0 for an ODE of more than quick_build_instructions SX
-    instructions when the user chose no flags."""
+    """The toolchain of the system's library (backends.joint_library.toolchain)."""
+    from casmech.backends.joint_library import toolchain
 
-    from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
-
-    quick = (system.dynamics.n_instructions() > quick_build_instructions
-             and os.environ.get(FLAGS_ENVIRONMENT) is None)
-    return Toolchain(flags=("-O0",)) if quick else Toolchain()
+    return toolchain(system.dynamics.n_instructions(), quick_build_instructions)
 
 
 class _Integrator:

@@ -67,9 +67,9 @@ def test_compiled_tree_functions_equal_the_interpreted(interpreted, compiled):
     assert fast.dynamics.class_name() == "External" and slow.dynamics.is_a("SXFunction")
     # the same SX compiled to C: equal to roundoff
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
-    # forward sweeps of the compiled ODE (its fwd1_ in the library), not the interpreted
-    # identity the numeric build offers
-    assert fast.identity_jacobian is None and slow.identity_jacobian is not None
+    # forward sweeps of a compiled ODE (BDF's library, built on first use:
+    # backends.joint_library), not the interpreted identity the numeric build offers
+    assert fast.jacobian.is_a("MXFunction") and slow.jacobian.is_a("SXFunction")
     _assert_jacobian_is_the_odes(fast, slow)
 
 
@@ -158,12 +158,12 @@ def test_a_warm_cache_builds_no_joint_system(interpreted, compiled, monkeypatch)
     building the symbolic system, and they are the interpreted system's; above motion_bodies
     the results rows too are kept beside the library."""
     above = DynamicsSolver(compile=JointCompile(motion_bodies=0))
-    for settings in (DynamicsSolver(), above):  # in the cache (maybe already)
-        joint_system(compiled, settings, Workspace(compiled))
+    for settings in (DynamicsSolver(), above):  # in the cache (maybe already), and BDF's
+        assert joint_system(compiled, settings, Workspace(compiled)).jacobian  # Jacobian's
     slow = joint_system(interpreted)
     _refuse_builds(monkeypatch)
     fast = joint_system(compiled, workspace=Workspace(compiled))
-    assert fast.dynamics.class_name() == "External" and fast.identity_jacobian is None
+    assert fast.dynamics.class_name() == "External"
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
     _assert_same_start_functions(fast, slow)
     _assert_jacobian_is_the_odes(fast, slow)

@@ -1,0 +1,103 @@
+"""What goes into the C of a compiled bundle's joint system (runtime.joint_dynamics): which
+functions, under which names, at which flags.
+
+  - the results rows' function above SPLIT_INSTRUCTIONS is compiled as its two halves
+    SPLIT_MOTION (backends.split), in two units gcc compiles at once, and `joined` makes
+    joint_motion of them again once loaded;
+  - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
+    quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
+    ($CASMECH_CFLAGS);
+  - BDF's Jacobian (forward sweeps of the ODE: numerics.lazy_jacobian) comes from a library of
+    its own, the ODE and its forward derivative at the library's flags, built when a BDF run
+    first asks for it (keyed_jacobian, content_jacobian: JointSystem.identity_jacobian's
+    place), so that a run on Adams, the rule for these trees, never compiles it at -O1.
+Both choices are functions of the functions, the settings and chosen_flags(), so a library
+keyed by those (backends.library.compile_keyed) stays honest.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+
+import casadi as ca
+
+from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
+from casmech.backends.library import compile_functions, compile_keyed
+from casmech.backends.split import halves, joined
+from casmech.numerics import lazy_jacobian
+
+# gcc's time grows faster than the function: above this many SX instructions the results rows
+# are compiled as two halves in two units at once
+SPLIT_INSTRUCTIONS = 12_000
+SPLIT_MOTION = ("joint_motion_head", "joint_motion_tail")
+QUICK_FLAGS = ("-O0",)
+# evaluated once per run, by method auto's stiffness probe (BDF's Newton iteration takes its
+# Jacobian from keyed_jacobian's library); -O1 would more than treble their gcc time
+SELDOM = ("fwd1_joint_ode",)
+
+
+def motion(function: ca.Function) -> dict[str, ca.Function]:
+    """The results rows' function by library name: joint_motion, or its halves."""
+    pair = halves(function, *SPLIT_MOTION) if (
+        function.n_instructions() > SPLIT_INSTRUCTIONS) else None
+    return dict(zip(SPLIT_MOTION, pair, strict=True)) if pair else {"joint_motion": function}
+
+
+def joined_library(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
+    """A loaded library with its results rows' halves joined into joint_motion."""
+    if SPLIT_MOTION[0] not in library:
+        return library
+    return {**library, "joint_motion": joined(*(library[n] for n in SPLIT_MOTION),
+                                              "joint_motion")}
+
+
+def chosen_flags() -> str | None:
+    """The flags the user chose ($CASMECH_CFLAGS), or None: what `toolchain` depends on besides
+    its arguments, so part of the library's key."""
+    return os.environ.get(FLAGS_ENVIRONMENT)
+
+
+def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
+    """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
+    for an ODE of more than quick_build_instructions SX `instructions`, and below that the
+    SELDOM functions alone at QUICK_FLAGS."""
+    if chosen_flags() is not None:
+        return Toolchain()
+    if instructions > quick_build_instructions:
+        return Toolchain(flags=QUICK_FLAGS)
+    return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM))
+
+
+def _bdf(ode: ca.Function, quick_build_instructions: int
+         ) -> tuple[dict[str, ca.Function], Toolchain]:
+    """The BDF Jacobian's library: the ODE and its forward derivative, and its toolchain (the
+    library's flags, none of its own)."""
+    chain = toolchain(ode.n_instructions(), quick_build_instructions)
+    return ({"joint_ode": ode, "fwd1_joint_ode": ode.forward(1)},
+            Toolchain(chain.compiler, chain.flags, chain.jobs))
+
+
+def keyed_jacobian(content: dict, ode: Callable[[], ca.Function],
+                   quick_build_instructions: int) -> Callable[[], ca.Function]:
+    """() -> the ODE's Jacobian (jacobian()'s signature) by forward sweeps of a library cached
+    under the joint library's `content` and this part, ode() giving the SX ODE on a miss."""
+    def jacobian() -> ca.Function:
+        def make():
+            functions, chain = _bdf(ode(), quick_build_instructions)
+            return functions, {}, chain
+
+        library = compile_keyed({**content, "part": "BDF Jacobian"}, make)
+        return lazy_jacobian.jacobian(library["joint_ode"])
+
+    return jacobian
+
+
+def content_jacobian(ode: ca.Function, quick_build_instructions: int
+                     ) -> Callable[[], ca.Function]:
+    """keyed_jacobian's Jacobian from a library keyed by the ODE's content."""
+    def jacobian() -> ca.Function:
+        functions, chain = _bdf(ode, quick_build_instructions)
+        return lazy_jacobian.jacobian(compile_functions(functions, toolchain=chain)["joint_ode"])
+
+    return jacobian

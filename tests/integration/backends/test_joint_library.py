@@ -1,0 +1,76 @@
+"""A compiled joint tree's library (runtime.joint_dynamics.keyed_system, what goes in it:
+backends.joint_library) where the user chose no flags: the ODE's forward derivative
+fwd1_joint_ode (method auto's probe) compiled at -O0 and the rest at the default flags, large
+results rows as two halves (backends.split), all equal to the interpreted system's; BDF's
+Jacobian from a library of its own, built by the first BDF run, so a BDF run after an Adams
+run from one cache is a BDF run from a fresh one; with flags chosen ($CASMECH_CFLAGS) every
+function is built with them, under another key."""
+
+import numpy as np
+
+import casmech
+from casmech.backends import build, cache, codegen, joint_library, manifest
+from casmech.runtime.joint_dynamics import joint_system
+from casmech.runtime.workspace import Workspace
+from tests.integration.backends.test_joint import (
+    _assert_jacobian_is_the_odes,
+    _assert_same_tree_functions,
+)
+
+
+def _compiles(commands: list, entry) -> dict[str, list[str]]:
+    """C source -> the flags gcc compiled it with."""
+    return {command[command.index("-c") + 1]: command[1:command.index("-c")]
+            for command in commands if "-c" in command
+            and (entry / command[command.index("-c") + 1]).is_file()}
+
+
+def test_seldom_functions_build_quickly_and_large_rows_in_halves(
+        model, toolchain, cache_root, interpreted, tmp_path, monkeypatch):
+    bundle = codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
+    monkeypatch.delenv(build.FLAGS_ENVIRONMENT)  # no flags chosen
+    monkeypatch.setattr(joint_library, "SPLIT_INSTRUCTIONS", 0)  # this small tree's rows too
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "first"))
+    commands = []
+    original = build._run
+    monkeypatch.setattr(build, "_run", lambda command, cwd: commands.append(command)
+                        or original(command, cwd))
+    space = Workspace(bundle)
+    fast, slow = joint_system(bundle, workspace=space), joint_system(interpreted)
+
+    (entry,) = cache.entries(tmp_path / "first")
+    record = manifest.read(entry)
+    names = {function["name"] for function in record["functions"]}
+    assert {"joint_ode", "fwd1_joint_ode", *joint_library.SPLIT_MOTION} <= names
+    assert "joint_motion" not in names and record["function_flags"] == {
+        "fwd1_joint_ode": ["-O0"]}
+    compiles = _compiles(commands, entry)
+    assert len(compiles) >= 2
+    for source, flags in compiles.items():
+        seldom = "int fwd1_joint_ode(" in (entry / source).read_text()
+        assert ("-O0" if seldom else build.DEFAULT_FLAGS[0]) in flags, (source, flags)
+    _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+
+    def run(method: str, workspace: Workspace):
+        return casmech.analyze(bundle, "dynamics", formulation="joint", t_end=0.3,
+                               method=method, workspace=workspace)
+
+    run("adams", space)
+    assert len(cache.entries(tmp_path / "first")) == 1  # Adams compiles no BDF Jacobian
+    after = run("bdf", space)
+    bdf = [manifest.read(path) for path in cache.entries(tmp_path / "first")]
+    assert len(bdf) == 2 and {"joint_ode", "fwd1_joint_ode"} in [
+        {function["name"] for function in record["functions"]} for record in bdf]
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "fresh"))
+    fresh = run("bdf", Workspace(bundle))
+    assert after.metadata["method"] == fresh.metadata["method"] == "bdf"
+    for name in ("q", "q_dot", "q_ddot", "lam"):
+        # the same libraries' C, built twice: the same computation
+        np.testing.assert_array_equal(getattr(after, name), getattr(fresh, name))
+    _assert_jacobian_is_the_odes(fast, slow)  # BDF's, at the default flags
+    # the same library with the flags chosen: the default's own value, all at it, another key
+    before = set(cache.entries(tmp_path / "fresh"))
+    monkeypatch.setenv(build.FLAGS_ENVIRONMENT, " ".join(build.DEFAULT_FLAGS))
+    joint_system(bundle, workspace=Workspace(bundle))
+    (chosen,) = set(cache.entries(tmp_path / "fresh")) - before
+    assert manifest.read(chosen)["function_flags"] == {}
