@@ -25,6 +25,8 @@ import casadi as ca
 from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
 from casmech.backends.library import compile_functions, compile_keyed
 from casmech.backends.split import halves, joined
+from casmech.formulations.joint_system import JointSystem, layout
+from casmech.formulations.tree import Tree
 from casmech.numerics import lazy_jacobian
 
 # gcc's time grows faster than the function: above this many SX instructions the results rows
@@ -101,3 +103,15 @@ def content_jacobian(ode: ca.Function, quick_build_instructions: int
         return lazy_jacobian.jacobian(compile_functions(functions, toolchain=chain)["joint_ode"])
 
     return jacobian
+
+
+def system_from(tree: Tree, library) -> JointSystem:
+    """A joint system of library functions under their library names (joint_ode or
+    joint_dae, joint_motion, joint_acceleration_system, joint_velocity_jacobian,
+    joint_relative_states; joint_jacobian, joint_solved_motion where there)."""
+    dynamics = library["joint_dae" if tree.cut else "joint_ode"]
+    return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
+                       dynamics, library["joint_motion"], library["joint_acceleration_system"],
+                       library["joint_velocity_jacobian"], library["joint_relative_states"],
+                       given_jacobian=library.get("joint_jacobian"),
+                       solved_motion=library.get("joint_solved_motion"))

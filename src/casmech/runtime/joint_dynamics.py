@@ -31,7 +31,7 @@ from casmech.errors import AnalysisError, Interrupted
 from casmech.formulations import mapped_system
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
-from casmech.formulations.joint_system import JointSystem, build, layout, saddle_terms
+from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
@@ -132,20 +132,9 @@ def library_system(functions: SystemFunctions,
                    workspace: Workspace | None = None) -> JointSystem:
     """The joint system of a parametric library's functions, bound to this bundle's values
     (codegen.parametric), over the numeric IR's tree."""
-    library, tree = functions.joint_functions, tree_of(functions, workspace)
-    return _from_library(tree, library)
+    from casmech.backends.joint_library import system_from
 
-
-def _from_library(tree: Tree, library) -> JointSystem:
-    """A joint system of library functions under their library names (joint_ode or
-    joint_dae, joint_motion, joint_acceleration_system, joint_velocity_jacobian,
-    joint_relative_states; joint_jacobian, joint_solved_motion where there)."""
-    dynamics = library["joint_dae" if tree.cut else "joint_ode"]
-    return JointSystem(tree, layout(tree), tuple(r for j in tree.cut for r in j.rows),
-                       dynamics, library["joint_motion"], library["joint_acceleration_system"],
-                       library["joint_velocity_jacobian"], library["joint_relative_states"],
-                       given_jacobian=library.get("joint_jacobian"),
-                       solved_motion=library.get("joint_solved_motion"))
+    return system_from(tree_of(functions, workspace), functions.joint_functions)
 
 
 def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
@@ -156,7 +145,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     is compiled, and the functions a run evaluates a few times (the start's and the loops'
     acceleration_system, velocity_jacobian, relative_states, and the results rows above
     compile.motion_bodies) are kept as CasADi's serialization beside it."""
-    from casmech.backends.joint_library import chosen_flags, joined_library, keyed_jacobian
+    from casmech.backends import joint_library
     from casmech.backends.library import compile_keyed
 
     workspace = of(functions, workspace)
@@ -164,7 +153,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     name = "joint_dae" if tree.cut else "joint_ode"
     content = {"kind": "joint system", "bundle": functions.library_key,
                "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
-               "loop_rows": settings.loop_rows, "chosen_flags": chosen_flags()}
+               "loop_rows": settings.loop_rows, "chosen_flags": joint_library.chosen_flags()}
 
     def make():
         system = _built(functions, settings, workspace)
@@ -178,10 +167,10 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
         return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
 
     library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
-    system = _from_library(tree, joined_library(library))
+    system = joint_library.system_from(tree, joint_library.joined_library(library))
     if "fwd1_joint_ode" not in library:
         return system
-    return replace(system, identity_jacobian=keyed_jacobian(
+    return replace(system, identity_jacobian=joint_library.keyed_jacobian(
         content, lambda: _built(functions, settings, workspace).dynamics,
         settings.compile.quick_build_instructions))
 
