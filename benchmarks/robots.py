@@ -10,8 +10,9 @@ left arm, Solo12 (fixed base). Each engine reads the same URDF copy:
 
 - casmech: `casmech.importers.urdf.import_urdf` (posed at the initial state) written to YAML
   without the stops it makes of the URDF limits (below); timed: `casmech.load` +
-  `casmech.compile(model)` (mode auto, the API's default, with an empty cache: what a first
-  run gets, interpreted) + `casmech.analyze(..., "dynamics", t_end=1, rtol=r, atol=r/100)`,
+  `casmech.compile(model, "auto")` (with an empty cache interpreted, as the API's default
+  `casmech.compile(model)` is: what a first run gets) +
+  `casmech.analyze(..., "dynamics", t_end=1, rtol=r, atol=r/100)`,
   then the same analyze again on the same functions (the integrator built); the same with
   `compile(model, "compiled")` from a warm cache; the cold build (`compile(model,
   "compiled")` into an empty CASMECH_CACHE_DIR and the first analyze, which builds the tree's
