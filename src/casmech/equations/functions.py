@@ -217,18 +217,19 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
 
 def results_terms(functions: SystemFunctions) -> dict[str, ca.Function]:
     """The functions a results row reads (system.RESULTS, then phi), by name: the bundle's own;
-    the results-only ones mapped (MX) for an interpreted bundle of more bodies than
-    WHERE_INLINE["results"] that has not built or been given them."""
+    for an interpreted bundle of more bodies than WHERE_INLINE["results"], the results-only
+    ones it has not built or been given built mapped, then expanded to SX (each kernel's
+    instances unrolled by CasADi, not by the builder's Python)."""
     bundle = functions.functions
     mapped = isinstance(bundle, LazyFunctions) and bundle.mapped is not None and \
         not is_inline("results", functions.n_bodies)
 
     def term(name: str) -> ca.Function:
         if mapped and name not in bundle.given and name not in bundle._built:
-            return bundle.mapped(name)
+            return bundle.mapped(name).expand()
         return bundle[name]
 
-    return {name: term(name) for name in (*system.RESULTS, "phi")}
+    return {name: term(name) for name in system.RESULTS} | {"phi": bundle["phi"]}
 
 
 def mapped_functions(ir: ModelIR, data: ca.SX | None = None) -> dict[str, ca.Function]:
