@@ -114,7 +114,9 @@ def child(arguments: list[str]) -> None:
 
     sys.argv = ["casmech", *arguments]
     try:
-        casmech.cli.main()
+        code = casmech.cli.main()  # (an error is an exit code, as the console script's)
+        if code:
+            raise SystemExit(code)
     except SystemExit as exit_:
         if exit_.code not in (0, None):
             raise

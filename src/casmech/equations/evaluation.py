@@ -37,6 +37,10 @@ WHERE_INLINE = {
     "prescribed_step": 32,  # the compiled kinematics step (docs/decisions/prescribed-step.md)
     "dae_library": 4,  # the compiled DAE residuals (docs/decisions/codegen-small-dae-unrolled.md)
     "parametric": 32,  # a library over the model data (backends.parametric.MAX_BODIES)
+    # the interpreted bundle's results-row terms (equations.functions.results_terms): above
+    # this, built mapped and expanded, which is faster than inline at both building and
+    # evaluating them (runtime.results.row_function then calls them instead of inlining them)
+    "results": 64,
 }
 # Inline functions of at most this many bodies merge their common subexpressions (a frame or a
 # kernel's term shared by several rows): fewer instructions per call, for a merge that costs

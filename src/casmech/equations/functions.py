@@ -17,7 +17,7 @@ import numpy as np
 
 from casmech.core.records import record
 from casmech.equations import system
-from casmech.equations.evaluation import Evaluation
+from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.system import System
 from casmech.model.ir import GROUND_INDEX, ModelIR, RowInfo
 
@@ -115,6 +115,8 @@ class LazyFunctions(MutableMapping):
         self._built: dict[str, ca.Function] = {}
         self._group_of = {name: k for k, (names, _) in enumerate(groups) for name in names or ()}
         self.given: dict[str, ca.Function] = {}  # set by callers (the rest: SX, built here)
+        # name -> the same function built mapped (MX) over the same IR, when the builder can
+        self.mapped: Callable[[str], ca.Function] | None = None
         self._done: set[int] = set()  # groups built
 
     def _build(self, k: int) -> None:
@@ -201,7 +203,33 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
     shared = System(ir, Evaluation.of(True, data, ir.n_bodies))
     groups = [((name,), lambda name=name: [system.function(shared, name)])
               for name in system.DEFINITIONS]
-    return _bundle(ir, LazyFunctions(groups), "interpreted")
+    lazy = LazyFunctions(groups)
+    mapped: list[System] = []  # the mapped System, made on first use
+
+    def mapped_function(name: str) -> ca.Function:
+        if not mapped:
+            mapped.append(System(ir, Evaluation.of(False, data)))
+        return system.function(mapped[0], name)
+
+    lazy.mapped = mapped_function
+    return _bundle(ir, lazy, "interpreted")
+
+
+def results_terms(functions: SystemFunctions) -> dict[str, ca.Function]:
+    """The functions a results row reads (system.RESULTS, then phi), by name: the bundle's own;
+    for an interpreted bundle of more bodies than WHERE_INLINE["results"], the results-only
+    ones it has not built or been given built mapped, then expanded to SX (each kernel's
+    instances unrolled by CasADi, not by the builder's Python)."""
+    bundle = functions.functions
+    mapped = isinstance(bundle, LazyFunctions) and bundle.mapped is not None and \
+        not is_inline("results", functions.n_bodies)
+
+    def term(name: str) -> ca.Function:
+        if mapped and name not in bundle.given and name not in bundle._built:
+            return bundle.mapped(name).expand()
+        return bundle[name]
+
+    return {name: term(name) for name in system.RESULTS} | {"phi": bundle["phi"]}
 
 
 def mapped_functions(ir: ModelIR, data: ca.SX | None = None) -> dict[str, ca.Function]:

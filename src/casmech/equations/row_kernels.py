@@ -273,7 +273,8 @@ def _name(key: RowKey) -> str:
 @lru_cache(maxsize=256)
 def joint_reaction(keys: tuple) -> ca.Function:
     """(x, c, f, lam, s) -> (force, torque) of one joint's rows together (x: the two bodies';
-    c, f, lam: every row's, stacked): the sum of their `reaction`."""
+    c, f, lam: every row's, stacked): the sum of their `reaction`, the terms the rows share
+    (the bodies' rotations) computed once."""
     rows = [reaction(key) for key in keys]
     c = ca.SX.sym("c", sum(r.nnz_in(1) for r in rows))
     f, lam, s = ca.SX.sym("f", 3 * len(keys)), ca.SX.sym("lam", len(keys)), ca.SX.sym("s", 3)
@@ -286,7 +287,7 @@ def joint_reaction(keys: tuple) -> ca.Function:
         force, torque, start = force + f_k, torque + t_k, start + pattern.nnz()
     digest = hashlib.sha256(repr(keys).encode()).hexdigest()[:10]
     return ca.Function(f"joint_reaction_{digest}", [x, c, f, lam, s], [force, torque],
-                       ["x", "c", "f", "lam", "s"], ["force", "torque"])
+                       ["x", "c", "f", "lam", "s"], ["force", "torque"], {"cse": True})
 
 
 @lru_cache(maxsize=1)

@@ -197,9 +197,12 @@ DEFINITIONS: dict[str, Callable[[System], tuple[dict, dict]]] = {
 # Functions merged inline at any size: their kernels repeat a per-body term (q_dot's p_dot in
 # q_ddot's), which the merge removes in time linear in the bodies.
 MERGED = frozenset({"romega_to_rp"})
-# Functions never merged: a results row's terms, evaluated once per output row, where the merge
-# costs about as much as building them and saves a fraction of a row's evaluation.
-UNMERGED = frozenset({"energy", "reactions", "body_rates", "element_outputs"})
+# The functions only a results row reads (runtime.results.row_function), evaluated once per
+# output row.
+RESULTS = ("reactions", "body_rates", "energy", "element_outputs")
+# Functions never merged: a results row's terms, where the merge costs about as much as
+# building them and saves a fraction of a row's evaluation.
+UNMERGED = frozenset(RESULTS)
 
 
 def function(system: System, name: str) -> ca.Function:

@@ -10,7 +10,8 @@ import numpy as np
 
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
 from casmech.equations import contact, readings
-from casmech.equations.functions import SystemFunctions, all_sx
+from casmech.equations.evaluation import is_inline
+from casmech.equations.functions import SystemFunctions, results_terms
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.nonfinite import NonFinite, check_states
@@ -222,9 +223,12 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
 
 def row_function(functions: SystemFunctions) -> ca.Function:
     """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it: one
-    casadi.Function over the bundle's own (SX: inlined; compiled: called)."""
-    bundle = functions.functions
-    sym = ca.SX if all_sx(bundle) else ca.MX
+    casadi.Function over the bundle's terms (equations.functions.results_terms): inlined when
+    all are SX and the model has at most WHERE_INLINE["results"] bodies, else called."""
+    bundle = results_terms(functions)
+    inline = all(f.is_a("SXFunction") for f in bundle.values()) and \
+        is_inline("results", functions.n_bodies)
+    sym = ca.SX if inline else ca.MX
     n, m = functions.n_coordinates, functions.n_rows
     t, q, q_dot, q_ddot, lam = (sym.sym("t"), sym.sym("q", n), sym.sym("q_dot", n),
                                 sym.sym("q_ddot", n), sym.sym("lam", m))
