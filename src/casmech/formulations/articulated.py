@@ -265,8 +265,8 @@ def reference_inertia(mass, inertia, frame: Frame, constants: Constants = NUMERI
         e, r = to_center(frame, constants)
         return ca.DM(ca.evalf(_transformed_inertia(e, r, spatial.inertia(mass, inertia))[0]))
     axes, origin = (ca.SX(v) for v in frame)
-    at_center = ca.diagcat(ca.SX(inertia), mass * ca.SX.eye(3))
-    return constants(spatial.transformed_inertia(axes, -axes.T @ origin, at_center))
+    centred = ca.diagcat(ca.SX(inertia), mass * ca.SX.eye(3))
+    return constants(spatial.transformed_inertia(axes, -axes.T @ origin, centred))
 
 
 def articulated_body(ir: ModelIR, joints: list[Joint], kin: Kinematics, external: list,
@@ -326,7 +326,7 @@ def _articulated(ia, pa, c, tau, s_free, e, r, *parent, rows, free):
     parent's articulated inertia and bias with the body's added (`parent` given)."""
     solved = ()
     if free:
-        ia, pa, solved = _eliminate(s_free, rows, ia, pa, c, tau)
+        ia, pa, solved = eliminate(s_free, rows, ia, pa, c, tau)
     else:
         pa = pa + ia @ c
     if not parent:
@@ -348,9 +348,10 @@ def _accelerate(a_parent, c, e, r, *solved):
     return a + s_free @ u_dot, u_dot
 
 
-def _eliminate(s_free, rows, ia, pa, c, tau):
+def eliminate(s_free, rows, ia, pa, c, tau):
     """The articulated inertia and bias a joint passes on, and (U, D^-1, residual) for pass 3;
-    rows: the rows S selects (spatial.selection), if it does."""
+    rows: the rows S selects (spatial.selection), if it does; tau: the joint's generalized
+    forces along S."""
     if rows is None:
         u_mat = ia @ s_free
         d_inv = ca.inv(s_free.T @ u_mat)
@@ -386,7 +387,7 @@ def joint_wrenches(joints: list[Joint], dynamics: Dynamics, applied: list | None
                                    dynamics.frame_accelerations[k], bias, j.e, j.r)
         if parent != GROUND_INDEX:
             wrench[parent] = wrench.get(parent, zero) + back
-    return [_at_center(*(constants(v) for v in dynamics.frames[j.joint.child]),
+    return [at_center(*(constants(v) for v in dynamics.frames[j.joint.child]),
                        wrench[j.joint.child])[0] for j in joints]
 
 
@@ -406,7 +407,7 @@ def _subtree(children, inertia, acceleration, bias, e, r):
 
 
 @traced
-def _at_center(axes, origin, f):
+def at_center(axes, origin, f):
     """A force in a body's reference frame, at its CM in body axes."""
     lin = axes @ f[3:6]
     return (ca.vertcat(axes @ f[0:3] + ca.cross(origin, lin), lin),)

@@ -35,7 +35,6 @@ import numpy as np
 
 from casmech.core import euler
 from casmech.core.records import record
-from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
 from casmech.equations import body
@@ -44,6 +43,7 @@ from casmech.formulations import articulated, joint_forces, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
+from casmech.formulations.tree_steps import body_rates, relative_step, tree_multipliers
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.numerics import lazy_jacobian
 
@@ -175,21 +175,6 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
     return [ca.horzcat(*parts) for parts in zip(*steps, strict=True)]
 
 
-@traced
-def relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s_p, c_c, s_c):
-    """(rotation, gap, twist) of one tree joint (_relative) from its bodies' r-p states."""
-    a_p, a_c = euler.rotation(p_p), euler.rotation(p_c)
-    w_p, w_c = body.angular_velocity(p_p, p_p_dot), body.angular_velocity(p_c, p_c_dot)
-    o_p, o_c = r_p + a_p @ s_p, r_c + a_c @ s_c
-    o_p_dot = r_p_dot + a_p @ ca.cross(w_p, s_p)
-    o_c_dot = r_c_dot + a_c @ ca.cross(w_c, s_c)
-    rotation = c_p.T @ a_p.T @ a_c @ c_c
-    gap = a_p.T @ (o_c - o_p)
-    omega = c_c.T @ (w_c - a_c.T @ a_p @ w_p)
-    gap_dot = c_p.T @ (a_p.T @ (o_c_dot - o_p_dot) - ca.cross(w_p, gap))
-    return rotation, c_p.T @ gap, ca.vertcat(omega, rotation.T @ gap_dot)
-
-
 def joint_bodies(ir: ModelIR, joint: JointIR) -> tuple[int, ...]:
     """The bodies a joint's rows read, body_i and body_j first, then a coupling's others
     (PrimitiveIR.others: the bodies of the joints it couples), ground included."""
@@ -206,21 +191,27 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
     rows (their kinds, which bodies each reads, which are ground, the vectors' shapes) that
     takes the rows' vectors and driver values as inputs (rows_template); `data` the model
     data of a parametric IR, whose vectors are SX of it."""
-    prims = ir.primitives[joint.rows.start:joint.rows.stop]
-    bodies = joint_bodies(ir, joint)
-    vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
-    shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
+    template, vectors, prims = rows_structure(ir, joint, data)
     if data is not None:
         stacked = ca.vertcat(ca.SX(0, 1), *(ca.vec(ca.SX(v)) for v in vectors))
     else:
         stacked = ca.SX(np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]))
     drivers = ca.vertcat(*(driver_value(prim, t) for prim in prims))
-    grounds = tuple(b == GROUND_INDEX for b in bodies)
-    reads = tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims)
-    template = rows_template(tuple(p.kind for p in prims), grounds, shapes, reads)
     poses = (r_i, p_i, r_j, p_j, *others)
     return template.call([v if isinstance(v, ca.SX) else ca.SX(v)
                           for v in (*poses, stacked, drivers)])
+
+
+def rows_structure(ir: ModelIR, joint: JointIR, data=None) -> tuple[ca.Function, list, list]:
+    """(rows_template of a joint's rows, their vectors in its order, the rows' primitives);
+    `data` as for rows_of."""
+    prims = ir.primitives[joint.rows.start:joint.rows.stop]
+    bodies = joint_bodies(ir, joint)
+    vectors = [prim.vectors[k] for prim in prims for k in PRIMITIVES[prim.kind][1]]
+    shapes = tuple(ca.SX(v).shape if data is not None else np.shape(v) for v in vectors)
+    reads = tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims)
+    return rows_template(tuple(p.kind for p in prims), tuple(b == GROUND_INDEX for b in bodies),
+                         shapes, reads), vectors, prims
 
 
 @cache
@@ -365,8 +356,8 @@ class _Builder:
                 continue
             _, block_i, block_j = self.rows(joint)
             block = block_i if j.joint.child == joint.body_i else block_j
-            lam[list(joint.rows)] = _tree_multipliers(block, self.kin.rotation[j.joint.child],
-                                                      w)[0]
+            lam[list(joint.rows)] = tree_multipliers(block, self.kin.rotation[j.joint.child],
+                                                     w)[0]
         return lam
 
     def motion(self, dynamics, lam_cut, signs) -> list:
@@ -374,32 +365,11 @@ class _Builder:
         nb, kin = self.ir.n_bodies, self.kin
         signed = ca.vertsplit(signs)
         p, p_dot, r_ddot, p_ddot = zip(*[
-            _body_rates(signed[k], kin.p[k], kin.rotation[k], kin.velocity[k],
-                        dynamics.accelerations[k]) for k in range(nb)], strict=True)
+            body_rates(signed[k], kin.p[k], kin.rotation[k], kin.velocity[k],
+                       dynamics.accelerations[k]) for k in range(nb)], strict=True)
         return [ca.vertcat(*kin.r, *p),
                 ca.vertcat(*[kin.r_dot(k) for k in range(nb)], *p_dot),
                 ca.vertcat(*r_ddot, *p_ddot), self.multipliers(dynamics, lam_cut)]
-
-
-@traced
-def _tree_multipliers(block, rotation, wrench):
-    """A tree joint's row multipliers from its constraint wrench on the child (CM frame):
-    -B^T lam = the wrench (global force, body-frame torque), B the rows' r-omega Jacobian at
-    the child, solved in the least-squares sense."""
-    force = ca.vertcat(rotation @ wrench[3:6], wrench[0:3])
-    return (-ca.solve(block @ block.T, block @ force),)
-
-
-@traced
-def _body_rates(sign, p, rotation, velocity, acceleration):
-    """A body's results-row (p, p_dot, r_ddot, p_ddot), its Euler parameters times sign, from
-    its CM-frame spatial velocity and acceleration."""
-    p = sign * p
-    omega, alpha = velocity[0:3], acceleration[0:3]
-    r_ddot = rotation @ (acceleration[3:6] + ca.cross(omega, velocity[3:6]))
-    p_dot = body.p_dot(p, omega)
-    p_ddot = 0.5 * (euler.g_matrix(p_dot).T @ omega + euler.g_matrix(p).T @ alpha)
-    return p, p_dot, r_ddot, p_ddot
 
 
 def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Function:

@@ -25,15 +25,14 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from casmech.core import euler, spatial
+from casmech.core import spatial
 from casmech.core.quaternions import conjugate, from_matrix, product
 from casmech.elements.joint_types import MOTIONS
-from casmech.elements.primitives import PRIMITIVES
-from casmech.equations import body
 from casmech.formulations import mapped_tree
-from casmech.formulations.articulated import local_motion
-from casmech.formulations.joint_system import joint_bodies, relative_step, rows_template
+from casmech.formulations.articulated import at_center, local_motion
+from casmech.formulations.joint_system import rows_structure
 from casmech.formulations.tree import Tree
+from casmech.formulations.tree_steps import body_rates, relative_step, tree_multipliers
 from casmech.model.ir import GROUND_INDEX, ModelIR
 
 POSE_CONSTANTS = 32  # s_p (3), C_p (9), C_c (9), s_c (3), C_p's quaternion (4), C_c's (4)
@@ -85,26 +84,20 @@ def body_rows() -> ca.Function:
     velocity = spatial.motion(*to_center, v)
     falling = ca.vertcat(ca.SX.zeros(3), (rotation @ axes).T @ gravity)
     acceleration = spatial.motion(*to_center, a + falling)
-    signed = sign * p
-    omega, alpha = velocity[0:3], acceleration[0:3]
-    p_dot = body.p_dot(signed, omega)
-    p_ddot = 0.5 * (euler.g_matrix(p_dot).T @ omega + euler.g_matrix(signed).T @ alpha)
-    r_ddot = rotation @ (acceleration[3:6] + ca.cross(omega, velocity[3:6]))
-    linear = axes @ w[3:6]
-    at_center = ca.vertcat(axes @ w[0:3] + ca.cross(origin, linear), linear)
+    signed, p_dot, r_ddot, p_ddot = body_rates.fn(sign, p, rotation, velocity, acceleration)
+    (centred,) = at_center.fn(axes, origin, w)
     return ca.Function("tree_body_rows", [sign, p, rotation, v, a, w, axes, origin, gravity],
-                       [signed, rotation @ velocity[3:6], p_dot, r_ddot, p_ddot, at_center])
+                       [signed, rotation @ velocity[3:6], p_dot, r_ddot, p_ddot, centred])
 
 
 @cache
 def multipliers(rows: int) -> ca.Function:
     """(B, A, wrench) -> a tree joint's row multipliers from its wrench on the child (CM,
     body axes): -B^T lam = (A w_force, w_torque), B the rows' r-omega Jacobian at the child,
-    in the least-squares sense (joint_system's _tree_multipliers)."""
+    in the least-squares sense (joint_system.tree_multipliers)."""
     block, rotation, w = ca.SX.sym("B", rows, 6), ca.SX.sym("A", 3, 3), ca.SX.sym("w", 6)
-    force = ca.vertcat(rotation @ w[3:6], w[0:3])
     return ca.Function(f"tree_multipliers_{rows}", [block, rotation, w],
-                       [-ca.solve(block @ block.T, block @ force)])
+                       list(tree_multipliers.fn(block, rotation, w)))
 
 
 def pose_data(tree: Tree) -> np.ndarray:
@@ -251,16 +244,9 @@ def _rows_inputs(ir: ModelIR, joint) -> tuple:
     """(joint_system.rows_template of a tree joint's rows, their vectors stacked, their
     driver values): what joint_system.rows_of passes it after the poses, for a numeric IR
     whose rows do not depend on time (mapped_tree.supported)."""
-    prims = ir.primitives[joint.rows.start:joint.rows.stop]
-    bodies = joint_bodies(ir, joint)
-    vectors = [np.asarray(prim.vectors[k], float) for prim in prims
-               for k in PRIMITIVES[prim.kind][1]]
-    template = rows_template(tuple(p.kind for p in prims),
-                             tuple(b == GROUND_INDEX for b in bodies),
-                             tuple(v.shape for v in vectors),
-                             tuple(tuple(bodies.index(b) for b in prim.bodies) for prim in prims))
+    template, vectors, prims = rows_structure(ir, joint)
     drivers = np.array([prim.offset for prim in prims], float)
-    return template, np.concatenate([np.zeros(0), *(v.ravel() for v in vectors)]), drivers
+    return template, np.concatenate([np.zeros(0), *(np.ravel(v) for v in vectors)]), drivers
 
 
 def relative_states(tree: Tree, n_bodies: int) -> ca.Function:
@@ -295,7 +281,7 @@ def relative_states(tree: Tree, n_bodies: int) -> ca.Function:
 
 @cache
 def _relative_function() -> ca.Function:
-    """joint_system.relative_step as one SX Function."""
+    """tree_steps.relative_step as one SX Function."""
     shapes = [(3, 1), (4, 1), (3, 1), (4, 1)] * 2 + [(3, 3), (3, 1), (3, 3), (3, 1)]
     symbols = [ca.SX.sym(f"a{k}", *shape) for k, shape in enumerate(shapes)]
     return ca.Function("relative_step", symbols, list(relative_step.fn(*symbols)))

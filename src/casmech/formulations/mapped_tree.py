@@ -26,7 +26,7 @@ import numpy as np
 
 from casmech.core import spatial
 from casmech.elements.joint_types import MOTIONS
-from casmech.formulations.articulated import local_motion
+from casmech.formulations.articulated import eliminate, local_motion
 from casmech.formulations.tree import Tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
 
@@ -71,8 +71,9 @@ def kernels(kind: str) -> dict[str, ca.Function]:
 
     ia = inertia + ia_children
     pa = spatial.cross_force(v, inertia @ v) + pa_children
-    if n_v:
-        ia, pa, (u_mat, d_inv, residual) = _eliminate(subspace, ia, pa, c)
+    if n_v:  # no joint force: tau = 0
+        ia, pa, (u_mat, d_inv, residual) = eliminate(subspace, spatial.selection(subspace),
+                                                      ia, pa, c, 0)
         packed = ca.vertcat(ca.vec(u_mat), ca.vec(d_inv), residual)
     else:
         pa, packed = pa + ia @ c, ca.SX(0, 1)
@@ -94,28 +95,6 @@ def kernels(kind: str) -> dict[str, ca.Function]:
                              [theta, u, data, v, a_parent, solved], [a, u_dot],
                              ["theta", "u", "data", "v", "a_parent", "solved"], ["a", "u_dot"])
     return {f.name(): f for f in (down, up, accelerate)}
-
-
-def _eliminate(subspace, ia, pa, c):
-    """The articulated inertia and bias a joint passes on, and (U, D^-1, residual) (no joint
-    force), as articulated.articulated_body eliminates: blockwise when S selects rows (the
-    eliminated rows exact zeros), else by the projection IA - U D^-1 U^T."""
-    rows = spatial.selection(subspace)
-    if rows is None:
-        u_mat = ia @ subspace
-        d_inv = ca.inv(subspace.T @ u_mat)
-        residual = -subspace.T @ pa
-        ia = ia - u_mat @ d_inv @ u_mat.T
-    else:
-        rest = [k for k in range(6) if k not in rows]
-        u_mat = ia[:, rows]
-        d_inv = ca.inv(ia[rows, rows])
-        residual = -pa[rows]
-        reduced = ca.SX.zeros(6, 6)
-        reduced[rest, rest] = ia[rest, rest] - ia[rest, rows] @ d_inv @ ia[rows, rest]
-        ia = reduced
-    pa = pa + ia @ c + u_mat @ (d_inv @ residual)
-    return ia, pa, (u_mat, d_inv, residual)
 
 
 def supported(ir: ModelIR, tree: Tree) -> str | None:
