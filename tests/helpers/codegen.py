@@ -15,6 +15,19 @@ MODEL = Path(__file__).with_name("codegen_model.yaml")
 FLAGS = ("-O0", "-Wall", "-Werror")
 
 
+def counted_builds(monkeypatch, module) -> list:
+    """Every call of `module`.build_libraries (the C compiler runs only inside it), recorded
+    as its positional arguments: how tests count builds."""
+    calls, original = [], module.build_libraries
+
+    def counting(*args, **kwargs):
+        calls.append(args)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(module, "build_libraries", counting)
+    return calls
+
+
 @pytest.fixture(scope="session")
 def cache_root(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("casmech_cache")

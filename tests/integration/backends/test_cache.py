@@ -14,21 +14,13 @@ from casmech.backends.manifest import MANIFEST
 from casmech.cli import main
 from casmech.runtime import assembly
 from tests.conftest import MODELS as MODELS_DIR
-from tests.helpers.codegen import MODEL
+from tests.helpers.codegen import MODEL, counted_builds
 
 
 @pytest.fixture
 def builds(monkeypatch) -> list:
     """Records every build (the C compiler runs only inside build_libraries)."""
-    calls = []
-    original = codegen.build_libraries
-
-    def counting(*args, **kwargs):
-        calls.append(args)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(codegen, "build_libraries", counting)
-    return calls
+    return counted_builds(monkeypatch, codegen)
 
 
 def test_unchanged_model_hits_changed_model_rebuilds(model, toolchain, cache_root, compiled,

@@ -10,6 +10,7 @@ from casmech.backends import cache, codegen, parametric
 from casmech.backends.load import externals
 from casmech.cli import main
 from casmech.runtime.joint_dynamics import joint_system
+from tests.helpers.codegen import counted_builds
 
 # a spring-mass on a slide (period 2 pi sqrt(m / k)) and, independent of it, a pendulum of
 # length L (small amplitude: 2 pi sqrt((I + M L^2) / (M g L)) with I = 1e-3 M)
@@ -56,11 +57,7 @@ def run(path, out, mode: str, values: dict, formulation: str) -> np.ndarray:
 
 @pytest.fixture
 def builds(monkeypatch) -> list:
-    calls = []
-    original = codegen.build_libraries
-    monkeypatch.setattr(codegen, "build_libraries",
-                        lambda *args, **kwargs: calls.append(args) or original(*args, **kwargs))
-    return calls
+    return counted_builds(monkeypatch, codegen)
 
 
 @pytest.mark.parametrize("mode", ["compiled", "interpreted"])

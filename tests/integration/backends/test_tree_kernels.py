@@ -11,21 +11,14 @@ import pytest
 from casmech.backends import build, cache, library, tree_kernels
 from casmech.backends.build import LIBRARY
 from casmech.formulations import mapped_rows, mapped_tree
+from tests.helpers.codegen import counted_builds
 
 RNG = np.random.default_rng(7)
 
 
 @pytest.fixture
 def builds(monkeypatch) -> list:
-    calls = []
-    original = library.build_libraries
-
-    def counting(*args, **kwargs):
-        calls.append(args)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(library, "build_libraries", counting)
-    return calls
+    return counted_builds(monkeypatch, library)
 
 
 def _inputs(function: ca.Function) -> list[np.ndarray]:

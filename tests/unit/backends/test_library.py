@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from casmech.backends import codegen, library
+from tests.helpers.codegen import counted_builds
 
 
 def _function(gain: float = 2.0) -> ca.Function:
@@ -25,15 +26,7 @@ def _oscillator() -> ca.Function:
 
 @pytest.fixture
 def builds(monkeypatch) -> list:
-    calls = []
-    original = library.build_libraries
-
-    def counting(*args, **kwargs):
-        calls.append(args)
-        return original(*args, **kwargs)
-
-    monkeypatch.setattr(library, "build_libraries", counting)
-    return calls
+    return counted_builds(monkeypatch, library)
 
 
 def test_values_and_jacobian_equal_sx_and_second_call_builds_nothing(toolchain, tmp_path,
