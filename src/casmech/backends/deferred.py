@@ -4,8 +4,8 @@ libraries when first read, the bundle itself at -O0 unless the user chose flags.
 
 A tree's run in joint coordinates reads of the bundle only the assembly's functions (READ,
 once: runtime.assembly), and none of the residuals (runtime.joint_dynamics compiles the tree's
-ODE and results rows itself); the rest of the bundle and the four residuals (rp and romega,
-both stabilizations, with their Jacobian blocks) were most of the C of a cold build. So
+ODE and results rows itself), while the rest of the bundle and the four residuals (rp and
+romega, both stabilizations, with their Jacobian blocks) would be most of its C. So
 codegen.compiled builds such a bundle with READ alone, and the bundle's mapping (an
 equations.functions.LazyFunctions) names every function all the same; the first read of one
 of the rest (rest()) builds them all, and the first read of a residual builds the residuals,

@@ -2,7 +2,8 @@
 field names, instead of methods compiled from generated source for every class.
 
 The standard decorator compiles each generated method with exec (six for a frozen class),
-which was most of the cost of importing casmech. A record compiles only its __init__ and
+so each class costs a compilation per method when a module is imported (measurements:
+benchmarks/RESULTS.md, "Whole processes, both commits"). A record compiles only its __init__ and
 behaves as the dataclass it replaces: the same fields, __init__, replace(), fields() and
 asdict(), the same repr, equality (same class, equal tuples of the compared fields) and hash
 (of the hashed fields' tuple). A frozen record's fields are written once, by __init__ (or by
