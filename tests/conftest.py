@@ -98,8 +98,11 @@ def private_caches(session_cache, monkeypatch) -> Path:
     (CASMECH_CACHE_DIR; subprocesses inherit it) and the folders derived from HOME that a
     library may cache into (XDG_CACHE_HOME: platformdirs' user cache folder on Linux;
     MPLCONFIGDIR: matplotlib's font cache) point into the session's temporary folder.
-    tests/integration/test_private_cache.py proves it."""
+    tests/integration/test_private_cache.py proves it. No library is built behind a run
+    (CASMECH_BACKGROUND_BUILD=0: a detached build would outlive the test that started it);
+    tests/integration/backends/test_background.py turns it on."""
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(session_cache / "casmech"))
+    monkeypatch.setenv("CASMECH_BACKGROUND_BUILD", "0")
     monkeypatch.setenv("XDG_CACHE_HOME", str(session_cache / "xdg"))
     monkeypatch.setenv("MPLCONFIGDIR", str(session_cache / "matplotlib"))
     return session_cache / "casmech"

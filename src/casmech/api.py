@@ -52,7 +52,7 @@ class CompiledModel(SystemFunctions):
     """
 
     model: ResolvedModel | None = field(default=None, compare=False)
-    requested: str = "interpreted"  # the mode asked of casmech.compile
+    requested: str = "auto"  # the mode asked of casmech.compile
 
     @property
     def parameters(self) -> Mapping[str, float]:
@@ -120,11 +120,13 @@ def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> Resolv
     return load_model(path, overrides=overrides)
 
 
-def compile(model: ResolvedModel, mode: str = "interpreted") -> CompiledModel:  # noqa: A001
-    """The model's named CasADi functions (a SystemFunctions) in `mode`: "interpreted" (SX
-    functions), "compiled" (C generated, built and loaded through the cache; a model with
-    parameters and up to 32 bodies gets a library that takes its numbers as an input) or
-    "auto" (backends.compile). `.set(name=value)` gives them at other parameter values,
+def compile(model: ResolvedModel, mode: str = "auto") -> CompiledModel:  # noqa: A001
+    """The model's named CasADi functions (a SystemFunctions) in `mode`: "auto", the default
+    (compiled when the cache holds the model's library, else interpreted while the library is
+    built behind for the next call: backends.compile), "interpreted" (SX functions, which
+    symbolic work such as calling them on SX needs) or "compiled" (C generated, built and
+    loaded through the cache; a model with parameters and up to 32 bodies gets a library that
+    takes its numbers as an input). `.set(name=value)` gives them at other parameter values,
     without a build where the library takes the numbers (CompiledModel)."""
     return _wrap(backends.compile(model, mode), model, mode)
 

@@ -69,7 +69,8 @@ def test_an_interpreted_dynamics_run_works_without_fcntl(tmp_path):
     script = (
         "import sys; sys.modules['fcntl'] = None\n"
         "import casmech\n"
-        "functions = casmech.compile(casmech.load('models/double_pendulum.yaml'))\n"
+        "functions = casmech.compile(casmech.load('models/double_pendulum.yaml'), "
+        "'interpreted')\n"
         "result = casmech.analyze(functions, t_end=0.5)\n"
         "loaded = sorted(m for m in sys.modules if m.startswith('casmech.backends.'))\n"
         "print(result.metadata['mode'], len(result), loaded)\n")

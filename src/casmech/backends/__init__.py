@@ -16,13 +16,13 @@ from casmech.schema.resolved import ResolvedModel
 COMPILE_MODES = ("interpreted", "compiled", "auto")
 
 
-def compile(model: ResolvedModel, mode: str = "interpreted") -> SystemFunctions:  # noqa: A001
+def compile(model: ResolvedModel, mode: str = "auto") -> SystemFunctions:  # noqa: A001
     """Build the named CasADi functions of a model. mode: "interpreted" (SX functions),
     "compiled" (C generated, built with the C compiler and loaded; cached by model content in
-    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto" (whichever runs sooner end to end,
-    codegen.auto_mode: compiled when the library is cached or the model is big, else
-    interpreted; interpreted with one warning without a C compiler). Both bundles have the
-    same functions."""
+    $CASMECH_CACHE_DIR, default ~/.cache/casmech) or "auto", the default (whichever runs sooner
+    end to end, codegen.auto_mode: compiled when the library is cached or the model is big,
+    else interpreted while it is built behind for the next call; interpreted with one warning
+    without a C compiler). Both bundles have the same functions."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
     if mode == "interpreted":  # before importing code generation, which this path never uses

@@ -32,18 +32,16 @@ The C holds each kernel once; only index tables grow with the model. Default fla
   - except a tree whose dynamics run in joint coordinates (its file's formulation auto or
     joint, no DAE stabilization): its ODE stays interpreted from solver.compile.ode_bodies bodies on
     (runtime.joint_dynamics) and the interpreted bundle builds only what the run reads, so it
-    runs interpreted at every size (a formulation given on the command line is not seen here).
-    Later runs of an unchanged model load the cached library.
-  - with $CASMECH_BACKGROUND_BUILD=1, a cache miss below AUTO_BODIES also builds the library
-    in a detached process (build_in_background) while the run goes on interpreted, so the
-    next run is compiled.
+    runs interpreted on a cache miss at every size (a formulation given on the command line
+    is not seen here);
+  - a cache miss run interpreted starts building the library in a process of its own while the
+    run goes on (backends.background; $CASMECH_BACKGROUND_BUILD=0 turns it off), so that the
+    next run of the unchanged model loads it compiled. casmech.compile's default is auto.
 """
 
 from __future__ import annotations
 
-import os
 import shutil
-import signal
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -51,6 +49,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from casmech.backends import background as background_build
 from casmech.backends import cache, deferred, generate, manifest, parametric
 from casmech.backends.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.backends.library import compile_functions
@@ -245,66 +244,36 @@ def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
 
 
 def _in_cache(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, root: Path | None,
-              dae: bool = True) -> bool:
-    entry = _entry(model, ir, toolchain, dae, defer=True)[0]  # the library compiled() loads
-    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file()
+              dae: bool = True) -> tuple[bool, str]:
+    """(whether the cache holds the library compiled() loads, its entry)."""
+    entry = _entry(model, ir, toolchain, dae, defer=True)[0]
+    return (Path(root or cache.cache_dir()) / entry / manifest.MANIFEST).is_file(), entry
 
 
 def is_cached(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, dae: bool = True) -> bool:
     """Whether the cache holds the model's library for this toolchain (nothing is built)."""
-    return _in_cache(model, lower(model), toolchain or Toolchain(), root, dae)
+    return _in_cache(model, lower(model), toolchain or Toolchain(), root, dae)[0]
 
 
 def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
               root: Path | None = None, background: bool = False) -> str:
     """"compiled" or "interpreted", whichever the model runs sooner without waiting long for a
     build (module docstring); "interpreted" without a C compiler. With `background`, a cache
-    miss below AUTO_BODIES also starts building the library behind the run when
-    $CASMECH_BACKGROUND_BUILD is 1 (build_in_background), so later runs are compiled."""
+    miss run interpreted also starts building the library behind the run
+    (backends.background, unless $CASMECH_BACKGROUND_BUILD is 0), so later runs are compiled."""
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
         return "interpreted"
     ir = lower(model)
-    if _in_cache(model, ir, toolchain, root) or (len(model.bodies) >= AUTO_BODIES
-                                                 and not _joint_tree(model, ir)):
+    hit, entry = _in_cache(model, ir, toolchain, root)
+    if hit and background_build.running(entry, root):
+        return "interpreted"  # its first part is published, the rest still building
+    if hit or (len(model.bodies) >= AUTO_BODIES and not _joint_tree(model, ir)):
         return "compiled"
-    if background and os.environ.get(BACKGROUND_ENVIRONMENT) == "1":
-        build_in_background(model, toolchain, root)
+    if background and background_build.enabled():
+        background_build.start(model, toolchain, root, entry)
     return "interpreted"
-
-
-BACKGROUND_ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "1": auto builds behind the run
-BACKGROUND_LIMIT = 900  # s: a background build still running then stops (SIGALRM)
-
-
-def build_in_background(model: ResolvedModel, toolchain: Toolchain | None = None,
-                        root: Path | None = None) -> int:
-    """Build the model's library into the cache in a detached process (two forks: no zombie,
-    no wait at exit; one compiler process, niced), published atomically by cache.lookup, whose
-    lock makes a foreground build of the same key wait for it instead of building twice.
-    Returns the intermediate child's pid (0 where there is no fork)."""
-    if not hasattr(os, "fork"):
-        return 0
-    toolchain = toolchain or Toolchain()
-    pid = os.fork()
-    if pid:
-        os.waitpid(pid, 0)
-        return pid
-    try:
-        os.setsid()
-        if os.fork():
-            os._exit(0)
-        os.nice(10)
-        signal.alarm(BACKGROUND_LIMIT)
-        quiet = os.open(os.devnull, os.O_RDWR)
-        for stream in (0, 1, 2):
-            os.dup2(quiet, stream)
-        _cached(model, Toolchain(toolchain.compiler, toolchain.flags, 1), root, True,
-                defer=True)
-        os._exit(0)
-    except BaseException:  # noqa: BLE001 - a detached child reports nothing and never returns
-        os._exit(1)
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,

@@ -105,7 +105,7 @@ def run(args) -> int:
     from casmech.runtime import assembly
 
     model = api.load(args.model, overrides(args.set))
-    functions = api.compile(model)
+    functions = api.compile(model, "interpreted")  # no build for a look at the structure
     failure = None
     try:
         q = assembly.assemble_positions(functions)

@@ -41,7 +41,7 @@ def test_joint_tree_builds_its_residuals_on_first_use(model, toolchain, tmp_path
     compiled_rp = functions["dae_rp"]
     assert sum(set(names) <= found for found in _functions_in_cache(root)) == 1
     residual_builds = len(builds)
-    plain = casmech.compile(model)  # interpreted
+    plain = casmech.compile(model, "interpreted")
     rng = np.random.default_rng(5)
     for name, (form, kind) in {"dae_rp": ("rp", "projection"),
                                "dae_ggl_romega": ("romega", "ggl")}.items():

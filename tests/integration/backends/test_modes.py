@@ -2,7 +2,6 @@
 no C compiler; compiled without one, or an unknown mode, is a usage error; casmech compile
 writes its files into -o DIR."""
 
-import time
 import warnings
 from dataclasses import replace
 
@@ -145,21 +144,3 @@ def test_auto_mode_rule(model, compiled, cache_root, tmp_path, monkeypatch):
     assert codegen.auto_mode(dynamics, root=empty) == "compiled"
     monkeypatch.setenv("CC", "casmech-no-such-compiler")
     assert codegen.auto_mode(model, root=cache_root) == "interpreted"
-
-
-def test_background_build_publishes_the_library(model, toolchain, tmp_path, monkeypatch):
-    """With CASMECH_BACKGROUND_BUILD=1 a cache miss runs interpreted now and builds the library
-    in a detached process; once it is published, auto picks it. Without the variable nothing
-    is built."""
-    empty = tmp_path / "cache"
-    monkeypatch.delenv(codegen.BACKGROUND_ENVIRONMENT, raising=False)
-    assert codegen.auto_mode(model, toolchain, empty, background=True) == "interpreted"
-    assert not empty.exists()
-    monkeypatch.setenv(codegen.BACKGROUND_ENVIRONMENT, "1")
-    assert codegen.auto_mode(model, toolchain, empty, background=True) == "interpreted"
-    deadline = time.monotonic() + 120  # a -O0 build takes ~2 s; the limit only ends a hang
-    while not codegen.is_cached(model, toolchain, empty) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    assert codegen.auto_mode(model, toolchain, empty) == "compiled"
-    functions = codegen.compiled(model, toolchain, root=empty)  # a cache hit: it loads
-    assert codegen.mode_of(functions) == "compiled"

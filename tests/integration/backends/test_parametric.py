@@ -93,7 +93,7 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
         model = casmech.load(path, values)
         bound = codegen.compiled(model, toolchain, root=cache_root)
         assert codegen.mode_of(bound) == "compiled" and bound.data is not None
-        plain = casmech.compile(model)
+        plain = casmech.compile(model, "interpreted")
         for name, function in plain.functions.items():
             args = [rng.standard_normal(function.sparsity_in(k).shape)
                     for k in range(function.n_in())]

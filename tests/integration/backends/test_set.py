@@ -84,11 +84,12 @@ def test_set_takes_a_mapping_texts_with_units_and_several_values(model_file, too
 
 
 def test_set_rebuilds_an_interpreted_bundle(model_file, builds):
-    interpreted = casmech.compile(casmech.load(model_file))
+    interpreted = casmech.compile(casmech.load(model_file), "interpreted")
     moved = interpreted.set(m=3)
     assert moved.library is None and moved.mode == "interpreted"
     rows = motion(moved, t_end=1.0)
-    reference = motion(casmech.compile(casmech.load(model_file, {"m": "3"})), t_end=1.0)
+    reference = motion(casmech.compile(casmech.load(model_file, {"m": "3"}), "interpreted"),
+                       t_end=1.0)
     for column in ("block.x", "bob.x", "slide.fx"):
         # the same functions and integrator: identical to round-off
         np.testing.assert_allclose(rows[column], reference[column], rtol=0, atol=1e-12)
@@ -108,7 +109,7 @@ def test_a_value_that_changes_the_structure_is_a_located_error(model_file, toolc
     assert "non-zero" in message
     assert "hint: casmech.compile(casmech.load(" in message
     # an interpreted bundle takes the value (it is rebuilt)
-    moved = casmech.compile(casmech.load(model_file)).set(theta0=0.0)
+    moved = casmech.compile(casmech.load(model_file), "interpreted").set(theta0=0.0)
     assert moved.parameters["theta0"] == 0.0
 
 
@@ -144,7 +145,7 @@ def test_set_on_a_library_with_its_values_builds_another_and_warns(model_file, t
 
 
 def test_repr_is_one_line(model_file):
-    text = repr(casmech.compile(casmech.load(model_file)).set(m=3))
+    text = repr(casmech.compile(casmech.load(model_file), "interpreted").set(m=3))
     assert text.startswith(
         "CompiledModel('two_oscillators': 2 bodies, 2 joints, 2 DOF; interpreted")
     assert "m=3" in text and "\n" not in text

@@ -92,7 +92,7 @@ def _triplets(sparsity: ca.Sparsity) -> set:
 @pytest.mark.parametrize("name", list(MODELS))
 def test_element_residuals_equal_compiler_dae(name):
     model = MODELS[name]()
-    ir, unrolled = lower(model), casmech.compile(model).functions
+    ir, unrolled = lower(model), casmech.compile(model, "interpreted").functions
     for form, kind in CASES:
         check(ir, unrolled, form, kind)
 
@@ -102,7 +102,7 @@ def test_every_model_element_residuals_equal_compiler_dae(file):
     """Every model of models/; one whose rows' vectors are kernel data (past BAKE_LIMIT
     geometries) may keep structural entries that are 0 in value (test_vectors_as_data)."""
     model = casmech.load(ROOT / "models" / file)
-    ir, unrolled = lower(model), casmech.compile(model).functions
+    ir, unrolled = lower(model), casmech.compile(model, "interpreted").functions
     baked = all(key.values is not None for key in rows.row_keys(ir))
     for form, kind in CASES:
         check(ir, unrolled, form, kind, same_pattern=baked)
@@ -115,7 +115,8 @@ def test_vectors_as_data(monkeypatch):
     ir = lower(model)
     assert all(key.values is None for key in rows.row_keys(ir))
     for form, kind in CASES:
-        check(ir, casmech.compile(model).functions, form, kind, same_pattern=False)
+        check(ir, casmech.compile(model, "interpreted").functions, form, kind,
+              same_pattern=False)
 
 
 def test_force_elements_without_a_kernel(monkeypatch):

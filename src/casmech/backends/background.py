@@ -1,0 +1,85 @@
+"""The background build: a model's library built into the cache by a process of its own while
+the run that asked for it goes on interpreted (codegen.auto_mode), so that the model's next run
+loads it compiled (docs/decisions/mode-auto.md).
+
+  - on by default; $CASMECH_BACKGROUND_BUILD=0 turns it off;
+  - the child is a fresh interpreter (`python -m casmech.runtime.background_build FILE`: it
+    runs analyses, a layer above this one) in a session of its own, its output discarded,
+    niced, stopped after LIMIT s: safe to start from a process running threads (a notebook, a
+    Dask worker), where fork is not;
+  - the model goes to it as a pickle in a private temporary file (mkstemp: 0600), written by
+    this process and deleted by the child once read;
+  - one at a time per cache: the child builds while it holds the cache's BACKGROUND_LOCK and
+    leaves at once when another holds it; a process starts a given library's build once;
+  - the child builds the library (codegen.compiled) and, for dynamics, runs the analysis
+    compiled over its first output step with its results table, which builds what a compiled
+    run reads besides (a tree's joint-system library, deferred functions); each is published
+    through cache.lookup, whose lock makes a foreground build of the same key wait for it;
+    while it builds it holds <key>BUILDING, and `running` tells auto to stay interpreted.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "0": auto never builds behind the run
+LIMIT = 900  # s: a background build still running then stops (SIGALRM)
+BACKGROUND_LOCK = "background.lock"  # in the cache folder: held by the one building child
+BUILDING = ".background"  # <library key> + BUILDING in the cache folder: held while it builds
+NICENESS = 10
+CHILD = "casmech.runtime.background_build"
+
+_started: set[str] = set()  # library keys this process has started a build of
+_children: list[subprocess.Popen] = []  # kept to be reaped (poll) instead of left as zombies
+
+
+def enabled() -> bool:
+    """Whether auto builds behind the run ($CASMECH_BACKGROUND_BUILD is not "0")."""
+    return os.environ.get(ENVIRONMENT, "1").strip() != "0"
+
+
+def start(model, toolchain, root: Path | None, key: str) -> subprocess.Popen | None:
+    """Start building the model's library (`key`: its cache entry) in a detached process,
+    unless this process has started it already; the process, or None where none started."""
+    for child in list(_children):
+        if child.poll() is not None:
+            _children.remove(child)
+    if key in _started:
+        return None
+    _started.add(key)
+    handle, path = tempfile.mkstemp(prefix="casmech-background-", suffix=".pickle")
+    with os.fdopen(handle, "wb") as stream:
+            pickle.dump((model, toolchain, None if root is None else str(root), key), stream)
+    env = dict(os.environ)
+    package_root = Path(__file__).resolve().parents[2]
+    if package_root.name not in ("site-packages", "dist-packages"):  # this casmech, from src
+        env["PYTHONPATH"] = os.pathsep.join(
+            [str(package_root)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
+    child = subprocess.Popen(  # noqa: S603 - this interpreter, this module, our own file
+        [sys.executable, "-m", CHILD, path],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        env=env, close_fds=True, start_new_session=True)
+    _children.append(child)
+    return child
+
+
+def running(key: str, root: Path | None) -> bool:
+    """Whether a background build of the library `key` is under way: its first part may be in
+    the cache already, the rest not (codegen.auto_mode counts that as a miss)."""
+    from casmech.backends import cache
+
+    marker = Path(root or cache.cache_dir()) / f"{key}{BUILDING}"
+    if not marker.exists():
+        return False
+    from filelock import FileLock, Timeout
+
+    try:
+        with FileLock(str(marker), timeout=0):
+            return False
+    except Timeout:
+        return True

@@ -1,0 +1,111 @@
+"""backends.background: a cache miss of `--mode auto` (casmech.compile's default) runs
+interpreted and builds the model's library in a detached process, so that the next call loads it
+compiled; one build per library per process, one at a time per cache, none with
+CASMECH_BACKGROUND_BUILD=0 (the test session's setting, tests/conftest.py)."""
+
+import tempfile
+
+import numpy as np
+import pytest
+from filelock import FileLock
+
+import casmech
+from casmech.backends import background, codegen, library
+from tests.conftest import MODELS
+from tests.helpers.codegen import counted_builds
+
+WAIT = 300  # s: a -O0 build of these models takes seconds; the limit only ends a hang
+
+
+@pytest.fixture
+def building(monkeypatch, tmp_path):
+    """The background build on, a private cache and temporary folder, this process's record of
+    started builds empty; yields the cache folder."""
+    monkeypatch.setenv(background.ENVIRONMENT, "1")
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("CASMECH_CFLAGS", "-O0")
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(background, "_started", set())
+    monkeypatch.setattr(background, "_children", [])
+    if not codegen.available():
+        pytest.skip("no C compiler")
+    return tmp_path / "cache"
+
+
+def finished(timeout: float = WAIT) -> None:
+    """Wait for every child this process started (each is a detached process of its own)."""
+    for child in list(background._children):
+        assert child.wait(timeout=timeout) == 0
+
+
+def test_a_cache_miss_runs_interpreted_and_the_next_call_compiled(building, tmp_path,
+                                                                   monkeypatch):
+    """The double pendulum, a tree run in joint coordinates: the first default call is
+    interpreted and starts the build; after it, the default call is compiled, its run builds
+    nothing more (the child ran the dynamics over one output step, which built the joint
+    system's library too) and gives the interpreted run's table."""
+    model = casmech.load(MODELS / "double_pendulum.yaml")
+    first = casmech.compile(model)
+    assert codegen.mode_of(first) == "interpreted"
+    assert len(background._children) == 1
+    finished()
+    assert not list((tmp_path / "tmp").glob("casmech-background-*"))  # the pickle is deleted
+    second = casmech.compile(model)
+    assert codegen.mode_of(second) == "compiled"
+    builds = counted_builds(monkeypatch, library)
+    compiled = casmech.analyze(second, t_end=0.5)
+    assert builds == []  # everything the compiled run reads was built behind the first
+    interpreted = casmech.analyze(first, t_end=0.5)
+    _, expected = casmech.results_table(first, interpreted)
+    _, got = casmech.results_table(second, compiled)
+    # the same SX graphs evaluated by C and by CasADi's virtual machine: the same steps, the
+    # states to within the integrator's roundoff
+    np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
+
+
+def test_one_build_per_library_per_process(building):
+    model = casmech.load(MODELS / "pendulum.yaml")
+    for _ in range(3):
+        assert codegen.mode_of(casmech.compile(model)) == "interpreted"
+    assert len(background._children) == 1
+    finished()
+    assert codegen.mode_of(casmech.compile(model)) == "compiled"
+    assert len(background._children) == 1  # a hit starts nothing
+
+
+def test_turned_off_builds_nothing(building, monkeypatch):
+    monkeypatch.setenv(background.ENVIRONMENT, "0")
+    model = casmech.load(MODELS / "pendulum.yaml")
+    assert codegen.mode_of(casmech.compile(model)) == "interpreted"
+    assert background._children == []
+    assert not building.exists()
+
+
+def test_one_build_at_a_time_per_cache(building):
+    """A child that finds the cache's background lock held leaves without building (and
+    without leaving its pickle behind); the next miss of the same process does not retry."""
+    model = casmech.load(MODELS / "pendulum.yaml")
+    building.mkdir(parents=True)
+    with FileLock(str(building / background.BACKGROUND_LOCK)):
+        assert codegen.mode_of(casmech.compile(model)) == "interpreted"
+        finished()
+    assert not codegen.is_cached(model)
+    assert codegen.mode_of(casmech.compile(model)) == "interpreted"
+    assert len(background._children) <= 1
+
+
+def test_the_command_line_builds_behind_its_run(building, tmp_path):
+    """`casmech run` of a cache miss: the run is interpreted (its metadata says so), the next
+    run compiled."""
+    import json
+
+    from casmech.cli import main
+
+    model = MODELS / "pendulum.yaml"
+    out = tmp_path / "out"
+    assert main(["run", str(model), "--t-end", "0.2", "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "metadata.json").read_text())["mode"] == "interpreted"
+    finished()
+    assert main(["run", str(model), "--t-end", "0.2", "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "metadata.json").read_text())["mode"] == "compiled"
