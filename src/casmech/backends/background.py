@@ -30,7 +30,7 @@ from pathlib import Path
 ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "0": auto never builds behind the run
 LIMIT = 900  # s: a background build still running then stops (SIGALRM)
 BACKGROUND_LOCK = "background.lock"  # in the cache folder: held by the one building child
-BUILDING = ".background"  # <library key> + BUILDING in the cache folder: held while it builds
+BUILDING = ".background.lock"  # <library key> + BUILDING: held while it builds (cleared as locks)
 NICENESS = 10
 CHILD = "casmech.runtime.background_build"
 

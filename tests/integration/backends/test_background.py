@@ -109,3 +109,18 @@ def test_the_command_line_builds_behind_its_run(building, tmp_path):
     finished()
     assert main(["run", str(model), "--t-end", "0.2", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "metadata.json").read_text())["mode"] == "compiled"
+
+
+def test_a_build_under_way_is_a_miss(building):
+    """The bundle published while the child still builds the rest: auto stays interpreted (no
+    run waits for a background build), and is compiled once the marker's lock is free."""
+    from casmech.backends import cache
+
+    model = casmech.load(MODELS / "pendulum.yaml")
+    casmech.compile(model, "compiled")
+    (entry,) = cache.entries(building)  # the bundle, as a background child publishes it first
+    with FileLock(str(building / f"{entry.name}{background.BUILDING}")):
+        assert background.running(entry.name, building)
+        assert codegen.auto_mode(model) == "interpreted"
+    assert not background.running(entry.name, building)
+    assert codegen.auto_mode(model) == "compiled"
