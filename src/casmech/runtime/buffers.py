@@ -4,7 +4,12 @@ a returned DM (np.array(DM) costs more than evaluating a mapped prescribed step 
 Functions with a sparse input or output are called the ordinary way. A buffered evaluation is
 a solver call a signal may stop at once (runtime.cancel.solving); the errors.Interrupted it
 then raises carries in `outputs` what the call had written (an integrator writes its outputs
-grid point by grid point; the rest NaN), so the rows computed before the signal are kept."""
+grid point by grid point; the rest NaN), so the rows computed before the signal are kept.
+
+A call's NumPy memory is bound to the buffer once (BOUND_ENTRIES): each call copies its inputs
+in and its outputs out, since binding an argument costs about as much as evaluating a small
+compiled function. So one BufferedCall is not to be called from two threads at once (the
+buffer it wraps never was)."""
 
 from __future__ import annotations
 
@@ -15,9 +20,15 @@ from casmech.errors import Interrupted
 from casmech.runtime import cancel
 from casmech.runtime.memo import kept
 
+# Functions whose inputs and outputs hold up to this many numbers keep them bound to the buffer
+# (BufferedCall); larger ones (a large tree's rows over a block) bind them per call, so that
+# kept calls do not hold their memory.
+BOUND_ENTRIES = 1 << 16
+
 
 class BufferedCall:
-    """function(*arrays) -> tuple of dense NumPy arrays, one per output."""
+    """function(*arrays) -> tuple of dense NumPy arrays, one per output (fresh arrays, which
+    the next call does not touch). An argument None stands for zeros."""
 
     def __init__(self, function: ca.Function):
         self.function = function
@@ -26,26 +37,42 @@ class BufferedCall:
             all(function.sparsity_out(i).is_dense() for i in range(n_out))
         self.shapes_in = [function.size_in(i) for i in range(n_in)]
         self.shapes_out = [function.size_out(i) for i in range(n_out)]
+        self._bound: tuple[list[np.ndarray], list[np.ndarray]] | None = None
         if self.dense:
             self.buffer, self.evaluate = function.buffer()
+            entries = sum(r * c for r, c in (*self.shapes_in, *self.shapes_out))
+            if entries <= BOUND_ENTRIES:
+                self._bound = self._bind()
+        self._zero = [False] * n_in  # bound inputs known to hold zeros
+
+    def _bind(self) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """Input and output arrays bound to the buffer: casadi stores a dense matrix column by
+        column, so each is the C-ordered transpose of its matrix."""
+        inputs = [np.zeros(shape[::-1]) for shape in self.shapes_in]
+        outputs = [np.empty(shape[::-1]) for shape in self.shapes_out]
+        for i, a in enumerate(inputs):
+            self.buffer.set_arg(i, memoryview(a.reshape(-1)))
+        for i, out in enumerate(outputs):
+            self.buffer.set_res(i, memoryview(out.reshape(-1)))
+        return inputs, outputs
 
     def __call__(self, *args) -> tuple[np.ndarray, ...]:
         if not self.dense:
-            outputs = self.function(*args)
+            outputs = self.function(*(0 if a is None else a for a in args))
             outputs = outputs if isinstance(outputs, tuple) else (outputs,)
             return tuple(np.array(o, float) for o in outputs)
-        # casadi stores a dense matrix column by column: the C-ordered transpose
-        inputs = [np.ascontiguousarray(np.asarray(a, float).reshape(shape).T)
-                  for a, shape in zip(args, self.shapes_in, strict=True)]
-        buffer = self.buffer
-        for i, a in enumerate(inputs):
-            buffer.set_arg(i, memoryview(a.reshape(-1)))
-        outputs = []
-        for i, shape in enumerate(self.shapes_out):
-            out = np.empty(shape[::-1])
+        bound = self._bound is not None
+        inputs, outputs = self._bound if bound else self._bind()
+        for i, (a, target) in enumerate(zip(args, inputs, strict=True)):
+            if a is None:  # a bound input is zeroed once, a new one is zeros
+                if bound and not self._zero[i]:
+                    target.fill(0.0)
+                    self._zero[i] = True
+                continue
+            np.copyto(target, np.reshape(a, self.shapes_in[i]).T)
+            self._zero[i] = False
+        for out in outputs:
             out.fill(np.nan)  # what an interrupted call did not write
-            buffer.set_res(i, memoryview(out.reshape(-1)))
-            outputs.append(out)
         cancel.arm()  # a signal may stop an integrator here (runtime.cancel.solving)
         try:
             self.evaluate()
@@ -53,12 +80,13 @@ class BufferedCall:
             try:
                 cancel.check(error)  # the signal that stopped it, not a failure
             except Interrupted as interrupted:
-                interrupted.outputs = tuple(out.T for out in outputs)
+                interrupted.outputs = tuple((out.copy() if bound else out).T
+                                            for out in outputs)
                 raise
             raise
         finally:
             cancel.disarm()
-        return tuple(out.T for out in outputs)
+        return tuple((out.copy() if bound else out).T for out in outputs)
 
 
 class NamedCall:
@@ -69,17 +97,15 @@ class NamedCall:
 
     def __init__(self, function: ca.Function):
         self.function, self.call = function, BufferedCall(function)
-        self.zeros = {function.name_in(k): np.zeros(function.size_in(k))
-                      for k in range(function.n_in())}
+        self.names_in, self.names_out = function.name_in(), function.name_out()
 
     def __call__(self, **inputs) -> dict[str, np.ndarray]:
-        args = [self.zeros[name] if inputs.get(name) is None else inputs[name]
-                for name in self.zeros]
+        args = [inputs.get(name) for name in self.names_in]
         try:
-            return dict(zip(self.function.name_out(), self.call(*args), strict=True))
+            return dict(zip(self.names_out, self.call(*args), strict=True))
         except Interrupted as interrupted:  # its outputs by name too
             if getattr(interrupted, "outputs", None) is not None:
-                interrupted.outputs = dict(zip(self.function.name_out(), interrupted.outputs,
+                interrupted.outputs = dict(zip(self.names_out, interrupted.outputs,
                                                strict=True))
             raise
 
@@ -125,7 +151,8 @@ class ColumnCall:
         for start in range(0, count, BLOCK):
             size = min(BLOCK, count - start)
             blocks.append(self._map(size)(*(
-                np.tile(a, (1, size)) if one else a[:, start * w:(start + size) * w]
+                (a if size == 1 else np.tile(a, (1, size))) if one
+                else a[:, start * w:(start + size) * w]
                 for a, w, one in zip(arguments, self.widths, shared, strict=True))))
         if len(blocks) == 1:
             return blocks[0]
@@ -137,3 +164,4 @@ class ColumnCall:
             return argument
         rows = self.function.size1_in(k)
         return argument.reshape(rows, -1) if rows else np.zeros((0, self.widths[k]))
+

@@ -68,3 +68,26 @@ def test_columns_in_blocks_equal_one_mapped_call(monkeypatch, count):
         for g, w in zip(got, want, strict=True):
             # the same operations on the same numbers, one evaluation at a time
             np.testing.assert_allclose(g, np.array(w), rtol=0, atol=0)
+
+
+def test_each_call_returns_its_own_arrays_and_none_is_zeros(monkeypatch):
+    """Bound buffers (small functions) and per-call ones (BOUND_ENTRIES 0) alike: a later
+    call leaves an earlier call's outputs as they were; None inputs are zeros, also after a
+    call that gave that input."""
+    from casmech.runtime import buffers
+
+    x, y = ca.SX.sym("x", 2), ca.SX.sym("y", 2, 3)
+    f = ca.Function("f", [x, y], [ca.mtimes(x.T, y), x + ca.sum2(y)])
+    for limit in (buffers.BOUND_ENTRIES, 0):
+        monkeypatch.setattr(buffers, "BOUND_ENTRIES", limit)
+        call = BufferedCall(f)
+        assert (call._bound is not None) == bool(limit)
+        a, b = RNG.normal(size=2), RNG.normal(size=(2, 3))
+        first = call(a, b)
+        kept = [np.array(o) for o in first]
+        call(2 * a, b)
+        for got, want in zip(first, kept, strict=True):
+            np.testing.assert_array_equal(got, want)  # untouched by the second call
+        for got, want in zip(call(None, b), f(np.zeros(2), b), strict=True):
+            # the same operations on the same numbers
+            np.testing.assert_allclose(got, np.array(want), rtol=0, atol=0)
