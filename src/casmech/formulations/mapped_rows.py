@@ -103,11 +103,19 @@ def multipliers(rows: int) -> ca.Function:
 def pose_data(tree: Tree) -> np.ndarray:
     """Every tree joint's pose data (POSE_CONSTANTS rows, one column per joint)."""
     columns = np.empty((POSE_CONSTANTS, len(tree.joints)))
+    quaternions: dict[bytes, np.ndarray] = {}  # by matrix (the frames' axes repeat)
+
+    def quaternion(matrix: np.ndarray) -> np.ndarray:
+        key = matrix.tobytes()
+        if key not in quaternions:
+            quaternions[key] = from_matrix(matrix)
+        return quaternions[key]
+
     for k, joint in enumerate(tree.joints):
         (c_p, s_p), (c_c, s_c) = ((np.asarray(m, float), np.asarray(o, float))
                                   for m, o in (joint.parent_frame, joint.child_frame))
         columns[:, k] = np.concatenate([s_p, c_p.ravel("F"), c_c.ravel("F"), s_c,
-                                        from_matrix(c_p), from_matrix(c_c)])
+                                        quaternion(c_p), quaternion(c_c)])
     return columns
 
 
@@ -125,7 +133,7 @@ class Rows:
         """(q, q_dot, q_ddot, lam) of the results row (joint_system.build's motion)."""
         ir, tree, passes = self.ir, self.tree, self.passes
         joints, nb = tree.joints, ir.n_bodies
-        data = pose_data(tree)
+        data = ca.horzsplit(ca.MX(ca.DM(pose_data(tree))))  # one constant, split
         index = passes.index
         r, a_rot, p = [None] * len(joints), [None] * len(joints), [None] * len(joints)
         ground = (ca.MX(ca.DM.zeros(3)), ca.MX(ca.DM.eye(3)), ca.MX(ca.DM([1, 0, 0, 0])))
@@ -133,7 +141,7 @@ class Rows:
             parent = ground if j.parent == GROUND_INDEX else (
                 r[index[j.parent]], a_rot[index[j.parent]], p[index[j.parent]])
             r[k], a_rot[k], p[k] = self.kernel(j.type, "pose").call(
-                [passes.theta[k], ca.MX(ca.DM(data[:, k])), *parent])
+                [passes.theta[k], data[k], *parent])
         passed: list[list] = [[] for _ in joints]
         wrench = [None] * len(joints)
         zero6 = ca.MX(ca.DM.zeros(6, 1))

@@ -196,6 +196,7 @@ def body_data(ir: ModelIR, tree: Tree) -> np.ndarray:
     (the child frame F_c, origin at the joint point)."""
     reference = {j.child: j.child_frame for j in tree.joints}
     columns = np.empty((CONSTANTS, len(tree.joints)))
+    inertias: dict[bytes, np.ndarray] = {}  # by the child's frame and inertia (repeated bodies)
     for k, joint in enumerate(tree.joints):
         c_p, s_p = (np.asarray(v, float) for v in joint.parent_frame)
         if joint.parent == GROUND_INDEX:
@@ -205,10 +206,14 @@ def body_data(ir: ModelIR, tree: Tree) -> np.ndarray:
             e_t, r_t = c_p.T @ c_ref, c_ref.T @ (s_p - o_ref)
         axes, origin = (np.asarray(v, float) for v in joint.child_frame)
         child = ir.bodies[joint.child]
-        at_center = np.zeros((6, 6))
-        at_center[:3, :3], at_center[3:, 3:] = child.inertia, child.mass * np.eye(3)
-        x = _transform(axes, -axes.T @ origin)
-        columns[:, k] = np.concatenate([e_t.ravel("F"), r_t, (x.T @ at_center @ x).ravel("F")])
+        inertia, mass = np.asarray(child.inertia, float), float(child.mass)
+        key = b"".join(a.tobytes() for a in (axes, origin, inertia, np.array(mass)))
+        if key not in inertias:
+            at_center = np.zeros((6, 6))
+            at_center[:3, :3], at_center[3:, 3:] = inertia, mass * np.eye(3)
+            x = _transform(axes, -axes.T @ origin)
+            inertias[key] = (x.T @ at_center @ x).ravel("F")
+        columns[:, k] = np.concatenate([e_t.ravel("F"), r_t, inertias[key]])
     return columns
 
 

@@ -230,7 +230,21 @@ def lower_force(force: Force, model: ResolvedModel, poses: Poses) -> ForceIR:
     return ForceIR(force.name, force.type, **fields, source=force.source)
 
 
+# the last model lowered and its IR: a run lowers its model twice (backends.codegen.auto_mode
+# looks its library up, then backends.compile builds its functions); both are frozen records
+_LAST: list[tuple[ResolvedModel, ModelIR]] = []
+
+
 def lower(model: ResolvedModel) -> ModelIR:
+    """The model's IR (the same IR again for the model lowered last)."""
+    if _LAST and _LAST[0][0] is model:
+        return _LAST[0][1]
+    ir = _lowered(model)
+    _LAST[:] = [(model, ir)]
+    return ir
+
+
+def _lowered(model: ResolvedModel) -> ModelIR:
     poses = Poses(model)
     primitives: list[PrimitiveIR] = []
     joints: list[JointIR] = []
