@@ -7,9 +7,12 @@ transform from the parent's reference frame and its spatial inertia in its own) 
 The kernels depend on the joint type alone, so they are built (and compiled: backends/
 tree_kernels.py) once, whatever the model; a model's ODE is then the MX graph of three kernel
 calls per body, which builds in a fraction of the unrolled SX's time and evaluates in the
-kernels' compiled code. Gravity enters as the ground's spatial acceleration (-g: Featherstone
-2008, section 5.3), so no pass needs the bodies' global poses; the accelerations of pass 3 are
-then relative to a frame falling with gravity, and the joints' accelerations exact.
+kernels' compiled code. A run of BLOCK same-type joints along a chain is one call of block
+kernels (the single-joint ones composed), as the machine's cost per call, not the kernels'
+arithmetic, is most of an evaluation. Gravity enters as the ground's spatial acceleration
+(-g: Featherstone 2008, section 5.3), so no pass needs the bodies' global poses; the
+accelerations of pass 3 are then relative to a frame falling with gravity, and the joints'
+accelerations exact.
 
 `supported` says which trees the mapped ODE covers: a tree (no cut joint), no coordinate a
 driver prescribes, a numeric IR, and no applied force but gravity; any other tree takes the
@@ -302,10 +305,10 @@ class Passes:
 def tree_ode(ir: ModelIR, tree: Tree, functions: Mapping[str, ca.Function] | None = None
              ) -> ca.Function:
     """(t, x) -> ode of a supported tree (joint_system.build's joint_ode: x = [theta; u] in
-    its layout), as the MX graph of the kernels `functions` (by kernel_name; default the SX
-    ones) called per body (Passes): pass 1 root to leaves, pass 2 leaves to root (each body's
-    IA and pA summed over its children), pass 3 root to leaves from the ground's
-    acceleration -g."""
+    its layout), as the MX graph of the kernels `functions` (by kernel_name and block_name;
+    default the SX ones) called per body or block (Passes): pass 1 root to leaves, pass 2
+    leaves to root (each body's IA and pA summed over its children), pass 3 root to leaves
+    from the ground's acceleration -g."""
     n_x = sum(MOTIONS[j.type].n_q + MOTIONS[j.type].n_v for j in tree.joints)
     t, x = ca.MX.sym("t"), ca.MX.sym("x", n_x)
     return ca.Function("joint_ode", [t, x], [Passes(ir, tree, x, functions).ode], ["t", "x"],
