@@ -42,7 +42,7 @@ def _functions(kind: str) -> dict[str, ca.Function]:
     derivatives under the names casadi.external looks them up."""
     ode = mapped_tree.kernels(kind) | mapped_tree.block_kernels(kind)
     return ode | {f"fwd1_{name}": f.forward(1) for name, f in ode.items()} | \
-        mapped_rows.kernels(kind)
+        mapped_rows.kernels(kind) | mapped_rows.block_kernels(kind)
 
 
 def compiled(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None

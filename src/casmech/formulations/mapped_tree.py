@@ -238,8 +238,9 @@ class Passes:
     """The three passes of the articulated-body algorithm over a supported tree at the MX state
     x = [theta; u] (joint_system's layout), per tree joint: theta, u, the body's data, V and
     the acceleration a (relative to the ground's -g); `index`: body -> its tree joint; `ode`:
-    the state's rates. The joints are called in `segments`: one call of the block kernels
-    per run of BLOCK joints of a chain, one of the single-joint kernels per other joint."""
+    the state's rates; `runs`: the segments with their inputs and outputs stacked. The joints
+    are called in `segments`: one call of the block kernels per run of BLOCK joints of a
+    chain, one of the single-joint kernels per other joint."""
 
     def __init__(self, ir: ModelIR, tree: Tree, x: ca.MX,
                  functions: Mapping[str, ca.Function] | None = None, size: int = BLOCK):
@@ -292,14 +293,19 @@ class Passes:
             if joints[k].parent != GROUND_INDEX:
                 passed[self.index[joints[k].parent]].append((ia, pa))
         falling = ca.MX(ca.DM(np.concatenate([np.zeros(3), -np.asarray(ir.gravity, float)])))
-        self.a, u_dot = [None] * n, [None] * len(runs)
+        self.a, u_dot, accelerations = [None] * n, [None] * len(runs), [None] * len(runs)
         for r, (k, count) in enumerate(runs):
             j = joints[k]
             parent = falling if j.parent == GROUND_INDEX else self.a[self.index[j.parent]]
-            a, u_dot[r] = kernel(r, "accelerate").call(
+            accelerations[r], u_dot[r] = kernel(r, "accelerate").call(
                 [theta[r], u[r], data[r], velocities[r], parent, solved[r]])
-            self.a[k:k + count] = ca.vertsplit(a, 6) if count > 1 else [a]
+            self.a[k:k + count] = ca.vertsplit(accelerations[r], 6) if count > 1 else \
+                [accelerations[r]]
         self.ode = ca.vertcat(ca.MX(0, 1), *theta_dot, *u_dot)
+        # per run (the results rows' block kernels read them): (first, count), theta, data,
+        # V and a stacked
+        self.runs = [(k, count, theta[r], data[r], velocities[r], accelerations[r])
+                     for r, (k, count) in enumerate(runs)]
 
 
 def tree_ode(ir: ModelIR, tree: Tree, functions: Mapping[str, ca.Function] | None = None
