@@ -6,10 +6,11 @@ relative_states), without the unrolled SX.
 Per joint type, two kernels with the body's data as inputs: `pose` (root to leaves: a child's
 global position, rotation matrix and Euler parameters from its parent's, as
 articulated.kinematics composes them) and `wrench` (leaves to root: the wrench the joint exerts
-on its child, the Newton-Euler balance of the child's subtree, articulated.joint_wrenches). The
-work of each body that needs no recursion (its Euler-parameter rates, accelerations and its
-joint's wrench at the CM) is one kernel mapped over all bodies, and the multipliers one
-mapped call per structure of the joints' rows (joint_system.rows_inputs), over index tables.
+on its child, the Newton-Euler balance of the child's subtree, articulated.joint_wrenches),
+and the two composed over the blocks the ODE's passes call (block_kernels). The work of each
+body that needs no recursion (its Euler-parameter rates, accelerations and its joint's wrench
+at the CM) is one kernel mapped over all bodies, and the multipliers one mapped call per
+structure of the joints' rows (joint_system.rows_inputs), over index tables.
 
 The accelerations of mapped_tree's pass 3 are relative to a frame falling with gravity; the
 bodies' accelerations add gravity back, while the wrench pass takes them as they are (the
