@@ -285,6 +285,8 @@ def test_event_iterations_bound_the_location():
 CONSTANTS = {
     "formulations/mapped_tree.py CONSTANTS": "the size of a body's data in the tree kernels "
                                              "(structure)",
+    "formulations/mapped_tree.py BLOCK": "the joints of a chain one block kernel covers "
+                                         "(structure: the compiled kernels' libraries)",
     "formulations/mapped_rows.py POSE_CONSTANTS": "the size of a joint's pose data in the tree "
                                                   "kernels (structure)",
     "formulations/mapped_rows.py MAX_ROWS": "the most rows of a tree joint (structure: the "

@@ -1,7 +1,7 @@
-"""The per-joint kernels of a mapped tree (formulations/mapped_tree.py: the ODE's passes;
-formulations/mapped_rows.py: the results rows' pose and wrench passes) compiled once per joint
-type into a shared library of the compiled-model cache, and loaded from it in every later
-process.
+"""The per-joint kernels of a mapped tree (formulations/mapped_tree.py: the ODE's passes, for one
+joint and for a block of a chain's joints; formulations/mapped_rows.py: the results rows' pose
+and wrench passes) compiled once per joint type into a shared library of the compiled-model
+cache, and loaded from it in every later process.
 
 The kernels depend on the joint type alone (a body's data is an input), so one library per
 joint type serves every model, and one more holds the kernels every tree calls (the per-body
@@ -33,15 +33,16 @@ from casmech.formulations.tree import Tree
 from casmech.model.ir import ModelIR
 
 CONTENT = {"kind": "tree kernels", "passes": list(mapped_tree.PASSES),
-           "constants": [mapped_tree.CONSTANTS, mapped_rows.POSE_CONSTANTS]}
+           "constants": [mapped_tree.CONSTANTS, mapped_rows.POSE_CONSTANTS],
+           "block": mapped_tree.BLOCK}
 
 
 def _functions(kind: str) -> dict[str, ca.Function]:
     """A joint type's kernels (the ODE's and the results rows'), the ODE's with their forward
     derivatives under the names casadi.external looks them up."""
-    ode = mapped_tree.kernels(kind)
+    ode = mapped_tree.kernels(kind) | mapped_tree.block_kernels(kind)
     return ode | {f"fwd1_{name}": f.forward(1) for name, f in ode.items()} | \
-        mapped_rows.kernels(kind)
+        mapped_rows.kernels(kind) | mapped_rows.block_kernels(kind)
 
 
 def compiled(kinds, root: Path | None = None, toolchain: build.Toolchain | None = None

@@ -6,10 +6,11 @@ relative_states), without the unrolled SX.
 Per joint type, two kernels with the body's data as inputs: `pose` (root to leaves: a child's
 global position, rotation matrix and Euler parameters from its parent's, as
 articulated.kinematics composes them) and `wrench` (leaves to root: the wrench the joint exerts
-on its child, the Newton-Euler balance of the child's subtree, articulated.joint_wrenches). The
-work of each body that needs no recursion (its Euler-parameter rates, accelerations and its
-joint's wrench at the CM) is one kernel mapped over all bodies, and the multipliers one
-mapped call per structure of the joints' rows (joint_system.rows_inputs), over index tables.
+on its child, the Newton-Euler balance of the child's subtree, articulated.joint_wrenches),
+and the two composed over the blocks the ODE's passes call (block_kernels). The work of each
+body that needs no recursion (its Euler-parameter rates, accelerations and its joint's wrench
+at the CM) is one kernel mapped over all bodies, and the multipliers one mapped call per
+structure of the joints' rows (joint_system.rows_inputs), over index tables.
 
 The accelerations of mapped_tree's pass 3 are relative to a frame falling with gravity; the
 bodies' accelerations add gravity back, while the wrench pass takes them as they are (the
@@ -73,6 +74,47 @@ def kernels(kind: str) -> dict[str, ca.Function]:
 
 
 @cache
+def block_kernels(kind: str, size: int = mapped_tree.BLOCK) -> dict[str, ca.Function]:
+    """The pose and wrench kernels of `size` consecutive joints of a chain (mapped_tree.
+    block_kernels' runs), by mapped_tree.block_name: the single-joint ones composed in SX,
+    with the joints' theta, data, V, a stacked; pose -> (r, A side by side, p) of every joint
+    from the first one's parent's; wrench -> (every joint's wrench on its child, stacked; the
+    first one's back in its parent's frame), `children` those of the last joint's child."""
+    single = kernels(kind)
+    n_q = MOTIONS[kind].n_q
+    theta = ca.SX.sym("theta", n_q * size)
+    pose_data = ca.SX.sym("pose_data", POSE_CONSTANTS * size)
+    data = ca.SX.sym("data", mapped_tree.CONSTANTS * size)
+    v, a, children = ca.SX.sym("v", 6 * size), ca.SX.sym("a", 6 * size), ca.SX.sym("children", 6)
+    r_p, a_p, p_p = ca.SX.sym("r_parent", 3), ca.SX.sym("A_parent", 3, 3), ca.SX.sym("p_parent",
+                                                                                     4)
+
+    def part(vector, width: int, i: int):
+        return vector[i * width:(i + 1) * width]
+
+    poses, parent = [], (r_p, a_p, p_p)
+    for i in range(size):
+        parent = single[mapped_tree.kernel_name(kind, "pose")](
+            part(theta, n_q, i), part(pose_data, POSE_CONSTANTS, i), *parent)
+        poses.append(parent)
+    pose = ca.Function(mapped_tree.block_name(kind, "pose", size),
+                       [theta, pose_data, r_p, a_p, p_p],
+                       [ca.vertcat(*(x[0] for x in poses)), ca.horzcat(*(x[1] for x in poses)),
+                        ca.vertcat(*(x[2] for x in poses))],
+                       ["theta", "pose_data", "r_parent", "A_parent", "p_parent"],
+                       ["r", "A", "p"])
+    wrenches, back = [None] * size, children
+    for i in reversed(range(size)):
+        wrenches[i], back = single[mapped_tree.kernel_name(kind, "wrench")](
+            part(theta, n_q, i), part(data, mapped_tree.CONSTANTS, i), part(v, 6, i),
+            part(a, 6, i), back)
+    wrench = ca.Function(mapped_tree.block_name(kind, "wrench", size),
+                         [theta, data, v, a, children], [ca.vertcat(*wrenches), back],
+                         ["theta", "data", "v", "a", "children"], ["wrench", "back"])
+    return {f.name(): f for f in (pose, wrench)}
+
+
+@cache
 def body_rows() -> ca.Function:
     """(sign, p, A, V, a, wrench, C_c, s_c, g) -> (p sign, r_dot, p_dot, r_ddot, p_ddot, the
     wrench at the CM in body axes) of one body: V, a (relative to the falling frame) and the
@@ -103,11 +145,19 @@ def multipliers(rows: int) -> ca.Function:
 def pose_data(tree: Tree) -> np.ndarray:
     """Every tree joint's pose data (POSE_CONSTANTS rows, one column per joint)."""
     columns = np.empty((POSE_CONSTANTS, len(tree.joints)))
+    quaternions: dict[bytes, np.ndarray] = {}  # by matrix (the frames' axes repeat)
+
+    def quaternion(matrix: np.ndarray) -> np.ndarray:
+        key = matrix.tobytes()
+        if key not in quaternions:
+            quaternions[key] = from_matrix(matrix)
+        return quaternions[key]
+
     for k, joint in enumerate(tree.joints):
         (c_p, s_p), (c_c, s_c) = ((np.asarray(m, float), np.asarray(o, float))
                                   for m, o in (joint.parent_frame, joint.child_frame))
         columns[:, k] = np.concatenate([s_p, c_p.ravel("F"), c_c.ravel("F"), s_c,
-                                        from_matrix(c_p), from_matrix(c_c)])
+                                        quaternion(c_p), quaternion(c_c)])
     return columns
 
 
@@ -118,30 +168,44 @@ class Rows:
     def __init__(self, ir: ModelIR, tree: Tree, passes: mapped_tree.Passes,
                  functions: Mapping[str, ca.Function]):
         self.ir, self.tree, self.passes = ir, tree, passes
-        self.kernel = lambda kind, step: mapped_tree.kernel_of(functions, kind, step, kernels)
         self.functions = functions
+
+    def kernel(self, kind: str, step: str, count: int) -> ca.Function:
+        """The pose or wrench kernel of one joint (count 1) or of a block of `count`."""
+        if count == 1:
+            return mapped_tree.kernel_of(self.functions, kind, step, kernels)
+        name = mapped_tree.block_name(kind, step, count)
+        return self.functions[name] if name in self.functions else \
+            block_kernels(kind, count)[name]
 
     def motion(self, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row (joint_system.build's motion)."""
         ir, tree, passes = self.ir, self.tree, self.passes
         joints, nb = tree.joints, ir.n_bodies
-        data = pose_data(tree)
+        columns = pose_data(tree)
+        # per run of the passes (one joint or a block), its pose data: one constant, split
+        data = ca.vertsplit(ca.MX(ca.DM(columns.ravel("F"))),
+                            [POSE_CONSTANTS * k for k, *_ in passes.runs] +
+                            [POSE_CONSTANTS * len(joints)])
         index = passes.index
         r, a_rot, p = [None] * len(joints), [None] * len(joints), [None] * len(joints)
         ground = (ca.MX(ca.DM.zeros(3)), ca.MX(ca.DM.eye(3)), ca.MX(ca.DM([1, 0, 0, 0])))
-        for k, j in enumerate(joints):
+        for run, (k, count, theta, _, _, _) in enumerate(passes.runs):
+            j = joints[k]
             parent = ground if j.parent == GROUND_INDEX else (
                 r[index[j.parent]], a_rot[index[j.parent]], p[index[j.parent]])
-            r[k], a_rot[k], p[k] = self.kernel(j.type, "pose").call(
-                [passes.theta[k], ca.MX(ca.DM(data[:, k])), *parent])
+            outputs = self.kernel(j.type, "pose", count).call([theta, data[run], *parent])
+            r[k:k + count], a_rot[k:k + count], p[k:k + count] = (
+                (ca.vertsplit(outputs[0], 3), ca.horzsplit(outputs[1], 3),
+                 ca.vertsplit(outputs[2], 4)) if count > 1 else ([x] for x in outputs))
         passed: list[list] = [[] for _ in joints]
         wrench = [None] * len(joints)
         zero6 = ca.MX(ca.DM.zeros(6, 1))
-        for k in reversed(range(len(joints))):
+        for k, count, theta, body, v, a in reversed(passes.runs):
             j = joints[k]
-            wrench[k], back = self.kernel(j.type, "wrench").call(
-                [passes.theta[k], passes.data[k], passes.v[k], passes.a[k],
-                 mapped_tree.total(passed[k], zero6)])
+            stacked, back = self.kernel(j.type, "wrench", count).call(
+                [theta, body, v, a, mapped_tree.total(passed[k + count - 1], zero6)])
+            wrench[k:k + count] = ca.vertsplit(stacked, 6) if count > 1 else [stacked]
             if j.parent != GROUND_INDEX:
                 passed[index[j.parent]].append(back)
         order = [index[b] for b in range(nb)]  # body -> its tree joint

@@ -43,8 +43,8 @@ class Poses:
     def __init__(self, model: ResolvedModel):
         self.joints = {j.name: j for j in model.joints}
         self.index = {b.name: k for k, b in enumerate(model.bodies)} | {GROUND: GROUND_INDEX}
-        self.pose = {b.name: (b.position, traced.numeric(euler.rotation, b.euler_parameters))
-                     for b in model.bodies}
+        self.pose = {b.name: (b.position, rotation)
+                     for b, rotation in zip(model.bodies, _rotations(model.bodies), strict=True)}
         self.pose[GROUND] = (np.zeros(3), np.eye(3))
         self.quaternion = {b.name: traced.asarray(b.euler_parameters) for b in model.bodies}
         self.quaternion[GROUND] = np.array([1.0, 0.0, 0.0, 0.0])
@@ -57,6 +57,17 @@ class Poses:
         """A joint by name and its global joint frame at t = 0 (joint_frame)."""
         joint = self.joints[name]
         return joint, joint_frame(joint)
+
+
+def _rotations(bodies) -> list:
+    """Each body's rotation matrix A(p) at its Euler parameters in the file: traced.numeric's,
+    by one mapped call over the bodies when none is traced (the same arithmetic per body)."""
+    if any(traced.is_traced(b.euler_parameters) for b in bodies) or not bodies:
+        return [traced.numeric(euler.rotation, b.euler_parameters) for b in bodies]
+    columns = np.column_stack([np.asarray(traced.value(b.euler_parameters), float).reshape(-1)
+                               for b in bodies])
+    matrices = euler.numeric_columns(euler.rotation, columns)
+    return [np.ascontiguousarray(matrices[:, 3 * k:3 * k + 3]) for k in range(len(bodies))]
 
 
 def joint_frame(joint: Joint) -> dict[str, np.ndarray]:
@@ -219,7 +230,21 @@ def lower_force(force: Force, model: ResolvedModel, poses: Poses) -> ForceIR:
     return ForceIR(force.name, force.type, **fields, source=force.source)
 
 
+# the last model lowered and its IR: a run lowers its model twice (backends.codegen.auto_mode
+# looks its library up, then backends.compile builds its functions); both are frozen records
+_LAST: list[tuple[ResolvedModel, ModelIR]] = []
+
+
 def lower(model: ResolvedModel) -> ModelIR:
+    """The model's IR (the same IR again for the model lowered last)."""
+    if _LAST and _LAST[0][0] is model:
+        return _LAST[0][1]
+    ir = _lowered(model)
+    _LAST[:] = [(model, ir)]
+    return ir
+
+
+def _lowered(model: ResolvedModel) -> ModelIR:
     poses = Poses(model)
     primitives: list[PrimitiveIR] = []
     joints: list[JointIR] = []

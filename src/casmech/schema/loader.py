@@ -378,7 +378,9 @@ class _Builder:
         return Source(self.file, start.line + 1, start.column + 1 + quote)
 
     def source_map(self) -> SourceMap:
-        values, keys, scalars = (dict(_expanded(log)) for log in self.logs)
+        # (with no alias, no log holds a copy to write out)
+        values, keys, scalars = (dict(_expanded(log) if self.anchors else log)
+                                 for log in self.logs)
         return SourceMap(values, keys, scalars, frozenset(self.nulls))
 
 

@@ -5,13 +5,14 @@ as body wrenches instead of the ground's acceleration): the ODE, the results row
 relative poses at random states of several tree shapes, and `supported` refusing what the
 kernels do not cover."""
 
+import casadi as ca
 import numpy as np
 import pytest
 
 import casmech
 from casmech.elements.joint_types import MOTIONS
 from casmech.formulations import mapped_system, mapped_tree
-from casmech.formulations.joint_system import build
+from casmech.formulations.joint_system import build, layout
 from casmech.formulations.tree import spanning_tree
 from tests.conftest import MODELS
 
@@ -197,12 +198,49 @@ def test_a_parametric_tree_is_not_supported():
 
 
 def test_kernels_depend_on_the_joint_type_alone():
-    """Two chains of different lengths and body data call the same kernel Functions."""
-    for n in (2, 5):
+    """Chains of different lengths and body data call the same kernel Functions: the
+    single-joint ones, and the block ones where the chain has BLOCK joints in a row."""
+    singles = {mapped_tree.kernel_name("spherical", step) for step in mapped_tree.PASSES}
+    blocks = {mapped_tree.block_name("spherical", step, mapped_tree.BLOCK)
+              for step in mapped_tree.PASSES}
+    for n, expected in ((2, singles), (mapped_tree.BLOCK + 1, singles | blocks)):
         ir = casmech.compile(casmech.loads(spherical_chain(n))).ir
         ode = mapped_tree.tree_ode(ir, spanning_tree(ir))
-        called = {f.name() for f in ode.find_functions()}
-        assert called == {mapped_tree.kernel_name("spherical", step)
-                          for step in mapped_tree.PASSES}
-        # three calls per body and their outputs, not the unrolled recursion's instructions
+        assert {f.name() for f in ode.find_functions()} == expected
+        # at most three calls per body and their outputs, not the unrolled recursion's
+        # instructions
         assert ode.n_instructions() < 20 * n + 20
+
+
+def branched_chain(n: int, branch: int) -> str:
+    """spherical_chain(n) with one more bar on a spherical joint at bar `branch`."""
+    extra = (f"  - {{name: side, mass: 0.5, inertia: [0.01, 0.02, 0.02], "
+             f"position: [{branch - 0.5}, 0.5, 0]}}\n")
+    text = spherical_chain(n, 0.01).replace("joints:\n", extra + "joints:\n")
+    return text.replace("analysis:", f"  - {{name: js, type: spherical, body_i: bar{branch}, "
+                        f"body_j: side, at: [{branch - 0.5}, 0, 0]}}\nanalysis:")
+
+
+def test_blocks_cover_runs_of_a_chain_and_equal_the_single_joint_kernels():
+    """A block covers BLOCK joints in a row of a chain, none across a body with a second
+    child; the passes over blocks give the single-joint passes' values."""
+    ir = casmech.compile(casmech.loads(branched_chain(11, 3))).ir
+    tree = spanning_tree(ir)
+    runs = mapped_tree.segments(tree)
+    for first, count in runs:
+        chain = tree.joints[first:first + count]
+        assert count in (1, mapped_tree.BLOCK)
+        assert all(b.parent == a.child for a, b in zip(chain[:-1], chain[1:], strict=True))
+        # every body inside a block has the block's next joint as its only child
+        assert all(sum(j.parent == a.child for j in tree.joints) == 1 for a in chain[:-1])
+    assert sorted(k for first, count in runs for k in range(first, first + count)) == \
+        list(range(len(tree.joints)))
+    assert any(count > 1 for _, count in runs)  # (some joints run in blocks)
+    n_x = layout(tree).n_x
+    x = ca.MX.sym("x", n_x)
+    blocked, single = (ca.Function("f", [x], [p.ode, *p.v, *p.a]) for p in (
+        mapped_tree.Passes(ir, tree, x), mapped_tree.Passes(ir, tree, x, size=1)))
+    state = RNG.uniform(-0.9, 0.9, n_x)
+    for a, b in zip(_values(single(state)), _values(blocked(state)), strict=True):
+        # the same kernels' arithmetic, inlined into the blocks: equal to roundoff
+        np.testing.assert_allclose(b, a, rtol=0, atol=1e-14 * np.abs(a).max(initial=1.0))
