@@ -12,7 +12,8 @@ left arm, Solo12 (fixed base). Each engine reads the same URDF copy:
 - casmech: `casmech.importers.urdf.import_urdf` (posed at the initial state) written to YAML
   without the stops it makes of the URDF limits (below); timed: `casmech.load` +
   `casmech.compile(model, "auto")` (with an empty cache interpreted, as the API's default
-  `casmech.compile(model)` is: what a first run gets) +
+  `casmech.compile(model)` is: what a first run gets; the library it would build behind for
+  the next call is left out here, and that next call is the compiled one below) +
   `casmech.analyze(..., "dynamics", t_end=1, rtol=r, atol=r/100)`,
   then the same analyze again on the same functions (the integrator built); the same with
   `compile(model, "compiled")` from a warm cache; the cold build (`compile(model,
@@ -265,6 +266,10 @@ def error(centres: dict[str, np.ndarray], reference: dict[str, np.ndarray]) -> f
 
 @contextlib.contextmanager
 def cache_dir(path: Path):
+    """CASMECH_CACHE_DIR = path for the block. The default call's background build stays off
+    (CASMECH_BACKGROUND_BUILD=0, set by main): the empty cache must stay empty, and a build
+    behind would share the cores with the engines timed next; benchmarks/first_runs.py measures
+    the first and next runs with it."""
     old = os.environ.get("CASMECH_CACHE_DIR")
     os.environ["CASMECH_CACHE_DIR"] = str(path)
     try:
@@ -763,6 +768,7 @@ def table(rows: list[dict]) -> str:
 
 
 def main() -> None:
+    os.environ["CASMECH_BACKGROUND_BUILD"] = "0"  # cache_dir's docstring
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robots", nargs="+", default=list(URDFS), choices=list(URDFS))
     parser.add_argument("--repeats", type=int, default=3, help="timed runs of each engine")
