@@ -99,7 +99,9 @@ def add_arguments(parser) -> None:
     parser.add_argument("--mode", choices=api.COMPILE_MODES,
                         help="compiled C (built once, cached) or interpreted CasADi functions "
                              "(default auto: compiled when cached or from 200 bodies, but "
-                             "trees in joint coordinates; else interpreted)")
+                             "trees in joint coordinates; else interpreted while a niced "
+                             "process builds the library for the next run, unless "
+                             "$CASMECH_BACKGROUND_BUILD=0)")
     talk = parser.add_mutually_exclusive_group()
     talk.add_argument("--quiet", "-q", action="store_true",
                       help="print nothing but errors: no progress bar, summary, events, notes "
