@@ -625,72 +625,6 @@ def compare_builds(names: list[str], commit: str, repeats: int, seed: int, log) 
     return "\n".join(lines)
 
 
-# -- method auto's choice -------------------------------------------------------------------
-
-def stiffness(functions) -> tuple[float, float]:
-    """(rho h, decay h): the spectral radius of the tree ODE's Jacobian at t0 and its largest
-    -Re(lambda) (method auto's probe, runtime.stiffness) times the 0.01 s output step."""
-    from casmech.numerics import lazy_jacobian
-    from casmech.runtime import joint_dynamics
-    from casmech.runtime.workspace import of
-
-    workspace = of(functions, None)
-    system = joint_dynamics.joint_system(functions, joint_dynamics.DEFAULT, workspace)
-    x, *_ = joint_dynamics._start(functions, system, 0.0, joint_dynamics.DEFAULT.assembly,
-                                  workspace)
-    x = np.asarray(x, float)
-    jacobian = lazy_jacobian.jacobian(system.dynamics)(0.0, x, system.dynamics(0.0, x))[1]
-    eigenvalues = np.linalg.eigvals(np.array(jacobian.full()))
-    return 0.01 * np.abs(eigenvalues).max(), 0.01 * max(0.0, -eigenvalues.real.min())
-
-
-def method_study(names: list[str], seed: int, repeats: int, log) -> str:
-    """Each robot compiled, 1 s by Adams and by BDF: rho h and decay h at t0 (stiffness),
-    method auto's pick, and per method the loosest half-decade rtol reaching LEVEL against the
-    reference, its error and the repeated call's CPU time (median of `repeats` x 5 calls in
-    one process)."""
-    import casmech
-
-    lines = ["| robot | rho h | decay h | auto picks | Adams: rtol, error m, steps, again ms | "
-             "BDF: rtol, error m, steps, again ms | BDF / Adams |", "|---|---|---|---|---|---|---|"]
-    with tempfile.TemporaryDirectory(prefix="robots-methods-") as tmp:
-        for name in names:
-            folder = Path(tmp) / name
-            folder.mkdir()
-            robot = Robot(name, folder)
-            q0, v0 = robot.draw_state(np.random.default_rng(seed))
-            run = robot.pin_run(q0, v0, "DOP853", 1e-13, 1e-13)
-            reference = robot.centres_pin(run.y[:robot.pin.nv, -1])
-            yaml = robot.write_casmech(q0, v0, stops=False)
-            with cache_dir(folder / "cache"):
-                functions = casmech.compile(casmech.load(yaml), "compiled")
-                auto = casmech.analyze(functions, "dynamics", t_end=T_END, rtol=1e-7,
-                                       atol=1e-9).metadata["method"]
-                cells, again = [], {}
-                for method in ("adams", "bdf"):
-                    for rtol in CASMECH_RTOLS:
-                        result = casmech.analyze(functions, "dynamics", t_end=T_END, rtol=rtol,
-                                                 atol=rtol / 100, method=method)
-                        e = error(Robot.centres_casmech(result), reference)
-                        if e <= LEVEL:
-                            break
-                    times = []
-                    for _ in range(5 * repeats):
-                        start = time.process_time()
-                        casmech.analyze(functions, "dynamics", t_end=T_END, rtol=rtol,
-                                        atol=rtol / 100, method=method)
-                        times.append(time.process_time() - start)
-                    again[method] = statistics.median(times)
-                    cells.append(f"{rtol:g}, {e:.1e}, {result.metadata['steps']}, "
-                                 f"{1e3 * again[method]:.2f}")
-                rho_h, decay_h = stiffness(functions)
-            line = (f"| {LABELS[name]} | {rho_h:.2f} | {decay_h:.2f} | {auto} | {cells[0]} | "
-                    f"{cells[1]} | {again['bdf'] / again['adams']:.2f} |")
-            log(line)
-            lines.append(line)
-    return "\n".join(lines)
-
-
 # -- output -----------------------------------------------------------------------------------
 
 def header() -> str:
@@ -780,9 +714,6 @@ def main() -> None:
     parser.add_argument("--compare-builds", metavar="COMMIT", help="instead: the cold build "
                         "and compiled run of each robot by src/ at COMMIT and by this checkout, "
                         "alternating, --repeats times each")
-    parser.add_argument("--methods", action="store_true", help="instead: each robot compiled "
-                        "by Adams and by BDF (method auto's choice: rho h, rtol reaching 1e-7 m, "
-                        "repeated call)")
     parser.add_argument("--cold-build-worker", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.cold_build_worker:
@@ -796,12 +727,6 @@ def main() -> None:
     def log(text: str) -> None:
         print(f"# {text}", flush=True)
 
-    if args.methods:
-        os.environ["CASMECH_ALLOWED_DIRS"] = str(robots_folder())
-        table_text = method_study(args.robots, args.seed, args.repeats, log)
-        print(f"\nStarted {started}; load at the end {os.getloadavg()[0]:.1f}\n")
-        print(table_text)
-        return
     if args.compare_builds:
         os.environ["CASMECH_ALLOWED_DIRS"] = str(robots_folder())
         table_text = compare_builds(args.robots, args.compare_builds, args.repeats, args.seed,

@@ -73,14 +73,11 @@ def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
 
 def _bdf(ode: ca.Function, quick_build_instructions: int
          ) -> tuple[dict[str, ca.Function], Toolchain]:
-    """The BDF Jacobian's library: the ODE and its forward derivative, and its toolchain: the
-    library's flags for the derivative, QUICK_FLAGS for the ODE, which is there to name the
-    derivative (casadi's externals find fwd1_<name> beside <name>) and never evaluated (the
-    integrator's right-hand side is the joint library's)."""
+    """The BDF Jacobian's library: the ODE and its forward derivative, and its toolchain (the
+    library's flags, none of its own)."""
     chain = toolchain(ode.n_instructions(), quick_build_instructions)
     return ({"joint_ode": ode, "fwd1_joint_ode": ode.forward(1)},
-            Toolchain(chain.compiler, chain.flags, chain.jobs,
-                      function_flags=(("joint_ode", QUICK_FLAGS),)))
+            Toolchain(chain.compiler, chain.flags, chain.jobs))
 
 
 def keyed_jacobian(content: dict, ode: Callable[[], ca.Function],

@@ -159,9 +159,9 @@ class DynamicsSolver:
                                         open_low=True)
     mu_tolerance: float = option(1.0, "the absolute tolerance of the index-2 DAEs' multiplier "
                                  "mu in IDAS's Newton test", low=0, open_low=True)
-    stiff_threshold: float = option(3.0, "method auto: bdf when the ODE's fastest decay rate at "
-                                    "t0 (the largest -Re of its Jacobian's eigenvalues) times "
-                                    "the output step exceeds this", low=0, open_low=True)
+    stiff_threshold: float = option(10.0, "method auto: bdf when the ODE's fastest eigenvalue at "
+                                    "t0 times the output step exceeds this", low=0,
+                                    open_low=True)
     stiff_states: int = option(200, "method auto examines ODEs of up to this many states (a "
                                "dense eigenproblem); larger ones run adams", low=0)
     singular_pose_ratio: float = option(1e-3, "a run with loops passed near a singular pose "

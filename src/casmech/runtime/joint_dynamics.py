@@ -40,14 +40,14 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
-from casmech.runtime.stiffness import decay_rate
+from casmech.runtime.stiffness import spectral_radius
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
 METHODS = {"adams": {"linear_multistep_method": "adams",
                      "nonlinear_solver_iteration": "functional"},
            "bdf": {"linear_multistep_method": "bdf", "nonlinear_solver_iteration": "newton"}}
-# method auto: BDF when the ODE's fastest decay rate at t0 times the output step exceeds
+# method auto: BDF when the ODE's fastest eigenvalue at t0 times the output step exceeds
 # stiff_threshold (the measurements behind it: docs/decisions/method-auto.md).
 
 # On a compiled bundle the tree's functions are unrolled SX compiled to C, whose build grows
@@ -322,17 +322,17 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
-    solution follows, so it is not examined. The fastest decay rate at (t0, x0)
+    solution follows, so it is not examined. The spectral radius at (t0, x0)
     (runtime.stiffness) depends on the system and the start alone: kept in `workspace`."""
     if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
         return "adams"  # (compiled_system compiles the derivative this needs up to this size)
     x0 = np.asarray(x0, float)
-    rate = decay_rate(system, t0, x0) if workspace is None else workspace.kept(
+    radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),
-        lambda: decay_rate(system, t0, x0))
-    if rate is None:
+        lambda: spectral_radius(system, t0, x0))
+    if radius is None:
         return "adams"
-    return "bdf" if rate * step > settings.stiff_threshold else "adams"
+    return "bdf" if radius * step > settings.stiff_threshold else "adams"
 
 
 def _start(functions: SystemFunctions, system: JointSystem, t0: float,

@@ -1,8 +1,5 @@
-"""The stiffness probe of method auto (runtime.joint_dynamics.choose_method): the fastest decay
-rate of the tree ODE's linearization at the run's start, the largest -Re(lambda) over the
-eigenvalues lambda of its Jacobian. A mode that decays that fast is what BDF steps over and
-Adams must resolve; a fast mode that oscillates (a stiff spring lightly damped) both methods
-resolve alike, so its frequency is not counted (docs/decisions/method-auto.md)."""
+"""The stiffness probe of method auto (runtime.joint_dynamics.choose_method): the spectral
+radius of the tree ODE's Jacobian at the run's start."""
 
 from __future__ import annotations
 
@@ -12,10 +9,10 @@ from casmech.formulations.joint_system import JointSystem
 from casmech.numerics import lazy_jacobian
 
 
-def decay_rate(system: JointSystem, t0: float, x0: np.ndarray) -> float | None:
-    """The largest -Re(lambda) over the eigenvalues of the tree ODE's Jacobian at (t0, x0), at
-    least 0; None where the Jacobian is not finite (a law not differentiable at t0, or worse:
-    the first results row then says so), so that there is no stiffness to judge by."""
+def spectral_radius(system: JointSystem, t0: float, x0: np.ndarray) -> float | None:
+    """The largest eigenvalue modulus of the tree ODE's Jacobian at (t0, x0); None where the
+    Jacobian is not finite (a law not differentiable at t0, or worse: the first results row
+    then says so), so that there is no stiffness to judge by."""
     rate = system.dynamics(t0, x0)
     # one evaluation: by forward sweeps, built in a fraction of the RNEA identity's build time
     # (which a run on functional iteration never needs), unless a library gives one
@@ -23,4 +20,4 @@ def decay_rate(system: JointSystem, t0: float, x0: np.ndarray) -> float | None:
     jacobian = np.array(probe(t0, x0, rate)[1].full())
     if not np.all(np.isfinite(jacobian)):
         return None
-    return max(0.0, float(-np.min(np.linalg.eigvals(jacobian).real)))
+    return float(np.max(np.abs(np.linalg.eigvals(jacobian))))
