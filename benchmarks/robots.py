@@ -3,7 +3,6 @@ in one run (issue 36's robots).
 
     python benchmarks/robots.py                        # the six variants, 3 repeats, ~15 min
     python benchmarks/robots.py --robots ur5 solo12 --repeats 5 --builds 1
-    python benchmarks/robots.py --methods              # Adams and BDF per robot (method auto)
 
 The variants: UR5, Panda with free fingers (its URDF without <mimic>: two independent finger
 slides) and with locked fingers (the finger joints made fixed), Kinova j2s6s200, the Talos
