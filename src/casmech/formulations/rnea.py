@@ -61,7 +61,10 @@ def forward_derivatives(inverse, acceleration, at, wrt: list) -> list:
     nv = acceleration.numel()
     if not nv:
         return [ca.SX(0, x.numel()) for x in wrt] + [ca.SX(0, 0)]
-    upper = ca.chol(ca.jacobian(inverse, acceleration))  # M = R^T R
+    mass = ca.jacobian(inverse, acceleration)
+    if not mass.sparsity().is_symmetric():  # symmetric in value, not always in structure (a
+        mass = (mass + mass.T) / 2          # free joint's rows): chol needs both
+    upper = ca.chol(mass)  # M = R^T R
 
     def solve(rhs):
         return ca.solve(upper, ca.solve(upper.T, rhs))
