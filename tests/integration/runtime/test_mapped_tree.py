@@ -70,7 +70,7 @@ def test_without_compiled_kernels_the_tree_is_built_unrolled(monkeypatch):
     kernels interpreted in an MX graph, with the kernels' warning."""
 
     monkeypatch.setenv("CC", "no-such-compiler-cc")
-    functions = casmech.compile(casmech.loads(spherical_chain(3)))
+    functions = casmech.compile(casmech.loads(spherical_chain(3)), "interpreted")
     with pytest.warns(UserWarning, match="built unrolled"):
         system = joint_system(functions, MAPPED)
     assert system.dynamics.is_a("SXFunction")
