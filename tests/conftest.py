@@ -2,7 +2,10 @@
 generators, and the markers `unit`, `integration` and `validation` given by folder
 (tests/README.md)."""
 
+import os
 import re
+import shutil
+import tempfile
 from pathlib import Path
 
 import casadi as ca
@@ -24,6 +27,26 @@ def kind_of(path) -> str | None:
     """The kind folder ("unit", "integration", "validation") holding a test file, or None."""
     parts = Path(path).resolve().relative_to(TESTS).parts
     return parts[0] if len(parts) > 1 and parts[0] in KINDS else None
+
+
+CACHE_VARIABLES = ("CASMECH_CACHE_DIR", "XDG_CACHE_HOME", "MPLCONFIGDIR")
+_SESSION_CACHES: list[str] = []
+
+
+def pytest_configure(config):
+    """Before any fixture (a module- or session-scoped one is made before the per-test
+    private_caches below): the caches point into a temporary folder of the session's and no
+    library is built behind a run, so that nothing a test does writes to the user's caches."""
+    folder = tempfile.mkdtemp(prefix="casmech-tests-")
+    _SESSION_CACHES.append(folder)
+    for name in CACHE_VARIABLES:
+        os.environ[name] = str(Path(folder) / name.lower())
+    os.environ["CASMECH_BACKGROUND_BUILD"] = "0"
+
+
+def pytest_unconfigure(config):
+    for folder in _SESSION_CACHES:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def pytest_collection_modifyitems(config, items):

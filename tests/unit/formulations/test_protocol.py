@@ -72,7 +72,7 @@ def baumgarte():
 
 @pytest.fixture(scope="module")
 def pendulums():
-    return {name: casmech.compile(casmech.load(MODELS / f"{name}.yaml"))
+    return {name: casmech.compile(casmech.load(MODELS / f"{name}.yaml"), "interpreted")
             for name in ("pendulum", "double_pendulum")}
 
 
@@ -208,7 +208,8 @@ def test_a_registered_formulation_in_a_file(tmp_path, baumgarte):
 def test_builtins_through_the_protocol(name, model, pendulums):
     """Each built-in formulation's System and Start, integrated by the generic driver, give
     its own run's motion (both at rtol 1e-10)."""
-    functions = pendulums.get(model) or casmech.compile(casmech.load(MODELS / f"{model}.yaml"))
+    functions = pendulums.get(model) or casmech.compile(casmech.load(MODELS / f"{model}.yaml"),
+                                                        "interpreted")
     asked = formulation_run.Run(0.0, 1.0, 0.01, RTOL, ATOL,
                                 DynamicsOptions(formulation=name))
     own = formulation_run.run(functions, name, asked)
