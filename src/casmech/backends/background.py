@@ -52,18 +52,24 @@ def start(model, toolchain, root: Path | None, key: str) -> subprocess.Popen | N
     if key in _started:
         return None
     _started.add(key)
-    handle, path = tempfile.mkstemp(prefix="casmech-background-", suffix=".pickle")
-    with os.fdopen(handle, "wb") as stream:
-            pickle.dump((model, toolchain, None if root is None else str(root), key), stream)
     env = dict(os.environ)
     package_root = Path(__file__).resolve().parents[2]
     if package_root.name not in ("site-packages", "dist-packages"):  # this casmech, from src
         env["PYTHONPATH"] = os.pathsep.join(
             [str(package_root)] + ([env["PYTHONPATH"]] if env.get("PYTHONPATH") else []))
-    child = subprocess.Popen(  # noqa: S603 - this interpreter, this module, our own file
-        [sys.executable, "-m", CHILD, path],
-        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        env=env, close_fds=True, start_new_session=True)
+    path = None
+    try:
+        handle, path = tempfile.mkstemp(prefix="casmech-background-", suffix=".pickle")
+        with os.fdopen(handle, "wb") as stream:
+            pickle.dump((model, toolchain, None if root is None else str(root), key), stream)
+        child = subprocess.Popen(  # noqa: S603 - this interpreter, this module, our own file
+            [sys.executable, "-m", CHILD, path],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            env=env, close_fds=True, start_new_session=True)
+    except (OSError, pickle.PicklingError, TypeError, AttributeError):  # no room for the
+        if path is not None:  # file, an unpicklable model, no process: no build, and the run
+            Path(path).unlink(missing_ok=True)  # that asked goes on interpreted
+        return None
     _children.append(child)
     return child
 

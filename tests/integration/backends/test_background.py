@@ -124,3 +124,14 @@ def test_a_build_under_way_is_a_miss(building):
         assert codegen.auto_mode(model) == "interpreted"
     assert not background.running(entry.name, building)
     assert codegen.auto_mode(model) == "compiled"
+
+
+def test_a_model_that_cannot_be_handed_over_is_not_built(building, tmp_path):
+    """Nothing the background build fails on reaches the run that asked: an object pickle
+    refuses starts no process and leaves no file behind."""
+    def local():  # a local function: pickle refuses it
+        return 0
+
+    assert background.start(local, None, building, "key") is None
+    assert background._children == []
+    assert not list((tmp_path / "tmp").glob("casmech-background-*"))
