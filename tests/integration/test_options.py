@@ -293,6 +293,7 @@ CONSTANTS = {
                                             "multipliers' compiled kernels)",
     "runtime/assembly.py MAX_CONTINUATION": "continuation steps: a bound on the time to fail",
     "runtime/buffers.py BLOCK": "columns per mapped call (batch work)",
+    "runtime/buffers.py MAP_ENTRIES": "numbers per mapped call (map construction time)",
     "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",
     "runtime/events.py ULPS": "the narrowest bracket, a roundoff floor",
     "runtime/nonfinite.py ONE_ARRAY": "rows checked in one NumPy call (call overhead, memory)",

@@ -117,23 +117,29 @@ class NamedCall:
             return {}
 
 
-# Columns per mapped call. casadi builds a Map in time growing with its length and the
-# function's size, so columns are evaluated in blocks of this many through kept maps (one per
-# block length: BLOCK and the lengths of shorter blocks, at most KEPT_MAPS); a call's own cost
-# is small beside its columns' (docs/decisions/output-blocks.md).
+# Columns per mapped call. casadi builds a Map in time growing with its length times the
+# function's size, so columns are evaluated in blocks of up to BLOCK, and of at most
+# MAP_ENTRIES input and output numbers, through kept maps (one per block length: the full
+# block's and the lengths of shorter blocks, at most KEPT_MAPS); a call's own cost is small
+# beside its columns' (docs/decisions/output-blocks.md).
 BLOCK = 256
+MAP_ENTRIES = 131_072
 KEPT_MAPS = 8
 
 
 class ColumnCall:
     """function evaluated at every column of its arguments (each with one column per
     evaluation, or one for all; an input of w columns takes w per evaluation), in blocks of
-    up to BLOCK evaluations: per output, the evaluations' outputs side by side."""
+    up to BLOCK evaluations and MAP_ENTRIES numbers: per output, the evaluations' outputs side
+    by side."""
 
     def __init__(self, function: ca.Function):
         self.function = function
         self.widths = [function.size2_in(k) for k in range(function.n_in())]
         self.maps: dict[int, BufferedCall] = {}  # by block length
+        entries = sum(function.nnz_in(k) for k in range(function.n_in())) + sum(
+            function.nnz_out(k) for k in range(function.n_out()))
+        self.block = max(1, min(BLOCK, MAP_ENTRIES // max(entries, 1)))
 
     def _map(self, count: int) -> BufferedCall:
         return kept(self.maps, count, lambda: BufferedCall(self.function.map(count)), KEPT_MAPS)
@@ -148,8 +154,8 @@ class ColumnCall:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
         blocks = []
-        for start in range(0, count, BLOCK):
-            size = min(BLOCK, count - start)
+        for start in range(0, count, self.block):
+            size = min(self.block, count - start)
             blocks.append(self._map(size)(*(
                 (a if size == 1 else np.tile(a, (1, size))) if one
                 else a[:, start * w:(start + size) * w]

@@ -70,6 +70,23 @@ def test_columns_in_blocks_equal_one_mapped_call(monkeypatch, count):
             np.testing.assert_allclose(g, np.array(w), rtol=0, atol=0)
 
 
+def test_blocks_bounded_by_numbers(monkeypatch):
+    """A function with many numbers per evaluation is mapped over fewer columns at a time
+    (MAP_ENTRIES), with the same outputs."""
+    from casmech.runtime import buffers
+
+    x, c = ca.SX.sym("x", 4), ca.SX.sym("c", 3)
+    f = ca.Function("f", [x, c], [ca.vertcat(x * c[0], ca.sum1(c))])
+    monkeypatch.setattr(buffers, "MAP_ENTRIES", 30)  # 4 + 3 in, 5 out: 12 a column, 2 a block
+    call = ColumnCall(f)
+    assert call.block == 2
+    xs, shared = RNG.normal(size=(4, 7)), RNG.normal(size=3)
+    (got,) = call(xs, shared)
+    # the same operations on the same numbers, one evaluation at a time
+    np.testing.assert_allclose(got, np.array(f.map(7)(xs, shared)), rtol=0, atol=0)
+    assert set(call.maps) == {2, 1}  # blocks of 2, 2, 2 and 1
+
+
 def test_each_call_returns_its_own_arrays_and_none_is_zeros(monkeypatch):
     """Bound buffers (small functions) and per-call ones (BOUND_ENTRIES 0) alike: a later
     call leaves an earlier call's outputs as they were; None inputs are zeros, also after a
