@@ -161,7 +161,9 @@ class _Integrate:
         origin, grid = (0.0, np.asarray(times) - t) if relative else (t, np.asarray(times))
         options = dict(self.options)
         if system.n_z:  # IDAS from the consistent state, with its exact derivative
-            x_dot = np.array(system.residual(origin, x, z, p)[0]).ravel()
+            residual = system.residual  # a compiled DAE's has IDAS's u (empty) after p
+            u = [np.zeros(residual.size_in(k)) for k in range(4, residual.n_in())]
+            x_dot = np.array(residual(origin, x, z, p, *u)[0]).ravel()
             options |= {"calc_ic": False, "init_xdot": list(x_dot), "suppress_algebraic": True}
         options |= self.formulation.integrator_options(
             self.functions, system, origin, np.asarray(x, float), np.asarray(z, float), p,
