@@ -22,19 +22,19 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
-import resource
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
+
+from process_race import timed  # noqa: E402
+from scaling import header as machine  # noqa: E402
 
 CLI = "import sys; from casmech.cli import main; sys.exit(main())"
 API = ("import sys, casmech; casmech.analyze(casmech.compile(casmech.load(sys.argv[1])), "
@@ -73,18 +73,6 @@ def model_file(name: str, work: Path) -> Path:
     return path
 
 
-def timed(command: list[str], env: dict) -> tuple[float, float]:
-    """(wall, CPU user + sys) of one process [s]."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    start = time.perf_counter()
-    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=900)
-    wall = time.perf_counter() - start
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    if done.returncode != 0:
-        raise SystemExit(f"{' '.join(command)} failed ({done.returncode}):\n{done.stderr}")
-    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-
-
 def ready_after(model: Path, cache: Path, env: dict, limit: float = 600.0) -> float:
     """Seconds until the cache holds the model's library (polled every 0.25 s)."""
     start = time.perf_counter()
@@ -118,12 +106,7 @@ def one_round(model: Path, t_end: float, work: Path, base: dict, tag: str,
 
 
 def header(args) -> str:
-    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
-    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    return (f"{platform.node()}, {os.cpu_count()} cores; Python {platform.python_version()}; "
-            f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC; commit {commit}; load {load}; "
-            f"t_end {args.t_end:g} s; medians of {args.repeats}")
+    return f"{machine()}; t_end {args.t_end:g} s; medians of {args.repeats}"
 
 
 def main() -> None:

@@ -33,23 +33,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import casmech_model  # noqa: E402
 import systems  # noqa: E402
+from fixed_costs import _timed  # noqa: E402
 
 from reference import Planar  # noqa: E402
 
 COUNTERS = ("nsteps", "nfevals", "nlinsetups", "netfails", "nncfails")
-
-
-def _timed(owner, name: str, label: str, spent: dict) -> None:
-    original = getattr(owner, name)
-
-    def timed(*args, **kwargs):
-        start = time.process_time()
-        try:
-            return original(*args, **kwargs)
-        finally:
-            spent[label] = spent.get(label, 0.0) + time.process_time() - start
-
-    setattr(owner, name, timed)
 
 
 def _capture(seen: dict) -> None:
