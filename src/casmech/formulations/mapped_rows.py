@@ -172,11 +172,7 @@ class Rows:
 
     def kernel(self, kind: str, step: str, count: int) -> ca.Function:
         """The pose or wrench kernel of one joint (count 1) or of a block of `count`."""
-        if count == 1:
-            return mapped_tree.kernel_of(self.functions, kind, step, kernels)
-        name = mapped_tree.block_name(kind, step, count)
-        return self.functions[name] if name in self.functions else \
-            block_kernels(kind, count)[name]
+        return mapped_tree.kernel_of(self.functions, kind, step, count, kernels, block_kernels)
 
     def motion(self, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row (joint_system.build's motion)."""

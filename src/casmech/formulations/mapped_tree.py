@@ -226,21 +226,26 @@ def _transform(e: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.block([[e, np.zeros((3, 3))], [-e @ skew, e]])
 
 
-def kernel_of(functions: Mapping[str, ca.Function], kind: str, step: str,
-              made=None) -> ca.Function:
-    """A kernel by joint type and step: from `functions` (by kernel_name) where there, else
-    made(kind) (default: kernels, the SX ones)."""
-    name = kernel_name(kind, step)
-    return functions[name] if name in functions else (made or kernels)(kind)[name]
+def kernel_of(functions: Mapping[str, ca.Function], kind: str, step: str, count: int = 1,
+              made=None, blocks=None) -> ca.Function:
+    """A kernel by joint type and step, of one joint or of a block of `count`: from
+    `functions` (by kernel_name, block_name) where there, else made(kind) (default: kernels,
+    the SX ones) or blocks(kind, count) (default: block_kernels)."""
+    if count == 1:
+        name = kernel_name(kind, step)
+        return functions[name] if name in functions else (made or kernels)(kind)[name]
+    name = block_name(kind, step, count)
+    return functions[name] if name in functions else \
+        (blocks or block_kernels)(kind, count)[name]
 
 
 class Passes:
     """The three passes of the articulated-body algorithm over a supported tree at the MX state
-    x = [theta; u] (joint_system's layout), per tree joint: theta, u, the body's data, V and
-    the acceleration a (relative to the ground's -g); `index`: body -> its tree joint; `ode`:
-    the state's rates; `runs`: the segments with their inputs and outputs stacked. The joints
-    are called in `segments`: one call of the block kernels per run of BLOCK joints of a
-    chain, one of the single-joint kernels per other joint."""
+    x = [theta; u] (joint_system's layout), per tree joint: V and the acceleration a (relative
+    to the ground's -g); `index`: body -> its tree joint; `ode`: the state's rates; `runs`:
+    the segments with their inputs and outputs stacked. The joints are called in `segments`:
+    one call of the block kernels per run of BLOCK joints of a chain, one of the single-joint
+    kernels per other joint."""
 
     def __init__(self, ir: ModelIR, tree: Tree, x: ca.MX,
                  functions: Mapping[str, ca.Function] | None = None, size: int = BLOCK):
@@ -249,11 +254,7 @@ class Passes:
         n = len(joints)
         n_q = [MOTIONS[j.type].n_q for j in joints]
         n_v = [MOTIONS[j.type].n_v for j in joints]
-        pieces = ca.vertsplit(x, [0, *np.cumsum(n_q + n_v).tolist()])
-        self.theta, self.u = pieces[:n], pieces[n:]
         columns = body_data(ir, tree)
-        # one constant, split by columns (one instruction, not one constant per body)
-        self.data = ca.horzsplit(ca.MX(ca.DM(columns))) if n else []
         self.index = {j.child: k for k, j in enumerate(joints)}
         runs = segments(tree, size)
         # each run's theta, u (one split of x) and data (one constant, split)
@@ -268,11 +269,7 @@ class Passes:
 
         def kernel(r: int, step: str) -> ca.Function:
             k, count = runs[r]
-            if count == 1:
-                return kernel_of(functions, joints[k].type, step)
-            name = block_name(joints[k].type, step, count)
-            return functions[name] if name in functions else \
-                block_kernels(joints[k].type, count)[name]
+            return kernel_of(functions, joints[k].type, step, count)
 
         self.v, velocities, theta_dot = [None] * n, [None] * len(runs), [None] * len(runs)
         for r, (k, count) in enumerate(runs):
