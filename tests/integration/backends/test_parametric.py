@@ -61,8 +61,11 @@ def builds(monkeypatch) -> list:
 
 
 @pytest.mark.parametrize("mode", ["compiled", "interpreted"])
-def test_set_sequence_builds_once_and_follows_the_values(tmp_path, toolchain, cache_root, builds,
-                                                         mode):
+def test_set_sequence_builds_once_and_follows_the_values(tmp_path, toolchain, builds, mode,
+                                                         monkeypatch):
+    # a cache of its own: the session's may hold this library already (test_set.py builds it)
+    cache_root = tmp_path / "cache"
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(cache_root))
     path = tmp_path / "oscillators.yaml"
     path.write_text(MODEL)
     before = set(cache.entries(cache_root))
