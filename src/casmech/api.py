@@ -136,14 +136,21 @@ def running(functions: SystemFunctions, given: workspace.Workspace | None = None
     return handover.ready() or functions
 
 
-# analyze's positional arguments before `workspace` (functions apart)
-_WORKSPACE = list(inspect.signature(analyses.analyze).parameters).index("workspace") - 1
+# analyze's parameters after `functions`, in order (as `analyze` reads them from args)
+_PARAMETERS = tuple(inspect.signature(analyses.analyze).parameters)[1:]
+
+
+def _argument(name: str, args: tuple, kwargs: dict):
+    at = _PARAMETERS.index(name)
+    return args[at] if len(args) > at else kwargs.get(name)
 
 
 @wraps(analyses.analyze)
 def analyze(functions: SystemFunctions, *args, **kwargs) -> Result:
-    given = args[_WORKSPACE] if len(args) > _WORKSPACE else kwargs.get("workspace")
-    return analyses.analyze(running(functions, given), *args, **kwargs)
+    # a controller's run builds an interpreted bundle of its own from the functions: it stays
+    if _argument("controller", args, kwargs) is None:
+        functions = running(functions, _argument("workspace", args, kwargs))
+    return analyses.analyze(functions, *args, **kwargs)
 
 
 def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:

@@ -36,7 +36,9 @@ The C holds each kernel once; only index tables grow with the model. Default fla
     is not seen here);
   - a cache miss run interpreted starts building the library in a process of its own while the
     run goes on (backends.background; $CASMECH_BACKGROUND_BUILD=0 turns it off), so that the
-    next run of the unchanged model loads it compiled. casmech.compile's default is auto.
+    next run of the unchanged model loads it compiled. casmech.compile's default is auto, and
+    the analyses of its functions move to the library once that build has published it
+    (auto_choice gives its key; backends.handover).
 """
 
 from __future__ import annotations
