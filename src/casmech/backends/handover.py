@@ -53,6 +53,9 @@ class Handover:
                 self._compiled = None
         return self._compiled
 
+    def __deepcopy__(self, memo) -> Handover:
+        return self  # the state of this process's build: a copy of the functions shares it
+
     def moved(self, model: ResolvedModel) -> Handover | None:
         """The handover of the same build for `model` (these functions' model at other
         parameter values: CompiledModel.set) where its library is the same one (a parametric
