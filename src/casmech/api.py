@@ -11,10 +11,13 @@ what `compile` returns; this module is the one entry the command line uses.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping
 from dataclasses import field, fields
+from functools import wraps
 from pathlib import Path
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -26,18 +29,20 @@ from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
 from casmech.formulations import joint_space as joint_spaces
 from casmech.model.lower import lower
-from casmech.runtime import workspace
+from casmech.runtime import analyses, workspace
 from casmech.runtime.analyses import (  # noqa: F401
     ANALYSES,
     DYNAMICS_OPTIONS,
     analysis_settings,
-    analyze,
     check,
     mode_of,
 )
 from casmech.runtime.results import Result, table
 from casmech.schema import load_model, load_model_text
 from casmech.schema.resolved import ResolvedModel
+
+if TYPE_CHECKING:
+    from casmech.backends.handover import Handover
 
 
 @record(repr=False, eq=False)
@@ -53,6 +58,9 @@ class CompiledModel(SystemFunctions):
 
     model: ResolvedModel | None = field(default=None, compare=False)
     requested: str = "auto"  # the mode asked of casmech.compile
+    # an auto miss's: the compiled bundle analyses run on once the library built behind is
+    # published (backends.handover; `running`)
+    handover: Handover | None = field(default=None, compare=False, repr=False)
 
     @property
     def parameters(self) -> Mapping[str, float]:
@@ -94,7 +102,8 @@ class CompiledModel(SystemFunctions):
         from casmech.backends import rebind
 
         functions, model = rebind.moved(self, self.model, given)
-        return _wrap(functions, model, self.requested)
+        later = self.handover.moved(model) if self.handover is not None else None
+        return _wrap(functions, model, self.requested, later)
 
     def __repr__(self) -> str:
         shown = ", ".join(f"{name}={value:.6g}" for name, value in
@@ -109,10 +118,39 @@ class CompiledModel(SystemFunctions):
                 f"parameters: {shown or 'none'})")
 
 
-def _wrap(functions: SystemFunctions, model: ResolvedModel, mode: str) -> CompiledModel:
+def _wrap(functions: SystemFunctions, model: ResolvedModel, mode: str,
+          handover: Handover | None = None) -> CompiledModel:
     """The bundle as a CompiledModel (its functions shared; a new bundle, so a new workspace)."""
     return CompiledModel(**{f.name: getattr(functions, f.name) for f in fields(SystemFunctions)},
-                         model=model, requested=mode)
+                         model=model, requested=mode, handover=handover)
+
+
+def running(functions: SystemFunctions, given: workspace.Workspace | None = None
+            ) -> SystemFunctions:
+    """The bundle an analysis of `functions` runs on: the compiled one its handover gives once
+    the library of an auto miss is built (backends.handover), else `functions` itself; with a
+    caller's workspace `given` (which serves one bundle), `functions`."""
+    handover = getattr(functions, "handover", None)
+    if handover is None or given is not None:
+        return functions
+    return handover.ready() or functions
+
+
+# analyze's parameters after `functions`, in order (as `analyze` reads them from args)
+_PARAMETERS = tuple(inspect.signature(analyses.analyze).parameters)[1:]
+
+
+def _argument(name: str, args: tuple, kwargs: dict):
+    at = _PARAMETERS.index(name)
+    return args[at] if len(args) > at else kwargs.get(name)
+
+
+@wraps(analyses.analyze)
+def analyze(functions: SystemFunctions, *args, **kwargs) -> Result:
+    # a controller's run builds an interpreted bundle of its own from the functions: it stays
+    if _argument("controller", args, kwargs) is None:
+        functions = running(functions, _argument("workspace", args, kwargs))
+    return analyses.analyze(functions, *args, **kwargs)
 
 
 def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> ResolvedModel:
@@ -123,12 +161,15 @@ def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> Resolv
 def compile(model: ResolvedModel, mode: str = "auto") -> CompiledModel:  # noqa: A001
     """The model's named CasADi functions (a SystemFunctions) in `mode`: "auto", the default
     (compiled when the cache holds the model's library, else interpreted while the library is
-    built behind for the next call: backends.compile), "interpreted" (SX functions, which
-    symbolic work such as calling them on SX needs) or "compiled" (C generated, built and
-    loaded through the cache; a model with parameters and up to 32 bodies gets a library that
-    takes its numbers as an input). `.set(name=value)` gives them at other parameter values,
-    without a build where the library takes the numbers (CompiledModel)."""
-    return _wrap(backends.compile(model, mode), model, mode)
+    built behind: backends.compile; the analyses of these functions, casmech.analyze and
+    casmech.results_table, run compiled from the first one that starts after that build has
+    published it: backends.handover), "interpreted" (SX functions, which symbolic work such
+    as calling them on SX needs) or "compiled" (C generated, built and loaded through the
+    cache; a model with parameters and up to 32 bodies gets a library that takes its numbers
+    as an input). `.set(name=value)` gives them at other parameter values, without a build
+    where the library takes the numbers (CompiledModel)."""
+    functions, handover = backends.compile_handing_over(model, mode)
+    return _wrap(functions, model, mode, handover)
 
 
 def loads(text: str, file: str = "<string>",
@@ -141,7 +182,7 @@ def results_table(functions: SystemFunctions, result: Result,
     """(column names, values): the results table of a Result. Each joint's reaction columns
     are in the frame its `reactions: {frame: ...}` names (default global); `reaction_frames`
     replaces it for every joint (global, body_i, body_j, joint) or the joints a mapping names."""
-    return table(functions, result, reaction_frames)
+    return table(running(functions), result, reaction_frames)
 
 
 def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpace:

@@ -7,11 +7,15 @@ sparsity). This module is light: code generation is imported only when a model i
 from __future__ import annotations
 
 import warnings
+from typing import TYPE_CHECKING
 
 from casmech.equations.functions import SystemFunctions, build_functions
 from casmech.errors import AnalysisError, UsageError
 from casmech.model.lower import lower
 from casmech.schema.resolved import ResolvedModel
+
+if TYPE_CHECKING:
+    from casmech.backends.handover import Handover
 
 COMPILE_MODES = ("interpreted", "compiled", "auto")
 
@@ -23,24 +27,35 @@ def compile(model: ResolvedModel, mode: str = "auto") -> SystemFunctions:  # noq
     end to end, codegen.auto_mode: compiled when the library is cached or the model is big,
     else interpreted while it is built behind for the next call; interpreted with one warning
     without a C compiler). Both bundles have the same functions."""
+    return compile_handing_over(model, mode)[0]
+
+
+def compile_handing_over(model: ResolvedModel, mode: str = "auto"
+                         ) -> tuple[SystemFunctions, Handover | None]:
+    """(compile's bundle, its handover): for an auto miss run interpreted while this process
+    builds the library behind, the backends.handover.Handover that gives the compiled bundle
+    once the build has published it; else None."""
     if mode not in COMPILE_MODES:
         raise UsageError(f"mode '{mode}' is not one of {', '.join(COMPILE_MODES)}")
     if mode == "interpreted":  # before importing code generation, which this path never uses
-        return build_functions(lower(model))
+        return build_functions(lower(model)), None
     from casmech.backends import codegen
 
     if mode == "auto" and not codegen.available():
         warnings.warn("no C compiler found (gcc, or $CC): casmech runs interpreted CasADi "
-                      "functions, which is slower; install gcc to compile models", stacklevel=2)
-        mode = "interpreted"
-    if mode == "interpreted" or (mode == "auto" and codegen.auto_mode(
-            model, background=True) == "interpreted"):
-        return build_functions(lower(model))
+                      "functions, which is slower; install gcc to compile models", stacklevel=3)
+        return build_functions(lower(model)), None
+    if mode == "auto":
+        chosen, building = codegen.auto_choice(model, background=True)
+        if chosen == "interpreted":
+            from casmech.backends import handover
+
+            return build_functions(lower(model)), handover.pending(model, building)
     try:
-        return codegen.compiled(model)
+        return codegen.compiled(model), None
     except (AnalysisError, UsageError) as error:  # the compiler failed; no writable cache
         if mode == "compiled":
             raise
         warnings.warn(f"{str(error).splitlines()[0]}; casmech runs interpreted CasADi "
-                      "functions instead", stacklevel=2)
-        return build_functions(lower(model))
+                      "functions instead", stacklevel=3)
+        return build_functions(lower(model)), None

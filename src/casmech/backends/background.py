@@ -15,7 +15,9 @@ loads it compiled (docs/decisions/mode-auto.md).
     compiled over its first output step with its results table, which builds what a compiled
     run reads besides (a tree's joint-system library, deferred functions); each is published
     through cache.lookup, whose lock makes a foreground build of the same key wait for it;
-    while it builds it holds <key>BUILDING, and `running` tells auto to stay interpreted.
+    while it builds it holds <key>BUILDING, and `running` tells auto to stay interpreted;
+  - `child_of(key)` is the process this one started for a library: the functions of the miss
+    move to the library once it has exited having published it (backends.handover).
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ BUILDING = ".background.lock"  # <library key> + BUILDING: held while it builds 
 NICENESS = 10
 CHILD = "casmech.runtime.background_build"
 
-_started: set[str] = set()  # library keys this process has started a build of
+_started: dict[str, subprocess.Popen | None] = {}  # library key -> the child started for it
 _children: list[subprocess.Popen] = []  # kept to be reaped (poll) instead of left as zombies
 
 
@@ -51,7 +53,7 @@ def start(model, toolchain, root: Path | None, key: str) -> subprocess.Popen | N
             _children.remove(child)
     if key in _started:
         return None
-    _started.add(key)
+    _started[key] = None
     env = dict(os.environ)
     package_root = Path(__file__).resolve().parents[2]
     if package_root.name not in ("site-packages", "dist-packages"):  # this casmech, from src
@@ -71,7 +73,14 @@ def start(model, toolchain, root: Path | None, key: str) -> subprocess.Popen | N
             Path(path).unlink(missing_ok=True)  # that asked goes on interpreted
         return None
     _children.append(child)
+    _started[key] = child
     return child
+
+
+def child_of(key: str) -> subprocess.Popen | None:
+    """The process this one started to build the library `key` (None: none started, or it
+    could not start)."""
+    return _started.get(key)
 
 
 def running(key: str, root: Path | None) -> bool:

@@ -36,7 +36,9 @@ The C holds each kernel once; only index tables grow with the model. Default fla
     is not seen here);
   - a cache miss run interpreted starts building the library in a process of its own while the
     run goes on (backends.background; $CASMECH_BACKGROUND_BUILD=0 turns it off), so that the
-    next run of the unchanged model loads it compiled. casmech.compile's default is auto.
+    next run of the unchanged model loads it compiled. casmech.compile's default is auto, and
+    the analyses of its functions move to the library once that build has published it
+    (auto_choice gives its key; backends.handover).
 """
 
 from __future__ import annotations
@@ -68,8 +70,9 @@ from casmech.model.lower import lower
 from casmech.model.parametric import data
 from casmech.schema.resolved import ResolvedModel
 
-__all__ = ["Toolchain", "auto_mode", "available", "compile_functions", "compiled", "export",
-           "is_cached", "mode_of", "parametric_functions", "write_build"]
+__all__ = ["Toolchain", "auto_choice", "auto_mode", "available", "compile_functions", "compiled",
+           "export", "is_cached", "library_key", "mode_of", "parametric_functions",
+           "write_build"]
 
 
 def dae_oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
@@ -262,18 +265,31 @@ def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
     build (module docstring); "interpreted" without a C compiler. With `background`, a cache
     miss run interpreted also starts building the library behind the run
     (backends.background, unless $CASMECH_BACKGROUND_BUILD is 0), so later runs are compiled."""
+    return auto_choice(model, toolchain, root, background)[0]
+
+
+def auto_choice(model: ResolvedModel, toolchain: Toolchain | None = None,
+                root: Path | None = None, background: bool = False) -> tuple[str, str | None]:
+    """(auto_mode's choice, the cache key of the library a background build was asked to
+    make: None when none was)."""
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
-        return "interpreted"
+        return "interpreted", None
     ir = lower(model)
     hit, entry = _in_cache(model, ir, toolchain, root)
     if hit and background_build.running(entry, root):
-        return "interpreted"  # its first part is published, the rest still building
+        return "interpreted", None  # its first part is published, the rest still building
     if hit or (len(model.bodies) >= AUTO_BODIES and not _joint_tree(model, ir)):
-        return "compiled"
+        return "compiled", None
     if background and background_build.enabled():
         background_build.start(model, toolchain, root, entry)
-    return "interpreted"
+        return "interpreted", entry
+    return "interpreted", None
+
+
+def library_key(model: ResolvedModel, toolchain: Toolchain | None = None) -> str:
+    """The cache key of the library `compiled(model, toolchain)` loads."""
+    return _entry(model, lower(model), toolchain or Toolchain(), True, defer=True)[0]
 
 
 def export(model: ResolvedModel, out: Path, toolchain: Toolchain | None = None,

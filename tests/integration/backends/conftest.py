@@ -1,5 +1,7 @@
-"""The code-generation fixtures (tests/helpers/codegen.py) for the tests of this folder."""
+"""The code-generation fixtures (tests/helpers/codegen.py) and the background build's
+(tests/helpers/background.py) for the tests of this folder."""
 
+from tests.helpers.background import building  # noqa: F401
 from tests.helpers.codegen import (  # noqa: F401
     build_dir,
     cache_root,

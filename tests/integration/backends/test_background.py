@@ -3,40 +3,14 @@ interpreted and builds the model's library in a detached process, so that the ne
 compiled; one build per library per process, one at a time per cache, none with
 CASMECH_BACKGROUND_BUILD=0 (the test session's setting, tests/conftest.py)."""
 
-import tempfile
-
 import numpy as np
-import pytest
 from filelock import FileLock
 
 import casmech
 from casmech.backends import background, codegen, library
 from tests.conftest import MODELS
+from tests.helpers.background import finished
 from tests.helpers.codegen import counted_builds
-
-WAIT = 300  # s: a -O0 build of these models takes seconds; the limit only ends a hang
-
-
-@pytest.fixture
-def building(monkeypatch, tmp_path):
-    """The background build on, a private cache and temporary folder, this process's record of
-    started builds empty; yields the cache folder."""
-    monkeypatch.setenv(background.ENVIRONMENT, "1")
-    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
-    monkeypatch.setenv("CASMECH_CFLAGS", "-O0")
-    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
-    (tmp_path / "tmp").mkdir()
-    monkeypatch.setattr(background, "_started", set())
-    monkeypatch.setattr(background, "_children", [])
-    if not codegen.available():
-        pytest.skip("no C compiler")
-    return tmp_path / "cache"
-
-
-def finished(timeout: float = WAIT) -> None:
-    """Wait for every child this process started (each is a detached process of its own)."""
-    for child in list(background._children):
-        assert child.wait(timeout=timeout) == 0
 
 
 def test_a_cache_miss_runs_interpreted_and_the_next_call_compiled(building, tmp_path,
@@ -49,7 +23,7 @@ def test_a_cache_miss_runs_interpreted_and_the_next_call_compiled(building, tmp_
     first = casmech.compile(model)
     assert codegen.mode_of(first) == "interpreted"
     assert len(background._children) == 1
-    finished()
+    assert finished() == [0]
     assert not list((tmp_path / "tmp").glob("casmech-background-*"))  # the pickle is deleted
     second = casmech.compile(model)
     assert codegen.mode_of(second) == "compiled"
@@ -69,7 +43,7 @@ def test_one_build_per_library_per_process(building):
     for _ in range(3):
         assert codegen.mode_of(casmech.compile(model)) == "interpreted"
     assert len(background._children) == 1
-    finished()
+    assert finished() == [0]
     assert codegen.mode_of(casmech.compile(model)) == "compiled"
     assert len(background._children) == 1  # a hit starts nothing
 
@@ -89,7 +63,7 @@ def test_one_build_at_a_time_per_cache(building):
     building.mkdir(parents=True)
     with FileLock(str(building / background.BACKGROUND_LOCK)):
         assert codegen.mode_of(casmech.compile(model)) == "interpreted"
-        finished()
+        assert finished() == [0]
     assert not codegen.is_cached(model)
     assert codegen.mode_of(casmech.compile(model)) == "interpreted"
     assert len(background._children) <= 1
@@ -106,7 +80,7 @@ def test_the_command_line_builds_behind_its_run(building, tmp_path):
     out = tmp_path / "out"
     assert main(["run", str(model), "--t-end", "0.2", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "metadata.json").read_text())["mode"] == "interpreted"
-    finished()
+    assert finished() == [0]
     assert main(["run", str(model), "--t-end", "0.2", "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "metadata.json").read_text())["mode"] == "compiled"
 
