@@ -270,15 +270,17 @@ def auto_mode(model: ResolvedModel, toolchain: Toolchain | None = None,
 
 def auto_choice(model: ResolvedModel, toolchain: Toolchain | None = None,
                 root: Path | None = None, background: bool = False) -> tuple[str, str | None]:
-    """(auto_mode's choice, the cache key of the library a background build was asked to
-    make: None when none was)."""
+    """(auto_mode's choice, the cache key of the library a background build was asked to make
+    or is making, when the choice is interpreted: None when none was)."""
     toolchain = toolchain or Toolchain()
     if not available(toolchain):
         return "interpreted", None
     ir = lower(model)
     hit, entry = _in_cache(model, ir, toolchain, root)
     if hit and background_build.running(entry, root):
-        return "interpreted", None  # its first part is published, the rest still building
+        # its first part is published, the rest still building (this process's build, when
+        # it started it: backends.handover follows it)
+        return "interpreted", entry
     if hit or (len(model.bodies) >= AUTO_BODIES and not _joint_tree(model, ir)):
         return "compiled", None
     if background and background_build.enabled():

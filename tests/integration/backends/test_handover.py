@@ -40,6 +40,22 @@ def test_the_same_functions_run_compiled_once_the_build_is_published(building, m
     np.testing.assert_allclose(got, expected, rtol=1e-9, atol=1e-9)
 
 
+def test_functions_compiled_again_while_it_builds_hand_over_too(building):
+    """A second casmech.compile of the model while this process's build of its library is
+    under way, its first part published (the child holds the key's BUILDING lock: held here
+    after the child is done), is interpreted and follows the same build: its analyses run
+    compiled once the child has exited, and no second build starts."""
+    model = casmech.load(MODELS / "double_pendulum.yaml")
+    casmech.analyze(casmech.compile(model), t_end=0.5)
+    assert finished() == [0]
+    (key,) = background._started
+    with FileLock(str(building / f"{key}{background.BUILDING}")):
+        again = casmech.compile(model)
+    assert codegen.mode_of(again) == "interpreted"
+    assert casmech.analyze(again, t_end=0.5).metadata["mode"] == "compiled"
+    assert len(background._children) == 1
+
+
 @pytest.mark.parametrize("mode", ["interpreted", "compiled"])
 def test_an_explicit_mode_never_hands_over(building, mode):
     """Functions compiled in an explicit mode run in it whatever a build of the same library
