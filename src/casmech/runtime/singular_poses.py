@@ -48,7 +48,8 @@ COMPILED_ROWS = 60
 
 def _entries(functions: SystemFunctions, workspace: Workspace | None) -> dict:
     """The check's entries for the bundle (kept in the workspace): "jacobians", Phi_q's mapped
-    call; by the rows examined, the compiled log-determinant's mapped call or None."""
+    call; "compiled", (the rows examined, the compiled log-determinant's mapped call or None)
+    of the last rows examined."""
     return of(functions, workspace).one("singular_pose_jacobian", dict)
 
 
@@ -104,14 +105,16 @@ def _compiled(functions: SystemFunctions, rows: list[int],
     or when the build failed (with a warning)."""
     entries = _entries(functions, workspace)
     key = tuple(rows)
-    if key not in entries:
-        entries[key] = None
+    if entries.get("compiled", (None,))[0] != key:
+        entries["compiled"] = key, None
         if functions.mode == "compiled" and len(rows) <= COMPILED_ROWS:
-            entries[key] = _build(functions, rows)
-    return entries[key]
+            entries["compiled"] = key, _build(functions, rows)
+    return entries["compiled"][1]
 
 
 def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
+    """_compiled's library, found or built (None: no cached library to key it by, no C
+    compiler, or a failed build)."""
     from casmech.backends import build
     from casmech.backends.library import compile_keyed
     from casmech.equations.functions import build_functions
