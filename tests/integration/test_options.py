@@ -326,6 +326,8 @@ CONSTANTS = {
                                                      "fail)",
     "runtime/projected_rk4.py ORDER": "the classical Runge-Kutta method's order",
     "runtime/singular_poses.py MAX_ENTRIES": "dense Jacobians held at once (memory)",
+    "runtime/singular_poses.py COMPILED_ROWS": "the log-determinant's C and gcc's time "
+                                               "(build cost)",
     "runtime/solver_messages.py MAX_LINES": "solver lines kept in metadata (size)",
     "formulations/joint_system.py ROW_NORM_FLOOR": "a roundoff floor compiled into libraries",
     "formulations/joint_system.py IDENTITY_STATES": "which Jacobian graph a tree's build makes",

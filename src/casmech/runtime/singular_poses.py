@@ -10,13 +10,23 @@ near a singular pose. Each such stretch of rows is reported once, at its smalles
 determinant: the time, the smallest singular value of the unit rows there, and the joints whose
 rows make up the dependency (its singular vector), each with its file:line:col.
 
+The log-determinants: for a bundle loaded from the compiled-model cache, of up to COMPILED_ROWS
+rows, by one compiled function of (t, q) mapped over the rows (logdet_function: Phi_q of the
+bundle's IR inline, the Gram matrix and CasADi's sparse LDL factor), cached under the bundle's
+library key and the rows, so built once per machine; otherwise, and at a row where the compiled
+value is not finite (a Gram matrix not numerically positive definite), in NumPy from Phi_q's
+dense rows (their Gram matrices, each scaled to a unit diagonal, by Cholesky factors).
+
 A tree has no loop to close (its joints' rows are independent at every pose) and is not
 examined; nor is a run above MAX_ENTRIES (output rows x rows of Phi x coordinates: the dense
 Jacobians held at once: a memory bound). The ratio's measurements:
-docs/decisions/singular-poses.md.
+docs/decisions/singular-poses.md; the compiled log-determinant's:
+docs/decisions/loop-dae-loose-tolerance.md.
 """
 
 from __future__ import annotations
+
+import warnings
 
 import casadi as ca
 import numpy as np
@@ -24,33 +34,143 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
+from casmech.errors import AnalysisError, UsageError
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 MAX_ENTRIES = 20_000_000  # output rows x rows of Phi x coordinates examined at most
+# rows of Phi whose log-determinant is compiled at most (the LDL factor's code, and gcc's time,
+# grow with them)
+COMPILED_ROWS = 60
+
+
+def _entries(functions: SystemFunctions, workspace: Workspace | None) -> dict:
+    """The check's entries for the bundle (kept in the workspace): "jacobians", Phi_q's mapped
+    call; "compiled", (the rows examined, the compiled log-determinant's mapped call or None)
+    of the last rows examined."""
+    return of(functions, workspace).one("singular_pose_jacobian", dict)
 
 
 def _jacobians(functions: SystemFunctions, workspace: Workspace | None) -> ColumnCall:
-    """Phi_q, dense, at output rows by mapped calls (kept in the workspace)."""
+    """Phi_q, dense, at output rows by mapped calls."""
     def build() -> ColumnCall:
         phi_q = functions["phi_q"]
         t, q = ca.MX.sym("t"), ca.MX.sym("q", phi_q.size1_in(1))
         return ColumnCall(ca.Function("phi_q_dense", [t, q], [ca.densify(phi_q(t, q))]))
 
-    return of(functions, workspace).one("singular_pose_jacobian", build)
+    entries = _entries(functions, workspace)
+    if "jacobians" not in entries:
+        entries["jacobians"] = build()
+    return entries["jacobians"]
+
+
+def logdet_function(phi_q: ca.Function, rows) -> ca.Function:
+    """(t, q, and phi_q's further inputs) -> log det of the Gram matrix of the rows `rows` of
+    phi_q (an SX Function) each scaled to unit length: the Gram matrix G (each product once)
+    factored by CasADi's sparse LDL (G[p, p] = (I + L) D (I + L)^T, p its fill-reducing
+    order), and log prod_k D_k / G[p_k, p_k] (each factor in (0, 1] where G is positive
+    definite); not finite where G is not numerically positive definite."""
+    inputs = phi_q.sx_in()
+    jacobian = phi_q(*inputs)[list(rows), :]
+    gram = ca.mtimes(jacobian, jacobian.T)
+    gram = ca.tril(gram) + ca.tril(gram, False).T
+    pivots, _, order = ca.ldl(gram)
+    ratio = ca.SX(1)
+    for k, j in enumerate(order):
+        ratio = ratio * (pivots[k] / gram[j, j])
+    return ca.Function("unit_gram_logdet", inputs, [ca.log(ratio)], phi_q.name_in(),
+                       ["logdet"])
+
+
+class _Compiled:
+    """logdet_function compiled, mapped over output rows (with a parametric library's model
+    data as its last input)."""
+
+    def __init__(self, function: ca.Function, data: np.ndarray | None):
+        self.call, self.data = ColumnCall(function), data
+
+    def __call__(self, times: np.ndarray, q: np.ndarray) -> np.ndarray:
+        data = () if self.data is None else (self.data[:, None],)
+        return self.call(times[None, :], q.T, *data)[0].ravel()
+
+
+def _compiled(functions: SystemFunctions, rows: list[int],
+              workspace: Workspace | None) -> _Compiled | None:
+    """logdet_function compiled for a bundle loaded from the compiled-model cache
+    (backends.library.compile_keyed, under the bundle's library key, or a parametric
+    library's, and the rows; Phi_q of the bundle's IR, or of the parametric library's
+    symbolic IR), for up to COMPILED_ROWS rows examined; None otherwise, without a C compiler,
+    or when the build failed (with a warning)."""
+    entries = _entries(functions, workspace)
+    key = tuple(rows)
+    if entries.get("compiled", (None,))[0] != key:
+        entries["compiled"] = key, None
+        if functions.mode == "compiled" and len(rows) <= COMPILED_ROWS:
+            entries["compiled"] = key, _build(functions, rows)
+    return entries["compiled"][1]
+
+
+def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
+    """_compiled's library, found or built (None: no cached library to key it by, no C
+    compiler, or a failed build)."""
+    from casmech.backends import build
+    from casmech.backends.library import compile_keyed
+    from casmech.equations.functions import build_functions
+    from casmech.model import parametric
+
+    library, data = functions.parametric, functions.data
+    if library is not None and data is not None:
+        bundle = {"parametric": library.folder.name, "signature": library.signature}
+
+        def phi_q() -> ca.Function:
+            split = parametric.split(functions.ir)
+            return build_functions(split.ir, split.symbols)["phi_q"]
+    elif functions.library_key is not None and data is None and library is None:
+        bundle = {"bundle": functions.library_key}
+
+        def phi_q() -> ca.Function:
+            return build_functions(functions.ir)["phi_q"]
+    else:
+        return None
+    toolchain = build.Toolchain()
+    if not build.available(toolchain):
+        return None
+    try:
+        compiled = compile_keyed({"kind": "unit gram logdet", **bundle, "rows": rows}, lambda: (
+            {"unit_gram_logdet": logdet_function(phi_q(), rows)}, {}, toolchain),
+            toolchain=toolchain)
+    except (AnalysisError, UsageError) as error:
+        warnings.warn(f"{str(error).splitlines()[0]}; the singular-pose check runs in NumPy",
+                      stacklevel=2)
+        return None
+    return _Compiled(compiled["unit_gram_logdet"], data)
 
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
                      workspace: Workspace | None = None) -> np.ndarray:
-    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): the
-    rows' Gram matrix scaled by its diagonal, its log-determinant from a Cholesky factor
-    (slogdet where one is not numerically positive definite)."""
+    """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): by
+    the compiled function where there is one (_compiled) and its value is finite, else from
+    the rows' Gram matrix scaled by its diagonal, by a Cholesky factor (slogdet where one is
+    not numerically positive definite)."""
+    times, q = np.asarray(times, float), np.asarray(q, float)
+    compiled = _compiled(functions, [int(row) for row in rows], workspace)
+    if compiled is None:
+        return _dense_logdet(functions, times, q, rows, workspace)
+    logdet = compiled(times, q)
+    failed = ~np.isfinite(logdet)
+    if failed.any():
+        logdet[failed] = _dense_logdet(functions, times[failed], q[failed], rows, workspace)
+    return logdet
+
+
+def _dense_logdet(functions: SystemFunctions, times: np.ndarray, q: np.ndarray, rows,
+                  workspace: Workspace | None) -> np.ndarray:
+    """unit_gram_logdet in NumPy from Phi_q's dense rows."""
     n = len(times)
     m, columns = functions["phi_q"].size_out(0)
-    flat, = _jacobians(functions, workspace)(np.asarray(times, float)[None, :],
-                                             np.asarray(q).T)
+    flat, = _jacobians(functions, workspace)(times[None, :], q.T)
     jacobian = flat.reshape(m, n, columns).transpose(1, 0, 2)
     if len(rows) < m:
         jacobian = jacobian[:, rows, :]
