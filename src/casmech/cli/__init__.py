@@ -20,6 +20,9 @@ import sys
 # Set before a command imports NumPy.
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
+# No pydantic plugins unless the user chose: looking for them reads the entry points of every
+# installed distribution when the model's validator is built (docs/decisions/pydantic-plugins.md).
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 from casmech.cli import collector  # noqa: E402
 from casmech.cli.commands import COMMANDS  # noqa: E402

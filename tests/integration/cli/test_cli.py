@@ -270,6 +270,19 @@ def test_one_blas_thread_unless_the_user_chose(given, expected):
     assert out.strip() == expected
 
 
+@pytest.mark.parametrize("given, expected", [(None, "__all__"), ("logfire", "logfire")])
+def test_no_pydantic_plugins_unless_the_user_chose(given, expected):
+    """The command line turns pydantic's plugin lookup off, unless the user set it."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    env["PYTHONPATH"] = str(ROOT / "src")
+    code = "import os; import casmech.cli; print(os.environ['PYDANTIC_DISABLE_PLUGINS'])"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert out.strip() == expected
+
+
 def test_the_processs_own_command_line_collects_less_often():
     """main() as the process's command line raises the young generation's threshold, starts
     the collector before a command other than run and leaves its objects frozen at the end
