@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import reprlib
 from operator import attrgetter
 
@@ -32,10 +33,15 @@ def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = Tr
         init = options.get("init", True)
         own_init = frozen and init and not base and _plain_fields(cls, options)
         given = {key: value for key, value in options.items() if key != "init"}
+        undocumented = own_init and not cls.__doc__
+        if undocumented:  # (dataclasses would read it from __init__, not written yet)
+            cls.__doc__ = "-"
         made = dataclasses.dataclass(cls, eq=False, repr=False, frozen=base,
                                      init=init and not own_init, **given)
         if own_init:
             made.__init__ = _frozen_init(made)
+        if undocumented:  # dataclasses' own: the class's name and signature
+            made.__doc__ = f"{made.__name__}{inspect.signature(made)}".replace(" -> None", "")
         if frozen:  # to dataclasses a frozen record is frozen: a frozen dataclass may extend it
             params = copy.copy(made.__dataclass_params__)
             params.frozen, params.init = True, init

@@ -145,6 +145,7 @@ def test_a_frozen_records_init_is_a_frozen_dataclasss():
     __post_init__; a field after a defaulted one refused as dataclasses refuse it."""
     made, rec = _pair()
     assert str(inspect.signature(rec)) == str(inspect.signature(made))
+    assert rec.__doc__ == made.__doc__  # (undocumented: the name and signature)
 
     @record
     class Later:
