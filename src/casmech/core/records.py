@@ -125,7 +125,8 @@ def _frozen_init(cls):
 
 
 def _getter(names: tuple[str, ...]):
-    """object -> the tuple of its attributes `names` (attrgetter returns a bare value for one)."""
+    """object -> the tuple of its attributes `names` (attrgetter returns a bare value for one;
+    a class keeps it as a staticmethod, so that a lambda is not bound to the instance)."""
     if len(names) == 1:
         one = attrgetter(names[0])
         return lambda value: (one(value),)
@@ -144,7 +145,8 @@ def _share(cls, eq: bool, with_repr: bool, frozen: bool) -> None:
     if not eq:
         return
     if "__eq__" not in own:
-        cls.__record_compare__ = _getter(tuple(f.name for f in fields if f.compare))
+        cls.__record_compare__ = staticmethod(_getter(tuple(f.name for f in fields
+                                                             if f.compare)))
         cls.__eq__ = _eq
     # dataclasses' rule: eq and frozen give a hash of the compared fields unless the class
     # wrote its own; eq alone makes instances unhashable
@@ -152,7 +154,7 @@ def _share(cls, eq: bool, with_repr: bool, frozen: bool) -> None:
     if explicit is dataclasses.MISSING or (explicit is None and "__eq__" in own):
         if frozen:
             hashed = tuple(f.name for f in fields if (f.compare if f.hash is None else f.hash))
-            cls.__record_hash__ = _getter(hashed)
+            cls.__record_hash__ = staticmethod(_getter(hashed))
             cls.__hash__ = _hash
         else:
             cls.__hash__ = None

@@ -176,3 +176,17 @@ def test_a_record_with_an_init_only_field_keeps_dataclasses_init():
     assert Scaled(2.0, 3.0).a == 6.0 and Scaled(2.0).a == 2.0
     with pytest.raises(dataclasses.FrozenInstanceError):
         Scaled(1.0).a = 2.0
+
+
+@pytest.mark.parametrize("annotations", [{}, {"a": "int"}, {"a": "int", "b": "int"}])
+def test_eq_and_hash_of_any_number_of_fields_as_a_dataclass(annotations):
+    """Zero and one compared field too (their getters are lambdas, not attrgetters)."""
+    def body():
+        return type("Few", (), {"__annotations__": dict(annotations), "__module__": __name__})
+
+    made, rec = dataclass(frozen=True)(body()), record(body())
+    args = range(len(annotations))
+    assert (rec(*args) == rec(*args)) is (made(*args) == made(*args)) is True
+    assert hash(rec(*args)) == hash(made(*args))
+    if annotations:
+        assert (rec(*args) == rec(*[9] * len(annotations))) is False
