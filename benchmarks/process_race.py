@@ -147,16 +147,17 @@ def main() -> None:
           f"{datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC; --t-end {args.t_end:g}; sources: "
           + ", ".join(f"[{k}] {src} @ {describe(src, commits)}" for k, src in enumerate(sources))
           + f"; medians of {args.repeats} after a warm-up\n")
-    print("| process | wall [s] | CPU [s] | wall / MuJoCo |")
-    print("|---|---:|---:|---:|")
+    print("| process | wall [s] | CPU [s] | wall / MuJoCo | CPU / MuJoCo |")
+    print("|---|---:|---:|---:|---:|")
     for name in args.systems:
-        peer = statistics.median(w for w, _ in samples[(name, f"MuJoCo RK4 dt "
-                                                                f"{args.mujoco_dt:g}, {name}")])
+        mujoco = samples[(name, f"MuJoCo RK4 dt {args.mujoco_dt:g}, {name}")]
+        peer = [statistics.median(sample[k] for sample in mujoco) for k in (0, 1)]
         for (system, label), values in samples.items():
             if system == name:
                 wall = statistics.median(w for w, _ in values)
                 cpu = statistics.median(c for _, c in values)
-                print(f"| {label} | {wall:.3f} | {cpu:.3f} | {wall / peer:.2f} |")
+                print(f"| {label} | {wall:.3f} | {cpu:.3f} | {wall / peer[0]:.2f} | "
+                      f"{cpu / peer[1]:.2f} |")
 
 
 if __name__ == "__main__":

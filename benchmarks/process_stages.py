@@ -6,7 +6,8 @@
     python benchmarks/process_stages.py --chain 32 --t-end 10 --warm-compiled  # library cached
 
 Each run is a fresh interpreter (PYTHONPATH=<src>) that starts casmech's command line as the
-console script does, with thin wrappers around its stages reading the process's CPU clock
+console script does (its garbage collector set as the tree's main() sets it before the stages'
+modules are imported), with thin wrappers around its stages reading the process's CPU clock
 (time.process_time): the imports, loading the YAML (api.load_model), the joint system's build
 (formulations.joint_system.build), assembly (runtime.assembly.initial_state), the results
 row's function (runtime.results.row_function) and the results table with its evaluation
@@ -66,6 +67,7 @@ def child(arguments: list[str]) -> None:
     start = time.process_time()
     import casmech.cli
 
+    _collector_as_the_command_line(casmech.cli)
     for _, module, _ in STAGES:
         try:
             importlib.import_module(module)
@@ -123,6 +125,19 @@ def child(arguments: list[str]) -> None:
     finally:
         spent["total (in process)"] = time.process_time()
         print("STAGES " + json.dumps({"stages": spent, "counters": counters}), flush=True)
+
+
+def _collector_as_the_command_line(cli) -> None:
+    """The garbage collector as the tree's own `main()` sets it first thing, before the stages'
+    modules are imported here (the console script imports them inside main): held until the
+    analysis (cli.collector), or the young generation's threshold of older trees."""
+    import gc
+
+    collector = getattr(cli, "collector", None)
+    if collector is not None:
+        collector.hold()
+    elif hasattr(cli, "YOUNG_OBJECTS"):
+        gc.set_threshold(cli.YOUNG_OBJECTS, *gc.get_threshold()[1:])
 
 
 def chain_model(n: int, t_end: float, folder: Path) -> Path:

@@ -10,7 +10,6 @@ Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis
 from __future__ import annotations
 
 import argparse
-import gc
 import importlib
 import os
 import sys
@@ -21,7 +20,11 @@ import sys
 # Set before a command imports NumPy.
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
+# No pydantic plugins unless the user chose: looking for them reads the entry points of every
+# installed distribution when the model's validator is built (docs/decisions/pydantic-plugins.md).
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
+from casmech.cli import collector  # noqa: E402
 from casmech.cli.commands import COMMANDS  # noqa: E402
 from casmech.core.version import VERSION  # noqa: E402
 from casmech.errors import (  # noqa: E402
@@ -33,10 +36,6 @@ from casmech.errors import (  # noqa: E402
 )
 
 DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
-# The young generation's threshold of a command's own process: importing and building make
-# hundreds of thousands of small objects and few cycles, which the default (700) collected
-# over a hundred times per run (docs/decisions/cli-collector.md).
-YOUNG_OBJECTS = 20_000
 
 
 def chosen(argv: list[str]) -> str | None:
@@ -61,14 +60,17 @@ def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The command line; `argv` None: this process's own (then a command a signal stopped
-    ends at once, its files written: see _end)."""
+    """The command line; `argv` None: this process's own (then its garbage collector waits
+    until the command's long part, cli.collector, and a command a signal stopped ends at once,
+    its files written: see _end)."""
     own = argv is None
     if own:
-        gc.set_threshold(YOUNG_OBJECTS, *gc.get_threshold()[1:])
+        collector.hold()
     argv = sys.argv[1:] if argv is None else list(argv)
     parser, module = _parser(argv)
     args = parser.parse_args(argv)
+    if not getattr(module, "RELEASES_COLLECTOR", False):  # (run: when its analysis starts)
+        collector.release()
     try:
         return module.run(args)
     except ModelError as error:
@@ -86,6 +88,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:  # Ctrl-C in a command that keeps nothing (run: errors.Interrupted)
         print("casmech: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if own:
+            collector.end()
 
 
 def _end(code: int) -> int:

@@ -38,6 +38,7 @@ import time
 from pathlib import Path
 
 from casmech import api
+from casmech.cli import collector
 from casmech.cli.common import add_options, add_overrides, add_span, options, overrides
 from casmech.errors import AnalysisError, CasmechError, Interrupted
 from casmech.io import events as events_output
@@ -49,6 +50,9 @@ from casmech.io.streaming import ResultsWriter, WriteError, writing
 from casmech.runtime import events, interrupts, reaction_frames, singular_poses
 from casmech.runtime.results import column_names, events_table
 
+# this command starts its process's collector itself, when the analysis starts: loading and
+# building make no cycles worth collecting (cli.collector)
+RELEASES_COLLECTOR = True
 # further files an analysis may write (Result.files), removed with an earlier run's results
 ANALYSIS_FILES = ("modes.csv", "linear_model.npz", events_output.FILE)
 # format -> (file name in DIR, the writer of its rows as they come, check run before the run)
@@ -149,6 +153,7 @@ def _run(args) -> int:
         recorded["option"] = list(args.option)
     run = (model, given, settings, timings, recorded)
     writer = _start(args, out, functions, run)
+    collector.release()
     clock = time.perf_counter()
     try:
         try:

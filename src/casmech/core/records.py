@@ -8,12 +8,16 @@ behaves as the dataclass it replaces: the same fields, __init__, replace(), fiel
 asdict(), the same repr, equality (same class, equal tuples of the compared fields) and hash
 (of the hashed fields' tuple). A frozen record's fields are written once, by __init__ (or by
 object.__setattr__ in __post_init__, as in a frozen dataclass); any later assignment or
-deletion raises dataclasses.FrozenInstanceError."""
+deletion raises dataclasses.FrozenInstanceError. Its __init__ writes each field by
+object.__setattr__, as a frozen dataclass's does, rather than through the class's own
+__setattr__ (a Python call per field of every instance: a 1000-body model makes some 40,000
+records while it loads)."""
 
 from __future__ import annotations
 
 import copy
 import dataclasses
+import inspect
 import reprlib
 from operator import attrgetter
 
@@ -25,11 +29,22 @@ def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = Tr
 
     def wrap(cls):
         # a frozen base (a record or a dataclass) needs dataclasses' own frozen subclass
-        made = dataclasses.dataclass(cls, eq=False, repr=False, frozen=frozen and _frozen_base(cls),
-                                     **options)
+        base = frozen and _frozen_base(cls)
+        init = options.get("init", True)
+        own_init = frozen and init and not base and _plain_fields(cls, options)
+        given = {key: value for key, value in options.items() if key != "init"}
+        undocumented = own_init and not cls.__doc__
+        if undocumented:  # (dataclasses would read it from __init__, not written yet)
+            cls.__doc__ = "-"
+        made = dataclasses.dataclass(cls, eq=False, repr=False, frozen=base,
+                                     init=init and not own_init, **given)
+        if own_init:
+            made.__init__ = _frozen_init(made)
+        if undocumented:  # dataclasses' own: the class's name and signature
+            made.__doc__ = f"{made.__name__}{inspect.signature(made)}".replace(" -> None", "")
         if frozen:  # to dataclasses a frozen record is frozen: a frozen dataclass may extend it
             params = copy.copy(made.__dataclass_params__)
-            params.frozen = True
+            params.frozen, params.init = True, init
             made.__dataclass_params__ = params
         _share(made, eq, repr, frozen)
         return made
@@ -42,8 +57,76 @@ def _frozen_base(cls) -> bool:
                for base in cls.__mro__[1:])
 
 
+def _plain_fields(cls, options: dict) -> bool:
+    """Whether the class's fields are all plain (no InitVar, ClassVar or keyword-only field, no
+    slots), which `_frozen_init` writes; others keep dataclasses' __init__."""
+    if options.get("kw_only") or options.get("slots"):
+        return False
+    written = cls.__dict__.get("__annotations__", {}).values()
+    if any(kind in str(annotation) for annotation in written
+           for kind in ("InitVar", "ClassVar", "KW_ONLY")):
+        return False
+    for base in cls.__mro__[1:]:
+        if dataclasses.is_dataclass(base) and (
+                len(base.__dataclass_fields__) != len(dataclasses.fields(base))
+                or any(f.kw_only for f in dataclasses.fields(base))):
+            return False
+    return True
+
+
+class _Factory:
+    """The default of a parameter whose field has a default_factory."""
+
+    def __repr__(self) -> str:
+        return "<factory>"
+
+
+_FACTORY = _Factory()
+
+
+def _frozen_init(cls):
+    """The __init__ dataclasses writes for a frozen class of these fields: the parameters in
+    field order (defaults and default factories as there), each field set by
+    object.__setattr__, then __post_init__ when the class has one."""
+    names = {"__record_set__": object.__setattr__, "__record_factory__": _FACTORY}
+    parameters, lines, defaulted = ["__record_self__"], [], False
+    for f in dataclasses.fields(cls):
+        factory = f.default_factory is not dataclasses.MISSING
+        if f.init:
+            if f.default is not dataclasses.MISSING:
+                names[f"__default_{f.name}"] = f.default
+                parameters.append(f"{f.name}=__default_{f.name}")
+            elif factory:
+                parameters.append(f"{f.name}=__record_factory__")
+            elif defaulted:
+                raise TypeError(f"non-default argument {f.name!r} follows default argument")
+            else:
+                parameters.append(f.name)
+            defaulted = defaulted or factory or f.default is not dataclasses.MISSING
+            value = (f"__factory_{f.name}() if {f.name} is __record_factory__ else {f.name}"
+                     if factory else f.name)
+        elif factory:
+            value = f"__factory_{f.name}()"
+        else:
+            continue  # (a default of a field left out of __init__ is the class's attribute)
+        if factory:
+            names[f"__factory_{f.name}"] = f.default_factory
+        lines.append(f"    __record_set__(__record_self__, {f.name!r}, {value})")
+    if hasattr(cls, "__post_init__"):
+        lines.append("    __record_self__.__post_init__()")
+    text = f"def __init__({', '.join(parameters)}):\n" + ("\n".join(lines) or "    pass")
+    exec(text, names)  # noqa: S102 (the text is made of the class's own field names)
+    function = names["__init__"]
+    function.__qualname__ = f"{cls.__qualname__}.__init__"
+    function.__module__ = cls.__module__
+    function.__annotations__ = {f.name: f.type for f in dataclasses.fields(cls) if f.init}
+    function.__annotations__["return"] = None
+    return function
+
+
 def _getter(names: tuple[str, ...]):
-    """object -> the tuple of its attributes `names` (attrgetter returns a bare value for one)."""
+    """object -> the tuple of its attributes `names` (attrgetter returns a bare value for one;
+    a class keeps it as a staticmethod, so that a lambda is not bound to the instance)."""
     if len(names) == 1:
         one = attrgetter(names[0])
         return lambda value: (one(value),)
@@ -62,7 +145,8 @@ def _share(cls, eq: bool, with_repr: bool, frozen: bool) -> None:
     if not eq:
         return
     if "__eq__" not in own:
-        cls.__record_compare__ = _getter(tuple(f.name for f in fields if f.compare))
+        cls.__record_compare__ = staticmethod(_getter(tuple(f.name for f in fields
+                                                             if f.compare)))
         cls.__eq__ = _eq
     # dataclasses' rule: eq and frozen give a hash of the compared fields unless the class
     # wrote its own; eq alone makes instances unhashable
@@ -70,7 +154,7 @@ def _share(cls, eq: bool, with_repr: bool, frozen: bool) -> None:
     if explicit is dataclasses.MISSING or (explicit is None and "__eq__" in own):
         if frozen:
             hashed = tuple(f.name for f in fields if (f.compare if f.hash is None else f.hash))
-            cls.__record_hash__ = _getter(hashed)
+            cls.__record_hash__ = staticmethod(_getter(hashed))
             cls.__hash__ = _hash
         else:
             cls.__hash__ = None

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from casmech.cli import YOUNG_OBJECTS, main
+from casmech.cli import main
+from casmech.cli.collector import YOUNG_OBJECTS
 from casmech.cli.commands import COMMANDS
 from casmech.io.csv import read_csv
 from tests.conftest import MODELS, ROOT
@@ -269,15 +270,49 @@ def test_one_blas_thread_unless_the_user_chose(given, expected):
     assert out.strip() == expected
 
 
+@pytest.mark.parametrize("given, expected", [(None, "__all__"), ("logfire", "logfire")])
+def test_no_pydantic_plugins_unless_the_user_chose(given, expected):
+    """The command line turns pydantic's plugin lookup off, unless the user set it."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    env["PYTHONPATH"] = str(ROOT / "src")
+    code = "import os; import casmech.cli; print(os.environ['PYDANTIC_DISABLE_PLUGINS'])"
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                         check=True, timeout=60).stdout
+    assert out.strip() == expected
+
+
 def test_the_processs_own_command_line_collects_less_often():
-    """main() as the process's command line raises the young generation's threshold
+    """main() as the process's command line raises the young generation's threshold, starts
+    the collector before a command other than run and leaves its objects frozen at the end
     (docs/decisions/cli-collector.md); main([...]) from a caller's code leaves it as it was."""
     code = ("import gc, sys; from casmech.cli import main; "
             f"sys.argv = ['casmech', 'check', {str(MODELS / 'pendulum.yaml')!r}]; "
-            "code = main(); print(code, gc.get_threshold()[0])")
+            "code = main(); print(code, gc.get_threshold()[0], gc.isenabled(), "
+            "gc.get_freeze_count() > 0)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=300, check=True)
-    assert done.stdout.split()[-2:] == ["0", str(YOUNG_OBJECTS)]  # after check's own lines
-    before = gc.get_threshold()
+    assert done.stdout.split()[-4:] == ["0", str(YOUNG_OBJECTS), "True", "True"]
+    before = gc.get_threshold(), gc.isenabled(), gc.get_freeze_count()
     assert main(["check", str(MODELS / "pendulum.yaml")]) == 0
-    assert gc.get_threshold() == before
+    assert (gc.get_threshold(), gc.isenabled(), gc.get_freeze_count()) == before
+
+
+def test_run_collects_from_its_analysis_on(tmp_path):
+    """`casmech run` as the process's own command line loads and compiles with the collector
+    stopped and analyzes with it running (cli.collector)."""
+    code = ("import gc, sys; from casmech import api; from casmech.cli import main; seen = []\n"
+            "def spy(name):\n"
+            "    inner = getattr(api, name)\n"
+            "    def call(*a, **k):\n"
+            "        seen.append((name, gc.isenabled())); return inner(*a, **k)\n"
+            "    setattr(api, name, call)\n"
+            "spy('load'); spy('compile'); spy('analyze')\n"
+            f"sys.argv = ['casmech', 'run', {str(MODELS / 'pendulum.yaml')!r}, '--t-end', "
+            f"'0.1', '-q', '--mode', 'interpreted', '--out', {str(tmp_path)!r}]\n"
+            "print(main(), seen)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, check=True)
+    assert done.stdout.strip() == ("0 [('load', False), ('compile', False), "
+                                   "('analyze', True)]")

@@ -2,6 +2,7 @@
 replace(), immutability and field options, class by class."""
 
 import dataclasses
+import inspect
 import pickle
 from dataclasses import dataclass, field
 
@@ -137,3 +138,55 @@ def test_a_frozen_dataclass_extends_a_record():
             value.a = 5.0
     with pytest.raises(TypeError, match="non-frozen"):  # as for a frozen dataclass
         dataclass(type("Mutable", (Base,), {"__annotations__": {"d": "int"}, "d": 0}))
+
+
+def test_a_frozen_records_init_is_a_frozen_dataclasss():
+    """The same signature, defaults, default factories (a new object each time) and
+    __post_init__; a field after a defaulted one refused as dataclasses refuse it."""
+    made, rec = _pair()
+    assert str(inspect.signature(rec)) == str(inspect.signature(made))
+    assert rec.__doc__ == made.__doc__  # (undocumented: the name and signature)
+
+    @record
+    class Later:
+        a: list = field(default_factory=list)
+        b: int = field(default=4, init=False)
+        c: dict = field(default_factory=dict, init=False)
+
+        def __post_init__(self):
+            object.__setattr__(self, "b", len(self.a))
+
+    one, two = Later(), Later([1, 2])
+    assert (one.a, one.b, one.c, two.a, two.b) == ([], 0, {}, [1, 2], 2)
+    assert one.a is not Later().a and one.c is not Later().c
+    with pytest.raises(TypeError, match="'b' follows default argument"):
+        record(type("Wrong", (), {"__annotations__": {"a": "int", "b": "int"}, "a": 0,
+                                  "__module__": __name__}))
+
+
+def test_a_record_with_an_init_only_field_keeps_dataclasses_init():
+    @record
+    class Scaled:
+        a: float
+        scale: dataclasses.InitVar[float] = 1.0
+
+        def __post_init__(self, scale):
+            object.__setattr__(self, "a", self.a * scale)
+
+    assert Scaled(2.0, 3.0).a == 6.0 and Scaled(2.0).a == 2.0
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Scaled(1.0).a = 2.0
+
+
+@pytest.mark.parametrize("annotations", [{}, {"a": "int"}, {"a": "int", "b": "int"}])
+def test_eq_and_hash_of_any_number_of_fields_as_a_dataclass(annotations):
+    """Zero and one compared field too (their getters are lambdas, not attrgetters)."""
+    def body():
+        return type("Few", (), {"__annotations__": dict(annotations), "__module__": __name__})
+
+    made, rec = dataclass(frozen=True)(body()), record(body())
+    args = range(len(annotations))
+    assert (rec(*args) == rec(*args)) is (made(*args) == made(*args)) is True
+    assert hash(rec(*args)) == hash(made(*args))
+    if annotations:
+        assert (rec(*args) == rec(*[9] * len(annotations))) is False
