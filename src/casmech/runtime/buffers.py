@@ -44,6 +44,9 @@ class BufferedCall:
             if entries <= BOUND_ENTRIES:
                 self._bound = self._bind()
         self._zero = [False] * n_in  # bound inputs known to hold zeros
+        # the inputs and outputs that hold numbers (an empty one is bound and never touched)
+        self._live_in = [i for i, (r, c) in enumerate(self.shapes_in) if r * c]
+        self._live_out = [i for i, (r, c) in enumerate(self.shapes_out) if r * c]
 
     def _bind(self) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Input and output arrays bound to the buffer: casadi stores a dense matrix column by
@@ -61,18 +64,23 @@ class BufferedCall:
             outputs = self.function(*(0 if a is None else a for a in args))
             outputs = outputs if isinstance(outputs, tuple) else (outputs,)
             return tuple(np.array(o, float) for o in outputs)
+        if len(args) != len(self.shapes_in):
+            raise TypeError(f"{self.function.name()} takes {len(self.shapes_in)} arguments, "
+                            f"{len(args)} given")
         bound = self._bound is not None
         inputs, outputs = self._bound if bound else self._bind()
-        for i, (a, target) in enumerate(zip(args, inputs, strict=True)):
+        zero = self._zero
+        for i in self._live_in:
+            a = args[i]
             if a is None:  # a bound input is zeroed once, a new one is zeros
-                if bound and not self._zero[i]:
-                    target.fill(0.0)
-                    self._zero[i] = True
+                if bound and not zero[i]:
+                    inputs[i].fill(0.0)
+                    zero[i] = True
                 continue
-            np.copyto(target, np.reshape(a, self.shapes_in[i]).T)
-            self._zero[i] = False
-        for out in outputs:
-            out.fill(np.nan)  # what an interrupted call did not write
+            np.copyto(inputs[i], np.reshape(a, self.shapes_in[i]).T)
+            zero[i] = False
+        for i in self._live_out:
+            outputs[i].fill(np.nan)  # what an interrupted call did not write
         cancel.arm()  # a signal may stop an integrator here (runtime.cancel.solving)
         try:
             self.evaluate()
@@ -86,7 +94,12 @@ class BufferedCall:
             raise
         finally:
             cancel.disarm()
-        return tuple((out.copy() if bound else out).T for out in outputs)
+        if not bound:
+            return tuple(out.T for out in outputs)
+        fresh = list(outputs)  # an empty output holds nothing the next call could change
+        for i in self._live_out:
+            fresh[i] = outputs[i].copy()
+        return tuple(out.T for out in fresh)
 
 
 class NamedCall:
