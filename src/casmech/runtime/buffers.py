@@ -4,7 +4,9 @@ a returned DM (np.array(DM) costs more than evaluating a mapped prescribed step 
 Functions with a sparse input or output are called the ordinary way. A buffered evaluation is
 a solver call a signal may stop at once (runtime.cancel.solving); the errors.Interrupted it
 then raises carries in `outputs` what the call had written (an integrator writes its outputs
-grid point by grid point; the rest NaN), so the rows computed before the signal are kept.
+grid point by grid point; the rest NaN), so the rows computed before the signal are kept. Only
+a function a signal can stop midway (`interruptible`: casadi's solvers) has its outputs set
+to NaN before each call.
 
 A call's NumPy memory is bound to the buffer once (BOUND_ENTRIES): each call copies its inputs
 in and its outputs out, since binding an argument costs about as much as evaluating a small
@@ -24,14 +26,26 @@ from casmech.runtime.memo import kept
 # (BufferedCall); larger ones (a large tree's rows over a block) bind them per call, so that
 # kept calls do not hold their memory.
 BOUND_ENTRIES = 1 << 16
+# Function classes whose evaluation no signal stops (casadi checks for interrupts in its
+# solvers only): a call of such functions alone leaves no output unwritten to mark with NaN.
+UNINTERRUPTED = frozenset({"SXFunction", "MXFunction", "External", "Map"})
+
+
+def interruptible(function: ca.Function) -> bool:
+    """Whether a signal may stop an evaluation of `function` midway: it is, or calls, a
+    function of a class not in UNINTERRUPTED (an integrator, a rootfinder, a solver)."""
+    return function.class_name() not in UNINTERRUPTED or any(
+        f.class_name() not in UNINTERRUPTED for f in function.find_functions())
 
 
 class BufferedCall:
     """function(*arrays) -> tuple of dense NumPy arrays, one per output (fresh arrays, which
-    the next call does not touch). An argument None stands for zeros."""
+    the next call does not touch). An argument None stands for zeros. `stoppable`: whether a
+    signal may stop an evaluation midway (default: interruptible(function))."""
 
-    def __init__(self, function: ca.Function):
+    def __init__(self, function: ca.Function, stoppable: bool | None = None):
         self.function = function
+        self.stoppable = interruptible(function) if stoppable is None else stoppable
         n_in, n_out = function.n_in(), function.n_out()
         self.dense = all(function.sparsity_in(i).is_dense() for i in range(n_in)) and \
             all(function.sparsity_out(i).is_dense() for i in range(n_out))
@@ -44,6 +58,9 @@ class BufferedCall:
             if entries <= BOUND_ENTRIES:
                 self._bound = self._bind()
         self._zero = [False] * n_in  # bound inputs known to hold zeros
+        # the inputs and outputs that hold numbers (an empty one is bound and never touched)
+        self._live_in = [i for i, (r, c) in enumerate(self.shapes_in) if r * c]
+        self._live_out = [i for i, (r, c) in enumerate(self.shapes_out) if r * c]
 
     def _bind(self) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Input and output arrays bound to the buffer: casadi stores a dense matrix column by
@@ -61,18 +78,24 @@ class BufferedCall:
             outputs = self.function(*(0 if a is None else a for a in args))
             outputs = outputs if isinstance(outputs, tuple) else (outputs,)
             return tuple(np.array(o, float) for o in outputs)
+        if len(args) != len(self.shapes_in):
+            raise TypeError(f"{self.function.name()} takes {len(self.shapes_in)} arguments, "
+                            f"{len(args)} given")
         bound = self._bound is not None
         inputs, outputs = self._bound if bound else self._bind()
-        for i, (a, target) in enumerate(zip(args, inputs, strict=True)):
+        zero = self._zero
+        for i in self._live_in:
+            a = args[i]
             if a is None:  # a bound input is zeroed once, a new one is zeros
-                if bound and not self._zero[i]:
-                    target.fill(0.0)
-                    self._zero[i] = True
+                if bound and not zero[i]:
+                    inputs[i].fill(0.0)
+                    zero[i] = True
                 continue
-            np.copyto(target, np.reshape(a, self.shapes_in[i]).T)
-            self._zero[i] = False
-        for out in outputs:
-            out.fill(np.nan)  # what an interrupted call did not write
+            np.copyto(inputs[i], np.reshape(a, self.shapes_in[i]).T)
+            zero[i] = False
+        if self.stoppable:
+            for i in self._live_out:
+                outputs[i].fill(np.nan)  # what an interrupted call did not write
         cancel.arm()  # a signal may stop an integrator here (runtime.cancel.solving)
         try:
             self.evaluate()
@@ -86,7 +109,12 @@ class BufferedCall:
             raise
         finally:
             cancel.disarm()
-        return tuple((out.copy() if bound else out).T for out in outputs)
+        if not bound:
+            return tuple(out.T for out in outputs)
+        fresh = list(outputs)  # an empty output holds nothing the next call could change
+        for i in self._live_out:
+            fresh[i] = outputs[i].copy()
+        return tuple(out.T for out in fresh)
 
 
 class NamedCall:
@@ -137,19 +165,23 @@ class ColumnCall:
         self.function = function
         self.widths = [function.size2_in(k) for k in range(function.n_in())]
         self.maps: dict[int, BufferedCall] = {}  # by block length
+        self.stoppable = interruptible(function)
         entries = sum(function.nnz_in(k) for k in range(function.n_in())) + sum(
             function.nnz_out(k) for k in range(function.n_out()))
         self.block = max(1, min(BLOCK, MAP_ENTRIES // max(entries, 1)))
 
     def _map(self, count: int) -> BufferedCall:
-        return kept(self.maps, count, lambda: BufferedCall(self.function.map(count)), KEPT_MAPS)
+        return kept(self.maps, count, lambda: BufferedCall(self.function.map(count),
+                                                           self.stoppable), KEPT_MAPS)
 
     def __call__(self, *arguments) -> tuple[np.ndarray, ...]:
         arguments = [self._matrix(np.asarray(a, float), k) for k, a in enumerate(arguments)]
-        shared = [a.shape[1] == w for a, w in zip(arguments, self.widths, strict=True)]
-        count = max((a.shape[1] // max(w, 1) for a, w, one in zip(arguments, self.widths,
-                                                                  shared, strict=True)
-                     if not one), default=1)
+        shared, counts = [], []
+        for a, w in zip(arguments, self.widths, strict=True):
+            shared.append(a.shape[1] == w)
+            if not shared[-1]:
+                counts.append(a.shape[1] // max(w, 1))
+        count = max(counts, default=1)
         if count == 0:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
@@ -157,12 +189,22 @@ class ColumnCall:
         for start in range(0, count, self.block):
             size = min(self.block, count - start)
             blocks.append(self._map(size)(*(
-                (a if size == 1 else np.tile(a, (1, size))) if one
+                self._repeated(a, size, w) if one
+                else a if (start == 0 and a.shape[1] == size * w)
                 else a[:, start * w:(start + size) * w]
                 for a, w, one in zip(arguments, self.widths, shared, strict=True))))
         if len(blocks) == 1:
             return blocks[0]
         return tuple(np.concatenate(parts, axis=1) for parts in zip(*blocks, strict=True))
+
+    @staticmethod
+    def _repeated(argument: np.ndarray, size: int, width: int) -> np.ndarray:
+        """A shared argument side by side `size` times (one column: a view)."""
+        if size == 1:
+            return argument
+        if width == 1:
+            return np.broadcast_to(argument, (argument.shape[0], size))
+        return np.tile(argument, (1, size))
 
     def _matrix(self, argument: np.ndarray, k: int) -> np.ndarray:
         """A 2-D argument as given; a vector as one column (shared by every evaluation)."""

@@ -33,7 +33,7 @@ from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import assembly, contact_steps, events, nonfinite
+from casmech.runtime import assembly, contact_steps, events, functional_ode, nonfinite
 from casmech.runtime.buffers import ColumnCall, NamedCall
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.driver import Block, Chunks, completed, drive
@@ -252,10 +252,7 @@ class _Integrator:
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if not system.n_cut:
-            functional = self.options["nonlinear_solver_iteration"] == "functional"
-            problem = system.functional_problem if functional else system.problem
-            integrator = self._cvodes(problem, t0, times) if not trial else NamedCall(
-                ca.integrator("joint", "cvodes", problem, t0, list(times[:1]), self.options))
+            integrator = self._cvodes(t0, times, trial)
             out = integrator(x0=x)
         else:
             integrator = self._idas(t0, times, x, z, times[-1] - t0 if trial else None)
@@ -267,22 +264,27 @@ class _Integrator:
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
 
-    def _cvodes(self, problem, t0: float, times) -> NamedCall:
+    def _cvodes(self, t0: float, times, trial: bool) -> NamedCall:
         """CVODES over the grid, kept for a later run over the same grid with the same options
-        (docs/decisions/joint-run-fixed-costs.md)."""
-        return self._kept("cvodes", (problem is self.system.functional_problem,), problem, t0,
-                          times, lambda: self.options)
+        (docs/decisions/joint-run-fixed-costs.md), to times[0] only for a `trial` point (not
+        kept); its problem: runtime.functional_ode's."""
+        functional = self.options["nonlinear_solver_iteration"] == "functional"
+        if trial:
+            return NamedCall(ca.integrator("joint", "cvodes", functional_ode.problem(
+                self.system, functional), t0, list(times[:1]), self.options))
+        return self._kept("cvodes", (functional,), lambda: functional_ode.problem(
+            self.system, functional), t0, times, lambda: self.options)
 
     def _idas(self, t0: float, times, x, z, first: float | None) -> NamedCall:
         """IDAS over the grid from (t0, x, z); its options depend on that state (_dae_options),
         so it is kept for a later run from the same state over the same grid (a repeated
         run: its start is kept too, runtime.joint_dynamics._start)."""
         return self._kept("idas", (np.asarray(x).tobytes(), np.asarray(z).tobytes(), first),
-                          self.system.problem, t0, times,
+                          lambda: self.system.problem, t0, times,
                           lambda: self.options | self._dae_options(t0, times, x, z, first))
 
     def _kept(self, plugin: str, key: tuple, problem, t0: float, times, options) -> NamedCall:
-        """casadi's `plugin` integrator of `problem` over the grid with options(), kept in the
+        """casadi's `plugin` integrator of problem() over the grid with options(), kept in the
         workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
         of several compile settings), the start and grid and self.options, and called through
         a buffer (runtime.buffers.NamedCall)."""
@@ -291,7 +293,7 @@ class _Integrator:
         key = (*key, self.system.dynamics, float(t0), np.asarray(times, float).tobytes(),
                self._options_key)
         return self.workspace.kept(plugin, key, lambda: NamedCall(
-            ca.integrator("joint", plugin, problem, t0, list(times), options())))
+            ca.integrator("joint", plugin, problem(), t0, list(times), options())))
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p

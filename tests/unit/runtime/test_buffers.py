@@ -108,3 +108,19 @@ def test_each_call_returns_its_own_arrays_and_none_is_zeros(monkeypatch):
         for got, want in zip(call(None, b), f(np.zeros(2), b), strict=True):
             # the same operations on the same numbers
             np.testing.assert_allclose(got, np.array(want), rtol=0, atol=0)
+
+
+def test_only_solvers_are_interruptible():
+    """A signal stops casadi's solvers only: their calls (and MX functions calling them)
+    mark what they did not write with NaN; plain and mapped expressions need not."""
+    from casmech.runtime.buffers import interruptible
+
+    x = ca.SX.sym("x", 2)
+    plain = ca.Function("plain", [x], [ca.sin(x)])
+    solver = ca.integrator("solver", "cvodes", {"x": x, "ode": -x}, 0.0, [1.0])
+    xm = ca.MX.sym("x", 2)
+    calling = ca.Function("calling", [xm], [solver(x0=xm)["xf"] + plain(xm)])
+    assert not interruptible(plain) and not interruptible(plain.map(4))
+    assert not interruptible(ca.Function("mx", [xm], [plain(xm) * 2]))
+    assert interruptible(solver) and interruptible(calling) and interruptible(solver.map(3))
+    assert not BufferedCall(plain).stoppable and BufferedCall(solver).stoppable
