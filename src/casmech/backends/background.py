@@ -85,7 +85,9 @@ def child_of(key: str) -> subprocess.Popen | None:
 
 def running(key: str, root: Path | None) -> bool:
     """Whether a background build of the library `key` is under way: its first part may be in
-    the cache already, the rest not (codegen.auto_mode counts that as a miss)."""
+    the cache already, the rest not (codegen.auto_mode counts that as a miss). The child
+    removes its marker before it lets the lock go, so a warm run finds none and takes no lock;
+    one a killed child left is probed (and found free)."""
     from casmech.backends import cache
 
     marker = Path(root or cache.cache_dir()) / f"{key}{BUILDING}"

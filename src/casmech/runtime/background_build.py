@@ -1,9 +1,10 @@
 """The child of a background build (backends.background starts it as
 `python -m casmech.runtime.background_build FILE`): read and delete the model's pickle, take
 the cache's background lock (or leave: another child is building), and while holding the lock
-that marks the library as building, build the library and, for dynamics, run the analysis over
-its first output step compiled with its results table, which builds what a compiled `casmech
-run` of the model reads besides (a tree's joint-system library, deferred functions)."""
+that marks the library as building (its file removed before the lock is let go), build the
+library and, for dynamics, run the analysis over its first output step compiled with its
+results table, which builds what a compiled `casmech run` of the model reads besides (a tree's
+joint-system library, deferred functions)."""
 
 from __future__ import annotations
 
@@ -43,11 +44,14 @@ def main(path: str) -> int:
         os.unlink(path)
     folder = Path(root) if root is not None else cache.cache_dir()
     folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    marker = folder / f"{key}{BUILDING}"
     try:
-        with FileLock(str(folder / BACKGROUND_LOCK), timeout=0), \
-                FileLock(str(folder / f"{key}{BUILDING}")):
-            build(model, Toolchain(toolchain.compiler, toolchain.flags, 1),
-                  None if root is None else folder)
+        with FileLock(str(folder / BACKGROUND_LOCK), timeout=0), FileLock(str(marker)):
+            try:
+                build(model, Toolchain(toolchain.compiler, toolchain.flags, 1),
+                      None if root is None else folder)
+            finally:  # removed while held: a run that finds no marker needs no lock to know
+                marker.unlink(missing_ok=True)  # no build runs (background.running)
     except Timeout:
         return 0  # another background build holds the cache: this one is not made
     return 0

@@ -25,6 +25,8 @@ def test_a_cache_miss_runs_interpreted_and_the_next_call_compiled(building, tmp_
     assert len(background._children) == 1
     assert finished() == [0]
     assert not list((tmp_path / "tmp").glob("casmech-background-*"))  # the pickle is deleted
+    # its marker removed: a later run's check (background.running) takes no lock
+    assert not list(building.glob(f"*{background.BUILDING}"))
     second = casmech.compile(model)
     assert codegen.mode_of(second) == "compiled"
     builds = counted_builds(monkeypatch, library)
