@@ -325,6 +325,8 @@ CONSTANTS = {
                                                      "try is an error (a bound on the time to "
                                                      "fail)",
     "runtime/projected_rk4.py ORDER": "the classical Runge-Kutta method's order",
+    "runtime/functional_ode.py DIRECT_STATES": "which form of the same ODE CVODES gets "
+                                               "(the integrator's creation time)",
     "runtime/singular_poses.py MAX_ENTRIES": "dense Jacobians held at once (memory)",
     "runtime/singular_poses.py COMPILED_ROWS": "the log-determinant's C and gcc's time "
                                                "(build cost)",
