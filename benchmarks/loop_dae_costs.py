@@ -85,7 +85,8 @@ def stages(runner, rtols, calls: int, reference, seen: dict) -> None:
 
     spent: dict[str, float] = {}
     _timed(joint_dynamics._Integrator, "__call__", "integrator", spent)
-    _timed(joint_dynamics._Recorder, "rows", "rows", spent)
+    _timed(getattr(joint_dynamics, "Recorder", None) or joint_dynamics._Recorder, "rows", "rows",
+           spent)
     _timed(auto_formulation, "singular_poses", "singular poses", spent)
     def timed_call(find):
         """`find`'s mapped call with its CPU added to spent["mapped"]."""

@@ -48,3 +48,36 @@ def test_the_kept_radius_is_per_start():
                                1e-8, t0=0.1, method="auto")
     assert later.metadata["method"] == fresh.metadata["method"] == "bdf"
     np.testing.assert_array_equal(later.q, fresh.q)
+
+
+def test_the_row_at_t0_is_kept_with_the_start_per_loop_rows_choice(monkeypatch):
+    """The results rows at t0 are a function of the kept start and of whether the loops'
+    rows are solved: a repeated run evaluates only its block's rows, each choice its own first
+    row, and the rows equal a fresh bundle's; a run of that row alone hands out its own
+    arrays (writing into them leaves the next run's as they were)."""
+    from casmech.runtime import joint_recorder
+    from casmech.runtime.joint_dynamics import run_joint_dynamics
+    from tests.validation.runtime.test_joint_dynamics import ROOT
+
+    path = ROOT / "benchmarks" / "models" / "four_bar.yaml"
+    functions = casmech.compile(casmech.load(path))
+    for loop_rows in ("solved", "integrator"):
+        _run(functions, options={"solver.loop_rows": loop_rows})
+    evaluated, rows = [], joint_recorder.Recorder.rows
+    monkeypatch.setattr(joint_recorder.Recorder, "rows", lambda self, times, *args: (
+        evaluated.append(len(times)) or rows(self, times, *args)))
+    for loop_rows in ("solved", "integrator"):
+        options = {"options": {"solver.loop_rows": loop_rows}}
+        again = _run(functions, **options)
+        fresh = _run(casmech.compile(casmech.load(path)), **options)
+        for name in ("q", "q_dot", "q_ddot", "lam"):
+            # the same computation, repeated
+            np.testing.assert_array_equal(getattr(again, name), getattr(fresh, name))
+    # a block of rows per kept run; the fresh bundles' first rows too
+    assert evaluated == [5, 1, 5] * 2, evaluated
+    only = run_joint_dynamics(functions, 0.0, 0.01, 1e-6, 1e-8)  # the row at t0 alone
+    kept = only.lam.copy()
+    only.lam[:] += 1.0
+    # the kept row, untouched by the write
+    np.testing.assert_array_equal(run_joint_dynamics(functions, 0.0, 0.01, 1e-6, 1e-8).lam,
+                                  kept)
