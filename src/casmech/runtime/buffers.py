@@ -126,6 +126,8 @@ class NamedCall:
     def __init__(self, function: ca.Function):
         self.function, self.call = function, BufferedCall(function)
         self.names_in, self.names_out = function.name_in(), function.name_out()
+        # (the inputs of a call, what a caller derived from its statistics), kept by the caller
+        self.derived: tuple | None = None
 
     def __call__(self, **inputs) -> dict[str, np.ndarray]:
         args = [inputs.get(name) for name in self.names_in]

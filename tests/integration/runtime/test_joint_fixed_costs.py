@@ -81,3 +81,40 @@ def test_the_row_at_t0_is_kept_with_the_start_per_loop_rows_choice(monkeypatch):
     # the kept row, untouched by the write
     np.testing.assert_array_equal(run_joint_dynamics(functions, 0.0, 0.01, 1e-6, 1e-8).lam,
                                   kept)
+
+
+def test_a_kept_integrators_steps_are_read_once_per_inputs(monkeypatch):
+    """A repeated run from the same start calls its kept integrator with the same inputs: the
+    steps of the first run's call are reported again, its statistics read once; a run from
+    another start (t0) reads them for its own call, and every count is a fresh bundle's."""
+    from casmech.runtime import buffers
+    from casmech.runtime.joint_dynamics import run_joint_dynamics
+
+    def runs(functions):
+        return [run_joint_dynamics(functions, t_end, 0.01, 1e-6, 1e-8, t0=t0)
+                for t0, t_end in ((0.0, 0.1), (0.0, 0.1), (0.05, 0.1), (0.0, 0.1))]
+
+    fresh = [r.metadata["steps"] for r in runs(casmech.compile(casmech.loads(STIFF_ARM)))]
+    read, stats = [], buffers.NamedCall.stats
+    monkeypatch.setattr(buffers.NamedCall, "stats", lambda self: read.append(1) or stats(self))
+    kept = [r.metadata["steps"] for r in runs(casmech.compile(casmech.loads(STIFF_ARM)))]
+    assert kept == fresh and fresh[0] > 0, (kept, fresh)
+    assert len(read) == 2  # the first start's call, the other start's (its own grid)
+
+
+def test_steps_are_read_again_for_other_inputs():
+    """The kept count is of the inputs it was read for: other inputs read the statistics
+    of their own call."""
+    import casadi as ca
+
+    from casmech.runtime.buffers import NamedCall
+    from casmech.runtime.joint_dynamics import _steps
+
+    x = ca.SX.sym("x", 2)
+    integrator = NamedCall(ca.integrator("i", "cvodes", {"x": x, "ode": ca.vertcat(
+        x[1], -x[0] * (1 + x[0] ** 2))}, 0.0, [1.0, 2.0], {"reltol": 1e-8}))
+    counts = []
+    for start in ([0.1, 0.0], [0.1, 0.0], [3.0, 0.0]):
+        integrator(x0=np.array(start))
+        counts.append((_steps(integrator, start), integrator.stats()["nsteps"]))
+    assert counts[0] == counts[1] and counts[2][0] == counts[2][1] != counts[0][0], counts
