@@ -67,7 +67,9 @@ def _options(seen: dict) -> dict:
 def _idas(seen: dict, options: dict):
     import casadi as ca
 
-    return ca.integrator("idas", "idas", seen["problem"], seen["t0"], seen["times"], options)
+    problem = seen["problem"]  # the integrator's problem, or (since 6a116ae) what makes it
+    problem = problem if isinstance(problem, (dict, ca.Function)) else problem()
+    return ca.integrator("idas", "idas", problem, seen["t0"], seen["times"], options)
 
 
 def _cpu(function, calls: int) -> float:
