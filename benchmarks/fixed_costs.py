@@ -63,7 +63,8 @@ def measure(target: str, mode: str, rtols: list[float], calls: int, stages: bool
         for name, label in STAGES.items():
             _timed(joint_dynamics, name, label, spent)
         _timed(joint_dynamics._Integrator, "__call__", "integrator", spent)
-        _timed(joint_dynamics._Recorder, "rows", "results rows", spent)
+        _timed(getattr(joint_dynamics, "Recorder", None) or joint_dynamics._Recorder, "rows",
+               "results rows", spent)
     functions = _bundle(target, mode)
     out = {}
     for rtol in rtols:

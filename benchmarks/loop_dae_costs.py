@@ -67,7 +67,9 @@ def _options(seen: dict) -> dict:
 def _idas(seen: dict, options: dict):
     import casadi as ca
 
-    return ca.integrator("idas", "idas", seen["problem"], seen["t0"], seen["times"], options)
+    problem = seen["problem"]  # the integrator's problem, or (since 6a116ae) what makes it
+    problem = problem if isinstance(problem, (dict, ca.Function)) else problem()
+    return ca.integrator("idas", "idas", problem, seen["t0"], seen["times"], options)
 
 
 def _cpu(function, calls: int) -> float:
@@ -85,7 +87,8 @@ def stages(runner, rtols, calls: int, reference, seen: dict) -> None:
 
     spent: dict[str, float] = {}
     _timed(joint_dynamics._Integrator, "__call__", "integrator", spent)
-    _timed(joint_dynamics._Recorder, "rows", "rows", spent)
+    _timed(getattr(joint_dynamics, "Recorder", None) or joint_dynamics._Recorder, "rows", "rows",
+           spent)
     _timed(auto_formulation, "singular_poses", "singular poses", spent)
     def timed_call(find):
         """`find`'s mapped call with its CPU added to spent["mapped"]."""

@@ -126,6 +126,8 @@ class NamedCall:
     def __init__(self, function: ca.Function):
         self.function, self.call = function, BufferedCall(function)
         self.names_in, self.names_out = function.name_in(), function.name_out()
+        # (the inputs of a call, what a caller derived from its statistics), kept by the caller
+        self.derived: tuple | None = None
 
     def __call__(self, **inputs) -> dict[str, np.ndarray]:
         args = [inputs.get(name) for name in self.names_in]
@@ -147,9 +149,9 @@ class NamedCall:
 
 # Columns per mapped call. casadi builds a Map in time growing with its length times the
 # function's size, so columns are evaluated in blocks of up to BLOCK, and of at most
-# MAP_ENTRIES input and output numbers, through kept maps (one per block length: the full
-# block's and the lengths of shorter blocks, at most KEPT_MAPS); a call's own cost is small
-# beside its columns' (docs/decisions/output-blocks.md).
+# MAP_ENTRIES input and output numbers, through kept maps (one per block length and set of
+# shared arguments: the full block's and the lengths of shorter blocks, at most KEPT_MAPS);
+# a call's own cost is small beside its columns' (docs/decisions/output-blocks.md).
 BLOCK = 256
 MAP_ENTRIES = 131_072
 KEPT_MAPS = 8
@@ -159,20 +161,30 @@ class ColumnCall:
     """function evaluated at every column of its arguments (each with one column per
     evaluation, or one for all; an input of w columns takes w per evaluation), in blocks of
     up to BLOCK evaluations and MAP_ENTRIES numbers: per output, the evaluations' outputs side
-    by side."""
+    by side. An argument shared by all is passed once per call, to a map that hands it to
+    every evaluation (casadi's map with reduce_in), not repeated in NumPy."""
 
     def __init__(self, function: ca.Function):
         self.function = function
         self.widths = [function.size2_in(k) for k in range(function.n_in())]
-        self.maps: dict[int, BufferedCall] = {}  # by block length
+        # by (block length, the indices of the arguments shared by its evaluations)
+        self.maps: dict[tuple[int, tuple[int, ...]], BufferedCall] = {}
         self.stoppable = interruptible(function)
         entries = sum(function.nnz_in(k) for k in range(function.n_in())) + sum(
             function.nnz_out(k) for k in range(function.n_out()))
         self.block = max(1, min(BLOCK, MAP_ENTRIES // max(entries, 1)))
 
-    def _map(self, count: int) -> BufferedCall:
-        return kept(self.maps, count, lambda: BufferedCall(self.function.map(count),
-                                                           self.stoppable), KEPT_MAPS)
+    def _map(self, count: int, shared: tuple[int, ...]) -> BufferedCall:
+        """The kept map over `count` evaluations, the arguments `shared` passed once."""
+        shared = shared if count > 1 else ()
+
+        def build() -> BufferedCall:
+            function = self.function
+            mapped = function.map(f"shared_{function.name()}", "serial", count, list(shared),
+                                  []) if shared else function.map(count)
+            return BufferedCall(mapped, self.stoppable)
+
+        return kept(self.maps, (count, shared), build, KEPT_MAPS)
 
     def __call__(self, *arguments) -> tuple[np.ndarray, ...]:
         arguments = [self._matrix(np.asarray(a, float), k) for k, a in enumerate(arguments)]
@@ -185,26 +197,17 @@ class ColumnCall:
         if count == 0:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
+        indices = tuple(k for k, one in enumerate(shared) if one)
         blocks = []
         for start in range(0, count, self.block):
             size = min(self.block, count - start)
-            blocks.append(self._map(size)(*(
-                self._repeated(a, size, w) if one
-                else a if (start == 0 and a.shape[1] == size * w)
+            blocks.append(self._map(size, indices)(*(
+                a if one or (start == 0 and a.shape[1] == size * w)
                 else a[:, start * w:(start + size) * w]
                 for a, w, one in zip(arguments, self.widths, shared, strict=True))))
         if len(blocks) == 1:
             return blocks[0]
         return tuple(np.concatenate(parts, axis=1) for parts in zip(*blocks, strict=True))
-
-    @staticmethod
-    def _repeated(argument: np.ndarray, size: int, width: int) -> np.ndarray:
-        """A shared argument side by side `size` times (one column: a view)."""
-        if size == 1:
-            return argument
-        if width == 1:
-            return np.broadcast_to(argument, (argument.shape[0], size))
-        return np.tile(argument, (1, size))
 
     def _matrix(self, argument: np.ndarray, k: int) -> np.ndarray:
         """A 2-D argument as given; a vector as one column (shared by every evaluation)."""

@@ -19,6 +19,7 @@ workspace (runtime.workspace).
 
 from __future__ import annotations
 
+import math
 import sys
 from dataclasses import asdict, replace
 
@@ -34,10 +35,10 @@ from casmech.formulations.joint_start import Loops, initial_state, quaternion_si
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, events, functional_ode, nonfinite
-from casmech.runtime.buffers import ColumnCall, NamedCall
-from casmech.runtime.dae_rows import minimum_norm
+from casmech.runtime.buffers import NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.joint_rows import LoopRows, solved_motion
+from casmech.runtime.joint_recorder import Recorder
+from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.results import Result
 from casmech.runtime.stiffness import spectral_radius
@@ -257,11 +258,12 @@ class _Integrator:
         else:
             integrator = self._idas(t0, times, x, z, times[-1] - t0 if trial else None)
             out = integrator(x0=x, z0=z, p=self.loops.mask)
-        self.steps += int(integrator.stats().get("nsteps", 0))
+        self.steps += _steps(integrator, x, z, self.loops.mask if system.n_cut else ())
         states = out["xf"]
         algebraic = out["zf"] if system.n_cut else np.zeros((0, len(times)))
-        if not (np.all(np.isfinite(states)) and np.all(np.isfinite(algebraic))):
-            raise RuntimeError("the state became NaN or infinite")
+        if not math.isfinite(states.sum() + algebraic.sum()) and not (
+                np.isfinite(states).all() and np.isfinite(algebraic).all()):  # (a sum's
+            raise RuntimeError("the state became NaN or infinite")  # overflow: finite)
         return states, algebraic
 
     def _cvodes(self, t0: float, times, trial: bool) -> NamedCall:
@@ -317,6 +319,17 @@ class _Integrator:
                     z[:system.n_cut], len(z), settings.mu_tolerance))}
 
 
+def _steps(integrator: NamedCall, *inputs) -> int:
+    """The steps of `integrator`'s last call, from `inputs`: its statistics, read once per
+    inputs (a kept integrator is deterministic: a call from the inputs of the call before it
+    takes the steps that one took), kept in its `derived`."""
+    key = b"".join(np.asarray(a, float).tobytes() for a in inputs)
+    last = integrator.derived
+    if last is None or last[0] != key:
+        integrator.derived = last = key, int(integrator.stats().get("nsteps", 0))
+    return last[1]
+
+
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
                   settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
@@ -343,6 +356,13 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
     mapped to joint coordinates, the loops' consistent multipliers and the quaternion signs;
     a function of the bundle, its joint system, t0 and the assembly settings alone, so kept in
     the workspace (arrays read-only)."""
+    return _kept_start(functions, system, t0, settings, workspace)[:4]
+
+
+def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
+                settings: Assembly, workspace: Workspace):
+    """_start's (x, z, loops, signs) and the results rows at t0 from them, by whether loop
+    rows are solved (a dict filled by the first run of each: runtime.joint_recorder)."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -351,7 +371,7 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
         signs = quaternion_signs(system, t0, x, z, q0, functions.n_bodies)
         for array in (x, z, signs, loops.mask):
             array.setflags(write=False)
-        return x, z, loops, signs
+        return x, z, loops, signs, {}
 
     return workspace.kept("joint_starts", (float(t0), settings, system.dynamics), build)
 
@@ -365,13 +385,14 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     recorded in Result.events; without any, no event work is done."""
     workspace = of(functions, workspace)
     system = joint_system(functions, settings, workspace)
-    x, z, loops, signs = _start(functions, system, t0, settings.assembly, workspace)
+    x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
+                                             workspace)
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
                                workspace)
-    recorder = _Recorder(functions, system, signs, loops.mask, workspace,
-                         settings.loop_rows == "solved")
+    recorder = Recorder(functions, system, signs, loops.mask, workspace,
+                        settings.loop_rows == "solved")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
     integrate.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
     times = output_times(t0, t_end, step)
@@ -411,7 +432,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                      lambda j: (states[:, j], loops.z(times_done[j], states[:, j])), probe)
 
     try:
-        first = recorder.rows(times[:1], x[:, None], z[:, None])
+        first = recorder.first(times[0], x, z, firsts)
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)
@@ -428,72 +449,3 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
     return result
-
-
-class _Recorder:
-    """Appends results rows: the r-p state of the tree and every joint's multipliers (the
-    minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
-    a block by one mapped call."""
-
-    def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
-                 workspace: Workspace, solve_loops: bool = False):
-        self.functions, self.system, self.signs = functions, system, signs
-        self.workspace, self._call = workspace, None
-        self.least_norm = workspace.kept(
-            "joint_least_norm", (mask.tobytes(), system.dynamics),
-            lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
-        # with solve_loops (the loop_rows option), a system over functions.ir, its own or a
-        # parametric library's bound to the IR's values (not a controller's, whose forces
-        # that IR does not hold): its loop rows solved at each row's state
-        solved = solve_loops and system.n_cut and (functions.joint_functions is None
-                                                    or functions.parametric is not None)
-        self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
-                                    lambda: _loop_rows(functions, system, mask)) if solved else None
-
-    def _mapped(self) -> ColumnCall:
-        """The results rows' function over columns (kept in the workspace; looked up once
-        per run)."""
-        if self._call is None:
-            self._call = self.workspace.kept("joint_motion_maps", self.system.motion,
-                                             lambda: ColumnCall(self.system.motion))
-        return self._call
-
-    def rows(self, times, states, algebraic):
-        """(q, q_dot, q_ddot, lam), one row per time; with loops, their multipliers solved at
-        each row's state (runtime.joint_rows) where the system was built over the bundle's IR,
-        else the integrator's `algebraic` states."""
-        times = np.asarray(times, float)
-        if self.loops is not None:
-            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
-        else:
-            q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
-                                                   self.signs[:, None])
-        if self.least_norm is not None:
-            (lam,) = self.least_norm(times[None, :], q, lam)
-        return q.T, q_dot.T, q_ddot.T, lam.T
-
-
-def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:
-    """The loops' rows solved at each state (runtime.joint_rows): the compiled library's where
-    it holds them, else solved_motion of the saddle terms and the system's motion (SX, or a
-    parametric library's motion called through MX)."""
-    def terms() -> ca.Function:
-        return saddle_terms(functions.ir, system.tree)
-
-    if system.solved_motion is not None:  # the terms only for a singular column
-        return LoopRows(system.solved_motion, terms, system.motion, mask)
-    built = terms()
-    return LoopRows(solved_motion(built, system.motion), lambda: built, system.motion, mask)
-
-
-def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
-    """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
-    minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
-    n = functions.n_joint_rows
-    masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
-    keep = [row for row in range(n) if row not in masked]
-    t, q = ca.MX.sym("t"), ca.MX.sym("q", functions.n_coordinates)
-    lam = ca.MX.sym("lam", functions.n_rows)
-    jacobian = functions["romega_jacobian"](t, q)
-    joint = minimum_norm(jacobian, lam[:n], keep)
-    return ca.Function("least_norm", [t, q, lam], [ca.vertcat(joint, lam[n:])])

@@ -84,7 +84,7 @@ def test_blocks_bounded_by_numbers(monkeypatch):
     (got,) = call(xs, shared)
     # the same operations on the same numbers, one evaluation at a time
     np.testing.assert_allclose(got, np.array(f.map(7)(xs, shared)), rtol=0, atol=0)
-    assert set(call.maps) == {2, 1}  # blocks of 2, 2, 2 and 1
+    assert set(call.maps) == {(2, (1,)), (1, ())}  # blocks of 2, 2, 2 and 1; c shared
 
 
 def test_each_call_returns_its_own_arrays_and_none_is_zeros(monkeypatch):

@@ -1,0 +1,94 @@
+"""The results rows of a joint-coordinate run (runtime.joint_dynamics): the r-p state the
+tree gives and every joint row's multiplier, the loops' from the integrator's algebraic
+states or solved at each row's state (runtime.joint_rows), the minimum-norm ones where loop
+rows were masked (as the r-p DAE reports them); every row of a block by one mapped call."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.equations.functions import SystemFunctions
+from casmech.formulations.joint_system import JointSystem, saddle_terms
+from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.dae_rows import minimum_norm
+from casmech.runtime.joint_rows import LoopRows, solved_motion
+from casmech.runtime.workspace import Workspace
+
+
+class Recorder:
+    """Appends results rows: the r-p state of the tree and every joint's multipliers (the
+    minimum-norm ones where loop rows were masked, as the r-p DAE reports them), every row of
+    a block by one mapped call."""
+
+    def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
+                 workspace: Workspace, solve_loops: bool = False):
+        self.functions, self.system, self.signs = functions, system, signs
+        self.workspace, self._call = workspace, None
+        self.least_norm = workspace.kept(
+            "joint_least_norm", (mask.tobytes(), system.dynamics),
+            lambda: ColumnCall(_least_norm(functions, system, mask))) if mask.any() else None
+        # with solve_loops (the loop_rows option), a system over functions.ir, its own or a
+        # parametric library's bound to the IR's values (not a controller's, whose forces
+        # that IR does not hold): its loop rows solved at each row's state
+        solved = solve_loops and system.n_cut and (functions.joint_functions is None
+                                                    or functions.parametric is not None)
+        self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
+                                    lambda: _loop_rows(functions, system, mask)) if solved else None
+
+    def first(self, t0: float, x, z, kept: dict) -> tuple[np.ndarray, ...]:
+        """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` by
+        whether loop rows are solved (the rest of a row is a function of the start), handed
+        out as copies."""
+        solved = self.loops is not None
+        if solved not in kept:
+            kept[solved] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
+        return tuple(row.copy() for row in kept[solved])
+
+    def _mapped(self) -> ColumnCall:
+        """The results rows' function over columns (kept in the workspace; looked up once
+        per run)."""
+        if self._call is None:
+            self._call = self.workspace.kept("joint_motion_maps", self.system.motion,
+                                             lambda: ColumnCall(self.system.motion))
+        return self._call
+
+    def rows(self, times, states, algebraic):
+        """(q, q_dot, q_ddot, lam), one row per time; with loops, their multipliers solved at
+        each row's state (runtime.joint_rows) where the system was built over the bundle's IR,
+        else the integrator's `algebraic` states."""
+        times = np.asarray(times, float)
+        if self.loops is not None:
+            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
+        else:
+            q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
+                                                   self.signs[:, None])
+        if self.least_norm is not None:
+            (lam,) = self.least_norm(times[None, :], q, lam)
+        return q.T, q_dot.T, q_ddot.T, lam.T
+
+
+def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:
+    """The loops' rows solved at each state (runtime.joint_rows): the compiled library's where
+    it holds them, else solved_motion of the saddle terms and the system's motion (SX, or a
+    parametric library's motion called through MX)."""
+    def terms() -> ca.Function:
+        return saddle_terms(functions.ir, system.tree)
+
+    if system.solved_motion is not None:  # the terms only for a singular column
+        return LoopRows(system.solved_motion, terms, system.motion, mask)
+    built = terms()
+    return LoopRows(solved_motion(built, system.motion), lambda: built, system.motion, mask)
+
+
+def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
+    """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
+    minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
+    n = functions.n_joint_rows
+    masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
+    keep = [row for row in range(n) if row not in masked]
+    t, q = ca.MX.sym("t"), ca.MX.sym("q", functions.n_coordinates)
+    lam = ca.MX.sym("lam", functions.n_rows)
+    jacobian = functions["romega_jacobian"](t, q)
+    joint = minimum_norm(jacobian, lam[:n], keep)
+    return ca.Function("least_norm", [t, q, lam], [ca.vertcat(joint, lam[n:])])
