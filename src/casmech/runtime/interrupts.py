@@ -29,11 +29,6 @@ from contextlib import contextmanager
 from casmech.runtime import cancel
 from casmech.runtime.cancel import CancelToken
 
-try:  # the signal module's C functions: guard() installs and restores a handler per run,
-    import _signal as _handlers  # without signal.py's enum wrapping of both numbers
-except ImportError:  # pragma: no cover (an interpreter without them)
-    _handlers = signal
-
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 ABANDON = 3  # the signal that ends the process without writing
 
@@ -109,9 +104,9 @@ class guard:
 
     def __enter__(self) -> CancelToken:
         if (not _traps and threading.current_thread() is threading.main_thread()
-                and _handlers.getsignal(signal.SIGINT) is signal.default_int_handler):
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
             self._trap = _Trap(self.token, abandon=False)
-            self._previous = _handlers.signal(signal.SIGINT, self._trap.handler)
+            self._previous = signal.signal(signal.SIGINT, self._trap.handler)
             _traps.append(self._trap)
         self._reset = cancel.enter(self.token)
         return self.token
@@ -120,7 +115,7 @@ class guard:
         cancel.leave(self._reset)
         if self._trap is not None:
             _traps.remove(self._trap)
-            _handlers.signal(signal.SIGINT, self._previous)
+            signal.signal(signal.SIGINT, self._previous)
 
 
 @contextmanager
