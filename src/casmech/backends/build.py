@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
 import shutil
@@ -71,16 +72,33 @@ class Toolchain:
 
 @lru_cache(maxsize=8)
 def compiler_version(compiler: str) -> str:
-    """First line of `compiler --version`, or "" when there is no such compiler."""
+    """First line of `compiler --version`, or "" when there is no such compiler; remembered
+    across processes for as long as the programs the command names stay the same files
+    (backends.stamps: the path each word resolves to on PATH, and that file's identity, size
+    and times)."""
     command = shlex.split(compiler)
-    if not command or shutil.which(command[0]) is None:
+    programs = [shutil.which(word) for word in command]
+    if not command or programs[0] is None:
         return ""
+    from casmech.backends import cache, stamps  # (cache imports this module)
+
+    files = [os.path.realpath(path) for path in programs if path is not None]
+    return stamps.remembered(json.dumps(["compiler version", compiler, programs]), files,
+                             lambda: _version(command), _one_line, cache.cache_dir())
+
+
+def _version(command: list[str]) -> str:
     try:
         done = subprocess.run([*command, "--version"], capture_output=True, text=True,
                               timeout=30, check=False)
     except OSError:
         return ""
     return done.stdout.splitlines()[0].strip() if done.returncode == 0 and done.stdout else ""
+
+
+def _one_line(text: str) -> bool:
+    """Whether a stored text is one a version reads as: a non-empty printable line."""
+    return 0 < len(text) <= 500 and text.isprintable()
 
 
 def available(toolchain: Toolchain | None = None) -> bool:
