@@ -6,13 +6,13 @@ import json
 import os
 import shlex
 import shutil
-import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import field
 from functools import lru_cache
 from pathlib import Path
 
+from casmech.backends import stamps
+from casmech.backends.folder import cache_dir
 from casmech.core.records import record
 from casmech.errors import AnalysisError, UsageError
 
@@ -80,14 +80,14 @@ def compiler_version(compiler: str) -> str:
     programs = [shutil.which(word) for word in command]
     if not command or programs[0] is None:
         return ""
-    from casmech.backends import cache, stamps  # (cache imports this module)
-
     files = [os.path.realpath(path) for path in programs if path is not None]
     return stamps.remembered(json.dumps(["compiler version", compiler, programs]), files,
-                             lambda: _version(command), _one_line, cache.cache_dir())
+                             lambda: _version(command), _one_line, cache_dir())
 
 
 def _version(command: list[str]) -> str:
+    import subprocess  # imported on use (as in _run): a warm run's version is remembered
+
     try:
         done = subprocess.run([*command, "--version"], capture_output=True, text=True,
                               timeout=30, check=False)
@@ -106,6 +106,8 @@ def available(toolchain: Toolchain | None = None) -> bool:
 
 
 def _run(command: list[str], cwd: Path) -> None:
+    import subprocess
+
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise AnalysisError(f"the C compiler failed: {' '.join(command)}\n"
@@ -129,6 +131,8 @@ def build_libraries(libraries: dict[str, list[Path]], directory: Path,
                  src.stem + ".o"] if src.name in unit_flags else
                 [*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"]
                 for src in sorted(sources, key=lambda src: -src.stat().st_size)]
+    from concurrent.futures import ThreadPoolExecutor  # (with logging: a build's only)
+
     with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
         list(pool.map(lambda command: _run(command, directory), commands))
     for library, group in libraries.items():

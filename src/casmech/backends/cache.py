@@ -35,6 +35,7 @@ import numpy as np
 
 from casmech.backends import stamps, trust
 from casmech.backends.build import LIBRARY
+from casmech.backends.folder import ENVIRONMENT, cache_dir  # noqa: F401 (cache.ENVIRONMENT)
 from casmech.backends.manifest import FORMAT, MANIFEST
 from casmech.core.version import VERSION
 from casmech.errors import Source, UsageError
@@ -42,23 +43,12 @@ from casmech.formulations import residuals
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.tables import TableExpr
 
-ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(__file__).resolve().parents[1]
 # what the generated code depends on: these packages (with their subpackages) and modules (the
 # joint system's library: which functions runtime.joint_dynamics.keyed_system compiles or keeps)
 SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations", "formulations",
                    "backends")
 SOURCE_MODULES = ("runtime/joint_dynamics.py",)
-
-
-def cache_dir() -> Path:
-    """$CASMECH_CACHE_DIR, else the platform's user cache folder for casmech."""
-    configured = os.environ.get(ENVIRONMENT)
-    if configured:
-        return Path(configured)
-    import platformdirs  # imported on use: a run with $CASMECH_CACHE_DIR never needs it
-
-    return platformdirs.user_cache_path("casmech", appauthor=False)
 
 
 def _sources() -> list[tuple[str, str]]:
