@@ -134,7 +134,8 @@ def main() -> None:
         commits[src] = full[:10]
         sources.append(src)
     samples: dict[str, list] = {}
-    with tempfile.TemporaryDirectory(prefix="process-race-") as folder:
+    # (an empty-cache run's background build may still be writing there at the end)
+    with tempfile.TemporaryDirectory(prefix="process-race-", ignore_cleanup_errors=True) as folder:
         rows = cases(args.systems, sources, Path(folder), args.t_end, args.mujoco_dt)
         for run in range(args.repeats + 1):  # run 0: warm-up
             for system, label, command, env in rows:

@@ -23,11 +23,13 @@ loads it compiled (docs/decisions/mode-auto.md).
 from __future__ import annotations
 
 import os
-import pickle
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import subprocess
 
 ENVIRONMENT = "CASMECH_BACKGROUND_BUILD"  # "0": auto never builds behind the run
 LIMIT = 900  # s: a background build still running then stops (SIGALRM)
@@ -54,6 +56,9 @@ def start(model, toolchain, root: Path | None, key: str) -> subprocess.Popen | N
     if key in _started:
         return None
     _started[key] = None
+    import pickle  # imported on use, as subprocess: a warm run starts no build
+    import subprocess
+
     env = dict(os.environ)
     package_root = Path(__file__).resolve().parents[2]
     if package_root.name not in ("site-packages", "dist-packages"):  # this casmech, from src

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shlex
 import shutil
-import subprocess
 import sys
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import field
 from functools import lru_cache
 from pathlib import Path
 
+from casmech.backends import stamps
+from casmech.backends.folder import cache_dir
 from casmech.core.records import record
 from casmech.errors import AnalysisError, UsageError
 
@@ -71,10 +72,22 @@ class Toolchain:
 
 @lru_cache(maxsize=8)
 def compiler_version(compiler: str) -> str:
-    """First line of `compiler --version`, or "" when there is no such compiler."""
+    """First line of `compiler --version`, or "" when there is no such compiler; remembered
+    across processes for as long as the programs the command names stay the same files
+    (backends.stamps: the path each word resolves to on PATH, and that file's identity, size
+    and times)."""
     command = shlex.split(compiler)
-    if not command or shutil.which(command[0]) is None:
+    programs = [shutil.which(word) for word in command]
+    if not command or programs[0] is None:
         return ""
+    files = [os.path.realpath(path) for path in programs if path is not None]
+    return stamps.remembered(json.dumps(["compiler version", compiler, programs]), files,
+                             lambda: _version(command), _one_line, cache_dir())
+
+
+def _version(command: list[str]) -> str:
+    import subprocess  # imported on use (as in _run): a warm run's version is remembered
+
     try:
         done = subprocess.run([*command, "--version"], capture_output=True, text=True,
                               timeout=30, check=False)
@@ -83,11 +96,18 @@ def compiler_version(compiler: str) -> str:
     return done.stdout.splitlines()[0].strip() if done.returncode == 0 and done.stdout else ""
 
 
+def _one_line(text: str) -> bool:
+    """Whether a stored text is one a version reads as: a non-empty printable line."""
+    return 0 < len(text) <= 500 and text.isprintable()
+
+
 def available(toolchain: Toolchain | None = None) -> bool:
     return bool((toolchain or Toolchain()).version())
 
 
 def _run(command: list[str], cwd: Path) -> None:
+    import subprocess
+
     done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, check=False)
     if done.returncode != 0:
         raise AnalysisError(f"the C compiler failed: {' '.join(command)}\n"
@@ -111,6 +131,8 @@ def build_libraries(libraries: dict[str, list[Path]], directory: Path,
                  src.stem + ".o"] if src.name in unit_flags else
                 [*compiler, *flags, "-c", src.name, "-o", src.stem + ".o"]
                 for src in sorted(sources, key=lambda src: -src.stat().st_size)]
+    from concurrent.futures import ThreadPoolExecutor  # (with logging: a build's only)
+
     with ThreadPoolExecutor(max_workers=max(1, toolchain.jobs)) as pool:
         list(pool.map(lambda command: _run(command, directory), commands))
     for library, group in libraries.items():

@@ -33,16 +33,16 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from casmech.backends import trust
+from casmech.backends import stamps, trust
 from casmech.backends.build import LIBRARY
+from casmech.backends.folder import ENVIRONMENT, cache_dir  # noqa: F401 (cache.ENVIRONMENT)
 from casmech.backends.manifest import FORMAT, MANIFEST
 from casmech.core.version import VERSION
-from casmech.errors import UsageError
+from casmech.errors import Source, UsageError
 from casmech.formulations import residuals
 from casmech.schema.resolved import ResolvedModel
 from casmech.schema.tables import TableExpr
 
-ENVIRONMENT = "CASMECH_CACHE_DIR"
 PACKAGE = Path(__file__).resolve().parents[1]
 # what the generated code depends on: these packages (with their subpackages) and modules (the
 # joint system's library: which functions runtime.joint_dynamics.keyed_system compiles or keeps)
@@ -51,53 +51,94 @@ SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations
 SOURCE_MODULES = ("runtime/joint_dynamics.py",)
 
 
-def cache_dir() -> Path:
-    """$CASMECH_CACHE_DIR, else the platform's user cache folder for casmech."""
-    configured = os.environ.get(ENVIRONMENT)
-    if configured:
-        return Path(configured)
-    import platformdirs  # imported on use: a run with $CASMECH_CACHE_DIR never needs it
+def _sources() -> list[tuple[str, str]]:
+    """(name, path) of every source file source_digest reads, in its order: each package's
+    .py files below it (the order of their paths' parts), then SOURCE_MODULES."""
+    found, start = [], len(str(PACKAGE)) + 1
+    for package in SOURCE_PACKAGES:
+        paths = [folder + os.sep + name for folder, _, files in os.walk(PACKAGE / package)
+                 for name in files if name.endswith(".py")]
+        named = [(path[start:].replace(os.sep, "/"), path) for path in paths]
+        found += sorted(named, key=lambda item: item[0].split("/"))
+    return found + [(Path(name).name, str(PACKAGE / name)) for name in SOURCE_MODULES]
 
-    return platformdirs.user_cache_path("casmech", appauthor=False)
+
+def _hexdigest(text: str) -> bool:
+    return len(text) == 64 and all(c in "0123456789abcdef" for c in text)
 
 
 @lru_cache(maxsize=1)
 def source_digest() -> str:
     """sha256 of casmech's own sources that shape the generated code (an edited compiler in a
-    development install must not reuse stale builds under the same version number)."""
-    digest = hashlib.sha256()
-    for package in SOURCE_PACKAGES:
-        for path in sorted((PACKAGE / package).rglob("*.py")):
-            name = path.relative_to(PACKAGE).as_posix()
-            digest.update(name.encode() + b"\0" + path.read_bytes())
-    for path in (PACKAGE / name for name in SOURCE_MODULES):
-        digest.update(path.name.encode() + b"\0" + path.read_bytes())
-    return digest.hexdigest()
+    development install must not reuse stale builds under the same version number); read
+    once for as long as no file changes (backends.stamps, in the cache folder when it
+    exists)."""
+    sources = _sources()
+
+    def digest() -> str:
+        found = hashlib.sha256()
+        for name, path in sources:
+            with open(path, "rb") as file:
+                found.update(name.encode() + b"\0" + file.read())
+        return found.hexdigest()
+
+    return stamps.remembered("casmech sources", [path for _, path in sources], digest,
+                             _hexdigest, cache_dir())
+
+
+# what holds no table: skipped without a call (an error's Source is a file, line and column)
+LEAVES = (str, bytes, int, float, complex, bool, type(None), np.ndarray, Source)
+_LEAF_TYPES = frozenset(LEAVES)
+_FIELDS: dict[type, tuple[str, ...] | None] = {}  # a class -> its dataclass fields' names
 
 
 def _tables(value, found: list, seen: set) -> list:
     """Every table (schema.tables.TableExpr) reachable from a resolved model's fields, in a
     fixed order: a CSV's content lives only there, not in any text."""
-    if id(value) in seen or isinstance(value, (str, bytes, int, float, np.ndarray)):
+    if id(value) in seen or isinstance(value, LEAVES):
         return found
     seen.add(id(value))
     if isinstance(value, TableExpr):
         found.append(value)
-    elif is_dataclass(value):
-        for item in fields(value):
-            _tables(getattr(value, item.name), found, seen)
+        return found
+    kind = type(value)
+    if kind not in _FIELDS:
+        _FIELDS[kind] = tuple(item.name for item in fields(value)) \
+            if is_dataclass(value) else None
+    names = _FIELDS[kind]
+    if names is not None:
+        items = [getattr(value, name) for name in names]
     elif isinstance(value, Mapping):
-        for item in value.values():
-            _tables(item, found, seen)
+        items = value.values()
     elif isinstance(value, (tuple, list)):
-        for item in value:
+        items = value
+    else:
+        return found
+    for item in items:
+        if type(item) not in _LEAF_TYPES:
             _tables(item, found, seen)
     return found
 
 
+# the last model digested, with its digests (by `values`): a run keys its library twice
+# (codegen.auto_choice looks it up, then codegen.compiled loads it); the model is a frozen
+# record
+_LAST: list[tuple[ResolvedModel, dict[bool, str]]] = []
+
+
 def model_digest(model: ResolvedModel, values: bool = True) -> str:
     """sha256 of everything the generated code of a model depends on; without `values`, of
-    everything but its parameter values (a parametric library takes them as an input)."""
+    everything but its parameter values (a parametric library takes them as an input). The
+    same again for the model digested last."""
+    if not (_LAST and _LAST[0][0] is model):
+        _LAST[:] = [(model, {})]
+    known = _LAST[0][1]
+    if values not in known:
+        known[values] = _digest(model, values)
+    return known[values]
+
+
+def _digest(model: ResolvedModel, values: bool) -> str:
     parameters = {k: float(v) for k, v in sorted(model.parameters.items())} if values else {}
     digest = hashlib.sha256(json.dumps({
         "text": model.text, "files": dict(sorted(model.files.items())),

@@ -132,7 +132,7 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
     residuals built on first use) and is built at -O0 where the user chose no flags
     (backends.deferred)."""
     if not mapped and parametric.applies(model):
-        values, signature = data(ir)  # one lowering's split serves key and load
+        values, signature = _data(ir)  # one lowering's split serves key and load
         entry = parametric.key(model, signature, toolchain, dae)
         info = {"model": model.name, "key": entry}
         return entry, lambda directory: parametric.write_build(
@@ -145,6 +145,18 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
     info = {"model": model.name, "model_hash": model_hash, "key": entry}
     return entry, lambda directory: write_build(ir, directory, toolchain, info, dae,
                                                 names), None
+
+
+# the last IR split and its model data: a run makes its library's entry twice (auto_choice
+# looks it up, then compiled loads it); the IR is a frozen record
+_SPLIT: list[tuple[ModelIR, tuple[np.ndarray, str]]] = []
+
+
+def _data(ir: ModelIR) -> tuple[np.ndarray, str]:
+    """model.parametric.data(ir) (the same again for the IR split last)."""
+    if not (_SPLIT and _SPLIT[0][0] is ir):
+        _SPLIT[:] = [(ir, data(ir))]
+    return _SPLIT[0][1]
 
 
 def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:
@@ -233,8 +245,20 @@ DYNAMICS = DynamicsOptions()  # the defaults (core.options)
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
+# the last (model, IR) asked and the answer: a run asks up to four times (auto_choice's and
+# compiled's entries, auto_choice, compiled's deferred parts); both are frozen records
+_TREE: list[tuple[ResolvedModel, ModelIR, bool]] = []
+
+
 def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
-    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
+    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode); the same
+    again for the (model, IR) asked last."""
+    if not (_TREE and _TREE[0][0] is model and _TREE[0][1] is ir):
+        _TREE[:] = [(model, ir, _is_joint_tree(model, ir))]
+    return _TREE[0][2]
+
+
+def _is_joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     options, written = model.analysis.options, dict(model.analysis.written)
     if model.analysis.type != "dynamics":
         return False

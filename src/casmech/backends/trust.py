@@ -9,7 +9,8 @@ only when
     build recorded in it: `Corrupt` otherwise (a truncated, empty or edited library, a
     manifest cut short), which the cache answers by discarding the entry and building it again.
 Each library is hashed once per process for as long as its file's identity and size and
-modification time stay the same (`verify` keeps what it checked).
+modification time stay the same, and each entry's manifest read once for as long as none of
+its files changes (`verify` keeps what it checked).
 
 Ownership and mode bits are POSIX; on Windows (no os.getuid) the cache lives in the user's
 own profile folder, whose access list is the user's, and only the sha256 check applies.
@@ -114,11 +115,17 @@ def libraries(record: dict, default: str | None) -> set[str]:
 
 
 _verified: dict[Path, tuple] = {}  # library -> (device, inode, size, mtime) when it was hashed
+# entry -> (its files' stat results, its manifest) when it was verified: a run verifies an
+# entry when it looks it up and again when it loads it, and a large model's manifest is
+# megabytes of JSON
+_manifests: dict[Path, tuple[tuple, dict]] = {}
 
 
 def verify(directory: Path, default_library: str | None = None) -> dict:
     """The entry's manifest, once the entry is the user's (Untrusted otherwise) and every
-    library it lists has its recorded sha256 (Corrupt otherwise)."""
+    library it lists has its recorded sha256 (Corrupt otherwise); the manifest read before
+    while none of the entry's files has changed since (their identities, sizes, times and
+    modes)."""
     try:
         found = _files(directory)
     except OSError as error:  # a file removed while it was listed
@@ -128,6 +135,12 @@ def verify(directory: Path, default_library: str | None = None) -> dict:
         if reason:
             raise refuse(path, reason, "Remove it (`casmech cache clear`) and look into who "
                                        "wrote it")
+    checked = tuple((str(path), status.st_dev, status.st_ino, status.st_size,
+                      status.st_mtime_ns, status.st_ctime_ns, status.st_mode, status.st_uid)
+                     for path, status in found)
+    known = _manifests.get(directory)
+    if known is not None and known[0] == checked:
+        return known[1]
     record = _manifest(directory)
     recorded = record[DIGESTS]
     for name in sorted(libraries(record, default_library)):
@@ -144,4 +157,5 @@ def verify(directory: Path, default_library: str | None = None) -> dict:
         if not stat.S_ISREG(status.st_mode) or sha256(path) != recorded[name]:
             raise Corrupt(f"{name} is not the library its build wrote (sha256 differs)")
         _verified[path] = identity
+    _manifests[directory] = (checked, record)
     return record

@@ -12,6 +12,7 @@ import hashlib
 import json
 import os
 import platform
+import shutil
 import sys
 from collections.abc import Mapping
 from dataclasses import replace
@@ -95,7 +96,7 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
         "casadi_version": casadi.__version__,
         "numpy_version": np.__version__,
         "python_version": platform.python_version(),
-        "platform": platform.platform(),
+        "platform": platform_text(),
         "python_executable": sys.executable,
         "created_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "model": {"file": Path(model.file).name, "path": str(model.file),
@@ -114,6 +115,26 @@ def run_metadata(model: ResolvedModel, overrides: Mapping[str, str], settings: d
         "error": error or "",
         "result": {k: _plain(v) for k, v in result_metadata.items()},
     }
+
+
+def _printable(text: str) -> bool:
+    return 0 < len(text) <= 500 and text.isprintable()
+
+
+def platform_text() -> str:
+    """platform.platform(), remembered across processes (backends.stamps, in the cache folder)
+    under the kernel's os.uname() and the stamps of what it reads: the interpreter (its C
+    library's version), the platform module and the `uname` program it runs for the
+    processor's name (a process of its own on Linux)."""
+    if not hasattr(os, "uname"):
+        return platform.platform()
+    from casmech.backends import stamps
+    from casmech.backends.folder import cache_dir
+
+    programs = [path for path in (shutil.which("uname"),) if path is not None]
+    files = [sys.executable, platform.__file__, *programs]
+    return stamps.remembered(json.dumps(["platform.platform", list(os.uname()), programs]),
+                             files, platform.platform, _printable, cache_dir())
 
 
 def _plain(value):

@@ -2,7 +2,8 @@
 35 items 1 and 13): a library planted in an entry never runs (its constructor would write a
 marker file), a damaged entry (a library cut short or emptied, a manifest of `{`) is built
 again with a warning, a file or folder others could write is refused with a usage error, a
-library is hashed once per process, and a build is private whatever the umask."""
+library is hashed and a manifest read once per process while their entry is unchanged, and a
+build is private whatever the umask."""
 
 import json
 import os
@@ -10,6 +11,7 @@ import shutil
 import stat
 import subprocess
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -203,12 +205,43 @@ def test_each_library_is_hashed_once_per_process(toolchain, tmp_path, monkeypatc
 
     monkeypatch.setattr(trust, "sha256", counting)
     trust._verified.clear()
+    trust._manifests.clear()
     for _ in range(3):
         _compiled(toolchain, root)
     assert hashed == [LIBRARY]
     _cut(_entry(root) / LIBRARY)  # a changed file is hashed again ...
     with pytest.warns(UserWarning, match="is damaged"):
         _compiled(toolchain, root)  # ... and the entry rebuilt
+
+
+def test_each_manifest_is_read_once_per_process_until_a_file_changes(toolchain, tmp_path,
+                                                                     monkeypatch):
+    """A lookup and a load verify an entry each; its manifest is read again only when one of
+    the entry's files changed (here rewritten with the same content: another change time)."""
+    root = tmp_path / "cache"
+    _compiled(toolchain, root)
+    read = []
+    original = trust._manifest
+
+    def counting(directory):
+        read.append(directory.name)
+        return original(directory)
+
+    monkeypatch.setattr(trust, "_manifest", counting)
+    trust._manifests.clear()
+    for _ in range(3):
+        # the compiled function's value: the same operations as numpy's, up to rounding
+        np.testing.assert_allclose(_value(_compiled(toolchain, root)), np.sin(0.5) * 2.0,
+                                   rtol=1e-14, atol=0)
+    assert read == [_entry(root).name]
+    written = _entry(root) / manifest.MANIFEST
+    time.sleep(0.05)  # past a tick of the file system's clock
+    written.write_bytes(written.read_bytes())
+    _compiled(toolchain, root)
+    assert len(read) == 2
+    written.write_text("{")  # damaged after it was verified: seen, and the entry rebuilt
+    with pytest.warns(UserWarning, match="is damaged"):
+        _compiled(toolchain, root)
 
 
 def test_cache_info_names_a_damaged_entry_and_escapes_names(toolchain, tmp_path, monkeypatch,
