@@ -37,6 +37,7 @@ from casmech.backends import stamps, trust
 from casmech.backends.build import LIBRARY
 from casmech.backends.folder import ENVIRONMENT, cache_dir  # noqa: F401 (cache.ENVIRONMENT)
 from casmech.backends.manifest import FORMAT, MANIFEST
+from casmech.core.last_call import last_call
 from casmech.core.version import VERSION
 from casmech.errors import Source, UsageError
 from casmech.formulations import residuals
@@ -123,16 +124,14 @@ def _tables(value, found: list, seen: set) -> list:
 # the last model digested, with its digests (by `values`): a run keys its library twice
 # (codegen.auto_choice looks it up, then codegen.compiled loads it); the model is a frozen
 # record
-_LAST: list[tuple[ResolvedModel, dict[bool, str]]] = []
+_digests = last_call(lambda model: {})
 
 
 def model_digest(model: ResolvedModel, values: bool = True) -> str:
     """sha256 of everything the generated code of a model depends on; without `values`, of
     everything but its parameter values (a parametric library takes them as an input). The
     same again for the model digested last."""
-    if not (_LAST and _LAST[0][0] is model):
-        _LAST[:] = [(model, {})]
-    known = _LAST[0][1]
+    known = _digests(model)
     if values not in known:
         known[values] = _digest(model, values)
     return known[values]

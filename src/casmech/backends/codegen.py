@@ -57,6 +57,7 @@ from casmech.backends.build import LIBRARY, Toolchain, available, build_librarie
 from casmech.backends.library import compile_functions
 from casmech.backends.load import externals, mode_of
 from casmech.backends.load import load as load_build
+from casmech.core.last_call import last_call
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
 from casmech.equations import system
@@ -147,16 +148,9 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
                                                 names), None
 
 
-# the last IR split and its model data: a run makes its library's entry twice (auto_choice
-# looks it up, then compiled loads it); the IR is a frozen record
-_SPLIT: list[tuple[ModelIR, tuple[np.ndarray, str]]] = []
-
-
-def _data(ir: ModelIR) -> tuple[np.ndarray, str]:
-    """model.parametric.data(ir) (the same again for the IR split last)."""
-    if not (_SPLIT and _SPLIT[0][0] is ir):
-        _SPLIT[:] = [(ir, data(ir))]
-    return _SPLIT[0][1]
+# model.parametric.data(ir), the same again for the IR split last: a run makes its library's
+# entry twice (auto_choice looks it up, then compiled loads it); the IR is a frozen record
+_data = last_call(lambda ir: data(ir))
 
 
 def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:
@@ -245,20 +239,8 @@ DYNAMICS = DynamicsOptions()  # the defaults (core.options)
 AUTO_BODIES = 200  # module docstring: between 128 (interpreted sooner) and 256 (compiled sooner)
 
 
-# the last (model, IR) asked and the answer: a run asks up to four times (auto_choice's and
-# compiled's entries, auto_choice, compiled's deferred parts); both are frozen records
-_TREE: list[tuple[ResolvedModel, ModelIR, bool]] = []
-
-
-def _joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
-    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode); the same
-    again for the (model, IR) asked last."""
-    if not (_TREE and _TREE[0][0] is model and _TREE[0][1] is ir):
-        _TREE[:] = [(model, ir, _is_joint_tree(model, ir))]
-    return _TREE[0][2]
-
-
 def _is_joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
+    """Whether the model's dynamics run in joint coordinates on a tree (auto_mode)."""
     options, written = model.analysis.options, dict(model.analysis.written)
     if model.analysis.type != "dynamics":
         return False
@@ -268,6 +250,12 @@ def _is_joint_tree(model: ResolvedModel, ir: ModelIR) -> bool:
     if formulation not in ("auto", "joint") or stabilization != DYNAMICS.stabilization:
         return False
     return spanning_tree(ir).is_tree
+
+
+# _is_joint_tree, the same again for the (model, IR) asked last: a run asks up to four times
+# (auto_choice's and compiled's entries, auto_choice, compiled's deferred parts); both are
+# frozen records
+_joint_tree = last_call(_is_joint_tree)
 
 
 def _in_cache(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, root: Path | None,

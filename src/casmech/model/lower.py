@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from casmech.core import euler, traced
+from casmech.core.last_call import last_call
 from casmech.elements import couplings
 from casmech.elements.force_types import REGISTRY as FORCE_TYPES
 from casmech.elements.joint_types import COORDINATES, REGISTRY
@@ -232,16 +233,12 @@ def lower_force(force: Force, model: ResolvedModel, poses: Poses) -> ForceIR:
 
 # the last model lowered and its IR: a run lowers its model twice (backends.codegen.auto_mode
 # looks its library up, then backends.compile builds its functions); both are frozen records
-_LAST: list[tuple[ResolvedModel, ModelIR]] = []
+_last = last_call(lambda model: _lowered(model))
 
 
 def lower(model: ResolvedModel) -> ModelIR:
     """The model's IR (the same IR again for the model lowered last)."""
-    if _LAST and _LAST[0][0] is model:
-        return _LAST[0][1]
-    ir = _lowered(model)
-    _LAST[:] = [(model, ir)]
-    return ir
+    return _last(model)
 
 
 def _lowered(model: ResolvedModel) -> ModelIR:
