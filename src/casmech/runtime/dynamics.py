@@ -305,7 +305,7 @@ class _Stepper:
         """The integrator's x = [q, v] at its output times (its algebraic states are checked
         only: the rows solve v_dot and the multipliers at each state, _Model.solved)."""
         x, z = np.array(out["xf"]), np.array(out["zf"])
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(z))):
+        if not nonfinite.all_finite(x, z):
             raise RuntimeError("the state became NaN or infinite")
         return x
 

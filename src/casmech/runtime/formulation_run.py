@@ -32,6 +32,7 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import run_joint_dynamics
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -184,7 +185,7 @@ class _Integrate:
         finally:
             self.steps += int(integrator.stats().get("nsteps", 0))
         xs, zs = out["xf"], out["zf"].reshape(system.n_z, len(grid))
-        if not (np.all(np.isfinite(xs)) and np.all(np.isfinite(zs))):
+        if not all_finite(xs, zs):
             raise RuntimeError("the state became NaN or infinite")
         return xs, zs, p
 

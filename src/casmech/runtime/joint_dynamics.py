@@ -19,7 +19,6 @@ workspace (runtime.workspace).
 
 from __future__ import annotations
 
-import math
 import sys
 from dataclasses import asdict, replace
 
@@ -261,9 +260,8 @@ class _Integrator:
         self.steps += _steps(integrator, x, z, self.loops.mask if system.n_cut else ())
         states = out["xf"]
         algebraic = out["zf"] if system.n_cut else np.zeros((0, len(times)))
-        if not math.isfinite(states.sum() + algebraic.sum()) and not (
-                np.isfinite(states).all() and np.isfinite(algebraic).all()):  # (a sum's
-            raise RuntimeError("the state became NaN or infinite")  # overflow: finite)
+        if not nonfinite.all_finite(states, algebraic):
+            raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
 
     def _cvodes(self, t0: float, times, trial: bool) -> NamedCall:

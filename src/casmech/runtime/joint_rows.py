@@ -11,7 +11,6 @@ them out of its error test (docs/decisions/row-multipliers.md)."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import casadi as ca
@@ -21,6 +20,7 @@ from casmech.numerics import kkt
 from casmech.runtime import cancel, solver_messages
 from casmech.runtime.assembly import saddle_solution
 from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.nonfinite import all_finite
 
 
 def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
@@ -62,8 +62,8 @@ class LoopRows:
             cancel.check(error)
             rows = tuple(np.full((self.motion.size1_out(k), len(times)), np.nan)
                          for k in range(4))
-        if math.isfinite(rows[2].sum() + rows[3].sum()):  # every column solved (else, or an
-            return rows  # overflow of the sum: column by column below)
+        if all_finite(rows[2], rows[3]):  # every column solved (else column by column below)
+            return rows
         solved = np.all(np.isfinite(rows[2]), axis=0) & np.all(np.isfinite(rows[3]), axis=0)
         for j in np.flatnonzero(~solved & np.all(np.isfinite(states), axis=0)):
             for row, value in zip(rows, self.column(times[j], states[:, j], signs), strict=True):

@@ -27,6 +27,7 @@ elements at the states extrapolated over it from the last row (its q, q_dot, q_d
 
 from __future__ import annotations
 
+import math
 from dataclasses import field
 
 import casadi as ca
@@ -104,6 +105,16 @@ class NonFinite(AnalysisError):
 
 
 _ALL = np.logical_and.reduce
+
+
+def all_finite(*arrays) -> bool:
+    """Whether every entry of `arrays` is finite: from their sums first (a NaN or an infinity
+    makes a sum non-finite; one reduction an array), entry by entry only where the sum is not
+    finite (a NaN, an infinity, or finite entries whose sum overflows)."""
+    if math.isfinite(sum(float(np.sum(array)) for array in arrays)):
+        return True
+    return all(np.isfinite(array).all() for array in arrays)
+
 ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 

@@ -1,13 +1,13 @@
 """runtime.nonfinite.check_states: the first row of a block with a value that is not finite,
 whether the block is checked as one array (small) or state by state (large), against a
-value-by-value scan with math.isfinite."""
+value-by-value scan with math.isfinite; all_finite against an entrywise check."""
 
 import math
 
 import numpy as np
 import pytest
 
-from casmech.runtime.nonfinite import ONE_ARRAY, check_states
+from casmech.runtime.nonfinite import ONE_ARRAY, all_finite, check_states
 
 
 def _scan(times, *blocks) -> int | None:
@@ -46,3 +46,16 @@ def test_finite_values_whose_sum_overflows_are_finite(rows):
     assert check_states(times, big, -big[:, :3], big, np.zeros((rows, 0))) is None
     big[rows - 1, 2] = np.inf
     assert check_states(times, big, big, big, big) == rows - 1
+
+
+def test_all_finite_matches_an_entrywise_check_through_overflowing_sums():
+    """all_finite against np.isfinite entry by entry: a NaN or an infinity in any
+    array is found, opposite infinities whose sum is NaN too, and finite entries whose sum
+    overflows are finite."""
+    big = np.full(4, 1e308)  # finite entries, sum inf
+    cases = [(np.zeros((3, 2)), np.zeros((0, 2))), (big, -big), (big, np.ones(2)),
+             (np.array([1.0, np.nan]), np.ones(2)), (np.ones(2), np.array([np.inf])),
+             (np.array([np.inf, -np.inf]),), (big, np.array([[np.nan]]))]
+    for arrays in cases:
+        expected = all(np.isfinite(a).all() for a in arrays)
+        assert all_finite(*arrays) == expected, arrays
