@@ -10,8 +10,8 @@ asdict(), the same repr, equality (same class, equal tuples of the compared fiel
 object.__setattr__ in __post_init__, as in a frozen dataclass); any later assignment or
 deletion raises dataclasses.FrozenInstanceError. Its __init__ writes each field by
 object.__setattr__, as a frozen dataclass's does, rather than through the class's own
-__setattr__ (a Python call per field of every instance: a 1000-body model makes some 40,000
-records while it loads)."""
+__setattr__ (a Python call per field of every instance; docs/decisions/frozen-records.md).
+"""
 
 from __future__ import annotations
 
