@@ -256,28 +256,19 @@ def test_every_module_imports_first():
     assert [report["failed"] for report in reports] == [{}] * shards
 
 
-@pytest.mark.parametrize("given, expected", [(None, "1"), ("2", "2")])
-def test_one_blas_thread_unless_the_user_chose(given, expected):
-    """The command line sets OPENBLAS_NUM_THREADS=1 before NumPy loads, unless it is set."""
-    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+@pytest.mark.parametrize("variable, given, expected", [
+    ("OPENBLAS_NUM_THREADS", None, "1"), ("OPENBLAS_NUM_THREADS", "2", "2"),
+    ("PYDANTIC_DISABLE_PLUGINS", None, "__all__"),
+    ("PYDANTIC_DISABLE_PLUGINS", "logfire", "logfire")])
+def test_the_command_lines_environment_unless_the_user_chose(variable, given, expected):
+    """Importing the command line sets one BLAS thread (before NumPy loads) and turns
+    pydantic's plugin lookup off, unless the user set the variable."""
+    env = {k: v for k, v in os.environ.items() if k != variable}
     if given is not None:
-        env["OPENBLAS_NUM_THREADS"] = given
+        env[variable] = given
     env["PYTHONPATH"] = str(ROOT / "src")
     code = ("import os, sys; import casmech.cli; assert 'numpy' not in sys.modules; "
-            "print(os.environ['OPENBLAS_NUM_THREADS'])")
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                         check=True, timeout=60).stdout
-    assert out.strip() == expected
-
-
-@pytest.mark.parametrize("given, expected", [(None, "__all__"), ("logfire", "logfire")])
-def test_no_pydantic_plugins_unless_the_user_chose(given, expected):
-    """The command line turns pydantic's plugin lookup off, unless the user set it."""
-    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
-    if given is not None:
-        env["PYDANTIC_DISABLE_PLUGINS"] = given
-    env["PYTHONPATH"] = str(ROOT / "src")
-    code = "import os; import casmech.cli; print(os.environ['PYDANTIC_DISABLE_PLUGINS'])"
+            f"print(os.environ[{variable!r}])")
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == expected
