@@ -102,7 +102,8 @@ class JointSystem:
     layout: Layout
     cut_rows: tuple[int, ...]  # rows of Phi the cut joints own (the DAE's algebraic rows)
     dynamics: ca.Function  # tree: (t, x) -> ode; loops: (t, x, z, p) -> (ode, alg)
-    motion: ca.Function  # (t, x, z, signs) -> (q, q_dot, q_ddot, lam, velocity_jacobian)
+    # (t, x, z, signs) -> (q, q_dot, q_ddot, lam), its common subexpressions merged (ca.cse)
+    motion: ca.Function
     # loops: (t, x) -> (d acceleration residual / dz, that residual at z = 0), where the
     # residual d^2/dt^2 Phi_c (unit rows) is affine in z (multipliers enter as forces)
     acceleration_system: ca.Function
@@ -443,7 +444,7 @@ def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,
         acceleration = {"matrix": ca.jacobian(residual, z),
                         "base": ca.substitute(residual, z, ca.DM.zeros(z.shape))}
         velocity = ca.jacobian(scale * rate, x[b.layout.n_theta:])
-    motion = dict(zip(("q", "q_dot", "q_ddot", "lam"), b.motion(dyn, lam_cut, signs),
+    motion = dict(zip(("q", "q_dot", "q_ddot", "lam"), ca.cse(b.motion(dyn, lam_cut, signs)),
                       strict=True))
     poses = {"q": ca.SX.sym("q", 7 * ir.n_bodies), "q_dot": ca.SX.sym("q_dot", 7 * ir.n_bodies)}
     relative = dict(zip(("rotations", "gaps", "twists"),
