@@ -30,8 +30,9 @@ from casmech.formulations.tree import Tree
 from casmech.numerics import lazy_jacobian
 
 # gcc's time grows faster than the function: above this many SX instructions the results rows
-# are compiled as two halves in two units at once
-SPLIT_INSTRUCTIONS = 12_000
+# are compiled as two halves in two units at once; below it whole, since the halves' rows cost
+# a fifth more per call (docs/decisions/results-rows-cost.md)
+SPLIT_INSTRUCTIONS = 20_000
 SPLIT_MOTION = ("joint_motion_head", "joint_motion_tail")
 QUICK_FLAGS = ("-O0",)
 # evaluated once per run, by method auto's stiffness probe (BDF's Newton iteration takes its
