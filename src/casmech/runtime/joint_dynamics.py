@@ -395,6 +395,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     system = joint_system(functions, settings, workspace)
     x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
                                              workspace)
+    if method == "dop853" and system.n_cut:
+        raise dop853.with_loops(functions, [j.name for j in system.tree.cut])
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
