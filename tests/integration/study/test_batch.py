@@ -155,6 +155,11 @@ def test_auto_batches_a_large_study_only_where_it_can(monkeypatch):
         file=str(PENDULUM))
     assert batch.obstacle(springy, settings, prepared.study, full=False) == (
         "method auto examines each run's stiffness")
+    explicit = casmech.loads(PENDULUM.read_text().replace("analysis:", (
+        "analysis:\n  method: dop853")), file=str(PENDULUM))
+    assert batch.obstacle(explicit, casmech.api.analysis_settings(casmech.compile(explicit)),
+                          prepared.study, full=False) == (
+        "method dop853 integrates each run by itself (a batch maps CVODES)")
 
 
 def test_corners_of_the_design():
