@@ -5,10 +5,9 @@ and step controller, and the states on the grid from each step's interpolant.
 
 Two paths, the same steps: where the ODE (and the projection) are functions loaded from a
 compiled library (backends.rk_library.entry), the whole call runs in C
-(backends/c/casmech_rk.c, the coefficient tables passed in from scipy's); otherwise scipy's own
-DOP853 stepper over the CasADi function. The tables are read from scipy's
-`scipy.integrate._ivp.dop853_coefficients` (a private module) so that the C driver and the
-Python path integrate with the very same numbers (docs/decisions/dop853.md).
+(backends/c/casmech_rk.c, the coefficient tables and controller constants passed in from
+numerics.dop853_tableau, a copy of scipy's that a test holds equal to them); otherwise scipy's
+own DOP853 stepper over the CasADi function (docs/decisions/dop853.md).
 
 `project(t, x) -> x`, optional, maps each accepted step's end state onto a manifold (the
 derivative the next step starts from is evaluated at the projected state) and each output
@@ -27,6 +26,8 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.numerics import dop853_tableau as tableau_module
+
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
 MAX_STEPS = 100_000  # accepted steps in one call unless the caller sets max_steps
@@ -40,12 +41,6 @@ class Stats:
     rejected: int = 0
     evaluations: int = 0
     projections: int = 0
-
-
-def _coefficients():
-    from scipy.integrate._ivp import dop853_coefficients as tables
-
-    return tables
 
 
 @dataclass
@@ -93,14 +88,15 @@ class Dop853:
         project = None if self.project is None else rk_library.entry(self.project)
         if run is None or ode is None or (self.project is not None and project is None):
             return None
-        t = _coefficients()
+        t = tableau_module
         arrays = [np.ascontiguousarray(v, float) for v in (
             t.A, t.B, t.C, t.E3, t.E5, t.D)]
         tableau = rk_library.Tableau(
             t.N_STAGES, t.N_STAGES_EXTENDED, t.INTERPOLATOR_POWER - 3,
-            *(rk_library.pointer(a) for a in arrays), 7.0)
+            *(rk_library.pointer(a) for a in arrays), float(t.ERROR_ORDER))
         settings = rk_library.Settings(
-            self.rtol, self.atol, self.max_step, self.first_step or 0.0, *_controller(),
+            self.rtol, self.atol, self.max_step, self.first_step or 0.0, t.SAFETY, t.MIN_FACTOR,
+            t.MAX_FACTOR,
             self.max_steps)
         n = self.ode.nnz_in(self.ode.name_in().index("x"))
         work = np.zeros((t.N_STAGES_EXTENDED + t.INTERPOLATOR_POWER + 6) * n)
@@ -166,13 +162,6 @@ class Dop853:
                 stats.projections += 1
         stats.evaluations = solver.nfev
         return out
-
-
-def _controller() -> tuple[float, float, float]:
-    """scipy's step controller's SAFETY, MIN_FACTOR, MAX_FACTOR."""
-    from scipy.integrate._ivp import rk
-
-    return rk.SAFETY, rk.MIN_FACTOR, rk.MAX_FACTOR
 
 
 def _numeric(function: ca.Function | None):
