@@ -6,8 +6,9 @@ and step controller, and the states on the grid from each step's interpolant.
 Two paths, the same steps: where the ODE (and the projection) are functions loaded from a
 compiled library (backends.rk_library.entry), the whole call runs in C
 (backends/c/casmech_rk.c, the coefficient tables and controller constants passed in from
-numerics.dop853_tableau, a copy of scipy's that a test holds equal to them); otherwise scipy's
-own DOP853 stepper over the CasADi function (docs/decisions/dop853.md).
+numerics.dop853_tableau, a copy of scipy's that a test holds equal to them); otherwise each
+step is one call of a CasADi Function of its 12 stages under scipy's controller in Python
+(runtime.dop853_steps). docs/decisions/dop853.md.
 
 `project(t, x) -> x`, optional, maps each accepted step's end state onto a manifold (the
 derivative the next step starts from is evaluated at the projected state) and each output
@@ -117,51 +118,85 @@ class Dop853:
         self.last = Stats(int(stats[lib.ACCEPTED]), int(stats[lib.REJECTED]),
                           int(stats[lib.EVALUATIONS]), int(stats[lib.PROJECTIONS]))
         if status != lib.DONE:
-            raise _failure(status, reached.value, {lib.TOO_SMALL: "too small",
-                                                   lib.MAX_STEPS: "max steps",
-                                                   lib.EVAL_FAILED: "failed",
-                                                   lib.NOT_FINITE: "not finite"}[status],
-                           out[:int(stats[lib.OUTPUTS])].T, self.max_steps)
+            raise _failure({lib.TOO_SMALL: "too small", lib.MAX_STEPS: "max steps",
+                            lib.EVAL_FAILED: "failed", lib.NOT_FINITE: "not finite"}[status],
+                           reached.value, out[:int(stats[lib.OUTPUTS])].T, self.max_steps)
         return out.T
 
-    # the Python path: scipy's stepper
-    def _run_python(self, t0: float, times: np.ndarray, x: np.ndarray) -> np.ndarray:
-        from scipy.integrate import DOP853
+    # the Python path: runtime.dop853_steps
+    def _python_parts(self):
+        from casmech.runtime import dop853_steps as steps
+        from casmech.runtime.buffers import BufferedCall
 
+        if getattr(self, "_python", None) is None:
+            self._python = (
+                BufferedCall(steps.step_function(self.ode), stoppable=False),
+                BufferedCall(steps.dense_function(self.ode), stoppable=False),
+                _numeric(self.ode), _numeric(self.project), steps)
+        return self._python
+
+    def _run_python(self, t0: float, times: np.ndarray, y: np.ndarray) -> np.ndarray:
+        step, dense, ode, project, steps = self._python_parts()
         stats = self.last = Stats()
-        ode, project = _numeric(self.ode), _numeric(self.project)
+        out = np.full((len(y), len(times)), np.nan)
+        done, t, t_bound = 0, t0, float(times[-1])
 
-        def rates(t, y):
-            value = ode(t, y)
+        def fail(kind: str, at: float) -> Failure:
+            return _failure(kind, at, out[:, :done], self.max_steps)
+
+        def rates(at: float, state: np.ndarray) -> np.ndarray:
+            stats.evaluations += 1
+            value = ode(at, state)
             if not np.isfinite(value).all():
-                raise _failure(4, t, "not finite", out[:, :done], self.max_steps)
+                raise fail("not finite", at)
             return value
 
-        out = np.full((len(x), len(times)), np.nan)
-        done = 0
-        solver = DOP853(rates, t0, x, times[-1], max_step=self.max_step, rtol=self.rtol,
-                        atol=self.atol, first_step=self.first_step)
-        while done < len(times) and solver.t < times[-1]:
+        f = rates(t, y)
+        h_abs = min(self.first_step, t_bound - t0) if self.first_step else steps.initial_step(
+            rates, t, y, f, t_bound, self.max_step, self.rtol, self.atol)
+        while done < len(times) and t != t_bound:
             if stats.accepted >= self.max_steps:
-                raise _failure(2, solver.t, "max steps", out[:, :done], self.max_steps)
-            if solver.step() is not None or solver.status == "failed":
-                raise _failure(1, solver.t, "too small", out[:, :done], self.max_steps)
+                raise fail("max steps", t)
+            min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+            h_abs = self.max_step if h_abs > self.max_step else max(h_abs, min_step)
+            rejected = False
+            while True:
+                if h_abs < min_step:
+                    raise fail("too small", t)
+                t_new = min(t + h_abs, t_bound)
+                h = t_new - t
+                h_abs = abs(h)
+                y_new, f_new, norm, K = step(t, y, f, h, self.rtol, self.atol)
+                stats.evaluations += T_STAGES
+                if not np.isfinite(K).all():
+                    raise fail("not finite", t)
+                accepted, h_abs = steps.next_step(h_abs, norm.item(), rejected)
+                if accepted:
+                    break
+                rejected = True
+                stats.rejected += 1
             stats.accepted += 1
-            t = solver.t
-            upto = int(np.searchsorted(times, t, side="right"))
+            y_new, f_new = y_new.ravel(), f_new.ravel()
+            upto = int(np.searchsorted(times, t_new, side="right"))
             if upto > done:
-                out[:, done:upto] = solver.dense_output()(times[done:upto])
+                F = dense(t, h, y, y_new, f_new, K)[0]
+                stats.evaluations += T_EXTRA
+                out[:, done:upto] = steps.interpolate(F, t, h, y, times[done:upto])
                 if project is not None:
                     for j in range(done, upto):
                         out[:, j] = project(times[j], out[:, j])
                         stats.projections += 1
                 done = upto
+            t, y, f = t_new, y_new, f_new
             if project is not None:
-                solver.y = project(t, solver.y)
-                solver.f = solver.fun(t, solver.y)
+                y = project(t, y)
                 stats.projections += 1
-        stats.evaluations = solver.nfev
+                f = rates(t, y)
         return out
+
+
+T_STAGES = tableau_module.N_STAGES  # evaluations of one step attempt (its last: f_new)
+T_EXTRA = tableau_module.N_STAGES_EXTENDED - tableau_module.N_STAGES - 1  # the interpolant's
 
 
 def _numeric(function: ca.Function | None):
@@ -194,7 +229,7 @@ class Failure(RuntimeError):
         self.t, self.outputs = t, outputs
 
 
-def _failure(status: int, t: float, kind: str, outputs: np.ndarray, max_steps: int) -> Failure:
+def _failure(kind: str, t: float, outputs: np.ndarray, max_steps: int) -> Failure:
     messages = {
         "too small": f"DOP853 failed at t = {t:.10g}: {TOO_SMALL}",
         "max steps": f"DOP853 failed at t = {t:.10g}: more than {max_steps} steps in one call",
