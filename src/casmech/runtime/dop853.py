@@ -16,8 +16,8 @@ state interpolated within the step (which is interpolated before the projection)
 
 A right-hand side that is not finite fails at once (FAILED_RATES in the message: as
 CVODES's regularity check), as do a step size below 10 ulps of t (TOO_SMALL) and more than
-max_steps accepted steps in one call; each a RuntimeError that the driver narrows to an output
-interval (runtime.driver, runtime.nonfinite.interval_failure).
+max_steps accepted steps between output times (CVODES's max_num_steps); each a RuntimeError
+that the driver narrows to an output interval (runtime.driver, nonfinite.interval_failure).
 """
 
 from __future__ import annotations
@@ -27,11 +27,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
-MAX_STEPS = 100_000  # accepted steps in one call unless the caller sets max_steps
+MAX_STEPS = 50_000  # accepted steps between output times unless the caller sets max_steps
 
 
 @dataclass
@@ -136,9 +137,19 @@ class Dop853:
         return self._python
 
     def _run_python(self, t0: float, times: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The Python path's call; an Interrupted (a signal, a controller's fault inside the
+        ODE: runtime.cancel) carries in `outputs` the states computed so far (NaN beyond)."""
+        out = np.full((len(y), len(times)), np.nan)
+        try:
+            return self._steps(t0, times, y, out)
+        except Interrupted as interrupted:
+            interrupted.outputs = out
+            raise
+
+    def _steps(self, t0: float, times: np.ndarray, y: np.ndarray, out: np.ndarray
+               ) -> np.ndarray:
         step, dense, ode, project, steps = self._python_parts()
         stats = self.last = Stats()
-        out = np.full((len(y), len(times)), np.nan)
         done, t, t_bound = 0, t0, float(times[-1])
 
         def fail(kind: str, at: float) -> Failure:
@@ -151,11 +162,11 @@ class Dop853:
                 raise fail("not finite", at)
             return value
 
-        f = rates(t, y)
+        f, since_output = rates(t, y), 0
         h_abs = min(self.first_step, t_bound - t0) if self.first_step else steps.initial_step(
             rates, t, y, f, t_bound, self.max_step, self.rtol, self.atol)
         while done < len(times) and t != t_bound:
-            if stats.accepted >= self.max_steps:
+            if since_output >= self.max_steps:
                 raise fail("max steps", t)
             min_step = 10 * abs(np.nextafter(t, np.inf) - t)
             h_abs = self.max_step if h_abs > self.max_step else max(h_abs, min_step)
@@ -176,11 +187,13 @@ class Dop853:
                 rejected = True
                 stats.rejected += 1
             stats.accepted += 1
+            since_output += 1
             y_new, f_new = y_new.ravel(), f_new.ravel()
             upto = int(np.searchsorted(times, t_new, side="right"))
             if upto > done:
                 F = dense(t, h, y, y_new, f_new, K)[0]
                 stats.evaluations += T_EXTRA
+                since_output = 0
                 out[:, done:upto] = steps.interpolate(F, t, h, y, times[done:upto])
                 if project is not None:
                     for j in range(done, upto):
@@ -232,7 +245,8 @@ class Failure(RuntimeError):
 def _failure(kind: str, t: float, outputs: np.ndarray, max_steps: int) -> Failure:
     messages = {
         "too small": f"DOP853 failed at t = {t:.10g}: {TOO_SMALL}",
-        "max steps": f"DOP853 failed at t = {t:.10g}: more than {max_steps} steps in one call",
+        "max steps": f"DOP853 failed at t = {t:.10g}: more than {max_steps} steps before the "
+                     "next output time",
         "failed": f"DOP853 failed at t = {t:.10g}: the right-hand side's evaluation failed",
         "not finite": f"DOP853 failed near t = {t:.10g}: the right-hand side is not finite "
                       f"({RATES_FAILED})"}

@@ -254,7 +254,13 @@ class _Integrator:
         if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
             rk = self.workspace.kept("dop853", (system.dynamics, self._key()),
                                      lambda: dop853.from_options(system.dynamics, self.options))
-            states = rk(t0, times[:1] if trial else times, x)
+            try:
+                states = rk(t0, times[:1] if trial else times, x)
+            except Interrupted as interrupted:  # as a NamedCall's: outputs by name
+                done = getattr(interrupted, "outputs", None)
+                if done is not None:
+                    interrupted.outputs = {"xf": done, "zf": np.zeros((0, done.shape[1]))}
+                raise
             self.steps += rk.last.accepted
             return states, np.zeros((0, states.shape[1]))
         if not system.n_cut:

@@ -153,5 +153,5 @@ def test_failures(tmp_path, use_c):
                                atol=1e-8)  # rtol 1e-6 per step near a pole
     message = str(failed.value)
     assert rates_failed(failed.value) or dop853.TOO_SMALL in message
-    with pytest.raises(dop853.Failure, match="more than 3 steps"):
+    with pytest.raises(dop853.Failure, match="more than 3 steps before the next output"):
         dop853.Dop853(ode, 1e-10, 1e-12, max_steps=3, use_c=use_c)(0.0, [0.5], [0.0])
