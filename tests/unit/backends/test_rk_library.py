@@ -49,3 +49,30 @@ def test_the_driver_builds_and_runs(externals):
     # rtol 1e-10 over ~20 steps of a smooth solution of size ~3
     np.testing.assert_allclose(states[0], np.cos(times) + times - np.sin(times), rtol=0,
                                atol=1e-8)
+
+
+def test_a_function_bound_to_its_data_is_reached_through_its_external(externals):
+    """backends.parametric.bind's form: the external called with a constant last input."""
+    from casmech.backends.parametric import bind
+
+    d = np.array([0.5, 1.0, 2.0])
+    bound = bind(externals["extra"], d)
+    found = rk_library.bound(bound)
+    assert found is not None and found[0].name() == "extra"
+    np.testing.assert_array_equal(found[1], d)
+    entry = rk_library.entry(bound)
+    assert entry is not None and entry.struct.i_x == 1
+    np.testing.assert_array_equal(entry.fixed[2], d)
+    # the driver over it: x' = 3.5 x, so x = exp(3.5 t) (rtol 1e-10 over 1.75 e-folds)
+    from casmech.runtime.dop853 import Dop853
+
+    rk = Dop853(bound, 1e-10, 1e-12)
+    assert rk.compiled
+    states = rk(0.0, [0.25, 0.5], [1.0, 2.0])
+    np.testing.assert_allclose(states, np.outer([1.0, 2.0], np.exp(3.5 * np.array([0.25, 0.5]))),
+                               rtol=1e-8, atol=0)
+    # another MX function is not taken for a bound one
+    t, x = ca.MX.sym("t"), ca.MX.sym("x", 2)
+    other = ca.Function("other", [t, x], [externals["extra"](t, x, ca.DM(d)) * 2], ["t", "x"],
+                        ["ode"])
+    assert rk_library.bound(other) is None
