@@ -70,16 +70,18 @@ class Dop853:
         return self._c is not None
 
     def __call__(self, t0: float, times, x) -> np.ndarray:
-        """The states at `times` (increasing, after t0) from x at t0, one column per time;
-        self.last holds the call's counts."""
+        """The states at `times` (increasing, from t0 on) from x at t0, one column per time
+        (x itself at times equal to t0); self.last holds the call's counts."""
         times = np.ascontiguousarray(times, float)
         x = np.ascontiguousarray(np.ravel(x), float)
-        if not len(x):
+        at_start = int(np.searchsorted(times, t0, side="right"))
+        if not len(x) or at_start == len(times):
             self.last = Stats()
-            return np.zeros((0, len(times)))
-        if self._c is not None:
-            return self._run_c(float(t0), times, x)
-        return self._run_python(float(t0), times, x)
+            return np.repeat(x[:, None], len(times), axis=1)
+        run = self._run_c if self._c is not None else self._run_python
+        states = run(float(t0), times[at_start:], x)
+        return np.hstack([np.repeat(x[:, None], at_start, axis=1), states]) if at_start \
+            else states
 
     # the C path
     def _c_parts(self):
