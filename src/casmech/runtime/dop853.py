@@ -27,12 +27,13 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
-MAX_STEPS = 50_000  # accepted steps between output times unless the caller sets max_steps
+MAX_STEPS = DynamicsSolver().max_steps  # accepted steps between output times (the option's)
 
 
 @dataclass
@@ -85,6 +86,8 @@ class Dop853:
 
     # the C path
     def _c_parts(self):
+        if not all(_loaded(f) for f in (self.ode, self.project) if f is not None):
+            return None  # (an interpreted bundle imports no code generation: backends.*)
         from casmech.backends import rk_library
 
         run = rk_library.driver()
@@ -212,6 +215,14 @@ class Dop853:
 
 T_STAGES = tableau_module.N_STAGES  # evaluations of one step attempt (its last: f_new)
 T_EXTRA = tableau_module.N_STAGES_EXTENDED - tableau_module.N_STAGES - 1  # the interpolant's
+
+
+def _loaded(function: ca.Function) -> bool:
+    """Whether `function` may have a C entry point (backends.rk_library.entry): it is, or
+    calls, a function loaded from a library."""
+    return function.class_name() == "External" or (
+        function.class_name() == "MXFunction"
+        and any(f.class_name() == "External" for f in function.find_functions()))
 
 
 def _numeric(function: ca.Function | None):
