@@ -1,6 +1,6 @@
-"""Forward dynamics in joint coordinates (analysis.formulation: joint), through SUNDIALS via
-CasADi over the output grid: CVODES on a tree's ODE, IDAS on the stabilized index-2 DAE of a
-tree with loop closures (formulations/joint_system.py).
+"""Forward dynamics in joint coordinates (analysis.formulation: joint) over the output grid:
+a tree's ODE by DOP853 (runtime.dop853) or CVODES via CasADi, the stabilized index-2 DAE of a
+tree with loop closures by IDAS (formulations/joint_system.py).
 
 The initial state is the r-p one (assembly: the file's pose assembled, its velocities projected
 onto the constraints), mapped to joint coordinates joint by joint (relative pose -> theta,
