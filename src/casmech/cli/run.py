@@ -91,8 +91,10 @@ def add_arguments(parser) -> None:
                              "(ggl) or projections of the index-1 DAE (default: the model's, "
                              "else ggl)")
     parser.add_argument("--method", choices=api.DYNAMICS_OPTIONS["method"],
-                        help="CVODES's method for joint coordinates on a tree (default: the "
-                             "model's, else auto: bdf when the ODE is stiff at t0)")
+                        help="the method for joint coordinates on a tree: CVODES's adams or "
+                             "bdf, or dop853 (default: the model's, else auto: bdf when the "
+                             "ODE is stiff at t0, adams where contacts or stops cap the step, "
+                             "else dop853)")
     parser.add_argument("--analysis", choices=sorted(api.ANALYSES), help="analysis type")
     add_options(parser)
     parser.add_argument("--reactions-frame", choices=list(reaction_frames.FRAMES),

@@ -1,6 +1,6 @@
-"""Forward dynamics in joint coordinates (analysis.formulation: joint), through SUNDIALS via
-CasADi over the output grid: CVODES on a tree's ODE, IDAS on the stabilized index-2 DAE of a
-tree with loop closures (formulations/joint_system.py).
+"""Forward dynamics in joint coordinates (analysis.formulation: joint) over the output grid:
+a tree's ODE by DOP853 (runtime.dop853) or CVODES via CasADi, the stabilized index-2 DAE of a
+tree with loop closures by IDAS (formulations/joint_system.py).
 
 The initial state is the r-p one (assembly: the file's pose assembled, its velocities projected
 onto the constraints), mapped to joint coordinates joint by joint (relative pose -> theta,
@@ -33,7 +33,7 @@ from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import assembly, contact_steps, events, functional_ode, nonfinite
+from casmech.runtime import assembly, contact_steps, dop853, events, functional_ode, nonfinite
 from casmech.runtime.buffers import NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
@@ -238,9 +238,9 @@ class _Integrator:
         self.settings = settings
         self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True,
                         **nonfinite.SOLVER_OPTIONS}
-        if not system.n_cut:
+        if not system.n_cut and method in METHODS:
             self.options |= METHODS[method]
-        self.steps, self._options_key = 0, None
+        self.method, self.steps, self._options_key = method, 0, None
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -251,6 +251,18 @@ class _Integrator:
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
+        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
+            rk = self.workspace.kept("dop853", (system.dynamics, self._key()),
+                                     lambda: dop853.from_options(system.dynamics, self.options))
+            try:
+                states = rk(t0, times[:1] if trial else times, x)
+            except Interrupted as interrupted:  # as a NamedCall's: outputs by name
+                done = getattr(interrupted, "outputs", None)
+                if done is not None:
+                    interrupted.outputs = {"xf": done, "zf": np.zeros((0, done.shape[1]))}
+                raise
+            self.steps += rk.last.accepted
+            return states, np.zeros((0, states.shape[1]))
         if not system.n_cut:
             integrator = self._cvodes(t0, times, trial)
             out = integrator(x0=x)
@@ -288,12 +300,16 @@ class _Integrator:
         workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
         of several compile settings), the start and grid and self.options, and called through
         a buffer (runtime.buffers.NamedCall)."""
-        if self._options_key is None:  # self.options are final by the first solver call
-            self._options_key = tuple(sorted(self.options.items()))
         key = (*key, self.system.dynamics, float(t0), np.asarray(times, float).tobytes(),
-               self._options_key)
+               self._key())
         return self.workspace.kept(plugin, key, lambda: NamedCall(
             ca.integrator("joint", plugin, problem(), t0, list(times), options())))
+
+    def _key(self) -> tuple:
+        """self.options as a key (final by the first solver call)."""
+        if self._options_key is None:
+            self._options_key = tuple(sorted(self.options.items()))
+        return self._options_key
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
@@ -329,23 +345,30 @@ def _steps(integrator: NamedCall, *inputs) -> int:
 
 
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
-                  settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None) -> str:
+                  settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None,
+                  capped: bool = False) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
-    "adams".
+    "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
+    an explicit method's every step would cost its 12 evaluations). Loops: "adams" (their DAE
+    goes to IDAS whatever the method).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
     solution follows, so it is not examined. The spectral radius at (t0, x0)
-    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`."""
-    if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
-        return "adams"  # (compiled_system compiles the derivative this needs up to this size)
+    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`.
+    docs/decisions/method-auto.md."""
+    if system.n_cut:
+        return "adams"
+    explicit = "adams" if capped else "dop853"
+    if not forces or not 0 < len(x0) <= settings.stiff_states:
+        return explicit  # (compiled_system compiles the derivative this needs up to this size)
     x0 = np.asarray(x0, float)
     radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),
         lambda: spectral_radius(system, t0, x0))
     if radius is None:
-        return "adams"
-    return "bdf" if radius * step > settings.stiff_threshold else "adams"
+        return explicit
+    return "bdf" if radius * step > settings.stiff_threshold else explicit
 
 
 def _start(functions: SystemFunctions, system: JointSystem, t0: float,
@@ -385,14 +408,17 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     system = joint_system(functions, settings, workspace)
     x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
                                              workspace)
+    if method == "dop853" and system.n_cut:
+        raise dop853.with_loops(functions, [j.name for j in system.tree.cut])
+    step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
-                               workspace)
+                               workspace, "max_step_size" in step_options)
     recorder = Recorder(functions, system, signs, loops.mask, workspace,
                         settings.loop_rows == "solved")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
-    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
+    integrate.options |= step_options
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
     watch = events.watch(functions, result, extra_events, rtol, settings.event_iterations,
@@ -442,7 +468,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     tree = system.tree
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
-        integrator="idas" if system.n_cut else "cvodes",
+        integrator="idas" if system.n_cut else "dop853" if method == "dop853" else "cvodes",
         method="bdf" if system.n_cut else method, steps=integrate.steps,
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
