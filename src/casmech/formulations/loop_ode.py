@@ -1,0 +1,109 @@
+"""A joint system's loop closures as an ODE of the tree's states, and the projection of a state
+back onto the loops' constraints: the projection method of Hairer, Lubich and Roche (Hairer and
+Wanner II, VII.2) for an explicit Runge-Kutta method (runtime.loop_integration).
+
+State x = [theta; u] as the joint DAE's (formulations/joint_system.py). At each (t, x) the loops'
+unit-row multipliers and the accelerations come from the DAE's saddle system at acceleration
+level (joint_system.saddle_terms, solved by numerics.kkt.solve_saddle with the DAE's row mask
+w), so that
+
+    ode(t, x) = [theta_dot(theta, u); u_dot],   [M P^T; P -diag(w)] [u_dot; lam] = [F; gamma]
+
+keeps d^2/dt^2 Phi_c = 0 along the solution; the positions and velocities drift from
+Phi_c = 0 and d/dt Phi_c = 0 by the integrator's error only, and `project` takes them back:
+
+- positions: Gauss-Newton on the kept rows' S Phi_c(t, theta) = 0 (the DAE's algebraic rows at
+  z = 0), each correction in velocity space du the M-weighted least-norm solution of
+  P du = -S Phi_c (the same saddle solve with F = 0: [M P^T; P -diag(w)] [du; .] = [0; -S Phi]),
+  taken to coordinates along theta_dot's derivative in u (theta += d theta_dot/du du: a joint's
+  quaternion coordinates move along its rates). The metric M is the joint-space mass matrix at
+  the state projected: the kinetic-energy metric, which weighs angles and lengths of
+  different joints in one unit (joules per velocity squared) where the Euclidean one would
+  depend on the units of theta. POSITION_ITERATIONS Gauss-Newton steps: the drift of an
+  accepted step is the integrator's local error e (|e| <~ rtol of coordinates ~1), and each
+  step squares it (e -> C e^2), so three take a drift up to ~1e-2 to roundoff; a fixed count
+  keeps the projection one branch-free graph (the iterations unrolled; tests/unit/formulations/
+  test_loop_ode.py checks that two do not suffice at the loosest rtol).
+- velocities: the same solve with the right side -S d/dt Phi_c (the DAE's second algebraic
+  rows at z = 0) at the projected positions: affine in u, so one step is exact; M-weighted, it
+  is the velocity an inelastic impulse along the rows gives, the kinetic energy's closest.
+
+Every term is read from the system's own functions (saddle_terms, the DAE's `dynamics` at
+z = 0: theta_dot and the rows' residuals); CasADi differentiates theta_dot. Where the saddle
+matrix is singular (a singular pose: P lost rank, no row masked) solve_saddle's SX gives NaN,
+which the integrator reports as a non-finite state.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from casmech.core.records import record
+from casmech.numerics.kkt import solve_saddle
+
+# Gauss-Newton steps of the position projection (module docstring)
+POSITION_ITERATIONS = 3
+
+
+@record
+class LoopODE:
+    """The loops' ODE and projection of one joint system and row mask."""
+
+    ode: ca.Function  # (t, x) -> ode
+    project: ca.Function  # (t, x) -> x on Phi_c = 0 and d/dt Phi_c = 0 (kept rows)
+    n_theta: int
+
+
+def _symbols(*functions: ca.Function):
+    """SX when every function is SX (their graphs inlined and shared), else MX."""
+    return ca.SX if all(f.is_a("SXFunction") for f in functions) else ca.MX
+
+
+def build(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
+          iterations: int = POSITION_ITERATIONS) -> LoopODE:
+    """The loops' ODE and projection (module docstring) from a joint system's saddle terms
+    (formulations.joint_system.saddle_terms: (t, x) -> (M, P, F, gamma)) and its DAE
+    (JointSystem.dynamics: (t, x, z, p) -> (ode, alg)), with the DAE's row mask (1: a row
+    masked, runtime's Loops.mask) as constants of the graph; n_theta: the coordinates in x.
+    One SX graph each where both functions are SX, else MX calling them."""
+    sym = _symbols(terms, dynamics)
+    n_x, m = terms.size1_in(1), terms.size1_out(1)
+    w = ca.DM(np.asarray(mask, float).reshape(m, 1))
+    t, x = sym.sym("t"), sym.sym("x", n_x)
+    z0 = sym.zeros(2 * m)
+
+    def rates(t, x):
+        """(theta_dot, S Phi_c, S d/dt Phi_c) at (t, x), the rows times (1 - w)."""
+        ode, alg = dynamics(t, x, z0, w)
+        return ode[:n_theta], alg[:m], alg[m:]
+
+    mass, jacobian, forces, gamma = terms(t, x)
+    u_dot, _ = solve_saddle(mass, jacobian, forces, gamma, w)
+    theta_dot, _, _ = rates(t, x)
+    ode = ca.vertcat(theta_dot, u_dot)
+
+    # the position step as a function of (t, x): theta + d theta_dot/du du
+    du = sym.sym("du", n_x - n_theta)
+    along = ca.Function("along", [t, x, du], [ca.jtimes(theta_dot, x, ca.vertcat(
+        sym.zeros(n_theta), du))])
+    zero = sym.zeros(n_x - n_theta)
+    state = x
+    for _ in range(iterations):
+        _, position, _ = rates(t, state)
+        _, rows, _, _ = terms(t, state)
+        step, _ = solve_saddle(mass, rows, zero, -position, w)
+        state = ca.vertcat(state[:n_theta] + along(t, state, step), state[n_theta:])
+    _, rows, _, _ = terms(t, state)
+    _, _, velocity = rates(t, state)
+    step, _ = solve_saddle(mass, rows, zero, -velocity, w)
+    projected = ca.vertcat(state[:n_theta], state[n_theta:] + step)
+
+    def function(name: str, output, out_name: str) -> ca.Function:
+        outputs = [output]
+        if sym is ca.SX:
+            outputs = ca.cse(outputs)
+        return ca.Function(name, [t, x], outputs, ["t", "x"], [out_name])
+
+    return LoopODE(function("joint_loop_ode", ode, "ode"),
+                   function("joint_loop_project", projected, "x_projected"), n_theta)
