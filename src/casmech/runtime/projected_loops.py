@@ -1,0 +1,63 @@
+"""The loops' ODE and projection (formulations.loop_ode) of a bundle's joint system, as
+`method: dop853` integrates a joint system with loops: built once per row mask and joint
+system and kept in the run's workspace.
+
+- A joint system whose DAE is SX (an interpreted bundle): one SX graph each, over the
+  bundle's IR (saddle_terms) and the system's DAE.
+- A parametric library's joint system (functions.joint_functions: bound to this bundle's
+  values): the same over MX, calling the library's DAE (interpreted; a compile per parameter
+  value would cost more than it saves).
+- A compiled bundle's: the SX graphs of the IR's joint system compiled into a library of their
+  own, cached under the bundle's library key, the mask and the projection's iterations
+  (backends.library.compile_keyed: a warm cache builds no graph), or under their content for
+  a bundle without a key.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from casmech.equations.functions import SystemFunctions
+from casmech.formulations import loop_ode
+from casmech.formulations.joint_system import JointSystem, build, saddle_terms
+from casmech.runtime.workspace import Workspace
+
+NAMES = ("joint_loop_ode", "joint_loop_project")  # the compiled library's functions
+
+
+def loop_ode_of(functions: SystemFunctions, system: JointSystem, mask,
+                workspace: Workspace) -> loop_ode.LoopODE:
+    """The loops' ODE and projection of `system` (a bundle's, with loops) with the DAE's row
+    mask `mask`, kept in `workspace` (module docstring)."""
+    mask = np.asarray(mask, float)
+    return workspace.kept("loop_ode", (mask.tobytes(), system.dynamics),
+                          lambda: _made(functions, system, mask))
+
+
+def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> loop_ode.LoopODE:
+    n_theta = system.layout.n_theta
+    if system.dynamics.is_a("SXFunction") or functions.joint_functions is not None:
+        return loop_ode.build(saddle_terms(functions.ir, system.tree), system.dynamics,
+                              n_theta, mask)
+    compiled = _compiled(functions, system, mask)
+    return loop_ode.LoopODE(compiled[NAMES[0]], compiled[NAMES[1]], n_theta)
+
+
+def _symbolic(functions: SystemFunctions, system: JointSystem, mask) -> dict:
+    """The SX graphs of the IR's joint system, by library name."""
+    dynamics = build(functions.ir, system.tree).dynamics
+    built = loop_ode.build(saddle_terms(functions.ir, system.tree), dynamics,
+                           system.layout.n_theta, mask)
+    return dict(zip(NAMES, (built.ode, built.project), strict=True))
+
+
+def _compiled(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> dict:
+    from casmech.backends.build import Toolchain
+    from casmech.backends.library import compile_functions, compile_keyed
+
+    if functions.library_key is None:
+        return compile_functions(_symbolic(functions, system, mask))
+    content = {"kind": "joint loop ode", "bundle": functions.library_key,
+               "mask": mask.tolist(), "iterations": loop_ode.POSITION_ITERATIONS}
+    return compile_keyed(content, lambda: (_symbolic(functions, system, mask), {},
+                                           Toolchain()))
