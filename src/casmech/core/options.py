@@ -22,7 +22,7 @@ from casmech.core.registry import Names
 # the registered formulations and auto: formulations.registry keeps it current
 FORMULATIONS = Names(("rp", "romega", "joint", "auto"))
 STABILIZATIONS = ("ggl", "projection")
-METHODS = ("auto", "adams", "bdf")
+METHODS = ("auto", "adams", "bdf", "dop853")
 LOOP_ROWS = ("integrator", "solved")
 
 
@@ -41,8 +41,9 @@ def _stabilization():
 
 
 def _method():
-    return option("auto", "CVODES's method for joint coordinates on a tree: adams, bdf, or auto "
-                  "(bdf when the ODE is stiff at t0: solver.stiff_threshold)",
+    return option("auto", "the method for joint coordinates on a tree: CVODES's adams or bdf, "
+                  "dop853 (an explicit Runge-Kutta pair of order 8), or auto (bdf when the ODE "
+                  "is stiff at t0: solver.stiff_threshold)",
                   choices=METHODS)
 
 

@@ -33,7 +33,7 @@ from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import assembly, contact_steps, events, functional_ode, nonfinite
+from casmech.runtime import assembly, contact_steps, dop853, events, functional_ode, nonfinite
 from casmech.runtime.buffers import NamedCall
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
@@ -238,9 +238,9 @@ class _Integrator:
         self.settings = settings
         self.options = {"reltol": rtol, "abstol": atol, "disable_internal_warnings": True,
                         **nonfinite.SOLVER_OPTIONS}
-        if not system.n_cut:
+        if not system.n_cut and method in METHODS:
             self.options |= METHODS[method]
-        self.steps, self._options_key = 0, None
+        self.method, self.steps, self._options_key = method, 0, None
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -251,6 +251,12 @@ class _Integrator:
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
+        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
+            rk = self.workspace.kept("dop853", (system.dynamics, self._key()),
+                                     lambda: dop853.from_options(system.dynamics, self.options))
+            states = rk(t0, times[:1] if trial else times, x)
+            self.steps += rk.last.accepted
+            return states, np.zeros((0, states.shape[1]))
         if not system.n_cut:
             integrator = self._cvodes(t0, times, trial)
             out = integrator(x0=x)
@@ -288,12 +294,16 @@ class _Integrator:
         workspace by `key`, the system's ODE or DAE (the workspace may hold the joint systems
         of several compile settings), the start and grid and self.options, and called through
         a buffer (runtime.buffers.NamedCall)."""
-        if self._options_key is None:  # self.options are final by the first solver call
-            self._options_key = tuple(sorted(self.options.items()))
         key = (*key, self.system.dynamics, float(t0), np.asarray(times, float).tobytes(),
-               self._options_key)
+               self._key())
         return self.workspace.kept(plugin, key, lambda: NamedCall(
             ca.integrator("joint", plugin, problem(), t0, list(times), options())))
+
+    def _key(self) -> tuple:
+        """self.options as a key (final by the first solver call)."""
+        if self._options_key is None:
+            self._options_key = tuple(sorted(self.options.items()))
+        return self._options_key
 
     def _dae_options(self, t0, times, x, z, first: float | None = None) -> dict:
         """IDAS's options for the loops' DAE, as runtime.dynamics sets them for GGL: the r-p
@@ -442,7 +452,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     tree = system.tree
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
-        integrator="idas" if system.n_cut else "cvodes",
+        integrator="idas" if system.n_cut else "dop853" if method == "dop853" else "cvodes",
         method="bdf" if system.n_cut else method, steps=integrate.steps,
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))

@@ -39,8 +39,9 @@ from casmech.errors import AnalysisError, FailureContext, solver_reason
 
 # the integrators' options that make a non-finite right-hand side a failure at once
 SOLVER_OPTIONS = {"regularity_check": True}
-# the flags SUNDIALS returns when the right-hand side (residual) failed unrecoverably
-FAILED_RATES = ('"CV_RHSFUNC_FAIL"', '"IDA_RES_FAIL"')
+# the flags SUNDIALS (and runtime.dop853) return when the right-hand side (residual) failed
+# unrecoverably
+FAILED_RATES = ('"CV_RHSFUNC_FAIL"', '"IDA_RES_FAIL"', '"RK_RHSFUNC_FAIL"')  # (runtime.dop853)
 # fractions of the failed output interval the elements are evaluated at (RatesNotFinite)
 PROBES = (0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)
 OVERFLOWING = 1e150  # a rate beyond this overflows when squared (double precision: 1.8e308)

@@ -1,0 +1,180 @@
+"""The explicit Runge-Kutta driver of c/casmech_rk.c as a shared library, built once per
+machine through the compiled-model cache (keyed by the C source, the compiler and its flags)
+and loaded by ctypes, and the C entry points of a compiled CasADi function for it to call.
+
+A function loaded from a library (casadi.external, class External) is reached at its own
+symbol in its own library: CasADi's External does not expose the path it loaded, so the path is
+read from the function's serialization (the importer's "DllLibrary" record: the path as a
+length-prefixed string, taken where it names an existing file), and ctypes opens the same file
+(the dynamic loader hands back the handle CasADi holds). Any other function (SX, MX, a
+parametric library's functions bound to the model data) has no C entry point here: `entry`
+returns None and the caller integrates in Python.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import json
+import weakref
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+LIBRARY = "libcasmech_rk.so"
+SOURCE = Path(__file__).resolve().parent / "c" / "casmech_rk.c"
+FLAGS = ("-O2",)  # a small fixed file: its loops gain from -O2, its build stays short
+# casmech_rk.c's return codes and counters
+DONE, TOO_SMALL, MAX_STEPS, EVAL_FAILED, NOT_FINITE = range(5)
+ACCEPTED, REJECTED, EVALUATIONS, OUTPUTS, PROJECTIONS, COUNT = range(6)
+
+_int = ctypes.c_longlong  # casadi_int of CasADi's generated C (backends.generate)
+_double_p = ctypes.POINTER(ctypes.c_double)
+
+
+class Function(ctypes.Structure):
+    _fields_ = [("eval", ctypes.c_void_p), ("arg", ctypes.POINTER(_double_p)),
+                ("res", ctypes.POINTER(_double_p)), ("iw", ctypes.POINTER(_int)),
+                ("w", _double_p), ("mem", ctypes.c_int), ("i_t", ctypes.c_int),
+                ("i_x", ctypes.c_int), ("i_out", ctypes.c_int)]
+
+
+class Tableau(ctypes.Structure):
+    _fields_ = [("n_stages", ctypes.c_int), ("n_extended", ctypes.c_int),
+                ("n_dense", ctypes.c_int), ("a", _double_p), ("b", _double_p),
+                ("c", _double_p), ("e3", _double_p), ("e5", _double_p), ("d", _double_p),
+                ("error_order", ctypes.c_double)]
+
+
+class Settings(ctypes.Structure):
+    _fields_ = [("rtol", ctypes.c_double), ("atol", ctypes.c_double),
+                ("max_step", ctypes.c_double), ("first_step", ctypes.c_double),
+                ("safety", ctypes.c_double), ("min_factor", ctypes.c_double),
+                ("max_factor", ctypes.c_double), ("max_steps", _int)]
+
+
+def pointer(array: np.ndarray):
+    """A double* to a C-contiguous float64 array (kept alive by its caller)."""
+    return array.ctypes.data_as(_double_p)
+
+
+_loaded: dict = {}
+
+
+def driver():
+    """casmech_rk_run from the cached library (built on a miss), or None without a C compiler
+    or when the build failed."""
+    if "run" not in _loaded:
+        _loaded["run"] = _load()
+    return _loaded["run"]
+
+
+def _load():
+    from casmech.backends import build, cache
+    from casmech.errors import AnalysisError, UsageError
+
+    toolchain = build.Toolchain(flags=FLAGS)
+    if not build.available(toolchain):
+        return None
+    source = SOURCE.read_bytes()
+    key = hashlib.sha256(json.dumps({
+        "kind": "rk driver", "source": hashlib.sha256(source).hexdigest(),
+        "compiler": toolchain.version(), "flags": list(toolchain.all_flags)},
+        sort_keys=True).encode()).hexdigest()[:32]
+    try:
+        directory, _ = cache.lookup(key, lambda d: _build(d, source, toolchain))
+    except (AnalysisError, UsageError, OSError):
+        return None
+    run = ctypes.CDLL(str(directory / LIBRARY)).casmech_rk_run
+    run.restype = ctypes.c_int
+    run.argtypes = [ctypes.POINTER(Tableau), ctypes.POINTER(Settings), ctypes.POINTER(Function),
+                    ctypes.POINTER(Function), ctypes.c_int, ctypes.c_double, _double_p,
+                    ctypes.c_int, _double_p, _double_p, _double_p, ctypes.POINTER(_int),
+                    _double_p]
+    return run
+
+
+def _build(directory: Path, source: bytes, toolchain) -> None:
+    """The library and a manifest naming it with its sha256 (what codegen.trust checks)."""
+    from casmech.backends import build, manifest
+
+    (directory / SOURCE.name).write_bytes(source)
+    build.build_libraries({LIBRARY: [directory / SOURCE.name]}, directory, toolchain)
+    (directory / manifest.MANIFEST).write_text(json.dumps({
+        "format": manifest.FORMAT, "model": "rk driver", "library": LIBRARY,
+        "functions": [{"name": "casmech_rk_run", "library": LIBRARY}],
+        manifest.DIGESTS: {LIBRARY: manifest.sha256(directory / LIBRARY)}}, indent=1))
+
+
+def library_path(function: ca.Function) -> Path | None:
+    """The library a casadi.external was loaded from (module docstring), or None."""
+    if function.class_name() != "External":
+        return None
+    text = function.serialize()
+    codes = np.frombuffer(text.encode("ascii"), np.uint8).astype(np.int64) - ord("a")
+    if len(codes) % 2:
+        codes = codes[:-1]
+    data = (codes[1::2] * 16 + codes[0::2]).astype(np.uint8).tobytes()
+    found = data.find(b"DllLibrary")
+    if found < 0:
+        return None
+    start = found + len(b"DllLibrary")
+    for offset in range(0, 9):  # a length-prefixed string follows (after a field of 4 bytes)
+        at = start + offset
+        size = int.from_bytes(data[at:at + 4], "little")
+        if 0 < size < 4096:
+            try:
+                path = Path(data[at + 4:at + 4 + size].decode())
+            except UnicodeDecodeError:
+                continue
+            if path.is_absolute() and path.is_file():
+                return path
+    return None
+
+
+class Entry:
+    """A compiled function's C entry point and work vectors as casmech_rk.c's cm_function:
+    its input `t` (if any) and `x` and its first output; the casadi Function kept alive with
+    it (its library stays loaded), its memory checked out and released with this object."""
+
+    def __init__(self, function: ca.Function, path: Path):
+        self.function = function
+        name = function.name()
+        library = ctypes.CDLL(str(path))
+        symbol = getattr(library, name)
+        names = function.name_in()
+        self.arg = (_double_p * max(function.sz_arg(), function.n_in()))()
+        self.res = (_double_p * max(function.sz_res(), function.n_out()))()
+        self.iw = np.zeros(max(function.sz_iw(), 1), np.int64)
+        self.w = np.zeros(max(function.sz_w(), 1))
+        mem = 0
+        checkout = getattr(library, f"{name}_checkout", None)
+        if checkout is not None:
+            checkout.restype = ctypes.c_int
+            mem = checkout()
+            release = getattr(library, f"{name}_release")
+            release.argtypes = [ctypes.c_int]
+            weakref.finalize(self, release, mem)
+        self.struct = Function(
+            ctypes.cast(symbol, ctypes.c_void_p).value, self.arg, self.res,
+            self.iw.ctypes.data_as(ctypes.POINTER(_int)), pointer(self.w), mem,
+            names.index("t") if "t" in names else -1, names.index("x"), 0)
+
+
+def entry(function: ca.Function) -> Entry | None:
+    """`function`'s C entry point (Entry) when it is a function loaded from a library whose
+    inputs besides t and x are empty (NULL reads as zeros) and whose first output is the
+    derivative; else None."""
+    path = library_path(function)
+    names = function.name_in()
+    if path is None or "x" not in names or any(
+            function.nnz_in(i) for i, name in enumerate(names) if name not in ("t", "x")):
+        return None
+    if function.nnz_out(0) != function.nnz_in(names.index("x")) or not (
+            function.sparsity_in("x").is_dense() and function.sparsity_out(0).is_dense()):
+        return None
+    try:
+        return Entry(function, path)
+    except (AttributeError, OSError):
+        return None

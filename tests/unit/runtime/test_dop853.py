@@ -1,0 +1,154 @@
+"""runtime.dop853: DOP853 over an output grid in C (backends/c/casmech_rk.c) and through scipy's
+stepper, against scipy's solve_ivp, closed forms, and with a projection onto a constraint."""
+
+import casadi as ca
+import numpy as np
+import pytest
+from scipy.integrate import DOP853, solve_ivp
+
+from casmech.backends import build
+from casmech.backends.library import compile_functions
+from casmech.runtime import dop853
+from casmech.runtime.nonfinite import rates_failed
+
+G = 9.81
+
+
+def pendulum() -> tuple[ca.Function, ca.Function, ca.Function]:
+    """A planar pendulum of unit length in Cartesian coordinates (px, py, vx, vy): its ODE (the
+    rod force from the acceleration-level constraint), the projection onto the circle and its
+    tangent, and its energy per unit mass."""
+    t, x = ca.SX.sym("t"), ca.SX.sym("x", 4)
+    p, v = x[:2], x[2:]
+    lam = (ca.dot(v, v) - G * p[1]) / ca.dot(p, p)
+    ode = ca.Function("pend_ode", [t, x], [ca.vertcat(v, -lam * p - ca.vertcat(0, G))],
+                      ["t", "x"], ["ode"])
+    unit = p / ca.norm_2(p)
+    project = ca.Function("pend_project", [t, x],
+                          [ca.vertcat(unit, v - ca.dot(v, unit) * unit)], ["t", "x"],
+                          ["projected"])
+    energy = ca.Function("energy", [x], [0.5 * ca.dot(v, v) + G * p[1]])
+    return ode, project, energy
+
+
+@pytest.fixture(scope="module")
+def compiled_pendulum(tmp_path_factory):
+    if not build.available(build.Toolchain()):
+        pytest.skip("no C compiler")
+    ode, project, _ = pendulum()
+    return compile_functions({"pend_ode": ode, "pend_project": project},
+                             root=tmp_path_factory.mktemp("cache"))
+
+
+X0 = np.array([1.0, 0.0, 0.0, 0.5])
+TIMES = np.linspace(0.1, 5.0, 50)
+
+
+def scipy_steps(ode: ca.Function, rtol: float) -> int:
+    """The steps scipy's DOP853 takes from X0 over TIMES."""
+    solver = DOP853(lambda t, y: np.asarray(ode(t, y)).ravel(), 0.0, X0, TIMES[-1],
+                    rtol=rtol, atol=rtol / 100)
+    steps = 0
+    while solver.status == "running":
+        solver.step()
+        steps += 1
+    return steps
+
+
+@pytest.mark.parametrize("rtol", [1e-5, 1e-9])
+def test_c_takes_scipys_steps(compiled_pendulum, rtol):
+    ode = pendulum()[0]
+    reference = solve_ivp(lambda t, y: np.asarray(ode(t, y)).ravel(), (0.0, TIMES[-1]), X0,
+                          "DOP853", t_eval=TIMES, rtol=rtol, atol=rtol / 100)
+    rk = dop853.Dop853(compiled_pendulum["pend_ode"], rtol, rtol / 100)
+    assert rk.compiled
+    states = rk(0.0, TIMES, X0)
+    assert rk.last.evaluations == reference.nfev
+    assert rk.last.accepted == scipy_steps(ode, rtol)
+    # the same arithmetic in another summation order: roundoff (1e-16 a step) grown over the
+    # run's steps by the pendulum's divergence stays far below the integration error (>=1e-9)
+    np.testing.assert_allclose(states, reference.y, rtol=1e-10, atol=1e-11)
+
+
+def test_python_path_is_scipys(compiled_pendulum):
+    ode = pendulum()[0]
+    reference = solve_ivp(lambda t, y: np.asarray(ode(t, y)).ravel(), (0.0, TIMES[-1]), X0,
+                          "DOP853", t_eval=TIMES, rtol=1e-7, atol=1e-9)
+    rk = dop853.Dop853(ode, 1e-7, 1e-9)
+    assert not rk.compiled  # an SX function: no C entry point
+    states = rk(0.0, TIMES, X0)
+    assert rk.last.evaluations == reference.nfev
+    # scipy's own stepper over the same function: equal but for the buffered call's copies
+    np.testing.assert_allclose(states, reference.y, rtol=1e-14, atol=1e-15)
+
+
+def test_harmonic_oscillator_closed_form():
+    t, x = ca.SX.sym("t"), ca.SX.sym("x", 2)
+    omega = 3.0
+    ode = ca.Function("oscillator", [t, x], [ca.vertcat(x[1], -omega**2 * x[0])], ["t", "x"],
+                      ["ode"])
+    states = dop853.Dop853(ode, 1e-10, 1e-12)(0.0, TIMES, [1.0, 0.0])
+    exact = np.vstack([np.cos(omega * TIMES), -omega * np.sin(omega * TIMES)])
+    # rtol 1e-10 per step over ~100 steps of an oscillation of amplitude 3
+    np.testing.assert_allclose(states, exact, rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("use_c", [True, False])
+def test_projection_holds_the_constraint(compiled_pendulum, use_c):
+    ode, project, energy = pendulum()
+    functions = (compiled_pendulum["pend_ode"], compiled_pendulum["pend_project"]) if use_c \
+        else (ode, project)
+    free = dop853.Dop853(functions[0], 1e-6, 1e-8, use_c=use_c)
+    projected = dop853.Dop853(functions[0], 1e-6, 1e-8, project=functions[1], use_c=use_c)
+    assert projected.compiled == use_c
+    plain, held = free(0.0, TIMES, X0), projected(0.0, TIMES, X0)
+    drift = np.abs(np.hypot(plain[0], plain[1]) - 1).max()
+    assert drift > 1e-7  # the unprojected run leaves the circle
+    # the projected outputs lie on the circle to roundoff, their velocities tangent
+    np.testing.assert_allclose(np.hypot(held[0], held[1]), 1.0, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(np.sum(held[:2] * held[2:], axis=0), 0.0, rtol=0, atol=1e-14)
+    e0 = float(energy(X0))
+    energies = np.array([float(energy(held[:, j])) for j in range(len(TIMES))])
+    plain_energies = np.array([float(energy(plain[:, j])) for j in range(len(TIMES))])
+    # the projection keeps the energy within the integration error, as the free run does
+    np.testing.assert_allclose(energies, e0, rtol=0, atol=1e-4)
+    assert np.abs(plain_energies - e0).max() > 1e-7
+    assert projected.last.projections == projected.last.accepted + len(TIMES)
+
+
+def test_c_projection_matches_python(compiled_pendulum):
+    ode, project, _ = pendulum()
+    c = dop853.Dop853(compiled_pendulum["pend_ode"], 1e-8, 1e-10,
+                      project=compiled_pendulum["pend_project"])
+    python = dop853.Dop853(ode, 1e-8, 1e-10, project=project)
+    # the same steps in C and through scipy's stepper: roundoff apart (as above)
+    np.testing.assert_allclose(c(0.0, TIMES, X0), python(0.0, TIMES, X0), rtol=1e-10,
+                               atol=1e-11)
+    assert c.last.evaluations == python.last.evaluations
+
+
+def singular() -> ca.Function:
+    """x' = 1 / (1 - t): not finite at t = 1."""
+    t, x = ca.SX.sym("t"), ca.SX.sym("x")
+    return ca.Function("blowup", [t, x], [1 / (1 - t) + 0 * x], ["t", "x"], ["ode"])
+
+
+@pytest.mark.parametrize("use_c", [True, False])
+def test_failures(tmp_path, use_c):
+    if use_c and not build.available(build.Toolchain()):
+        pytest.skip("no C compiler")
+    ode = singular()
+    if use_c:
+        ode = compile_functions({"blowup": ode}, root=tmp_path)["blowup"]
+    times = np.linspace(0.25, 2.0, 8)
+    with pytest.raises(dop853.Failure) as failed:
+        dop853.Dop853(ode, 1e-6, 1e-8, use_c=use_c)(0.0, times, [0.0])
+    # the rows before the singularity are kept, as -log(1 - t)
+    outputs = failed.value.outputs
+    assert 0 < outputs.shape[1] < 4
+    np.testing.assert_allclose(outputs[0], -np.log(1 - times[:outputs.shape[1]]), rtol=1e-5,
+                               atol=1e-8)  # rtol 1e-6 per step near a pole
+    message = str(failed.value)
+    assert rates_failed(failed.value) or dop853.TOO_SMALL in message
+    with pytest.raises(dop853.Failure, match="more than 3 steps"):
+        dop853.Dop853(ode, 1e-10, 1e-12, max_steps=3, use_c=use_c)(0.0, [0.5], [0.0])
