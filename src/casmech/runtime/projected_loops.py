@@ -15,11 +15,15 @@ system and kept in the run's workspace.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import loop_ode
+from casmech.formulations.joint_start import Loops
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
+from casmech.runtime import dop853
 from casmech.runtime.workspace import Workspace
 
 NAMES = ("joint_loop_ode", "joint_loop_project")  # the compiled library's functions
@@ -61,3 +65,22 @@ def _compiled(functions: SystemFunctions, system: JointSystem, mask: np.ndarray)
                "mask": mask.tolist(), "iterations": loop_ode.POSITION_ITERATIONS}
     return compile_keyed(content, lambda: (_symbolic(functions, system, mask), {},
                                            Toolchain()))
+
+
+def loop_integrator(loop: loop_ode.LoopODE, options: dict, key, workspace: Workspace
+               ) -> dop853.Dop853:
+    """DOP853 on the loops' ODE with their projection after every accepted step (and at every
+    output point: runtime.dop853), from a run's integrator options (dop853.from_options),
+    kept in `workspace` by the ODE and `key` (the options as a key)."""
+    return workspace.kept("dop853", (loop.ode, loop.project, key), lambda: replace(
+        dop853.from_options(loop.ode, options), project=loop.project))
+
+
+def loop_algebraic(loops: Loops, times, states: np.ndarray, solved: bool) -> np.ndarray:
+    """The DAE's algebraic states z = [lam; mu] at the states' columns, as the results rows
+    read them: zeros where the rows solve the loops themselves (runtime.joint_rows: `solved`)
+    or there are none, else each column's consistent multipliers (Loops.z)."""
+    times = np.ravel(times)[:states.shape[1]]
+    if solved or not loops.n_z:
+        return np.zeros((loops.n_z, states.shape[1]))
+    return np.column_stack([loops.z(t, x) for t, x in zip(times, states.T, strict=True)])
