@@ -4,9 +4,10 @@ system and kept in the run's workspace.
 
 - A joint system whose DAE is SX (an interpreted bundle): one SX graph each, over the
   bundle's IR (saddle_terms) and the system's DAE.
-- A parametric library's joint system (functions.joint_functions: bound to this bundle's
-  values): the same over MX, calling the library's DAE (interpreted; a compile per parameter
-  value would cost more than it saves).
+- A parametric library's joint system (functions.joint_functions, bound to this bundle's
+  values: no C entry point for runtime.dop853, and no derivatives for the projection to take
+  through it): the same SX graphs over the bundle's numeric IR, interpreted (a compile per
+  parameter value would cost more than it saves).
 - A compiled bundle's: the SX graphs of the IR's joint system compiled into a library of their
   own, cached under the bundle's library key, the mask and the projection's iterations
   (backends.library.compile_keyed: a warm cache builds no graph), or under their content for
@@ -40,9 +41,11 @@ def loop_ode_of(functions: SystemFunctions, system: JointSystem, mask,
 
 def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> loop_ode.LoopODE:
     n_theta = system.layout.n_theta
-    if system.dynamics.is_a("SXFunction") or functions.joint_functions is not None:
+    if system.dynamics.is_a("SXFunction"):
         return loop_ode.build(saddle_terms(functions.ir, system.tree), system.dynamics,
                               n_theta, mask)
+    if functions.joint_functions is not None:
+        return loop_ode.LoopODE(*_symbolic(functions, system, mask).values(), n_theta)
     compiled = _compiled(functions, system, mask)
     return loop_ode.LoopODE(compiled[NAMES[0]], compiled[NAMES[1]], n_theta)
 
