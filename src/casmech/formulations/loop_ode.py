@@ -17,13 +17,14 @@ Phi_c = 0 and d/dt Phi_c = 0 by the integrator's error only, and `project` takes
   P du = -S Phi_c (the same saddle solve with F = 0: [M P^T; P -diag(w)] [du; .] = [0; -S Phi]),
   taken to coordinates along theta_dot's derivative in u (theta += d theta_dot/du du: a joint's
   quaternion coordinates move along its rates). The metric M is the joint-space mass matrix at
-  the state projected: the kinetic-energy metric, which weighs angles and lengths of
-  different joints in one unit (joules per velocity squared) where the Euclidean one would
-  depend on the units of theta. POSITION_ITERATIONS Gauss-Newton steps: the drift of an
-  accepted step is the integrator's local error e (|e| <~ rtol of coordinates ~1), and each
-  step squares it (e -> C e^2), so three take a drift up to ~1e-2 to roundoff; a fixed count
-  keeps the projection one branch-free graph (the iterations unrolled; tests/unit/formulations/
-  test_loop_ode.py checks that two do not suffice at the loosest rtol).
+  the state given (held over the iterations): the kinetic-energy metric, which weighs angles
+  and lengths of different joints in one unit (joules per velocity squared) where the
+  Euclidean one would depend on the units of theta. POSITION_ITERATIONS Gauss-Newton steps:
+  the drift of an accepted step is the integrator's local error e (|e| <~ rtol of
+  coordinates ~1), and each step squares it (e -> C e^2), so three take a drift up to ~1e-2
+  to roundoff; a fixed count keeps the projection one branch-free graph (the iterations
+  unrolled; tests/unit/formulations/test_loop_ode.py checks that two do not suffice at the
+  loosest rtol).
 - velocities: the same solve with the right side -S d/dt Phi_c (the DAE's second algebraic
   rows at z = 0) at the projected positions: affine in u, so one step is exact; M-weighted, it
   is the velocity an inelastic impulse along the rows gives, the kinetic energy's closest.
