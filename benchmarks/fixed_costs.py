@@ -53,7 +53,8 @@ def _timed(owner, name: str, label: str, spent: dict) -> None:
     setattr(owner, name, timed)
 
 
-def measure(target: str, mode: str, rtols: list[float], calls: int, stages: bool) -> dict:
+def measure(target: str, mode: str, rtols: list[float], calls: int, stages: bool,
+            method: str | None = None) -> dict:
     """{rtol: {"first": s, "again": s, "stages": {...}}} of one process."""
     import casmech
     from casmech.runtime import joint_dynamics
@@ -72,7 +73,7 @@ def measure(target: str, mode: str, rtols: list[float], calls: int, stages: bool
             spent.clear()
             start = time.process_time()
             result = casmech.analyze(functions, "dynamics", t_end=1.0, rtol=rtol,
-                                     atol=rtol / 100)
+                                     atol=rtol / 100, method=method)
             total = time.process_time() - start
             parts = dict(spent, rest=total - sum(spent.values()))
             return total, parts, result.metadata.get("steps")
@@ -120,6 +121,8 @@ def main() -> None:
     parser.add_argument("--calls", type=int, default=20, help="repeated calls (median)")
     parser.add_argument("--compare", metavar="COMMIT")
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--method", default=None, help="the joint ODE's method (default: the "
+                        "file's, else auto)")
     parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     os.environ.setdefault("CASMECH_CACHE_DIR", str(Path(tempfile.gettempdir())
@@ -128,7 +131,7 @@ def main() -> None:
         compare(args.targets, args.mode, args.rtols, args.calls, args.compare, args.rounds)
         return
     for target in args.targets:
-        out = measure(target, args.mode, args.rtols, args.calls, not args.json)
+        out = measure(target, args.mode, args.rtols, args.calls, not args.json, args.method)
         if args.json:
             print(json.dumps({str(r): v for r, v in out.items()}))
             continue

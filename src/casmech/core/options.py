@@ -42,8 +42,10 @@ def _stabilization():
 
 def _method():
     return option("auto", "the method for joint coordinates on a tree: CVODES's adams or bdf, "
-                  "dop853 (an explicit Runge-Kutta pair of order 8), or auto (bdf when the ODE "
-                  "is stiff at t0: solver.stiff_threshold)",
+                  "dop853 (an explicit Runge-Kutta pair of order 8; with loops, their ODE "
+                  "projected onto the loops after each step), or auto (bdf when the ODE is "
+                  "stiff at t0: solver.stiff_threshold; adams where contacts or stops cap the "
+                  "step; else dop853; loops: IDAS)",
                   choices=METHODS)
 
 
@@ -164,7 +166,7 @@ class DynamicsSolver:
                                     "t0 times the output step exceeds this", low=0,
                                     open_low=True)
     stiff_states: int = option(200, "method auto examines ODEs of up to this many states (a "
-                               "dense eigenproblem); larger ones run adams", low=0)
+                               "dense eigenproblem); larger ones are not examined", low=0)
     singular_pose_ratio: float = option(1e-3, "a run with loops passed near a singular pose "
                                         "where the Gram determinant of its unit constraint rows "
                                         "falls below this times its value at t0", low=0,

@@ -5,10 +5,10 @@ and step controller, and the states on the grid from each step's interpolant.
 
 Two paths, the same steps: where the ODE (and the projection) are functions loaded from a
 compiled library (backends.rk_library.entry), the whole call runs in C
-(backends/c/casmech_rk.c, the coefficient tables passed in from scipy's); otherwise scipy's own
-DOP853 stepper over the CasADi function. The tables are read from scipy's
-`scipy.integrate._ivp.dop853_coefficients` (a private module) so that the C driver and the
-Python path integrate with the very same numbers (docs/decisions/dop853.md).
+(backends/c/casmech_rk.c, the coefficient tables and controller constants passed in from
+numerics.dop853_tableau, a copy of scipy's that a test holds equal to them); otherwise each
+step is one call of a CasADi Function of its 12 stages under scipy's controller in Python
+(runtime.dop853_steps). docs/decisions/dop853.md.
 
 `project(t, x) -> x`, optional, maps each accepted step's end state onto a manifold (the
 derivative the next step starts from is evaluated at the projected state) and each output
@@ -16,8 +16,8 @@ state interpolated within the step (which is interpolated before the projection)
 
 A right-hand side that is not finite fails at once (FAILED_RATES in the message: as
 CVODES's regularity check), as do a step size below 10 ulps of t (TOO_SMALL) and more than
-max_steps accepted steps in one call; each a RuntimeError that the driver narrows to an output
-interval (runtime.driver, runtime.nonfinite.interval_failure).
+max_steps accepted steps between output times (CVODES's max_num_steps); each a RuntimeError
+that the driver narrows to an output interval (runtime.driver, nonfinite.interval_failure).
 """
 
 from __future__ import annotations
@@ -27,9 +27,12 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.errors import Interrupted
+from casmech.numerics import dop853_tableau as tableau_module
+
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
-MAX_STEPS = 100_000  # accepted steps in one call unless the caller sets max_steps
+MAX_STEPS = 50_000  # accepted steps between output times unless the caller sets max_steps
 
 
 @dataclass
@@ -40,12 +43,6 @@ class Stats:
     rejected: int = 0
     evaluations: int = 0
     projections: int = 0
-
-
-def _coefficients():
-    from scipy.integrate._ivp import dop853_coefficients as tables
-
-    return tables
 
 
 @dataclass
@@ -93,14 +90,15 @@ class Dop853:
         project = None if self.project is None else rk_library.entry(self.project)
         if run is None or ode is None or (self.project is not None and project is None):
             return None
-        t = _coefficients()
+        t = tableau_module
         arrays = [np.ascontiguousarray(v, float) for v in (
             t.A, t.B, t.C, t.E3, t.E5, t.D)]
         tableau = rk_library.Tableau(
             t.N_STAGES, t.N_STAGES_EXTENDED, t.INTERPOLATOR_POWER - 3,
-            *(rk_library.pointer(a) for a in arrays), 7.0)
+            *(rk_library.pointer(a) for a in arrays), float(t.ERROR_ORDER))
         settings = rk_library.Settings(
-            self.rtol, self.atol, self.max_step, self.first_step or 0.0, *_controller(),
+            self.rtol, self.atol, self.max_step, self.first_step or 0.0, t.SAFETY, t.MIN_FACTOR,
+            t.MAX_FACTOR,
             self.max_steps)
         n = self.ode.nnz_in(self.ode.name_in().index("x"))
         work = np.zeros((t.N_STAGES_EXTENDED + t.INTERPOLATOR_POWER + 6) * n)
@@ -121,58 +119,97 @@ class Dop853:
         self.last = Stats(int(stats[lib.ACCEPTED]), int(stats[lib.REJECTED]),
                           int(stats[lib.EVALUATIONS]), int(stats[lib.PROJECTIONS]))
         if status != lib.DONE:
-            raise _failure(status, reached.value, {lib.TOO_SMALL: "too small",
-                                                   lib.MAX_STEPS: "max steps",
-                                                   lib.EVAL_FAILED: "failed",
-                                                   lib.NOT_FINITE: "not finite"}[status],
-                           out[:int(stats[lib.OUTPUTS])].T, self.max_steps)
+            raise _failure({lib.TOO_SMALL: "too small", lib.MAX_STEPS: "max steps",
+                            lib.EVAL_FAILED: "failed", lib.NOT_FINITE: "not finite"}[status],
+                           reached.value, out[:int(stats[lib.OUTPUTS])].T, self.max_steps)
         return out.T
 
-    # the Python path: scipy's stepper
-    def _run_python(self, t0: float, times: np.ndarray, x: np.ndarray) -> np.ndarray:
-        from scipy.integrate import DOP853
+    # the Python path: runtime.dop853_steps
+    def _python_parts(self):
+        from casmech.runtime import dop853_steps as steps
+        from casmech.runtime.buffers import BufferedCall
 
+        if getattr(self, "_python", None) is None:
+            self._python = (
+                BufferedCall(steps.step_function(self.ode), stoppable=False),
+                BufferedCall(steps.dense_function(self.ode), stoppable=False),
+                _numeric(self.ode), _numeric(self.project), steps)
+        return self._python
+
+    def _run_python(self, t0: float, times: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """The Python path's call; an Interrupted (a signal, a controller's fault inside the
+        ODE: runtime.cancel) carries in `outputs` the states computed so far (NaN beyond)."""
+        out = np.full((len(y), len(times)), np.nan)
+        try:
+            return self._steps(t0, times, y, out)
+        except Interrupted as interrupted:
+            interrupted.outputs = out
+            raise
+
+    def _steps(self, t0: float, times: np.ndarray, y: np.ndarray, out: np.ndarray
+               ) -> np.ndarray:
+        step, dense, ode, project, steps = self._python_parts()
         stats = self.last = Stats()
-        ode, project = _numeric(self.ode), _numeric(self.project)
+        done, t, t_bound = 0, t0, float(times[-1])
 
-        def rates(t, y):
-            value = ode(t, y)
+        def fail(kind: str, at: float) -> Failure:
+            return _failure(kind, at, out[:, :done], self.max_steps)
+
+        def rates(at: float, state: np.ndarray) -> np.ndarray:
+            stats.evaluations += 1
+            value = ode(at, state)
             if not np.isfinite(value).all():
-                raise _failure(4, t, "not finite", out[:, :done], self.max_steps)
+                raise fail("not finite", at)
             return value
 
-        out = np.full((len(x), len(times)), np.nan)
-        done = 0
-        solver = DOP853(rates, t0, x, times[-1], max_step=self.max_step, rtol=self.rtol,
-                        atol=self.atol, first_step=self.first_step)
-        while done < len(times) and solver.t < times[-1]:
-            if stats.accepted >= self.max_steps:
-                raise _failure(2, solver.t, "max steps", out[:, :done], self.max_steps)
-            if solver.step() is not None or solver.status == "failed":
-                raise _failure(1, solver.t, "too small", out[:, :done], self.max_steps)
+        f, since_output = rates(t, y), 0
+        h_abs = min(self.first_step, t_bound - t0) if self.first_step else steps.initial_step(
+            rates, t, y, f, t_bound, self.max_step, self.rtol, self.atol)
+        while done < len(times) and t != t_bound:
+            if since_output >= self.max_steps:
+                raise fail("max steps", t)
+            min_step = 10 * abs(np.nextafter(t, np.inf) - t)
+            h_abs = self.max_step if h_abs > self.max_step else max(h_abs, min_step)
+            rejected = False
+            while True:
+                if h_abs < min_step:
+                    raise fail("too small", t)
+                t_new = min(t + h_abs, t_bound)
+                h = t_new - t
+                h_abs = abs(h)
+                y_new, f_new, norm, K = step(t, y, f, h, self.rtol, self.atol)
+                stats.evaluations += T_STAGES
+                if not np.isfinite(K).all():
+                    raise fail("not finite", t)
+                accepted, h_abs = steps.next_step(h_abs, norm.item(), rejected)
+                if accepted:
+                    break
+                rejected = True
+                stats.rejected += 1
             stats.accepted += 1
-            t = solver.t
-            upto = int(np.searchsorted(times, t, side="right"))
+            since_output += 1
+            y_new, f_new = y_new.ravel(), f_new.ravel()
+            upto = int(np.searchsorted(times, t_new, side="right"))
             if upto > done:
-                out[:, done:upto] = solver.dense_output()(times[done:upto])
+                F = dense(t, h, y, y_new, f_new, K)[0]
+                stats.evaluations += T_EXTRA
+                since_output = 0
+                out[:, done:upto] = steps.interpolate(F, t, h, y, times[done:upto])
                 if project is not None:
                     for j in range(done, upto):
                         out[:, j] = project(times[j], out[:, j])
                         stats.projections += 1
                 done = upto
+            t, y, f = t_new, y_new, f_new
             if project is not None:
-                solver.y = project(t, solver.y)
-                solver.f = solver.fun(t, solver.y)
+                y = project(t, y)
                 stats.projections += 1
-        stats.evaluations = solver.nfev
+                f = rates(t, y)
         return out
 
 
-def _controller() -> tuple[float, float, float]:
-    """scipy's step controller's SAFETY, MIN_FACTOR, MAX_FACTOR."""
-    from scipy.integrate._ivp import rk
-
-    return rk.SAFETY, rk.MIN_FACTOR, rk.MAX_FACTOR
+T_STAGES = tableau_module.N_STAGES  # evaluations of one step attempt (its last: f_new)
+T_EXTRA = tableau_module.N_STAGES_EXTENDED - tableau_module.N_STAGES - 1  # the interpolant's
 
 
 def _numeric(function: ca.Function | None):
@@ -205,10 +242,11 @@ class Failure(RuntimeError):
         self.t, self.outputs = t, outputs
 
 
-def _failure(status: int, t: float, kind: str, outputs: np.ndarray, max_steps: int) -> Failure:
+def _failure(kind: str, t: float, outputs: np.ndarray, max_steps: int) -> Failure:
     messages = {
         "too small": f"DOP853 failed at t = {t:.10g}: {TOO_SMALL}",
-        "max steps": f"DOP853 failed at t = {t:.10g}: more than {max_steps} steps in one call",
+        "max steps": f"DOP853 failed at t = {t:.10g}: more than {max_steps} steps before the "
+                     "next output time",
         "failed": f"DOP853 failed at t = {t:.10g}: the right-hand side's evaluation failed",
         "not finite": f"DOP853 failed near t = {t:.10g}: the right-hand side is not finite "
                       f"({RATES_FAILED})"}

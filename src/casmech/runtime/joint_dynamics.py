@@ -258,7 +258,14 @@ class _Integrator:
                 self.loop, self.options, self._key(), self.workspace) if system.n_cut else \
                 self.workspace.kept("dop853", (system.dynamics, self._key()),
                                     lambda: dop853.from_options(system.dynamics, self.options))
-            states = rk(t0, times[:1] if trial else times, x)
+            try:
+                states = rk(t0, times[:1] if trial else times, x)
+            except Interrupted as interrupted:  # as a NamedCall's: outputs by name
+                done = getattr(interrupted, "outputs", None)
+                if done is not None:
+                    interrupted.outputs = {"xf": done, "zf": loop_algebraic(
+                        self.loops, times, done, self.solved)}
+                raise
             self.steps += rk.last.accepted
             return states, loop_algebraic(self.loops, times, states, self.solved)
         if not system.n_cut:
@@ -343,23 +350,30 @@ def _steps(integrator: NamedCall, *inputs) -> int:
 
 
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
-                  settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None) -> str:
+                  settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None,
+                  capped: bool = False) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
-    "adams".
+    "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
+    an explicit method's every step would cost its 12 evaluations). Loops: "adams" (their DAE
+    goes to IDAS; dop853 asked for integrates their projected ODE: runtime.projected_loops).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
     solution follows, so it is not examined. The spectral radius at (t0, x0)
-    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`."""
-    if system.n_cut or not forces or not 0 < len(x0) <= settings.stiff_states:
-        return "adams"  # (compiled_system compiles the derivative this needs up to this size)
+    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`.
+    docs/decisions/method-auto.md."""
+    if system.n_cut:
+        return "adams"
+    explicit = "adams" if capped else "dop853"
+    if not forces or not 0 < len(x0) <= settings.stiff_states:
+        return explicit  # (compiled_system compiles the derivative this needs up to this size)
     x0 = np.asarray(x0, float)
     radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),
         lambda: spectral_radius(system, t0, x0))
     if radius is None:
-        return "adams"
-    return "bdf" if radius * step > settings.stiff_threshold else "adams"
+        return explicit
+    return "bdf" if radius * step > settings.stiff_threshold else explicit
 
 
 def _start(functions: SystemFunctions, system: JointSystem, t0: float,
@@ -399,17 +413,18 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     system = joint_system(functions, settings, workspace)
     x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
                                              workspace)
+    step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
-                               workspace)
+                               workspace, "max_step_size" in step_options)
     recorder = Recorder(functions, system, signs, loops.mask, workspace,
                         settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
     if method == "dop853" and system.n_cut:  # the loops' projected ODE (runtime.projected_loops)
         integrate.loop = loop_ode_of(functions, system, loops.mask, workspace)
         integrate.solved = recorder.loops is not None
-    integrate.options |= contact_steps.options(functions.ir, step, t_end - t0, settings)
+    integrate.options |= step_options
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
     watch = events.watch(functions, result, extra_events, rtol, settings.event_iterations,

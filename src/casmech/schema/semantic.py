@@ -47,10 +47,12 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
                     hint=limits.HINTS.get(key))
-    if given.method == "adams" and given.formulation in ("rp", "romega"):
-        check.error("E409", (*path, "method"), "method adams integrates joint coordinates of a "
-                    "tree; the rp and romega DAEs are integrated by IDAS's BDF method",
-                    got="adams", hint="write formulation: joint (or auto), or remove method")
+    if given.method in ("adams", "dop853") and given.formulation in ("rp", "romega"):
+        integrates = {"adams": "a tree", "dop853": "a tree or the projected ODE of its loops"}
+        check.error("E409", (*path, "method"), f"method {given.method} integrates joint "
+                    f"coordinates of {integrates[given.method]}; the rp and romega DAEs are "
+                    "integrated by IDAS's BDF method", got=given.method,
+                    hint="write formulation: joint (or auto), or remove method")
     options, written = analysis_options(check, given)
     source = check.doc.source_map.values.get(path)
     return (

@@ -3,7 +3,8 @@ mapped over parameter sets (casadi's map, on threads where the caller has cores)
 
 A study is batched (study.sweep.prepare, mode "batched", or auto from COMPILE_RUNS runs) when
 `obstacle` finds nothing against it: dynamics of a tree in joint coordinates with no events,
-contacts or stops, the method fixed for every run (given, or auto with no force element),
+contacts or stops, the method fixed for every run (adams or bdf given, or auto with no force
+element: Adams; a study asking dop853 runs run by run, runtime.dop853),
 no `initial:` values, no `--full`, the parametric library applies, and the study's parameters
 can be symbolic (optimal.system.traced_model) with the library's structure and model data at
 the design's corners (so the values there are checked by the schema as a run's are).
@@ -73,6 +74,8 @@ def obstacle(model, settings, study, full: bool) -> str | None:
          "contacts or joint stops"),
         (method == "auto" and bool(ir.forces or ir.motors),
          "method auto examines each run's stiffness"),
+        (method == "dop853", "method dop853 integrates each run by itself (a batch maps "
+         "CVODES)"),
         (any(joint.initial for joint in ir.joints), "joints' initial: values"))
     found = next((why for bad, why in reasons if bad), None)
     return found or _structure_obstacle(model, study)

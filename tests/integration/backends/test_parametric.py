@@ -139,7 +139,7 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
         metadata = json.loads((out / "metadata.json").read_text())
         assert metadata["mode"] == "compiled"
         assert metadata["result"]["formulation"] == "joint"
-        assert metadata["result"]["integrator"] == ("cvodes" if case == "double_pendulum"
+        assert metadata["result"]["integrator"] == ("dop853" if case == "double_pendulum"
                                                     else "idas")
         assert len(builds) == 1  # the first run only
         rp = run(path, tmp_path / f"rp{number}", "compiled", values, "rp")

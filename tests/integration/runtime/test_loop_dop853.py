@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import casmech
+from casmech.errors import ModelError
 from casmech.runtime import workspace
 from tests.conftest import MODELS, ROOT, Table
 from tests.helpers import gallery_closed_forms as cf
@@ -106,3 +107,15 @@ def test_compiled_takes_the_interpreted_steps():
     np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
     np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
                                atol=1e-9 * np.abs(runs[0].lam).max())
+
+
+def test_with_rp_it_is_a_located_error():
+    """The r-p DAE of loops goes to IDAS: method dop853 with formulation rp is the schema's
+    error at analysis.method."""
+    text = (MODELS / "four_bar_released.yaml").read_text().replace(
+        "analysis:\n", "analysis:\n  method: dop853\n  formulation: rp\n")
+    with pytest.raises(ModelError) as raised:
+        casmech.loads(text, "four_bar.yaml")
+    [diagnostic] = raised.value.diagnostics
+    assert diagnostic.path == "analysis.method" and diagnostic.source is not None
+    assert diagnostic.got == "dop853" and "formulation: joint" in diagnostic.hint

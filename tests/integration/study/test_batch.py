@@ -69,7 +69,10 @@ def test_batched_runs_equal_the_study_made_run_by_run(no_single_runs, monkeypatc
     grid = {"L": [0.5, 0.77, 1.3, 2.0], "theta0": [0.3, 1.5]}
     batched = casmech.sweep(PENDULUM, grid=grid, keep=KEEP, mode="batched", workers=0)
     monkeypatch.undo()  # runs one by one allowed again
-    alone = casmech.sweep(PENDULUM, grid=grid, keep=KEEP, mode="compiled", workers=0)
+    # method auto runs a batch by CVODES's Adams (study.batch) and a run alone by DOP853
+    # (runtime.joint_dynamics.choose_method): the runs alone are asked for Adams
+    alone = casmech.sweep(PENDULUM, grid=grid, keep=KEEP, mode="compiled", workers=0,
+                          method="adams")
     assert list(batched["status"]) == ["complete"] * 8
     for column in KEEP:
         # the same integrator on the same compiled ODE from the same state; the model data
@@ -96,7 +99,8 @@ def test_initial_velocities_are_projected_as_a_run_projects_them(no_single_runs,
     keep = ["max(bob.z)", "bob.vy@0.2", "final(bob.wx)"]
     batched = casmech.sweep(model, grid=grid, keep=keep, mode="batched", workers=0)
     monkeypatch.undo()
-    alone = casmech.sweep(model, grid=grid, keep=keep, mode="compiled", workers=0)
+    alone = casmech.sweep(model, grid=grid, keep=keep, mode="compiled", workers=0,
+                          method="adams")  # the batch's method (as above)
     assert set(batched["status"]) == {"complete"}
     for column in keep:
         # the projection by the same least squares on Phi_q from the traced model instead of
@@ -155,6 +159,11 @@ def test_auto_batches_a_large_study_only_where_it_can(monkeypatch):
         file=str(PENDULUM))
     assert batch.obstacle(springy, settings, prepared.study, full=False) == (
         "method auto examines each run's stiffness")
+    explicit = casmech.loads(PENDULUM.read_text().replace("analysis:", (
+        "analysis:\n  method: dop853")), file=str(PENDULUM))
+    assert batch.obstacle(explicit, casmech.api.analysis_settings(casmech.compile(explicit)),
+                          prepared.study, full=False) == (
+        "method dop853 integrates each run by itself (a batch maps CVODES)")
 
 
 def test_corners_of_the_design():

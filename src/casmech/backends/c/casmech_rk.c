@@ -44,7 +44,7 @@ typedef struct {
 typedef struct {
   double rtol, atol, max_step, first_step; /* first_step <= 0: chosen */
   double safety, min_factor, max_factor;
-  casadi_int max_steps;                    /* accepted steps in one call */
+  casadi_int max_steps;                    /* accepted steps between output times */
 } cm_settings;
 
 enum { CM_DONE = 0, CM_TOO_SMALL = 1, CM_MAX_STEPS = 2, CM_EVAL_FAILED = 3, CM_NOT_FINITE = 4 };
@@ -181,6 +181,7 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
   double *y_new = y + n, *y_old = y_new + n, *f = y_old + n, *ytmp = f + n, *scale = ytmp + n;
   double t = t0, t_bound = times[n_times - 1], h_abs, exponent = -1 / (tab->error_order + 1);
   int next = 0, status, k, s;
+  casadi_int since_output = 0;
   memset(stats, 0, S_COUNT * sizeof(casadi_int));
   *t_reached = t0;
   memcpy(y, y0, n * sizeof(double));
@@ -195,7 +196,7 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
     if (t == t_bound) break; /* a grid point not after t0: none left but t_bound itself */
     if (h_abs > set->max_step) h_abs = set->max_step;
     else if (h_abs < min_step) h_abs = min_step;
-    if (stats[S_ACCEPTED] >= set->max_steps) return CM_MAX_STEPS;
+    if (since_output >= set->max_steps) return CM_MAX_STEPS;
     for (;;) {
       if (h_abs < min_step) return CM_TOO_SMALL;
       h = h_abs;
@@ -227,12 +228,14 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
       stats[S_REJECTED]++;
     }
     stats[S_ACCEPTED]++;
+    since_output++;
     memcpy(y_old, y, n * sizeof(double));
     memcpy(y, y_new, n * sizeof(double));
     memcpy(f, K + tab->n_stages * n, n * sizeof(double));
     if (next < n_times && times[next] <= t_new) {
       status = dense(tab, ode, t, h, y_old, y, f, K, F, ytmp, stats, n);
       if (status) return status;
+      since_output = 0;
       for (; next < n_times && times[next] <= t_new; ++next) {
         interpolate(tab, F, t, h, y_old, times[next], out + (casadi_int)next * n, n);
         if (project) {
