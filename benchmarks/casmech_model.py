@@ -86,6 +86,7 @@ TOOLS = {
     "casmech-rp": {"mode": "interpreted", "formulation": "rp"},
     "casmech-joint": {"mode": "interpreted", "formulation": "joint"},
     # method dop853 (an explicit Runge-Kutta pair; with loops, the projected loop ODE)
+    "casmech-dop853": {"mode": "interpreted", "formulation": None, "method": "dop853"},
     "casmech-c-dop853": {"mode": "compiled", "formulation": None, "method": "dop853"},
 }
 
