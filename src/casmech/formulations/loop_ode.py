@@ -69,21 +69,45 @@ def build(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
     masked, runtime's Loops.mask) as constants of the graph; n_theta: the coordinates in x.
     One SX graph each where both functions are SX, else MX calling them."""
     sym = _symbols(terms, dynamics)
-    n_x, m = terms.size1_in(1), terms.size1_out(1)
-    w = ca.DM(np.asarray(mask, float).reshape(m, 1))
-    t, x = sym.sym("t"), sym.sym("x", n_x)
-    z0 = sym.zeros(2 * m)
-
-    def rates(t, x):
-        """(theta_dot, S Phi_c, S d/dt Phi_c) at (t, x), the rows times (1 - w)."""
-        ode, alg = dynamics(t, x, z0, w)
-        return ode[:n_theta], alg[:m], alg[m:]
-
+    t, x = sym.sym("t"), sym.sym("x", terms.size1_in(1))
+    w = _mask(terms, mask)
     mass, jacobian, forces, gamma = terms(t, x)
     u_dot, _ = solve_saddle(mass, jacobian, forces, gamma, w)
-    theta_dot, _, _ = rates(t, x)
-    ode = ca.vertcat(theta_dot, u_dot)
+    ode = ca.vertcat(_rates(dynamics, w, t, x)[0][:n_theta], u_dot)
+    return LoopODE(_function("joint_loop_ode", t, x, ode, "ode"),
+                   projection(terms, dynamics, n_theta, mask, iterations), n_theta)
 
+
+def consistent_ode(acceleration: ca.Function, dynamics: ca.Function, mask) -> ca.Function:
+    """(t, x) -> ode: the DAE's ODE at the multipliers of its acceleration system
+    (JointSystem.acceleration_system: the kept rows' constraint accelerations, affine in
+    them, set to zero; the masked rows' multipliers zero, as formulations.joint_start.Loops.z
+    solves them), for a system whose forces only its own functions hold (a controller's:
+    runtime.projected_loops); `build`'s ODE where the saddle terms hold them, in fewer
+    instructions."""
+    sym = _symbols(acceleration, dynamics)
+    t, x = sym.sym("t"), sym.sym("x", acceleration.size1_in(1))
+    matrix, base = acceleration(t, x)
+    m = base.size1()
+    keep = [int(k) for k in np.flatnonzero(np.asarray(mask, float) == 0)]
+    lam = sym.zeros(m)
+    if keep:
+        lam[keep] = ca.solve(matrix[keep, keep], -base[keep])
+    ode = dynamics(t, x, ca.vertcat(lam, sym.zeros(m)), ca.DM(np.asarray(mask, float)))[0]
+    return _function("joint_loop_ode", t, x, ode, "ode")
+
+
+def projection(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
+               iterations: int = POSITION_ITERATIONS) -> ca.Function:
+    """(t, x) -> x projected onto the kept rows (module docstring), from the saddle terms'
+    M and P and the DAE's theta_dot and rows, as `build`'s (the geometry and the masses
+    only: no force enters)."""
+    sym = _symbols(terms, dynamics)
+    n_x, m = terms.size1_in(1), terms.size1_out(1)
+    w = _mask(terms, mask)
+    t, x = sym.sym("t"), sym.sym("x", n_x)
+    mass = terms(t, x)[0]
+    theta_dot = _rates(dynamics, w, t, x)[0][:n_theta]
     # the position step as a function of (t, x): theta + d theta_dot/du du
     du = sym.sym("du", n_x - n_theta)
     along = ca.Function("along", [t, x, du], [ca.jtimes(theta_dot, x, ca.vertcat(
@@ -91,20 +115,27 @@ def build(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
     zero = sym.zeros(n_x - n_theta)
     state = x
     for _ in range(iterations):
-        _, position, _ = rates(t, state)
-        _, rows, _, _ = terms(t, state)
-        step, _ = solve_saddle(mass, rows, zero, -position, w)
+        position = _rates(dynamics, w, t, state)[1][:m]
+        step, _ = solve_saddle(mass, terms(t, state)[1], zero, -position, w)
         state = ca.vertcat(state[:n_theta] + along(t, state, step), state[n_theta:])
-    _, rows, _, _ = terms(t, state)
-    _, _, velocity = rates(t, state)
-    step, _ = solve_saddle(mass, rows, zero, -velocity, w)
+    velocity = _rates(dynamics, w, t, state)[1][m:]
+    step, _ = solve_saddle(mass, terms(t, state)[1], zero, -velocity, w)
     projected = ca.vertcat(state[:n_theta], state[n_theta:] + step)
+    return _function("joint_loop_project", t, x, projected, "x_projected")
 
-    def function(name: str, output, out_name: str) -> ca.Function:
-        outputs = [output]
-        if sym is ca.SX:
-            outputs = ca.cse(outputs)
-        return ca.Function(name, [t, x], outputs, ["t", "x"], [out_name])
 
-    return LoopODE(function("joint_loop_ode", ode, "ode"),
-                   function("joint_loop_project", projected, "x_projected"), n_theta)
+def _mask(terms: ca.Function, mask) -> ca.DM:
+    return ca.DM(np.asarray(mask, float).reshape(terms.size1_out(1), 1))
+
+
+def _rates(dynamics: ca.Function, w: ca.DM, t, x) -> tuple:
+    """The DAE's (ode, alg) at z = 0: theta_dot first in ode, the rows (1 - w) S Phi_c and
+    (1 - w) S d/dt Phi_c in alg."""
+    zeros = (ca.SX if isinstance(x, ca.SX) else ca.MX).zeros(2 * w.numel())
+    return dynamics(t, x, zeros, w)
+
+
+def _function(name: str, t, x, output, out_name: str) -> ca.Function:
+    """(t, x) -> output, its common subexpressions shared in SX."""
+    outputs = ca.cse([output]) if isinstance(output, ca.SX) else [output]
+    return ca.Function(name, [t, x], outputs, ["t", "x"], [out_name])

@@ -8,6 +8,10 @@ system and kept in the run's workspace.
   values: no C entry point for runtime.dop853, and no derivatives for the projection to take
   through it): the same SX graphs over the bundle's numeric IR, interpreted (a compile per
   parameter value would cost more than it saves).
+- A controller's joint system (runtime.controller: functions.joint_functions bound to the
+  controller, no parametric library), whose forces the bundle's IR does not hold: the ODE from
+  the system's own DAE and acceleration system (loop_ode.consistent_ode), the projection
+  (geometry and masses only) from the IR's SX.
 - A compiled bundle's: the SX graphs of the IR's joint system compiled into a library of their
   own, cached under the bundle's library key, the mask and the projection's iterations
   (backends.library.compile_keyed: a warm cache builds no graph), or under their content for
@@ -41,6 +45,12 @@ def loop_ode_of(functions: SystemFunctions, system: JointSystem, mask,
 
 def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> loop_ode.LoopODE:
     n_theta = system.layout.n_theta
+    if functions.joint_functions is not None and functions.parametric is None:
+        # a controller's system (runtime.controller): its forces only in its own functions
+        terms, built = saddle_terms(functions.ir, system.tree), build(functions.ir, system.tree)
+        return loop_ode.LoopODE(
+            loop_ode.consistent_ode(system.acceleration_system, system.dynamics, mask),
+            loop_ode.projection(terms, built.dynamics, n_theta, mask), n_theta)
     if system.dynamics.is_a("SXFunction"):
         return loop_ode.build(saddle_terms(functions.ir, system.tree), system.dynamics,
                               n_theta, mask)

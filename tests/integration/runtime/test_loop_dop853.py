@@ -4,14 +4,19 @@ tolerance, the constraints at every results row, a conservative loop's energy fr
 table (numpy: tests/helpers/gallery_closed_forms.py), singular poses (IFToMM A02) and the
 compiled path against the interpreted one."""
 
+import math
+
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 import casmech
 from casmech.errors import ModelError
 from casmech.runtime import workspace
 from tests.conftest import MODELS, ROOT, Table
 from tests.helpers import gallery_closed_forms as cf
+from tests.validation.runtime.test_events import TIME, parallelogram, swing_time
+from tests.validation.runtime.test_events import model as event_model
 from tests.validation.runtime.test_validation_iftomm import A02
 
 LOOPS = ["four_bar_released", "bricard"]  # a planar loop; an overconstrained one (a row masked)
@@ -119,3 +124,44 @@ def test_with_rp_it_is_a_located_error():
     [diagnostic] = raised.value.diagnostics
     assert diagnostic.path == "analysis.method" and diagnostic.source is not None
     assert diagnostic.got == "dop853" and "formulation: joint" in diagnostic.hint
+
+
+def test_an_event_of_a_closed_loop_at_its_closed_form_time():
+    """A parallelogram's crank angle crossing a value just after an output row: the event at
+    the closed form's time (tests/validation/runtime/test_events.py's IDAS case, on the
+    projected ODE: the trial steps of runtime.events through dop853)."""
+    text, scale = parallelogram()
+    crossing = 0.3 + 1e-9
+    angle = brentq(lambda swung: swing_time(swung, math.pi / 4, scale) - crossing, 0.01,
+                   math.pi / 4, xtol=1e-15)
+    functions = event_model(text, f'  - {{name: at, when: "crank_pivot.angle - {angle!r}"}}\n')
+    result = casmech.analyze(functions, formulation="joint", method="dop853")
+    [event] = result.events
+    assert result.metadata["integrator"] == "dop853" and result.metadata["cut_joints"]
+    assert abs(event.t - crossing) < TIME
+
+
+def test_a_controller_of_a_loop_reads_the_projected_run():
+    """A Python controller's bundle holds forces its IR does not (runtime.joint_recorder: the
+    loops' rows then from the algebraic states, here each row's consistent multipliers): the
+    same PD on the four-bar's crank as a callback and written in the model."""
+    text = (MODELS / "four_bar_released.yaml").read_text().replace(
+        "    initial: {angle: 30 deg, angle_dot: 60 deg/s}\n",
+        "    initial: {angle: 30 deg, angle_dot: 60 deg/s}\n    motor: {torque: LAW}\n")
+    settings = {"t_end": 0.5, "rtol": 1e-10, "atol": 1e-12, "method": "dop853"}
+
+    def bundle(law: str):
+        return casmech.compile(casmech.loads(text.replace("LAW", law), "four_bar.yaml"))
+
+    written = casmech.analyze(bundle("'-5 * angle - 0.5 * angle_dot'"), **settings)
+
+    def law(t, state):
+        return -5 * state["crank_pivot.angle"] - 0.5 * state["crank_pivot.angle_dot"]
+
+    called = casmech.analyze(bundle("0"), controller=law, **settings)
+    assert called.metadata["integrator"] == "dop853"
+    # two rtol 1e-10 runs of one ODE (one through the controller's bound forces)
+    np.testing.assert_allclose(called.q, written.q, rtol=0, atol=1e-7)
+    # the multipliers: solved at each row (written) and the rows' consistent ones (called)
+    np.testing.assert_allclose(called.lam, written.lam, rtol=0,
+                               atol=1e-6 * np.abs(written.lam).max())

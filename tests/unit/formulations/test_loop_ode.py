@@ -61,6 +61,11 @@ def test_ode_is_the_dae_at_its_consistent_multipliers(model):
         np.testing.assert_allclose(_value(loop.ode(t, x)), expected, rtol=0,
                                    atol=1e-10 * (1 + np.abs(expected).max()))
         np.testing.assert_array_equal(_value(loop.ode(t, x))[:n_theta], expected[:n_theta])
+        # the same solve as one graph (a controller's ODE): the DAE's own function, in SX
+        consistent = loop_ode.consistent_ode(system.acceleration_system, system.dynamics,
+                                             loops.mask)
+        np.testing.assert_allclose(_value(consistent(t, x)), expected, rtol=0,
+                                   atol=1e-10 * (1 + np.abs(expected).max()))
 
 
 def _residuals(system, loops, t, x) -> np.ndarray:
