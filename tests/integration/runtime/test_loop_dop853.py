@@ -165,3 +165,21 @@ def test_a_controller_of_a_loop_reads_the_projected_run():
     # the multipliers: solved at each row (written) and the rows' consistent ones (called)
     np.testing.assert_allclose(called.lam, written.lam, rtol=0,
                                atol=1e-6 * np.abs(written.lam).max())
+
+
+@pytest.mark.slow
+def test_a_parametric_library_runs_the_loops_interpreted():
+    """A compiled gallery model with parameters holds its DAE bound to the model data, with no
+    C entry point and no derivatives: its loop ODE is the SX of the bundle's IR, on the
+    Python path, the interpreted bundle's steps and rows."""
+    model = casmech.load(MODELS / "four_bar_released.yaml")
+    bundles = [casmech.compile(model, mode) for mode in ("interpreted", "compiled")]
+    assert bundles[1].joint_functions is not None and bundles[1].parametric is not None
+    runs = [_run(functions, rtol=1e-7, atol=1e-9, method="dop853") for functions in bundles]
+    assert [[rk.compiled for rk in workspace.default(functions).store("dop853").values()]
+            for functions in bundles] == [[False], [False]]
+    assert runs[0].metadata["steps"] == runs[1].metadata["steps"]
+    # the same SX graphs; the rows' multipliers through the library's compiled rows
+    np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
+                               atol=1e-9 * np.abs(runs[0].lam).max())
