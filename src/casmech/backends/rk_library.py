@@ -6,9 +6,10 @@ A function loaded from a library (casadi.external, class External) is reached at
 symbol in its own library: CasADi's External does not expose the path it loaded, so the path is
 read from the function's serialization (the importer's "DllLibrary" record: the path as a
 length-prefixed string, taken where it names an existing file), and ctypes opens the same file
-(the dynamic loader hands back the handle CasADi holds). Any other function (SX, MX, a
-parametric library's functions bound to the model data) has no C entry point here: `entry`
-returns None and the caller integrates in Python.
+(the dynamic loader hands back the handle CasADi holds). A parametric library's function bound
+to the model data (an MX function calling the external with a constant last input d) is
+reached the same way, d passed as that input. Any other function (SX, other MX) has no C entry
+point here: `entry` returns None and the caller integrates in Python.
 """
 
 from __future__ import annotations
@@ -135,10 +136,11 @@ def library_path(function: ca.Function) -> Path | None:
 
 class Entry:
     """A compiled function's C entry point and work vectors as casmech_rk.c's cm_function:
-    its input `t` (if any) and `x` and its first output; the casadi Function kept alive with
-    it (its library stays loaded), its memory checked out and released with this object."""
+    its input `t` (if any) and `x` and its first output, its other inputs `fixed` (position ->
+    dense values, held here; the rest NULL: zeros); the casadi Function kept alive with it (its
+    library stays loaded), its memory checked out and released with this object."""
 
-    def __init__(self, function: ca.Function, path: Path):
+    def __init__(self, function: ca.Function, path: Path, fixed: dict | None = None):
         self.function = function
         name = function.name()
         library = ctypes.CDLL(str(path))
@@ -146,6 +148,9 @@ class Entry:
         names = function.name_in()
         self.arg = (_double_p * max(function.sz_arg(), function.n_in()))()
         self.res = (_double_p * max(function.sz_res(), function.n_out()))()
+        self.fixed = {i: np.ascontiguousarray(v, float) for i, v in (fixed or {}).items()}
+        for i, values in self.fixed.items():
+            self.arg[i] = pointer(values)
         self.iw = np.zeros(max(function.sz_iw(), 1), np.int64)
         self.w = np.zeros(max(function.sz_w(), 1))
         mem = 0
@@ -162,19 +167,58 @@ class Entry:
             names.index("t") if "t" in names else -1, names.index("x"), 0)
 
 
+# casadi's operation codes of an MX function's instructions that a bound call consists of
+_BOUND_OPS = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST, ca.OP_CALL}
+
+
+def bound(function: ca.Function) -> tuple[ca.Function, np.ndarray] | None:
+    """(the external, d) when `function` is an external called with its last input a constant
+    d and the others `function`'s own inputs in order (backends.parametric.bind: a parametric
+    library's function at the model data), checked by one evaluation of both; else None."""
+    if function.class_name() != "MXFunction":
+        return None
+    inner = function.find_functions()
+    if len(inner) != 1 or inner[0].class_name() != "External":
+        return None
+    external = inner[0]
+    ops = [function.instruction_id(k) for k in range(function.n_instructions())]
+    if set(ops) - _BOUND_OPS or ops.count(ca.OP_CALL) != 1 or ops.count(ca.OP_CONST) != 1 \
+            or external.n_in() != function.n_in() + 1 \
+            or external.name_in()[:-1] != function.name_in() \
+            or external.name_out()[:1] != function.name_out()[:1]:
+        return None
+    constant = function.instruction_MX(ops.index(ca.OP_CONST))
+    if not external.sparsity_in(external.n_in() - 1).is_dense() or \
+            constant.sparsity() != external.sparsity_in(external.n_in() - 1):
+        return None
+    d = np.array(ca.evalf(constant)).ravel()
+    probe = [np.random.default_rng(0).uniform(0.5, 1.0, function.sparsity_in(i).shape)
+             for i in range(function.n_in())]
+    mine, theirs = function.call(probe)[0], external.call([*probe, d])[0]
+    if not np.array_equal(np.array(mine), np.array(theirs)):
+        return None
+    return external, d
+
+
 def entry(function: ca.Function) -> Entry | None:
-    """`function`'s C entry point (Entry) when it is a function loaded from a library whose
-    inputs besides t and x are empty (NULL reads as zeros) and whose first output is the
-    derivative; else None."""
+    """`function`'s C entry point (Entry) when it is a function loaded from a library, or one
+    bound to the model data (`bound`), whose inputs besides t and x are empty (NULL reads as
+    zeros) and whose first output is the derivative; else None."""
+    fixed = {}
+    found = bound(function)
+    if found is not None:
+        function, d = found
+        fixed = {function.n_in() - 1: d}
     path = library_path(function)
     names = function.name_in()
     if path is None or "x" not in names or any(
-            function.nnz_in(i) for i, name in enumerate(names) if name not in ("t", "x")):
+            function.nnz_in(i) for i, name in enumerate(names)
+            if name not in ("t", "x") and i not in fixed):
         return None
     if function.nnz_out(0) != function.nnz_in(names.index("x")) or not (
             function.sparsity_in("x").is_dense() and function.sparsity_out(0).is_dense()):
         return None
     try:
-        return Entry(function, path)
+        return Entry(function, path, fixed)
     except (AttributeError, OSError):
         return None
