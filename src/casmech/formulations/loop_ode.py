@@ -67,14 +67,16 @@ def build(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
     (formulations.joint_system.saddle_terms: (t, x) -> (M, P, F, gamma)) and its DAE
     (JointSystem.dynamics: (t, x, z, p) -> (ode, alg)), with the DAE's row mask (1: a row
     masked, runtime's Loops.mask) as constants of the graph; n_theta: the coordinates in x.
-    One SX graph each where both functions are SX, else MX calling them."""
+    One SX graph each where both functions are SX, else MX calling them. Inputs after those
+    (a parametric build's model data d, the same for both) become the results' trailing
+    inputs."""
     sym = _symbols(terms, dynamics)
-    t, x = sym.sym("t"), sym.sym("x", terms.size1_in(1))
+    t, x, extra = _inputs(sym, terms)
     w = _mask(terms, mask)
-    mass, jacobian, forces, gamma = terms(t, x)
+    mass, jacobian, forces, gamma = terms(t, x, *extra)
     u_dot, _ = solve_saddle(mass, jacobian, forces, gamma, w)
-    ode = ca.vertcat(_rates(dynamics, w, t, x)[0][:n_theta], u_dot)
-    return LoopODE(_function("joint_loop_ode", t, x, ode, "ode"),
+    ode = ca.vertcat(_rates(dynamics, w, t, x, extra)[0][:n_theta], u_dot)
+    return LoopODE(_function("joint_loop_ode", terms, [t, x, *extra], ode, "ode"),
                    projection(terms, dynamics, n_theta, mask, iterations), n_theta)
 
 
@@ -86,56 +88,66 @@ def consistent_ode(acceleration: ca.Function, dynamics: ca.Function, mask) -> ca
     runtime.projected_loops); `build`'s ODE where the saddle terms hold them, in fewer
     instructions."""
     sym = _symbols(acceleration, dynamics)
-    t, x = sym.sym("t"), sym.sym("x", acceleration.size1_in(1))
-    matrix, base = acceleration(t, x)
+    t, x, extra = _inputs(sym, acceleration)
+    matrix, base = acceleration(t, x, *extra)
     m = base.size1()
     keep = [int(k) for k in np.flatnonzero(np.asarray(mask, float) == 0)]
     lam = sym.zeros(m)
     if keep:
         lam[keep] = ca.solve(matrix[keep, keep], -base[keep])
-    ode = dynamics(t, x, ca.vertcat(lam, sym.zeros(m)), ca.DM(np.asarray(mask, float)))[0]
-    return _function("joint_loop_ode", t, x, ode, "ode")
+    ode = dynamics(t, x, ca.vertcat(lam, sym.zeros(m)), ca.DM(np.asarray(mask, float)),
+                   *extra)[0]
+    return _function("joint_loop_ode", acceleration, [t, x, *extra], ode, "ode")
 
 
 def projection(terms: ca.Function, dynamics: ca.Function, n_theta: int, mask,
                iterations: int = POSITION_ITERATIONS) -> ca.Function:
     """(t, x) -> x projected onto the kept rows (module docstring), from the saddle terms'
     M and P and the DAE's theta_dot and rows, as `build`'s (the geometry and the masses
-    only: no force enters)."""
+    only: no force enters); trailing inputs as `build`'s."""
     sym = _symbols(terms, dynamics)
     n_x, m = terms.size1_in(1), terms.size1_out(1)
     w = _mask(terms, mask)
-    t, x = sym.sym("t"), sym.sym("x", n_x)
-    mass = terms(t, x)[0]
-    theta_dot = _rates(dynamics, w, t, x)[0][:n_theta]
+    t, x, extra = _inputs(sym, terms)
+    mass = terms(t, x, *extra)[0]
+    theta_dot = _rates(dynamics, w, t, x, extra)[0][:n_theta]
     # the position step as a function of (t, x): theta + d theta_dot/du du
     du = sym.sym("du", n_x - n_theta)
-    along = ca.Function("along", [t, x, du], [ca.jtimes(theta_dot, x, ca.vertcat(
+    along = ca.Function("along", [t, x, du, *extra], [ca.jtimes(theta_dot, x, ca.vertcat(
         sym.zeros(n_theta), du))])
     zero = sym.zeros(n_x - n_theta)
     state = x
     for _ in range(iterations):
-        position = _rates(dynamics, w, t, state)[1][:m]
-        step, _ = solve_saddle(mass, terms(t, state)[1], zero, -position, w)
-        state = ca.vertcat(state[:n_theta] + along(t, state, step), state[n_theta:])
-    velocity = _rates(dynamics, w, t, state)[1][m:]
-    step, _ = solve_saddle(mass, terms(t, state)[1], zero, -velocity, w)
+        position = _rates(dynamics, w, t, state, extra)[1][:m]
+        step, _ = solve_saddle(mass, terms(t, state, *extra)[1], zero, -position, w)
+        state = ca.vertcat(state[:n_theta] + along(t, state, step, *extra), state[n_theta:])
+    velocity = _rates(dynamics, w, t, state, extra)[1][m:]
+    step, _ = solve_saddle(mass, terms(t, state, *extra)[1], zero, -velocity, w)
     projected = ca.vertcat(state[:n_theta], state[n_theta:] + step)
-    return _function("joint_loop_project", t, x, projected, "x_projected")
+    return _function("joint_loop_project", terms, [t, x, *extra], projected, "x_projected")
+
+
+def _inputs(sym, function: ca.Function) -> tuple:
+    """(t, x, [the inputs after them]) as symbols of `function`'s shapes."""
+    t, x = sym.sym("t"), sym.sym("x", function.size1_in(1))
+    return t, x, [sym.sym(function.name_in(k), function.sparsity_in(k))
+                  for k in range(2, function.n_in())]
 
 
 def _mask(terms: ca.Function, mask) -> ca.DM:
     return ca.DM(np.asarray(mask, float).reshape(terms.size1_out(1), 1))
 
 
-def _rates(dynamics: ca.Function, w: ca.DM, t, x) -> tuple:
+def _rates(dynamics: ca.Function, w: ca.DM, t, x, extra) -> tuple:
     """The DAE's (ode, alg) at z = 0: theta_dot first in ode, the rows (1 - w) S Phi_c and
     (1 - w) S d/dt Phi_c in alg."""
     zeros = (ca.SX if isinstance(x, ca.SX) else ca.MX).zeros(2 * w.numel())
-    return dynamics(t, x, zeros, w)
+    return dynamics(t, x, zeros, w, *extra)
 
 
-def _function(name: str, t, x, output, out_name: str) -> ca.Function:
-    """(t, x) -> output, its common subexpressions shared in SX."""
+def _function(name: str, like: ca.Function, inputs: list, output, out_name: str
+              ) -> ca.Function:
+    """inputs -> output (named as `like`'s inputs), its common subexpressions shared in SX."""
     outputs = ca.cse([output]) if isinstance(output, ca.SX) else [output]
-    return ca.Function(name, [t, x], outputs, ["t", "x"], [out_name])
+    names = ["t", "x", *(like.name_in(k) for k in range(2, len(inputs)))]
+    return ca.Function(name, inputs, outputs, names, [out_name])

@@ -5,9 +5,9 @@ system and kept in the run's workspace.
 - A joint system whose DAE is SX (an interpreted bundle): one SX graph each, over the
   bundle's IR (saddle_terms) and the system's DAE.
 - A parametric library's joint system (functions.joint_functions, bound to this bundle's
-  values: no C entry point for runtime.dop853, and no derivatives for the projection to take
-  through it): the same SX graphs over the bundle's numeric IR, interpreted (a compile per
-  parameter value would cost more than it saves).
+  values, with no derivatives for the projection to take through it): the SX graphs over the
+  symbols of the model data (model.parametric.split) compiled once per structure and bound to
+  this bundle's data; without a compiler, the SX over the bundle's numeric IR, interpreted.
 - A controller's joint system (runtime.controller: functions.joint_functions bound to the
   controller, no parametric library), whose forces the bundle's IR does not hold: the ODE from
   the system's own DAE and acceleration system (loop_ode.consistent_ode), the projection
@@ -22,10 +22,13 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import casadi as ca
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
+from casmech.errors import AnalysisError, UsageError
 from casmech.formulations import loop_ode
+from casmech.formulations.joint_constants import DATA
 from casmech.formulations.joint_start import Loops
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.runtime import dop853
@@ -55,9 +58,48 @@ def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> 
         return loop_ode.build(saddle_terms(functions.ir, system.tree), system.dynamics,
                               n_theta, mask)
     if functions.joint_functions is not None:
-        return loop_ode.LoopODE(*_symbolic(functions, system, mask).values(), n_theta)
+        try:
+            return loop_ode.LoopODE(*_parametric(functions, system, mask), n_theta)
+        except (AnalysisError, UsageError, OSError):  # no compiler: the SX, interpreted
+            return loop_ode.LoopODE(*_symbolic(functions, system, mask).values(), n_theta)
     compiled = _compiled(functions, system, mask)
     return loop_ode.LoopODE(compiled[NAMES[0]], compiled[NAMES[1]], n_theta)
+
+
+def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> list:
+    """A parametric library's loop ODE and projection: compiled over the model data's symbols
+    (model.parametric.split) once per structure, mask and iterations (backends.library.
+    compile_keyed), each bound to this bundle's data as an MX call of the external with d a
+    constant (the form runtime.dop853's C driver takes: backends.rk_library.bound)."""
+    from casmech.backends.build import Toolchain
+    from casmech.backends.library import compile_keyed
+    from casmech.model.parametric import split
+
+    parts = split(functions.ir)
+
+    def make():
+        symbolic = build(parts.ir, system.tree, data=parts.symbols)
+        t, x = ca.SX.sym("t"), ca.SX.sym("x", system.layout.n_x)
+        z, p = (ca.SX.sym(name, symbolic.dynamics.sparsity_in(name)) for name in ("z", "p"))
+        ode, alg = symbolic.dynamics(t, x, z, p, symbolic.data(parts.symbols))
+        dae = ca.Function("dae", [t, x, z, p, parts.symbols], [ode, alg],
+                          ["t", "x", "z", "p", DATA], ["ode", "alg"])
+        built = loop_ode.build(saddle_terms(parts.ir, system.tree, data=parts.symbols), dae,
+                               system.layout.n_theta, mask)
+        return dict(zip(NAMES, (built.ode, built.project), strict=True)), {}, Toolchain()
+
+    content = {"kind": "joint loop ode (parametric)", "signature": parts.signature,
+               "mask": mask.tolist(), "iterations": loop_ode.POSITION_ITERATIONS}
+    compiled = compile_keyed(content, make)
+    d = ca.DM(parts.values)
+    bound = []
+    for name in NAMES:
+        external = compiled[name]
+        t, x = ca.MX.sym("t"), ca.MX.sym("x", external.sparsity_in("x"))
+        bound.append(ca.Function(name, [t, x], [external(t, x, d)[0] if external.n_out() > 1
+                                                else external(t, x, d)],
+                                 ["t", "x"], external.name_out()[:1]))
+    return bound
 
 
 def _symbolic(functions: SystemFunctions, system: JointSystem, mask) -> dict:
