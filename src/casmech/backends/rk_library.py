@@ -23,7 +23,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-LIBRARY = "libcasmech_rk.so"
+from casmech.backends.build import SUFFIX
+
+LIBRARY = "libcasmech_rk" + SUFFIX
 SOURCE = Path(__file__).resolve().parent / "c" / "casmech_rk.c"
 FLAGS = ("-O2",)  # a small fixed file: its loops gain from -O2, its build stays short
 # casmech_rk.c's return codes and counters

@@ -27,12 +27,13 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
-MAX_STEPS = 50_000  # accepted steps between output times unless the caller sets max_steps
+MAX_STEPS = DynamicsSolver().max_steps  # accepted steps between output times (the option's)
 
 
 @dataclass
@@ -70,19 +71,23 @@ class Dop853:
         return self._c is not None
 
     def __call__(self, t0: float, times, x) -> np.ndarray:
-        """The states at `times` (increasing, after t0) from x at t0, one column per time;
-        self.last holds the call's counts."""
+        """The states at `times` (increasing, from t0 on) from x at t0, one column per time
+        (x itself at times equal to t0); self.last holds the call's counts."""
         times = np.ascontiguousarray(times, float)
         x = np.ascontiguousarray(np.ravel(x), float)
-        if not len(x):
+        at_start = int(np.searchsorted(times, t0, side="right"))
+        if not len(x) or at_start == len(times):
             self.last = Stats()
-            return np.zeros((0, len(times)))
-        if self._c is not None:
-            return self._run_c(float(t0), times, x)
-        return self._run_python(float(t0), times, x)
+            return np.repeat(x[:, None], len(times), axis=1)
+        run = self._run_c if self._c is not None else self._run_python
+        states = run(float(t0), times[at_start:], x)
+        return np.hstack([np.repeat(x[:, None], at_start, axis=1), states]) if at_start \
+            else states
 
     # the C path
     def _c_parts(self):
+        if not all(_loaded(f) for f in (self.ode, self.project) if f is not None):
+            return None  # (an interpreted bundle imports no code generation: backends.*)
         from casmech.backends import rk_library
 
         run = rk_library.driver()
@@ -210,6 +215,14 @@ class Dop853:
 
 T_STAGES = tableau_module.N_STAGES  # evaluations of one step attempt (its last: f_new)
 T_EXTRA = tableau_module.N_STAGES_EXTENDED - tableau_module.N_STAGES - 1  # the interpolant's
+
+
+def _loaded(function: ca.Function) -> bool:
+    """Whether `function` may have a C entry point (backends.rk_library.entry): it is, or
+    calls, a function loaded from a library."""
+    return function.class_name() == "External" or (
+        function.class_name() == "MXFunction"
+        and any(f.class_name() == "External" for f in function.find_functions()))
 
 
 def _numeric(function: ca.Function | None):

@@ -155,3 +155,13 @@ def test_failures(tmp_path, use_c):
     assert rates_failed(failed.value) or dop853.TOO_SMALL in message
     with pytest.raises(dop853.Failure, match="more than 3 steps before the next output"):
         dop853.Dop853(ode, 1e-10, 1e-12, max_steps=3, use_c=use_c)(0.0, [0.5], [0.0])
+
+
+def test_times_at_the_start_are_the_start():
+    ode = pendulum()[0]
+    rk = dop853.Dop853(ode, 1e-8, 1e-10)
+    states = rk(0.5, [0.5, 0.5, 1.0], X0)
+    np.testing.assert_array_equal(states[:, :2], np.column_stack([X0, X0]))
+    # the rest as a call from the start over the later times alone (the same steps)
+    np.testing.assert_array_equal(states[:, 2], rk(0.5, [1.0], X0)[:, 0])
+    np.testing.assert_array_equal(rk(0.5, [0.5], X0)[:, 0], X0)
