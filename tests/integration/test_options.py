@@ -335,6 +335,10 @@ CONSTANTS = {
                                                "(build cost)",
     "runtime/solver_messages.py MAX_LINES": "solver lines kept in metadata (size)",
     "formulations/joint_system.py ROW_NORM_FLOOR": "a roundoff floor compiled into libraries",
+    "formulations/loop_ode.py POSITION_ITERATIONS": "the projection's Gauss-Newton steps, "
+    "unrolled into its graph and compiled (structure; enough for the loosest rtol's drift)",
+    "formulations/loop_ode.py FLUSH": "a floor against subnormal numbers compiled into the "
+    "projection (far below any tolerance; its square a normal number)",
     "formulations/joint_system.py IDENTITY_STATES": "which Jacobian graph a tree's build makes",
     "formulations/prescribed.py ITERATIONS": "chord steps compiled into the library's step",
     "formulations/prescribed.py CHUNK": "the inner map of the step (batch work)",

@@ -42,9 +42,10 @@ def _stabilization():
 
 def _method():
     return option("auto", "the method for joint coordinates on a tree: CVODES's adams or bdf, "
-                  "dop853 (an explicit Runge-Kutta pair of order 8), or auto (bdf when the ODE "
-                  "is stiff at t0: solver.stiff_threshold; adams where contacts or stops cap "
-                  "the step; else dop853)",
+                  "dop853 (an explicit Runge-Kutta pair of order 8; with loops, their ODE "
+                  "projected onto the loops after each step), or auto (bdf when the ODE is "
+                  "stiff at t0: solver.stiff_threshold; adams where contacts or stops cap the "
+                  "step; else dop853; loops: IDAS)",
                   choices=METHODS)
 
 

@@ -389,13 +389,16 @@ def forced_ode(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Functio
                        [ca.vertcat(b.theta_dot, *dyn.u_dot)], list(inputs), ["ode"])
 
 
-def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
+def saddle_terms(ir: ModelIR, tree: Tree, data: ca.SX | None = None) -> ca.Function:
     """(t, x) -> (M, P, F, gamma): the loops' DAE at acceleration level as numerics.kkt's
     saddle system [M P^T; P -diag(w)] [u_dot; lam] = [F; gamma], lam the DAE's unit-row
     multipliers: M the tree's joint-space mass matrix and F its generalized forces less the
     bias (the RNEA's d tau/d u_dot and -tau at u_dot = 0), P = S d/du d/dt Phi_c (the DAE's
-    velocity Jacobian) and gamma = -S d/dt Phi_c's rate at u_dot = 0 (a numeric IR)."""
-    b = _Builder(ir, tree, Constants(None))
+    velocity Jacobian) and gamma = -S d/dt Phi_c's rate at u_dot = 0; over a parametric IR
+    (data: the symbols of model.parametric.split) (t, x, d) -> the same, d the model data
+    itself (the tree's constants computed from it inside)."""
+    constants = Constants(data)
+    b = _Builder(ir, tree, constants)
     _, rate, scale, _, _ = b.loop_closure()
     lay, t = b.layout, b.t
     theta, u = b.x[:lay.n_theta], b.x[lay.n_theta:]
@@ -405,8 +408,13 @@ def saddle_terms(ir: ModelIR, tree: Tree) -> ca.Function:
     jacobian = ca.repmat(scale, 1, a.numel()) * ca.jacobian(rate, u)
     gamma = -scale * (ca.jtimes(rate, theta, b.theta_dot) + ca.jacobian(rate, t))
     outputs = [ca.jacobian(tau, a), jacobian, -ca.substitute(tau, a, ca.DM.zeros(a.shape)), gamma]
-    return ca.Function("joint_saddle_terms", [t, b.x], ca.cse(outputs), ["t", "x"],
-                       ["M", "P", "F", "gamma"])
+    names = ["M", "P", "F", "gamma"]
+    if data is None:
+        return ca.Function("joint_saddle_terms", [t, b.x], ca.cse(outputs), ["t", "x"], names)
+    inner = ca.Function("terms", [t, b.x, constants.inputs], outputs)
+    outputs = inner.call([t, b.x, constants.function()(data)])
+    return ca.Function("joint_saddle_terms", [t, b.x, data], ca.cse(outputs),
+                       ["t", "x", DATA], names)
 
 
 def build(ir: ModelIR, tree: Tree, data: ca.SX | None = None,

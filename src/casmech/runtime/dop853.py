@@ -266,22 +266,6 @@ def _failure(kind: str, t: float, outputs: np.ndarray, max_steps: int) -> Failur
     return Failure(messages[kind], t, np.array(outputs, copy=True))
 
 
-def with_loops(functions, cut_joints) -> Exception:
-    """The error of method dop853 asked of a joint run with loops (`cut_joints`: their names):
-    located at the analysis block when the file wrote it (a ModelError), else a UsageError."""
-    from casmech.errors import Diagnostic, ModelError, UsageError
-
-    names = ", ".join(f"'{name}'" for name in cut_joints if name) or "closure rows"
-    message = (f"method dop853 integrates the ODE of a tree; this model's loops ({names}) make "
-               "a DAE, which IDAS integrates")
-    hint = "remove method (auto), or write method: bdf"
-    analysis = functions.ir.analysis
-    if analysis is not None and dict(analysis.written).get("method") == "dop853":
-        return ModelError([Diagnostic("E409", "analysis.method", message, analysis.source,
-                                      got="dop853", hint=hint)])
-    return UsageError(f"{message} (hint: {hint})")
-
-
 def from_options(ode: ca.Function, options: dict) -> Dop853:
     """DOP853 for `ode` from CVODES's options as a run sets them (reltol, abstol, and where
     given max_step_size, step0 and max_num_steps: runtime.contact_steps)."""

@@ -39,6 +39,7 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.projected_loops import loop_algebraic, loop_integrator, loop_ode_of
 from casmech.runtime.results import Result
 from casmech.runtime.stiffness import spectral_radius
 from casmech.runtime.workspace import Workspace, of
@@ -241,6 +242,7 @@ class _Integrator:
         if not system.n_cut and method in METHODS:
             self.options |= METHODS[method]
         self.method, self.steps, self._options_key = method, 0, None
+        self.loop, self.solved = None, True  # dop853 with loops: set by run_joint_dynamics
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -251,18 +253,21 @@ class _Integrator:
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
-        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
-            rk = self.workspace.kept("dop853", (system.dynamics, self._key()),
-                                     lambda: dop853.from_options(system.dynamics, self.options))
+        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md); loops:
+            rk = loop_integrator(  # their projected ODE (runtime.projected_loops)
+                self.loop, self.options, self._key(), self.workspace) if system.n_cut else \
+                self.workspace.kept("dop853", (system.dynamics, self._key()),
+                                    lambda: dop853.from_options(system.dynamics, self.options))
             try:
                 states = rk(t0, times[:1] if trial else times, x)
             except Interrupted as interrupted:  # as a NamedCall's: outputs by name
                 done = getattr(interrupted, "outputs", None)
                 if done is not None:
-                    interrupted.outputs = {"xf": done, "zf": np.zeros((0, done.shape[1]))}
+                    interrupted.outputs = {"xf": done, "zf": loop_algebraic(
+                        self.loops, times, done, self.solved)}
                 raise
             self.steps += rk.last.accepted
-            return states, np.zeros((0, states.shape[1]))
+            return states, loop_algebraic(self.loops, times, states, self.solved)
         if not system.n_cut:
             integrator = self._cvodes(t0, times, trial)
             out = integrator(x0=x)
@@ -350,7 +355,7 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
     "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
     an explicit method's every step would cost its 12 evaluations). Loops: "adams" (their DAE
-    goes to IDAS whatever the method).
+    goes to IDAS; dop853 asked for integrates their projected ODE: runtime.projected_loops).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
@@ -408,16 +413,17 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     system = joint_system(functions, settings, workspace)
     x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
                                              workspace)
-    if method == "dop853" and system.n_cut:
-        raise dop853.with_loops(functions, [j.name for j in system.tree.cut])
     step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
                                workspace, "max_step_size" in step_options)
     recorder = Recorder(functions, system, signs, loops.mask, workspace,
-                        settings.loop_rows == "solved")
+                        settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
+    if method == "dop853" and system.n_cut:  # the loops' projected ODE (runtime.projected_loops)
+        integrate.loop = loop_ode_of(functions, system, loops.mask, workspace)
+        integrate.solved = recorder.loops is not None
     integrate.options |= step_options
     times = output_times(t0, t_end, step)
     result = Result("dynamics", on_row=progress)
@@ -468,8 +474,9 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     tree = system.tree
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
-        integrator="idas" if system.n_cut else "dop853" if method == "dop853" else "cvodes",
-        method="bdf" if system.n_cut else method, steps=integrate.steps,
+        integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",
+        method=method if method == "dop853" or not system.n_cut else "bdf",
+        steps=integrate.steps,
         tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
         cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
     return result

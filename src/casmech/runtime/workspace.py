@@ -37,6 +37,7 @@ KINDS: dict[str, int] = {
     "idas": 8,  # joint coordinates' IDAS instances, also by start
     "joint_least_norm": 8,  # least-norm multipliers of masked loop rows, by mask
     "joint_loop_rows": 8,  # loop rows' solved multipliers (runtime.joint_rows), by mask
+    "loop_ode": 8,  # the loops' ODE and projection (runtime.projected_loops), by mask
     "joint_motion_maps": 16,  # results rows' column calls, by motion function
     "formulation_systems": 4,  # a formulation's System (runtime.formulation_run.generic)
     "dae_problems": 4,  # r-p / r-omega DAEs as casadi.integrator takes them

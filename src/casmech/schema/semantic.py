@@ -48,9 +48,10 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
                     hint=limits.HINTS.get(key))
     if given.method in ("adams", "dop853") and given.formulation in ("rp", "romega"):
+        integrates = {"adams": "a tree", "dop853": "a tree or the projected ODE of its loops"}
         check.error("E409", (*path, "method"), f"method {given.method} integrates joint "
-                    "coordinates of a tree; the rp and romega DAEs are integrated by IDAS's BDF "
-                    "method", got=given.method,
+                    f"coordinates of {integrates[given.method]}; the rp and romega DAEs are "
+                    "integrated by IDAS's BDF method", got=given.method,
                     hint="write formulation: joint (or auto), or remove method")
     options, written = analysis_options(check, given)
     source = check.doc.source_map.values.get(path)

@@ -231,3 +231,23 @@ def test_each_joints_rows_equal_the_rp_bundles(path):
 def _pose(q, p, k: int) -> tuple:
     """(r, p) of body k in q (ground's at the origin)."""
     return (np.zeros(3), np.array([1.0, 0, 0, 0])) if k < 0 else (q[3 * k:3 * k + 3], p[k])
+
+
+def test_saddle_terms_over_the_model_data_are_the_numeric_ones():
+    """saddle_terms of model.parametric.split's IR, called with the split's values, gives the
+    numeric IR's terms (the tree's constants computed from d inside)."""
+    from casmech.formulations.joint_system import saddle_terms
+    from casmech.model.parametric import split
+
+    functions = casmech.compile(casmech.load(MODELS / "four_bar_released.yaml"))
+    tree = spanning_tree(functions.ir)
+    parts = split(functions.ir)
+    symbolic = saddle_terms(parts.ir, tree, data=parts.symbols)
+    numeric = saddle_terms(functions.ir, tree)
+    assert symbolic.name_in() == ["t", "x", "d"]
+    for t in (0.0, 0.3):
+        x = RNG.uniform(-0.8, 0.8, numeric.size1_in(1))
+        for got, expected in zip(symbolic(t, x, parts.values), numeric(t, x), strict=True):
+            # the same expressions, evaluated with the numbers as inputs or folded in
+            np.testing.assert_allclose(np.array(got), np.array(expected), rtol=1e-12,
+                                       atol=1e-12)
