@@ -354,8 +354,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
                   capped: bool = False) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
     "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
-    an explicit method's every step would cost its 12 evaluations). Loops: "adams" (their DAE
-    goes to IDAS; dop853 asked for integrates their projected ODE: runtime.projected_loops).
+    an explicit method's every step would cost its 12 evaluations). Loops: "dop853" (their
+    projected ODE: runtime.projected_loops) without force elements and capped steps, else
+    "adams" (their DAE goes to IDAS, which no stiffness of theirs can stall).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
@@ -363,7 +364,7 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     (runtime.stiffness) depends on the system and the start alone: kept in `workspace`.
     docs/decisions/method-auto.md."""
     if system.n_cut:
-        return "adams"
+        return "adams" if forces or capped else "dop853"
     explicit = "adams" if capped else "dop853"
     if not forces or not 0 < len(x0) <= settings.stiff_states:
         return explicit  # (compiled_system compiles the derivative this needs up to this size)
