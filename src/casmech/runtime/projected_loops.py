@@ -31,6 +31,7 @@ from casmech.formulations import loop_ode
 from casmech.formulations.joint_constants import DATA
 from casmech.formulations.joint_start import Loops
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
+from casmech.formulations.tree import spanning_tree
 from casmech.runtime import dop853
 from casmech.runtime.workspace import Workspace
 
@@ -78,13 +79,16 @@ def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarra
     parts = split(functions.ir)
 
     def make():
-        symbolic = build(parts.ir, system.tree, data=parts.symbols)
+        # the tree of the symbolic IR: a numeric IR's tree holds this bundle's numbers, which
+        # the library (shared by every value of the structure) must not
+        tree = spanning_tree(parts.ir)
+        symbolic = build(parts.ir, tree, data=parts.symbols)
         t, x = ca.SX.sym("t"), ca.SX.sym("x", system.layout.n_x)
         z, p = (ca.SX.sym(name, symbolic.dynamics.sparsity_in(name)) for name in ("z", "p"))
         ode, alg = symbolic.dynamics(t, x, z, p, symbolic.data(parts.symbols))
         dae = ca.Function("dae", [t, x, z, p, parts.symbols], [ode, alg],
                           ["t", "x", "z", "p", DATA], ["ode", "alg"])
-        built = loop_ode.build(saddle_terms(parts.ir, system.tree, data=parts.symbols), dae,
+        built = loop_ode.build(saddle_terms(parts.ir, tree, data=parts.symbols), dae,
                                system.layout.n_theta, mask)
         return dict(zip(NAMES, (built.ode, built.project), strict=True)), {}, Toolchain()
 
