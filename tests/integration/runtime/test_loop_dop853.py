@@ -93,6 +93,21 @@ def test_singular_poses_are_reported_and_auto_runs_rp_after_them():
         "joint coordinates went near a singular pose at t = 0.71")
 
 
+def _compiled_against_interpreted(model):
+    """(bundles, runs): the model interpreted and compiled at rtol 1e-7 with dop853, the
+    compiled run's steps in C and the interpreted one's in Python, the same steps and the
+    same rows to roundoff (the callers' docstrings say why)."""
+    bundles = [casmech.compile(model, mode) for mode in ("interpreted", "compiled")]
+    runs = [_run(functions, rtol=1e-7, atol=1e-9, method="dop853") for functions in bundles]
+    assert [[rk.compiled for rk in workspace.default(functions).store("dop853").values()]
+            for functions in bundles] == [[False], [True]]
+    assert runs[0].metadata["steps"] == runs[1].metadata["steps"]
+    np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
+                               atol=1e-9 * np.abs(runs[0].lam).max())
+    return bundles, runs
+
+
 @pytest.mark.slow
 def test_compiled_takes_the_interpreted_steps():
     """The compiled bundle's loop ODE and projection in C (runtime.dop853's C driver) against
@@ -100,18 +115,9 @@ def test_compiled_takes_the_interpreted_steps():
     same rows to roundoff of the ODE's evaluation (its C and CasADi's virtual machine sum in
     other orders: ~1e-15 relative an evaluation, grown through ~20 steps of a motion that
     amplifies it; measured 2.3e-12 at most). The benchmark four-bar: a model
-    without parameters, whose compiled bundle compiles the loop ODE (a parametric library's
-    runs it interpreted: runtime.projected_loops)."""
+    without parameters, whose compiled bundle compiles the loop ODE."""
     model = casmech.load(ROOT / "benchmarks" / "models" / "four_bar.yaml")
-    bundles = [casmech.compile(model, mode) for mode in ("interpreted", "compiled")]
-    runs = [_run(functions, rtol=1e-7, atol=1e-9, method="dop853") for functions in bundles]
-    # the compiled run's steps ran in C, the interpreted one's in scipy
-    assert [[rk.compiled for rk in workspace.default(functions).store("dop853").values()]
-            for functions in bundles] == [[False], [True]]
-    assert runs[0].metadata["steps"] == runs[1].metadata["steps"]
-    np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
-    np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
-                               atol=1e-9 * np.abs(runs[0].lam).max())
+    _compiled_against_interpreted(model)
 
 
 def test_with_rp_it_is_a_located_error():
@@ -174,16 +180,8 @@ def test_a_parametric_library_compiles_the_loops_once_per_structure():
     the interpreted bundle's steps and rows to roundoff; another value of a parameter reuses
     the library (bound to its own data) and moves the motion."""
     model = casmech.load(MODELS / "four_bar_released.yaml")
-    bundles = [casmech.compile(model, mode) for mode in ("interpreted", "compiled")]
+    bundles, runs = _compiled_against_interpreted(model)
     assert bundles[1].joint_functions is not None and bundles[1].parametric is not None
-    runs = [_run(functions, rtol=1e-7, atol=1e-9, method="dop853") for functions in bundles]
-    assert [[rk.compiled for rk in workspace.default(functions).store("dop853").values()]
-            for functions in bundles] == [[False], [True]]
-    assert runs[0].metadata["steps"] == runs[1].metadata["steps"]
-    # the same graphs, compiled against CasADi's virtual machine (as the benchmark four-bar's)
-    np.testing.assert_allclose(runs[1].q, runs[0].q, rtol=0, atol=1e-10)
-    np.testing.assert_allclose(runs[1].lam, runs[0].lam, rtol=0,
-                               atol=1e-9 * np.abs(runs[0].lam).max())
     heavier = bundles[1].set(m=1.2)  # each link 1.2 kg instead of 0.8
     other = [_run(functions, rtol=1e-7, atol=1e-9, method="dop853")
              for functions in (heavier, casmech.compile(casmech.load(
