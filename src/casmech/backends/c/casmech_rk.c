@@ -1,7 +1,7 @@
 /* An adaptive explicit Runge-Kutta pair with dense output over an output grid: the steps of
  * scipy.integrate's RungeKutta solvers (DOP853: Hairer's 8th-order method, its 5th- and
  * 3rd-order error estimates and 7th-order interpolant), with the tableau passed in by the
- * caller (casmech.runtime.dop853 reads it from scipy), calling CasADi-generated functions
+ * caller (casmech.numerics.dop853_tableau: scipy's tables), calling CasADi-generated functions
  * through their C entry points. One call integrates from (t0, y0) to the last output time.
  *
  * The step controller is scipy's: the initial step of select_initial_step, the error norm of
