@@ -351,10 +351,12 @@ def _steps(integrator: NamedCall, *inputs) -> int:
 
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
                   settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None,
-                  capped: bool = False) -> str:
+                  capped: bool = False, mapped: bool = False) -> str:
     """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
     "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
-    an explicit method's every step would cost its 12 evaluations). Loops: "dop853" (their
+    an explicit method's every step would cost its 12 evaluations) or the tree is `mapped`
+    (above compile.mapped_bodies: its MX ODE takes DOP853's Python path, slower there than
+    CVODES's Adams). Loops: "dop853" (their
     projected ODE: runtime.projected_loops) without force elements and capped steps, else
     "adams" (their DAE goes to IDAS, which no stiffness of theirs can stall).
 
@@ -365,7 +367,7 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     docs/decisions/method-auto.md."""
     if system.n_cut:
         return "adams" if forces or capped else "dop853"
-    explicit = "adams" if capped else "dop853"
+    explicit = "adams" if capped or mapped else "dop853"
     if not forces or not 0 < len(x0) <= settings.stiff_states:
         return explicit  # (compiled_system compiles the derivative this needs up to this size)
     x0 = np.asarray(x0, float)
@@ -418,7 +420,9 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     if method == "auto":
         method = choose_method(system, t0, x, step,
                                bool(functions.ir.forces or functions.ir.motors), settings,
-                               workspace, "max_step_size" in step_options)
+                               workspace, "max_step_size" in step_options,
+                               mapped_system.chosen(functions.ir, system.tree,
+                                                    settings.compile.mapped_bodies))
     recorder = Recorder(functions, system, signs, loops.mask, workspace,
                         settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)

@@ -74,3 +74,23 @@ def test_without_compiled_kernels_the_tree_is_built_unrolled(monkeypatch):
     with pytest.warns(UserWarning, match="built unrolled"):
         system = joint_system(functions, MAPPED)
     assert system.dynamics.is_a("SXFunction")
+
+
+def test_method_auto_keeps_adams_above_mapped_bodies(quick_builds):
+    """Method auto on a tree above compile.mapped_bodies is Adams (DOP853 would run its Python
+    path over the mapped MX ODE: runtime.joint_dynamics.choose_method); the same tree under
+    the default size rule, and the mapped one asked for dop853, run DOP853, the same motion."""
+    text = spherical_chain(4)
+    solver = " solver: {compile: {mapped_bodies: 0}},"
+    runs = {}
+    for label, settings, method in (("mapped", solver, "auto"), ("unrolled", "", "auto"),
+                                    ("asked", solver, "dop853")):
+        functions = casmech.compile(casmech.loads(text.replace(
+            "analysis: {type: dynamics,", "analysis: {type: dynamics, formulation: joint, "
+            f"rtol: 1.0e-10, atol: 1.0e-12,{settings}")))
+        runs[label] = casmech.analyze(functions, method=method)
+    assert [runs[k].metadata["method"] for k in ("mapped", "unrolled", "asked")] == \
+        ["adams", "dop853", "dop853"]
+    for label in ("unrolled", "asked"):
+        # two integrators at rtol 1e-10 over the same motion: their errors
+        np.testing.assert_allclose(runs[label].q, runs["mapped"].q, rtol=0, atol=1e-7)
