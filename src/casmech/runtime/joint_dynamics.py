@@ -356,9 +356,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
     an explicit method's every step would cost its 12 evaluations) or the tree is `mapped`
     (above compile.mapped_bodies: its MX ODE takes DOP853's Python path, slower there than
-    CVODES's Adams). Loops: "dop853" (their
-    projected ODE: runtime.projected_loops) without force elements and capped steps, else
-    "adams" (their DAE goes to IDAS, which no stiffness of theirs can stall).
+    CVODES's Adams). Loops: "dop853" (their projected ODE: runtime.projected_loops) without
+    force elements and capped steps, else "adams" (their DAE goes to IDAS, which no
+    stiffness of theirs can stall).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
