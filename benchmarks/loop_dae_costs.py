@@ -1,12 +1,14 @@
-"""Where a repeated call of a closed loop's default dynamics run goes (the benchmark four-bar:
-joint coordinates, its loop a DAE on IDAS), and what IDAS's own options would change.
+"""Where a repeated call of a closed loop's dynamics run on IDAS goes (the benchmark four-bar:
+joint coordinates, its loop a DAE on IDAS, `method: bdf`: method auto runs this loop's
+projected ODE on DOP853, benchmarks/loop_ode_costs.py), and what IDAS's own options would
+change.
 
     PYTHONPATH=src python benchmarks/loop_dae_costs.py --mode compiled --rtols 1e-4 1e-6 1e-8
     PYTHONPATH=src python benchmarks/loop_dae_costs.py --options '{"max_order": 4}' \
         '{"step0": 10}' '{"lam": 0.01}' '{"linear_solver": "csparse"}'
 
-Stages (CPU ms, median of --calls repeated calls of `casmech.analyze(functions, "dynamics",
-t_end=1, output_step=0.01, rtol=r, atol=r/100)` in one process): the IDAS call itself, the rest
+Stages (CPU ms, median of --calls repeated calls of `casmech.analyze(functions,
+"dynamics", t_end=1, output_step=0.01, rtol=r, atol=r/100, method="bdf")` in one process): the IDAS call itself, the rest
 of the integrator call (its key, counters, finiteness checks), the results rows, the
 singular-pose check after the run (of it the mapped call: its compiled log-determinants, or Phi_q
 at every row for NumPy's), and the Python elsewhere; with
@@ -72,6 +74,24 @@ def _idas(seen: dict, options: dict):
     return ca.integrator("idas", "idas", problem, seen["t0"], seen["times"], options)
 
 
+def time_idas(spent: dict, label: str) -> None:
+    """Adds the CPU time of every call of the joint run's IDAS (runtime.buffers.NamedCall of
+    the integrator named "joint") to spent[label]."""
+    from casmech.runtime import buffers
+
+    named = buffers.NamedCall.__call__
+
+    def idas_call(self, **inputs):
+        start = time.process_time()
+        try:
+            return named(self, **inputs)
+        finally:
+            if self.function.name() == "joint":
+                spent[label] = spent.get(label, 0.0) + time.process_time() - start
+
+    buffers.NamedCall.__call__ = idas_call
+
+
 def _cpu(function, calls: int) -> float:
     times = []
     for _ in range(calls):
@@ -83,7 +103,7 @@ def _cpu(function, calls: int) -> float:
 
 def stages(runner, rtols, calls: int, reference, seen: dict) -> None:
     import casmech
-    from casmech.runtime import auto_formulation, buffers, joint_dynamics, singular_poses
+    from casmech.runtime import auto_formulation, joint_dynamics, singular_poses
 
     spent: dict[str, float] = {}
     _timed(joint_dynamics._Integrator, "__call__", "integrator", spent)
@@ -111,17 +131,7 @@ def stages(runner, rtols, calls: int, reference, seen: dict) -> None:
     singular_poses._jacobians = timed_call(singular_poses._jacobians)
     if hasattr(singular_poses, "_compiled"):
         singular_poses._compiled = timed_call(singular_poses._compiled)
-    named = buffers.NamedCall.__call__
-
-    def idas_call(self, **inputs):
-        start = time.process_time()
-        try:
-            return named(self, **inputs)
-        finally:
-            if self.function.name() == "joint":
-                spent["IDAS"] = spent.get("IDAS", 0.0) + time.process_time() - start
-
-    buffers.NamedCall.__call__ = idas_call
+    time_idas(spent, "IDAS")
     print("| rtol | total | IDAS | integrator, rest | rows | singular poses (mapped call) | Python "
           "elsewhere | steps | residuals | Jacobians | IDAS: residual, Jacobian, rest | "
           "error at 1 s |")
@@ -129,7 +139,8 @@ def stages(runner, rtols, calls: int, reference, seen: dict) -> None:
     for rtol in rtols:
         def call(rtol=rtol):
             return casmech.analyze(runner.functions, "dynamics", t_end=1.0,
-                                   output_step=systems.OUTPUT_STEP, rtol=rtol, atol=rtol / 100)
+                                   output_step=systems.OUTPUT_STEP, rtol=rtol, atol=rtol / 100,
+                                   method="bdf")
 
         out = runner.run({"rtol": rtol, "atol": rtol / 100}, t_end=1.0)
         rows = []
@@ -210,7 +221,7 @@ def main() -> None:
     seen: dict = {}
     _capture(seen)
     system = systems.make(args.system)
-    runner = casmech_model.Runner(system, args.mode)
+    runner = casmech_model.Runner(system, args.mode, method="bdf")
     if args.options is None:
         stages(runner, args.rtols, args.calls, Planar(system).solve()["points"], seen)
     else:

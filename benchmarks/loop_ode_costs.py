@@ -29,6 +29,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import casmech_model  # noqa: E402
 import systems  # noqa: E402
 from fixed_costs import _timed  # noqa: E402
+from loop_dae_costs import time_idas  # noqa: E402
 
 from reference import Planar  # noqa: E402
 
@@ -36,19 +37,9 @@ from reference import Planar  # noqa: E402
 def _solver_time(spent: dict) -> None:
     """The solver's own call inside the integrator: IDAS through runtime.buffers.NamedCall,
     DOP853 through runtime.dop853.Dop853."""
-    from casmech.runtime import buffers, dop853
+    from casmech.runtime import dop853
 
-    named = buffers.NamedCall.__call__
-
-    def idas_call(self, **inputs):
-        start = time.process_time()
-        try:
-            return named(self, **inputs)
-        finally:
-            if self.function.name() == "joint":
-                spent["solver"] = spent.get("solver", 0.0) + time.process_time() - start
-
-    buffers.NamedCall.__call__ = idas_call
+    time_idas(spent, "solver")
     _timed(dop853.Dop853, "__call__", "solver", spent)
 
 
