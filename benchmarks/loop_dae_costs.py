@@ -8,8 +8,9 @@ change.
         '{"step0": 10}' '{"lam": 0.01}' '{"linear_solver": "csparse"}'
 
 Stages (CPU ms, median of --calls repeated calls of `casmech.analyze(functions,
-"dynamics", t_end=1, output_step=0.01, rtol=r, atol=r/100, method="bdf")` in one process): the IDAS call itself, the rest
-of the integrator call (its key, counters, finiteness checks), the results rows, the
+"dynamics", t_end=1, output_step=0.01, rtol=r, atol=r/100, method="bdf")` in one process):
+the IDAS call itself, the rest of the integrator call (its key, counters, finiteness checks),
+the results rows, the
 singular-pose check after the run (of it the mapped call: its compiled log-determinants, or Phi_q
 at every row for NumPy's), and the Python elsewhere; with
 IDAS's counters and its own split (CasADi's record_time: the residual, its Jacobian, the rest
