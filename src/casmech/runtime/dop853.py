@@ -217,6 +217,19 @@ T_STAGES = tableau_module.N_STAGES  # evaluations of one step attempt (its last:
 T_EXTRA = tableau_module.N_STAGES_EXTENDED - tableau_module.N_STAGES - 1  # the interpolant's
 
 
+def in_c(ode: ca.Function, entry: bool = True) -> bool:
+    """Whether DOP853 over `ode` runs in C: `ode` loaded from a compiled library (with a C
+    entry point: `entry`; False for a function from which a compiled one is derived, as the
+    loops' projected ODE of a compiled bundle) and the driver built. Else its Python path
+    evaluates 12 stages a step in CasADi."""
+    if not _loaded(ode):
+        return False
+    from casmech.backends import rk_library
+
+    return rk_library.driver() is not None and (
+        not entry or rk_library.entry(ode) is not None)
+
+
 def _loaded(function: ca.Function) -> bool:
     """Whether `function` may have a C entry point (backends.rk_library.entry): it is, or
     calls, a function loaded from a library."""

@@ -78,16 +78,18 @@ def test_without_compiled_kernels_the_tree_is_built_unrolled(monkeypatch):
 
 def test_method_auto_keeps_adams_above_mapped_bodies(quick_builds):
     """Method auto on a tree above compile.mapped_bodies is Adams (DOP853 would run its Python
-    path over the mapped MX ODE: runtime.joint_dynamics.choose_method); the same tree under
-    the default size rule, and the mapped one asked for dop853, run DOP853, the same motion."""
+    path over the mapped MX ODE: runtime.joint_dynamics.choose_method); the same tree
+    compiled under the default size rule, and the mapped one asked for dop853, run DOP853,
+    the same motion."""
     text = spherical_chain(4)
     solver = " solver: {compile: {mapped_bodies: 0}},"
     runs = {}
-    for label, settings, method in (("mapped", solver, "auto"), ("unrolled", "", "auto"),
-                                    ("asked", solver, "dop853")):
+    for label, settings, method, mode in (
+            ("mapped", solver, "auto", "auto"), ("unrolled", "", "auto", "compiled"),
+            ("asked", solver, "dop853", "auto")):
         functions = casmech.compile(casmech.loads(text.replace(
             "analysis: {type: dynamics,", "analysis: {type: dynamics, formulation: joint, "
-            f"rtol: 1.0e-10, atol: 1.0e-12,{settings}")))
+            f"rtol: 1.0e-10, atol: 1.0e-12,{settings}")), mode)
         runs[label] = casmech.analyze(functions, method=method)
     assert [runs[k].metadata["method"] for k in ("mapped", "unrolled", "asked")] == \
         ["adams", "dop853", "dop853"]
