@@ -8,7 +8,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from casmech.backends import trust
+from casmech.backends import external_record, trust
 from casmech.backends.build import LIBRARY
 from casmech.backends.manifest import KEPT
 from casmech.equations.functions import JointMeta, SystemFunctions
@@ -38,11 +38,12 @@ def externals(directory: Path) -> dict[str, ca.Function]:
 
 
 def _loaded(name: str, path: Path) -> ca.Function:
-    """A function from its library, or from CasADi's serialization of it (a kept function of
-    backends.library.compile_keyed)."""
+    """A function from its library (recorded with its file: backends.external_record), or from
+    CasADi's serialization of it (a kept function of backends.library.compile_keyed)."""
     if path.name.endswith(KEPT):
         return ca.Function.load(str(path))
-    return ca.external(name, str(path.resolve()))
+    path = path.resolve()
+    return external_record.loaded(ca.external(name, str(path)), path)
 
 
 def load(directory: Path, ir: ModelIR) -> SystemFunctions:

@@ -32,7 +32,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from casmech.backends import cache, generate, manifest
+from casmech.backends import cache, external_record, generate, manifest
 from casmech.backends.build import LIBRARY, Toolchain
 from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
@@ -131,13 +131,19 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, 
                           {n: generate.dae_library(n) for n in oracles})
 
 
-def bind(function: ca.Function, values: np.ndarray, name: str | None = None) -> ca.Function:
-    """The function without its trailing input d, called with d = values (under `name`)."""
+def bind(function: ca.Function, values: np.ndarray, name: str | None = None,
+         first: bool = False) -> ca.Function:
+    """The function without its trailing input d, called with d = values (under `name`; only
+    its first output if `first`), recorded as such (backends.external_record)."""
     inputs = [ca.MX.sym(function.name_in(k), function.sparsity_in(k))
               for k in range(function.n_in() - 1)]
     outputs = function.call([*inputs, ca.DM(values)])
-    return ca.Function(name or function.name(), inputs, outputs, function.name_in()[:-1],
-                       function.name_out())
+    names = function.name_out()
+    if first:
+        outputs, names = outputs[:1], names[:1]
+    return external_record.bound(
+        ca.Function(name or function.name(), inputs, outputs, function.name_in()[:-1], names),
+        function, values)
 
 
 @functools.lru_cache(maxsize=8)

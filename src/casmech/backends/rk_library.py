@@ -2,14 +2,13 @@
 machine through the compiled-model cache (keyed by the C source, the compiler and its flags)
 and loaded by ctypes, and the C entry points of a compiled CasADi function for it to call.
 
-A function loaded from a library (casadi.external, class External) is reached at its own
-symbol in its own library: CasADi's External does not expose the path it loaded, so the path is
-read from the function's serialization (the importer's "DllLibrary" record: the path as a
-length-prefixed string, taken where it names an existing file), and ctypes opens the same file
-(the dynamic loader hands back the handle CasADi holds). A parametric library's function bound
-to the model data (an MX function calling the external with a constant last input d) is
-reached the same way, d passed as that input. Any other function (SX, other MX) has no C entry
-point here: `entry` returns None and the caller integrates in Python.
+A function casmech loaded from a library (backends.load: a casadi.external) is reached at its
+own symbol in its own file, which backends.external_record recorded when it was loaded (ctypes
+opens the same file: the dynamic loader hands back the handle CasADi holds). A function bound to
+the model data (backends.parametric.bind: the external called with its last input d a
+constant, recorded as such) is reached through that external, d passed as its last input. Any
+other function (SX, other MX, an external casmech did not load) has no C entry point here:
+`entry` returns None and the caller integrates in Python.
 """
 
 from __future__ import annotations
@@ -23,6 +22,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from casmech.backends import external_record
 from casmech.backends.build import SUFFIX
 
 LIBRARY = "libcasmech_rk" + SUFFIX
@@ -110,32 +110,6 @@ def _build(directory: Path, source: bytes, toolchain) -> None:
         manifest.DIGESTS: {LIBRARY: manifest.sha256(directory / LIBRARY)}}, indent=1))
 
 
-def library_path(function: ca.Function) -> Path | None:
-    """The library a casadi.external was loaded from (module docstring), or None."""
-    if function.class_name() != "External":
-        return None
-    text = function.serialize()
-    codes = np.frombuffer(text.encode("ascii"), np.uint8).astype(np.int64) - ord("a")
-    if len(codes) % 2:
-        codes = codes[:-1]
-    data = (codes[1::2] * 16 + codes[0::2]).astype(np.uint8).tobytes()
-    found = data.find(b"DllLibrary")
-    if found < 0:
-        return None
-    start = found + len(b"DllLibrary")
-    for offset in range(0, 9):  # a length-prefixed string follows (after a field of 4 bytes)
-        at = start + offset
-        size = int.from_bytes(data[at:at + 4], "little")
-        if 0 < size < 4096:
-            try:
-                path = Path(data[at + 4:at + 4 + size].decode())
-            except UnicodeDecodeError:
-                continue
-            if path.is_absolute() and path.is_file():
-                return path
-    return None
-
-
 class Entry:
     """A compiled function's C entry point and work vectors as casmech_rk.c's cm_function:
     its input `t` (if any) and `x` and its first output, its other inputs `fixed` (position ->
@@ -169,49 +143,20 @@ class Entry:
             names.index("t") if "t" in names else -1, names.index("x"), 0)
 
 
-# casadi's operation codes of an MX function's instructions that a bound call consists of
-_BOUND_OPS = {ca.OP_INPUT, ca.OP_OUTPUT, ca.OP_CONST, ca.OP_CALL}
-
-
-def bound(function: ca.Function) -> tuple[ca.Function, np.ndarray] | None:
-    """(the external, d) when `function` is an external called with its last input a constant
-    d and the others `function`'s own inputs in order (backends.parametric.bind: a parametric
-    library's function at the model data), checked by one evaluation of both; else None."""
-    if function.class_name() != "MXFunction":
-        return None
-    inner = function.find_functions()
-    if len(inner) != 1 or inner[0].class_name() != "External":
-        return None
-    external = inner[0]
-    ops = [function.instruction_id(k) for k in range(function.n_instructions())]
-    if set(ops) - _BOUND_OPS or ops.count(ca.OP_CALL) != 1 or ops.count(ca.OP_CONST) != 1 \
-            or external.n_in() != function.n_in() + 1 \
-            or external.name_in()[:-1] != function.name_in() \
-            or external.name_out()[:1] != function.name_out()[:1]:
-        return None
-    constant = function.instruction_MX(ops.index(ca.OP_CONST))
-    if not external.sparsity_in(external.n_in() - 1).is_dense() or \
-            constant.sparsity() != external.sparsity_in(external.n_in() - 1):
-        return None
-    d = np.array(ca.evalf(constant)).ravel()
-    probe = [np.random.default_rng(0).uniform(0.5, 1.0, function.sparsity_in(i).shape)
-             for i in range(function.n_in())]
-    mine, theirs = function.call(probe)[0], external.call([*probe, d])[0]
-    if not np.array_equal(np.array(mine), np.array(theirs)):
-        return None
-    return external, d
-
-
 def entry(function: ca.Function) -> Entry | None:
-    """`function`'s C entry point (Entry) when it is a function loaded from a library, or one
-    bound to the model data (`bound`), whose inputs besides t and x are empty (NULL reads as
-    zeros) and whose first output is the derivative; else None."""
+    """`function`'s C entry point (Entry) when casmech loaded it from a library, or bound such
+    a function to the model data (backends.external_record), and its inputs besides t, x (and
+    the bound d) are empty (NULL reads as zeros) and its first output is the derivative; else
+    None."""
     fixed = {}
-    found = bound(function)
+    found = external_record.binding(function)
     if found is not None:
         function, d = found
-        fixed = {function.n_in() - 1: d}
-    path = library_path(function)
+        last = function.n_in() - 1
+        if not function.sparsity_in(last).is_dense() or function.nnz_in(last) != d.size:
+            return None
+        fixed = {last: d}
+    path = external_record.library(function)
     names = function.name_in()
     if path is None or "x" not in names or any(
             function.nnz_in(i) for i, name in enumerate(names)

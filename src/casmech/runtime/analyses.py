@@ -86,7 +86,8 @@ def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspac
 
     rows = len(output_times(t0, t_end, step))
     return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows,
-                                lambda: run("joint"), run, options.solver, workspace)
+                                lambda: run("joint"), run, options.solver, workspace,
+                                options.method)
 
 
 def _runtime(name: str):
@@ -289,12 +290,16 @@ def _settings(functions: SystemFunctions, analysis, t_end, output_step, rtol, at
                              f"{', '.join(DYNAMICS_OPTIONS[name])}")
         if name in names:
             typed = replace(typed, **{name: value})
-    if "formulation" in names and typed.formulation == "auto" and (
-            stabilization is not None or typed.stabilization != "ggl"):
+    stabilized = "formulation" in names and typed.formulation == "auto" and (
+        stabilization is not None or typed.stabilization != "ggl")
+    if stabilized:
         # a DAE stabilization asked for means the r-p DAE: decided here only
         # (runtime.auto_formulation never sees it)
         typed = replace(typed, formulation="rp")
     settings = replace(settings, options=typed)
+    if "method" in names:
+        _method_runs(functions, typed.formulation, typed.method,
+                     (formulation, stabilization, method) == (None, None, None), stabilized)
     numbers = {name: float(getattr(settings, name))
                for name in ("t_end", "output_step", "rtol", "atol")}
     problems = limits.analysis_problems(numbers, len(column_names(functions)), step_within=False)
@@ -309,6 +314,27 @@ def _settings(functions: SystemFunctions, analysis, t_end, output_step, rtol, at
         raise UsageError("\n".join(f"error[E409] {name} = {numbers[name]:g}: {problem}"
                                     for name, problem in problems.items()))
     return settings
+
+
+def _method_runs(functions: SystemFunctions, formulation: str, method: str,
+                 files: bool, stabilized: bool) -> None:
+    """E409 when the method does not run under the formulation (runtime.auto_formulation.
+    method_problem): located at the file's `method` when the file's settings make it (`files`:
+    no formulation, stabilization or method of the caller's), else a UsageError. `stabilized`:
+    rp is auto's for a stabilization asked for."""
+    found = auto_formulation.method_problem(lambda: tree_of(functions), formulation, method,
+                                            functions.body_names)
+    if found is None:
+        return
+    problem, hint = found
+    if stabilized:
+        problem += " (a DAE stabilization asked for makes formulation auto run rp)"
+        hint = "leave the stabilization out (auto, joint coordinates), or remove method"
+    source = dict(functions.ir.analysis.sources).get("method")
+    if files and source is not None:
+        raise ModelError([Diagnostic("E409", "analysis.method", problem, source,
+                                     expected="auto | bdf", got=method, hint=hint)])
+    raise UsageError(f"error[E409] method = {method}: {problem}\n  hint: {hint}")
 
 
 def check(functions: SystemFunctions) -> tuple[Structure, bool]:

@@ -22,11 +22,19 @@
   formulation whose takes_couplings is False asked for is an error naming them.
 - A DAE stabilization asked for makes the formulation `rp` before this module is reached
   (api.analysis_settings, the one place that rule lives).
+- `method: dop853` asked for makes auto run joint coordinates wherever they apply (loops
+  without a floating body: in a compiled bundle whose joint system stays interpreted, or in a
+  run too long to be examined, too); the rp run after a loop run that failed or passed a
+  singular pose stays. A method of joint coordinates (adams, dop853: schema.limits.
+  JOINT_METHODS) asked for on loops with a floating body cannot run: `method_problem` says
+  why, and runtime.analyses' analysis_settings raises it as E409 at the method (located when
+  the file wrote it) before anything runs. (`adams` on other loops runs their joint DAE on
+  IDAS, as `formulation: joint` does: runtime.joint_dynamics.)
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 from casmech.core.options import DynamicsSolver
 from casmech.equations.functions import SystemFunctions
@@ -37,16 +45,17 @@ from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
 from casmech.runtime.singular_poses import describe, examinable, singular_poses
 from casmech.runtime.workspace import Workspace
+from casmech.schema.limits import BDF, JOINT_METHODS, joint_method
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
 
 def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
-           lags: Callable[[], bool]) -> str:
+           lags: Callable[[], bool], method: str = "auto") -> str:
     """The formulation to run first: "joint" or the one asked for (rp, romega, another
     registered one); examinable(): whether the run's rows can be examined for singular poses;
-    lags(): lags_bundle. Both are asked only for loops in auto (a tree's choice needs
-    neither)."""
+    lags(): lags_bundle. Both are asked only for loops in auto without a method of joint
+    coordinates (a tree's choice needs neither; module docstring)."""
     if tree.couplings and formulation != "auto" and \
             not FORMULATIONS[formulation].takes_couplings:
         taking = [name for name, entry in FORMULATIONS.items() if entry.takes_couplings]
@@ -56,19 +65,49 @@ def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
             [(j.name, j.source, 0.0) for j in tree.couplings], "coupling"))
     if formulation != "auto":
         return formulation
-    return "joint" if tree.is_tree or (not tree.floating_loops and examinable() and not lags()) \
-        else "rp"
+    if tree.is_tree or (not tree.floating_loops and method == "dop853"):
+        return "joint"
+    return "joint" if not tree.floating_loops and examinable() and not lags() else "rp"
+
+
+def method_problem(tree: Callable[[], Tree], formulation: str, method: str,
+                   bodies: Sequence[str] = ()) -> tuple[str, str] | None:
+    """(why, hint) when `method` does not run under `formulation`: a method of joint
+    coordinates (JOINT_METHODS) with a formulation other than joint, or with auto on a model
+    with loops and a floating body (choice: rp; `bodies`: the body names by index); None
+    otherwise. tree() is asked only for auto with such a method."""
+    if method not in JOINT_METHODS or formulation == "joint":
+        return None
+    if formulation in ("rp", "romega"):
+        return (f"{joint_method(method)}; the rp and romega DAEs are integrated by {BDF}",
+                "write formulation: joint (or auto), or remove method")
+    if formulation != "auto":
+        return (f"{joint_method(method)}; the {formulation} formulation integrates its own "
+                "equations by CVODES or IDAS", "write formulation: joint, or remove method")
+    found = tree()
+    if not found.floating_loops:
+        return None
+    child = next(joint.child for joint in found.joints if joint.joint is None)
+    body = f"body '{bodies[child]}'" if child < len(bodies) else "a body"
+    return (f"{joint_method(method)}; formulation auto runs this model in rp, integrated by "
+            f"{BDF}: it has loops and {body} floats in the spanning tree (no tree joint "
+            "reaches it from ground, so its joint coordinates would be its r-p ones plus the "
+            "recursion's overhead)",
+            "remove method (auto) or write method: bdf; formulation: joint runs joint "
+            "coordinates with the floating body's free joint, slower than rp "
+            "(docs/formulations.md)")
 
 
 def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
         joint: Callable[[], Result], other: Callable[[str], Result],
         settings: DynamicsSolver = DEFAULT,
-        workspace: Workspace | None = None) -> Result:
-    """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows);
+        workspace: Workspace | None = None, method: str = "auto") -> Result:
+    """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows;
+    method: the run's);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
     first = choice(tree, formulation, lambda: examinable(functions, rows),
-                   lambda: lags_bundle(functions, settings.compile))
+                   lambda: lags_bundle(functions, settings.compile), method)
 
     def examined(result: Result) -> Result:
         """`result` with the singular poses of a run with loops in its metadata."""

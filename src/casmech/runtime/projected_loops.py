@@ -70,10 +70,11 @@ def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> 
 def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> list:
     """A parametric library's loop ODE and projection: compiled over the model data's symbols
     (model.parametric.split) once per structure, mask and iterations (backends.library.
-    compile_keyed), each bound to this bundle's data as an MX call of the external with d a
-    constant (the form runtime.dop853's C driver takes: backends.rk_library.bound)."""
+    compile_keyed), each bound to this bundle's data, its first output (backends.parametric.
+    bind: the form runtime.dop853's C driver takes)."""
     from casmech.backends.build import Toolchain
     from casmech.backends.library import compile_keyed
+    from casmech.backends.parametric import bind
     from casmech.model.parametric import split
 
     parts = split(functions.ir)
@@ -95,15 +96,7 @@ def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarra
     content = {"kind": "joint loop ode (parametric)", "signature": parts.signature,
                "mask": mask.tolist(), "iterations": loop_ode.POSITION_ITERATIONS}
     compiled = compile_keyed(content, make)
-    d = ca.DM(parts.values)
-    bound = []
-    for name in NAMES:
-        external = compiled[name]
-        t, x = ca.MX.sym("t"), ca.MX.sym("x", external.sparsity_in("x"))
-        bound.append(ca.Function(name, [t, x], [external(t, x, d)[0] if external.n_out() > 1
-                                                else external(t, x, d)],
-                                 ["t", "x"], external.name_out()[:1]))
-    return bound
+    return [bind(compiled[name], parts.values, first=True) for name in NAMES]
 
 
 def _symbolic(functions: SystemFunctions, system: JointSystem, mask) -> dict:

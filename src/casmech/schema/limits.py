@@ -53,6 +53,16 @@ HINTS = {
     "atol": "the absolute error allowed in metres and radians; the default is 1e-10",
 }
 
+# the methods that integrate joint coordinates only, and what they integrate (E409 where the
+# formulation that runs is another: schema.semantic, runtime.auto_formulation)
+JOINT_METHODS = {"adams": "a tree", "dop853": "a tree or the projected ODE of its loops"}
+BDF = "IDAS's BDF method"  # what integrates the DAEs of rp, romega and the joint loops' DAE
+
+
+def joint_method(method: str) -> str:
+    """What a method of JOINT_METHODS integrates, as its E409 says it."""
+    return f"method {method} integrates joint coordinates of {JOINT_METHODS[method]}"
+
 
 def limit(path: Path | str) -> tuple[float, str, str] | None:
     """(largest magnitude, what, unit) of the number at `path`, or None (not bounded)."""

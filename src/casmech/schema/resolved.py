@@ -175,7 +175,7 @@ class Analysis:
     source: Source | None = None
     events: tuple[Event, ...] = ()  # the model's `events:` (dynamics runs watch them)
     written: tuple[tuple[str, Any], ...] = ()
-    sources: tuple[tuple[str, Source | None], ...] = ()  # where t_end, output_step, ... are
+    sources: tuple[tuple[str, Source | None], ...] = ()  # where t_end, ..., method are
 
 
 @record

@@ -47,20 +47,22 @@ def analysis(check: Checker, given: spec.Analysis) -> resolved.Analysis | None:
     for key, problem in problems.items():
         check.error("E409", (*path, key), problem, got=f"{values[key]:g}",
                     hint=limits.HINTS.get(key))
-    if given.method in ("adams", "dop853") and given.formulation in ("rp", "romega"):
-        integrates = {"adams": "a tree", "dop853": "a tree or the projected ODE of its loops"}
-        check.error("E409", (*path, "method"), f"method {given.method} integrates joint "
-                    f"coordinates of {integrates[given.method]}; the rp and romega DAEs are "
-                    "integrated by IDAS's BDF method", got=given.method,
+    if given.method in limits.JOINT_METHODS and given.formulation in ("rp", "romega"):
+        check.error("E409", (*path, "method"), f"{limits.joint_method(given.method)}; the rp "
+                    f"and romega DAEs are integrated by {limits.BDF}", got=given.method,
                     hint="write formulation: joint (or auto), or remove method")
     options, written = analysis_options(check, given)
     source = check.doc.source_map.values.get(path)
+    # where the grid, the tolerances and the formulation and method written are (a run's
+    # located E409: runtime.analyses.analysis_settings)
+    located = keys + tuple(key for key in ("formulation", "method")
+                           if key in given.model_fields_set)
     return (
         None
         if problems or options is None
         else resolved.Analysis(given.type, **values, options=options, source=source,
                                written=written, sources=tuple(
-                                   (key, check.doc.locate((*path, key))) for key in keys))
+                                   (key, check.doc.locate((*path, key))) for key in located))
     )
 
 

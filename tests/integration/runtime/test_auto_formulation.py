@@ -58,6 +58,54 @@ def test_loops_through_a_floating_body_run_rp(path, why):
     assert result.metadata["formulation"] == "rp", why
 
 
+@pytest.mark.parametrize("method", ["dop853", "adams"])
+def test_a_method_of_joint_coordinates_on_a_floating_loop_is_a_located_error(method):
+    """auto runs a loop through a floating body in rp, which IDAS's BDF integrates: the file's
+    method is E409 at its own line before anything runs (`casmech check` reports it too, by
+    the same analysis_settings); the caller's, a UsageError saying the same."""
+    from casmech.api import analysis_settings
+    from casmech.errors import ModelError, UsageError
+
+    path = MODELS / "validation" / "distance_case01.yaml"
+    text = path.read_text().replace("  atol: 1.0e-12\n", f"  atol: 1.0e-12\n  method: {method}\n")
+    line = text.splitlines().index(f"  method: {method}") + 1
+    functions = casmech.compile(casmech.loads(text, "distance.yaml"), "interpreted")
+    with pytest.raises(ModelError) as raised:
+        casmech.analyze(functions, t_end=0.05)
+    [diagnostic] = raised.value.diagnostics
+    assert (diagnostic.code, diagnostic.path, diagnostic.got) == ("E409", "analysis.method",
+                                                                   method)
+    assert diagnostic.format().startswith(
+        f"distance.yaml:{line}:11: error[E409] analysis.method: method {method} integrates "
+        "joint coordinates of a tree")
+    assert "formulation auto runs this model in rp" in diagnostic.message
+    assert "body 'pendulum' floats" in diagnostic.message
+    assert "method: bdf" in diagnostic.hint and "formulation: joint" in diagnostic.hint
+    assert analysis_settings(functions, method="bdf").options.method == "bdf"  # a caller's
+    plain = casmech.compile(casmech.load(path), "interpreted")
+    with pytest.raises(UsageError, match=rf"error\[E409\] method = {method}: method {method} "
+                       "integrates joint coordinates of a tree"):
+        casmech.analyze(plain, t_end=0.05, method=method)
+    # formulation joint runs it (the body's free joint among the tree's coordinates)
+    joint = casmech.analyze(plain, t_end=0.05, method=method, formulation="joint")
+    assert joint.metadata["formulation"] == "joint"
+
+
+def test_a_callers_method_of_joint_coordinates_with_rp_is_an_error():
+    """The schema refuses `method: dop853` beside `formulation: rp` in a file (E409); the
+    caller's pair says the same, instead of running IDAS."""
+    from casmech.errors import UsageError
+
+    functions = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"), "interpreted")
+    with pytest.raises(UsageError, match=r"method dop853 integrates joint coordinates of a "
+                       r"tree or the projected ODE of its loops; the rp and romega DAEs are "
+                       r"integrated by IDAS's BDF method"):
+        casmech.analyze(functions, t_end=0.05, formulation="rp", method="dop853")
+    with pytest.raises(UsageError, match=r"method = adams: .* \(a DAE stabilization asked "
+                       r"for makes formulation auto run rp\)"):
+        casmech.analyze(functions, t_end=0.05, stabilization="ggl", method="adams")
+
+
 def test_a_failed_joint_run_is_redone_in_rp_and_an_interrupt_is_not():
     functions = casmech.compile(casmech.load(FOUR_BAR))
     tree = tree_of(functions)
@@ -95,6 +143,10 @@ def test_choice_table():
     assert auto_formulation.choice(tree, "auto", fact(False), fact(False)) == "rp"  # unexamined
     assert auto_formulation.choice(tree, "auto", fact(True), fact(True)) == "rp"  # not compiled
     assert auto_formulation.choice(tree, "romega", fact(True), fact(False)) == "romega"
+    # dop853 asked for: joint coordinates wherever they apply (its projected loop ODE)
+    assert auto_formulation.choice(tree, "auto", fact(False), fact(True), "dop853") == "joint"
+    # adams on loops runs their DAE on IDAS in either formulation: auto's facts decide
+    assert auto_formulation.choice(tree, "auto", fact(True), fact(True), "adams") == "rp"
 
 
 def test_a_tree_is_not_examined_for_its_choice():

@@ -36,3 +36,18 @@ def test_the_explicit_method_follows_the_backend(quick_builds, monkeypatch):
     again = casmech.compile(model, "compiled")
     assert _run(again).metadata["method"] == "adams"
     assert _run(again, method="dop853").metadata["method"] == "dop853"
+
+
+def test_a_bundle_without_parameters_runs_its_steps_in_c(quick_builds):
+    """A model without parameters compiles its values into its library (no bound model data):
+    its joint ODE is the external backends.load recorded, reached in C (backends.rk_library),
+    and auto takes DOP853."""
+    from casmech.runtime import workspace
+    from tests.conftest import ROOT
+
+    model = casmech.load(ROOT / "benchmarks" / "models" / "chain2.yaml")
+    assert not model.parameters
+    functions = casmech.compile(model, "compiled")
+    assert functions.parametric is None
+    assert _run(functions, t_end=0.2).metadata["method"] == "dop853"
+    assert [rk.compiled for rk in workspace.default(functions).store("dop853").values()] == [True]
