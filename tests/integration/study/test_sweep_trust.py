@@ -147,9 +147,12 @@ STUDY = ["--samples", "120", "--normal", "m=2,0.1", "--seed", "4", "--keep", "ma
 
 
 def test_a_killed_sweep_keeps_its_runs_and_resume_completes_it(tmp_path):
+    """(--mode interpreted: every process of the study runs the same code whatever the cache
+    holds; under auto a process finding the library runs compiled, and method auto there
+    DOP853 where the interpreted runs take Adams, docs/decisions/method-auto.md.)"""
     killed, whole = tmp_path / "killed", tmp_path / "whole"
     command = [sys.executable, "-m", "casmech.cli", "sweep", str(SPRING_MASS), *STUDY,
-               "--workers", "0"]
+               "--workers", "0", "--mode", "interpreted"]
     process = subprocess.Popen([*command, "--out", str(killed)], env=ENV,
                                stderr=subprocess.DEVNULL)
     results = killed / "sweep.csv"
@@ -168,8 +171,8 @@ def test_a_killed_sweep_keeps_its_runs_and_resume_completes_it(tmp_path):
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     assert f"{len(kept)} finished earlier" in done.stderr
-    assert cli.main(["sweep", str(SPRING_MASS), *STUDY, "--workers", "0", "--out",
-                     str(whole)]) == 0
+    assert cli.main(["sweep", str(SPRING_MASS), *STUDY, "--workers", "0", "--mode",
+                     "interpreted", "--out", str(whole)]) == 0
     resumed, fresh = pd.read_csv(results), pd.read_csv(whole / "sweep.csv")
     assert list(resumed["run"]) == list(range(120))
     # deterministic runs: the same doubles, whether run before the kill, after it or at once
