@@ -30,6 +30,7 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
+from casmech.runtime.buffers import BOUND_ENTRIES
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
@@ -50,10 +51,11 @@ class _CCall:
     """What the C path builds once per Dop853: the driver, its arguments that do not change
     between calls (the tableau, settings and entry points by reference, the work vector, the
     counters and the time reached), and the state, output times and outputs of a call held in
-    arrays of its own (grown to the longest grid asked for), so a call passes pointers made
-    once instead of converting NumPy arrays to pointers (each conversion costs about as much
-    as copying its array). One Dop853 is not to be called from two threads at once (the
-    work vector never was)."""
+    arrays of its own (grown to the longest grid asked for, up to runtime.buffers'
+    BOUND_ENTRIES outputs; a longer grid's are made for its call), so a call passes pointers
+    made once instead of converting NumPy arrays to pointers (each conversion costs more than
+    copying a small array). One Dop853 is not to be called from two threads at once (the work
+    vector never was)."""
 
     def __init__(self, run, lib, kept: tuple, work: np.ndarray, n: int):
         import ctypes
@@ -74,11 +76,13 @@ class _CCall:
         """(x, times, outputs) pointers holding this call's x and times, and the outputs (the
         leading len(times) rows of the kept array, NaN)."""
         m = len(times)
-        if m > self._grid[0]:
+        grid = self._grid
+        if m > grid[0]:
             times_kept, out = np.empty(m), np.empty((m, self.n))
-            self._grid = (m, times_kept, out, self.lib.pointer(times_kept),
-                          self.lib.pointer(out))
-        _, times_kept, out, times_p, out_p = self._grid
+            grid = (m, times_kept, out, self.lib.pointer(times_kept), self.lib.pointer(out))
+            if m * self.n <= BOUND_ENTRIES:
+                self._grid = grid
+        _, times_kept, out, times_p, out_p = grid
         np.copyto(self._x, x)
         times_kept[:m] = times
         out = out[:m]
