@@ -60,7 +60,7 @@ class _CCall:
     def __init__(self, run, lib, kept: tuple, work: np.ndarray, n: int):
         import ctypes
 
-        ode, project, self._arrays, tableau, settings = kept
+        ode, project, _, tableau, settings = kept  # kept: what the pointers point into
         self.run, self.lib, self._kept, self.n = run, lib, kept, n
         self.stats = np.zeros(lib.COUNT, np.int64)
         self.reached = ctypes.c_double()
