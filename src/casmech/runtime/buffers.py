@@ -91,7 +91,9 @@ class BufferedCall:
                     inputs[i].fill(0.0)
                     zero[i] = True
                 continue
-            np.copyto(inputs[i], np.reshape(a, self.shapes_in[i]).T)
+            shape = self.shapes_in[i]
+            np.copyto(inputs[i], (a if type(a) is np.ndarray and a.shape == shape
+                                  else np.reshape(a, shape)).T)
             zero[i] = False
         if self.stoppable:
             for i in self._live_out:
@@ -177,6 +179,9 @@ class ColumnCall:
     def _map(self, count: int, shared: tuple[int, ...]) -> BufferedCall:
         """The kept map over `count` evaluations, the arguments `shared` passed once."""
         shared = shared if count > 1 else ()
+        found = self.maps.get((count, shared))
+        if found is not None:
+            return found
 
         def build() -> BufferedCall:
             function = self.function
@@ -198,15 +203,16 @@ class ColumnCall:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
         indices = tuple(k for k, one in enumerate(shared) if one)
+        if count <= self.block:  # one block
+            return self._map(count, indices)(*(
+                a if one or a.shape[1] == count * w else a[:, :count * w]
+                for a, w, one in zip(arguments, self.widths, shared, strict=True)))
         blocks = []
         for start in range(0, count, self.block):
             size = min(self.block, count - start)
             blocks.append(self._map(size, indices)(*(
-                a if one or (start == 0 and a.shape[1] == size * w)
-                else a[:, start * w:(start + size) * w]
+                a if one else a[:, start * w:(start + size) * w]
                 for a, w, one in zip(arguments, self.widths, shared, strict=True))))
-        if len(blocks) == 1:
-            return blocks[0]
         return tuple(np.concatenate(parts, axis=1) for parts in zip(*blocks, strict=True))
 
     def _matrix(self, argument: np.ndarray, k: int) -> np.ndarray:

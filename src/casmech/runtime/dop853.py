@@ -30,6 +30,7 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
+from casmech.runtime.buffers import BOUND_ENTRIES
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
@@ -44,6 +45,49 @@ class Stats:
     rejected: int = 0
     evaluations: int = 0
     projections: int = 0
+
+
+class _CCall:
+    """What the C path builds once per Dop853: the driver, its arguments that do not change
+    between calls (the tableau, settings and entry points by reference, the work vector, the
+    counters and the time reached), and the state, output times and outputs of a call held in
+    arrays of its own (grown to the longest grid asked for, up to runtime.buffers'
+    BOUND_ENTRIES outputs; a longer grid's are made for its call), so a call passes pointers
+    made once instead of converting NumPy arrays to pointers (each conversion costs more than
+    copying a small array). One Dop853 is not to be called from two threads at once (the work
+    vector never was)."""
+
+    def __init__(self, run, lib, kept: tuple, work: np.ndarray, n: int):
+        import ctypes
+
+        ode, project, _, tableau, settings = kept  # kept: what the pointers point into
+        self.run, self.lib, self._kept, self.n = run, lib, kept, n
+        self.stats = np.zeros(lib.COUNT, np.int64)
+        self.reached = ctypes.c_double()
+        self.head = (ctypes.byref(tableau), ctypes.byref(settings), ctypes.byref(ode.struct),
+                     None if project is None else ctypes.byref(project.struct))
+        self.tail = (lib.pointer(work), self.stats.ctypes.data_as(
+            ctypes.POINTER(ctypes.c_longlong)), ctypes.byref(self.reached))
+        self._work, self._x = work, np.empty(n)
+        self._x_p = lib.pointer(self._x)
+        self._grid: tuple = (0, None, None, None, None)
+
+    def buffers(self, x: np.ndarray, times: np.ndarray):
+        """(x, times, outputs) pointers holding this call's x and times, and the outputs (the
+        leading len(times) rows of the kept array, NaN)."""
+        m = len(times)
+        grid = self._grid
+        if m > grid[0]:
+            times_kept, out = np.empty(m), np.empty((m, self.n))
+            grid = (m, times_kept, out, self.lib.pointer(times_kept), self.lib.pointer(out))
+            if m * self.n <= BOUND_ENTRIES:
+                self._grid = grid
+        _, times_kept, out, times_p, out_p = grid
+        np.copyto(self._x, x)
+        times_kept[:m] = times
+        out = out[:m]
+        out.fill(np.nan)
+        return self._x_p, times_p, out_p, out
 
 
 @dataclass
@@ -75,7 +119,8 @@ class Dop853:
         (x itself at times equal to t0); self.last holds the call's counts."""
         times = np.ascontiguousarray(times, float)
         x = np.ascontiguousarray(np.ravel(x), float)
-        at_start = int(np.searchsorted(times, t0, side="right"))
+        at_start = 0 if not len(times) or times[0] > t0 else \
+            int(np.searchsorted(times, t0, side="right"))
         if not len(x) or at_start == len(times):
             self.last = Stats()
             return np.repeat(x[:, None], len(times), axis=1)
@@ -85,7 +130,7 @@ class Dop853:
             else states
 
     # the C path
-    def _c_parts(self):
+    def _c_parts(self) -> _CCall | None:
         if not all(_loaded(f) for f in (self.ode, self.project) if f is not None):
             return None  # (an interpreted bundle imports no code generation: backends.*)
         from casmech.backends import rk_library
@@ -107,27 +152,21 @@ class Dop853:
             self.max_steps)
         n = self.ode.nnz_in(self.ode.name_in().index("x"))
         work = np.zeros((t.N_STAGES_EXTENDED + t.INTERPOLATOR_POWER + 6) * n)
-        return run, rk_library, ode, project, arrays, tableau, settings, work
+        return _CCall(run, rk_library, (ode, project, arrays, tableau, settings), work, n)
 
     def _run_c(self, t0: float, times: np.ndarray, x: np.ndarray) -> np.ndarray:
-        run, lib, ode, project, _, tableau, settings, work = self._c
-        import ctypes
-
-        out = np.full((len(times), len(x)), np.nan)
-        stats = np.zeros(lib.COUNT, np.int64)
-        reached = ctypes.c_double()
-        status = run(ctypes.byref(tableau), ctypes.byref(settings), ctypes.byref(ode.struct),
-                     None if project is None else ctypes.byref(project.struct), len(x), t0,
-                     lib.pointer(x), len(times), lib.pointer(times), lib.pointer(out),
-                     lib.pointer(work), stats.ctypes.data_as(ctypes.POINTER(ctypes.c_longlong)),
-                     ctypes.byref(reached))
-        self.last = Stats(int(stats[lib.ACCEPTED]), int(stats[lib.REJECTED]),
-                          int(stats[lib.EVALUATIONS]), int(stats[lib.PROJECTIONS]))
+        c, lib = self._c, self._c.lib
+        m = len(times)
+        x_p, times_p, out_p, out = c.buffers(x, times)
+        status = c.run(*c.head, len(x), t0, x_p, m, times_p, out_p, *c.tail)
+        stats = c.stats.tolist()
+        self.last = Stats(stats[lib.ACCEPTED], stats[lib.REJECTED], stats[lib.EVALUATIONS],
+                          stats[lib.PROJECTIONS])
         if status != lib.DONE:
             raise _failure({lib.TOO_SMALL: "too small", lib.MAX_STEPS: "max steps",
                             lib.EVAL_FAILED: "failed", lib.NOT_FINITE: "not finite"}[status],
-                           reached.value, out[:int(stats[lib.OUTPUTS])].T, self.max_steps)
-        return out.T
+                           c.reached.value, out[:stats[lib.OUTPUTS]].T, self.max_steps)
+        return out.copy().T
 
     # the Python path: runtime.dop853_steps
     def _python_parts(self):

@@ -19,6 +19,7 @@ KeyboardInterrupt, carries the rows.
 
 from __future__ import annotations
 
+import _signal
 import os
 import signal
 import sys
@@ -31,6 +32,7 @@ from casmech.runtime.cancel import CancelToken
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 ABANDON = 3  # the signal that ends the process without writing
+_SIGINT = int(signal.SIGINT)
 
 
 class _Trap:
@@ -95,7 +97,10 @@ class guard:
     """Ctrl-C cancels `token` during this block when no trap() is active, this is the main
     thread and SIGINT has Python's default handler (a program's own handler is left alone);
     otherwise the token is only the running one. An analysis nested in another's block
-    (inside a trap() or guard()) installs no handler of its own: the outer one serves both."""
+    (inside a trap() or guard()) installs no handler of its own: the outer one serves both.
+    The handlers are read and set through `_signal`, the C module `signal` wraps, whose
+    handlers are the same objects without signal's conversion of them to enums (which cost
+    several times the installs themselves, on every analysis)."""
 
     __slots__ = ("token", "_trap", "_previous", "_reset")
 
@@ -104,9 +109,9 @@ class guard:
 
     def __enter__(self) -> CancelToken:
         if (not _traps and threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGINT) is signal.default_int_handler):
+                and _signal.getsignal(_SIGINT) is signal.default_int_handler):
             self._trap = _Trap(self.token, abandon=False)
-            self._previous = signal.signal(signal.SIGINT, self._trap.handler)
+            self._previous = _signal.signal(_SIGINT, self._trap.handler)
             _traps.append(self._trap)
         self._reset = cancel.enter(self.token)
         return self.token
@@ -115,7 +120,7 @@ class guard:
         cancel.leave(self._reset)
         if self._trap is not None:
             _traps.remove(self._trap)
-            signal.signal(signal.SIGINT, self._previous)
+            _signal.signal(_SIGINT, self._previous)
 
 
 @contextmanager

@@ -106,13 +106,17 @@ class NonFinite(AnalysisError):
 
 
 _ALL = np.logical_and.reduce
+_SUM = np.add.reduce  # (np.sum's own Python layer costs more than summing a block of rows)
 
 
 def all_finite(*arrays) -> bool:
     """Whether every entry of `arrays` is finite: from their sums first (a NaN or an infinity
     makes a sum non-finite; one reduction an array), entry by entry only where the sum is not
     finite (a NaN, an infinity, or finite entries whose sum overflows)."""
-    if math.isfinite(sum(float(np.sum(array)) for array in arrays)):
+    total = 0.0
+    for array in arrays:
+        total += float(_SUM(array, None))
+    if math.isfinite(total):
         return True
     return all(np.isfinite(array).all() for array in arrays)
 
@@ -120,8 +124,11 @@ ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
-    """The first row of a block whose states are not all finite (None: all are). A small
-    block is checked as one array of its rows (one call into NumPy, not one per state)."""
+    """The first row of a block whose states are not all finite (None: all are): all_finite
+    first (a sum per state), then, where a sum is not finite, row by row; a small block is
+    searched as one array of its rows (one call into NumPy, not one per state)."""
+    if all_finite(times, q, q_dot, q_ddot, lam):
+        return None
     times = np.reshape(times, (-1, 1))
     blocks = (times, q, q_dot, q_ddot, lam)
     if len(times) <= ONE_ARRAY:

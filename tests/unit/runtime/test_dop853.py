@@ -165,3 +165,23 @@ def test_times_at_the_start_are_the_start():
     # the rest as a call from the start over the later times alone (the same steps)
     np.testing.assert_array_equal(states[:, 2], rk(0.5, [1.0], X0)[:, 0])
     np.testing.assert_array_equal(rk(0.5, [0.5], X0)[:, 0], X0)
+
+
+def test_c_calls_reusing_their_arrays_are_independent(compiled_pendulum, monkeypatch):
+    """One instance called over grids of several lengths (longer, shorter, and past the
+    length whose arrays it keeps) from several starts gives what a new instance gives, and a
+    call's states are not changed by the calls after it (the kept output array is copied)."""
+    monkeypatch.setattr(dop853, "BOUND_ENTRIES", 4 * 60)  # the pendulum's 4 states, 60 times
+    ode = compiled_pendulum["pend_ode"]
+    kept = dop853.Dop853(ode, 1e-8, 1e-10)
+    grids = [TIMES[:10], TIMES, np.linspace(0.05, 6.0, 80), TIMES[:3], TIMES]
+    starts = [X0, X0 * [1, 1, 1, -1], X0, X0 * [1, 1, 1, 2], X0]
+    first = None
+    for times, x0 in zip(grids, starts, strict=True):
+        got = kept(0.0, times, x0)
+        fresh = dop853.Dop853(ode, 1e-8, 1e-10)(0.0, times, x0)
+        assert fresh.shape == got.shape
+        np.testing.assert_array_equal(got, fresh)  # the same C on the same numbers
+        if first is None:
+            first, first_copy = got, got.copy()
+    np.testing.assert_array_equal(first, first_copy)
