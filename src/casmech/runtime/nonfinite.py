@@ -112,13 +112,17 @@ _SUM = np.add.reduce  # (np.sum's own Python layer costs more than summing a blo
 def all_finite(*arrays) -> bool:
     """Whether every entry of `arrays` is finite: from their sums first (a NaN or an infinity
     makes a sum non-finite; one reduction an array), entry by entry only where the sum is not
-    finite (a NaN, an infinity, or finite entries whose sum overflows)."""
+    finite (a NaN, an infinity, or finite entries whose sum overflows). NumPy's overflow and
+    invalid-value warnings of those sums are silenced: they are the check, not news for a
+    user."""
     total = 0.0
-    for array in arrays:
-        total += float(_SUM(array, None))
+    with np.errstate(over="ignore", invalid="ignore"):
+        for array in arrays:
+            total += float(_SUM(array, None))
     if math.isfinite(total):
         return True
     return all(np.isfinite(array).all() for array in arrays)
+
 
 ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 

@@ -59,3 +59,17 @@ def test_all_finite_matches_an_entrywise_check_through_overflowing_sums():
     for arrays in cases:
         expected = all(np.isfinite(a).all() for a in arrays)
         assert all_finite(*arrays) == expected, arrays
+
+
+def test_the_check_itself_warns_nothing():
+    """Sums that overflow or meet inf - inf are how the check finds out, not a NumPy warning
+    for the user's terminal (an error here under the filter)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert all_finite(np.full(4, 1e308))
+        assert not all_finite(np.array([np.inf, -np.inf, 1.0]))
+        assert check_states(np.arange(3.0), np.full((3, 2), 1e308), np.array(
+            [[1.0, 2.0], [np.inf, -np.inf], [0.0, 0.0]]), np.zeros((3, 2)),
+            np.zeros((3, 0))) == 1
