@@ -8,7 +8,8 @@ cluster at --scheduler ADDRESS, or this process with --workers 0; a batched stud
 batched, or auto from 200 runs where it can be: many runs per mapped call) runs in this
 process on every core unless --workers or --scheduler is given. A run that fails is a row
 with status failed and its reason; the study goes on. Each finished run is appended to
-DIR/sweep.csv as it arrives, so a killed sweep keeps them and --resume runs only the others.
+DIR/sweep.csv as it arrives, so a killed sweep keeps them and --resume runs only the others,
+in the mode the earlier part ran in (DIR/metadata.json) unless --mode is given.
 Ctrl-C (or SIGTERM) stops it: the finished runs are written and the exit code is 130. Writes
 DIR/sweep.csv (in run order at the end), DIR/sweep.parquet (when pyarrow is installed),
 DIR/metadata.json (status running until the end) and with --full DIR/runs.h5. docs/sweeps.md,
@@ -62,12 +63,13 @@ def add_arguments(parser) -> None:
                         help="continue the study whose results DIR/sweep.csv holds (a sweep "
                              "that was stopped or killed): run only the missing runs")
     parser.add_argument("--mode", choices=("auto", "interpreted", "compiled", "batched"),
-                        default="auto",
                         help="compiled: the model's parametric library, built once, bound to "
                              "each run's values; batched: that library mapped over many runs "
                              "per call (a tree's dynamics; docs/sweeps.md); interpreted: CasADi "
                              "functions built per run; auto (default): compiled from 200 runs "
-                             "or when cached, batched where it can be from 200 runs")
+                             "or when cached, batched where it can be from 200 runs; with "
+                             "--resume the default is the earlier part's mode "
+                             "(DIR/metadata.json)")
     add_span(parser)
     add_overrides(parser)
 
@@ -105,18 +107,22 @@ def run(args) -> int:
     settings = {"t_end": args.t_end, "output_step": args.output_step, "rtol": args.rtol,
                 "atol": args.atol}
     given = overrides(args.set)
-    prepared = study.prepare(args.model, study_form(args), settings, given, full=args.full,
-                             mode=args.mode)
     out = args.out or args.model.with_name(args.model.stem + "_sweep_results")
+    mode, earlier_mode = study.resume_mode(out, args.resume, args.mode)
+    prepared = study.prepare(args.model, study_form(args), settings, given, full=args.full,
+                             mode=mode)
     total = prepared.study.size()
     earlier = study.resumed(out, prepared) if args.resume else []
+    changed = study.changed_mode(earlier_mode, prepared.job)
+    if changed:
+        print(f"sweep: {changed}", file=sys.stderr)
     batched = bool(prepared.job.batched)
     here = args.workers == 0 or (batched and args.workers is None)
     where = args.scheduler or (
         f"this process ({study.execute.default_workers()} threads)" if here and batched else
         "this process" if here else
         f"{args.workers or study.execute.default_workers()} local workers")
-    mode = "batched" if batched else prepared.job.mode
+    mode = study.mode_name(prepared.job)
     again = f", {len(earlier)} finished earlier" if args.resume else ""
     print(f"sweep: {total} runs on {where}, {mode}{again}", file=sys.stderr)
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,

@@ -209,6 +209,68 @@ def resumed(out: Path, prepared: Prepared) -> list[dict]:
     return journal.read(out / "sweep.csv", columns(study), study.points(), study.parameters)
 
 
+RAN = ("interpreted", "compiled", "batched")  # the modes a study's metadata.json may say
+
+
+def earlier_mode(out: Path) -> str:
+    """The mode the earlier part of the study in `out` ran in: its metadata.json's
+    `options.mode`, written by `start` before its first run (a usage error when the file is
+    missing, not JSON, or says anything but one of RAN: it is read, not trusted)."""
+    import json
+
+    from casmech.errors import UsageError, escape
+
+    path = out / "metadata.json"
+    hint = "; pass --mode to choose the rest's mode"
+    try:
+        metadata = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+    except FileNotFoundError:
+        raise UsageError(f"--resume: {escape(path)} does not exist, so the mode of the earlier "
+                         f"part is unknown{hint}") from None
+    except (OSError, ValueError) as error:
+        raise UsageError(f"--resume: {escape(path)} cannot be read ({escape(error)})"
+                         f"{hint}") from None
+    options = metadata.get("options") if isinstance(metadata, dict) else None
+    mode = options.get("mode") if isinstance(options, dict) else None
+    if mode not in RAN:
+        shown = escape(repr(mode)[:60])
+        raise UsageError(f"--resume: {escape(path)}: options.mode is {shown}, not one of "
+                         f"{', '.join(RAN)}{hint}")
+    return mode
+
+
+def resume_mode(out: Path, resume: bool, given: str | None) -> tuple[str, str | None]:
+    """The mode to `prepare` a study in, and the mode its earlier part ran in (None when not
+    resumed, or when `given` and the earlier metadata cannot tell it). A resumed study keeps
+    its earlier part's mode (under method auto the mode picks the method:
+    docs/decisions/method-auto.md) unless a mode is given; else `given`, default auto."""
+    from casmech.errors import UsageError
+
+    earlier = None
+    if resume:
+        try:
+            earlier = earlier_mode(out)
+        except UsageError:
+            if given is None:
+                raise
+    return given or earlier or "auto", earlier
+
+
+def mode_name(job: Job) -> str:
+    """The runs' mode as `--mode` names it (batched, compiled, interpreted)."""
+    return "batched" if job.batched else job.mode
+
+
+def changed_mode(earlier: str | None, job: Job) -> str | None:
+    """What to tell a user whose given mode makes the resumed runs differ from the earlier
+    part's, else None."""
+    if earlier is None or mode_name(job) == earlier:
+        return None
+    return (f"the earlier runs ran {earlier}, the rest run {mode_name(job)} (as --mode asks): "
+            "their rows may differ within the tolerance (method auto depends on the mode, "
+            "docs/decisions/method-auto.md)")
+
+
 def columns(study: Study) -> list[str]:
     return [*FIXED, *study.parameters, *STATUS, *study.keep, "reason"]
 
@@ -232,11 +294,10 @@ def parquet_available() -> bool:
 
 def start(out: Path, prepared: Prepared, options: Mapping) -> Path:
     """metadata.json of a study that is running (status running), before its first run."""
-    from casmech.io.metadata import run_metadata, write_json
+    from casmech.io.metadata import write_json
 
     out.mkdir(parents=True, exist_ok=True)
-    metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, {}, {}, 0,
-                            status="running", options=dict(options))
+    metadata = _metadata(prepared, {}, 0, "running", options)
     metadata["study"] = prepared.study.describe()
     return write_json(out / "metadata.json", metadata)
 
@@ -245,7 +306,7 @@ def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping
           options: Mapping) -> list[Path]:
     """sweep.csv, sweep.parquet (when pyarrow is installed) and metadata.json in `out`."""
     from casmech.core.atomic import atomic
-    from casmech.io.metadata import run_metadata, write_json
+    from casmech.io.metadata import write_json
 
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "sweep.csv"]
@@ -259,14 +320,26 @@ def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping
         with replaced(paths[-1]) as temporary:
             table.to_parquet(temporary, index=False)
     counts = table["status"].value_counts().to_dict() if len(table) else {}
-    metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, timings, {},
-                            len(table), status="complete" if finished else "interrupted",
-                            options=dict(options))
+    metadata = _metadata(prepared, timings, len(table),
+                         "complete" if finished else "interrupted", options)
     metadata["study"] = {**prepared.study.describe(), "finished_runs": len(table),
                          "statuses": {str(k): int(v) for k, v in counts.items()},
                          "parquet": parquet, "runner": runner_text(prepared.job)}
     paths.append(write_json(out / "metadata.json", metadata))
     return paths
+
+
+def _metadata(prepared: Prepared, timings: Mapping[str, float], rows: int, status: str,
+              options: Mapping) -> dict:
+    """A study's metadata.json but its `study`: a run's (io.metadata.run_metadata) whose
+    `mode` is the runs' (casmech.compile's mode: compiled for batched runs too; `options.mode`
+    and `study.runner` tell batched apart)."""
+    from casmech.io.metadata import run_metadata
+
+    metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, timings, {},
+                            rows, status=status, options=dict(options))
+    metadata["mode"] = prepared.job.mode
+    return metadata
 
 
 def timed(function, *args, **kwargs):

@@ -58,6 +58,8 @@ def test_batched_periods_match_the_closed_form(no_single_runs, tmp_path):
 
     metadata = json.loads((tmp_path / "1.0" / "metadata.json").read_text())
     assert metadata["study"]["runner"].startswith("batched")
+    # the runs' casmech.compile mode at the top (the library's), batched in the options
+    assert (metadata["mode"], metadata["options"]["mode"]) == ("compiled", "batched")
 
 
 KEEP = ["max(bob.z)", "bob.vy@0.37", "min(pivot.fz)", "integral(energy)", "final(bob.wx)"]
