@@ -45,8 +45,10 @@ def _method():
                   "dop853 (an explicit Runge-Kutta pair of order 8; with loops, their ODE "
                   "projected onto the loops after each step), or auto (bdf when the ODE is "
                   "stiff at t0: solver.stiff_threshold; adams where contacts or stops cap the "
-                  "step or the tree has more than compile.mapped_bodies bodies; else dop853; "
-                  "loops: dop853 without force elements or capped steps, else IDAS)",
+                  "step or where dop853 would not run in C: an interpreted model, a tree of "
+                  "more than compile.mapped_bodies bodies, no C compiler; else dop853; loops: "
+                  "dop853 on a compiled model without force elements or capped steps, else "
+                  "IDAS)",
                   choices=METHODS)
 
 

@@ -358,9 +358,9 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     in C (`in_c()` False, asked only when an explicit method is chosen: runtime.dop853.in_c,
     not for an interpreted bundle's SX, a mapped tree's MX graph or without a C compiler),
     where its 12 evaluations a step in CasADi's virtual machine cost more than CVODES's
-    Adams. Loops: "dop853" (their projected ODE, compiled
-    with a compiled bundle: runtime.projected_loops) in C without force elements and capped
-    steps, else "adams" (their DAE goes to IDAS, which no stiffness of theirs can stall).
+    Adams. Loops: "dop853" (their projected ODE, compiled with a compiled bundle:
+    runtime.projected_loops) in C without force elements and capped steps, else "adams"
+    (their DAE goes to IDAS, which no stiffness of theirs can stall).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the

@@ -34,7 +34,7 @@ KINDS: dict[str, int] = {
     "stiffness": 8,  # method auto's spectral radius of the tree's ODE, by start
     "cvodes": 8,  # CVODES instances, by grid and integrator options
     "dop853": 4,  # runtime.dop853 integrators of a tree's ODE, by integrator options
-    "dop853_in_c": 4,  # whether DOP853 over a tree's ODE runs in C (method auto's choice)
+    "dop853_in_c": 4,  # whether DOP853 over a joint system runs in C (method auto's choice)
     "idas": 8,  # joint coordinates' IDAS instances, also by start
     "joint_least_norm": 8,  # least-norm multipliers of masked loop rows, by mask
     "joint_loop_rows": 8,  # loop rows' solved multipliers (runtime.joint_rows), by mask
