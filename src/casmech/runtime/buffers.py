@@ -179,9 +179,6 @@ class ColumnCall:
     def _map(self, count: int, shared: tuple[int, ...]) -> BufferedCall:
         """The kept map over `count` evaluations, the arguments `shared` passed once."""
         shared = shared if count > 1 else ()
-        found = self.maps.get((count, shared))
-        if found is not None:
-            return found
 
         def build() -> BufferedCall:
             function = self.function
@@ -203,16 +200,19 @@ class ColumnCall:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
         indices = tuple(k for k, one in enumerate(shared) if one)
-        if count <= self.block:  # one block
-            return self._map(count, indices)(*(
-                a if one or a.shape[1] == count * w else a[:, :count * w]
+
+        def block(start: int, size: int) -> tuple[np.ndarray, ...]:
+            """The evaluations start .. start + size in one mapped call (an argument that is
+            that block whole passed as it is)."""
+            return self._map(size, indices)(*(
+                a if one or (start == 0 and a.shape[1] == size * w)
+                else a[:, start * w:(start + size) * w]
                 for a, w, one in zip(arguments, self.widths, shared, strict=True)))
-        blocks = []
-        for start in range(0, count, self.block):
-            size = min(self.block, count - start)
-            blocks.append(self._map(size, indices)(*(
-                a if one else a[:, start * w:(start + size) * w]
-                for a, w, one in zip(arguments, self.widths, shared, strict=True))))
+
+        if count <= self.block:
+            return block(0, count)
+        blocks = [block(start, min(self.block, count - start))
+                  for start in range(0, count, self.block)]
         return tuple(np.concatenate(parts, axis=1) for parts in zip(*blocks, strict=True))
 
     def _matrix(self, argument: np.ndarray, k: int) -> np.ndarray:

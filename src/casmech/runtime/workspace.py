@@ -87,9 +87,7 @@ class Workspace:
         """The entry of `kind` under `key`, built by build() when missing (at KINDS[kind]
         entries, the oldest goes first)."""
         store = self._stores.get(kind)
-        if store is not None and key in store:
-            return store[key]
-        return kept(self.store(kind), key, build, KINDS[kind])
+        return kept(self.store(kind) if store is None else store, key, build, KINDS[kind])
 
     def one(self, kind: str, build: Callable[[], T]) -> T:
         """The one entry of `kind`, built by build() when missing."""
