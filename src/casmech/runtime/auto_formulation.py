@@ -28,8 +28,9 @@
   singular pose stays. A method of joint coordinates (adams, dop853: schema.limits.
   JOINT_METHODS) asked for on loops with a floating body cannot run: `method_problem` says
   why, and runtime.analyses' analysis_settings raises it as E409 at the method (located when
-  the file wrote it) before anything runs. (`adams` on other loops runs their joint DAE on
-  IDAS, as `formulation: joint` does: runtime.joint_dynamics.)
+  the file wrote it) before anything runs. A method of a tree alone (not in schema.limits.
+  LOOP_METHODS: adams) asked for on loops (or couplings) under auto or joint is E409 too:
+  their joint DAE goes to IDAS, whose only method is BDF.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
 from casmech.runtime.singular_poses import describe, examinable, singular_poses
 from casmech.runtime.workspace import Workspace
-from casmech.schema.limits import BDF, JOINT_METHODS, joint_method
+from casmech.schema.limits import BDF, JOINT_METHODS, LOOP_METHODS, joint_method
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)
 
@@ -73,29 +74,36 @@ def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
 def method_problem(tree: Callable[[], Tree], formulation: str, method: str,
                    bodies: Sequence[str] = ()) -> tuple[str, str] | None:
     """(why, hint) when `method` does not run under `formulation`: a method of joint
-    coordinates (JOINT_METHODS) with a formulation other than joint, or with auto on a model
-    with loops and a floating body (choice: rp; `bodies`: the body names by index); None
-    otherwise. tree() is asked only for auto with such a method."""
-    if method not in JOINT_METHODS or formulation == "joint":
+    coordinates (JOINT_METHODS) with a formulation other than joint or auto, with auto on a
+    model with loops and a floating body (choice: rp; `bodies`: the body names by index), or
+    one of a tree alone (not LOOP_METHODS) on a model with loops; None otherwise. tree() is
+    asked only for joint or auto with such a method."""
+    if method not in JOINT_METHODS:
         return None
     if formulation in ("rp", "romega"):
         return (f"{joint_method(method)}; the rp and romega DAEs are integrated by {BDF}",
                 "write formulation: joint (or auto), or remove method")
-    if formulation != "auto":
+    if formulation not in ("auto", "joint"):
         return (f"{joint_method(method)}; the {formulation} formulation integrates its own "
                 "equations by CVODES or IDAS", "write formulation: joint, or remove method")
     found = tree()
-    if not found.floating_loops:
+    if formulation == "auto" and found.floating_loops:
+        child = next(joint.child for joint in found.joints if joint.joint is None)
+        body = f"body '{bodies[child]}'" if child < len(bodies) else "a body"
+        return (f"{joint_method(method)}; formulation auto runs this model in rp, integrated "
+                f"by {BDF}: it has loops and {body} floats in the spanning tree (no tree joint "
+                "reaches it from ground, so its joint coordinates would be its r-p ones plus "
+                "the recursion's overhead)",
+                "remove method (auto) or write method: bdf; formulation: joint runs joint "
+                "coordinates with the floating body's free joint, slower than rp "
+                "(docs/formulations.md)")
+    if found.is_tree or method in LOOP_METHODS:
         return None
-    child = next(joint.child for joint in found.joints if joint.joint is None)
-    body = f"body '{bodies[child]}'" if child < len(bodies) else "a body"
-    return (f"{joint_method(method)}; formulation auto runs this model in rp, integrated by "
-            f"{BDF}: it has loops and {body} floats in the spanning tree (no tree joint "
-            "reaches it from ground, so its joint coordinates would be its r-p ones plus the "
-            "recursion's overhead)",
-            "remove method (auto) or write method: bdf; formulation: joint runs joint "
-            "coordinates with the floating body's free joint, slower than rp "
-            "(docs/formulations.md)")
+    closing = "loops or couplings" if found.couplings else "loops"
+    return (f"{joint_method(method)}; this model has {closing}, whose DAE in joint "
+            f"coordinates is integrated by {BDF}",
+            f"write method: {' or '.join(LOOP_METHODS)} (the loops' ODE, projected onto "
+            "them after each step) or bdf, or remove method (auto)")
 
 
 def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,

@@ -56,6 +56,8 @@ HINTS = {
 # the methods that integrate joint coordinates only, and what they integrate (E409 where the
 # formulation that runs is another: schema.semantic, runtime.auto_formulation)
 JOINT_METHODS = {"adams": "a tree", "dop853": "a tree or the projected ODE of its loops"}
+# those of them that run on loops (the others integrate a tree only: E409 on loops)
+LOOP_METHODS = ("dop853",)
 BDF = "IDAS's BDF method"  # what integrates the DAEs of rp, romega and the joint loops' DAE
 
 
