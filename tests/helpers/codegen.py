@@ -15,6 +15,18 @@ MODEL = Path(__file__).with_name("codegen_model.yaml")
 FLAGS = ("-O0", "-Wall", "-Werror")
 
 
+def model_libraries(root: Path) -> set:
+    """The cache entries under `root` of models' libraries: all but DOP853's C driver
+    (backends.rk_library: one entry per machine, built by the first compiled DOP853 run of a
+    process whose cache lacks it, so present or not by which tests ran before)."""
+    import json
+
+    from casmech.backends import cache, manifest
+
+    return {entry for entry in cache.entries(root)
+            if json.loads((entry / manifest.MANIFEST).read_text()).get("model") != "rk driver"}
+
+
 def counted_builds(monkeypatch, module) -> list:
     """Every call of `module`.build_libraries (the C compiler runs only inside it), recorded
     as its positional arguments: how tests count builds."""

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 import casmech
-from casmech.backends import cache, codegen, manifest, parametric
+from casmech.backends import cache, codegen, parametric
 from casmech.backends.load import externals
 from casmech.cli import main
 from casmech.runtime.joint_dynamics import joint_system
-from tests.helpers.codegen import counted_builds
+from tests.helpers.codegen import counted_builds, model_libraries
 
 # a spring-mass on a slide (period 2 pi sqrt(m / k)) and, independent of it, a pendulum of
 # length L (small amplitude: 2 pi sqrt((I + M L^2) / (M g L)) with I = 1e-3 M)
@@ -70,7 +70,7 @@ def test_set_sequence_builds_once_and_follows_the_values(tmp_path, toolchain, bu
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(cache_root))
     path = tmp_path / "oscillators.yaml"
     path.write_text(MODEL)
-    before = set(cache.entries(cache_root))
+    before = model_libraries(cache_root)
     # the joint formulation (a tree: ODE in joint coordinates), then the library's r-p DAE
     runs = [({"m": 2}, "joint"), ({"m": 3}, "joint"), ({"L": 2.0}, "joint"), ({"m": 3}, "rp"),
             ({"L": 2.0}, "rp")]
@@ -84,15 +84,8 @@ def test_set_sequence_builds_once_and_follows_the_values(tmp_path, toolchain, bu
         np.testing.assert_allclose(period(rows["t"], rows["bobx"] - 5.0), pendulum,
                                    rtol=1e-4, atol=0)
         assert len(builds) == (1 if mode == "compiled" else 0)  # the first run only
-    new = set(cache.entries(cache_root)) - before - _rk_driver(cache_root)
+    new = model_libraries(cache_root) - before
     assert len(new) == (1 if mode == "compiled" else 0)  # one library for every value
-
-
-def _rk_driver(root) -> set:
-    """The cache's entry of DOP853's C driver (backends.rk_library: one per machine, built by
-    the first compiled DOP853 run of a process whose cache lacks it)."""
-    return {entry for entry in cache.entries(root)
-            if json.loads((entry / manifest.MANIFEST).read_text()).get("model") == "rk driver"}
 
 
 def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_root):
@@ -135,7 +128,6 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
     """`casmech run --set` twice on a compiled model: the first run builds the parametric
     library (with the joint functions), the second builds nothing; both run in joint
     coordinates from that library and move as the r-p DAE at the same values does."""
-    import json
 
     from tests.unit.formulations.test_joint_system import PARAMETRIC_CASES
 

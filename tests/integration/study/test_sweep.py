@@ -95,12 +95,12 @@ def test_no_library_is_built(tmp_path, monkeypatch):
 def test_compiled_study_builds_one_library_for_every_value(tmp_path, monkeypatch, quick_builds):
     """mode compiled: the pendulum's parametric library is built once, before the runs, and
     every L is bound to it; the kept outputs equal the interpreted study's."""
-    from casmech.backends import cache
+    from tests.helpers.codegen import model_libraries
 
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
     grid = {"L": [0.5, 1.0, 2.0]}
     compiled = casmech.sweep(PENDULUM, grid=grid, workers=0, mode="compiled")
-    assert len(list(cache.entries(tmp_path / "cache"))) == 1
+    assert len(model_libraries(tmp_path / "cache")) == 1
     interpreted = casmech.sweep(PENDULUM, grid=grid, workers=0, mode="interpreted")
     # the same equations, C against the SX interpreter, at rtol 1e-10: the crossings agree to
     # far below the output step's interpolation error

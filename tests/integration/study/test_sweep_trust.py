@@ -105,10 +105,11 @@ def test_a_scheduler_address_of_the_wrong_form_is_a_usage_error(address, capsys,
     assert err.count("\n") == 1 and "is not a Dask scheduler's address" in err
 
 
-def test_a_scheduler_that_does_not_answer_is_a_usage_error_within_seconds():
+def test_a_scheduler_that_does_not_answer_is_a_usage_error_within_seconds(tmp_path):
     clock = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "casmech.cli", "sweep", str(PENDULUM),
-                           "--grid", "L=1,2", "--scheduler", "tcp://127.0.0.1:1"], env=ENV,
+                           "--grid", "L=1,2", "--scheduler", "tcp://127.0.0.1:1",
+                           "--out", str(tmp_path / "study")], env=ENV,
                           capture_output=True, text=True, timeout=120)
     seconds = time.perf_counter() - clock
     assert done.returncode == 2, done.stderr
