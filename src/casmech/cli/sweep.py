@@ -61,7 +61,8 @@ def add_arguments(parser) -> None:
                              "printed at the start); off by default")
     parser.add_argument("--resume", action="store_true",
                         help="continue the study whose results DIR/sweep.csv holds (a sweep "
-                             "that was stopped or killed): run only the missing runs")
+                             "that was stopped or killed): run only the missing runs; the "
+                             "model file, --set and settings must be the earlier part's")
     parser.add_argument("--mode", choices=("auto", "interpreted", "compiled", "batched"),
                         help="compiled: the model's parametric library, built once, bound to "
                              "each run's values; batched: that library mapped over many runs "

@@ -204,9 +204,53 @@ def collect(prepared: Prepared, workers: int | None = None, scheduler: str | Non
 
 def resumed(out: Path, prepared: Prepared) -> list[dict]:
     """The finished rows that an earlier run of this study left in out/sweep.csv (a usage
-    error when it holds another study's)."""
+    error when it holds another study's: `same_study`, then journal.read's columns and
+    parameter values)."""
+    same_study(out, prepared)
     study = prepared.study
     return journal.read(out / "sweep.csv", columns(study), study.points(), study.parameters)
+
+
+# what a resumed study's runs share with the earlier part's, by metadata.json's keys
+SHARED = {"model": "model file", "files": "files the model reads", "overrides": "--set "
+          "overrides", "analysis": "analysis settings"}
+
+
+def same_study(out: Path, prepared: Prepared) -> None:
+    """A usage error when out/metadata.json (written before the earlier part's first run)
+    records another model text, other files read, --set overrides or analysis settings than
+    `prepared`'s: the rows of two studies would mix in one sweep.csv. Nothing to compare when
+    the file is missing or unreadable (earlier_mode says so unless --mode is given), nor for a
+    key it lacks. The file is read, not trusted: only equality with this study's own values
+    is asked."""
+    import json
+
+    from casmech.errors import UsageError, escape
+
+    path = out / "metadata.json"
+    try:
+        earlier = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+    except (OSError, ValueError):
+        return
+    if not isinstance(earlier, dict):
+        return
+    now = json.loads(json.dumps(_metadata(prepared, {}, 0, "running", {})))
+    now["model"] = now["model"]["sha256"]
+    now["files"] = {name: entry["sha256"] for name, entry in now["files"].items()}
+    model, files = earlier.get("model"), earlier.get("files")
+    if "model" in earlier:
+        earlier["model"] = model.get("sha256") if isinstance(model, dict) else None
+    if "files" in earlier:
+        earlier["files"] = {name: entry.get("sha256") if isinstance(entry, dict) else None
+                            for name, entry in files.items()} if isinstance(files, dict) \
+            else None
+    differ = [what for key, what in SHARED.items()
+              if key in earlier and earlier[key] != now[key]]
+    if differ:
+        raise UsageError(
+            f"--resume: {escape(out)} holds a study of other {', '.join(differ)} than this one "
+            f"(by {escape(path)}): its runs and these would mix in one sweep.csv; run the "
+            "study as it was, or start it without --resume (or in another directory)")
 
 
 RAN = ("interpreted", "compiled", "batched")  # the modes a study's metadata.json may say
