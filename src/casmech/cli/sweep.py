@@ -129,12 +129,8 @@ def run(args) -> int:
     options = {"workers": args.workers, "scheduler": args.scheduler, "full": args.full,
                "mode": mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
-    study.start(out, prepared, options)
-    (rows, finished), seconds = study.timed(
-        study.collect, prepared, args.workers, args.scheduler,
-        out / "runs.h5" if args.full else None, out / "sweep.csv", earlier, args.dashboard)
-    table = study.dataframe(rows, prepared.study)
-    paths = study.write(out, prepared, table, finished, {"runs": seconds}, options)
+    table, finished, seconds, paths = study.run(out, prepared, options, args.workers,
+                                                args.scheduler, earlier, args.dashboard)
     if args.full:
         paths.append(out / "runs.h5")
     failed = int((table["status"] != "complete").sum())

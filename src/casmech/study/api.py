@@ -46,18 +46,10 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
     changed = study.changed_mode(earlier_mode, prepared.job)
     if changed:
         warnings.warn(changed, stacklevel=2)
-    full_path = Path(out) / "runs.h5" if out is not None and full else None
     options = {"workers": workers, "scheduler": scheduler, "full": bool(full),
                "mode": study.mode_name(prepared.job)}
-    earlier = []
-    if out is not None:
-        earlier = study.resumed(Path(out), prepared) if resume else []
-        study.start(Path(out), prepared, options)
-    (rows, finished), seconds = study.timed(
-        study.collect, prepared, workers, scheduler, full_path,
-        Path(out) / "sweep.csv" if out is not None else None, earlier, dashboard)
-    table = study.dataframe(rows, prepared.study)
-    if out is not None:
-        study.write(Path(out), prepared, table, finished, {"runs": seconds}, options)
+    earlier = study.resumed(Path(out), prepared) if resuming else []
+    table, finished, _, _ = study.run(None if out is None else Path(out), prepared, options,
+                                      workers, scheduler, earlier, dashboard)
     table.attrs["finished"] = finished
     return table

@@ -1,9 +1,9 @@
 """A parameter study end to end: prepare (load, check, build once), run every point, tabulate.
 
     prepared = prepare(path_or_model, form, settings)   # the study checked against the model
-    start(out, prepared, options)                        # metadata.json: status running
-    rows, finished = collect(prepared, workers=2, journal_path=out / "sweep.csv")
-    write(out, prepared, dataframe(rows, ...), finished, ...)  # sweep.csv in run order, ...
+    table, finished, seconds, paths = run(out, prepared, options, workers=2)
+    # run: start (metadata.json: status running), collect (each row appended to
+    # out/sweep.csv), write (sweep.csv in run order, metadata.json; failed on an error)
 
 With `journal_path`, each finished run is appended to that file as it arrives (study.journal),
 so a sweep killed by any signal keeps its finished runs; `resumed(out, prepared)` reads them
@@ -202,6 +202,45 @@ def collect(prepared: Prepared, workers: int | None = None, scheduler: str | Non
     return [rows[k] for k in sorted(rows)], finished
 
 
+def run(out: Path | None, prepared: Prepared, options: Mapping, workers: int | None = None,
+        scheduler: str | None = None, earlier: list[dict] | tuple = (),
+        dashboard: bool = False):
+    """A study end to end (start, collect, write; in `out` unless None): (table, finished,
+    seconds, paths written). `earlier`: the resumed rows. When collect raises (a scheduler
+    that does not answer, anything but an interrupt, which collect reports as not finished),
+    metadata.json says failed with the error; the runs finished so far stay in sweep.csv."""
+    journal_path = full_path = None
+    if out is not None:
+        start(out, prepared, options)
+        journal_path = out / "sweep.csv"
+        full_path = out / "runs.h5" if prepared.job.full else None
+    try:
+        (rows, finished), seconds = timed(collect, prepared, workers, scheduler, full_path,
+                                          journal_path, earlier, dashboard)
+    except Exception as error:
+        if out is not None:
+            failed(out, prepared, options, error)
+        raise
+    table = dataframe(rows, prepared.study)
+    paths = [] if out is None else write(out, prepared, table, finished, {"runs": seconds},
+                                         options)
+    return table, finished, seconds, paths
+
+
+def failed(out: Path, prepared: Prepared, options: Mapping, error: Exception) -> Path:
+    """metadata.json of a study whose runs stopped on `error` (status failed, the error's
+    text; its rows: those sweep.csv kept)."""
+    from casmech.io.metadata import write_json
+
+    try:
+        kept = len(resumed(out, prepared))
+    except Exception:  # a journal cut anyhow: the rows are what the file says, not counted
+        kept = 0
+    metadata = _metadata(prepared, {}, kept, "failed", options, error=str(error))
+    metadata["study"] = prepared.study.describe()
+    return write_json(out / "metadata.json", metadata)
+
+
 def resumed(out: Path, prepared: Prepared) -> list[dict]:
     """The finished rows that an earlier run of this study left in out/sweep.csv (a usage
     error when it holds another study's: `same_study`, then journal.read's columns and
@@ -374,14 +413,14 @@ def write(out: Path, prepared: Prepared, table, finished: bool, timings: Mapping
 
 
 def _metadata(prepared: Prepared, timings: Mapping[str, float], rows: int, status: str,
-              options: Mapping) -> dict:
+              options: Mapping, error: str | None = None) -> dict:
     """A study's metadata.json but its `study`: a run's (io.metadata.run_metadata) whose
     `mode` is the runs' (casmech.compile's mode: compiled for batched runs too; `options.mode`
     and `study.runner` tell batched apart)."""
     from casmech.io.metadata import run_metadata
 
     metadata = run_metadata(prepared.model, prepared.overrides, prepared.settings, timings, {},
-                            rows, status=status, options=dict(options))
+                            rows, error=error, status=status, options=dict(options))
     metadata["mode"] = prepared.job.mode
     return metadata
 

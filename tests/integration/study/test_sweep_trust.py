@@ -23,6 +23,7 @@ import pandas as pd
 import psutil
 import pytest
 
+import casmech
 from casmech import cli
 from casmech.study import execute
 from tests.conftest import ROOT
@@ -117,6 +118,10 @@ def test_a_scheduler_that_does_not_answer_is_a_usage_error_within_seconds(tmp_pa
     errors = [line for line in done.stderr.splitlines() if line.startswith("casmech:")]
     assert len(errors) == 1 and "no Dask scheduler answered within 5s" in errors[0]
     assert seconds < 20  # start-up and the 5 s connection timeout; it took 30 s and a traceback
+    # metadata.json says so (it said "running" for good): status failed, the error's text
+    metadata = json.loads((tmp_path / "study" / "metadata.json").read_text())
+    assert metadata["status"] == "failed" and "no Dask scheduler answered" in metadata["error"]
+    assert metadata["rows"] == 0 and metadata["study"]["runs"] == 2
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux's /proc")
@@ -219,3 +224,24 @@ def test_sigterm_stops_a_dask_sweep_promptly_keeping_its_runs(tmp_path):
     table = pd.read_csv(results)
     assert 3 <= len(table) < 3000 and list(table["run"]) == sorted(table["run"])
     assert json.loads((out / "metadata.json").read_text())["status"] == "interrupted"
+
+
+def test_a_study_that_stops_on_an_error_keeps_its_rows_and_says_failed(tmp_path, monkeypatch):
+    """An error out of the runs' executor after some runs finished (a worker lost, a scheduler
+    gone): the error reaches the caller, sweep.csv keeps the finished runs, metadata.json says
+    failed with the error's text and that many rows (study.sweep.run)."""
+    original = execute.execute
+
+    def failing(job, points, done, *args, **kwargs):
+        original(job, points[:1], done, 0)  # the first run, in this process
+        raise RuntimeError("the scheduler went away")
+
+    monkeypatch.setattr(execute, "execute", failing)
+    out = tmp_path / "study"
+    with pytest.raises(RuntimeError, match="went away"):
+        casmech.sweep(PENDULUM, grid={"L": [1.0, 2.0]}, keep=["crossing(bob.y)"], workers=0,
+                      out=out)
+    assert len(pd.read_csv(out / "sweep.csv")) == 1
+    metadata = json.loads((out / "metadata.json").read_text())
+    assert (metadata["status"], metadata["error"], metadata["rows"]) == (
+        "failed", "the scheduler went away", 1)
