@@ -130,7 +130,8 @@ def run(args) -> int:
                "mode": mode,
                "allow_dir": [str(Path(d).resolve()) for d in args.allow_dir]}
     table, finished, seconds, paths = study.run(out, prepared, options, args.workers,
-                                                args.scheduler, earlier, args.dashboard)
+                                                args.scheduler, earlier, args.dashboard,
+                                                earlier_mode)
     if args.full:
         paths.append(out / "runs.h5")
     failed = int((table["status"] != "complete").sum())

@@ -50,6 +50,6 @@ def sweep(model, grid: Mapping | None = None, samples: int = 0,
                "mode": study.mode_name(prepared.job)}
     earlier = study.resumed(Path(out), prepared) if resuming else []
     table, finished, _, _ = study.run(None if out is None else Path(out), prepared, options,
-                                      workers, scheduler, earlier, dashboard)
+                                      workers, scheduler, earlier, dashboard, earlier_mode)
     table.attrs["finished"] = finished
     return table

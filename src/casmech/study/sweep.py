@@ -204,11 +204,16 @@ def collect(prepared: Prepared, workers: int | None = None, scheduler: str | Non
 
 def run(out: Path | None, prepared: Prepared, options: Mapping, workers: int | None = None,
         scheduler: str | None = None, earlier: list[dict] | tuple = (),
-        dashboard: bool = False):
+        dashboard: bool = False, earlier_mode: str | None = None):
     """A study end to end (start, collect, write; in `out` unless None): (table, finished,
-    seconds, paths written). `earlier`: the resumed rows. When collect raises (a scheduler
-    that does not answer, anything but an interrupt, which collect reports as not finished),
-    metadata.json says failed with the error; the runs finished so far stay in sweep.csv."""
+    seconds, paths written). `earlier`: the resumed rows, `earlier_mode` the mode they ran in
+    (resume_mode), both recorded in metadata.json's options.resumed. When collect raises (a
+    scheduler that does not answer, anything but an interrupt, which collect reports as not
+    finished), metadata.json says failed with the error; the runs finished so far stay in
+    sweep.csv."""
+    if earlier or earlier_mode:
+        options = {**options, "resumed": {"earlier_runs": len(earlier),
+                                          "earlier_mode": earlier_mode}}
     journal_path = full_path = None
     if out is not None:
         start(out, prepared, options)

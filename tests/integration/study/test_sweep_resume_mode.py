@@ -72,6 +72,8 @@ def test_a_resumed_study_keeps_its_earlier_mode(studies, capsys):
     pd.testing.assert_frame_equal(rows(part), rows(whole), check_exact=True)  # bit for bit
     assert metadata(part)["mode"] == "interpreted"
     assert metadata(part)["study"]["runner"].startswith("interpreted")
+    assert metadata(part)["options"]["resumed"] == {"earlier_runs": 2,
+                                                    "earlier_mode": "interpreted"}
 
 
 def test_a_mode_given_on_resume_wins_and_says_so(studies, capsys):
@@ -82,9 +84,12 @@ def test_a_mode_given_on_resume_wins_and_says_so(studies, capsys):
     resumed = rows(part)
     pd.testing.assert_frame_equal(resumed[:2], rows(whole)[:2], check_exact=True)
     pd.testing.assert_frame_equal(resumed[2:], rows(compiled)[2:], check_exact=True)
-    # the top-level mode is the runs' (the last part's), as the runner says
+    # the top-level mode is the runs' (the last part's), as the runner says; the earlier
+    # part's is recorded beside it
     assert metadata(part)["mode"] == metadata(part)["options"]["mode"] == "compiled"
     assert metadata(part)["study"]["runner"].startswith("compiled")
+    assert metadata(part)["options"]["resumed"] == {"earlier_runs": 2,
+                                                    "earlier_mode": "interpreted"}
 
 
 def test_the_api_resumes_in_the_earlier_mode(studies):
