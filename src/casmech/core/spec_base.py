@@ -19,7 +19,7 @@ from pydantic import (
     WrapValidator,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
+from pydantic_core import PydanticCustomError, core_schema
 
 
 def _scalar(value: Any, handler: Any) -> Any:
@@ -96,6 +96,34 @@ class Spec(BaseModel):
             for key, value in data.items()
             if value is not None or key not in fields or fields[key].is_required()
         }
+
+
+class Deferred:
+    """`Annotated[SomeSpec, Deferred]`: the items of that class are validated by the class's own
+    validator, built when the first such item is validated, instead of a copy of its schema
+    inside the schema of every class that holds it; a document builds only the classes it uses
+    (a union of every joint type, `joints: [spherical ...]`: only the spherical joint's).
+
+    The errors are the class's own, under the holder's location, as if inlined. A class with a
+    `type` field shows it to the holder, so that a union of such classes is discriminated on
+    `type`. The JSON Schema is the class's own (a `$ref` to its definition)."""
+
+    @classmethod
+    def __get_pydantic_core_schema__(cls, source: Any, handler: Any) -> Any:
+        def validate(value: Any, _inner: Any) -> Any:
+            return source.__pydantic_validator__.validate_python(value)
+
+        field = source.model_fields.get("type")
+        shown = {} if field is None else {
+            "type": core_schema.typed_dict_field(handler.generate_schema(field.annotation))}
+        return core_schema.no_info_wrap_validator_function(
+            validate, core_schema.typed_dict_schema(shown),
+            serialization=core_schema.simple_ser_schema("any"), metadata={"deferred": source})
+
+    @classmethod
+    def __get_pydantic_json_schema__(cls, schema: Any, handler: Any) -> Any:
+        source = schema["metadata"]["deferred"]
+        return handler.generate_json_schema.generate_inner(source.__pydantic_core_schema__)
 
 
 # ------------------------------------------------------------------------------- orientation

@@ -16,7 +16,7 @@ from pydantic import (
 )
 from pydantic.fields import FieldInfo
 
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Deferred, Name, Orientation, Repeats, Scalar, Spec, Vector
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
@@ -192,13 +192,14 @@ _BUILT_FROM: dict[str, JointType] = {}  # joint type -> the entry its class was 
 
 
 def _joint_union():
-    """The `joints:` item: a union of the registered types' classes, discriminated on `type`."""
+    """The `joints:` item: a union of the registered types' classes, discriminated on `type`,
+    each validated by its own validator (spec_base.Deferred)."""
     for name in set(JOINT_CLASSES) - set(REGISTRY):
         del JOINT_CLASSES[name], _BUILT_FROM[name]
     for name, entry in REGISTRY.items():
         if _BUILT_FROM.get(name) is not entry:
             JOINT_CLASSES[name], _BUILT_FROM[name] = joint_class(entry), entry
-    classes = tuple(JOINT_CLASSES[name] for name in REGISTRY)
+    classes = tuple(Annotated[JOINT_CLASSES[name], Deferred] for name in REGISTRY)
     return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
 
