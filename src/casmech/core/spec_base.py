@@ -116,8 +116,12 @@ class Deferred:
         field = source.model_fields.get("type")
         shown = {} if field is None else {
             "type": core_schema.typed_dict_field(handler.generate_schema(field.annotation))}
+        # (a reference of its own, so that the JSON Schema of a field holding it gives the field
+        # no title, as for a class inlined)
+        shown_schema = core_schema.typed_dict_schema(
+            shown, ref=f"{source.__module__}.{source.__qualname__}:{id(source)}:shown")
         return core_schema.no_info_wrap_validator_function(
-            validate, core_schema.typed_dict_schema(shown),
+            validate, shown_schema,
             serialization=core_schema.simple_ser_schema("any"), metadata={"deferred": source})
 
     @classmethod

@@ -20,7 +20,16 @@ from pydantic import ConfigDict, Discriminator, Field, StrictStr, Tag
 from pydantic.fields import FieldInfo
 
 from casmech.core import options, spec_base
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
+from casmech.core.spec_base import (
+    Deferred,
+    Name,
+    Orientation,
+    Repeats,
+    Scalar,
+    Spec,
+    Vector,
+    Version,
+)
 from casmech.elements import coordinate_kinds, force_types
 from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
@@ -65,8 +74,8 @@ class Component(Spec):
 
 ComponentRef = Annotated[
     Union[  # noqa: UP007
-        Annotated[ComponentFile, Tag("file")],
-        Annotated[Component, Tag("inline")],
+        Annotated[ComponentFile, Deferred, Tag("file")],
+        Annotated[Component, Deferred, Tag("inline")],
     ],
     Discriminator(lambda v: "file" if isinstance(v, dict) and "file" in v else "inline"),
 ]
@@ -84,13 +93,15 @@ class ModelSpec(Spec):
     joints: tuple[Joint, ...] = ()
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
-    events: tuple[Event, ...] = ()
-    outputs: tuple[Output, ...] = ()
-    estimate: Estimate | None = None
-    ocp: OptimalControl | None = None
-    study: Study | None = None
+    # the sections a model may leave out: validated by their classes' own validators, built
+    # when a document first has one (spec_base.Deferred)
+    events: tuple[Annotated[Event, Deferred], ...] = ()
+    outputs: tuple[Annotated[Output, Deferred], ...] = ()
+    estimate: Annotated[Estimate, Deferred] | None = None
+    ocp: Annotated[OptimalControl, Deferred] | None = None
+    study: Annotated[Study, Deferred] | None = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
-    instances: tuple[Instance, ...] = ()
+    instances: tuple[Annotated[Instance, Deferred], ...] = ()
 
     model_config = ConfigDict(
         extra="forbid",
