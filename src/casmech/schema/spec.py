@@ -74,8 +74,8 @@ class Component(Spec):
 
 ComponentRef = Annotated[
     Union[  # noqa: UP007
-        Annotated[ComponentFile, Deferred, Tag("file")],
-        Annotated[Component, Deferred, Tag("inline")],
+        Annotated[ComponentFile, Deferred(), Tag("file")],
+        Annotated[Component, Deferred(), Tag("inline")],
     ],
     Discriminator(lambda v: "file" if isinstance(v, dict) and "file" in v else "inline"),
 ]
@@ -95,13 +95,13 @@ class ModelSpec(Spec):
     analysis: Analysis = Field(default_factory=Analysis)
     # the sections a model may leave out: validated by their classes' own validators, built
     # when a document first has one (spec_base.Deferred)
-    events: tuple[Annotated[Event, Deferred], ...] = ()
-    outputs: tuple[Annotated[Output, Deferred], ...] = ()
-    estimate: Annotated[Estimate, Deferred] | None = None
-    ocp: Annotated[OptimalControl, Deferred] | None = None
-    study: Annotated[Study, Deferred] | None = None
+    events: tuple[Annotated[Event, Deferred()], ...] = ()
+    outputs: tuple[Annotated[Output, Deferred()], ...] = ()
+    estimate: Annotated[Estimate, Deferred()] | None = None
+    ocp: Annotated[OptimalControl, Deferred()] | None = None
+    study: Annotated[Study, Deferred()] | None = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
-    instances: tuple[Annotated[Instance, Deferred], ...] = ()
+    instances: tuple[Annotated[Instance, Deferred()], ...] = ()
 
     model_config = ConfigDict(
         extra="forbid",

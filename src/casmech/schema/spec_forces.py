@@ -14,7 +14,7 @@ from casmech.elements.force_types import REGISTRY
 def _force_union():
     """The `forces:` item: a union of the registered types' classes, discriminated on `type`,
     each validated by its own validator (spec_base.Deferred)."""
-    classes = tuple(Annotated[entry.spec, Deferred] for entry in REGISTRY.values())
+    classes = tuple(Annotated[entry.spec, Deferred()] for entry in REGISTRY.values())
     return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
 
