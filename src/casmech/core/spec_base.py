@@ -105,8 +105,9 @@ class Deferred:
     validator, built when the first such item is validated, instead of a copy of its schema
     inside the schema of every class that holds it; a document builds only the classes it uses
     (a union of every joint type, `joints: [spherical ...]`: only the spherical joint's).
-    `Annotated[Spec, Deferred(build, tag)]`: the class itself is made by `build()` when first
-    used, its `type` being `tag` (`build` keeps what it made: spec_joints.joint_class_of).
+    `Annotated[Spec, Deferred(build, tag)]`: the class itself is made (or its module imported)
+    by `build()` when first used, its `type` being `tag` if it has one (`build` keeps what it
+    made: spec_joints.joint_class_of; spec._problem).
 
     The errors are the class's own, under the holder's location, as if inlined. A class with a
     `type` field shows it to the holder, so that a union of such classes is discriminated on
@@ -131,7 +132,7 @@ class Deferred:
             def validate(value: Any, _inner: Any) -> Any:
                 return build().__pydantic_validator__.validate_python(value)
 
-            tag = Literal[self.tag]
+            tag = None if self.tag is None else Literal[self.tag]
         shown = {} if tag is None else {
             "type": core_schema.typed_dict_field(handler.generate_schema(tag))}
         # (a reference of its own, so that the JSON Schema of a field holding it gives the field
