@@ -41,7 +41,7 @@ from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
 
-PARTS = (spec_base, spec_bodies, spec_joints, spec_forces, spec_analysis)
+PARTS = (spec_base, spec_bodies, spec_joints, spec_analysis, spec_forces)
 # the part imported when first used: the sections of `casmech optimize` and `casmech sweep`
 PROBLEMS = "casmech.schema.spec_problems"
 
