@@ -27,7 +27,6 @@ from casmech.core.records import record
 from casmech.equations import checks
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import UsageError
-from casmech.formulations import joint_space as joint_spaces
 from casmech.model.lower import lower
 from casmech.runtime import analyses, workspace
 from casmech.runtime.analyses import (  # noqa: F401
@@ -43,6 +42,7 @@ from casmech.schema.resolved import ResolvedModel
 
 if TYPE_CHECKING:
     from casmech.backends.handover import Handover
+    from casmech.formulations import joint_space as joint_spaces
 
 
 @record(repr=False, eq=False)
@@ -191,6 +191,8 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     forces, forward and inverse dynamics and their derivatives as CasADi Functions and NumPy
     calls (formulations.joint_space; docs/api.md#joint-space-dynamics). A compiled model keeps
     its joint space (built once per set of values)."""
+    from casmech.formulations import joint_space as joint_spaces
+
     if not isinstance(model, SystemFunctions):
         return joint_spaces.joint_space(lower(model))
     return workspace.default(model).one("joint_space",

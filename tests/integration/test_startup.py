@@ -140,3 +140,28 @@ def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch, quic
     assert loaded(again, ["filelock", "platformdirs"]) == []
     assert (tmp_path / "again" / "results.csv").read_bytes() == \
         (tmp_path / "first" / "results.csv").read_bytes()
+
+
+def test_loading_makes_only_the_classes_the_file_uses():
+    """The YAML classes of force elements, of estimation, optimal control and studies, and of
+    joint types a file does not name are made when a file first has one (spec_base.Deferred),
+    and components are imported by a composed file only: loading the double pendulum (two
+    revolute joints, no forces) makes the revolute joint's class alone; the bushing mount makes
+    the force elements' classes; the compiler's modules import no pydantic."""
+    assert loaded(modules_after("import casmech.equations.functions, "
+                                "casmech.formulations.joint_system"), ["pydantic"]) == []
+    probe = ("import json, sys; from casmech.schema import load_model, spec_joints; "
+             "load_model(sys.argv[1]); print(json.dumps([sorted(spec_joints.JOINT_CLASSES), "
+             "sorted(m for m in sys.modules if m.startswith('casmech.'))]))")
+    made = {}
+    for name in ("double_pendulum", "bushing_mount"):
+        done = subprocess.run([sys.executable, "-c", probe, str(MODELS / f"{name}.yaml")],
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        made[name] = json.loads(done.stdout.splitlines()[-1])
+    joints, modules = made["double_pendulum"]
+    assert joints == ["revolute"]
+    assert "casmech.schema.spec" in modules
+    assert loaded(set(modules), ["casmech.elements.forces.specs", "casmech.schema.spec_problems",
+                                 "casmech.schema.components"]) == []
+    assert "casmech.elements.forces.specs" in made["bushing_mount"][1]

@@ -3,6 +3,8 @@ items every section uses: orientations and `repeat`."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
@@ -19,7 +21,7 @@ from pydantic import (
     WrapValidator,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
+from pydantic_core import PydanticCustomError, core_schema
 
 
 def _scalar(value: Any, handler: Any) -> Any:
@@ -96,6 +98,54 @@ class Spec(BaseModel):
             for key, value in data.items()
             if value is not None or key not in fields or fields[key].is_required()
         }
+
+
+class Deferred:
+    """`Annotated[SomeSpec, Deferred()]`: the items of that class are validated by the class's own
+    validator, built when the first such item is validated, instead of a copy of its schema
+    inside the schema of every class that holds it; a document builds only the classes it uses
+    (a union of every joint type, `joints: [spherical ...]`: only the spherical joint's).
+    `Annotated[Spec, Deferred(build, tag)]`: the class itself is made (or its module imported)
+    by `build()` when first used, its `type` being `tag` if it has one (`build` keeps what it
+    made: spec_joints.joint_class_of; spec._problem).
+
+    The errors are the class's own, under the holder's location, as if inlined. A class with a
+    `type` field shows it to the holder, so that a union of such classes is discriminated on
+    `type`. The JSON Schema is the class's own (a `$ref` to its definition)."""
+
+    def __init__(self, build: Callable[[], type] | None = None, tag: str | None = None):
+        self.build, self.tag = build, tag
+
+    def spec(self, source: Any) -> Any:
+        """The class: `source` (the annotated class), or the one `build` makes."""
+        return source if self.build is None else self.build()
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: Any) -> Any:
+        build = self.build
+        if build is None:
+            def validate(value: Any, _inner: Any) -> Any:
+                return source.__pydantic_validator__.validate_python(value)
+
+            field = source.model_fields.get("type")
+            tag = None if field is None else field.annotation
+        else:
+            def validate(value: Any, _inner: Any) -> Any:
+                return build().__pydantic_validator__.validate_python(value)
+
+            tag = None if self.tag is None else Literal[self.tag]
+        shown = {} if tag is None else {
+            "type": core_schema.typed_dict_field(handler.generate_schema(tag))}
+        # (a reference of its own, so that the JSON Schema of a field holding it gives the field
+        # no title, as for a class inlined)
+        shown_schema = core_schema.typed_dict_schema(shown, ref=f"casmech.deferred:{id(self)}")
+        return core_schema.no_info_wrap_validator_function(
+            validate, shown_schema, serialization=core_schema.simple_ser_schema("any"),
+            metadata={"deferred": partial(self.spec, source)})
+
+    @staticmethod
+    def __get_pydantic_json_schema__(schema: Any, handler: Any) -> Any:
+        spec = schema["metadata"]["deferred"]()
+        return handler.generate_json_schema.generate_inner(spec.__pydantic_core_schema__)
 
 
 # ------------------------------------------------------------------------------- orientation

@@ -61,7 +61,9 @@ class ForceType:
     """One force element type (module docstring)."""
 
     name: str  # YAML `type:`
-    spec: type  # its YAML class (pydantic, casmech.core.spec_base.Spec): `type: Literal[name]`
+    # its YAML class (pydantic, casmech.core.spec_base.Spec): `type: Literal[name]`; or a
+    # function of no arguments returning it, called when the schema first needs it (spec_of)
+    spec: type | Callable[[], type]
     resolve: Callable[..., dict | None]
     lower: Callable[..., dict]
     law: Callable[..., tuple]
@@ -81,7 +83,21 @@ class ForceType:
     relative: bool = False
 
 
-def _contact(name: str, spec: type, shape_spec: Callable, shape: Callable, **extra) -> ForceType:
+def _spec(name: str) -> type:
+    """A built-in type's YAML class: casmech.elements.forces.specs, imported on the first call
+    (a model without force elements makes none of their classes)."""
+    from casmech.elements.forces import specs
+
+    return getattr(specs, name)
+
+
+def spec_of(entry: ForceType) -> type:
+    """The YAML class of an entry (its `spec`, or what that function returns)."""
+    return entry.spec if isinstance(entry.spec, type) else entry.spec()
+
+
+def _contact(name: str, spec: Callable, shape_spec: Callable, shape: Callable,
+             **extra) -> ForceType:
     return ForceType(name, spec, partial(contact_spec.resolve, shape=shape_spec), contact.lower,
                      partial(contact.generalized_force, shape=shape),
                      outputs=contact.OUTPUTS, output_values=partial(contact.outputs, shape=shape),
@@ -89,27 +105,29 @@ def _contact(name: str, spec: type, shape_spec: Callable, shape: Callable, **ext
 
 
 BUILT_IN = (
-    ForceType("tsda", springs.TSDA, springs.resolve_tsda, springs.lower_tsda, springs.law,
+    ForceType("tsda", partial(_spec, "TSDA"), springs.resolve_tsda, springs.lower_tsda, springs.law,
               state_keys=("actuator",), inputs=("force",), with_inputs=springs.with_inputs,
               kernel=Kernel(springs.kernel_data, springs.kernel), relative=True),
-    ForceType("rsda", springs.RSDA, springs.resolve_rsda, springs.lower_rsda, springs.law,
+    ForceType("rsda", partial(_spec, "RSDA"), springs.resolve_rsda, springs.lower_rsda, springs.law,
               state_keys=("actuator",), inputs=("torque",), with_inputs=springs.with_inputs,
               kernel=Kernel(springs.kernel_data, springs.kernel), relative=True),
-    ForceType("force", loads.PointForce, loads.resolve_force, loads.lower, loads.force_law,
+    ForceType("force", partial(_spec, "PointForce"), loads.resolve_force, loads.lower,
+              loads.force_law,
               state_keys=("value",), inputs=("fx", "fy", "fz"), with_inputs=loads.with_inputs,
               one_body=True, kernel=Kernel(loads.force_data, loads.force_kernel, 3)),
-    ForceType("torque", loads.Torque, loads.resolve_torque, loads.lower, loads.torque_law,
+    ForceType("torque", partial(_spec, "Torque"), loads.resolve_torque, loads.lower,
+              loads.torque_law,
               state_keys=("value",), inputs=("tx", "ty", "tz"), with_inputs=loads.with_inputs,
               one_body=True, kernel=Kernel(loads.no_data, loads.torque_kernel, 3)),
-    ForceType("bushing", bushing.Bushing, bushing.resolve, bushing.lower, bushing.law,
+    ForceType("bushing", partial(_spec, "Bushing"), bushing.resolve, bushing.lower, bushing.law,
               inputs=("fx", "fy", "fz", "tx", "ty", "tz"), with_inputs=bushing.with_inputs),
-    _contact("sphere_plane", contact_spec.SpherePlane, contact_spec.sphere_plane,
+    _contact("sphere_plane", partial(_spec, "SpherePlane"), contact_spec.sphere_plane,
              contact.sphere_plane),
-    _contact("sphere_sphere", contact_spec.SphereSphere, contact_spec.sphere_sphere,
+    _contact("sphere_sphere", partial(_spec, "SphereSphere"), contact_spec.sphere_sphere,
              contact.sphere_sphere, thickness=contact.pair_thickness),
-    _contact("points_plane", contact_spec.PointsPlane, contact_spec.points_plane,
+    _contact("points_plane", partial(_spec, "PointsPlane"), contact_spec.points_plane,
              contact.points_plane),
-    _contact("capsule_plane", contact_spec.CapsulePlane, contact_spec.capsule_plane,
+    _contact("capsule_plane", partial(_spec, "CapsulePlane"), contact_spec.capsule_plane,
              contact.capsule_plane),
 )
 

@@ -78,12 +78,13 @@ def _symbols(names: Sequence[str]) -> dict:
 
 def _findings(document: Document, overrides: Mapping[str, str] | None,
               symbols: Mapping) -> ResolvedModel:
-    from casmech.schema.components import compose, uses_composition
-    from casmech.schema.repeat import too_many
+    from casmech.schema.repeat import too_many, uses_composition
     from casmech.schema.semantic import resolve
     from casmech.schema.spec_errors import validate
 
     if uses_composition(document.data):  # components, instances, repeat: docs/components.md
+        from casmech.schema.components import compose
+
         model, found = compose(document, overrides, symbols)
         found = sorted(dict.fromkeys(found), key=lambda d: _in_files(d, document.file))
         if found or model is None:

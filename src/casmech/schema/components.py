@@ -38,12 +38,7 @@ from casmech.schema.semantic import resolve_model
 from casmech.schema.spec_errors import validate
 
 PREFIX = re.compile(r"^in instances? (.+?) \(component (.+?)\): (.*)$", re.S)
-COMPOSED_KEYS = ("components", "instances")
 ALL = 6  # instance names listed in a message before '...'
-
-
-def uses_composition(data: Mapping[str, Any]) -> bool:
-    return any(key in data for key in COMPOSED_KEYS) or repeat.has_repeat(data)
 
 
 # ----------------------------------------------------------------------------- checker

@@ -257,6 +257,15 @@ def has_repeat(data: Mapping[str, Any]) -> bool:
                                        for k in NAME_KEYS) for item in items)
 
 
+COMPOSED_KEYS = ("components", "instances")
+
+
+def uses_composition(data: Mapping[str, Any]) -> bool:
+    """Whether a document is composed (schema/components.py): components, instances, `repeat`
+    or `{expr}` names."""
+    return any(key in data for key in COMPOSED_KEYS) or has_repeat(data)
+
+
 def too_many(document: Document) -> list[Diagnostic]:
     """E105 when the items written in a model without repeat or instances exceed MAX_ITEMS
     (at the item that goes past it)."""

@@ -7,29 +7,54 @@ geometry items on their shape. Every scalar is a number or an expression string 
 The classes live in the parts, by what they hold: casmech.core.spec_base (scalars, vectors,
 orientation, repeat), spec_bodies, spec_joints (one class per joint type of
 casmech.elements.joint_types),
-spec_forces, spec_analysis (analysis, events, estimation, optimal control, studies); this
-module holds the whole file (ModelSpec) and components, and gives every part's names as its
-own (`spec.Body`, `from casmech.schema.spec import Revolute`).
+spec_forces, spec_analysis (analysis, events, outputs), spec_problems (estimation, optimal
+control, studies: imported when first used); this module holds the whole file (ModelSpec) and
+components, and gives every part's names as its own (`spec.Body`, `from casmech.schema.spec
+import Revolute`).
 """
 
 from __future__ import annotations
 
+import importlib
+from functools import partial
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import ConfigDict, Discriminator, Field, StrictStr, Tag
 from pydantic.fields import FieldInfo
 
 from casmech.core import options, spec_base
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector, Version
+from casmech.core.spec_base import (
+    Deferred,
+    Name,
+    Orientation,
+    Repeats,
+    Scalar,
+    Spec,
+    Vector,
+    Version,
+)
 from casmech.elements import coordinate_kinds, force_types
 from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
-from casmech.schema.spec_analysis import Analysis, Estimate, Event, OptimalControl, Output, Study
+from casmech.schema.spec_analysis import Analysis, Event, Output
 from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
 
-PARTS = (spec_base, spec_bodies, spec_joints, spec_forces, spec_analysis)
+PARTS = (spec_base, spec_bodies, spec_joints, spec_analysis, spec_forces)
+# the part imported when first used: the sections of `casmech optimize` and `casmech sweep`
+PROBLEMS = "casmech.schema.spec_problems"
+
+
+def _problem(name: str) -> type[Spec]:
+    """A class of spec_problems (the module imported on the first call)."""
+    return getattr(importlib.import_module(PROBLEMS), name)
+
+
+# the optional sections of spec_problems' classes
+EstimateSection, OptimalControlSection, StudySection = (
+    Annotated[Spec, Deferred(partial(_problem, name))] | None
+    for name in ("Estimate", "OptimalControl", "Study"))
 
 
 # ------------------------------------------------------ components and instances (issue 6)
@@ -65,8 +90,8 @@ class Component(Spec):
 
 ComponentRef = Annotated[
     Union[  # noqa: UP007
-        Annotated[ComponentFile, Tag("file")],
-        Annotated[Component, Tag("inline")],
+        Annotated[ComponentFile, Deferred(), Tag("file")],
+        Annotated[Component, Deferred(), Tag("inline")],
     ],
     Discriminator(lambda v: "file" if isinstance(v, dict) and "file" in v else "inline"),
 ]
@@ -84,13 +109,15 @@ class ModelSpec(Spec):
     joints: tuple[Joint, ...] = ()
     forces: tuple[Force, ...] = ()
     analysis: Analysis = Field(default_factory=Analysis)
-    events: tuple[Event, ...] = ()
-    outputs: tuple[Output, ...] = ()
-    estimate: Estimate | None = None
-    ocp: OptimalControl | None = None
-    study: Study | None = None
+    # the sections a model may leave out: validated by their classes' own validators, built
+    # when a document first has one (spec_base.Deferred)
+    events: tuple[Annotated[Event, Deferred()], ...] = ()
+    outputs: tuple[Annotated[Output, Deferred()], ...] = ()
+    estimate: EstimateSection = None
+    ocp: OptimalControlSection = None
+    study: StudySection = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
-    instances: tuple[Instance, ...] = ()
+    instances: tuple[Annotated[Instance, Deferred()], ...] = ()
 
     model_config = ConfigDict(
         extra="forbid",
@@ -160,6 +187,11 @@ def __getattr__(name: str) -> Any:
     for part in PARTS:
         try:
             return getattr(part, name)
+        except AttributeError:
+            pass
+    if not name.startswith("__"):  # (the import system asks for `__path__`)
+        try:
+            return _problem(name)
         except AttributeError:
             pass
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

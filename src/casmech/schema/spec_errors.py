@@ -13,6 +13,7 @@ from typing import Annotated, Any, Union, get_args, get_origin
 from pydantic import BaseModel, Tag, ValidationError
 from pydantic_core import ErrorDetails
 
+from casmech.core.spec_base import Deferred
 from casmech.elements.joint_types import REGISTRY, initial_keys, listed
 from casmech.errors import Diagnostic, did_you_mean
 from casmech.schema.loader import Document, Path, format_path
@@ -20,16 +21,22 @@ from casmech.schema.spec import GEOMETRY_KINDS, ModelSpec
 
 
 def _strip(annotation: Any) -> Any:
+    """The type under Annotated: a class made when first used (spec_base.Deferred) is made."""
     while get_origin(annotation) is Annotated:
-        annotation = get_args(annotation)[0]
+        annotation, *metadata = get_args(annotation)
+        for meta in metadata:
+            if isinstance(meta, Deferred):
+                annotation = meta.spec(annotation)
     return annotation
 
 
 def _tag(member: Any) -> str | None:
     """The tag of a union member: its Tag metadata or the Literal of its `type` field."""
     tags = [meta.tag for meta in get_args(member)[1:] if isinstance(meta, Tag)]
+    if tags:
+        return tags[0]
     fields = getattr(_strip(member), "model_fields", {})
-    tags += list(get_args(fields["type"].annotation)) if "type" in fields else []
+    tags = list(get_args(fields["type"].annotation)) if "type" in fields else []
     return tags[0] if tags else None
 
 

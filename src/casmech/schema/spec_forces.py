@@ -3,16 +3,21 @@ of its casmech.elements.force_types entry (the built-in ones are in casmech.elem
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Annotated, Union
 
-from pydantic import Field
+from pydantic import Field, Tag
 
-from casmech.elements.force_types import REGISTRY
+from casmech.core.spec_base import Deferred, Spec
+from casmech.elements.force_types import REGISTRY, spec_of
 
 
 def _force_union():
-    """The `forces:` item: a union of the registered types' classes, discriminated on `type`."""
-    classes = tuple(entry.spec for entry in REGISTRY.values())
+    """The `forces:` item: a union of the registered types' classes, discriminated on `type`,
+    each made (force_types.spec_of) and validated by its own validator when a document first
+    holds one (spec_base.Deferred)."""
+    classes = tuple(Annotated[Spec, Deferred(partial(spec_of, entry), name), Tag(name)]
+                    for name, entry in REGISTRY.items())
     return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
 
@@ -29,7 +34,10 @@ def rebuild():
 
 def __getattr__(name: str) -> type:
     """A force element type's class by its name (spec.TSDA, spec.Bushing, ...)."""
-    found = [entry.spec for entry in REGISTRY.values() if entry.spec.__name__ == name]
+    if name.startswith("__"):  # (the import system asks for `__path__`)
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    found = [spec_of(entry) for entry in REGISTRY.values()]
+    found = [cls for cls in found if cls.__name__ == name]
     if not found:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     return found[0]

@@ -3,6 +3,7 @@ and one class per registered joint type, built from its casmech.elements.joint_t
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
@@ -16,7 +17,7 @@ from pydantic import (
 )
 from pydantic.fields import FieldInfo
 
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Deferred, Name, Orientation, Repeats, Scalar, Spec, Vector
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
@@ -187,18 +188,27 @@ def joint_class(entry: JointType) -> type[Spec]:
                         __module__=__name__, **fields)
 
 
-JOINT_CLASSES: dict[str, type[Spec]] = {}  # joint type -> its class (joint_types.REGISTRY's)
+JOINT_CLASSES: dict[str, type[Spec]] = {}  # joint type -> its class, made when first asked for
 _BUILT_FROM: dict[str, JointType] = {}  # joint type -> the entry its class was built from
 
 
+def joint_class_of(name: str) -> type[Spec]:
+    """The class of a registered joint type, made from its current registry entry when first
+    asked for (and again after the entry or a coordinate kind changed)."""
+    entry = REGISTRY[name]
+    if _BUILT_FROM.get(name) is not entry:
+        JOINT_CLASSES[name], _BUILT_FROM[name] = joint_class(entry), entry
+    return JOINT_CLASSES[name]
+
+
 def _joint_union():
-    """The `joints:` item: a union of the registered types' classes, discriminated on `type`."""
+    """The `joints:` item: a union of the registered types' classes, discriminated on `type`,
+    each made and validated by its own validator when a document first holds one
+    (spec_base.Deferred)."""
     for name in set(JOINT_CLASSES) - set(REGISTRY):
         del JOINT_CLASSES[name], _BUILT_FROM[name]
-    for name, entry in REGISTRY.items():
-        if _BUILT_FROM.get(name) is not entry:
-            JOINT_CLASSES[name], _BUILT_FROM[name] = joint_class(entry), entry
-    classes = tuple(JOINT_CLASSES[name] for name in REGISTRY)
+    classes = tuple(Annotated[Spec, Deferred(partial(joint_class_of, name), name), Tag(name)]
+                    for name in REGISTRY)
     return Annotated[Union[classes], Field(discriminator="type")]  # noqa: UP007
 
 
@@ -214,7 +224,7 @@ def rebuild():
 
 def __getattr__(name: str) -> type[Spec]:
     """A joint type's class by its name (spec.Revolute, spec.DP1, ...)."""
-    found = [cls for cls in JOINT_CLASSES.values() if cls.__name__ == name]
+    found = [key for key, entry in REGISTRY.items() if entry.class_name == name]
     if not found:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return found[0]
+    return joint_class_of(found[0])

@@ -8,7 +8,8 @@ and third-party libraries only (tests/unit/test_layering.py).
     springs       tsda, rsda
     loads         force, torque
     bushing       bushing
-    contact_spec  the contacts' YAML classes and checks
+    contact_spec  the contacts' checks
+    specs         the YAML classes of them all, imported when the schema first needs one
     contact       the contacts' laws and lowering (sphere_plane, sphere_sphere, points_plane,
                   capsule_plane)
 """

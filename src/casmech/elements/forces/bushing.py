@@ -22,51 +22,26 @@ The rotation vector comes from Euler parameters: s = conj(p_i) p_j c, where the 
 the relative rotation at t = 0, so S = A_i^T A_j (A_i0^T A_j0)^T and theta = M_i^T theta(S) with
 M_i the I frame in body_i. theta(S) = 2 e atan2(|e|, e0)/|e|, by its series near identity.
 
-Here: its YAML class, checks (`resolve`), lowering, law and linearization inputs (its
-casmech.elements.force_types entry).
+Here: its checks (`resolve`), lowering, law and linearization inputs (its
+casmech.elements.force_types entry); its YAML class is in elements/forces/specs.py.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Literal
+from typing import Any
 
 import casadi as ca
 import numpy as np
-from pydantic import StrictBool
 
 from casmech.core import euler, traced
 from casmech.core.quaternions import conjugate
-from casmech.core.spec_base import Name, Orientation, Repeats, Spec, Vector
 from casmech.core.values import constant
 from casmech.elements.forces.springs import non_negative
 from casmech.errors import failed
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
 SERIES = 1e-3  # below |e|^2 / e0^2 = SERIES, atan(u)/u by its series (5 terms: error < 1e-16)
-
-
-class Bushing(Spec):
-    """6-DOF linear spring-damper between a frame on body_i and one on body_j (docs/forces.md).
-
-    Both frames are at the global point `at` with `orientation` (default: global axes) at t = 0;
-    vectors are components along the I frame's x, y, z: force = -K d - C d_dot + preload.
-    """
-
-    name: Name
-    type: Literal["bushing"]
-    body_i: Name
-    body_j: Name
-    at: Vector
-    orientation: Orientation | None = None
-    stiffness: Vector = (0, 0, 0)
-    damping: Vector = (0, 0, 0)
-    rotational_stiffness: Vector = (0, 0, 0)
-    rotational_damping: Vector = (0, 0, 0)
-    preload_force: Vector = (0, 0, 0)
-    preload_torque: Vector = (0, 0, 0)
-    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
-    repeat: Repeats | None = None
 
 
 # a bushing's coefficients under its params names (stiffness0..5 = stiffness then

@@ -1,4 +1,5 @@
-"""Contact elements' YAML classes and checks: their numbers, geometry and located errors.
+"""Contact elements' checks: their numbers, geometry and located errors (their YAML classes:
+elements/forces/specs.py).
 
 A contact entry of `forces:` resolves to a resolved.Force whose `vectors` hold its geometry,
 GLOBAL at t = 0 like every point of the format (plane `at`, unit `normal`; sphere `center`,
@@ -17,92 +18,15 @@ segment and radius (a capsule). A body without that item and no explicit size is
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Literal
+from typing import Any
 
 import casadi as ca
 import numpy as np
-from pydantic import Field
 
 from casmech.core import euler, traced
-from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
 from casmech.errors import failed
 
 HERTZ = 1.5  # Hunt-Crossley's default exponent: Hertz's sphere on a flat
-
-
-class NormalLaw(Spec):
-    """hunt_crossley: F = k d^n (1 + alpha d_dot), alpha giving restitution e at v_in
-    (hunt_crossley_damping); linear: F = k d + c d_dot."""
-
-    law: Literal["hunt_crossley", "linear"] = "hunt_crossley"
-    stiffness: Scalar
-    exponent: Scalar | None = None  # hunt_crossley: default 1.5 (Hertz); linear: always 1
-    restitution: Scalar | None = None  # hunt_crossley: e at impact_velocity, default 1
-    impact_velocity: Scalar = 1  # hunt_crossley: the v_in the damping is scaled by
-    damping: Scalar | None = None  # linear: c, default 0
-
-
-class Friction(Spec):
-    """model smooth: regularized Coulomb friction, mu from 0 at slip 0 up to `static` at
-    stiction_velocity, down to `dynamic` at transition_velocity, then constant (Adams' STEP
-    curve); model exact: Coulomb's stick (|F_t| <= static N, the point held) and slip
-    (dynamic N against the slip), switched at located events in dynamics."""
-
-    model: Literal["smooth", "exact"] = "smooth"
-    static: Scalar
-    dynamic: Scalar | None = None  # default: static
-    stiction_velocity: Scalar = 1e-3
-    transition_velocity: Scalar | None = None  # default: 2 stiction_velocity
-
-
-class Plane(Spec):
-    at: Vector = (0, 0, 0)  # a point of the plane, global at t = 0
-    normal: Vector = (0, 0, 1)  # its outward normal (towards the other body), global at t = 0
-
-
-# a contact's plane when it names none: made on use, so that importing builds no validator
-DEFAULT_PLANE = Field(default_factory=Plane,
-                      json_schema_extra={"default": {"at": [0, 0, 0], "normal": [0, 0, 1]}})
-
-
-class ContactBase(Spec):
-    name: Name
-    body_j: Name
-    normal: NormalLaw
-    friction: Friction | None = None
-    repeat: Repeats | None = None
-
-
-class SpherePlane(ContactBase):
-    type: Literal["sphere_plane"]
-    body_i: Name = "ground"  # carries the plane
-    plane: Plane = DEFAULT_PLANE
-    radius: Scalar | None = None  # default: body_j's sphere geometry
-    center: Vector | None = None  # global at t = 0; default: that sphere's centre
-
-
-class SphereSphere(ContactBase):
-    type: Literal["sphere_sphere"]
-    body_i: Name
-    radius_i: Scalar | None = None  # default: the body's sphere geometry
-    radius_j: Scalar | None = None
-    center_i: Vector | None = None  # global at t = 0; default: that sphere's centre
-    center_j: Vector | None = None
-
-
-class PointsPlane(ContactBase):
-    type: Literal["points_plane"]
-    body_i: Name = "ground"
-    plane: Plane = DEFAULT_PLANE
-    points: tuple[Vector, ...] | None = None  # global at t = 0; default: body_j's box corners
-
-
-class CapsulePlane(ContactBase):
-    type: Literal["capsule_plane"]
-    body_i: Name = "ground"
-    plane: Plane = DEFAULT_PLANE
-    radius: Scalar | None = None  # default: body_j's cylinder geometry
-    ends: Annotated[tuple[Vector, ...], Field(min_length=2, max_length=2)] | None = None
 
 
 # -------------------------------------------------------------------------- checks

@@ -1,5 +1,6 @@
 """Loads on one moving body: a point force (`force`, at a point, default the centre of mass)
-and a torque (`torque`): YAML classes, checks, lowering, laws, kernels.
+and a torque (`torque`): checks, lowering, laws, kernels (their YAML classes:
+elements/forces/specs.py).
 
 The vector `value` (three expressions of t that may read the state) is global, or in the body's
 frame with `frame: body`. Generalized force: x_q^T F of the point x(q) (terms.point_force), or
@@ -9,34 +10,14 @@ frame with `frame: body`. Generalized force: x_q^T F of the point x(q) (terms.po
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Literal
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from casmech.core import traced
-from casmech.core.spec_base import Name, Repeats, Spec, Vector
 from casmech.core.values import constant
 from casmech.elements.forces.terms import Input, in_global, point_force, torque
-
-
-class PointForce(Spec):
-    name: Name
-    type: Literal["force"]
-    body: Name
-    at: Vector | None = None  # default: the body's centre of mass
-    value: Vector
-    frame: Literal["global", "body"] = "global"
-    repeat: Repeats | None = None
-
-
-class Torque(Spec):
-    name: Name
-    type: Literal["torque"]
-    body: Name
-    value: Vector
-    frame: Literal["global", "body"] = "global"
-    repeat: Repeats | None = None
 
 
 # ---------------------------------------------------------------------------- resolution

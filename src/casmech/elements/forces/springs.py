@@ -1,5 +1,6 @@
 """The spring-damper-actuators: tsda (along the distance of two points) and rsda (about a
-revolute or cylindrical joint's axis): YAML classes, checks, lowering, law, kernel.
+revolute or cylindrical joint's axis): checks, lowering, law, kernel (their YAML classes:
+elements/forces/specs.py).
 
 tension = stiffness (coordinate - rest) + damping rate + actuator(t, coordinate, rate, state),
 generalized force -coordinate_q^T tension, potential 1/2 stiffness (coordinate - rest)^2
@@ -9,46 +10,16 @@ generalized force -coordinate_q^T tension, potential 1/2 stiffness (coordinate -
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
-from pydantic import StrictBool
 
 from casmech.core import traced
-from casmech.core.spec_base import Name, Repeats, Scalar, Spec, Vector
 from casmech.core.values import constant
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.forces.terms import Input, SpringKind, distance, spring
 from casmech.elements.joint_types import having, listed
 from casmech.errors import failed
-
-
-class TSDA(Spec):
-    name: Name
-    type: Literal["tsda"]
-    body_i: Name
-    at_i: Vector
-    body_j: Name
-    at_j: Vector
-    stiffness: Scalar = 0
-    free_length: Scalar | None = None
-    damping: Scalar = 0
-    actuator: Scalar = "0"
-    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
-    repeat: Repeats | None = None
-
-
-class RSDA(Spec):
-    name: Name
-    type: Literal["rsda"]
-    joint: Name
-    stiffness: Scalar = 0
-    free_angle: Scalar = 0
-    damping: Scalar = 0
-    actuator: Scalar = "0"
-    allow_negative: StrictBool = False  # a negative stiffness or damping is meant
-    repeat: Repeats | None = None
-
 
 ANGLE = KINDS["angle"]  # an rsda acts along a joint's angle
 SPRINGS = {
