@@ -3,9 +3,8 @@ field names, instead of methods compiled from generated source for every class.
 
 The standard decorator compiles each generated method with exec (six for a frozen class),
 so each class costs a compilation per method when a module is imported (measurements:
-benchmarks/RESULTS.md, "Whole processes, both commits"). A record has only its __init__ made
-from source, compiled once per shape of fields and given each class's names, and behaves as the
-dataclass it replaces: the same fields, __init__, replace(), fields() and
+benchmarks/RESULTS.md, "Whole processes, both commits"). A record compiles only its __init__ and
+behaves as the dataclass it replaces: the same fields, __init__, replace(), fields() and
 asdict(), the same repr, equality (same class, equal tuples of the compared fields) and hash
 (of the hashed fields' tuple). A frozen record's fields are written once, by __init__ (or by
 object.__setattr__ in __post_init__, as in a frozen dataclass); any later assignment or
@@ -21,7 +20,6 @@ import dataclasses
 import inspect
 import reprlib
 from operator import attrgetter
-from types import CodeType, FunctionType
 
 
 def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = True,  # noqa: A002
@@ -89,57 +87,41 @@ _FACTORY = _Factory()
 def _frozen_init(cls):
     """The __init__ dataclasses writes for a frozen class of these fields: the parameters in
     field order (defaults and default factories as there), each field set by
-    object.__setattr__, then __post_init__ when the class has one.
-
-    Its code is compiled once per shape (how many fields, which take a default factory, a
-    __post_init__ or not) with placeholder names, and each class gets that code with its own
-    parameter and field names (CodeType.replace) and its own defaults."""
+    object.__setattr__, then __post_init__ when the class has one."""
     names = {"__record_set__": object.__setattr__, "__record_factory__": _FACTORY}
-    parameters, lines, defaults, own = ["__record_self__"], [], [], ["__record_self__"]
-    for k, f in enumerate(dataclasses.fields(cls)):
+    parameters, lines, defaulted = ["__record_self__"], [], False
+    for f in dataclasses.fields(cls):
         factory = f.default_factory is not dataclasses.MISSING
         if f.init:
-            parameter = f"__record_{k}__"
-            parameters.append(parameter)
-            own.append(f.name)
             if f.default is not dataclasses.MISSING:
-                defaults.append(f.default)
+                names[f"__default_{f.name}"] = f.default
+                parameters.append(f"{f.name}=__default_{f.name}")
             elif factory:
-                defaults.append(_FACTORY)
-            elif defaults:
+                parameters.append(f"{f.name}=__record_factory__")
+            elif defaulted:
                 raise TypeError(f"non-default argument {f.name!r} follows default argument")
-            value = (f"__factory_{k}() if {parameter} is __record_factory__ else {parameter}"
-                     if factory else parameter)
+            else:
+                parameters.append(f.name)
+            defaulted = defaulted or factory or f.default is not dataclasses.MISSING
+            value = (f"__factory_{f.name}() if {f.name} is __record_factory__ else {f.name}"
+                     if factory else f.name)
         elif factory:
-            value = f"__factory_{k}()"
+            value = f"__factory_{f.name}()"
         else:
             continue  # (a default of a field left out of __init__ is the class's attribute)
         if factory:
-            names[f"__factory_{k}"] = f.default_factory
-        lines.append(f"    __record_set__(__record_self__, '{_PLACEHOLDER}{k}', {value})")
+            names[f"__factory_{f.name}"] = f.default_factory
+        lines.append(f"    __record_set__(__record_self__, {f.name!r}, {value})")
     if hasattr(cls, "__post_init__"):
         lines.append("    __record_self__.__post_init__()")
     text = f"def __init__({', '.join(parameters)}):\n" + ("\n".join(lines) or "    pass")
-    code = _CODE.get(text)
-    if code is None:
-        compiled = compile(text, "<string>", "exec")
-        code = _CODE[text] = next(c for c in compiled.co_consts if isinstance(c, CodeType))
-    fields = {f"{_PLACEHOLDER}{k}": f.name for k, f in enumerate(dataclasses.fields(cls))}
-    code = code.replace(co_varnames=tuple(own),
-                        co_consts=tuple(fields.get(c, c) if isinstance(c, str) else c
-                                        for c in code.co_consts),
-                        co_qualname=f"{cls.__qualname__}.__init__")
-    function = FunctionType(code, names, "__init__", tuple(defaults) or None)
+    exec(text, names)  # noqa: S102 (the text is made of the class's own field names)
+    function = names["__init__"]
     function.__qualname__ = f"{cls.__qualname__}.__init__"
     function.__module__ = cls.__module__
     function.__annotations__ = {f.name: f.type for f in dataclasses.fields(cls) if f.init}
     function.__annotations__["return"] = None
     return function
-
-
-# a field's name in the code compiled once per shape (not an identifier: no field is named so)
-_PLACEHOLDER = "__record field "
-_CODE: dict[str, CodeType] = {}  # the __init__ text of a shape -> its code
 
 
 def _getter(names: tuple[str, ...]):

@@ -190,38 +190,3 @@ def test_eq_and_hash_of_any_number_of_fields_as_a_dataclass(annotations):
     assert hash(rec(*args)) == hash(made(*args))
     if annotations:
         assert (rec(*args) == rec(*[9] * len(annotations))) is False
-
-
-def test_classes_of_one_shape_keep_their_own_names_and_defaults():
-    """Two records of the same shape (the __init__ code is shared per shape) against the
-    dataclasses of the same bodies: signature, keyword names, defaults, factories, errors."""
-
-    def bodies():
-        class Left:
-            a: int
-            b: list = field(default_factory=list)
-            c: str = "left"
-
-        class Right:
-            u: float
-            v: dict = field(default_factory=dict)
-            w: str = "right"
-
-        return Left, Right
-
-    for made, rec in zip((dataclass(frozen=True)(c) for c in bodies()),
-                         (record(c) for c in bodies()), strict=True):
-        assert str(inspect.signature(rec)) == str(inspect.signature(made))
-        names = [f.name for f in dataclasses.fields(made)]
-        keywords = dict(zip(names, (1, [2], "x"), strict=True))
-        assert repr(rec(**keywords)) == repr(made(**keywords)).replace(made.__qualname__,
-                                                                       rec.__qualname__)
-        assert repr(rec(5)) == repr(made(5))
-        first, second = rec(5), rec(5)  # a default factory called for each
-        assert getattr(first, names[1]) is not getattr(second, names[1])
-        for args, kwargs in (((), {}), ((1,), {names[0]: 2})):
-            with pytest.raises(TypeError) as theirs:
-                made(*args, **kwargs)
-            with pytest.raises(TypeError) as ours:
-                rec(*args, **kwargs)
-            assert str(ours.value) == str(theirs.value)
