@@ -43,8 +43,12 @@ from casmech.formulations import articulated, joint_forces, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
-from casmech.formulations.tree_steps import (body_rates, relative_step, translation_pivots,
-                                             tree_multipliers)
+from casmech.formulations.tree_steps import (
+    body_rates,
+    relative_step,
+    translation_pivots,
+    tree_multipliers,
+)
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.numerics import lazy_jacobian
 
