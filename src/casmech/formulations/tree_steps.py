@@ -59,9 +59,10 @@ def tree_multipliers(block, rotation, wrench, pivots=None):
 
 def translation_pivots(block) -> tuple | None:
     """((row, column, sign), ...) of the three rows of a joint's r-omega Jacobian `block` (SX)
-    whose translation columns hold one constant +-1 each (the rest constant zeros), in distinct
-    columns, where no other row has a translation entry (a point held fixed to the child, as a revolute, universal,
-    spherical or fixed joint's rows hold it); else None. tree_multipliers' fast path."""
+    whose translation columns hold one constant +-1 each (the rest constant zeros), in
+    distinct columns, where no other row has a translation entry (a point held fixed to the
+    child, as a revolute, universal, spherical or fixed joint's rows hold it); else None.
+    tree_multipliers' fast path."""
     sparsity, pivots = block.sparsity(), []
     for row in range(block.size1()):
         columns = [c for c in range(3) if sparsity.has_nz(row, c) and not (
