@@ -5,8 +5,6 @@ rows were masked (as the r-p DAE reports them); every row of a block by one mapp
 
 from __future__ import annotations
 
-import sys
-
 import casadi as ca
 import numpy as np
 
@@ -14,7 +12,7 @@ from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.joint_rows import LoopRows, solved_motion
+from casmech.runtime.joint_rows import LoopRows, columns, over_rows, solved_motion
 from casmech.runtime.workspace import Workspace
 
 
@@ -48,11 +46,11 @@ class Recorder:
         return tuple(row.copy() for row in kept[solved])
 
     def _mapped(self):
-        """The results rows' function over rows (kept in the workspace; looked up once per
-        run): _over_rows's."""
+        """The results rows' function over many states (joint_rows.over_rows; kept in the
+        workspace, looked up once per run)."""
         if self._call is None:
             self._call = self.workspace.kept("joint_motion_maps", self.system.motion,
-                                             lambda: _over_rows(self.system.motion))
+                                             lambda: over_rows(self.system.motion))
         return self._call
 
     def rows(self, times, states, algebraic):
@@ -61,31 +59,13 @@ class Recorder:
         else the integrator's `algebraic` states."""
         times = np.asarray(times, float)
         if self.loops is not None:
-            q, q_dot, q_ddot, lam = (v.T for v in self.loops(times, np.asarray(states, float),
-                                                             self.signs))
-        elif type(call := self._mapped()) is ColumnCall:
-            q, q_dot, q_ddot, lam = (v.T for v in call(times[None, :], states, algebraic,
-                                                       self.signs[:, None]))
-        else:  # the compiled rows in one C loop (backends.rows_loop), row by row
-            q, q_dot, q_ddot, lam = call(len(times), times, np.asarray(states, float).T,
-                                         np.asarray(algebraic, float).T, self.signs)
+            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
+        else:
+            q, q_dot, q_ddot, lam = columns(self._mapped(), times, np.asarray(states, float),
+                                            np.asarray(algebraic, float), self.signs)
         if self.least_norm is not None:
-            (lam,) = self.least_norm(times[None, :], q.T, lam.T)
-            lam = lam.T
-        return q, q_dot, q_ddot, lam
-
-
-def _over_rows(motion: ca.Function):
-    """The results rows' function over rows: in one C loop where a library casmech loaded
-    holds it (backends.rows_loop; backends is imported only once a library was loaded, as
-    its functions are recorded then), else over columns by casadi's map (ColumnCall)."""
-    if sys.modules.get("casmech.backends.external_record") is not None:
-        from casmech.backends.rows_loop import rows_call
-
-        call = rows_call(motion)
-        if call is not None:
-            return call
-    return ColumnCall(motion)
+            (lam,) = self.least_norm(times[None, :], q, lam)
+        return q.T, q_dot.T, q_ddot.T, lam.T
 
 
 def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:

@@ -8,7 +8,7 @@ import casmech
 from casmech.backends import rows_loop
 from casmech.backends.rows_loop import RowsCall
 from casmech.runtime import workspace
-from tests.conftest import MODELS
+from tests.conftest import MODELS, ROOT
 
 
 def _table(functions):
@@ -31,3 +31,20 @@ def test_the_rows_loop_gives_the_maps_table(quick_builds, monkeypatch):
     # the same compiled code on the same states
     np.testing.assert_array_equal(table, mapped)
     assert table.shape[0] > 10 and np.isfinite(table).all()
+
+
+def test_the_loops_solved_rows_in_c(quick_builds, monkeypatch):
+    """A closed loop's rows, their multipliers solved at each state
+    (runtime.joint_rows.LoopRows over the library's joint_solved_motion; a model without
+    parameters, whose library holds it): the same table as the map's."""
+    model = casmech.load(ROOT / "benchmarks" / "models" / "four_bar.yaml")
+    functions = casmech.compile(model, "compiled")
+    table = _table(functions)
+    rows = list(workspace.default(functions).store("joint_loop_rows").values())
+    assert [type(found.call) for found in rows] == [RowsCall]
+    monkeypatch.setattr(rows_loop, "rows_call", lambda function: None)
+    again = casmech.compile(model, "compiled")
+    mapped = _table(again)
+    rows = list(workspace.default(again).store("joint_loop_rows").values())
+    assert [type(found.call).__name__ for found in rows] == ["ColumnCall"]
+    np.testing.assert_array_equal(table, mapped)
