@@ -1,6 +1,7 @@
-"""The explicit Runge-Kutta driver of c/casmech_rk.c as a shared library, built once per
-machine through the compiled-model cache (keyed by the C source, the compiler and its flags)
-and loaded by ctypes, and the C entry points of a compiled CasADi function for it to call.
+"""The explicit Runge-Kutta driver of c/casmech_rk.c and the loop over rows of
+c/casmech_rows.c as shared libraries, each built once per machine through the compiled-model
+cache (keyed by its C source, the compiler and its flags) and loaded by ctypes, and the C entry
+points of a compiled CasADi function for them to call.
 
 A function casmech loaded from a library (backends.load: a casadi.external) is reached at its
 own symbol in its own file, which backends.external_record recorded when it was loaded (ctypes
@@ -27,6 +28,8 @@ from casmech.backends.build import SUFFIX
 
 LIBRARY = "libcasmech_rk" + SUFFIX
 SOURCE = Path(__file__).resolve().parent / "c" / "casmech_rk.c"
+ROWS_LIBRARY = "libcasmech_rows" + SUFFIX
+ROWS_SOURCE = SOURCE.with_name("casmech_rows.c")
 FLAGS = ("-O2",)  # a small fixed file: its loops gain from -O2, its build stays short
 # casmech_rk.c's return codes and counters
 DONE, TOO_SMALL, MAX_STEPS, EVAL_FAILED, NOT_FINITE = range(5)
@@ -69,45 +72,58 @@ def driver():
     """casmech_rk_run from the cached library (built on a miss), or None without a C compiler
     or when the build failed."""
     if "run" not in _loaded:
-        _loaded["run"] = _load()
+        _loaded["run"] = _load("rk driver", SOURCE, LIBRARY, "casmech_rk_run", ctypes.c_int, [
+            ctypes.POINTER(Tableau), ctypes.POINTER(Settings), ctypes.POINTER(Function),
+            ctypes.POINTER(Function), ctypes.c_int, ctypes.c_double, _double_p, ctypes.c_int,
+            _double_p, _double_p, _double_p, ctypes.POINTER(_int), _double_p])
     return _loaded["run"]
 
 
-def _load():
+def rows_driver():
+    """casmech_rows_run (c/casmech_rows.c: a function over rows in one C loop) from the
+    cached library (built on a miss), or None without a C compiler or when the build
+    failed."""
+    if "rows" not in _loaded:
+        _loaded["rows"] = _load("rows driver", ROWS_SOURCE, ROWS_LIBRARY, "casmech_rows_run",
+                                _int, [ctypes.POINTER(Function), _int, ctypes.c_int,
+                                       ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
+                                       ctypes.c_void_p, ctypes.c_void_p])
+    return _loaded["rows"]
+
+
+def _load(kind: str, path: Path, name: str, symbol: str, restype, argtypes):
     from casmech.backends import build, cache
     from casmech.errors import AnalysisError, UsageError
 
     toolchain = build.Toolchain(flags=FLAGS)
     if not build.available(toolchain):
         return None
-    source = SOURCE.read_bytes()
+    source = path.read_bytes()
     key = hashlib.sha256(json.dumps({
-        "kind": "rk driver", "source": hashlib.sha256(source).hexdigest(),
+        "kind": kind, "source": hashlib.sha256(source).hexdigest(),
         "compiler": toolchain.version(), "flags": list(toolchain.all_flags)},
         sort_keys=True).encode()).hexdigest()[:32]
     try:
-        directory, _ = cache.lookup(key, lambda d: _build(d, source, toolchain))
+        directory, _ = cache.lookup(
+            key, lambda d: _build(d, kind, path.name, source, name, symbol, toolchain))
     except (AnalysisError, UsageError, OSError):
         return None
-    run = ctypes.CDLL(str(directory / LIBRARY)).casmech_rk_run
-    run.restype = ctypes.c_int
-    run.argtypes = [ctypes.POINTER(Tableau), ctypes.POINTER(Settings), ctypes.POINTER(Function),
-                    ctypes.POINTER(Function), ctypes.c_int, ctypes.c_double, _double_p,
-                    ctypes.c_int, _double_p, _double_p, _double_p, ctypes.POINTER(_int),
-                    _double_p]
-    return run
+    function = getattr(ctypes.CDLL(str(directory / name)), symbol)
+    function.restype, function.argtypes = restype, argtypes
+    return function
 
 
-def _build(directory: Path, source: bytes, toolchain) -> None:
+def _build(directory: Path, kind: str, file: str, source: bytes, name: str, symbol: str,
+           toolchain) -> None:
     """The library and a manifest naming it with its sha256 (what codegen.trust checks)."""
     from casmech.backends import build, manifest
 
-    (directory / SOURCE.name).write_bytes(source)
-    build.build_libraries({LIBRARY: [directory / SOURCE.name]}, directory, toolchain)
+    (directory / file).write_bytes(source)
+    build.build_libraries({name: [directory / file]}, directory, toolchain)
     (directory / manifest.MANIFEST).write_text(json.dumps({
-        "format": manifest.FORMAT, "model": "rk driver", "library": LIBRARY,
-        "functions": [{"name": "casmech_rk_run", "library": LIBRARY}],
-        manifest.DIGESTS: {LIBRARY: manifest.sha256(directory / LIBRARY)}}, indent=1))
+        "format": manifest.FORMAT, "model": kind, "library": name,
+        "functions": [{"name": symbol, "library": name}],
+        manifest.DIGESTS: {name: manifest.sha256(directory / name)}}, indent=1))
 
 
 class Entry:

@@ -43,7 +43,12 @@ from casmech.formulations import articulated, joint_forces, rnea
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
-from casmech.formulations.tree_steps import body_rates, relative_step, tree_multipliers
+from casmech.formulations.tree_steps import (
+    body_rates,
+    relative_step,
+    translation_pivots,
+    tree_multipliers,
+)
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.numerics import lazy_jacobian
 
@@ -358,7 +363,7 @@ class _Builder:
             _, block_i, block_j = self.rows(joint)
             block = block_i if j.joint.child == joint.body_i else block_j
             lam[list(joint.rows)] = tree_multipliers(block, self.kin.rotation[j.joint.child],
-                                                     w)[0]
+                                                     w, pivots=translation_pivots(block))[0]
         return lam
 
     def motion(self, dynamics, lam_cut, signs) -> list:

@@ -28,15 +28,52 @@ def relative_step(r_p, p_p, r_p_dot, p_p_dot, r_c, p_c, r_c_dot, p_c_dot, c_p, s
 
 
 @traced
-def tree_multipliers(block, rotation, wrench):
+def tree_multipliers(block, rotation, wrench, pivots=None):
     """A tree joint's row multipliers from its constraint wrench on the child (CM frame):
-    -B^T lam = the wrench (global force, body-frame torque), B the rows' r-omega Jacobian at
+    -B^T lam = the wrench f (global force, body-frame torque), B the rows' r-omega Jacobian at
     the child, solved in the least-squares sense: B B^T lam = -B f, B B^T (symmetric positive
     definite: a joint's rows are independent) factored by Cholesky, about half the
-    instructions of a general solve."""
+    instructions of a general solve. With `pivots` (translation_pivots: three rows whose
+    translation columns are one +-1 each, the other rows' none), the three force equations
+    give those rows' multipliers at once and the torque equations the others' in the
+    least-squares sense (B_w B_w^T of those rows alone): the same multipliers for a wrench the
+    rows can exert (a constraint wrench), with a fraction of the arithmetic."""
     force = ca.vertcat(rotation @ wrench[3:6], wrench[0:3])
-    upper = ca.chol(block @ block.T)  # B B^T = R^T R
-    return (-ca.solve(upper, ca.solve(upper.T, block @ force)),)
+    if pivots is None:
+        upper = ca.chol(block @ block.T)  # B B^T = R^T R
+        return (-ca.solve(upper, ca.solve(upper.T, block @ force)),)
+    lam = [None] * block.size1()
+    for row, column, sign in pivots:  # sign lam_row = -f_column
+        lam[row] = -sign * force[column]
+    held = [row for row, _, _ in pivots]
+    torque = -force[3:6] - block[held, 3:6].T @ ca.vertcat(*(lam[row] for row in held))
+    others = [row for row in range(block.size1()) if lam[row] is None]
+    if others:  # B_w^T lam = torque over the other rows, by the normal equations
+        turning = block[others, 3:6]
+        upper = ca.chol(turning @ turning.T)
+        for row, value in zip(others, ca.vertsplit(
+                ca.solve(upper, ca.solve(upper.T, turning @ torque))), strict=True):
+            lam[row] = value
+    return (ca.vertcat(*lam),)
+
+
+def translation_pivots(block) -> tuple | None:
+    """((row, column, sign), ...) of the three rows of a joint's r-omega Jacobian `block` (SX)
+    whose translation columns hold one constant +-1 each (the rest constant zeros), in
+    distinct columns, where no other row has a translation entry (a point held fixed to the
+    child, as a revolute, universal, spherical or fixed joint's rows hold it); else None.
+    tree_multipliers' fast path."""
+    sparsity, pivots = block.sparsity(), []
+    for row in range(block.size1()):
+        columns = [c for c in range(3) if sparsity.has_nz(row, c) and not (
+            block[row, c].is_constant() and float(block[row, c]) == 0.0)]
+        if not columns:
+            continue
+        entry = block[row, columns[0]]
+        if len(columns) > 1 or not entry.is_constant() or abs(float(entry)) != 1.0:
+            return None
+        pivots.append((row, columns[0], float(entry)))
+    return tuple(pivots) if sorted(c for _, c, _ in pivots) == [0, 1, 2] else None
 
 
 @traced

@@ -12,7 +12,7 @@ from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.joint_rows import LoopRows, solved_motion
+from casmech.runtime.joint_rows import LoopRows, columns, over_rows, solved_motion
 from casmech.runtime.workspace import Workspace
 
 
@@ -45,12 +45,12 @@ class Recorder:
             kept[solved] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
         return tuple(row.copy() for row in kept[solved])
 
-    def _mapped(self) -> ColumnCall:
-        """The results rows' function over columns (kept in the workspace; looked up once
-        per run)."""
+    def _mapped(self):
+        """The results rows' function over many states (joint_rows.over_rows; kept in the
+        workspace, looked up once per run)."""
         if self._call is None:
             self._call = self.workspace.kept("joint_motion_maps", self.system.motion,
-                                             lambda: ColumnCall(self.system.motion))
+                                             lambda: over_rows(self.system.motion))
         return self._call
 
     def rows(self, times, states, algebraic):
@@ -61,8 +61,8 @@ class Recorder:
         if self.loops is not None:
             q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
         else:
-            q, q_dot, q_ddot, lam = self._mapped()(times[None, :], states, algebraic,
-                                                   self.signs[:, None])
+            q, q_dot, q_ddot, lam = columns(self._mapped(), times, np.asarray(states, float),
+                                            np.asarray(algebraic, float), self.signs)
         if self.least_norm is not None:
             (lam,) = self.least_norm(times[None, :], q, lam)
         return q.T, q_dot.T, q_ddot.T, lam.T

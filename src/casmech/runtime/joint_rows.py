@@ -11,6 +11,7 @@ them out of its error test (docs/decisions/row-multipliers.md)."""
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 
 import casadi as ca
@@ -41,23 +42,46 @@ def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
                        ["t", "x", "w", "signs"], ["q", "q_dot", "q_ddot", "lam"])
 
 
+def over_rows(function: ca.Function):
+    """`function` over many states, for columns(): in one C loop over the rows where a library
+    casmech loaded holds it (backends.rows_loop.RowsCall; backends is imported only once a
+    library was loaded, as its functions are recorded then), else by casadi's map over
+    columns (ColumnCall)."""
+    if sys.modules.get("casmech.backends.external_record") is not None:
+        from casmech.backends.rows_loop import rows_call
+
+        call = rows_call(function)
+        if call is not None:
+            return call
+    return ColumnCall(function)
+
+
+def columns(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, ...]:
+    """An over_rows call at each of `times`: each input one column per time (n x len(times))
+    or a vector every evaluation shares; each output one column per time."""
+    if type(call) is ColumnCall:
+        return call(times[None, :], *(a if a.ndim == 2 else a[:, None] for a in inputs))
+    return tuple(out.T for out in call(len(times), times,
+                                       *(a.T if a.ndim == 2 else a for a in inputs)))
+
+
 class LoopRows:
-    """The rows of one loop system: (q, q_dot, q_ddot, lam) per column of states, one mapped
-    call of `rows` (solved_motion's, compiled or not); a column whose saddle matrix is
-    singular (the solve's outputs not finite at a finite state) by
+    """The rows of one loop system: (q, q_dot, q_ddot, lam) per column of states, one call of
+    `rows` (solved_motion's, compiled or not) over them all (over_rows); a column whose saddle
+    matrix is singular (the solve's outputs not finite at a finite state) by
     runtime.assembly.saddle_solution's least squares, from the saddle terms `terms()` builds
     (called for the first such column only)."""
 
     def __init__(self, rows: ca.Function, terms: Callable[[], ca.Function],
                  motion: ca.Function, mask: np.ndarray):
-        self.call, self.terms, self.motion = ColumnCall(rows), terms, motion
+        self.call, self.terms, self.motion = over_rows(rows), terms, motion
         self.mask = np.asarray(mask, float)
         self._saddle: tuple[ca.Function, ca.Function] | None = None
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
         try:
             with solver_messages.without_input_dumps():
-                rows = self.call(times[None, :], states, self.mask[:, None], signs[:, None])
+                rows = columns(self.call, times, states, self.mask, signs)
         except RuntimeError as error:  # an evaluation that failed: every column alone
             cancel.check(error)
             rows = tuple(np.full((self.motion.size1_out(k), len(times)), np.nan)

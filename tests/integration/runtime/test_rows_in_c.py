@@ -1,0 +1,50 @@
+"""A compiled joint tree's results rows go through one C loop over the rows
+(backends.rows_loop, runtime.joint_recorder): the same table as casadi's map over columns of
+the same compiled function (ColumnCall, the path of every other bundle)."""
+
+import numpy as np
+
+import casmech
+from casmech.backends import rows_loop
+from casmech.backends.rows_loop import RowsCall
+from casmech.runtime import workspace
+from tests.conftest import MODELS, ROOT
+
+
+def _table(functions):
+    result = casmech.analyze(functions, "dynamics", t_end=0.5, rtol=1e-6, atol=1e-8)
+    return np.asarray(casmech.results_table(functions, result)[1], float)
+
+
+def test_the_rows_loop_gives_the_maps_table(quick_builds, monkeypatch):
+    model = casmech.load(MODELS / "double_pendulum.yaml")
+    functions = casmech.compile(model, "compiled")
+    table = _table(functions)
+    calls = workspace.default(functions).store("joint_motion_maps").values()
+    assert [type(call) for call in calls] == [RowsCall]
+    # without the C loop (a new bundle: calls are kept per bundle): casadi's map
+    monkeypatch.setattr(rows_loop, "rows_call", lambda function: None)
+    again = casmech.compile(model, "compiled")
+    mapped = _table(again)
+    calls = workspace.default(again).store("joint_motion_maps").values()
+    assert [type(call).__name__ for call in calls] == ["ColumnCall"]
+    # the same compiled code on the same states
+    np.testing.assert_array_equal(table, mapped)
+    assert table.shape[0] > 10 and np.isfinite(table).all()
+
+
+def test_the_loops_solved_rows_in_c(quick_builds, monkeypatch):
+    """A closed loop's rows, their multipliers solved at each state
+    (runtime.joint_rows.LoopRows over the library's joint_solved_motion; a model without
+    parameters, whose library holds it): the same table as the map's."""
+    model = casmech.load(ROOT / "benchmarks" / "models" / "four_bar.yaml")
+    functions = casmech.compile(model, "compiled")
+    table = _table(functions)
+    rows = list(workspace.default(functions).store("joint_loop_rows").values())
+    assert [type(found.call) for found in rows] == [RowsCall]
+    monkeypatch.setattr(rows_loop, "rows_call", lambda function: None)
+    again = casmech.compile(model, "compiled")
+    mapped = _table(again)
+    rows = list(workspace.default(again).store("joint_loop_rows").values())
+    assert [type(found.call).__name__ for found in rows] == ["ColumnCall"]
+    np.testing.assert_array_equal(table, mapped)
