@@ -160,7 +160,7 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
     workspace = of(functions, workspace)
     messages: list[str] = []  # the solvers' own stderr lines (runtime.solver_messages)
     try:
-        with interrupts.guard(token or current() or CancelToken()), \
+        with workspace.lock, interrupts.guard(token or current() or CancelToken()), \
                 solver_messages.collected(messages) as stream:
             result = run(functions, settings, progress, workspace)
     except AnalysisError as error:  # the rows before a failure tabulate like a whole run's

@@ -8,11 +8,15 @@ caller of the analyses: `casmech.analyze(functions, workspace=...)`, or by defau
 goes with the bundle). Each kind of entry is bounded (KINDS: the entries kept, the oldest
 dropped first) and keyed by what it depends on besides the bundle (a start, an output grid,
 the option values it was built with), so runs with other options never reuse a stale entry.
-Entries never hold the bundle itself.
+Entries never hold the bundle itself. What they hold is not shared between threads: DOP853's
+and the rows' C loops write one set of work vectors, solver instances one memory, so analyses on
+one workspace run one at a time (`lock`, held by runtime.analyses.analyze; other bundles' and
+other workspaces' runs go on beside them).
 """
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections.abc import Callable, Hashable
 from typing import TypeVar
@@ -71,6 +75,7 @@ class Workspace:
     def __init__(self, functions=None):
         self._bundle = None if functions is None else weakref.ref(functions)
         self._stores: dict[str, dict] = {}
+        self.lock = threading.RLock()  # held by a run (module docstring)
 
     def serve(self, functions) -> Workspace:
         """This workspace, bound to `functions` on first use; a UsageError if it serves
@@ -111,6 +116,7 @@ class Workspace:
 
 
 _defaults: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+_making = threading.Lock()
 
 
 def default(functions) -> Workspace:
@@ -125,7 +131,10 @@ def default(functions) -> Workspace:
                if loaded else "; casmech.compile(casmech.load(path)) gives them"))
     found = _defaults.get(functions)
     if found is None:
-        found = _defaults[functions] = Workspace(functions)
+        with _making:  # one default per bundle, whichever thread asks first
+            found = _defaults.get(functions)
+            if found is None:
+                found = _defaults[functions] = Workspace(functions)
     return found
 
 
