@@ -16,15 +16,17 @@ FLAGS = ("-O0", "-Wall", "-Werror")
 
 
 def model_libraries(root: Path) -> set:
-    """The cache entries under `root` of models' libraries: all but DOP853's C driver
-    (backends.rk_library: one entry per machine, built by the first compiled DOP853 run of a
-    process whose cache lacks it, so present or not by which tests ran before)."""
+    """The cache entries under `root` of models' libraries: all but the C drivers of
+    backends.rk_library (DOP853's and the rows' loop: one entry each per machine, built by the
+    first compiled run of a process whose cache lacks it, so present or not by which tests ran
+    before)."""
     import json
 
     from casmech.backends import cache, manifest
 
+    drivers = {"rk driver", "rows driver"}
     return {entry for entry in cache.entries(root)
-            if json.loads((entry / manifest.MANIFEST).read_text()).get("model") != "rk driver"}
+            if json.loads((entry / manifest.MANIFEST).read_text()).get("model") not in drivers}
 
 
 def counted_builds(monkeypatch, module) -> list:
