@@ -159,19 +159,29 @@ class Entry:
             names.index("t") if "t" in names else -1, names.index("x"), 0)
 
 
+def unbound(function: ca.Function) -> tuple[ca.Function, dict] | None:
+    """(the function casmech loaded, {its last input: d}) of a function bound to the model data
+    d (backends.external_record), (function, {}) of any other; None where d does not fill that
+    input densely."""
+    found = external_record.binding(function)
+    if found is None:
+        return function, {}
+    function, d = found
+    last = function.n_in() - 1
+    if not function.sparsity_in(last).is_dense() or function.nnz_in(last) != d.size:
+        return None
+    return function, {last: d}
+
+
 def entry(function: ca.Function) -> Entry | None:
     """`function`'s C entry point (Entry) when casmech loaded it from a library, or bound such
     a function to the model data (backends.external_record), and its inputs besides t, x (and
     the bound d) are empty (NULL reads as zeros) and its first output is the derivative; else
     None."""
-    fixed = {}
-    found = external_record.binding(function)
-    if found is not None:
-        function, d = found
-        last = function.n_in() - 1
-        if not function.sparsity_in(last).is_dense() or function.nnz_in(last) != d.size:
-            return None
-        fixed = {last: d}
+    found = unbound(function)
+    if found is None:
+        return None
+    function, fixed = found
     path = external_record.library(function)
     names = function.name_in()
     if path is None or "x" not in names or any(

@@ -79,14 +79,10 @@ def rows_call(function: ca.Function) -> RowsCall | None:
     """A RowsCall of `function` where it has a C entry point (casmech loaded it from a
     library, or bound such a function to the model data: backends.external_record), its
     inputs and outputs are dense and the loop's library is there; else None."""
-    fixed = {}
-    found = external_record.binding(function)
-    if found is not None:
-        function, d = found
-        last = function.n_in() - 1
-        if not function.sparsity_in(last).is_dense() or function.nnz_in(last) != d.size:
-            return None
-        fixed = {last: d}
+    found = rk_library.unbound(function)
+    if found is None:
+        return None
+    function, fixed = found
     path = external_record.library(function)
     if path is None or not all(function.sparsity_in(k).is_dense()
                                for k in range(function.n_in())) or not all(
