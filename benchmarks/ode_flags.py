@@ -38,23 +38,16 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import c_timing  # noqa: E402
+
 HERE = Path(__file__).resolve().parent
 FLAGS_VARIABLE = "ODE_FLAGS_CHILD"  # a child process's flag set
 # the joint system's functions a run calls in its loops: the integrator's right-hand side, the
 # results rows once per output row (--scope joint)
 LOOP = ("joint_ode", "joint_dae", "joint_motion", "joint_solved_motion")
+# the timing program's main, after c_timing.PRELUDE
 HARNESS = r"""
-#include <dlfcn.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <time.h>
-typedef long long ci;
-typedef int (*fn)(const double**, double**, ci*, double*, int);
-static double now(void) {
-  struct timespec s;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &s);
-  return s.tv_sec + 1e-9 * s.tv_nsec;
-}
 /* lib symbol calls n_in nnz_in... n_out nnz_out... sz_iw sz_w values-file */
 int main(int argc, char** argv) {
   int a = 1;
@@ -192,10 +185,7 @@ def main() -> None:
                                args.calls, Path(harness), Path(table))))
         return
     with tempfile.TemporaryDirectory(prefix="casmech_ode_flags_") as folder:
-        harness = Path(folder) / "harness"
-        (Path(folder) / "harness.c").write_text(HARNESS)
-        subprocess.run(["gcc", "-O2", "-o", str(harness), str(Path(folder) / "harness.c"),
-                        "-ldl"], check=True)
+        harness = c_timing.build(Path(folder), HARNESS)
         for n, spec in enumerate(args.targets):
             target, rtol = spec.rsplit(":", 1)
             runs: dict[str, list[dict]] = {flags: [] for flags in args.flags.split(",")}

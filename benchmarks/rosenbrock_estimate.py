@@ -34,11 +34,15 @@ import argparse
 import os
 import statistics
 import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import c_timing  # noqa: E402
 
 A4 = [1.221224509226641, 6.019134481288629, 12.53708332932087, -0.6878860361058950]
 RODAS4 = {"gamma": 0.25, "order": 4, "c": [0, 0.386, 0.21, 0.63, 1, 1],
@@ -73,20 +77,8 @@ RODAS5 = {"gamma": 0.19, "order": 5,
 METHODS = {"RODAS4": RODAS4, "RODAS5": RODAS5}
 RTOLS = tuple(float(f"{m}e{e}") for e in range(-4, -8, -1) for m in (3, 1))
 
+# the timing program's main, after c_timing.PRELUDE
 HARNESS = r"""
-#include <dlfcn.h>
-#include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
-typedef long long ci;
-typedef int (*fn)(const double**, double**, ci*, double*, int);
-static double now(void) {
-  struct timespec s;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &s);
-  return s.tv_sec + 1e-9 * s.tv_nsec;
-}
 static void lu(double* a, int* p, int n) {
   for (int k = 0; k < n; k++) {
     int m = k;
@@ -288,10 +280,7 @@ def main() -> None:
                 found[name] = (rtol, counts)
 
     with tempfile.TemporaryDirectory() as folder:
-        harness = Path(folder) / "harness"
-        (Path(folder) / "harness.c").write_text(HARNESS)
-        subprocess.run(["gcc", "-O2", "-o", str(harness), str(Path(folder) / "harness.c"),
-                        "-ldl", "-lm"], check=True)
+        harness = c_timing.build(Path(folder), HARNESS)
         costs = c_costs(harness, {"ODE": ode, "Jacobian (RNEA identity, -O1)":
                                   library["identity"], "Jacobian (CasADi AD, -O1)":
                                   library["ad"]}, x0, rates(0.0, x0), options.calls)
