@@ -238,7 +238,7 @@ def failed(out: Path, prepared: Prepared, options: Mapping, error: Exception) ->
     from casmech.io.metadata import write_json
 
     try:
-        kept = len(resumed(out, prepared))
+        kept = len(_journal(out, prepared))
     except Exception:  # a journal cut anyhow: the rows are what the file says, not counted
         kept = 0
     metadata = _metadata(prepared, {}, kept, "failed", options, error=str(error))
@@ -251,8 +251,21 @@ def resumed(out: Path, prepared: Prepared) -> list[dict]:
     error when it holds another study's: `same_study`, then journal.read's columns and
     parameter values)."""
     same_study(out, prepared)
+    return _journal(out, prepared)
+
+
+def _journal(out: Path, prepared: Prepared) -> list[dict]:
+    """The rows out/sweep.csv holds, checked against the study's columns and points."""
     study = prepared.study
     return journal.read(out / "sweep.csv", columns(study), study.points(), study.parameters)
+
+
+def _earlier_metadata(out: Path):
+    """out/metadata.json parsed: any JSON value (read, not trusted); OSError or ValueError
+    when it cannot be read."""
+    import json
+
+    return json.loads((out / "metadata.json").read_text(encoding="utf-8", errors="replace"))
 
 
 # what a resumed study's runs share with the earlier part's, by metadata.json's keys
@@ -271,9 +284,8 @@ def same_study(out: Path, prepared: Prepared) -> None:
 
     from casmech.errors import UsageError, escape
 
-    path = out / "metadata.json"
     try:
-        earlier = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+        earlier = _earlier_metadata(out)
     except (OSError, ValueError):
         return
     if not isinstance(earlier, dict):
@@ -293,8 +305,9 @@ def same_study(out: Path, prepared: Prepared) -> None:
     if differ:
         raise UsageError(
             f"--resume: {escape(out)} holds a study of other {', '.join(differ)} than this one "
-            f"(by {escape(path)}): its runs and these would mix in one sweep.csv; run the "
-            "study as it was, or start it without --resume (or in another directory)")
+            f"(by {escape(out / 'metadata.json')}): its runs and these would mix in one "
+            "sweep.csv; run the study as it was, or start it without --resume (or in another "
+            "directory)")
 
 
 RAN = ("interpreted", "compiled", "batched")  # the modes a study's metadata.json may say
@@ -304,14 +317,13 @@ def earlier_mode(out: Path) -> str:
     """The mode the earlier part of the study in `out` ran in: its metadata.json's
     `options.mode`, written by `start` before its first run (a usage error when the file is
     missing, not JSON, or says anything but one of RAN: it is read, not trusted)."""
-    import json
 
     from casmech.errors import UsageError, escape
 
     path = out / "metadata.json"
     hint = "; pass --mode to choose the rest's mode"
     try:
-        metadata = json.loads(path.read_text(encoding="utf-8", errors="replace"))
+        metadata = _earlier_metadata(out)
     except FileNotFoundError:
         raise UsageError(f"--resume: {escape(path)} does not exist, so the mode of the earlier "
                          f"part is unknown{hint}") from None
