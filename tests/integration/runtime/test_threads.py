@@ -1,7 +1,7 @@
 """Runs of one bundle from several threads (runtime.workspace: a workspace's runs one at a
 time): what a run keeps for the next (DOP853's C work vectors, the rows' C loop, solver
-memories) is one set per workspace, and two threads writing it at once gave rows that were
-not finite or a segmentation fault. Every threaded run now equals the serial run bit for bit,
+memories) is one set per workspace, and two threads writing it at once would give rows that
+are not finite or a segmentation fault. Every threaded run equals the serial run bit for bit,
 compiled (DOP853 and the rows in C) and interpreted (CVODES)."""
 
 from concurrent.futures import ThreadPoolExecutor

@@ -118,7 +118,7 @@ def test_a_scheduler_that_does_not_answer_is_a_usage_error_within_seconds(tmp_pa
     errors = [line for line in done.stderr.splitlines() if line.startswith("casmech:")]
     assert len(errors) == 1 and "no Dask scheduler answered within 5s" in errors[0]
     assert seconds < 20  # start-up and the 5 s connection timeout; it took 30 s and a traceback
-    # metadata.json says so (it said "running" for good): status failed, the error's text
+    # metadata.json says so, not "running": status failed, the error's text
     metadata = json.loads((tmp_path / "study" / "metadata.json").read_text())
     assert metadata["status"] == "failed" and "no Dask scheduler answered" in metadata["error"]
     assert metadata["rows"] == 0 and metadata["study"]["runs"] == 2
