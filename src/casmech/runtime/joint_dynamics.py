@@ -41,7 +41,7 @@ from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.projected_loops import loop_algebraic, loop_integrator, loop_ode_of
 from casmech.runtime.results import Result
-from casmech.runtime.stiffness import spectral_radius
+from casmech.runtime.stiffness import spectral_radius, stable_step
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
@@ -351,36 +351,39 @@ def _steps(integrator: NamedCall, *inputs) -> int:
 
 def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool = True,
                   settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None,
-                  capped: bool = False, in_c=lambda: True) -> str:
-    """method auto: "bdf" when the tree's ODE is stiff at t0 (settings.stiff_threshold), else
-    "dop853", or "adams" where the step is `capped` (contacts, stops: runtime.contact_steps;
-    an explicit method's every step would cost its 12 evaluations) or DOP853 would not run
-    in C (`in_c()` False, asked only when an explicit method is chosen: runtime.dop853.in_c,
-    not for an interpreted bundle's SX, a mapped tree's MX graph or without a C compiler),
-    where its 12 evaluations a step in CasADi's virtual machine cost more than CVODES's
-    Adams. Loops: "dop853" (their projected ODE, compiled with a compiled bundle:
-    runtime.projected_loops) in C without force elements and capped steps, else "adams"
-    (their DAE goes to IDAS, which no stiffness of theirs can stall).
+                  capped: bool = False, in_c=lambda: True) -> tuple[str, float | None]:
+    """(method, the spectral radius at t0 or None where not examined) of method auto: "bdf" when
+    the tree's ODE is stiff at t0 (settings.stiff_threshold), else "dop853", or "adams" where
+    the step is `capped` (contacts, stops: runtime.contact_steps; an explicit method's every
+    step would cost its 12 evaluations) or DOP853 would not run in C (`in_c()` False, asked only
+    when an explicit method is chosen: runtime.dop853.in_c, not for an interpreted bundle's SX,
+    a mapped tree's MX graph or without a C compiler), where its 12 evaluations a step in
+    CasADi's virtual machine cost more than CVODES's Adams. Loops: "dop853" (their projected
+    ODE, compiled with a compiled bundle: runtime.projected_loops) in C without force elements
+    and capped steps, else "adams" (their DAE goes to IDAS, which no stiffness of theirs can
+    stall).
 
     Without force elements (`forces` False: gravity, drivers and inertia only) the ODE has no
     source of stiffness: its eigenvalues are pendulum and gyroscopic frequencies, which the
     solution follows, so it is not examined. The spectral radius at (t0, x0)
-    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`.
+    (runtime.stiffness) depends on the system and the start alone: kept in `workspace`;
+    under DOP853 it bounds the step (runtime.stiffness.stable_step).
     docs/decisions/method-auto.md."""
     def explicit() -> str:
         return "adams" if capped or not in_c() else "dop853"
 
     if system.n_cut:
-        return "adams" if forces else explicit()
+        return ("adams" if forces else explicit()), None
     if not forces or not 0 < len(x0) <= settings.stiff_states:
-        return explicit()  # (compiled_system compiles the derivative this needs up to this size)
+        return explicit(), None  # (compiled_system compiles the derivative this needs up to
+        #                           this size)
     x0 = np.asarray(x0, float)
     radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),
         lambda: spectral_radius(system, t0, x0))
     if radius is None:
-        return explicit()
-    return "bdf" if radius * step > settings.stiff_threshold else explicit()
+        return explicit(), None
+    return ("bdf" if radius * step > settings.stiff_threshold else explicit()), radius
 
 
 def _start(functions: SystemFunctions, system: JointSystem, t0: float,
@@ -422,12 +425,13 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                                              workspace)
     step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
-        method = choose_method(system, t0, x, step,
-                               bool(functions.ir.forces or functions.ir.motors), settings,
-                               workspace, "max_step_size" in step_options,
-                               lambda: workspace.kept("dop853_in_c", system.dynamics,
-                                                      lambda: dop853.in_c(system.dynamics,
-                                                                          not system.n_cut)))
+        method, radius = choose_method(
+            system, t0, x, step, bool(functions.ir.forces or functions.ir.motors), settings,
+            workspace, "max_step_size" in step_options,
+            lambda: workspace.kept("dop853_in_c", system.dynamics,
+                                   lambda: dop853.in_c(system.dynamics, not system.n_cut)))
+        if method == "dop853" and radius is not None:  # the fastest mode damped, not met
+            step_options["max_step_size"] = stable_step(radius)
     recorder = Recorder(functions, system, signs, loops.mask, workspace,
                         settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
