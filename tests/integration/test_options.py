@@ -299,6 +299,8 @@ CONSTANTS = {
     "runtime/buffers.py MAP_ENTRIES": "numbers per mapped call (map construction time)",
     "runtime/buffers.py KEPT_MAPS": "maps kept per call (memory)",
     "runtime/events.py ULPS": "the narrowest bracket, a roundoff floor",
+    "runtime/stiffness.py STABLE_REAL": "a property of DOP853's tableau (its stability "
+                                        "function on the real axis)",
     "runtime/nonfinite.py ONE_ARRAY": "rows checked in one NumPy call (call overhead, memory)",
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",
