@@ -52,6 +52,7 @@ class RowsCall:
                                     np.int64)
         self.shared_p = (ctypes.c_void_p * max(len(entries) - 1, 1))()
         self.shared: np.ndarray = np.empty(0)
+        self.shared_rows = -1  # the rows the shared pointers are set for
         self.parts = (rk_library.Function * len(entries))(*(e.struct for e in entries))
         self.tail = (self.n_in, ctypes.addressof(self.in_p), self.in_stride.ctypes.data,
                      ctypes.addressof(self.shared_p), self.shared_size.ctypes.data,
@@ -89,7 +90,10 @@ class RowsCall:
         return tuple(out[rows * a:rows * b].reshape(rows, b - a) for a, b in self.spans)
 
     def _share(self, rows: int) -> None:
-        """The shared values' buffers for `rows` rows (grown when short)."""
+        """The shared values' buffers for `rows` rows (grown when short; their pointers set
+        when the rows change)."""
+        if rows == self.shared_rows:
+            return
         sizes = self.shared_size.tolist()
         if self.shared.size < rows * sum(sizes):
             self.shared = np.empty(rows * sum(sizes))
@@ -97,6 +101,7 @@ class RowsCall:
         for k, size in enumerate(sizes):
             self.shared_p[k] = base
             base += 8 * rows * size
+        self.shared_rows = rows
 
 
 # a chained function's key (Function.__hash__, as backends.external_record keys its entries)
