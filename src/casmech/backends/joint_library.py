@@ -1,8 +1,8 @@
 """What goes into the C of a compiled bundle's joint system (runtime.joint_dynamics): which
 functions, under which names, at which flags.
 
-  - the results rows' function above PART_INSTRUCTIONS is compiled as a chain of parts of
-    about that many instructions each (backends.split; motion_parts names them), which gcc
+  - the results rows' function above WHOLE_INSTRUCTIONS is compiled as a chain of parts of at
+    most PART_INSTRUCTIONS instructions each (backends.split; motion_parts names them), which gcc
     compiles in units at once; once loaded, `joined` makes joint_motion of them again and
     backends.rows_loop evaluates it part by part over the rows (rows_loop.chained);
   - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
@@ -31,10 +31,12 @@ from casmech.formulations.joint_system import JointSystem, layout
 from casmech.formulations.tree import Tree
 from casmech.numerics import lazy_jacobian
 
-# the results rows' SX instructions per part (a chain of parts above it): evaluated part by part
-# over a block's rows, a part's machine code stays in the instruction cache, where the whole
-# function's is fetched again on every row; and gcc's time grows faster than a unit
-# (docs/decisions/results-rows-cost.md)
+# the results rows above WHOLE_INSTRUCTIONS SX instructions are compiled as a chain of parts of
+# at most PART_INSTRUCTIONS each: evaluated part by part over a block's rows, a part's machine
+# code stays in the instruction cache, where the whole function's is fetched again on every
+# row; below it the whole function's code stays there, and a chain would only add the writes
+# and reads of its shared values (docs/decisions/results-rows-cost.md)
+WHOLE_INSTRUCTIONS = 6_000
 PART_INSTRUCTIONS = 3_500
 MOTION_PART = "joint_motion_part"  # the parts' names: joint_motion_part0, joint_motion_part1, ...
 QUICK_FLAGS = ("-O0",)
@@ -49,9 +51,10 @@ def motion_parts(count: int) -> tuple[str, ...]:
 
 
 def motion(function: ca.Function) -> dict[str, ca.Function]:
-    """The results rows' function by library name: joint_motion, or its chain of parts (one
-    per PART_INSTRUCTIONS instructions, rounded up)."""
-    count = -(-function.n_instructions() // PART_INSTRUCTIONS)
+    """The results rows' function by library name: joint_motion, or above WHOLE_INSTRUCTIONS
+    its chain of parts (one per PART_INSTRUCTIONS instructions, rounded up)."""
+    instructions = function.n_instructions()
+    count = -(-instructions // PART_INSTRUCTIONS) if instructions > WHOLE_INSTRUCTIONS else 1
     chain = parts(function, motion_parts(count)) if count > 1 else None
     return dict(zip(motion_parts(count), chain, strict=True)) if chain else {
         "joint_motion": function}

@@ -10,7 +10,15 @@ function is built with them, under another key."""
 import numpy as np
 
 import casmech
-from casmech.backends import build, cache, codegen, joint_library, manifest, rows_loop
+from casmech.backends import (
+    build,
+    cache,
+    codegen,
+    joint_library,
+    manifest,
+    rk_library,
+    rows_loop,
+)
 from casmech.runtime.joint_dynamics import joint_system
 from casmech.runtime.workspace import Workspace
 from tests.integration.backends.test_joint import (
@@ -31,8 +39,10 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
     bundle = codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
     monkeypatch.delenv(build.FLAGS_ENVIRONMENT)  # no flags chosen
     # this small tree's rows too, in three parts
+    monkeypatch.setattr(joint_library, "WHOLE_INSTRUCTIONS", 0)
     monkeypatch.setattr(joint_library, "PART_INSTRUCTIONS",
                         -(-joint_system(interpreted).motion.n_instructions() // 3))
+    rk_library.rows_driver()  # the rows' C loop (once a process) not among these entries
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "first"))
     commands = []
     original = build._run
