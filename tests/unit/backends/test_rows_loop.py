@@ -44,6 +44,12 @@ def test_rows_as_casadis_own_evaluation(externals):
     assert [g.shape for g in got] == [(7, 2), (7, 0), (7, 5)]
     for g, w in zip(got, want, strict=True):  # the same compiled code on the same numbers
         np.testing.assert_array_equal(g, w.T)
+    # read-only inputs (whose buffers ctypes cannot view): the same rows
+    frozen = [a.copy() for a in (times, states, signs)]
+    for a in frozen:
+        a.setflags(write=False)
+    for g, w in zip(call(7, *frozen[:2], None, frozen[2]), got, strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
     # the outputs are fresh: the next call does not write into them
     before = [g.copy() for g in got]
     call(7, times + 1, states, None, signs)
