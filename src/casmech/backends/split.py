@@ -11,9 +11,8 @@ The cuts fall at equal shares of f's algorithm (its instruction list). Part k ta
 and the values every earlier part shares (`shared_0`, ..., `shared_<k-1>`) and computes its
 share of the algorithm; a part but the last returns, as `shared_<k>`, every value of its own
 that a later part reads (f's outputs it assigns included; not inputs and constants, which every
-part has); the last part returns f's outputs.
-Each instruction is rebuilt with the same operation on the same operands, so the chain computes
-what f computes, in the same order.
+part has); the last part returns f's outputs. Each instruction is rebuilt with the same
+operation on the same operands, so the chain computes what f computes, in the same order.
 """
 
 from __future__ import annotations
@@ -70,22 +69,22 @@ def parts(function: ca.Function, names: Sequence[str]) -> tuple[ca.Function, ...
                       else ca.SX.binary(op, *operands))
         (index,) = function.instruction_output(k)
         written[index] = (part, k, result)
-    links = [[made[m] for m in sorted(made)] for made in shared]
-    made = []
+    links = [[values[m] for m in sorted(values)] for values in shared]
+    chain = []
     for k, name in enumerate(names):
         link_in = [ca.vertcat(ca.SX(0, 1), *(symbol for _, symbol in links[j])) for j in range(k)]
         names_in = [*function.name_in(), *(f"shared_{j}" for j in range(k))]
         if k < last:
-            made.append(ca.Function(name, [*inputs, *link_in],
-                                    [ca.vertcat(ca.SX(0, 1), *(v for v, _ in links[k]))],
-                                    names_in, [f"shared_{k}"]))
+            chain.append(ca.Function(name, [*inputs, *link_in],
+                                     [ca.vertcat(ca.SX(0, 1), *(v for v, _ in links[k]))],
+                                     names_in, [f"shared_{k}"]))
             continue
-        made.append(ca.Function(
+        chain.append(ca.Function(
             name, [*inputs, *link_in],
             [ca.SX(function.sparsity_out(o), ca.vertcat(*column)) if column else
              ca.SX(function.sparsity_out(o)) for o, column in enumerate(outputs)],
             names_in, function.name_out()))
-    return tuple(made)
+    return tuple(chain)
 
 
 def joined(chain: Sequence[ca.Function], name: str) -> ca.Function:
