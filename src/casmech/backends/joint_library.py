@@ -1,9 +1,10 @@
 """What goes into the C of a compiled bundle's joint system (runtime.joint_dynamics): which
 functions, under which names, at which flags.
 
-  - the results rows' function above SPLIT_INSTRUCTIONS is compiled as its two halves
-    SPLIT_MOTION (backends.split), in two units gcc compiles at once, and `joined` makes
-    joint_motion of them again once loaded;
+  - the results rows' function above WHOLE_INSTRUCTIONS is compiled as a chain of parts of at
+    most PART_INSTRUCTIONS instructions each (backends.split; motion_parts names them), which gcc
+    compiles in units at once; once loaded, `joined` makes joint_motion of them again and
+    backends.rows_loop evaluates it part by part over the rows (rows_loop.chained);
   - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
     quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
     ($CASMECH_CFLAGS);
@@ -24,35 +25,49 @@ import casadi as ca
 
 from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
 from casmech.backends.library import compile_functions, compile_keyed
-from casmech.backends.split import halves, joined
+from casmech.backends.rows_loop import chained
+from casmech.backends.split import joined, parts
 from casmech.formulations.joint_system import JointSystem, layout
 from casmech.formulations.tree import Tree
 from casmech.numerics import lazy_jacobian
 
-# gcc's time grows faster than the function: above this many SX instructions the results rows
-# are compiled as two halves in two units at once; below it whole, since the halves' rows cost
-# a fifth more per call (docs/decisions/results-rows-cost.md)
-SPLIT_INSTRUCTIONS = 20_000
-SPLIT_MOTION = ("joint_motion_head", "joint_motion_tail")
+# the results rows above WHOLE_INSTRUCTIONS SX instructions are compiled as a chain of parts of
+# at most PART_INSTRUCTIONS each: evaluated part by part over a block's rows, a part's machine
+# code stays in the instruction cache, where the whole function's is fetched again on every
+# row; below it the whole function's code stays there, and a chain would only add the writes
+# and reads of its shared values (docs/decisions/results-rows-cost.md)
+WHOLE_INSTRUCTIONS = 6_000
+PART_INSTRUCTIONS = 3_500
+MOTION_PART = "joint_motion_part"  # the parts' names: joint_motion_part0, joint_motion_part1, ...
 QUICK_FLAGS = ("-O0",)
 # evaluated once per run, by method auto's stiffness probe (BDF's Newton iteration takes its
 # Jacobian from keyed_jacobian's library); -O1 would more than treble their gcc time
 SELDOM = ("fwd1_joint_ode",)
 
 
+def motion_parts(count: int) -> tuple[str, ...]:
+    """The library names of a chain of `count` parts of the results rows."""
+    return tuple(f"{MOTION_PART}{k}" for k in range(count))
+
+
 def motion(function: ca.Function) -> dict[str, ca.Function]:
-    """The results rows' function by library name: joint_motion, or its halves."""
-    pair = halves(function, *SPLIT_MOTION) if (
-        function.n_instructions() > SPLIT_INSTRUCTIONS) else None
-    return dict(zip(SPLIT_MOTION, pair, strict=True)) if pair else {"joint_motion": function}
+    """The results rows' function by library name: joint_motion, or above WHOLE_INSTRUCTIONS
+    its chain of parts (one per PART_INSTRUCTIONS instructions, rounded up)."""
+    instructions = function.n_instructions()
+    count = -(-instructions // PART_INSTRUCTIONS) if instructions > WHOLE_INSTRUCTIONS else 1
+    chain = parts(function, motion_parts(count)) if count > 1 else None
+    return dict(zip(motion_parts(count), chain, strict=True)) if chain else {
+        "joint_motion": function}
 
 
 def joined_library(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
-    """A loaded library with its results rows' halves joined into joint_motion."""
-    if SPLIT_MOTION[0] not in library:
+    """A loaded library with its results rows' parts joined into joint_motion, evaluated over
+    rows part by part (rows_loop.chained)."""
+    count = sum(1 for name in library if name.startswith(MOTION_PART))
+    if not count:
         return library
-    return {**library, "joint_motion": joined(*(library[n] for n in SPLIT_MOTION),
-                                              "joint_motion")}
+    chain = [library[name] for name in motion_parts(count)]
+    return {**library, "joint_motion": chained(joined(chain, "joint_motion"), chain)}
 
 
 def chosen_flags() -> str | None:

@@ -80,14 +80,15 @@ def driver():
 
 
 def rows_driver():
-    """casmech_rows_run (c/casmech_rows.c: a function over rows in one C loop) from the
-    cached library (built on a miss), or None without a C compiler or when the build
-    failed."""
+    """casmech_rows_run (c/casmech_rows.c: a function, or a chain of its parts, over rows in C
+    loops) from the cached library (built on a miss), or None without a C compiler or when
+    the build failed."""
     if "rows" not in _loaded:
         _loaded["rows"] = _load("rows driver", ROWS_SOURCE, ROWS_LIBRARY, "casmech_rows_run",
-                                _int, [ctypes.POINTER(Function), _int, ctypes.c_int,
-                                       ctypes.c_void_p, ctypes.c_void_p, ctypes.c_int,
-                                       ctypes.c_void_p, ctypes.c_void_p])
+                                _int, [ctypes.c_int, ctypes.c_void_p, _int, ctypes.c_int,
+                                       ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p,
+                                       ctypes.c_void_p, ctypes.c_int, ctypes.c_void_p,
+                                       ctypes.c_void_p])
     return _loaded["rows"]
 
 

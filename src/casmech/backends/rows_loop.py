@@ -1,13 +1,16 @@
-"""A compiled function evaluated over rows by one C loop (c/casmech_rows.c, loaded by
+"""A compiled function evaluated over rows by C loops (c/casmech_rows.c, loaded by
 backends.rk_library.rows_driver), calling it at its C entry point (rk_library.Entry: a function
 casmech loaded from a library, or bound such a function to the model data) as casmech_rk.c
 calls the ODE: what casadi's map over columns gives, without the map's bookkeeping per
 evaluation and the copies of its buffers. Every input and output row-major: row i of input k
-is its i-th row (or the same vector for every row), row i of output k its i-th row."""
+is its i-th row (or the same vector for every row), row i of output k its i-th row. A function
+made of a chain of compiled parts (backends.split, recorded here by `chained`) is evaluated part
+by part, each over all the rows, in the same C call."""
 
 from __future__ import annotations
 
 import ctypes
+import weakref
 
 import casadi as ca
 import numpy as np
@@ -20,29 +23,39 @@ class RowsCall:
     An input (one per input of the function, a bound function's d excepted) is None (zeros),
     a vector of nnz_in(k) numbers (the same for every row) or a (rows, nnz_in(k)) array (of a
     scalar input, also a vector of one number a row). The outputs of one call are views of
-    one array. Not to be called from two threads at once (the function's work vectors are
-    one)."""
+    one array. `entries`: the function's own entry, or its chain's parts' (chained; their
+    shared values in buffers of this call, kept between calls). Not to be called from two
+    threads at once (the functions' work vectors are one)."""
 
-    def __init__(self, run, entry: rk_library.Entry):
-        function = entry.function
-        self.run, self.entry, self.function = run, entry, function
-        self.n_in, self.n_out = function.n_in(), function.n_out()
-        self.sizes_in = [function.nnz_in(k) for k in range(self.n_in)]
-        self.sizes_out = [function.nnz_out(k) for k in range(self.n_out)]
+    def __init__(self, run, entries: list[rk_library.Entry], function: ca.Function | None = None):
+        first, last = entries[0].function, entries[-1].function
+        self.run, self.entries = run, entries
+        self.function = function if function is not None else first
+        self.n_in, self.n_out = first.n_in(), last.n_out()
+        self.sizes_in = [first.nnz_in(k) for k in range(self.n_in)]
+        self.sizes_out = [last.nnz_out(k) for k in range(self.n_out)]
         offsets = np.cumsum([0, *self.sizes_out]).tolist()
         self.spans = list(zip(offsets[:-1], offsets[1:], strict=True))  # in one array a row
         self.total = offsets[-1]
         # the fixed inputs (a bound function's d) read at the same address by every row; the
         # caller gives the others
-        self.given = [k for k in range(self.n_in) if k not in entry.fixed]
+        fixed = entries[0].fixed
+        self.given = [k for k in range(self.n_in) if k not in fixed]
         self.in_p = (ctypes.c_void_p * max(self.n_in, 1))()
-        for k, values in entry.fixed.items():
+        for k, values in fixed.items():
             self.in_p[k] = values.ctypes.data
         self.out_p = (ctypes.c_void_p * max(self.n_out, 1))()
         self.in_stride = np.zeros(max(self.n_in, 1), np.int64)
         self.out_stride = np.array(self.sizes_out or [0], np.int64)
-        self.struct = ctypes.byref(entry.struct)
+        # each part but the last: its shared values a row, their buffer (rows x size)
+        self.shared_size = np.array([e.function.nnz_out(0) for e in entries[:-1]] or [0],
+                                    np.int64)
+        self.shared_p = (ctypes.c_void_p * max(len(entries) - 1, 1))()
+        self.shared: np.ndarray = np.empty(0)
+        self.shared_rows = -1  # the rows the shared pointers are set for
+        self.parts = (rk_library.Function * len(entries))(*(e.struct for e in entries))
         self.tail = (self.n_in, ctypes.addressof(self.in_p), self.in_stride.ctypes.data,
+                     ctypes.addressof(self.shared_p), self.shared_size.ctypes.data,
                      self.n_out, ctypes.addressof(self.out_p), self.out_stride.ctypes.data)
 
     def __call__(self, rows: int, *inputs) -> tuple[np.ndarray, ...]:
@@ -64,34 +77,89 @@ class RowsCall:
                 raise ValueError(f"{self.function.name()}'s input {k} has shape {a.shape}, "
                                  f"not ({rows}, {size}) or ({size},)")
             kept.append(a)
-            self.in_p[k] = a.ctypes.data
+            self.in_p[k] = _address(a)
+        if len(self.entries) > 1:
+            self._share(rows)
         out = np.empty(rows * self.total)
-        base = out.ctypes.data
+        base = _address(out)
         for k, (start, _) in enumerate(self.spans):
             self.out_p[k] = base + 8 * rows * start
-        failed = self.run(self.struct, rows, *self.tail)
+        failed = self.run(len(self.entries), self.parts, rows, *self.tail)
         if failed:
             raise RuntimeError(f"{self.function.name()} failed to evaluate at row {failed - 1}")
         return tuple(out[rows * a:rows * b].reshape(rows, b - a) for a, b in self.spans)
 
+    def _share(self, rows: int) -> None:
+        """The shared values' buffers for `rows` rows (grown when short; their pointers set
+        when the rows change)."""
+        if rows == self.shared_rows:
+            return
+        sizes = self.shared_size.tolist()
+        if self.shared.size < rows * sum(sizes):
+            self.shared = np.empty(rows * sum(sizes))
+        base = self.shared.ctypes.data
+        for k, size in enumerate(sizes):
+            self.shared_p[k] = base
+            base += 8 * rows * size
+        self.shared_rows = rows
+
+
+def _address(a: np.ndarray) -> int:
+    """The address of a C-contiguous array's data: through a ctypes view of its buffer (less
+    than half of `ndarray.ctypes`' cost), or `ndarray.ctypes` where that takes none (a
+    read-only or empty array)."""
+    try:
+        return ctypes.addressof(ctypes.c_char.from_buffer(a))
+    except (TypeError, ValueError):
+        return a.ctypes.data
+
+
+# a chained function's key (Function.__hash__, as backends.external_record keys its entries)
+# -> (a wrapper of its own, keeping its object alive, its parts)
+_CHAINS: dict[int, tuple[ca.Function, tuple[ca.Function, ...]]] = {}
+
+
+def chained(function: ca.Function, chain) -> ca.Function:
+    """`function` (backends.split.joined of `chain`, compiled parts casmech loaded), recorded as
+    the chain's parts called in turn, for rows_call; the record lasts as long as this wrapper
+    of it."""
+    key = function.__hash__()
+    entry = (ca.Function(function), tuple(chain))
+    _CHAINS[key] = entry
+    finalizer = weakref.finalize(function, _forget, key, entry)
+    finalizer.atexit = False
+    return function
+
+
+def _forget(key: int, entry) -> None:
+    if _CHAINS.get(key) is entry:  # not one recorded since for the same object
+        del _CHAINS[key]
+
 
 def rows_call(function: ca.Function) -> RowsCall | None:
-    """A RowsCall of `function` where it has a C entry point (casmech loaded it from a
-    library, or bound such a function to the model data: backends.external_record), its
+    """A RowsCall of `function` where it, or each part of the chain it was recorded as
+    (chained), has a C entry point (casmech loaded it from a library, or bound such a
+    function to the model data: backends.external_record; a chain's parts not bound), its
     inputs and outputs are dense and the loop's library is there; else None."""
-    found = rk_library.unbound(function)
-    if found is None:
-        return None
-    function, fixed = found
-    path = external_record.library(function)
-    if path is None or not all(function.sparsity_in(k).is_dense()
-                               for k in range(function.n_in())) or not all(
-            function.sparsity_out(k).is_dense() for k in range(function.n_out())):
-        return None
+    chain = _CHAINS.get(function.__hash__())
+    parts = chain[1] if chain is not None else (function,)
+    entries = []
+    for part in parts:
+        found = rk_library.unbound(part)
+        if found is None or (chain is not None and found[1]):
+            return None
+        inner, fixed = found
+        path = external_record.library(inner)
+        if path is None or not all(inner.sparsity_in(k).is_dense()
+                                   for k in range(inner.n_in())) or not all(
+                inner.sparsity_out(k).is_dense() for k in range(inner.n_out())):
+            return None
+        entries.append((inner, path, fixed))
     run = rk_library.rows_driver()
     if run is None:
         return None
     try:
-        return RowsCall(run, rk_library.Entry(function, path, fixed))
+        return RowsCall(run, [rk_library.Entry(*e) for e in entries],
+                        function if chain is not None else None)
     except (AttributeError, OSError, ValueError):
         return None

@@ -1,27 +1,32 @@
-"""One SX Function as two, head then tail, for C compiled in two units at once: gcc's time on
-a function grows faster than the function, and two cores compile the halves side by side.
+"""One SX Function as a chain of parts, computed one after the other: for C compiled in units at
+once (gcc's time on a function grows faster than the function, and two cores compile parts
+side by side), and evaluated part by part over many rows (backends.rows_loop: each part's
+machine code stays in the instruction cache over the rows, where the whole function's would
+not).
 
-    head, tail = halves(f, "f_head", "f_tail")   # SX Functions
-    f_again = joined(head, tail, f)              # MX: tail(inputs, head(inputs)), f's names
+    first, second, last = parts(f, ("f_0", "f_1", "f_2"))   # SX Functions
+    f_again = joined((first, second, last), f.name())        # MX: f's inputs and outputs
 
-The cut falls at the middle of f's algorithm (its instruction list): the head computes the first
-half and returns every value of it the second half reads (and f's outputs it assigns); the tail
-takes f's inputs and those values and computes the rest with f's outputs. Each instruction is
-rebuilt with the same operation on the same operands, so the pair computes what f computes, in
-the same order.
+The cuts fall at equal shares of f's algorithm (its instruction list). Part k takes f's inputs
+and the values every earlier part shares (`shared_0`, ..., `shared_<k-1>`) and computes its
+share of the algorithm; a part but the last returns, as `shared_<k>`, every value of its own
+that a later part reads (f's outputs it assigns included; not inputs and constants, which every
+part has); the last part returns f's outputs. Each instruction is rebuilt with the same
+operation on the same operands, so the chain computes what f computes, in the same order.
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import casadi as ca
 
 _UNSPLIT = (ca.OP_CALL,)  # operations not rebuilt from their operands alone
 
 
-def halves(function: ca.Function, head_name: str, tail_name: str
-           ) -> tuple[ca.Function, ca.Function] | None:
-    """(head, tail) of an SXFunction (module docstring), or None for another kind of Function
-    or when its algorithm holds an operation this cannot rebuild."""
+def parts(function: ca.Function, names: Sequence[str]) -> tuple[ca.Function, ...] | None:
+    """The chain of len(names) parts of an SXFunction (module docstring), or None for another
+    kind of Function or when its algorithm holds an operation this cannot rebuild."""
     if not function.is_a("SXFunction"):
         return None
     count = function.n_instructions()
@@ -30,26 +35,28 @@ def halves(function: ca.Function, head_name: str, tail_name: str
         return None
     inputs = function.sx_in()
     entries = [[x.nz[j] for j in range(x.nnz())] for x in inputs]
-    cut = count // 2
-    head: dict[int, tuple[int, ca.SX]] = {}  # work index -> (instruction, value) of the head
-    tail: dict[int, ca.SX] = {}  # work index -> value, once the tail wrote it
-    shared: dict[int, tuple[ca.SX, ca.SX]] = {}  # head instruction -> (value, tail's symbol)
+    n, last = len(names), len(names) - 1
+    ends = [count * (k + 1) // n for k in range(n)]  # part k: instructions before ends[k]
+    written: dict[int, tuple[int, int, ca.SX]] = {}  # work index -> (part, instruction, value)
+    # per part: its instruction -> (its value, the symbol later parts read it by)
+    shared: list[dict[int, tuple[ca.SX, ca.SX]]] = [{} for _ in names]
     outputs = [[ca.SX(0)] * function.nnz_out(o) for o in range(function.n_out())]
 
-    def value(index: int, k: int) -> ca.SX:
-        if k < cut:
-            return head[index][1]
-        if index in tail:
-            return tail[index]
-        made, found = head[index]
-        if made not in shared:
-            shared[made] = (found, ca.SX.sym(f"shared_{len(shared)}"))
-        return shared[made][1]
+    def value(index: int, part: int) -> ca.SX:
+        own, made, found = written[index]
+        if own == part or operations[made] in (ca.OP_INPUT, ca.OP_CONST):
+            return found  # its own, or an input or constant every part has
+        if made not in shared[own]:
+            shared[own][made] = (found, ca.SX.sym(f"shared_{own}_{len(shared[own])}"))
+        return shared[own][made][1]
 
+    part = 0
     for k, op in enumerate(operations):
+        while k >= ends[part]:
+            part += 1
         if op == ca.OP_OUTPUT:
             (index,), (o, nz) = function.instruction_input(k), function.instruction_output(k)
-            outputs[o][nz] = value(index, max(k, cut))  # through the tail
+            outputs[o][nz] = value(index, last)  # through the last part
             continue
         if op == ca.OP_INPUT:
             i, nz = function.instruction_input(k)
@@ -57,29 +64,36 @@ def halves(function: ca.Function, head_name: str, tail_name: str
         elif op == ca.OP_CONST:
             result = ca.SX(function.instruction_constant(k))
         else:
-            operands = [value(index, k) for index in function.instruction_input(k)]
+            operands = [value(index, part) for index in function.instruction_input(k)]
             result = (ca.SX.unary(op, operands[0]) if len(operands) == 1
                       else ca.SX.binary(op, *operands))
         (index,) = function.instruction_output(k)
-        if k < cut:
-            head[index] = (k, result)
-        else:
-            tail[index] = result
-    values = [shared[k] for k in sorted(shared)]
-    link = ca.vertcat(*(symbol for _, symbol in values))
-    head_function = ca.Function(head_name, inputs, [ca.vertcat(*(v for v, _ in values))],
-                                function.name_in(), ["shared"])
-    tail_function = ca.Function(
-        tail_name, [*inputs, link],
-        [ca.SX(function.sparsity_out(o), ca.vertcat(*column)) if column else
-         ca.SX(function.sparsity_out(o)) for o, column in enumerate(outputs)],
-        [*function.name_in(), "shared"], function.name_out())
-    return head_function, tail_function
+        written[index] = (part, k, result)
+    links = [[values[m] for m in sorted(values)] for values in shared]
+    chain = []
+    for k, name in enumerate(names):
+        link_in = [ca.vertcat(ca.SX(0, 1), *(symbol for _, symbol in links[j])) for j in range(k)]
+        names_in = [*function.name_in(), *(f"shared_{j}" for j in range(k))]
+        if k < last:
+            chain.append(ca.Function(name, [*inputs, *link_in],
+                                     [ca.vertcat(ca.SX(0, 1), *(v for v, _ in links[k]))],
+                                     names_in, [f"shared_{k}"]))
+            continue
+        chain.append(ca.Function(
+            name, [*inputs, *link_in],
+            [ca.SX(function.sparsity_out(o), ca.vertcat(*column)) if column else
+             ca.SX(function.sparsity_out(o)) for o, column in enumerate(outputs)],
+            names_in, function.name_out()))
+    return tuple(chain)
 
 
-def joined(head: ca.Function, tail: ca.Function, name: str) -> ca.Function:
-    """tail(inputs, head(inputs)) as an MX Function `name` with the tail's output names and
-    the head's inputs (the pair's compiled externals stay compiled)."""
-    inputs = [ca.MX.sym(head.name_in(k), head.sparsity_in(k)) for k in range(head.n_in())]
-    outputs = tail.call([*inputs, *head.call(inputs)])
-    return ca.Function(name, inputs, outputs, head.name_in(), tail.name_out())
+def joined(chain: Sequence[ca.Function], name: str) -> ca.Function:
+    """The chain's parts called in turn as an MX Function `name` with the first part's f
+    inputs and the last part's outputs (the parts' compiled externals stay compiled)."""
+    first = chain[0]
+    inputs = [ca.MX.sym(first.name_in(k), first.sparsity_in(k)) for k in range(first.n_in())]
+    links: list[ca.MX] = []
+    for part in chain[:-1]:
+        links.append(part.call([*inputs, *links])[0])
+    outputs = chain[-1].call([*inputs, *links])
+    return ca.Function(name, inputs, outputs, first.name_in(), chain[-1].name_out())

@@ -1,7 +1,8 @@
 """A compiled joint tree's library (runtime.joint_dynamics.keyed_system, what goes in it:
 backends.joint_library) where the user chose no flags: the ODE's forward derivative
 fwd1_joint_ode (method auto's probe) compiled at -O0 and the rest at the default flags, large
-results rows as two halves (backends.split), all equal to the interpreted system's; BDF's
+results rows as a chain of parts (backends.split), all equal to the interpreted system's, the
+parts evaluated over rows in C (backends.rows_loop); BDF's
 Jacobian from a library of its own, built by the first BDF run, so a BDF run after an Adams
 run from one cache is a BDF run from a fresh one; with flags chosen ($CASMECH_CFLAGS) every
 function is built with them, under another key."""
@@ -9,7 +10,15 @@ function is built with them, under another key."""
 import numpy as np
 
 import casmech
-from casmech.backends import build, cache, codegen, joint_library, manifest
+from casmech.backends import (
+    build,
+    cache,
+    codegen,
+    joint_library,
+    manifest,
+    rk_library,
+    rows_loop,
+)
 from casmech.runtime.joint_dynamics import joint_system
 from casmech.runtime.workspace import Workspace
 from tests.integration.backends.test_joint import (
@@ -25,11 +34,15 @@ def _compiles(commands: list, entry) -> dict[str, list[str]]:
             and (entry / command[command.index("-c") + 1]).is_file()}
 
 
-def test_seldom_functions_build_quickly_and_large_rows_in_halves(
+def test_seldom_functions_build_quickly_and_large_rows_in_parts(
         model, toolchain, cache_root, interpreted, tmp_path, monkeypatch):
     bundle = codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
     monkeypatch.delenv(build.FLAGS_ENVIRONMENT)  # no flags chosen
-    monkeypatch.setattr(joint_library, "SPLIT_INSTRUCTIONS", 0)  # this small tree's rows too
+    # this small tree's rows too, in three parts
+    monkeypatch.setattr(joint_library, "WHOLE_INSTRUCTIONS", 0)
+    monkeypatch.setattr(joint_library, "PART_INSTRUCTIONS",
+                        -(-joint_system(interpreted).motion.n_instructions() // 3))
+    rk_library.rows_driver()  # the rows' C loop (once a process) not among these entries
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "first"))
     commands = []
     original = build._run
@@ -41,7 +54,7 @@ def test_seldom_functions_build_quickly_and_large_rows_in_halves(
     (entry,) = cache.entries(tmp_path / "first")
     record = manifest.read(entry)
     names = {function["name"] for function in record["functions"]}
-    assert {"joint_ode", "fwd1_joint_ode", *joint_library.SPLIT_MOTION} <= names
+    assert {"joint_ode", "fwd1_joint_ode", *joint_library.motion_parts(3)} <= names
     assert "joint_motion" not in names and record["function_flags"] == {
         "fwd1_joint_ode": ["-O0"]}
     compiles = _compiles(commands, entry)
@@ -50,6 +63,15 @@ def test_seldom_functions_build_quickly_and_large_rows_in_halves(
         seldom = "int fwd1_joint_ode(" in (entry / source).read_text()
         assert ("-O0" if seldom else build.DEFAULT_FLAGS[0]) in flags, (source, flags)
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
+    call = rows_loop.rows_call(fast.motion)  # the parts in turn over rows, in one C call
+    assert call is not None and len(call.entries) == 3
+    rng = np.random.default_rng(5)
+    times, states = rng.uniform(0, 2, 9), rng.uniform(-0.5, 0.5, (9, fast.layout.n_x))
+    signs = np.ones(interpreted.n_bodies)
+    want = fast.motion.map(9)(times[None, :], states.T, np.zeros((0, 9)), signs[:, None])
+    for got, expected in zip(call(9, times, states, None, signs), want, strict=True):
+        # the same compiled parts on the same numbers, through CasADi or the C loop
+        np.testing.assert_array_equal(got, np.array(expected).T)
 
     def run(method: str, workspace: Workspace):
         return casmech.analyze(bundle, "dynamics", formulation="joint", t_end=0.3,

@@ -44,6 +44,12 @@ def test_rows_as_casadis_own_evaluation(externals):
     assert [g.shape for g in got] == [(7, 2), (7, 0), (7, 5)]
     for g, w in zip(got, want, strict=True):  # the same compiled code on the same numbers
         np.testing.assert_array_equal(g, w.T)
+    # read-only inputs (whose buffers ctypes cannot view): the same rows
+    frozen = [a.copy() for a in (times, states, signs)]
+    for a in frozen:
+        a.setflags(write=False)
+    for g, w in zip(call(7, *frozen[:2], None, frozen[2]), got, strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
     # the outputs are fresh: the next call does not write into them
     before = [g.copy() for g in got]
     call(7, times + 1, states, None, signs)
@@ -82,3 +88,33 @@ def test_functions_without_an_entry_point(externals):
     # a casadi.external a user loads from the same library: not recorded by casmech
     path = external_record.library(externals["rows"])
     assert rows_loop.rows_call(ca.external("rows", str(path))) is None
+
+
+def test_a_chain_of_parts_over_rows(externals, tmp_path):
+    """A function compiled as a chain of parts (backends.split) and recorded as such
+    (rows_loop.chained): the parts in turn over all rows compute the function's rows
+    (`externals`: skipped without a C compiler)."""
+    from casmech.backends.split import joined, parts
+
+    t, x, z, s = ca.SX.sym("t"), ca.SX.sym("x", 3), ca.SX.sym("z", 0), ca.SX.sym("s", 2)
+    inline = ca.Function("rows", [t, x, z, s], [ca.cos(x[0] * t) + s[0], ca.SX(0, 1),
+                                                 ca.vertcat(x * ca.sin(t), s[1] * x[2])],
+                         ["t", "x", "z", "signs"], ["a", "none", "b"])
+    names = ("chain_0", "chain_1", "chain_2")
+    built = compile_functions(dict(zip(names, parts(inline, names), strict=True)),
+                              root=tmp_path)
+    chain = [built[name] for name in names]
+    whole = rows_loop.chained(joined(chain, "rows"), chain)
+    call = rows_loop.rows_call(whole)
+    assert call is not None and len(call.entries) == 3
+    rng = np.random.default_rng(4)
+    for rows in (6, 2, 9):  # the shared values' buffers grown and reused
+        times, states, signs = rng.normal(size=rows), rng.normal(size=(rows, 3)), rng.normal(
+            size=2)
+        want = _columns(whole, times[None, :], states.T, np.zeros((0, rows)),
+                        np.repeat(signs[:, None], rows, axis=1))
+        for g, w in zip(call(rows, times, states, None, signs), want, strict=True):
+            # the same compiled parts on the same numbers
+            np.testing.assert_array_equal(g, w.T)
+    # the same parts joined again but not recorded: an MX function without an entry point
+    assert rows_loop.rows_call(joined(chain, "rows")) is None

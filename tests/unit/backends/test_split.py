@@ -1,13 +1,13 @@
-"""backends.split: an SX Function cut into a head and a tail computes what the Function
-computes (the same operations on the same operands), interpreted and compiled, and a changed
-toolchain setting (a function's own flags) changes a library's cache key."""
+"""backends.split: an SX Function cut into a chain of parts computes what the Function computes
+(the same operations on the same operands), interpreted and compiled, and a changed toolchain
+setting (a function's own flags) changes a library's cache key."""
 
 import casadi as ca
 import numpy as np
 
 import casmech
 from casmech.backends import codegen, library
-from casmech.backends.split import halves, joined
+from casmech.backends.split import joined, parts
 from casmech.runtime.joint_dynamics import joint_system
 from tests.conftest import MODELS
 
@@ -35,34 +35,38 @@ def _assert_same(got, want) -> None:
         np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-14, atol=1e-14)
 
 
-def test_head_then_tail_is_the_function():
+def test_the_parts_in_turn_are_the_function():
     motion = joint_system(casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"))).motion
-    for function in (_function(), motion):
-        head, tail = halves(function, "head", "tail")
-        both = joined(head, tail, function.name())
-        assert both.name_in() == function.name_in() and both.name_out() == function.name_out()
-        assert all(both.sparsity_out(k) == function.sparsity_out(k)
+    for function, count in ((_function(), 2), (_function(), 3), (motion, 2), (motion, 5)):
+        chain = parts(function, [f"part{k}" for k in range(count)])
+        assert len(chain) == count
+        again = joined(chain, function.name())
+        assert again.name_in() == function.name_in()
+        assert again.name_out() == function.name_out()
+        assert all(again.sparsity_out(k) == function.sparsity_out(k)
                    for k in range(function.n_out()))
-        # each half holds about half of the work
-        assert max(head.n_instructions(), tail.n_instructions()) < function.n_instructions()
+        # part k takes the inputs and the earlier parts' shared values
+        assert [part.n_in() for part in chain] == [function.n_in() + k for k in range(count)]
+        # each part holds about its share of the work
+        assert max(p.n_instructions() for p in chain) < function.n_instructions()
         for _ in range(3):
             arguments = _arguments(function)
-            _assert_same(both(*arguments), function(*arguments))
+            _assert_same(again(*arguments), function(*arguments))
 
 
 def test_an_mx_function_is_not_split():
     x = ca.MX.sym("x", 2)
-    assert halves(ca.Function("g", [x], [ca.sin(x) * x[0]]), "head", "tail") is None
+    assert parts(ca.Function("g", [x], [ca.sin(x) * x[0]]), ("head", "tail")) is None
 
 
-def test_the_compiled_halves_are_the_function(toolchain, tmp_path):
+def test_the_compiled_parts_are_the_function(toolchain, tmp_path):
     function = _function()
-    head, tail = halves(function, "f_head", "f_tail")
-    built = codegen.compile_functions({"f_head": head, "f_tail": tail}, toolchain=toolchain,
-                                      root=tmp_path)
-    both = joined(built["f_head"], built["f_tail"], "f")
+    names = ("f_0", "f_1", "f_2")
+    built = codegen.compile_functions(dict(zip(names, parts(function, names), strict=True)),
+                                      toolchain=toolchain, root=tmp_path)
+    again = joined([built[name] for name in names], "f")
     arguments = _arguments(function)
-    for a, b in zip(both(*arguments), function(*arguments), strict=True):
+    for a, b in zip(again(*arguments), function(*arguments), strict=True):
         # the same SX compiled to C: roundoff
         np.testing.assert_allclose(np.array(a), np.array(b), rtol=1e-12, atol=1e-12)
 
