@@ -39,10 +39,11 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
+from casmech.runtime.memo import kept
 from casmech.runtime.projected_loops import loop_algebraic, loop_integrator, loop_ode_of
 from casmech.runtime.results import Result
 from casmech.runtime.stiffness import spectral_radius
-from casmech.runtime.workspace import Workspace, of
+from casmech.runtime.workspace import KINDS, Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
 METHODS = {"adams": {"linear_multistep_method": "adams",
@@ -243,6 +244,7 @@ class _Integrator:
             self.options |= METHODS[method]
         self.method, self.steps, self._options_key = method, 0, None
         self.loop, self.solved = None, True  # dop853 with loops: set by run_joint_dynamics
+        self.derived: dict | None = None  # the start's derived entries (_kept_start)
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -253,11 +255,8 @@ class _Integrator:
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
-        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md); loops:
-            rk = loop_integrator(  # their projected ODE (runtime.projected_loops)
-                self.loop, self.options, self._key(), self.workspace) if system.n_cut else \
-                self.workspace.kept("dop853", (system.dynamics, self._key()),
-                                    lambda: dop853.from_options(system.dynamics, self.options))
+        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
+            rk = self._dop853()
             try:
                 states = rk(t0, times[:1] if trial else times, x)
             except Interrupted as interrupted:  # as a NamedCall's: outputs by name
@@ -280,6 +279,24 @@ class _Integrator:
         if not nonfinite.all_finite(states, algebraic):
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
+
+    def _dop853(self) -> dop853.Dop853:
+        """DOP853 over the tree's ODE, or with loops their projected ODE (runtime.
+        projected_loops), kept in the workspace by the ODE and the options, and by the
+        options alone in the start's `derived` entries (set by run_joint_dynamics), so that a
+        repeated run hashes no CasADi Function to find it."""
+        system = self.system
+
+        def found() -> dop853.Dop853:
+            if system.n_cut:
+                return loop_integrator(self.loop, self.options, self._key(), self.workspace)
+            return self.workspace.kept("dop853", (system.dynamics, self._key()),
+                                       lambda: dop853.from_options(system.dynamics,
+                                                                   self.options))
+
+        if self.derived is None:
+            return found()
+        return kept(self.derived.setdefault("dop853", {}), self._key(), found, KINDS["dop853"])
 
     def _cvodes(self, t0: float, times, trial: bool) -> NamedCall:
         """CVODES over the grid, kept for a later run over the same grid with the same options
@@ -394,8 +411,11 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
 
 def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
                 settings: Assembly, workspace: Workspace):
-    """_start's (x, z, loops, signs) and the results rows at t0 from them, by whether loop
-    rows are solved (a dict filled by the first run of each: runtime.joint_recorder)."""
+    """_start's (x, z, loops, signs) and what runs from it derive (a dict filled by the first
+    run that needs each entry, looked up by plain keys: no CasADi Function hashed): the results
+    rows at t0 and the Recorder, by whether loop rows are solved (runtime.joint_recorder),
+    the loops' projected ODE ("loop_ode": its mask is the start's) and DOP853's integrators
+    by their options ("dop853", _Integrator._dop853)."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -418,8 +438,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     recorded in Result.events; without any, no event work is done."""
     workspace = of(functions, workspace)
     system = joint_system(functions, settings, workspace)
-    x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
-                                             workspace)
+    x, z, loops, signs, derived = _kept_start(functions, system, t0, settings.assembly,
+                                              workspace)
     step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
         method = choose_method(system, t0, x, step,
@@ -428,11 +448,18 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                                lambda: workspace.kept("dop853_in_c", system.dynamics,
                                                       lambda: dop853.in_c(system.dynamics,
                                                                           not system.n_cut)))
-    recorder = Recorder(functions, system, signs, loops.mask, workspace,
-                        settings.loop_rows == "solved" or method == "dop853")
+    solve = settings.loop_rows == "solved" or method == "dop853"
+    recorder = derived.get(("recorder", solve))
+    if recorder is None:
+        recorder = derived["recorder", solve] = Recorder(functions, system, signs, loops.mask,
+                                                         workspace, solve)
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
+    integrate.derived = derived
     if method == "dop853" and system.n_cut:  # the loops' projected ODE (runtime.projected_loops)
-        integrate.loop = loop_ode_of(functions, system, loops.mask, workspace)
+        integrate.loop = derived.get("loop_ode")
+        if integrate.loop is None:
+            integrate.loop = derived["loop_ode"] = loop_ode_of(functions, system, loops.mask,
+                                                               workspace)
         integrate.solved = recorder.loops is not None
     integrate.options |= step_options
     times = output_times(t0, t_end, step)
@@ -472,7 +499,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                      lambda j: (states[:, j], loops.z(times_done[j], states[:, j])), probe)
 
     try:
-        first = recorder.first(times[0], x, z, firsts)
+        first = recorder.first(times[0], x, z, derived)
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)

@@ -111,6 +111,11 @@ class Result:
         return self._array("t").tolist()
 
     @property
+    def t(self) -> np.ndarray:
+        """The output times as one array (times reads them as a list)."""
+        return self._array("t")
+
+    @property
     def q(self) -> np.ndarray:
         return self._array("q")
 
