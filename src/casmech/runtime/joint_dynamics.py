@@ -415,7 +415,7 @@ def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
     run that needs each entry, looked up by plain keys: no CasADi Function hashed): the results
     rows at t0 and the Recorder, by whether loop rows are solved (runtime.joint_recorder),
     the loops' projected ODE ("loop_ode": its mask is the start's) and DOP853's integrators
-    by their options ("dop853", _Integrator._dop853)."""
+    by their options ("dop853", _Integrator._dop853), the metadata's joint names ("names")."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -508,12 +508,16 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     except AnalysisError as error:
         error.partial = result
         raise
-    tree = system.tree
+    names = derived.get("names")
+    if names is None:  # of the start's system and mask alone
+        tree = system.tree
+        names = derived["names"] = (
+            tuple(j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints),
+            tuple(j.name for j in tree.cut), int(loops.mask.sum()))
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
         integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",
         method=method if method == "dop853" or not system.n_cut else "bdf",
-        steps=integrate.steps,
-        tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
-        cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
+        steps=integrate.steps, tree=list(names[0]), cut_joints=list(names[1]),
+        dropped_rows=names[2])
     return result

@@ -132,7 +132,7 @@ def loop_algebraic(loops: Loops, times, states: np.ndarray, solved: bool) -> np.
     """The DAE's algebraic states z = [lam; mu] at the states' columns, as the results rows
     read them: zeros where the rows solve the loops themselves (runtime.joint_rows: `solved`)
     or there are none, else each column's consistent multipliers (Loops.z)."""
-    times = np.ravel(times)[:states.shape[1]]
     if solved or not loops.n_z:
         return np.zeros((loops.n_z, states.shape[1]))
+    times = np.ravel(times)[:states.shape[1]]
     return np.column_stack([loops.z(t, x) for t, x in zip(times, states.T, strict=True)])
