@@ -69,6 +69,8 @@ def test_the_check_itself_warns_nothing():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert all_finite(np.full(4, 1e308))
+        # squares finite in each array, their total beyond the largest double
+        assert all_finite(np.full(2, 1.2e154), np.full((1, 2), 1.2e154))
         assert not all_finite(np.array([np.inf, -np.inf, 1.0]))
         assert check_states(np.arange(3.0), np.full((3, 2), 1e308), np.array(
             [[1.0, 2.0], [np.inf, -np.inf], [0.0, 0.0]]), np.zeros((3, 2)),
