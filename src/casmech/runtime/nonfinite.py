@@ -119,7 +119,8 @@ def all_finite(*arrays) -> bool:
     they are the check, not news for a user."""
     total = 0.0
     for array in arrays:
-        total += float(_SQUARES(array, array))  # (a Python float's sum overflows silently)
+        flat = np.asarray(array).ravel("K")  # (a view of a transposed block: np.vdot would copy)
+        total += float(_SQUARES(flat, flat))  # (a Python float's sum overflows silently)
     if math.isfinite(total):
         return True
     return all(np.isfinite(array).all() for array in arrays)
