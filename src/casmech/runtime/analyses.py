@@ -263,7 +263,7 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     the arguments (and their types) that made them, so a repeated run checks them once."""
     given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
              options)
-    key = tuple((type(value), value) for value in given)
+    key = (*given, *map(type, given))
     try:
         hash(key)
     except TypeError:  # options as a mapping: checked every time
