@@ -39,11 +39,10 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
-from casmech.runtime.memo import kept
-from casmech.runtime.projected_loops import loop_algebraic, loop_integrator, loop_ode_of
+from casmech.runtime.projected_loops import dop853_of, loop_algebraic, loop_ode_of
 from casmech.runtime.results import Result
 from casmech.runtime.stiffness import spectral_radius
-from casmech.runtime.workspace import KINDS, Workspace, of
+from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
 METHODS = {"adams": {"linear_multistep_method": "adams",
@@ -255,8 +254,9 @@ class _Integrator:
         system = self.system
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
-        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md)
-            rk = self._dop853()
+        if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md); loops:
+            rk = dop853_of(system, self.loop, self.options, self._key(),  # their projected
+                           self.workspace, self.derived)  # ODE (runtime.projected_loops)
             try:
                 states = rk(t0, times[:1] if trial else times, x)
             except Interrupted as interrupted:  # as a NamedCall's: outputs by name
@@ -279,24 +279,6 @@ class _Integrator:
         if not nonfinite.all_finite(states, algebraic):
             raise RuntimeError("the state became NaN or infinite")
         return states, algebraic
-
-    def _dop853(self) -> dop853.Dop853:
-        """DOP853 over the tree's ODE, or with loops their projected ODE (runtime.
-        projected_loops), kept in the workspace by the ODE and the options, and by the
-        options alone in the start's `derived` entries (set by run_joint_dynamics), so that a
-        repeated run hashes no CasADi Function to find it."""
-        system = self.system
-
-        def found() -> dop853.Dop853:
-            if system.n_cut:
-                return loop_integrator(self.loop, self.options, self._key(), self.workspace)
-            return self.workspace.kept("dop853", (system.dynamics, self._key()),
-                                       lambda: dop853.from_options(system.dynamics,
-                                                                   self.options))
-
-        if self.derived is None:
-            return found()
-        return kept(self.derived.setdefault("dop853", {}), self._key(), found, KINDS["dop853"])
 
     def _cvodes(self, t0: float, times, trial: bool) -> NamedCall:
         """CVODES over the grid, kept for a later run over the same grid with the same options
@@ -411,11 +393,10 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
 
 def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
                 settings: Assembly, workspace: Workspace):
-    """_start's (x, z, loops, signs) and what runs from it derive (a dict filled by the first
-    run that needs each entry, looked up by plain keys: no CasADi Function hashed): the results
-    rows at t0 and the Recorder, by whether loop rows are solved (runtime.joint_recorder),
-    the loops' projected ODE ("loop_ode": its mask is the start's) and DOP853's integrators
-    by their options ("dop853", _Integrator._dop853), the metadata's joint names ("names")."""
+    """_start's (x, z, loops, signs) and a dict of what runs from it derive, filled by the
+    first run that needs each entry and found by plain keys, no CasADi Function hashed (the
+    rows at t0 and the Recorder: runtime.joint_recorder; the loops' ODE and DOP853:
+    runtime.projected_loops; the metadata's joint names)."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -448,18 +429,12 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                                lambda: workspace.kept("dop853_in_c", system.dynamics,
                                                       lambda: dop853.in_c(system.dynamics,
                                                                           not system.n_cut)))
-    solve = settings.loop_rows == "solved" or method == "dop853"
-    recorder = derived.get(("recorder", solve))
-    if recorder is None:
-        recorder = derived["recorder", solve] = Recorder(functions, system, signs, loops.mask,
-                                                         workspace, solve)
+    recorder = Recorder.kept(derived, functions, system, signs, loops.mask, workspace,
+                             settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
     integrate.derived = derived
     if method == "dop853" and system.n_cut:  # the loops' projected ODE (runtime.projected_loops)
-        integrate.loop = derived.get("loop_ode")
-        if integrate.loop is None:
-            integrate.loop = derived["loop_ode"] = loop_ode_of(functions, system, loops.mask,
-                                                               workspace)
+        integrate.loop = loop_ode_of(functions, system, loops.mask, workspace, derived)
         integrate.solved = recorder.loops is not None
     integrate.options |= step_options
     times = output_times(t0, t_end, step)
@@ -508,12 +483,10 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     except AnalysisError as error:
         error.partial = result
         raise
-    names = derived.get("names")
-    if names is None:  # of the start's system and mask alone
-        tree = system.tree
-        names = derived["names"] = (
-            tuple(j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints),
-            tuple(j.name for j in tree.cut), int(loops.mask.sum()))
+    tree = system.tree  # the names: of the start's system and mask alone
+    names = derived.get("names") or derived.setdefault("names", (
+        [j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
+        [j.name for j in tree.cut], int(loops.mask.sum())))
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
         integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",

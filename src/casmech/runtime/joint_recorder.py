@@ -37,6 +37,17 @@ class Recorder:
         self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
                                     lambda: _loop_rows(functions, system, mask)) if solved else None
 
+    @classmethod
+    def kept(cls, derived: dict, functions: SystemFunctions, system: JointSystem, signs, mask,
+             workspace: Workspace, solve_loops: bool = False) -> Recorder:
+        """The Recorder of a kept start, in its `derived` entries by solve_loops
+        (runtime.joint_dynamics._kept_start: signs, mask and system are the start's)."""
+        found = derived.get(("recorder", solve_loops))
+        if found is None:
+            found = derived["recorder", solve_loops] = cls(functions, system, signs, mask,
+                                                           workspace, solve_loops)
+        return found
+
     def first(self, t0: float, x, z, kept: dict) -> tuple[np.ndarray, ...]:
         """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` under
         ("first", whether loop rows are solved) (the rest of a row is a function of the
