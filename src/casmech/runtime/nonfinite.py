@@ -131,7 +131,7 @@ ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
     """The first row of a block whose states are not all finite (None: all are): all_finite
-    first (a sum per state), then, where a sum is not finite, row by row; a small block is
+    first (a sum of squares per state), then, where one is not finite, row by row; a small block is
     searched as one array of its rows (one call into NumPy, not one per state)."""
     if all_finite(times, q, q_dot, q_ddot, lam):
         return None
