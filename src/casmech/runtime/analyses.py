@@ -33,7 +33,12 @@ from casmech.runtime import (
 from casmech.runtime.cancel import CancelToken, current
 from casmech.runtime.events import Event
 from casmech.runtime.joint_dynamics import tree_of
-from casmech.runtime.kinematics import output_times, run_assembly, run_prescribed_motion
+from casmech.runtime.kinematics import (
+    output_count,
+    output_times,
+    run_assembly,
+    run_prescribed_motion,
+)
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.results import Result, column_names
 from casmech.runtime.workspace import Workspace, of
@@ -84,7 +89,7 @@ def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspac
     def run(name: str) -> Result:
         return formulation_run.run(f, name, asked)
 
-    rows = len(output_times(t0, t_end, step))
+    rows = output_count(t0, t_end, step)
     return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows,
                                 lambda: run("joint"), run, options.solver, workspace,
                                 options.method)
@@ -258,7 +263,7 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     the arguments (and their types) that made them, so a repeated run checks them once."""
     given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
              options)
-    key = tuple((type(value), value) for value in given)
+    key = (*given, *map(type, given))
     try:
         hash(key)
     except TypeError:  # options as a mapping: checked every time

@@ -114,7 +114,7 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
     method: the run's);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
-    first = choice(tree, formulation, lambda: examinable(functions, rows),
+    first = choice(tree, formulation, lambda: examinable(functions, rows, workspace),
                    lambda: lags_bundle(functions, settings.compile), method)
 
     def examined(result: Result) -> Result:

@@ -118,7 +118,7 @@ class Dop853:
         """The states at `times` (increasing, from t0 on) from x at t0, one column per time
         (x itself at times equal to t0); self.last holds the call's counts."""
         times = np.ascontiguousarray(times, float)
-        x = np.ascontiguousarray(np.ravel(x), float)
+        x = np.ascontiguousarray(x, float).reshape(-1)
         at_start = 0 if not len(times) or times[0] > t0 else \
             int(np.searchsorted(times, t0, side="right"))
         if not len(x) or at_start == len(times):

@@ -39,7 +39,7 @@ from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.kinematics import output_times
-from casmech.runtime.projected_loops import loop_algebraic, loop_integrator, loop_ode_of
+from casmech.runtime.projected_loops import dop853_of, loop_algebraic, loop_ode_of
 from casmech.runtime.results import Result
 from casmech.runtime.stiffness import spectral_radius, stable_step
 from casmech.runtime.workspace import Workspace, of
@@ -243,6 +243,7 @@ class _Integrator:
             self.options |= METHODS[method]
         self.method, self.steps, self._options_key = method, 0, None
         self.loop, self.solved = None, True  # dop853 with loops: set by run_joint_dynamics
+        self.derived: dict | None = None  # the start's derived entries (_kept_start)
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -254,10 +255,8 @@ class _Integrator:
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md); loops:
-            rk = loop_integrator(  # their projected ODE (runtime.projected_loops)
-                self.loop, self.options, self._key(), self.workspace) if system.n_cut else \
-                self.workspace.kept("dop853", (system.dynamics, self._key()),
-                                    lambda: dop853.from_options(system.dynamics, self.options))
+            rk = dop853_of(system, self.loop, self.options, self._key(),  # their projected
+                           self.workspace, self.derived)  # ODE (runtime.projected_loops)
             try:
                 states = rk(t0, times[:1] if trial else times, x)
             except Interrupted as interrupted:  # as a NamedCall's: outputs by name
@@ -397,8 +396,10 @@ def _start(functions: SystemFunctions, system: JointSystem, t0: float,
 
 def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
                 settings: Assembly, workspace: Workspace):
-    """_start's (x, z, loops, signs) and the results rows at t0 from them, by whether loop
-    rows are solved (a dict filled by the first run of each: runtime.joint_recorder)."""
+    """_start's (x, z, loops, signs) and a dict of what runs from it derive, filled by the
+    first run that needs each entry and found by plain keys, no CasADi Function hashed (the
+    rows at t0 and the Recorder: runtime.joint_recorder; the loops' ODE and DOP853:
+    runtime.projected_loops; the metadata's joint names)."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -421,8 +422,8 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     recorded in Result.events; without any, no event work is done."""
     workspace = of(functions, workspace)
     system = joint_system(functions, settings, workspace)
-    x, z, loops, signs, firsts = _kept_start(functions, system, t0, settings.assembly,
-                                             workspace)
+    x, z, loops, signs, derived = _kept_start(functions, system, t0, settings.assembly,
+                                              workspace)
     step_options = contact_steps.options(functions.ir, step, t_end - t0, settings)
     if method == "auto":
         method, radius = choose_method(
@@ -432,11 +433,12 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                                    lambda: dop853.in_c(system.dynamics, not system.n_cut)))
         if method == "dop853" and radius is not None:  # the fastest mode damped, not met
             step_options["max_step_size"] = stable_step(radius)
-    recorder = Recorder(functions, system, signs, loops.mask, workspace,
-                        settings.loop_rows == "solved" or method == "dop853")
+    recorder = Recorder.kept(derived, functions, system, signs, loops.mask, workspace,
+                             settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)
+    integrate.derived = derived
     if method == "dop853" and system.n_cut:  # the loops' projected ODE (runtime.projected_loops)
-        integrate.loop = loop_ode_of(functions, system, loops.mask, workspace)
+        integrate.loop = loop_ode_of(functions, system, loops.mask, workspace, derived)
         integrate.solved = recorder.loops is not None
     integrate.options |= step_options
     times = output_times(t0, t_end, step)
@@ -476,7 +478,7 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                      lambda j: (states[:, j], loops.z(times_done[j], states[:, j])), probe)
 
     try:
-        first = recorder.first(times[0], x, z, firsts)
+        first = recorder.first(times[0], x, z, derived)
         result.extend(times[:1], *first)
         if watch is not None:
             watch.start(times[0], first)
@@ -485,12 +487,14 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     except AnalysisError as error:
         error.partial = result
         raise
-    tree = system.tree
+    tree = system.tree  # the names: of the start's system and mask alone
+    names = derived.get("names") or derived.setdefault("names", (
+        [j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
+        [j.name for j in tree.cut], int(loops.mask.sum())))
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
         integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",
         method=method if method == "dop853" or not system.n_cut else "bdf",
-        steps=integrate.steps,
-        tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
-        cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
+        steps=integrate.steps, tree=list(names[0]), cut_joints=list(names[1]),
+        dropped_rows=names[2])
     return result

@@ -23,7 +23,8 @@ class Recorder:
 
     def __init__(self, functions: SystemFunctions, system: JointSystem, signs, mask,
                  workspace: Workspace, solve_loops: bool = False):
-        self.functions, self.system, self.signs = functions, system, signs
+        # (the bundle is not held: a Recorder is kept with its start in the workspace)
+        self.system, self.signs = system, signs
         self.workspace, self._call = workspace, None
         self.least_norm = workspace.kept(
             "joint_least_norm", (mask.tobytes(), system.dynamics),
@@ -36,14 +37,26 @@ class Recorder:
         self.loops = workspace.kept("joint_loop_rows", (mask.tobytes(), system.dynamics),
                                     lambda: _loop_rows(functions, system, mask)) if solved else None
 
+    @classmethod
+    def kept(cls, derived: dict, functions: SystemFunctions, system: JointSystem, signs, mask,
+             workspace: Workspace, solve_loops: bool = False) -> Recorder:
+        """The Recorder of a kept start, in its `derived` entries by solve_loops
+        (runtime.joint_dynamics._kept_start: signs, mask and system are the start's)."""
+        found = derived.get(("recorder", solve_loops))
+        if found is None:
+            found = derived["recorder", solve_loops] = cls(functions, system, signs, mask,
+                                                           workspace, solve_loops)
+        return found
+
     def first(self, t0: float, x, z, kept: dict) -> tuple[np.ndarray, ...]:
-        """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` by
-        whether loop rows are solved (the rest of a row is a function of the start), handed
-        out as copies."""
-        solved = self.loops is not None
-        if solved not in kept:
-            kept[solved] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
-        return tuple(row.copy() for row in kept[solved])
+        """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` under
+        ("first", whether loop rows are solved) (the rest of a row is a function of the
+        start), handed out as copies."""
+        key = "first", self.loops is not None
+        rows = kept.get(key)
+        if rows is None:
+            rows = kept[key] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
+        return tuple(row.copy() for row in rows)
 
     def _mapped(self):
         """The results rows' function over many states (joint_rows.over_rows; kept in the

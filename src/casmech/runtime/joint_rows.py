@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from contextlib import nullcontext
 
 import casadi as ca
 import numpy as np
@@ -75,12 +76,16 @@ class LoopRows:
     def __init__(self, rows: ca.Function, terms: Callable[[], ca.Function],
                  motion: ca.Function, mask: np.ndarray):
         self.call, self.terms, self.motion = over_rows(rows), terms, motion
+        # CasADi's map prints a failed evaluation's inputs before raising (held back); the
+        # rows' C loop prints nothing, its failure is its own RuntimeError
+        self._quiet = solver_messages.without_input_dumps if type(self.call) is ColumnCall \
+            else nullcontext
         self.mask = np.asarray(mask, float)
         self._saddle: tuple[ca.Function, ca.Function] | None = None
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
         try:
-            with solver_messages.without_input_dumps():
+            with self._quiet():
                 rows = columns(self.call, times, states, self.mask, signs)
         except RuntimeError as error:  # an evaluation that failed: every column alone
             cancel.check(error)

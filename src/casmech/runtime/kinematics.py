@@ -17,6 +17,7 @@ length never changes its rows.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -41,9 +42,23 @@ BLOCK_SECONDS = 0.1  # a mapped block longer than this is halved for the next (c
 
 
 def output_times(t0: float, t_end: float, step: float) -> np.ndarray:
-    n = int(np.floor((t_end - t0) / step + 1e-9))
+    """The output grid: t0 + k step up to t_end (within 1e-9 of a step), and t_end itself
+    where the last step falls short of it."""
+    n, closed = _grid(t0, t_end, step)
     times = t0 + step * np.arange(n + 1)
-    return times if times[-1] >= t_end - 1e-9 * step else np.append(times, t_end)
+    return times if closed else np.append(times, t_end)
+
+
+def output_count(t0: float, t_end: float, step: float) -> int:
+    """len(output_times(t0, t_end, step)), without making the grid."""
+    n, closed = _grid(t0, t_end, step)
+    return n + 1 if closed else n + 2
+
+
+def _grid(t0: float, t_end: float, step: float) -> tuple[int, bool]:
+    """(n, whether t0 + n step, the grid's last multiple of the step, reaches t_end)."""
+    n = math.floor((t_end - t0) / step + 1e-9)
+    return n, t0 + step * n >= t_end - 1e-9 * step
 
 
 def require_fully_driven(functions: SystemFunctions, t: float, q: np.ndarray,

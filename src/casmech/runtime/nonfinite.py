@@ -106,19 +106,21 @@ class NonFinite(AnalysisError):
 
 
 _ALL = np.logical_and.reduce
-_SUM = np.add.reduce  # (np.sum's own Python layer costs more than summing a block of rows)
+# an array's entries' sum of squares, by BLAS (one call an array, through no ufunc: NumPy's
+# floating-point warnings, and the errstate that would silence them, are not involved)
+_SQUARES = np.vdot
 
 
 def all_finite(*arrays) -> bool:
-    """Whether every entry of `arrays` is finite: from their sums first (a NaN or an infinity
-    makes a sum non-finite; one reduction an array), entry by entry only where the sum is not
-    finite (a NaN, an infinity, or finite entries whose sum overflows). NumPy's overflow and
-    invalid-value warnings of those sums are silenced: they are the check, not news for a
-    user."""
+    """Whether every entry of `arrays` is finite: from each array's sum of squares first
+    (np.vdot of the array with itself: a NaN or an infinity makes it non-finite, and a sum of
+    non-negative terms meets no inf - inf), entry by entry only where a sum is not finite (a
+    NaN, an infinity, or finite entries whose squares overflow). The sums warn of nothing:
+    they are the check, not news for a user."""
     total = 0.0
-    with np.errstate(over="ignore", invalid="ignore"):
-        for array in arrays:
-            total += float(_SUM(array, None))
+    for array in arrays:
+        flat = np.asarray(array).ravel("K")  # (a view of a transposed block: np.vdot would copy)
+        total += float(_SQUARES(flat, flat))  # (a Python float's sum overflows silently)
     if math.isfinite(total):
         return True
     return all(np.isfinite(array).all() for array in arrays)
@@ -129,7 +131,7 @@ ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
     """The first row of a block whose states are not all finite (None: all are): all_finite
-    first (a sum per state), then, where a sum is not finite, row by row; a small block is
+    first (a sum of squares per state), then, where one is not finite, row by row; a small block is
     searched as one array of its rows (one call into NumPy, not one per state)."""
     if all_finite(times, q, q_dot, q_ddot, lam):
         return None

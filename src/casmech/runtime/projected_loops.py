@@ -33,18 +33,26 @@ from casmech.formulations.joint_start import Loops
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import spanning_tree
 from casmech.runtime import dop853
-from casmech.runtime.workspace import Workspace
+from casmech.runtime.memo import kept
+from casmech.runtime.workspace import KINDS, Workspace
 
 NAMES = ("joint_loop_ode", "joint_loop_project")  # the compiled library's functions
 
 
 def loop_ode_of(functions: SystemFunctions, system: JointSystem, mask,
-                workspace: Workspace) -> loop_ode.LoopODE:
+                workspace: Workspace, derived: dict | None = None) -> loop_ode.LoopODE:
     """The loops' ODE and projection of `system` (a bundle's, with loops) with the DAE's row
-    mask `mask`, kept in `workspace` (module docstring)."""
-    mask = np.asarray(mask, float)
-    return workspace.kept("loop_ode", (mask.tobytes(), system.dynamics),
-                          lambda: _made(functions, system, mask))
+    mask `mask`, kept in `workspace` (module docstring) and in `derived`, the entries of the
+    start whose mask it is (runtime.joint_dynamics._kept_start), found there without hashing
+    a CasADi Function."""
+    found = None if derived is None else derived.get("loop_ode")
+    if found is None:
+        mask = np.asarray(mask, float)
+        found = workspace.kept("loop_ode", (mask.tobytes(), system.dynamics),
+                               lambda: _made(functions, system, mask))
+        if derived is not None:
+            derived["loop_ode"] = found
+    return found
 
 
 def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> loop_ode.LoopODE:
@@ -128,11 +136,28 @@ def loop_integrator(loop: loop_ode.LoopODE, options: dict, key, workspace: Works
         dop853.from_options(loop.ode, options), project=loop.project))
 
 
+def dop853_of(system: JointSystem, loop: loop_ode.LoopODE | None, options: dict, key,
+              workspace: Workspace, derived: dict | None = None) -> dop853.Dop853:
+    """DOP853 of a joint run from its integrator options (`key`: them as a key): over the
+    tree's ODE, or with loops over `loop` (loop_integrator); kept in `workspace` by the ODE and
+    key, and by key alone in `derived`, the entries of the run's start (runtime.joint_dynamics.
+    _kept_start), where a repeated run finds it without hashing a CasADi Function."""
+    def found() -> dop853.Dop853:
+        if system.n_cut:
+            return loop_integrator(loop, options, key, workspace)
+        return workspace.kept("dop853", (system.dynamics, key),
+                              lambda: dop853.from_options(system.dynamics, options))
+
+    if derived is None:
+        return found()
+    return kept(derived.setdefault("dop853", {}), key, found, KINDS["dop853"])
+
+
 def loop_algebraic(loops: Loops, times, states: np.ndarray, solved: bool) -> np.ndarray:
     """The DAE's algebraic states z = [lam; mu] at the states' columns, as the results rows
     read them: zeros where the rows solve the loops themselves (runtime.joint_rows: `solved`)
     or there are none, else each column's consistent multipliers (Loops.z)."""
-    times = np.ravel(times)[:states.shape[1]]
     if solved or not loops.n_z:
         return np.zeros((loops.n_z, states.shape[1]))
+    times = np.ravel(times)[:states.shape[1]]
     return np.column_stack([loops.z(t, x) for t, x in zip(times, states.T, strict=True)])

@@ -56,13 +56,14 @@ class Result:
         whose states are not all finite is refused: the rows before it are added, then
         runtime.nonfinite.NonFinite is raised."""
         times = np.asarray(times, float).reshape(-1)
-        arrays = [np.asarray(v, float) for v in (q, q_dot, q_ddot, lam)]
+        arrays = [np.asarray(q, float), np.asarray(q_dot, float), np.asarray(q_ddot, float),
+                  np.asarray(lam, float)]
         count = len(times)
-        for name, value in zip(STATES, arrays, strict=True):
-            if value.ndim != 2 or value.shape[0] != count:
-                raise ValueError(f"{name}: expected {count} rows, got shape {value.shape}")
-        values = dict(zip(STATES, arrays, strict=True))
+        for k, value in enumerate(arrays):
+            if value.ndim != 2 or len(value) != count:
+                raise ValueError(f"{STATES[k]}: expected {count} rows, got shape {value.shape}")
         bad = check_states(times, *arrays)
+        values = dict(zip(STATES, arrays, strict=True))
         if bad is not None:
             if bad:
                 self._add(times[:bad], {name: value[:bad] for name, value in values.items()})
@@ -109,6 +110,11 @@ class Result:
     @property
     def times(self) -> list[float]:
         return self._array("t").tolist()
+
+    @property
+    def t(self) -> np.ndarray:
+        """The output times as one array (times reads them as a list)."""
+        return self._array("t")
 
     @property
     def q(self) -> np.ndarray:

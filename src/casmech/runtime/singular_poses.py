@@ -36,6 +36,7 @@ from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -49,7 +50,7 @@ COMPILED_ROWS = 60
 def _entries(functions: SystemFunctions, workspace: Workspace | None) -> dict:
     """The check's entries for the bundle (kept in the workspace): "jacobians", Phi_q's mapped
     call; "compiled", (the rows examined, the compiled log-determinant's mapped call or None)
-    of the last rows examined."""
+    of the last rows examined; "shape", Phi_q's (rows, coordinates)."""
     return of(functions, workspace).one("singular_pose_jacobian", dict)
 
 
@@ -155,12 +156,12 @@ def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
     the rows' Gram matrix scaled by its diagonal, by a Cholesky factor (slogdet where one is
     not numerically positive definite)."""
     times, q = np.asarray(times, float), np.asarray(q, float)
-    compiled = _compiled(functions, [int(row) for row in rows], workspace)
+    compiled = _compiled(functions, list(map(int, rows)), workspace)
     if compiled is None:
         return _dense_logdet(functions, times, q, rows, workspace)
     logdet = compiled(times, q)
-    failed = ~np.isfinite(logdet)
-    if failed.any():
+    if not all_finite(logdet):
+        failed = ~np.isfinite(logdet)
         logdet[failed] = _dense_logdet(functions, times[failed], q[failed], rows, workspace)
     return logdet
 
@@ -185,10 +186,15 @@ def _dense_logdet(functions: SystemFunctions, times: np.ndarray, q: np.ndarray, 
         return 2.0 * np.sum(np.log(np.diagonal(factor, axis1=1, axis2=2)), axis=1)
 
 
-def examinable(functions: SystemFunctions, rows: int) -> bool:
-    """Whether a run of `rows` output rows is examined (MAX_ENTRIES)."""
-    m, columns = functions["phi_q"].size_out(0)
-    return rows * m * columns <= MAX_ENTRIES
+def examinable(functions: SystemFunctions, rows: int,
+               workspace: Workspace | None = None) -> bool:
+    """Whether a run of `rows` output rows is examined (MAX_ENTRIES); Phi_q's shape read once
+    per workspace (the check's entries)."""
+    entries = _entries(functions, workspace)
+    shape = entries.get("shape")
+    if shape is None:
+        shape = entries["shape"] = functions["phi_q"].size_out(0)
+    return rows * shape[0] * shape[1] <= MAX_ENTRIES
 
 
 def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
@@ -197,8 +203,8 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
     """The singular poses the run passed near (module docstring); None when not examined."""
     if not loops:
         return None
-    times, q = np.asarray(result.times), np.asarray(result.q)
-    if len(times) < 2 or not examinable(functions, len(times)):
+    times, q = result.t, result.q
+    if len(times) < 2 or not examinable(functions, len(times), workspace):
         return None
     limits = settings.assembly.linear_algebra
     rows = _independent(functions, result, float(times[0]), q[0], limits)
@@ -221,6 +227,8 @@ def _independent(functions: SystemFunctions, result: Result, t: float, q,
 
 def _deepest(near: np.ndarray, drop: np.ndarray) -> list[int]:
     """The row of smallest determinant in each stretch of consecutive near rows."""
+    if not near.any():
+        return []
     edges = np.flatnonzero(np.diff(np.concatenate([[0], near.astype(int), [0]])))
     return [start + int(np.argmin(drop[start:stop])) for start, stop in edges.reshape(-1, 2)]
 

@@ -78,17 +78,25 @@ class _Filter(io.TextIOBase):
         self.target.flush()
 
 
-@contextmanager
-def collected(kept: list[str]):
-    """Within the block, the solvers' lines on sys.stderr go to `kept` (module docstring)."""
-    target = sys.stderr
-    stream = _Filter(target, kept)
-    sys.stderr = stream
-    try:
-        yield stream
-    finally:
-        stream.close_line()
-        sys.stderr = target
+class collected:
+    """Within the block, the solvers' lines on sys.stderr go to `kept` (module docstring); the
+    block is given the filtering stream (its `count`: the solver lines seen). A class, not a
+    generator's context manager: entered on every analysis."""
+
+    __slots__ = ("kept", "_target", "_stream")
+
+    def __init__(self, kept: list[str]):
+        self.kept, self._target, self._stream = kept, None, None
+
+    def __enter__(self) -> _Filter:
+        self._target = sys.stderr
+        self._stream = _Filter(self._target, self.kept)
+        sys.stderr = self._stream
+        return self._stream
+
+    def __exit__(self, *exc) -> None:
+        self._stream.close_line()
+        sys.stderr = self._target
 
 
 @contextmanager

@@ -119,3 +119,31 @@ def test_steps_are_read_again_for_other_inputs():
         integrator(x0=np.array(start))
         counts.append((_steps(integrator, start), integrator.stats()["nsteps"]))
     assert counts[0] == counts[1] and counts[2][0] == counts[2][1] != counts[0][0], counts
+
+
+def test_a_repeated_loop_run_finds_what_its_start_derived_without_the_workspace(monkeypatch):
+    """The Recorder, the loops' projected ODE and DOP853 of a run are found again in its kept
+    start's entries: a repeated run of the four-bar looks none of them up in the workspace
+    (whose keys hash CasADi Functions), and its rows equal a fresh bundle's."""
+    from casmech.runtime.workspace import Workspace
+    from tests.validation.runtime.test_joint_dynamics import ROOT
+
+    path = ROOT / "benchmarks" / "models" / "four_bar.yaml"
+    functions = casmech.compile(casmech.load(path))
+    first = _run(functions, method="dop853")
+    asked, kept = [], Workspace.kept
+    monkeypatch.setattr(Workspace, "kept", lambda self, kind, key, build: (
+        asked.append(kind) or kept(self, kind, key, build)))
+    again = _run(functions, method="dop853")
+    assert again.metadata["method"] == "dop853"
+    found = {"joint_least_norm", "joint_loop_rows", "loop_ode", "dop853"} & set(asked)
+    assert not found, asked
+    monkeypatch.undo()
+    fresh = _run(casmech.compile(casmech.load(path)), method="dop853")
+    for name in ("q", "q_dot", "q_ddot", "lam"):
+        # the same computation, repeated
+        np.testing.assert_array_equal(getattr(again, name), getattr(fresh, name))
+        np.testing.assert_array_equal(getattr(again, name), getattr(first, name))
+    assert again.metadata["tree"] == fresh.metadata["tree"]
+    again.metadata["tree"].append("x")  # each run's own list
+    assert _run(functions, method="dop853").metadata["tree"] == fresh.metadata["tree"]

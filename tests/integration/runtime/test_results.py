@@ -48,6 +48,8 @@ def test_extend_and_append_build_the_same_result():
     by_blocks.append(times[3], *(s[3] for s in states))
     by_blocks.extend(times[4:], *(s[4:] for s in states))
     assert seen == by_blocks.times == by_rows.times == times.tolist()
+    # the times as one array: the same floats as the list
+    np.testing.assert_array_equal(by_blocks.t, np.array(by_rows.times))
     assert len(by_blocks) == len(by_rows) == 7
     for name, value in zip(("q", "q_dot", "q_ddot", "lam"), states, strict=True):
         np.testing.assert_array_equal(getattr(by_blocks, name), value)  # copied exactly

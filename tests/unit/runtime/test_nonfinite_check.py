@@ -56,6 +56,13 @@ def test_all_finite_matches_an_entrywise_check_through_overflowing_sums():
     cases = [(np.zeros((3, 2)), np.zeros((0, 2))), (big, -big), (big, np.ones(2)),
              (np.array([1.0, np.nan]), np.ones(2)), (np.ones(2), np.array([np.inf])),
              (np.array([np.inf, -np.inf]),), (big, np.array([[np.nan]]))]
+    # transposed and strided views (read in place or copied), a NaN or an infinity inside
+    block = np.arange(12.0).reshape(3, 4)
+    block[2, 1] = np.nan
+    strided = np.ones((4, 6))
+    strided[2, 4] = np.inf
+    cases += [(block.T,), (block[:2].T,), (strided[:, ::2],), (strided[:, 1::3],),
+              (np.full((3, 2), 1e200).T,)]
     for arrays in cases:
         expected = all(np.isfinite(a).all() for a in arrays)
         assert all_finite(*arrays) == expected, arrays
@@ -69,6 +76,8 @@ def test_the_check_itself_warns_nothing():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert all_finite(np.full(4, 1e308))
+        # squares finite in each array, their total beyond the largest double
+        assert all_finite(np.full(2, 1.2e154), np.full((1, 2), 1.2e154))
         assert not all_finite(np.array([np.inf, -np.inf, 1.0]))
         assert check_states(np.arange(3.0), np.full((3, 2), 1e308), np.array(
             [[1.0, 2.0], [np.inf, -np.inf], [0.0, 0.0]]), np.zeros((3, 2)),
