@@ -20,11 +20,8 @@ import sys
 # Set before a command imports NumPy.
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
-# No pydantic plugins unless the user chose: looking for them reads the entry points of every
-# installed distribution when the model's validator is built (docs/decisions/pydantic-plugins.md).
-os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
-from casmech.cli import collector  # noqa: E402
+from casmech.cli import collector, pydantic_plugins  # noqa: E402
 from casmech.cli.commands import COMMANDS  # noqa: E402
 from casmech.core.version import VERSION  # noqa: E402
 from casmech.errors import (  # noqa: E402
@@ -34,6 +31,11 @@ from casmech.errors import (  # noqa: E402
     Source,
     UsageError,
 )
+
+# No pydantic plugins unless the user chose: looking for them reads the entry points of every
+# installed distribution when the model's validator is built, after importing
+# importlib.metadata (docs/decisions/pydantic-plugins.md).
+pydantic_plugins.turn_off()
 
 DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
 

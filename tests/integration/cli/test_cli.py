@@ -274,6 +274,33 @@ def test_the_command_lines_environment_unless_the_user_chose(variable, given, ex
     assert out.strip() == expected
 
 
+PLUGINS = """
+import sys
+from casmech.cli import main
+assert main(["check", sys.argv[1]]) == 0
+from pydantic.plugin._schema_validator import create_schema_validator  # (pydantic's caller)
+from pydantic.plugin import _loader
+print("importlib.metadata" in sys.modules, type(_loader).__name__,
+      _loader.PYDANTIC_ENTRY_POINT_GROUP, type(sys.modules["pydantic.plugin._loader"]).__name__)
+"""
+
+
+@pytest.mark.parametrize("given, looked_up", [(None, False), ("1", False), ("logfire", True)])
+def test_pydantic_looks_for_no_plugin_unless_the_user_chose(given, looked_up):
+    """With plugins off (the command line's default, or the user's `1`), validating a model
+    imports no importlib.metadata (pydantic's plugin loader stands aside: cli.pydantic_plugins);
+    with a plugin named, pydantic's own loader looks them up; either way a name of the loader
+    reads pydantic's own module, which then stands in sys.modules."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    env["PYTHONPATH"] = str(ROOT / "src")
+    out = subprocess.run([sys.executable, "-c", PLUGINS, str(MODELS / "pendulum.yaml")],
+                         env=env, capture_output=True, text=True, check=True,
+                         timeout=120).stdout.splitlines()[-1].split()
+    assert out == [str(looked_up), "module" if looked_up else "_Loader", "pydantic", "module"]
+
+
 def test_the_processs_own_command_line_collects_less_often():
     """main() as the process's command line raises the young generation's threshold, starts
     the collector before a command other than run and leaves its objects frozen at the end
