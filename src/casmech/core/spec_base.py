@@ -175,10 +175,11 @@ class Repeat(Spec):
     to: Scalar
 
 
+# (a Repeat validated by its own validator, built when a document first has one: Deferred)
 Repeats = Annotated[
     Union[  # noqa: UP007
-        Annotated[Repeat, Tag("one")],
-        Annotated[tuple[Repeat, ...], Field(min_length=1), Tag("nested")],
+        Annotated[Repeat, Deferred(), Tag("one")],
+        Annotated[tuple[Annotated[Repeat, Deferred()], ...], Field(min_length=1), Tag("nested")],
     ],
     Discriminator(lambda v: "nested" if isinstance(v, list | tuple) else "one"),
 ]

@@ -10,13 +10,22 @@ from pydantic import (
     Tag,
 )
 
-from casmech.core.spec_base import Inertia, Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import (
+    Deferred,
+    Inertia,
+    Name,
+    Orientation,
+    Repeats,
+    Scalar,
+    Spec,
+    Vector,
+)
 
 
 # ---------------------------------------------------------------------------------- geometry
 class Placement(Spec):
     offset: Vector | None = None
-    orientation: Orientation | None = None
+    orientation: Annotated[Orientation, Deferred()] | None = None
 
 
 class Cylinder(Spec):
@@ -50,12 +59,14 @@ def _geometry_kind(value: Any) -> str | None:
     return kinds[0] if len(kinds) == 1 else None
 
 
+# a box inlined (most bodies' item), the other kinds validated by their classes' own validators,
+# built when a document first has one (spec_base.Deferred), as an orientation
 Geometry = Annotated[
     Union[  # noqa: UP007
         Annotated[BoxItem, Tag("box")],
-        Annotated[CylinderItem, Tag("cylinder")],
-        Annotated[SphereItem, Tag("sphere")],
-        Annotated[MeshItem, Tag("mesh")],
+        Annotated[CylinderItem, Deferred(), Tag("cylinder")],
+        Annotated[SphereItem, Deferred(), Tag("sphere")],
+        Annotated[MeshItem, Deferred(), Tag("mesh")],
     ],
     Discriminator(
         _geometry_kind,
@@ -70,7 +81,7 @@ class Body(Spec):
     mass: Scalar
     inertia: Inertia
     position: Vector
-    orientation: Orientation | None = None
+    orientation: Annotated[Orientation, Deferred()] | None = None
     velocity: Vector | None = None
     angular_velocity: Vector | None = None
     geometry: tuple[Geometry, ...] = ()

@@ -85,12 +85,15 @@ class JointBase(Spec):
     body_i: Name
     body_j: Name
     repeat: Repeats | None = None
-    reactions: Reactions | None = None
+    # the blocks a joint may leave out: validated by their classes' own validators, built when
+    # a document first has one (spec_base.Deferred)
+    reactions: Annotated[Reactions, Deferred()] | None = None
 
 
 class Composite(JointBase):
-    driver: Driver | None = None  # rebuilt when a coordinate kind is (un)registered
-    motor: Motor | None = None
+    # (rebuilt when a coordinate kind is (un)registered)
+    driver: Annotated[Driver, Deferred()] | None = None
+    motor: Annotated[Motor, Deferred()] | None = None
     # joint formulation: keep this joint as a loop-closure constraint, never a tree joint
     cut: StrictBool = False
 
@@ -101,7 +104,8 @@ def kinds_changed() -> None:
     global Driver, Motor
     Driver, Motor = driver_class(), motor_class()
     for key, cls in (("driver", Driver), ("motor", Motor)):
-        Composite.model_fields[key] = FieldInfo.from_annotated_attribute(cls | None, None)
+        Composite.model_fields[key] = FieldInfo.from_annotated_attribute(
+            Annotated[cls, Deferred()] | None, None)
     Composite.model_rebuild(force=True)
     _BUILT_FROM.clear()
 
@@ -179,11 +183,11 @@ def joint_class(entry: JointType) -> type[Spec]:
     fields |= {key: (Vector, ...) for key in entry.vectors}
     fields |= {key: (Scalar | None, None) for key in entry.options}
     if entry.limit is not None:
-        fields["limit"] = (Limit | None, None)
-        fields["friction"] = (JointFriction | None, None)
+        fields["limit"] = (Annotated[Limit, Deferred()] | None, None)
+        fields["friction"] = (Annotated[JointFriction, Deferred()] | None, None)
     initial = initial_class(entry)
     if initial is not None:
-        fields["initial"] = (initial | None, None)
+        fields["initial"] = (Annotated[initial, Deferred()] | None, None)
     return create_model(entry.class_name, __base__=Basic if entry.basic else Composite,
                         __module__=__name__, **fields)
 
