@@ -1,7 +1,8 @@
 """Scalars, vectors and the base class of the format's pydantic models (schema/spec.py), and the
 items every section uses: orientations and `repeat`."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from collections.abc import Callable
 from functools import partial

@@ -13,7 +13,8 @@ components, and gives every part's names as its own (`spec.Body`, `from casmech.
 import Revolute`).
 """
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 import importlib
 from functools import partial

@@ -1,7 +1,8 @@
 """The model's analysis settings, events and outputs (schema/spec.py); estimation, optimal
 control and parameter studies are in spec_problems."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from typing import Any, Literal
 

@@ -1,6 +1,7 @@
 """`bodies:` items (schema/spec.py): mass, inertia, pose, velocities, geometry."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from typing import Annotated, Any, Literal, Union
 

@@ -1,7 +1,8 @@
 """`joints:` items (schema/spec.py): the keys every joint has, drivers, motors, tables, limits,
 and one class per registered joint type, built from its casmech.elements.joint_types entry."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from functools import partial
 from typing import Annotated, Any, Literal, Union

@@ -4,7 +4,8 @@ springs (tsda, rsda), loads (force, torque), the bushing and the contacts. The r
 schema first needs the class, so that a model without force elements makes none of them; the
 checks, lowering and laws are in the types' own modules."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from typing import Annotated, Literal
 
