@@ -21,7 +21,12 @@ import sys
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
-from casmech.cli import collector, pydantic_plugins  # noqa: E402
+# No pydantic plugins unless the user chose: looking for them reads the entry points of every
+# installed distribution when the model's validator is built, after importing
+# importlib.metadata (docs/decisions/pydantic-plugins.md).
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
+
+from casmech.cli import collector  # noqa: E402
 from casmech.cli.commands import COMMANDS  # noqa: E402
 from casmech.core.version import VERSION  # noqa: E402
 from casmech.errors import (  # noqa: E402
@@ -31,11 +36,6 @@ from casmech.errors import (  # noqa: E402
     Source,
     UsageError,
 )
-
-# No pydantic plugins unless the user chose: looking for them reads the entry points of every
-# installed distribution when the model's validator is built, after importing
-# importlib.metadata (docs/decisions/pydantic-plugins.md).
-pydantic_plugins.turn_off()
 
 DESCRIPTION = "casmech: a declarative compiler for 3D rigid multibody mechanisms on CasADi."
 
@@ -52,8 +52,13 @@ def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
     parser.add_argument("--version", action="version", version=f"casmech {VERSION}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     name = chosen(argv)
+    # a command given first (`casmech run ...`) is parsed by its own parser alone, and no
+    # message of the parse names the others: only its parser is made then
+    alone = bool(argv) and argv[0] == name and name in COMMANDS
     module = None
     for command, (module_name, help_text) in COMMANDS.items():
+        if alone and command != name:
+            continue
         sub = commands.add_parser(command, help=help_text, description=help_text)
         if command == name:
             module = importlib.import_module(f"casmech.cli.{module_name}")

@@ -24,6 +24,10 @@ from pydantic import (
 )
 from pydantic_core import PydanticCustomError, core_schema
 
+from casmech.core import pydantic_plugins
+
+pydantic_plugins.stand_aside()  # (before the first validator is built)
+
 
 def _scalar(value: Any, handler: Any) -> Any:
     try:
