@@ -17,7 +17,15 @@ from pydantic import (
     create_model,
 )
 
-from casmech.core.spec_base import Deferred, Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import (
+    Deferred,
+    Name,
+    OrientationField,
+    Repeats,
+    Scalar,
+    Spec,
+    Vector,
+)
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
@@ -112,7 +120,7 @@ class Basic(JointBase):
 
 
 # `initial:` keys that are not scalars (a spherical joint's relative rotation and rate)
-INITIAL_FORMS: dict[str, Any] = {"orientation": Orientation, "angular_velocity": Vector}
+INITIAL_FORMS: dict[str, Any] = {"orientation": OrientationField, "angular_velocity": Vector}
 
 
 def initial_class(entry: JointType) -> type[Spec] | None:

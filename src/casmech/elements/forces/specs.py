@@ -11,7 +11,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, StrictBool
 
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Name, OrientationField, Repeats, Scalar, Spec, Vector
 
 
 # ----------------------------------------------------------- springs (elements/forces/springs.py)
@@ -75,7 +75,7 @@ class Bushing(Spec):
     body_i: Name
     body_j: Name
     at: Vector
-    orientation: Orientation | None = None
+    orientation: OrientationField | None = None
     stiffness: Vector = (0, 0, 0)
     damping: Vector = (0, 0, 0)
     rotational_stiffness: Vector = (0, 0, 0)
