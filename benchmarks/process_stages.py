@@ -43,6 +43,8 @@ HERE = Path(__file__).resolve().parent
 # (label, module, attribute path) of each wrapped stage, in the order the table shows them
 STAGES = (
     ("load", "casmech.api", "load_model"),
+    ("validation (in load; the first builds the validators)", "casmech.schema.spec_errors",
+     "validate"),
     ("model functions (api.compile)", "casmech.api", "compile"),
     ("joint system build", "casmech.formulations.joint_system", "build"),
     ("joint system build", "casmech.formulations.mapped_system", "build"),
@@ -170,7 +172,9 @@ def timed_child(src: str, model: Path, arguments: list[str], environment: dict) 
 
 
 def median(values: list[float]) -> str:
-    return f"{statistics.median(values):.2f} ({min(values):.2f}-{max(values):.2f})"
+    """Median (range) in milliseconds."""
+    ms = [1000 * value for value in values]
+    return f"{statistics.median(ms):.1f} ({min(ms):.1f}-{max(ms):.1f})"
 
 
 def main() -> None:
@@ -205,7 +209,7 @@ def main() -> None:
                 runs[src].append(timed_child(src, model, arguments, environment))
     print(f"# {model.name}, `casmech run --t-end {options.t_end}`, {options.repeats} runs "
           f"each, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load average "
-          f"{os.getloadavg()[0]:.1f}; CPU seconds, medians (ranges)\n")
+          f"{os.getloadavg()[0]:.1f}; CPU milliseconds, medians (ranges)\n")
     print("| stage | " + " | ".join(sources) + " |")
     print("|---|" + "---:|" * len(sources))
     labels = ["imports", *dict.fromkeys(label for label, _, _ in STAGES), "total (in process)"]

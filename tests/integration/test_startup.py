@@ -143,11 +143,13 @@ def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch, quic
 
 
 def test_loading_makes_only_the_classes_the_file_uses():
-    """The YAML classes of force elements, of estimation, optimal control and studies, and of
-    joint types a file does not name are made when a file first has one (spec_base.Deferred),
-    and components are imported by a composed file only: loading the double pendulum (two
-    revolute joints, no forces) makes the revolute joint's class alone; the bushing mount makes
-    the force elements' classes; the compiler's modules import no pydantic."""
+    """The YAML classes of force elements, of estimation, optimal control and studies, of
+    components and instances, events and outputs, geometry other than boxes, joint blocks
+    (reactions, limits, friction) and of joint types a file does not name are made when a file
+    first has one (spec_base.Deferred), and components are imported by a composed file only:
+    loading the double pendulum (two revolute joints, no forces) makes the revolute joint's
+    class alone; the bushing mount makes the force elements' classes; the compiler's modules
+    import no pydantic."""
     assert loaded(modules_after("import casmech.equations.functions, "
                                 "casmech.formulations.joint_system"), ["pydantic"]) == []
     probe = ("import json, sys; from casmech.schema import load_model, spec_joints; "
@@ -163,5 +165,7 @@ def test_loading_makes_only_the_classes_the_file_uses():
     assert joints == ["revolute"]
     assert "casmech.schema.spec" in modules
     assert loaded(set(modules), ["casmech.elements.forces.specs", "casmech.schema.spec_problems",
-                                 "casmech.schema.components"]) == []
+                                 "casmech.schema.components", "casmech.schema.spec_components",
+                                 "casmech.schema.spec_events", "casmech.schema.spec_shapes",
+                                 "casmech.schema.spec_joint_blocks"]) == []
     assert "casmech.elements.forces.specs" in made["bushing_mount"][1]

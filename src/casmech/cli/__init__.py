@@ -20,8 +20,10 @@ import sys
 # Set before a command imports NumPy.
 for _variable in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
+
 # No pydantic plugins unless the user chose: looking for them reads the entry points of every
-# installed distribution when the model's validator is built (docs/decisions/pydantic-plugins.md).
+# installed distribution when the model's validator is built, after importing
+# importlib.metadata (docs/decisions/pydantic-plugins.md).
 os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 from casmech.cli import collector  # noqa: E402
@@ -50,8 +52,13 @@ def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
     parser.add_argument("--version", action="version", version=f"casmech {VERSION}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     name = chosen(argv)
+    # a command given first (`casmech run ...`) is parsed by its own parser alone, and no
+    # message of the parse names the others: only its parser is made then
+    alone = bool(argv) and argv[0] == name and name in COMMANDS
     module = None
     for command, (module_name, help_text) in COMMANDS.items():
+        if alone and command != name:
+            continue
         sub = commands.add_parser(command, help=help_text, description=help_text)
         if command == name:
             module = importlib.import_module(f"casmech.cli.{module_name}")

@@ -3,7 +3,8 @@ field names, instead of methods compiled from generated source for every class.
 
 The standard decorator compiles each generated method with exec (six for a frozen class),
 so each class costs a compilation per method when a module is imported (measurements:
-benchmarks/RESULTS.md, "Whole processes, both commits"). A record compiles only its __init__ and
+benchmarks/RESULTS.md, "Whole processes, both commits"). A record compiles only its __init__,
+when the class is first called (a process calls some of the classes it imports), and
 behaves as the dataclass it replaces: the same fields, __init__, replace(), fields() and
 asdict(), the same repr, equality (same class, equal tuples of the compared fields) and hash
 (of the hashed fields' tuple). A frozen record's fields are written once, by __init__ (or by
@@ -87,9 +88,12 @@ _FACTORY = _Factory()
 def _frozen_init(cls):
     """The __init__ dataclasses writes for a frozen class of these fields: the parameters in
     field order (defaults and default factories as there), each field set by
-    object.__setattr__, then __post_init__ when the class has one."""
+    object.__setattr__, then __post_init__ when the class has one. Its text is compiled when
+    the class is first called (`_compiled_on_first_call`); until then the class's __init__
+    has that function's signature, annotations and names."""
     names = {"__record_set__": object.__setattr__, "__record_factory__": _FACTORY}
     parameters, lines, defaulted = ["__record_self__"], [], False
+    signature = [inspect.Parameter("__record_self__", _POSITIONAL)]
     for f in dataclasses.fields(cls):
         factory = f.default_factory is not dataclasses.MISSING
         if f.init:
@@ -105,6 +109,10 @@ def _frozen_init(cls):
             defaulted = defaulted or factory or f.default is not dataclasses.MISSING
             value = (f"__factory_{f.name}() if {f.name} is __record_factory__ else {f.name}"
                      if factory else f.name)
+            default = _FACTORY if factory else f.default
+            signature.append(inspect.Parameter(
+                f.name, _POSITIONAL, annotation=f.type,
+                default=inspect.Parameter.empty if default is dataclasses.MISSING else default))
         elif factory:
             value = f"__factory_{f.name}()"
         else:
@@ -115,13 +123,37 @@ def _frozen_init(cls):
     if hasattr(cls, "__post_init__"):
         lines.append("    __record_self__.__post_init__()")
     text = f"def __init__({', '.join(parameters)}):\n" + ("\n".join(lines) or "    pass")
-    exec(text, names)  # noqa: S102 (the text is made of the class's own field names)
-    function = names["__init__"]
+    annotations = {f.name: f.type for f in dataclasses.fields(cls) if f.init}
+    annotations["return"] = None
+    first = _compiled_on_first_call(cls, text, names, annotations)
+    first.__signature__ = inspect.Signature(signature, return_annotation=None)
+    return first
+
+
+_POSITIONAL = inspect.Parameter.POSITIONAL_OR_KEYWORD
+
+
+def _named(function, cls, annotations: dict):
+    """`function` named as the __init__ of `cls`."""
     function.__qualname__ = f"{cls.__qualname__}.__init__"
     function.__module__ = cls.__module__
-    function.__annotations__ = {f.name: f.type for f in dataclasses.fields(cls) if f.init}
-    function.__annotations__["return"] = None
+    function.__annotations__ = dict(annotations)
     return function
+
+
+def _compiled_on_first_call(cls, text: str, names: dict, annotations: dict):
+    """An __init__ that compiles `text` (a record's __init__), puts it in its own place in
+    `cls` and calls it: a module's records are made at import, and a process calls some of
+    them only."""
+
+    def __init__(__record_self__, *args, **kwargs):  # noqa: N807
+        exec(text, names)  # noqa: S102 (the text is made of the class's own field names)
+        function = _named(names["__init__"], cls, annotations)
+        if cls.__dict__.get("__init__") is __init__:
+            cls.__init__ = function
+        function(__record_self__, *args, **kwargs)
+
+    return _named(__init__, cls, annotations)
 
 
 def _getter(names: tuple[str, ...]):

@@ -1,8 +1,11 @@
 """Scalars, vectors and the base class of the format's pydantic models (schema/spec.py), and the
-items every section uses: orientations and `repeat`."""
+items every section may hold: orientations and `repeat` (their classes in spec_items, made when
+a document first has one)."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
+import importlib
 from collections.abc import Callable
 from functools import partial
 from typing import Annotated, Any, Literal, Union
@@ -22,6 +25,10 @@ from pydantic import (
     model_validator,
 )
 from pydantic_core import PydanticCustomError, core_schema
+
+from casmech.core import pydantic_plugins
+
+pydantic_plugins.stand_aside()  # (before the first validator is built)
 
 
 def _scalar(value: Any, handler: Any) -> Any:
@@ -148,37 +155,30 @@ class Deferred:
         return handler.generate_json_schema.generate_inner(spec.__pydantic_core_schema__)
 
 
-# ------------------------------------------------------------------------------- orientation
-class AxisAngle(Spec):
-    axis: Vector
-    angle: Scalar
+# ------------------------------------------------------------ orientation, repeat (spec_items)
+ITEMS = "casmech.core.spec_items"  # Orientation (with AxisAngle) and Repeat
 
 
-class Orientation(Spec):
-    """Exactly one form must be given (checked in semantic, E407)."""
-
-    euler_parameters: Annotated[tuple[Scalar, ...], Field(min_length=4, max_length=4)] | None = None
-    axis_angle: AxisAngle | None = None
-    matrix: Matrix | None = None
-    x_axis: Vector | None = None
-    y_axis: Vector | None = None
-    z_axis: Vector | None = None
+def item(name: str) -> type[Spec]:
+    """A class of spec_items (the module imported on the first call)."""
+    return getattr(importlib.import_module(ITEMS), name)
 
 
-# --------------------------------------------------------------- repeat (docs/components.md)
-class Repeat(Spec):
-    """One copy of the item per integer `index` from `from` to `to` (inclusive; none if to <
-    from); the index is a number in the item's expressions and `{expr}` in its names."""
-
-    index: Name
-    from_: Scalar = Field(alias="from")
-    to: Scalar
-
-
+# an orientation, validated by its class's own validator, made when a document first has one
+OrientationField = Annotated[Spec, Deferred(partial(item, "Orientation"))]
+# (a Repeat likewise)
 Repeats = Annotated[
     Union[  # noqa: UP007
-        Annotated[Repeat, Tag("one")],
-        Annotated[tuple[Repeat, ...], Field(min_length=1), Tag("nested")],
+        Annotated[Spec, Deferred(partial(item, "Repeat")), Tag("one")],
+        Annotated[tuple[Annotated[Spec, Deferred(partial(item, "Repeat"))], ...],
+                  Field(min_length=1), Tag("nested")],
     ],
     Discriminator(lambda v: "nested" if isinstance(v, list | tuple) else "one"),
 ]
+
+
+def __getattr__(name: str) -> type[Spec]:
+    """The classes of spec_items by name (spec_base.Orientation, ...)."""
+    if name in ("AxisAngle", "Orientation", "Repeat"):
+        return item(name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -4,18 +4,22 @@ Frozen, `extra="forbid"`; joints and forces are unions discriminated on `type`, 
 geometry items on their shape. Every scalar is a number or an expression string (evaluated in
 `semantic`); `spec_errors.validate` turns pydantic's errors into Diagnostics.
 
-The classes live in the parts, by what they hold: casmech.core.spec_base (scalars, vectors,
-orientation, repeat), spec_bodies, spec_joints (one class per joint type of
-casmech.elements.joint_types),
-spec_forces, spec_analysis (analysis, events, outputs), spec_problems (estimation, optimal
-control, studies: imported when first used); this module holds the whole file (ModelSpec) and
-components, and gives every part's names as its own (`spec.Body`, `from casmech.schema.spec
-import Revolute`).
+The classes live in the parts, by what they hold: casmech.core.spec_base (scalars, vectors),
+spec_bodies, spec_joints (one class per joint type of casmech.elements.joint_types),
+spec_forces, spec_analysis; the classes of what a document may leave out live in parts
+imported when a document first has one (spec_base.Deferred): casmech.core.spec_items
+(orientations, repeat), spec_shapes (geometry other than boxes), spec_joint_blocks (reactions,
+limits, friction), spec_events (events, outputs), spec_components (components, instances),
+spec_problems (estimation, optimal control, studies). This module holds the whole file
+(ModelSpec) and gives every part's names as its own (`spec.Body`, `spec.Instance`, `from
+casmech.schema.spec import Revolute`).
 """
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 import importlib
+import sys
 from functools import partial
 from typing import Annotated, Any, Literal, Union
 
@@ -25,9 +29,6 @@ from pydantic.fields import FieldInfo
 from casmech.core import options, spec_base
 from casmech.core.spec_base import (
     Deferred,
-    Name,
-    Orientation,
-    Repeats,
     Scalar,
     Spec,
     Vector,
@@ -36,7 +37,7 @@ from casmech.core.spec_base import (
 from casmech.elements import coordinate_kinds, force_types
 from casmech.elements.joint_types import on_change
 from casmech.schema import spec_analysis, spec_bodies, spec_forces, spec_joints
-from casmech.schema.spec_analysis import Analysis, Event, Output
+from casmech.schema.spec_analysis import Analysis, section
 from casmech.schema.spec_bodies import Body
 from casmech.schema.spec_forces import Force
 from casmech.schema.spec_joints import Joint
@@ -58,40 +59,18 @@ EstimateSection, OptimalControlSection, StudySection = (
 
 
 # ------------------------------------------------------ components and instances (issue 6)
-class Instance(Spec):
-    """One use of a component: its parameters (expressions of the user's parameters) and the
-    placement of its frame (docs/components.md)."""
-
-    name: Name
-    component: Name
-    parameters: dict[StrictStr, Scalar] = Field(default_factory=dict)
-    position: Vector | None = None
-    orientation: Orientation | None = None
-    repeat: Repeats | None = None
+COMPONENTS = "casmech.schema.spec_components"  # Instance, ComponentFile, Component
 
 
-class ComponentFile(Spec):
-    """A component defined by another model file (path relative to this file)."""
-
-    file: StrictStr
-
-
-class Component(Spec):
-    """An inline component: a model body; a parameter without a value must be given by every
-    instance."""
-
-    description: StrictStr = ""
-    parameters: dict[StrictStr, Scalar | None] = Field(default_factory=dict)
-    bodies: tuple[Body, ...] = ()
-    joints: tuple[Joint, ...] = ()
-    forces: tuple[Force, ...] = ()
-    instances: tuple[Instance, ...] = ()
+def _component(name: str) -> type[Spec]:
+    """A class of spec_components (the module imported on the first call)."""
+    return getattr(importlib.import_module(COMPONENTS), name)
 
 
 ComponentRef = Annotated[
     Union[  # noqa: UP007
-        Annotated[ComponentFile, Deferred(), Tag("file")],
-        Annotated[Component, Deferred(), Tag("inline")],
+        Annotated[Spec, Deferred(partial(_component, "ComponentFile")), Tag("file")],
+        Annotated[Spec, Deferred(partial(_component, "Component")), Tag("inline")],
     ],
     Discriminator(lambda v: "file" if isinstance(v, dict) and "file" in v else "inline"),
 ]
@@ -111,13 +90,13 @@ class ModelSpec(Spec):
     analysis: Analysis = Field(default_factory=Analysis)
     # the sections a model may leave out: validated by their classes' own validators, built
     # when a document first has one (spec_base.Deferred)
-    events: tuple[Annotated[Event, Deferred()], ...] = ()
-    outputs: tuple[Annotated[Output, Deferred()], ...] = ()
+    events: tuple[Annotated[Spec, Deferred(partial(section, "Event"))], ...] = ()
+    outputs: tuple[Annotated[Spec, Deferred(partial(section, "Output"))], ...] = ()
     estimate: EstimateSection = None
     ocp: OptimalControlSection = None
     study: StudySection = None
     components: dict[StrictStr, ComponentRef] = Field(default_factory=dict)
-    instances: tuple[Annotated[Instance, Deferred()], ...] = ()
+    instances: tuple[Annotated[Spec, Deferred(partial(_component, "Instance"))], ...] = ()
 
     model_config = ConfigDict(
         extra="forbid",
@@ -134,11 +113,17 @@ def _model_schema(schema: dict) -> None:
     schema["anyOf"] = [{"required": ["bodies"]}, {"required": ["instances"]}]
 
 
+def _holders() -> tuple[type[Spec], ...]:
+    """The classes holding joints and forces: ModelSpec, and Component once made."""
+    components = sys.modules.get(COMPONENTS)
+    return (ModelSpec,) if components is None else (components.Component, ModelSpec)
+
+
 def _joints_changed() -> None:
     """A joint type was (un)registered: rebuild the union and the classes that hold it."""
     global Joint
     Joint = spec_joints.rebuild()
-    for cls in (Component, ModelSpec):
+    for cls in _holders():
         cls.model_fields["joints"] = FieldInfo.from_annotated_attribute(tuple[Joint, ...], ())
         cls.model_rebuild(force=True)
 
@@ -161,7 +146,7 @@ def _forces_changed() -> None:
     it."""
     global Force
     Force = spec_forces.rebuild()
-    for cls in (Component, ModelSpec):
+    for cls in _holders():
         cls.model_fields["forces"] = FieldInfo.from_annotated_attribute(tuple[Force, ...], ())
         cls.model_rebuild(force=True)
 
@@ -175,7 +160,7 @@ def _formulations_changed() -> None:
     field = Analysis.model_fields["formulation"]
     Analysis.model_fields["formulation"] = FieldInfo.from_annotated_attribute(
         Literal[tuple(options.FORMULATIONS)], field.default)
-    for cls in (Analysis, Component, ModelSpec):
+    for cls in (Analysis, *_holders()):
         cls.model_rebuild(force=True)
 
 
@@ -189,6 +174,8 @@ def __getattr__(name: str) -> Any:
             return getattr(part, name)
         except AttributeError:
             pass
+    if name in ("Instance", "ComponentFile", "Component"):
+        return _component(name)
     if not name.startswith("__"):  # (the import system asks for `__path__`)
         try:
             return _problem(name)

@@ -1,8 +1,10 @@
 """The model's analysis settings, events and outputs (schema/spec.py); estimation, optimal
 control and parameter studies are in spec_problems."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
+import importlib
 from typing import Any, Literal
 
 from pydantic import StrictStr
@@ -39,22 +41,18 @@ class Analysis(Spec):
     solver: dict[StrictStr, Any] | None = None
 
 
-# ----------------------------------------------------------------------------------- events
-class Event(Spec):
-    """An event: where `when` (an expression of the results columns, joint coordinates, t and
-    parameters) crosses zero in `direction`; `action` stop ends the run there, log records it
-    (docs/format.md#events, casmech.schema.events)."""
-
-    name: Name
-    when: Scalar
-    direction: Literal["rising", "falling", "both"] = "both"
-    action: Literal["stop", "log"] = "log"
+# the `events:` and `outputs:` items' classes, Event and Output: imported when a document first
+# has one (spec_base.Deferred)
+EVENTS = "casmech.schema.spec_events"
 
 
-class Output(Spec):
-    """A named value written as a results column at every row (docs/format.md#outputs,
-    casmech.schema.outputs): an expression of t, parameters, earlier outputs, the state and
-    the reactions."""
+def section(name: str) -> type[Spec]:
+    """A class of spec_events (the module imported on the first call)."""
+    return getattr(importlib.import_module(EVENTS), name)
 
-    name: Name
-    value: Scalar
+
+def __getattr__(name: str) -> type[Spec]:
+    """The classes of spec_events by name (spec.Event, spec.Output)."""
+    if name in ("Event", "Output"):
+        return section(name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,7 +1,8 @@
 """`forces:` items (schema/spec.py): one class per registered force element type, the `spec`
 of its casmech.elements.force_types entry (the built-in ones are in casmech.elements.forces)."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from functools import partial
 from typing import Annotated, Union

@@ -1,13 +1,14 @@
 """`joints:` items (schema/spec.py): the keys every joint has, drivers, motors, tables, limits,
 and one class per registered joint type, built from its casmech.elements.joint_types entry."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
+import importlib
 from functools import partial
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
-    ConfigDict,
     Discriminator,
     Field,
     StrictBool,
@@ -15,9 +16,16 @@ from pydantic import (
     Tag,
     create_model,
 )
-from pydantic.fields import FieldInfo
 
-from casmech.core.spec_base import Deferred, Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import (
+    Deferred,
+    Name,
+    OrientationField,
+    Repeats,
+    Scalar,
+    Spec,
+    Vector,
+)
 from casmech.elements.coordinate_kinds import REGISTRY as KINDS
 from casmech.elements.joint_types import REGISTRY, JointType, initial_keys
 
@@ -55,29 +63,33 @@ def driver_class() -> type[Spec]:
                         **fields)
 
 
-class MotorBase(Spec):
-    model_config = ConfigDict(extra="allow", frozen=True,
-                              json_schema_extra={"additionalProperties": False})
-
-
 def motor_class() -> type[Spec]:
     """`motor:`: the registered coordinate kinds' motor modes, kind by kind."""
     fields: dict[str, Any] = {mode: (TimeFunction | None, None) for kind in KINDS.values()
                               for mode in kind.motor}
-    return create_model("Motor", __base__=MotorBase, __module__=__name__, __doc__=MOTOR_DOC,
-                        **fields)
+    return create_model("Motor", __base__=block("MotorBase"), __module__=__name__,
+                        __doc__=MOTOR_DOC, **fields)
 
 
-Driver, Motor = driver_class(), motor_class()
+# the blocks a joint may have, most joints leave out: made (or their module imported) when first
+# asked for, and validated by their classes' own validators (spec_base.Deferred)
+BLOCKS = "casmech.schema.spec_joint_blocks"  # Reactions, Limit, JointFriction, MotorBase
+_MADE: dict[str, type[Spec]] = {}  # Driver and Motor as made for the current coordinate kinds
 
 
-class Reactions(Spec):
-    """How a joint's reaction columns are written (casmech.runtime.reaction_frames): the frame
-    of their components and the point the torque is taken about (global at t = 0, carried by
-    body_i; default the joint point)."""
+def block(name: str) -> type[Spec]:
+    """The class of a joint's block: Driver, Motor (made for the registered coordinate kinds),
+    or a class of spec_joint_blocks."""
+    if name in ("Driver", "Motor"):
+        if name not in _MADE:
+            _MADE[name] = (driver_class if name == "Driver" else motor_class)()
+        return _MADE[name]
+    return getattr(importlib.import_module(BLOCKS), name)
 
-    frame: Literal["global", "body_i", "body_j", "joint"] = "global"
-    point: Vector | None = None
+
+def _block(name: str) -> Any:
+    """The annotation of a field holding a joint's block, or None."""
+    return Annotated[Spec, Deferred(partial(block, name))] | None
 
 
 class JointBase(Spec):
@@ -85,48 +97,22 @@ class JointBase(Spec):
     body_i: Name
     body_j: Name
     repeat: Repeats | None = None
-    reactions: Reactions | None = None
+    reactions: _block("Reactions") = None
 
 
 class Composite(JointBase):
-    driver: Driver | None = None  # rebuilt when a coordinate kind is (un)registered
-    motor: Motor | None = None
+    driver: _block("Driver") = None  # (made again when a coordinate kind is (un)registered)
+    motor: _block("Motor") = None
     # joint formulation: keep this joint as a loop-closure constraint, never a tree joint
     cut: StrictBool = False
 
 
 def kinds_changed() -> None:
-    """A coordinate kind was (un)registered: new Driver and Motor classes in Composite, and
-    every joint class built again by the next `rebuild`."""
-    global Driver, Motor
-    Driver, Motor = driver_class(), motor_class()
-    for key, cls in (("driver", Driver), ("motor", Motor)):
-        Composite.model_fields[key] = FieldInfo.from_annotated_attribute(cls | None, None)
-    Composite.model_rebuild(force=True)
+    """A coordinate kind was (un)registered: Driver, Motor and the `initial:` classes made
+    again when next asked for, and every joint class built again by the next `rebuild`."""
+    _MADE.clear()
+    _INITIAL.clear()
     _BUILT_FROM.clear()
-
-
-class Limit(Spec):
-    """A joint stop (equations/limits.py): a one-sided spring-damper in the joint coordinate
-    (revolute: the angle, translational and cylindrical: the slide) outside [lower, upper]."""
-
-    lower: Scalar | None = None
-    upper: Scalar | None = None
-    stiffness: Scalar
-    damping: Scalar = 0
-
-
-class JointFriction(Spec):
-    """Joint friction (equations/friction.py): Coulomb and viscous along the joint coordinate,
-    with a part proportional to the joint's load (mu, mu_static; radius for an angle), exact
-    sticking up to the static limit (runtime/friction.py)."""
-
-    coulomb: Scalar = 0
-    viscous: Scalar = 0
-    static: Scalar | None = None
-    mu: Scalar = 0
-    mu_static: Scalar | None = None
-    radius: Scalar | None = None
 
 
 class Basic(JointBase):
@@ -134,7 +120,7 @@ class Basic(JointBase):
 
 
 # `initial:` keys that are not scalars (a spherical joint's relative rotation and rate)
-INITIAL_FORMS: dict[str, Any] = {"orientation": Orientation, "angular_velocity": Vector}
+INITIAL_FORMS: dict[str, Any] = {"orientation": OrientationField, "angular_velocity": Vector}
 
 
 def initial_class(entry: JointType) -> type[Spec] | None:
@@ -147,12 +133,24 @@ def initial_class(entry: JointType) -> type[Spec] | None:
                         **fields)
 
 
+_INITIAL: dict[str, tuple[JointType, type[Spec]]] = {}  # joint type -> (entry, its `initial:`)
+
+
+def initial_class_of(entry: JointType) -> type[Spec]:
+    """The `initial:` class of a joint type's entry, made when first asked for (and again
+    after a coordinate kind changed: kinds_changed)."""
+    made = _INITIAL.get(entry.name)
+    if made is None or made[0] is not entry:
+        _INITIAL[entry.name] = made = (entry, initial_class(entry))
+    return made[1]
+
+
 class CouplingBase(Spec):
     """A coupling of other joints' coordinates (joint_types.Couples): no bodies of its own."""
 
     name: Name
     repeat: Repeats | None = None
-    reactions: Reactions | None = None
+    reactions: _block("Reactions") = None
 
 
 def coupling_class(entry: JointType) -> type[Spec]:
@@ -179,11 +177,11 @@ def joint_class(entry: JointType) -> type[Spec]:
     fields |= {key: (Vector, ...) for key in entry.vectors}
     fields |= {key: (Scalar | None, None) for key in entry.options}
     if entry.limit is not None:
-        fields["limit"] = (Limit | None, None)
-        fields["friction"] = (JointFriction | None, None)
-    initial = initial_class(entry)
-    if initial is not None:
-        fields["initial"] = (initial | None, None)
+        fields["limit"] = (_block("Limit"), None)
+        fields["friction"] = (_block("JointFriction"), None)
+    if initial_keys(entry.name):
+        fields["initial"] = (
+            Annotated[Spec, Deferred(partial(initial_class_of, entry))] | None, None)
     return create_model(entry.class_name, __base__=Basic if entry.basic else Composite,
                         __module__=__name__, **fields)
 
@@ -223,7 +221,10 @@ def rebuild():
 
 
 def __getattr__(name: str) -> type[Spec]:
-    """A joint type's class by its name (spec.Revolute, spec.DP1, ...)."""
+    """A joint type's class by its name (spec.Revolute, spec.DP1, ...), or a block's
+    (spec.Driver, spec.Limit, ...)."""
+    if name in ("Driver", "Motor", "Reactions", "Limit", "JointFriction", "MotorBase"):
+        return block(name)
     found = [key for key, entry in REGISTRY.items() if entry.class_name == name]
     if not found:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -2,7 +2,8 @@
 `estimate:`, `ocp:` and `study:` sections, imported when a document first has one of them
 (spec.ModelSpec, spec_base.Deferred)."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from typing import Annotated, Any, Literal, Union
 

@@ -1,6 +1,8 @@
 """End to end: the `casmech` console script on model files (exit codes, results contract)."""
 
+import contextlib
 import gc
+import io
 import json
 import os
 import subprocess
@@ -10,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from casmech.cli import main
+from casmech.cli import _parser, main
 from casmech.cli.collector import YOUNG_OBJECTS
 from casmech.cli.commands import COMMANDS
 from casmech.io.csv import read_csv
@@ -272,6 +274,59 @@ def test_the_command_lines_environment_unless_the_user_chose(variable, given, ex
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          check=True, timeout=60).stdout
     assert out.strip() == expected
+
+
+def _parsed(parser, argv: list[str]) -> tuple:
+    """What parsing `argv` prints and ends with (exit code, or the namespace)."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            result = vars(parser.parse_args(argv))
+        except SystemExit as stop:
+            result = stop.code
+    return result, out.getvalue(), err.getvalue()
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_a_command_given_first_parses_as_with_every_command(command):
+    """`casmech COMMAND ...` makes the parser of that command alone (cli._parser): its help,
+    usage errors and parsed arguments are those of the parser holding every command (made
+    when an option comes first)."""
+    alone, _ = _parser([command])
+    every, _ = _parser(["--version", command])
+    assert len(every._subparsers._group_actions[0].choices) == len(COMMANDS) > 1
+    assert list(alone._subparsers._group_actions[0].choices) == [command]
+    for argv in ([command, "--help"], [command], [command, "--bogus"],
+                 [command, "model.yaml", "--bogus", "1"], [command, "model.yaml", "--version"],
+                 [command, "a.yaml", "b.csv"]):
+        assert _parsed(alone, argv) == _parsed(every, argv), argv
+
+
+PLUGINS = """
+import sys
+from casmech.cli import _parser, main
+assert main(["check", sys.argv[1]]) == 0
+from pydantic.plugin._schema_validator import create_schema_validator  # (pydantic's caller)
+from pydantic.plugin import _loader
+print("importlib.metadata" in sys.modules, type(_loader).__name__,
+      _loader.PYDANTIC_ENTRY_POINT_GROUP, type(sys.modules["pydantic.plugin._loader"]).__name__)
+"""
+
+
+@pytest.mark.parametrize("given, looked_up", [(None, False), ("1", False), ("logfire", True)])
+def test_pydantic_looks_for_no_plugin_unless_the_user_chose(given, looked_up):
+    """With plugins off (the command line's default, or the user's `1`), validating a model
+    imports no importlib.metadata (pydantic's plugin loader stands aside: core.pydantic_plugins);
+    with a plugin named, pydantic's own loader looks them up; either way a name of the loader
+    reads pydantic's own module, which then stands in sys.modules."""
+    env = {k: v for k, v in os.environ.items() if k != "PYDANTIC_DISABLE_PLUGINS"}
+    if given is not None:
+        env["PYDANTIC_DISABLE_PLUGINS"] = given
+    env["PYTHONPATH"] = str(ROOT / "src")
+    out = subprocess.run([sys.executable, "-c", PLUGINS, str(MODELS / "pendulum.yaml")],
+                         env=env, capture_output=True, text=True, check=True,
+                         timeout=120).stdout.splitlines()[-1].split()
+    assert out == [str(looked_up), "module" if looked_up else "_Loader", "pydantic", "module"]
 
 
 def test_the_processs_own_command_line_collects_less_often():

@@ -164,6 +164,29 @@ def test_a_frozen_records_init_is_a_frozen_dataclasss():
                                   "__module__": __name__}))
 
 
+def test_a_frozen_records_init_is_compiled_when_first_called():
+    """Until the class is first called its __init__ has the compiled one's signature, names
+    and annotations; the first call compiles it into the class's own place (once: the second
+    call runs it), and the instances are those of the same dataclass."""
+    made, rec = _pair()
+    waiting = rec.__dict__["__init__"]
+    assert str(inspect.signature(rec)) == str(inspect.signature(made))
+    assert (waiting.__qualname__, waiting.__annotations__) == \
+        (made.__init__.__qualname__, made.__init__.__annotations__)
+    first = rec(1.0, tags=(1,))
+    compiled = rec.__dict__["__init__"]
+    assert compiled is not waiting and compiled.__code__.co_varnames[0] == "__record_self__"
+    assert str(inspect.signature(compiled)) == str(inspect.signature(waiting))
+    assert (compiled.__qualname__, compiled.__annotations__) == \
+        (waiting.__qualname__, waiting.__annotations__)
+    second = rec(1.0, tags=(1,))
+    assert rec.__dict__["__init__"] is compiled
+    assert first == second and repr(first) == repr(made(1.0, tags=(1,))).replace(
+        made.__qualname__, rec.__qualname__)
+    with pytest.raises(TypeError, match="missing 1 required positional argument: 'x'"):
+        _pair()[1]()  # (the first call's arguments reach the compiled __init__)
+
+
 def test_a_record_with_an_init_only_field_keeps_dataclasses_init():
     @record
     class Scaled:

@@ -227,3 +227,33 @@ def test_unknown_key_hint_uses_the_key_as_written_not_the_python_field():
     unknown = [d for d in found if d.code == "E101"]
     assert [d.path for d in unknown] == ["bodies[0].repeat.form"]
     assert unknown[0].hint == "did you mean 'from'?"
+
+
+def test_the_formats_classes_hold_their_annotations_as_objects():
+    """No class of the format's modules has a string annotation (none of them imports
+    `from __future__ import annotations`): pydantic would evaluate each string when it makes
+    the class (docs/decisions/pydantic-defer-build.md)."""
+    from casmech.core import spec_base, spec_items
+    from casmech.elements.forces import specs
+    from casmech.schema import (
+        spec_analysis,
+        spec_bodies,
+        spec_components,
+        spec_events,
+        spec_forces,
+        spec_joint_blocks,
+        spec_joints,
+        spec_problems,
+        spec_shapes,
+    )
+
+    modules = (spec_base, spec_items, spec, spec_analysis, spec_bodies, spec_components,
+               spec_events, spec_forces, spec_joint_blocks, spec_joints, spec_problems,
+               spec_shapes, specs)
+    classes = [cls for module in modules for cls in vars(module).values()
+               if isinstance(cls, type) and cls.__module__ == module.__name__]
+    assert len(classes) > 30  # (the format's classes made at import)
+    written = [f"{cls.__module__}.{cls.__qualname__}.{key}" for cls in classes
+               for key, value in vars(cls).get("__annotations__", {}).items()
+               if isinstance(value, str)]
+    assert written == []

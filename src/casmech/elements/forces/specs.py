@@ -4,13 +4,14 @@ springs (tsda, rsda), loads (force, torque), the bushing and the contacts. The r
 schema first needs the class, so that a model without force elements makes none of them; the
 checks, lowering and laws are in the types' own modules."""
 
-from __future__ import annotations
+# (annotations are objects here, not strings: no `from __future__ import annotations`, so that
+# pydantic makes each class without evaluating them; docs/decisions/pydantic-defer-build.md)
 
 from typing import Annotated, Literal
 
 from pydantic import Field, StrictBool
 
-from casmech.core.spec_base import Name, Orientation, Repeats, Scalar, Spec, Vector
+from casmech.core.spec_base import Name, OrientationField, Repeats, Scalar, Spec, Vector
 
 
 # ----------------------------------------------------------- springs (elements/forces/springs.py)
@@ -74,7 +75,7 @@ class Bushing(Spec):
     body_i: Name
     body_j: Name
     at: Vector
-    orientation: Orientation | None = None
+    orientation: OrientationField | None = None
     stiffness: Vector = (0, 0, 0)
     damping: Vector = (0, 0, 0)
     rotational_stiffness: Vector = (0, 0, 0)
