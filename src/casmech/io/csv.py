@@ -111,23 +111,37 @@ PANDAS_BYTES = 8 << 20
 
 def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:
     """The names and the rows, every number exactly the binary64 value written; a header alone
-    is 0 rows."""
+    is 0 rows. A last line without its newline is a row cut off (a run killed while it wrote:
+    the system may end a write short on a fatal signal) and is not read."""
     with open(path) as handle:
         names = handle.readline().strip().split(",")
         if not handle.readline().strip():
             return names, np.zeros((0, len(names)))
+    rows = _complete_rows(path)
+    if rows == 0:
+        return names, np.zeros((0, len(names)))
     if Path(path).stat().st_size > PANDAS_BYTES:
-        return names, _pandas_rows(path)
-    return names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        return names, _pandas_rows(path, rows)
+    return names, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2, max_rows=rows)
 
 
-def _pandas_rows(path) -> np.ndarray:
-    """The rows by pandas' C parser: exact by default from pandas 3, by its round-trip
-    parser before (its default there may be 1 ulp off)."""
+def _complete_rows(path) -> int | None:
+    """None when the file ends with a newline, else the rows before its last line."""
+    with open(path, "rb") as handle:
+        handle.seek(-1, os.SEEK_END)
+        if handle.read(1) == b"\n":
+            return None
+        handle.seek(0)
+        return sum(block.count(b"\n") for block in iter(lambda: handle.read(PIECE), b"")) - 1
+
+
+def _pandas_rows(path, rows: int | None = None) -> np.ndarray:
+    """The rows by pandas' C parser (the first `rows`, None: all): exact by default from
+    pandas 3, by its round-trip parser before (its default there may be 1 ulp off)."""
     import pandas as pd
 
     exact = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
-    return pd.read_csv(path, dtype=np.float64, keep_default_na=False,
+    return pd.read_csv(path, dtype=np.float64, keep_default_na=False, nrows=rows,
                        na_values=["nan", "-nan"], **exact).to_numpy()
 
 

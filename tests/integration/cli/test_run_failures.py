@@ -213,7 +213,8 @@ def test_an_output_folder_under_a_file_ends_the_run(tmp_path):
 
 def test_rows_are_on_disk_while_the_run_goes(tmp_path):
     """A run killed outright (SIGKILL) leaves the rows written so far: whole rows, in time
-    order, and metadata.json saying running."""
+    order (a row the kill cut short, the last line without its newline, is not read back), and
+    metadata.json saying running."""
     text = (MODELS / "double_pendulum.yaml").read_text().replace(
         "t_end: 2", "t_end: 10000").replace("output_step: 0.01", "output_step: 0.1")
     (tmp_path / "long.yaml").write_text(text)

@@ -81,3 +81,21 @@ def test_large_files_read_by_pandas_bit_for_bit(tmp_path, monkeypatch):
     _, by_pandas = read_csv(path)
     np.testing.assert_array_equal(bits(by_pandas), bits(values))
     np.testing.assert_array_equal(bits(by_pandas), bits(by_numpy))
+
+
+@pytest.mark.parametrize("pandas", [False, True])
+def test_a_row_cut_off_at_the_end_is_not_read(tmp_path, monkeypatch, pandas):
+    """A run killed while it wrote may leave its last row cut short (no newline): the rows
+    before it are read as written, the cut one not."""
+    if pandas:
+        monkeypatch.setattr(csv, "PANDAS_BYTES", 0)
+    values = np.array([[0.0, 1.5, -2.25], [0.1, 3.0, 1e-300], [0.2, 4.0, 5.0]])
+    path = write_csv(tmp_path / "results.csv", ["t", "a", "b"], values)
+    whole = path.read_bytes()
+    for cut in (len(whole) - 1, len(whole) - 4, whole.rfind(b"\n", 0, len(whole) - 1) + 1 + 2):
+        path.write_bytes(whole[:cut])
+        names, read = read_csv(path)
+        assert names == ["t", "a", "b"]
+        np.testing.assert_array_equal(read, values[:2])  # written exactly, read exactly
+    path.write_bytes(whole[:whole.find(b"\n") + 4])  # the first row cut
+    assert read_csv(path)[1].shape == (0, 3)
