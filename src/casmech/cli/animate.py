@@ -47,10 +47,7 @@ def add_arguments(parser) -> None:
 def _results(path: Path):
     if not path.is_file():
         raise UsageError(f"{path}: no such results file (hint: write one with `casmech run`)")
-    try:
-        return read_csv(path)
-    except ValueError as error:
-        raise UsageError(f"{path}: not a results table of numbers ({error})") from None
+    return read_csv(path)
 
 
 def _metadata(results: Path) -> dict:

@@ -109,15 +109,50 @@ def rows_text(values: np.ndarray) -> bytes:
 PANDAS_BYTES = 8 << 20
 
 
-def read_csv(path: str | Path) -> tuple[list[str], np.ndarray]:
+def read_csv(path: str | Path, as_written: bool = True) -> tuple[list[str], np.ndarray]:
     """The names and the rows, every number exactly the binary64 value written; a header alone
-    is 0 rows. A last line without its newline is a row cut off (a run killed while it wrote:
-    the system may end a write short on a fatal signal) and is not read."""
-    with open(path) as handle:
+    is 0 rows. `as_written`: a table casmech wrote as a run went (results.csv), whose last line
+    without its newline is a row cut off (a run killed while it wrote: the system may end a
+    write short on a fatal signal) and is not read; else (measurements from elsewhere) every
+    line is. A table that is not numbers under its header is a UsageError naming the file."""
+    try:
+        return _read(path, as_written)
+    except ValueError as error:  # (UnicodeDecodeError and pandas' ParserError are ones)
+        found = _where(path)
+        raise UsageError(f"{path}{found}; expected a table of numbers under a header of column "
+                         f"names" if found else f"{path}: not a table of numbers under a "
+                         f"header of column names ({error})") from None
+
+
+def _where(path) -> str:
+    """':line:column' of the first field of a table file that is not a number, or of a line
+    with another count of fields than the header's ('' where none is found: the cause is
+    elsewhere, e.g. the encoding)."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            count = len(handle.readline().split(","))
+            for line, text in enumerate(handle, start=2):
+                fields = text.rstrip("\r\n").split(",")
+                if len(fields) != count:
+                    return f":{line}:1: {len(fields)} values where the header names {count}"
+                column = 1
+                for field in fields:
+                    try:
+                        float(field)
+                    except ValueError:
+                        return f":{line}:{column}: {field.strip()[:20]!r} is not a number"
+                    column += len(field) + 1
+    except (OSError, ValueError):
+        pass
+    return ""
+
+
+def _read(path, as_written: bool) -> tuple[list[str], np.ndarray]:
+    with open(path, encoding="utf-8") as handle:
         names = handle.readline().strip().split(",")
         if not handle.readline().strip():
             return names, np.zeros((0, len(names)))
-    rows = _complete_rows(path)
+    rows = _complete_rows(path) if as_written else None
     if rows == 0:
         return names, np.zeros((0, len(names)))
     if Path(path).stat().st_size > PANDAS_BYTES:
@@ -148,9 +183,11 @@ def _pandas_rows(path, rows: int | None = None) -> np.ndarray:
 def read_measurements(path: str | Path, columns: Sequence[str] | None = None):
     """(times, {column: values}) from a CSV with a `t` column (the results format)."""
     try:
-        names, values = read_csv(path)
-    except (OSError, ValueError) as error:
+        names, values = read_csv(path, as_written=False)
+    except OSError as error:
         raise UsageError(f"cannot read measurements from {path}: {error}") from None
+    except UsageError as error:
+        raise UsageError(f"cannot read measurements from {error}") from None
     if "t" not in names:
         raise UsageError(f"{path}: the measurements need a 't' column (time) and one column per "
                          "measured output, named as in results.csv")

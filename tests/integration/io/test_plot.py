@@ -112,6 +112,19 @@ def test_cli_usage_errors_exit_2(slider_run, tmp_path, capsys):
     assert "Traceback" not in err and not (tmp_path / "a.png").exists()
 
 
+def test_a_results_file_that_is_not_a_table_is_a_usage_error(tmp_path, capsys):
+    """A results.csv edited by hand (a row short of values, a word among the numbers): exit 2
+    naming the file and the row, no traceback."""
+    for text, where in (("t,a,b\n0,1,2\n0.1,1\n", ":3:1: 2 values where the header names 3"),
+                        ("t,a\n0,1\n0.1,x\n", ":3:5: 'x' is not a number")):
+        path = tmp_path / "results.csv"
+        path.write_text(text)
+        assert cli.main(["plot", str(path), "a", "-o", str(tmp_path / "a.png")]) == 2
+        err = capsys.readouterr().err
+        assert f"{path}{where}; expected a table of numbers" in err
+        assert "Traceback" not in err and not (tmp_path / "a.png").exists()
+
+
 def test_missing_matplotlib_says_how_to_install_it(slider_run, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)  # import now fails
     with pytest.raises(UsageError, match=r"pip install matplotlib"):

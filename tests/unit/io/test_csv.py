@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from casmech.errors import UsageError
 from casmech.io import csv
 from casmech.io.csv import read_csv, write_csv
 
@@ -99,3 +100,24 @@ def test_a_row_cut_off_at_the_end_is_not_read(tmp_path, monkeypatch, pandas):
         np.testing.assert_array_equal(read, values[:2])  # written exactly, read exactly
     path.write_bytes(whole[:whole.find(b"\n") + 4])  # the first row cut
     assert read_csv(path)[1].shape == (0, 3)
+
+
+def test_a_file_from_elsewhere_is_read_whole(tmp_path):
+    """Measurements written by another tool often end without a newline: every line is read."""
+    path = tmp_path / "measured.csv"
+    path.write_text("t,x\n0,1.5\n0.5,2.25")  # no newline after the last row
+    _, read = read_csv(path, as_written=False)
+    np.testing.assert_array_equal(read, [[0.0, 1.5], [0.5, 2.25]])  # exact decimal binaries
+    times, columns = csv.read_measurements(path)
+    np.testing.assert_array_equal(times, [0.0, 0.5])  # the last row kept
+
+
+@pytest.mark.parametrize("text", ["t,a,b\n0,1,2\n0.1,1\n0.2,3,4\n", "t,a\n0,1\n0.1,x\n"])
+def test_a_table_that_is_not_numbers_is_a_usage_error(tmp_path, text):
+    path = tmp_path / "results.csv"
+    path.write_text(text)
+    with pytest.raises(UsageError, match=r"results.csv:3:\d+: .*; expected a table of numbers"):
+        read_csv(path)
+    path.write_bytes(b"\xb1\x00\xff,\n\x01")
+    with pytest.raises(UsageError, match="not a table of numbers"):
+        read_csv(path)
