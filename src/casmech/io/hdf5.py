@@ -124,9 +124,23 @@ def _write_group(group, mapping: Mapping, strings) -> None:
 
 
 def read_hdf5(path: str | Path) -> tuple[list[str], np.ndarray]:
-    with h5py().File(path, "r") as handle:
-        names = [str(name) for name in handle["columns"].asstr()[()]]
-        return names, np.array(handle["results"][()], float)
+    """The names and the rows of a results.h5; a file that is not one (not HDF5, without the
+    datasets, their shapes not a table of its columns, larger than a run writes) is a
+    UsageError naming it, read no further than its datasets' shapes."""
+    from casmech.schema.limits import MAX_VALUES
+
+    try:
+        with h5py().File(path, "r") as handle:
+            columns, results = handle["columns"], handle["results"]
+            if columns.ndim != 1 or results.ndim != 2 or results.shape[1] != columns.shape[0]:
+                raise ValueError(f"'results' of shape {results.shape} is not a table of the "
+                                 f"{columns.shape} 'columns'")
+            if results.size > MAX_VALUES:
+                raise ValueError(f"{results.size} values, more than a run writes ({MAX_VALUES})")
+            names = [str(name) for name in columns.asstr()[()]]
+            return names, np.array(results[()], float)
+    except (OSError, KeyError, TypeError, ValueError) as error:
+        raise UsageError(f"{path}: not a results.h5 of casmech run ({error})") from None
 
 
 def read_hdf5_metadata(path: str | Path) -> dict:

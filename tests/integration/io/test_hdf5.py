@@ -4,6 +4,7 @@ versions, the YAML read by PyYAML, the command line, a wall clock)."""
 
 import hashlib
 import json
+import re
 import sys
 from importlib.metadata import version
 
@@ -127,3 +128,25 @@ def test_unknown_format_is_a_usage_error(tmp_path, capsys):
         cli.main(["run", str(MODELS / "slider_crank.yaml"), "--format", "csv,xml"])
     assert exit_.value.code == 2
     assert "unknown format 'xml'" in capsys.readouterr().err
+
+
+def test_a_file_that_is_not_a_results_h5_is_a_usage_error(tmp_path, monkeypatch):
+    """Random bytes, HDF5 without the datasets, a table whose shape is not its columns', one
+    claiming more values than a run writes (read no further than its shape): each a UsageError
+    naming the file."""
+    from casmech.schema import limits
+
+    (tmp_path / "noise.h5").write_bytes(bytes(range(256)) * 8)
+    with h5py.File(tmp_path / "empty.h5", "w") as handle:
+        handle["other"] = np.zeros(3)
+    with h5py.File(tmp_path / "shape.h5", "w") as handle:
+        handle["columns"] = np.array([b"t", b"a"])
+        handle["results"] = np.zeros((3, 5))
+    with h5py.File(tmp_path / "large.h5", "w") as handle:
+        handle["columns"] = np.array([b"t", b"a"])
+        handle.create_dataset("results", shape=(1000, 2), dtype=float)  # never written
+    monkeypatch.setattr(limits, "MAX_VALUES", 100)
+    for name, cause in (("noise", "signature"), ("empty", "columns"), ("shape", "(3, 5)"),
+                        ("large", "2000 values")):
+        with pytest.raises(UsageError, match=rf"{name}.h5: not a results.h5 .*{re.escape(cause)}"):
+            read_hdf5(tmp_path / f"{name}.h5")
