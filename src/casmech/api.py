@@ -192,8 +192,9 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     calls (formulations.joint_space; docs/api.md#joint-space-dynamics). A compiled model keeps
     its joint space (built once per set of values)."""
     from casmech.formulations import joint_space as joint_spaces
+    from casmech.runtime.joint_space_calls import Calls
 
     if not isinstance(model, SystemFunctions):
-        return joint_spaces.joint_space(lower(model))
+        return joint_spaces.joint_space(lower(model), Calls)
     return workspace.default(model).one("joint_space",
-                                        lambda: joint_spaces.joint_space(model.ir))
+                                        lambda: joint_spaces.joint_space(model.ir, Calls))

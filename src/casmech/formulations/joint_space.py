@@ -32,7 +32,8 @@ the coordinates): build refuses them, naming the cut joints.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from dataclasses import field
 
 import casadi as ca
 import numpy as np
@@ -113,6 +114,9 @@ class JointSpace:
     velocities: tuple[str, ...]  # names of v and of tau, a
     joints: tuple[str, ...]  # the tree joints, in tree order ('' for a floating body's)
     neutral: np.ndarray  # q at the file's pose: zeros, unit quaternions [1, 0, 0, 0]
+    # name -> the NumPy call of that function (arrays in, a tuple of 2-D arrays out), given by
+    # whoever makes the space (casmech.joint_space: through buffers); None: casadi's own call
+    calls: Mapping[str, Callable[..., tuple]] | None = field(default=None, compare=False)
 
     @property
     def nq(self) -> int:
@@ -126,6 +130,8 @@ class JointSpace:
         return self.functions[name]
 
     def _call(self, name: str, *args) -> list[np.ndarray]:
+        if self.calls is not None:
+            return list(self.calls[name](*(np.asarray(a, float) for a in args)))
         outputs = self.functions[name](*(np.asarray(a, float) for a in args))
         outputs = outputs if isinstance(outputs, tuple) else (outputs,)
         return [np.array(out.full()) for out in outputs]
@@ -166,8 +172,10 @@ class JointSpace:
                 f"functions={list(self.functions)})")
 
 
-def joint_space(ir: ModelIR) -> JointSpace:
-    """The joint space of a lowered model whose joints form a tree (module docstring)."""
+def joint_space(ir: ModelIR, calls: Callable[[Mapping[str, ca.Function]], Mapping] | None = None
+                ) -> JointSpace:
+    """The joint space of a lowered model whose joints form a tree (module docstring); `calls`
+    makes its NumPy calls of its functions (None: casadi's own call)."""
     tree = spanning_tree(ir)
     if tree.cut:
         names = ", ".join(f"'{j.name}'" + (f" ({j.source})" if j.source else "")
@@ -184,4 +192,6 @@ def joint_space(ir: ModelIR) -> JointSpace:
                 neutral[slots[free.index(start)]] = 1.0
     names = tuple(j.name or ("ground" if j.child == GROUND_INDEX else ir.bodies[j.child].name)
                   for j in tree.joints)
-    return JointSpace(functions(ir, tree), coordinates, velocities, names, neutral)
+    made = functions(ir, tree)
+    return JointSpace(made, coordinates, velocities, names, neutral,
+                      None if calls is None else calls(made))

@@ -1,0 +1,64 @@
+"""runtime.joint_space_calls: a joint space's NumPy calls through buffers give what CasADi's
+own call of the same functions gives, bit for bit, from one thread or several."""
+
+import threading
+
+import numpy as np
+
+import casmech
+from casmech.formulations import joint_space as joint_spaces
+from casmech.model.lower import lower
+from tests.conftest import MODELS
+
+
+def _arguments(space, rng):
+    q = space.neutral + 0.3 * rng.standard_normal(space.nq)
+    v, tau = rng.standard_normal(space.nv), rng.standard_normal(space.nv)
+    return q, v, tau
+
+
+def test_the_buffered_calls_equal_casadis_calls():
+    # a spherical joint (nq > nv, quaternion coordinates) and revolute ones; the derivatives
+    # are structurally sparse, the buffered ones dense
+    ir = lower(casmech.load(MODELS / "heavy_top.yaml"))
+    plain, buffered = joint_spaces.joint_space(ir), casmech.joint_space(casmech.load(
+        MODELS / "heavy_top.yaml"))
+    assert plain.calls is None and buffered.calls is not None
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        q, v, tau = _arguments(plain, rng)
+        pairs = [(plain.mass_matrix(q), buffered.mass_matrix(q)),
+                 (plain.bias_forces(q, v), buffered.bias_forces(q, v)),
+                 (plain.forward_dynamics(q, v, tau), buffered.forward_dynamics(q, v, tau)),
+                 (plain.inverse_dynamics(q, v, tau), buffered.inverse_dynamics(q, v, tau)),
+                 *zip(plain.forward_dynamics_derivatives(q, v, tau),
+                      buffered.forward_dynamics_derivatives(q, v, tau), strict=True),
+                 *zip(plain.inverse_dynamics_derivatives(q, v, tau),
+                      buffered.inverse_dynamics_derivatives(q, v, tau), strict=True),
+                 *zip(plain.forward_kinematics(q, v), buffered.forward_kinematics(q, v),
+                      strict=True)]
+        for expected, found in pairs:
+            assert found.shape == expected.shape
+            np.testing.assert_array_equal(found, expected)  # the same SX evaluated
+
+
+def test_threads_share_a_space():
+    space = casmech.joint_space(casmech.load(MODELS / "double_pendulum.yaml"))
+    rng = np.random.default_rng(5)
+    cases = [_arguments(space, rng) for _ in range(8)]
+    expected = [space.forward_dynamics_derivatives(*case)[0] for case in cases]
+    failures = []
+
+    def work(k: int) -> None:
+        for _ in range(300):
+            found = space.forward_dynamics_derivatives(*cases[k])[0]
+            if not np.array_equal(found, expected[k]):
+                failures.append(k)
+                return
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(len(cases))]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert failures == []
