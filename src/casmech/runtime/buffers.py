@@ -190,19 +190,16 @@ class ColumnCall:
 
     def __call__(self, *arguments) -> tuple[np.ndarray, ...]:
         arguments = [self._matrix(np.asarray(a, float), k) for k, a in enumerate(arguments)]
-        shared, count = [], None
+        shared, counts = [], []
         for a, w in zip(arguments, self.widths, strict=True):
-            one = a.shape[1] == w
-            shared.append(one)
-            if not one:
-                found = a.shape[1] // max(w, 1)
-                count = found if count is None or found > count else count
-        if count is None:
-            count = 1
-        elif count == 0:
+            shared.append(a.shape[1] == w)
+            if not shared[-1]:
+                counts.append(a.shape[1] // max(w, 1))
+        count = max(counts, default=1)
+        if count == 0:
             return tuple(np.zeros((self.function.size1_out(k), 0))
                          for k in range(self.function.n_out()))
-        indices = tuple(k for k, one in enumerate(shared) if one) if any(shared) else ()
+        indices = tuple(k for k, one in enumerate(shared) if one)
 
         def block(start: int, size: int) -> tuple[np.ndarray, ...]:
             """The evaluations start .. start + size in one mapped call (an argument that is

@@ -399,7 +399,7 @@ def _kept_start(functions: SystemFunctions, system: JointSystem, t0: float,
     """_start's (x, z, loops, signs) and a dict of what runs from it derive, filled by the
     first run that needs each entry and found by plain keys, no CasADi Function hashed (the
     rows at t0 and the Recorder: runtime.joint_recorder; the loops' ODE and DOP853:
-    runtime.projected_loops; the metadata's joint names)."""
+    runtime.projected_loops)."""
     def build():
         q0, q_dot0 = assembly.initial_state(functions, t0, settings, workspace)
         x = initial_state(system, q0, q_dot0)
@@ -487,14 +487,12 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
     except AnalysisError as error:
         error.partial = result
         raise
-    tree = system.tree  # the names: of the start's system and mask alone
-    names = derived.get("names") or derived.setdefault("names", (
-        [j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
-        [j.name for j in tree.cut], int(loops.mask.sum())))
+    tree = system.tree
     result.metadata.update(
         rtol=rtol, atol=atol, formulation="joint",
         integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",
         method=method if method == "dop853" or not system.n_cut else "bdf",
-        steps=integrate.steps, tree=list(names[0]), cut_joints=list(names[1]),
-        dropped_rows=names[2])
+        steps=integrate.steps,
+        tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
+        cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
     return result

@@ -317,7 +317,6 @@ def earlier_mode(out: Path) -> str:
     """The mode the earlier part of the study in `out` ran in: its metadata.json's
     `options.mode`, written by `start` before its first run (a usage error when the file is
     missing, not JSON, or says anything but one of RAN: it is read, not trusted)."""
-
     from casmech.errors import UsageError, escape
 
     path = out / "metadata.json"
