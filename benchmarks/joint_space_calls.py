@@ -1,6 +1,8 @@
 """The joint space's NumPy calls as a user makes them (`space.forward_dynamics(q, v, tau)`,
 `space.forward_dynamics_derivatives(q, v, tau)`: casmech.joint_space's SX functions through
-buffers, runtime.joint_space_calls) and as CasADi's own call of the same functions, against
+buffers, runtime.joint_space_calls; "compiled": the space of the model compiled with mode
+"compiled", its functions in C, backends.joint_space_library, each built on its first call,
+timed) and as CasADi's own call of the same functions, against
 Pinocchio's Python calls (`pin.aba`, `pin.computeABADerivatives`), on the robots of
 joint_derivatives.py (issue 36).
 
@@ -14,9 +16,11 @@ Needs `pin` and `example-robot-data` (pip install ".[bench]").
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -29,16 +33,31 @@ from joint_derivatives import ROBOTS, load, per_call, pinocchio_state  # noqa: E
 def measure(name: str, workdir: Path, repeats: int, calls: int) -> list[str]:
     import pinocchio as pin
 
+    import casmech
+
     space, model = load(name, workdir, stops=False)
     plain = replace(space, calls=None)  # CasADi's own call of the same functions
     data = model.createData()
     rng = np.random.default_rng(7)
     (q, v, tau), (q_pin, v_pin, tau_pin), _ = pinocchio_state(model, space, rng)
+    # the space of the model compiled with mode "compiled": its two functions built here, into
+    # an empty cache (backends.joint_space_library)
+    os.environ["CASMECH_CACHE_DIR"] = str(workdir / f"{name}_cache")
+    compiled = casmech.joint_space(casmech.compile(casmech.load(workdir / f"{name}.yaml"),
+                                                   "compiled"))
+    builds = []
+    for call in (compiled.forward_dynamics, compiled.forward_dynamics_derivatives):
+        start = time.perf_counter()
+        call(q, v, tau)
+        builds.append(time.perf_counter() - start)
     candidates = {
         ("rhs", "casmech"): lambda: space.forward_dynamics(q, v, tau),
+        ("rhs", "casmech compiled"): lambda: compiled.forward_dynamics(q, v, tau),
         ("rhs", "casadi call"): lambda: plain.forward_dynamics(q, v, tau),
         ("rhs", "Pinocchio"): lambda: pin.aba(model, data, q_pin, v_pin, tau_pin),
         ("Jacobian", "casmech"): lambda: space.forward_dynamics_derivatives(q, v, tau),
+        ("Jacobian", "casmech compiled"): lambda: compiled.forward_dynamics_derivatives(
+            q, v, tau),
         ("Jacobian", "casadi call"): lambda: plain.forward_dynamics_derivatives(q, v, tau),
         ("Jacobian", "Pinocchio"): lambda: pin.computeABADerivatives(
             model, data, q_pin, v_pin, tau_pin),
@@ -48,12 +67,13 @@ def measure(name: str, workdir: Path, repeats: int, calls: int) -> list[str]:
         for key, call in candidates.items():
             times[key].append(per_call(call, calls))
     rows = []
-    for what in ("rhs", "Jacobian"):
+    for what, build in zip(("rhs", "Jacobian"), builds, strict=True):
         peer = statistics.median(times[what, "Pinocchio"])
-        for who in ("casmech", "casadi call"):
+        for who in ("casmech", "casmech compiled", "casadi call"):
             mine = statistics.median(times[what, who])
+            built = f"{build:.1f}" if who == "casmech compiled" else ""
             rows.append(f"| {name} | {what} | {who} | {1e6 * mine:.1f} | {1e6 * peer:.2f} | "
-                        f"{mine / peer:.1f} |")
+                        f"{mine / peer:.1f} | {built} |")
     return rows
 
 
@@ -63,8 +83,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=11)
     parser.add_argument("--calls", type=int, default=500)
     options = parser.parse_args()
-    print("| robot | what | call | casmech us | Pinocchio us | ratio |")
-    print("|---|---|---|---:|---:|---:|")
+    print("| robot | what | call | casmech us | Pinocchio us | ratio | first call s (build) |")
+    print("|---|---|---|---:|---:|---:|---:|")
     with tempfile.TemporaryDirectory() as folder:
         for name in options.robots:
             for row in measure(name, Path(folder), options.repeats, options.calls):

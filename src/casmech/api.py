@@ -190,11 +190,22 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     casmech.compile result: the latter's parameter values, after `set` too): mass matrix, bias
     forces, forward and inverse dynamics and their derivatives as CasADi Functions and NumPy
     calls (formulations.joint_space; docs/api.md#joint-space-dynamics). A compiled model keeps
-    its joint space (built once per set of values)."""
+    its joint space (built once per set of values); one compiled with mode "compiled" has it
+    compiled too: each function in a library of the model's structure that every set of
+    values shares, built into the cache when the function is first used
+    (backends.joint_space_library)."""
     from casmech.formulations import joint_space as joint_spaces
     from casmech.runtime.joint_space_calls import Calls
 
     if not isinstance(model, SystemFunctions):
         return joint_spaces.joint_space(lower(model), Calls)
-    return workspace.default(model).one("joint_space",
-                                        lambda: joint_spaces.joint_space(model.ir, Calls))
+    made = None
+    if getattr(model, "requested", None) == "compiled":
+        def made():
+            from casmech.backends import joint_space_library as library
+
+            space = library.CompiledSpace(model.ir)
+            return space.bound, Calls(space.externals, space.data)
+
+    return workspace.default(model).one(
+        "joint_space", lambda: joint_spaces.joint_space(model.ir, Calls, made))

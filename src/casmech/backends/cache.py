@@ -142,13 +142,19 @@ def _digest(model: ResolvedModel, values: bool) -> str:
     digest = hashlib.sha256(json.dumps({
         "text": model.text, "files": dict(sorted(model.files.items())),
         "parameters": parameters}).encode())
-    for table in _tables(model, [], set()):
+    table_digest(model, digest)
+    return digest.hexdigest()
+
+
+def table_digest(value, digest) -> None:
+    """Update the hashlib `digest` with every table reachable from `value` (a resolved model,
+    a ModelIR): its text and its polynomial's data."""
+    for table in _tables(value, [], set()):
         polynomial = table.polynomial
         digest.update(json.dumps([table.text, polynomial.periodic, list(polynomial.slopes),
                                   polynomial.increment]).encode())
         digest.update(np.ascontiguousarray(polynomial.breaks, float).tobytes())
         digest.update(np.ascontiguousarray(polynomial.coefficients, float).tobytes())
-    return digest.hexdigest()
 
 
 def key(model_hash: str, compiler: str, flags, dae: bool = False,

@@ -32,6 +32,7 @@ from casmech.fmu import description, outputs
 from casmech.fmu.model import Exported, exported
 from casmech.fmu.start import Start, start
 from casmech.fmu.system import FmuSystem, build_system
+from casmech.numerics.dense_outputs import dense_outputs
 from casmech.schema.resolved import ResolvedModel
 
 TEMPLATES = ("casmech_fmu.c", "casmech_fmu_solver.c", "casmech_fmu.h", "fmi2Functions.h",
@@ -233,8 +234,8 @@ def write_functions(functions: dict[str, ca.Function], directory: Path, parts: i
     translation units of about equal size (backends.generate.partition: compiled in
     parallel), the others in one unit built without optimization, behind one header; the
     units' file names."""
-    hot = {name: [_dense(f)] for name, f in functions.items() if name in HOT}
-    cold = [_dense(f) for name, f in functions.items() if name not in HOT]
+    hot = {name: [dense_outputs(f)] for name, f in functions.items() if name in HOT}
+    cold = [dense_outputs(f) for name, f in functions.items() if name not in HOT]
     groups = [*generate.partition(hot, parts), cold]
     names = []
     for k, group in enumerate(groups):
@@ -257,14 +258,6 @@ def write_functions(functions: dict[str, ca.Function], directory: Path, parts: i
 
 def platform_folder() -> str:
     return PLATFORMS.get(sys.platform, sys.platform)
-
-
-def _dense(function: ca.Function) -> ca.Function:
-    """The function with dense outputs (the C reads and writes plain arrays)."""
-    inputs = function.sx_in()
-    results = [ca.densify(v) for v in function.call(inputs)]
-    return ca.Function(function.name(), inputs, results, function.name_in(),
-                       function.name_out())
 
 
 __all__ = ["Options", "Written", "export"]

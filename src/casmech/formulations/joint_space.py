@@ -42,6 +42,8 @@ from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS
 from casmech.errors import UsageError
 from casmech.formulations import articulated, joint_forces, rnea
+from casmech.formulations.articulated import NUMERIC
+from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.joint_system import labels, layout
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.model.ir import GROUND_INDEX, ModelIR
@@ -58,15 +60,13 @@ SIGNATURES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 
 
-def _function(name: str, inputs: list, outputs: list) -> ca.Function:
-    input_names, output_names = SIGNATURES[name]
-    return ca.Function(name, inputs, outputs, list(input_names), list(output_names))
-
-
-def functions(ir: ModelIR, tree: Tree, joint_local: bool = True) -> dict[str, ca.Function]:
+def functions(ir: ModelIR, tree: Tree, joint_local: bool = True,
+              constants: Constants = NUMERIC) -> dict[str, ca.Function]:
     """The SIGNATURES' functions of a tree (module docstring), SX; the elements local to one
     tree joint as generalized forces on its coordinates (formulations/joint_forces.py; not
-    `joint_local`: as body wrenches)."""
+    `joint_local`: as body wrenches). Over model.parametric.split's IR, with `constants` over
+    its symbols, each function takes last the input "d" of the tree's constants
+    (joint_constants.Constants.inputs; `parametric`)."""
     lay = layout(tree)
     nq, nv = lay.n_theta, lay.n_x - lay.n_theta
     t, q, v = ca.SX.sym("t"), ca.SX.sym("q", nq), ca.SX.sym("v", nv)
@@ -75,10 +75,10 @@ def functions(ir: ModelIR, tree: Tree, joint_local: bool = True) -> dict[str, ca
     reference = {j.child: j.child_frame for j in tree.joints}
     joints = [articulated.Joint(j, t, {c: x[k] for c, k in zip(fq, kq, strict=True)},
                                 {c: x[k] for c, k in zip(fv, kv, strict=True)},
-                                reference.get(j.parent))
+                                reference.get(j.parent), constants)
               for j, kq, kv, fq, fv in zip(tree.joints, lay.theta, lay.u, lay.free_theta,
                                            lay.free_u, strict=True)]
-    kin = articulated.kinematics(joints, ir.n_bodies)
+    kin = articulated.kinematics(joints, ir.n_bodies, constants)
     forces = joint_forces.TreeForces(ir, tree, joints, kin, t, joint_local)
     torques = [local + tau[[k - nq for k in slots]] if slots else ca.SX(0, 1)
                for local, slots in zip(forces.torques, lay.u, strict=True)]
@@ -89,6 +89,13 @@ def functions(ir: ModelIR, tree: Tree, joint_local: bool = True) -> dict[str, ca
     mass = ca.jacobian(inverse, acceleration)
     bias = ca.substitute(inverse, acceleration, ca.DM.zeros(nv))
     bodies = articulated.state(kin, ir.n_bodies)
+    data = [constants.inputs] if constants.symbolic else []
+
+    def _function(name: str, inputs: list, outputs: list) -> ca.Function:
+        input_names, output_names = SIGNATURES[name]
+        return ca.Function(name, inputs + data, outputs,
+                           list(input_names) + [DATA] * bool(data), list(output_names))
+
     return {
         "mass_matrix": _function("mass_matrix", [t, q], [mass]),
         "bias_forces": _function("bias_forces", [t, q, v], [bias]),
@@ -172,10 +179,13 @@ class JointSpace:
                 f"functions={list(self.functions)})")
 
 
-def joint_space(ir: ModelIR, calls: Callable[[Mapping[str, ca.Function]], Mapping] | None = None
+def joint_space(ir: ModelIR, calls: Callable[[Mapping[str, ca.Function]], Mapping] | None = None,
+                made: Callable[[], tuple[Mapping[str, ca.Function], Mapping]] | None = None
                 ) -> JointSpace:
     """The joint space of a lowered model whose joints form a tree (module docstring); `calls`
-    makes its NumPy calls of its functions (None: casadi's own call)."""
+    makes its NumPy calls of its functions (None: casadi's own call); `made`, where given,
+    makes (the functions, their NumPy calls) instead (a compiled space:
+    backends.joint_space_library), once the model is known to be a tree."""
     tree = spanning_tree(ir)
     if tree.cut:
         names = ", ".join(f"'{j.name}'" + (f" ({j.source})" if j.source else "")
@@ -192,6 +202,9 @@ def joint_space(ir: ModelIR, calls: Callable[[Mapping[str, ca.Function]], Mappin
                 neutral[slots[free.index(start)]] = 1.0
     names = tuple(j.name or ("ground" if j.child == GROUND_INDEX else ir.bodies[j.child].name)
                   for j in tree.joints)
-    made = functions(ir, tree)
-    return JointSpace(made, coordinates, velocities, names, neutral,
-                      None if calls is None else calls(made))
+    if made is not None:
+        space_functions, space_calls = made()
+    else:
+        space_functions = functions(ir, tree)
+        space_calls = None if calls is None else calls(space_functions)
+    return JointSpace(space_functions, coordinates, velocities, names, neutral, space_calls)

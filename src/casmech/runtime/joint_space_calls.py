@@ -8,26 +8,35 @@ shared by threads."""
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 
 import casadi as ca
+import numpy as np
 
+from casmech.numerics.dense_outputs import dense_outputs
 from casmech.runtime.buffers import BufferedCall
 
 
 class Calls(Mapping):
-    """name -> a thread-safe NumPy call of functions[name] (module docstring)."""
+    """name -> a thread-safe NumPy call of functions[name] (module docstring); `data`: what
+    gives the value of the trailing input every function takes besides the space's (a compiled
+    joint space's "d", asked for once a function is at hand: backends.joint_space_library),
+    None: no such input."""
 
-    def __init__(self, functions: Mapping[str, ca.Function]):
-        self._functions, self._calls = functions, {}
+    def __init__(self, functions: Mapping[str, ca.Function],
+                 data: Callable[[], np.ndarray] | None = None):
+        self._functions, self._calls, self._data = functions, {}, data
         self._lock = threading.Lock()
 
     def __getitem__(self, name: str):
         call = self._calls.get(name)
         if call is None:
             with self._lock:
-                call = self._calls.get(name) or _Locked(
-                    BufferedCall(_dense(self._functions[name]), stoppable=False), self._lock)
+                call = self._calls.get(name)
+                if call is None:
+                    function = dense_outputs(self._functions[name])
+                    call = _Locked(BufferedCall(function, stoppable=False), self._lock,
+                                   () if self._data is None else (self._data(),))
                 self._calls[name] = call
         return call
 
@@ -39,19 +48,9 @@ class Calls(Mapping):
 
 
 class _Locked:
-    def __init__(self, call: BufferedCall, lock: threading.Lock):
-        self.call, self.lock = call, lock
+    def __init__(self, call: BufferedCall, lock: threading.Lock, trailing: tuple):
+        self.call, self.lock, self.trailing = call, lock, trailing
 
     def __call__(self, *arrays) -> tuple:
         with self.lock:
-            return self.call(*arrays)
-
-
-def _dense(function: ca.Function) -> ca.Function:
-    """`function` with every output dense, under its name and its inputs' and outputs' names."""
-    if all(function.sparsity_out(k).is_dense() for k in range(function.n_out())):
-        return function
-    inputs = function.sx_in() if function.is_a("SXFunction") else function.mx_in()
-    return ca.Function(function.name(), inputs,
-                       [ca.densify(out) for out in function.call(inputs)],
-                       function.name_in(), function.name_out())
+            return self.call(*arrays, *self.trailing)
