@@ -136,12 +136,12 @@ class JointSpace:
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
 
-    def _call(self, name: str, *args) -> list[np.ndarray]:
-        if self.calls is not None:
-            return list(self.calls[name](*(np.asarray(a, float) for a in args)))
+    def _call(self, name: str, *args) -> tuple[np.ndarray, ...]:
+        if self.calls is not None:  # (they take numbers, lists and arrays as they are)
+            return self.calls[name](*args)
         outputs = self.functions[name](*(np.asarray(a, float) for a in args))
         outputs = outputs if isinstance(outputs, tuple) else (outputs,)
-        return [np.array(out.full()) for out in outputs]
+        return tuple(np.array(out.full()) for out in outputs)
 
     def mass_matrix(self, q, t: float = 0.0) -> np.ndarray:
         """M(q) (nv x nv); Pinocchio's crba."""

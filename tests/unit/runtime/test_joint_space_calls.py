@@ -4,6 +4,7 @@ own call of the same functions gives, bit for bit, from one thread or several.""
 import threading
 
 import numpy as np
+import pytest
 
 import casmech
 from casmech.formulations import joint_space as joint_spaces
@@ -62,3 +63,16 @@ def test_threads_share_a_space():
     for thread in threads:
         thread.join()
     assert failures == []
+
+
+def test_lists_are_arguments_and_a_wrong_size_is_named():
+    space = casmech.joint_space(casmech.load(MODELS / "double_pendulum.yaml"))
+    q, v, tau = np.array([0.3, -0.2]), np.array([0.5, 1.0]), np.array([0.1, 0.0])
+    np.testing.assert_array_equal(space.forward_dynamics(list(q), list(v), list(tau)),
+                                  space.forward_dynamics(q, v, tau))  # the same numbers in
+    np.testing.assert_array_equal(space.forward_dynamics(q[:, None], v, tau),
+                                  space.forward_dynamics(q, v, tau))  # a column is a vector
+    with pytest.raises(ValueError, match=r"forward_dynamics: q takes 2 numbers, got \(3,\)"):
+        space.forward_dynamics([0.1, 0.2, 0.3], v, tau)
+    with pytest.raises(ValueError, match="mass_matrix: q takes 2 numbers, got 'x'"):
+        space.mass_matrix("x")
