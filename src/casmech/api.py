@@ -191,16 +191,18 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     forces, forward and inverse dynamics and their derivatives as CasADi Functions and NumPy
     calls (formulations.joint_space; docs/api.md#joint-space-dynamics). A compiled model keeps
     its joint space (built once per set of values); one compiled with mode "compiled" has it
-    compiled too: each function in a library of the model's structure that every set of
-    values shares, built into the cache when the function is first used
-    (backends.joint_space_library)."""
+    compiled too, up to the bodies of a library over the model data (more: interpreted): each
+    function in a library of the model's structure that every set of values shares, built into
+    the cache when the function is first used (backends.joint_space_library)."""
+    from casmech.equations.evaluation import WHERE_INLINE
     from casmech.formulations import joint_space as joint_spaces
     from casmech.runtime.joint_space_calls import Calls
 
     if not isinstance(model, SystemFunctions):
         return joint_spaces.joint_space(lower(model), Calls)
     made = None
-    if getattr(model, "requested", None) == "compiled":
+    if getattr(model, "requested", None) == "compiled" and \
+            model.n_bodies <= WHERE_INLINE["parametric"]:
         def made():
             from casmech.backends import joint_space_library as library
 

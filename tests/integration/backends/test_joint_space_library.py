@@ -110,3 +110,16 @@ def test_a_changed_table_is_a_different_library(toolchain, tmp_path):
     for compiled, interpreted in (before, after):
         np.testing.assert_allclose(compiled, interpreted, rtol=0, atol=1e-13)  # roundoff
     assert abs(after[0] - before[0]) > 1e-3  # the lift at 0.4 s doubled (~10 mm)
+
+
+def test_a_tree_above_the_inline_bodies_keeps_the_interpreted_space(toolchain, builds,
+                                                                    monkeypatch):
+    from casmech.equations import evaluation
+
+    compiled = casmech.compile(casmech.load(MODELS / "heavy_top.yaml"), "compiled")
+    monkeypatch.setitem(evaluation.WHERE_INLINE, "parametric", compiled.n_bodies - 1)
+    built = len(builds)
+    space = casmech.joint_space(compiled)
+    q = space.neutral
+    space.forward_dynamics(q, np.zeros(space.nv), np.zeros(space.nv))
+    assert len(builds) == built and space["forward_dynamics"].is_a("SXFunction")
