@@ -301,6 +301,8 @@ CONSTANTS = {
     "runtime/events.py ULPS": "the narrowest bracket, a roundoff floor",
     "runtime/stiffness.py STABLE_REAL": "a property of DOP853's tableau (its stability "
                                         "function on the real axis)",
+    "runtime/dop853.py HERMITE_BELOW": "where an interpolant's error estimate is trusted "
+                                       "(a fraction of the tolerance a step is held to)",
     "runtime/nonfinite.py ONE_ARRAY": "rows checked in one NumPy call (call overhead, memory)",
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",

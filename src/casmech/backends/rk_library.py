@@ -33,7 +33,7 @@ ROWS_SOURCE = SOURCE.with_name("casmech_rows.c")
 FLAGS = ("-O2",)  # a small fixed file: its loops gain from -O2, its build stays short
 # casmech_rk.c's return codes and counters
 DONE, TOO_SMALL, MAX_STEPS, EVAL_FAILED, NOT_FINITE = range(5)
-ACCEPTED, REJECTED, EVALUATIONS, OUTPUTS, PROJECTIONS, COUNT = range(6)
+ACCEPTED, REJECTED, EVALUATIONS, OUTPUTS, PROJECTIONS, HERMITE, COUNT = range(7)
 
 _int = ctypes.c_longlong  # casadi_int of CasADi's generated C (backends.generate)
 _double_p = ctypes.POINTER(ctypes.c_double)
@@ -57,7 +57,8 @@ class Settings(ctypes.Structure):
     _fields_ = [("rtol", ctypes.c_double), ("atol", ctypes.c_double),
                 ("max_step", ctypes.c_double), ("first_step", ctypes.c_double),
                 ("safety", ctypes.c_double), ("min_factor", ctypes.c_double),
-                ("max_factor", ctypes.c_double), ("max_steps", _int)]
+                ("max_factor", ctypes.c_double), ("max_steps", _int),
+                ("hermite_below", ctypes.c_double)]
 
 
 def pointer(array: np.ndarray):

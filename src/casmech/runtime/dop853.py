@@ -10,6 +10,13 @@ numerics.dop853_tableau, a copy of scipy's that a test holds equal to them); oth
 step is one call of a CasADi Function of its 12 stages under scipy's controller in Python
 (runtime.dop853_steps). docs/decisions/dop853.md.
 
+`free_outputs` (method auto's, where it bounds the step by the stiffness probe:
+runtime.stiffness.stable_step; off by default, so a named `method: dop853` takes scipy's steps
+and outputs): an output step after the call's first takes its outputs from the quintic of
+numerics.hermite_pair (the states and derivatives at the step's ends and the previous step's
+start) where that pair's estimate is below HERMITE_BELOW, instead of DOP853's interpolant and
+its 3 extra evaluations; not with a projection. docs/decisions/method-auto.md.
+
 `project(t, x) -> x`, optional, maps each accepted step's end state onto a manifold (the
 derivative the next step starts from is evaluated at the projected state) and each output
 state interpolated within the step (which is interpolated before the projection).
@@ -30,21 +37,31 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
+from casmech.numerics import hermite_pair
 from casmech.runtime.buffers import BOUND_ENTRIES
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
 TOO_SMALL = "the step size fell below 10 ulps of t"
 MAX_STEPS = DynamicsSolver().max_steps  # accepted steps between output times (the option's)
+# the Hermite pair's estimate below which its quintic gives a step's outputs (free_outputs):
+# the quintic's error then below 1.6 x 0.3 of the tolerance's scale on y' = lambda y
+# (numerics.hermite_pair), half the error a DOP853 step is accepted with; DOP853's
+# interpolant otherwise. docs/decisions/method-auto.md
+HERMITE_BELOW = 0.3
+FREE_OUTPUTS = "dop853_free_outputs"  # the integrator option that sets free_outputs
 
 
 @dataclass
 class Stats:
-    """A call's counts: accepted and rejected steps, ODE evaluations, projections."""
+    """A call's counts: accepted and rejected steps, ODE evaluations, projections, and the
+    output steps interpolated by the Hermite pair (free_outputs: each saved T_EXTRA
+    evaluations)."""
 
     accepted: int = 0
     rejected: int = 0
     evaluations: int = 0
     projections: int = 0
+    hermite: int = 0
 
 
 class _CCall:
@@ -94,7 +111,9 @@ class _CCall:
 class Dop853:
     """DOP853 for `ode` (t, x) -> x_dot (a CasADi Function: inputs named t and x, others
     empty; its first output the derivative) and an optional `project` (t, x) -> x of the same
-    form. `use_c`: False forces the Python path (True: C where the functions allow it)."""
+    form. `use_c`: False forces the Python path (True: C where the functions allow it).
+    `free_outputs`: outputs from the Hermite pair where its estimate allows (the module's
+    docstring)."""
 
     ode: ca.Function
     rtol: float
@@ -104,10 +123,16 @@ class Dop853:
     first_step: float | None = None
     max_steps: int = MAX_STEPS
     use_c: bool = True
+    free_outputs: bool = False
     last: Stats = field(default_factory=Stats)
 
     def __post_init__(self):
         self._c = self._c_parts() if self.use_c else None
+
+    @property
+    def hermite_below(self) -> float:
+        """The Hermite pair's threshold: HERMITE_BELOW where free_outputs, else 0 (never)."""
+        return HERMITE_BELOW if self.free_outputs and self.project is None else 0.0
 
     @property
     def compiled(self) -> bool:
@@ -148,10 +173,9 @@ class Dop853:
             *(rk_library.pointer(a) for a in arrays), float(t.ERROR_ORDER))
         settings = rk_library.Settings(
             self.rtol, self.atol, self.max_step, self.first_step or 0.0, t.SAFETY, t.MIN_FACTOR,
-            t.MAX_FACTOR,
-            self.max_steps)
+            t.MAX_FACTOR, self.max_steps, self.hermite_below)
         n = self.ode.nnz_in(self.ode.name_in().index("x"))
-        work = np.zeros((t.N_STAGES_EXTENDED + t.INTERPOLATOR_POWER + 6) * n)
+        work = np.zeros((t.N_STAGES_EXTENDED + t.INTERPOLATOR_POWER + 8) * n)
         return _CCall(run, rk_library, (ode, project, arrays, tableau, settings), work, n)
 
     def _run_c(self, t0: float, times: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -161,7 +185,7 @@ class Dop853:
         status = c.run(*c.head, len(x), t0, x_p, m, times_p, out_p, *c.tail)
         stats = c.stats.tolist()
         self.last = Stats(stats[lib.ACCEPTED], stats[lib.REJECTED], stats[lib.EVALUATIONS],
-                          stats[lib.PROJECTIONS])
+                          stats[lib.PROJECTIONS], stats[lib.HERMITE])
         if status != lib.DONE:
             raise _failure({lib.TOO_SMALL: "too small", lib.MAX_STEPS: "max steps",
                             lib.EVAL_FAILED: "failed", lib.NOT_FINITE: "not finite"}[status],
@@ -206,7 +230,8 @@ class Dop853:
                 raise fail("not finite", at)
             return value
 
-        f, since_output = rates(t, y), 0
+        f, since_output, below = rates(t, y), 0, self.hermite_below
+        previous = None  # (y, f, h) of the step before, for the Hermite pair
         h_abs = min(self.first_step, t_bound - t0) if self.first_step else steps.initial_step(
             rates, t, y, f, t_bound, self.max_step, self.rtol, self.atol)
         while done < len(times) and t != t_bound:
@@ -235,15 +260,23 @@ class Dop853:
             y_new, f_new = y_new.ravel(), f_new.ravel()
             upto = int(np.searchsorted(times, t_new, side="right"))
             if upto > done:
-                F = dense(t, h, y, y_new, f_new, K)[0]
-                stats.evaluations += T_EXTRA
                 since_output = 0
-                out[:, done:upto] = steps.interpolate(F, t, h, y, times[done:upto])
+                pair = None if previous is None or not below else hermite_pair.coefficients(
+                    previous[0], previous[1], y, f, y_new, f_new, previous[2], h)
+                if pair is not None and hermite_pair.estimate(
+                        pair, y, y_new, previous[2], h, self.rtol, self.atol) < below:
+                    out[:, done:upto] = hermite_pair.quintic(pair, y, (times[done:upto] - t) / h)
+                    stats.hermite += 1
+                else:
+                    F = dense(t, h, y, y_new, f_new, K)[0]
+                    stats.evaluations += T_EXTRA
+                    out[:, done:upto] = steps.interpolate(F, t, h, y, times[done:upto])
                 if project is not None:
                     for j in range(done, upto):
                         out[:, j] = project(times[j], out[:, j])
                         stats.projections += 1
                 done = upto
+            previous = y, f, h
             t, y, f = t_new, y_new, f_new
             if project is not None:
                 y = project(t, y)
@@ -320,8 +353,10 @@ def _failure(kind: str, t: float, outputs: np.ndarray, max_steps: int) -> Failur
 
 def from_options(ode: ca.Function, options: dict) -> Dop853:
     """DOP853 for `ode` from CVODES's options as a run sets them (reltol, abstol, and where
-    given max_step_size, step0 and max_num_steps: runtime.contact_steps)."""
+    given max_step_size, step0 and max_num_steps: runtime.contact_steps; FREE_OUTPUTS where
+    method auto bounds the step: runtime.joint_dynamics)."""
     return Dop853(ode, options["reltol"], options["abstol"],
                   max_step=options.get("max_step_size", np.inf),
                   first_step=options.get("step0"),
-                  max_steps=options.get("max_num_steps", MAX_STEPS))
+                  max_steps=options.get("max_num_steps", MAX_STEPS),
+                  free_outputs=options.get(FREE_OUTPUTS, False))

@@ -431,8 +431,9 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
             workspace, "max_step_size" in step_options,
             lambda: workspace.kept("dop853_in_c", system.dynamics,
                                    lambda: dop853.in_c(system.dynamics, not system.n_cut)))
-        if method == "dop853" and radius is not None:  # the fastest mode damped, not met
-            step_options["max_step_size"] = stable_step(radius)
+        if method == "dop853" and radius is not None:  # the fastest mode damped, not met;
+            step_options["max_step_size"] = stable_step(radius)  # outputs without the
+            step_options[dop853.FREE_OUTPUTS] = True  # interpolant's evaluations where it may
     recorder = Recorder.kept(derived, functions, system, signs, loops.mask, workspace,
                              settings.loop_rows == "solved" or method == "dop853")
     integrate = _Integrator(system, loops, rtol, atol, method, workspace, settings)

@@ -2,14 +2,16 @@
 (runtime.stiffness.stable_step, runtime.joint_dynamics.run_joint_dynamics): on a tree whose
 fastest mode is a damper's real decay (a light rod on a damped elbow, not stiff enough for BDF
 at the output step), the bounded run rejects fewer steps than DOP853 named (scipy's steps,
-unbounded), and both follow a tight BDF run."""
+unbounded), and both follow a tight BDF run; its outputs come from the Hermite pair without
+evaluations on most output steps (runtime.dop853's free_outputs)."""
 
 import numpy as np
 
 import casmech
-from casmech.runtime import joint_dynamics, workspace
+from casmech.runtime import dop853, joint_dynamics, workspace
 from casmech.runtime.stiffness import STABLE_REAL, spectral_radius
 from tests.conftest import MODELS
+from tests.unit.runtime.test_dop853 import dense_steps
 
 # the double pendulum with a light short second rod (0.05 kg, 0.2 m: 6.7e-4 kg m^2 about the
 # elbow) on a 0.3 N m s/rad damper: a real eigenvalue near -0.3 / 6.7e-4 = -450 1/s, so
@@ -61,3 +63,31 @@ def test_auto_bounds_the_step_by_the_fastest_mode(quick_builds):
         # rtol 1e-4, atol 1e-6 over 1 s: the angles (~1.6 rad) within a few hundred rtol
         np.testing.assert_allclose(run.q, exact.q, rtol=0, atol=5e-3)
 
+
+
+def test_outputs_without_the_interpolants_evaluations(quick_builds, monkeypatch):
+    model = _model()
+    exact = _run(casmech.compile(model, "interpreted"), method="bdf", rtol=1e-12, atol=1e-14)
+    runs, threshold = {}, dop853.HERMITE_BELOW
+    for below in (threshold, 0.0):  # the Hermite pair, then DOP853's interpolant
+        monkeypatch.setattr(dop853, "HERMITE_BELOW", below)
+        functions = casmech.compile(model, "compiled")  # its own workspace: a new Dop853
+        result = _run(functions, rtol=1e-3, atol=1e-5)
+        rk = _last_dop853(functions)
+        assert result.metadata["method"] == "dop853" and rk.free_outputs
+        runs[below] = result, rk.last
+    (free, free_stats), (dense, dense_stats) = runs[threshold], runs[0.0]
+    output_steps = dense_steps(dense_stats)
+    assert dense_stats.hermite == 0 and output_steps > 50
+    # the same steps; most output steps interpolated by the Hermite pair, each 3 evaluations
+    # fewer
+    assert (free_stats.accepted, free_stats.rejected) == \
+        (dense_stats.accepted, dense_stats.rejected)
+    assert free_stats.hermite > 0.8 * output_steps
+    assert dense_stats.evaluations - free_stats.evaluations == 3 * free_stats.hermite
+    free_error = np.abs(free.q - exact.q).max()
+    dense_error = np.abs(dense.q - exact.q).max()
+    # rtol 1e-3 on angles of ~1.6 rad: within the tolerance, and within 2x DOP853's
+    # interpolant's error (measured: no larger)
+    assert free_error < 1e-3
+    assert free_error <= 2 * dense_error

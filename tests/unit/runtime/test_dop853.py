@@ -185,3 +185,113 @@ def test_c_calls_reusing_their_arrays_are_independent(compiled_pendulum, monkeyp
         if first is None:
             first, first_copy = got, got.copy()
     np.testing.assert_array_equal(first, first_copy)
+
+
+# free_outputs: a slow oscillation p'' = -p followed by w with a fast real decay (rate FAST,
+# a step bounded at 6.2 / FAST as method auto bounds it: runtime.stiffness.stable_step)
+FAST = 400.0
+
+
+def fast_mode() -> ca.Function:
+    t, x = ca.SX.sym("t"), ca.SX.sym("x", 3)
+    return ca.Function("fast_ode", [t, x], [ca.vertcat(x[1], -x[0], -FAST * (x[2] - x[0]))],
+                       ["t", "x"], ["ode"])
+
+
+def fast_mode_exact(times: np.ndarray, w0: float) -> np.ndarray:
+    """The closed form from (1, 0, w0) at t = 0: w the forced decay towards p = cos t."""
+    def forced(s):
+        return FAST * (FAST * np.cos(s) + np.sin(s)) / (FAST**2 + 1)
+
+    return np.vstack([np.cos(times), -np.sin(times),
+                      forced(times) + (w0 - forced(0.0)) * np.exp(-FAST * times)])
+
+
+@pytest.fixture(scope="module")
+def compiled_fast(tmp_path_factory):
+    if not build.available(build.Toolchain()):
+        pytest.skip("no C compiler")
+    return compile_functions({"fast_ode": fast_mode()},
+                             root=tmp_path_factory.mktemp("cache"))["fast_ode"]
+
+
+def dense_steps(stats: dop853.Stats) -> int:
+    """The output steps that evaluated DOP853's interpolant: a call's evaluations less the
+    first derivative, the initial step's and 12 a step attempt, 3 each."""
+    attempts = stats.accepted + stats.rejected
+    return (stats.evaluations - 2 - dop853.T_STAGES * attempts) // dop853.T_EXTRA
+
+
+@pytest.mark.parametrize("rtol", [1e-3, 1e-7])
+def test_free_outputs_where_the_step_is_stability_bounded(compiled_fast, rtol):
+    bound, x0 = 6.2 / FAST, [1.0, 0.0, 1.0]
+    exact = fast_mode_exact(TIMES, x0[2])
+    runs = {}
+    for free in (False, True):
+        for use_c in (True, False):
+            rk = dop853.Dop853(compiled_fast if use_c else fast_mode(), rtol, rtol / 100,
+                               max_step=bound, free_outputs=free, use_c=use_c)
+            assert rk.compiled == use_c
+            runs[free, use_c] = rk(0.0, TIMES, x0), rk.last
+    for use_c in (True, False):
+        (dense, dense_stats), (free, free_stats) = runs[False, use_c], runs[True, use_c]
+        assert dense_stats.hermite == 0 and dense_steps(dense_stats) == len(TIMES)
+        # the same steps; every output step after the first (none here: TIMES start at 0.1)
+        # interpolated without evaluations
+        assert (free_stats.accepted, free_stats.rejected) == \
+            (dense_stats.accepted, dense_stats.rejected)
+        assert free_stats.hermite == len(TIMES) and dense_steps(free_stats) == 0
+        assert free_stats.evaluations == dense_stats.evaluations - 3 * len(TIMES)
+        dense_error = np.abs(dense - exact).max()
+        free_error = np.abs(free - exact).max()
+        # within the tolerance of the closed form (O(1) states), and no worse than DOP853's
+        # interpolant, which magnifies the fast mode inside a step at h lambda = -6.2
+        assert free_error < rtol
+        assert free_error <= dense_error
+    # C and Python: the same decisions, the outputs roundoff apart (as above)
+    assert runs[True, True][1] == runs[True, False][1]
+    np.testing.assert_allclose(runs[True, True][0], runs[True, False][0], rtol=1e-10,
+                               atol=1e-11)
+
+
+@pytest.mark.parametrize("use_c", [True, False])
+def test_the_estimate_refuses_a_fast_transient(compiled_fast, use_c):
+    ode = compiled_fast if use_c else fast_mode()
+    x0 = [1.0, 0.0, 5.0]  # w starts 4 away from its slow manifold w ~ p: a transient of e^-400t
+    calls = {}
+    for times in (np.linspace(0.01, 1.0, 100), np.linspace(0.2, 1.0, 81)):
+        rk = dop853.Dop853(ode, 1e-5, 1e-7, max_step=6.2 / FAST, free_outputs=True,
+                           use_c=use_c)
+        states = rk(0.0, times, x0)
+        # the outputs within the tolerance of the closed form (O(1) states, rtol 1e-5)
+        np.testing.assert_allclose(states, fast_mode_exact(times, x0[2]), rtol=0, atol=1e-4)
+        calls[len(times)] = rk.last
+    # outputs from the start: the first step has no step before it, and the estimate refuses
+    # the next ones, inside the transient (DOP853's interpolant); after it (from 0.2 s), none
+    assert dense_steps(calls[100]) >= 3
+    assert dense_steps(calls[81]) == 0 and calls[81].hermite > 0
+
+
+@pytest.mark.parametrize("use_c", [True, False])
+def test_the_estimate_refuses_accuracy_limited_steps(compiled_pendulum, use_c):
+    ode = compiled_pendulum["pend_ode"] if use_c else pendulum()[0]
+    plain = dop853.Dop853(ode, 1e-5, 1e-7, use_c=use_c)
+    free = dop853.Dop853(ode, 1e-5, 1e-7, free_outputs=True, use_c=use_c)
+    # steps as long as the 8th-order accuracy allows (no bound): the cubic's error, which the
+    # estimate measures, is far above the tolerance, so every output comes from DOP853's
+    # interpolant, as without free_outputs
+    np.testing.assert_array_equal(free(0.0, TIMES, X0), plain(0.0, TIMES, X0))
+    assert free.last == plain.last and free.last.hermite == 0
+
+
+def test_free_outputs_are_off_by_default_and_with_a_projection(compiled_pendulum):
+    ode, project = compiled_pendulum["pend_ode"], compiled_pendulum["pend_project"]
+    assert not dop853.Dop853(ode, 1e-6, 1e-8).free_outputs
+    assert dop853.from_options(ode, {"reltol": 1e-6, "abstol": 1e-8}).hermite_below == 0
+    assert dop853.from_options(ode, {"reltol": 1e-6, "abstol": 1e-8,
+                                     dop853.FREE_OUTPUTS: True}).hermite_below > 0
+    projected = dop853.Dop853(ode, 1e-6, 1e-8, project=project, max_step=0.01,
+                              free_outputs=True)
+    assert projected.hermite_below == 0
+    projected(0.0, TIMES, X0)
+    assert projected.last.hermite == 0

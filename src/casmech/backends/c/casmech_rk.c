@@ -10,6 +10,11 @@
  * of an accepted step are interpolated from that step. An optional projection maps each
  * accepted step's end state (and each interpolated output) onto a manifold; the derivative the
  * next step starts from is evaluated again at the projected state.
+ *
+ * With hermite_below > 0 (and no projection), an output step after the call's first takes its
+ * outputs from the quintic Hermite interpolant through (y, f) at the step's ends and the previous
+ * step's start where the estimate of the embedded cubic/quintic pair is below hermite_below,
+ * without the interpolant's extra evaluations (casmech.numerics.hermite_pair, the same formulas).
  */
 #include <math.h>
 #include <string.h>
@@ -45,10 +50,11 @@ typedef struct {
   double rtol, atol, max_step, first_step; /* first_step <= 0: chosen */
   double safety, min_factor, max_factor;
   casadi_int max_steps;                    /* accepted steps between output times */
+  double hermite_below;                    /* the Hermite pair's threshold; 0: never */
 } cm_settings;
 
 enum { CM_DONE = 0, CM_TOO_SMALL = 1, CM_MAX_STEPS = 2, CM_EVAL_FAILED = 3, CM_NOT_FINITE = 4 };
-enum { S_ACCEPTED, S_REJECTED, S_EVALUATIONS, S_OUTPUTS, S_PROJECTIONS, S_COUNT };
+enum { S_ACCEPTED, S_REJECTED, S_EVALUATIONS, S_OUTPUTS, S_PROJECTIONS, S_HERMITE, S_COUNT };
 
 /* f at (t, x) into out (not x), counted in *count; a failure or an output not finite */
 static int call(cm_function* f, double t, const double* x, double* out, casadi_int* count,
@@ -169,8 +175,44 @@ static void interpolate(const cm_tableau* tab, const double* F, double t_old, do
   }
 }
 
+/* the Hermite pair (m0, c2, c3, alpha, beta) into P (5 x n) over the step from (y, f) to
+ * (y_new, f_new) of size h after one from (y_prev, f_prev) of size h_prev; returns its estimate
+ * (casmech.numerics.hermite_pair.coefficients and estimate) */
+static double hermite_pair(const double* y_prev, const double* f_prev, const double* y,
+                           const double* f, const double* y_new, const double* f_new,
+                           double h_prev, double h, const cm_settings* set, double* P, int n) {
+  double r = h_prev / h, g = r * r * (1 + r) * (1 + r), g_slope = -2 * r * (1 + r) * (1 + 2 * r);
+  double sum = 0;
+  int k;
+  for (k = 0; k < n; ++k) {
+    double m0 = h * f[k], m1 = h * f_new[k], delta = y_new[k] - y[k];
+    double c2 = 3 * delta - 2 * m0 - m1, c3 = m0 + m1 - 2 * delta;
+    double d0 = y_prev[k] - (y[k] - r * m0 + r * r * c2 - r * r * r * c3);
+    double d1 = h * f_prev[k] - (m0 - 2 * r * c2 + 3 * r * r * c3);
+    double beta = (d1 - g_slope * d0 / g) / g, alpha = d0 / g + r * beta;
+    double bound = fmax(fabs(alpha), fabs(alpha + beta)) / 16;
+    double scale = set->atol + set->rtol * fmax(fabs(y[k]), fabs(y_new[k]));
+    P[k] = m0;
+    P[n + k] = c2;
+    P[2 * n + k] = c3;
+    P[3 * n + k] = alpha;
+    P[4 * n + k] = beta;
+    sum += (bound / scale) * (bound / scale);
+  }
+  return sqrt(sum / n) * fmax(1.0, r);
+}
+
+/* the pair's quintic at s = (t - t_old) / h */
+static void quintic(const double* P, const double* y_old, double s, double* out, int n) {
+  double g = s * s * (s - 1) * (s - 1);
+  int k;
+  for (k = 0; k < n; ++k)
+    out[k] = y_old[k] + s * (P[k] + s * (P[n + k] + s * P[2 * n + k]))
+             + g * (P[3 * n + k] + P[4 * n + k] * s);
+}
+
 /* Integrate from (t0, y0) to times[n_times - 1], writing the state at each of times (all after
- * t0, increasing) into out (n_times x n, row-major). work: (n_extended + 3 + n_dense + 6) n
+ * t0, increasing) into out (n_times x n, row-major). work: (n_extended + 3 + n_dense + 8) n
  * doubles. stats: S_COUNT counters; *t_reached: the last accepted time. Returns CM_DONE or the
  * failure (the outputs before it are written: stats[S_OUTPUTS] of them). */
 int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* ode,
@@ -179,6 +221,7 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
                    double* t_reached) {
   double *K = work, *F = K + tab->n_extended * n, *y = F + (3 + tab->n_dense) * n;
   double *y_new = y + n, *y_old = y_new + n, *f = y_old + n, *ytmp = f + n, *scale = ytmp + n;
+  double *y_prev = scale + n, *f_prev = y_prev + n, h_prev = 0; /* h_prev 0: no step before */
   double t = t0, t_bound = times[n_times - 1], h_abs, exponent = -1 / (tab->error_order + 1);
   int next = 0, status, k, s;
   casadi_int since_output = 0;
@@ -233,11 +276,17 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
     memcpy(y, y_new, n * sizeof(double));
     memcpy(f, K + tab->n_stages * n, n * sizeof(double));
     if (next < n_times && times[next] <= t_new) {
-      status = dense(tab, ode, t, h, y_old, y, f, K, F, ytmp, stats, n);
-      if (status) return status;
+      /* K's first stage: f at t_old; F holds the pair's rows where it is taken */
+      int pair = h_prev > 0 && set->hermite_below > 0 && !project
+                 && hermite_pair(y_prev, f_prev, y_old, K, y, f, h_prev, h, set, F, n)
+                        < set->hermite_below;
+      if (pair) stats[S_HERMITE]++;
+      else if ((status = dense(tab, ode, t, h, y_old, y, f, K, F, ytmp, stats, n)))
+        return status;
       since_output = 0;
       for (; next < n_times && times[next] <= t_new; ++next) {
-        interpolate(tab, F, t, h, y_old, times[next], out + (casadi_int)next * n, n);
+        if (pair) quintic(F, y_old, (times[next] - t) / h, out + (casadi_int)next * n, n);
+        else interpolate(tab, F, t, h, y_old, times[next], out + (casadi_int)next * n, n);
         if (project) {
           memcpy(ytmp, out + (casadi_int)next * n, n * sizeof(double));
           if ((status = call(project, times[next], ytmp, out + (casadi_int)next * n,
@@ -247,6 +296,9 @@ int casmech_rk_run(const cm_tableau* tab, const cm_settings* set, cm_function* o
         stats[S_OUTPUTS] = next + 1;
       }
     }
+    memcpy(y_prev, y_old, n * sizeof(double));
+    memcpy(f_prev, K, n * sizeof(double));
+    h_prev = h;
     t = t_new;
     *t_reached = t;
     if (project) {
