@@ -66,6 +66,15 @@ def columns(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, .
                                        *(a.T if a.ndim == 2 else a for a in inputs)))
 
 
+def rows_of(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, ...]:
+    """columns() transposed: each input one row per time (len(times) x n) or a vector every
+    evaluation shares; each output one row per time (the rows' C loop's own layout)."""
+    if type(call) is ColumnCall:
+        return tuple(out.T for out in call(times[None, :], *(
+            a.T if a.ndim == 2 else a[:, None] for a in inputs)))
+    return call(len(times), times, *inputs)
+
+
 class LoopRows:
     """The rows of one loop system: (q, q_dot, q_ddot, lam) per column of states, one call of
     `rows` (solved_motion's, compiled or not) over them all (over_rows); a column whose saddle

@@ -36,6 +36,7 @@ from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.joint_rows import over_rows, rows_of
 from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -72,7 +73,9 @@ def logdet_function(phi_q: ca.Function, rows) -> ca.Function:
     phi_q (an SX Function) each scaled to unit length: the Gram matrix G (each product once)
     factored by CasADi's sparse LDL (G[p, p] = (I + L) D (I + L)^T, p its fill-reducing
     order), and log prod_k D_k / G[p_k, p_k] (each factor in (0, 1] where G is positive
-    definite); not finite where G is not numerically positive definite."""
+    definite); not finite where G is not numerically positive definite. Its inputs are named
+    as phi_q's but q, which is `x`: the input a compiled function's C entry point takes its
+    rows' states by (backends.rk_library.Entry), so that the rows' C loop runs it."""
     inputs = phi_q.sx_in()
     jacobian = phi_q(*inputs)[list(rows), :]
     gram = ca.mtimes(jacobian, jacobian.T)
@@ -81,20 +84,20 @@ def logdet_function(phi_q: ca.Function, rows) -> ca.Function:
     ratio = ca.SX(1)
     for k, j in enumerate(order):
         ratio = ratio * (pivots[k] / gram[j, j])
-    return ca.Function("unit_gram_logdet", inputs, [ca.log(ratio)], phi_q.name_in(),
-                       ["logdet"])
+    names = ["x" if name == "q" else name for name in phi_q.name_in()]
+    return ca.Function("unit_gram_logdet", inputs, [ca.log(ratio)], names, ["logdet"])
 
 
 class _Compiled:
-    """logdet_function compiled, mapped over output rows (with a parametric library's model
-    data as its last input)."""
+    """logdet_function compiled, over output rows (with a parametric library's model data as
+    its last input) in the rows' C loop (runtime.joint_rows.over_rows), or casadi's map."""
 
     def __init__(self, function: ca.Function, data: np.ndarray | None):
-        self.call, self.data = ColumnCall(function), data
+        self.call = over_rows(function)
+        self.data = () if data is None else (np.asarray(data, float),)
 
     def __call__(self, times: np.ndarray, q: np.ndarray) -> np.ndarray:
-        data = () if self.data is None else (self.data[:, None],)
-        return self.call(times[None, :], q.T, *data)[0].ravel()
+        return rows_of(self.call, times, q, *self.data)[0].ravel()
 
 
 def _compiled(functions: SystemFunctions, rows: list[int],
@@ -139,7 +142,10 @@ def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
     if not build.available(toolchain):
         return None
     try:
-        compiled = compile_keyed({"kind": "unit gram logdet", **bundle, "rows": rows}, lambda: (
+        # "x": the function's q input is named x (logdet_function); libraries built when it
+        # was named q (which the rows' C loop cannot run) are not this key's
+        compiled = compile_keyed({"kind": "unit gram logdet", **bundle, "rows": rows,
+                                  "state": "x"}, lambda: (
             {"unit_gram_logdet": logdet_function(phi_q(), rows)}, {}, toolchain),
             toolchain=toolchain)
     except (AnalysisError, UsageError) as error:
