@@ -72,8 +72,8 @@ class Recorder:
         else the integrator's `algebraic` states."""
         times = np.asarray(times, float)
         if self.loops is not None:
-            q, q_dot, q_ddot, lam = (out.T for out in self.loops(
-                times, np.asarray(states, float), self.signs))
+            q, q_dot, q_ddot, lam = self.loops.by_row(times, np.asarray(states, float),
+                                                      self.signs)
         else:
             q, q_dot, q_ddot, lam = rows_of(self._mapped(), times, np.asarray(states, float).T,
                                             np.asarray(algebraic, float).T, self.signs)
