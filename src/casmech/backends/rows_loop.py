@@ -37,6 +37,8 @@ class RowsCall:
         offsets = np.cumsum([0, *self.sizes_out]).tolist()
         self.spans = list(zip(offsets[:-1], offsets[1:], strict=True))  # in one array a row
         self.total = offsets[-1]
+        # (rows, each output's shape and byte offset in the one array of a call of that many)
+        self.layout: tuple[int, list] = (-1, [])
         # the fixed inputs (a bound function's d) read at the same address by every row; the
         # caller gives the others
         fixed = entries[0].fixed
@@ -91,14 +93,17 @@ class RowsCall:
             self.in_p[k] = _address(a)
         if len(self.entries) > 1:
             self._share(rows)
+        layout = self.layout
+        if layout[0] != rows:
+            layout = self.layout = (rows, [((rows, b - a), 8 * rows * a) for a, b in self.spans])
         out = np.empty(rows * self.total)
         base = _address(out)
-        for k, (start, _) in enumerate(self.spans):
-            self.out_p[k] = base + 8 * rows * start
+        for k, (_, offset) in enumerate(layout[1]):
+            self.out_p[k] = base + offset
         failed = self.run(len(self.entries), self.parts, rows, *self.tail)
         if failed:
             raise RuntimeError(f"{self.function.name()} failed to evaluate at row {failed - 1}")
-        return tuple([out[rows * a:rows * b].reshape(rows, b - a) for a, b in self.spans])
+        return tuple([np.ndarray(shape, float, out, offset) for shape, offset in layout[1]])
 
     def _share(self, rows: int) -> None:
         """The shared values' buffers for `rows` rows (grown when short; their pointers set
