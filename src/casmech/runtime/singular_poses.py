@@ -11,8 +11,9 @@ determinant: the time, the smallest singular value of the unit rows there, and t
 rows make up the dependency (its singular vector), each with its file:line:col.
 
 The log-determinants: for a bundle loaded from the compiled-model cache, of up to COMPILED_ROWS
-rows, by one compiled function of (t, q) mapped over the rows (logdet_function: Phi_q of the
-bundle's IR inline, the Gram matrix and CasADi's sparse LDL factor), cached under the bundle's
+rows, by one compiled function of (t, q) over the rows in the rows' C loop (logdet_function:
+Phi_q of the bundle's IR inline, the Gram matrix and CasADi's sparse LDL factor; runtime.
+joint_rows.over_rows, CasADi's map where the loop cannot run it), cached under the bundle's
 library key and the rows, so built once per machine; otherwise, and at a row where the compiled
 value is not finite (a Gram matrix not numerically positive definite), in NumPy from Phi_q's
 dense rows (their Gram matrices, each scaled to a unit diagonal, by Cholesky factors).
