@@ -37,11 +37,18 @@ class RowsCall:
         offsets = np.cumsum([0, *self.sizes_out]).tolist()
         self.spans = list(zip(offsets[:-1], offsets[1:], strict=True))  # in one array a row
         self.total = offsets[-1]
+        # (rows, each output's shape and byte offset in the one array of a call of that many)
+        self.layout: tuple[int, list] = (-1, [])
         # the fixed inputs (a bound function's d) read at the same address by every row; the
         # caller gives the others
         fixed = entries[0].fixed
         self.given = [k for k in range(self.n_in) if k not in fixed]
         self.in_p = (ctypes.c_void_p * max(self.n_in, 1))()
+        # per input: the vector every row read last call where it was given as it is (an
+        # array of its own shape, float, contiguous: a start's signs, the loops' mask), held
+        # here so that its address stays its own; the same object given again is read at the
+        # address set then (its values read by the call, as any input's)
+        self.shared_inputs: list[np.ndarray | None] = [None] * max(self.n_in, 1)
         for k, values in fixed.items():
             self.in_p[k] = values.ctypes.data
         self.out_p = (ctypes.c_void_p * max(self.n_out, 1))()
@@ -63,31 +70,40 @@ class RowsCall:
             raise TypeError(f"{self.function.name()} takes {len(self.given)} inputs, "
                             f"{len(inputs)} given")
         kept = []  # the arrays the pointers point into, alive through the call
+        shared = self.shared_inputs
         for k, given in zip(self.given, inputs, strict=True):
             size = self.sizes_in[k]
             if given is None or not size:
-                self.in_p[k] = None
+                self.in_p[k] = shared[k] = None
+                continue
+            if given is shared[k] and given.shape == (size,):  # its address already set
+                self.in_stride[k] = 0
                 continue
             a = np.ascontiguousarray(given, float)
             if a.shape == (rows, size) or (size == 1 and a.shape == (rows,)):
                 self.in_stride[k] = size
+                kept.append(a)
             elif a.shape == (size,):
                 self.in_stride[k] = 0
+                kept.append(a)
             else:
                 raise ValueError(f"{self.function.name()}'s input {k} has shape {a.shape}, "
                                  f"not ({rows}, {size}) or ({size},)")
-            kept.append(a)
+            shared[k] = a if a is given and self.in_stride[k] == 0 else None
             self.in_p[k] = _address(a)
         if len(self.entries) > 1:
             self._share(rows)
+        layout = self.layout
+        if layout[0] != rows:
+            layout = self.layout = (rows, [((rows, b - a), 8 * rows * a) for a, b in self.spans])
         out = np.empty(rows * self.total)
         base = _address(out)
-        for k, (start, _) in enumerate(self.spans):
-            self.out_p[k] = base + 8 * rows * start
+        for k, (_, offset) in enumerate(layout[1]):
+            self.out_p[k] = base + offset
         failed = self.run(len(self.entries), self.parts, rows, *self.tail)
         if failed:
             raise RuntimeError(f"{self.function.name()} failed to evaluate at row {failed - 1}")
-        return tuple(out[rows * a:rows * b].reshape(rows, b - a) for a, b in self.spans)
+        return tuple([np.ndarray(shape, float, out, offset) for shape, offset in layout[1]])
 
     def _share(self, rows: int) -> None:
         """The shared values' buffers for `rows` rows (grown when short; their pointers set

@@ -12,7 +12,7 @@ from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.joint_rows import LoopRows, columns, over_rows, solved_motion
+from casmech.runtime.joint_rows import LoopRows, over_rows, rows_of, solved_motion
 from casmech.runtime.workspace import Workspace
 
 
@@ -72,13 +72,15 @@ class Recorder:
         else the integrator's `algebraic` states."""
         times = np.asarray(times, float)
         if self.loops is not None:
-            q, q_dot, q_ddot, lam = self.loops(times, np.asarray(states, float), self.signs)
+            q, q_dot, q_ddot, lam = self.loops.by_row(times, np.asarray(states, float),
+                                                      self.signs)
         else:
-            q, q_dot, q_ddot, lam = columns(self._mapped(), times, np.asarray(states, float),
-                                            np.asarray(algebraic, float), self.signs)
+            q, q_dot, q_ddot, lam = rows_of(self._mapped(), times, np.asarray(states, float).T,
+                                            np.asarray(algebraic, float).T, self.signs)
         if self.least_norm is not None:
-            (lam,) = self.least_norm(times[None, :], q, lam)
-        return q.T, q_dot.T, q_ddot.T, lam.T
+            (lam,) = self.least_norm(times[None, :], q.T, lam.T)
+            lam = lam.T
+        return q, q_dot, q_ddot, lam
 
 
 def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRows:

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
-from contextlib import nullcontext
 
 import casadi as ca
 import numpy as np
@@ -44,7 +43,7 @@ def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
 
 
 def over_rows(function: ca.Function):
-    """`function` over many states, for columns(): in one C loop over the rows where a library
+    """`function` over many states, for rows_of(): in one C loop over the rows where a library
     casmech loaded holds it (backends.rows_loop.RowsCall; backends is imported only once a
     library was loaded, as its functions are recorded then), else by casadi's map over
     columns (ColumnCall)."""
@@ -57,13 +56,14 @@ def over_rows(function: ca.Function):
     return ColumnCall(function)
 
 
-def columns(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, ...]:
-    """An over_rows call at each of `times`: each input one column per time (n x len(times))
-    or a vector every evaluation shares; each output one column per time."""
+def rows_of(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, ...]:
+    """An over_rows call at each of `times`: each input one row per time (len(times) x n) or
+    a vector every evaluation shares; each output one row per time (the rows' C loop's own
+    layout; casadi's map's columns transposed)."""
     if type(call) is ColumnCall:
-        return call(times[None, :], *(a if a.ndim == 2 else a[:, None] for a in inputs))
-    return tuple(out.T for out in call(len(times), times,
-                                       *(a.T if a.ndim == 2 else a for a in inputs)))
+        return tuple(out.T for out in call(times[None, :], *(
+            a.T if a.ndim == 2 else a[:, None] for a in inputs)))
+    return call(len(times), times, *inputs)
 
 
 class LoopRows:
@@ -79,24 +79,32 @@ class LoopRows:
         # CasADi's map prints a failed evaluation's inputs before raising (held back); the
         # rows' C loop prints nothing, its failure is its own RuntimeError
         self._quiet = solver_messages.without_input_dumps if type(self.call) is ColumnCall \
-            else nullcontext
+            else None
         self.mask = np.asarray(mask, float)
         self._saddle: tuple[ca.Function, ca.Function] | None = None
 
     def __call__(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
+        return tuple(row.T for row in self.by_row(times, states, signs))
+
+    def by_row(self, times: np.ndarray, states: np.ndarray, signs: np.ndarray):
+        """The same rows, one row per time (len(times) x n each): the rows' C loop's own
+        layout."""
         try:
-            with self._quiet():
-                rows = columns(self.call, times, states, self.mask, signs)
+            if self._quiet is None:
+                rows = rows_of(self.call, times, states.T, self.mask, signs)
+            else:
+                with self._quiet():
+                    rows = rows_of(self.call, times, states.T, self.mask, signs)
         except RuntimeError as error:  # an evaluation that failed: every column alone
             cancel.check(error)
-            rows = tuple(np.full((self.motion.size1_out(k), len(times)), np.nan)
+            rows = tuple(np.full((len(times), self.motion.size1_out(k)), np.nan)
                          for k in range(4))
         if all_finite(rows[2], rows[3]):  # every column solved (else column by column below)
             return rows
-        solved = np.all(np.isfinite(rows[2]), axis=0) & np.all(np.isfinite(rows[3]), axis=0)
+        solved = np.all(np.isfinite(rows[2]), axis=1) & np.all(np.isfinite(rows[3]), axis=1)
         for j in np.flatnonzero(~solved & np.all(np.isfinite(states), axis=0)):
             for row, value in zip(rows, self.column(times[j], states[:, j], signs), strict=True):
-                row[:, j] = value
+                row[j, :] = value
         return rows
 
     def column(self, t: float, x: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:

@@ -11,8 +11,9 @@ determinant: the time, the smallest singular value of the unit rows there, and t
 rows make up the dependency (its singular vector), each with its file:line:col.
 
 The log-determinants: for a bundle loaded from the compiled-model cache, of up to COMPILED_ROWS
-rows, by one compiled function of (t, q) mapped over the rows (logdet_function: Phi_q of the
-bundle's IR inline, the Gram matrix and CasADi's sparse LDL factor), cached under the bundle's
+rows, by one compiled function of (t, q) over the rows in the rows' C loop (logdet_function:
+Phi_q of the bundle's IR inline, the Gram matrix and CasADi's sparse LDL factor; runtime.
+joint_rows.over_rows, CasADi's map where the loop cannot run it), cached under the bundle's
 library key and the rows, so built once per machine; otherwise, and at a row where the compiled
 value is not finite (a Gram matrix not numerically positive definite), in NumPy from Phi_q's
 dense rows (their Gram matrices, each scaled to a unit diagonal, by Cholesky factors).
@@ -36,6 +37,7 @@ from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime.buffers import ColumnCall
+from casmech.runtime.joint_rows import over_rows, rows_of
 from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
@@ -72,7 +74,9 @@ def logdet_function(phi_q: ca.Function, rows) -> ca.Function:
     phi_q (an SX Function) each scaled to unit length: the Gram matrix G (each product once)
     factored by CasADi's sparse LDL (G[p, p] = (I + L) D (I + L)^T, p its fill-reducing
     order), and log prod_k D_k / G[p_k, p_k] (each factor in (0, 1] where G is positive
-    definite); not finite where G is not numerically positive definite."""
+    definite); not finite where G is not numerically positive definite. Its inputs are named
+    as phi_q's but q, which is `x`: the input a compiled function's C entry point takes its
+    rows' states by (backends.rk_library.Entry), so that the rows' C loop runs it."""
     inputs = phi_q.sx_in()
     jacobian = phi_q(*inputs)[list(rows), :]
     gram = ca.mtimes(jacobian, jacobian.T)
@@ -81,30 +85,32 @@ def logdet_function(phi_q: ca.Function, rows) -> ca.Function:
     ratio = ca.SX(1)
     for k, j in enumerate(order):
         ratio = ratio * (pivots[k] / gram[j, j])
-    return ca.Function("unit_gram_logdet", inputs, [ca.log(ratio)], phi_q.name_in(),
-                       ["logdet"])
+    names = ["x" if name == "q" else name for name in phi_q.name_in()]
+    return ca.Function("unit_gram_logdet", inputs, [ca.log(ratio)], names, ["logdet"])
 
 
 class _Compiled:
-    """logdet_function compiled, mapped over output rows (with a parametric library's model
-    data as its last input)."""
+    """logdet_function compiled, over output rows (with a parametric library's model data as
+    its last input) in the rows' C loop (runtime.joint_rows.over_rows), or casadi's map."""
 
     def __init__(self, function: ca.Function, data: np.ndarray | None):
-        self.call, self.data = ColumnCall(function), data
+        self.call = over_rows(function)
+        self.data = () if data is None else (np.asarray(data, float),)
 
     def __call__(self, times: np.ndarray, q: np.ndarray) -> np.ndarray:
-        data = () if self.data is None else (self.data[:, None],)
-        return self.call(times[None, :], q.T, *data)[0].ravel()
+        return rows_of(self.call, times, q, *self.data)[0].ravel()
 
 
 def _compiled(functions: SystemFunctions, rows: list[int],
-              workspace: Workspace | None) -> _Compiled | None:
+              workspace: Workspace | None, entries: dict | None = None) -> _Compiled | None:
     """logdet_function compiled for a bundle loaded from the compiled-model cache
     (backends.library.compile_keyed, under the bundle's library key, or a parametric
     library's, and the rows; Phi_q of the bundle's IR, or of the parametric library's
     symbolic IR), for up to COMPILED_ROWS rows examined; None otherwise, without a C compiler,
-    or when the build failed (with a warning)."""
-    entries = _entries(functions, workspace)
+    or when the build failed (with a warning). `entries`: the check's (_entries), when the
+    caller has them."""
+    if entries is None:
+        entries = _entries(functions, workspace)
     key = tuple(rows)
     if entries.get("compiled", (None,))[0] != key:
         entries["compiled"] = key, None
@@ -139,7 +145,10 @@ def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
     if not build.available(toolchain):
         return None
     try:
-        compiled = compile_keyed({"kind": "unit gram logdet", **bundle, "rows": rows}, lambda: (
+        # "x": the function's q input is named x (logdet_function); libraries built when it
+        # was named q (which the rows' C loop cannot run) are not this key's
+        compiled = compile_keyed({"kind": "unit gram logdet", **bundle, "rows": rows,
+                                  "state": "x"}, lambda: (
             {"unit_gram_logdet": logdet_function(phi_q(), rows)}, {}, toolchain),
             toolchain=toolchain)
     except (AnalysisError, UsageError) as error:
@@ -150,13 +159,14 @@ def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
 
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
-                     workspace: Workspace | None = None) -> np.ndarray:
+                     workspace: Workspace | None = None, entries: dict | None = None
+                     ) -> np.ndarray:
     """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): by
     the compiled function where there is one (_compiled) and its value is finite, else from
     the rows' Gram matrix scaled by its diagonal, by a Cholesky factor (slogdet where one is
     not numerically positive definite)."""
     times, q = np.asarray(times, float), np.asarray(q, float)
-    compiled = _compiled(functions, list(map(int, rows)), workspace)
+    compiled = _compiled(functions, list(map(int, rows)), workspace, entries)
     if compiled is None:
         return _dense_logdet(functions, times, q, rows, workspace)
     logdet = compiled(times, q)
@@ -187,10 +197,11 @@ def _dense_logdet(functions: SystemFunctions, times: np.ndarray, q: np.ndarray, 
 
 
 def examinable(functions: SystemFunctions, rows: int,
-               workspace: Workspace | None = None) -> bool:
+               workspace: Workspace | None = None, entries: dict | None = None) -> bool:
     """Whether a run of `rows` output rows is examined (MAX_ENTRIES); Phi_q's shape read once
-    per workspace (the check's entries)."""
-    entries = _entries(functions, workspace)
+    per workspace (the check's `entries`: _entries)."""
+    if entries is None:
+        entries = _entries(functions, workspace)
     shape = entries.get("shape")
     if shape is None:
         shape = entries["shape"] = functions["phi_q"].size_out(0)
@@ -204,11 +215,12 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
     if not loops:
         return None
     times, q = result.t, result.q
-    if len(times) < 2 or not examinable(functions, len(times), workspace):
+    entries = _entries(functions, workspace)
+    if len(times) < 2 or not examinable(functions, len(times), workspace, entries):
         return None
     limits = settings.assembly.linear_algebra
     rows = _independent(functions, result, float(times[0]), q[0], limits)
-    drop = unit_gram_logdet(functions, times, q, rows, workspace)
+    drop = unit_gram_logdet(functions, times, q, rows, workspace, entries)
     near = drop - drop[0] < np.log(settings.singular_pose_ratio)
     return [_pose(functions, float(times[k]), q[k], rows) for k in _deepest(near, drop)]
 

@@ -48,3 +48,30 @@ def test_the_loops_solved_rows_in_c(quick_builds, monkeypatch):
     rows = list(workspace.default(again).store("joint_loop_rows").values())
     assert [type(found.call).__name__ for found in rows] == ["ColumnCall"]
     np.testing.assert_array_equal(table, mapped)
+
+
+def test_the_singular_pose_check_in_c_finds_the_flat_poses(quick_builds, monkeypatch):
+    """A compiled loop's singular-pose check (runtime.singular_poses) runs its compiled
+    log-determinants in the rows' C loop: IFToMM A02 passes a flat pose in its first second;
+    the check finds it, and the log-determinants are casadi's map's of the same function."""
+    from casmech.runtime import singular_poses
+    from casmech.runtime.buffers import ColumnCall
+    from tests.helpers.reference_data import VALIDATION_MODELS
+
+    model = casmech.load(VALIDATION_MODELS / "iftomm_a02_four_bar_N2.yaml")
+    functions = casmech.compile(model, "compiled")
+    result = casmech.analyze(functions, "dynamics", t_end=1.0, rtol=1e-7, atol=1e-9)
+    _, compiled = singular_poses._entries(functions, None)["compiled"]
+    assert type(compiled.call) is RowsCall
+    poses = result.metadata["singular_poses"]
+    assert len(poses) == 1 and 0.6 < poses[0]["t"] < 0.8  # the first flat pose, at ~0.71 s
+    mapped = ColumnCall(compiled.call.function)(  # with a parametric library's data
+        result.t[None, :], result.q.T, *(d[:, None] for d in compiled.data))[0].ravel()
+    # the same compiled code on the same rows
+    np.testing.assert_array_equal(compiled(result.t, result.q), mapped)
+    # without the C loop: casadi's map, the same poses
+    monkeypatch.setattr(rows_loop, "rows_call", lambda function: None)
+    again = casmech.compile(model, "compiled")
+    found = casmech.analyze(again, "dynamics", t_end=1.0, rtol=1e-7, atol=1e-9)
+    assert type(singular_poses._entries(again, None)["compiled"][1].call) is ColumnCall
+    assert found.metadata["singular_poses"] == poses

@@ -118,3 +118,32 @@ def test_a_chain_of_parts_over_rows(externals, tmp_path):
             np.testing.assert_array_equal(g, w.T)
     # the same parts joined again but not recorded: an MX function without an entry point
     assert rows_loop.rows_call(joined(chain, "rows")) is None
+
+
+def test_a_vector_given_again_is_read_again(externals):
+    """A vector every row reads, given again as the same object (its address kept): its
+    values as they are at each call, and whatever was given in its place in between."""
+    function = externals["rows"]
+    call = rows_loop.rows_call(function)
+    rng = np.random.default_rng(5)
+    times, states = rng.normal(size=4), rng.normal(size=(4, 3))
+    signs = np.array([1.0, -1.0])
+
+    def want(s):
+        return call(4, times, states, None, np.array(s))  # a fresh array: no kept address
+
+    first = call(4, times, states, None, signs)
+    for g, w in zip(first, want([1.0, -1.0]), strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
+    signs[:] = [2.0, 3.0]  # the same object, new values
+    for g, w in zip(call(4, times, states, None, signs), want([2.0, 3.0]), strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
+    # another input in its place (rows of their own, none), then the vector again
+    per_row = np.tile([5.0, 7.0], (4, 1))
+    for g, w in zip(call(4, times, states, None, per_row), want([5.0, 7.0]), strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
+    call(4, times, states, None, None)
+    for g, w in zip(call(4, times, states, None, signs), want([2.0, 3.0]), strict=True):
+        np.testing.assert_array_equal(g, w)  # the same compiled code on the same numbers
+    with pytest.raises(ValueError, match="input 3"):
+        call(4, times, states, None, np.ones(3))
