@@ -55,4 +55,3 @@ def mapped_bundle(ir: ModelIR) -> SystemFunctions:
     names = tuple(b.name for b in ir.bodies)
     terms = {name: system.function(shared, name) for name in (*system.RESULTS, "phi")}
     return SystemFunctions(terms, names, (), tuple(ir.row_info()), ir)
-

@@ -25,7 +25,7 @@ def _names(root) -> list[set[str]]:
     return [{e["name"] for e in manifest.read(path)["functions"]} for path in cache.entries(root)]
 
 
-def test_the_compiled_row_is_the_built_row(mapped, monkeypatch):
+def test_the_compiled_row_is_the_built_row(mapped):
     functions, root = mapped
     compiled = results_row.compiled(functions)
     assert compiled is not None and compiled.class_name() == "External"
@@ -37,8 +37,9 @@ def test_the_compiled_row_is_the_built_row(mapped, monkeypatch):
         args = [rng.uniform(-1, 1, built.sparsity_in(k).shape) for k in range(built.n_in())]
         # the same operations: the terms' C as their library's, the readings' as CasADi's
         # virtual machine evaluates them (no contraction under -std=c99): bit for bit
-        np.testing.assert_allclose(np.array(compiled(*args)), np.array(built(*args)),
-                                   rtol=0, atol=0)
+        got, want = np.array(compiled(*args)), np.array(built(*args))
+        np.testing.assert_allclose(got, want, rtol=0, atol=0)
+        np.testing.assert_array_equal(np.signbit(got), np.signbit(want))  # zeros' signs too
 
 
 def test_a_run_maps_the_compiled_row_built_once(mapped, model, toolchain, monkeypatch):
@@ -58,8 +59,9 @@ def test_a_run_maps_the_compiled_row_built_once(mapped, model, toolchain, monkey
     other = codegen.compiled(model, toolchain, root=root, parametric_library=False)
     want_names, want = results.table(other, result)  # row_function over the bundle
     assert names == want_names
-    # the same operations (test above): bit for bit
+    # the same operations (test above): bit for bit, the zeros' signs too (results.csv's text)
     np.testing.assert_allclose(values, want, rtol=0, atol=0)
+    np.testing.assert_array_equal(np.signbit(values), np.signbit(want))
 
 
 def test_no_compiled_row_for_an_interpreted_or_parametric_bundle(model, interpreted, compiled):
