@@ -9,15 +9,16 @@ Each run is a fresh interpreter (PYTHONPATH=<src>) that starts casmech's command
 console script does (its garbage collector set as the tree's main() sets it before the stages'
 modules are imported), with thin wrappers around its stages reading the process's CPU clock
 (time.process_time): the imports, loading the YAML (api.load_model), the joint system's build
-(formulations.joint_system.build), assembly (runtime.assembly.initial_state), the results
-row's function (runtime.results.row_function) and the results table with its evaluation
-(results.table, which includes row_function), the results files' writing (streaming
-flush, which includes the table), and CVODES/IDAS (runtime.joint_dynamics._Integrator.__call__),
-whose counters (steps, right-hand sides, Jacobians, linear setups) are read from the kept
-integrator. A profiler's cost per Python call inflates the Python-heavy stages several times
-over; these wrappers cost a few function calls per stage. The parent times each child as a
-whole (wall, and user + sys from getrusage) and prints medians (ranges) over --repeats runs,
-round-robin over the source trees so that a change in the machine's load hits them alike.
+(formulations.joint_system.build), assembly (runtime.assembly.initial_state), the results row's
+function (runtime.results.row_function; row_call: a compiled bundle's loaded, else that one)
+and the results table with its evaluation (results.table, which includes row_call), the results
+files' writing (streaming flush, which includes the table), and CVODES/IDAS
+(runtime.joint_dynamics._Integrator.__call__), whose counters (steps, right-hand sides,
+Jacobians, linear setups) are read from the kept integrator. A profiler's cost per Python call
+inflates the Python-heavy stages several times over; these wrappers cost a few function calls
+per stage. The parent times each child as a whole (wall, and user + sys from getrusage) and
+prints medians (ranges) over --repeats runs, round-robin over the source trees so that a change
+in the machine's load hits them alike.
 
 `--chain N` writes benchmarks/systems.py's N-link chain through casmech_model.py with its
 `t_end` set to --t-end (the generated 10 s span is the benchmark's), into a temporary folder;
@@ -56,6 +57,7 @@ STAGES = (
     ("assembly", "casmech.runtime.assembly", "initial_state"),
     ("integrator", "casmech.runtime.joint_dynamics", "_Integrator.__call__"),
     ("results row function", "casmech.runtime.results", "row_function"),
+    ("results row (loaded or built; incl. row function)", "casmech.runtime.results", "row_call"),
     ("results table (incl. row function)", "casmech.runtime.results", "table"),
     ("results writing (incl. table)", "casmech.io.streaming", "ResultsWriter.flush"),
 )

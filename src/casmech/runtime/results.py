@@ -9,9 +9,8 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
-from casmech.equations import contact, readings
-from casmech.equations.evaluation import is_inline
-from casmech.equations.functions import SystemFunctions, results_terms
+from casmech.equations import contact, readings, results_row
+from casmech.equations.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.nonfinite import NonFinite, check_states
@@ -228,38 +227,29 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
 
 
 def row_function(functions: SystemFunctions) -> ca.Function:
-    """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it: one
-    casadi.Function over the bundle's terms (equations.functions.results_terms): inlined when
-    all are SX and the model has at most WHERE_INLINE["results"] bodies, else called."""
-    bundle = results_terms(functions)
-    inline = all(f.is_a("SXFunction") for f in bundle.values()) and \
-        is_inline("results", functions.n_bodies)
-    sym = ca.SX if inline else ca.MX
-    n, m = functions.n_coordinates, functions.n_rows
-    t, q, q_dot, q_ddot, lam = (sym.sym("t"), sym.sym("q", n), sym.sym("q_dot", n),
-                                sym.sym("q_ddot", n), sym.sym("lam", m))
-    nb = functions.n_bodies
-    omega, alpha = bundle["body_rates"](q, q_dot, q_ddot)
-    force, torque = bundle["reactions"](t, q, q_dot, lam)
-    kinetic, potential = bundle["energy"](t, q, q_dot)
-    phi = bundle["phi"](t, q)
-    violation = ca.mmax(ca.fabs(phi)) if phi.numel() else sym(1, 1)
-    # each body's columns (BODY_COLUMNS) as one column of a matrix, then each joint's
-    per_body = ca.vertcat(ca.reshape(q[:3 * nb], 3, nb), ca.reshape(q[3 * nb:], 4, nb),
-                          ca.reshape(q_dot[:3 * nb], 3, nb), omega,
-                          ca.reshape(q_ddot[:3 * nb], 3, nb), alpha)
-    parts = [t, ca.vec(per_body), ca.vec(ca.vertcat(force, torque))]
-    parts += [kinetic + potential, violation, bundle["element_outputs"](t, q, q_dot),
-              readings_function(functions)(t, q, q_dot, q_ddot, force, torque)]
-    return ca.Function("results_row", [t, q, q_dot, q_ddot, lam],
-                       [ca.densify(ca.vertcat(*parts))])
+    """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it:
+    equations.results_row.row_function over the bundle's terms and its readings_function."""
+    return results_row.row_function(functions, readings_function(functions))
+
+
+def row_call(functions: SystemFunctions) -> ca.Function:
+    """The results row `table` maps over the rows: a compiled bundle's compiled with it
+    (backends.results_row: the same graph over the same functions, loaded from the cache),
+    else row_function."""
+    if functions.library_key is not None:
+        from casmech.backends import results_row as compiled_row
+
+        compiled = compiled_row.compiled(functions)
+        if compiled is not None:
+            return compiled
+    return row_function(functions)
 
 
 def table(functions: SystemFunctions, result: Result,
           reaction_frames: str | Mapping[str, str] | None = None,
           workspace: Workspace | None = None) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_function (built once per workspace, by default the bundle's)
-    mapped over the rows in blocks,
+    """Every row at once: row_call (made once per workspace, by default the bundle's) mapped
+    over the rows in blocks,
     writing into NumPy memory (runtime.buffers.ColumnCall); then each joint's reaction columns
     in its frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for
     every joint (a frame name) or the joints it names (a mapping)."""
@@ -269,7 +259,7 @@ def table(functions: SystemFunctions, result: Result,
     if rows == 0:
         return names, np.zeros((0, len(names)))
     rows_of = of(functions, workspace).one("results_row",
-                                           lambda: ColumnCall(row_function(functions)))
+                                           lambda: ColumnCall(row_call(functions)))
     (values,) = rows_of(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
                         result.q_ddot.T, result.lam.T)
     values = values.T
