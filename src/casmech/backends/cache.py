@@ -45,11 +45,14 @@ from casmech.schema.resolved import ResolvedModel
 from casmech.schema.tables import TableExpr
 
 PACKAGE = Path(__file__).resolve().parents[1]
-# what the generated code depends on: these packages (with their subpackages) and modules (the
-# joint system's library: which functions runtime.joint_dynamics.keyed_system compiles or keeps)
+# what the generated code depends on: these packages (with their subpackages) and the runtime
+# modules that build graphs compiled under a key of their own (backends.library.compile_keyed:
+# the joint system's library, which functions runtime.joint_dynamics.keyed_system compiles or
+# keeps; the loops' projected ODE; the singular-pose check's log-determinants)
 SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations", "formulations",
                    "backends")
-SOURCE_MODULES = ("runtime/joint_dynamics.py",)
+SOURCE_MODULES = ("runtime/joint_dynamics.py", "runtime/projected_loops.py",
+                  "runtime/singular_poses.py")
 
 
 def _sources() -> list[tuple[str, str]]:
