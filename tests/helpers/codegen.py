@@ -42,6 +42,21 @@ def counted_builds(monkeypatch, module) -> list:
     return calls
 
 
+@pytest.fixture
+def builds(monkeypatch) -> list:
+    """Every cache entry built from here on (a library of a model, of the joint functions, of
+    a joint space's function, ...): the keys cache.lookup's build callable ran for."""
+    from casmech.backends import cache
+
+    calls, lookup = [], cache.lookup
+
+    def counting(entry, build, root=None):
+        return lookup(entry, lambda directory: calls.append(entry) or build(directory), root)
+
+    monkeypatch.setattr(cache, "lookup", counting)
+    return calls
+
+
 @pytest.fixture(scope="session")
 def cache_root(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("casmech_cache")

@@ -4,6 +4,7 @@
 from tests.helpers.background import building  # noqa: F401
 from tests.helpers.codegen import (  # noqa: F401
     build_dir,
+    builds,
     cache_root,
     compiled,
     interpreted,

@@ -6,27 +6,13 @@ serves every parameter value (`set` builds nothing) and follows the model's tabl
 import shutil
 
 import numpy as np
-import pytest
 
 import casmech
-from casmech.backends import cache
 from tests.conftest import MODELS
 
 FUNCTIONS = ("mass_matrix", "bias_forces", "forward_dynamics", "inverse_dynamics",
              "forward_dynamics_derivatives", "inverse_dynamics_derivatives",
              "forward_kinematics")
-
-
-@pytest.fixture
-def builds(monkeypatch) -> list:
-    """The cache entries built from here on (a library of the model, of a space's function)."""
-    calls, lookup = [], cache.lookup
-
-    def counting(entry, build, root=None):
-        return lookup(entry, lambda directory: calls.append(entry) or build(directory), root)
-
-    monkeypatch.setattr(cache, "lookup", counting)
-    return calls
 
 
 def _outputs(space, q, v, tau) -> list[np.ndarray]:
