@@ -6,10 +6,10 @@ Each compiled function takes last the input "d" (the model data with the tree's 
 computed from it: formulations.joint_constants), its outputs dense (runtime.joint_space_calls'
 buffers read plain arrays), in a library of its own beside joint_data, which computes that
 input from the model data (once per set of values: kept as CasADi's serialization, not
-compiled). A library's cache key
-(backends.library.compile_keyed) is the function's name, the structure's signature and the
-model's tables (a table's data is not in the signature): a model after `set` loads the same
-libraries, and a cache hit builds no symbolic graph (the values come from parametric.data).
+compiled). A library's cache key (backends.library.compile_keyed) is the function's name, the
+structure's signature and the model's tables (a table's data is not in the signature): a model
+after `set` loads the same libraries, and a cache hit builds no symbolic graph (the values come
+from parametric.data).
 """
 
 from __future__ import annotations

@@ -66,7 +66,7 @@ def functions(ir: ModelIR, tree: Tree, joint_local: bool = True,
     tree joint as generalized forces on its coordinates (formulations/joint_forces.py; not
     `joint_local`: as body wrenches). Over model.parametric.split's IR, with `constants` over
     its symbols, each function takes last the input "d" of the tree's constants
-    (joint_constants.Constants.inputs; `parametric`)."""
+    (joint_constants.Constants.inputs: the compiled space, backends.joint_space_library)."""
     lay = layout(tree)
     nq, nv = lay.n_theta, lay.n_x - lay.n_theta
     t, q, v = ca.SX.sym("t"), ca.SX.sym("q", nq), ca.SX.sym("v", nv)
