@@ -138,16 +138,18 @@ def running(functions: SystemFunctions, given: workspace.Workspace | None = None
 
 # analyze's parameters after `functions`, in order (as `analyze` reads them from args)
 _PARAMETERS = tuple(inspect.signature(analyses.analyze).parameters)[1:]
-_CONTROLLER, _WORKSPACE = _PARAMETERS.index("controller"), _PARAMETERS.index("workspace")
+
+
+def _argument(name: str, args: tuple, kwargs: dict):
+    at = _PARAMETERS.index(name)
+    return args[at] if len(args) > at else kwargs.get(name)
 
 
 @wraps(analyses.analyze)
 def analyze(functions: SystemFunctions, *args, **kwargs) -> Result:
     # a controller's run builds an interpreted bundle of its own from the functions: it stays
-    n = len(args)
-    if (args[_CONTROLLER] if n > _CONTROLLER else kwargs.get("controller")) is None:
-        functions = running(functions, args[_WORKSPACE] if n > _WORKSPACE
-                            else kwargs.get("workspace"))
+    if _argument("controller", args, kwargs) is None:
+        functions = running(functions, _argument("workspace", args, kwargs))
     return analyses.analyze(functions, *args, **kwargs)
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from contextlib import nullcontext
 
 import casadi as ca
 import numpy as np
@@ -79,7 +80,7 @@ class LoopRows:
         # CasADi's map prints a failed evaluation's inputs before raising (held back); the
         # rows' C loop prints nothing, its failure is its own RuntimeError
         self._quiet = solver_messages.without_input_dumps if type(self.call) is ColumnCall \
-            else None
+            else nullcontext
         self.mask = np.asarray(mask, float)
         self._saddle: tuple[ca.Function, ca.Function] | None = None
 
@@ -90,11 +91,8 @@ class LoopRows:
         """The same rows, one row per time (len(times) x n each): the rows' C loop's own
         layout."""
         try:
-            if self._quiet is None:
+            with self._quiet():
                 rows = rows_of(self.call, times, states.T, self.mask, signs)
-            else:
-                with self._quiet():
-                    rows = rows_of(self.call, times, states.T, self.mask, signs)
         except RuntimeError as error:  # an evaluation that failed: every column alone
             cancel.check(error)
             rows = tuple(np.full((len(times), self.motion.size1_out(k)), np.nan)

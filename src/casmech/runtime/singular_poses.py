@@ -102,15 +102,13 @@ class _Compiled:
 
 
 def _compiled(functions: SystemFunctions, rows: list[int],
-              workspace: Workspace | None, entries: dict | None = None) -> _Compiled | None:
+              workspace: Workspace | None) -> _Compiled | None:
     """logdet_function compiled for a bundle loaded from the compiled-model cache
     (backends.library.compile_keyed, under the bundle's library key, or a parametric
     library's, and the rows; Phi_q of the bundle's IR, or of the parametric library's
     symbolic IR), for up to COMPILED_ROWS rows examined; None otherwise, without a C compiler,
-    or when the build failed (with a warning). `entries`: the check's (_entries), when the
-    caller has them."""
-    if entries is None:
-        entries = _entries(functions, workspace)
+    or when the build failed (with a warning)."""
+    entries = _entries(functions, workspace)
     key = tuple(rows)
     if entries.get("compiled", (None,))[0] != key:
         entries["compiled"] = key, None
@@ -159,14 +157,13 @@ def _build(functions: SystemFunctions, rows: list[int]) -> _Compiled | None:
 
 
 def unit_gram_logdet(functions: SystemFunctions, times, q, rows,
-                     workspace: Workspace | None = None, entries: dict | None = None
-                     ) -> np.ndarray:
+                     workspace: Workspace | None = None) -> np.ndarray:
     """log det(J J^T) of the rows `rows` of Phi_q scaled to unit length, at each (t, q): by
     the compiled function where there is one (_compiled) and its value is finite, else from
     the rows' Gram matrix scaled by its diagonal, by a Cholesky factor (slogdet where one is
     not numerically positive definite)."""
     times, q = np.asarray(times, float), np.asarray(q, float)
-    compiled = _compiled(functions, list(map(int, rows)), workspace, entries)
+    compiled = _compiled(functions, list(map(int, rows)), workspace)
     if compiled is None:
         return _dense_logdet(functions, times, q, rows, workspace)
     logdet = compiled(times, q)
@@ -197,11 +194,10 @@ def _dense_logdet(functions: SystemFunctions, times: np.ndarray, q: np.ndarray, 
 
 
 def examinable(functions: SystemFunctions, rows: int,
-               workspace: Workspace | None = None, entries: dict | None = None) -> bool:
+               workspace: Workspace | None = None) -> bool:
     """Whether a run of `rows` output rows is examined (MAX_ENTRIES); Phi_q's shape read once
-    per workspace (the check's `entries`: _entries)."""
-    if entries is None:
-        entries = _entries(functions, workspace)
+    per workspace (the check's entries)."""
+    entries = _entries(functions, workspace)
     shape = entries.get("shape")
     if shape is None:
         shape = entries["shape"] = functions["phi_q"].size_out(0)
@@ -215,12 +211,11 @@ def singular_poses(functions: SystemFunctions, result: Result, loops: bool,
     if not loops:
         return None
     times, q = result.t, result.q
-    entries = _entries(functions, workspace)
-    if len(times) < 2 or not examinable(functions, len(times), workspace, entries):
+    if len(times) < 2 or not examinable(functions, len(times), workspace):
         return None
     limits = settings.assembly.linear_algebra
     rows = _independent(functions, result, float(times[0]), q[0], limits)
-    drop = unit_gram_logdet(functions, times, q, rows, workspace, entries)
+    drop = unit_gram_logdet(functions, times, q, rows, workspace)
     near = drop - drop[0] < np.log(settings.singular_pose_ratio)
     return [_pose(functions, float(times[k]), q[k], rows) for k in _deepest(near, drop)]
 
