@@ -21,6 +21,7 @@ from casmech.core.options import FORMULATIONS, METHODS, OPTIONS, STABILIZATIONS
 from casmech.equations.checks import Structure, structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, Interrupted, ModelError, UsageError
+from casmech.formulations.registry import FORMULATIONS as REGISTERED
 from casmech.runtime import (
     assembly,
     auto_formulation,
@@ -52,15 +53,20 @@ DYNAMICS_OPTIONS = {"formulation": FORMULATIONS, "stabilization": STABILIZATIONS
 
 
 def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
-              extra_events=()) -> Result:
+              extra_events=(), plan: _Plan | None = None) -> Result:
     """A model with joint friction or exact contact friction: segments in its modes
     (runtime.friction); else one run. The load parts of driven coordinates' frictions are
     added to the rows, and to a failed run's (runtime.driven_friction). Which of these a
-    model has is found once per workspace."""
+    model has is found once per workspace; a `plan`'s one run is kept in it."""
+    if plan is not None and plan.dynamics is not None:
+        return plan.dynamics.run(f, progress)
     switched, loaded = workspace.one("frictions", lambda: (
         friction.switched(f.ir), bool(driven_friction.elements(f.ir))))
     if not (switched or loaded):
-        return _run_dynamics(f, s, progress, workspace, extra_events)
+        one = _Segment(f, s, workspace, extra_events)
+        if plan is not None:
+            plan.dynamics = one
+        return one.run(f, progress)
     try:
         if switched:
             def segment(functions, span, events):
@@ -77,22 +83,44 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
 
 def _run_dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace | None,
                   extra_events=(), span=None) -> Result:
-    """By the formulation asked for, taken from the registry (formulations.registry; its run:
-    runtime.formulation_run); auto: runtime.auto_formulation, which also examines a mechanism
-    with loops for singular poses. `span`: (t0, t_end, output step), by default the
-    analysis's from 0."""
-    options = s.options
-    t0, t_end, step = span or (0.0, s.t_end, s.output_step)
-    asked = formulation_run.Run(t0, t_end, step, s.rtol, s.atol, options, progress,
-                                tuple(extra_events), workspace)
+    """One segment's run (_Segment)."""
+    return _Segment(f, s, workspace, extra_events, span).run(f, progress)
 
-    def run(name: str) -> Result:
-        return formulation_run.run(f, name, asked)
 
-    rows = output_count(t0, t_end, step)
-    return auto_formulation.run(f, tree_of(f, workspace), options.formulation, rows,
-                                lambda: run("joint"), run, options.solver, workspace,
-                                options.method)
+class _Segment:
+    """A dynamics run of one segment: by the formulation asked for, taken from the registry
+    (formulations.registry; its run: runtime.formulation_run); auto: runtime.auto_formulation,
+    which also examines a mechanism with loops for singular poses. `span`: (t0, t_end, output
+    step), by default the analysis's from 0. Its run of joint coordinates is prepared by its
+    first run (formulation_run.prepared_joint) and kept for the next (a _Plan's), while the
+    built-in formulation is registered as "joint"; the bundle is not held."""
+
+    def __init__(self, f: SystemFunctions, s: Analysis, workspace: Workspace | None,
+                 extra_events=(), span=None):
+        t0, t_end, step = span or (0.0, s.t_end, s.output_step)
+        self.asked = formulation_run.Run(t0, t_end, step, s.rtol, s.atol, s.options, None,
+                                         tuple(extra_events), workspace)
+        self.tree, self.rows = tree_of(f, workspace), output_count(t0, t_end, step)
+        self.joint = self.formulation = None
+
+    def run(self, f: SystemFunctions, progress) -> Result:
+        asked = self.asked
+        options = asked.options
+
+        def other(name: str) -> Result:
+            return formulation_run.run(f, name, replace(asked, progress=progress))
+
+        def joint() -> Result:
+            prepared, registered = self.joint, REGISTERED.get("joint")
+            if prepared is None or self.formulation is not registered:
+                prepared = formulation_run.prepared_joint(f, asked)
+                if prepared is None:
+                    return other("joint")
+                self.joint, self.formulation = prepared, registered
+            return prepared.run(f, progress, asked.extra_events)
+
+        return auto_formulation.run(f, self.tree, options.formulation, self.rows, joint,
+                                    other, options.solver, asked.workspace, options.method)
 
 
 def _runtime(name: str):
@@ -156,13 +184,17 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             analysis=analysis, t_end=t_end, output_step=output_step, rtol=rtol, atol=atol,
             formulation=formulation, progress=progress, stabilization=stabilization,
             method=method, events=events, options=options, workspace=workspace, token=token))
-    settings = analysis_settings(functions, analysis, t_end, output_step, rtol, atol,
-                                 formulation, stabilization, method, options)
+    given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
+             options)
+    workspace = of(functions, workspace)
+    plan = None if events else _plan(functions, given, workspace)
+    settings = analysis_settings(functions, *given) if plan is None else plan.settings
     if events and settings.type != "dynamics":
         raise UsageError(f"events are watched by dynamics, not by {settings.type}")
     run = ANALYSES[settings.type] if not events else (
         lambda f, s, p, w: _dynamics(f, s, p, w, tuple(events)))
-    workspace = of(functions, workspace)
+    if plan is not None and run is _dynamics:
+        run = plan.dynamics_run
     messages: list[str] = []  # the solvers' own stderr lines (runtime.solver_messages)
     try:
         with workspace.lock, interrupts.guard(token or current() or CancelToken()), \
@@ -177,9 +209,39 @@ def analyze(functions: SystemFunctions, analysis: str | None = None, t_end: floa
             error.explain(functions)
         raise
     _keep_messages(result, messages, stream.count)
-    result.metadata.update(analysis=settings.type, mode=mode_of(functions))
+    result.metadata.update(analysis=settings.type,
+                           mode=mode_of(functions) if plan is None else plan.mode)
     result.functions = functions
     return result
+
+
+class _Plan:
+    """What `analyze` derives from its arguments for one bundle, kept in the run's workspace
+    under them (with their types: kind "analysis_plans"), so that the same analysis asked
+    again checks nothing and builds nothing again: the checked settings, the bundle's mode
+    (compiled or interpreted: the metadata's) and, for dynamics of one segment (no friction
+    switched or amended) without events, that run (_Segment, its run of joint coordinates
+    prepared). It holds no bundle: the workspace's bundle is the one it serves."""
+
+    def __init__(self, settings: Analysis, mode: str):
+        self.settings, self.mode, self.dynamics = settings, mode, None
+
+    def dynamics_run(self, f: SystemFunctions, s: Analysis, progress,
+                     workspace: Workspace) -> Result:
+        return _dynamics(f, s, progress, workspace, (), self)
+
+
+def _plan(functions: SystemFunctions, given: tuple, workspace: Workspace) -> _Plan | None:
+    """The plan of analyze's arguments `given` (analysis_settings' order) in `workspace`; None
+    where they do not hash (options as a mapping: checked every time)."""
+    key = (*given, *map(type, given))
+    try:
+        hash(key)
+    except TypeError:
+        return None
+    return workspace.kept("analysis_plans", key,
+                          lambda: _Plan(analysis_settings(functions, *given),
+                                        mode_of(functions)))
 
 
 def _controlled(functions: SystemFunctions, controller, controls, arguments: dict) -> Result:

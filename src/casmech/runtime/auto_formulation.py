@@ -57,7 +57,7 @@ def choice(tree: Tree, formulation: str, examinable: Callable[[], bool],
     registered one); examinable(): whether the run's rows can be examined for singular poses;
     lags(): lags_bundle. Both are asked only for loops in auto without a method of joint
     coordinates (a tree's choice needs neither; module docstring)."""
-    if tree.couplings and formulation != "auto" and \
+    if formulation != "auto" and tree.couplings and \
             not FORMULATIONS[formulation].takes_couplings:
         taking = [name for name, entry in FORMULATIONS.items() if entry.takes_couplings]
         raise AnalysisError(FailureContext(
@@ -116,15 +116,16 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
     Singular poses are recorded in the metadata of a run with loops."""
     first = choice(tree, formulation, lambda: examinable(functions, rows, workspace),
                    lambda: lags_bundle(functions, settings.compile), method)
+    loops = not tree.is_tree
 
     def examined(result: Result) -> Result:
         """`result` with the singular poses of a run with loops in its metadata."""
-        poses = singular_poses(functions, result, not tree.is_tree, settings, workspace)
+        poses = singular_poses(functions, result, loops, settings, workspace)
         if poses is not None:
             result.metadata["singular_poses"] = poses
         return result
 
-    fallback = formulation == "auto" and first == "joint" and not tree.is_tree
+    fallback = formulation == "auto" and first == "joint" and loops
     if first != "joint":
         return examined(other(first))
     try:
@@ -136,6 +137,8 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
             raise
         why = f"the joint DAE failed ({str(error).splitlines()[0]})"
     else:
+        if not loops:  # a tree's run: nothing to examine (singular_poses)
+            return result
         poses = examined(result).metadata.get("singular_poses")
         if not (fallback and poses):
             return result

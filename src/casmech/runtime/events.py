@@ -251,10 +251,12 @@ class Watch:
 
 def watch(functions: SystemFunctions, result: Result, extra: Sequence[Event] = (),
           rtol: float = 0.0, iterations: int = ITERATIONS,
-          workspace: Workspace | None = None) -> Watch | None:
-    """The Watch of a run over the model's events and `extra` ones, locating to the run's
-    rtol; None without any (the run then does no event work at all)."""
-    events = (*model_events(functions, workspace), *extra)
+          workspace: Workspace | None = None,
+          model: tuple[Event, ...] | None = None) -> Watch | None:
+    """The Watch of a run over the model's events (`model`, where the caller holds them:
+    model_events') and `extra` ones, locating to the run's rtol; None without any (the run
+    then does no event work at all)."""
+    events = (*(model_events(functions, workspace) if model is None else model), *extra)
     return Watch(events, result, rtol, iterations) if events else None
 
 

@@ -30,7 +30,8 @@ from casmech.runtime.buffers import NamedCall
 from casmech.runtime.dae_rows import mapped
 from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.dynamics import run_dynamics
-from casmech.runtime.joint_dynamics import run_joint_dynamics
+from casmech.runtime.joint_dynamics import prepare
+from casmech.runtime.joint_run import JointRun
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
@@ -69,11 +70,22 @@ def _body(functions: SystemFunctions, formulation: Formulation, asked: Run) -> R
 
 
 def _joint(functions: SystemFunctions, formulation: Formulation, asked: Run) -> Result:
+    return _prepared(functions, asked).run(functions, asked.progress, asked.extra_events)
+
+
+def prepared_joint(functions: SystemFunctions, asked: Run) -> JointRun | None:
+    """The run of joint coordinates `asked` describes, prepared (runtime.joint_dynamics.prepare;
+    its progress and events are its run's), where the formulation registered as "joint" is the
+    built-in one; None where another took its name."""
+    if RUNS.get(type(FORMULATIONS["joint"])) is not _joint:
+        return None
+    return _prepared(functions, asked)
+
+
+def _prepared(functions: SystemFunctions, asked: Run) -> JointRun:
     options = asked.options
-    return run_joint_dynamics(functions, asked.t_end, asked.step, asked.rtol, asked.atol,
-                              t0=asked.t0, progress=asked.progress, method=options.method,
-                              extra_events=asked.extra_events, settings=options.solver,
-                              workspace=asked.workspace)
+    return prepare(functions, asked.t_end, asked.step, asked.rtol, asked.atol, asked.t0,
+                   options.method, options.solver, asked.workspace)
 
 
 def generic(functions: SystemFunctions, formulation: Formulation, asked: Run) -> Result:

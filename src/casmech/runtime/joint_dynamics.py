@@ -27,17 +27,24 @@ import numpy as np
 
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
-from casmech.errors import AnalysisError, Interrupted
+from casmech.errors import Interrupted
 from casmech.formulations import mapped_system
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import assembly, contact_steps, dop853, events, functional_ode, nonfinite
+from casmech.runtime import (
+    assembly,
+    contact_steps,
+    dop853,
+    events,
+    functional_ode,
+    nonfinite,
+)
 from casmech.runtime.buffers import NamedCall
-from casmech.runtime.driver import Block, Chunks, completed, drive
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
+from casmech.runtime.joint_run import JointRun
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.projected_loops import dop853_of, loop_algebraic, loop_ode_of
 from casmech.runtime.results import Result
@@ -419,7 +426,19 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
                        settings: DynamicsSolver = DEFAULT,
                        workspace: Workspace | None = None) -> Result:
     """The model's `events:` and `extra_events` (runtime.events.Event) are located and
-    recorded in Result.events; without any, no event work is done."""
+    recorded in Result.events; without any, no event work is done (runtime.joint_run)."""
+    return prepare(functions, t_end, step, rtol, atol, t0, method, settings,
+                   workspace).run(functions, progress, extra_events)
+
+
+def prepare(functions: SystemFunctions, t_end: float, step: float, rtol: float, atol: float,
+            t0: float = 0.0, method: str = METHOD, settings: DynamicsSolver = DEFAULT,
+            workspace: Workspace | None = None) -> JointRun:
+    """A run over the output grid from t0 to t_end by step, prepared (runtime.joint_run): the
+    joint system and the kept start of the workspace, method auto's choice from that start,
+    the Recorder, the integrator with its options; a function of the bundle and these
+    arguments alone, so a JointRun serves every later run of the same arguments on this
+    workspace."""
     workspace = of(functions, workspace)
     system = joint_system(functions, settings, workspace)
     x, z, loops, signs, derived = _kept_start(functions, system, t0, settings.assembly,
@@ -442,58 +461,9 @@ def run_joint_dynamics(functions: SystemFunctions, t_end: float, step: float, rt
         integrate.loop = loop_ode_of(functions, system, loops.mask, workspace, derived)
         integrate.solved = recorder.loops is not None
     integrate.options |= step_options
-    times = output_times(t0, t_end, step)
-    result = Result("dynamics", on_row=progress)
-    watch = events.watch(functions, result, extra_events, rtol, settings.event_iterations,
-                         workspace)
-
-    def block(t: float, chunk: np.ndarray, state) -> Block:
-        """One solver call from (t, x, z) over `chunk` (z None: the loops' consistent
-        multipliers at x, computed here; the next chunk's are never needed); the rows
-        computed before a signal stopped it, attached to the Interrupted (runtime.driver)."""
-        x, z = state
-        if z is None:
-            z = loops.z(t, x)
-        try:
-            states, algebraic = integrate(t, chunk, x, z)
-        except Interrupted as interrupted:  # the grid points done before the signal
-            done = getattr(interrupted, "outputs", None)
-            count = 0 if done is None else completed(done["xf"], done["zf"])
-            if count:
-                interrupted.block = made(t, chunk[:count], (x, z), done["xf"][:, :count],
-                                         done["zf"][:, :count] if system.n_cut
-                                         else np.zeros((0, count)))
-            raise
-        return made(t, chunk, (x, z), states, algebraic)
-
-    def made(t: float, times_done: np.ndarray, start, states, algebraic) -> Block:
-        def probe(t_start: float, at, t_trial: float, t_stop: float):
-            """To t_stop, t_trial from the interpolant (as runtime.dynamics' probe: with
-            loops, the index-2 DAE's first step is sized by the whole interval)."""
-            found, found_z = integrate(t_start, [t_trial, t_stop], *at, trial=True)
-            return (recorder.rows([t_trial], found[:, :1], found_z[:, :1]),
-                    (found[:, 0], found_z[:, 0]))
-
-        return Block(times_done, recorder.rows(times_done, states, algebraic),
-                     (states[:, -1], None), start,
-                     lambda j: (states[:, j], loops.z(times_done[j], states[:, j])), probe)
-
-    try:
-        first = recorder.first(times[0], x, z, derived)
-        result.extend(times[:1], *first)
-        if watch is not None:
-            watch.start(times[0], first)
-        drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch, halves=True,
-              fail=nonfinite.interval_failure)
-    except AnalysisError as error:
-        error.partial = result
-        raise
     tree = system.tree
-    result.metadata.update(
-        rtol=rtol, atol=atol, formulation="joint",
-        integrator="dop853" if method == "dop853" else "idas" if system.n_cut else "cvodes",
-        method=method if method == "dop853" or not system.n_cut else "bdf",
-        steps=integrate.steps,
-        tree=[j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints],
-        cut_joints=[j.name for j in tree.cut], dropped_rows=int(loops.mask.sum()))
-    return result
+    names = (tuple(j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints),
+             tuple(j.name for j in tree.cut))
+    return JointRun((x, z, loops, derived), recorder, integrate, output_times(t0, t_end, step),
+                    rtol, atol, settings, workspace, names,
+                    events.model_events(functions, workspace))

@@ -56,7 +56,8 @@ class Recorder:
         rows = kept.get(key)
         if rows is None:
             rows = kept[key] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
-        return tuple(row.copy() for row in rows)
+        q, q_dot, q_ddot, lam = rows
+        return q.copy(), q_dot.copy(), q_ddot.copy(), lam.copy()
 
     def _mapped(self):
         """The results rows' function over many states (joint_rows.over_rows; kept in the

@@ -107,8 +107,9 @@ class NonFinite(AnalysisError):
 
 _ALL = np.logical_and.reduce
 # an array's entries' sum of squares, by BLAS (one call an array, through no ufunc: NumPy's
-# floating-point warnings, and the errstate that would silence them, are not involved)
-_SQUARES = np.vdot
+# floating-point warnings, and the errstate that would silence them, are not involved); np.vdot's
+# C function itself where NumPy exposes it (no Python dispatcher call before it)
+_SQUARES = getattr(np.vdot, "_implementation", np.vdot)
 
 
 def all_finite(*arrays) -> bool:

@@ -29,6 +29,7 @@ T = TypeVar("T")
 
 # kind of entry -> the most entries kept (what each is: the module that builds it)
 KINDS: dict[str, int] = {
+    "analysis_plans": 16,  # what analyze derives from its arguments (runtime.analyses._Plan)
     "analysis_settings": 16,  # checked settings, by analyze's arguments (runtime.analyses)
     "column_names": 1,  # the results table's column names (runtime.results)
     "frictions": 1,  # whether dynamics switches frictions' modes, amends driven ones' loads
@@ -105,11 +106,13 @@ class Workspace:
         return self._stores.setdefault(kind, {})
 
     def drop(self, kind: str | None = None) -> None:
-        """Forget the entries of `kind`, or all of them."""
+        """Forget the entries of `kind`, or all of them; analyze's plans go with any kind
+        (a plan holds entries of the others)."""
         if kind is None:
             self._stores.clear()
         else:
             self._stores.pop(kind, None)
+            self._stores.pop("analysis_plans", None)
 
     def __len__(self) -> int:
         return sum(len(store) for store in self._stores.values())
