@@ -101,6 +101,9 @@ class _Segment:
         self.asked = formulation_run.Run(t0, t_end, step, s.rtol, s.atol, s.options, None,
                                          tuple(extra_events), workspace)
         self.tree, self.rows = tree_of(f, workspace), output_count(t0, t_end, step)
+        options = s.options
+        self.first = auto_formulation.first_of(f, self.tree, options.formulation, self.rows,
+                                               options.solver, workspace, options.method)
         self.joint = self.formulation = None
 
     def run(self, f: SystemFunctions, progress) -> Result:
@@ -120,7 +123,8 @@ class _Segment:
             return prepared.run(f, progress, asked.extra_events)
 
         return auto_formulation.run(f, self.tree, options.formulation, self.rows, joint,
-                                    other, options.solver, asked.workspace, options.method)
+                                    other, options.solver, asked.workspace, options.method,
+                                    self.first)
 
 
 def _runtime(name: str):

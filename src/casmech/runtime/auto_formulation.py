@@ -106,16 +106,26 @@ def method_problem(tree: Callable[[], Tree], formulation: str, method: str,
             "them after each step) or bdf, or remove method (auto)")
 
 
+def first_of(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
+             settings: DynamicsSolver = DEFAULT, workspace: Workspace | None = None,
+             method: str = "auto") -> str:
+    """`choice` for a run of `rows` output rows of `functions` (the arguments as run takes
+    them); a function of these alone, so a caller running the same run again may keep it."""
+    return choice(tree, formulation, lambda: examinable(functions, rows, workspace),
+                  lambda: lags_bundle(functions, settings.compile), method)
+
+
 def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
         joint: Callable[[], Result], other: Callable[[str], Result],
         settings: DynamicsSolver = DEFAULT,
-        workspace: Workspace | None = None, method: str = "auto") -> Result:
+        workspace: Workspace | None = None, method: str = "auto",
+        first: str | None = None) -> Result:
     """Run `joint()` or `other(formulation)` as `choice` says (rows: the run's output rows;
-    method: the run's);
+    method: the run's; `first`: first_of's answer where the caller kept it);
     with loops in auto, the rp run after a joint run that failed or passed a singular pose.
     Singular poses are recorded in the metadata of a run with loops."""
-    first = choice(tree, formulation, lambda: examinable(functions, rows, workspace),
-                   lambda: lags_bundle(functions, settings.compile), method)
+    if first is None:
+        first = first_of(functions, tree, formulation, rows, settings, workspace, method)
     loops = not tree.is_tree
 
     def examined(result: Result) -> Result:
