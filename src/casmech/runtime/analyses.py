@@ -58,8 +58,6 @@ def _dynamics(f: SystemFunctions, s: Analysis, progress, workspace: Workspace,
     (runtime.friction); else one run. The load parts of driven coordinates' frictions are
     added to the rows, and to a failed run's (runtime.driven_friction). Which of these a
     model has is found once per workspace; a `plan`'s one run is kept in it."""
-    if plan is not None and plan.dynamics is not None:
-        return plan.dynamics.run(f, progress)
     switched, loaded = workspace.one("frictions", lambda: (
         friction.switched(f.ir), bool(driven_friction.elements(f.ir))))
     if not (switched or loaded):
@@ -232,6 +230,8 @@ class _Plan:
 
     def dynamics_run(self, f: SystemFunctions, s: Analysis, progress,
                      workspace: Workspace) -> Result:
+        if self.dynamics is not None:
+            return self.dynamics.run(f, progress)
         return _dynamics(f, s, progress, workspace, (), self)
 
 
