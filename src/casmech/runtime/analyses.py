@@ -238,10 +238,8 @@ class _Plan:
 def _plan(functions: SystemFunctions, given: tuple, workspace: Workspace) -> _Plan | None:
     """The plan of analyze's arguments `given` (analysis_settings' order) in `workspace`; None
     where they do not hash (options as a mapping: checked every time)."""
-    key = (*given, *map(type, given))
-    try:
-        hash(key)
-    except TypeError:
+    key = _key(given)
+    if key is None:
         return None
     return workspace.kept("analysis_plans", key,
                           lambda: _Plan(analysis_settings(functions, *given),
@@ -329,13 +327,22 @@ def analysis_settings(functions: SystemFunctions, analysis: str | None = None,
     the arguments (and their types) that made them, so a repeated run checks them once."""
     given = (analysis, t_end, output_step, rtol, atol, formulation, stabilization, method,
              options)
-    key = (*given, *map(type, given))
-    try:
-        hash(key)
-    except TypeError:  # options as a mapping: checked every time
+    key = _key(given)
+    if key is None:  # options as a mapping: checked every time
         return _settings(functions, *given)
     return of(functions, None).kept("analysis_settings", key,
                                     lambda: _settings(functions, *given))
+
+
+def _key(given: tuple) -> tuple | None:
+    """analysis_settings' arguments `given` with their types, as a key; None where they do
+    not hash (options as a mapping)."""
+    key = (*given, *map(type, given))
+    try:
+        hash(key)
+    except TypeError:
+        return None
+    return key
 
 
 def _settings(functions: SystemFunctions, analysis, t_end, output_step, rtol, atol,
