@@ -155,3 +155,26 @@ def test_a_compiled_loop_repeated_gives_a_fresh_runs_rows(quick_builds):
     assert first.metadata["integrator"] == "dop853" and first.metadata["cut_joints"]
     for result in (casmech.analyze(functions, **settings), _fresh(functions, **settings)):
         _same(result, first)
+
+
+def test_a_formulation_registered_over_joint_is_run_by_a_kept_plan(functions):
+    """The plan's prepared run is the built-in formulation's: once another entry is
+    registered as "joint" (here the built-in's class subclassed: formulation_run's generic
+    run), the same analysis runs it, and again the built-in once that is back."""
+    from casmech.formulations.builtin import JointCoordinates
+    from casmech.formulations.registry import FORMULATIONS
+
+    class Generic(JointCoordinates):
+        pass
+
+    settings = BASE | {"formulation": "joint"}
+    built_in = FORMULATIONS["joint"]
+    own = casmech.analyze(functions, **settings)
+    FORMULATIONS.register(Generic("joint"))
+    try:
+        generic = casmech.analyze(functions, **settings)
+        _same(generic, _fresh(functions, **settings))
+    finally:
+        FORMULATIONS.register(built_in)
+    assert "tree" in own.metadata and "tree" not in generic.metadata  # the generic run's
+    _same(casmech.analyze(functions, **settings), own)
