@@ -5,7 +5,8 @@ metadata's names), held so that the same analysis run again on the same bundle a
 integrates at once (runtime.analyses keeps it in its plan).
 
 A JointRun holds no bundle (it is kept in the bundle's workspace) and nothing a run returns:
-each run makes its own Result, rows, chunks and metadata lists.
+each run makes its own Result, rows, chunks and metadata lists; its output grid is read-only
+(a Result's blocks are views of it until the Result joins them into its own array).
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ class JointRun:
         x, z = self.x, self.z
         try:
             first = recorder.first(times[0], x, z, self.derived)
-            result.extend(times[:1], *first)
+            result.extend(times[:1].copy(), *first)  # (a Result of that row alone owns it)
             if watch is not None:
                 watch.start(times[0], first)
             drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch,

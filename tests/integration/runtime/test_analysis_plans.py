@@ -178,3 +178,24 @@ def test_a_formulation_registered_over_joint_is_run_by_a_kept_plan(functions):
         FORMULATIONS.register(built_in)
     assert "tree" in own.metadata and "tree" not in generic.metadata  # the generic run's
     _same(casmech.analyze(functions, **settings), own)
+
+
+def test_a_partial_result_owns_its_times(functions, monkeypatch):
+    """A run that fails after its first row: the Result's times are its own (writing them
+    leaves the kept grid of the next run alone)."""
+    from casmech.errors import AnalysisError
+    from casmech.runtime import joint_run
+
+    base = casmech.analyze(functions, **BASE)
+
+    def failing(*args, **kwargs):
+        raise AnalysisError("failed on purpose")
+
+    monkeypatch.setattr(joint_run, "drive", failing)
+    with pytest.raises(AnalysisError) as failed:
+        casmech.analyze(functions, **BASE)
+    partial = failed.value.partial
+    assert len(partial.t) == 1
+    partial.t[:] = 7.0  # the caller's own array
+    monkeypatch.undo()
+    _same(casmech.analyze(functions, **BASE), base)
