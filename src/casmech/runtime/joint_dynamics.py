@@ -464,7 +464,6 @@ def prepare(functions: SystemFunctions, t_end: float, step: float, rtol: float, 
     tree = system.tree
     names = (tuple(j.name or f"free '{functions.body_names[j.child]}'" for j in tree.joints),
              tuple(j.name for j in tree.cut))
-    times = output_times(t0, t_end, step)
-    times.setflags(write=False)  # kept: each run's Result gets views of it, then copies
-    return JointRun((x, z, loops, derived), recorder, integrate, times, rtol, atol, settings,
-                    workspace, names, events.model_events(functions, workspace))
+    return JointRun((x, z, loops, derived), recorder, integrate, output_times(t0, t_end, step),
+                    rtol, atol, settings, workspace, names,
+                    events.model_events(functions, workspace))

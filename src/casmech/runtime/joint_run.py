@@ -5,8 +5,8 @@ metadata's names), held so that the same analysis run again on the same bundle a
 integrates at once (runtime.analyses keeps it in its plan).
 
 A JointRun holds no bundle (it is kept in the bundle's workspace) and nothing a run returns:
-each run makes its own Result, rows, chunks and metadata lists; its output grid is read-only
-(a Result's blocks are views of it until the Result joins them into its own array).
+each run makes its own Result, rows, chunks and metadata lists, and its own copy of the output
+grid (a Result's blocks are views of the grid it was given).
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ class JointRun:
         """The run's Result (its rows, events and metadata: runtime.joint_dynamics); the
         model's `events:` and `extra_events` (runtime.events.Event) are located and recorded
         in Result.events; without any, no event work is done."""
-        recorder, integrate, loops, times = self.recorder, self.integrate, self.loops, self.times
+        recorder, integrate, loops = self.recorder, self.integrate, self.loops
+        times = self.times.copy()  # the run's own: its Result's blocks are views of it
         settings = self.settings
         integrate.steps = 0
         cut = integrate.system.n_cut
@@ -86,7 +87,7 @@ class JointRun:
         x, z = self.x, self.z
         try:
             first = recorder.first(times[0], x, z, self.derived)
-            result.extend(times[:1].copy(), *first)  # (a Result of that row alone owns it)
+            result.extend(times[:1], *first)
             if watch is not None:
                 watch.start(times[0], first)
             drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch,
