@@ -19,7 +19,6 @@ Exit codes of the command line (docs/format.md): 0 success, 1 model error, 2 usa
 
 from __future__ import annotations
 
-import difflib
 import re
 import signal
 from collections.abc import Iterable, Sequence
@@ -143,7 +142,10 @@ class Diagnostic:
 
 
 def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
-    """A 'did you mean ...?' hint, or None when nothing is close."""
+    """A 'did you mean ...?' hint, or None when nothing is close (difflib imported here: only
+    a mistake needs it)."""
+    import difflib
+
     close = difflib.get_close_matches(str(word), [str(c) for c in candidates], n=1, cutoff=0.6)
     return f"did you mean '{close[0]}'?" if close else None
 

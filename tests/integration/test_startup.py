@@ -106,7 +106,8 @@ def test_no_module_builds_a_function_or_reads_a_file_at_import():
 def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     """`casmech run` of a dynamics model (the joint formulation's tree) loads neither Dask nor
     pandas, plotting, SciPy's optimizers, the importers or the optimal-control layer, nor
-    the schema of a replayed run's record (only `--replay` reads one)."""
+    the schema of a replayed run's record (only `--replay` reads one), nor difflib (the
+    suggestions of an error message)."""
     code = ("import sys; from casmech import cli; "
             f"code = cli.main(['run', {str(MODELS / 'double_pendulum.yaml')!r}, '--t-end', "
             f"'0.05', '--out', {str(tmp_path / 'out')!r}, '--mode', 'interpreted', '--quiet'])"
@@ -116,7 +117,7 @@ def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     assert loaded(modules, ["dask", "distributed", "pandas", "matplotlib", "scipy.optimize",
                             "h5py", "meshio", "casmech.study", "casmech.optimal",
                             "casmech.importers", "casmech.fmu", "casmech.io.plot",
-                            "casmech.io.animate", "casmech.cli.replay_record",
+                            "casmech.io.animate", "casmech.cli.replay_record", "difflib",
                             *COMPILER]) == []
 
 
