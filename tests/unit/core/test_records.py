@@ -213,3 +213,16 @@ def test_eq_and_hash_of_any_number_of_fields_as_a_dataclass(annotations):
     assert hash(rec(*args)) == hash(made(*args))
     if annotations:
         assert (rec(*args) == rec(*[9] * len(annotations))) is False
+
+
+@pytest.mark.parametrize("init", [True, False])
+def test_a_frozen_records_dataclass_parameters_are_a_frozen_dataclasss(init):
+    """dataclasses reads a frozen record's parameters (every slot) as those of a frozen
+    dataclass whose eq and repr are the record's own, each class with a copy of its own."""
+    made = _pair(frozen=True, init=init)[1]
+    plain = _pair(frozen=True, init=init, eq=False, repr=False)[0]
+    ours, theirs = made.__dataclass_params__, plain.__dataclass_params__
+    assert type(ours) is type(theirs)
+    assert {name: getattr(ours, name) for name in type(ours).__slots__} == \
+        {name: getattr(theirs, name) for name in type(theirs).__slots__}
+    assert _pair(frozen=True, init=init)[1].__dataclass_params__ is not ours
