@@ -77,12 +77,20 @@ def _python_files(folder: str) -> list[str]:
     except OSError:
         return found
     for entry in entries:
-        if entry.is_dir():
-            if entry.name != BYTECODE and not entry.is_symlink():
+        if _is(entry.is_dir):
+            if entry.name != BYTECODE and not _is(entry.is_symlink):
                 found += _python_files(entry.path)
         elif entry.name.endswith(".py"):
             found.append(entry.path)
     return found
+
+
+def _is(test) -> bool:
+    """A directory entry's test, False where it cannot be told (as os.walk takes it)."""
+    try:
+        return test()
+    except OSError:
+        return False
 
 
 def _hexdigest(text: str) -> bool:
