@@ -126,6 +126,9 @@ class Source:
 
 @record
 class Diagnostic:
+    """One finding: its code, path, message, where in the file, and what was expected, what
+    was got and a hint."""
+
     code: str
     path: str
     message: str
