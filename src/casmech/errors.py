@@ -19,11 +19,11 @@ Exit codes of the command line (docs/format.md): 0 success, 1 model error, 2 usa
 
 from __future__ import annotations
 
-import difflib
 import re
 import signal
 from collections.abc import Iterable, Sequence
 from dataclasses import field
+from functools import cache
 
 from casmech.core.records import record
 
@@ -85,8 +85,8 @@ CODES: dict[str, str] = {
 # C0 and C1 control characters, DEL, and the invisible marks that reorder or break what a
 # terminal shows (direction marks, embeddings, overrides and isolates; line and paragraph
 # separators)
-_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069"
-                      "\u2028\u2029]")
+CONTROL = ("[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069"
+           "\u2028\u2029]")
 _NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
@@ -100,9 +100,16 @@ def escape(text: object, keep_newlines: bool = False) -> str:
     """`text` with every control character written as its escape (module docstring);
     `keep_newlines`: a message's own line breaks stay (each line escaped)."""
     text = str(text)
+    control = _pattern(CONTROL)
     if keep_newlines:
-        return "\n".join(_CONTROL.sub(_escaped, line) for line in text.split("\n"))
-    return _CONTROL.sub(_escaped, text)
+        return "\n".join(control.sub(_escaped, line) for line in text.split("\n"))
+    return control.sub(_escaped, text)
+
+
+@cache
+def _pattern(text: str) -> re.Pattern:
+    """A pattern of this module, compiled when first used (a run that ends well uses none)."""
+    return re.compile(text)
 
 
 @record
@@ -119,6 +126,9 @@ class Source:
 
 @record
 class Diagnostic:
+    """One finding: its code, path, message, where in the file, and what was expected, what
+    was got and a hint."""
+
     code: str
     path: str
     message: str
@@ -143,7 +153,10 @@ class Diagnostic:
 
 
 def did_you_mean(word: str, candidates: Iterable[str]) -> str | None:
-    """A 'did you mean ...?' hint, or None when nothing is close."""
+    """A 'did you mean ...?' hint, or None when nothing is close (difflib imported here: only
+    a mistake needs it)."""
+    import difflib
+
     close = difflib.get_close_matches(str(word), [str(c) for c in candidates], n=1, cutoff=0.6)
     return f"did you mean '{close[0]}'?" if close else None
 
@@ -193,14 +206,14 @@ SOLVER_REASONS = {
     "REP_RES_ERR": "the residual function failed repeatedly",
     "CONSTR_FAIL": "the inequality constraints failed",
 }
-_FLAG = re.compile(r'returned "(?:IDA|CV)_(\w+)"')
+FLAG = r'returned "(?:IDA|CV)_(\w+)"'
 
 
 def solver_reason(error: BaseException) -> str:
     """What a SUNDIALS solver said, from the RuntimeError CasADi raised ("IDAS: too much
     accuracy requested"), else the error's last line."""
     text = str(error)
-    match = _FLAG.search(text)
+    match = _pattern(FLAG).search(text)
     if match:
         solver = "IDAS" if "Idas" in text or '"IDA_' in text else "CVODES"
         return f"{solver}: {SOLVER_REASONS.get(match.group(1), match.group(1))}"

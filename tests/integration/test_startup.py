@@ -106,7 +106,8 @@ def test_no_module_builds_a_function_or_reads_a_file_at_import():
 def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     """`casmech run` of a dynamics model (the joint formulation's tree) loads neither Dask nor
     pandas, plotting, SciPy's optimizers, the importers or the optimal-control layer, nor
-    the schema of a replayed run's record (only `--replay` reads one)."""
+    the schema of a replayed run's record (only `--replay` reads one), nor difflib (the
+    suggestions of an error message)."""
     code = ("import sys; from casmech import cli; "
             f"code = cli.main(['run', {str(MODELS / 'double_pendulum.yaml')!r}, '--t-end', "
             f"'0.05', '--out', {str(tmp_path / 'out')!r}, '--mode', 'interpreted', '--quiet'])"
@@ -116,14 +117,15 @@ def test_a_run_imports_no_study_plotting_or_optimization(tmp_path):
     assert loaded(modules, ["dask", "distributed", "pandas", "matplotlib", "scipy.optimize",
                             "h5py", "meshio", "casmech.study", "casmech.optimal",
                             "casmech.importers", "casmech.fmu", "casmech.io.plot",
-                            "casmech.io.animate", "casmech.cli.replay_record",
+                            "casmech.io.animate", "casmech.cli.replay_record", "difflib",
                             *COMPILER]) == []
 
 
 def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch, quick_builds):
     """A compiled run whose library is in the cache ($CASMECH_CACHE_DIR given) imports neither
     filelock (a lock is taken to build a missing entry only) nor platformdirs (the folder is
-    the one given); the run that built the entry did take the lock."""
+    the one given), nor the modules that write C (backends.generate, backends.split), nor
+    the optimal-control section's checks; the run that built the entry did take the lock."""
     monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
     model = str(MODELS / "pendulum.yaml")
 
@@ -135,9 +137,10 @@ def test_a_compiled_run_from_the_cache_takes_no_lock(tmp_path, monkeypatch, quic
             "\nassert code == 0, code")
 
     built = run("first")
-    assert "filelock" in built and "casmech.backends.cache" in built
+    assert {"filelock", "casmech.backends.cache", "casmech.backends.generate"} <= built
     again = run("again")
-    assert loaded(again, ["filelock", "platformdirs"]) == []
+    assert loaded(again, ["filelock", "platformdirs", "casmech.backends.generate",
+                          "casmech.backends.split", "casmech.schema.ocp_terms"]) == []
     assert (tmp_path / "again" / "results.csv").read_bytes() == \
         (tmp_path / "first" / "results.csv").read_bytes()
 

@@ -55,3 +55,23 @@ def test_error_messages_escape_what_they_echo():
     assert "m\\x1b.yaml:3:1: joint 'j\\nfile:1:1: error[E999] forged'" in text
     usage = str(UsageError("first line\nsecond \x1b[31mline"))
     assert usage == "first line\nsecond \\x1b[31mline"
+
+
+def test_the_patterns_are_compiled_when_first_used():
+    """Importing casmech.errors compiles neither of its patterns (a run that ends well uses
+    none); the first escape compiles the control characters' once, and every control
+    character of the set (and no other) is escaped."""
+    import subprocess
+    import sys
+
+    probe = ("from casmech import errors\n"
+             "assert errors._pattern.cache_info().currsize == 0\n"
+             "assert errors.escape('a\\x1bb\\u202ec\\u2028') == 'a\\\\x1bb\\\\u202ec\\\\u2028'\n"
+             "assert errors._pattern.cache_info().currsize == 1\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    every = "".join(map(chr, range(0x3000)))
+    kept = "".join(c for c in every if escape(c) == c)
+    assert kept == re.sub("[\x00-\x1f\x7f-\x9f\u200e\u200f\u202a-\u202e\u2066-\u2069\u2028"
+                          "\u2029]", "", every)

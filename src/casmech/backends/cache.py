@@ -51,6 +51,7 @@ PACKAGE = Path(__file__).resolve().parents[1]
 # keeps; the loops' projected ODE; the singular-pose check's log-determinants)
 SOURCE_PACKAGES = ("core", "numerics", "elements", "schema", "model", "equations", "formulations",
                    "backends")
+BYTECODE = "__pycache__"
 SOURCE_MODULES = ("runtime/joint_dynamics.py", "runtime/projected_loops.py",
                   "runtime/singular_poses.py")
 
@@ -60,11 +61,36 @@ def _sources() -> list[tuple[str, str]]:
     .py files below it (the order of their paths' parts), then SOURCE_MODULES."""
     found, start = [], len(str(PACKAGE)) + 1
     for package in SOURCE_PACKAGES:
-        paths = [folder + os.sep + name for folder, _, files in os.walk(PACKAGE / package)
-                 for name in files if name.endswith(".py")]
+        paths = _python_files(str(PACKAGE / package))
         named = [(path[start:].replace(os.sep, "/"), path) for path in paths]
         found += sorted(named, key=lambda item: item[0].split("/"))
     return found + [(Path(name).name, str(PACKAGE / name)) for name in SOURCE_MODULES]
+
+
+def _python_files(folder: str) -> list[str]:
+    """The .py files below `folder`, as os.walk finds them (a link to a folder listed, not
+    followed), the bytecode folders (__pycache__, no source in them) not listed: a warm run
+    reads this on every start."""
+    found = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return found
+    for entry in entries:
+        if _is(entry.is_dir):
+            if entry.name != BYTECODE and not _is(entry.is_symlink):
+                found += _python_files(entry.path)
+        elif entry.name.endswith(".py"):
+            found.append(entry.path)
+    return found
+
+
+def _is(test) -> bool:
+    """A directory entry's test, False where it cannot be told (as os.walk takes it)."""
+    try:
+        return test()
+    except OSError:
+        return False
 
 
 def _hexdigest(text: str) -> bool:

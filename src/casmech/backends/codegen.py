@@ -52,7 +52,7 @@ import casadi as ca
 import numpy as np
 
 from casmech.backends import background as background_build
-from casmech.backends import cache, deferred, generate, manifest, parametric
+from casmech.backends import cache, deferred, manifest, parametric
 from casmech.backends.build import LIBRARY, Toolchain, available, build_libraries
 from casmech.backends.library import compile_functions
 from casmech.backends.load import externals, mode_of
@@ -105,6 +105,8 @@ def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict,
     """Generate the sources and headers, build the libraries and write the manifest (last, so
     a directory with a manifest is complete); `dae`: the DAE residuals dae_[ggl_]<formulation>
     too, each in its own library; `names`: only those of the bundle's functions."""
+    from casmech.backends import generate  # (on a build only: a warm run writes no C)
+
     functions = bundle(ir, names)
     sources = generate.write_sources(functions, directory, toolchain.jobs)
     oracles = dae_oracles(ir) if dae else {}

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from casmech.backends import generate, manifest
+from casmech.backends import manifest
 from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain
 from casmech.equations.functions import LazyFunctions
 from casmech.equations.system import DEFINITIONS
@@ -68,6 +68,8 @@ def write_build(oracles: dict[str, dict[str, ca.Function]], directory: Path, inf
                 build: Callable[[dict[str, list[Path]], Path], list[Path]]) -> Path:
     """Each residual's library (generate.write_dae_sources) built by `build(libraries,
     directory)`, and the manifest listing the residuals."""
+    from casmech.backends import generate  # (on a build only: a warm run writes no C)
+
     sources = generate.write_dae_sources(oracles, directory)
     build(sources, directory)
     return manifest.write(directory, {n: oracle[n] for n, oracle in oracles.items()}, set(),

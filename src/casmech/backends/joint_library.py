@@ -26,7 +26,6 @@ import casadi as ca
 from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
 from casmech.backends.library import compile_functions, compile_keyed
 from casmech.backends.rows_loop import chained
-from casmech.backends.split import joined, parts
 from casmech.formulations.joint_system import JointSystem, layout
 from casmech.formulations.tree import Tree
 from casmech.numerics import lazy_jacobian
@@ -53,6 +52,8 @@ def motion_parts(count: int) -> tuple[str, ...]:
 def motion(function: ca.Function) -> dict[str, ca.Function]:
     """The results rows' function by library name: joint_motion, or above WHOLE_INSTRUCTIONS
     its chain of parts (one per PART_INSTRUCTIONS instructions, rounded up)."""
+    from casmech.backends.split import parts  # (on a build only)
+
     instructions = function.n_instructions()
     count = -(-instructions // PART_INSTRUCTIONS) if instructions > WHOLE_INSTRUCTIONS else 1
     chain = parts(function, motion_parts(count)) if count > 1 else None
@@ -66,6 +67,8 @@ def joined_library(library: dict[str, ca.Function]) -> dict[str, ca.Function]:
     count = sum(1 for name in library if name.startswith(MOTION_PART))
     if not count:
         return library
+    from casmech.backends.split import joined  # (only a library with the rows in parts)
+
     chain = [library[name] for name in motion_parts(count)]
     return {**library, "joint_motion": chained(joined(chain, "joint_motion"), chain)}
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from casmech.backends import cache, generate, manifest
+from casmech.backends import cache, manifest
 from casmech.backends.build import LIBRARY, Toolchain, build_libraries
 from casmech.backends.load import externals
 from casmech.core.version import VERSION
@@ -139,6 +139,8 @@ def _write(directory: Path, key: str, named: Mapping[str, ca.Function],
     """A build directory: the C of `named` (their Jacobians with_jacobian; integrators as
     IDAS's DAE libraries) compiled, each function's units with its flags
     (toolchain.flags_of), `kept` serialized, and the manifest listing them all."""
+    from casmech.backends import generate  # (on a build only: a warm run writes no C)
+
     plain = {n: f for n, f in named.items() if n not in integrators}
     by_flags: dict[tuple[str, ...], dict[str, list[ca.Function]]] = {}
     for n, f in plain.items():

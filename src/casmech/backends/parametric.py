@@ -32,7 +32,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from casmech.backends import cache, external_record, generate, manifest
+from casmech.backends import cache, external_record, manifest
 from casmech.backends.build import LIBRARY, Toolchain
 from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
@@ -110,6 +110,8 @@ def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca
 
 def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, dae: bool,
                 build_libraries) -> Path:
+    from casmech.backends import generate  # (on a build only: a warm run writes no C)
+
     functions, oracles = bundle(ir, dae)
     joint = (joint_functions(parametric.split(ir)) if ir.analysis.type in JOINT_ANALYSES
              else {})

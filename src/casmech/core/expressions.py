@@ -147,6 +147,9 @@ def _number(value: float, backend: int) -> Any:
 
 @record
 class Number:
+    """A number in SI (a unit's factor applied) and its unit's dimension; `offset`, `length`
+    its span in the text."""
+
     value: float  # SI (a unit's factor applied)
     offset: int
     length: int
@@ -162,6 +165,8 @@ class Number:
 
 @record
 class Constant:
+    """A named constant of CONSTANTS (pi, e); `offset`, `length` its span in the text."""
+
     name: str
     offset: int
     length: int
@@ -175,6 +180,9 @@ class Constant:
 
 @record
 class Name:
+    """A name the environment gives a value (a parameter, a state: `pivot.angle`); `offset`,
+    `length` its span in the text."""
+
     name: str
     offset: int
     length: int
@@ -191,6 +199,8 @@ class Name:
 
 @record
 class Unary:
+    """A unary operation (`op` one of UNARY's) of one node; `offset` its place in the text."""
+
     op: str
     operand: Any
     offset: int
@@ -204,6 +214,9 @@ class Unary:
 
 @record
 class Binary:
+    """A binary operation (`op` one of BINARY's) of two nodes; `offset` its place in the
+    text."""
+
     op: str
     left: Any
     right: Any
@@ -219,6 +232,9 @@ class Binary:
 
 @record
 class Call:
+    """A call of a function of FUNCTIONS on argument nodes; `offset`, `length` its span in
+    the text."""
+
     function: str
     args: tuple[Any, ...]
     offset: int
@@ -273,6 +289,8 @@ _TOKEN = re.compile(
 
 @record
 class Token:
+    """One token of an expression's text: its kind, text and offset."""
+
     kind: str  # number | name | op | end
     text: str
     offset: int

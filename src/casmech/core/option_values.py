@@ -13,7 +13,6 @@ errors) alike.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import math
 import types
 import typing
@@ -264,6 +263,8 @@ def unknown(kind: type, key: str, path: tuple[str, ...] | None = None) -> Proble
     names = list(fields(node)) if is_options(node) else []
     close = did_you_mean(path[depth], names) if depth < len(path) else None
     if close is None:  # a key of another level: by its last name, the whole key proposed
+        import difflib  # (on use: only a mistake needs it)
+
         full = {}
         for known in reversed(keys(kind)):
             full[known.split(".")[-1]] = known

@@ -12,11 +12,13 @@ object.__setattr__ in __post_init__, as in a frozen dataclass); any later assign
 deletion raises dataclasses.FrozenInstanceError. Its __init__ writes each field by
 object.__setattr__, as a frozen dataclass's does, rather than through the class's own
 __setattr__ (a Python call per field of every instance; docs/decisions/frozen-records.md).
+A mutable record's __init__ assigns each field, as a dataclass's does; a record extending a
+frozen class is made frozen by dataclasses (its own __setattr__ and __delattr__, replaced by
+the shared ones) but gets the record's own __init__ too.
 """
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import inspect
 import reprlib
@@ -32,7 +34,7 @@ def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = Tr
         # a frozen base (a record or a dataclass) needs dataclasses' own frozen subclass
         base = frozen and _frozen_base(cls)
         init = options.get("init", True)
-        own_init = frozen and init and not base and _plain_fields(cls, options)
+        own_init = init and _plain_fields(cls, options)
         given = {key: value for key, value in options.items() if key != "init"}
         undocumented = own_init and not cls.__doc__
         if undocumented:  # (dataclasses would read it from __init__, not written yet)
@@ -40,17 +42,27 @@ def record(cls=None, /, *, frozen: bool = True, eq: bool = True, repr: bool = Tr
         made = dataclasses.dataclass(cls, eq=False, repr=False, frozen=base,
                                      init=init and not own_init, **given)
         if own_init:
-            made.__init__ = _frozen_init(made)
+            made.__init__ = _own_init(made, frozen)
         if undocumented:  # dataclasses' own: the class's name and signature
             made.__doc__ = f"{made.__name__}{inspect.signature(made)}".replace(" -> None", "")
         if frozen:  # to dataclasses a frozen record is frozen: a frozen dataclass may extend it
-            params = copy.copy(made.__dataclass_params__)
+            params = _copied(made.__dataclass_params__)
             params.frozen, params.init = True, init
             made.__dataclass_params__ = params
         _share(made, eq, repr, frozen)
         return made
 
     return wrap if cls is None else wrap(cls)
+
+
+def _copied(params):
+    """A copy of a class's dataclass parameters, slot by slot (copy.copy's reduce protocol
+    costs several times more, once per record class a process makes)."""
+    kind = type(params)
+    made = object.__new__(kind)
+    for name in kind.__slots__:
+        object.__setattr__(made, name, getattr(params, name))
+    return made
 
 
 def _frozen_base(cls) -> bool:
@@ -60,7 +72,7 @@ def _frozen_base(cls) -> bool:
 
 def _plain_fields(cls, options: dict) -> bool:
     """Whether the class's fields are all plain (no InitVar, ClassVar or keyword-only field, no
-    slots), which `_frozen_init` writes; others keep dataclasses' __init__."""
+    slots), which `_own_init` writes; others keep dataclasses' __init__."""
     if options.get("kw_only") or options.get("slots"):
         return False
     written = cls.__dict__.get("__annotations__", {}).values()
@@ -85,12 +97,12 @@ class _Factory:
 _FACTORY = _Factory()
 
 
-def _frozen_init(cls):
-    """The __init__ dataclasses writes for a frozen class of these fields: the parameters in
-    field order (defaults and default factories as there), each field set by
-    object.__setattr__, then __post_init__ when the class has one. Its text is compiled when
-    the class is first called (`_compiled_on_first_call`); until then the class's __init__
-    has that function's signature, annotations and names."""
+def _own_init(cls, frozen: bool):
+    """The __init__ dataclasses writes for a class of these fields: the parameters in field
+    order (defaults and default factories as there), each field set (frozen: by
+    object.__setattr__; else by assignment), then __post_init__ when the class has one. Its
+    text is compiled when the class is first called (`_compiled_on_first_call`); until then
+    the class's __init__ has that function's signature, annotations and names."""
     names = {"__record_set__": object.__setattr__, "__record_factory__": _FACTORY}
     parameters, lines, defaulted = ["__record_self__"], [], False
     signature = [inspect.Parameter("__record_self__", _POSITIONAL)]
@@ -119,7 +131,8 @@ def _frozen_init(cls):
             continue  # (a default of a field left out of __init__ is the class's attribute)
         if factory:
             names[f"__factory_{f.name}"] = f.default_factory
-        lines.append(f"    __record_set__(__record_self__, {f.name!r}, {value})")
+        lines.append(f"    __record_set__(__record_self__, {f.name!r}, {value})" if frozen
+                     else f"    __record_self__.{f.name} = {value}")
     if hasattr(cls, "__post_init__"):
         lines.append("    __record_self__.__post_init__()")
     text = f"def __init__({', '.join(parameters)}):\n" + ("\n".join(lines) or "    pass")

@@ -35,6 +35,8 @@ class Link:
 
 @record
 class TreeJoint:
+    """A tree joint: the index of its link and the parent and child bodies it joins."""
+
     index: int  # the joint's index among the links
     parent: str
     child: str
@@ -46,6 +48,9 @@ class TreeJoint:
 
 @record
 class Tree:
+    """The spanning tree by name: its tree joints (parents before children) and the bodies
+    that float."""
+
     joints: tuple[TreeJoint, ...]  # parents before children
     roots: tuple[str, ...]  # bodies that float (no tree joint reaches them from ground)
 

@@ -17,6 +17,9 @@ LIMITS = LinearAlgebra()  # the defaults (core.options)
 
 @record
 class Structure:
+    """The constraint rows' structure at a pose: coordinates, rows, rank, the redundant
+    rows, the nominal degrees of freedom and the rows kept."""
+
     n_coordinates: int
     n_rows: int
     rank: int

@@ -34,6 +34,9 @@ ROW = 14  # x of an element: [r_i, p_i, r_j, p_j]
 
 @record
 class ForceKey:
+    """What makes two force elements share one kernel: type, frame, actuator and data
+    pattern."""
+
     type: str
     frame: str
     actuator: tuple | None  # (text, constants) of a spring's actuator

@@ -24,6 +24,9 @@ from casmech.model.ir import GROUND_INDEX, ModelIR, RowInfo
 
 @record
 class JointMeta:
+    """A joint as the bundle describes it: name, type, its rows, its bodies' names and its
+    source."""
+
     name: str
     type: str
     rows: range

@@ -45,6 +45,9 @@ ZERO, CONSTANT, TIME = "zero", "constant", "time"  # how f depends on t
 
 @record
 class RowKey:
+    """What makes two constraint rows share one kernel: kind, ground sides, vector pattern,
+    driving function class, baked values, bodies read."""
+
     kind: str
     ground: str | None  # the sides (SIDES) that are ground, or None
     pattern: tuple[bool, ...]  # which entries of the stacked vectors are non-zero

@@ -31,6 +31,9 @@ class RowInfo:
 
 @record
 class PrimitiveIR:
+    """One basic constraint row of a kind of elements.primitives: its bodies (indices),
+    vectors, driving function and offset."""
+
     kind: str
     body_i: int
     body_j: int
@@ -49,6 +52,8 @@ class PrimitiveIR:
 
 @record
 class BodyIR:
+    """A lowered body: mass, inertia about its CM in its frame, initial pose and velocities."""
+
     name: str
     mass: float
     inertia: np.ndarray  # (3, 3) body frame, about the CM
@@ -89,6 +94,9 @@ class JointIR:
 
 @record
 class ForceIR:
+    """A lowered force element: type, bodies (indices), body-frame points, parameters and
+    actuator."""
+
     name: str
     type: str
     body_i: int
@@ -104,6 +112,9 @@ class ForceIR:
 
 @record
 class ModelIR:
+    """The lowered model: bodies, constraint rows (primitives), joints and forces by index,
+    with the model's settings."""
+
     name: str
     file: str
     text: str

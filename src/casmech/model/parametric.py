@@ -73,6 +73,9 @@ def _zero(value) -> bool:
 
 @record
 class Split:
+    """A lowered model split into structure and numbers: the IR over the symbols d, d's
+    values and the structure's signature."""
+
     ir: ModelIR  # numbers replaced by entries of `symbols` (structural zeros kept)
     symbols: ca.SX  # d, the column of every symbol in `ir`, in walk order
     values: np.ndarray  # d of the lowering that was split

@@ -70,6 +70,9 @@ class ScalarText:
 
 @record(frozen=False)
 class SourceMap:
+    """Where each value, key and scalar of a document was written (path -> file:line:col),
+    and the values written as null."""
+
     values: dict[Path, Source] = field(default_factory=dict)
     keys: dict[Path, Source] = field(default_factory=dict)
     scalars: dict[Path, ScalarText] = field(default_factory=dict)
@@ -78,6 +81,8 @@ class SourceMap:
 
 @record
 class Document:
+    """A YAML document read: its data, file, text, source map and reading's findings."""
+
     data: dict[str, Any]
     file: str
     text: str
@@ -168,6 +173,8 @@ class _Node:
 
 @record(frozen=False)
 class _Anchor:
+    """A YAML anchor: its value, path, the source-map entries written under it and its size."""
+
     value: Any
     path: Path
     ranges: tuple[tuple[int, int], ...]  # entries of each source-map log written under it

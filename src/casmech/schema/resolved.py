@@ -45,6 +45,9 @@ class ScalarFunction:
 
 @record
 class Body:
+    """A resolved body: mass, inertia, initial pose and velocities in SI, its geometry and
+    source."""
+
     name: str
     mass: float
     inertia: np.ndarray  # (3, 3) about the CM, body frame
@@ -193,6 +196,8 @@ class Estimation:
 
 @record
 class ControlInput:
+    """An optimal-control input: the joint it drives, torque or force, and its bounds."""
+
     joint: str
     type: str  # torque | force
     lower: float
@@ -240,6 +245,9 @@ class OptimalControl:
 
 @record
 class ResolvedModel:
+    """The validated, evaluated model that schema hands on (docs/architecture.md): every
+    number in SI."""
+
     name: str
     description: str
     file: str

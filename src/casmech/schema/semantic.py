@@ -20,7 +20,6 @@ from casmech.schema import (
     initial,
     limits,
     motors,
-    ocp_terms,
     outputs,
     resolved,
     spec,
@@ -175,6 +174,8 @@ def optimal_control(check: Checker, given: spec.OptimalControl, joints=(), force
                     f"{limits.MIN_TIME:g} and {limits.MAX_T_END:g} s",
                     got="[{:g}, {:g}]".format(*free["free_time"]))
         free = None
+    from casmech.schema import ocp_terms  # (on use: a model with an `ocp:` section)
+
     terms = ocp_terms.costs(check, given.objective, joints, forces, written)
     ipopt = ocp_terms.solver(check, given.solver)
     guess_file = ocp_terms.guess_file(check, given.initial_guess)

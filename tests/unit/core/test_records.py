@@ -213,3 +213,63 @@ def test_eq_and_hash_of_any_number_of_fields_as_a_dataclass(annotations):
     assert hash(rec(*args)) == hash(made(*args))
     if annotations:
         assert (rec(*args) == rec(*[9] * len(annotations))) is False
+
+
+@pytest.mark.parametrize("init", [True, False])
+def test_a_frozen_records_dataclass_parameters_are_a_frozen_dataclasss(init):
+    """dataclasses reads a frozen record's parameters (every slot) as those of a frozen
+    dataclass whose eq and repr are the record's own, each class with a copy of its own."""
+    made = _pair(frozen=True, init=init)[1]
+    plain = _pair(frozen=True, init=init, eq=False, repr=False)[0]
+    ours, theirs = made.__dataclass_params__, plain.__dataclass_params__
+    assert type(ours) is type(theirs)
+    assert {name: getattr(ours, name) for name in type(ours).__slots__} == \
+        {name: getattr(theirs, name) for name in type(theirs).__slots__}
+    assert _pair(frozen=True, init=init)[1].__dataclass_params__ is not ours
+
+
+@pytest.mark.parametrize("frozen", [True, False])
+def test_a_records_own_init_is_compiled_when_first_called_mutable_or_over_a_frozen_base(
+        frozen):
+    """A mutable record, and a record over a frozen record, get the record's own __init__
+    (compiled when first called), with the dataclass's signature, doc and instances; the
+    mutable one assigns through the class's own __setattr__, as a dataclass's __init__ does."""
+    made, rec = _pair(frozen=frozen)
+    assert rec.__dict__["__init__"].__code__.co_varnames[0] == "__record_self__"
+    assert str(inspect.signature(rec)) == str(inspect.signature(made))
+    assert rec.__doc__ == made.__doc__
+    assert repr(rec(1.0, tags=(1,))) == repr(made(1.0, tags=(1,))).replace(
+        made.__qualname__, rec.__qualname__)
+    if not frozen:
+        seen = []
+
+        @record(frozen=False)
+        class Watched:
+            a: int
+            b: list = field(default_factory=list)
+
+            def __setattr__(self, name, value):
+                seen.append(name)
+                object.__setattr__(self, name, value)
+
+        assert Watched(1).b == [] and seen == ["a", "b"]
+        return
+
+    @record
+    class Base:
+        a: float = 1.0
+
+    @record
+    class Over(Base):
+        b: float = 2.0
+
+    @dataclass(frozen=True)
+    class OverDataclass(Base):
+        b: float = 2.0
+
+    assert Over.__dict__["__init__"].__code__.co_varnames[0] == "__record_self__"
+    assert str(inspect.signature(Over)) == str(inspect.signature(OverDataclass))
+    assert (Over(3.0).a, Over(3.0, 4.0).b, Over() == Over(), hash(Over())) == \
+        (3.0, 4.0, True, hash((1.0, 2.0)))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        Over().b = 5.0
