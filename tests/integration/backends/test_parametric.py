@@ -118,6 +118,14 @@ def test_library_equals_interpreted_at_other_values(tmp_path, toolchain, cache_r
                 np.testing.assert_allclose(np.array(g), np.array(w), rtol=1e-12, atol=1e-12)
 
 
+def case_text(case: str) -> str:
+    """A model of formulations' PARAMETRIC_CASES over 1 s: the text of every test here that
+    runs it, so that they share its parametric library (the text is part of its key)."""
+    from tests.unit.formulations.test_joint_system import PARAMETRIC_CASES
+
+    return PARAMETRIC_CASES[case][0].replace("t_end: 2", "t_end: 1")
+
+
 @pytest.mark.parametrize("case, sets", [
     ("double_pendulum", [{"m1": 2.0, "L2": 1.3}, {"m2": 0.4, "L1": 0.7}]),  # a tree
     ("four_bar", [{"b": 2.2}, {"b": 1.9, "m": 1.5}]),  # a loop: its projected ODE
@@ -129,10 +137,8 @@ def test_set_runs_joint_coordinates_compiled_and_builds_once(tmp_path, toolchain
     library (with the joint functions), the second builds nothing; both run in joint
     coordinates from that library and move as the r-p DAE at the same values does."""
 
-    from tests.unit.formulations.test_joint_system import PARAMETRIC_CASES
-
     path = tmp_path / f"{case}.yaml"
-    path.write_text(PARAMETRIC_CASES[case][0].replace("t_end: 2", "t_end: 1"))
+    path.write_text(case_text(case))
     entries = []  # the cache's entries after each value's runs
     for number, values in enumerate(sets):
         out = tmp_path / f"joint{number}"
@@ -185,10 +191,11 @@ def test_a_parametric_library_solves_its_loop_rows():
     interpreted bundle's are: they are the r-p multipliers at the row's (q, q_dot) to
     roundoff, where IDAS's algebraic states (loop_rows integrator) carry their own error."""
     from tests.integration.runtime.test_loop_rows import rp_multipliers
-    from tests.unit.formulations.test_joint_system import PARAMETRIC_CASES
 
-    model = casmech.loads(PARAMETRIC_CASES["four_bar"][0], overrides={"b": "2.2"})
-    bundle = casmech.compile(model, "compiled")  # (the session's library of this structure)
+    model = casmech.loads(case_text("four_bar"), overrides={"b": "2.2"})
+    # the session's library of this structure when the four-bar's --set runs came first (the
+    # same text: its digest keys the library)
+    bundle = casmech.compile(model, "compiled")
     assert bundle.parametric is not None and bundle.joint_functions is not None
     plain = casmech.compile(model)
 

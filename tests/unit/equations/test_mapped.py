@@ -6,6 +6,8 @@ names, sparsity, also over the model data d (model.parametric) at random d; and 
 with the number of bodies."""
 
 
+import functools
+
 import casadi as ca
 import numpy as np
 import pytest
@@ -119,10 +121,17 @@ def test_mapped_functions_equal_inline(name):
 EVERY_MODEL = sorted(path.name for path in (ROOT / "models").glob("*.yaml"))
 
 
+@functools.cache
+def _every_model_inline(file: str) -> dict:
+    """The numeric inline bundle of a model of models/, built once for the two tests below
+    (CasADi Functions: evaluating them changes nothing)."""
+    return _inline(lower(casmech.load(ROOT / "models" / file)))
+
+
 @pytest.mark.parametrize("file", EVERY_MODEL)
 def test_every_model_mapped_equals_inline(file):
     ir = lower(casmech.load(ROOT / "models" / file))
-    _compare_bundles(mapped_functions(ir), _inline(ir))
+    _compare_bundles(mapped_functions(ir), _every_model_inline(file))
 
 
 @pytest.mark.parametrize("file", EVERY_MODEL)
@@ -134,7 +143,7 @@ def test_every_model_over_its_data_mapped_equals_inline(file):
     inline = build_functions(split.ir, split.symbols).functions
     _compare_bundles(mapped_functions(split.ir, split.symbols),
                      {name: inline[name] for name in inline}, seed=11)
-    numeric, rng = _inline(ir), np.random.default_rng(5)
+    numeric, rng = _every_model_inline(file), np.random.default_rng(5)
     for name, function in numeric.items():
         args = _random(function, rng)
         for a, b in zip(inline[name].call([*args, ca.DM(split.values)]), function.call(args),
