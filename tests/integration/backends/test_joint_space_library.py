@@ -46,7 +46,7 @@ def test_the_compiled_space_gives_the_interpreted_ones_values(toolchain, builds)
     # one library per function used, built on first use; the CasADi Functions call them
     assert len(builds) - built <= len(FUNCTIONS)
     a = compiled["forward_dynamics"](0.0, q, v, tau)
-    np.testing.assert_allclose(np.ravel(a), interpreted.forward_dynamics(q, v, tau),
+    np.testing.assert_allclose(np.ravel(a.full()), interpreted.forward_dynamics(q, v, tau),
                                rtol=1e-11, atol=1e-11)  # as above
     assert compiled["forward_dynamics"].name_in() == ["t", "q", "v", "tau"]
 
