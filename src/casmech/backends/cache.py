@@ -68,29 +68,14 @@ def _sources() -> list[tuple[str, str]]:
 
 
 def _python_files(folder: str) -> list[str]:
-    """The .py files below `folder`, as os.walk finds them (a link to a folder listed, not
-    followed), the bytecode folders (__pycache__, no source in them) not listed: a warm run
-    reads this on every start."""
+    """The .py files below `folder` (a link to a folder listed by os.walk, not followed), the
+    bytecode folders (BYTECODE: no source in them) not entered: a warm run reads this on every
+    start."""
     found = []
-    try:
-        entries = list(os.scandir(folder))
-    except OSError:
-        return found
-    for entry in entries:
-        if _is(entry.is_dir):
-            if entry.name != BYTECODE and not _is(entry.is_symlink):
-                found += _python_files(entry.path)
-        elif entry.name.endswith(".py"):
-            found.append(entry.path)
+    for root, folders, files in os.walk(folder):
+        folders[:] = [name for name in folders if name != BYTECODE]
+        found += [os.path.join(root, name) for name in files if name.endswith(".py")]
     return found
-
-
-def _is(test) -> bool:
-    """A directory entry's test, False where it cannot be told (as os.walk takes it)."""
-    try:
-        return test()
-    except OSError:
-        return False
 
 
 def _hexdigest(text: str) -> bool:
