@@ -13,13 +13,13 @@ is still missing. Any difference is a miss: the model is loaded as without the c
 entry written again.
 
 Only a load that succeeded and showed no warning is kept: a bad model's errors and a load's
-warnings come from the load itself, every time. The entry is one pickle listed in a
-manifest with its sha256, under the cache's trust rules (backends.trust): the entry must be
-the user's and writable by no one else (Untrusted, a usage error, otherwise), its pickle must
-have the recorded sha256 (read bytes hashed before they are unpickled) or the entry is
-discarded with a warning and written again. A cache folder that cannot be used (not
-writable, not the user's) leaves the load as without the cache, and the stage that needs the
-cache reports it.
+warnings come from the load itself, every time. An entry is a folder in the cache folder's
+FOLDER holding one pickle, listed in a manifest with its sha256, under the cache's trust rules
+(backends.trust): the folders and files must be the user's and writable by no one else
+(Untrusted, a usage error, otherwise), and the pickle's bytes must have the recorded sha256
+(hashed as read, before they are unpickled), else the entry is discarded with a warning and
+written again. A cache folder that cannot be used (not writable, not the user's) leaves the
+load as without the cache, and the stage that needs the cache reports it.
 """
 
 from __future__ import annotations
@@ -46,6 +46,7 @@ from casmech.schema import files, load_model
 from casmech.schema.resolved import ResolvedModel
 
 KIND = "checked model"
+FOLDER = "checked-models"  # the entries' folder in the cache folder (cache.entries lists libraries)
 FILE = "model.pickle"
 # the libraries that read and validate a model file: their installed files' stamps key it
 VALIDATORS = ("pydantic", "pydantic_core", "yaml")
@@ -59,7 +60,7 @@ def load(path: str | Path, overrides: Mapping[str, str] | None = None) -> Resolv
     if key is None:  # not a regular file that reads: the load says why
         return load_model(path, overrides)
     try:
-        root = cache.prepared()
+        root = cache.prepared(cache.prepared() / FOLDER)
     except UsageError:  # reported by the stage that needs the cache, as without this entry
         return load_model(path, overrides)
     entry = root / key

@@ -75,7 +75,7 @@ def rooted(model_file: str) -> Iterator[dict[str, Path]]:
     loaded; its component files stay under the same folders). Yields the files named so far
     (absolute path text -> Path), filled as `resolve` finds them."""
     if _roots.get() is not None:  # a nested load (a component file) keeps the outer roots
-        yield _named.get() or {}
+        yield _named.get()
         return
     named: dict[str, Path] = {}
     token, recording = _roots.set(allowed_folders(model_file)), _named.set(named)
