@@ -145,17 +145,20 @@ def test_a_load_that_warned_is_not_kept(root, tmp_path, monkeypatch):
     assert len(root.loads) == 2 and _entries(root) == []
 
 
-@pytest.mark.parametrize("damage", ["cut", "replaced", "not a model"])
-def test_a_damaged_entry_is_discarded_and_written_again(root, tmp_path, damage):
+@pytest.mark.parametrize("damage", ["cut", "replaced", "swapped after the check",
+                                    "not a model"])
+def test_a_damaged_entry_is_discarded_and_written_again(root, tmp_path, monkeypatch, damage):
     path = _models(tmp_path) / "pendulum.yaml"
     expected = checked_model.load(path, {})
     (entry,) = _entries(root)
     kept = entry / checked_model.FILE
     if damage == "cut":  # its sha256 no longer the manifest's
         kept.write_bytes(kept.read_bytes()[:100])
-    elif damage == "replaced":  # another model that unpickles, under the first one's sha256
+    elif damage.startswith(("replaced", "swapped")):  # another model, the first one's sha256
         other = load_model(MODELS / "double_pendulum.yaml")
         kept.write_bytes(pickle.dumps((other, {})))
+        if damage.startswith("swapped"):  # after the entry's check: the bytes read are hashed
+            monkeypatch.setattr(cache, "usable", lambda entry: entry.exists())
     else:  # the recorded sha256, but not a checked model: refused after the check
         data = pickle.dumps({"not": "a model"})
         kept.write_bytes(data)
