@@ -75,3 +75,17 @@ def test_a_bad_model_reports_its_errors_every_run(tmp_path):
     assert "bad.yaml:" in found[0][2] and "error[" in found[0][2]
     entries = tmp_path / "cache" / "checked-models"
     assert not entries.exists() or not any(p.is_dir() for p in entries.iterdir())
+
+
+def test_cache_info_counts_the_kept_models_and_clear_removes_them(tmp_path, monkeypatch,
+                                                                   capsys):
+    from casmech.backends import checked_model
+    from casmech.cli import main
+
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    checked_model.load(MODELS / "pendulum.yaml")
+    assert main(["cache", "info"]) == 0
+    assert "and 1 checked models kept for runs of unchanged files" in capsys.readouterr().out
+    assert main(["cache", "clear"]) == 0
+    assert main(["cache", "info"]) == 0
+    assert "checked models" not in capsys.readouterr().out
