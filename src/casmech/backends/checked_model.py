@@ -191,7 +191,10 @@ def _watching():
 
 
 def _keep(root: Path, entry: Path, model: ResolvedModel, asked: dict[str, str]) -> None:
-    """Write the entry (a stale one replaced); a model that does not pickle is not kept."""
+    """Write the entry (a stale one replaced), without the cache's lock: it is made in
+    milliseconds, and processes racing to publish it write the same model (the rename keeps
+    the entry whole). A model that does not pickle, or an entry that cannot be written, is
+    not kept."""
     try:
         data = pickle.dumps((model, asked), protocol=pickle.HIGHEST_PROTOCOL)
     except (pickle.PicklingError, TypeError, AttributeError):
@@ -206,4 +209,7 @@ def _keep(root: Path, entry: Path, model: ResolvedModel, asked: dict[str, str]) 
             "library": FILE, "functions": [{"name": KIND, "library": FILE}],
             DIGESTS: {FILE: hashlib.sha256(data).hexdigest()}}, indent=1))
 
-    cache.lookup(entry.name, write, root)
+    try:
+        cache.publish(root, entry.name, write)
+    except OSError:
+        pass  # the run goes on with the model it loaded
