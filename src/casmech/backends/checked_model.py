@@ -98,7 +98,7 @@ def entry_key(path: str | Path, overrides: Mapping[str, str]) -> str | None:
 
 
 def _stamp(name: str) -> list | None:
-    """An installed package's module file: its path, size, inode and times (a reinstall
+    """An installed package's module file: its path, size, inode and modification time (a reinstall
     writes new files)."""
     spec = find_spec(name)
     if spec is None or not spec.origin:
