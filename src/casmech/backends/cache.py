@@ -239,18 +239,25 @@ def lookup(entry_key: str, build: Callable[[Path], None], root: Path | None = No
     with FileLock(root / f"{entry_key}.lock"):
         if usable(final):
             return final, True
-        temporary = Path(tempfile.mkdtemp(prefix=f".{entry_key}.", dir=root))
-        try:
-            build(temporary)
-            trust.private(temporary)
-            os.replace(temporary, final)  # atomic; fails if another process published first
-        except OSError:
-            if not (final / MANIFEST).is_file():
-                raise
-        finally:
-            shutil.rmtree(temporary, ignore_errors=True)
+        publish(root, entry_key, build)
     trust.verify(final, LIBRARY)
     return final, False
+
+
+def publish(root: Path, entry_key: str, build: Callable[[Path], None]) -> None:
+    """build(temporary_dir) in a private temporary directory of `root`, published as the
+    key's entry by one rename (kept out when another process published first)."""
+    final = root / entry_key
+    temporary = Path(tempfile.mkdtemp(prefix=f".{entry_key}.", dir=root))
+    try:
+        build(temporary)
+        trust.private(temporary)
+        os.replace(temporary, final)  # atomic; fails if another process published first
+    except OSError:
+        if not (final / MANIFEST).is_file():
+            raise
+    finally:
+        shutil.rmtree(temporary, ignore_errors=True)
 
 
 def entries(root: Path | None = None) -> list[Path]:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 from casmech.backends import cache
+from casmech.backends.checked_model import FOLDER
 from casmech.backends.manifest import MANIFEST
 from casmech.errors import escape
 
@@ -43,4 +44,9 @@ def run(args) -> int:
         stale = sum(cache.size(path) for path in unfinished)
         print(f"  and {len(unfinished)} unfinished builds ({stale / 1e6:.2f} MB: in progress, "
               f"or left by a build that was killed; `casmech cache clear` removes them)")
+    kept = [p for p in (root / FOLDER).glob("*") if p.is_dir()] \
+        if (root / FOLDER).is_dir() else []
+    if kept:
+        print(f"  and {len(kept)} checked models kept for runs of unchanged files "
+              f"({sum(cache.size(p) for p in kept) / 1e6:.2f} MB)")
     return 0

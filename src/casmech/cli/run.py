@@ -131,7 +131,7 @@ def run(args) -> int:
 def _run(args) -> int:
     given = overrides(args.set)
     clock = time.perf_counter()
-    model = api.load(args.model, given)
+    model = _load(args, given)
     from casmech.cli import replay
 
     replay.check_read(model, args)  # a replay reads only what its record lists
@@ -195,6 +195,16 @@ def _run(args) -> int:
     if not args.quiet:
         _report(args, result, timings, paths)
     return 0
+
+
+def _load(args, given):
+    """The model: kept in the cache from an earlier run of the same file (backends.
+    checked_model) unless the run is interpreted (it uses no cache) or a replay."""
+    if args.mode == "interpreted" or args.replay:
+        return api.load(args.model, given)
+    from casmech.backends import checked_model
+
+    return checked_model.load(args.model, given)
 
 
 def _report(args, result, timings, paths) -> None:

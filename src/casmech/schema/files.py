@@ -12,7 +12,9 @@ A file is read up to a limit (E306 beyond it; E006 for the model file itself): a
 huge file costs at most the limit in time and memory.
 
 While a model loads (`rooted`), every file it names that exists is recorded; `digests` gives
-their sha256 for the run's metadata (io/metadata.py) and `casmech run --replay`.
+their sha256 for the run's metadata (io/metadata.py) and `casmech run --replay`. Every path it
+names, present or not, is recorded too with where it resolved (`asked`): what a kept model
+(backends.checked_model) checks again before it stands for a new load.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ ALLOWED_DIRS = "CASMECH_ALLOWED_DIRS"
 _extra: list[Path] = []  # folders allowed by `allow` (the command line)
 _roots: ContextVar[tuple[Path, ...] | None] = ContextVar("casmech_model_roots", default=None)
 _named: ContextVar[dict[str, Path] | None] = ContextVar("casmech_model_files", default=None)
+# the path each name resolved from (its base file's folder joined with it) -> where it resolved
+_asked: ContextVar[dict[str, str] | None] = ContextVar("casmech_model_names", default=None)
 MAX_HASH_BYTES = 256 << 20  # a file named by a model is hashed up to this size (meshes)
 
 
@@ -71,15 +75,23 @@ def rooted(model_file: str) -> Iterator[dict[str, Path]]:
     loaded; its component files stay under the same folders). Yields the files named so far
     (absolute path text -> Path), filled as `resolve` finds them."""
     if _roots.get() is not None:  # a nested load (a component file) keeps the outer roots
-        yield _named.get() or {}
+        yield _named.get()
         return
     named: dict[str, Path] = {}
     token, recording = _roots.set(allowed_folders(model_file)), _named.set(named)
+    asking = _asked.set({})
     try:
         yield named
     finally:
+        _asked.reset(asking)
         _named.reset(recording)
         _roots.reset(token)
+
+
+def asked() -> dict[str, str]:
+    """Within `rooted`: every path the load has resolved so far, existing or not (its base
+    file's folder joined with the name as written -> the resolved path)."""
+    return dict(_asked.get() or {})
 
 
 def resolve(base_file: str, name: str, *, must_exist: bool = True) -> Path:
@@ -87,11 +99,15 @@ def resolve(base_file: str, name: str, *, must_exist: bool = True) -> Path:
     folder and, when it exists (or must), a regular file. Raises NotAllowed or
     FileNotFoundError."""
     roots = _roots.get() or allowed_folders(base_file)
-    path = (Path(base_file).parent / name).resolve()
+    joined = Path(base_file).parent / name
+    path = joined.resolve()
     if not any(path == root or root in path.parents for root in roots):
         raise NotAllowed("the path leads outside the model's folder",
                          f"files a model names must be in its folder ({roots[0]}) or below; "
                          f"allow more with --allow-dir DIR or ${ALLOWED_DIRS}")
+    asking = _asked.get()
+    if asking is not None:
+        asking[str(joined)] = str(path)
     try:
         mode = path.stat().st_mode
     except FileNotFoundError:

@@ -9,8 +9,10 @@ warning), and nothing a mechanism means comes near these bounds. Parameters are 
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-from casmech.schema.loader import Path
+if TYPE_CHECKING:
+    from casmech.schema.loader import Path
 
 LENGTH = 1e6  # [m] positions, points, offsets and sizes: 1000 km (move the origin instead)
 SPEED = 1e6  # [m/s], [rad/s] initial velocities
