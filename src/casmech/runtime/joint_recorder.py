@@ -51,13 +51,17 @@ class Recorder:
     def first(self, t0: float, x, z, kept: dict) -> tuple[np.ndarray, ...]:
         """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` under
         ("first", whether loop rows are solved) (the rest of a row is a function of the
-        start), handed out as copies."""
+        start) as one vector, handed out as views of one copy of it (one copy; the Result's
+        finiteness check then sums that copy alone: runtime.nonfinite.shared)."""
         key = "first", self.loops is not None
-        rows = kept.get(key)
-        if rows is None:
-            rows = kept[key] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
-        q, q_dot, q_ddot, lam = rows
-        return q.copy(), q_dot.copy(), q_ddot.copy(), lam.copy()
+        found = kept.get(key)
+        if found is None:
+            rows = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
+            ends = np.cumsum([row.shape[1] for row in rows]).tolist()
+            found = kept[key] = np.concatenate([row.ravel() for row in rows]), ends
+        vector, (a, b, c, _) = found
+        row = vector.copy()
+        return row[None, :a], row[None, a:b], row[None, b:c], row[None, c:]
 
     def _mapped(self):
         """The results rows' function over many states (joint_rows.over_rows; kept in the

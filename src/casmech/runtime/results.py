@@ -43,7 +43,8 @@ class Result:
         # results columns a run computed beyond the bundle's (a stuck joint's friction:
         # runtime.friction): name -> a value per row
         self.fixed_columns: dict[str, np.ndarray] = {}
-        self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
+        self._blocks: dict[str, list[np.ndarray]] = {"t": [], "q": [], "q_dot": [],
+                                                     "q_ddot": [], "lam": []}  # ("t", *STATES)
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
         """One row: t a float, the states 1-D."""
