@@ -199,3 +199,44 @@ def test_a_partial_result_owns_its_times(functions, monkeypatch):
     partial.t[:] = 7.0  # the caller's own array
     monkeypatch.undo()
     _same(casmech.analyze(functions, **BASE), base)
+
+
+def test_a_partial_results_first_row_is_its_own(functions, monkeypatch):
+    """A run that fails after its first row: its states are the run's own (the kept row at
+    t0 handed out as a copy), so writing them leaves the next run's first row alone."""
+    from casmech.errors import AnalysisError
+    from casmech.runtime import joint_run
+
+    casmech.analyze(functions, **BASE)
+
+    def failing(*args, **kwargs):
+        raise AnalysisError("failed on purpose")
+
+    monkeypatch.setattr(joint_run, "drive", failing)
+    with pytest.raises(AnalysisError) as failed:
+        casmech.analyze(functions, **BASE)
+    partial = failed.value.partial
+    for name in STATES[1:]:
+        getattr(partial, name)[:] = 7.0  # the caller's own arrays
+    monkeypatch.undo()
+    _same(casmech.analyze(functions, **BASE), _fresh(functions, **BASE))
+
+
+def test_a_prepared_runs_dop853_is_looked_up_by_its_first_call_only(functions, monkeypatch):
+    """The integrator of a prepared run finds its DOP853 once (then kept: its loop and
+    options are final by then); the runs give the rows of a fresh workspace."""
+    from casmech.runtime import joint_dynamics
+
+    looked, original = [], joint_dynamics.dop853_of
+
+    def dop853_of(*args, **kwargs):
+        looked.append(args[3])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(joint_dynamics, "dop853_of", dop853_of)
+    settings = BASE | {"method": "dop853", "output_step": 0.01}
+    runs = [casmech.analyze(functions, **settings) for _ in range(3)]
+    assert len(looked) == 1 and runs[0].metadata["integrator"] == "dop853"
+    expected = _fresh(functions, **settings)
+    for result in runs:
+        _same(result, expected)
