@@ -87,8 +87,8 @@ class JointRun:
 
         x, z = self.x, self.z
         try:
-            first = recorder.first(times[0], x, z, self.derived)
-            result.extend(times[:1], *first)
+            first, finite = recorder.first(times[0], x, z, self.derived)
+            result.extend(times[:1], *first, checked=finite)  # (not finite: refused there)
             if watch is not None:
                 watch.start(times[0], first)
             drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch,

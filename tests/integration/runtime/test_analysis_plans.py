@@ -240,3 +240,38 @@ def test_a_prepared_runs_dop853_is_looked_up_by_its_first_call_only(functions, m
     expected = _fresh(functions, **settings)
     for result in runs:
         _same(result, expected)
+
+
+def test_the_kept_first_row_is_checked_once_and_refused_on_every_run(functions, monkeypatch):
+    """The row at t0 of a kept start is checked when it is kept: the runs' Results check
+    their blocks only, and a first row that is not finite is refused (NonFinite at t0, no
+    rows) on every run, the repeated ones too."""
+    from casmech.runtime import joint_recorder, results
+    from casmech.runtime.nonfinite import NonFinite
+
+    checked, original = [], results.check_states
+
+    def check_states(times, *states):
+        checked.append(len(times))
+        return original(times, *states)
+
+    monkeypatch.setattr(results, "check_states", check_states)
+    workspace = Workspace(functions)
+    for _ in range(3):
+        casmech.analyze(functions, workspace=workspace, **BASE)
+    assert checked == [30, 30, 30]  # (the block of each run; the row at t0 when kept)
+
+    rows = joint_recorder.Recorder.rows
+
+    def first_row_nan(self, times, states, algebraic):
+        found = rows(self, times, states, algebraic)
+        if len(times) == 1:
+            found[2][0, 0] = np.nan  # q_ddot at t0
+        return found
+
+    monkeypatch.setattr(joint_recorder.Recorder, "rows", first_row_nan)
+    poisoned = Workspace(functions)
+    for _ in range(2):
+        with pytest.raises(NonFinite) as refused:
+            casmech.analyze(functions, workspace=poisoned, **BASE)
+        assert len(refused.value.partial) == 0 and refused.value.partial.status == "failed"
