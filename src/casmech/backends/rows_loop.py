@@ -91,7 +91,7 @@ class RowsCall:
                                  f"not ({rows}, {size}) or ({size},)")
             shared[k] = a if a is given and self.in_stride[k] == 0 else None
             self.in_p[k] = _address(a)
-        if len(self.entries) > 1:
+        if rows != self.shared_rows and len(self.entries) > 1:
             self._share(rows)
         layout = self.layout
         if layout[0] != rows:
@@ -106,10 +106,8 @@ class RowsCall:
         return tuple([np.ndarray(shape, float, out, offset) for shape, offset in layout[1]])
 
     def _share(self, rows: int) -> None:
-        """The shared values' buffers for `rows` rows (grown when short; their pointers set
-        when the rows change)."""
-        if rows == self.shared_rows:
-            return
+        """The shared values' buffers for `rows` rows (grown when short) and their pointers
+        (called when the rows change)."""
         sizes = self.shared_size.tolist()
         if self.shared.size < rows * sum(sizes):
             self.shared = np.empty(rows * sum(sizes))

@@ -100,7 +100,7 @@ class _CCall:
             if m * self.n <= BOUND_ENTRIES:
                 self._grid = grid
         _, times_kept, out, times_p, out_p = grid
-        np.copyto(self._x, x)
+        self._x[:] = x  # (not np.copyto: its Python dispatcher)
         times_kept[:m] = times
         out = out[:m]
         out.fill(np.nan)

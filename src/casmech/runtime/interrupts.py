@@ -23,7 +23,6 @@ import _signal
 import os
 import signal
 import sys
-import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -100,7 +99,8 @@ class guard:
     (inside a trap() or guard()) installs no handler of its own: the outer one serves both.
     The handlers are read and set through `_signal`, the C module `signal` wraps, whose
     handlers are the same objects without signal's conversion of them to enums (which cost
-    several times the installs themselves, on every analysis)."""
+    several times the installs themselves, on every analysis); another thread is told by the
+    install's own refusal (a ValueError), not by asking `threading` first."""
 
     __slots__ = ("token", "_trap", "_previous", "_reset")
 
@@ -108,11 +108,15 @@ class guard:
         self.token, self._trap, self._previous, self._reset = token, None, None, None
 
     def __enter__(self) -> CancelToken:
-        if (not _traps and threading.current_thread() is threading.main_thread()
-                and _signal.getsignal(_SIGINT) is signal.default_int_handler):
-            self._trap = _Trap(self.token, abandon=False)
-            self._previous = _signal.signal(_SIGINT, self._trap.handler)
-            _traps.append(self._trap)
+        if not _traps and _signal.getsignal(_SIGINT) is signal.default_int_handler:
+            found = _Trap(self.token, abandon=False)
+            try:
+                self._previous = _signal.signal(_SIGINT, found.handler)
+            except ValueError:  # not the main thread (whose handlers alone run)
+                pass
+            else:
+                self._trap = found
+                _traps.append(found)
         self._reset = cancel.enter(self.token)
         return self.token
 

@@ -254,6 +254,7 @@ class _Integrator:
         self.method, self.steps, self._options_key = method, 0, None
         self.loop, self.solved = None, True  # dop853 with loops: set by run_joint_dynamics
         self.derived: dict | None = None  # the start's derived entries (_kept_start)
+        self._rk = None  # dop853: the integrator its first call found (loop, key: final then)
 
     def __call__(self, t0: float, times, x, z, trial: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -265,8 +266,10 @@ class _Integrator:
         if not len(x):  # every coordinate driven: nothing to integrate
             return np.zeros((0, len(times))), np.zeros((0, len(times)))
         if self.method == "dop853":  # runtime.dop853, kept (docs/decisions/dop853.md); loops:
-            rk = dop853_of(system, self.loop, self.options, self._key(),  # their projected
-                           self.workspace, self.derived)  # ODE (runtime.projected_loops)
+            rk = self._rk
+            if rk is None:  # with loops: their projected ODE (runtime.projected_loops)
+                rk = self._rk = dop853_of(system, self.loop, self.options, self._key(),
+                                          self.workspace, self.derived)
             try:
                 states = rk(t0, times[:1] if trial else times, x)
             except Interrupted as interrupted:  # as a NamedCall's: outputs by name

@@ -13,6 +13,7 @@ from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.joint_rows import LoopRows, over_rows, rows_of, solved_motion
+from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.workspace import Workspace
 
 
@@ -48,16 +49,22 @@ class Recorder:
                                                            workspace, solve_loops)
         return found
 
-    def first(self, t0: float, x, z, kept: dict) -> tuple[np.ndarray, ...]:
-        """The rows at t0 of a run from a kept start (x, z): kept in that start's `kept` under
-        ("first", whether loop rows are solved) (the rest of a row is a function of the
-        start), handed out as copies."""
+    def first(self, t0: float, x, z, kept: dict) -> tuple[tuple[np.ndarray, ...], bool]:
+        """The rows at t0 of a run from a kept start (x, z) and whether they are all finite:
+        kept in that start's `kept` under ("first", whether loop rows are solved) (the rest of
+        a row is a function of the start) as one vector with that answer, handed out as views
+        of one copy of it (one copy; a check of them sums that copy alone:
+        runtime.nonfinite.shared)."""
         key = "first", self.loops is not None
-        rows = kept.get(key)
-        if rows is None:
-            rows = kept[key] = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
-        q, q_dot, q_ddot, lam = rows
-        return q.copy(), q_dot.copy(), q_ddot.copy(), lam.copy()
+        found = kept.get(key)
+        if found is None:
+            rows = self.rows([t0], np.asarray(x)[:, None], np.asarray(z)[:, None])
+            ends = np.cumsum([row.shape[1] for row in rows]).tolist()
+            vector = np.concatenate([row.ravel() for row in rows])
+            found = kept[key] = vector, ends, all_finite(vector)
+        vector, (a, b, c, _), finite = found
+        row = vector.copy()
+        return (row[None, :a], row[None, a:b], row[None, b:c], row[None, c:]), finite
 
     def _mapped(self):
         """The results rows' function over many states (joint_rows.over_rows; kept in the

@@ -50,7 +50,8 @@ class JointRun:
         cut = integrate.system.n_cut
         result = Result("dynamics", on_row=progress)
         watch = events.watch(functions, result, extra_events, self.rtol,
-                             settings.event_iterations, self.workspace, self.model_events)
+                             settings.event_iterations, self.workspace, self.model_events) \
+            if self.model_events or extra_events else None  # (None: no event work)
 
         def block(t: float, chunk: np.ndarray, state) -> Block:
             """One solver call from (t, x, z) over `chunk` (z None: the loops' consistent
@@ -86,8 +87,8 @@ class JointRun:
 
         x, z = self.x, self.z
         try:
-            first = recorder.first(times[0], x, z, self.derived)
-            result.extend(times[:1], *first)
+            first, finite = recorder.first(times[0], x, z, self.derived)
+            result.extend(times[:1], *first, checked=finite)  # (not finite: refused there)
             if watch is not None:
                 watch.start(times[0], first)
             drive(result, times, (x, z), block, Chunks(settings.joint_chunk), watch,

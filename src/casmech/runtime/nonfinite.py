@@ -108,23 +108,47 @@ class NonFinite(AnalysisError):
 _ALL = np.logical_and.reduce
 # an array's entries' sum of squares, by BLAS (one call an array, through no ufunc: NumPy's
 # floating-point warnings, and the errstate that would silence them, are not involved); np.vdot's
-# C function itself where NumPy exposes it (no Python dispatcher call before it)
+# C function itself where NumPy exposes it (no Python dispatcher call before it). The public
+# functions without that dispatcher (ndarray.dot, np.inner) warn when the sum overflows (an
+# error under -W error), which np.vdot does not.
 _SQUARES = getattr(np.vdot, "_implementation", np.vdot)
+
+# the most entries one sum takes: OpenBLAS sums more than 10,000 in its threads, whose waking
+# and waiting cost many times the sum's own time on a machine's other cores
+PIECE = 8192
 
 
 def all_finite(*arrays) -> bool:
     """Whether every entry of `arrays` is finite: from each array's sum of squares first
     (np.vdot of the array with itself: a NaN or an infinity makes it non-finite, and a sum of
     non-negative terms meets no inf - inf), entry by entry only where a sum is not finite (a
-    NaN, an infinity, or finite entries whose squares overflow). The sums warn of nothing:
-    they are the check, not news for a user."""
+    NaN, an infinity, or finite entries whose squares overflow), a long array's in pieces of
+    at most PIECE entries. The sums warn of nothing: they are the check, not news for a
+    user."""
     total = 0.0
     for array in arrays:
         flat = np.asarray(array).ravel("K")  # (a view of a transposed block: np.vdot would copy)
-        total += float(_SQUARES(flat, flat))  # (a Python float's sum overflows silently)
+        if flat.size <= PIECE:
+            total += float(_SQUARES(flat, flat))  # (a Python float's sum overflows silently)
+            continue
+        for start in range(0, flat.size, PIECE):
+            piece = flat[start:start + PIECE]
+            total += float(_SQUARES(piece, piece))
     if math.isfinite(total):
         return True
     return all(np.isfinite(array).all() for array in arrays)
+
+
+def shared(q: np.ndarray, q_dot: np.ndarray, q_ddot: np.ndarray, lam: np.ndarray) -> tuple:
+    """(the array the four states view,) where they view one and it holds no more entries
+    than they do (the rows' C loop's outputs of one call: runtime.joint_recorder), else the
+    states: its entries finite, so are theirs (each a part of it); an entry of it outside
+    them not finite only sends the check on to theirs."""
+    base = q.base
+    if type(base) is not np.ndarray or q_dot.base is not base or q_ddot.base is not base \
+            or lam.base is not base or base.size > q.size + q_dot.size + q_ddot.size + lam.size:
+        return q, q_dot, q_ddot, lam
+    return (base,)
 
 
 ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
@@ -132,9 +156,10 @@ ONE_ARRAY = 256  # blocks of up to this many rows are checked as one array
 
 def check_states(times, q, q_dot, q_ddot, lam) -> int | None:
     """The first row of a block whose states are not all finite (None: all are): all_finite
-    first (a sum of squares per state), then, where one is not finite, row by row; a small block is
-    searched as one array of its rows (one call into NumPy, not one per state)."""
-    if all_finite(times, q, q_dot, q_ddot, lam):
+    first (a sum of squares per state, or one of the array the four states view where they
+    view one no larger than them: shared), then, where one is not finite, row by row; a small
+    block is searched as one array of its rows (one call into NumPy, not one per state)."""
+    if all_finite(times, *shared(q, q_dot, q_ddot, lam)):
         return None
     times = np.reshape(times, (-1, 1))
     blocks = (times, q, q_dot, q_ddot, lam)

@@ -43,17 +43,19 @@ class Result:
         # results columns a run computed beyond the bundle's (a stuck joint's friction:
         # runtime.friction): name -> a value per row
         self.fixed_columns: dict[str, np.ndarray] = {}
-        self._blocks: dict[str, list[np.ndarray]] = {name: [] for name in ("t", *STATES)}
+        self._blocks: dict[str, list[np.ndarray]] = {"t": [], "q": [], "q_dot": [],
+                                                     "q_ddot": [], "lam": []}  # ("t", *STATES)
 
     def append(self, t, q, q_dot, q_ddot, lam) -> None:
         """One row: t a float, the states 1-D."""
         self.extend([t], *(np.reshape(np.asarray(v, float), (1, -1))
                            for v in (q, q_dot, q_ddot, lam)))
 
-    def extend(self, times, q, q_dot, q_ddot, lam) -> None:
+    def extend(self, times, q, q_dot, q_ddot, lam, checked: bool = False) -> None:
         """A block of rows: times (k,), the states 2-D arrays (k x n), row j at times[j]. A row
         whose states are not all finite is refused: the rows before it are added, then
-        runtime.nonfinite.NonFinite is raised."""
+        runtime.nonfinite.NonFinite is raised. `checked`: rows their maker found finite (a
+        run's kept row at t0: runtime.joint_recorder), not checked again."""
         times = np.asarray(times, float).reshape(-1)
         arrays = [np.asarray(q, float), np.asarray(q_dot, float), np.asarray(q_ddot, float),
                   np.asarray(lam, float)]
@@ -61,7 +63,7 @@ class Result:
         for k, value in enumerate(arrays):
             if value.ndim != 2 or len(value) != count:
                 raise ValueError(f"{STATES[k]}: expected {count} rows, got shape {value.shape}")
-        bad = check_states(times, *arrays)
+        bad = None if checked else check_states(times, *arrays)
         values = dict(zip(STATES, arrays, strict=True))
         if bad is not None:
             if bad:

@@ -199,3 +199,79 @@ def test_a_partial_result_owns_its_times(functions, monkeypatch):
     partial.t[:] = 7.0  # the caller's own array
     monkeypatch.undo()
     _same(casmech.analyze(functions, **BASE), base)
+
+
+def test_a_partial_results_first_row_is_its_own(functions, monkeypatch):
+    """A run that fails after its first row: its states are the run's own (the kept row at
+    t0 handed out as a copy), so writing them leaves the next run's first row alone."""
+    from casmech.errors import AnalysisError
+    from casmech.runtime import joint_run
+
+    casmech.analyze(functions, **BASE)
+
+    def failing(*args, **kwargs):
+        raise AnalysisError("failed on purpose")
+
+    monkeypatch.setattr(joint_run, "drive", failing)
+    with pytest.raises(AnalysisError) as failed:
+        casmech.analyze(functions, **BASE)
+    partial = failed.value.partial
+    for name in STATES[1:]:
+        getattr(partial, name)[:] = 7.0  # the caller's own arrays
+    monkeypatch.undo()
+    _same(casmech.analyze(functions, **BASE), _fresh(functions, **BASE))
+
+
+def test_a_prepared_runs_dop853_is_looked_up_by_its_first_call_only(functions, monkeypatch):
+    """The integrator of a prepared run finds its DOP853 once (then kept: its loop and
+    options are final by then); the runs give the rows of a fresh workspace."""
+    from casmech.runtime import joint_dynamics
+
+    looked, original = [], joint_dynamics.dop853_of
+
+    def dop853_of(*args, **kwargs):
+        looked.append(args[3])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(joint_dynamics, "dop853_of", dop853_of)
+    settings = BASE | {"method": "dop853", "output_step": 0.01}
+    runs = [casmech.analyze(functions, **settings) for _ in range(3)]
+    assert len(looked) == 1 and runs[0].metadata["integrator"] == "dop853"
+    expected = _fresh(functions, **settings)
+    for result in runs:
+        _same(result, expected)
+
+
+def test_the_kept_first_row_is_checked_once_and_refused_on_every_run(functions, monkeypatch):
+    """The row at t0 of a kept start is checked when it is kept: the runs' Results check
+    their blocks only, and a first row that is not finite is refused (NonFinite at t0, no
+    rows) on every run, the repeated ones too."""
+    from casmech.runtime import joint_recorder, results
+    from casmech.runtime.nonfinite import NonFinite
+
+    checked, original = [], results.check_states
+
+    def check_states(times, *states):
+        checked.append(len(times))
+        return original(times, *states)
+
+    monkeypatch.setattr(results, "check_states", check_states)
+    workspace = Workspace(functions)
+    for _ in range(3):
+        casmech.analyze(functions, workspace=workspace, **BASE)
+    assert checked == [30, 30, 30]  # (the block of each run; the row at t0 when kept)
+
+    rows = joint_recorder.Recorder.rows
+
+    def first_row_nan(self, times, states, algebraic):
+        found = rows(self, times, states, algebraic)
+        if len(times) == 1:
+            found[2][0, 0] = np.nan  # q_ddot at t0
+        return found
+
+    monkeypatch.setattr(joint_recorder.Recorder, "rows", first_row_nan)
+    poisoned = Workspace(functions)
+    for _ in range(2):
+        with pytest.raises(NonFinite) as refused:
+            casmech.analyze(functions, workspace=poisoned, **BASE)
+        assert len(refused.value.partial) == 0 and refused.value.partial.status == "failed"

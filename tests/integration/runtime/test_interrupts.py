@@ -134,6 +134,30 @@ def test_ctrl_c_in_the_api_keeps_the_rows():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+def test_an_analysis_in_another_thread_leaves_the_handler_alone():
+    """Only the main thread installs casmech's Ctrl-C handler: a run in another thread
+    (the guard's install refused there) completes, its token the running one, and neither
+    installs a handler nor leaves one behind."""
+    functions = casmech.compile(casmech.load(MODELS / "double_pendulum.yaml"))
+    seen, failed = [], []
+
+    def on_row(t):
+        seen.append((signal.getsignal(signal.SIGINT), bool(interrupts._traps)))
+
+    def run():
+        try:
+            casmech.analyze(functions, t_end=0.05, progress=on_row)
+        except BaseException as error:  # noqa: BLE001 (reported below)
+            failed.append(error)
+
+    thread = threading.Thread(target=run)
+    thread.start()
+    thread.join()
+    assert not failed and seen
+    assert all(handler is signal.default_int_handler and not traps for handler, traps in seen)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
 @pytest.mark.parametrize("formulation", ["joint", "rp"])
 def test_a_signal_stops_an_integrator_call_at_once_and_keeps_its_rows(formulation):
     """One solver call over 2000 output intervals of a bouncing ball (seconds of work): a

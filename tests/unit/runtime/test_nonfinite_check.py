@@ -1,13 +1,16 @@
 """runtime.nonfinite.check_states: the first row of a block with a value that is not finite,
 whether the block is checked as one array (small) or state by state (large), against a
-value-by-value scan with math.isfinite; all_finite against an entrywise check."""
+value-by-value scan with math.isfinite; all_finite against an entrywise check, its sums never
+longer than PIECE (OpenBLAS sums longer vectors in threads), states viewing one array summed
+as that array."""
 
 import math
 
 import numpy as np
 import pytest
 
-from casmech.runtime.nonfinite import ONE_ARRAY, all_finite, check_states
+from casmech.runtime import nonfinite
+from casmech.runtime.nonfinite import ONE_ARRAY, PIECE, all_finite, check_states
 
 
 def _scan(times, *blocks) -> int | None:
@@ -82,3 +85,48 @@ def test_the_check_itself_warns_nothing():
         assert check_states(np.arange(3.0), np.full((3, 2), 1e308), np.array(
             [[1.0, 2.0], [np.inf, -np.inf], [0.0, 0.0]]), np.zeros((3, 2)),
             np.zeros((3, 0))) == 1
+
+
+@pytest.fixture
+def sums(monkeypatch) -> list[int]:
+    """The length of every sum of squares all_finite takes from here on."""
+    taken, original = [], nonfinite._SQUARES
+
+    def squares(a, b):
+        taken.append(a.size)
+        return original(a, b)
+
+    monkeypatch.setattr(nonfinite, "_SQUARES", squares)
+    return taken
+
+
+def test_long_arrays_are_summed_in_pieces_and_every_piece_counts(sums):
+    """An array longer than PIECE is summed in pieces of at most PIECE entries (one BLAS
+    thread), and a NaN or an infinity in any piece, the last one's among them, is found."""
+    values = np.ones((3 * PIECE + 5) // 7 + 1, float)[:, None] * np.ones(7)  # (rows, 7)
+    assert all_finite(values)
+    assert sums and max(sums) <= PIECE and sum(sums) == values.size
+    for where in (0, PIECE - 1, PIECE, values.size - 1):
+        bad = values.copy()
+        bad.flat[where] = (np.nan, np.inf)[where % 2]
+        assert not all_finite(bad), where
+
+
+def test_states_viewing_one_array_are_summed_as_that_array(sums):
+    """The four states as views of one array no larger than them (the rows' C loop's
+    outputs) take one sum besides the times'; any other states, one sum each; either way the
+    first bad row is the scan's."""
+    rows, widths = 5, (6, 6, 6, 4)
+    one = np.arange(rows * sum(widths), dtype=float) / 7
+    edges = np.cumsum([0, *widths]) * rows
+    views = [one[a:b].reshape(rows, -1) for a, b in zip(edges[:-1], edges[1:], strict=True)]
+    times = np.linspace(0.0, 1.0, rows)
+    assert check_states(times, *views) is None and len(sums) == 2
+    views[3][2, 1] = np.nan  # (in the one array)
+    assert check_states(times, *views) == _scan(times, *views) == 2
+    sums.clear()
+    part = np.concatenate([one, one]).copy()  # views of an array larger than them
+    larger = [part[a:b].reshape(rows, -1) for a, b in zip(edges[:-1], edges[1:],
+                                                         strict=True)]
+    part[-1] = np.nan  # outside the views: not theirs
+    assert check_states(times, *larger) == _scan(times, *larger) and len(sums) == 5
