@@ -24,7 +24,7 @@ def test_the_buffered_calls_equal_casadis_calls():
     ir = lower(casmech.load(MODELS / "heavy_top.yaml"))
     plain, buffered = joint_spaces.joint_space(ir), casmech.joint_space(casmech.load(
         MODELS / "heavy_top.yaml"))
-    assert plain.calls is None and buffered.calls is not None
+    assert type(plain.calls).__name__ == "_CasadiCalls" and type(buffered.calls).__name__ == "Calls"
     rng = np.random.default_rng(3)
     for _ in range(3):
         q, v, tau = _arguments(plain, rng)
