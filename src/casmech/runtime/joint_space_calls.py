@@ -121,11 +121,11 @@ def _call(function: ca.Function, trailing: tuple) -> Callable[..., tuple]:
     name = function.name() if function.name().isidentifier() else "call"
     text = _TEXT.format(name=name, arguments=arguments, copies=copies,
                         packed=f"({arguments})", outputs="(" + "".join(
-                            f"o{k}.T.copy(), " for k in range(len(outputs))) + ")")
+                            f"o{k}.copy(), " for k in range(len(outputs))) + ")")
     scope = {"acquire": lock.acquire, "release": lock.release, "evaluate": evaluate,
              "write": write, "buffer": buffer, "inputs": inputs,
              **{f"f{k}": f for k, f in enumerate(flat)},
              **{f"m{k}": memoryview(f) for k, f in enumerate(flat)},
-             **{f"o{k}": o for k, o in enumerate(outputs)}}
+             **{f"o{k}": o.T for k, o in enumerate(outputs)}}  # the matrices
     exec(text, scope)  # noqa: S102 (made of indices, sizes and an identifier)
     return scope[name]
