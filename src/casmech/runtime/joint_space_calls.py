@@ -24,6 +24,7 @@ from collections.abc import Callable, Mapping
 import casadi as ca
 import numpy as np
 
+from casmech.formulations.joint_space import VECTORS
 from casmech.numerics.dense_outputs import dense_outputs
 
 TIME = "t"  # the input written as one number (SIGNATURES' time)
@@ -31,8 +32,9 @@ TIME = "t"  # the input written as one number (SIGNATURES' time)
 
 class Calls(dict):
     """name -> a thread-safe NumPy call of functions[name] (module docstring): the call takes
-    the function's inputs but the trailing ones `trailing` gives and returns a tuple of fresh
-    2-D arrays, one per output. `trailing(name)`: the values of the inputs functions[name]
+    the function's inputs but the trailing ones `trailing` gives and returns its outputs as
+    fresh arrays, those named in VECTORS 1-D and the others 2-D: the array of a function of one
+    output, else a tuple of them. `trailing(name)`: the values of the inputs functions[name]
     takes after the space's (a compiled joint space's "d", asked for once the function is at
     hand: backends.joint_space_library); None: no such inputs. A dict whose values are, until
     first called, stand-ins that make the call and put it in their place."""
@@ -82,13 +84,15 @@ def {name}({arguments}):
 
 
 def _call(function: ca.Function, trailing: tuple) -> Callable[..., tuple]:
-    """function(*arrays) -> a tuple of fresh 2-D arrays, one per output, through the function's
-    buffer (module docstring); `trailing` the values of its last inputs, written once."""
+    """function(*arrays) -> its outputs as Calls gives them, through the function's buffer
+    (module docstring); `trailing` the values of its last inputs, written once."""
     buffer, evaluate = function.buffer()
-    # casadi stores a matrix column by column: each array is its matrix's transpose (the
-    # buffer holds their addresses: the arrays are kept by the call's closure)
+    # casadi stores a matrix column by column: each array is its matrix's transpose, a
+    # vector's its numbers (the buffer holds their addresses: the call's scope keeps them)
     inputs = [np.zeros(function.size_in(i)[::-1]) for i in range(function.n_in())]
-    outputs = [np.empty(function.size_out(i)[::-1]) for i in range(function.n_out())]
+    outputs = [np.empty(function.numel_out(i)) if name in VECTORS else
+               np.empty(function.size_out(i)[::-1])
+               for i, name in enumerate(function.name_out())]
     for i, array in enumerate(inputs):
         buffer.set_arg(i, memoryview(array.reshape(-1)))
     for i, array in enumerate(outputs):
@@ -119,13 +123,13 @@ def _call(function: ca.Function, trailing: tuple) -> Callable[..., tuple]:
     copies = "; ".join(f"f{k}[0] = x{k}" if scalar[k] else f"m{k}[:] = x{k}"
                        for k in range(given)) or "pass"
     name = function.name() if function.name().isidentifier() else "call"
-    text = _TEXT.format(name=name, arguments=arguments, copies=copies,
-                        packed=f"({arguments})", outputs="(" + "".join(
-                            f"o{k}.copy(), " for k in range(len(outputs))) + ")")
+    copied = [f"o{k}.copy()" for k in range(len(outputs))]
+    text = _TEXT.format(name=name, arguments=arguments, copies=copies, packed=f"({arguments})",
+                        outputs=copied[0] if len(copied) == 1 else f"({', '.join(copied)},)")
     scope = {"acquire": lock.acquire, "release": lock.release, "evaluate": evaluate,
              "write": write, "buffer": buffer, "inputs": inputs,
              **{f"f{k}": f for k, f in enumerate(flat)},
              **{f"m{k}": memoryview(f) for k, f in enumerate(flat)},
-             **{f"o{k}": o.T for k, o in enumerate(outputs)}}  # the matrices
+             **{f"o{k}": o.T for k, o in enumerate(outputs)}}  # (a matrix's view)
     exec(text, scope)  # noqa: S102 (made of indices, sizes and an identifier)
     return scope[name]
