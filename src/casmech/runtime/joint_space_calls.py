@@ -45,7 +45,7 @@ class Calls(dict):
         self._functions, self._trailing = functions, trailing
         self._lock = threading.Lock()
 
-    def _make(self, name: str) -> Callable[..., tuple]:
+    def _make(self, name: str) -> Callable:
         """The call of `name`, made once (under the lock) and put in the stand-in's place."""
         with self._lock:
             call = self[name]
@@ -62,7 +62,7 @@ class _Unmade:
     def __init__(self, calls: Calls, name: str):
         self.calls, self.name = calls, name
 
-    def __call__(self, *arrays) -> tuple:
+    def __call__(self, *arrays):
         return self.calls._make(self.name)(*arrays)
 
 
@@ -83,7 +83,7 @@ def {name}({arguments}):
 """
 
 
-def _call(function: ca.Function, trailing: tuple) -> Callable[..., tuple]:
+def _call(function: ca.Function, trailing: tuple) -> Callable:
     """function(*arrays) -> its outputs as Calls gives them, through the function's buffer
     (module docstring); `trailing` the values of its last inputs, written once."""
     buffer, evaluate = function.buffer()
@@ -122,14 +122,17 @@ def _call(function: ca.Function, trailing: tuple) -> Callable[..., tuple]:
     arguments = "".join(f"x{k}, " for k in range(given))
     copies = "; ".join(f"f{k}[0] = x{k}" if scalar[k] else f"m{k}[:] = x{k}"
                        for k in range(given)) or "pass"
-    name = function.name() if function.name().isidentifier() else "call"
-    copied = [f"o{k}.copy()" for k in range(len(outputs))]
-    text = _TEXT.format(name=name, arguments=arguments, copies=copies, packed=f"({arguments})",
-                        outputs=copied[0] if len(copied) == 1 else f"({', '.join(copied)},)")
+    copied = "".join(f"o{k}.copy(), " for k in range(len(outputs)))
     scope = {"acquire": lock.acquire, "release": lock.release, "evaluate": evaluate,
              "write": write, "buffer": buffer, "inputs": inputs,
              **{f"f{k}": f for k, f in enumerate(flat)},
              **{f"m{k}": memoryview(f) for k, f in enumerate(flat)},
              **{f"o{k}": o.T for k, o in enumerate(outputs)}}  # (a matrix's view)
-    exec(text, scope)  # noqa: S102 (made of indices, sizes and an identifier)
+    # (named as the function where that name is free: Python's message for a wrong number of
+    # arguments names it)
+    name = function.name() if function.name().isidentifier() and \
+        function.name() not in scope else "call"
+    text = _TEXT.format(name=name, arguments=arguments, copies=copies, packed=f"({arguments})",
+                        outputs=copied[:-2] if len(outputs) == 1 else f"({copied})")
+    exec(text, scope)  # noqa: S102 (made of indices and an identifier)
     return scope[name]
