@@ -72,8 +72,8 @@ def measure(name: str, workdir: Path, repeats: int, calls: int) -> list[str]:
         for who in ("casmech", "casmech compiled", "casadi call"):
             mine = statistics.median(times[what, who])
             built = f"{build:.1f}" if who == "casmech compiled" else ""
-            rows.append(f"| {name} | {what} | {who} | {1e6 * mine:.1f} | {1e6 * peer:.2f} | "
-                        f"{mine / peer:.1f} | {built} |")
+            rows.append(f"| {name} | {what} | {who} | {1e6 * mine:.2f} | {1e6 * peer:.2f} | "
+                        f"{mine / peer:.2f} | {built} |")
     return rows
 
 

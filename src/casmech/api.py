@@ -193,21 +193,25 @@ def joint_space(model: ResolvedModel | SystemFunctions) -> joint_spaces.JointSpa
     its joint space (built once per set of values); one compiled with mode "compiled" has it
     compiled too, up to the bodies of a library over the model data (more: interpreted): each
     function in a library of the model's structure that every set of values shares, built into
-    the cache when the function is first used (backends.joint_space_library)."""
+    the cache when the function is first used (backends.joint_space_library). Under mode
+    "auto" each function is compiled where the cache holds its library when first used, else
+    interpreted (nothing is built); an auto miss's space is made again on the compiled bundle
+    once its handover has it (`running`), looking in the cache again."""
     from casmech.equations.evaluation import WHERE_INLINE
     from casmech.formulations import joint_space as joint_spaces
     from casmech.runtime.joint_space_calls import Calls
 
     if not isinstance(model, SystemFunctions):
         return joint_spaces.joint_space(lower(model), Calls)
+    requested = getattr(model, "requested", None)
+    model = running(model)
     made = None
-    if getattr(model, "requested", None) == "compiled" and \
-            model.n_bodies <= WHERE_INLINE["parametric"]:
+    if requested in ("compiled", "auto") and model.n_bodies <= WHERE_INLINE["parametric"]:
         def made():
             from casmech.backends import joint_space_library as library
 
-            space = library.CompiledSpace(model.ir)
-            return space.bound, Calls(space.externals, space.data)
+            space = library.CompiledSpace(model.ir, build=requested == "compiled")
+            return space.functions, Calls(space.evaluated, space.trailing)
 
     return workspace.default(model).one(
         "joint_space", lambda: joint_spaces.joint_space(model.ir, Calls, made))

@@ -32,7 +32,7 @@ the coordinates): build refuses them, naming the cut joints.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import field
 
 import casadi as ca
@@ -58,6 +58,8 @@ SIGNATURES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "inverse_dynamics_derivatives": (("t", "q", "v", "a"), ("dtau_dq", "dtau_dv", "dtau_da")),
     "forward_kinematics": (("t", "q", "v"), ("q_bodies", "q_dot_bodies")),
 }
+# the outputs that are vectors: the NumPy calls give them as 1-D arrays, the others as 2-D
+VECTORS = frozenset({"b", "a", "tau", "q_bodies", "q_dot_bodies"})
 
 
 def functions(ir: ModelIR, tree: Tree, joint_local: bool = True,
@@ -121,9 +123,14 @@ class JointSpace:
     velocities: tuple[str, ...]  # names of v and of tau, a
     joints: tuple[str, ...]  # the tree joints, in tree order ('' for a floating body's)
     neutral: np.ndarray  # q at the file's pose: zeros, unit quaternions [1, 0, 0, 0]
-    # name -> the NumPy call of that function (arrays in, a tuple of 2-D arrays out), given by
+    # name -> the NumPy call of that function (arrays in; out fresh arrays, VECTORS 1-D and
+    # matrices 2-D: the array of a function of one output, else a tuple of them), given by
     # whoever makes the space (casmech.joint_space: through buffers); None: casadi's own call
-    calls: Mapping[str, Callable[..., tuple]] | None = field(default=None, compare=False)
+    calls: Mapping[str, Callable] | None = field(default=None, compare=False)
+
+    def __post_init__(self):
+        if self.calls is None:  # (the methods call self.calls[name] with no test)
+            object.__setattr__(self, "calls", _CasadiCalls(self.functions))
 
     @property
     def nq(self) -> int:
@@ -136,47 +143,68 @@ class JointSpace:
     def __getitem__(self, name: str) -> ca.Function:
         return self.functions[name]
 
-    def _call(self, name: str, *args) -> tuple[np.ndarray, ...]:
-        if self.calls is not None:  # (they take numbers, lists and arrays as they are)
-            return self.calls[name](*args)
-        outputs = self.functions[name](*(np.asarray(a, float) for a in args))
-        outputs = outputs if isinstance(outputs, tuple) else (outputs,)
-        return tuple(np.array(out.full()) for out in outputs)
-
+    # (each method calls its function's call itself, with no helper between: a Python frame
+    # is a visible part of a compiled function's call)
     def mass_matrix(self, q, t: float = 0.0) -> np.ndarray:
         """M(q) (nv x nv); Pinocchio's crba."""
-        return self._call("mass_matrix", t, q)[0]
+        return self.calls["mass_matrix"](t, q)
 
     def bias_forces(self, q, v, t: float = 0.0) -> np.ndarray:
         """b(t, q, v) (nv); Pinocchio's nonLinearEffects where gravity is the only force."""
-        return self._call("bias_forces", t, q, v)[0].ravel()
+        return self.calls["bias_forces"](t, q, v)
 
     def forward_dynamics(self, q, v, tau, t: float = 0.0) -> np.ndarray:
         """The accelerations a (nv) under joint forces tau; Pinocchio's aba."""
-        return self._call("forward_dynamics", t, q, v, tau)[0].ravel()
+        return self.calls["forward_dynamics"](t, q, v, tau)
 
     def inverse_dynamics(self, q, v, a, t: float = 0.0) -> np.ndarray:
         """The joint forces tau (nv) that give accelerations a; Pinocchio's rnea."""
-        return self._call("inverse_dynamics", t, q, v, a)[0].ravel()
+        return self.calls["inverse_dynamics"](t, q, v, a)
 
     def forward_dynamics_derivatives(self, q, v, tau, t: float = 0.0) -> tuple:
         """(da/dq, da/dv, da/dtau = M^-1); Pinocchio's computeABADerivatives."""
-        return tuple(self._call("forward_dynamics_derivatives", t, q, v, tau))
+        return self.calls["forward_dynamics_derivatives"](t, q, v, tau)
 
     def inverse_dynamics_derivatives(self, q, v, a, t: float = 0.0) -> tuple:
         """(dtau/dq, dtau/dv, dtau/da = M); Pinocchio's computeRNEADerivatives."""
-        return tuple(self._call("inverse_dynamics_derivatives", t, q, v, a))
+        return self.calls["inverse_dynamics_derivatives"](t, q, v, a)
 
     def forward_kinematics(self, q, v=None, t: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """The bodies' r-p coordinates and their rates (casmech's q and q_dot: positions
         r_1..r_nb, then Euler parameters p_1..p_nb) at the joint state."""
         v = np.zeros(self.nv) if v is None else v
-        q_bodies, q_dot_bodies = self._call("forward_kinematics", t, q, v)
-        return q_bodies.ravel(), q_dot_bodies.ravel()
+        return self.calls["forward_kinematics"](t, q, v)
 
     def __repr__(self) -> str:
         return (f"JointSpace(nq={self.nq}, nv={self.nv}, joints={list(self.joints)}, "
                 f"functions={list(self.functions)})")
+
+
+class _CasadiCalls(Mapping):
+    """name -> CasADi's own call of functions[name] (numbers, lists and arrays in; out as
+    JointSpace.calls gives them)."""
+
+    def __init__(self, functions: Mapping[str, ca.Function]):
+        self._functions = functions
+
+    def __getitem__(self, name: str) -> Callable[..., tuple]:
+        function = self._functions[name]
+
+        def call(*args):
+            outputs = function(*(np.asarray(a, float) for a in args))
+            outputs = outputs if isinstance(outputs, tuple) else (outputs,)
+            arrays = tuple(np.array(out.full()).ravel() if output in VECTORS else
+                           np.array(out.full())
+                           for output, out in zip(function.name_out(), outputs, strict=True))
+            return arrays[0] if len(arrays) == 1 else arrays
+
+        return call
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._functions)
+
+    def __len__(self) -> int:
+        return len(self._functions)
 
 
 def joint_space(ir: ModelIR, calls: Callable[[Mapping[str, ca.Function]], Mapping] | None = None,

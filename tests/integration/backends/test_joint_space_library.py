@@ -109,3 +109,63 @@ def test_a_tree_above_the_inline_bodies_keeps_the_interpreted_space(toolchain, b
     q = space.neutral
     space.forward_dynamics(q, np.zeros(space.nv), np.zeros(space.nv))
     assert len(builds) == built and space["forward_dynamics"].is_a("SXFunction")
+
+
+def test_auto_compiles_what_the_cache_holds_and_builds_nothing(toolchain, tmp_path,
+                                                                monkeypatch):
+    from casmech.backends import cache
+    from casmech.backends.joint_space_library import CompiledSpace
+    from casmech.model.lower import lower
+
+    root = tmp_path / "cache"  # of its own: the session's may hold these libraries
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(root))
+    monkeypatch.setenv("CASMECH_BACKGROUND_BUILD", "0")
+    model = casmech.load(MODELS / "heavy_top.yaml")
+    interpreted = casmech.joint_space(model)
+    rng = np.random.default_rng(5)
+    q, v, tau = _state(interpreted, rng)
+
+    cold = casmech.joint_space(casmech.compile(model))  # mode auto, an empty cache
+    found = _outputs(cold, q, v, tau)
+    assert all(cold[name].is_a("SXFunction") for name in FUNCTIONS)
+    assert cache.entries(root) == [] and cache.unfinished(root) == []  # nothing built
+    for a, b in zip(found, _outputs(interpreted, q, v, tau), strict=True):
+        np.testing.assert_array_equal(a, b)  # the same SX functions
+
+    CompiledSpace(lower(model)).evaluated["forward_dynamics"]  # its library alone, built
+    built = cache.entries(root)
+    warm = casmech.joint_space(casmech.compile(model))  # auto again: a new bundle, a new space
+    assert not warm["forward_dynamics"].is_a("SXFunction")  # the library's, with d fixed
+    assert warm["mass_matrix"].is_a("SXFunction")  # not in the cache: interpreted
+    found = _outputs(warm, q, v, tau)
+    assert cache.entries(root) == built and cache.unfinished(root) == []
+    for a, b in zip(found, _outputs(interpreted, q, v, tau), strict=True):
+        # the compiled forward dynamics reads the constants from the data input instead of
+        # folding them in: roundoff of O(1) quantities
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12)
+
+
+def test_an_auto_space_looks_again_once_its_bundle_is_handed_over(toolchain, tmp_path,
+                                                                   monkeypatch):
+    from casmech.backends.joint_space_library import CompiledSpace
+    from casmech.model.lower import lower
+
+    monkeypatch.setenv("CASMECH_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("CASMECH_BACKGROUND_BUILD", "0")
+    model = casmech.load(MODELS / "heavy_top.yaml")
+
+    class Handover:  # an auto miss's build (backends.handover), done once `done` holds it
+        done = None
+
+        def ready(self):
+            return self.done
+
+    functions = casmech.compile(model)
+    functions = type(functions)(**{**vars(functions), "handover": Handover()})
+    before = casmech.joint_space(functions)
+    assert before["forward_dynamics"].is_a("SXFunction")  # an empty cache
+    CompiledSpace(lower(model)).evaluated["forward_dynamics"]  # its library, built since
+    assert casmech.joint_space(functions) is before  # kept: the build is not done
+    Handover.done = casmech.compile(model, "interpreted")  # the bundle handed over
+    after = casmech.joint_space(functions)
+    assert after is not before and not after["forward_dynamics"].is_a("SXFunction")
