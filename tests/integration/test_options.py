@@ -304,6 +304,8 @@ CONSTANTS = {
     "runtime/dop853.py HERMITE_BELOW": "where an interpolant's error estimate is trusted "
                                        "(a fraction of the tolerance a step is held to)",
     "runtime/nonfinite.py ONE_ARRAY": "rows checked in one NumPy call (call overhead, memory)",
+    "runtime/nonfinite.py PIECE": "the most entries one sum of squares takes (OpenBLAS threads "
+                                  "longer dot products; a bound on a check, not a setting)",
     "runtime/friction.py SLACK": "a holding force's roundoff past its static limit",
     "runtime/friction.py STILL": "a rate at rest in the start state, a roundoff floor",
     "runtime/friction.py SWITCHES": "friction switches before a Zeno cascade ends a run",
