@@ -180,13 +180,11 @@ def test_a_formulation_registered_over_joint_is_run_by_a_kept_plan(functions):
     _same(casmech.analyze(functions, **settings), own)
 
 
-def test_a_partial_result_owns_its_times(functions, monkeypatch):
-    """A run that fails after its first row: the Result's times are its own (writing them
-    leaves the kept grid of the next run alone)."""
+def _partial(functions, monkeypatch):
+    """The partial Result of a run of BASE that fails after its first row (the plan kept by
+    a run before it)."""
     from casmech.errors import AnalysisError
     from casmech.runtime import joint_run
-
-    base = casmech.analyze(functions, **BASE)
 
     def failing(*args, **kwargs):
         raise AnalysisError("failed on purpose")
@@ -194,7 +192,14 @@ def test_a_partial_result_owns_its_times(functions, monkeypatch):
     monkeypatch.setattr(joint_run, "drive", failing)
     with pytest.raises(AnalysisError) as failed:
         casmech.analyze(functions, **BASE)
-    partial = failed.value.partial
+    return failed.value.partial
+
+
+def test_a_partial_result_owns_its_times(functions, monkeypatch):
+    """A run that fails after its first row: the Result's times are its own (writing them
+    leaves the kept grid of the next run alone)."""
+    base = casmech.analyze(functions, **BASE)
+    partial = _partial(functions, monkeypatch)
     assert len(partial.t) == 1
     partial.t[:] = 7.0  # the caller's own array
     monkeypatch.undo()
@@ -204,18 +209,8 @@ def test_a_partial_result_owns_its_times(functions, monkeypatch):
 def test_a_partial_results_first_row_is_its_own(functions, monkeypatch):
     """A run that fails after its first row: its states are the run's own (the kept row at
     t0 handed out as a copy), so writing them leaves the next run's first row alone."""
-    from casmech.errors import AnalysisError
-    from casmech.runtime import joint_run
-
     casmech.analyze(functions, **BASE)
-
-    def failing(*args, **kwargs):
-        raise AnalysisError("failed on purpose")
-
-    monkeypatch.setattr(joint_run, "drive", failing)
-    with pytest.raises(AnalysisError) as failed:
-        casmech.analyze(functions, **BASE)
-    partial = failed.value.partial
+    partial = _partial(functions, monkeypatch)
     for name in STATES[1:]:
         getattr(partial, name)[:] = 7.0  # the caller's own arrays
     monkeypatch.undo()
