@@ -101,10 +101,11 @@ def _set_flags(scope: str, flags: tuple[str, ...]) -> None:
         return
     chosen = joint_library.toolchain
 
-    def toolchain(instructions: int, quick_build_instructions: int) -> build.Toolchain:
+    def toolchain(instructions: int, quick_build_instructions: int, names=()
+                  ) -> build.Toolchain:
         """joint_library's toolchain with the LOOP functions' units at `flags` where it
         builds at the default flags (no flags chosen, the ODE below the quick build's size)."""
-        made = chosen(instructions, quick_build_instructions)
+        made = chosen(instructions, quick_build_instructions, names)
         if joint_library.chosen_flags() is not None or made.flags != build.DEFAULT_FLAGS:
             return made
         return build.Toolchain(made.compiler, made.flags, made.jobs, made.function_flags

@@ -5,9 +5,9 @@ functions, under which names, at which flags.
     most PART_INSTRUCTIONS instructions each (backends.split; motion_parts names them), which gcc
     compiles in units at once; once loaded, `joined` makes joint_motion of them again and
     backends.rows_loop evaluates it part by part over the rows (rows_loop.chained);
-  - the SELDOM functions are compiled at QUICK_FLAGS, and an ODE above the settings'
-    quick_build_instructions at QUICK_FLAGS whole, unless the user chose flags
-    ($CASMECH_CFLAGS);
+  - the SELDOM functions are compiled at QUICK_FLAGS, the results rows (joint_motion or its
+    parts) at ROWS_FLAGS, and an ODE above the settings' quick_build_instructions at
+    QUICK_FLAGS whole, unless the user chose flags ($CASMECH_CFLAGS);
   - BDF's Jacobian (forward sweeps of the ODE: numerics.lazy_jacobian) comes from a library of
     its own, the ODE and its forward derivative at the library's flags, built when a BDF run
     first asks for it (keyed_jacobian, content_jacobian: JointSystem.identity_jacobian's
@@ -42,6 +42,11 @@ QUICK_FLAGS = ("-O0",)
 # evaluated once per run, by method auto's stiffness probe (BDF's Newton iteration takes its
 # Jacobian from keyed_jacobian's library); -O1 would more than treble their gcc time
 SELDOM = ("fwd1_joint_ode",)
+# the results rows' units, run once per output row: -Os code is shorter and these
+# straight-line functions are fetched again on every row, which runs them faster than at -O1;
+# the tree's ODE stays at the library's flags, its -Os code's speed depends on where the
+# library's pages lie (docs/decisions/second-call-c.md)
+ROWS_FLAGS = ("-Os",)
 
 
 def motion_parts(count: int) -> tuple[str, ...]:
@@ -79,15 +84,23 @@ def chosen_flags() -> str | None:
     return os.environ.get(FLAGS_ENVIRONMENT)
 
 
-def toolchain(instructions: int, quick_build_instructions: int) -> Toolchain:
+def is_rows(name: str) -> bool:
+    """Whether library function `name` is the results rows' (joint_motion or one of its
+    parts)."""
+    return name == "joint_motion" or name.startswith(MOTION_PART)
+
+
+def toolchain(instructions: int, quick_build_instructions: int, names=()) -> Toolchain:
     """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
     for an ODE of more than quick_build_instructions SX `instructions`, and below that the
-    SELDOM functions alone at QUICK_FLAGS."""
+    SELDOM functions at QUICK_FLAGS and the results rows among the library's function `names`
+    at ROWS_FLAGS."""
     if chosen_flags() is not None:
         return Toolchain()
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)
-    return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM))
+    return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM)
+                     + tuple((name, ROWS_FLAGS) for name in sorted(names) if is_rows(name)))
 
 
 def _bdf(ode: ca.Function, quick_build_instructions: int

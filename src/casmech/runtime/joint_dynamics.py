@@ -175,7 +175,8 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
                 "joint_relative_states": relative_states(tree, functions.n_bodies)}
         if not with_motion:
             kept["joint_motion"] = system.motion
-        return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions)
+        return compiled, kept, _toolchain(system, settings.compile.quick_build_instructions,
+                                          compiled)
 
     library = compile_keyed(content, make, with_jacobian=[name] if tree.cut else ())
     system = joint_library.system_from(tree, joint_library.joined_library(library))
@@ -224,7 +225,7 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
     functions = _library_functions(system, with_motion, settings, rows)
     quick = settings.compile.quick_build_instructions
     built = joined_library(codegen.compile_functions(
-        functions, toolchain=_toolchain(system, quick),
+        functions, toolchain=_toolchain(system, quick, functions),
         with_jacobian=[name] if system.n_cut else ()))
     jacobian = content_jacobian(system.dynamics, quick) if "fwd1_joint_ode" in functions \
         else None
@@ -233,11 +234,12 @@ def compiled_system(system: JointSystem, with_motion: bool = True,
                    solved_motion=built.get("joint_solved_motion"))
 
 
-def _toolchain(system: JointSystem, quick_build_instructions: int):
-    """The toolchain of the system's library (backends.joint_library.toolchain)."""
+def _toolchain(system: JointSystem, quick_build_instructions: int, names=()):
+    """The toolchain of the system's library of functions `names`
+    (backends.joint_library.toolchain)."""
     from casmech.backends.joint_library import toolchain
 
-    return toolchain(system.dynamics.n_instructions(), quick_build_instructions)
+    return toolchain(system.dynamics.n_instructions(), quick_build_instructions, names)
 
 
 class _Integrator:

@@ -1,7 +1,8 @@
 """A compiled joint tree's library (runtime.joint_dynamics.keyed_system, what goes in it:
 backends.joint_library) where the user chose no flags: the ODE's forward derivative
-fwd1_joint_ode (method auto's probe) compiled at -O0 and the rest at the default flags, large
-results rows as a chain of parts (backends.split), all equal to the interpreted system's, the
+fwd1_joint_ode (method auto's probe) compiled at -O0, the results rows at
+joint_library.ROWS_FLAGS and the rest at the default flags, large results rows as a chain of
+parts (backends.split), all equal to the interpreted system's, the
 parts evaluated over rows in C (backends.rows_loop); BDF's
 Jacobian from a library of its own, built by the first BDF run, so a BDF run after an Adams
 run from one cache is a BDF run from a fresh one; with flags chosen ($CASMECH_CFLAGS) every
@@ -56,12 +57,15 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
     names = {function["name"] for function in record["functions"]}
     assert {"joint_ode", "fwd1_joint_ode", *joint_library.motion_parts(3)} <= names
     assert "joint_motion" not in names and record["function_flags"] == {
-        "fwd1_joint_ode": ["-O0"]}
+        "fwd1_joint_ode": ["-O0"],
+        **{part: list(joint_library.ROWS_FLAGS) for part in joint_library.motion_parts(3)}}
     compiles = _compiles(commands, entry)
-    assert len(compiles) >= 2
+    assert len(compiles) >= 3
     for source, flags in compiles.items():
-        seldom = "int fwd1_joint_ode(" in (entry / source).read_text()
-        assert ("-O0" if seldom else build.DEFAULT_FLAGS[0]) in flags, (source, flags)
+        text = (entry / source).read_text()
+        want = ("-O0" if "int fwd1_joint_ode(" in text else joint_library.ROWS_FLAGS[0]
+                if "int joint_motion_part" in text else build.DEFAULT_FLAGS[0])
+        assert want in flags, (source, flags)
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
     call = rows_loop.rows_call(fast.motion)  # the parts in turn over rows, in one C call
     assert call is not None and len(call.entries) == 3

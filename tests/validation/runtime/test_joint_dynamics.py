@@ -257,19 +257,27 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
 
 
 def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
-    """The tree's ODE above compile.quick_build_instructions compiles at -O0, below at the
-    default flags; $CASMECH_CFLAGS always wins."""
-    from casmech.backends import build
+    """The tree's ODE above compile.quick_build_instructions compiles at -O0 (the rows too),
+    below at the default flags with the results rows at joint_library.ROWS_FLAGS;
+    $CASMECH_CFLAGS always wins."""
+    from casmech.backends import build, joint_library
     from casmech.runtime import joint_dynamics
 
     system = joint_dynamics.joint_system(
         casmech.compile(casmech.load(MODELS / "double_pendulum.yaml")))
     monkeypatch.delenv(build.FLAGS_ENVIRONMENT, raising=False)
     size = system.dynamics.n_instructions()
-    assert joint_dynamics._toolchain(system, size - 1).flags == ("-O0",)
-    assert joint_dynamics._toolchain(system, size).flags == build.DEFAULT_FLAGS
+    names = ("joint_ode", "joint_motion", "joint_motion_part0")
+    quick = joint_dynamics._toolchain(system, size - 1, names)
+    assert quick.flags == ("-O0",) and quick.flags_of("joint_motion") == ("-O0",)
+    default = joint_dynamics._toolchain(system, size, names)
+    assert default.flags == build.DEFAULT_FLAGS
+    assert default.flags_of("joint_ode") == build.DEFAULT_FLAGS
+    assert default.flags_of("joint_motion") == default.flags_of("joint_motion_part0") \
+        == joint_library.ROWS_FLAGS != build.DEFAULT_FLAGS
     monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
-    assert joint_dynamics._toolchain(system, size - 1).flags == ("-O2", "-march=native")
+    chosen = joint_dynamics._toolchain(system, size - 1, names)
+    assert chosen.flags == chosen.flags_of("joint_motion") == ("-O2", "-march=native")
 
 
 def test_a_second_run_from_the_same_start_reuses_its_initial_state(monkeypatch):
