@@ -108,7 +108,8 @@ def rows_text(values: np.ndarray) -> bytes:
         lines = text.split(b"],[")
     for k in np.flatnonzero(~finite.all(axis=1)):
         lines[k] = ",".join(map(repr, values[k].tolist())).encode()
-    return b"\n".join(lines) + b"\n"
+    lines.append(b"")  # (the last row's newline, joined: no copy of the whole text for it)
+    return b"\n".join(lines)
 
 
 # Files above this size are parsed by pandas' C reader, smaller ones by numpy, which do not
