@@ -13,7 +13,9 @@ import orjson
 from casmech.core.atomic import atomic
 from casmech.errors import UsageError
 
-CHUNK_VALUES = 1 << 18  # numbers formatted per block of rows (a few MB of text at a time)
+# numbers formatted per block of rows: a text of about 100-200 KB, whose buffers the allocator
+# reuses from block to block (a text of megabytes is mapped and unmapped anew each time)
+CHUNK_VALUES = 1 << 13
 PIECE = 1 << 16  # bytes of whole rows per write call of CsvRows
 # columns from which rows_text formats each row by itself and joins the lines: one pass over
 # the text, where the whole block's text with its row separators replaced takes two (narrower
