@@ -20,7 +20,7 @@ PIECE = 1 << 16  # bytes of whole rows per write call of CsvRows
 # columns from which rows_text formats each row by itself and joins the lines: one pass over
 # the text, where the whole block's text with its row separators replaced takes two (narrower
 # rows cost more per row than that pass)
-ROW_BY_ROW = 32
+ROW_BY_ROW = 16
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
