@@ -6,15 +6,21 @@
     python benchmarks/process_stages.py --chain 32 --t-end 10 --warm-compiled  # library cached
 
 Each run is a fresh interpreter (PYTHONPATH=<src>) that starts casmech's command line as the
-console script does (its garbage collector set as the tree's main() sets it before the stages'
-modules are imported), with thin wrappers around its stages reading the process's CPU clock
-(time.process_time): the imports, loading the YAML (api.load_model), the joint system's build
-(formulations.joint_system.build), assembly (runtime.assembly.initial_state), the results row's
-function (runtime.results.row_function; row_call: a compiled bundle's loaded, else that one)
-and the results table with its evaluation (results.table, which includes row_call), the results
-files' writing (streaming flush, which includes the table), and CVODES/IDAS
-(runtime.joint_dynamics._Integrator.__call__), whose counters (steps, right-hand sides,
-Jacobians, linear setups) are read from the kept integrator. A profiler's cost per Python call
+console script does (its garbage collector set as the tree's main() sets it), importing nothing
+the run itself does not: each stage's module is wrapped as the run imports it (an import
+hook), with thin wrappers reading the process's CPU clock (time.process_time) around its
+stages: loading (cli.run._load: the model kept in the cache, else the file's load; api.
+load_model: the file's load, 0 where the kept model is read), the joint system's build
+(formulations.joint_system.build), assembly (runtime.assembly.initial_state), the analysis
+(api.analyze) with DOP853 (runtime.dop853.Dop853.__call__) or CVODES/IDAS
+(runtime.joint_dynamics._Integrator.__call__, whose counters, steps, right-hand sides,
+Jacobians and linear setups, are read from the kept integrator), the results row's function
+(runtime.results.row_function; row_call: a compiled bundle's loaded, else that one), the
+results table with its evaluation (results.table, which includes row_call) and the results
+files' writing (streaming flush, which includes the table and the CSV text, io.csv.rows_text).
+The stages are printed by an atexit handler, which runs however the command line ends the
+process; what the parent measures beyond it is the interpreter's start before casmech.cli and
+the process's exit. The steps and rows are metadata.json's. A profiler's cost per Python call
 inflates the Python-heavy stages several times over; these wrappers cost a few function calls
 per stage. The parent times each child as a whole (wall, and user + sys from getrusage) and
 prints medians (ranges) over --repeats runs, round-robin over the source trees so that a change
@@ -28,22 +34,19 @@ is not timed).
 
 from __future__ import annotations
 
-import argparse
-import json
+# (the child, the run's own process, imports nothing the run does not import: the rest is
+# imported where the parent uses it)
 import os
-import re
-import resource
-import statistics
-import subprocess
 import sys
-import tempfile
 import time
-from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
+HERE = os.path.dirname(os.path.abspath(__file__))
 # (label, module, attribute path) of each wrapped stage, in the order the table shows them
 STAGES = (
-    ("load", "casmech.api", "load_model"),
+    ("the command's module imported, its parser made (cli._parser)", "casmech.cli", "_parser"),
+    ("load (cli.run._load: the kept model, else the file's load)", "casmech.cli.run", "_load"),
+    ("load of the file (api.load_model; 0 where the kept model is read)", "casmech.api",
+     "load_model"),
     ("validation (in load; the first builds the validators)", "casmech.schema.spec_errors",
      "validate"),
     ("model functions (api.compile)", "casmech.api", "compile"),
@@ -55,29 +58,32 @@ STAGES = (
     ("joint system library (key, load or build)", "casmech.runtime.joint_dynamics",
      "keyed_system"),
     ("assembly", "casmech.runtime.assembly", "initial_state"),
-    ("integrator", "casmech.runtime.joint_dynamics", "_Integrator.__call__"),
+    ("analysis (api.analyze)", "casmech.api", "analyze"),
+    ("DOP853 (in analysis)", "casmech.runtime.dop853", "Dop853.__call__"),
+    ("integrator's call (joint_dynamics._Integrator.__call__: DOP853, CVODES or IDAS)",
+     "casmech.runtime.joint_dynamics", "_Integrator.__call__"),
     ("results row function", "casmech.runtime.results", "row_function"),
     ("results row (loaded or built; incl. row function)", "casmech.runtime.results", "row_call"),
     ("results table (incl. row function)", "casmech.runtime.results", "table"),
     ("results writing (incl. table)", "casmech.io.streaming", "ResultsWriter.flush"),
+    ("results text (in writing)", "casmech.io.csv", "rows_text"),
 )
 COUNTERS = ("nsteps", "nfevals", "nniters", "nlinsetups", "njevals", "netfails", "nncfails")
 
 
 def child(arguments: list[str]) -> None:
-    """Run `casmech <arguments>` here with the stages wrapped; print one JSON line."""
-    import importlib
+    """Run `casmech <arguments>` here with the stages wrapped; print one JSON line.
+
+    Each stage's module is wrapped as the run imports it (an import hook), so the process
+    imports what the run imports, nothing more; the line is printed by an atexit handler,
+    which runs however the command line ends the process (cli._leave, or the interpreter)."""
+    import atexit
 
     start = time.process_time()
+    spent: dict[str, float] = {"interpreter start (to the child's first line)": start}
     import casmech.cli
 
     _collector_as_the_command_line(casmech.cli)
-    for _, module, _ in STAGES:
-        try:
-            importlib.import_module(module)
-        except ModuleNotFoundError:  # (a source tree may not have every stage)
-            continue
-    spent = {"imports": time.process_time() - start}
     counters: dict[str, int] = {}
 
     def wrap(label: str, owner, name: str) -> None:
@@ -91,33 +97,44 @@ def child(arguments: list[str]) -> None:
                 spent[label] = spent.get(label, 0.0) + time.process_time() - begin
         setattr(owner, name, timed)
 
-    for label, module, path in STAGES:
-        if module not in sys.modules:
-            continue
-        owner = sys.modules[module]
-        *classes, name = path.split(".")
-        for cls in classes:
-            owner = getattr(owner, cls)
-        if hasattr(owner, name):  # (a source tree may not have every stage)
-            wrap(label, owner, name)
-    # modules that imported `build` by name call it through their own binding
-    joint_dynamics = sys.modules["casmech.runtime.joint_dynamics"]
-    joint_dynamics.build = sys.modules["casmech.formulations.joint_system"].build
+    def count(buffers) -> None:
+        named_call = buffers.NamedCall.__call__
 
-    from casmech.runtime import buffers
+        def counted(self, **inputs):
+            try:
+                return named_call(self, **inputs)
+            finally:
+                if self.function.is_a("Integrator", True) or self.function.name() == "joint":
+                    stats = self.stats()
+                    for key in COUNTERS:
+                        counters[key] = counters.get(key, 0) + int(stats.get(key) or 0)
+        buffers.NamedCall.__call__ = counted
 
-    named_call = buffers.NamedCall.__call__
+    def wrap_module(module) -> None:
+        for label, name, path in STAGES:
+            if name != module.__name__:
+                continue
+            owner = module
+            *classes, attribute = path.split(".")
+            for cls in classes:
+                owner = getattr(owner, cls, None)
+            if owner is not None and hasattr(owner, attribute):  # (a tree may not have it)
+                wrap(label, owner, attribute)
+        if module.__name__ == "casmech.runtime.buffers":
+            count(module)
 
-    def counted(self, **inputs):
-        try:
-            return named_call(self, **inputs)
-        finally:
-            if self.function.is_a("Integrator", True) or self.function.name() == "joint":
-                stats = self.stats()
-                for key in COUNTERS:
-                    counters[key] = counters.get(key, 0) + int(stats.get(key) or 0)
-    buffers.NamedCall.__call__ = counted
+    wanted = {name for _, name, _ in STAGES} | {"casmech.runtime.buffers"}
+    for name in wanted & set(sys.modules):
+        wrap_module(sys.modules[name])
+    sys.meta_path.insert(0, _WrapOnImport(wanted, wrap_module))
+    spent["imports of casmech.cli"] = time.process_time() - start
 
+    def report() -> None:
+        spent["total (in process, to the atexit handlers)"] = time.process_time()
+        import json
+
+        print("STAGES " + json.dumps({"stages": spent, "counters": counters}), flush=True)
+    atexit.register(report)
     sys.argv = ["casmech", *arguments]
     try:
         code = casmech.cli.main()  # (an error is an exit code, as the console script's)
@@ -126,15 +143,37 @@ def child(arguments: list[str]) -> None:
     except SystemExit as exit_:
         if exit_.code not in (0, None):
             raise
-    finally:
-        spent["total (in process)"] = time.process_time()
-        print("STAGES " + json.dumps({"stages": spent, "counters": counters}), flush=True)
+
+
+class _WrapOnImport:
+    """A finder in front of sys.meta_path that lets the others find the modules `wanted` and
+    calls `then(module)` once each has run, before its importer reads a name of it."""
+
+    def __init__(self, wanted: set[str], then) -> None:
+        self.wanted, self.then = wanted, then
+
+    def find_spec(self, name, path, target=None):
+        if name not in self.wanted:
+            return None
+        for finder in sys.meta_path:
+            found = finder is not self and getattr(finder, "find_spec", None)
+            spec = found(name, path, target) if found else None
+            if spec is not None:
+                break
+        else:
+            return None
+        run, then = spec.loader.exec_module, self.then
+
+        def exec_module(module):
+            run(module)
+            then(module)
+        spec.loader.exec_module = exec_module
+        return spec
 
 
 def _collector_as_the_command_line(cli) -> None:
-    """The garbage collector as the tree's own `main()` sets it first thing, before the stages'
-    modules are imported here (the console script imports them inside main): held until the
-    analysis (cli.collector), or the young generation's threshold of older trees."""
+    """The garbage collector as the tree's own `main()` sets it first thing (held until the
+    analysis, cli.collector), or the young generation's threshold of older trees."""
     import gc
 
     collector = getattr(cli, "collector", None)
@@ -144,8 +183,10 @@ def _collector_as_the_command_line(cli) -> None:
         gc.set_threshold(cli.YOUNG_OBJECTS, *gc.get_threshold()[1:])
 
 
-def chain_model(n: int, t_end: float, folder: Path) -> Path:
-    sys.path.insert(0, str(HERE))
+def chain_model(n: int, t_end: float, folder):
+    import re
+
+    sys.path.insert(0, HERE)
     from casmech_model import yaml_text
     from systems import chain
 
@@ -155,7 +196,14 @@ def chain_model(n: int, t_end: float, folder: Path) -> Path:
     return path
 
 
-def timed_child(src: str, model: Path, arguments: list[str], environment: dict) -> dict:
+def timed_child(src: str, model, arguments: list[str], environment: dict) -> dict:
+    """The child's stages, its whole process's CPU and wall, and its metadata.json's steps
+    and rows."""
+    import json
+    import resource
+    import subprocess
+    from pathlib import Path
+
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     begin = time.perf_counter()
     done = subprocess.run([sys.executable, __file__, "--child", "--", "run", str(model),
@@ -170,11 +218,17 @@ def timed_child(src: str, model: Path, arguments: list[str], environment: dict) 
     found = json.loads(line[len("STAGES "):])
     found["wall"] = wall
     found["cpu"] = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    out = Path(arguments[len(arguments) - 1 - arguments[::-1].index("--out") + 1])
+    metadata = json.loads((out / "metadata.json").read_text())
+    found["steps"] = (metadata.get("result") or {}).get("steps") or 0
+    found["rows"] = metadata.get("rows") or 0
     return found
 
 
 def median(values: list[float]) -> str:
     """Median (range) in milliseconds."""
+    import statistics
+
     ms = [1000 * value for value in values]
     return f"{statistics.median(ms):.1f} ({min(ms):.1f}-{max(ms):.1f})"
 
@@ -183,6 +237,11 @@ def main() -> None:
     if "--child" in sys.argv:
         child(sys.argv[sys.argv.index("--") + 1:])
         return
+    import argparse
+    import statistics
+    import tempfile
+    from pathlib import Path
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     which = parser.add_mutually_exclusive_group(required=True)
     which.add_argument("--model", type=Path, help="a YAML model")
@@ -214,14 +273,22 @@ def main() -> None:
           f"{os.getloadavg()[0]:.1f}; CPU milliseconds, medians (ranges)\n")
     print("| stage | " + " | ".join(sources) + " |")
     print("|---|" + "---:|" * len(sources))
-    labels = ["imports", *dict.fromkeys(label for label, _, _ in STAGES), "total (in process)"]
+    labels = ["interpreter start (to the child's first line)", "imports of casmech.cli",
+              *dict.fromkeys(label for label, _, _ in STAGES),
+              "total (in process, to the atexit handlers)"]
     for label in labels:
         print(f"| {label} | " + " | ".join(
             median([r["stages"].get(label, 0.0) for r in runs[s]]) for s in sources) + " |")
+    total = "total (in process, to the atexit handlers)"
+    print("| the exit, after the atexit handlers (whole process less the total) | " + " | ".join(
+        median([r["cpu"] - r["stages"][total] for r in runs[s]]) for s in sources) + " |")
     for key in ("cpu", "wall"):
         name = {"cpu": "whole process, user + sys", "wall": "whole process, wall"}[key]
         print(f"| {name} | " + " | ".join(median([r[key] for r in runs[s]])
                                           for s in sources) + " |")
+    for key in ("steps", "rows"):
+        print(f"| {key} (metadata.json) | " + " | ".join(
+            str(int(statistics.median([r[key] for r in runs[s]]))) for s in sources) + " |")
     for key in COUNTERS:
         print(f"| integrator {key} | " + " | ".join(
             str(int(statistics.median([r["counters"].get(key, 0) for r in runs[s]])))

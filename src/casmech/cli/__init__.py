@@ -10,6 +10,8 @@ Exit codes (docs/format.md): 0 success, 1 model error, 2 usage error, 3 analysis
 from __future__ import annotations
 
 import argparse
+import atexit
+import contextlib
 import importlib
 import os
 import sys
@@ -68,8 +70,9 @@ def _parser(argv: list[str]) -> tuple[argparse.ArgumentParser, object | None]:
 
 def main(argv: list[str] | None = None) -> int:
     """The command line; `argv` None: this process's own (then its garbage collector waits
-    until the command's long part, cli.collector, and a command a signal stopped ends at once,
-    its files written: see _end)."""
+    until the command's long part, cli.collector; a command a signal stopped ends at once,
+    its files written: see _end; and a command that asks, `run`, ends the process as it
+    returns: see _leave)."""
     own = argv is None
     if own:
         collector.hold()
@@ -78,6 +81,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if not getattr(module, "RELEASES_COLLECTOR", False):  # (run: when its analysis starts)
         collector.release()
+    code = _command(module, args, own)
+    if own and getattr(module, "ENDS_AT_ONCE", False):
+        _leave(code)  # (returns where the interpreter's own exit is needed)
+    return code
+
+
+def _command(module, args, own: bool) -> int:
+    """The command's exit code, its errors rendered."""
     try:
         return module.run(args)
     except ModelError as error:
@@ -98,6 +109,36 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if own:
             collector.end()
+
+
+def _leave(code: int) -> None:
+    """End the process with `code` without the interpreter's teardown, as it would end
+    otherwise: the atexit handlers run (weakref finalizers, logging, a coverage tool's), then
+    C's and Python's standard streams are flushed. Returns, leaving the exit to the
+    interpreter, where that is not all it would do: while a thread the interpreter would wait
+    for is alive, or when a stream cannot be flushed (the interpreter reports that itself)."""
+    threading = sys.modules.get("threading")
+    if threading is not None and any(
+            not thread.daemon and thread is not threading.main_thread()
+            for thread in threading.enumerate()):
+        return
+    atexit._run_exitfuncs()
+    try:
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (OSError, ValueError):  # (a closed pipe, a closed stream)
+        return
+    _flush_c_streams()
+    os._exit(code)
+
+
+def _flush_c_streams() -> None:
+    """fflush(NULL): what a library wrote through C's stdio and left in its buffers (a pipe's
+    stdout is fully buffered), flushed as C's exit would flush it."""
+    ctypes = sys.modules.get("ctypes")  # (NumPy and CasADi import it; else nothing wrote)
+    if ctypes is not None:
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None).fflush(None)
 
 
 def _end(code: int) -> int:

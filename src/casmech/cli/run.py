@@ -53,6 +53,9 @@ from casmech.runtime.results import column_names, events_table
 # this command starts its process's collector itself, when the analysis starts: loading and
 # building make no cycles worth collecting (cli.collector)
 RELEASES_COLLECTOR = True
+# the process ends when this command returns, without the interpreter's teardown of the modules
+# it loaded (cli._leave: atexit handlers run, streams flushed, files closed by the command)
+ENDS_AT_ONCE = True
 # further files an analysis may write (Result.files), removed with an earlier run's results
 ANALYSIS_FILES = ("modes.csv", "linear_model.npz", events_output.FILE)
 # format -> (file name in DIR, the writer of its rows as they come, check run before the run)

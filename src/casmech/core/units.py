@@ -15,15 +15,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from fractions import Fraction
+from numbers import Rational
 
 from casmech.errors import did_you_mean
 
-Dimension = tuple[Fraction, Fraction, Fraction]  # exponents of mass, length, time
+# exponents of mass, length, time: ints, Fractions where a power makes them so (an int and the
+# Fraction of the same value are equal and hash alike, so either finds a dimension in NAMES)
+Dimension = tuple[Rational, Rational, Rational]
 
 
-def dimension(mass=0, length=0, time=0) -> Dimension:
-    return (Fraction(mass), Fraction(length), Fraction(time))
+def dimension(mass: int = 0, length: int = 0, time: int = 0) -> Dimension:
+    return (mass, length, time)
 
 
 NUMBER = dimension()
@@ -101,6 +103,8 @@ def multiply(a: Dimension, b: Dimension, sign: int = 1) -> Dimension:
 
 
 def power(a: Dimension, exponent) -> Dimension:
+    from fractions import Fraction  # (a unit's powers only: not imported to read a model)
+
     return tuple(x * Fraction(exponent).limit_denominator(1000) for x in a)
 
 

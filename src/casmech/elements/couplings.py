@@ -35,7 +35,6 @@ pose (docs/format.md).
 from __future__ import annotations
 
 import math
-from fractions import Fraction
 
 import casadi as ca
 
@@ -71,6 +70,8 @@ def integers(coefficients) -> tuple[int, ...] | None:
         values = [float(c) for c in coefficients]
     except TypeError:  # traced numbers of symbolic parameters: no fixed ratio
         return None
+    from fractions import Fraction  # (a coupling's ratios only)
+
     ratios = [Fraction(v / values[0]).limit_denominator(MAX_DENOMINATOR) for v in values]
     if any(abs(float(r) - v / values[0]) > FRACTION * max(1.0, abs(v / values[0]))
            for r, v in zip(ratios, values, strict=True)):

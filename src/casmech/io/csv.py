@@ -13,8 +13,14 @@ import orjson
 from casmech.core.atomic import atomic
 from casmech.errors import UsageError
 
-CHUNK_VALUES = 1 << 18  # numbers formatted per block of rows (a few MB of text at a time)
+# numbers formatted per block of rows: a text of about 100-200 KB, whose buffers the allocator
+# reuses from block to block (a text of megabytes is mapped and unmapped anew each time)
+CHUNK_VALUES = 1 << 13
 PIECE = 1 << 16  # bytes of whole rows per write call of CsvRows
+# columns from which rows_text formats each row by itself and joins the lines: one pass over
+# the text, where the whole block's text with its row separators replaced takes two (narrower
+# rows cost more per row than that pass)
+ROW_BY_ROW = 16
 
 
 def write_csv(path: str | Path, names: list[str], values: np.ndarray) -> Path:
@@ -94,14 +100,18 @@ def rows_text(values: np.ndarray) -> bytes:
     if values.shape[1] == 0:
         return b"\n" * values.shape[0]
     finite = np.isfinite(values)
-    text = orjson.dumps(np.ascontiguousarray(np.where(finite, values, 0.0)),
-                        option=orjson.OPT_SERIALIZE_NUMPY)[2:-2]
-    if finite.all():
-        return text.replace(b"],[", b"\n") + b"\n"
-    lines = text.split(b"],[")
+    numbers = np.ascontiguousarray(np.where(finite, values, 0.0))
+    if values.shape[1] >= ROW_BY_ROW:
+        lines = [orjson.dumps(row, option=orjson.OPT_SERIALIZE_NUMPY)[1:-1] for row in numbers]
+    else:
+        text = orjson.dumps(numbers, option=orjson.OPT_SERIALIZE_NUMPY)[2:-2]
+        if finite.all():
+            return text.replace(b"],[", b"\n") + b"\n"
+        lines = text.split(b"],[")
     for k in np.flatnonzero(~finite.all(axis=1)):
         lines[k] = ",".join(map(repr, values[k].tolist())).encode()
-    return b"\n".join(lines) + b"\n"
+    lines.append(b"")  # (the last row's newline, joined: no copy of the whole text for it)
+    return b"\n".join(lines)
 
 
 # Files above this size are parsed by pandas' C reader, smaller ones by numpy, which do not

@@ -348,7 +348,8 @@ def test_the_processs_own_command_line_collects_less_often():
 def test_run_collects_from_its_analysis_on(tmp_path):
     """`casmech run` as the process's own command line loads and compiles with the collector
     stopped and analyzes with it running (cli.collector)."""
-    code = ("import gc, sys; from casmech import api; from casmech.cli import main; seen = []\n"
+    code = ("import atexit, gc, sys; from casmech import api; from casmech.cli import main\n"
+            "seen = []; atexit.register(lambda: print(seen))\n"
             "def spy(name):\n"
             "    inner = getattr(api, name)\n"
             "    def call(*a, **k):\n"
@@ -357,8 +358,65 @@ def test_run_collects_from_its_analysis_on(tmp_path):
             "spy('load'); spy('compile'); spy('analyze')\n"
             f"sys.argv = ['casmech', 'run', {str(MODELS / 'pendulum.yaml')!r}, '--t-end', "
             f"'0.1', '-q', '--mode', 'interpreted', '--out', {str(tmp_path)!r}]\n"
-            "print(main(), seen)")
+            "sys.exit(main())")  # (run ends the process: `seen` printed by atexit)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=300, check=True)
-    assert done.stdout.strip() == ("0 [('load', False), ('compile', False), "
-                                   "('analyze', True)]")
+    assert done.stdout.strip() == "[('load', False), ('compile', False), ('analyze', True)]"
+
+
+# `casmech run` as a process's own command line, with what its exit must still do: an atexit
+# handler, a line C's stdio holds in its buffer (stdout is a pipe here), and an object of a
+# module whose finalizer runs only in the interpreter's teardown
+ENDING = """import atexit, ctypes, os, sys, threading, types
+from casmech.cli import main
+class Teardown:
+    def __del__(self, write=os.write):
+        write(2, b"teardown\\n")
+sys.modules["probe"] = types.ModuleType("probe")
+sys.modules["probe"].kept = Teardown()  # (a module's objects go as the teardown clears it)
+atexit.register(lambda: print("atexit ran"))
+atexit.register(lambda: ctypes.CDLL(None).printf(b"C stdio\\n"))  # (left in C's buffer)
+if sys.argv[1] == "thread":  # a thread still running as the command returns
+    import time
+    import casmech.cli.run as command
+    def run(args, inner=command.run):
+        try:
+            return inner(args)
+        finally:
+            threading.Thread(target=time.sleep, args=(0.3,)).start()
+    command.run = run
+sys.argv = ["casmech", "run", sys.argv[2], "--t-end", "0.1", "--mode", "interpreted",
+            "--out", sys.argv[3]]
+sys.exit(main())
+"""
+# buffered streams, as in a user's shell (PYTHONUNBUFFERED unbuffers C's stdout as well)
+BUFFERED = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+
+
+def test_run_ends_its_process_as_it_returns_and_loses_nothing(tmp_path):
+    """`casmech run` ends the process when it returns (cli._leave): no teardown of the modules,
+    but the atexit handlers run, C's and Python's buffered output is written, and the exit code
+    and results files are the run's (docs/decisions/warm-process-exit.md)."""
+    done = subprocess.run([sys.executable, "-c", ENDING, "alone", MODELS / "pendulum.yaml",
+                           tmp_path], capture_output=True, text=True, timeout=300, env=BUFFERED)
+    assert done.returncode == 0, done.stderr
+    assert "C stdio" in done.stdout and "atexit ran" in done.stdout
+    assert "results.csv" in done.stdout  # the run's summary, printed before the exit
+    assert "teardown" not in done.stderr
+    names, values = read_csv(tmp_path / "results.csv")
+    assert names[0] == "t"
+    np.testing.assert_allclose(values[-1, 0], 0.1, rtol=0, atol=1e-12)  # (the last output time)
+    assert json.loads((tmp_path / "metadata.json").read_text())["status"] == "complete"
+    failed = subprocess.run([sys.executable, "-c", ENDING, "alone", tmp_path / "missing.yaml",
+                             tmp_path], capture_output=True, text=True, timeout=300, env=BUFFERED)
+    assert failed.returncode == 2 and "atexit ran" in failed.stdout
+
+
+def test_run_leaves_the_exit_to_the_interpreter_while_a_thread_runs(tmp_path):
+    """A thread the interpreter would wait for keeps the interpreter's own exit: it is joined,
+    and the teardown runs as without casmech."""
+    done = subprocess.run([sys.executable, "-c", ENDING, "thread", MODELS / "pendulum.yaml",
+                           tmp_path], capture_output=True, text=True, timeout=300, env=BUFFERED)
+    assert done.returncode == 0, done.stderr
+    assert "C stdio" in done.stdout and "atexit ran" in done.stdout
+    assert "teardown" in done.stderr

@@ -13,9 +13,11 @@ import pytest
 
 from tests.conftest import MODELS
 
-# runs the command line and prints, last on stderr, the modules the process imported
-PROBE = ("import json, sys\nfrom casmech.cli import main\ncode = main()\n"
-         "print(json.dumps(sorted(sys.modules)), file=sys.stderr)\nsys.exit(code)")
+# runs the command line and prints, last on stderr, the modules the process imported (by an
+# atexit handler: `casmech run` ends the process as it returns, cli._leave)
+PROBE = ("import atexit, json, sys\nfrom casmech.cli import main\n"
+         "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
+         "sys.exit(main())")
 VALIDATION = ("pydantic", "yaml", "casmech.schema.spec", "casmech.schema.semantic",
               "casmech.schema.loader")
 

@@ -6,11 +6,14 @@ tests/unit/model/test_plain_lowering.py's: the lowering of every gallery model i
 the one recorded before units existed."""
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 import casmech
+from casmech.core import units
 from casmech.core.expressions import ExpressionSyntaxError, parse
 from casmech.errors import ModelError
 from casmech.optimal.sensitivity import sensitivity
@@ -218,3 +221,21 @@ def test_an_instance_position_and_a_free_final_time_take_their_dimensions():
         with pytest.raises(ModelError) as caught:
             casmech.loads(text)
         assert [(d.code, d.path) for d in caught.value.diagnostics] == [("E205", path)]
+
+
+def test_dimensions_from_powers_find_their_names():
+    """A dimension is ints, a power's Fractions where it makes them: equal, and named, alike."""
+    area = units.dimension(length=2)
+    assert units.power(area, 0.5) == units.LENGTH
+    assert units.describe(units.power(area, 0.5)) == "length (m)"
+    assert units.describe(units.power(units.LENGTH, 0.5)) == "m^1/2"
+    assert units.describe(units.multiply(units.FORCE, units.LENGTH)) == "torque or energy (N m)"
+
+
+def test_reading_units_imports_no_fractions():
+    """fractions (and decimal) are imported for a power of a unit only, not to read a model."""
+    code = ("import sys; import casmech.core.expressions, casmech.elements.coordinate_kinds, "
+            "casmech.elements.couplings; print('fractions' in sys.modules)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.strip() == "False"

@@ -121,3 +121,20 @@ def test_a_table_that_is_not_numbers_is_a_usage_error(tmp_path, text):
     path.write_bytes(b"\xb1\x00\xff,\n\x01")
     with pytest.raises(UsageError, match="not a table of numbers"):
         read_csv(path)
+
+
+@pytest.mark.parametrize("width", [3, csv.ROW_BY_ROW + 5])
+def test_rows_formatted_one_by_one_are_the_blocks_text(monkeypatch, width):
+    """Wide rows are formatted row by row (ROW_BY_ROW), narrow ones as one block: both give
+    the same bytes, special values' rows included."""
+    rng = np.random.default_rng(3)
+    values = rng.standard_normal((40, width)) * 10.0 ** rng.integers(-300, 300, (40, width))
+    values[:, 0] = np.arange(40) * 0.01
+    values[7, 1], values[9, -1], values[11, 2] = np.nan, -np.inf, -0.0
+    as_written = csv.rows_text(values)
+    monkeypatch.setattr(csv, "ROW_BY_ROW", 1)
+    row_by_row = csv.rows_text(values)
+    monkeypatch.setattr(csv, "ROW_BY_ROW", width + 1)
+    as_a_block = csv.rows_text(values)
+    assert row_by_row == as_a_block == as_written
+    assert as_written.count(b"\n") == 40 and b"nan" in as_written and b"-inf" in as_written
