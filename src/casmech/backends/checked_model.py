@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from casmech.backends import cache, trust
+from casmech.backends import cache, stamps, trust
 from casmech.backends.manifest import DIGESTS, FORMAT, MANIFEST
 from casmech.core.version import VERSION
 from casmech.errors import UsageError
@@ -98,16 +98,13 @@ def entry_key(path: str | Path, overrides: Mapping[str, str]) -> str | None:
 
 
 def _stamp(name: str) -> list | None:
-    """An installed package's module file: its path, size, inode and modification time (a reinstall
-    writes new files)."""
+    """An installed package's module file's stamp (backends.stamps: a reinstall writes new
+    files), its path alone where it cannot be read; None: not installed."""
     spec = find_spec(name)
     if spec is None or not spec.origin:
         return None
-    try:
-        status = os.stat(spec.origin)
-    except OSError:
-        return [spec.origin]
-    return [spec.origin, status.st_size, status.st_ino, status.st_mtime_ns]
+    found = stamps.stamp([spec.origin])
+    return [spec.origin] if found is None else found[0]
 
 
 def _kept(entry: Path) -> ResolvedModel | None:
