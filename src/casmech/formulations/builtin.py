@@ -30,10 +30,10 @@ from casmech.formulations.protocol import (
 from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
+from casmech.numerics import kkt
 
 if TYPE_CHECKING:
     from casmech.formulations.joint_control import JointControl
-from casmech.numerics import kkt
 
 
 def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:

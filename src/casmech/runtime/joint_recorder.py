@@ -11,8 +11,9 @@ import numpy as np
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.joint_rows import LoopRows, over_rows, rows_of, solved_motion
+from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.nonfinite import all_finite
+from casmech.runtime.row_calls import over_rows, rows_of
 from casmech.runtime.workspace import Workspace
 
 
