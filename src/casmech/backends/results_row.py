@@ -21,7 +21,6 @@ from casmech.backends.build import Toolchain, available
 from casmech.backends.library import compile_keyed
 from casmech.equations import readings
 from casmech.equations.functions import SystemFunctions
-from casmech.equations.results_row import mapped_bundle, row_function
 from casmech.errors import AnalysisError
 
 NAME = "results_row"
@@ -46,6 +45,8 @@ def compiled(functions: SystemFunctions) -> ca.Function | None:
     content = {"kind": "results row", "bundle": functions.library_key}
 
     def make():
+        from casmech.equations.results_row import mapped_bundle, row_function
+
         ir = functions.ir
         return {NAME: row_function(mapped_bundle(ir), readings.columns_function(ir), ca.MX)}, \
             {}, toolchain

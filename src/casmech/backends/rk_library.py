@@ -130,7 +130,8 @@ def _build(directory: Path, kind: str, file: str, source: bytes, name: str, symb
 
 class Entry:
     """A compiled function's C entry point and work vectors as casmech_rk.c's cm_function:
-    its input `t` (if any) and `x` and its first output, its other inputs `fixed` (position ->
+    its input `t` and `x` (-1 where it has none: the rows' loop reads neither) and its first
+    output, its other inputs `fixed` (position ->
     dense values, held here; the rest NULL: zeros); the casadi Function kept alive with it (its
     library stays loaded), its memory checked out and released with this object."""
 
@@ -158,7 +159,8 @@ class Entry:
         self.struct = Function(
             ctypes.cast(symbol, ctypes.c_void_p).value, self.arg, self.res,
             self.iw.ctypes.data_as(ctypes.POINTER(_int)), pointer(self.w), mem,
-            names.index("t") if "t" in names else -1, names.index("x"), 0)
+            names.index("t") if "t" in names else -1,
+            names.index("x") if "x" in names else -1, 0)
 
 
 def unbound(function: ca.Function) -> tuple[ca.Function, dict] | None:

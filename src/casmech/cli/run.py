@@ -47,7 +47,7 @@ from casmech.io.hdf5 import Hdf5Rows, h5py
 from casmech.io.metadata import analysis_record, rewrite_json, run_metadata, write_json
 from casmech.io.progress import progress_bar
 from casmech.io.streaming import ResultsWriter, WriteError, writing
-from casmech.runtime import events, interrupts, reaction_frames, singular_poses
+from casmech.runtime import events, interrupts, reaction_frames
 from casmech.runtime.results import column_names, events_table
 
 # this command starts its process's collector itself, when the analysis starts: loading and
@@ -237,6 +237,10 @@ def _report(args, result, timings, paths) -> None:
 def singular_pose_warnings(poses, every: bool = False) -> list[str]:
     """One line per set of joints the run passed singular poses of, with how many times and
     when (`every`: one line per pose, as singular_poses.describe writes it)."""
+    if not poses:
+        return []
+    from casmech.runtime import singular_poses
+
     groups: dict[tuple, list[dict]] = {}
     for pose in poses:
         key = tuple(sorted(zip(pose["joints"], pose["sources"], strict=True)))

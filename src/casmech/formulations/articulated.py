@@ -27,7 +27,7 @@ from casmech.core.quaternions import conjugate, product
 from casmech.core.records import record
 from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
-from casmech.equations import body, eom
+from casmech.equations import body
 from casmech.equations.assemble import GROUND_POSE, Coordinates
 from casmech.formulations.joint_constants import Constants
 from casmech.formulations.tree import Frame, TreeJoint
@@ -224,6 +224,8 @@ def state(kin: Kinematics, n_bodies: int) -> tuple:
 def applied_wrenches(ir: ModelIR, t, kin: Kinematics) -> list:
     """Body wrenches (n_bar, A^T F) of every applied force at the tree's state (a parametric
     IR's forces over its model data, kin.constants.data)."""
+    from casmech.equations import eom
+
     nb = ir.n_bodies
     x = Coordinates.create(nb)
     generalized, _ = eom.applied_forces(ir, x)

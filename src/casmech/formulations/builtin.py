@@ -5,6 +5,8 @@ by formulations.joint_start; for optimal control formulations.joint_control)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import casadi as ca
 import numpy as np
 
@@ -15,7 +17,6 @@ from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations import dae
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
-from casmech.formulations.joint_control import JointControl
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, labels
 from casmech.formulations.protocol import (
@@ -30,6 +31,9 @@ from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
 from casmech.numerics import kkt
+
+if TYPE_CHECKING:
+    from casmech.formulations.joint_control import JointControl
 
 
 def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
@@ -167,6 +171,8 @@ class JointCoordinates(Formulation):
         """formulations.joint_control's equations over the JointSystem `equations` builds
         over `data`; None for loops through a floating body (formulations.tree: its joint
         coordinates are its r-p ones plus the recursion's overhead)."""
+        from casmech.formulations.joint_control import JointControl
+
         tree = spanning_tree(ir)
         if tree.floating_loops:
             return None

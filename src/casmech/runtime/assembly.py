@@ -38,7 +38,6 @@ from casmech.formulations import augmented
 from casmech.formulations.table import BODY_FORMS
 from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import cancel, initial_holds
-from casmech.runtime.dae_rows import minimum_norm
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.workspace import Workspace, of
 
@@ -304,6 +303,8 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     on redundant rows, the multipliers of least norm with the same reaction (what least
     squares of the whole singular system gives). `rows` restricts the constraints to an
     independent subset instead (lam then has their length)."""
+    from casmech.runtime.dae_rows import minimum_norm
+
     if rows is None:
         independent = list(structure(functions, t, q, settings.linear_algebra).independent)
         q_ddot, lam = solve_dynamic_accelerations(functions, t, q, q_dot, independent,

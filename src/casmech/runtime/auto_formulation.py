@@ -44,7 +44,6 @@ from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import Tree
 from casmech.runtime.joint_dynamics import lags_bundle
 from casmech.runtime.results import Result
-from casmech.runtime.singular_poses import describe, examinable, singular_poses
 from casmech.runtime.workspace import Workspace
 from casmech.schema.limits import BDF, JOINT_METHODS, LOOP_METHODS, joint_method
 
@@ -111,7 +110,12 @@ def first_of(functions: SystemFunctions, tree: Tree, formulation: str, rows: int
              method: str = "auto") -> str:
     """`choice` for a run of `rows` output rows of `functions` (the arguments as run takes
     them); a function of these alone, so a caller running the same run again may keep it."""
-    return choice(tree, formulation, lambda: examinable(functions, rows, workspace),
+    def examinable() -> bool:
+        from casmech.runtime.singular_poses import examinable
+
+        return examinable(functions, rows, workspace)
+
+    return choice(tree, formulation, examinable,
                   lambda: lags_bundle(functions, settings.compile), method)
 
 
@@ -130,6 +134,8 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
 
     def examined(result: Result) -> Result:
         """`result` with the singular poses of a run with loops in its metadata."""
+        from casmech.runtime.singular_poses import singular_poses
+
         poses = singular_poses(functions, result, loops, settings, workspace)
         if poses is not None:
             result.metadata["singular_poses"] = poses
@@ -152,6 +158,8 @@ def run(functions: SystemFunctions, tree: Tree, formulation: str, rows: int,
         poses = examined(result).metadata.get("singular_poses")
         if not (fallback and poses):
             return result
+        from casmech.runtime.singular_poses import describe
+
         why = f"joint coordinates went {describe(poses[0])}"
     result = examined(other("rp"))
     result.metadata["formulation_fallback"] = why

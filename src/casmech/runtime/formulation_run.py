@@ -21,15 +21,12 @@ from casmech.core.options import DynamicsOptions, DynamicsSolver
 from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext, Interrupted, solver_reason
-from casmech.formulations import dae
 from casmech.formulations.builtin import BodyCoordinates, JointCoordinates
 from casmech.formulations.protocol import Formulation, System
 from casmech.formulations.registry import FORMULATIONS
 from casmech.runtime import assembly, contact_steps, events
 from casmech.runtime.buffers import NamedCall
-from casmech.runtime.dae_rows import mapped
 from casmech.runtime.driver import Block, Chunks, completed, drive
-from casmech.runtime.dynamics import run_dynamics
 from casmech.runtime.joint_dynamics import prepare
 from casmech.runtime.joint_run import JointRun
 from casmech.runtime.kinematics import output_times
@@ -62,6 +59,8 @@ def run(functions: SystemFunctions, name: str, asked: Run) -> Result:
 
 
 def _body(functions: SystemFunctions, formulation: Formulation, asked: Run) -> Result:
+    from casmech.runtime.dynamics import run_dynamics
+
     options = asked.options
     return run_dynamics(functions, asked.t_end, asked.step, asked.rtol, asked.atol,
                         t0=asked.t0, formulation=formulation.name, progress=asked.progress,
@@ -154,6 +153,8 @@ class _Integrate:
 
     def __init__(self, functions: SystemFunctions, formulation: Formulation, system: System,
                  p: np.ndarray, settings: DynamicsSolver, options: dict):
+        from casmech.formulations import dae
+
         self.functions, self.formulation, self.settings = functions, formulation, settings
         self.system, self.p, self.options = system, np.asarray(p, float), options
         self.problem = dae.problem(system.residual)
@@ -203,6 +204,8 @@ class _Integrate:
 
     def rows(self, times, xs, zs, p):
         """(q, q_dot, q_ddot, lam), one row per time."""
+        from casmech.runtime.dae_rows import mapped
+
         times = np.asarray(times, float)
         relative = times - p[self.system.time_offset] if self.system.time_offset is not None \
             else times

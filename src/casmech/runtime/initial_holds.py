@@ -25,7 +25,6 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.records import record
-from casmech.equations import initial_rows
 from casmech.equations.assemble import Coordinates
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
@@ -62,6 +61,8 @@ def _insert(stack, held, joint_rows: int):
 
 def _positions(functions: SystemFunctions, joint_rows: int) -> tuple[SystemFunctions, int]:
     """The bundle with the position rows held; the number of held rows."""
+    from casmech.equations import initial_rows
+
     x = Coordinates.create(functions.n_bodies)
     s = ca.SX.sym("s")
     held = initial_rows.positions(functions.ir, x, s)
@@ -86,6 +87,8 @@ def _positions(functions: SystemFunctions, joint_rows: int) -> tuple[SystemFunct
 
 def _velocities(functions: SystemFunctions, joint_rows: int) -> SystemFunctions:
     """The bundle with the rate rows held: [Phi_q; J] q_dot = [nu; targets]."""
+    from casmech.equations import initial_rows
+
     x = Coordinates.create(functions.n_bodies)
     held = initial_rows.rates(functions.ir, x)
     jacobian = x.ground_fixed(ca.jacobian(held.values, x.q_dot))
@@ -161,6 +164,8 @@ def holds(functions: SystemFunctions, workspace: Workspace | None = None) -> Hol
         return None
 
     def build() -> Holds:
+        from casmech.equations import initial_rows
+
         joint_rows = functions.n_joint_rows
         positions, count = _positions(functions, joint_rows)
         reference = (np.asarray(ir.reference_pose, float) if ir.reference_pose is not None

@@ -28,19 +28,11 @@ import numpy as np
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import Interrupted
-from casmech.formulations import mapped_system
 from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
-from casmech.runtime import (
-    assembly,
-    contact_steps,
-    dop853,
-    events,
-    functional_ode,
-    nonfinite,
-)
+from casmech.runtime import assembly, contact_steps, dop853, events, nonfinite
 from casmech.runtime.buffers import NamedCall
 from casmech.runtime.joint_recorder import Recorder
 from casmech.runtime.joint_rows import solved_motion
@@ -114,6 +106,8 @@ def _built(functions: SystemFunctions, settings: DynamicsSolver,
            workspace: Workspace, mapped: bool = False) -> JointSystem:
     """The joint system's symbolic build over the bundle's IR; `mapped`: a tree above
     compile.mapped_bodies that formulations.mapped_system covers as its kernels' graph."""
+    from casmech.formulations import mapped_system
+
     tree = tree_of(functions, workspace)
     if mapped and mapped_system.chosen(functions.ir, tree, settings.compile.mapped_bodies):
         from casmech.backends import tree_kernels
@@ -299,6 +293,8 @@ class _Integrator:
         """CVODES over the grid, kept for a later run over the same grid with the same options
         (docs/decisions/joint-run-fixed-costs.md), to times[0] only for a `trial` point (not
         kept); its problem: runtime.functional_ode's."""
+        from casmech.runtime import functional_ode
+
         functional = self.options["nonlinear_solver_iteration"] == "functional"
         if trial:
             return NamedCall(ca.integrator("joint", "cvodes", functional_ode.problem(

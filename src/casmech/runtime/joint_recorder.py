@@ -11,9 +11,9 @@ import numpy as np
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.dae_rows import minimum_norm
-from casmech.runtime.joint_rows import LoopRows, over_rows, rows_of, solved_motion
+from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.nonfinite import all_finite
+from casmech.runtime.row_calls import over_rows, rows_of
 from casmech.runtime.workspace import Workspace
 
 
@@ -107,6 +107,8 @@ def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRow
 def _least_norm(functions: SystemFunctions, system: JointSystem, mask) -> ca.Function:
     """(t, q, lam) -> lam with the joint rows' least-norm multipliers (runtime.dynamics'
     minimum_norm over the r-omega Jacobian; the masked cut rows depend on the rest)."""
+    from casmech.runtime.dae_rows import minimum_norm
+
     n = functions.n_joint_rows
     masked = {system.cut_rows[k] for k in np.flatnonzero(mask)}
     keep = [row for row in range(n) if row not in masked]

@@ -11,7 +11,6 @@ them out of its error test (docs/decisions/row-multipliers.md)."""
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from contextlib import nullcontext
 
@@ -23,6 +22,7 @@ from casmech.runtime import cancel, solver_messages
 from casmech.runtime.assembly import saddle_solution
 from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.nonfinite import all_finite
+from casmech.runtime.row_calls import over_rows, rows_of
 
 
 def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
@@ -41,30 +41,6 @@ def solved_motion(terms: ca.Function, motion: ca.Function) -> ca.Function:
     return ca.Function("joint_solved_motion", [t, x, w, signs],
                        ca.cse(outputs) if sym is ca.SX else outputs,
                        ["t", "x", "w", "signs"], ["q", "q_dot", "q_ddot", "lam"])
-
-
-def over_rows(function: ca.Function):
-    """`function` over many states, for rows_of(): in one C loop over the rows where a library
-    casmech loaded holds it (backends.rows_loop.RowsCall; backends is imported only once a
-    library was loaded, as its functions are recorded then), else by casadi's map over
-    columns (ColumnCall)."""
-    if sys.modules.get("casmech.backends.external_record") is not None:
-        from casmech.backends.rows_loop import rows_call
-
-        call = rows_call(function)
-        if call is not None:
-            return call
-    return ColumnCall(function)
-
-
-def rows_of(call, times: np.ndarray, *inputs: np.ndarray) -> tuple[np.ndarray, ...]:
-    """An over_rows call at each of `times`: each input one row per time (len(times) x n) or
-    a vector every evaluation shares; each output one row per time (the rows' C loop's own
-    layout; casadi's map's columns transposed)."""
-    if type(call) is ColumnCall:
-        return tuple(out.T for out in call(times[None, :], *(
-            a.T if a.ndim == 2 else a[:, None] for a in inputs)))
-    return call(len(times), times, *inputs)
 
 
 class LoopRows:

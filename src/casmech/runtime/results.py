@@ -9,11 +9,11 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.columns import BODY_COLUMNS, JOINT_COLUMNS
-from casmech.equations import contact, readings, results_row
+from casmech.equations import contact, readings
 from casmech.equations.functions import SystemFunctions
 from casmech.runtime import reaction_frames as reaction_frames_of
-from casmech.runtime.buffers import ColumnCall
 from casmech.runtime.nonfinite import NonFinite, check_states
+from casmech.runtime.row_calls import over_rows, rows_of
 from casmech.runtime.workspace import Workspace, of
 
 STATES = ("q", "q_dot", "q_ddot", "lam")
@@ -231,6 +231,8 @@ def row(functions: SystemFunctions, t, q, q_dot, q_ddot, lam) -> np.ndarray:
 def row_function(functions: SystemFunctions) -> ca.Function:
     """(t, q, q_dot, q_ddot, lam) -> the results row (a column), as `row` computes it:
     equations.results_row.row_function over the bundle's terms and its readings_function."""
+    from casmech.equations import results_row
+
     return results_row.row_function(functions, readings_function(functions))
 
 
@@ -250,9 +252,9 @@ def row_call(functions: SystemFunctions) -> ca.Function:
 def table(functions: SystemFunctions, result: Result,
           reaction_frames: str | Mapping[str, str] | None = None,
           workspace: Workspace | None = None) -> tuple[list[str], np.ndarray]:
-    """Every row at once: row_call (made once per workspace, by default the bundle's) mapped
-    over the rows in blocks,
-    writing into NumPy memory (runtime.buffers.ColumnCall); then each joint's reaction columns
+    """Every row at once: row_call (made once per workspace, by default the bundle's) over
+    the rows (runtime.row_calls: a compiled row in one C loop, else casadi's map writing into
+    NumPy memory); then each joint's reaction columns
     in its frame: the model's `reactions: {frame: ...}`, replaced by `reaction_frames` for
     every joint (a frame name) or the joints it names (a mapping)."""
     frames = reaction_frames_of.chosen(functions.ir, reaction_frames)
@@ -260,11 +262,9 @@ def table(functions: SystemFunctions, result: Result,
     rows = len(result)
     if rows == 0:
         return names, np.zeros((0, len(names)))
-    rows_of = of(functions, workspace).one("results_row",
-                                           lambda: ColumnCall(row_call(functions)))
-    (values,) = rows_of(np.array(result.times)[None, :], result.q.T, result.q_dot.T,
-                        result.q_ddot.T, result.lam.T)
-    values = values.T
+    call = of(functions, workspace).one("results_row", lambda: over_rows(row_call(functions)))
+    (values,) = rows_of(call, np.asarray(result.times, float), result.q, result.q_dot,
+                        result.q_ddot, result.lam)
     start = 1 + len(BODY_COLUMNS) * functions.n_bodies
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,

@@ -37,9 +37,9 @@ from casmech.equations.checks import structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, UsageError
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.joint_rows import over_rows, rows_of
 from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.results import Result
+from casmech.runtime.row_calls import over_rows, rows_of
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT = DynamicsSolver()  # the defaults (core.options)

@@ -8,7 +8,21 @@ import casmech
 from casmech.backends import rows_loop
 from casmech.backends.rows_loop import RowsCall
 from casmech.runtime import workspace
+from casmech.runtime.results import row
 from tests.conftest import MODELS, ROOT
+
+# two bars hanging from spherical joints
+CHAIN = """casmech: 1
+name: chain2
+gravity: [0.0, 0.0, -9.81]
+bodies:
+  - {name: bar1, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [0.5, 0.0, 0.0]}
+  - {name: bar2, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [1.5, 0.0, 0.0]}
+joints:
+  - {name: j1, type: spherical, body_i: ground, body_j: bar1, at: [0.0, 0.0, 0.0]}
+  - {name: j2, type: spherical, body_i: bar1, body_j: bar2, at: [1.0, 0.0, 0.0]}
+analysis: {type: dynamics, t_end: 0.5, output_step: 0.01}
+"""
 
 
 def _table(functions):
@@ -75,3 +89,32 @@ def test_the_singular_pose_check_in_c_finds_the_flat_poses(quick_builds, monkeyp
     found = casmech.analyze(again, "dynamics", t_end=1.0, rtol=1e-7, atol=1e-9)
     assert type(singular_poses._entries(again, None)["compiled"][1].call) is ColumnCall
     assert found.metadata["singular_poses"] == poses
+
+
+def test_the_results_table_is_the_maps_table(quick_builds, monkeypatch):
+    """runtime.results.table evaluates the compiled results row through runtime.row_calls.over_rows
+    (the rows' C loop where it takes the function, else casadi's map), then writes the joints'
+    reactions in their frames: the same table as the map over columns, reaction frames and
+    all."""
+    model = casmech.loads(CHAIN)  # no parameters: its library compiles the results row
+    functions = casmech.compile(model, "compiled")
+    result = casmech.analyze(functions, "dynamics", t_end=0.5, rtol=1e-6, atol=1e-8)
+    frames = {"j2": "body_i"}
+    table = casmech.results_table(functions, result, reaction_frames=frames)[1]
+    calls = workspace.default(functions).store("results_row").values()
+    assert [type(call) for call in calls] == [RowsCall]
+    monkeypatch.setattr(rows_loop, "rows_call", lambda function: None)
+    again = casmech.compile(model, "compiled")
+    mapped = casmech.results_table(again, result, reaction_frames=frames)[1]
+    calls = workspace.default(again).store("results_row").values()
+    assert [type(call).__name__ for call in calls] == ["ColumnCall"]
+    # the same compiled code on the same states
+    np.testing.assert_array_equal(table, mapped)
+    # row by row, numerically (runtime.results.row: the bundle's functions one call each)
+    names, plain = casmech.results_table(functions, result)
+    assert plain.shape == (len(result), len(names))
+    for k in (0, len(result) // 2, len(result) - 1):
+        expected = row(functions, result.times[k], result.q[k], result.q_dot[k],
+                       result.q_ddot[k], result.lam[k])
+        # the same terms through another graph: equal to rounding
+        np.testing.assert_allclose(plain[k], expected, rtol=1e-12, atol=1e-12)

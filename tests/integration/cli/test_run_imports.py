@@ -1,0 +1,56 @@
+"""What a warm compiled `casmech run` imports: a run of a tree whose library and model the cache
+holds loads its functions compiled and builds no symbolic function, so it imports none of the
+modules that build them (docs/decisions/warm-run-imports.md)."""
+
+import json
+import os
+import subprocess
+import sys
+
+# runs the command line and prints, last on stderr, the modules the process imported (by an
+# atexit handler: `casmech run` ends the process as it returns, cli._leave)
+PROBE = ("import atexit, json, sys\nfrom casmech.cli import main\n"
+         "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
+         "sys.exit(main())")
+# the symbolic builders and the other formulations' runs, imported by the functions that use
+# them
+SYMBOLIC = ("casmech.equations.eom", "casmech.equations.initial_rows",
+            "casmech.equations.results_row", "casmech.formulations.joint_control",
+            "casmech.formulations.mapped_system", "casmech.runtime.dynamics",
+            "casmech.runtime.dae_integrators", "casmech.runtime.dae_rows",
+            "casmech.runtime.functional_ode", "casmech.runtime.projected_rk4",
+            "casmech.runtime.singular_poses")
+
+
+# two bars hanging from spherical joints, no parameters (a parametric model's results row is
+# built over its bound library: equations.results_row)
+CHAIN = """casmech: 1
+name: chain2
+gravity: [0.0, 0.0, -9.81]
+bodies:
+  - {name: bar1, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [0.5, 0.0, 0.0]}
+  - {name: bar2, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [1.5, 0.0, 0.0]}
+joints:
+  - {name: j1, type: spherical, body_i: ground, body_j: bar1, at: [0.0, 0.0, 0.0]}
+  - {name: j2, type: spherical, body_i: bar1, body_j: bar2, at: [1.0, 0.0, 0.0]}
+analysis: {type: dynamics, t_end: 0.1, output_step: 0.01}
+"""
+
+
+def _modules(tmp_path, *args) -> set[str]:
+    model = tmp_path / "chain2.yaml"
+    model.write_text(CHAIN)
+    env = {**os.environ, "CASMECH_CACHE_DIR": str(tmp_path / "cache")}
+    done = subprocess.run([sys.executable, "-c", PROBE, "run", str(model), "--out",
+                           str(tmp_path / "out"), *args], env=env, capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    return set(json.loads(done.stderr.splitlines()[-1]))
+
+
+def test_a_warm_compiled_run_imports_no_symbolic_builder(tmp_path):
+    built = _modules(tmp_path, "--mode", "compiled")  # builds the library: every builder
+    assert [m for m in SYMBOLIC if m in built] != []
+    warm = _modules(tmp_path)
+    assert "casmech.backends.load" in warm  # the run loaded its library
+    assert [m for m in SYMBOLIC if m in warm] == []
