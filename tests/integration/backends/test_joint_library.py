@@ -28,7 +28,6 @@ from tests.integration.backends.test_joint import (
     _assert_same_tree_functions,
 )
 
-
 # a stand-in for the machine's instruction set that every compiler accepts
 MACHINE = ("-DCASMECH_MACHINE_FLAGS",)
 
