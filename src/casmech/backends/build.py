@@ -32,7 +32,7 @@ FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
 # the instruction set of the joint system's loop functions where the building machine has it
 # (machine_flags): AVX's three-operand scalar instructions need no register copies, which makes
 # their straight-line code a fifth shorter; no FMA, so the same roundings
-# (docs/decisions/joint-code-avx.md)
+# (docs/decisions/joint-ode-code-size.md)
 AVX_FLAGS = ("-mavx",)
 CPU_INFO = Path("/proc/cpuinfo")
 

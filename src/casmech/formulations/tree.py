@@ -29,7 +29,7 @@ Frame = tuple  # (axes as columns, origin), in a body's frame: NumPy arrays or S
 # an entry of a numeric joint frame's axis or point of at most RESIDUE times that vector's
 # largest entry is the rounding residue of the arithmetic that placed the frame on its body
 # (an axis off by less than 1e-15 rad, a point by 1e-15 of its distance): an exact zero in
-# the tree, so that the build folds its products away (docs/decisions/joint-frame-zeros.md)
+# the tree, so that the build folds its products away (docs/decisions/joint-ode-code-size.md)
 RESIDUE = 4 * np.finfo(float).eps
 
 
