@@ -103,10 +103,12 @@ def _set_flags(scope: str, flags: tuple[str, ...]) -> None:
 
     def toolchain(instructions: int, quick_build_instructions: int, names=()
                   ) -> build.Toolchain:
-        """joint_library's toolchain with the LOOP functions' units at `flags` where it
-        builds at the default flags (no flags chosen, the ODE below the quick build's size)."""
+        """joint_library's toolchain with the LOOP functions' units at `flags` (the machine's
+        instruction set only where `flags` name it) where it builds at the default flags (no
+        flags chosen, the ODE below the quick build's size)."""
         made = chosen(instructions, quick_build_instructions, names)
-        if joint_library.chosen_flags() is not None or made.flags != build.DEFAULT_FLAGS:
+        default = build.DEFAULT_FLAGS + build.machine_flags()
+        if joint_library.chosen_flags() is not None or made.flags != default:
             return made
         return build.Toolchain(made.compiler, made.flags, made.jobs, made.function_flags
                                + tuple((name, flags) for name in LOOP))

@@ -29,6 +29,12 @@ LIBRARY = f"libcasmech_model{SUFFIX}"
 REQUIRED_FLAGS = ("-std=c99",) + (() if SUFFIX == ".dll" else ("-fPIC",))
 COMPILERS = ("gcc", "clang", "cc")  # the first found on PATH is the default without $CC
 FLAGS_ENVIRONMENT = "CASMECH_CFLAGS"  # replaces DEFAULT_FLAGS when set
+# the instruction set of the joint system's loop functions where the building machine has it
+# (machine_flags): AVX's three-operand scalar instructions need no register copies, which makes
+# their straight-line code a fifth shorter; no FMA, so the same roundings
+# (docs/decisions/joint-ode-code-size.md)
+AVX_FLAGS = ("-mavx",)
+CPU_INFO = Path("/proc/cpuinfo")
 
 
 def default_compiler() -> str:
@@ -38,6 +44,25 @@ def default_compiler() -> str:
     if configured:
         return configured
     return next((name for name in COMPILERS if shutil.which(name)), COMPILERS[0])
+
+
+@lru_cache(maxsize=1)
+def machine_flags() -> tuple[str, ...]:
+    """AVX_FLAGS on an x86-64 Linux machine whose kernel reports AVX (its first processor's
+    `flags` in CPU_INFO), else none; a library built with them is keyed by them, so that a
+    machine without AVX never loads it."""
+    import platform
+
+    if sys.platform != "linux" or platform.machine() not in ("x86_64", "AMD64"):
+        return ()
+    try:
+        with CPU_INFO.open(encoding="ascii", errors="replace") as info:
+            for line in info:
+                if line.startswith("flags"):
+                    return AVX_FLAGS if "avx" in line.partition(":")[2].split() else ()
+    except OSError:
+        pass
+    return ()
 
 
 def default_flags() -> tuple[str, ...]:

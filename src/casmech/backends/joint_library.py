@@ -12,8 +12,9 @@ functions, under which names, at which flags.
     its own, the ODE and its forward derivative at the library's flags, built when a BDF run
     first asks for it (keyed_jacobian, content_jacobian: JointSystem.identity_jacobian's
     place), so that a run on Adams, the rule for these trees, never compiles it at -O1.
-Both choices are functions of the functions, the settings and chosen_flags(), so a library
-keyed by those (backends.library.compile_keyed) stays honest.
+Both choices are functions of the functions, the settings, chosen_flags() and
+build.machine_flags(), so a library keyed by those (backends.library.compile_keyed) stays
+honest.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.backends.build import FLAGS_ENVIRONMENT, Toolchain
+from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain, machine_flags
 from casmech.backends.library import compile_functions, compile_keyed
 from casmech.backends.rows_loop import chained
 from casmech.formulations.joint_system import JointSystem, layout
@@ -93,14 +94,18 @@ def is_rows(name: str) -> bool:
 def toolchain(instructions: int, quick_build_instructions: int, names=()) -> Toolchain:
     """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
     for an ODE of more than quick_build_instructions SX `instructions`, and below that the
-    SELDOM functions at QUICK_FLAGS and the results rows among the library's function `names`
-    at ROWS_FLAGS."""
+    library at DEFAULT_FLAGS, the SELDOM functions at QUICK_FLAGS and the results rows among
+    the library's function `names` at ROWS_FLAGS, each but SELDOM with the machine's
+    instruction set (build.machine_flags)."""
     if chosen_flags() is not None:
         return Toolchain()
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)
-    return Toolchain(function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM)
-                     + tuple((name, ROWS_FLAGS) for name in sorted(names) if is_rows(name)))
+    machine = machine_flags()
+    return Toolchain(flags=DEFAULT_FLAGS + machine,
+                     function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM)
+                     + tuple((name, ROWS_FLAGS + machine) for name in sorted(names)
+                             if is_rows(name)))
 
 
 def _bdf(ode: ca.Function, quick_build_instructions: int

@@ -26,6 +26,11 @@ from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.schema.resolved import ScalarFunction
 
 Frame = tuple  # (axes as columns, origin), in a body's frame: NumPy arrays or SX
+# an entry of a numeric joint frame's axis or point of at most RESIDUE times that vector's
+# largest entry is the rounding residue of the arithmetic that placed the frame on its body
+# (an axis off by less than 1e-15 rad, a point by 1e-15 of its distance): an exact zero in
+# the tree, so that the build folds its products away (docs/decisions/joint-ode-code-size.md)
+RESIDUE = 4 * np.finfo(float).eps
 
 
 @record
@@ -120,11 +125,23 @@ def tree_joint(joint: JointIR, parent: int) -> TreeJoint:
     sides = ("j", "i") if reversed_ else ("i", "j")
     child = joint.body_i if reversed_ else joint.body_j
     motion = MOTIONS[joint.type]
-    frames = FRAMES[motion.frame](joint.geometry, *sides)
+    frames = tuple(_without_residues(frame)
+                   for frame in FRAMES[motion.frame](joint.geometry, *sides))
     sign = -1.0 if reversed_ else 1.0
     prescribed = {motion.drivers[key]: (f, sign) for key, f in joint.drivers.items()}
     return TreeJoint(joint.name, joint.type, parent, child, *frames, reversed_, prescribed,
                      joint)
+
+
+def _without_residues(frame: Frame) -> Frame:
+    """A numeric frame with its residues (RESIDUE) made zeros; SX as it is."""
+    axes, origin = frame
+    if isinstance(axes, ca.SX) or isinstance(origin, ca.SX):
+        return frame
+    axes, origin = np.array(axes, float), np.array(origin, float)
+    axes[np.abs(axes) <= RESIDUE * np.abs(axes).max(axis=0)] = 0.0
+    origin[np.abs(origin) <= RESIDUE * np.abs(origin).max(initial=0.0)] = 0.0
+    return axes, origin
 
 
 def _axes_frames(geometry, parent: str, child: str) -> tuple[Frame, Frame]:

@@ -158,7 +158,8 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     name = "joint_dae" if tree.cut else "joint_ode"
     content = {"kind": "joint system", "bundle": functions.library_key,
                "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
-               "loop_rows": settings.loop_rows, "chosen_flags": joint_library.chosen_flags()}
+               "loop_rows": settings.loop_rows, "chosen_flags": joint_library.chosen_flags(),
+               "machine_flags": list(joint_library.machine_flags())}
 
     def make():
         system = _built(functions, settings, workspace)

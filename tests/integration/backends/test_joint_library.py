@@ -1,7 +1,8 @@
 """A compiled joint tree's library (runtime.joint_dynamics.keyed_system, what goes in it:
 backends.joint_library) where the user chose no flags: the ODE's forward derivative
 fwd1_joint_ode (method auto's probe) compiled at -O0, the results rows at
-joint_library.ROWS_FLAGS and the rest at the default flags, large results rows as a chain of
+joint_library.ROWS_FLAGS and the rest at the default flags, all but fwd1_joint_ode with the
+machine's instruction set (build.machine_flags, part of the key), large results rows as a chain of
 parts (backends.split), all equal to the interpreted system's, the
 parts evaluated over rows in C (backends.rows_loop); BDF's
 Jacobian from a library of its own, built by the first BDF run, so a BDF run after an Adams
@@ -27,6 +28,9 @@ from tests.integration.backends.test_joint import (
     _assert_same_tree_functions,
 )
 
+# a stand-in for the machine's instruction set that every compiler accepts
+MACHINE = ("-DCASMECH_MACHINE_FLAGS",)
+
 
 def _compiles(commands: list, entry) -> dict[str, list[str]]:
     """C source -> the flags gcc compiled it with."""
@@ -39,6 +43,7 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
         model, toolchain, cache_root, interpreted, tmp_path, monkeypatch):
     bundle = codegen.compiled(model, toolchain, root=cache_root, parametric_library=False)
     monkeypatch.delenv(build.FLAGS_ENVIRONMENT)  # no flags chosen
+    monkeypatch.setattr(joint_library, "machine_flags", lambda: MACHINE)
     # this small tree's rows too, in three parts
     monkeypatch.setattr(joint_library, "WHOLE_INSTRUCTIONS", 0)
     monkeypatch.setattr(joint_library, "PART_INSTRUCTIONS",
@@ -58,7 +63,8 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
     assert {"joint_ode", "fwd1_joint_ode", *joint_library.motion_parts(3)} <= names
     assert "joint_motion" not in names and record["function_flags"] == {
         "fwd1_joint_ode": ["-O0"],
-        **{part: list(joint_library.ROWS_FLAGS) for part in joint_library.motion_parts(3)}}
+        **{part: list(joint_library.ROWS_FLAGS + MACHINE)
+           for part in joint_library.motion_parts(3)}}
     compiles = _compiles(commands, entry)
     assert len(compiles) >= 3
     for source, flags in compiles.items():
@@ -66,6 +72,7 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
         want = ("-O0" if "int fwd1_joint_ode(" in text else joint_library.ROWS_FLAGS[0]
                 if "int joint_motion_part" in text else build.DEFAULT_FLAGS[0])
         assert want in flags, (source, flags)
+        assert (MACHINE[0] in flags) == (want != "-O0"), (source, flags)
     _assert_same_tree_functions(fast, slow, interpreted.n_bodies)
     call = rows_loop.rows_call(fast.motion)  # the parts in turn over rows, in one C call
     assert call is not None and len(call.entries) == 3
@@ -100,3 +107,10 @@ def test_seldom_functions_build_quickly_and_large_rows_in_parts(
     joint_system(bundle, workspace=Workspace(bundle))
     (chosen,) = set(cache.entries(tmp_path / "fresh")) - before
     assert manifest.read(chosen)["function_flags"] == {}
+    # a machine without the instruction set: its own library, under another key
+    monkeypatch.delenv(build.FLAGS_ENVIRONMENT)
+    monkeypatch.setattr(joint_library, "machine_flags", lambda: ())
+    before = set(cache.entries(tmp_path / "fresh"))
+    joint_system(bundle, workspace=Workspace(bundle))
+    (plain,) = set(cache.entries(tmp_path / "fresh")) - before
+    assert MACHINE[0] not in str(manifest.read(plain))

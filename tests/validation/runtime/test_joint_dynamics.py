@@ -258,8 +258,8 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
 
 def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     """The tree's ODE above compile.quick_build_instructions compiles at -O0 (the rows too),
-    below at the default flags with the results rows at joint_library.ROWS_FLAGS;
-    $CASMECH_CFLAGS always wins."""
+    below at the default flags with the results rows at joint_library.ROWS_FLAGS, both with
+    the machine's instruction set (build.machine_flags); $CASMECH_CFLAGS always wins."""
     from casmech.backends import build, joint_library
     from casmech.runtime import joint_dynamics
 
@@ -271,10 +271,11 @@ def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     quick = joint_dynamics._toolchain(system, size - 1, names)
     assert quick.flags == ("-O0",) and quick.flags_of("joint_motion") == ("-O0",)
     default = joint_dynamics._toolchain(system, size, names)
-    assert default.flags == build.DEFAULT_FLAGS
-    assert default.flags_of("joint_ode") == build.DEFAULT_FLAGS
+    machine = build.machine_flags()  # the machine's instruction set, on both
+    assert default.flags == build.DEFAULT_FLAGS + machine
+    assert default.flags_of("joint_ode") == build.DEFAULT_FLAGS + machine
     assert default.flags_of("joint_motion") == default.flags_of("joint_motion_part0") \
-        == joint_library.ROWS_FLAGS != build.DEFAULT_FLAGS
+        == joint_library.ROWS_FLAGS + machine != build.DEFAULT_FLAGS + machine
     monkeypatch.setenv(build.FLAGS_ENVIRONMENT, "-O2 -march=native")
     chosen = joint_dynamics._toolchain(system, size - 1, names)
     assert chosen.flags == chosen.flags_of("joint_motion") == ("-O2", "-march=native")
