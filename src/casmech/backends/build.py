@@ -65,6 +65,19 @@ def machine_flags() -> tuple[str, ...]:
     return ()
 
 
+@lru_cache(maxsize=8)
+def takes_machine_flags(compiler: str) -> bool:
+    """Whether `compiler` (a command, a launcher may lead) is one whose -m options
+    machine_flags gives: a word of it that is, or links to, a gcc, clang or Intel compiler
+    (cc is usually a link to gcc); another compiler gets none."""
+    for word in shlex.split(compiler):
+        found = shutil.which(word)
+        for name in {os.path.basename(word), os.path.basename(os.path.realpath(found or word))}:
+            if "gcc" in name or "clang" in name or name.startswith(("icx", "icc")):
+                return True
+    return False
+
+
 def default_flags() -> tuple[str, ...]:
     configured = os.environ.get(FLAGS_ENVIRONMENT)
     return tuple(configured.split()) if configured is not None else DEFAULT_FLAGS

@@ -24,7 +24,14 @@ from collections.abc import Callable
 
 import casadi as ca
 
-from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain, machine_flags
+from casmech.backends.build import (
+    DEFAULT_FLAGS,
+    FLAGS_ENVIRONMENT,
+    Toolchain,
+    default_compiler,
+    machine_flags,
+    takes_machine_flags,
+)
 from casmech.backends.library import compile_functions, compile_keyed
 from casmech.backends.rows_loop import chained
 from casmech.formulations.joint_system import JointSystem, layout
@@ -96,12 +103,13 @@ def toolchain(instructions: int, quick_build_instructions: int, names=()) -> Too
     for an ODE of more than quick_build_instructions SX `instructions`, and below that the
     library at DEFAULT_FLAGS, the SELDOM functions at QUICK_FLAGS and the results rows among
     the library's function `names` at ROWS_FLAGS, each but SELDOM with the machine's
-    instruction set (build.machine_flags)."""
+    instruction set (build.machine_flags) where the compiler takes it
+    (build.takes_machine_flags)."""
     if chosen_flags() is not None:
         return Toolchain()
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)
-    machine = machine_flags()
+    machine = machine_flags() if takes_machine_flags(default_compiler()) else ()
     return Toolchain(flags=DEFAULT_FLAGS + machine,
                      function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM)
                      + tuple((name, ROWS_FLAGS + machine) for name in sorted(names)

@@ -56,3 +56,25 @@ def test_none_on_other_machines(cpu_info, monkeypatch):
     monkeypatch.setattr(platform, "machine", lambda: "x86_64")
     monkeypatch.setattr(build.sys, "platform", "darwin")
     assert build.machine_flags() == ()
+
+
+@pytest.mark.parametrize("compiler, takes", [
+    ("gcc", True), ("gcc-12", True), ("ccache clang", True), ("x86_64-linux-gnu-gcc", True),
+    ("icx", True), ("tcc", False), ("/opt/some/cl", False)])
+def test_machine_flags_only_for_compilers_that_take_them(compiler, takes):
+    """-mavx goes to gcc, clang and Intel compilers (by name, or the file a name links to),
+    never to another compiler, which might reject it."""
+    build.takes_machine_flags.cache_clear()
+    assert build.takes_machine_flags(compiler) is takes
+
+
+def test_cc_linked_to_gcc_takes_them(tmp_path, monkeypatch):
+    """A `cc` that is a link to gcc (as Debian's alternatives make it) takes the flags."""
+    gcc = tmp_path / "x86_64-linux-gnu-gcc-12"
+    gcc.write_text("#!/bin/sh\n")
+    gcc.chmod(0o755)
+    (tmp_path / "cc").symlink_to(gcc)
+    monkeypatch.setenv("PATH", str(tmp_path))
+    build.takes_machine_flags.cache_clear()
+    assert build.takes_machine_flags("cc") is True
+    build.takes_machine_flags.cache_clear()
