@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 
+from tests.conftest import ROOT
+
 # runs the command line and prints, last on stderr, the modules the process imported (by an
 # atexit handler: `casmech run` ends the process as it returns, cli._leave)
 PROBE = ("import atexit, json, sys\nfrom casmech.cli import main\n"
@@ -24,25 +26,15 @@ SYMBOLIC = ("casmech.equations.eom", "casmech.equations.initial_rows",
 
 # two bars hanging from spherical joints, no parameters (a parametric model's results row is
 # built over its bound library: equations.results_row)
-CHAIN = """casmech: 1
-name: chain2
-gravity: [0.0, 0.0, -9.81]
-bodies:
-  - {name: bar1, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [0.5, 0.0, 0.0]}
-  - {name: bar2, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [1.5, 0.0, 0.0]}
-joints:
-  - {name: j1, type: spherical, body_i: ground, body_j: bar1, at: [0.0, 0.0, 0.0]}
-  - {name: j2, type: spherical, body_i: bar1, body_j: bar2, at: [1.0, 0.0, 0.0]}
-analysis: {type: dynamics, t_end: 0.1, output_step: 0.01}
-"""
+CHAIN = ROOT / "benchmarks" / "models" / "chain2.yaml"
 
 
 def _modules(tmp_path, *args) -> set[str]:
     model = tmp_path / "chain2.yaml"
-    model.write_text(CHAIN)
+    model.write_bytes(CHAIN.read_bytes())
     env = {**os.environ, "CASMECH_CACHE_DIR": str(tmp_path / "cache")}
-    done = subprocess.run([sys.executable, "-c", PROBE, "run", str(model), "--out",
-                           str(tmp_path / "out"), *args], env=env, capture_output=True,
+    done = subprocess.run([sys.executable, "-c", PROBE, "run", str(model), "--t-end", "0.1",
+                           "--out", str(tmp_path / "out"), *args], env=env, capture_output=True,
                           text=True, timeout=300, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     return set(json.loads(done.stderr.splitlines()[-1]))

@@ -11,18 +11,8 @@ from casmech.runtime import workspace
 from casmech.runtime.results import row
 from tests.conftest import MODELS, ROOT
 
-# two bars hanging from spherical joints
-CHAIN = """casmech: 1
-name: chain2
-gravity: [0.0, 0.0, -9.81]
-bodies:
-  - {name: bar1, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [0.5, 0.0, 0.0]}
-  - {name: bar2, mass: 1.0, inertia: [0.0001, 0.0834, 0.0834], position: [1.5, 0.0, 0.0]}
-joints:
-  - {name: j1, type: spherical, body_i: ground, body_j: bar1, at: [0.0, 0.0, 0.0]}
-  - {name: j2, type: spherical, body_i: bar1, body_j: bar2, at: [1.0, 0.0, 0.0]}
-analysis: {type: dynamics, t_end: 0.5, output_step: 0.01}
-"""
+# two bars hanging from spherical joints, no parameters: its library compiles the results row
+CHAIN = ROOT / "benchmarks" / "models" / "chain2.yaml"
 
 
 def _table(functions):
@@ -96,7 +86,7 @@ def test_the_results_table_is_the_maps_table(quick_builds, monkeypatch):
     (the rows' C loop where it takes the function, else casadi's map), then writes the joints'
     reactions in their frames: the same table as the map over columns, reaction frames and
     all."""
-    model = casmech.loads(CHAIN)  # no parameters: its library compiles the results row
+    model = casmech.load(CHAIN)
     functions = casmech.compile(model, "compiled")
     result = casmech.analyze(functions, "dynamics", t_end=0.5, rtol=1e-6, atol=1e-8)
     frames = {"j2": "body_i"}
