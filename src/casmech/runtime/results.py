@@ -262,9 +262,11 @@ def table(functions: SystemFunctions, result: Result,
     rows = len(result)
     if rows == 0:
         return names, np.zeros((0, len(names)))
-    call = of(functions, workspace).one("results_row", lambda: over_rows(row_call(functions)))
-    (values,) = rows_of(call, np.asarray(result.times, float), result.q, result.q_dot,
-                        result.q_ddot, result.lam)
+    space = of(functions, workspace)
+    with space.lock:  # the row's call (its work vectors) serves one thread at a time
+        call = space.one("results_row", lambda: over_rows(row_call(functions)))
+        (values,) = rows_of(call, np.asarray(result.times, float), result.q, result.q_dot,
+                            result.q_ddot, result.lam)
     start = 1 + len(BODY_COLUMNS) * functions.n_bodies
     block = slice(start, start + len(JOINT_COLUMNS) * len(functions.joints))
     values[:, block] = reaction_frames_of.written(functions.ir, frames, result.q,

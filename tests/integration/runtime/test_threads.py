@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import casmech
-from tests.conftest import MODELS
+from tests.conftest import MODELS, ROOT
 
 
 def _table(functions) -> np.ndarray:
@@ -40,3 +40,17 @@ def test_threads_on_bundles_of_their_own_equal_the_serial_run(quick_builds):
         tables = list(pool.map(_table, bundles * 4))
     for table in tables:
         np.testing.assert_array_equal(table, serial)  # the same run: the same doubles
+
+
+def test_results_tables_from_threads_equal_the_serial_table(quick_builds):
+    """The results table of one bundle from several threads at once: its compiled row in the
+    rows' C loop (one set of work vectors a workspace) is called by one thread at a time."""
+    functions = casmech.compile(casmech.load(ROOT / "benchmarks" / "models" / "chain2.yaml"),
+                                "compiled")
+    result = casmech.analyze(functions, "dynamics", t_end=2.0)
+    serial = casmech.results_table(functions, result)[1]
+    with ThreadPoolExecutor(4) as pool:
+        tables = list(pool.map(lambda _: casmech.results_table(functions, result)[1],
+                               range(32)))
+    for table in tables:
+        np.testing.assert_array_equal(table, serial)  # the same rows: the same doubles
