@@ -15,7 +15,9 @@ cache" means CASMECH_CACHE_DIR holds the model's compiled library (built once be
 importing mujoco and NumPy, reading the MJCF, stepping RK4 at --mujoco-dt and recording qpos
 every 0.01 s (as the benchmark's MuJoCo runner does). Commands run round-robin, so a change in
 the machine's load hits all alike; medians of wall and CPU (user + sys of the child) after one
-untimed warm-up of each.
+untimed warm-up of each. After each command the next waits, untimed, until the background
+build an empty-cache run started (and its compilers) has ended (`settle`), so that no command
+is timed beside another's build.
 """
 
 from __future__ import annotations
@@ -96,6 +98,32 @@ def cases(systems: list[str], sources: list[Path], work: Path, t_end: float, dt:
     return rows
 
 
+def settle(cache: str | None, limit: float = 900.0) -> None:
+    """Waits (untimed) until no process works for `cache` any more: an empty-cache run's
+    background build (a detached child and its compilers, CASMECH_CACHE_DIR=`cache` in their
+    environment) goes on after the run, and would load the machine under the commands timed
+    next. Linux (/proc); elsewhere, and for the warm rows, which start none, it returns."""
+    if cache is None or not Path("/proc").is_dir():
+        return
+    marker = f"CASMECH_CACHE_DIR={cache}".encode()
+    deadline = time.monotonic() + limit
+    while time.monotonic() < deadline:
+        busy = False
+        for entry in Path("/proc").iterdir():
+            if not entry.name.isdigit() or int(entry.name) == os.getpid():
+                continue
+            try:
+                environ = (entry / "environ").read_bytes()
+            except OSError:  # gone, or not ours
+                continue
+            if marker in environ.split(b"\0"):
+                busy = True
+                break
+        if not busy:
+            return
+        time.sleep(0.05)
+
+
 def quiet(src: Path, base: dict) -> list[str]:
     """["--quiet"] where that source's `casmech run` has the flag (older commits do not)."""
     usage = subprocess.run([sys.executable, "-c", CONSOLE, "run", "--help"], capture_output=True,
@@ -139,9 +167,11 @@ def main() -> None:
         rows = cases(args.systems, sources, Path(folder), args.t_end, args.mujoco_dt)
         for run in range(args.repeats + 1):  # run 0: warm-up
             for system, label, command, env in rows:
-                sample = timed(command, env(run))
+                environment = env(run)
+                sample = timed(command, environment)
                 if run:
                     samples.setdefault((system, label), []).append(sample)
+                settle(environment.get("CASMECH_CACHE_DIR"))
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, load {load} "
           f"at the end; Python {platform.python_version()}; "
