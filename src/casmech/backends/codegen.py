@@ -60,7 +60,6 @@ from casmech.backends.load import load as load_build
 from casmech.core.last_call import last_call
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
-from casmech.equations import system
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import SystemFunctions, build_functions, mapped_functions
 from casmech.errors import UsageError
@@ -89,6 +88,8 @@ def bundle(ir: ModelIR, names: tuple[str, ...] | None = None) -> dict[str, ca.Fu
     prescribed_step over its functions evaluated inline (one SX graph) or mapped, as the
     switch says (equations.evaluation.WHERE_INLINE). `names`: only those of the builder's
     (a part of a joint tree's bundle, backends.deferred)."""
+    from casmech.equations import system  # (on a build only: a warm run builds no function)
+
     if names is not None:
         shared = system.System(ir, Evaluation.of(False, None))
         return {name: system.function(shared, name) for name in names}

@@ -17,20 +17,19 @@ instead of building them (so each DAE gets a library of its own: backends.genera
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import casadi as ca
 
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import build_functions
 from casmech.formulations.registry import FORMULATIONS
-from casmech.formulations.residual_groups import (
-    Indices,
-    body_group,
-    force_groups,
-    joint_groups,
-)
 from casmech.formulations.table import BODY_FORMS
 from casmech.model.ir import ModelIR
-from casmech.numerics.element_sums import ElementSum
+
+if TYPE_CHECKING:  # (the element kernels are imported where a mapped residual is built)
+    from casmech.formulations.residual_groups import Indices
+    from casmech.numerics.element_sums import ElementSum
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 # A library's DAE of a model the switch evaluates inline (WHERE_INLINE["dae_library"]) is
@@ -47,6 +46,9 @@ def name(form: str, kind: str) -> str:
 
 def element_sum(ir: ModelIR, ix: Indices, t, constants: list, ev: Evaluation) -> ElementSum:
     """constants: the row constants of p, [w, s] (, s_phi for ggl) (formulations.dae)."""
+    from casmech.formulations.residual_groups import body_group, force_groups, joint_groups
+    from casmech.numerics.element_sums import ElementSum
+
     groups = [*joint_groups(ir, ix, t, constants, ev), *body_group(ir, ix, constants, ev),
               *force_groups(ir, ix, t, ev)]
     return ElementSum(ix.n_x + ix.n_z, ix.n_u, tuple(groups), ix.padding)
@@ -95,6 +97,8 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     of a symbolic IR, whose values follow p's own."""
     if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
+    from casmech.formulations.residual_groups import Indices
+
     ix = Indices(ir, form, kind)
     n_data = 0 if data is None else data.numel()
     tau, x, z = ca.MX.sym("t"), ca.MX.sym("x", ix.n_x), ca.MX.sym("z", ix.n_z)
