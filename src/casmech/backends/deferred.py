@@ -27,8 +27,8 @@ import casadi as ca
 
 from casmech.backends import manifest
 from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain
-from casmech.equations.functions import LazyFunctions
 from casmech.equations.bundle_names import NAMES
+from casmech.equations.functions import LazyFunctions
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.residuals import name
 
