@@ -67,7 +67,6 @@ from casmech.formulations import prescribed, residuals
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
 from casmech.model.lower import lower
-from casmech.model.parametric import data
 from casmech.schema.resolved import ResolvedModel
 
 __all__ = ["Toolchain", "auto_choice", "auto_mode", "available", "compile_functions", "compiled",
@@ -151,9 +150,15 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
                                                 names), None
 
 
+def _model_data(ir: ModelIR) -> tuple[np.ndarray, str]:
+    from casmech.model.parametric import data  # (on a parametric library's key only)
+
+    return data(ir)
+
+
 # model.parametric.data(ir), the same again for the IR split last: a run makes its library's
 # entry twice (auto_choice looks it up, then compiled loads it); the IR is a frozen record
-_data = last_call(lambda ir: data(ir))
+_data = last_call(_model_data)
 
 
 def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:

@@ -34,7 +34,6 @@ from casmech.core.records import record
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.formulations import augmented
 from casmech.formulations.table import BODY_FORMS
 from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import cancel, initial_holds
@@ -353,6 +352,8 @@ def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.nda
     direction (a Euclidean least-squares step there moved A02 onto the wrong branch), at the
     price of slow progress along it: a residual below `accept` (default the tolerance) after
     settings.max_iterations steps is taken as converged."""
+    from casmech.formulations import augmented
+
     accept = settings.tolerance if accept is None else accept
     name = next(key for key, value in BODY_FORMS.items() if value == form)
     per_call = fallback.projection_iterations
