@@ -63,7 +63,7 @@ from casmech.core.version import VERSION
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import SystemFunctions, build_functions, mapped_functions
 from casmech.errors import UsageError
-from casmech.formulations import prescribed, residuals
+from casmech.formulations import residuals
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
 from casmech.model.lower import lower
@@ -88,6 +88,7 @@ def bundle(ir: ModelIR, names: tuple[str, ...] | None = None) -> dict[str, ca.Fu
     switch says (equations.evaluation.WHERE_INLINE). `names`: only those of the builder's
     (a part of a joint tree's bundle, backends.deferred)."""
     from casmech.equations import system  # (on a build only: a warm run builds no function)
+    from casmech.formulations import prescribed
 
     if names is not None:
         shared = system.System(ir, Evaluation.of(False, None))

@@ -39,7 +39,7 @@ from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
-from casmech.formulations import prescribed, residuals
+from casmech.formulations import residuals
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
@@ -97,6 +97,7 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
 
 def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
     """(the system functions with input d, the DAE residuals over them by name)."""
+    from casmech.formulations import prescribed
     from casmech.model import parametric
 
     split = parametric.split(ir)

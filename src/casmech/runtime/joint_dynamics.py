@@ -381,8 +381,6 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     (runtime.stiffness) depends on the system and the start alone: kept in `workspace`;
     under DOP853 it bounds the step (runtime.stiffness.stable_step).
     docs/decisions/method-auto.md."""
-    from casmech.runtime.stiffness import spectral_radius
-
     def explicit() -> str:
         return "adams" if capped or not in_c() else "dop853"
 
@@ -391,6 +389,8 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     if not forces or not 0 < len(x0) <= settings.stiff_states:
         return explicit(), None  # (compiled_system compiles the derivative this needs up to
         #                           this size)
+    from casmech.runtime.stiffness import spectral_radius
+
     x0 = np.asarray(x0, float)
     radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),

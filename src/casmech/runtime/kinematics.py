@@ -26,7 +26,7 @@ from casmech.core.options import Assembly, KinematicsSolver
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
-from casmech.formulations import prescribed, prescribed_friction
+from casmech.formulations import prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
 from casmech.runtime.load_checks import check_rows
@@ -190,11 +190,15 @@ class _MappedGrid:
 
     def __init__(self, functions: SystemFunctions, settings: KinematicsSolver,
                  workspace: Workspace):
+        from casmech.formulations import prescribed
+
         self.step = prescribed.step(functions.functions)
         self.m = functions.n_rows
         self.settings, self.workspace = settings, workspace
 
     def __call__(self, state, previous: float, block: np.ndarray):
+        from casmech.formulations import prescribed
+
         rows = len(block)
         padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
         function = self.workspace.kept("prescribed_grids", padded, lambda: BufferedCall(
