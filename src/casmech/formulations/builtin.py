@@ -26,10 +26,8 @@ from casmech.formulations.protocol import (
     System,
     indexed,
 )
-from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
-from casmech.numerics import kkt
 
 if TYPE_CHECKING:
     from casmech.formulations.joint_control import JointControl
@@ -48,6 +46,8 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
 def row_scales(functions: SystemFunctions, name: str, t, q) -> tuple[np.ndarray, np.ndarray]:
     """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
     Phi_q at (t, q)."""
+    from casmech.formulations.table import BODY_FORMS
+
     form = BODY_FORMS[name]
     jacobian = functions.matrix(form.jacobian, t, q)
     phi_q = jacobian if form.jacobian == "phi_q" else functions.matrix("phi_q", t, q)
@@ -90,6 +90,7 @@ class BodyCoordinates(Formulation):
 
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
         from casmech.formulations import dae
+        from casmech.formulations.table import BODY_FORMS
 
         residual = self.residual(functions, stabilization)
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
@@ -112,6 +113,8 @@ class BodyCoordinates(Formulation):
         """[q, v] with the consistent (v_dot, lam / s) of the masked, scaled rows (the rows
         equations.checks.structure finds redundant at t0 masked; s the inverse row norms)."""
         from casmech.formulations import dae
+        from casmech.formulations.table import BODY_FORMS
+        from casmech.numerics import kkt
 
         form = BODY_FORMS[self.name]
         n_q, n_v, m = dae.sizes(functions.functions, self.name)

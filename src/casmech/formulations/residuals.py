@@ -24,7 +24,6 @@ import casadi as ca
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import build_functions
 from casmech.formulations.registry import FORMULATIONS
-from casmech.formulations.table import BODY_FORMS
 from casmech.model.ir import ModelIR
 
 if TYPE_CHECKING:  # (the element kernels are imported where a mapped residual is built)
@@ -63,6 +62,8 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     stabilizations, built in) with its daeF and jacF: inline where the switch says so and
     the code is small (UNROLLED_INSTRUCTIONS), else mapped (oracle) where the formulation
     has element kernels (the body forms: formulations.residual_groups), else inline."""
+    from casmech.formulations.table import BODY_FORMS
+
     sx = build_functions(ir) if is_inline("dae_library", ir.n_bodies) else None
     out = {}
     for formulation in FORMULATIONS.values():
@@ -95,6 +96,8 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     quad, zero), with `daeF` (its residual) and `jacF` (the Jacobian blocks d(ode, alg)/d(x,
     z)), the names casadi's IDAS interface looks up in the DAE's library. `data`: the symbols
     of a symbolic IR, whose values follow p's own."""
+    from casmech.formulations.table import BODY_FORMS
+
     if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
     from casmech.formulations.residual_groups import Indices

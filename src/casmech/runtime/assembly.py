@@ -34,8 +34,7 @@ from casmech.core.records import record
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.formulations.table import BODY_FORMS
-from casmech.numerics import kkt, numeric_qr
+from casmech.numerics import numeric_qr
 from casmech.runtime import cancel, initial_holds
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.workspace import Workspace, of
@@ -223,6 +222,8 @@ def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
     closest point of its neighbourhood) or where the rootfinder does not reach
     |Phi| <= settings.tolerance (a Jacobian losing rank at q makes the KKT matrix nearly
     singular)."""
+    from casmech.numerics import kkt
+
     rows = structure(functions, t, q, settings.linear_algebra).independent
     if len(rows) == functions.n_coordinates:
         return q
@@ -302,6 +303,7 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     on redundant rows, the multipliers of least norm with the same reaction (what least
     squares of the whole singular system gives). `rows` restricts the constraints to an
     independent subset instead (lam then has their length)."""
+    from casmech.numerics import kkt
     from casmech.runtime.dae_rows import minimum_norm
 
     if rows is None:
@@ -353,6 +355,7 @@ def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.nda
     price of slow progress along it: a residual below `accept` (default the tolerance) after
     settings.max_iterations steps is taken as converged."""
     from casmech.formulations import augmented
+    from casmech.formulations.table import BODY_FORMS
 
     accept = settings.tolerance if accept is None else accept
     name = next(key for key, value in BODY_FORMS.items() if value == form)
