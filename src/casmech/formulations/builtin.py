@@ -15,7 +15,6 @@ from casmech.core.options import STABILIZATIONS, DynamicsSolver, LinearAlgebra
 from casmech.core.records import record
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
-from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, labels
 from casmech.formulations.protocol import (
@@ -143,6 +142,7 @@ class BodyCoordinates(Formulation):
         """As runtime.dynamics sets them: the algebraic tolerances per group, and with ggl
         the first step from the translations' accelerations."""
         from casmech.formulations import dae
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 
         _, n_v, m = dae.sizes(functions.functions, self.name)
         ggl = system.n_z > n_v + m
@@ -224,6 +224,8 @@ class JointCoordinates(Formulation):
                            atol: float, interval: float,
                            settings: DynamicsSolver = DEFAULT) -> dict:
         """The loops' DAE's, as runtime.joint_dynamics sets them (none for a tree's ODE)."""
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+
         joint = system.joint
         if not joint.n_cut:
             return {}

@@ -34,7 +34,6 @@ from casmech.core.records import record
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.numerics import numeric_qr
 from casmech.runtime import cancel, initial_holds
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.workspace import Workspace, of
@@ -117,6 +116,8 @@ def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | N
             return q
         start = phi if start is None else start
         best_phi = phi if best_phi is None or _worst(phi) < _worst(best_phi) else best_phi
+        from casmech.numerics import numeric_qr  # (where Phi is not met yet)
+
         q += numeric_qr.lstsq(phi_q, -phi, limits=settings.linear_algebra)
     phi, phi_q = _evaluate(functions, t, q, scale)
     if _worst(phi) <= 1e3 * tolerance:
@@ -259,6 +260,8 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
     zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
     if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
         return np.array(q_dot_guess, float)
+    from casmech.numerics import numeric_qr
+
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
     finite(t, "nu", nu, q)

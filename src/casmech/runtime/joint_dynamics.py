@@ -28,7 +28,6 @@ import numpy as np
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import Interrupted
-from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
@@ -333,6 +332,8 @@ class _Integrator:
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
         test per group (algebraic_tolerances; docs/decisions/algebraic-tolerances.md).
         `first`: the interval the first step is sized by (default the first output interval)."""
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint

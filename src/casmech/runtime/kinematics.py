@@ -29,7 +29,6 @@ from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.formulations import prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.load_checks import check_rows
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -155,6 +154,8 @@ class Loads:
             self.n = functions.ir.n_bodies * 7
 
     def __call__(self, times, states, lam):
+        from casmech.runtime.load_checks import check_rows
+
         if not self.loaded or not len(times):
             return lam
         n = self.n
