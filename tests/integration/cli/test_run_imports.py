@@ -34,11 +34,15 @@ SYMBOLIC = ("casmech.equations.eom", "casmech.equations.initial_rows",
             "casmech.formulations.rnea", "casmech.formulations.tree_steps",
             "casmech.formulations.mapped_rows", "casmech.formulations.mapped_tree",
             # what other analyses, formulations and formats use: loops, projections, the
-            # prescribed step, parametric libraries, method auto's stiffness, HDF5
+            # prescribed step, parametric libraries, method auto's stiffness, HDF5, DAE options,
+            # least squares, DOP853's steps in Python, loads' checks, limits and motors
             "casmech.formulations.augmented", "casmech.formulations.loop_ode",
             "casmech.formulations.prescribed", "casmech.formulations.table",
             "casmech.model.parametric", "casmech.numerics.kkt", "casmech.runtime.joint_rows",
-            "casmech.runtime.stiffness", "casmech.io.hdf5", "casmech.io.staged")
+            "casmech.runtime.stiffness", "casmech.io.hdf5", "casmech.io.staged",
+            "casmech.formulations.dae_options", "casmech.numerics.numeric_qr",
+            "casmech.numerics.sparse_qr", "casmech.numerics.hermite_pair",
+            "casmech.runtime.load_checks", "casmech.equations.limits", "casmech.equations.motors")
 
 
 # two bars hanging from spherical joints, no parameters (a parametric model's results row is
