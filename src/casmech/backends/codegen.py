@@ -60,15 +60,13 @@ from casmech.backends.load import load as load_build
 from casmech.core.last_call import last_call
 from casmech.core.options import DynamicsOptions
 from casmech.core.version import VERSION
-from casmech.equations import system
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import SystemFunctions, build_functions, mapped_functions
 from casmech.errors import UsageError
-from casmech.formulations import prescribed, residuals
+from casmech.formulations import residuals
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
 from casmech.model.lower import lower
-from casmech.model.parametric import data
 from casmech.schema.resolved import ResolvedModel
 
 __all__ = ["Toolchain", "auto_choice", "auto_mode", "available", "compile_functions", "compiled",
@@ -89,6 +87,9 @@ def bundle(ir: ModelIR, names: tuple[str, ...] | None = None) -> dict[str, ca.Fu
     prescribed_step over its functions evaluated inline (one SX graph) or mapped, as the
     switch says (equations.evaluation.WHERE_INLINE). `names`: only those of the builder's
     (a part of a joint tree's bundle, backends.deferred)."""
+    from casmech.equations import system  # (on a build only: a warm run builds no function)
+    from casmech.formulations import prescribed
+
     if names is not None:
         shared = system.System(ir, Evaluation.of(False, None))
         return {name: system.function(shared, name) for name in names}
@@ -150,9 +151,15 @@ def _entry(model: ResolvedModel, ir: ModelIR, toolchain: Toolchain, dae: bool,
                                                 names), None
 
 
+def _model_data(ir: ModelIR) -> tuple[np.ndarray, str]:
+    from casmech.model.parametric import data  # (on a parametric library's key only)
+
+    return data(ir)
+
+
 # model.parametric.data(ir), the same again for the IR split last: a run makes its library's
 # entry twice (auto_choice looks it up, then compiled loads it); the IR is a frozen record
-_data = last_call(lambda ir: data(ir))
+_data = last_call(_model_data)
 
 
 def _deferred(model: ResolvedModel, ir: ModelIR) -> bool:

@@ -27,8 +27,8 @@ import casadi as ca
 
 from casmech.backends import manifest
 from casmech.backends.build import DEFAULT_FLAGS, FLAGS_ENVIRONMENT, Toolchain
+from casmech.equations.bundle_names import NAMES
 from casmech.equations.functions import LazyFunctions
-from casmech.equations.system import DEFINITIONS
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.residuals import name
 
@@ -53,7 +53,7 @@ def residual_names() -> tuple[str, ...]:
 
 def rest() -> tuple[str, ...]:
     """The bundle's functions a joint tree's bundle is built without, in the bundle's order."""
-    return tuple(name for name in DEFINITIONS if name not in READ)
+    return tuple(name for name in NAMES if name not in READ)
 
 
 def key(bundle_key: str, part: str, toolchain: Toolchain) -> str:

@@ -28,6 +28,7 @@ import functools
 import hashlib
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
@@ -38,13 +39,15 @@ from casmech.backends.load import externals, metadata
 from casmech.core.version import VERSION
 from casmech.equations.evaluation import WHERE_INLINE
 from casmech.equations.functions import Library, SystemFunctions, build_functions
-from casmech.formulations import prescribed, residuals
+from casmech.formulations import residuals
 from casmech.formulations.registry import FORMULATIONS
 from casmech.formulations.tree import spanning_tree
-from casmech.model import parametric
 from casmech.model.ir import ModelIR
 from casmech.numerics import lazy_jacobian
 from casmech.schema.resolved import ResolvedModel
+
+if TYPE_CHECKING:  # (model.parametric is imported where a parametric library is built)
+    from casmech.model import parametric
 
 MAX_BODIES = WHERE_INLINE["parametric"]  # above: the mapped library, the values in its key
 PRESCRIBED_ANALYSES = ("kinematics", "inverse_dynamics")  # as codegen's: prescribed_step too
@@ -94,6 +97,9 @@ def joint_functions(split: parametric.Split) -> dict[str, list[ca.Function]]:
 
 def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca.Function]]:
     """(the system functions with input d, the DAE residuals over them by name)."""
+    from casmech.formulations import prescribed
+    from casmech.model import parametric
+
     split = parametric.split(ir)
     built = build_functions(split.ir, split.symbols)
     functions = built.functions
@@ -111,6 +117,7 @@ def bundle(ir: ModelIR, dae: bool) -> tuple[dict[str, ca.Function], dict[str, ca
 def write_build(ir: ModelIR, directory: Path, toolchain: Toolchain, info: dict, dae: bool,
                 build_libraries) -> Path:
     from casmech.backends import generate  # (on a build only: a warm run writes no C)
+    from casmech.model import parametric
 
     functions, oracles = bundle(ir, dae)
     joint = (joint_functions(parametric.split(ir)) if ir.analysis.type in JOINT_ANALYSES

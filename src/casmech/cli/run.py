@@ -43,7 +43,6 @@ from casmech.cli.common import add_options, add_overrides, add_span, options, ov
 from casmech.errors import AnalysisError, CasmechError, Interrupted
 from casmech.io import events as events_output
 from casmech.io.csv import CsvRows
-from casmech.io.hdf5 import Hdf5Rows, h5py
 from casmech.io.metadata import analysis_record, rewrite_json, run_metadata, write_json
 from casmech.io.progress import progress_bar
 from casmech.io.streaming import ResultsWriter, WriteError, writing
@@ -58,10 +57,24 @@ RELEASES_COLLECTOR = True
 ENDS_AT_ONCE = True
 # further files an analysis may write (Result.files), removed with an earlier run's results
 ANALYSIS_FILES = ("modes.csv", "linear_model.npz", events_output.FILE)
+
+
+def _hdf5_rows(path: Path, names: list[str]):
+    from casmech.io.hdf5 import Hdf5Rows  # (io.hdf5 where the format is asked for)
+
+    return Hdf5Rows(path, names)
+
+
+def _h5py():
+    from casmech.io.hdf5 import h5py
+
+    return h5py()
+
+
 # format -> (file name in DIR, the writer of its rows as they come, check run before the run)
 FORMATS = {
     "csv": ("results.csv", CsvRows, lambda: None),
-    "hdf5": ("results.h5", lambda path, names: Hdf5Rows(path, names), h5py),
+    "hdf5": ("results.h5", _hdf5_rows, _h5py),
 }
 
 

@@ -8,6 +8,7 @@ own over them (casmech.optimal). The bundle's functions are equations.functions'
 from __future__ import annotations
 
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import casadi as ca
 
@@ -16,8 +17,10 @@ from casmech.equations.derivatives import GROUND_POSE
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.row_kernels import driver_value
 from casmech.equations.symbols import Coordinates
-from casmech.equations.system import Symbols, System
 from casmech.model.ir import ModelIR
+
+if TYPE_CHECKING:  # (the builder is imported where a System is made: system_over)
+    from casmech.equations.system import System
 
 __all__ = ["GROUND_POSE", "ConstraintSystem", "Coordinates", "build_constraints",
            "driver_value", "system_over"]
@@ -27,6 +30,8 @@ def system_over(ir: ModelIR, x: Coordinates, lam=None, scale=None) -> System:
     """The builder's System of `ir` evaluated inline over the symbols of x (and the multipliers
     lam, the drivers' scale s: fresh symbols unless given). The IR's numbers may be symbols
     (they stay in the expressions)."""
+    from casmech.equations.system import Symbols, System
+
     m = len(ir.primitives) + ir.n_bodies
     v, v_dot = ca.SX.sym("v", 6 * ir.n_bodies), ca.SX.sym("v_dot", 6 * ir.n_bodies)
     symbols = Symbols(x.t, x.q, x.q_dot, x.q_ddot, ca.SX.sym("lam", m) if lam is None else lam,

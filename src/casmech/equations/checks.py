@@ -10,7 +10,6 @@ from casmech.core.records import record
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import BodyName
 from casmech.model.ir import RowInfo
-from casmech.numerics import numeric_qr
 
 LIMITS = LinearAlgebra()  # the defaults (core.options)
 
@@ -61,6 +60,8 @@ def independent_rows(matrix, limits: LinearAlgebra = LIMITS) -> list[bool]:
     """Greedy in row order: is row k farther than limits.rank_tolerance * max(|matrix|_2, 1)
     from the span of the rows kept before it? (numeric_qr.independent_rows: a sparse QR, so the
     work follows the factors' fill, not rows x columns)."""
+    from casmech.numerics import numeric_qr
+
     matrix = ca.DM(matrix)
     scale = max(numeric_qr.norm2(matrix, limits=limits), 1.0)
     return numeric_qr.independent_rows(matrix, limits.rank_tolerance, scale, limits)
@@ -104,6 +105,8 @@ def dependent_joints(functions: SystemFunctions, phi_q, count: int = 3,
     limits.dense_svd_entries entries u is the left singular vector of the smallest singular
     value; above, the row (in structure's scan order) closest to the span of the rows before
     it, combined with them by least squares (sparse: numeric_qr)."""
+    from casmech.numerics import numeric_qr
+
     rows, columns = phi_q.shape
     if rows * columns <= limits.dense_svd_entries:
         u, s, _ = np.linalg.svd(np.array(ca.DM(phi_q)) if isinstance(phi_q, ca.DM) else phi_q)

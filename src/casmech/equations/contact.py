@@ -8,7 +8,7 @@ from __future__ import annotations
 import casadi as ca
 
 from casmech.elements.force_types import REGISTRY, outputs_of
-from casmech.equations import friction, limits
+from casmech.equations import friction
 
 
 def output_names(ir) -> list[str]:
@@ -28,4 +28,6 @@ def element_outputs(ir, x):
 
 def _of(element):
     """The module of a joint element of ir.limits: a stop's or a friction's."""
+    from casmech.equations import limits
+
     return friction if element.type in friction.COORDINATE else limits

@@ -16,10 +16,11 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.records import record
-from casmech.equations import system
 from casmech.equations.evaluation import Evaluation, is_inline
-from casmech.equations.system import System
 from casmech.model.ir import GROUND_INDEX, ModelIR, RowInfo
+
+# (equations.system, the builder, is imported by the functions that build: a warm compiled run
+# loads its functions and builds none)
 
 
 @record
@@ -203,15 +204,17 @@ def build_functions(ir: ModelIR, data: ca.SX | None = None) -> SystemFunctions:
     """The interpreted bundle: every function inline (SX), built when first used
     (LazyFunctions). `data`: for a symbolic IR (model.parametric.split), its symbols, every
     function's trailing input "d"."""
-    shared = System(ir, Evaluation.of(True, data, ir.n_bodies))
+    from casmech.equations import system
+
+    shared = system.System(ir, Evaluation.of(True, data, ir.n_bodies))
     groups = [((name,), lambda name=name: [system.function(shared, name)])
               for name in system.DEFINITIONS]
     lazy = LazyFunctions(groups)
-    mapped: list[System] = []  # the mapped System, made on first use
+    mapped: list[system.System] = []  # the mapped System, made on first use
 
     def mapped_function(name: str) -> ca.Function:
         if not mapped:
-            mapped.append(System(ir, Evaluation.of(False, data)))
+            mapped.append(system.System(ir, Evaluation.of(False, data)))
         return system.function(mapped[0], name)
 
     lazy.mapped = mapped_function
@@ -223,6 +226,8 @@ def results_terms(functions: SystemFunctions) -> dict[str, ca.Function]:
     for an interpreted bundle of more bodies than WHERE_INLINE["results"], the results-only
     ones it has not built or been given built mapped, then expanded to SX (each kernel's
     instances unrolled by CasADi, not by the builder's Python)."""
+    from casmech.equations import system
+
     bundle = functions.functions
     mapped = isinstance(bundle, LazyFunctions) and bundle.mapped is not None and \
         not is_inline("results", functions.n_bodies)
@@ -238,5 +243,7 @@ def results_terms(functions: SystemFunctions) -> dict[str, ca.Function]:
 def mapped_functions(ir: ModelIR, data: ca.SX | None = None) -> dict[str, ca.Function]:
     """name -> MX Function of every system function, its kernels mapped over their instances:
     the bundle code generation compiles. `data`: as build_functions'."""
-    shared = System(ir, Evaluation.of(False, data))
+    from casmech.equations import system
+
+    shared = system.System(ir, Evaluation.of(False, data))
     return {name: system.function(shared, name) for name in system.DEFINITIONS}

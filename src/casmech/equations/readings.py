@@ -34,7 +34,7 @@ from casmech.elements.coordinate_kinds import ANGLE
 from casmech.elements.coordinate_kinds import REGISTRY as COORDINATE_KINDS
 from casmech.elements.joint_types import REGISTRY, attributes
 from casmech.equations import contact, coordinates, joint_states
-from casmech.equations.assemble import Coordinates
+from casmech.equations.symbols import Coordinates
 from casmech.model.bindings import coordinate_geometry
 from casmech.model.ir import ModelIR
 

@@ -3,8 +3,8 @@ of its rows (equations.rows), bodies (equations.bodies) and force elements (equa
 evaluated inline (SX) or mapped (MX) by one switch (equations.evaluation.Evaluation).
 
 `System(ir, evaluation)` holds the model's symbols and builds each quantity when first read;
-`DEFINITIONS` names the bundle's functions (inputs and outputs over a System), in the order
-every bundle lists them.
+`DEFINITIONS` defines the bundle's functions (inputs and outputs over a System), in the order
+every bundle lists them (equations.bundle_names.NAMES).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import casadi as ca
 
 from casmech.core.records import record
 from casmech.equations import bodies, forces, inline, rows
+from casmech.equations.bundle_names import NAMES
 from casmech.equations.evaluation import Evaluation
 from casmech.equations.layout import Layout
 from casmech.model.ir import ModelIR
@@ -163,7 +164,7 @@ def _named(names: tuple[str, ...], values) -> dict:
     return dict(zip(names, values, strict=True))
 
 
-# name -> its (inputs, outputs) over a System, in the bundle's order
+# name -> its (inputs, outputs) over a System, in the bundle's order (bundle_names.NAMES)
 DEFINITIONS: dict[str, Callable[[System], tuple[dict, dict]]] = {
     "phi": lambda s: (_tq(s), {"phi": s.constraints["phi"]}),
     "phi_q": lambda s: (_tq(s), {"phi_q": s.constraints["phi_q"]}),
@@ -192,6 +193,9 @@ DEFINITIONS: dict[str, Callable[[System], tuple[dict, dict]]] = {
     "romega_to_rp": lambda s: ({"q": s.x.q, "v": s.x.v, "v_dot": s.x.v_dot},
                                {"q_dot": s.romega_q_dot, "q_ddot": s.romega_q_ddot()}),
 }
+if tuple(DEFINITIONS) != NAMES:
+    raise ImportError("equations.system.DEFINITIONS and equations.bundle_names.NAMES name the "
+                      "bundle's functions differently")
 
 
 # Functions merged inline at any size: their kernels repeat a per-body term (q_dot's p_dot in

@@ -28,7 +28,8 @@ from casmech.core.records import record
 from casmech.core.traced_steps import traced
 from casmech.elements.joint_types import MOTIONS
 from casmech.equations import body
-from casmech.equations.assemble import GROUND_POSE, Coordinates
+from casmech.equations.derivatives import GROUND_POSE
+from casmech.equations.symbols import Coordinates
 from casmech.formulations.joint_constants import Constants
 from casmech.formulations.tree import Frame, TreeJoint
 from casmech.model.ir import GROUND_INDEX, ModelIR

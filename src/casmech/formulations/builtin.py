@@ -11,12 +11,10 @@ import casadi as ca
 import numpy as np
 
 from casmech.core import euler
-from casmech.core.options import DynamicsSolver, LinearAlgebra
+from casmech.core.options import STABILIZATIONS, DynamicsSolver, LinearAlgebra
 from casmech.core.records import record
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
-from casmech.formulations import dae
-from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, labels
 from casmech.formulations.protocol import (
@@ -27,10 +25,8 @@ from casmech.formulations.protocol import (
     System,
     indexed,
 )
-from casmech.formulations.table import BODY_FORMS
 from casmech.formulations.tree import spanning_tree
 from casmech.model.ir import ModelIR
-from casmech.numerics import kkt
 
 if TYPE_CHECKING:
     from casmech.formulations.joint_control import JointControl
@@ -49,6 +45,8 @@ def velocities(functions: SystemFunctions, name: str, q, q_dot) -> np.ndarray:
 def row_scales(functions: SystemFunctions, name: str, t, q) -> tuple[np.ndarray, np.ndarray]:
     """(s, s_phi): the DAEs' row scales (formulations.dae), inverse row norms of P and of
     Phi_q at (t, q)."""
+    from casmech.formulations.table import BODY_FORMS
+
     form = BODY_FORMS[name]
     jacobian = functions.matrix(form.jacobian, t, q)
     phi_q = jacobian if form.jacobian == "phi_q" else functions.matrix("phi_q", t, q)
@@ -60,6 +58,8 @@ def masked_rows(functions: SystemFunctions, name: str, t, q,
     """1 for every row of P dropped from the DAE, else 0: the rows equations.checks.structure
     finds redundant at (t, q) (the same joint rows in both formulations; r-p rows are ordered
     as Phi's, r-omega's are Phi's joint rows)."""
+    from casmech.formulations import dae
+
     keep = np.zeros(functions.n_rows)
     keep[list(structure(functions, t, q, limits).independent)] = 1.0
     return 1.0 - keep[:dae.sizes(functions.functions, name)[2]]
@@ -71,6 +71,8 @@ class BodyCoordinates(Formulation):
     d] as formulations.dae writes them; t relative to p[0]."""
 
     def states(self, functions: SystemFunctions, stabilization: str = "ggl") -> States:
+        from casmech.formulations import dae
+
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         mu = functions["phi"].size1_out(0) if stabilization == "ggl" else 0
         return States(indexed("q", n_q) + indexed("v", n_v),
@@ -78,12 +80,17 @@ class BodyCoordinates(Formulation):
 
     def residual(self, functions: SystemFunctions, stabilization: str = "ggl") -> ca.Function:
         """formulations.dae's dae_[ggl_]<name>: the bundle's own when it carries it."""
+        from casmech.formulations import dae
+
         return dae.residual(functions.functions, self.name, stabilization)
 
     def library_stabilizations(self) -> tuple[str, ...]:
-        return dae.STABILIZATIONS
+        return STABILIZATIONS  # formulations.dae's, read on every run (backends.deferred)
 
     def system(self, functions: SystemFunctions, stabilization: str = "ggl") -> System:
+        from casmech.formulations import dae
+        from casmech.formulations.table import BODY_FORMS
+
         residual = self.residual(functions, stabilization)
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         form = BODY_FORMS[self.name]
@@ -104,6 +111,10 @@ class BodyCoordinates(Formulation):
               q_dot: np.ndarray) -> Start:
         """[q, v] with the consistent (v_dot, lam / s) of the masked, scaled rows (the rows
         equations.checks.structure finds redundant at t0 masked; s the inverse row norms)."""
+        from casmech.formulations import dae
+        from casmech.formulations.table import BODY_FORMS
+        from casmech.numerics import kkt
+
         form = BODY_FORMS[self.name]
         n_q, n_v, m = dae.sizes(functions.functions, self.name)
         v = velocities(functions, self.name, q, q_dot)
@@ -130,6 +141,9 @@ class BodyCoordinates(Formulation):
                            settings: DynamicsSolver = DEFAULT) -> dict:
         """As runtime.dynamics sets them: the algebraic tolerances per group, and with ggl
         the first step from the translations' accelerations."""
+        from casmech.formulations import dae
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+
         _, n_v, m = dae.sizes(functions.functions, self.name)
         ggl = system.n_z > n_v + m
         v_dot, lam = z[:n_v], z[n_v:n_v + m]
@@ -210,6 +224,8 @@ class JointCoordinates(Formulation):
                            atol: float, interval: float,
                            settings: DynamicsSolver = DEFAULT) -> dict:
         """The loops' DAE's, as runtime.joint_dynamics sets them (none for a tree's ODE)."""
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+
         joint = system.joint
         if not joint.n_cut:
             return {}

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import casadi as ca
 
+from casmech.core.options import STABILIZATIONS as STABILIZATIONS  # the residuals built
 from casmech.equations.functions import symbol_type
 from casmech.formulations import dae_terms as terms
 from casmech.formulations.table import BODY_FORMS
@@ -53,9 +54,6 @@ def sizes(functions: dict[str, ca.Function], name: str) -> tuple[int, int, int]:
     form = BODY_FORMS[name]
     jacobian = functions[form.jacobian]
     return jacobian.size1_in(1), jacobian.size2_out(0), jacobian.size1_out(0)
-
-
-STABILIZATIONS = ("ggl", "projection")
 
 
 def residual(functions: dict[str, ca.Function], name: str,

@@ -37,20 +37,16 @@ from casmech.core import euler
 from casmech.core.records import record
 from casmech.elements.joint_types import MOTIONS, state_names
 from casmech.elements.primitives import PRIMITIVES, Frame
-from casmech.equations import body
-from casmech.equations.assemble import driver_value
-from casmech.formulations import articulated, joint_forces, rnea
+from casmech.formulations import articulated
 from casmech.formulations.articulated import Joint
 from casmech.formulations.joint_constants import DATA, Constants
 from casmech.formulations.tree import Tree
-from casmech.formulations.tree_steps import (
-    body_rates,
-    relative_step,
-    translation_pivots,
-    tree_multipliers,
-)
 from casmech.model.ir import GROUND_INDEX, JointIR, ModelIR
 from casmech.numerics import lazy_jacobian
+
+# (the build's kernels, equations.body, equations.row_kernels, formulations.joint_forces, rnea
+# and tree_steps, are imported by the functions that build: a warm run loads the system
+# compiled)
 
 # a cut row whose velocity Jacobian in joint coordinates is shorter than this (its units:
 # the row's per unit joint velocity, m or 1) is one the tree cannot violate: roundoff of 0
@@ -165,6 +161,8 @@ def _relative(tree_joints, q, q_dot, constants: Constants) -> list:
     twist relative to F_p (angular, then the origin's velocity, in F_c), JointSystem's
     relative_states (runtime.joint_dynamics takes each joint's coordinates and velocities
     from them). Every body is the child of one tree joint."""
+    from casmech.formulations.tree_steps import relative_step
+
     n_bodies = len(tree_joints)
     poses = [ca.vertsplit(v, [*range(0, 3 * n_bodies, 3), *range(3 * n_bodies, 7 * n_bodies + 1,
                                                                    4)]) for v in (q, q_dot)]
@@ -197,6 +195,8 @@ def rows_of(ir: ModelIR, joint: JointIR, t, r_i, p_i, r_j, p_j, *others, data=No
     rows (their kinds, which bodies each reads, which are ground, the vectors' shapes) that
     takes the rows' vectors and driver values as inputs (rows_template); `data` the model
     data of a parametric IR, whose vectors are SX of it."""
+    from casmech.equations.row_kernels import driver_value
+
     template, vectors, prims = rows_structure(ir, joint, data)
     if data is not None:
         stacked = ca.vertcat(ca.SX(0, 1), *(ca.vec(ca.SX(v)) for v in vectors))
@@ -227,6 +227,8 @@ def rows_template(kinds: tuple[str, ...], grounds: tuple[bool, ...],
     """(r_1, p_1, ..., r_n, p_n, the rows' vectors stacked, their driver values) -> (phi,
     B_1, ..., B_n) of rows of these kinds (rows_of), each row reading the bodies at its
     `reads` positions, built from the rows' primitives so that the cost stays per joint."""
+    from casmech.equations import body
+
     sides = [(ca.SX.sym(f"r_{k}", 3), ca.SX.sym(f"p_{k}", 4)) for k in range(len(grounds))]
     frames = [Frame(ca.DM.zeros(3), ca.DM.eye(3)) if ground else Frame(r, euler.rotation(p))
               for ground, (r, p) in zip(grounds, sides, strict=True)]
@@ -253,6 +255,8 @@ class _Builder:
 
     def __init__(self, ir: ModelIR, tree: Tree, constants: Constants,
                  joint_local: bool = True):
+        from casmech.formulations import joint_forces
+
         self.ir, self.tree, self.layout = ir, tree, layout(tree)
         self.constants = constants
         self.joint_rows: dict[str, list] = {}  # joint name -> rows_of at the tree's state
@@ -335,6 +339,8 @@ class _Builder:
         2018, rnea.forward_derivatives): d u'/d(t, x) = -M^-1 dRNEA/d(t, x) at u' = the ODE
         value, an input, so no articulated-body sweep is re-run; theta' by CasADi's AD.
         (t, x, ode) -> (d ode/dt, d ode/dx): jacobian()'s signature (a numeric IR's)."""
+        from casmech.formulations import rnea
+
         lay = self.layout
         n_u = lay.n_x - lay.n_theta
         ode, u_dot = ca.SX.sym("ode", lay.n_x), ca.SX.sym("u_dot", n_u)
@@ -352,6 +358,8 @@ class _Builder:
         """Every joint row's multiplier: the cut rows' from the DAE, each tree joint's rows
         from its constraint wrench w on the child, -B^T lam = w with B the rows' r-omega
         Jacobian at the child (global force, body-frame torque)."""
+        from casmech.formulations.tree_steps import translation_pivots, tree_multipliers
+
         lam = ca.SX.zeros(len(self.ir.row_info()), 1)
         lam[list(self.cut_rows)] = lam_cut
         wrenches = articulated.joint_wrenches(self.joints, dynamics,
@@ -368,6 +376,8 @@ class _Builder:
 
     def motion(self, dynamics, lam_cut, signs) -> list:
         """(q, q_dot, q_ddot, lam) of the results row: r-p, Euler parameters times signs."""
+        from casmech.formulations.tree_steps import body_rates
+
         nb, kin = self.ir.n_bodies, self.kin
         signed = ca.vertsplit(signs)
         p, p_dot, r_ddot, p_ddot = zip(*[

@@ -22,7 +22,6 @@ import casadi as ca
 
 from casmech.equations import friction, friction_load
 from casmech.equations.symbols import Coordinates
-from casmech.numerics.sparse_qr import sparse_qr
 
 
 def elements(ir) -> list:
@@ -37,6 +36,8 @@ def correction(functions, loaded: list) -> ca.Function:
     results column `<joint>.friction`), and friction_load.sliding's outputs for them (the
     load parts g, the system's largest residual, A_ij = mu_i |n1_ij|), which the runtime
     checks as a dynamics run does (unique: A's spectral radius below 1; solved)."""
+    from casmech.numerics.sparse_qr import sparse_qr
+
     nb = functions.ir.n_bodies
     x = Coordinates.create(nb)
     t, q, q_dot = x.t, x.q, x.q_dot

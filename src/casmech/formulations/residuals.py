@@ -17,20 +17,18 @@ instead of building them (so each DAE gets a library of its own: backends.genera
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import casadi as ca
 
 from casmech.equations.evaluation import Evaluation, is_inline
 from casmech.equations.functions import build_functions
 from casmech.formulations.registry import FORMULATIONS
-from casmech.formulations.residual_groups import (
-    Indices,
-    body_group,
-    force_groups,
-    joint_groups,
-)
-from casmech.formulations.table import BODY_FORMS
 from casmech.model.ir import ModelIR
-from casmech.numerics.element_sums import ElementSum
+
+if TYPE_CHECKING:  # (the element kernels are imported where a mapped residual is built)
+    from casmech.formulations.residual_groups import Indices
+    from casmech.numerics.element_sums import ElementSum
 
 KINDS = {"ggl": "dae_ggl_", "projection": "dae_"}  # stabilization -> name prefix
 # A library's DAE of a model the switch evaluates inline (WHERE_INLINE["dae_library"]) is
@@ -47,6 +45,9 @@ def name(form: str, kind: str) -> str:
 
 def element_sum(ir: ModelIR, ix: Indices, t, constants: list, ev: Evaluation) -> ElementSum:
     """constants: the row constants of p, [w, s] (, s_phi for ggl) (formulations.dae)."""
+    from casmech.formulations.residual_groups import body_group, force_groups, joint_groups
+    from casmech.numerics.element_sums import ElementSum
+
     groups = [*joint_groups(ir, ix, t, constants, ev), *body_group(ir, ix, constants, ev),
               *force_groups(ir, ix, t, ev)]
     return ElementSum(ix.n_x + ix.n_z, ix.n_u, tuple(groups), ix.padding)
@@ -61,6 +62,8 @@ def oracles(ir: ModelIR) -> dict[str, dict[str, ca.Function]]:
     stabilizations, built in) with its daeF and jacF: inline where the switch says so and
     the code is small (UNROLLED_INSTRUCTIONS), else mapped (oracle) where the formulation
     has element kernels (the body forms: formulations.residual_groups), else inline."""
+    from casmech.formulations.table import BODY_FORMS
+
     sx = build_functions(ir) if is_inline("dae_library", ir.n_bodies) else None
     out = {}
     for formulation in FORMULATIONS.values():
@@ -93,8 +96,12 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     quad, zero), with `daeF` (its residual) and `jacF` (the Jacobian blocks d(ode, alg)/d(x,
     z)), the names casadi's IDAS interface looks up in the DAE's library. `data`: the symbols
     of a symbolic IR, whose values follow p's own."""
+    from casmech.formulations.table import BODY_FORMS
+
     if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
+    from casmech.formulations.residual_groups import Indices
+
     ix = Indices(ir, form, kind)
     n_data = 0 if data is None else data.numel()
     tau, x, z = ca.MX.sym("t"), ca.MX.sym("x", ix.n_x), ca.MX.sym("z", ix.n_z)

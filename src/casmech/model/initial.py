@@ -35,7 +35,6 @@ import numpy as np
 
 from casmech.core import euler, traced
 from casmech.core.quaternions import conjugate, product, unit
-from casmech.elements.joint_tree import GROUND, Link, spanning_tree
 from casmech.elements.joint_types import COORDINATES, REGISTRY
 from casmech.model.ir import BodyIR
 
@@ -165,6 +164,8 @@ def _root_motion(motions: _Motions, body: BodyIR, inputs: _Inputs):
 def posed_bodies(model, bodies: tuple[BodyIR, ...], frames) -> tuple[BodyIR, ...]:
     """The bodies at their initial state (module docstring); `bodies` as in the file,
     `frames`: joint name -> its global joint frame at the file's pose (model.lower)."""
+    from casmech.elements.joint_tree import GROUND, Link, spanning_tree
+
     joints = model.joints
     if not any(joint.initial for joint in joints):
         return bodies

@@ -34,9 +34,6 @@ from casmech.core.records import record
 from casmech.equations.checks import dependent_joints, structure, worst_joints
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, FailureContext
-from casmech.formulations import augmented
-from casmech.formulations.table import BODY_FORMS
-from casmech.numerics import kkt, numeric_qr
 from casmech.runtime import cancel, initial_holds
 from casmech.runtime.nonfinite import NonFinite
 from casmech.runtime.workspace import Workspace, of
@@ -119,6 +116,8 @@ def newton(functions: SystemFunctions, t: float, q: np.ndarray, scale: float | N
             return q
         start = phi if start is None else start
         best_phi = phi if best_phi is None or _worst(phi) < _worst(best_phi) else best_phi
+        from casmech.numerics import numeric_qr  # (where Phi is not met yet)
+
         q += numeric_qr.lstsq(phi_q, -phi, limits=settings.linear_algebra)
     phi, phi_q = _evaluate(functions, t, q, scale)
     if _worst(phi) <= 1e3 * tolerance:
@@ -224,6 +223,8 @@ def closest_point(functions: SystemFunctions, t: float, q: np.ndarray,
     closest point of its neighbourhood) or where the rootfinder does not reach
     |Phi| <= settings.tolerance (a Jacobian losing rank at q makes the KKT matrix nearly
     singular)."""
+    from casmech.numerics import kkt
+
     rows = structure(functions, t, q, settings.linear_algebra).independent
     if len(rows) == functions.n_coordinates:
         return q
@@ -259,6 +260,8 @@ def solve_velocities(functions: SystemFunctions, t: float, q: np.ndarray,
     zero and nu is structurally zero: no drivers, a mechanism starting from rest)."""
     if not np.any(q_dot_guess) and not functions["nu"].sparsity_out(0).nnz():
         return np.array(q_dot_guess, float)
+    from casmech.numerics import numeric_qr
+
     phi_q = functions["phi_q"](t, q)
     nu = functions.vector("nu", t, q)
     finite(t, "nu", nu, q)
@@ -303,6 +306,7 @@ def solve_dynamic_accelerations(functions: SystemFunctions, t: float, q: np.ndar
     on redundant rows, the multipliers of least norm with the same reaction (what least
     squares of the whole singular system gives). `rows` restricts the constraints to an
     independent subset instead (lam then has their length)."""
+    from casmech.numerics import kkt
     from casmech.runtime.dae_rows import minimum_norm
 
     if rows is None:
@@ -353,6 +357,9 @@ def project(functions: SystemFunctions, form, t: float, q: np.ndarray, v: np.nda
     direction (a Euclidean least-squares step there moved A02 onto the wrong branch), at the
     price of slow progress along it: a residual below `accept` (default the tolerance) after
     settings.max_iterations steps is taken as converged."""
+    from casmech.formulations import augmented
+    from casmech.formulations.table import BODY_FORMS
+
     accept = settings.tolerance if accept is None else accept
     name = next(key for key, value in BODY_FORMS.items() if value == form)
     per_call = fallback.projection_iterations

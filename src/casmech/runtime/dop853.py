@@ -37,7 +37,6 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.errors import Interrupted
 from casmech.numerics import dop853_tableau as tableau_module
-from casmech.numerics import hermite_pair
 from casmech.runtime.buffers import BOUND_ENTRIES
 
 RATES_FAILED = '"RK_RHSFUNC_FAIL"'  # in the message of a right-hand side not finite
@@ -216,6 +215,8 @@ class Dop853:
 
     def _steps(self, t0: float, times: np.ndarray, y: np.ndarray, out: np.ndarray
                ) -> np.ndarray:
+        from casmech.numerics import hermite_pair
+
         step, dense, ode, project, steps = self._python_parts()
         stats = self.last = Stats()
         done, t, t_bound = 0, t0, float(times[-1])

@@ -32,8 +32,8 @@ import numpy as np
 from casmech.core.options import DynamicsSolver
 from casmech.core.records import record
 from casmech.equations import readings
-from casmech.equations.assemble import Coordinates
 from casmech.equations.functions import SystemFunctions
+from casmech.equations.symbols import Coordinates
 from casmech.errors import AnalysisError, FailureContext, solver_reason
 from casmech.runtime import cancel
 from casmech.runtime.buffers import ColumnCall

@@ -39,7 +39,6 @@ from casmech.equations.symbols import Coordinates
 from casmech.errors import AnalysisError
 from casmech.runtime import assembly, contact_friction, events
 from casmech.runtime.kinematics import output_times
-from casmech.runtime.load_checks import check_loads
 from casmech.runtime.results import Result, table
 from casmech.schema.resolved import ScalarFunction
 
@@ -181,6 +180,8 @@ class _Run:
         joints' rows, the stuck contact points' row pairs. The sliding joints with load parts
         get their laws' loads (friction_load.sliding, solved together) from the segment's
         model without them."""
+        from casmech.runtime.load_checks import check_loads
+
         s, _ = self.values(q, q_dot)
         ir, rows = segment_model(self.ir, q, q_dot, modes, s)
         ir, held = self.contacts.segment(ir, t, q, q_dot, modes)
@@ -247,6 +248,8 @@ class _Run:
             return modes, self.attempt(span, built, extra), built
 
     def run(self, t_end, step, extra) -> Result:
+        from casmech.runtime.load_checks import check_loads
+
         t = 0.0
         q, q_dot = assembly.initial_state(self.functions, t, self.settings.options.solver.assembly)
         _, rates = self.values(q, q_dot)

@@ -25,9 +25,9 @@ import casadi as ca
 import numpy as np
 
 from casmech.core.records import record
-from casmech.equations.assemble import Coordinates
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
+from casmech.equations.symbols import Coordinates
 from casmech.errors import AnalysisError, Diagnostic, ModelError
 from casmech.model.ir import RowInfo
 from casmech.runtime.workspace import Workspace, of

@@ -28,19 +28,16 @@ import numpy as np
 from casmech.core.options import Assembly, DynamicsOptions, DynamicsSolver, JointCompile
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import Interrupted
-from casmech.formulations.dae_options import algebraic_tolerances, initial_step
 from casmech.formulations.joint_start import Loops, initial_state, quaternion_signs
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
 from casmech.formulations.tree import Tree, spanning_tree
 from casmech.runtime import assembly, contact_steps, dop853, events, nonfinite
 from casmech.runtime.buffers import NamedCall
 from casmech.runtime.joint_recorder import Recorder
-from casmech.runtime.joint_rows import solved_motion
 from casmech.runtime.joint_run import JointRun
 from casmech.runtime.kinematics import output_times
 from casmech.runtime.projected_loops import dop853_of, loop_algebraic, loop_ode_of
 from casmech.runtime.results import Result
-from casmech.runtime.stiffness import spectral_radius, stable_step
 from casmech.runtime.workspace import Workspace, of
 
 DEFAULT, METHOD = DynamicsSolver(), DynamicsOptions().method  # core.options
@@ -123,6 +120,8 @@ def _compiled_parts(functions: SystemFunctions, system: JointSystem,
     """compiled_system's (with_motion, rows) for a compiled bundle's built `system`: the results
     rows compiled up to compile.motion_bodies, and with them for loop_rows solved the loops'
     rows solved at each state (runtime.joint_rows.solved_motion)."""
+    from casmech.runtime.joint_rows import solved_motion
+
     with_motion = functions.n_bodies <= settings.compile.motion_bodies
     solved = with_motion and bool(system.n_cut) and settings.loop_rows == "solved"
     if not solved:
@@ -151,7 +150,6 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     unrolled graph's size and load time."""
     from casmech.backends import joint_library
     from casmech.backends.library import compile_keyed
-    from casmech.formulations.mapped_rows import relative_states
 
     workspace = of(functions, workspace)
     tree = tree_of(functions, workspace)
@@ -162,6 +160,8 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
                "machine_flags": list(joint_library.machine_flags())}
 
     def make():
+        from casmech.formulations.mapped_rows import relative_states
+
         system = _built(functions, settings, workspace)
         with_motion, rows = _compiled_parts(functions, system, settings)
         compiled = _library_functions(system, with_motion, settings, rows)
@@ -332,6 +332,8 @@ class _Integrator:
         rule's first step, the algebraic unknowns out of the error test and held in Newton's
         test per group (algebraic_tolerances; docs/decisions/algebraic-tolerances.md).
         `first`: the interval the first step is sized by (default the first output interval)."""
+        from casmech.formulations.dae_options import algebraic_tolerances, initial_step
+
         system = self.system
         x_dot = np.array(system.dynamics(t0, x, z, self.loops.mask)[0].full()).ravel()
         nb = len(system.tree.joints)  # every body is the child of one tree joint
@@ -388,6 +390,8 @@ def choose_method(system: JointSystem, t0: float, x0, step: float, forces: bool 
     if not forces or not 0 < len(x0) <= settings.stiff_states:
         return explicit(), None  # (compiled_system compiles the derivative this needs up to
         #                           this size)
+    from casmech.runtime.stiffness import spectral_radius
+
     x0 = np.asarray(x0, float)
     radius = spectral_radius(system, t0, x0) if workspace is None else workspace.kept(
         "stiffness", (system.dynamics, float(t0), x0.tobytes()),
@@ -456,6 +460,8 @@ def prepare(functions: SystemFunctions, t_end: float, step: float, rtol: float, 
             lambda: workspace.kept("dop853_in_c", system.dynamics,
                                    lambda: dop853.in_c(system.dynamics, not system.n_cut)))
         if method == "dop853" and radius is not None:  # the fastest mode damped, not met;
+            from casmech.runtime.stiffness import stable_step
+
             step_options["max_step_size"] = stable_step(radius)  # outputs without the
             step_options[dop853.FREE_OUTPUTS] = True  # interpolant's evaluations where it may
     recorder = Recorder.kept(derived, functions, system, signs, loops.mask, workspace,

@@ -5,16 +5,20 @@ rows were masked (as the r-p DAE reports them); every row of a block by one mapp
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import casadi as ca
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
 from casmech.formulations.joint_system import JointSystem, saddle_terms
 from casmech.runtime.buffers import ColumnCall
-from casmech.runtime.joint_rows import LoopRows, solved_motion
 from casmech.runtime.nonfinite import all_finite
 from casmech.runtime.row_calls import over_rows, rows_of
 from casmech.runtime.workspace import Workspace
+
+if TYPE_CHECKING:  # (the loops' rows are imported where a tree with loops records them)
+    from casmech.runtime.joint_rows import LoopRows
 
 
 class Recorder:
@@ -95,6 +99,8 @@ def _loop_rows(functions: SystemFunctions, system: JointSystem, mask) -> LoopRow
     """The loops' rows solved at each state (runtime.joint_rows): the compiled library's where
     it holds them, else solved_motion of the saddle terms and the system's motion (SX, or a
     parametric library's motion called through MX)."""
+    from casmech.runtime.joint_rows import LoopRows, solved_motion
+
     def terms() -> ca.Function:
         return saddle_terms(functions.ir, system.tree)
 

@@ -26,10 +26,9 @@ from casmech.core.options import Assembly, KinematicsSolver
 from casmech.equations.checks import structure
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, Diagnostic, ModelError
-from casmech.formulations import prescribed, prescribed_friction
+from casmech.formulations import prescribed_friction
 from casmech.runtime import assembly, cancel
 from casmech.runtime.buffers import BufferedCall
-from casmech.runtime.load_checks import check_rows
 from casmech.runtime.results import Result
 from casmech.runtime.workspace import Workspace, of
 
@@ -155,6 +154,8 @@ class Loads:
             self.n = functions.ir.n_bodies * 7
 
     def __call__(self, times, states, lam):
+        from casmech.runtime.load_checks import check_rows
+
         if not self.loaded or not len(times):
             return lam
         n = self.n
@@ -190,11 +191,15 @@ class _MappedGrid:
 
     def __init__(self, functions: SystemFunctions, settings: KinematicsSolver,
                  workspace: Workspace):
+        from casmech.formulations import prescribed
+
         self.step = prescribed.step(functions.functions)
         self.m = functions.n_rows
         self.settings, self.workspace = settings, workspace
 
     def __call__(self, state, previous: float, block: np.ndarray):
+        from casmech.formulations import prescribed
+
         rows = len(block)
         padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
         function = self.workspace.kept("prescribed_grids", padded, lambda: BufferedCall(

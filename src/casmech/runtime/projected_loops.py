@@ -21,13 +21,13 @@ system and kept in the run's workspace.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from casmech.equations.functions import SystemFunctions
 from casmech.errors import AnalysisError, UsageError
-from casmech.formulations import loop_ode
 from casmech.formulations.joint_constants import DATA
 from casmech.formulations.joint_start import Loops
 from casmech.formulations.joint_system import JointSystem, build, saddle_terms
@@ -35,6 +35,9 @@ from casmech.formulations.tree import spanning_tree
 from casmech.runtime import dop853
 from casmech.runtime.memo import kept
 from casmech.runtime.workspace import KINDS, Workspace
+
+if TYPE_CHECKING:  # (the loops' ODE is imported where it is built or loaded)
+    from casmech.formulations import loop_ode
 
 NAMES = ("joint_loop_ode", "joint_loop_project")  # the compiled library's functions
 
@@ -56,6 +59,8 @@ def loop_ode_of(functions: SystemFunctions, system: JointSystem, mask,
 
 
 def _made(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> loop_ode.LoopODE:
+    from casmech.formulations import loop_ode
+
     n_theta = system.layout.n_theta
     if functions.joint_functions is not None and functions.parametric is None:
         # a controller's system (runtime.controller): its forces only in its own functions
@@ -83,6 +88,7 @@ def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarra
     from casmech.backends.build import Toolchain
     from casmech.backends.library import compile_keyed
     from casmech.backends.parametric import bind
+    from casmech.formulations import loop_ode
     from casmech.model.parametric import split
 
     parts = split(functions.ir)
@@ -109,6 +115,8 @@ def _parametric(functions: SystemFunctions, system: JointSystem, mask: np.ndarra
 
 def _symbolic(functions: SystemFunctions, system: JointSystem, mask) -> dict:
     """The SX graphs of the IR's joint system, by library name."""
+    from casmech.formulations import loop_ode
+
     dynamics = build(functions.ir, system.tree).dynamics
     built = loop_ode.build(saddle_terms(functions.ir, system.tree), dynamics,
                            system.layout.n_theta, mask)
@@ -118,6 +126,7 @@ def _symbolic(functions: SystemFunctions, system: JointSystem, mask) -> dict:
 def _compiled(functions: SystemFunctions, system: JointSystem, mask: np.ndarray) -> dict:
     from casmech.backends.build import Toolchain
     from casmech.backends.library import compile_functions, compile_keyed
+    from casmech.formulations import loop_ode
 
     if functions.library_key is None:
         return compile_functions(_symbolic(functions, system, mask))

@@ -15,13 +15,34 @@ PROBE = ("import atexit, json, sys\nfrom casmech.cli import main\n"
          "atexit.register(lambda: print(json.dumps(sorted(sys.modules)), file=sys.stderr))\n"
          "sys.exit(main())")
 # the symbolic builders and the other formulations' runs, imported by the functions that use
-# them
+# them (docs/decisions/warm-run-imports.md)
 SYMBOLIC = ("casmech.equations.eom", "casmech.equations.initial_rows",
             "casmech.equations.results_row", "casmech.formulations.joint_control",
             "casmech.formulations.mapped_system", "casmech.runtime.dynamics",
             "casmech.runtime.dae_integrators", "casmech.runtime.dae_rows",
             "casmech.runtime.functional_ode", "casmech.runtime.projected_rk4",
-            "casmech.runtime.singular_poses")
+            "casmech.runtime.singular_poses",
+            # the builder and its kernels (backends.deferred names the bundle's functions from
+            # equations.bundle_names), the DAE residuals' kernels and the joint system's build
+            "casmech.equations.system", "casmech.equations.assemble", "casmech.equations.bodies",
+            "casmech.equations.body_kernels", "casmech.equations.force_kernels",
+            "casmech.equations.force_laws", "casmech.equations.forces", "casmech.equations.inline",
+            "casmech.equations.layout", "casmech.equations.row_kernels", "casmech.equations.rows",
+            "casmech.formulations.dae", "casmech.formulations.dae_terms",
+            "casmech.formulations.residual_groups", "casmech.formulations.residual_kernels",
+            "casmech.numerics.element_sums", "casmech.formulations.joint_forces",
+            "casmech.formulations.rnea", "casmech.formulations.tree_steps",
+            "casmech.formulations.mapped_rows", "casmech.formulations.mapped_tree",
+            # what other analyses, formulations and formats use: loops, projections, the
+            # prescribed step, parametric libraries, method auto's stiffness, HDF5, DAE options,
+            # least squares, DOP853's steps in Python, loads' checks, limits and motors
+            "casmech.formulations.augmented", "casmech.formulations.loop_ode",
+            "casmech.formulations.prescribed", "casmech.formulations.table",
+            "casmech.model.parametric", "casmech.numerics.kkt", "casmech.runtime.joint_rows",
+            "casmech.runtime.stiffness", "casmech.io.hdf5", "casmech.io.staged",
+            "casmech.formulations.dae_options", "casmech.numerics.numeric_qr",
+            "casmech.numerics.sparse_qr", "casmech.numerics.hermite_pair",
+            "casmech.runtime.load_checks", "casmech.equations.limits", "casmech.equations.motors")
 
 
 # two bars hanging from spherical joints, no parameters (a parametric model's results row is

@@ -15,7 +15,7 @@ import pytest
 
 import casmech
 from casmech.equations import evaluation, force_kernels, rows
-from casmech.formulations import dae, residuals
+from casmech.formulations import dae, residual_groups, residuals
 from casmech.formulations.table import BODY_FORMS
 from casmech.model.lower import lower
 from tests.unit.equations.test_mapped import EVERY_MODEL, MODELS, ROOT
@@ -60,7 +60,7 @@ def check(ir, unrolled: dict, form: str, kind: str, seed: int = 5, same_pattern=
     assert [function.size_in(k) for k in range(4)] == [reference.size_in(k) for k in range(4)]
     blocks = _blocks(reference)
     rng = np.random.default_rng(seed)
-    m = residuals.Indices(ir, form, kind).m
+    m = residual_groups.Indices(ir, form, kind).m
     assert function.size_in(3) == reference.size_in(3) == (dae.parameters(unrolled, form, kind), 1)
     for _ in range(2):
         inputs = _inputs(reference, m, rng)
@@ -131,7 +131,7 @@ def test_elements_per_joint_and_body():
     """One element per joint (its rows together), body and force: a chain of 4 has 2 joint
     kernels (the ground joint's rows bake ground, the others share one), 1 body kernel."""
     ir = lower(MODELS["chain4"]())
-    ix = residuals.Indices(ir, "rp", "ggl")
+    ix = residual_groups.Indices(ir, "rp", "ggl")
     t, p = ca.MX.sym("t"), ca.MX.sym("p", ix.n_p)
     groups = residuals.element_sum(ir, ix, t, ix.constants(p),
                                    evaluation.Evaluation.of(False)).groups
