@@ -107,8 +107,7 @@ def _set_flags(scope: str, flags: tuple[str, ...]) -> None:
         instruction set only where `flags` name it) where it builds at the default flags (no
         flags chosen, the ODE below the quick build's size)."""
         made = chosen(instructions, quick_build_instructions, names)
-        default = build.DEFAULT_FLAGS + (build.machine_flags() if build.takes_machine_flags(
-            build.default_compiler()) else ())
+        default = build.DEFAULT_FLAGS + joint_library.machine()
         if joint_library.chosen_flags() is not None or made.flags != default:
             return made
         return build.Toolchain(made.compiler, made.flags, made.jobs, made.function_flags

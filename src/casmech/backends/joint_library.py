@@ -12,8 +12,8 @@ functions, under which names, at which flags.
     its own, the ODE and its forward derivative at the library's flags, built when a BDF run
     first asks for it (keyed_jacobian, content_jacobian: JointSystem.identity_jacobian's
     place), so that a run on Adams, the rule for these trees, never compiles it at -O1.
-Both choices are functions of the functions, the settings, chosen_flags() and
-build.machine_flags(), so a library keyed by those (backends.library.compile_keyed) stays
+Both choices are functions of the functions, the settings, chosen_flags() and machine(),
+so a library keyed by those (backends.library.compile_keyed) stays
 honest.
 """
 
@@ -98,21 +98,27 @@ def is_rows(name: str) -> bool:
     return name == "joint_motion" or name.startswith(MOTION_PART)
 
 
+def machine() -> tuple[str, ...]:
+    """The machine's instruction set the library's loop functions are built with
+    (build.machine_flags) where the default compiler takes it (build.takes_machine_flags),
+    else none: what toolchain adds and the library's key records."""
+    return machine_flags() if takes_machine_flags(default_compiler()) else ()
+
+
 def toolchain(instructions: int, quick_build_instructions: int, names=()) -> Toolchain:
     """The default toolchain where the user chose flags ($CASMECH_CFLAGS); else at QUICK_FLAGS
     for an ODE of more than quick_build_instructions SX `instructions`, and below that the
     library at DEFAULT_FLAGS, the SELDOM functions at QUICK_FLAGS and the results rows among
-    the library's function `names` at ROWS_FLAGS, each but SELDOM with the machine's
-    instruction set (build.machine_flags) where the compiler takes it
-    (build.takes_machine_flags)."""
+    the library's function `names` at ROWS_FLAGS, each but SELDOM with machine()'s
+    instruction set."""
     if chosen_flags() is not None:
         return Toolchain()
     if instructions > quick_build_instructions:
         return Toolchain(flags=QUICK_FLAGS)
-    machine = machine_flags() if takes_machine_flags(default_compiler()) else ()
-    return Toolchain(flags=DEFAULT_FLAGS + machine,
+    extra = machine()
+    return Toolchain(flags=DEFAULT_FLAGS + extra,
                      function_flags=tuple((name, QUICK_FLAGS) for name in SELDOM)
-                     + tuple((name, ROWS_FLAGS + machine) for name in sorted(names)
+                     + tuple((name, ROWS_FLAGS + extra) for name in sorted(names)
                              if is_rows(name)))
 
 

@@ -96,12 +96,11 @@ def oracle(ir: ModelIR, form: str, kind: str, data: ca.SX | None = None
     quad, zero), with `daeF` (its residual) and `jacF` (the Jacobian blocks d(ode, alg)/d(x,
     z)), the names casadi's IDAS interface looks up in the DAE's library. `data`: the symbols
     of a symbolic IR, whose values follow p's own."""
+    from casmech.formulations.residual_groups import Indices
     from casmech.formulations.table import BODY_FORMS
 
     if form not in BODY_FORMS:
         raise ValueError(f"unknown formulation {form}")
-    from casmech.formulations.residual_groups import Indices
-
     ix = Indices(ir, form, kind)
     n_data = 0 if data is None else data.numel()
     tau, x, z = ca.MX.sym("t"), ca.MX.sym("x", ix.n_x), ca.MX.sym("z", ix.n_z)

@@ -157,7 +157,7 @@ def keyed_system(functions: SystemFunctions, settings: DynamicsSolver = DEFAULT,
     content = {"kind": "joint system", "bundle": functions.library_key,
                "compile": asdict(settings.compile), "stiff_states": settings.stiff_states,
                "loop_rows": settings.loop_rows, "chosen_flags": joint_library.chosen_flags(),
-               "machine_flags": list(joint_library.machine_flags())}
+               "machine_flags": list(joint_library.machine())}
 
     def make():
         from casmech.formulations.mapped_rows import relative_states

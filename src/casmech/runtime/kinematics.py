@@ -194,16 +194,15 @@ class _MappedGrid:
         from casmech.formulations import prescribed
 
         self.step = prescribed.step(functions.functions)
+        self.chunk, self.grid = prescribed.CHUNK, prescribed.grid
         self.m = functions.n_rows
         self.settings, self.workspace = settings, workspace
 
     def __call__(self, state, previous: float, block: np.ndarray):
-        from casmech.formulations import prescribed
-
         rows = len(block)
-        padded = -(-rows // prescribed.CHUNK) * prescribed.CHUNK
+        padded = -(-rows // self.chunk) * self.chunk
         function = self.workspace.kept("prescribed_grids", padded, lambda: BufferedCall(
-            prescribed.grid(self.step, rows)[0]))
+            self.grid(self.step, rows)[0]))
         times = np.concatenate([block, np.full(padded - rows, block[-1])])
         steps = np.diff(times, prepend=previous)
         states, checks = function(state, np.vstack([times, steps]))

@@ -259,7 +259,7 @@ def test_runs_reusing_kept_integrators_repeat_exactly():
 def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     """The tree's ODE above compile.quick_build_instructions compiles at -O0 (the rows too),
     below at the default flags with the results rows at joint_library.ROWS_FLAGS, both with
-    the machine's instruction set (build.machine_flags); $CASMECH_CFLAGS always wins."""
+    the machine's instruction set (joint_library.machine); $CASMECH_CFLAGS always wins."""
     from casmech.backends import build, joint_library
     from casmech.runtime import joint_dynamics
 
@@ -271,9 +271,7 @@ def test_a_large_tree_builds_quickly_unless_flags_are_chosen(monkeypatch):
     quick = joint_dynamics._toolchain(system, size - 1, names)
     assert quick.flags == ("-O0",) and quick.flags_of("joint_motion") == ("-O0",)
     default = joint_dynamics._toolchain(system, size, names)
-    # the machine's instruction set, on both (where the compiler takes it)
-    machine = build.machine_flags() if build.takes_machine_flags(build.default_compiler()) \
-        else ()
+    machine = joint_library.machine()  # the machine's instruction set, on both
     assert default.flags == build.DEFAULT_FLAGS + machine
     assert default.flags_of("joint_ode") == build.DEFAULT_FLAGS + machine
     assert default.flags_of("joint_motion") == default.flags_of("joint_motion_part0") \
